@@ -1,0 +1,353 @@
+//! The exact canonical form (engine.md section 4).
+//!
+//! An expression is a fraction `num / den` of integer polynomials in the
+//! leaves, where
+//! - `num` has degree at most 1 in every `sin` leaf (`s^2 -> 1 - c^2`) and in
+//!   every `sqrt` leaf (`r^2 -> radicand`);
+//! - `den` contains no `sin` and no `sqrt` leaf (made so by multiplying with
+//!   the conjugate, `(b0 + s b1)(b0 - s b1) = b0^2 - (1 - c^2) b1^2`);
+//! - `gcd(num, den) = 1` and the leading coefficient of `den` is positive.
+//!
+//! Two expressions are equal as functions iff their forms are identical (up
+//! to the limitations listed in docs/engine.md), so zero-testing is exact.
+
+use crate::gcd::gcd;
+use crate::graph::{Ctx, Id, LeafKind, Node};
+use crate::num::{int, Q};
+use crate::poly::{Mono, Poly, Var};
+use rustc_hash::FxHashSet;
+
+/// A canonical rational function (see the module documentation).
+#[derive(Clone, PartialEq, Eq, Hash, Debug)]
+pub struct RatFun {
+    pub(crate) num: Poly,
+    pub(crate) den: Poly,
+}
+
+impl RatFun {
+    pub fn zero() -> RatFun {
+        RatFun { num: Poly::zero(), den: Poly::one() }
+    }
+    pub fn one() -> RatFun {
+        RatFun { num: Poly::one(), den: Poly::one() }
+    }
+    pub fn from_q(q: &Q) -> RatFun {
+        RatFun { num: Poly::constant(q.num().clone()), den: Poly::constant(q.den().clone()) }
+    }
+    pub(crate) fn var(v: Var) -> RatFun {
+        RatFun { num: Poly::var(v), den: Poly::one() }
+    }
+    pub fn is_zero(&self) -> bool {
+        self.num.is_zero()
+    }
+    pub fn is_one(&self) -> bool {
+        self.num.is_one() && self.den.is_one()
+    }
+    /// The rational value if the form is constant.
+    pub fn as_q(&self) -> Option<Q> {
+        Some(Q::new(self.num.as_constant()?, self.den.as_constant()?))
+    }
+    pub fn numerator(&self) -> &Poly {
+        &self.num
+    }
+    pub fn denominator(&self) -> &Poly {
+        &self.den
+    }
+    /// Leaves that occur.
+    pub fn vars(&self) -> Vec<Var> {
+        let mut v = self.num.vars();
+        v.extend(self.den.vars());
+        v.sort_unstable();
+        v.dedup();
+        v
+    }
+    pub fn neg(&self) -> RatFun {
+        RatFun { num: self.num.neg(), den: self.den.clone() }
+    }
+    /// Number of terms in numerator and denominator (a size measure).
+    pub fn term_count(&self) -> usize {
+        self.num.len() + self.den.len()
+    }
+}
+
+/// The algebraic relation a leaf satisfies, if any.
+enum Relation<'a> {
+    /// `s^2 = 1 - c^2`.
+    Sin(Var),
+    /// `r^2 = radicand`.
+    Sqrt(&'a RatFun),
+}
+
+impl Ctx {
+    fn relation(&self, v: Var) -> Option<Relation<'_>> {
+        let leaf = &self.leaves[v as usize];
+        match leaf.kind {
+            LeafKind::Sin(_) => Some(Relation::Sin(leaf.partner.expect("sin leaf has a cos partner"))),
+            LeafKind::Sqrt(_) => Some(Relation::Sqrt(leaf.radicand.as_ref().expect("sqrt leaf has a radicand"))),
+            _ => None,
+        }
+    }
+
+    fn has_relation(&self, v: Var) -> bool {
+        matches!(self.leaves[v as usize].kind, LeafKind::Sin(_) | LeafKind::Sqrt(_))
+    }
+
+    /// Reduce all relation leaves to degree <= 1: returns `(n, m)` with `p = n / m`.
+    fn reduce_poly(&self, p: Poly) -> (Poly, Poly) {
+        let mut num = p;
+        let mut den = Poly::one();
+        loop {
+            // Highest leaf first: reductions only introduce lower leaves.
+            let v = num.vars().into_iter().rev().find(|&v| self.has_relation(v) && num.degree(v) >= 2);
+            let Some(v) = v else { break };
+            let cs = num.coeffs_in(v);
+            match self.relation(v).expect("checked") {
+                Relation::Sin(c) => {
+                    let one_minus_c2 = Poly::one().sub(&Poly::var(c).pow(2));
+                    let mut acc = Poly::zero();
+                    for (e, k) in cs {
+                        let t = k.mul_term(&Mono::var(v, e % 2), &int(1)).mul(&one_minus_c2.pow(e / 2));
+                        acc = acc.add(&t);
+                    }
+                    num = acc;
+                }
+                Relation::Sqrt(rad) => {
+                    let half = cs[0].0 / 2;
+                    let mut acc = Poly::zero();
+                    for (e, k) in cs {
+                        let t = k
+                            .mul_term(&Mono::var(v, e % 2), &int(1))
+                            .mul(&rad.num.pow(e / 2))
+                            .mul(&rad.den.pow(half - e / 2));
+                        acc = acc.add(&t);
+                    }
+                    num = acc;
+                    den = den.mul(&rad.den.pow(half));
+                }
+            }
+        }
+        (num, den)
+    }
+
+    /// Bring any fraction to canonical form.
+    pub(crate) fn normalize(&self, num: Poly, den: Poly) -> RatFun {
+        assert!(!den.is_zero(), "canonical form with zero denominator");
+        if num.is_zero() {
+            return RatFun::zero();
+        }
+        let (mut num, m1) = self.reduce_poly(num);
+        let mut den = den.mul(&m1);
+        let (d, m2) = self.reduce_poly(den);
+        den = d;
+        num = num.mul(&m2);
+        // Rationalise: remove relation leaves from the denominator, highest first.
+        while let Some(v) = den.vars().into_iter().rev().find(|&v| self.has_relation(v)) {
+            let cs = den.coeffs_in(v);
+            let d1 = cs.iter().find(|c| c.0 == 1).map(|c| c.1.clone()).unwrap_or_default();
+            let d0 = cs.iter().find(|c| c.0 == 0).map(|c| c.1.clone()).unwrap_or_default();
+            let conj = d0.sub(&d1.mul(&Poly::var(v)));
+            let (n2, m3) = self.reduce_poly(num.mul(&conj));
+            let (d2, m4) = self.reduce_poly(den.mul(&conj));
+            assert!(!d2.is_zero(), "conjugate norm vanished: a sqrt radicand is a perfect square");
+            num = n2.mul(&m4);
+            den = d2.mul(&m3);
+        }
+        let g = gcd(&num, &den);
+        if !g.is_one() {
+            num = num.div_exact(&g).expect("gcd divides numerator");
+            den = den.div_exact(&g).expect("gcd divides denominator");
+        }
+        if den.lc_sign() == dashu_int::Sign::Negative {
+            num = num.neg();
+            den = den.neg();
+        }
+        RatFun { num, den }
+    }
+
+    pub(crate) fn rf_add(&self, a: &RatFun, b: &RatFun) -> RatFun {
+        if a.is_zero() {
+            return b.clone();
+        }
+        if b.is_zero() {
+            return a.clone();
+        }
+        if a.den == b.den {
+            let num = a.num.add(&b.num);
+            if a.den.is_one() || num.is_zero() {
+                return RatFun { num, den: a.den.clone() }.fix_zero();
+            }
+            let g = gcd(&num, &a.den);
+            return RatFun { num: num.div_exact(&g).expect("gcd"), den: a.den.div_exact(&g).expect("gcd") }.fix_zero();
+        }
+        // Henrici: only the gcd of the denominators can cancel.
+        let g = gcd(&a.den, &b.den);
+        let da = a.den.div_exact(&g).expect("gcd");
+        let db = b.den.div_exact(&g).expect("gcd");
+        let num = a.num.mul(&db).add(&b.num.mul(&da));
+        if num.is_zero() {
+            return RatFun::zero();
+        }
+        let den = a.den.mul(&db);
+        let g2 = gcd(&num, &g);
+        if g2.is_one() {
+            RatFun { num, den }
+        } else {
+            RatFun { num: num.div_exact(&g2).expect("gcd"), den: den.div_exact(&g2).expect("gcd") }
+        }
+    }
+
+    pub(crate) fn rf_mul(&self, a: &RatFun, b: &RatFun) -> RatFun {
+        if a.is_zero() || b.is_zero() {
+            return RatFun::zero();
+        }
+        if a.den.is_one() && b.den.is_one() && (a.num.is_constant() || b.num.is_constant()) {
+            return RatFun { num: a.num.mul(&b.num), den: Poly::one() }.fix_sign_const();
+        }
+        let g1 = gcd(&a.num, &b.den);
+        let g2 = gcd(&b.num, &a.den);
+        let an = a.num.div_exact(&g1).expect("gcd");
+        let bn = b.num.div_exact(&g2).expect("gcd");
+        let ad = a.den.div_exact(&g2).expect("gcd");
+        let bd = b.den.div_exact(&g1).expect("gcd");
+        let num = an.mul(&bn);
+        let den = ad.mul(&bd);
+        // A product of two reduced numerators may need the relations again.
+        let av = an.vars();
+        let needs = bn.vars().iter().any(|v| self.has_relation(*v) && av.contains(v));
+        if needs {
+            self.normalize(num, den)
+        } else {
+            RatFun { num, den }
+        }
+    }
+
+    /// Inverse; `None` for zero.
+    pub(crate) fn rf_inv(&self, a: &RatFun) -> Option<RatFun> {
+        if a.is_zero() {
+            return None;
+        }
+        if a.num.vars().iter().any(|v| self.has_relation(*v)) {
+            return Some(self.normalize(a.den.clone(), a.num.clone()));
+        }
+        let (mut num, mut den) = (a.den.clone(), a.num.clone());
+        if den.lc_sign() == dashu_int::Sign::Negative {
+            num = num.neg();
+            den = den.neg();
+        }
+        Some(RatFun { num, den })
+    }
+
+    pub(crate) fn rf_pow(&self, a: &RatFun, e: i64) -> Option<RatFun> {
+        let base = if e < 0 { self.rf_inv(a)? } else { a.clone() };
+        let mut k = e.unsigned_abs();
+        let mut r = RatFun::one();
+        let mut b = base;
+        while k > 0 {
+            if k & 1 == 1 {
+                r = self.rf_mul(&r, &b);
+            }
+            k >>= 1;
+            if k > 0 {
+                b = self.rf_mul(&b, &b);
+            }
+        }
+        Some(r)
+    }
+
+    pub fn rf_sub(&self, a: &RatFun, b: &RatFun) -> RatFun {
+        self.rf_add(a, &b.neg())
+    }
+
+    /// The canonical form of a node (memoised; children first, no recursion).
+    ///
+    /// Panics only on a division by an expression whose canonical form is zero;
+    /// builders reject such divisions with an error first.
+    pub fn canon(&mut self, id: Id) -> RatFun {
+        if let Some(r) = self.canon_memo.get(&id) {
+            return r.clone();
+        }
+        // Nodes below `id` whose form is not known yet.
+        let mut todo = Vec::new();
+        let mut seen = FxHashSet::default();
+        let mut stack = vec![id];
+        while let Some(n) = stack.pop() {
+            if self.canon_memo.contains_key(&n) || !seen.insert(n) {
+                continue;
+            }
+            todo.push(n);
+            match self.node(n) {
+                Node::Add(cs) | Node::Mul(cs) => stack.extend(cs.iter().copied()),
+                Node::Pow(b, _) => stack.push(*b),
+                _ => {}
+            }
+        }
+        todo.sort_unstable();
+        for n in todo {
+            let r = match self.node(n).clone() {
+                Node::Num(q) => RatFun::from_q(&q),
+                Node::Leaf(v) => RatFun::var(v),
+                Node::Add(cs) => {
+                    let mut acc = RatFun::zero();
+                    for c in cs.iter() {
+                        acc = self.rf_add(&acc, &self.canon_memo[c]);
+                    }
+                    acc
+                }
+                Node::Mul(cs) => {
+                    let mut acc = RatFun::one();
+                    for c in cs.iter() {
+                        acc = self.rf_mul(&acc, &self.canon_memo[c]);
+                    }
+                    acc
+                }
+                Node::Pow(b, e) => self.rf_pow(&self.canon_memo[&b], e as i64).expect("division by zero in a canonical form"),
+            };
+            self.canon_memo.insert(n, r);
+        }
+        self.canon_memo[&id].clone()
+    }
+
+    /// `true` iff the expression is identically zero (exact).
+    pub fn is_identically_zero(&mut self, id: Id) -> bool {
+        self.canon(id).is_zero()
+    }
+
+    /// A node whose canonical form is `r` (deterministic, so equal forms give equal ids).
+    pub fn from_canonical(&mut self, r: &RatFun) -> Id {
+        let num = self.poly_node(&r.num);
+        let id = if r.den.is_one() {
+            num
+        } else {
+            let den = self.poly_node(&r.den);
+            self.div(num, den)
+        };
+        self.canon_memo.entry(id).or_insert_with(|| r.clone());
+        id
+    }
+
+    fn poly_node(&mut self, p: &Poly) -> Id {
+        let mut terms = Vec::with_capacity(p.len());
+        for (m, c) in p.terms() {
+            let mut f = vec![self.num(Q::from_int(c.clone()))];
+            for (v, e) in m.iter() {
+                let ln = self.leaf_node(v);
+                f.push(self.pow(ln, e as i64));
+            }
+            terms.push(self.mul(&f));
+        }
+        self.add(&terms)
+    }
+}
+
+impl RatFun {
+    fn fix_zero(self) -> RatFun {
+        if self.num.is_zero() {
+            RatFun::zero()
+        } else {
+            self
+        }
+    }
+    fn fix_sign_const(self) -> RatFun {
+        self
+    }
+}

@@ -1,0 +1,170 @@
+//! Formal differentiation on the shared graph, with the chain rule through
+//! every leaf (engine.md section 2). Memoised per (node, variable); children
+//! first in id order, so no recursion.
+
+use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::num::Q;
+use crate::poly::Var;
+use rustc_hash::FxHashSet;
+
+impl Ctx {
+    /// d `id` / d `x`, where `x` is a rational symbol.
+    pub fn diff(&mut self, id: Id, x: Var) -> Id {
+        if let Some(&d) = self.diff_memo.get(&(id, x)) {
+            return d;
+        }
+        let mut todo = Vec::new();
+        let mut seen = FxHashSet::default();
+        let mut stack = vec![id];
+        while let Some(n) = stack.pop() {
+            if self.diff_memo.contains_key(&(n, x)) || !seen.insert(n) {
+                continue;
+            }
+            todo.push(n);
+            stack.extend(self.deps(n));
+        }
+        todo.sort_unstable();
+        for n in todo {
+            let d = self.diff_node(n, x);
+            self.diff_memo.insert((n, x), d);
+        }
+        self.diff_memo[&(id, x)]
+    }
+
+    fn d(&self, n: Id, x: Var) -> Id {
+        self.diff_memo[&(n, x)]
+    }
+
+    fn diff_node(&mut self, n: Id, x: Var) -> Id {
+        match self.node(n).clone() {
+            Node::Num(_) => self.zero(),
+            Node::Add(cs) => {
+                let ds: Vec<Id> = cs.iter().map(|&c| self.d(c, x)).filter(|&d| !self.is_zero(d)).collect();
+                self.add(&ds)
+            }
+            Node::Mul(cs) => {
+                let mut terms = Vec::new();
+                for (i, &c) in cs.iter().enumerate() {
+                    let dc = self.d(c, x);
+                    if self.is_zero(dc) {
+                        continue;
+                    }
+                    let mut f: Vec<Id> = cs.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, &y)| y).collect();
+                    f.push(dc);
+                    terms.push(self.mul(&f));
+                }
+                self.add(&terms)
+            }
+            Node::Pow(b, e) => {
+                let db = self.d(b, x);
+                if self.is_zero(db) {
+                    return self.zero();
+                }
+                let k = self.int(e as i64);
+                let p = self.pow(b, e as i64 - 1);
+                self.mul(&[k, p, db])
+            }
+            Node::Leaf(v) => self.diff_leaf(v, x),
+        }
+    }
+
+    fn diff_leaf(&mut self, v: Var, x: Var) -> Id {
+        let leaf = self.leaves[v as usize].clone();
+        let node = leaf.node;
+        match leaf.kind {
+            LeafKind::Symbol(_) => {
+                if v == x {
+                    self.one()
+                } else {
+                    self.zero()
+                }
+            }
+            LeafKind::Pi => self.zero(),
+            LeafKind::Sin(a) | LeafKind::Cos(a) => {
+                let is_sin = matches!(self.leaves[v as usize].kind, LeafKind::Sin(_));
+                let partner = self.leaf_node(leaf.partner.expect("angle leaves come in pairs"));
+                let darg = self.angle_darg(&a, x);
+                if self.is_zero(darg) {
+                    return self.zero();
+                }
+                let p = if is_sin { partner } else { self.neg(partner) };
+                self.mul(&[p, darg])
+            }
+            LeafKind::Exp(a) => {
+                let darg = self.angle_darg(&a, x);
+                self.mul(&[node, darg])
+            }
+            LeafKind::Atan(u) => {
+                let du = self.d(u, x);
+                if self.is_zero(du) {
+                    return self.zero();
+                }
+                let one = self.one();
+                let u2 = self.pow(u, 2);
+                let den = self.add(&[one, u2]);
+                self.div(du, den)
+            }
+            LeafKind::Atan2(y, xx) => {
+                let (dy, dx) = (self.d(y, x), self.d(xx, x));
+                if self.is_zero(dy) && self.is_zero(dx) {
+                    return self.zero();
+                }
+                let a = self.mul(&[xx, dy]);
+                let b = self.mul(&[y, dx]);
+                let num = self.sub(a, b);
+                let x2 = self.pow(xx, 2);
+                let y2 = self.pow(y, 2);
+                let den = self.add(&[x2, y2]);
+                self.div(num, den)
+            }
+            LeafKind::Log(u) => {
+                let du = self.d(u, x);
+                if self.is_zero(du) {
+                    return self.zero();
+                }
+                self.div(du, u)
+            }
+            LeafKind::Sqrt(u) => {
+                let du = self.d(u, x);
+                if self.is_zero(du) {
+                    return self.zero();
+                }
+                let half = self.num(Q::new(1.into(), 2.into()));
+                let inv = self.pow(node, -1);
+                self.mul(&[half, du, inv])
+            }
+        }
+    }
+
+    /// Derivative of the argument of an angle or exponential leaf.
+    fn angle_darg(&mut self, a: &Angle, x: Var) -> Id {
+        match a {
+            Angle::Symbol { sym, den } => {
+                if *sym == x {
+                    self.num(Q::new(1.into(), (*den as i64).into()))
+                } else {
+                    self.zero()
+                }
+            }
+            Angle::Generic(arg) => self.d(*arg, x),
+        }
+    }
+
+    /// Lie derivative `L_f g = grad(g) . f` (eq. 7) along the field `f`, given
+    /// as one node per state variable.
+    pub fn lie_derivative(&mut self, g: Id, states: &[Var], f: &[Id]) -> Id {
+        assert_eq!(states.len(), f.len(), "field and state lengths differ");
+        let mut terms = Vec::with_capacity(states.len());
+        for (&x, &fx) in states.iter().zip(f) {
+            if self.is_zero(fx) {
+                continue;
+            }
+            let d = self.diff(g, x);
+            if self.is_zero(d) {
+                continue;
+            }
+            terms.push(self.mul(&[d, fx]));
+        }
+        self.add(&terms)
+    }
+}

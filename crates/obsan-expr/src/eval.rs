@@ -1,0 +1,261 @@
+//! Evaluation of expression graphs: compiled f64 tapes (compile once,
+//! evaluate many times), exact rationals, and F_p at random points with the
+//! angle parametrisation of engine.md section 3.
+
+use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::num::{Fp, SplitMix, Q};
+use crate::poly::Var;
+use std::fmt;
+
+#[derive(Clone, Debug)]
+enum Op {
+    Const(f64),
+    Input(u32),
+    Add(Box<[u32]>),
+    Mul(Box<[u32]>),
+    Pow(u32, i32),
+    Sin(u32, f64),
+    Cos(u32, f64),
+    Exp(u32, f64),
+    Atan(u32),
+    Atan2(u32, u32),
+    Log(u32),
+    Sqrt(u32),
+}
+
+/// A compiled f64 evaluator for a set of expressions.
+#[derive(Clone, Debug)]
+pub struct Tape {
+    ops: Vec<Op>,
+    outputs: Vec<u32>,
+    n_inputs: usize,
+}
+
+/// A symbol the tape needs but was not given an input slot.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnboundSymbol(pub String);
+
+impl fmt::Display for UnboundSymbol {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "no value given for symbol {}", self.0)
+    }
+}
+impl std::error::Error for UnboundSymbol {}
+
+impl Tape {
+    /// Compile `roots` with input slots for the symbols `inputs`, in that order.
+    pub fn compile(ctx: &Ctx, roots: &[Id], inputs: &[Var]) -> Result<Tape, UnboundSymbol> {
+        let order = ctx.reachable(roots);
+        let mut slot = vec![u32::MAX; ctx.len()];
+        let mut ops = Vec::with_capacity(order.len());
+        for (i, &id) in order.iter().enumerate() {
+            slot[id.index()] = i as u32;
+            let s = |x: Id| {
+                debug_assert!(slot[x.index()] != u32::MAX, "child compiled after parent");
+                slot[x.index()]
+            };
+            let op = match ctx.node(id) {
+                Node::Num(q) => Op::Const(q.to_f64()),
+                Node::Add(cs) => Op::Add(cs.iter().map(|&c| s(c)).collect()),
+                Node::Mul(cs) => Op::Mul(cs.iter().map(|&c| s(c)).collect()),
+                Node::Pow(b, e) => Op::Pow(s(*b), *e),
+                Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
+                    LeafKind::Symbol(name) => match inputs.iter().position(|x| x == v) {
+                        Some(k) => Op::Input(k as u32),
+                        None => return Err(UnboundSymbol(name.clone())),
+                    },
+                    LeafKind::Pi => Op::Const(std::f64::consts::PI),
+                    LeafKind::Sin(a) | LeafKind::Cos(a) | LeafKind::Exp(a) => {
+                        let (arg, scale) = match a {
+                            Angle::Symbol { sym, den } => (s(ctx.leaf_node(*sym)), 1.0 / *den as f64),
+                            Angle::Generic(g) => (s(*g), 1.0),
+                        };
+                        match &ctx.leaves[*v as usize].kind {
+                            LeafKind::Sin(_) => Op::Sin(arg, scale),
+                            LeafKind::Cos(_) => Op::Cos(arg, scale),
+                            _ => Op::Exp(arg, scale),
+                        }
+                    }
+                    LeafKind::Atan(u) => Op::Atan(s(*u)),
+                    LeafKind::Atan2(y, x) => Op::Atan2(s(*y), s(*x)),
+                    LeafKind::Log(u) => Op::Log(s(*u)),
+                    LeafKind::Sqrt(u) => Op::Sqrt(s(*u)),
+                },
+            };
+            ops.push(op);
+        }
+        let outputs = roots.iter().map(|r| slot[r.index()]).collect();
+        Ok(Tape { ops, outputs, n_inputs: inputs.len() })
+    }
+
+    pub fn n_inputs(&self) -> usize {
+        self.n_inputs
+    }
+    pub fn n_outputs(&self) -> usize {
+        self.outputs.len()
+    }
+    pub fn len(&self) -> usize {
+        self.ops.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.ops.is_empty()
+    }
+
+    /// Evaluate; `scratch` is reused between calls to avoid allocation.
+    pub fn eval_into(&self, inputs: &[f64], scratch: &mut Vec<f64>, out: &mut [f64]) {
+        assert_eq!(inputs.len(), self.n_inputs, "wrong number of inputs");
+        scratch.clear();
+        scratch.reserve(self.ops.len());
+        for op in &self.ops {
+            let v = |i: &u32| scratch[*i as usize];
+            let x = match op {
+                Op::Const(c) => *c,
+                Op::Input(k) => inputs[*k as usize],
+                Op::Add(cs) => cs.iter().map(v).sum(),
+                Op::Mul(cs) => cs.iter().map(v).product(),
+                Op::Pow(b, e) => v(b).powi(*e),
+                Op::Sin(a, k) => (v(a) * k).sin(),
+                Op::Cos(a, k) => (v(a) * k).cos(),
+                Op::Exp(a, k) => (v(a) * k).exp(),
+                Op::Atan(a) => v(a).atan(),
+                Op::Atan2(y, x) => v(y).atan2(v(x)),
+                Op::Log(a) => v(a).ln(),
+                Op::Sqrt(a) => v(a).sqrt(),
+            };
+            scratch.push(x);
+        }
+        for (o, &s) in out.iter_mut().zip(&self.outputs) {
+            *o = scratch[s as usize];
+        }
+    }
+
+    pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
+        let mut scratch = Vec::new();
+        let mut out = vec![0.0; self.outputs.len()];
+        self.eval_into(inputs, &mut scratch, &mut out);
+        out
+    }
+}
+
+/// The chosen point was a zero of a denominator or gave a non-square under a
+/// root: pick another point (probability at most `degree / p`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BadPoint;
+
+impl fmt::Display for BadPoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("the evaluation point hit a pole or a non-square radicand")
+    }
+}
+impl std::error::Error for BadPoint {}
+
+/// Values in F_p for every leaf of a context, consistent with the relations:
+/// `sin`/`cos` from `t` as `2t/(1+t^2)`, `(1-t^2)/(1+t^2)` (1 + t^2 is never 0
+/// since -1 is not a square mod 2^61 - 1), square roots by Tonelli–Shanks,
+/// every transcendental atom independent and uniform.
+#[derive(Clone, Debug)]
+pub struct FpPoint {
+    values: Vec<Fp>,
+}
+
+impl FpPoint {
+    pub fn value(&self, v: Var) -> Fp {
+        self.values[v as usize]
+    }
+}
+
+impl Ctx {
+    /// A random point; `fixed` gives values of some symbols (others are uniform).
+    pub fn random_fp_point(&mut self, rng: &mut SplitMix, fixed: &dyn Fn(Var) -> Option<Fp>) -> Result<FpPoint, BadPoint> {
+        let mut values = vec![Fp::ZERO; self.leaves.len()];
+        let mut done = vec![false; self.leaves.len()];
+        for v in 0..self.leaves.len() {
+            if done[v] {
+                continue;
+            }
+            let leaf = self.leaves[v].clone();
+            match &leaf.kind {
+                LeafKind::Symbol(_) => values[v] = fixed(v as Var).unwrap_or_else(|| rng.fp()),
+                LeafKind::Sin(_) | LeafKind::Cos(_) => {
+                    let t = rng.fp();
+                    let t2 = t.mul(t);
+                    let inv = Fp::ONE.add(t2).inv().ok_or(BadPoint)?;
+                    let s = Fp(2).mul(t).mul(inv);
+                    let c = Fp::ONE.sub(t2).mul(inv);
+                    let p = leaf.partner.expect("angle pair") as usize;
+                    let is_sin = matches!(leaf.kind, LeafKind::Sin(_));
+                    values[v] = if is_sin { s } else { c };
+                    values[p] = if is_sin { c } else { s };
+                    done[p] = true;
+                }
+                LeafKind::Sqrt(_) => {
+                    let r = leaf.radicand.as_ref().expect("radicand");
+                    let val = |x: Var| values[x as usize];
+                    let n = r.num.eval_fp(&val);
+                    let d = r.den.eval_fp(&val);
+                    let u = n.mul(d.inv().ok_or(BadPoint)?);
+                    values[v] = u.sqrt().ok_or(BadPoint)?;
+                }
+                _ => values[v] = rng.fp(),
+            }
+            done[v] = true;
+        }
+        Ok(FpPoint { values })
+    }
+
+    /// Values of `roots` at an F_p point.
+    pub fn eval_fp(&self, roots: &[Id], point: &FpPoint) -> Result<Vec<Fp>, BadPoint> {
+        let order = self.reachable(roots);
+        let mut val = vec![Fp::ZERO; self.len()];
+        for id in order {
+            let x = match self.node(id) {
+                Node::Num(q) => q.to_fp().ok_or(BadPoint)?,
+                Node::Leaf(v) => point.value(*v),
+                Node::Add(cs) => cs.iter().fold(Fp::ZERO, |a, c| a.add(val[c.index()])),
+                Node::Mul(cs) => cs.iter().fold(Fp::ONE, |a, c| a.mul(val[c.index()])),
+                Node::Pow(b, e) => {
+                    let base = val[b.index()];
+                    let base = if *e < 0 { base.inv().ok_or(BadPoint)? } else { base };
+                    base.pow(e.unsigned_abs() as u64)
+                }
+            };
+            val[id.index()] = x;
+        }
+        Ok(roots.iter().map(|r| val[r.index()]).collect())
+    }
+
+    /// Exact value of `roots` given a rational value for every leaf they use
+    /// (leaf values must respect the relations, e.g. from [`rational_angle`]).
+    pub fn eval_q(&self, roots: &[Id], leaf: &dyn Fn(Var) -> Option<Q>) -> Result<Vec<Q>, EvalQError> {
+        let order = self.reachable(roots);
+        let mut val: Vec<Option<Q>> = vec![None; self.len()];
+        for id in order {
+            let get = |c: &Id| val[c.index()].clone().expect("child first");
+            let x = match self.node(id) {
+                Node::Num(q) => q.clone(),
+                Node::Leaf(v) => leaf(*v).ok_or(EvalQError::Unbound(*v))?,
+                Node::Add(cs) => cs.iter().fold(Q::zero(), |a, c| a.add(&get(c))),
+                Node::Mul(cs) => cs.iter().fold(Q::one(), |a, c| a.mul(&get(c))),
+                Node::Pow(b, e) => get(b).powi(*e as i64).ok_or(EvalQError::DivisionByZero)?,
+            };
+            val[id.index()] = Some(x);
+        }
+        Ok(roots.iter().map(|r| val[r.index()].clone().expect("evaluated")).collect())
+    }
+}
+
+/// Why an exact evaluation failed.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum EvalQError {
+    Unbound(Var),
+    DivisionByZero,
+}
+
+/// `(sin, cos)` of the rational angle parameter `t`: `(2t/(1+t^2), (1-t^2)/(1+t^2))`.
+pub fn rational_angle(t: &Q) -> (Q, Q) {
+    let t2 = t.mul(t);
+    let d = Q::one().add(&t2);
+    let s = Q::from_i64(2).mul(t).div(&d).expect("1 + t^2 > 0");
+    let c = Q::one().sub(&t2).div(&d).expect("1 + t^2 > 0");
+    (s, c)
+}

@@ -1,0 +1,45 @@
+//! obsan's exact symbolic engine.
+//!
+//! Expressions live in a [`Ctx`]: a flat arena with one node per distinct
+//! subexpression, children before parents. Functions are lowered to *leaves*
+//! as they are built (per-symbol `sin`/`cos`/`exp`, and atoms for `atan`,
+//! `atan2`, `log`, `sqrt` and other arguments), so that every expression is an
+//! element of a field of rational functions in the leaves with the relations
+//! `sin^2 + cos^2 = 1` and `sqrt(u)^2 = u`. [`Ctx::canon`] gives its exact
+//! canonical form ([`RatFun`]); equality and zero-testing are exact.
+//!
+//! ```
+//! use obsan_expr::Ctx;
+//! let mut ctx = Ctx::new();
+//! let e = ctx.parse("sin(g - p)*cos(p) + cos(g - p)*sin(p) - sin(g)").unwrap();
+//! assert!(ctx.is_identically_zero(e));
+//! let x = ctx.symbol("x");
+//! let f = ctx.parse("atan2(x, 1)").unwrap();
+//! let d = ctx.diff(f, x.var);
+//! assert_eq!(ctx.to_text(d), "1/(x^2 + 1)");
+//! ```
+//!
+//! See `docs/engine.md` in the repository for the mathematics and the
+//! limitations, and the [`tutorial`] module for a guided tour.
+
+mod canon;
+mod diff;
+mod eval;
+mod gcd;
+mod graph;
+mod lower;
+mod num;
+mod parse;
+mod poly;
+mod print;
+pub mod tutorial;
+
+pub use canon::RatFun;
+pub use eval::{rational_angle, BadPoint, EvalQError, FpPoint, Tape, UnboundSymbol};
+pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
+pub use graph::{Ctx, Id, Symbol};
+pub use lower::EngineError;
+pub use num::{Fp, Int, SplitMix, P, Q};
+pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
+pub use poly::{Mono, Poly, Var};
+pub use print::latex_name;

@@ -1,0 +1,455 @@
+//! Functions, lowered to leaves as they are built (engine.md section 2).
+//!
+//! - `sin`, `cos` of `sum_i n_i x_i + k pi + rest`: expanded by the addition
+//!   formulas into per-symbol leaves `sin(x_i)`, `cos(x_i)`, exact values for
+//!   multiples of pi/4 and pi/6, and one angle atom for `rest`;
+//! - `exp` likewise into per-symbol leaves `exp(x_i)` times an atom for the rest;
+//! - `atan`, `atan2`, `log`, `sqrt`: one atom per canonical argument, after
+//!   normalisation (odd symmetry of atan, square factors out of sqrt);
+//! - `tan = sin / cos`, `a^(n/2) = sqrt(a)^n`, `a^b = exp(b log a)`.
+//!
+//! A symbol's angles must be integer multiples of one unit (`x` and `2x`, or
+//! `x/2` and `3x/2`); mixing `sin(x)` with `sin(x/3)` is refused with an error,
+//! never silently treated as independent.
+
+use crate::canon::RatFun;
+use crate::graph::{Angle, Ctx, Id, Leaf, LeafKind};
+use crate::num::{int, int_exact_sqrt, Int, Q};
+use crate::poly::{Mono, Poly, Var};
+use dashu_int::Sign;
+use std::fmt;
+
+/// An error from building an expression (the parser adds the position).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct EngineError(pub String);
+
+impl fmt::Display for EngineError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl std::error::Error for EngineError {}
+
+type R<T> = Result<T, EngineError>;
+
+fn err<T>(msg: impl Into<String>) -> R<T> {
+    Err(EngineError(msg.into()))
+}
+
+/// The linear part of an argument: `sum coeff_i sym_i + pi_coeff pi + rest`.
+struct Linear {
+    syms: Vec<(Var, Q)>,
+    pi: Q,
+    rest: RatFun,
+}
+
+impl Ctx {
+    fn split_linear(&self, c: &RatFun) -> Linear {
+        let Some(d) = c.den.as_constant() else {
+            return Linear { syms: vec![], pi: Q::zero(), rest: c.clone() };
+        };
+        let mut syms = Vec::new();
+        let mut pi = Q::zero();
+        let mut rest = Vec::new();
+        for (m, k) in c.num.terms() {
+            let mut it = m.iter();
+            let single = match (it.next(), it.next()) {
+                (Some((v, 1)), None) => Some(v),
+                _ => None,
+            };
+            let coeff = Q::new(k.clone(), d.clone());
+            match single.map(|v| &self.leaves[v as usize].kind) {
+                Some(LeafKind::Symbol(_)) => syms.push((single.expect("matched"), coeff)),
+                Some(LeafKind::Pi) => pi = pi.add(&coeff),
+                _ => rest.push((m.clone(), k.clone())),
+            }
+        }
+        let rest = RatFun { num: Poly::from_terms(rest), den: Poly::constant(d) };
+        let rest = if rest.num.is_zero() { RatFun::zero() } else { self.normalize(rest.num, rest.den) };
+        Linear { syms, pi, rest }
+    }
+
+    /// The unit denominator of symbol `sym`'s angles (or exponentials), and the
+    /// integer multiple of that unit which `coeff` is.
+    fn unit_multiple(&mut self, sym: Var, coeff: &Q, exp: bool) -> R<(u32, i64)> {
+        let name = self.symbol_name(sym).unwrap_or("?").to_string();
+        let den = u32::try_from(coeff.den()).ok().filter(|d| *d <= 1000);
+        let Some(den) = den else {
+            return err(format!("the coefficient {coeff} of {name} inside a function is too fine a fraction"));
+        };
+        let unit = *self.angle_units.entry((sym, exp)).or_insert(den);
+        let n = coeff.mul(&Q::from_i64(unit as i64));
+        if !n.is_integer() {
+            let f = if exp { "exp" } else { "sin/cos" };
+            return err(format!(
+                "{f} of {name} is used both with unit {name}/{unit} and with coefficient {coeff}: \
+                 angles of one symbol must be integer multiples of one unit (introduce a new symbol for the fraction)"
+            ));
+        }
+        let n = i64::try_from(n.num()).ok().filter(|n| n.abs() <= 64);
+        match n {
+            Some(n) => Ok((unit, n)),
+            None => err(format!("the multiple of {name} inside {} is too large", if exp { "exp" } else { "sin/cos" })),
+        }
+    }
+
+    /// The (cos, sin) leaf nodes of an angle, created together.
+    fn angle_pair(&mut self, a: Angle) -> (Id, Id) {
+        let s = self.leaf(LeafKind::Sin(a.clone()));
+        let c = self.leaf(LeafKind::Cos(a));
+        self.leaves[s as usize].partner = Some(c);
+        self.leaves[c as usize].partner = Some(s);
+        (self.leaf_node(c), self.leaf_node(s))
+    }
+
+    fn cmul(&mut self, (c1, s1): (Id, Id), (c2, s2): (Id, Id)) -> (Id, Id) {
+        let a = self.mul(&[c1, c2]);
+        let b = self.mul(&[s1, s2]);
+        let c = self.sub(a, b);
+        let d = self.mul(&[s1, c2]);
+        let e = self.mul(&[c1, s2]);
+        let s = self.add(&[d, e]);
+        (c, s)
+    }
+
+    fn cpow(&mut self, (c, s): (Id, Id), n: i64) -> (Id, Id) {
+        let base = if n < 0 { (c, self.neg(s)) } else { (c, s) };
+        let (one, zero) = (self.one(), self.zero());
+        let mut r = (one, zero);
+        for _ in 0..n.unsigned_abs() {
+            r = self.cmul(r, base);
+        }
+        r
+    }
+
+    /// (cos, sin) of `k pi`: exact for multiples of pi/4 and pi/6.
+    fn pi_rotation(&mut self, k: &Q) -> R<(Id, Id)> {
+        // Reduce k modulo 2.
+        let two = Q::from_i64(2);
+        let q = k.div(&two).expect("nonzero");
+        let fl = q.num() / q.den() - if q.is_negative() && !q.is_integer() { int(1) } else { int(0) };
+        let k = k.sub(&Q::from_int(fl * int(2)));
+        let den = k.den().clone();
+        let num = i64::try_from(k.num()).expect("reduced");
+        let (cq, sq): (Id, Id);
+        if den == int(1) || den == int(2) {
+            let quarter = if den == int(1) { num * 2 } else { num }; // multiples of pi/2
+            let (c, s) = [(1, 0), (0, 1), (-1, 0), (0, -1)][quarter.rem_euclid(4) as usize];
+            return Ok((self.int(c), self.int(s)));
+        }
+        if den == int(4) {
+            let r2 = self.sqrt_const(&Q::from_i64(2))?;
+            let h = self.num(Q::new(int(1), int(2)));
+            let v = self.mul(&[h, r2]);
+            let nv = self.neg(v);
+            let (c, s) = match num.rem_euclid(8) {
+                1 => (v, v),
+                3 => (nv, v),
+                5 => (nv, nv),
+                _ => (v, nv),
+            };
+            return Ok((c, s));
+        }
+        if den == int(3) || den == int(6) {
+            let sixth = if den == int(3) { num * 2 } else { num }; // multiples of pi/6
+            let r3 = self.sqrt_const(&Q::from_i64(3))?;
+            let h = self.num(Q::new(int(1), int(2)));
+            let hr3 = self.mul(&[h, r3]);
+            let table: [(i64, i64); 12] =
+                [(2, 0), (3, 1), (1, 3), (0, 2), (-1, 3), (-3, 1), (-2, 0), (-3, -1), (-1, -3), (0, -2), (1, -3), (3, -1)];
+            let (a, b) = table[sixth.rem_euclid(12) as usize];
+            // a, b encode values: 2 -> 1, 1 -> 1/2, 3 -> sqrt(3)/2, 0 -> 0 (with sign).
+            let mut val = |x: i64| -> Id {
+                let m = match x.abs() {
+                    0 => self.zero(),
+                    1 => h,
+                    2 => self.one(),
+                    _ => hr3,
+                };
+                if x < 0 {
+                    self.neg(m)
+                } else {
+                    m
+                }
+            };
+            cq = val(a);
+            sq = val(b);
+            return Ok((cq, sq));
+        }
+        // Other multiples of pi: an angle atom with a constant argument.
+        let pi = self.pi();
+        let kn = self.num(k);
+        let arg = self.mul(&[kn, pi]);
+        let c = self.canon(arg);
+        let id = self.from_canonical(&c);
+        Ok(self.angle_pair(Angle::Generic(id)))
+    }
+
+    /// (cos u, sin u).
+    fn cos_sin(&mut self, u: Id) -> R<(Id, Id)> {
+        let c = self.canon(u);
+        let lin = self.split_linear(&c);
+        let (one, zero) = (self.one(), self.zero());
+        let mut acc = (one, zero);
+        if !lin.rest.is_zero() {
+            // sin(-r) = -sin(r): keep the atom's argument with a positive leading coefficient.
+            let flip = lin.rest.num.lc_sign() == Sign::Negative;
+            let r = if flip { lin.rest.neg() } else { lin.rest.clone() };
+            let id = self.from_canonical(&r);
+            let (c, s) = self.angle_pair(Angle::Generic(id));
+            acc = if flip { (c, self.neg(s)) } else { (c, s) };
+        }
+        for (sym, coeff) in lin.syms {
+            let (den, n) = self.unit_multiple(sym, &coeff, false)?;
+            let pair = self.angle_pair(Angle::Symbol { sym, den });
+            let p = self.cpow(pair, n);
+            acc = self.cmul(acc, p);
+        }
+        if !lin.pi.is_zero() {
+            let rot = self.pi_rotation(&lin.pi)?;
+            acc = self.cmul(acc, rot);
+        }
+        Ok(acc)
+    }
+
+    pub fn sin(&mut self, u: Id) -> R<Id> {
+        Ok(self.cos_sin(u)?.1)
+    }
+    pub fn cos(&mut self, u: Id) -> R<Id> {
+        Ok(self.cos_sin(u)?.0)
+    }
+    pub fn tan(&mut self, u: Id) -> R<Id> {
+        let (c, s) = self.cos_sin(u)?;
+        if self.canon(c).is_zero() {
+            return err("tan is undefined here: its cosine is identically 0");
+        }
+        Ok(self.div(s, c))
+    }
+
+    pub fn exp(&mut self, u: Id) -> R<Id> {
+        let c = self.canon(u);
+        let lin = self.split_linear(&c);
+        let mut factors = Vec::new();
+        let mut rest = lin.rest.clone();
+        if !lin.pi.is_zero() {
+            let pv = self.pi_var();
+            let pi_part = self.rf_mul(&RatFun::from_q(&lin.pi), &RatFun::var(pv));
+            rest = self.rf_add(&rest, &pi_part);
+        }
+        for (sym, coeff) in lin.syms {
+            let (den, n) = self.unit_multiple(sym, &coeff, true)?;
+            let e = self.leaf(LeafKind::Exp(Angle::Symbol { sym, den }));
+            let en = self.leaf_node(e);
+            factors.push(self.pow(en, n));
+        }
+        if !rest.is_zero() {
+            let id = self.from_canonical(&rest);
+            let e = self.leaf(LeafKind::Exp(Angle::Generic(id)));
+            factors.push(self.leaf_node(e));
+        }
+        Ok(self.mul(&factors))
+    }
+
+    fn pi_var(&mut self) -> Var {
+        self.leaf(LeafKind::Pi)
+    }
+
+    pub fn atan(&mut self, u: Id) -> R<Id> {
+        let c = self.canon(u);
+        if c.is_zero() {
+            return Ok(self.zero());
+        }
+        if let Some(q) = c.as_q() {
+            if q.is_one() || q.neg().is_one() {
+                let pi = self.pi();
+                let k = self.num(Q::new(if q.is_one() { int(1) } else { int(-1) }, int(4)));
+                return Ok(self.mul(&[k, pi]));
+            }
+        }
+        let flip = c.num.lc_sign() == Sign::Negative;
+        let r = if flip { c.neg() } else { c };
+        let id = self.from_canonical(&r);
+        let a = self.leaf(LeafKind::Atan(id));
+        let n = self.leaf_node(a);
+        Ok(if flip { self.neg(n) } else { n })
+    }
+
+    pub fn atan2(&mut self, y: Id, x: Id) -> R<Id> {
+        let (cy, cx) = (self.canon(y), self.canon(x));
+        if cy.is_zero() && cx.is_zero() {
+            return err("atan2(0, 0) is undefined");
+        }
+        if let (Some(qy), Some(qx)) = (cy.as_q(), cx.as_q()) {
+            let pi = self.pi();
+            let frac = |s: &mut Ctx, a: i64, b: i64| {
+                let k = s.num(Q::new(int(a), int(b)));
+                s.mul(&[k, pi])
+            };
+            if qy.is_zero() {
+                return Ok(if qx.is_negative() { pi } else { self.zero() });
+            }
+            if qx.is_zero() {
+                return Ok(frac(self, if qy.is_negative() { -1 } else { 1 }, 2));
+            }
+        }
+        let (iy, ix) = (self.from_canonical(&cy), self.from_canonical(&cx));
+        let a = self.leaf(LeafKind::Atan2(iy, ix));
+        Ok(self.leaf_node(a))
+    }
+
+    pub fn log(&mut self, u: Id) -> R<Id> {
+        let c = self.canon(u);
+        if let Some(q) = c.as_q() {
+            if q.is_one() {
+                return Ok(self.zero());
+            }
+            if q.is_zero() || q.is_negative() {
+                return err(format!("log of the constant {q} is undefined"));
+            }
+        }
+        let id = self.from_canonical(&c);
+        let l = self.leaf(LeafKind::Log(id));
+        Ok(self.leaf_node(l))
+    }
+
+    fn sqrt_const(&mut self, q: &Q) -> R<Id> {
+        let id = self.num(q.clone());
+        self.sqrt(id)
+    }
+
+    pub fn sqrt(&mut self, u: Id) -> R<Id> {
+        let c = self.canon(u);
+        if c.is_zero() {
+            return Ok(self.zero());
+        }
+        // Pull the largest square factor of the constant content out.
+        let cn = c.num.content();
+        let cd = c.den.content();
+        if let Some(q) = c.as_q() {
+            if q.is_negative() {
+                return err(format!("sqrt of the negative constant {q} is undefined"));
+            }
+        }
+        let (sn, _) = square_part(&cn);
+        let (sd, _) = square_part(&cd);
+        // sqrt(c) = (sn/sd) * sqrt(c * sd^2 / sn^2)
+        let outside = Q::new(sn.clone(), sd.clone());
+        let inner = RatFun {
+            num: c.num.div_exact(&Poly::constant(&sn * &sn)).expect("square divides content"),
+            den: c.den.div_exact(&Poly::constant(&sd * &sd)).expect("square divides content"),
+        };
+        let out = self.num(outside);
+        if inner.is_one() {
+            return Ok(out);
+        }
+        if inner.num.is_constant() && inner.den.is_constant() {
+            // sqrt(a/b) = sqrt(a b) / b for constants, so the atom is an integer.
+            let (a, b) = (inner.num.as_constant().expect("const"), inner.den.as_constant().expect("const"));
+            if !b.is_one() {
+                let ab = self.num(Q::from_int(&a * &b));
+                let r = self.sqrt(ab)?;
+                let inv_b = self.num(Q::new(int(1), b));
+                return Ok(self.mul(&[out, r, inv_b]));
+            }
+        }
+        if is_square_poly(&inner.num.mul(&inner.den)) {
+            return err(
+                "sqrt of a perfect square is not supported (it is |.|, not a polynomial): write the root without sqrt",
+            );
+        }
+        let id = self.from_canonical(&inner);
+        let v = self.leaf(LeafKind::Sqrt(id));
+        let leaf: &mut Leaf = &mut self.leaves[v as usize];
+        leaf.radicand = Some(inner);
+        let n = self.leaf_node(v);
+        Ok(self.mul(&[out, n]))
+    }
+
+    /// `b^q` for a rational exponent: integers and halves.
+    pub fn pow_q(&mut self, b: Id, q: &Q) -> R<Id> {
+        let zero = self.canon(b).is_zero();
+        if q.is_integer() {
+            let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
+            let Some(e) = e else { return err(format!("exponent {q} is too large")) };
+            if zero && e < 0 {
+                return err("division by zero: 0 raised to a negative power");
+            }
+            return Ok(self.pow(b, e));
+        }
+        if q.den() == &int(2) {
+            let r = self.sqrt(b)?;
+            let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
+            let Some(e) = e else { return err(format!("exponent {q} is too large")) };
+            if zero && e < 0 {
+                return err("division by zero: 0 raised to a negative power");
+            }
+            return Ok(self.pow(r, e));
+        }
+        err(format!("exponent {q} is not supported: use an integer or half-integer exponent"))
+    }
+
+    /// `b^e`: a constant exponent goes to [`Ctx::pow_q`], any other is `exp(e log b)`.
+    pub fn pow_expr(&mut self, b: Id, e: Id) -> R<Id> {
+        if let Some(q) = self.canon(e).as_q() {
+            return self.pow_q(b, &q);
+        }
+        let l = self.log(b)?;
+        let m = self.mul(&[e, l]);
+        self.exp(m)
+    }
+
+    /// Checked division: an error when the divisor is identically zero.
+    pub fn checked_div(&mut self, a: Id, b: Id) -> R<Id> {
+        if self.canon(b).is_zero() {
+            return err("division by an expression that is identically zero");
+        }
+        Ok(self.div(a, b))
+    }
+}
+
+/// `n = s^2 t` with `s` as large as trial division by small primes finds.
+fn square_part(n: &Int) -> (Int, Int) {
+    let mut s = int(1);
+    let mut t = n.clone();
+    if t.is_zero() {
+        return (int(1), t);
+    }
+    if let Some(r) = int_exact_sqrt(&t) {
+        return (r, int(1));
+    }
+    let mut p = 2i64;
+    while p <= 1000 {
+        let pp = int(p * p);
+        while (&t % &pp).is_zero() {
+            t = &t / &pp;
+            s *= int(p);
+        }
+        p += 1;
+    }
+    (s, t)
+}
+
+/// Whether a polynomial is the square of a polynomial (schoolbook square root).
+fn is_square_poly(p: &Poly) -> bool {
+    if p.is_zero() {
+        return true;
+    }
+    let Some((lm, lc)) = p.leading().cloned() else { return true };
+    if lm.iter().any(|(_, e)| e % 2 == 1) {
+        return false;
+    }
+    let Some(rc) = int_exact_sqrt(&lc) else { return false };
+    let rm = Mono::from_pairs(lm.iter().map(|(v, e)| (v, e / 2)));
+    let mut root = Poly::monomial(rm.clone(), rc.clone());
+    let two_lead = (rm, &rc * int(2));
+    for _ in 0..=p.len() {
+        let rem = p.sub(&root.mul(&root));
+        let Some((m, c)) = rem.leading().cloned() else { return true };
+        let Some(q) = m.div(&two_lead.0) else { return false };
+        if !(&c % &two_lead.1).is_zero() {
+            return false;
+        }
+        root = root.add(&Poly::monomial(q, &c / &two_lead.1));
+    }
+    false
+}

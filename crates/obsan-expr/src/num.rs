@@ -1,0 +1,344 @@
+//! Numbers: exact integers and rationals (over dashu's `IBig`) and the prime
+//! field F_p with p = 2^61 - 1 used by the probabilistic rank test.
+
+use dashu_int::ops::{Abs, BitTest, DivRem, Gcd, SquareRoot};
+use dashu_int::{IBig, Sign, UBig};
+use std::fmt;
+
+/// Arbitrary-precision integer. Small values are stored inline by dashu.
+pub type Int = IBig;
+
+pub(crate) fn int(n: i64) -> Int {
+    IBig::from(n)
+}
+
+pub(crate) fn int_gcd(a: &Int, b: &Int) -> Int {
+    IBig::from(a.gcd(b))
+}
+
+/// Exact division (the caller knows `b` divides `a`).
+pub(crate) fn int_div_exact(a: &Int, b: &Int) -> Int {
+    debug_assert!((a % b).is_zero(), "inexact integer division");
+    a / b
+}
+
+/// Remainder in the symmetric range (-m/2, m/2].
+pub(crate) fn int_symmetric_mod(a: &Int, m: &Int) -> Int {
+    let (_, mut r) = a.clone().div_rem(m.clone());
+    if r.sign() == Sign::Negative {
+        r += m;
+    }
+    // now 0 <= r < m
+    let twice: Int = &r * int(2);
+    if &twice > m {
+        r -= m;
+    }
+    r
+}
+
+pub(crate) fn int_to_f64(a: &Int) -> f64 {
+    a.to_f64().value()
+}
+
+/// Integer square root if `a` is a perfect square (a >= 0).
+pub(crate) fn int_exact_sqrt(a: &Int) -> Option<Int> {
+    if a.sign() == Sign::Negative {
+        return None;
+    }
+    let u: UBig = a.clone().abs().try_into().ok()?;
+    let r = u.sqrt();
+    if &r * &r == u {
+        Some(IBig::from(r))
+    } else {
+        None
+    }
+}
+
+/// Exact rational number with positive denominator and gcd(num, den) = 1.
+#[derive(Clone, PartialEq, Eq, Hash, Debug)]
+pub struct Q {
+    num: Int,
+    den: Int,
+}
+
+impl Q {
+    pub fn new(num: Int, den: Int) -> Q {
+        assert!(!den.is_zero(), "rational with zero denominator");
+        let g = int_gcd(&num, &den);
+        let (mut n, mut d) = (int_div_exact(&num, &g), int_div_exact(&den, &g));
+        if d.sign() == Sign::Negative {
+            n = -n;
+            d = -d;
+        }
+        Q { num: n, den: d }
+    }
+    pub fn from_int(n: Int) -> Q {
+        Q { num: n, den: int(1) }
+    }
+    pub fn from_i64(n: i64) -> Q {
+        Q::from_int(int(n))
+    }
+    pub fn zero() -> Q {
+        Q::from_i64(0)
+    }
+    pub fn one() -> Q {
+        Q::from_i64(1)
+    }
+    pub fn num(&self) -> &Int {
+        &self.num
+    }
+    pub fn den(&self) -> &Int {
+        &self.den
+    }
+    pub fn is_zero(&self) -> bool {
+        self.num.is_zero()
+    }
+    pub fn is_one(&self) -> bool {
+        self.num.is_one() && self.den.is_one()
+    }
+    pub fn is_integer(&self) -> bool {
+        self.den.is_one()
+    }
+    pub fn is_negative(&self) -> bool {
+        self.num.sign() == Sign::Negative
+    }
+    pub fn add(&self, o: &Q) -> Q {
+        Q::new(&self.num * &o.den + &o.num * &self.den, &self.den * &o.den)
+    }
+    pub fn sub(&self, o: &Q) -> Q {
+        self.add(&o.neg())
+    }
+    pub fn mul(&self, o: &Q) -> Q {
+        Q::new(&self.num * &o.num, &self.den * &o.den)
+    }
+    pub fn neg(&self) -> Q {
+        Q { num: -self.num.clone(), den: self.den.clone() }
+    }
+    /// Inverse; `None` for zero.
+    pub fn inv(&self) -> Option<Q> {
+        if self.is_zero() {
+            None
+        } else {
+            Some(Q::new(self.den.clone(), self.num.clone()))
+        }
+    }
+    pub fn div(&self, o: &Q) -> Option<Q> {
+        Some(self.mul(&o.inv()?))
+    }
+    /// Integer power (negative powers of zero give `None`).
+    pub fn powi(&self, e: i64) -> Option<Q> {
+        let base = if e < 0 { self.inv()? } else { self.clone() };
+        let k = e.unsigned_abs() as usize;
+        Some(Q { num: base.num.pow(k), den: base.den.pow(k) })
+    }
+    pub fn to_f64(&self) -> f64 {
+        // Scale to keep precision for huge numerators/denominators.
+        let (n, d) = (int_to_f64(&self.num), int_to_f64(&self.den));
+        if n.is_finite() && d.is_finite() {
+            return n / d;
+        }
+        let shift = (self.num.clone().abs().bit_len() as i64 - 60).max(self.den.bit_len() as i64 - 60).max(0) as usize;
+        let n2 = int_to_f64(&(&self.num >> shift));
+        let d2 = int_to_f64(&(&self.den >> shift));
+        n2 / d2
+    }
+    /// Exact value of a finite f64.
+    pub fn from_f64(x: f64) -> Option<Q> {
+        if !x.is_finite() {
+            return None;
+        }
+        let bits = x.to_bits();
+        let sign = if bits >> 63 == 1 { -1i64 } else { 1 };
+        let exp = ((bits >> 52) & 0x7ff) as i64;
+        let frac = bits & ((1u64 << 52) - 1);
+        let (mant, e) = if exp == 0 { (frac, -1074) } else { (frac | (1u64 << 52), exp - 1075) };
+        let m = int(sign) * IBig::from(mant);
+        Some(if e >= 0 { Q::from_int(m << e as usize) } else { Q::new(m, int(1) << (-e) as usize) })
+    }
+    /// Value modulo p, `None` when p divides the denominator.
+    pub fn to_fp(&self) -> Option<Fp> {
+        let n = Fp::from_int(&self.num);
+        let d = Fp::from_int(&self.den);
+        Some(n.mul(d.inv()?))
+    }
+}
+
+impl fmt::Display for Q {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.den.is_one() {
+            write!(f, "{}", self.num)
+        } else {
+            write!(f, "{}/{}", self.num, self.den)
+        }
+    }
+}
+
+/// The Mersenne prime 2^61 - 1: reduction is a shift and an add.
+pub const P: u64 = (1u64 << 61) - 1;
+
+/// Element of F_p, p = 2^61 - 1, always reduced to [0, p).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug, Default)]
+pub struct Fp(pub u64);
+
+impl Fp {
+    pub const ZERO: Fp = Fp(0);
+    pub const ONE: Fp = Fp(1);
+    pub fn new(x: u64) -> Fp {
+        Fp(x % P)
+    }
+    pub fn from_i64(x: i64) -> Fp {
+        if x >= 0 {
+            Fp::new(x as u64)
+        } else {
+            Fp::new(x.unsigned_abs()).neg()
+        }
+    }
+    pub fn from_int(x: &Int) -> Fp {
+        let p = IBig::from(P);
+        let (_, mut r) = x.clone().div_rem(p.clone());
+        if r.sign() == Sign::Negative {
+            r += &p;
+        }
+        Fp(u64::try_from(&r).expect("reduced value fits u64"))
+    }
+    #[inline]
+    pub fn add(self, o: Fp) -> Fp {
+        let s = self.0 + o.0;
+        Fp(if s >= P { s - P } else { s })
+    }
+    #[inline]
+    pub fn sub(self, o: Fp) -> Fp {
+        Fp(if self.0 >= o.0 { self.0 - o.0 } else { self.0 + P - o.0 })
+    }
+    #[inline]
+    pub fn neg(self) -> Fp {
+        Fp(if self.0 == 0 { 0 } else { P - self.0 })
+    }
+    #[inline]
+    pub fn mul(self, o: Fp) -> Fp {
+        let w = self.0 as u128 * o.0 as u128;
+        let lo = (w as u64) & P;
+        let hi = (w >> 61) as u64;
+        let s = lo + hi;
+        Fp(if s >= P { s - P } else { s })
+    }
+    pub fn pow(self, mut e: u64) -> Fp {
+        let (mut b, mut r) = (self, Fp::ONE);
+        while e > 0 {
+            if e & 1 == 1 {
+                r = r.mul(b);
+            }
+            b = b.mul(b);
+            e >>= 1;
+        }
+        r
+    }
+    /// Inverse by Fermat; `None` for zero.
+    pub fn inv(self) -> Option<Fp> {
+        if self.0 == 0 {
+            None
+        } else {
+            Some(self.pow(P - 2))
+        }
+    }
+    pub fn is_zero(self) -> bool {
+        self.0 == 0
+    }
+    /// A square root if one exists (Tonelli–Shanks; p - 1 = 2 * odd * ...).
+    pub fn sqrt(self) -> Option<Fp> {
+        if self.0 == 0 {
+            return Some(self);
+        }
+        if self.pow((P - 1) / 2) != Fp::ONE {
+            return None;
+        }
+        // p - 1 = 2^s * q
+        let (mut q, mut s) = (P - 1, 0u32);
+        while q % 2 == 0 {
+            q /= 2;
+            s += 1;
+        }
+        let mut z = Fp(2);
+        while z.pow((P - 1) / 2) == Fp::ONE {
+            z = Fp(z.0 + 1);
+        }
+        let (mut m, mut c, mut t, mut r) = (s, z.pow(q), self.pow(q), self.pow(q.div_ceil(2)));
+        while t != Fp::ONE {
+            let mut i = 0;
+            let mut t2 = t;
+            while t2 != Fp::ONE {
+                t2 = t2.mul(t2);
+                i += 1;
+            }
+            let b = c.pow(1u64 << (m - i - 1));
+            m = i;
+            c = b.mul(b);
+            t = t.mul(c);
+            r = r.mul(b);
+        }
+        Some(r)
+    }
+}
+
+/// Small deterministic PRNG (SplitMix64) for random evaluation points: the
+/// engine must not depend on a particular `rand` version for reproducibility.
+#[derive(Clone, Debug)]
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform element of F_p.
+    pub fn fp(&mut self) -> Fp {
+        loop {
+            let x = self.next_u64() >> 3;
+            if x < P {
+                return Fp(x);
+            }
+        }
+    }
+    /// Uniform f64 in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fp_field_identities() {
+        let mut r = SplitMix(7);
+        for _ in 0..200 {
+            let (a, b) = (r.fp(), r.fp());
+            assert_eq!(a.mul(b), b.mul(a));
+            if !a.is_zero() {
+                assert_eq!(a.mul(a.inv().unwrap()), Fp::ONE);
+            }
+            assert_eq!(a.sub(b).add(b), a);
+            let sq = a.mul(a);
+            let s = sq.sqrt().unwrap();
+            assert_eq!(s.mul(s), sq);
+        }
+    }
+
+    #[test]
+    fn rational_arithmetic_and_conversions() {
+        let a = Q::new(int(6), int(-4));
+        assert_eq!(a, Q::new(int(-3), int(2)));
+        assert_eq!(a.add(&Q::new(int(3), int(2))), Q::zero());
+        assert_eq!(Q::from_f64(0.375).unwrap(), Q::new(int(3), int(8)));
+        assert_eq!(Q::new(int(1), int(3)).to_f64(), 1.0 / 3.0);
+        let x = Q::new(int(5), int(7)).to_fp().unwrap();
+        assert_eq!(x.mul(Fp::from_i64(7)), Fp::from_i64(5));
+        assert_eq!(int_symmetric_mod(&int(7), &int(5)), int(2));
+        assert_eq!(int_symmetric_mod(&int(9), &int(5)), int(-1));
+        assert_eq!(int_symmetric_mod(&int(-7), &int(5)), int(-2));
+    }
+}

@@ -1,0 +1,429 @@
+//! Infix expressions: a hand-written lexer and a Pratt parser producing a
+//! spanned syntax tree, then a builder that lowers it into a [`Ctx`].
+//!
+//! Grammar: numbers (integers and decimals, read as exact rationals, with an
+//! optional exponent `1.5e-3`), identifiers, `+ - * / ^`, unary minus,
+//! parentheses, `pi`, and the functions `sin cos tan atan atan2 exp log sqrt`.
+//! `^` is right-associative and binds tighter than unary minus: `-x^2 = -(x^2)`.
+
+use crate::graph::{Ctx, Id};
+use crate::num::{int, Int, Q};
+use std::fmt;
+
+/// Byte range in the source text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Span {
+    pub start: usize,
+    pub end: usize,
+}
+
+impl Span {
+    pub fn new(start: usize, end: usize) -> Span {
+        Span { start, end }
+    }
+    pub fn join(self, o: Span) -> Span {
+        Span { start: self.start.min(o.start), end: self.end.max(o.end) }
+    }
+    pub fn shift(self, by: usize) -> Span {
+        Span { start: self.start + by, end: self.end + by }
+    }
+}
+
+/// An error at a place in the source.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ParseError {
+    pub message: String,
+    pub span: Span,
+}
+
+impl ParseError {
+    pub fn new(message: impl Into<String>, span: Span) -> ParseError {
+        ParseError { message: message.into(), span }
+    }
+}
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+impl std::error::Error for ParseError {}
+
+/// 1-based line and column (in characters) of a byte offset.
+pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
+    let offset = offset.min(src.len());
+    let before = &src[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, col)
+}
+
+/// Binary operators.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BinOp {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+}
+
+/// The functions the language knows, with their arity.
+pub const FUNCTIONS: [(&str, usize); 8] =
+    [("sin", 1), ("cos", 1), ("tan", 1), ("atan", 1), ("atan2", 2), ("exp", 1), ("log", 1), ("sqrt", 1)];
+
+/// A syntax tree node with its span.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ast {
+    pub kind: AstKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum AstKind {
+    Num(Q),
+    Pi,
+    Ident(String),
+    Neg(Box<Ast>),
+    Bin(BinOp, Box<Ast>, Box<Ast>),
+    Call(String, Vec<Ast>),
+}
+
+impl Ast {
+    /// Every identifier (not function names), with its span.
+    pub fn idents(&self) -> Vec<(&str, Span)> {
+        let mut out = Vec::new();
+        let mut stack = vec![self];
+        while let Some(a) = stack.pop() {
+            match &a.kind {
+                AstKind::Ident(n) => out.push((n.as_str(), a.span)),
+                AstKind::Neg(x) => stack.push(x),
+                AstKind::Bin(_, l, r) => {
+                    stack.push(r);
+                    stack.push(l);
+                }
+                AstKind::Call(_, args) => stack.extend(args.iter().rev()),
+                AstKind::Num(_) | AstKind::Pi => {}
+            }
+        }
+        out
+    }
+
+    /// The top-level additive terms, each with its sign (`a - b*c` gives `+a`, `-b*c`).
+    pub fn additive_terms(&self) -> Vec<(bool, &Ast)> {
+        let mut out = Vec::new();
+        fn walk<'a>(a: &'a Ast, neg: bool, out: &mut Vec<(bool, &'a Ast)>) {
+            match &a.kind {
+                AstKind::Bin(BinOp::Add, l, r) => {
+                    walk(l, neg, out);
+                    walk(r, neg, out);
+                }
+                AstKind::Bin(BinOp::Sub, l, r) => {
+                    walk(l, neg, out);
+                    walk(r, !neg, out);
+                }
+                AstKind::Neg(x) => walk(x, !neg, out),
+                _ => out.push((neg, a)),
+            }
+        }
+        walk(self, false, &mut out);
+        out
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Tok {
+    Num(Q),
+    Ident(String),
+    Op(char),
+    LParen,
+    RParen,
+    Comma,
+    End,
+}
+
+struct Lexer<'a> {
+    src: &'a str,
+    pos: usize,
+}
+
+impl<'a> Lexer<'a> {
+    fn next(&mut self) -> Result<(Tok, Span), ParseError> {
+        let b = self.src.as_bytes();
+        while self.pos < b.len() && (b[self.pos] as char).is_whitespace() {
+            self.pos += 1;
+        }
+        let start = self.pos;
+        if self.pos >= b.len() {
+            return Ok((Tok::End, Span::new(start, start)));
+        }
+        let c = b[self.pos] as char;
+        if c.is_ascii_digit() || (c == '.' && b.get(self.pos + 1).is_some_and(|d| d.is_ascii_digit())) {
+            return self.number(start);
+        }
+        if c.is_ascii_alphabetic() || c == '_' {
+            while self.pos < b.len() && ((b[self.pos] as char).is_ascii_alphanumeric() || b[self.pos] == b'_') {
+                self.pos += 1;
+            }
+            return Ok((Tok::Ident(self.src[start..self.pos].to_string()), Span::new(start, self.pos)));
+        }
+        self.pos += 1;
+        let t = match c {
+            '+' | '-' | '*' | '/' | '^' => Tok::Op(c),
+            '(' => Tok::LParen,
+            ')' => Tok::RParen,
+            ',' => Tok::Comma,
+            _ => {
+                let ch = self.src[start..].chars().next().unwrap_or('?');
+                self.pos = start + ch.len_utf8();
+                let hint = if ch == '=' { " (an equation is not an expression)" } else { "" };
+                return Err(ParseError::new(format!("unexpected character '{ch}'{hint}"), Span::new(start, self.pos)));
+            }
+        };
+        Ok((t, Span::new(start, self.pos)))
+    }
+
+    fn number(&mut self, start: usize) -> Result<(Tok, Span), ParseError> {
+        let b = self.src.as_bytes();
+        let digits = |p: &mut usize| {
+            let s = *p;
+            while *p < b.len() && b[*p].is_ascii_digit() {
+                *p += 1;
+            }
+            *p - s
+        };
+        let mut p = self.pos;
+        digits(&mut p);
+        let int_end = p;
+        let mut frac = "";
+        if p < b.len() && b[p] == b'.' {
+            p += 1;
+            let fs = p;
+            digits(&mut p);
+            frac = &self.src[fs..p];
+        }
+        let mut exp: i64 = 0;
+        if p < b.len() && (b[p] == b'e' || b[p] == b'E') {
+            let mut q = p + 1;
+            let neg = q < b.len() && b[q] == b'-';
+            if q < b.len() && (b[q] == b'-' || b[q] == b'+') {
+                q += 1;
+            }
+            let es = q;
+            if digits(&mut q) == 0 {
+                return Err(ParseError::new("malformed number: exponent has no digits", Span::new(start, q)));
+            }
+            let e: i64 = self.src[es..q].parse().unwrap_or(i64::MAX);
+            if e > 400 {
+                return Err(ParseError::new("number exponent out of range", Span::new(start, q)));
+            }
+            exp = if neg { -e } else { e };
+            p = q;
+        }
+        self.pos = p;
+        let span = Span::new(start, p);
+        if p < b.len() && ((b[p] as char).is_ascii_alphabetic() || b[p] == b'_') {
+            return Err(ParseError::new("a number cannot be followed by a letter (use '*')", Span::new(start, p + 1)));
+        }
+        if int_end - start + frac.len() > 400 {
+            return Err(ParseError::new("number has too many digits", span));
+        }
+        let mantissa: Int = format!("{}{}", &self.src[start..int_end], frac).parse::<Int>().unwrap_or(int(0));
+        let e = exp - frac.len() as i64;
+        let ten = int(10);
+        let q = if e >= 0 {
+            Q::from_int(mantissa * ten.pow(e as usize))
+        } else {
+            Q::new(mantissa, ten.pow((-e) as usize))
+        };
+        Ok((Tok::Num(q), span))
+    }
+}
+
+struct Parser<'a> {
+    lex: Lexer<'a>,
+    tok: Tok,
+    span: Span,
+    depth: usize,
+}
+
+const MAX_DEPTH: usize = 500;
+
+impl<'a> Parser<'a> {
+    fn bump(&mut self) -> Result<(), ParseError> {
+        let (t, s) = self.lex.next()?;
+        self.tok = t;
+        self.span = s;
+        Ok(())
+    }
+
+    fn expr(&mut self, min_bp: u8) -> Result<Ast, ParseError> {
+        self.depth += 1;
+        if self.depth > MAX_DEPTH {
+            return Err(ParseError::new("expression nested too deeply", self.span));
+        }
+        let mut lhs = self.prefix()?;
+        loop {
+            let (op, l_bp, r_bp) = match self.tok {
+                Tok::Op('+') => (BinOp::Add, 1, 2),
+                Tok::Op('-') => (BinOp::Sub, 1, 2),
+                Tok::Op('*') => (BinOp::Mul, 3, 4),
+                Tok::Op('/') => (BinOp::Div, 3, 4),
+                Tok::Op('^') => (BinOp::Pow, 8, 7),
+                _ => break,
+            };
+            if l_bp < min_bp {
+                break;
+            }
+            self.bump()?;
+            let rhs = self.expr(r_bp)?;
+            let span = lhs.span.join(rhs.span);
+            lhs = Ast { kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)), span };
+        }
+        self.depth -= 1;
+        Ok(lhs)
+    }
+
+    fn prefix(&mut self) -> Result<Ast, ParseError> {
+        let span = self.span;
+        match self.tok.clone() {
+            Tok::Num(q) => {
+                self.bump()?;
+                Ok(Ast { kind: AstKind::Num(q), span })
+            }
+            Tok::Op('-') => {
+                self.bump()?;
+                let x = self.expr(5)?;
+                let s = span.join(x.span);
+                Ok(Ast { kind: AstKind::Neg(Box::new(x)), span: s })
+            }
+            Tok::Op('+') => {
+                self.bump()?;
+                self.expr(5)
+            }
+            Tok::LParen => {
+                self.bump()?;
+                let inner = self.expr(0)?;
+                if self.tok != Tok::RParen {
+                    return Err(ParseError::new("expected ')' to close this '('", span.join(self.span)));
+                }
+                let end = self.span;
+                self.bump()?;
+                Ok(Ast { kind: inner.kind, span: span.join(end) })
+            }
+            Tok::Ident(name) => {
+                self.bump()?;
+                if self.tok == Tok::LParen {
+                    return self.call(name, span);
+                }
+                if name == "pi" {
+                    return Ok(Ast { kind: AstKind::Pi, span });
+                }
+                if FUNCTIONS.iter().any(|(f, _)| *f == name) {
+                    return Err(ParseError::new(format!("function '{name}' needs an argument list: {name}(...)"), span));
+                }
+                Ok(Ast { kind: AstKind::Ident(name), span })
+            }
+            Tok::End => Err(ParseError::new("unexpected end of expression", span)),
+            Tok::RParen => Err(ParseError::new("unexpected ')'", span)),
+            Tok::Comma => Err(ParseError::new("unexpected ','", span)),
+            Tok::Op(c) => Err(ParseError::new(format!("unexpected operator '{c}'"), span)),
+        }
+    }
+
+    fn call(&mut self, name: String, name_span: Span) -> Result<Ast, ParseError> {
+        let Some(&(_, arity)) = FUNCTIONS.iter().find(|(f, _)| *f == name) else {
+            let known: Vec<&str> = FUNCTIONS.iter().map(|f| f.0).collect();
+            return Err(ParseError::new(format!("unknown function '{name}' (known: {})", known.join(", ")), name_span));
+        };
+        self.bump()?; // '('
+        let mut args = Vec::new();
+        if self.tok != Tok::RParen {
+            loop {
+                args.push(self.expr(0)?);
+                if self.tok == Tok::Comma {
+                    self.bump()?;
+                    continue;
+                }
+                break;
+            }
+        }
+        if self.tok != Tok::RParen {
+            return Err(ParseError::new(format!("expected ',' or ')' in the arguments of '{name}'"), self.span));
+        }
+        let span = name_span.join(self.span);
+        self.bump()?;
+        if args.len() != arity {
+            let plural = if arity == 1 { "" } else { "s" };
+            return Err(ParseError::new(format!("'{name}' takes {arity} argument{plural}, got {}", args.len()), span));
+        }
+        Ok(Ast { kind: AstKind::Call(name, args), span })
+    }
+}
+
+/// Parse an expression to a syntax tree.
+pub fn parse_ast(src: &str) -> Result<Ast, ParseError> {
+    let mut p = Parser { lex: Lexer { src, pos: 0 }, tok: Tok::End, span: Span::default(), depth: 0 };
+    p.bump()?;
+    let a = p.expr(0)?;
+    if p.tok != Tok::End {
+        let what = match &p.tok {
+            Tok::RParen => "unmatched ')'".to_string(),
+            Tok::Num(_) | Tok::Ident(_) | Tok::LParen => "missing operator before this".to_string(),
+            _ => "unexpected token".to_string(),
+        };
+        return Err(ParseError::new(what, p.span));
+    }
+    Ok(a)
+}
+
+impl Ctx {
+    /// Build a syntax tree; `resolve` maps each identifier to a node.
+    pub fn build(&mut self, ast: &Ast, resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>) -> Result<Id, ParseError> {
+        let at = |e: crate::lower::EngineError, s: Span| ParseError::new(e.0, s);
+        Ok(match &ast.kind {
+            AstKind::Num(q) => self.num(q.clone()),
+            AstKind::Pi => self.pi(),
+            AstKind::Ident(n) => resolve(self, n, ast.span)?,
+            AstKind::Neg(x) => {
+                let v = self.build(x, resolve)?;
+                self.neg(v)
+            }
+            AstKind::Bin(op, l, r) => {
+                let a = self.build(l, resolve)?;
+                let b = self.build(r, resolve)?;
+                match op {
+                    BinOp::Add => self.add(&[a, b]),
+                    BinOp::Sub => self.sub(a, b),
+                    BinOp::Mul => self.mul(&[a, b]),
+                    BinOp::Div => self.checked_div(a, b).map_err(|e| at(e, r.span))?,
+                    BinOp::Pow => self.pow_expr(a, b).map_err(|e| at(e, ast.span))?,
+                }
+            }
+            AstKind::Call(f, args) => {
+                let mut v = Vec::with_capacity(args.len());
+                for a in args {
+                    v.push(self.build(a, resolve)?);
+                }
+                let r = match f.as_str() {
+                    "sin" => self.sin(v[0]),
+                    "cos" => self.cos(v[0]),
+                    "tan" => self.tan(v[0]),
+                    "atan" => self.atan(v[0]),
+                    "atan2" => self.atan2(v[0], v[1]),
+                    "exp" => self.exp(v[0]),
+                    "log" => self.log(v[0]),
+                    "sqrt" => self.sqrt(v[0]),
+                    _ => unreachable!("the parser accepts only known functions"),
+                };
+                r.map_err(|e| at(e, ast.span))?
+            }
+        })
+    }
+
+    /// Parse and build, treating every identifier as a symbol.
+    pub fn parse(&mut self, src: &str) -> Result<Id, ParseError> {
+        let ast = parse_ast(src)?;
+        self.build(&ast, &mut |ctx, name, _| Ok(ctx.symbol(name).id))
+    }
+}

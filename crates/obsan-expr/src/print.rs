@@ -1,0 +1,201 @@
+//! Printing canonical forms as plain text (which parses back to the same
+//! canonical form) and as LaTeX.
+
+use crate::canon::RatFun;
+use crate::graph::{Angle, Ctx, Id, LeafKind};
+use crate::num::Int;
+use crate::poly::{Mono, Poly, Var};
+use dashu_int::Sign;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Style {
+    Text,
+    Latex,
+}
+
+impl Ctx {
+    /// Plain text of the canonical form of `id`.
+    pub fn to_text(&mut self, id: Id) -> String {
+        let r = self.canon(id);
+        self.ratfun_text(&r)
+    }
+
+    /// LaTeX of the canonical form of `id`.
+    pub fn to_latex(&mut self, id: Id) -> String {
+        let r = self.canon(id);
+        self.ratfun_latex(&r)
+    }
+
+    pub fn ratfun_text(&self, r: &RatFun) -> String {
+        self.fmt_ratfun(r, Style::Text)
+    }
+
+    pub fn ratfun_latex(&self, r: &RatFun) -> String {
+        self.fmt_ratfun(r, Style::Latex)
+    }
+
+    /// Plain text of a polynomial over the leaves.
+    pub fn poly_text(&self, p: &Poly) -> String {
+        self.fmt_poly(p, Style::Text)
+    }
+
+    fn fmt_ratfun(&self, r: &RatFun, st: Style) -> String {
+        let num = self.fmt_poly(&r.num, st);
+        if r.den.is_one() {
+            return num;
+        }
+        let den = self.fmt_poly(&r.den, st);
+        match st {
+            Style::Latex => format!("\\frac{{{num}}}{{{den}}}"),
+            Style::Text => {
+                let n = if r.num.len() > 1 { format!("({num})") } else { num };
+                let simple_den = r.den.len() == 1 && {
+                    let (m, c) = &r.den.terms()[0];
+                    (m.is_one() && c.sign() == Sign::Positive) || (c.is_one() && m.iter().count() == 1)
+                };
+                let d = if simple_den { den } else { format!("({den})") };
+                format!("{n}/{d}")
+            }
+        }
+    }
+
+    fn fmt_poly(&self, p: &Poly, st: Style) -> String {
+        if p.is_zero() {
+            return "0".into();
+        }
+        let mut out = String::new();
+        for (i, (m, c)) in p.terms().iter().enumerate() {
+            let neg = c.sign() == Sign::Negative;
+            let a: Int = if neg { -c.clone() } else { c.clone() };
+            if i == 0 {
+                if neg {
+                    out.push('-');
+                }
+            } else {
+                out.push_str(if neg { " - " } else { " + " });
+            }
+            let mono = self.fmt_mono(m, st);
+            if mono.is_empty() {
+                out.push_str(&a.to_string());
+            } else if a.is_one() {
+                out.push_str(&mono);
+            } else {
+                out.push_str(&a.to_string());
+                out.push_str(if st == Style::Text { "*" } else { " " });
+                out.push_str(&mono);
+            }
+        }
+        out
+    }
+
+    fn fmt_mono(&self, m: &Mono, st: Style) -> String {
+        let parts: Vec<String> = m
+            .iter()
+            .map(|(v, e)| {
+                let base = self.fmt_leaf(v, st);
+                match (e, st) {
+                    (1, _) => base,
+                    (_, Style::Text) => format!("{base}^{e}"),
+                    (_, Style::Latex) => {
+                        // \sin^{2}\gamma reads better than (\sin\gamma)^{2}.
+                        if let Some(rest) = base.strip_prefix("\\sin") {
+                            format!("\\sin^{{{e}}}{rest}")
+                        } else if let Some(rest) = base.strip_prefix("\\cos") {
+                            format!("\\cos^{{{e}}}{rest}")
+                        } else if base.starts_with('\\') && base.contains("\\left(") {
+                            format!("\\left({base}\\right)^{{{e}}}")
+                        } else {
+                            format!("{base}^{{{e}}}")
+                        }
+                    }
+                }
+            })
+            .collect();
+        parts.join(if st == Style::Text { "*" } else { " " })
+    }
+
+    fn arg(&self, id: Id, st: Style) -> String {
+        let r = self.canon_memo.get(&id).expect("atom arguments are canonical");
+        self.fmt_ratfun(r, st)
+    }
+
+    fn fmt_leaf(&self, v: Var, st: Style) -> String {
+        let kind = &self.leaves[v as usize].kind;
+        let angle = |a: &Angle| -> String {
+            match a {
+                Angle::Symbol { sym, den } => {
+                    let s = self.fmt_leaf(*sym, st);
+                    match (den, st) {
+                        (1, _) => s,
+                        (_, Style::Text) => format!("{s}/{den}"),
+                        (_, Style::Latex) => format!("\\frac{{{s}}}{{{den}}}"),
+                    }
+                }
+                Angle::Generic(id) => self.arg(*id, st),
+            }
+        };
+        let simple_angle = |a: &Angle| matches!(a, Angle::Symbol { den: 1, .. });
+        match (kind, st) {
+            (LeafKind::Symbol(name), Style::Text) => name.clone(),
+            (LeafKind::Symbol(name), Style::Latex) => latex_name(name),
+            (LeafKind::Pi, Style::Text) => "pi".into(),
+            (LeafKind::Pi, Style::Latex) => "\\pi".into(),
+            (LeafKind::Sin(a), Style::Text) => format!("sin({})", angle(a)),
+            (LeafKind::Cos(a), Style::Text) => format!("cos({})", angle(a)),
+            (LeafKind::Exp(a), Style::Text) => format!("exp({})", angle(a)),
+            (LeafKind::Sin(a), Style::Latex) if simple_angle(a) => format!("\\sin {}", angle(a)),
+            (LeafKind::Cos(a), Style::Latex) if simple_angle(a) => format!("\\cos {}", angle(a)),
+            (LeafKind::Sin(a), Style::Latex) => format!("\\sin\\left({}\\right)", angle(a)),
+            (LeafKind::Cos(a), Style::Latex) => format!("\\cos\\left({}\\right)", angle(a)),
+            (LeafKind::Exp(a), Style::Latex) => format!("e^{{{}}}", angle(a)),
+            (LeafKind::Atan(u), Style::Text) => format!("atan({})", self.arg(*u, st)),
+            (LeafKind::Atan(u), Style::Latex) => format!("\\arctan\\left({}\\right)", self.arg(*u, st)),
+            (LeafKind::Atan2(y, x), Style::Text) => format!("atan2({}, {})", self.arg(*y, st), self.arg(*x, st)),
+            (LeafKind::Atan2(y, x), Style::Latex) => {
+                format!("\\operatorname{{atan2}}\\left({}, {}\\right)", self.arg(*y, st), self.arg(*x, st))
+            }
+            (LeafKind::Log(u), Style::Text) => format!("log({})", self.arg(*u, st)),
+            (LeafKind::Log(u), Style::Latex) => format!("\\log\\left({}\\right)", self.arg(*u, st)),
+            (LeafKind::Sqrt(u), Style::Text) => format!("sqrt({})", self.arg(*u, st)),
+            (LeafKind::Sqrt(u), Style::Latex) => format!("\\sqrt{{{}}}", self.arg(*u, st)),
+        }
+    }
+
+    /// Plain text of a leaf (a symbol's name, or `sin(gamma)`, ...).
+    pub fn leaf_text(&self, v: Var) -> String {
+        self.fmt_leaf(v, Style::Text)
+    }
+}
+
+const GREEK: [&str; 40] = [
+    "alpha", "beta", "gamma", "delta", "epsilon", "varepsilon", "zeta", "eta", "theta", "vartheta", "iota", "kappa",
+    "lambda", "mu", "nu", "xi", "pi", "varpi", "rho", "varrho", "sigma", "varsigma", "tau", "upsilon", "phi", "varphi",
+    "chi", "psi", "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi", "Omega",
+];
+
+/// LaTeX for a symbol name: Greek names become letters, `a_b` and trailing
+/// digits become subscripts, other multi-letter names are upright.
+pub fn latex_name(name: &str) -> String {
+    let (base, sub) = match name.split_once('_') {
+        Some((b, s)) => (b, Some(s.to_string())),
+        None => {
+            let t = name.trim_end_matches(|c: char| c.is_ascii_digit());
+            if t.len() < name.len() && !t.is_empty() {
+                (t, Some(name[t.len()..].to_string()))
+            } else {
+                (name, None)
+            }
+        }
+    };
+    let b = if GREEK.contains(&base) {
+        format!("\\{base}")
+    } else if base.chars().count() == 1 {
+        base.to_string()
+    } else {
+        format!("\\mathrm{{{base}}}")
+    };
+    match sub {
+        Some(s) => format!("{b}_{{{}}}", latex_name(&s)),
+        None => b,
+    }
+}
