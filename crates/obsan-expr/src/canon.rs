@@ -26,16 +26,28 @@ pub struct RatFun {
 
 impl RatFun {
     pub fn zero() -> RatFun {
-        RatFun { num: Poly::zero(), den: Poly::one() }
+        RatFun {
+            num: Poly::zero(),
+            den: Poly::one(),
+        }
     }
     pub fn one() -> RatFun {
-        RatFun { num: Poly::one(), den: Poly::one() }
+        RatFun {
+            num: Poly::one(),
+            den: Poly::one(),
+        }
     }
     pub fn from_q(q: &Q) -> RatFun {
-        RatFun { num: Poly::constant(q.num().clone()), den: Poly::constant(q.den().clone()) }
+        RatFun {
+            num: Poly::constant(q.num().clone()),
+            den: Poly::constant(q.den().clone()),
+        }
     }
     pub(crate) fn var(v: Var) -> RatFun {
-        RatFun { num: Poly::var(v), den: Poly::one() }
+        RatFun {
+            num: Poly::var(v),
+            den: Poly::one(),
+        }
     }
     pub fn is_zero(&self) -> bool {
         self.num.is_zero()
@@ -62,7 +74,10 @@ impl RatFun {
         v
     }
     pub fn neg(&self) -> RatFun {
-        RatFun { num: self.num.neg(), den: self.den.clone() }
+        RatFun {
+            num: self.num.neg(),
+            den: self.den.clone(),
+        }
     }
     /// Number of terms in numerator and denominator (a size measure).
     pub fn term_count(&self) -> usize {
@@ -82,14 +97,21 @@ impl Ctx {
     fn relation(&self, v: Var) -> Option<Relation<'_>> {
         let leaf = &self.leaves[v as usize];
         match leaf.kind {
-            LeafKind::Sin(_) => Some(Relation::Sin(leaf.partner.expect("sin leaf has a cos partner"))),
-            LeafKind::Sqrt(_) => Some(Relation::Sqrt(leaf.radicand.as_ref().expect("sqrt leaf has a radicand"))),
+            LeafKind::Sin(_) => Some(Relation::Sin(
+                leaf.partner.expect("sin leaf has a cos partner"),
+            )),
+            LeafKind::Sqrt(_) => Some(Relation::Sqrt(
+                leaf.radicand.as_ref().expect("sqrt leaf has a radicand"),
+            )),
             _ => None,
         }
     }
 
     fn has_relation(&self, v: Var) -> bool {
-        matches!(self.leaves[v as usize].kind, LeafKind::Sin(_) | LeafKind::Sqrt(_))
+        matches!(
+            self.leaves[v as usize].kind,
+            LeafKind::Sin(_) | LeafKind::Sqrt(_)
+        )
     }
 
     /// Reduce all relation leaves to degree <= 1: returns `(n, m)` with `p = n / m`.
@@ -98,7 +120,11 @@ impl Ctx {
         let mut den = Poly::one();
         loop {
             // Highest leaf first: reductions only introduce lower leaves.
-            let v = num.vars().into_iter().rev().find(|&v| self.has_relation(v) && num.degree(v) >= 2);
+            let v = num
+                .vars()
+                .into_iter()
+                .rev()
+                .find(|&v| self.has_relation(v) && num.degree(v) >= 2);
             let Some(v) = v else { break };
             let cs = num.coeffs_in(v);
             match self.relation(v).expect("checked") {
@@ -106,7 +132,9 @@ impl Ctx {
                     let one_minus_c2 = Poly::one().sub(&Poly::var(c).pow(2));
                     let mut acc = Poly::zero();
                     for (e, k) in cs {
-                        let t = k.mul_term(&Mono::var(v, e % 2), &int(1)).mul(&one_minus_c2.pow(e / 2));
+                        let t = k
+                            .mul_term(&Mono::var(v, e % 2), &int(1))
+                            .mul(&one_minus_c2.pow(e / 2));
                         acc = acc.add(&t);
                     }
                     num = acc;
@@ -143,12 +171,23 @@ impl Ctx {
         // Rationalise: remove relation leaves from the denominator, highest first.
         while let Some(v) = den.vars().into_iter().rev().find(|&v| self.has_relation(v)) {
             let cs = den.coeffs_in(v);
-            let d1 = cs.iter().find(|c| c.0 == 1).map(|c| c.1.clone()).unwrap_or_default();
-            let d0 = cs.iter().find(|c| c.0 == 0).map(|c| c.1.clone()).unwrap_or_default();
+            let d1 = cs
+                .iter()
+                .find(|c| c.0 == 1)
+                .map(|c| c.1.clone())
+                .unwrap_or_default();
+            let d0 = cs
+                .iter()
+                .find(|c| c.0 == 0)
+                .map(|c| c.1.clone())
+                .unwrap_or_default();
             let conj = d0.sub(&d1.mul(&Poly::var(v)));
             let (n2, m3) = self.reduce_poly(num.mul(&conj));
             let (d2, m4) = self.reduce_poly(den.mul(&conj));
-            assert!(!d2.is_zero(), "conjugate norm vanished: a sqrt radicand is a perfect square");
+            assert!(
+                !d2.is_zero(),
+                "conjugate norm vanished: a sqrt radicand is a perfect square"
+            );
             num = n2.mul(&m4);
             den = d2.mul(&m3);
         }
@@ -174,10 +213,18 @@ impl Ctx {
         if a.den == b.den {
             let num = a.num.add(&b.num);
             if a.den.is_one() || num.is_zero() {
-                return RatFun { num, den: a.den.clone() }.fix_zero();
+                return RatFun {
+                    num,
+                    den: a.den.clone(),
+                }
+                .fix_zero();
             }
             let g = gcd(&num, &a.den);
-            return RatFun { num: num.div_exact(&g).expect("gcd"), den: a.den.div_exact(&g).expect("gcd") }.fix_zero();
+            return RatFun {
+                num: num.div_exact(&g).expect("gcd"),
+                den: a.den.div_exact(&g).expect("gcd"),
+            }
+            .fix_zero();
         }
         // Henrici: only the gcd of the denominators can cancel.
         let g = gcd(&a.den, &b.den);
@@ -192,7 +239,10 @@ impl Ctx {
         if g2.is_one() {
             RatFun { num, den }
         } else {
-            RatFun { num: num.div_exact(&g2).expect("gcd"), den: den.div_exact(&g2).expect("gcd") }
+            RatFun {
+                num: num.div_exact(&g2).expect("gcd"),
+                den: den.div_exact(&g2).expect("gcd"),
+            }
         }
     }
 
@@ -201,7 +251,11 @@ impl Ctx {
             return RatFun::zero();
         }
         if a.den.is_one() && b.den.is_one() && (a.num.is_constant() || b.num.is_constant()) {
-            return RatFun { num: a.num.mul(&b.num), den: Poly::one() }.fix_sign_const();
+            return RatFun {
+                num: a.num.mul(&b.num),
+                den: Poly::one(),
+            }
+            .fix_sign_const();
         }
         let g1 = gcd(&a.num, &b.den);
         let g2 = gcd(&b.num, &a.den);
@@ -213,7 +267,10 @@ impl Ctx {
         let den = ad.mul(&bd);
         // A product of two reduced numerators may need the relations again.
         let av = an.vars();
-        let needs = bn.vars().iter().any(|v| self.has_relation(*v) && av.contains(v));
+        let needs = bn
+            .vars()
+            .iter()
+            .any(|v| self.has_relation(*v) && av.contains(v));
         if needs {
             self.normalize(num, den)
         } else {
@@ -300,7 +357,9 @@ impl Ctx {
                     }
                     acc
                 }
-                Node::Pow(b, e) => self.rf_pow(&self.canon_memo[&b], e as i64).expect("division by zero in a canonical form"),
+                Node::Pow(b, e) => self
+                    .rf_pow(&self.canon_memo[&b], e as i64)
+                    .expect("division by zero in a canonical form"),
             };
             self.canon_memo.insert(n, r);
         }

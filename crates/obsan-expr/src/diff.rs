@@ -39,7 +39,11 @@ impl Ctx {
         match self.node(n).clone() {
             Node::Num(_) => self.zero(),
             Node::Add(cs) => {
-                let ds: Vec<Id> = cs.iter().map(|&c| self.d(c, x)).filter(|&d| !self.is_zero(d)).collect();
+                let ds: Vec<Id> = cs
+                    .iter()
+                    .map(|&c| self.d(c, x))
+                    .filter(|&d| !self.is_zero(d))
+                    .collect();
                 self.add(&ds)
             }
             Node::Mul(cs) => {
@@ -49,7 +53,12 @@ impl Ctx {
                     if self.is_zero(dc) {
                         continue;
                     }
-                    let mut f: Vec<Id> = cs.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, &y)| y).collect();
+                    let mut f: Vec<Id> = cs
+                        .iter()
+                        .enumerate()
+                        .filter(|(j, _)| *j != i)
+                        .map(|(_, &y)| y)
+                        .collect();
                     f.push(dc);
                     terms.push(self.mul(&f));
                 }

@@ -67,7 +67,9 @@ impl Tape {
                     LeafKind::Pi => Op::Const(std::f64::consts::PI),
                     LeafKind::Sin(a) | LeafKind::Cos(a) | LeafKind::Exp(a) => {
                         let (arg, scale) = match a {
-                            Angle::Symbol { sym, den } => (s(ctx.leaf_node(*sym)), 1.0 / *den as f64),
+                            Angle::Symbol { sym, den } => {
+                                (s(ctx.leaf_node(*sym)), 1.0 / *den as f64)
+                            }
                             Angle::Generic(g) => (s(*g), 1.0),
                         };
                         match &ctx.leaves[*v as usize].kind {
@@ -85,7 +87,11 @@ impl Tape {
             ops.push(op);
         }
         let outputs = roots.iter().map(|r| slot[r.index()]).collect();
-        Ok(Tape { ops, outputs, n_inputs: inputs.len() })
+        Ok(Tape {
+            ops,
+            outputs,
+            n_inputs: inputs.len(),
+        })
     }
 
     pub fn n_inputs(&self) -> usize {
@@ -166,7 +172,11 @@ impl FpPoint {
 
 impl Ctx {
     /// A random point; `fixed` gives values of some symbols (others are uniform).
-    pub fn random_fp_point(&mut self, rng: &mut SplitMix, fixed: &dyn Fn(Var) -> Option<Fp>) -> Result<FpPoint, BadPoint> {
+    pub fn random_fp_point(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+    ) -> Result<FpPoint, BadPoint> {
         let mut values = vec![Fp::ZERO; self.leaves.len()];
         let mut done = vec![false; self.leaves.len()];
         for v in 0..self.leaves.len() {
@@ -215,7 +225,11 @@ impl Ctx {
                 Node::Mul(cs) => cs.iter().fold(Fp::ONE, |a, c| a.mul(val[c.index()])),
                 Node::Pow(b, e) => {
                     let base = val[b.index()];
-                    let base = if *e < 0 { base.inv().ok_or(BadPoint)? } else { base };
+                    let base = if *e < 0 {
+                        base.inv().ok_or(BadPoint)?
+                    } else {
+                        base
+                    };
                     base.pow(e.unsigned_abs() as u64)
                 }
             };
@@ -226,7 +240,11 @@ impl Ctx {
 
     /// Exact value of `roots` given a rational value for every leaf they use
     /// (leaf values must respect the relations, e.g. from [`rational_angle`]).
-    pub fn eval_q(&self, roots: &[Id], leaf: &dyn Fn(Var) -> Option<Q>) -> Result<Vec<Q>, EvalQError> {
+    pub fn eval_q(
+        &self,
+        roots: &[Id],
+        leaf: &dyn Fn(Var) -> Option<Q>,
+    ) -> Result<Vec<Q>, EvalQError> {
         let order = self.reachable(roots);
         let mut val: Vec<Option<Q>> = vec![None; self.len()];
         for id in order {
@@ -240,7 +258,10 @@ impl Ctx {
             };
             val[id.index()] = Some(x);
         }
-        Ok(roots.iter().map(|r| val[r.index()].clone().expect("evaluated")).collect())
+        Ok(roots
+            .iter()
+            .map(|r| val[r.index()].clone().expect("evaluated"))
+            .collect())
     }
 }
 

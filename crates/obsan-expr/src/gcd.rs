@@ -86,7 +86,8 @@ fn strip(p: &Poly, m: &Mono, c: &Int) -> Poly {
     if c.is_one() {
         q
     } else {
-        q.div_exact(&Poly::constant(c.clone())).expect("content divides")
+        q.div_exact(&Poly::constant(c.clone()))
+            .expect("content divides")
     }
 }
 
@@ -127,7 +128,12 @@ fn gcd_with_content(other: &Poly, p: &Poly, x: Var, method: Method) -> Poly {
 fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
     let mut rng = SplitMix(0x5eed_0b5a_u64 ^ (a.len() as u64) << 20 ^ b.len() as u64);
     let vals: Vec<(Var, Fp)> = vars.iter().map(|&v| (v, rng.fp())).collect();
-    let val = |v: Var| vals.iter().find(|(x, _)| *x == v).map(|(_, f)| *f).unwrap_or(Fp::ZERO);
+    let val = |v: Var| {
+        vals.iter()
+            .find(|(x, _)| *x == v)
+            .map(|(_, f)| *f)
+            .unwrap_or(Fp::ZERO)
+    };
     for &x in vars {
         let ia = a.univariate_image(x, &val);
         let ib = b.univariate_image(x, &val);
@@ -229,11 +235,18 @@ fn interpolate(h: &Poly, xi: &Int, x: Var) -> Poly {
     let mut terms = Vec::new();
     let mut e = 0u32;
     while !rest.is_zero() {
-        let digit = Poly::from_terms(rest.terms().iter().map(|(m, c)| (m.clone(), int_symmetric_mod(c, xi))));
+        let digit = Poly::from_terms(
+            rest.terms()
+                .iter()
+                .map(|(m, c)| (m.clone(), int_symmetric_mod(c, xi))),
+        );
         for (m, c) in digit.terms() {
             terms.push((m.mul(&Mono::var(x, e)), c.clone()));
         }
-        rest = rest.sub(&digit).div_exact(&Poly::constant(xi.clone())).expect("digit removed");
+        rest = rest
+            .sub(&digit)
+            .div_exact(&Poly::constant(xi.clone()))
+            .expect("digit removed");
         e += 1;
         if e > 0xFFFF {
             return Poly::zero();
@@ -269,7 +282,11 @@ fn prs(a: &Poly, b: &Poly, x: Var, method: Method) -> Poly {
         }
         let r = pseudo_rem(&f, &g, x);
         f = g;
-        g = if r.is_zero() { r } else { r.div_exact(&content(&r)).expect("content divides") };
+        g = if r.is_zero() {
+            r
+        } else {
+            r.div_exact(&content(&r)).expect("content divides")
+        };
     }
     let pp = f.div_exact(&content(&f)).expect("content divides");
     c.mul(&pp).normalize_sign()
@@ -322,7 +339,10 @@ mod tests {
             let h2 = PrsGcd.gcd(&ga, &gb);
             assert_eq!(h, h2, "fast and PRS gcd disagree");
             // g divides the gcd, and the gcd divides both.
-            assert!(h.div_exact(&g.clone().normalize_sign()).is_some() || h.div_exact(&g.neg()).is_some());
+            assert!(
+                h.div_exact(&g.clone().normalize_sign()).is_some()
+                    || h.div_exact(&g.neg()).is_some()
+            );
             let ca = ga.div_exact(&h).expect("gcd divides a");
             let cb = gb.div_exact(&h).expect("gcd divides b");
             // Cofactors are coprime.
@@ -338,7 +358,10 @@ mod tests {
         assert_eq!(gcd(&x, &y), one);
         assert_eq!(gcd(&x.mul(&y), &x.pow(2)), x);
         let six = Poly::constant(int(6));
-        assert_eq!(gcd(&six.mul(&x), &Poly::constant(int(-4)).mul(&x)), Poly::constant(int(2)).mul(&x));
+        assert_eq!(
+            gcd(&six.mul(&x), &Poly::constant(int(-4)).mul(&x)),
+            Poly::constant(int(2)).mul(&x)
+        );
         let p = x.add(&y);
         let q = x.sub(&y);
         assert_eq!(gcd(&p.mul(&q), &p.pow(2).neg()), p);

@@ -90,7 +90,12 @@ pub struct Ctx {
 
 impl fmt::Debug for Ctx {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "Ctx({} nodes, {} leaves)", self.nodes.len(), self.leaves.len())
+        write!(
+            f,
+            "Ctx({} nodes, {} leaves)",
+            self.nodes.len(),
+            self.leaves.len()
+        )
     }
 }
 
@@ -125,7 +130,9 @@ impl Ctx {
         let id = Id(u32::try_from(self.nodes.len()).expect("expression arena exceeds 2^32 nodes"));
         #[cfg(debug_assertions)]
         match &n {
-            Node::Add(cs) | Node::Mul(cs) => debug_assert!(cs.iter().all(|c| *c < id), "child after parent"),
+            Node::Add(cs) | Node::Mul(cs) => {
+                debug_assert!(cs.iter().all(|c| *c < id), "child after parent")
+            }
             Node::Pow(b, _) => debug_assert!(*b < id),
             _ => {}
         }
@@ -137,16 +144,25 @@ impl Ctx {
     /// The rational symbol `name`, created on first use.
     pub fn symbol(&mut self, name: &str) -> Symbol {
         if let Some(&v) = self.symbols.get(name) {
-            return Symbol { var: v, id: self.leaves[v as usize].node };
+            return Symbol {
+                var: v,
+                id: self.leaves[v as usize].node,
+            };
         }
         let v = self.leaf(LeafKind::Symbol(name.to_string()));
         self.symbols.insert(name.to_string(), v);
-        Symbol { var: v, id: self.leaves[v as usize].node }
+        Symbol {
+            var: v,
+            id: self.leaves[v as usize].node,
+        }
     }
 
     /// Look up an existing symbol.
     pub fn lookup(&self, name: &str) -> Option<Symbol> {
-        self.symbols.get(name).map(|&v| Symbol { var: v, id: self.leaves[v as usize].node })
+        self.symbols.get(name).map(|&v| Symbol {
+            var: v,
+            id: self.leaves[v as usize].node,
+        })
     }
 
     /// Name of a symbol variable (`None` for atoms).
@@ -161,9 +177,17 @@ impl Ctx {
         if let Some(&v) = self.leaf_dedup.get(&kind) {
             return v;
         }
-        let v = u32::try_from(self.leaves.len()).ok().filter(|&v| v < 0xFFFF).expect("more than 65535 leaves");
+        let v = u32::try_from(self.leaves.len())
+            .ok()
+            .filter(|&v| v < 0xFFFF)
+            .expect("more than 65535 leaves");
         // Reserve the leaf before interning its node (the node refers to it).
-        self.leaves.push(Leaf { kind: kind.clone(), node: Id(0), partner: None, radicand: None });
+        self.leaves.push(Leaf {
+            kind: kind.clone(),
+            node: Id(0),
+            partner: None,
+            radicand: None,
+        });
         let node = self.intern(Node::Leaf(v));
         self.leaves[v as usize].node = node;
         self.leaf_dedup.insert(kind, v);
@@ -177,10 +201,14 @@ impl Ctx {
     /// The node of the leaf, and its arguments (for traversals).
     pub(crate) fn leaf_args(&self, v: Var) -> Vec<Id> {
         match &self.leaves[v as usize].kind {
-            LeafKind::Sin(Angle::Generic(a)) | LeafKind::Cos(Angle::Generic(a)) | LeafKind::Exp(Angle::Generic(a)) => vec![*a],
+            LeafKind::Sin(Angle::Generic(a))
+            | LeafKind::Cos(Angle::Generic(a))
+            | LeafKind::Exp(Angle::Generic(a)) => vec![*a],
             LeafKind::Atan(a) | LeafKind::Log(a) | LeafKind::Sqrt(a) => vec![*a],
             LeafKind::Atan2(y, x) => vec![*y, *x],
-            LeafKind::Sin(Angle::Symbol { sym, .. }) | LeafKind::Cos(Angle::Symbol { sym, .. }) | LeafKind::Exp(Angle::Symbol { sym, .. }) => {
+            LeafKind::Sin(Angle::Symbol { sym, .. })
+            | LeafKind::Cos(Angle::Symbol { sym, .. })
+            | LeafKind::Exp(Angle::Symbol { sym, .. }) => {
                 vec![self.leaf_node(*sym)]
             }
             LeafKind::Symbol(_) | LeafKind::Pi => vec![],
@@ -298,7 +326,11 @@ impl Ctx {
             if let Some(Node::Num(q)) = cs.first().map(|c| self.node(*c)) {
                 let q = q.clone();
                 let rest: Vec<Id> = cs[1..].to_vec();
-                let r = if rest.len() == 1 { rest[0] } else { self.intern(Node::Mul(rest.into())) };
+                let r = if rest.len() == 1 {
+                    rest[0]
+                } else {
+                    self.intern(Node::Mul(rest.into()))
+                };
                 return (q, r);
             }
         }

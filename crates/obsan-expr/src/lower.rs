@@ -46,7 +46,11 @@ struct Linear {
 impl Ctx {
     fn split_linear(&self, c: &RatFun) -> Linear {
         let Some(d) = c.den.as_constant() else {
-            return Linear { syms: vec![], pi: Q::zero(), rest: c.clone() };
+            return Linear {
+                syms: vec![],
+                pi: Q::zero(),
+                rest: c.clone(),
+            };
         };
         let mut syms = Vec::new();
         let mut pi = Q::zero();
@@ -64,8 +68,15 @@ impl Ctx {
                 _ => rest.push((m.clone(), k.clone())),
             }
         }
-        let rest = RatFun { num: Poly::from_terms(rest), den: Poly::constant(d) };
-        let rest = if rest.num.is_zero() { RatFun::zero() } else { self.normalize(rest.num, rest.den) };
+        let rest = RatFun {
+            num: Poly::from_terms(rest),
+            den: Poly::constant(d),
+        };
+        let rest = if rest.num.is_zero() {
+            RatFun::zero()
+        } else {
+            self.normalize(rest.num, rest.den)
+        };
         Linear { syms, pi, rest }
     }
 
@@ -75,7 +86,9 @@ impl Ctx {
         let name = self.symbol_name(sym).unwrap_or("?").to_string();
         let den = u32::try_from(coeff.den()).ok().filter(|d| *d <= 1000);
         let Some(den) = den else {
-            return err(format!("the coefficient {coeff} of {name} inside a function is too fine a fraction"));
+            return err(format!(
+                "the coefficient {coeff} of {name} inside a function is too fine a fraction"
+            ));
         };
         let unit = *self.angle_units.entry((sym, exp)).or_insert(den);
         let n = coeff.mul(&Q::from_i64(unit as i64));
@@ -89,7 +102,10 @@ impl Ctx {
         let n = i64::try_from(n.num()).ok().filter(|n| n.abs() <= 64);
         match n {
             Some(n) => Ok((unit, n)),
-            None => err(format!("the multiple of {name} inside {} is too large", if exp { "exp" } else { "sin/cos" })),
+            None => err(format!(
+                "the multiple of {name} inside {} is too large",
+                if exp { "exp" } else { "sin/cos" }
+            )),
         }
     }
 
@@ -127,7 +143,12 @@ impl Ctx {
         // Reduce k modulo 2.
         let two = Q::from_i64(2);
         let q = k.div(&two).expect("nonzero");
-        let fl = q.num() / q.den() - if q.is_negative() && !q.is_integer() { int(1) } else { int(0) };
+        let fl = q.num() / q.den()
+            - if q.is_negative() && !q.is_integer() {
+                int(1)
+            } else {
+                int(0)
+            };
         let k = k.sub(&Q::from_int(fl * int(2)));
         let den = k.den().clone();
         let num = i64::try_from(k.num()).expect("reduced");
@@ -155,8 +176,20 @@ impl Ctx {
             let r3 = self.sqrt_const(&Q::from_i64(3))?;
             let h = self.num(Q::new(int(1), int(2)));
             let hr3 = self.mul(&[h, r3]);
-            let table: [(i64, i64); 12] =
-                [(2, 0), (3, 1), (1, 3), (0, 2), (-1, 3), (-3, 1), (-2, 0), (-3, -1), (-1, -3), (0, -2), (1, -3), (3, -1)];
+            let table: [(i64, i64); 12] = [
+                (2, 0),
+                (3, 1),
+                (1, 3),
+                (0, 2),
+                (-1, 3),
+                (-3, 1),
+                (-2, 0),
+                (-3, -1),
+                (-1, -3),
+                (0, -2),
+                (1, -3),
+                (3, -1),
+            ];
             let (a, b) = table[sixth.rem_euclid(12) as usize];
             // a, b encode values: 2 -> 1, 1 -> 1/2, 3 -> sqrt(3)/2, 0 -> 0 (with sign).
             let mut val = |x: i64| -> Id {
@@ -194,7 +227,11 @@ impl Ctx {
         if !lin.rest.is_zero() {
             // sin(-r) = -sin(r): keep the atom's argument with a positive leading coefficient.
             let flip = lin.rest.num.lc_sign() == Sign::Negative;
-            let r = if flip { lin.rest.neg() } else { lin.rest.clone() };
+            let r = if flip {
+                lin.rest.neg()
+            } else {
+                lin.rest.clone()
+            };
             let id = self.from_canonical(&r);
             let (c, s) = self.angle_pair(Angle::Generic(id));
             acc = if flip { (c, self.neg(s)) } else { (c, s) };
@@ -335,8 +372,14 @@ impl Ctx {
         // sqrt(c) = (sn/sd) * sqrt(c * sd^2 / sn^2)
         let outside = Q::new(sn.clone(), sd.clone());
         let inner = RatFun {
-            num: c.num.div_exact(&Poly::constant(&sn * &sn)).expect("square divides content"),
-            den: c.den.div_exact(&Poly::constant(&sd * &sd)).expect("square divides content"),
+            num: c
+                .num
+                .div_exact(&Poly::constant(&sn * &sn))
+                .expect("square divides content"),
+            den: c
+                .den
+                .div_exact(&Poly::constant(&sd * &sd))
+                .expect("square divides content"),
         };
         let out = self.num(outside);
         if inner.is_one() {
@@ -344,7 +387,10 @@ impl Ctx {
         }
         if inner.num.is_constant() && inner.den.is_constant() {
             // sqrt(a/b) = sqrt(a b) / b for constants, so the atom is an integer.
-            let (a, b) = (inner.num.as_constant().expect("const"), inner.den.as_constant().expect("const"));
+            let (a, b) = (
+                inner.num.as_constant().expect("const"),
+                inner.den.as_constant().expect("const"),
+            );
             if !b.is_one() {
                 let ab = self.num(Q::from_int(&a * &b));
                 let r = self.sqrt(ab)?;
@@ -370,7 +416,9 @@ impl Ctx {
         let zero = self.canon(b).is_zero();
         if q.is_integer() {
             let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
-            let Some(e) = e else { return err(format!("exponent {q} is too large")) };
+            let Some(e) = e else {
+                return err(format!("exponent {q} is too large"));
+            };
             if zero && e < 0 {
                 return err("division by zero: 0 raised to a negative power");
             }
@@ -379,13 +427,17 @@ impl Ctx {
         if q.den() == &int(2) {
             let r = self.sqrt(b)?;
             let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
-            let Some(e) = e else { return err(format!("exponent {q} is too large")) };
+            let Some(e) = e else {
+                return err(format!("exponent {q} is too large"));
+            };
             if zero && e < 0 {
                 return err("division by zero: 0 raised to a negative power");
             }
             return Ok(self.pow(r, e));
         }
-        err(format!("exponent {q} is not supported: use an integer or half-integer exponent"))
+        err(format!(
+            "exponent {q} is not supported: use an integer or half-integer exponent"
+        ))
     }
 
     /// `b^e`: a constant exponent goes to [`Ctx::pow_q`], any other is `exp(e log b)`.
@@ -434,18 +486,26 @@ fn is_square_poly(p: &Poly) -> bool {
     if p.is_zero() {
         return true;
     }
-    let Some((lm, lc)) = p.leading().cloned() else { return true };
+    let Some((lm, lc)) = p.leading().cloned() else {
+        return true;
+    };
     if lm.iter().any(|(_, e)| e % 2 == 1) {
         return false;
     }
-    let Some(rc) = int_exact_sqrt(&lc) else { return false };
+    let Some(rc) = int_exact_sqrt(&lc) else {
+        return false;
+    };
     let rm = Mono::from_pairs(lm.iter().map(|(v, e)| (v, e / 2)));
     let mut root = Poly::monomial(rm.clone(), rc.clone());
     let two_lead = (rm, &rc * int(2));
     for _ in 0..=p.len() {
         let rem = p.sub(&root.mul(&root));
-        let Some((m, c)) = rem.leading().cloned() else { return true };
-        let Some(q) = m.div(&two_lead.0) else { return false };
+        let Some((m, c)) = rem.leading().cloned() else {
+            return true;
+        };
+        let Some(q) = m.div(&two_lead.0) else {
+            return false;
+        };
         if !(&c % &two_lead.1).is_zero() {
             return false;
         }

@@ -73,7 +73,10 @@ impl Q {
         Q { num: n, den: d }
     }
     pub fn from_int(n: Int) -> Q {
-        Q { num: n, den: int(1) }
+        Q {
+            num: n,
+            den: int(1),
+        }
     }
     pub fn from_i64(n: i64) -> Q {
         Q::from_int(int(n))
@@ -112,7 +115,10 @@ impl Q {
         Q::new(&self.num * &o.num, &self.den * &o.den)
     }
     pub fn neg(&self) -> Q {
-        Q { num: -self.num.clone(), den: self.den.clone() }
+        Q {
+            num: -self.num.clone(),
+            den: self.den.clone(),
+        }
     }
     /// Inverse; `None` for zero.
     pub fn inv(&self) -> Option<Q> {
@@ -129,7 +135,10 @@ impl Q {
     pub fn powi(&self, e: i64) -> Option<Q> {
         let base = if e < 0 { self.inv()? } else { self.clone() };
         let k = e.unsigned_abs() as usize;
-        Some(Q { num: base.num.pow(k), den: base.den.pow(k) })
+        Some(Q {
+            num: base.num.pow(k),
+            den: base.den.pow(k),
+        })
     }
     pub fn to_f64(&self) -> f64 {
         // Scale to keep precision for huge numerators/denominators.
@@ -137,7 +146,9 @@ impl Q {
         if n.is_finite() && d.is_finite() {
             return n / d;
         }
-        let shift = (self.num.clone().abs().bit_len() as i64 - 60).max(self.den.bit_len() as i64 - 60).max(0) as usize;
+        let shift = (self.num.clone().abs().bit_len() as i64 - 60)
+            .max(self.den.bit_len() as i64 - 60)
+            .max(0) as usize;
         let n2 = int_to_f64(&(&self.num >> shift));
         let d2 = int_to_f64(&(&self.den >> shift));
         n2 / d2
@@ -151,9 +162,17 @@ impl Q {
         let sign = if bits >> 63 == 1 { -1i64 } else { 1 };
         let exp = ((bits >> 52) & 0x7ff) as i64;
         let frac = bits & ((1u64 << 52) - 1);
-        let (mant, e) = if exp == 0 { (frac, -1074) } else { (frac | (1u64 << 52), exp - 1075) };
+        let (mant, e) = if exp == 0 {
+            (frac, -1074)
+        } else {
+            (frac | (1u64 << 52), exp - 1075)
+        };
         let m = int(sign) * IBig::from(mant);
-        Some(if e >= 0 { Q::from_int(m << e as usize) } else { Q::new(m, int(1) << (-e) as usize) })
+        Some(if e >= 0 {
+            Q::from_int(m << e as usize)
+        } else {
+            Q::new(m, int(1) << (-e) as usize)
+        })
     }
     /// Value modulo p, `None` when p divides the denominator.
     pub fn to_fp(&self) -> Option<Fp> {
@@ -208,7 +227,11 @@ impl Fp {
     }
     #[inline]
     pub fn sub(self, o: Fp) -> Fp {
-        Fp(if self.0 >= o.0 { self.0 - o.0 } else { self.0 + P - o.0 })
+        Fp(if self.0 >= o.0 {
+            self.0 - o.0
+        } else {
+            self.0 + P - o.0
+        })
     }
     #[inline]
     pub fn neg(self) -> Fp {

@@ -22,10 +22,16 @@ impl Span {
         Span { start, end }
     }
     pub fn join(self, o: Span) -> Span {
-        Span { start: self.start.min(o.start), end: self.end.max(o.end) }
+        Span {
+            start: self.start.min(o.start),
+            end: self.end.max(o.end),
+        }
     }
     pub fn shift(self, by: usize) -> Span {
-        Span { start: self.start + by, end: self.end + by }
+        Span {
+            start: self.start + by,
+            end: self.end + by,
+        }
     }
 }
 
@@ -38,7 +44,10 @@ pub struct ParseError {
 
 impl ParseError {
     pub fn new(message: impl Into<String>, span: Span) -> ParseError {
-        ParseError { message: message.into(), span }
+        ParseError {
+            message: message.into(),
+            span,
+        }
     }
 }
 
@@ -69,8 +78,16 @@ pub enum BinOp {
 }
 
 /// The functions the language knows, with their arity.
-pub const FUNCTIONS: [(&str, usize); 8] =
-    [("sin", 1), ("cos", 1), ("tan", 1), ("atan", 1), ("atan2", 2), ("exp", 1), ("log", 1), ("sqrt", 1)];
+pub const FUNCTIONS: [(&str, usize); 8] = [
+    ("sin", 1),
+    ("cos", 1),
+    ("tan", 1),
+    ("atan", 1),
+    ("atan2", 2),
+    ("exp", 1),
+    ("log", 1),
+    ("sqrt", 1),
+];
 
 /// A syntax tree node with its span.
 #[derive(Clone, Debug, PartialEq)]
@@ -158,14 +175,21 @@ impl<'a> Lexer<'a> {
             return Ok((Tok::End, Span::new(start, start)));
         }
         let c = b[self.pos] as char;
-        if c.is_ascii_digit() || (c == '.' && b.get(self.pos + 1).is_some_and(|d| d.is_ascii_digit())) {
+        if c.is_ascii_digit()
+            || (c == '.' && b.get(self.pos + 1).is_some_and(|d| d.is_ascii_digit()))
+        {
             return self.number(start);
         }
         if c.is_ascii_alphabetic() || c == '_' {
-            while self.pos < b.len() && ((b[self.pos] as char).is_ascii_alphanumeric() || b[self.pos] == b'_') {
+            while self.pos < b.len()
+                && ((b[self.pos] as char).is_ascii_alphanumeric() || b[self.pos] == b'_')
+            {
                 self.pos += 1;
             }
-            return Ok((Tok::Ident(self.src[start..self.pos].to_string()), Span::new(start, self.pos)));
+            return Ok((
+                Tok::Ident(self.src[start..self.pos].to_string()),
+                Span::new(start, self.pos),
+            ));
         }
         self.pos += 1;
         let t = match c {
@@ -176,8 +200,15 @@ impl<'a> Lexer<'a> {
             _ => {
                 let ch = self.src[start..].chars().next().unwrap_or('?');
                 self.pos = start + ch.len_utf8();
-                let hint = if ch == '=' { " (an equation is not an expression)" } else { "" };
-                return Err(ParseError::new(format!("unexpected character '{ch}'{hint}"), Span::new(start, self.pos)));
+                let hint = if ch == '=' {
+                    " (an equation is not an expression)"
+                } else {
+                    ""
+                };
+                return Err(ParseError::new(
+                    format!("unexpected character '{ch}'{hint}"),
+                    Span::new(start, self.pos),
+                ));
             }
         };
         Ok((t, Span::new(start, self.pos)))
@@ -211,11 +242,17 @@ impl<'a> Lexer<'a> {
             }
             let es = q;
             if digits(&mut q) == 0 {
-                return Err(ParseError::new("malformed number: exponent has no digits", Span::new(start, q)));
+                return Err(ParseError::new(
+                    "malformed number: exponent has no digits",
+                    Span::new(start, q),
+                ));
             }
             let e: i64 = self.src[es..q].parse().unwrap_or(i64::MAX);
             if e > 400 {
-                return Err(ParseError::new("number exponent out of range", Span::new(start, q)));
+                return Err(ParseError::new(
+                    "number exponent out of range",
+                    Span::new(start, q),
+                ));
             }
             exp = if neg { -e } else { e };
             p = q;
@@ -223,12 +260,17 @@ impl<'a> Lexer<'a> {
         self.pos = p;
         let span = Span::new(start, p);
         if p < b.len() && ((b[p] as char).is_ascii_alphabetic() || b[p] == b'_') {
-            return Err(ParseError::new("a number cannot be followed by a letter (use '*')", Span::new(start, p + 1)));
+            return Err(ParseError::new(
+                "a number cannot be followed by a letter (use '*')",
+                Span::new(start, p + 1),
+            ));
         }
         if int_end - start + frac.len() > 400 {
             return Err(ParseError::new("number has too many digits", span));
         }
-        let mantissa: Int = format!("{}{}", &self.src[start..int_end], frac).parse::<Int>().unwrap_or(int(0));
+        let mantissa: Int = format!("{}{}", &self.src[start..int_end], frac)
+            .parse::<Int>()
+            .unwrap_or(int(0));
         let e = exp - frac.len() as i64;
         let ten = int(10);
         let q = if e >= 0 {
@@ -278,7 +320,10 @@ impl<'a> Parser<'a> {
             self.bump()?;
             let rhs = self.expr(r_bp)?;
             let span = lhs.span.join(rhs.span);
-            lhs = Ast { kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)), span };
+            lhs = Ast {
+                kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)),
+                span,
+            };
         }
         self.depth -= 1;
         Ok(lhs)
@@ -289,13 +334,19 @@ impl<'a> Parser<'a> {
         match self.tok.clone() {
             Tok::Num(q) => {
                 self.bump()?;
-                Ok(Ast { kind: AstKind::Num(q), span })
+                Ok(Ast {
+                    kind: AstKind::Num(q),
+                    span,
+                })
             }
             Tok::Op('-') => {
                 self.bump()?;
                 let x = self.expr(5)?;
                 let s = span.join(x.span);
-                Ok(Ast { kind: AstKind::Neg(Box::new(x)), span: s })
+                Ok(Ast {
+                    kind: AstKind::Neg(Box::new(x)),
+                    span: s,
+                })
             }
             Tok::Op('+') => {
                 self.bump()?;
@@ -305,11 +356,17 @@ impl<'a> Parser<'a> {
                 self.bump()?;
                 let inner = self.expr(0)?;
                 if self.tok != Tok::RParen {
-                    return Err(ParseError::new("expected ')' to close this '('", span.join(self.span)));
+                    return Err(ParseError::new(
+                        "expected ')' to close this '('",
+                        span.join(self.span),
+                    ));
                 }
                 let end = self.span;
                 self.bump()?;
-                Ok(Ast { kind: inner.kind, span: span.join(end) })
+                Ok(Ast {
+                    kind: inner.kind,
+                    span: span.join(end),
+                })
             }
             Tok::Ident(name) => {
                 self.bump()?;
@@ -317,12 +374,21 @@ impl<'a> Parser<'a> {
                     return self.call(name, span);
                 }
                 if name == "pi" {
-                    return Ok(Ast { kind: AstKind::Pi, span });
+                    return Ok(Ast {
+                        kind: AstKind::Pi,
+                        span,
+                    });
                 }
                 if FUNCTIONS.iter().any(|(f, _)| *f == name) {
-                    return Err(ParseError::new(format!("function '{name}' needs an argument list: {name}(...)"), span));
+                    return Err(ParseError::new(
+                        format!("function '{name}' needs an argument list: {name}(...)"),
+                        span,
+                    ));
                 }
-                Ok(Ast { kind: AstKind::Ident(name), span })
+                Ok(Ast {
+                    kind: AstKind::Ident(name),
+                    span,
+                })
             }
             Tok::End => Err(ParseError::new("unexpected end of expression", span)),
             Tok::RParen => Err(ParseError::new("unexpected ')'", span)),
@@ -334,7 +400,10 @@ impl<'a> Parser<'a> {
     fn call(&mut self, name: String, name_span: Span) -> Result<Ast, ParseError> {
         let Some(&(_, arity)) = FUNCTIONS.iter().find(|(f, _)| *f == name) else {
             let known: Vec<&str> = FUNCTIONS.iter().map(|f| f.0).collect();
-            return Err(ParseError::new(format!("unknown function '{name}' (known: {})", known.join(", ")), name_span));
+            return Err(ParseError::new(
+                format!("unknown function '{name}' (known: {})", known.join(", ")),
+                name_span,
+            ));
         };
         self.bump()?; // '('
         let mut args = Vec::new();
@@ -349,21 +418,38 @@ impl<'a> Parser<'a> {
             }
         }
         if self.tok != Tok::RParen {
-            return Err(ParseError::new(format!("expected ',' or ')' in the arguments of '{name}'"), self.span));
+            return Err(ParseError::new(
+                format!("expected ',' or ')' in the arguments of '{name}'"),
+                self.span,
+            ));
         }
         let span = name_span.join(self.span);
         self.bump()?;
         if args.len() != arity {
             let plural = if arity == 1 { "" } else { "s" };
-            return Err(ParseError::new(format!("'{name}' takes {arity} argument{plural}, got {}", args.len()), span));
+            return Err(ParseError::new(
+                format!(
+                    "'{name}' takes {arity} argument{plural}, got {}",
+                    args.len()
+                ),
+                span,
+            ));
         }
-        Ok(Ast { kind: AstKind::Call(name, args), span })
+        Ok(Ast {
+            kind: AstKind::Call(name, args),
+            span,
+        })
     }
 }
 
 /// Parse an expression to a syntax tree.
 pub fn parse_ast(src: &str) -> Result<Ast, ParseError> {
-    let mut p = Parser { lex: Lexer { src, pos: 0 }, tok: Tok::End, span: Span::default(), depth: 0 };
+    let mut p = Parser {
+        lex: Lexer { src, pos: 0 },
+        tok: Tok::End,
+        span: Span::default(),
+        depth: 0,
+    };
     p.bump()?;
     let a = p.expr(0)?;
     if p.tok != Tok::End {
@@ -379,7 +465,11 @@ pub fn parse_ast(src: &str) -> Result<Ast, ParseError> {
 
 impl Ctx {
     /// Build a syntax tree; `resolve` maps each identifier to a node.
-    pub fn build(&mut self, ast: &Ast, resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>) -> Result<Id, ParseError> {
+    pub fn build(
+        &mut self,
+        ast: &Ast,
+        resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>,
+    ) -> Result<Id, ParseError> {
         let at = |e: crate::lower::EngineError, s: Span| ParseError::new(e.0, s);
         Ok(match &ast.kind {
             AstKind::Num(q) => self.num(q.clone()),

@@ -16,7 +16,10 @@ const VAR_MAX: u32 = 0xFFFF;
 
 #[inline]
 fn pack(v: Var, e: u32) -> u32 {
-    debug_assert!(v <= VAR_MAX && e > 0 && e <= 0xFFFF, "variable or exponent out of range");
+    debug_assert!(
+        v <= VAR_MAX && e > 0 && e <= 0xFFFF,
+        "variable or exponent out of range"
+    );
     ((VAR_MAX - v) << 16) | e
 }
 #[inline]
@@ -44,7 +47,9 @@ impl Mono {
     }
     /// From `(variable, exponent)` pairs in any order (zero exponents dropped).
     pub fn from_pairs(pairs: impl IntoIterator<Item = (Var, u32)>) -> Mono {
-        pairs.into_iter().fold(Mono::one(), |m, (v, e)| m.mul(&Mono::var(v, e)))
+        pairs
+            .into_iter()
+            .fold(Mono::one(), |m, (v, e)| m.mul(&Mono::var(v, e)))
     }
     /// `(variable, exponent)` pairs in increasing variable order.
     pub fn iter(&self) -> impl Iterator<Item = (Var, u32)> + '_ {
@@ -153,20 +158,26 @@ impl Poly {
         if c.is_zero() {
             Poly::zero()
         } else {
-            Poly { terms: vec![(Mono::one(), c)] }
+            Poly {
+                terms: vec![(Mono::one(), c)],
+            }
         }
     }
     pub fn one() -> Poly {
         Poly::constant(int(1))
     }
     pub fn var(v: Var) -> Poly {
-        Poly { terms: vec![(Mono::var(v, 1), int(1))] }
+        Poly {
+            terms: vec![(Mono::var(v, 1), int(1))],
+        }
     }
     pub fn monomial(m: Mono, c: Int) -> Poly {
         if c.is_zero() {
             Poly::zero()
         } else {
-            Poly { terms: vec![(m, c)] }
+            Poly {
+                terms: vec![(m, c)],
+            }
         }
     }
     /// Build from arbitrary terms (merged, sorted, zeros dropped).
@@ -209,7 +220,13 @@ impl Poly {
         self.terms.first().map_or(Sign::Positive, |t| t.1.sign())
     }
     pub fn neg(&self) -> Poly {
-        Poly { terms: self.terms.iter().map(|(m, c)| (m.clone(), -c.clone())).collect() }
+        Poly {
+            terms: self
+                .terms
+                .iter()
+                .map(|(m, c)| (m.clone(), -c.clone()))
+                .collect(),
+        }
     }
     pub fn add(&self, o: &Poly) -> Poly {
         self.merge(o, false)
@@ -235,12 +252,20 @@ impl Poly {
                     i += 1;
                 }
                 std::cmp::Ordering::Less => {
-                    let c = if negate { -b[j].1.clone() } else { b[j].1.clone() };
+                    let c = if negate {
+                        -b[j].1.clone()
+                    } else {
+                        b[j].1.clone()
+                    };
                     out.push((b[j].0.clone(), c));
                     j += 1;
                 }
                 std::cmp::Ordering::Equal => {
-                    let c = if negate { &a[i].1 - &b[j].1 } else { &a[i].1 + &b[j].1 };
+                    let c = if negate {
+                        &a[i].1 - &b[j].1
+                    } else {
+                        &a[i].1 + &b[j].1
+                    };
                     if !c.is_zero() {
                         out.push((a[i].0.clone(), c));
                     }
@@ -282,7 +307,13 @@ impl Poly {
             return Poly::zero();
         }
         // Multiplying by a monomial keeps the order.
-        Poly { terms: self.terms.iter().map(|(mm, cc)| (mm.mul(m), cc * c)).collect() }
+        Poly {
+            terms: self
+                .terms
+                .iter()
+                .map(|(mm, cc)| (mm.mul(m), cc * c))
+                .collect(),
+        }
     }
     pub fn scale(&self, c: &Int) -> Poly {
         self.mul_term(&Mono::one(), c)
@@ -320,7 +351,11 @@ impl Poly {
         for (v, e) in lm.iter() {
             let _ = e;
             if self.degree(v) < d.degree(v) {
-                return if self.is_zero() { Some(Poly::zero()) } else { None };
+                return if self.is_zero() {
+                    Some(Poly::zero())
+                } else {
+                    None
+                };
             }
         }
         let mut r = self.clone();
@@ -337,14 +372,26 @@ impl Poly {
         Some(Poly { terms: q })
     }
     pub fn degree(&self, v: Var) -> u32 {
-        self.terms.iter().map(|(m, _)| m.degree(v)).max().unwrap_or(0)
+        self.terms
+            .iter()
+            .map(|(m, _)| m.degree(v))
+            .max()
+            .unwrap_or(0)
     }
     pub fn total_degree(&self) -> u32 {
-        self.terms.iter().map(|(m, _)| m.total_degree()).max().unwrap_or(0)
+        self.terms
+            .iter()
+            .map(|(m, _)| m.total_degree())
+            .max()
+            .unwrap_or(0)
     }
     /// Sorted list of the variables that occur.
     pub fn vars(&self) -> Vec<Var> {
-        let mut vs: Vec<Var> = self.terms.iter().flat_map(|(m, _)| m.iter().map(|(v, _)| v)).collect();
+        let mut vs: Vec<Var> = self
+            .terms
+            .iter()
+            .flat_map(|(m, _)| m.iter().map(|(v, _)| v))
+            .collect();
         vs.sort_unstable();
         vs.dedup();
         vs
@@ -447,7 +494,9 @@ impl Poly {
     /// Gcd of all monomials.
     pub fn mono_content(&self) -> Mono {
         let mut it = self.terms.iter();
-        let Some((first, _)) = it.next() else { return Mono::one() };
+        let Some((first, _)) = it.next() else {
+            return Mono::one();
+        };
         let mut g = first.clone();
         for (m, _) in it {
             if g.is_one() {
@@ -458,7 +507,13 @@ impl Poly {
         g
     }
     pub fn div_mono(&self, m: &Mono) -> Poly {
-        Poly { terms: self.terms.iter().map(|(mm, c)| (mm.div(m).expect("monomial divides"), c.clone())).collect() }
+        Poly {
+            terms: self
+                .terms
+                .iter()
+                .map(|(mm, c)| (mm.div(m).expect("monomial divides"), c.clone()))
+                .collect(),
+        }
     }
     /// Make the leading coefficient positive.
     pub fn normalize_sign(self) -> Poly {
@@ -469,7 +524,17 @@ impl Poly {
         }
     }
     pub fn max_abs_coeff(&self) -> Int {
-        self.terms.iter().map(|(_, c)| if c.sign() == Sign::Negative { -c.clone() } else { c.clone() }).max().unwrap_or(int(0))
+        self.terms
+            .iter()
+            .map(|(_, c)| {
+                if c.sign() == Sign::Negative {
+                    -c.clone()
+                } else {
+                    c.clone()
+                }
+            })
+            .max()
+            .unwrap_or(int(0))
     }
     /// Partial derivative with respect to `v`.
     pub fn derivative(&self, v: Var) -> Poly {

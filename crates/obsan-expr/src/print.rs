@@ -48,10 +48,15 @@ impl Ctx {
         match st {
             Style::Latex => format!("\\frac{{{num}}}{{{den}}}"),
             Style::Text => {
-                let n = if r.num.len() > 1 { format!("({num})") } else { num };
+                let n = if r.num.len() > 1 {
+                    format!("({num})")
+                } else {
+                    num
+                };
                 let simple_den = r.den.len() == 1 && {
                     let (m, c) = &r.den.terms()[0];
-                    (m.is_one() && c.sign() == Sign::Positive) || (c.is_one() && m.iter().count() == 1)
+                    (m.is_one() && c.sign() == Sign::Positive)
+                        || (c.is_one() && m.iter().count() == 1)
                 };
                 let d = if simple_den { den } else { format!("({den})") };
                 format!("{n}/{d}")
@@ -115,7 +120,10 @@ impl Ctx {
     }
 
     fn arg(&self, id: Id, st: Style) -> String {
-        let r = self.canon_memo.get(&id).expect("atom arguments are canonical");
+        let r = self
+            .canon_memo
+            .get(&id)
+            .expect("atom arguments are canonical");
         self.fmt_ratfun(r, st)
     }
 
@@ -149,10 +157,18 @@ impl Ctx {
             (LeafKind::Cos(a), Style::Latex) => format!("\\cos\\left({}\\right)", angle(a)),
             (LeafKind::Exp(a), Style::Latex) => format!("e^{{{}}}", angle(a)),
             (LeafKind::Atan(u), Style::Text) => format!("atan({})", self.arg(*u, st)),
-            (LeafKind::Atan(u), Style::Latex) => format!("\\arctan\\left({}\\right)", self.arg(*u, st)),
-            (LeafKind::Atan2(y, x), Style::Text) => format!("atan2({}, {})", self.arg(*y, st), self.arg(*x, st)),
+            (LeafKind::Atan(u), Style::Latex) => {
+                format!("\\arctan\\left({}\\right)", self.arg(*u, st))
+            }
+            (LeafKind::Atan2(y, x), Style::Text) => {
+                format!("atan2({}, {})", self.arg(*y, st), self.arg(*x, st))
+            }
             (LeafKind::Atan2(y, x), Style::Latex) => {
-                format!("\\operatorname{{atan2}}\\left({}, {}\\right)", self.arg(*y, st), self.arg(*x, st))
+                format!(
+                    "\\operatorname{{atan2}}\\left({}, {}\\right)",
+                    self.arg(*y, st),
+                    self.arg(*x, st)
+                )
             }
             (LeafKind::Log(u), Style::Text) => format!("log({})", self.arg(*u, st)),
             (LeafKind::Log(u), Style::Latex) => format!("\\log\\left({}\\right)", self.arg(*u, st)),
@@ -168,9 +184,46 @@ impl Ctx {
 }
 
 const GREEK: [&str; 40] = [
-    "alpha", "beta", "gamma", "delta", "epsilon", "varepsilon", "zeta", "eta", "theta", "vartheta", "iota", "kappa",
-    "lambda", "mu", "nu", "xi", "pi", "varpi", "rho", "varrho", "sigma", "varsigma", "tau", "upsilon", "phi", "varphi",
-    "chi", "psi", "omega", "Gamma", "Delta", "Theta", "Lambda", "Xi", "Pi", "Sigma", "Upsilon", "Phi", "Psi", "Omega",
+    "alpha",
+    "beta",
+    "gamma",
+    "delta",
+    "epsilon",
+    "varepsilon",
+    "zeta",
+    "eta",
+    "theta",
+    "vartheta",
+    "iota",
+    "kappa",
+    "lambda",
+    "mu",
+    "nu",
+    "xi",
+    "pi",
+    "varpi",
+    "rho",
+    "varrho",
+    "sigma",
+    "varsigma",
+    "tau",
+    "upsilon",
+    "phi",
+    "varphi",
+    "chi",
+    "psi",
+    "omega",
+    "Gamma",
+    "Delta",
+    "Theta",
+    "Lambda",
+    "Xi",
+    "Pi",
+    "Sigma",
+    "Upsilon",
+    "Phi",
+    "Psi",
+    "Omega",
 ];
 
 /// LaTeX for a symbol name: Greek names become letters, `a_b` and trailing

@@ -1,0 +1,315 @@
+//! Identities the engine must satisfy, checked on random expressions.
+//! Case counts are capped so CI stays fast; raise PROPTEST_CASES to search harder.
+
+use obsan_expr::{gcd, parse_ast, Ctx, Id, Poly, PolyGcd, PrsGcd, SplitMix, Tape, Var};
+use proptest::prelude::*;
+
+const SYMS: [&str; 3] = ["x", "y", "z"];
+
+/// Random expression text over x, y, z whose f64 value is defined on the
+/// sampled box (x, y, z in [0.3, 1.7]): logs and roots of positive arguments only.
+fn expr_text() -> impl Strategy<Value = String> {
+    let leaf = prop_oneof![
+        prop::sample::select(SYMS.to_vec()).prop_map(|s| s.to_string()),
+        (1i32..5).prop_map(|n| n.to_string()),
+        Just("0.5".to_string()),
+    ];
+    leaf.prop_recursive(4, 24, 2, |inner| {
+        prop_oneof![
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("({a} + {b})")),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("({a} - {b})")),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("({a})*({b})")),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("({a})/(2 + ({b})^2)")),
+            (inner.clone(), 2u32..4).prop_map(|(a, e)| format!("({a})^{e}")),
+            inner.clone().prop_map(|a| format!("sin({a})")),
+            inner.clone().prop_map(|a| format!("cos({a})")),
+            inner.clone().prop_map(|a| format!("atan({a})")),
+            (inner.clone(), inner.clone()).prop_map(|(a, b)| format!("atan2({a}, 3 + ({b})^2)")),
+            inner.clone().prop_map(|a| format!("sqrt(1 + ({a})^2)")),
+            inner.clone().prop_map(|a| format!("log(1 + ({a})^2)")),
+            inner.clone().prop_map(|a| format!("exp(sin({a}))")),
+            prop::sample::select(SYMS.to_vec()).prop_map(|s| format!("sin(2*{s} - y)")),
+        ]
+    })
+}
+
+/// Parse generated text. The one error allowed is the documented refusal to
+/// mix angle units of a symbol (`sin(y)` with `sin(4*y/9)`); such cases are skipped.
+fn setup(text: &str) -> Result<(Ctx, Id, Vec<Var>), TestCaseError> {
+    let mut ctx = Ctx::new();
+    let vars: Vec<Var> = SYMS.iter().map(|s| ctx.symbol(s).var).collect();
+    match ctx.parse(text) {
+        Ok(id) => Ok((ctx, id, vars)),
+        Err(e) if e.message.contains("integer multiples of one unit") => {
+            Err(TestCaseError::reject("mixed angle units"))
+        }
+        Err(e) => Err(TestCaseError::fail(format!("{text}: {e}"))),
+    }
+}
+
+fn close(a: f64, b: f64, rel: f64) -> bool {
+    (a - b).abs() <= rel * (1.0 + a.abs().max(b.abs()))
+}
+
+fn points(seed: u64, n: usize) -> Vec<[f64; 3]> {
+    let mut r = SplitMix(seed);
+    (0..n)
+        .map(|_| {
+            [
+                r.uniform(0.3, 1.7),
+                r.uniform(0.3, 1.7),
+                r.uniform(0.3, 1.7),
+            ]
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// The canonical form has the value of the expression it came from.
+    #[test]
+    fn canonical_form_keeps_value(text in expr_text(), seed in any::<u64>()) {
+        let (mut ctx, id, vars) = setup(&text)?;
+        let c = ctx.canon(id);
+        let back = ctx.from_canonical(&c);
+        let tape = Tape::compile(&ctx, &[id, back], &vars).unwrap();
+        for p in points(seed, 4) {
+            let v = tape.eval(&p);
+            prop_assert!(close(v[0], v[1], 1e-7), "{text}: {} vs canonical {}", v[0], v[1]);
+        }
+    }
+
+    /// Symbolic derivatives agree with central finite differences.
+    #[test]
+    fn derivative_matches_finite_differences(text in expr_text(), seed in any::<u64>(), k in 0usize..3) {
+        let (mut ctx, id, vars) = setup(&text)?;
+        let d = ctx.diff(id, vars[k]);
+        let tape = Tape::compile(&ctx, &[id, d], &vars).unwrap();
+        for p in points(seed, 3) {
+            let h = 1e-5;
+            let (mut a, mut b) = (p, p);
+            a[k] += h;
+            b[k] -= h;
+            let fd = (tape.eval(&a)[0] - tape.eval(&b)[0]) / (2.0 * h);
+            let sym = tape.eval(&p)[1];
+            prop_assert!(close(fd, sym, 1e-4), "{text}: d/d{} fd {fd} vs symbolic {sym}", SYMS[k]);
+        }
+    }
+
+    /// Printing the canonical form and parsing it back gives the same form.
+    #[test]
+    fn print_parse_roundtrip(text in expr_text()) {
+        let (mut ctx, id, _) = setup(&text)?;
+        let c = ctx.canon(id);
+        let printed = ctx.ratfun_text(&c);
+        let again = ctx.parse(&printed).map_err(|e| TestCaseError::fail(format!("{printed}: {e}")))?;
+        prop_assert_eq!(ctx.canon(again), c, "printed: {}", printed);
+    }
+
+    /// Zero-testing agrees with evaluation: e - e is zero, e - (e + tiny change) is not.
+    #[test]
+    fn zero_test_agrees_with_evaluation(text in expr_text(), other in expr_text(), seed in any::<u64>()) {
+        let (mut ctx, a, vars) = setup(&text)?;
+        let b = match ctx.parse(&other) {
+            Ok(b) => b,
+            Err(e) if e.message.contains("integer multiples of one unit") => return Err(TestCaseError::reject("mixed angle units")),
+            Err(e) => return Err(TestCaseError::fail(e.message)),
+        };
+        let diff = ctx.sub(a, b);
+        let zero = ctx.is_identically_zero(diff);
+        let tape = Tape::compile(&ctx, &[diff], &vars).unwrap();
+        let vals: Vec<f64> = points(seed, 4).iter().map(|p| tape.eval(p)[0]).collect();
+        let scale = {
+            let t = Tape::compile(&ctx, &[a, b], &vars).unwrap();
+            points(seed, 4).iter().map(|p| { let v = t.eval(p); v[0].abs() + v[1].abs() }).fold(1.0, f64::max)
+        };
+        if zero {
+            prop_assert!(vals.iter().all(|v| v.abs() <= 1e-7 * scale), "{text} == {other} but values {vals:?}");
+        } else {
+            prop_assert!(vals.iter().any(|v| v.abs() > 1e-12 * scale), "{text} != {other} but all values ~0: {vals:?}");
+        }
+        // And an expression minus itself, rebuilt from text, is zero.
+        let a2 = ctx.parse(&text).unwrap();
+        let d2 = ctx.sub(a, a2);
+        prop_assert!(ctx.is_identically_zero(d2));
+    }
+
+    /// The parser returns an error, never panics, on arbitrary input.
+    #[test]
+    fn parser_never_panics(s in "[ -~]{0,40}") {
+        let _ = parse_ast(&s);
+        let mut ctx = Ctx::new();
+        let _ = ctx.parse(&s);
+    }
+
+    /// Same for input built from the language's own tokens (more likely to get deep).
+    #[test]
+    fn parser_never_panics_on_tokens(toks in prop::collection::vec(prop::sample::select(vec![
+        "x", "y", "1", "0", "2.5", "+", "-", "*", "/", "^", "(", ")", ",", "sin", "atan2", "sqrt", "log", "pi", "0.0",
+    ]), 0..30)) {
+        let s = toks.join(" ");
+        let mut ctx = Ctx::new();
+        let _ = ctx.parse(&s);
+    }
+}
+
+fn canon_text(src: &str) -> String {
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    ctx.to_text(id)
+}
+
+fn is_zero(src: &str) -> bool {
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    ctx.is_identically_zero(id)
+}
+
+#[test]
+fn trig_identities() {
+    assert!(is_zero("sin(a + b) - (sin(a)*cos(b) + cos(a)*sin(b))"));
+    assert!(is_zero("cos(a + b) - (cos(a)*cos(b) - sin(a)*sin(b))"));
+    assert!(is_zero("cos(2*a) - (cos(a)^2 - sin(a)^2)"));
+    assert!(is_zero("sin(2*a) - 2*sin(a)*cos(a)"));
+    assert!(is_zero("tan(a) - sin(a)/cos(a)"));
+    assert!(is_zero("sin(x)^2 + cos(x)^2 - 1"));
+    assert!(is_zero("sin(g - p)*cos(p) + cos(g - p)*sin(p) - sin(g)"));
+    assert!(is_zero("sin(x + pi/2) - cos(x)"));
+    assert!(is_zero("cos(x + pi) + cos(x)"));
+    assert!(is_zero("sin(pi/4) - sqrt(2)/2"));
+    assert!(is_zero("cos(pi/6) - sqrt(3)/2"));
+    assert!(is_zero("sin(-x) + sin(x)"));
+    assert!(is_zero("sin(x*y)^2 + cos(x*y)^2 - 1"));
+    assert!(is_zero("sin(x/2)^2 - (1 - cos(x/2)^2)"));
+    assert!(
+        half_angle_after_unit(),
+        "half angles are exact once the unit is x/2"
+    );
+    assert!(!is_zero("sin(a) - cos(a)"));
+    assert!(is_zero("1/(1 - sin(x)) - (1 + sin(x))/cos(x)^2"));
+}
+
+/// `sin(x)` built first fixes the unit of x to 1, so `sin(x/2)` afterwards is an
+/// error, not a silent independent atom; built the other way round it is exact.
+fn half_angle_after_unit() -> bool {
+    let mut ctx = Ctx::new();
+    ctx.parse("sin(x/2)").unwrap();
+    let e = ctx.parse("sin(x) - 2*sin(x/2)*cos(x/2)").unwrap();
+    ctx.is_identically_zero(e)
+}
+
+#[test]
+fn mixing_angle_units_is_an_error_not_a_silent_atom() {
+    let mut ctx = Ctx::new();
+    ctx.parse("sin(x)").unwrap();
+    let e = ctx.parse("sin(x/3)").unwrap_err();
+    assert!(e.message.contains("unit"), "{}", e.message);
+}
+
+#[test]
+fn atan_sqrt_exp_log_identities() {
+    // d/dx atan2(y, x) = -y/(x^2 + y^2), d/dy = x/(x^2 + y^2).
+    let mut ctx = Ctx::new();
+    let (x, y) = (ctx.symbol("x"), ctx.symbol("y"));
+    let f = ctx.parse("atan2(y, x)").unwrap();
+    let dx = ctx.diff(f, x.var);
+    let dy = ctx.diff(f, y.var);
+    let ex = ctx.parse("-y/(x^2 + y^2)").unwrap();
+    let ey = ctx.parse("x/(x^2 + y^2)").unwrap();
+    assert_eq!(ctx.canon(dx), ctx.canon(ex));
+    assert_eq!(ctx.canon(dy), ctx.canon(ey));
+    // The paper's observation: atan2 form and -atan form have the same gradient.
+    let g = ctx.symbol("g");
+    let mu = ctx.symbol("mu");
+    let b1 = ctx.parse("atan2(sin(g), -mu - cos(g))").unwrap();
+    let b2 = ctx.parse("-atan(sin(g)/(mu + cos(g)))").unwrap();
+    for v in [g.var, mu.var] {
+        let (d1, d2) = (ctx.diff(b1, v), ctx.diff(b2, v));
+        assert_eq!(ctx.canon(d1), ctx.canon(d2));
+    }
+    assert!(is_zero("sqrt(x)^2 - x"));
+    assert!(is_zero("sqrt(4*x) - 2*sqrt(x)"));
+    assert!(is_zero("sqrt(8) - 2*sqrt(2)"));
+    assert!(is_zero("1/sqrt(x) - sqrt(x)/x"));
+    assert!(is_zero("exp(a + b) - exp(a)*exp(b)"));
+    assert!(is_zero("exp(2*a) - exp(a)^2"));
+    assert!(is_zero("exp(-a)*exp(a) - 1"));
+    assert!(is_zero("atan(-x) + atan(x)"));
+    assert!(is_zero("x^(1/2) - sqrt(x)"));
+    assert!(is_zero("x^(3/2) - x*sqrt(x)"));
+    assert_eq!(canon_text("(x^2 - 1)/(x + 1)"), "x - 1");
+    assert_eq!(canon_text("0.25*x + 1/4*x"), "x/2");
+}
+
+#[test]
+fn derivative_rules_through_atoms() {
+    let mut ctx = Ctx::new();
+    let x = ctx.symbol("x");
+    let cases = [
+        ("log(x)", "1/x"),
+        ("exp(x^2)", "2*x*exp(x^2)"),
+        ("sqrt(x)", "1/(2*sqrt(x))"),
+        ("atan(x^2)", "2*x/(x^4 + 1)"),
+        ("sin(x^2)", "2*x*cos(x^2)"),
+        ("tan(x)", "1/cos(x)^2"),
+        ("x^y", "y*x^y/x"),
+    ];
+    for (f, df) in cases {
+        let a = ctx.parse(f).unwrap();
+        let d = ctx.diff(a, x.var);
+        let e = ctx.parse(df).unwrap();
+        assert_eq!(ctx.canon(d), ctx.canon(e), "d/dx {f}");
+    }
+}
+
+#[test]
+fn errors_name_the_place() {
+    let mut ctx = Ctx::new();
+    let cases = [
+        ("1 +", "end of expression"),
+        ("(x + 1", "')'"),
+        ("foo(x)", "unknown function"),
+        ("atan2(x)", "takes 2 arguments"),
+        ("x / (y - y)", "identically zero"),
+        ("x $ y", "unexpected character"),
+        ("2x", "followed by a letter"),
+        ("sqrt(-4)", "negative constant"),
+        ("log(0)", "undefined"),
+        ("x^(1/3)", "not supported"),
+        ("sqrt(x^2)", "perfect square"),
+        ("x y", "missing operator"),
+    ];
+    for (src, want) in cases {
+        let e = ctx.parse(src).unwrap_err();
+        assert!(e.message.contains(want), "{src}: got '{}'", e.message);
+        assert!(e.span.end <= src.len() + 1, "{src}: span {:?}", e.span);
+    }
+    let e = ctx.parse("x + (y $ 1)").unwrap_err();
+    assert_eq!(obsan_expr::line_col("x + (y $ 1)", e.span.start), (1, 8));
+}
+
+#[test]
+fn gcd_agrees_with_reference_on_structured_inputs() {
+    // Products of shared factors in several variables, against the PRS reference.
+    let mut ctx = Ctx::new();
+    let texts = [
+        ("(x + y)^2*(x - 2*z)", "(x + y)*(x^2 + z)*(x - 2*z)^2"),
+        ("(x*y - 1)^3*(z + 1)", "(x*y - 1)*(z - 1)"),
+        (
+            "(3*x^2 + 2*y*z + 1)*(x - y)",
+            "(3*x^2 + 2*y*z + 1)*(x + y)*7",
+        ),
+    ];
+    for (a, b) in texts {
+        let (ia, ib) = (ctx.parse(a).unwrap(), ctx.parse(b).unwrap());
+        let (pa, pb): (Poly, Poly) = (
+            ctx.canon(ia).numerator().clone(),
+            ctx.canon(ib).numerator().clone(),
+        );
+        let g1 = gcd(&pa, &pb);
+        let g2 = PrsGcd.gcd(&pa, &pb);
+        assert_eq!(g1, g2, "{a} / {b}");
+        assert!(pa.div_exact(&g1).is_some() && pb.div_exact(&g1).is_some());
+    }
+}
