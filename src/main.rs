@@ -1,1 +1,37 @@
-fn main() {}
+//! `obsan`: the command-line front end. Thin glue over the library crates:
+//! it alone reads files, formats output and chooses exit codes.
+//!
+//! Exit codes: 0 success; 1 the command ran but a check it performs failed;
+//! 2 bad input (a malformed file, an unknown symbol, a bad flag) or an error.
+
+mod cli;
+mod expr_cmds;
+mod show;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+/// An error to report on stderr with exit code 2.
+pub struct Failure(pub String);
+
+impl<E: std::fmt::Display> From<E> for Failure {
+    fn from(e: E) -> Failure {
+        Failure(e.to_string())
+    }
+}
+
+fn main() -> ExitCode {
+    let args = cli::Cli::parse();
+    let result = match args.command {
+        cli::Command::Show(a) => show::run(&a),
+        cli::Command::Simplify(a) => expr_cmds::simplify(&a),
+        cli::Command::Diff(a) => expr_cmds::diff(&a),
+    };
+    match result {
+        Ok(code) => code,
+        Err(Failure(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -75,7 +75,7 @@ pub(crate) struct Leaf {
 }
 
 /// The symbolic context: arena, leaves, and memo tables.
-#[derive(Default)]
+#[derive(Default, Clone)]
 pub struct Ctx {
     pub(crate) nodes: Vec<Node>,
     dedup: FxHashMap<Node, Id>,

@@ -32,6 +32,7 @@ mod num;
 mod parse;
 mod poly;
 mod print;
+mod subst;
 pub mod tutorial;
 
 pub use canon::RatFun;

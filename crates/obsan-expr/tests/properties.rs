@@ -313,3 +313,22 @@ fn gcd_agrees_with_reference_on_structured_inputs() {
         assert!(pa.div_exact(&g1).is_some() && pb.div_exact(&g1).is_some());
     }
 }
+
+#[test]
+fn substitution_relowers_functions() {
+    let mut ctx = Ctx::new();
+    let (g, p) = (ctx.symbol("g"), ctx.symbol("p"));
+    let e = ctx.parse("sin(g - p) + atan(g*p) + sqrt(1 + g^2)").unwrap();
+    let a = ctx.parse("p + 2*x").unwrap();
+    let s = ctx.substitute(e, &[(g.var, a)]).unwrap();
+    let want = ctx
+        .parse("sin(2*x) + atan((p + 2*x)*p) + sqrt(1 + (p + 2*x)^2)")
+        .unwrap();
+    assert_eq!(ctx.canon(s), ctx.canon(want));
+    let zero = ctx.int(0);
+    let f = ctx.parse("1/(g - 1)").unwrap();
+    let one = ctx.int(1);
+    assert!(ctx.substitute(f, &[(g.var, one)]).is_err());
+    let h = ctx.substitute(f, &[(g.var, zero)]).unwrap();
+    assert_eq!(ctx.to_text(h), "-1");
+}

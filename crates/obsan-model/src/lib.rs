@@ -1,1 +1,20 @@
+//! obsan's system model: the `.sys` text format (see `docs/sys-format.md`),
+//! the checks that make a description an input-affine system, and its normal
+//! form `S' = f0(S) + sum_i f_i(S) u_i`, `y = h(S)`, optionally after an input
+//! restriction and with known constants given values.
+//!
+//! ```
+//! let src = "system demo\nstate x\ninput u\nx' = -x + u\noutput y = x^2\n";
+//! let sys = obsan_model::System::parse(src, "demo.sys").unwrap();
+//! let mut nf = sys.normal_form(None, &[]).unwrap();
+//! assert_eq!(nf.ctx.to_text(nf.f0[0]), "-x");
+//! assert_eq!(nf.ctx.to_text(nf.fields[0][0]), "1");
+//! ```
 
+mod error;
+mod normal;
+mod sys;
+
+pub use error::ModelError;
+pub use normal::NormalForm;
+pub use sys::{Decl, Kind, Restriction, System};

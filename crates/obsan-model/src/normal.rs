@@ -1,0 +1,192 @@
+//! The normal form `S' = f0(S) + sum_i f_i(S) u_i`, `y = h(S)` (eq. 6 of the paper).
+
+use crate::error::ModelError;
+use crate::sys::{Kind, System};
+use obsan_expr::{Ctx, Id, Var, Q};
+
+/// A system in input-affine normal form, ready for analysis.
+///
+/// The analysed state `S` is the dynamic states followed by the params
+/// (whose derivative is 0); every vector field has one entry per element of `S`.
+#[derive(Clone, Debug)]
+pub struct NormalForm {
+    pub ctx: Ctx,
+    pub name: String,
+    pub description: String,
+    /// Names of the analysed state: dynamic states, then params.
+    pub state: Vec<String>,
+    pub state_vars: Vec<Var>,
+    /// How many of `state` are dynamic states (the rest are params).
+    pub n_dynamic: usize,
+    /// Known constants: name and the value given to it, if any (else generic).
+    pub consts: Vec<(String, Option<Q>)>,
+    pub inputs: Vec<String>,
+    pub input_vars: Vec<Var>,
+    /// Drift `f0`, one entry per state element.
+    pub f0: Vec<Id>,
+    /// `fields[i]` is the field multiplying input `i`.
+    pub fields: Vec<Vec<Id>>,
+    pub outputs: Vec<(String, Id)>,
+    /// The restriction applied, if any.
+    pub restriction: Option<String>,
+}
+
+impl NormalForm {
+    /// `true` if the drift is identically zero.
+    pub fn drift_is_zero(&mut self) -> bool {
+        let f0 = self.f0.clone();
+        f0.iter().all(|&f| self.ctx.is_identically_zero(f))
+    }
+}
+
+impl System {
+    /// The normal form, after the named input restriction (if any) and with
+    /// the given known constants set to values (others stay generic).
+    pub fn normal_form(
+        &self,
+        restriction: Option<&str>,
+        set: &[(String, Q)],
+    ) -> Result<NormalForm, ModelError> {
+        let mut ctx = self.ctx.clone();
+        // Constant values: from the file, then from --set.
+        let mut subst: Vec<(Var, Id)> = Vec::new();
+        let mut consts: Vec<(String, Option<Q>)> = Vec::new();
+        for (n, _) in set {
+            match self.decls.iter().find(|d| &d.name == n) {
+                Some(d) if d.kind == Kind::Const => {}
+                Some(d) => {
+                    return Err(ModelError::general(
+                        "--set",
+                        format!(
+                            "'{n}' is a {} of {}, not a known constant",
+                            d.kind.word(),
+                            self.name
+                        ),
+                    ))
+                }
+                None => {
+                    let names: Vec<&str> = self
+                        .decls_of(Kind::Const)
+                        .map(|d| d.name.as_str())
+                        .collect();
+                    let known = if names.is_empty() {
+                        "it has none".to_string()
+                    } else {
+                        format!("its constants: {}", names.join(", "))
+                    };
+                    return Err(ModelError::general(
+                        "--set",
+                        format!("'{n}' is not a constant of {} ({known})", self.name),
+                    ));
+                }
+            }
+        }
+        for d in self.decls_of(Kind::Const) {
+            let v = set
+                .iter()
+                .rev()
+                .find(|(n, _)| n == &d.name)
+                .map(|(_, q)| q.clone())
+                .or_else(|| d.value.clone());
+            if let Some(q) = &v {
+                subst.push((d.sym.var, ctx.num(q.clone())));
+            }
+            consts.push((d.name.clone(), v));
+        }
+        // Restriction.
+        let mut inputs: Vec<String> = self.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+        if let Some(rn) = restriction {
+            let Some(r) = self.restriction(rn) else {
+                let names: Vec<&str> = self.restrictions.iter().map(|r| r.name.as_str()).collect();
+                let known = if names.is_empty() {
+                    "it declares none".to_string()
+                } else {
+                    format!("it declares: {}", names.join(", "))
+                };
+                return Err(ModelError::general(
+                    "--input",
+                    format!("{} has no restriction named '{rn}' ({known})", self.origin),
+                ));
+            };
+            let input_decls: Vec<_> = self.decls_of(Kind::Input).collect();
+            for (ii, loc) in &r.subs {
+                let rhs = ctx
+                    .substitute(loc.id, &subst)
+                    .map_err(|e| self.err_at(loc, &e.0))?;
+                subst.push((input_decls[*ii].sym.var, rhs));
+            }
+            inputs = r.inputs.clone();
+        }
+        let input_vars: Vec<Var> = inputs.iter().map(|n| ctx.symbol(n).var).collect();
+        let state_decls: Vec<_> = self
+            .decls
+            .iter()
+            .filter(|d| d.kind == Kind::State)
+            .chain(self.decls_of(Kind::Param))
+            .collect();
+        let n_dynamic = self.dynamics.len();
+        let mut f0 = Vec::new();
+        let mut fields = vec![Vec::new(); inputs.len()];
+        let zero = ctx.int(0);
+        for (k, _) in state_decls.iter().enumerate() {
+            if k >= n_dynamic {
+                f0.push(zero);
+                for f in fields.iter_mut() {
+                    f.push(zero);
+                }
+                continue;
+            }
+            let loc = &self.dynamics[k];
+            let e = ctx
+                .substitute(loc.id, &subst)
+                .map_err(|er| self.err_at(loc, &er.0))?;
+            // e is affine in the inputs (checked when read; restrictions are affine too).
+            let mut rest = e;
+            for (i, &u) in input_vars.iter().enumerate() {
+                let fi = ctx.diff(e, u);
+                let c = ctx.canon(fi);
+                debug_assert!(
+                    input_vars.iter().all(|&w| {
+                        let d = ctx.diff(fi, w);
+                        ctx.is_identically_zero(d)
+                    }),
+                    "affine"
+                );
+                let fi = ctx.from_canonical(&c);
+                let uid = ctx.lookup(&inputs[i]).expect("input symbol").id;
+                let term = ctx.mul(&[fi, uid]);
+                rest = ctx.sub(rest, term);
+                fields[i].push(fi);
+            }
+            let c = ctx.canon(rest);
+            f0.push(ctx.from_canonical(&c));
+        }
+        let mut outputs = Vec::new();
+        for (n, loc) in &self.outputs {
+            let h = ctx
+                .substitute(loc.id, &subst)
+                .map_err(|e| self.err_at(loc, &e.0))?;
+            outputs.push((n.clone(), h));
+        }
+        Ok(NormalForm {
+            ctx,
+            name: self.name.clone(),
+            description: self.description.clone(),
+            state: state_decls.iter().map(|d| d.name.clone()).collect(),
+            state_vars: state_decls.iter().map(|d| d.sym.var).collect(),
+            n_dynamic,
+            consts,
+            inputs,
+            input_vars,
+            f0,
+            fields,
+            outputs,
+            restriction: restriction.map(str::to_string),
+        })
+    }
+
+    fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {
+        let (a, b) = loc.src_span(loc.ast.span);
+        ModelError::at(&self.origin, &self.src, a, b, msg.to_string())
+    }
+}

@@ -1,0 +1,965 @@
+//! Reading the `.sys` format.
+//!
+//! A file is a list of statements, one per line; a statement continues on the
+//! next line while a parenthesis is open or the line ends with an operator or a
+//! comma. `#` starts a comment. Declarations may come in any order: all names
+//! are collected first, then every expression is built and checked.
+
+use crate::error::ModelError;
+use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, FUNCTIONS, Q};
+
+/// What a declared name is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// A dynamic state (has an equation `x' = ...`).
+    State,
+    /// An unknown constant parameter: part of the analysed state, derivative 0.
+    Param,
+    /// A known constant (such as `q`): neither state nor input.
+    Const,
+    Input,
+}
+
+impl Kind {
+    pub fn word(self) -> &'static str {
+        match self {
+            Kind::State => "state",
+            Kind::Param => "param",
+            Kind::Const => "const",
+            Kind::Input => "input",
+        }
+    }
+}
+
+/// A declared name.
+#[derive(Clone, Debug)]
+pub struct Decl {
+    pub name: String,
+    pub kind: Kind,
+    pub sym: Symbol,
+    /// For constants declared with a value (`const g = 9.81`).
+    pub value: Option<Q>,
+    /// Byte offset of the name in the source.
+    pub(crate) at: usize,
+}
+
+/// An expression with the map from its text offsets to source offsets.
+#[derive(Clone, Debug)]
+pub(crate) struct Located {
+    pub ast: Ast,
+    pub id: Id,
+    pub map: Vec<usize>,
+}
+
+impl Located {
+    pub(crate) fn src_span(&self, s: Span) -> (usize, usize) {
+        let a = self.map[s.start.min(self.map.len() - 1)];
+        let b = self.map[s.end.saturating_sub(1).min(self.map.len() - 1)] + 1;
+        (a, b.max(a + 1))
+    }
+}
+
+/// A named input restriction, e.g. `restrict q: wR = nu, wL = q*nu`.
+#[derive(Clone, Debug)]
+pub struct Restriction {
+    pub name: String,
+    /// Original input index, and its replacement.
+    pub(crate) subs: Vec<(usize, Located)>,
+    /// The inputs of the restricted system, in order: the original inputs not
+    /// replaced, then the new ones in order of appearance.
+    pub inputs: Vec<String>,
+}
+
+/// A parsed, checked system description.
+#[derive(Clone, Debug)]
+pub struct System {
+    pub name: String,
+    pub description: String,
+    pub(crate) ctx: Ctx,
+    pub decls: Vec<Decl>,
+    /// Right-hand side per dynamic state, in the order of `states()`.
+    pub(crate) dynamics: Vec<Located>,
+    pub(crate) outputs: Vec<(String, Located)>,
+    pub restrictions: Vec<Restriction>,
+    pub(crate) origin: String,
+    pub(crate) src: String,
+}
+
+/// A logical statement: its text and, per byte, the source offset.
+struct Stmt {
+    text: String,
+    map: Vec<usize>,
+}
+
+impl Stmt {
+    fn src(&self, i: usize) -> usize {
+        self.map
+            .get(i)
+            .copied()
+            .unwrap_or_else(|| self.map.last().map_or(0, |x| x + 1))
+    }
+    fn slice(&self, a: usize, b: usize) -> (&str, Vec<usize>) {
+        (&self.text[a..b], self.map[a..b].to_vec())
+    }
+}
+
+fn split_statements(src: &str, origin: &str) -> Result<Vec<Stmt>, ModelError> {
+    let mut out = Vec::new();
+    let mut cur = Stmt {
+        text: String::new(),
+        map: Vec::new(),
+    };
+    let mut depth: i64 = 0;
+    let mut open_at = 0;
+    let mut offset = 0;
+    for raw in src.split_inclusive('\n') {
+        let line_start = offset;
+        offset += raw.len();
+        let line = raw.trim_end_matches(['\n', '\r']);
+        let code = line.split('#').next().unwrap_or("");
+        for (i, ch) in code.char_indices() {
+            match ch {
+                '(' => {
+                    if depth == 0 {
+                        open_at = line_start + i;
+                    }
+                    depth += 1
+                }
+                ')' => depth -= 1,
+                _ => {}
+            }
+            let pos = line_start + i;
+            cur.text.push(ch);
+            cur.map.extend(std::iter::repeat_n(pos, ch.len_utf8()));
+        }
+        let trimmed = code.trim_end();
+        let continues = depth > 0 || trimmed.ends_with(['+', '-', '*', '/', '^', ',']);
+        if continues && !cur.text.trim().is_empty() {
+            cur.text.push(' ');
+            cur.map.push(line_start + code.len());
+            continue;
+        }
+        if !cur.text.trim().is_empty() {
+            out.push(std::mem::replace(
+                &mut cur,
+                Stmt {
+                    text: String::new(),
+                    map: Vec::new(),
+                },
+            ));
+        } else {
+            cur = Stmt {
+                text: String::new(),
+                map: Vec::new(),
+            };
+        }
+        depth = 0;
+    }
+    if depth > 0 {
+        return Err(ModelError::at(
+            origin,
+            src,
+            open_at,
+            open_at + 1,
+            "this '(' is never closed",
+        ));
+    }
+    if !cur.text.trim().is_empty() {
+        out.push(cur);
+    }
+    Ok(out)
+}
+
+fn is_ident(s: &str) -> bool {
+    let mut c = s.chars();
+    c.next()
+        .is_some_and(|f| f.is_ascii_alphabetic() || f == '_')
+        && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
+}
+
+/// Split `text` at commas outside parentheses: (start, end) byte ranges.
+fn split_commas(text: &str) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0i64, 0);
+    for (i, ch) in text.char_indices() {
+        match ch {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push((start, i));
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push((start, text.len()));
+    out
+}
+
+/// Trimmed sub-range.
+fn trim_range(text: &str, (a, b): (usize, usize)) -> (usize, usize) {
+    let s = &text[a..b];
+    let lead = s.len() - s.trim_start().len();
+    let trail = s.len() - s.trim_end().len();
+    (a + lead, (b - trail).max(a + lead))
+}
+
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for i in 1..=a.len() {
+        let mut cur = vec![i; b.len() + 1];
+        for j in 1..=b.len() {
+            let sub = prev[j - 1] + usize::from(a[i - 1] != b[j - 1]);
+            cur[j] = sub.min(prev[j] + 1).min(cur[j - 1] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+const KEYWORDS: [&str; 12] = [
+    "system",
+    "description",
+    "state",
+    "states",
+    "param",
+    "params",
+    "const",
+    "consts",
+    "input",
+    "inputs",
+    "output",
+    "restrict",
+];
+
+struct Reader<'a> {
+    src: &'a str,
+    origin: &'a str,
+}
+
+impl<'a> Reader<'a> {
+    fn err(&self, stmt: &Stmt, a: usize, b: usize, msg: impl Into<String>) -> ModelError {
+        let (s, e) = (stmt.src(a), stmt.src(b.saturating_sub(1)) + 1);
+        ModelError::at(self.origin, self.src, s, e.max(s + 1), msg)
+    }
+    fn err_src(&self, a: usize, b: usize, msg: impl Into<String>) -> ModelError {
+        ModelError::at(self.origin, self.src, a, b.max(a + 1), msg)
+    }
+    fn parse_err(&self, map: &[usize], e: ParseError) -> ModelError {
+        let a = map
+            .get(e.span.start)
+            .copied()
+            .unwrap_or_else(|| map.last().map_or(0, |x| x + 1));
+        let b = map
+            .get(e.span.end.saturating_sub(1))
+            .map_or(a + 1, |x| x + 1);
+        self.err_src(a, b, e.message)
+    }
+}
+
+impl System {
+    /// Read a system from `.sys` text; `origin` names the file in messages.
+    pub fn parse(src: &str, origin: &str) -> Result<System, ModelError> {
+        let rd = Reader { src, origin };
+        let stmts = split_statements(src, origin)?;
+        let mut name: Option<String> = None;
+        let mut description = Vec::new();
+        // Pass 1: declarations.
+        struct PendingDecl {
+            name: String,
+            kind: Kind,
+            at: usize,
+            value: Option<(String, Vec<usize>)>,
+        }
+        let mut pending: Vec<PendingDecl> = Vec::new();
+        let mut equations: Vec<(usize, usize, String, Vec<usize>)> = Vec::new(); // (stmt idx, name at, rhs, map)
+        let mut outputs_raw: Vec<(String, usize, String, Vec<usize>)> = Vec::new();
+        let mut restrict_raw: Vec<(usize, String, usize)> = Vec::new(); // stmt idx, name, at
+        for (si, st) in stmts.iter().enumerate() {
+            let t = st.text.as_str();
+            let lead = t.len() - t.trim_start().len();
+            let word_end = t[lead..]
+                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '\''))
+                .map_or(t.len(), |i| lead + i);
+            let word = &t[lead..word_end];
+            let rest_start = word_end;
+            let kind = match word {
+                "state" | "states" => Some(Kind::State),
+                "param" | "params" => Some(Kind::Param),
+                "const" | "consts" => Some(Kind::Const),
+                "input" | "inputs" => Some(Kind::Input),
+                _ => None,
+            };
+            if let Some(kind) = kind {
+                let body = &t[rest_start..];
+                if body.trim().is_empty() {
+                    return Err(rd.err(
+                        st,
+                        lead,
+                        word_end,
+                        format!("'{word}' needs a list of names"),
+                    ));
+                }
+                for r in split_commas(body) {
+                    let (a, b) = trim_range(body, r);
+                    let item = &body[a..b];
+                    let (nm, val) = match item.split_once('=') {
+                        Some((n, v)) => (n.trim_end(), Some(v)),
+                        None => (item, None),
+                    };
+                    let na = rest_start + a;
+                    if !is_ident(nm) {
+                        let shown = if nm.is_empty() {
+                            "an empty name".to_string()
+                        } else {
+                            format!("'{nm}'")
+                        };
+                        return Err(rd.err(
+                            st,
+                            na,
+                            na + nm.len().max(1),
+                            format!("{shown} is not a valid name in a '{word}' list"),
+                        ));
+                    }
+                    let value = match (val, kind) {
+                        (Some(v), Kind::Const) => {
+                            let off = rest_start + a + item.find('=').expect("has '=") + 1;
+                            Some((
+                                v.to_string(),
+                                (off..off + v.len()).map(|i| st.src(i)).collect(),
+                            ))
+                        }
+                        (Some(_), _) => {
+                            return Err(rd.err(
+                                st,
+                                na,
+                                rest_start + b,
+                                format!(
+                                    "only constants can be given a value, not a {}",
+                                    kind.word()
+                                ),
+                            ))
+                        }
+                        (None, _) => None,
+                    };
+                    pending.push(PendingDecl {
+                        name: nm.to_string(),
+                        kind,
+                        at: st.src(na),
+                        value,
+                    });
+                }
+                continue;
+            }
+            match word {
+                "system" => {
+                    let n = t[rest_start..].trim();
+                    if !is_ident(n) {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            t.len(),
+                            "'system' needs one name (letters, digits, '_'): system NAME",
+                        ));
+                    }
+                    if name.is_some() {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            word_end,
+                            "a second 'system' line: a file describes one system",
+                        ));
+                    }
+                    name = Some(n.to_string());
+                }
+                "description" => description.push(t[rest_start..].trim().to_string()),
+                "output" => {
+                    let body = &t[rest_start..];
+                    let Some(eq) = body.find('=') else {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            t.len(),
+                            "an output needs a name and an expression: output y = EXPR",
+                        ));
+                    };
+                    let (a, b) = trim_range(body, (0, eq));
+                    let nm = &body[a..b];
+                    if !is_ident(nm) {
+                        return Err(rd.err(
+                            st,
+                            rest_start + a,
+                            rest_start + b.max(a + 1),
+                            "an output needs a name: output y = EXPR",
+                        ));
+                    }
+                    let rs = rest_start + eq + 1;
+                    let (rhs, map) = st.slice(rs, t.len());
+                    outputs_raw.push((
+                        nm.to_string(),
+                        st.src(rest_start + a),
+                        rhs.to_string(),
+                        map,
+                    ));
+                }
+                "restrict" => {
+                    let body = &t[rest_start..];
+                    let Some(colon) = body.find(':') else {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            t.len(),
+                            "a restriction needs a name and a colon: restrict NAME: u1 = EXPR, ...",
+                        ));
+                    };
+                    let (a, b) = trim_range(body, (0, colon));
+                    let nm = &body[a..b];
+                    if !is_ident(nm) {
+                        return Err(rd.err(
+                            st,
+                            rest_start + a,
+                            rest_start + b.max(a + 1),
+                            "a restriction needs a name: restrict NAME: u1 = EXPR, ...",
+                        ));
+                    }
+                    if restrict_raw.iter().any(|r| r.1 == nm) {
+                        return Err(rd.err(
+                            st,
+                            rest_start + a,
+                            rest_start + b,
+                            format!("restriction '{nm}' is defined twice"),
+                        ));
+                    }
+                    restrict_raw.push((si, nm.to_string(), st.src(rest_start + a)));
+                }
+                w if t[word_end..].starts_with('\'') || w.ends_with('\'') => {
+                    let nm = w.trim_end_matches('\'');
+                    let after = if w.ends_with('\'') {
+                        word_end
+                    } else {
+                        word_end + 1
+                    };
+                    let rest = &t[after..];
+                    let Some(eq) = rest.find('=') else {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            t.len(),
+                            format!("an equation needs '=': {nm}' = EXPR"),
+                        ));
+                    };
+                    if !rest[..eq].trim().is_empty() {
+                        return Err(rd.err(
+                            st,
+                            after,
+                            after + eq,
+                            format!("expected '=' after {nm}'"),
+                        ));
+                    }
+                    let rs = after + eq + 1;
+                    let (rhs, map) = st.slice(rs, t.len());
+                    equations.push((si, st.src(lead), rhs.to_string(), map));
+                }
+                _ => {
+                    let hint = if t.contains('=') && is_ident(word) {
+                        format!(" (for the dynamics of {word} write {word}' = ..., for an output write output {word} = ...)")
+                    } else {
+                        String::new()
+                    };
+                    return Err(rd.err(
+                        st,
+                        lead,
+                        word_end.max(lead + 1),
+                        format!("expected a declaration (system, description, state, param, const, input, output, restrict) or an equation x' = ...{hint}"),
+                    ));
+                }
+            }
+        }
+        let Some(name) = name else {
+            return Err(ModelError::general(
+                origin,
+                "no 'system NAME' line: every .sys file starts by naming its system",
+            ));
+        };
+
+        // Declarations: duplicates, reserved names, symbol creation in order.
+        let mut ctx = Ctx::new();
+        let mut decls: Vec<Decl> = Vec::new();
+        for p in &pending {
+            if let Some(prev) = pending.iter().find(|q| q.name == p.name && q.at < p.at) {
+                let (l, c) = obsan_expr::line_col(src, prev.at);
+                return Err(rd.err_src(
+                    p.at,
+                    p.at + p.name.len(),
+                    format!(
+                        "'{}' is declared twice (first as a {} at line {l}, column {c})",
+                        p.name,
+                        prev.kind.word()
+                    ),
+                ));
+            }
+            if p.name == "pi"
+                || FUNCTIONS.iter().any(|f| f.0 == p.name)
+                || KEYWORDS.contains(&p.name.as_str())
+            {
+                return Err(rd.err_src(
+                    p.at,
+                    p.at + p.name.len(),
+                    format!("'{}' is a reserved word and cannot be a name", p.name),
+                ));
+            }
+        }
+        let mut order: Vec<&PendingDecl> = pending.iter().collect();
+        order.sort_by_key(|p| match p.kind {
+            Kind::State => 0,
+            Kind::Param => 1,
+            Kind::Const => 2,
+            Kind::Input => 3,
+        });
+        for p in order {
+            let sym = ctx.symbol(&p.name);
+            let value = match &p.value {
+                None => None,
+                Some((text, map)) => {
+                    let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
+                    let mut tmp = Ctx::new();
+                    let id = tmp
+                        .build(&ast, &mut |_, n, s| {
+                            Err(ParseError::new(
+                                format!("a constant's value must be a number, not '{n}'"),
+                                s,
+                            ))
+                        })
+                        .map_err(|e| rd.parse_err(map, e))?;
+                    match tmp.canon(id).as_q() {
+                        Some(q) => Some(q),
+                        None => {
+                            return Err(rd.parse_err(
+                                map,
+                                ParseError::new(
+                                    "a constant's value must be a rational number",
+                                    ast.span,
+                                ),
+                            ))
+                        }
+                    }
+                }
+            };
+            decls.push(Decl {
+                name: p.name.clone(),
+                kind: p.kind,
+                sym,
+                value,
+                at: p.at,
+            });
+        }
+        if !decls
+            .iter()
+            .any(|d| matches!(d.kind, Kind::State | Kind::Param))
+        {
+            return Err(ModelError::general(
+                origin,
+                "the system has no state and no param: declare them with 'state' and 'param'",
+            ));
+        }
+
+        let find = |n: &str| decls.iter().find(|d| d.name == n);
+        let suggest = |n: &str| -> String {
+            let best = decls
+                .iter()
+                .map(|d| (edit_distance(n, &d.name), &d.name))
+                .filter(|(k, _)| *k <= 2)
+                .min();
+            best.map_or(String::new(), |(_, m)| format!(" (did you mean '{m}'?)"))
+        };
+
+        // Dynamics.
+        let states: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::State).collect();
+        let mut dynamics: Vec<Option<Located>> = vec![None; states.len()];
+        for (si, at, rhs, map) in &equations {
+            let st = &stmts[*si];
+            let t = st.text.trim_start();
+            let nm = t[..t.find('\'').unwrap_or(0)].trim();
+            let width = nm.len() + 1;
+            let Some(d) = find(nm) else {
+                return Err(rd.err_src(
+                    *at,
+                    at + width,
+                    format!(
+                        "equation for '{nm}', which is not declared{} (declare it with 'state')",
+                        suggest(nm)
+                    ),
+                ));
+            };
+            let idx = match d.kind {
+                Kind::State => states.iter().position(|s| s.name == nm).expect("state"),
+                Kind::Param => {
+                    return Err(rd.err_src(
+                        *at,
+                        at + width,
+                        format!("'{nm}' is a param: params are constant and take no equation"),
+                    ))
+                }
+                k => {
+                    return Err(rd.err_src(
+                        *at,
+                        at + width,
+                        format!("'{nm}' is a {}: only states have equations", k.word()),
+                    ))
+                }
+            };
+            if dynamics[idx].is_some() {
+                return Err(rd.err_src(*at, at + width, format!("a second equation for '{nm}'")));
+            }
+            if rhs.trim().is_empty() {
+                return Err(rd.err_src(
+                    *at,
+                    at + width,
+                    format!("the equation for '{nm}' has no right-hand side"),
+                ));
+            }
+            let ast = parse_ast(rhs).map_err(|e| rd.parse_err(map, e))?;
+            let id = build_checked(
+                &mut ctx,
+                &ast,
+                map,
+                &rd,
+                &decls,
+                &[Kind::State, Kind::Param, Kind::Const, Kind::Input],
+                &format!("the dynamics of {nm}"),
+            )?;
+            let loc = Located {
+                ast,
+                id,
+                map: map.clone(),
+            };
+            check_affine(&mut ctx, &loc, &decls, &rd, nm)?;
+            dynamics[idx] = Some(loc);
+        }
+        let mut dyn_out = Vec::with_capacity(states.len());
+        for (s, d) in states.iter().zip(dynamics) {
+            match d {
+                Some(d) => dyn_out.push(d),
+                None => {
+                    return Err(rd.err_src(s.at, s.at + s.name.len(), format!("state '{}' has no equation: add {}' = ... (or declare it as a param if it is constant)", s.name, s.name)))
+                }
+            }
+        }
+
+        // Outputs.
+        if outputs_raw.is_empty() {
+            return Err(ModelError::general(
+                origin,
+                "the system has no output: add at least one 'output y = EXPR'",
+            ));
+        }
+        let mut outputs = Vec::new();
+        for (nm, at, rhs, map) in &outputs_raw {
+            if find(nm).is_some() || outputs.iter().any(|(o, _): &(String, Located)| o == nm) {
+                return Err(rd.err_src(
+                    *at,
+                    at + nm.len(),
+                    format!("output name '{nm}' is already used"),
+                ));
+            }
+            if rhs.trim().is_empty() {
+                return Err(rd.err_src(
+                    *at,
+                    at + nm.len(),
+                    format!("output '{nm}' has no expression"),
+                ));
+            }
+            let ast = parse_ast(rhs).map_err(|e| rd.parse_err(map, e))?;
+            for (id_name, span) in ast.idents() {
+                if find(id_name).is_some_and(|d| d.kind == Kind::Input) {
+                    let (a, b) = Located {
+                        ast: ast.clone(),
+                        id: ctx.int(0),
+                        map: map.clone(),
+                    }
+                    .src_span(span);
+                    return Err(rd.err_src(a, b, format!("output '{nm}' uses the input '{id_name}': outputs must be functions of states, params and constants")));
+                }
+            }
+            let id = build_checked(
+                &mut ctx,
+                &ast,
+                map,
+                &rd,
+                &decls,
+                &[Kind::State, Kind::Param, Kind::Const],
+                &format!("output {nm}"),
+            )?;
+            outputs.push((
+                nm.clone(),
+                Located {
+                    ast,
+                    id,
+                    map: map.clone(),
+                },
+            ));
+        }
+
+        // Restrictions.
+        let inputs: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::Input).collect();
+        let mut restrictions = Vec::new();
+        for (si, rname, at) in &restrict_raw {
+            let st = &stmts[*si];
+            let t = &st.text;
+            let colon = t.find(':').expect("checked") + 1;
+            let body = &t[colon..];
+            let mut subs: Vec<(usize, Located)> = Vec::new();
+            let mut fresh: Vec<String> = Vec::new();
+            let mut raw: Vec<(usize, Ast, Vec<usize>)> = Vec::new();
+            if body.trim().is_empty() {
+                return Err(rd.err_src(*at, at + rname.len(), format!("restriction '{rname}' substitutes nothing: restrict {rname}: u1 = EXPR, ...")));
+            }
+            for r in split_commas(body) {
+                let (a, b) = trim_range(body, r);
+                let item = &body[a..b];
+                let Some(eq) = item.find('=') else {
+                    return Err(rd.err(
+                        st,
+                        colon + a,
+                        colon + b.max(a + 1),
+                        "each part of a restriction is INPUT = EXPR",
+                    ));
+                };
+                let lhs = item[..eq].trim();
+                let la = colon + a;
+                let Some(ii) = inputs.iter().position(|d| d.name == lhs) else {
+                    let what = match find(lhs) {
+                        Some(d) => format!("'{lhs}' is a {}, not an input", d.kind.word()),
+                        None => format!("'{lhs}' is not a declared input{}", suggest(lhs)),
+                    };
+                    return Err(rd.err(
+                        st,
+                        la,
+                        la + lhs.len().max(1),
+                        format!("restriction '{rname}': {what}"),
+                    ));
+                };
+                if raw.iter().any(|(k, _, _)| *k == ii) {
+                    return Err(rd.err(
+                        st,
+                        la,
+                        la + lhs.len(),
+                        format!("restriction '{rname}' sets '{lhs}' twice"),
+                    ));
+                }
+                let rs = colon + a + eq + 1;
+                let (rhs, map) = st.slice(rs, colon + b);
+                if rhs.trim().is_empty() {
+                    return Err(rd.err(
+                        st,
+                        la,
+                        la + lhs.len(),
+                        format!("restriction '{rname}': '{lhs} =' needs an expression"),
+                    ));
+                }
+                let ast = parse_ast(rhs).map_err(|e| rd.parse_err(&map, e))?;
+                raw.push((ii, ast, map));
+            }
+            let replaced: Vec<usize> = raw.iter().map(|r| r.0).collect();
+            for (_, ast, map) in &raw {
+                for (n, span) in ast.idents() {
+                    let loc = Located {
+                        ast: ast.clone(),
+                        id: ctx.int(0),
+                        map: map.clone(),
+                    };
+                    match find(n) {
+                        Some(d) if d.kind == Kind::Const => {}
+                        Some(d) if d.kind == Kind::Input => {
+                            let ii = inputs.iter().position(|x| x.name == n).expect("input");
+                            if replaced.contains(&ii) {
+                                let (a, b) = loc.src_span(span);
+                                return Err(rd.err_src(a, b, format!("restriction '{rname}' replaces '{n}' and also uses it on a right side")));
+                            }
+                        }
+                        Some(d) => {
+                            let (a, b) = loc.src_span(span);
+                            return Err(rd.err_src(a, b, format!("restriction '{rname}': the right side may use known constants and inputs only, not the {} '{n}'", d.kind.word())));
+                        }
+                        None if outputs.iter().any(|(o, _)| o == n) => {
+                            let (a, b) = loc.src_span(span);
+                            return Err(rd.err_src(
+                                a,
+                                b,
+                                format!("restriction '{rname}': '{n}' is an output, not an input"),
+                            ));
+                        }
+                        None => {
+                            if !fresh.iter().any(|f| f == n) {
+                                fresh.push(n.to_string());
+                            }
+                        }
+                    }
+                }
+            }
+            let mut new_inputs: Vec<String> = inputs
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !replaced.contains(i))
+                .map(|(_, d)| d.name.clone())
+                .collect();
+            new_inputs.extend(fresh.iter().cloned());
+            for (ii, ast, map) in raw {
+                let fresh_ref = &fresh;
+                let decls_ref = &decls;
+                let mut resolve = |c: &mut Ctx, n: &str, _s: Span| -> Result<Id, ParseError> {
+                    if fresh_ref.iter().any(|f| f == n) || decls_ref.iter().any(|d| d.name == n) {
+                        Ok(c.symbol(n).id)
+                    } else {
+                        unreachable!("identifiers were classified above")
+                    }
+                };
+                let id = ctx
+                    .build(&ast, &mut resolve)
+                    .map_err(|e| rd.parse_err(&map, e))?;
+                let loc = Located { ast, id, map };
+                // Affine in the new inputs.
+                let vars: Vec<_> = new_inputs.iter().map(|n| ctx.symbol(n).var).collect();
+                for &v in &vars {
+                    let d = ctx.diff(id, v);
+                    for &w in &vars {
+                        let dd = ctx.diff(d, w);
+                        if !ctx.is_identically_zero(dd) {
+                            let (a, b) = loc.src_span(loc.ast.span);
+                            return Err(rd.err_src(a, b, format!("restriction '{rname}': {} = ... is not affine in the inputs ({})", inputs[ii].name, new_inputs.join(", "))));
+                        }
+                    }
+                }
+                subs.push((ii, loc));
+            }
+            restrictions.push(Restriction {
+                name: rname.clone(),
+                subs,
+                inputs: new_inputs,
+            });
+        }
+
+        Ok(System {
+            name,
+            description: description.join(" ").trim().to_string(),
+            ctx,
+            decls,
+            dynamics: dyn_out,
+            outputs,
+            restrictions,
+            origin: origin.to_string(),
+            src: src.to_string(),
+        })
+    }
+
+    pub fn decls_of(&self, kind: Kind) -> impl Iterator<Item = &Decl> {
+        self.decls.iter().filter(move |d| d.kind == kind)
+    }
+
+    pub fn origin(&self) -> &str {
+        &self.origin
+    }
+
+    pub fn restriction(&self, name: &str) -> Option<&Restriction> {
+        self.restrictions.iter().find(|r| r.name == name)
+    }
+
+    /// Output names in declaration order.
+    pub fn output_names(&self) -> Vec<&str> {
+        self.outputs.iter().map(|o| o.0.as_str()).collect()
+    }
+}
+
+/// Build an expression, allowing only identifiers of the given kinds.
+fn build_checked(
+    ctx: &mut Ctx,
+    ast: &Ast,
+    map: &[usize],
+    rd: &Reader,
+    decls: &[Decl],
+    allowed: &[Kind],
+    what: &str,
+) -> Result<Id, ModelError> {
+    let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+        match decls.iter().find(|d| d.name == n) {
+            Some(d) if allowed.contains(&d.kind) => Ok(c.lookup(n).expect("declared").id),
+            Some(d) => Err(ParseError::new(
+                format!("{what} cannot use the {} '{n}'", d.kind.word()),
+                s,
+            )),
+            None => {
+                let best = decls
+                    .iter()
+                    .map(|d| (edit_distance(n, &d.name), &d.name))
+                    .filter(|(k, _)| *k <= 2)
+                    .min();
+                let hint = best.map_or(String::new(), |(_, m)| format!(" (did you mean '{m}'?)"));
+                Err(ParseError::new(
+                    format!("unknown symbol '{n}' in {what}{hint}"),
+                    s,
+                ))
+            }
+        }
+    };
+    ctx.build(ast, &mut resolve)
+        .map_err(|e| rd.parse_err(map, e))
+}
+
+/// The dynamics must be affine in the inputs: otherwise name the first
+/// top-level term that is not.
+fn check_affine(
+    ctx: &mut Ctx,
+    loc: &Located,
+    decls: &[Decl],
+    rd: &Reader,
+    state: &str,
+) -> Result<(), ModelError> {
+    let inputs: Vec<_> = decls
+        .iter()
+        .filter(|d| d.kind == Kind::Input)
+        .map(|d| d.sym.var)
+        .collect();
+    let affine = |ctx: &mut Ctx, id: Id| -> bool {
+        for &u in &inputs {
+            let d = ctx.diff(id, u);
+            for &w in &inputs {
+                let dd = ctx.diff(d, w);
+                if !ctx.is_identically_zero(dd) {
+                    return false;
+                }
+            }
+        }
+        true
+    };
+    if affine(ctx, loc.id) {
+        return Ok(());
+    }
+    let names: Vec<&str> = decls
+        .iter()
+        .filter(|d| d.kind == Kind::Input)
+        .map(|d| d.name.as_str())
+        .collect();
+    for (_, term) in loc.ast.additive_terms() {
+        let mut resolve = |c: &mut Ctx, n: &str, _s: Span| -> Result<Id, ParseError> {
+            Ok(c.lookup(n).expect("checked").id)
+        };
+        let Ok(tid) = ctx.build(term, &mut resolve) else {
+            continue;
+        };
+        if !affine(ctx, tid) {
+            let (a, b) = loc.src_span(term.span);
+            let text = &rd.src[a..b];
+            return Err(rd.err_src(a, b, format!("the dynamics of {state} are not affine in the inputs ({}): the term '{text}' is not", names.join(", "))));
+        }
+    }
+    let (a, b) = loc.src_span(loc.ast.span);
+    Err(rd.err_src(
+        a,
+        b,
+        format!(
+            "the dynamics of {state} are not affine in the inputs ({})",
+            names.join(", ")
+        ),
+    ))
+}

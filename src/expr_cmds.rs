@@ -1,0 +1,76 @@
+//! `obsan simplify` and `obsan diff`.
+
+use crate::cli::{DiffArgs, ExprArgs, OutputArgs};
+use crate::Failure;
+use obsan_expr::{Ctx, Id};
+use obsan_model::ModelError;
+use serde_json::json;
+use std::process::ExitCode;
+
+/// Parse a command-line expression; errors point into it with a caret.
+pub fn parse_arg(ctx: &mut Ctx, src: &str, what: &str) -> Result<Id, Failure> {
+    ctx.parse(src).map_err(|e| {
+        Failure(ModelError::at(what, src, e.span.start, e.span.end, e.message).to_string())
+    })
+}
+
+fn emit(
+    ctx: &mut Ctx,
+    input: &str,
+    id: Id,
+    out: &OutputArgs,
+    extra: serde_json::Value,
+) -> ExitCode {
+    let c = ctx.canon(id);
+    if out.json {
+        let mut v = json!({
+            "input": input,
+            "canonical": ctx.ratfun_text(&c),
+            "latex": ctx.ratfun_latex(&c),
+            "is_zero": c.is_zero(),
+            "exact": true,
+        });
+        if let (Some(m), Some(e)) = (v.as_object_mut(), extra.as_object()) {
+            m.extend(e.clone());
+        }
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else if out.latex {
+        println!("{}", ctx.ratfun_latex(&c));
+    } else {
+        println!("{}", ctx.ratfun_text(&c));
+    }
+    ExitCode::SUCCESS
+}
+
+pub fn simplify(a: &ExprArgs) -> Result<ExitCode, Failure> {
+    let mut ctx = Ctx::new();
+    let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
+    Ok(emit(&mut ctx, &a.expr, id, &a.out, json!({})))
+}
+
+pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
+    let valid = a
+        .var
+        .chars()
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && a.var.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && a.var != "pi";
+    if !valid {
+        return Err(Failure(format!(
+            "'{}' is not a symbol name to differentiate by",
+            a.var
+        )));
+    }
+    let mut ctx = Ctx::new();
+    let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
+    let x = ctx.symbol(&a.var);
+    let d = ctx.diff(id, x.var);
+    Ok(emit(
+        &mut ctx,
+        &a.expr,
+        d,
+        &a.out,
+        json!({ "variable": a.var }),
+    ))
+}

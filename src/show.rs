@@ -1,0 +1,182 @@
+//! `obsan show`, and loading a system from the command line (shared by the
+//! commands that take a SYSTEM argument).
+
+use crate::cli::{ShowArgs, SystemArgs};
+use crate::Failure;
+use obsan_expr::{Ctx, Id, Q};
+use obsan_model::{Kind, NormalForm, System};
+use serde_json::{json, Map, Value};
+use std::process::ExitCode;
+
+/// Read and check a .sys file.
+pub fn load_system(path: &str) -> Result<System, Failure> {
+    let src =
+        std::fs::read_to_string(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    System::parse(&src, path).map_err(|e| Failure(e.to_string()))
+}
+
+/// Parse `--set NAME=VALUE` flags (values are exact: `0.9` is 9/10).
+pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Q)>, Failure> {
+    let mut out = Vec::new();
+    for s in sets {
+        let Some((n, v)) = s.split_once('=') else {
+            return Err(Failure(format!(
+                "--set {s}: expected NAME=VALUE, e.g. --set q=0.9"
+            )));
+        };
+        let mut ctx = Ctx::new();
+        let id = ctx
+            .parse(v.trim())
+            .map_err(|e| Failure(format!("--set {s}: {e}")))?;
+        let Some(q) = ctx.canon(id).as_q() else {
+            return Err(Failure(format!(
+                "--set {s}: the value must be a rational number"
+            )));
+        };
+        out.push((n.trim().to_string(), q));
+    }
+    Ok(out)
+}
+
+/// Load a system and bring it to normal form as the flags say.
+pub fn load_normal_form(a: &SystemArgs) -> Result<(System, NormalForm), Failure> {
+    let sys = load_system(&a.system)?;
+    let sets = parse_sets(&a.set)?;
+    let nf = sys
+        .normal_form(a.restriction.as_deref(), &sets)
+        .map_err(|e| Failure(e.to_string()))?;
+    Ok((sys, nf))
+}
+
+fn expr_json(ctx: &mut Ctx, id: Id) -> Value {
+    let c = ctx.canon(id);
+    json!({ "text": ctx.ratfun_text(&c), "latex": ctx.ratfun_latex(&c) })
+}
+
+pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
+    let (sys, mut nf) = load_normal_form(&a.sys)?;
+    let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
+    let states: Vec<String> = nf.state[..nf.n_dynamic].to_vec();
+    if a.out.json {
+        let field = |nf: &mut NormalForm, f: &[Id]| -> Value {
+            let mut m = Map::new();
+            for (k, &c) in f.iter().enumerate() {
+                m.insert(nf.state[k].clone(), expr_json(&mut nf.ctx, c));
+            }
+            Value::Object(m)
+        };
+        let f0 = nf.f0.clone();
+        let f0j = field(&mut nf, &f0);
+        let mut fields = Map::new();
+        for (i, f) in nf.fields.clone().iter().enumerate() {
+            let fj = field(&mut nf, f);
+            fields.insert(nf.inputs[i].clone(), fj);
+        }
+        let mut outs = Map::new();
+        for (n, h) in nf.outputs.clone() {
+            outs.insert(n, expr_json(&mut nf.ctx, h));
+        }
+        let consts: Vec<Value> = nf
+            .consts
+            .iter()
+            .map(|(n, v)| json!({ "name": n, "value": v.as_ref().map(|q| q.to_string()) }))
+            .collect();
+        let v = json!({
+            "system": nf.name,
+            "file": a.sys.system,
+            "description": nf.description,
+            "restriction": nf.restriction,
+            "states": states,
+            "params": params,
+            "consts": consts,
+            "inputs": nf.inputs,
+            "f0": f0j,
+            "fields": fields,
+            "outputs": outs,
+            "exact": true,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let fmt = |nf: &mut NormalForm, id: Id| -> String {
+        let c = nf.ctx.canon(id);
+        if a.out.latex {
+            nf.ctx.ratfun_latex(&c)
+        } else {
+            nf.ctx.ratfun_text(&c)
+        }
+    };
+    let mut out = String::new();
+    out.push_str(&format!("system {}", nf.name));
+    if let Some(r) = &nf.restriction {
+        out.push_str(&format!(" with restriction {r}"));
+    }
+    out.push('\n');
+    if !nf.description.is_empty() {
+        out.push_str(&format!("  {}\n", nf.description));
+    }
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "(none)".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    out.push_str(&format!("states: {}\n", list(&states)));
+    out.push_str(&format!("params: {}\n", list(&params)));
+    let consts: Vec<String> = nf
+        .consts
+        .iter()
+        .map(|(n, v)| match v {
+            Some(q) => format!("{n} = {q}"),
+            None => format!("{n} (generic)"),
+        })
+        .collect();
+    out.push_str(&format!("consts: {}\n", list(&consts)));
+    out.push_str(&format!("inputs: {}\n", list(&nf.inputs)));
+    out.push_str(&format!("analysed state S = [{}]\n", nf.state.join(", ")));
+    let mut fields: Vec<(String, Vec<Id>)> = vec![("f0".to_string(), nf.f0.clone())];
+    for (i, f) in nf.fields.iter().enumerate() {
+        fields.push((
+            format!("f_{} (coefficient of {})", nf.inputs[i], nf.inputs[i]),
+            f.clone(),
+        ));
+    }
+    for (name, f) in fields {
+        let nonzero: Vec<(usize, Id)> = f
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(_, c)| !nf.ctx.is_identically_zero(*c))
+            .collect();
+        if nonzero.is_empty() {
+            out.push_str(&format!("{name}: 0\n"));
+            continue;
+        }
+        out.push_str(&format!("{name}:\n"));
+        let w = nonzero
+            .iter()
+            .map(|(k, _)| nf.state[*k].len())
+            .max()
+            .unwrap_or(0);
+        for (k, c) in nonzero {
+            let s = fmt(&mut nf, c);
+            out.push_str(&format!("  {:w$} : {s}\n", nf.state[k]));
+        }
+        let zeros: Vec<String> = f
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| nf.ctx.is_identically_zero(**c))
+            .map(|(k, _)| nf.state[k].clone())
+            .collect();
+        if !zeros.is_empty() {
+            out.push_str(&format!("  (0 for {})\n", zeros.join(", ")));
+        }
+    }
+    for (n, h) in nf.outputs.clone() {
+        let s = fmt(&mut nf, h);
+        out.push_str(&format!("output {n} = {s}\n"));
+    }
+    print!("{out}");
+    Ok(ExitCode::SUCCESS)
+}
