@@ -2,8 +2,10 @@
 //! every leaf (engine.md section 2). Memoised per (node, variable); children
 //! first in id order, so no recursion.
 
+use crate::canon::RatFun;
 use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
 use crate::num::Q;
+use crate::poly::Poly;
 use crate::poly::Var;
 use rustc_hash::FxHashSet;
 
@@ -175,5 +177,122 @@ impl Ctx {
             terms.push(self.mul(&[d, fx]));
         }
         self.add(&terms)
+    }
+}
+
+impl Ctx {
+    /// d/dx of a canonical form, computed on the form itself (quotient rule,
+    /// chain rule through the leaves); the result is canonical. Much cheaper
+    /// than canonicalising a differentiated graph node by node.
+    pub fn rf_diff(&mut self, r: &RatFun, x: Var) -> RatFun {
+        let dn = self.poly_diff(&r.num, x);
+        if r.den.is_one() {
+            return dn;
+        }
+        let dd = self.poly_diff(&r.den, x);
+        if dn.is_zero() && dd.is_zero() {
+            return RatFun::zero();
+        }
+        let num = RatFun {
+            num: r.num.clone(),
+            den: Poly::one(),
+        };
+        if dd.den.is_one() {
+            // With g = gcd(D, D'), D = g D1, D' = g E:
+            // (N' D - N D')/D^2 = (N' D1 - N E)/(D D1); the rest rarely cancels.
+            let g = crate::gcd::gcd(&r.den, &dd.num);
+            let d1 = r.den.div_exact(&g).expect("gcd divides");
+            let e = dd.num.div_exact(&g).expect("gcd divides");
+            let a = self.rf_mul(
+                &dn,
+                &RatFun {
+                    num: d1.clone(),
+                    den: Poly::one(),
+                },
+            );
+            let b = self.rf_mul(
+                &num,
+                &RatFun {
+                    num: e,
+                    den: Poly::one(),
+                },
+            );
+            let top = self.rf_sub(&a, &b);
+            let inv = RatFun {
+                num: Poly::one(),
+                den: r.den.mul(&d1),
+            };
+            return self.rf_mul(&top, &inv);
+        }
+        let den = RatFun {
+            num: r.den.clone(),
+            den: Poly::one(),
+        };
+        let a = self.rf_mul(&dn, &den);
+        let b = self.rf_mul(&num, &dd);
+        let top = self.rf_sub(&a, &b);
+        let inv = RatFun {
+            num: Poly::one(),
+            den: r.den.mul(&r.den),
+        };
+        self.rf_mul(&top, &inv)
+    }
+
+    /// d/dx of a polynomial in the leaves, as a canonical form.
+    fn poly_diff(&mut self, p: &Poly, x: Var) -> RatFun {
+        let mut poly_part = Poly::zero();
+        let mut rat_part = RatFun::zero();
+        for v in p.vars() {
+            let lv = self.leaf_derivative_rf(v, x);
+            if lv.is_zero() {
+                continue;
+            }
+            let dv = p.derivative(v);
+            if lv.den.is_one() {
+                poly_part = poly_part.add(&dv.mul(&lv.num));
+            } else {
+                let t = self.rf_mul(
+                    &RatFun {
+                        num: dv,
+                        den: Poly::one(),
+                    },
+                    &lv,
+                );
+                rat_part = self.rf_add(&rat_part, &t);
+            }
+        }
+        let pp = self.normalize(poly_part, Poly::one());
+        self.rf_add(&pp, &rat_part)
+    }
+
+    /// d(leaf v)/dx in canonical form (memoised through the graph's memo tables).
+    fn leaf_derivative_rf(&mut self, v: Var, x: Var) -> RatFun {
+        if let LeafKind::Symbol(_) = self.leaves[v as usize].kind {
+            return if v == x {
+                RatFun::one()
+            } else {
+                RatFun::zero()
+            };
+        }
+        let n = self.leaf_node(v);
+        let d = self.diff(n, x);
+        self.canon(d)
+    }
+
+    /// Lie derivative on canonical forms: `sum_i d g/d x_i f_i` (eq. 7).
+    pub fn rf_lie_derivative(&mut self, g: &RatFun, states: &[Var], f: &[RatFun]) -> RatFun {
+        let mut acc = RatFun::zero();
+        for (&x, fx) in states.iter().zip(f) {
+            if fx.is_zero() {
+                continue;
+            }
+            let d = self.rf_diff(g, x);
+            if d.is_zero() {
+                continue;
+            }
+            let t = self.rf_mul(&d, fx);
+            acc = self.rf_add(&acc, &t);
+        }
+        acc
     }
 }

@@ -7,7 +7,9 @@
 
 use crate::num::{int, int_div_exact, int_gcd, Fp, Int};
 use dashu_int::Sign;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
+use smallvec::SmallVec;
+use std::collections::BTreeMap;
 
 /// Index of a polynomial variable (a leaf of the expression context).
 pub type Var = u32;
@@ -29,17 +31,17 @@ fn unpack(w: u32) -> (Var, u32) {
 
 /// A monomial: packed words in decreasing word order (increasing variable).
 #[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Debug, Default)]
-pub struct Mono(Vec<u32>);
+pub struct Mono(SmallVec<[u32; 8]>);
 
 impl Mono {
     pub fn one() -> Mono {
-        Mono(Vec::new())
+        Mono(SmallVec::new())
     }
     pub fn var(v: Var, e: u32) -> Mono {
         if e == 0 {
             Mono::one()
         } else {
-            Mono(vec![pack(v, e)])
+            Mono(smallvec::smallvec![pack(v, e)])
         }
     }
     pub fn is_one(&self) -> bool {
@@ -63,7 +65,7 @@ impl Mono {
     }
     pub fn mul(&self, o: &Mono) -> Mono {
         let (a, b) = (&self.0, &o.0);
-        let mut out = Vec::with_capacity(a.len() + b.len());
+        let mut out: SmallVec<[u32; 8]> = SmallVec::with_capacity(a.len() + b.len());
         let (mut i, mut j) = (0, 0);
         while i < a.len() && j < b.len() {
             let ((va, ea), (vb, eb)) = (unpack(a[i]), unpack(b[j]));
@@ -85,7 +87,7 @@ impl Mono {
     }
     /// `self / o` when `o` divides `self`.
     pub fn div(&self, o: &Mono) -> Option<Mono> {
-        let mut out = Vec::with_capacity(self.0.len());
+        let mut out: SmallVec<[u32; 8]> = SmallVec::with_capacity(self.0.len());
         let mut j = 0;
         for &w in &self.0 {
             let (v, e) = unpack(w);
@@ -114,7 +116,7 @@ impl Mono {
     }
     /// Componentwise minimum (the gcd of two monomials).
     pub fn gcd(&self, o: &Mono) -> Mono {
-        let mut out = Vec::new();
+        let mut out = SmallVec::new();
         for (v, e) in self.iter() {
             let eo = o.degree(v);
             if eo > 0 {
@@ -182,7 +184,7 @@ impl Poly {
     }
     /// Build from arbitrary terms (merged, sorted, zeros dropped).
     pub fn from_terms(terms: impl IntoIterator<Item = (Mono, Int)>) -> Poly {
-        let mut map: HashMap<Mono, Int> = HashMap::new();
+        let mut map: HashMap<Mono, Int> = HashMap::default();
         for (m, c) in terms {
             *map.entry(m).or_insert_with(|| int(0)) += c;
         }
@@ -286,7 +288,8 @@ impl Poly {
         if o.terms.len() == 1 {
             return self.mul_term(&o.terms[0].0, &o.terms[0].1);
         }
-        let mut map: HashMap<Mono, Int> = HashMap::with_capacity(self.len() * o.len());
+        let mut map: HashMap<Mono, Int> =
+            HashMap::with_capacity_and_hasher(self.len() * o.len(), Default::default());
         for (ma, ca) in &self.terms {
             for (mb, cb) in &o.terms {
                 let c = ca * cb;
@@ -358,15 +361,31 @@ impl Poly {
                 };
             }
         }
-        let mut r = self.clone();
+        // Remainder in an ordered map: each quotient term touches |d| entries.
+        let mut r: BTreeMap<Mono, Int> = self.terms.iter().cloned().collect();
         let mut q = Vec::new();
-        while let Some((rm, rc)) = r.leading().cloned() {
+        let rest: Vec<(Mono, Int)> = d.terms[1..].to_vec();
+        while let Some((rm, rc)) = r.pop_last() {
             let m = rm.div(&lm)?;
             if !(&rc % &lc).is_zero() {
                 return None;
             }
             let c = int_div_exact(&rc, &lc);
-            r = r.sub(&d.mul_term(&m, &c));
+            for (dm, dc) in &rest {
+                let key = dm.mul(&m);
+                let sub = dc * &c;
+                match r.entry(key) {
+                    std::collections::btree_map::Entry::Occupied(mut e) => {
+                        *e.get_mut() -= sub;
+                        if e.get().is_zero() {
+                            e.remove();
+                        }
+                    }
+                    std::collections::btree_map::Entry::Vacant(e) => {
+                        e.insert(-sub);
+                    }
+                }
+            }
             q.push((m, c));
         }
         Some(Poly { terms: q })
@@ -387,21 +406,33 @@ impl Poly {
     }
     /// Sorted list of the variables that occur.
     pub fn vars(&self) -> Vec<Var> {
-        let mut vs: Vec<Var> = self
-            .terms
-            .iter()
-            .flat_map(|(m, _)| m.iter().map(|(v, _)| v))
-            .collect();
-        vs.sort_unstable();
-        vs.dedup();
-        vs
+        let mut bits: SmallVec<[u64; 4]> = SmallVec::new();
+        for (m, _) in &self.terms {
+            for &w in m.0.iter() {
+                let v = unpack(w).0 as usize;
+                if bits.len() <= v / 64 {
+                    bits.resize(v / 64 + 1, 0);
+                }
+                bits[v / 64] |= 1 << (v % 64);
+            }
+        }
+        let mut out = Vec::new();
+        for (i, &b) in bits.iter().enumerate() {
+            let mut b = b;
+            while b != 0 {
+                let t = b.trailing_zeros();
+                out.push((i * 64) as Var + t);
+                b &= b - 1;
+            }
+        }
+        out
     }
     pub fn contains_var(&self, v: Var) -> bool {
         self.terms.iter().any(|(m, _)| m.degree(v) > 0)
     }
     /// Coefficients with respect to `v`: `(exponent, coefficient)`, decreasing exponent.
     pub fn coeffs_in(&self, v: Var) -> Vec<(u32, Poly)> {
-        let mut map: HashMap<u32, Vec<(Mono, Int)>> = HashMap::new();
+        let mut map: HashMap<u32, Vec<(Mono, Int)>> = HashMap::default();
         for (m, c) in &self.terms {
             let (e, rest) = m.split(v);
             map.entry(e).or_default().push((rest, c.clone()));

@@ -332,3 +332,19 @@ fn substitution_relowers_functions() {
     let h = ctx.substitute(f, &[(g.var, zero)]).unwrap();
     assert_eq!(ctx.to_text(h), "-1");
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// Differentiating the canonical form directly agrees with canonicalising
+    /// the differentiated graph (two independent routes to the same form).
+    #[test]
+    fn canonical_derivative_agrees_with_graph_derivative(text in expr_text(), k in 0usize..3) {
+        let (mut ctx, id, vars) = setup(&text)?;
+        let c = ctx.canon(id);
+        let d1 = ctx.rf_diff(&c, vars[k]);
+        let dg = ctx.diff(id, vars[k]);
+        let d2 = ctx.canon(dg);
+        prop_assert_eq!(d1, d2, "{}", text);
+    }
+}

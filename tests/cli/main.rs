@@ -1,0 +1,5 @@
+//! The one integration-test target: runs the `obsan` binary as a user would.
+
+mod expr;
+mod show;
+mod util;

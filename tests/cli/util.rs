@@ -1,0 +1,62 @@
+use std::process::Command;
+
+/// Output of one obsan run.
+pub struct Run {
+    pub code: i32,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+/// Run obsan from the repository root.
+pub fn obsan(args: &[&str]) -> Run {
+    let out = Command::new(env!("CARGO_BIN_EXE_obsan"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("obsan runs");
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// Run and expect success; returns stdout.
+pub fn ok(args: &[&str]) -> String {
+    let r = obsan(args);
+    assert_eq!(r.code, 0, "obsan {args:?} failed:\n{}", r.stderr);
+    r.stdout
+}
+
+/// Run and expect exit code 2 with a message containing `want`; returns stderr.
+pub fn bad(args: &[&str], want: &str) -> String {
+    let r = obsan(args);
+    assert_eq!(
+        r.code, 2,
+        "obsan {args:?} should fail with 2, got {}:\n{}{}",
+        r.code, r.stdout, r.stderr
+    );
+    assert!(
+        r.stderr.contains(want),
+        "obsan {args:?}: wanted '{want}' in:\n{}",
+        r.stderr
+    );
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    r.stderr
+}
+
+/// Write a temporary file and return its path.
+pub fn temp_file(name: &str, content: &str) -> String {
+    let dir = std::env::temp_dir().join(format!("obsan-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, content).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+/// Exact equality of two expressions, decided by the engine.
+pub fn same_function(a: &str, b: &str) -> bool {
+    let mut ctx = obsan_expr::Ctx::new();
+    let (x, y) = (ctx.parse(a).unwrap(), ctx.parse(b).unwrap());
+    ctx.canon(x) == ctx.canon(y)
+}
