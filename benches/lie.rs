@@ -124,7 +124,7 @@ fn main() {
     println!("order | Lie derivs | DAG nodes (Lie) | build ms | grad nodes | grad ms | entries | canon ms | terms total (max)");
     for order in 1..=max_order {
         let mut runs: Vec<Figures> = (0..reps).map(|_| once(&sys, order)).collect();
-        runs.sort_by(|a, b| (a.build + a.grad + a.canon).cmp(&(b.build + b.grad + b.canon)));
+        runs.sort_by_key(|r| r.build + r.grad + r.canon);
         let med = &runs[runs.len() / 2];
         let min = &runs[0];
         println!(

@@ -12,6 +12,7 @@
 //!    exact division: a verified answer is always correct);
 //! 5. the primitive polynomial remainder sequence, which always succeeds.
 
+use std::ops::{Mul, Sub};
 use crate::num::{int, int_gcd, int_symmetric_mod, Fp, Int, SplitMix};
 use crate::poly::{Mono, Poly, Var};
 use dashu_int::ops::SquareRoot;

@@ -4,6 +4,7 @@
 use dashu_int::ops::{Abs, BitTest, DivRem, Gcd, SquareRoot};
 use dashu_int::{IBig, Sign, UBig};
 use std::fmt;
+use std::ops::{Mul, Neg};
 
 /// Arbitrary-precision integer. Small values are stored inline by dashu.
 pub type Int = IBig;
@@ -220,31 +221,6 @@ impl Fp {
         }
         Fp(u64::try_from(&r).expect("reduced value fits u64"))
     }
-    #[inline]
-    pub fn add(self, o: Fp) -> Fp {
-        let s = self.0 + o.0;
-        Fp(if s >= P { s - P } else { s })
-    }
-    #[inline]
-    pub fn sub(self, o: Fp) -> Fp {
-        Fp(if self.0 >= o.0 {
-            self.0 - o.0
-        } else {
-            self.0 + P - o.0
-        })
-    }
-    #[inline]
-    pub fn neg(self) -> Fp {
-        Fp(if self.0 == 0 { 0 } else { P - self.0 })
-    }
-    #[inline]
-    pub fn mul(self, o: Fp) -> Fp {
-        let w = self.0 as u128 * o.0 as u128;
-        let lo = (w as u64) & P;
-        let hi = (w >> 61) as u64;
-        let s = lo + hi;
-        Fp(if s >= P { s - P } else { s })
-    }
     pub fn pow(self, mut e: u64) -> Fp {
         let (mut b, mut r) = (self, Fp::ONE);
         while e > 0 {
@@ -303,6 +279,44 @@ impl Fp {
     }
 }
 
+impl std::ops::Add for Fp {
+    type Output = Fp;
+    #[inline]
+    fn add(self, o: Fp) -> Fp {
+        let s = self.0 + o.0;
+        Fp(if s >= P { s - P } else { s })
+    }
+}
+
+impl std::ops::Sub for Fp {
+    type Output = Fp;
+    #[inline]
+    fn sub(self, o: Fp) -> Fp {
+        Fp(if self.0 >= o.0 { self.0 - o.0 } else { self.0 + P - o.0 })
+    }
+}
+
+impl std::ops::Neg for Fp {
+    type Output = Fp;
+    #[inline]
+    fn neg(self) -> Fp {
+        Fp(if self.0 == 0 { 0 } else { P - self.0 })
+    }
+}
+
+impl std::ops::Mul for Fp {
+    type Output = Fp;
+    /// Reduction modulo 2^61 - 1: split at bit 61 and add.
+    #[inline]
+    fn mul(self, o: Fp) -> Fp {
+        let w = self.0 as u128 * o.0 as u128;
+        let lo = (w as u64) & P;
+        let hi = (w >> 61) as u64;
+        let s = lo + hi;
+        Fp(if s >= P { s - P } else { s })
+    }
+}
+
 /// Small deterministic PRNG (SplitMix64) for random evaluation points: the
 /// engine must not depend on a particular `rand` version for reproducibility.
 #[derive(Clone, Debug)]
@@ -344,7 +358,7 @@ mod tests {
             if !a.is_zero() {
                 assert_eq!(a.mul(a.inv().unwrap()), Fp::ONE);
             }
-            assert_eq!(a.sub(b).add(b), a);
+            assert_eq!(a - b + b, a);
             let sq = a.mul(a);
             let s = sq.sqrt().unwrap();
             assert_eq!(s.mul(s), sq);

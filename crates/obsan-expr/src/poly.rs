@@ -5,6 +5,7 @@
 //! lexicographic order of the word slices equal to the lex monomial order
 //! with variable 0 highest, so sorting and leading terms need no custom code.
 
+use std::ops::{Add, Mul};
 use crate::num::{int, int_div_exact, int_gcd, Fp, Int};
 use dashu_int::Sign;
 use rustc_hash::FxHashMap as HashMap;
@@ -197,6 +198,9 @@ impl Poly {
     }
     pub fn len(&self) -> usize {
         self.terms.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
     }
     pub fn is_zero(&self) -> bool {
         self.terms.is_empty()
@@ -444,7 +448,7 @@ impl Poly {
                 (e, Poly { terms: ts })
             })
             .collect();
-        out.sort_unstable_by(|a, b| b.0.cmp(&a.0));
+        out.sort_unstable_by_key(|t| std::cmp::Reverse(t.0));
         out
     }
     /// Rebuild from coefficients in `v` (inverse of `coeffs_in`).
