@@ -2,11 +2,11 @@
 //! evaluate many times), exact rationals, and F_p at random points with the
 //! angle parametrisation of engine.md section 3.
 
-use std::ops::{Add, Mul, Sub};
 use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
 use crate::num::{Fp, SplitMix, Q};
 use crate::poly::Var;
 use std::fmt;
+use std::ops::{Add, Mul, Sub};
 
 #[derive(Clone, Debug)]
 enum Op {

@@ -12,11 +12,11 @@
 //!    exact division: a verified answer is always correct);
 //! 5. the primitive polynomial remainder sequence, which always succeeds.
 
-use std::ops::{Mul, Sub};
 use crate::num::{int, int_gcd, int_symmetric_mod, Fp, Int, SplitMix};
 use crate::poly::{Mono, Poly, Var};
 use dashu_int::ops::SquareRoot;
 use dashu_int::UBig;
+use std::ops::{Mul, Sub};
 
 /// The gcd interface of the canonical form, so that another implementation
 /// (a crate, or a faster algorithm) can be put behind it and tested against ours.

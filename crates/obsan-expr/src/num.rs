@@ -292,7 +292,11 @@ impl std::ops::Sub for Fp {
     type Output = Fp;
     #[inline]
     fn sub(self, o: Fp) -> Fp {
-        Fp(if self.0 >= o.0 { self.0 - o.0 } else { self.0 + P - o.0 })
+        Fp(if self.0 >= o.0 {
+            self.0 - o.0
+        } else {
+            self.0 + P - o.0
+        })
     }
 }
 

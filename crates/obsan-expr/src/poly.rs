@@ -5,12 +5,12 @@
 //! lexicographic order of the word slices equal to the lex monomial order
 //! with variable 0 highest, so sorting and leading terms need no custom code.
 
-use std::ops::{Add, Mul};
 use crate::num::{int, int_div_exact, int_gcd, Fp, Int};
 use dashu_int::Sign;
 use rustc_hash::FxHashMap as HashMap;
 use smallvec::SmallVec;
 use std::collections::BTreeMap;
+use std::ops::{Add, Mul};
 
 /// Index of a polynomial variable (a leaf of the expression context).
 pub type Var = u32;
