@@ -23,6 +23,73 @@ pub enum Command {
     Simplify(ExprArgs),
     /// Print the derivative of an expression with respect to a symbol, in canonical form.
     Diff(DiffArgs),
+    /// The observability rank test (Hermann-Krener): generic rank, a basis of
+    /// Lie derivatives, which variables are observable on their own.
+    Rank(RankArgs),
+    /// A basis of the continuous symmetries (null space of the Lie-derivative
+    /// gradients), exact, each checked before it is printed.
+    Symmetries(RankArgs),
+    /// The Lie derivatives of the outputs up to an order, in canonical form.
+    Lie(LieArgs),
+    /// Check candidate observable modes against the symmetry PDE (eq. 11).
+    Check(CheckArgs),
+    /// Check a claimed local decomposition (new state, reduced dynamics, output) exactly.
+    Verify(VerifyArgs),
+}
+
+/// Options of the analysis commands.
+#[derive(Args, Clone)]
+pub struct AnalysisArgs {
+    /// Seed of the random evaluation points (same seed, same answer).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Give up after this many seconds (exit code 2).
+    #[arg(long, value_name = "SECONDS")]
+    pub timeout: Option<f64>,
+}
+
+#[derive(Args)]
+pub struct RankArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    #[command(flatten)]
+    pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct LieArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    /// Highest order (all words of every order up to it).
+    #[arg(long)]
+    pub order: usize,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct CheckArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    /// A candidate observable mode (repeat the flag for several).
+    #[arg(long = "mode", value_name = "EXPR", required = true)]
+    pub modes: Vec<String>,
+    #[command(flatten)]
+    pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct VerifyArgs {
+    /// A decomposition file (docs/decomposition-format.md).
+    pub file: String,
+    #[command(flatten)]
+    pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
 }
 
 /// Options shared by every command that reads a system.

@@ -74,3 +74,10 @@ pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
         json!({ "variable": a.var }),
     ))
 }
+
+/// Parse a command-line expression over a system's state and constants.
+pub fn parse_arg_in(nf: &mut obsan_model::NormalForm, src: &str) -> Result<Id, Failure> {
+    nf.parse_expr(src, false).map_err(|e| {
+        Failure(ModelError::at("--mode", src, e.span.start, e.span.end, e.message).to_string())
+    })
+}

@@ -4,6 +4,7 @@
 //! Exit codes: 0 success; 1 the command ran but a check it performs failed;
 //! 2 bad input (a malformed file, an unknown symbol, a bad flag) or an error.
 
+mod analysis_cmds;
 mod cli;
 mod expr_cmds;
 mod show;
@@ -26,6 +27,11 @@ fn main() -> ExitCode {
         cli::Command::Show(a) => show::run(&a),
         cli::Command::Simplify(a) => expr_cmds::simplify(&a),
         cli::Command::Diff(a) => expr_cmds::diff(&a),
+        cli::Command::Rank(a) => analysis_cmds::rank(&a),
+        cli::Command::Symmetries(a) => analysis_cmds::symmetries(&a),
+        cli::Command::Lie(a) => analysis_cmds::lie(&a),
+        cli::Command::Check(a) => analysis_cmds::check(&a),
+        cli::Command::Verify(a) => analysis_cmds::verify(&a),
     };
     match result {
         Ok(code) => code,

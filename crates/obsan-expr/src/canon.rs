@@ -43,7 +43,13 @@ impl RatFun {
             den: Poly::constant(q.den().clone()),
         }
     }
-    pub(crate) fn var(v: Var) -> RatFun {
+    pub fn from_poly(p: Poly) -> RatFun {
+        RatFun {
+            num: p,
+            den: Poly::one(),
+        }
+    }
+    pub fn var(v: Var) -> RatFun {
         RatFun {
             num: Poly::var(v),
             den: Poly::one(),
@@ -105,6 +111,11 @@ impl Ctx {
             )),
             _ => None,
         }
+    }
+
+    /// Whether a form contains no `sin` and no `sqrt` leaf (its inverse is cheap).
+    pub fn is_relation_free(&self, r: &RatFun) -> bool {
+        !r.num.vars().iter().any(|&v| self.has_relation(v))
     }
 
     fn has_relation(&self, v: Var) -> bool {
@@ -203,7 +214,7 @@ impl Ctx {
         RatFun { num, den }
     }
 
-    pub(crate) fn rf_add(&self, a: &RatFun, b: &RatFun) -> RatFun {
+    pub fn rf_add(&self, a: &RatFun, b: &RatFun) -> RatFun {
         if a.is_zero() {
             return b.clone();
         }
@@ -246,7 +257,7 @@ impl Ctx {
         }
     }
 
-    pub(crate) fn rf_mul(&self, a: &RatFun, b: &RatFun) -> RatFun {
+    pub fn rf_mul(&self, a: &RatFun, b: &RatFun) -> RatFun {
         if a.is_zero() || b.is_zero() {
             return RatFun::zero();
         }
@@ -279,7 +290,7 @@ impl Ctx {
     }
 
     /// Inverse; `None` for zero.
-    pub(crate) fn rf_inv(&self, a: &RatFun) -> Option<RatFun> {
+    pub fn rf_inv(&self, a: &RatFun) -> Option<RatFun> {
         if a.is_zero() {
             return None;
         }
@@ -294,7 +305,7 @@ impl Ctx {
         Some(RatFun { num, den })
     }
 
-    pub(crate) fn rf_pow(&self, a: &RatFun, e: i64) -> Option<RatFun> {
+    pub fn rf_pow(&self, a: &RatFun, e: i64) -> Option<RatFun> {
         let base = if e < 0 { self.rf_inv(a)? } else { a.clone() };
         let mut k = e.unsigned_abs();
         let mut r = RatFun::one();

@@ -281,3 +281,62 @@ pub fn rational_angle(t: &Q) -> (Q, Q) {
     let c = Q::one().sub(&t2).div(&d).expect("1 + t^2 > 0");
     (s, c)
 }
+
+/// Degree bounds `(numerator, denominator)` of expressions as rational
+/// functions of the random coordinates of [`Ctx::random_fp_point`]: symbols and
+/// transcendental atoms have degree 1, sin/cos leaves are (2, 2) in their
+/// parameter t, square roots count their radicand's degrees. Used for the
+/// Schwartz–Zippel error bound of probabilistic tests.
+pub fn degree_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(u64, u64)> {
+    let order = ctx.reachable(roots);
+    let mut deg: Vec<(u64, u64)> = vec![(0, 0); ctx.len()];
+    for id in order {
+        let d = match ctx.node(id) {
+            Node::Num(_) => (0, 0),
+            Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
+                LeafKind::Sin(_) | LeafKind::Cos(_) => (2, 2),
+                LeafKind::Sqrt(_) => {
+                    let r = ctx.leaves[*v as usize].radicand.as_ref().expect("radicand");
+                    let leaf_deg = |p: &crate::poly::Poly| {
+                        p.terms()
+                            .iter()
+                            .map(|(m, _)| m.iter().map(|(_, e)| 2 * e as u64).sum::<u64>())
+                            .max()
+                            .unwrap_or(0)
+                    };
+                    (leaf_deg(&r.num) + leaf_deg(&r.den), 0)
+                }
+                _ => (1, 0),
+            },
+            Node::Add(cs) => {
+                let den: u64 = cs
+                    .iter()
+                    .map(|c| deg[c.index()].1)
+                    .fold(0, u64::saturating_add);
+                let num = cs
+                    .iter()
+                    .map(|c| deg[c.index()].0.saturating_add(den - deg[c.index()].1))
+                    .max()
+                    .unwrap_or(0);
+                (num, den)
+            }
+            Node::Mul(cs) => cs.iter().fold((0u64, 0u64), |a, c| {
+                (
+                    a.0.saturating_add(deg[c.index()].0),
+                    a.1.saturating_add(deg[c.index()].1),
+                )
+            }),
+            Node::Pow(b, e) => {
+                let (n, d) = deg[b.index()];
+                let k = e.unsigned_abs() as u64;
+                if *e > 0 {
+                    (n.saturating_mul(k), d.saturating_mul(k))
+                } else {
+                    (d.saturating_mul(k), n.saturating_mul(k))
+                }
+            }
+        };
+        deg[id.index()] = d;
+    }
+    roots.iter().map(|r| deg[r.index()]).collect()
+}

@@ -33,10 +33,11 @@ mod parse;
 mod poly;
 mod print;
 mod subst;
+mod tanhalf;
 pub mod tutorial;
 
 pub use canon::RatFun;
-pub use eval::{rational_angle, BadPoint, EvalQError, FpPoint, Tape, UnboundSymbol};
+pub use eval::{degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, Tape, UnboundSymbol};
 pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
 pub use lower::EngineError;
@@ -44,3 +45,4 @@ pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
 pub use poly::{Mono, Poly, Var};
 pub use print::latex_name;
+pub use tanhalf::TanHalf;

@@ -222,7 +222,10 @@ impl Poly {
     pub fn leading(&self) -> Option<&(Mono, Int)> {
         self.terms.first()
     }
-    pub fn lc_sign(&self) -> Sign {
+    pub fn lc_is_negative(&self) -> bool {
+        self.lc_sign() == Sign::Negative
+    }
+    pub(crate) fn lc_sign(&self) -> Sign {
         self.terms.first().map_or(Sign::Positive, |t| t.1.sign())
     }
     pub fn neg(&self) -> Poly {

@@ -349,3 +349,18 @@ proptest! {
         prop_assert_eq!(d1, d2, "{}", text);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// The half-angle view and back is the identity on canonical forms.
+    #[test]
+    fn tan_half_roundtrip(text in expr_text()) {
+        let (mut ctx, id, _) = setup(&text)?;
+        let c = ctx.canon(id);
+        let th = ctx.tan_half();
+        let t = ctx.to_tan_half(&th, &c);
+        let back = ctx.from_tan_half(&th, &t);
+        prop_assert_eq!(back, c, "{}", text);
+    }
+}

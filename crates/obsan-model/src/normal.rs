@@ -2,7 +2,7 @@
 
 use crate::error::ModelError;
 use crate::sys::{Kind, System};
-use obsan_expr::{Ctx, Id, Var, Q};
+use obsan_expr::{parse_ast, Ctx, Id, ParseError, Span, Var, Q};
 
 /// A system in input-affine normal form, ready for analysis.
 ///
@@ -188,5 +188,42 @@ impl System {
     fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {
         let (a, b) = loc.src_span(loc.ast.span);
         ModelError::at(&self.origin, &self.src, a, b, msg.to_string())
+    }
+}
+
+impl NormalForm {
+    /// Parse an expression over the analysed state and the known constants
+    /// (constants with a value are replaced by it), and the inputs if `inputs`.
+    pub fn parse_expr(&mut self, text: &str, inputs: bool) -> Result<Id, ParseError> {
+        let ast = parse_ast(text)?;
+        let state = self.state.clone();
+        let consts = self.consts.clone();
+        let ins = if inputs { self.inputs.clone() } else { vec![] };
+        let all_inputs = self.inputs.clone();
+        let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+            if state.iter().any(|x| x == n) || ins.iter().any(|x| x == n) {
+                return Ok(c.symbol(n).id);
+            }
+            if let Some((_, v)) = consts.iter().find(|(x, _)| x == n) {
+                return Ok(match v {
+                    Some(q) => c.num(q.clone()),
+                    None => c.symbol(n).id,
+                });
+            }
+            if all_inputs.iter().any(|x| x == n) {
+                return Err(ParseError::new(
+                    format!("'{n}' is an input; only states, params and constants may appear here"),
+                    s,
+                ));
+            }
+            let mut known = state.clone();
+            known.extend(consts.iter().map(|c| c.0.clone()));
+            known.extend(ins.iter().cloned());
+            Err(ParseError::new(
+                format!("unknown symbol '{n}' (known here: {})", known.join(", ")),
+                s,
+            ))
+        };
+        self.ctx.build(&ast, &mut resolve)
     }
 }

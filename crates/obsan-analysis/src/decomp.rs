@@ -1,0 +1,410 @@
+//! Claimed local decompositions (eq. 9): new variables as functions of the
+//! state, their reduced dynamics and the output, checked exactly.
+//!
+//! File format (docs/decomposition-format.md):
+//! ```text
+//! system eq20.sys                  # path relative to this file
+//! input q                          # optional: a restriction of the system
+//! set q = 9/10                     # optional: constant values
+//! let Psi3 = (mu + cos(gamma))/sin(gamma)
+//! state Psi1, Psi2, Psi3, xi_q     # the new state: lets or original variables
+//! Psi3' = nu*(Psi2 + Psi1*Psi2*Psi3 - xi_q - xi_q*Psi3^2)
+//! output y = 1/Psi3                # equal up to a constant
+//! ```
+
+use crate::modes::{check_modes, gradient_rank};
+use crate::rank::{rank, AnalysisError, RankOptions};
+use crate::symmetry::symmetries;
+use obsan_expr::{line_col, parse_ast, Ast, Ctx, Id, ParseError, Span, Var, Q};
+use obsan_model::NormalForm;
+
+/// A parsed decomposition file.
+#[derive(Clone, Debug)]
+pub struct Decomposition {
+    pub system: String,
+    pub restriction: Option<String>,
+    pub set: Vec<(String, Q)>,
+    lets: Vec<(String, Ast, usize)>,
+    pub new_state: Vec<String>,
+    new_state_at: usize,
+    dynamics: Vec<(String, Ast, usize)>,
+    outputs: Vec<(String, Ast, usize)>,
+    src: String,
+    origin: String,
+}
+
+/// One line of the verdict.
+#[derive(Clone, Debug)]
+pub struct Check {
+    pub name: String,
+    pub pass: bool,
+    /// On failure, the residual or the reason.
+    pub detail: String,
+}
+
+fn err(origin: &str, src: &str, at: usize, msg: impl Into<String>) -> AnalysisError {
+    let (l, c) = line_col(src, at);
+    AnalysisError::Invalid(format!("{origin}:{l}:{c}: {}", msg.into()))
+}
+
+impl Decomposition {
+    /// Read a decomposition file; `origin` names it in messages.
+    pub fn parse(src: &str, origin: &str) -> Result<Decomposition, AnalysisError> {
+        let mut d = Decomposition {
+            system: String::new(),
+            restriction: None,
+            set: vec![],
+            lets: vec![],
+            new_state: vec![],
+            new_state_at: 0,
+            dynamics: vec![],
+            outputs: vec![],
+            src: src.to_string(),
+            origin: origin.to_string(),
+        };
+        let mut offset = 0;
+        for raw in src.split_inclusive('\n') {
+            let start = offset;
+            offset += raw.len();
+            let code = raw.split('#').next().unwrap_or("").trim_end();
+            let lead = code.len() - code.trim_start().len();
+            let line = code.trim_start();
+            if line.is_empty() {
+                continue;
+            }
+            let at = start + lead;
+            let (word, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+            let rest_at = at
+                + word.len()
+                + (rest.len() - rest.trim_start().len())
+                + usize::from(!rest.is_empty());
+            let rest = rest.trim();
+            let expr = |text: &str, base: usize| -> Result<(Ast, usize), AnalysisError> {
+                let lead = text.len() - text.trim_start().len();
+                let t = text.trim();
+                parse_ast(t)
+                    .map(|a| (a, base + lead))
+                    .map_err(|e| err(origin, src, base + lead + e.span.start, e.message))
+            };
+            match word {
+                "system" => d.system = rest.to_string(),
+                "input" => d.restriction = Some(rest.to_string()),
+                "set" | "let" | "output" => {
+                    let Some(eq) = rest.find('=') else {
+                        return Err(err(origin, src, at, format!("'{word}' needs NAME = EXPR")));
+                    };
+                    let name = rest[..eq].trim().to_string();
+                    if name.is_empty()
+                        || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                    {
+                        return Err(err(
+                            origin,
+                            src,
+                            rest_at,
+                            format!("'{word}' needs a name before '='"),
+                        ));
+                    }
+                    let (ast, eat) = expr(&rest[eq + 1..], rest_at + eq + 1)?;
+                    match word {
+                        "set" => {
+                            let mut c = Ctx::new();
+                            let q = c
+                                .build(&ast, &mut |_, n, s| {
+                                    Err(ParseError::new(
+                                        format!("a value must be a number, not '{n}'"),
+                                        s,
+                                    ))
+                                })
+                                .ok()
+                                .and_then(|id| c.canon(id).as_q());
+                            let Some(q) = q else {
+                                return Err(err(
+                                    origin,
+                                    src,
+                                    eat,
+                                    "a value must be a rational number",
+                                ));
+                            };
+                            d.set.push((name, q));
+                        }
+                        "let" => {
+                            if d.lets.iter().any(|l| l.0 == name) {
+                                return Err(err(
+                                    origin,
+                                    src,
+                                    rest_at,
+                                    format!("'{name}' is defined twice"),
+                                ));
+                            }
+                            d.lets.push((name, ast, eat));
+                        }
+                        _ => d.outputs.push((name, ast, eat)),
+                    }
+                }
+                "state" => {
+                    d.new_state = rest.split(',').map(|s| s.trim().to_string()).collect();
+                    d.new_state_at = rest_at;
+                    if d.new_state.iter().any(|s| s.is_empty()) {
+                        return Err(err(
+                            origin,
+                            src,
+                            rest_at,
+                            "'state' needs a comma-separated list of names",
+                        ));
+                    }
+                }
+                w if w.ends_with('\'') || line.contains("' =") || line.contains("'=") => {
+                    let tick = line.find('\'').expect("has a tick");
+                    let name = line[..tick].trim().to_string();
+                    let Some(eq) = line.find('=') else {
+                        return Err(err(origin, src, at, "an equation needs '='"));
+                    };
+                    let (ast, eat) = expr(&line[eq + 1..], at + eq + 1)?;
+                    d.dynamics.push((name, ast, eat));
+                }
+                _ => {
+                    return Err(err(origin, src, at, "expected system, input, set, let, state, NAME' = EXPR or output NAME = EXPR"));
+                }
+            }
+        }
+        if d.system.is_empty() {
+            return Err(AnalysisError::Invalid(format!(
+                "{origin}: no 'system PATH' line"
+            )));
+        }
+        if d.new_state.is_empty() {
+            return Err(AnalysisError::Invalid(format!(
+                "{origin}: no 'state' line naming the new state"
+            )));
+        }
+        Ok(d)
+    }
+
+    fn at(&self, offset: usize, msg: impl Into<String>) -> AnalysisError {
+        err(&self.origin, &self.src, offset, msg)
+    }
+}
+
+/// Check a decomposition against the system's normal form (already restricted
+/// and with constants set as the file says).
+pub fn verify_decomposition(
+    nf: &mut NormalForm,
+    d: &Decomposition,
+    seed: u64,
+) -> Result<Vec<Check>, AnalysisError> {
+    // Lets, in terms of the original variables (earlier lets may be used).
+    let mut defs: Vec<(String, Id)> = Vec::new();
+    for (name, ast, at) in &d.lets {
+        if nf.state.contains(name) || nf.consts.iter().any(|c| &c.0 == name) {
+            return Err(d.at(*at, format!("'{name}' is already a variable of the system")));
+        }
+        let id = build_over(nf, ast, &defs, &[]).map_err(|e| d.at(at + e.span.start, e.message))?;
+        defs.push((name.clone(), id));
+    }
+    // The new state.
+    let mut g: Vec<Id> = Vec::new();
+    for s in &d.new_state {
+        if let Some((_, id)) = defs.iter().find(|(n, _)| n == s) {
+            g.push(*id);
+        } else if nf.state.contains(s) {
+            g.push(nf.ctx.symbol(s).id);
+        } else {
+            return Err(d.at(
+                d.new_state_at,
+                format!("'{s}' in the new state is neither a 'let' nor a variable of the system"),
+            ));
+        }
+    }
+    // Placeholders for the new variables in the claimed expressions.
+    let placeholders: Vec<(String, Id, Var)> = d
+        .new_state
+        .iter()
+        .map(|s| {
+            let sym = nf.ctx.symbol(&format!("{s}\u{2032}new"));
+            (s.clone(), sym.id, sym.var)
+        })
+        .collect();
+    let back: Vec<(Var, Id)> = placeholders
+        .iter()
+        .zip(&g)
+        .map(|(p, &id)| (p.2, id))
+        .collect();
+    let mut checks = Vec::new();
+
+    // 1. Symmetries, and each new variable an observable mode.
+    let report = rank(
+        nf,
+        RankOptions {
+            seed,
+            ..Default::default()
+        },
+    )?;
+    let sym = symmetries(nf, &report)?;
+    let modes = check_modes(nf, &sym, &g, seed)?;
+    for (s, c) in d.new_state.iter().zip(&modes.checks) {
+        let detail = match c.residuals.iter().position(|r| !r.is_zero()) {
+            None => String::new(),
+            Some(k) => format!(
+                "grad({s}) . w{} = {}",
+                k + 1,
+                nf.ctx.ratfun_text(&c.residuals[k])
+            ),
+        };
+        checks.push(Check {
+            name: format!(
+                "{s} is an observable mode (eq. 11, {} symmetries)",
+                sym.vectors.len()
+            ),
+            pass: c.is_mode,
+            detail,
+        });
+    }
+    // 2. Independent, 3. complete.
+    let (indep, _) = gradient_rank(nf, &g, seed)?;
+    checks.push(Check {
+        name: format!("the {} new variables are independent", g.len()),
+        pass: indep == g.len(),
+        detail: if indep == g.len() {
+            String::new()
+        } else {
+            format!("their gradients have rank {indep}")
+        },
+    });
+    checks.push(Check {
+        name: format!("they are complete (rank of the system is {})", report.rank),
+        pass: indep == report.rank,
+        detail: if indep == report.rank {
+            String::new()
+        } else {
+            format!("{indep} independent variables for rank {}", report.rank)
+        },
+    });
+    // 4. Dynamics: L_{f_i} g_k equals the claimed coefficient of u_i, for every field.
+    let input_vars = nf.input_vars.clone();
+    let state_vars = nf.state_vars.clone();
+    for (k, s) in d.new_state.iter().enumerate() {
+        let claimed = d.dynamics.iter().find(|x| &x.0 == s);
+        let Some((_, ast, at)) = claimed else {
+            checks.push(Check {
+                name: format!("{s}' is given"),
+                pass: false,
+                detail: format!("no equation {s}' = ... in the file"),
+            });
+            continue;
+        };
+        let rhs = build_over(nf, ast, &[], &placeholders)
+            .map_err(|e| d.at(at + e.span.start, e.message))?;
+        let rhs = nf.ctx.substitute(rhs, &back).map_err(|e| d.at(*at, e.0))?;
+        // Drift and per-input coefficients of the claim.
+        let mut claim_rest = rhs;
+        let mut residual_text = Vec::new();
+        for (i, &u) in input_vars.iter().enumerate() {
+            let ci = nf.ctx.diff(rhs, u);
+            let ui = nf.ctx.symbol(&nf.inputs[i].clone()).id;
+            let t = nf.ctx.mul(&[ci, ui]);
+            claim_rest = nf.ctx.sub(claim_rest, t);
+            let field = nf.fields[i].clone();
+            let actual = nf.ctx.lie_derivative(g[k], &state_vars, &field);
+            let diff = nf.ctx.sub(actual, ci);
+            let r = nf.ctx.canon(diff);
+            if !r.is_zero() {
+                residual_text.push(format!(
+                    "coefficient of {}: L_f{} {s} - claimed = {}",
+                    nf.inputs[i],
+                    nf.inputs[i],
+                    nf.ctx.ratfun_text(&r)
+                ));
+            }
+        }
+        let f0 = nf.f0.clone();
+        let drift = nf.ctx.lie_derivative(g[k], &state_vars, &f0);
+        let diff = nf.ctx.sub(drift, claim_rest);
+        let r = nf.ctx.canon(diff);
+        if !r.is_zero() {
+            residual_text.push(format!(
+                "drift: L_f0 {s} - claimed = {}",
+                nf.ctx.ratfun_text(&r)
+            ));
+        }
+        checks.push(Check {
+            name: format!("{s}' = {}", ast_text(&d.src, ast, *at)),
+            pass: residual_text.is_empty(),
+            detail: residual_text.join("; "),
+        });
+    }
+    // 5. Outputs, up to a constant.
+    for (name, ast, at) in &d.outputs {
+        let Some(h) = nf.outputs.iter().find(|o| &o.0 == name).map(|o| o.1) else {
+            return Err(d.at(*at, format!("'{name}' is not an output of the system")));
+        };
+        let claim = build_over(nf, ast, &[], &placeholders)
+            .map_err(|e| d.at(at + e.span.start, e.message))?;
+        let claim = nf
+            .ctx
+            .substitute(claim, &back)
+            .map_err(|e| d.at(*at, e.0))?;
+        let diff = nf.ctx.sub(h, claim);
+        let c = nf.ctx.canon(diff);
+        let mut bad = Vec::new();
+        for (j, &x) in state_vars.iter().enumerate() {
+            let dx = nf.ctx.rf_diff(&c, x);
+            if !dx.is_zero() {
+                bad.push(format!(
+                    "d/d{} ({name} - claimed) = {}",
+                    nf.state[j],
+                    nf.ctx.ratfun_text(&dx)
+                ));
+            }
+        }
+        checks.push(Check {
+            name: format!(
+                "output {name} = {} (up to a constant)",
+                ast_text(&d.src, ast, *at)
+            ),
+            pass: bad.is_empty(),
+            detail: bad.join("; "),
+        });
+    }
+    Ok(checks)
+}
+
+fn ast_text(src: &str, ast: &Ast, at: usize) -> String {
+    src.get(at + ast.span.start..at + ast.span.end)
+        .unwrap_or("?")
+        .to_string()
+}
+
+/// Build an expression over the system's state, constants and inputs, the
+/// given definitions, and placeholders for the new variables.
+fn build_over(
+    nf: &mut NormalForm,
+    ast: &Ast,
+    defs: &[(String, Id)],
+    placeholders: &[(String, Id, Var)],
+) -> Result<Id, ParseError> {
+    let state = nf.state.clone();
+    let consts = nf.consts.clone();
+    let inputs = nf.inputs.clone();
+    let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+        if let Some(p) = placeholders.iter().find(|p| p.0 == n) {
+            return Ok(p.1);
+        }
+        if let Some((_, id)) = defs.iter().find(|(x, _)| x == n) {
+            return Ok(*id);
+        }
+        if !placeholders.is_empty() && state.iter().any(|x| x == n) {
+            return Err(ParseError::new(format!("'{n}' is an original variable, not one of the new state: the claim must use the new variables"), s));
+        }
+        if state.iter().any(|x| x == n) || inputs.iter().any(|x| x == n) {
+            return Ok(c.symbol(n).id);
+        }
+        if let Some((_, v)) = consts.iter().find(|(x, _)| x == n) {
+            return Ok(match v {
+                Some(q) => c.num(q.clone()),
+                None => c.symbol(n).id,
+            });
+        }
+        Err(ParseError::new(format!("unknown symbol '{n}'"), s))
+    };
+    nf.ctx.build(ast, &mut resolve)
+}

@@ -1,0 +1,39 @@
+//! obsan's observability analysis of an input-affine system in normal form:
+//! the rank test, continuous symmetries (Definition 2 of Martinelli 2011),
+//! observable-mode checks (eq. 11) and local decompositions (eq. 9).
+//!
+//! ```
+//! let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../systems/localization.sys")).unwrap();
+//! let sys = obsan_model::System::parse(&src, "localization.sys").unwrap();
+//! let mut nf = sys.normal_form(None, &[]).unwrap();
+//! let r = obsan_analysis::rank(&mut nf, Default::default()).unwrap();
+//! assert_eq!((r.rank, r.n), (2, 3));
+//! ```
+
+mod decomp;
+mod modes;
+mod rank;
+mod symmetry;
+
+pub use decomp::{verify_decomposition, Check, Decomposition};
+pub use modes::{check_modes, ModeCheck, ModeReport};
+pub use rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
+pub use symmetry::{canonical_lie, symmetries, SymmetryReport};
+
+use obsan_expr::Id;
+use obsan_model::NormalForm;
+
+/// Names and vectors of the fields: `f0` when the drift is not zero, then one per input.
+fn field_names(nf: &mut NormalForm) -> (Vec<String>, Vec<Vec<Id>>) {
+    let mut names = Vec::new();
+    let mut vectors = Vec::new();
+    if !nf.drift_is_zero() {
+        names.push("f0".to_string());
+        vectors.push(nf.f0.clone());
+    }
+    for (i, f) in nf.fields.iter().enumerate() {
+        names.push(nf.inputs[i].clone());
+        vectors.push(f.clone());
+    }
+    (names, vectors)
+}

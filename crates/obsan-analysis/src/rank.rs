@@ -1,0 +1,327 @@
+//! The observability rank test (Hermann–Krener), exactly modulo a prime at
+//! random points (engine.md section 3).
+//!
+//! The codistribution is grown level by level: level 0 is the outputs; level
+//! k+1 is `L_f phi` for every field f (the drift f0 when it is not zero, and
+//! each input field) and every function phi *kept* at level k. A function is
+//! kept when its gradient at the point raises the rank. If d(phi) is in the
+//! span, d(L_f phi) is in the span of the old gradients and of the L_f of the
+//! kept functions, so nothing is lost; the growth stops when a level adds
+//! nothing, after at most n levels.
+
+use crate::field_names;
+use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, SplitMix, P};
+use obsan_model::NormalForm;
+use std::fmt;
+use std::time::Instant;
+
+/// A Lie derivative, named by the fields applied to an output.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LieWord {
+    pub output: usize,
+    /// Field indices (into [`Fields`]) in the order applied: `[a, b]` is `L_b L_a h`.
+    pub fields: Vec<usize>,
+}
+
+impl LieWord {
+    pub fn order(&self) -> usize {
+        self.fields.len()
+    }
+    /// Operator notation, last field applied first: `L_wL L_wR beta`.
+    pub fn display(&self, field_names: &[String], outputs: &[String]) -> String {
+        let mut s = String::new();
+        for &f in self.fields.iter().rev() {
+            s.push_str(&format!("L_{} ", field_names[f]));
+        }
+        s.push_str(&outputs[self.output]);
+        s
+    }
+}
+
+/// The vector fields of a normal form: the drift (when not identically zero)
+/// and one field per input.
+#[derive(Clone, Debug)]
+pub struct Fields {
+    pub names: Vec<String>,
+    pub vectors: Vec<Vec<Id>>,
+}
+
+impl Fields {
+    pub fn of(nf: &mut NormalForm) -> Fields {
+        let (names, vectors) = field_names(nf);
+        Fields { names, vectors }
+    }
+}
+
+/// Options of the rank test.
+pub struct RankOptions<'a> {
+    pub seed: u64,
+    /// Give up (with [`AnalysisError::Timeout`]) after this instant.
+    pub deadline: Option<Instant>,
+    /// Called after each level: (level, rank so far, state dimension).
+    pub progress: Option<&'a mut dyn FnMut(usize, usize, usize)>,
+}
+
+impl Default for RankOptions<'_> {
+    fn default() -> Self {
+        RankOptions {
+            seed: 1,
+            deadline: None,
+            progress: None,
+        }
+    }
+}
+
+/// Errors of the analysis.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum AnalysisError {
+    /// The deadline passed; the message says how far it got.
+    Timeout(String),
+    /// No usable random point was found (poles or non-square radicands everywhere).
+    NoPoint,
+    /// Anything else, with a message for the user.
+    Invalid(String),
+}
+
+impl fmt::Display for AnalysisError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AnalysisError::Timeout(s) => write!(f, "timed out: {s}"),
+            AnalysisError::NoPoint => f.write_str("no random point avoided the poles of the system (is a denominator identically zero on the domain?)"),
+            AnalysisError::Invalid(s) => f.write_str(s),
+        }
+    }
+}
+impl std::error::Error for AnalysisError {}
+
+/// The result of the rank test.
+#[derive(Clone, Debug)]
+pub struct RankReport {
+    /// Dimension of the analysed state.
+    pub n: usize,
+    /// Generic rank of the observability codistribution.
+    pub rank: usize,
+    /// Lie derivatives whose gradients form a basis, in the order found.
+    pub basis: Vec<(LieWord, Id)>,
+    /// The highest order among the basis functions.
+    pub max_order: usize,
+    /// How many Lie derivatives were evaluated.
+    pub evaluated: usize,
+    /// Per state variable: whether it is observable on its own (e_i in the span).
+    pub observable: Vec<bool>,
+    /// Pivot columns of the basis rows (a non-singular minor), at the point.
+    pub pivots: Vec<usize>,
+    /// Schwartz–Zippel degree bound D of the minors involved.
+    pub degree_bound: u64,
+    /// Probability that the reported rank is below the generic rank: (D/p)^2
+    /// for two independent points. (The rank is never above it.)
+    pub error_bound: f64,
+    pub fields: Fields,
+    /// The seed the points were drawn from.
+    pub seed: u64,
+}
+
+/// Row echelon basis over F_p.
+struct Echelon {
+    rows: Vec<(usize, Vec<Fp>)>, // (pivot column, normalised row)
+}
+
+impl Echelon {
+    /// Reduce `v` against the basis; returns the reduced vector.
+    fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
+        for (p, r) in &self.rows {
+            let c = v[*p];
+            if !c.is_zero() {
+                for (x, y) in v.iter_mut().zip(r) {
+                    *x = *x - c * *y;
+                }
+            }
+        }
+        v
+    }
+    /// Add `v` if independent; returns whether it was.
+    fn insert(&mut self, v: Vec<Fp>) -> bool {
+        let mut v = self.reduce(v);
+        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
+            return false;
+        };
+        let inv = v[p].inv().expect("nonzero");
+        for x in v.iter_mut() {
+            *x = *x * inv;
+        }
+        // Keep the basis reduced on existing pivots too.
+        for (_, r) in self.rows.iter_mut() {
+            let c = r[p];
+            if !c.is_zero() {
+                for (x, y) in r.iter_mut().zip(&v) {
+                    *x = *x - c * *y;
+                }
+            }
+        }
+        self.rows.push((p, v));
+        true
+    }
+    fn rank(&self) -> usize {
+        self.rows.len()
+    }
+}
+
+pub(crate) fn random_point(ctx: &mut Ctx, rng: &mut SplitMix) -> Result<FpPoint, AnalysisError> {
+    for _ in 0..32 {
+        if let Ok(p) = ctx.random_fp_point(rng, &|_| None) {
+            return Ok(p);
+        }
+    }
+    Err(AnalysisError::NoPoint)
+}
+
+/// Gradient ids of `f` with respect to the state.
+pub(crate) fn gradient(nf: &mut NormalForm, f: Id) -> Vec<Id> {
+    let vars = nf.state_vars.clone();
+    vars.iter().map(|&x| nf.ctx.diff(f, x)).collect()
+}
+
+struct Run {
+    basis: Vec<(LieWord, Id)>,
+    echelon: Echelon,
+    evaluated: usize,
+    degree: u64,
+    worst_rejected: u64,
+    point: FpPoint,
+}
+
+fn row_degree(ctx: &Ctx, grad: &[Id]) -> u64 {
+    let d = degree_bounds(ctx, grad);
+    let max_num = d.iter().map(|x| x.0).max().unwrap_or(0);
+    let sum_den: u64 = d.iter().map(|x| x.1).fold(0, u64::saturating_add);
+    max_num.saturating_add(sum_den)
+}
+
+fn grow(
+    nf: &mut NormalForm,
+    fields: &Fields,
+    point: FpPoint,
+    opts: &mut RankOptions,
+) -> Result<Run, AnalysisError> {
+    let n = nf.state.len();
+    let mut run = Run {
+        basis: vec![],
+        echelon: Echelon { rows: vec![] },
+        evaluated: 0,
+        degree: 0,
+        worst_rejected: 0,
+        point,
+    };
+    let mut level: Vec<(LieWord, Id)> = nf
+        .outputs
+        .iter()
+        .enumerate()
+        .map(|(i, (_, h))| {
+            (
+                LieWord {
+                    output: i,
+                    fields: vec![],
+                },
+                *h,
+            )
+        })
+        .collect();
+    let outputs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
+    let mut depth = 0;
+    loop {
+        let mut kept = Vec::new();
+        for (word, f) in level {
+            if let Some(d) = opts.deadline {
+                if Instant::now() > d {
+                    return Err(AnalysisError::Timeout(format!(
+                        "at Lie derivative order {depth}, rank {} of {n} so far (last: {})",
+                        run.echelon.rank(),
+                        word.display(&fields.names, &outputs)
+                    )));
+                }
+            }
+            let grad = gradient(nf, f);
+            let vals = nf
+                .ctx
+                .eval_fp(&grad, &run.point)
+                .map_err(|BadPoint| AnalysisError::NoPoint)?;
+            run.evaluated += 1;
+            let deg = row_degree(&nf.ctx, &grad);
+            if run.echelon.insert(vals) {
+                run.degree = run.degree.saturating_add(deg);
+                kept.push((word.clone(), f));
+                run.basis.push((word, f));
+            } else {
+                run.worst_rejected = run.worst_rejected.max(deg);
+            }
+            if run.echelon.rank() == n {
+                break;
+            }
+        }
+        if let Some(p) = opts.progress.as_mut() {
+            p(depth, run.echelon.rank(), n);
+        }
+        if kept.is_empty() || run.echelon.rank() == n {
+            break;
+        }
+        depth += 1;
+        let mut next = Vec::new();
+        for (word, f) in &kept {
+            for (k, field) in fields.vectors.iter().enumerate() {
+                let g = nf.ctx.lie_derivative(*f, &nf.state_vars.clone(), field);
+                if nf.ctx.is_zero(g) {
+                    continue;
+                }
+                let mut w = word.clone();
+                w.fields.push(k);
+                next.push((w, g));
+            }
+        }
+        level = next;
+    }
+    Ok(run)
+}
+
+/// The generic rank of the observability codistribution, by two independent
+/// runs at random points of F_p (the larger is the answer).
+pub fn rank(nf: &mut NormalForm, mut opts: RankOptions) -> Result<RankReport, AnalysisError> {
+    let fields = Fields::of(nf);
+    let n = nf.state.len();
+    let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
+    let p1 = random_point(&mut nf.ctx, &mut rng)?;
+    let r1 = grow(nf, &fields, p1, &mut opts)?;
+    let p2 = random_point(&mut nf.ctx, &mut rng)?;
+    let r2 = grow(nf, &fields, p2, &mut opts)?;
+    let best = if r2.echelon.rank() > r1.echelon.rank() {
+        r2
+    } else {
+        r1
+    };
+    let rank = best.echelon.rank();
+    // Single variables: e_i in the span at the point.
+    let observable = (0..n)
+        .map(|i| {
+            let mut e = vec![Fp::ZERO; n];
+            e[i] = Fp::ONE;
+            best.echelon.reduce(e).iter().all(|x| x.is_zero())
+        })
+        .collect();
+    let mut pivots: Vec<usize> = best.echelon.rows.iter().map(|(p, _)| *p).collect();
+    pivots.sort_unstable();
+    let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
+    let per_point = (degree_bound as f64 / P as f64).min(1.0);
+    let max_order = best.basis.iter().map(|(w, _)| w.order()).max().unwrap_or(0);
+    Ok(RankReport {
+        n,
+        rank,
+        max_order,
+        evaluated: best.evaluated,
+        basis: best.basis,
+        observable,
+        pivots,
+        degree_bound,
+        error_bound: per_point * per_point,
+        fields,
+        seed: opts.seed,
+    })
+}

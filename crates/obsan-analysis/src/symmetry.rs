@@ -1,0 +1,442 @@
+//! Continuous symmetries: a basis of the null space of the gradients of the
+//! Lie derivatives (Definition 2), in exact form.
+//!
+//! The rank test gives r independent basis functions and r pivot columns at
+//! which their gradients have a non-singular minor. The canonical gradient
+//! rows are brought to reduced echelon form on the pivot columns by exact
+//! Gauss–Jordan elimination; each free column gives one null vector.
+//!
+//! Every vector is then checked exactly against the gradients of the basis
+//! functions and of all their one-step Lie derivatives. Passing that check
+//! proves, without probability, that the codistribution is the span of the
+//! basis rows: if d(phi_k) span it and every d(L_f phi_k) lies in that span,
+//! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
+
+use crate::rank::{gradient, random_point, AnalysisError, LieWord, RankReport};
+use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
+use obsan_model::NormalForm;
+use std::collections::HashMap;
+
+/// The symmetries of a system.
+#[derive(Clone, Debug)]
+pub struct SymmetryReport {
+    pub n: usize,
+    pub rank: usize,
+    /// A basis of the symmetries, each a vector field over the analysed state.
+    pub vectors: Vec<Vec<RatFun>>,
+    /// The exact closure check passed: the rank and the symmetries are exact.
+    pub exact: bool,
+    /// Number of gradient rows each vector was checked against.
+    pub rows_checked: usize,
+}
+
+/// Canonical Lie derivatives by word, sharing prefixes.
+pub struct LieCache {
+    fields: Vec<Vec<RatFun>>,
+    memo: HashMap<(usize, Vec<usize>), RatFun>,
+}
+
+impl LieCache {
+    pub fn new(nf: &mut NormalForm, report: &RankReport) -> LieCache {
+        let fields = report
+            .fields
+            .vectors
+            .iter()
+            .map(|f| f.iter().map(|&c| nf.ctx.canon(c)).collect())
+            .collect();
+        LieCache {
+            fields,
+            memo: HashMap::new(),
+        }
+    }
+
+    /// The canonical Lie derivative named by `word`.
+    pub fn get(&mut self, nf: &mut NormalForm, word: &LieWord) -> RatFun {
+        let key = (word.output, word.fields.clone());
+        if let Some(r) = self.memo.get(&key) {
+            return r.clone();
+        }
+        let r = match word.fields.split_last() {
+            None => nf.ctx.canon(nf.outputs[word.output].1),
+            Some((&last, prefix)) => {
+                let inner = self.get(
+                    nf,
+                    &LieWord {
+                        output: word.output,
+                        fields: prefix.to_vec(),
+                    },
+                );
+                let vars = nf.state_vars.clone();
+                nf.ctx.rf_lie_derivative(&inner, &vars, &self.fields[last])
+            }
+        };
+        self.memo.insert(key, r.clone());
+        r
+    }
+}
+
+/// The canonical form of the Lie derivative named by `word`.
+pub fn canonical_lie(nf: &mut NormalForm, report: &RankReport, word: &LieWord) -> RatFun {
+    LieCache::new(nf, report).get(nf, word)
+}
+
+fn grad(ctx: &mut Ctx, f: &RatFun, vars: &[obsan_expr::Var]) -> Vec<RatFun> {
+    vars.iter().map(|&x| ctx.rf_diff(f, x)).collect()
+}
+
+fn dot(ctx: &mut Ctx, a: &[RatFun], b: &[RatFun]) -> RatFun {
+    let mut acc = RatFun::zero();
+    for (x, y) in a.iter().zip(b) {
+        if x.is_zero() || y.is_zero() {
+            continue;
+        }
+        let t = ctx.rf_mul(x, y);
+        acc = ctx.rf_add(&acc, &t);
+    }
+    acc
+}
+
+/// A readable multiple of `v`: content and common factors removed; then the
+/// scaling (polynomial, or one entry made 1) with the fewest terms.
+pub(crate) fn normalize_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
+    // Candidates: v divided by each entry (canonical), and that with its
+    // denominators cleared and polynomial content removed; keep the smallest.
+    let size = |w: &[RatFun]| {
+        w.iter()
+            .map(|e| {
+                e.numerator().len()
+                    + if e.denominator().is_one() {
+                        0
+                    } else {
+                        e.denominator().len()
+                    }
+            })
+            .sum::<usize>()
+    };
+    // Dividing by an entry with a sin leaf would rationalise by conjugates: skip those.
+    let mut order: Vec<usize> = (0..v.len())
+        .filter(|&i| !v[i].is_zero() && ctx.is_relation_free(&v[i]))
+        .collect();
+    order.sort_by_key(|&i| v[i].term_count());
+    let mut best: Vec<RatFun> = primitive_vector(ctx, v);
+    let mut best_size = size(&best);
+    for &k in &order {
+        let inv = ctx.rf_inv(&v[k]).expect("nonzero");
+        let u: Vec<RatFun> = v.iter().map(|e| ctx.rf_mul(e, &inv)).collect();
+        let p = primitive_vector(ctx, &u);
+        for cand in [u, p] {
+            let s = size(&cand);
+            if s < best_size {
+                best_size = s;
+                best = cand;
+            }
+        }
+    }
+    // Sign: the first non-zero entry has a positive leading coefficient.
+    if let Some(first) = best.iter().find(|e| !e.is_zero()) {
+        if first.numerator().lc_is_negative() {
+            best = best.iter().map(|e| e.neg()).collect();
+        }
+    }
+    best
+}
+
+/// Null space of `rows` by intersection, one row at a time: start from the
+/// unit vectors; for each row, with c_i = row . b_i and the simplest non-zero
+/// c_p, replace b_i by c_p b_i - c_i b_p (i != p) and drop b_p. Each new vector
+/// is made primitive at once, so intermediate vectors stay as small as the
+/// symmetries themselves (Gauss–Jordan on the rows swells badly instead).
+fn null_space(ctx: &mut Ctx, rows: &[Vec<RatFun>], n: usize) -> Vec<Vec<RatFun>> {
+    let mut basis: Vec<Vec<RatFun>> = (0..n)
+        .map(|i| {
+            let mut v = vec![RatFun::zero(); n];
+            v[i] = RatFun::one();
+            v
+        })
+        .collect();
+    for row in rows {
+        let c: Vec<RatFun> = basis.iter().map(|b| dot(ctx, row, b)).collect();
+        let candidates: Vec<usize> = (0..basis.len()).filter(|&i| !c[i].is_zero()).collect();
+        if candidates.is_empty() {
+            continue;
+        }
+        // Try every pivot and keep the smallest resulting basis: the
+        // symmetries are simple, but a careless pivot mixes them with large
+        // scalar factors.
+        let mut best: Option<(usize, Vec<Vec<RatFun>>)> = None;
+        for &p in &candidates {
+            let next = eliminate(ctx, &basis, &c, p, n);
+            let size: usize = next.iter().flatten().map(|e| e.term_count()).sum();
+            if best.as_ref().is_none_or(|b| size < b.0) {
+                best = Some((size, next));
+            }
+        }
+        basis = best.expect("a candidate").1;
+    }
+    basis
+}
+
+/// The basis after eliminating with pivot vector `p`: c_p b_i - c_i b_p.
+fn eliminate(
+    ctx: &mut Ctx,
+    basis: &[Vec<RatFun>],
+    c: &[RatFun],
+    p: usize,
+    n: usize,
+) -> Vec<Vec<RatFun>> {
+    let mut next = Vec::with_capacity(basis.len() - 1);
+    for i in 0..basis.len() {
+        if i == p {
+            continue;
+        }
+        if c[i].is_zero() {
+            next.push(basis[i].clone());
+            continue;
+        }
+        let v: Vec<RatFun> = (0..n)
+            .map(|j| {
+                let a = ctx.rf_mul(&c[p], &basis[i][j]);
+                let b = ctx.rf_mul(&c[i], &basis[p][j]);
+                ctx.rf_sub(&a, &b)
+            })
+            .collect();
+        next.push(primitive_vector(ctx, &v));
+    }
+    next
+}
+
+/// `v` times the lcm of its denominators, divided by the gcd of the numerators.
+fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
+    let mut lcm = Poly::one();
+    for e in v.iter().filter(|e| !e.is_zero()) {
+        let g = obsan_expr::gcd(&lcm, e.denominator());
+        lcm = lcm.mul(&e.denominator().div_exact(&g).expect("gcd divides"));
+    }
+    let l = RatFun::from_poly(lcm);
+    let polys: Vec<RatFun> = v.iter().map(|e| ctx.rf_mul(e, &l)).collect();
+    let mut g = Poly::zero();
+    for e in &polys {
+        g = obsan_expr::gcd(&g, e.numerator());
+    }
+    if g.is_zero() {
+        return polys;
+    }
+    // Exact division, not multiplication by 1/g: g may contain sin leaves,
+    // and rationalising 1/g would multiply by conjugates. The quotient of a
+    // reduced numerator by a factor of it is reduced.
+    let sign = if g.lc_is_negative() { -1 } else { 1 };
+    let _ = ctx;
+    polys
+        .iter()
+        .map(|e| {
+            RatFun::from_poly(
+                e.numerator()
+                    .div_exact(&g)
+                    .expect("gcd divides")
+                    .scale(&sign.into()),
+            )
+        })
+        .collect()
+}
+
+/// The free columns whose reduced echelon null basis is sparsest, judged at a
+/// random point of F_p (an entry that vanishes there is identically zero
+/// except with probability D/p; the choice only affects readability).
+fn choose_free_columns(
+    nf: &mut NormalForm,
+    report: &RankReport,
+) -> Result<Vec<usize>, AnalysisError> {
+    let n = report.n;
+    let k = n - report.rank;
+    let report_free: Vec<usize> = (0..n).filter(|j| !report.pivots.contains(j)).collect();
+    if k == 0 {
+        return Ok(vec![]);
+    }
+    let mut rng = SplitMix(report.seed ^ 0x5e1ec7);
+    let pt = random_point(&mut nf.ctx, &mut rng)?;
+    let mut m: Vec<Vec<Fp>> = Vec::new();
+    for (_, f) in &report.basis {
+        let g = gradient(nf, *f);
+        m.push(
+            nf.ctx
+                .eval_fp(&g, &pt)
+                .map_err(|_| AnalysisError::NoPoint)?,
+        );
+    }
+    let mut best: (usize, Vec<usize>) = (0, report_free.clone());
+    let mut found = false;
+    let mut count = 0;
+    for free in subsets(n, k) {
+        count += 1;
+        if count > 4096 {
+            break;
+        }
+        let piv: Vec<usize> = (0..n).filter(|j| !free.contains(j)).collect();
+        let Some(zeros) = echelon_zeros(&m, &piv, &free) else {
+            continue;
+        };
+        // Prefer more zeros; on ties, free columns late in the state (parameters).
+        if !found
+            || zeros > best.0
+            || (zeros == best.0 && free.iter().rev().gt(best.1.iter().rev()))
+        {
+            best = (zeros, free);
+            found = true;
+        }
+    }
+    Ok(best.1)
+}
+
+/// Number of zero entries of the reduced echelon null basis for these
+/// pivot/free columns, or `None` if the pivot minor is singular.
+fn echelon_zeros(m: &[Vec<Fp>], piv: &[usize], free: &[usize]) -> Option<usize> {
+    let r = piv.len();
+    // Augmented system [M_P | M_F] reduced to [I | X]; null vectors are (-X, I).
+    let mut a: Vec<Vec<Fp>> = m
+        .iter()
+        .map(|row| piv.iter().chain(free).map(|&c| row[c]).collect())
+        .collect();
+    for c in 0..r {
+        let p = (c..a.len()).find(|&i| !a[i][c].is_zero())?;
+        a.swap(c, p);
+        let inv = a[c][c].inv()?;
+        for x in a[c].iter_mut() {
+            *x = *x * inv;
+        }
+        for i in 0..a.len() {
+            if i != c && !a[i][c].is_zero() {
+                let f = a[i][c];
+                let pr = a[c].clone();
+                for (x, y) in a[i].iter_mut().zip(&pr) {
+                    *x = *x - f * *y;
+                }
+            }
+        }
+    }
+    Some(
+        (0..r)
+            .map(|i| (r..r + free.len()).filter(|&j| a[i][j].is_zero()).count())
+            .sum(),
+    )
+}
+
+/// All k-subsets of 0..n in lexicographic order.
+fn subsets(n: usize, k: usize) -> impl Iterator<Item = Vec<usize>> {
+    let mut cur: Option<Vec<usize>> = if k <= n { Some((0..k).collect()) } else { None };
+    std::iter::from_fn(move || {
+        let out = cur.clone()?;
+        let mut c = out.clone();
+        let mut i = k;
+        loop {
+            if i == 0 {
+                cur = None;
+                break;
+            }
+            i -= 1;
+            if c[i] < n - k + i {
+                c[i] += 1;
+                for j in i + 1..k {
+                    c[j] = c[j - 1] + 1;
+                }
+                cur = Some(c);
+                break;
+            }
+        }
+        Some(out)
+    })
+}
+
+/// A basis of the continuous symmetries, exact, each vector checked.
+pub fn symmetries(
+    nf: &mut NormalForm,
+    report: &RankReport,
+) -> Result<SymmetryReport, AnalysisError> {
+    let n = report.n;
+    let r = report.rank;
+    let vars = nf.state_vars.clone();
+    let mut cache = LieCache::new(nf, report);
+    let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);
+    for (w, _) in &report.basis {
+        let f = cache.get(nf, w);
+        rows.push(grad(&mut nf.ctx, &f, &vars));
+    }
+    let basis_rows = rows.clone();
+    // Linear algebra in the half-angle view, where gcds see every common factor.
+    let th = nf.ctx.tan_half();
+    let rows: Vec<Vec<RatFun>> = if th.complete(&nf.ctx) {
+        rows.iter()
+            .map(|row| row.iter().map(|e| nf.ctx.to_tan_half(&th, e)).collect())
+            .collect()
+    } else {
+        rows
+    };
+    let free = choose_free_columns(nf, report)?;
+    let pivots: Vec<usize> = (0..n).filter(|j| !free.contains(j)).collect();
+    let mut vectors = Vec::new();
+    for &j in &free {
+        // The reduced echelon vector for free column j spans the null space
+        // of the columns P + {j}: one-dimensional, so its primitive form is unique.
+        let mut cols = pivots.clone();
+        cols.push(j);
+        let sub: Vec<Vec<RatFun>> = rows
+            .iter()
+            .map(|row| cols.iter().map(|&c| row[c].clone()).collect())
+            .collect();
+        let ns = null_space(&mut nf.ctx, &sub, cols.len());
+        if ns.len() != 1 {
+            return Err(AnalysisError::Invalid(
+                "internal: the chosen pivot minor is singular".into(),
+            ));
+        }
+        let mut v = vec![RatFun::zero(); n];
+        for (k, &c) in cols.iter().enumerate() {
+            v[c] = if th.complete(&nf.ctx) {
+                nf.ctx.from_tan_half(&th, &ns[0][k])
+            } else {
+                ns[0][k].clone()
+            };
+        }
+        vectors.push(normalize_vector(&mut nf.ctx, &v));
+    }
+    // Exact checks: basis rows, then every one-step extension (closure).
+    let mut checked = 0;
+    for v in &vectors {
+        for row in &basis_rows {
+            let d = dot(&mut nf.ctx, v, row);
+            if !d.is_zero() {
+                return Err(AnalysisError::Invalid(
+                    "internal: a computed symmetry does not annihilate a basis gradient".into(),
+                ));
+            }
+            checked += 1;
+        }
+    }
+    let mut exact = true;
+    if !vectors.is_empty() {
+        'outer: for (w, _) in &report.basis {
+            for k in 0..report.fields.vectors.len() {
+                let mut w2 = w.clone();
+                w2.fields.push(k);
+                let f = cache.get(nf, &w2);
+                if f.is_zero() {
+                    continue;
+                }
+                let row = grad(&mut nf.ctx, &f, &vars);
+                for v in &vectors {
+                    checked += 1;
+                    if !dot(&mut nf.ctx, v, &row).is_zero() {
+                        exact = false;
+                        break 'outer;
+                    }
+                }
+            }
+        }
+    }
+    Ok(SymmetryReport {
+        n,
+        rank: r,
+        vectors,
+        exact,
+        rows_checked: checked,
+    })
+}

@@ -1,0 +1,119 @@
+//! The tangent half-angle view: `sin x = 2t/(1+t^2)`, `cos x = (1-t^2)/(1+t^2)`
+//! with `t = tan(x/2)`, for every angle pair. In this view every form is a
+//! plain rational function (no relation), so polynomial gcds remove every
+//! common factor: Q[t, ...] is a unique-factorisation domain, while modulo
+//! s^2 + c^2 = 1 common factors can hide (s^2 = (1 - c)(1 + c)). Linear
+//! algebra that must keep its results small (null spaces) runs here; results
+//! are mapped back with `t = s/(1 + c)`.
+
+use crate::canon::RatFun;
+use crate::graph::{Ctx, LeafKind};
+use crate::num::int;
+use crate::poly::{Mono, Poly, Var};
+
+/// The angle pairs of a context and their half-angle symbols.
+#[derive(Clone, Debug)]
+pub struct TanHalf {
+    /// (sin leaf, cos leaf, t symbol)
+    pairs: Vec<(Var, Var, Var)>,
+}
+
+impl TanHalf {
+    /// Whether the view covers every relation of the context (no sqrt leaf).
+    pub fn complete(&self, ctx: &Ctx) -> bool {
+        !ctx.leaves
+            .iter()
+            .any(|l| matches!(l.kind, LeafKind::Sqrt(_)))
+    }
+}
+
+impl Ctx {
+    /// Half-angle symbols for every sin/cos pair of the context.
+    pub fn tan_half(&mut self) -> TanHalf {
+        let mut pairs = Vec::new();
+        let n = self.leaves.len();
+        for v in 0..n {
+            if let LeafKind::Sin(_) = self.leaves[v].kind {
+                let c = self.leaves[v].partner.expect("pair");
+                let name = format!("\u{27e8}t{v}\u{27e9}");
+                let t = self.symbol(&name).var;
+                pairs.push((v as Var, c, t));
+            }
+        }
+        TanHalf { pairs }
+    }
+
+    fn poly_to_tan_half(&self, th: &TanHalf, p: &Poly) -> (Poly, Vec<u32>) {
+        // Per angle, the highest total degree in (s, c) over the terms.
+        let degs: Vec<u32> = th
+            .pairs
+            .iter()
+            .map(|&(s, c, _)| {
+                p.terms()
+                    .iter()
+                    .map(|(m, _)| m.degree(s) + m.degree(c))
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
+        let mut acc = Poly::zero();
+        for (m, k) in p.terms() {
+            let mut rest = m.clone();
+            let mut factor = Poly::monomial(Mono::one(), k.clone());
+            for (i, &(s, c, t)) in th.pairs.iter().enumerate() {
+                let (a, r1) = rest.split(s);
+                let (b, r2) = r1.split(c);
+                rest = r2;
+                if degs[i] == 0 {
+                    continue;
+                }
+                let tt = Poly::var(t);
+                let one_plus = Poly::one().add(&tt.mul(&tt));
+                let one_minus = Poly::one().sub(&tt.mul(&tt));
+                let two_t = tt.scale(&int(2));
+                factor = factor
+                    .mul(&two_t.pow(a))
+                    .mul(&one_minus.pow(b))
+                    .mul(&one_plus.pow(degs[i] - a - b));
+            }
+            acc = acc.add(&factor.mul_term(&rest, &int(1)));
+        }
+        (acc, degs)
+    }
+
+    /// A form in the half-angle view (no sin/cos leaf; canonical by plain gcd).
+    pub fn to_tan_half(&self, th: &TanHalf, r: &RatFun) -> RatFun {
+        let (n, dn) = self.poly_to_tan_half(th, &r.num);
+        let (d, dd) = self.poly_to_tan_half(th, &r.den);
+        // num/den = (n/(1+t^2)^dn) / (d/(1+t^2)^dd)
+        let mut num = n;
+        let mut den = d;
+        for (i, &(_, _, t)) in th.pairs.iter().enumerate() {
+            let tt = Poly::var(t);
+            let one_plus = Poly::one().add(&tt.mul(&tt));
+            if dd[i] > dn[i] {
+                num = num.mul(&one_plus.pow(dd[i] - dn[i]));
+            } else if dn[i] > dd[i] {
+                den = den.mul(&one_plus.pow(dn[i] - dd[i]));
+            }
+        }
+        self.normalize(num, den)
+    }
+
+    /// Back from the half-angle view: `t = s/(1 + c)`; the result is canonical.
+    pub fn from_tan_half(&mut self, th: &TanHalf, r: &RatFun) -> RatFun {
+        let id = self.from_canonical(r);
+        let mut map = Vec::new();
+        for &(s, c, t) in &th.pairs {
+            let (sn, cn) = (self.leaf_node(s), self.leaf_node(c));
+            let one = self.one();
+            let den = self.add(&[one, cn]);
+            let q = self.div(sn, den);
+            map.push((t, q));
+        }
+        let back = self
+            .substitute(id, &map)
+            .expect("t = s/(1+c) has no pole generically");
+        self.canon(back)
+    }
+}

@@ -1,0 +1,431 @@
+//! `obsan rank`, `symmetries`, `lie`, `check`, `verify`.
+
+use crate::cli::{AnalysisArgs, CheckArgs, LieArgs, OutputArgs, RankArgs, VerifyArgs};
+use crate::expr_cmds::parse_arg_in;
+use crate::show::{load_normal_form, load_system};
+use crate::Failure;
+use obsan_analysis::{
+    canonical_lie, check_modes, rank as rank_test, symmetries as sym_basis, verify_decomposition,
+    Decomposition, LieWord, RankOptions, RankReport, SymmetryReport,
+};
+use obsan_expr::RatFun;
+use obsan_model::NormalForm;
+use serde_json::{json, Value};
+use std::io::IsTerminal;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+fn fmt_rf(nf: &NormalForm, r: &RatFun, out: &OutputArgs) -> String {
+    if out.latex {
+        nf.ctx.ratfun_latex(r)
+    } else {
+        nf.ctx.ratfun_text(r)
+    }
+}
+
+/// Run the rank test with a progress bar on a terminal and the timeout.
+fn run_rank(nf: &mut NormalForm, an: &AnalysisArgs) -> Result<RankReport, Failure> {
+    let deadline = an
+        .timeout
+        .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let b = indicatif::ProgressBar::new(nf.state.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template("{spinner} rank {pos}/{len} {msg}")
+                .expect("template"),
+        );
+        b
+    });
+    let mut progress = |level: usize, r: usize, _n: usize| {
+        if let Some(b) = &bar {
+            b.set_position(r as u64);
+            b.set_message(format!("(Lie derivative order {level})"));
+        }
+    };
+    let report = rank_test(
+        nf,
+        RankOptions {
+            seed: an.seed,
+            deadline,
+            progress: Some(&mut progress),
+        },
+    );
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    report.map_err(|e| Failure(e.to_string()))
+}
+
+fn word_text(nf: &NormalForm, r: &RankReport, w: &LieWord) -> String {
+    let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
+    w.display(&r.fields.names, &outs)
+}
+
+fn system_title(nf: &NormalForm) -> String {
+    let mut t = format!("system {}", nf.name);
+    if let Some(r) = &nf.restriction {
+        t.push_str(&format!(" with restriction {r}"));
+    }
+    let set: Vec<String> = nf
+        .consts
+        .iter()
+        .filter_map(|(n, v)| v.as_ref().map(|q| format!("{n} = {q}")))
+        .collect();
+    if !set.is_empty() {
+        t.push_str(&format!(" ({})", set.join(", ")));
+    }
+    t
+}
+
+pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
+    let (_, mut nf) = load_normal_form(&a.sys)?;
+    let r = run_rank(&mut nf, &a.an)?;
+    let words: Vec<String> = r.basis.iter().map(|(w, _)| word_text(&nf, &r, w)).collect();
+    let obs: Vec<&String> = nf
+        .state
+        .iter()
+        .zip(&r.observable)
+        .filter(|(_, o)| **o)
+        .map(|(s, _)| s)
+        .collect();
+    let unobs: Vec<&String> = nf
+        .state
+        .iter()
+        .zip(&r.observable)
+        .filter(|(_, o)| !**o)
+        .map(|(s, _)| s)
+        .collect();
+    let exact = r.rank == r.n;
+    if a.out.json {
+        let v = json!({
+            "system": nf.name,
+            "restriction": nf.restriction,
+            "state": nf.state,
+            "n": r.n,
+            "rank": r.rank,
+            "weakly_locally_observable": exact,
+            "basis": r.basis.iter().zip(&words).map(|((w, _), t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
+            "max_order": r.max_order,
+            "observable_variables": obs,
+            "unobservable_variables": unobs,
+            "evaluated": r.evaluated,
+            "exact": exact,
+            "error_bound": if exact { 0.0 } else { r.error_bound },
+            "degree_bound": r.degree_bound,
+            "seed": r.seed,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let mut o = String::new();
+    o.push_str(&format!(
+        "{}: state [{}]\n",
+        system_title(&nf),
+        nf.state.join(", ")
+    ));
+    let verdict = if exact {
+        "weakly locally observable"
+    } else {
+        "not weakly locally observable"
+    };
+    o.push_str(&format!("rank {} of {}: {verdict}\n", r.rank, r.n));
+    o.push_str(&format!(
+        "basis of the codistribution (Lie derivatives up to order {}; L_a L_b h = L_a(L_b(h))):\n",
+        r.max_order
+    ));
+    for w in &words {
+        o.push_str(&format!("  d {w}\n"));
+    }
+    let list = |v: &[&String]| {
+        if v.is_empty() {
+            "(none)".to_string()
+        } else {
+            v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+        }
+    };
+    o.push_str(&format!("observable on their own: {}\n", list(&obs)));
+    o.push_str(&format!("not observable on their own: {}\n", list(&unobs)));
+    if exact {
+        o.push_str("exact: a non-singular minor of full rank was found (a non-zero value at a point proves it)\n");
+    } else {
+        o.push_str(&format!(
+            "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); the rank is never too high, and too low with probability <= {:.1e} (Schwartz-Zippel, degree bound {}); `obsan symmetries` proves it exactly\n",
+            r.seed, r.error_bound, r.degree_bound
+        ));
+    }
+    print!("{o}");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
+    let vecs: Vec<Value> = s
+        .vectors
+        .iter()
+        .map(|v| {
+            let comps: serde_json::Map<String, Value> = nf
+                .state
+                .iter()
+                .zip(v)
+                .map(|(n, e)| {
+                    (
+                        n.clone(),
+                        json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
+                    )
+                })
+                .collect();
+            Value::Object(comps)
+        })
+        .collect();
+    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked })
+}
+
+fn compute_symmetries(
+    nf: &mut NormalForm,
+    an: &AnalysisArgs,
+) -> Result<(RankReport, SymmetryReport), Failure> {
+    let r = run_rank(nf, an)?;
+    let s = sym_basis(nf, &r).map_err(|e| Failure(e.to_string()))?;
+    Ok((r, s))
+}
+
+pub fn symmetries(a: &RankArgs) -> Result<ExitCode, Failure> {
+    let (_, mut nf) = load_normal_form(&a.sys)?;
+    let (r, s) = compute_symmetries(&mut nf, &a.an)?;
+    if a.out.json {
+        let mut v = symmetry_json(&nf, &s);
+        let m = v.as_object_mut().expect("object");
+        m.insert("system".into(), json!(nf.name));
+        m.insert("restriction".into(), json!(nf.restriction));
+        m.insert("state".into(), json!(nf.state));
+        m.insert("rank".into(), json!(r.rank));
+        m.insert("n".into(), json!(r.n));
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let mut o = format!(
+        "{}: rank {} of {}, {} independent symmetr{}\n",
+        system_title(&nf),
+        r.rank,
+        r.n,
+        s.vectors.len(),
+        if s.vectors.len() == 1 { "y" } else { "ies" }
+    );
+    o.push_str(&format!("state order: [{}]\n", nf.state.join(", ")));
+    for (k, v) in s.vectors.iter().enumerate() {
+        let comps: Vec<String> = v.iter().map(|e| fmt_rf(&nf, e, &a.out)).collect();
+        o.push_str(&format!("w{} = [{}]\n", k + 1, comps.join(", ")));
+    }
+    if s.vectors.is_empty() {
+        o.push_str("no continuous symmetry: the state is weakly locally observable (exact)\n");
+    } else if s.exact {
+        o.push_str(&format!(
+            "exact: each symmetry annihilates the gradients of the basis Lie derivatives and of all their Lie derivatives ({} products checked), which proves the rank {} exactly\n",
+            s.rows_checked, r.rank
+        ));
+    } else {
+        o.push_str("warning: a one-step Lie derivative is not annihilated: the rank test was unlucky; run again with another --seed\n");
+    }
+    print!("{o}");
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
+    if a.order > 8 {
+        return Err(Failure(format!(
+            "--order {} is too high: at most 8 (the number of words grows as inputs^order)",
+            a.order
+        )));
+    }
+    let (_, mut nf) = load_normal_form(&a.sys)?;
+    // A rank report only to name the fields; the words are enumerated here.
+    let fields = obsan_analysis::Fields::of(&mut nf);
+    let dummy = RankReport {
+        n: nf.state.len(),
+        rank: 0,
+        basis: vec![],
+        max_order: 0,
+        evaluated: 0,
+        observable: vec![],
+        pivots: vec![],
+        degree_bound: 0,
+        error_bound: 0.0,
+        fields: fields.clone(),
+        seed: 0,
+    };
+    let mut words: Vec<LieWord> = (0..nf.outputs.len())
+        .map(|o| LieWord {
+            output: o,
+            fields: vec![],
+        })
+        .collect();
+    let mut level = words.clone();
+    for _ in 0..a.order {
+        let mut next = Vec::new();
+        for w in &level {
+            for k in 0..fields.names.len() {
+                let mut w2 = w.clone();
+                w2.fields.push(k);
+                next.push(w2);
+            }
+        }
+        words.extend(next.iter().cloned());
+        level = next;
+    }
+    let mut rows = Vec::new();
+    for w in &words {
+        let f = canonical_lie(&mut nf, &dummy, w);
+        rows.push((word_text(&nf, &dummy, w), w.order(), f));
+    }
+    if a.out.json {
+        let v: Vec<Value> = rows
+            .iter()
+            .map(|(t, k, f)| json!({"lie_derivative": t, "order": k, "text": nf.ctx.ratfun_text(f), "latex": nf.ctx.ratfun_latex(f)}))
+            .collect();
+        println!("{}", serde_json::to_string_pretty(&json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    let mut o = format!(
+        "{}: Lie derivatives up to order {} (exact; L_a L_b h = L_a(L_b(h)))\n",
+        system_title(&nf),
+        a.order
+    );
+    for (t, _, f) in &rows {
+        o.push_str(&format!("{t} = {}\n", fmt_rf(&nf, f, &a.out)));
+    }
+    print!("{o}");
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
+    let (_, mut nf) = load_normal_form(&a.sys)?;
+    let mut ids = Vec::new();
+    for m in &a.modes {
+        ids.push(parse_arg_in(&mut nf, m)?);
+    }
+    let (_, s) = compute_symmetries(&mut nf, &a.an)?;
+    let rep = check_modes(&mut nf, &s, &ids, a.an.seed).map_err(|e| Failure(e.to_string()))?;
+    let all_pass = rep.checks.iter().all(|c| c.is_mode) && rep.independent;
+    if a.out.json {
+        let checks: Vec<Value> = a
+            .modes
+            .iter()
+            .zip(&rep.checks)
+            .map(|(m, c)| {
+                json!({
+                    "mode": m,
+                    "observable_mode": c.is_mode,
+                    "residuals": c.residuals.iter().map(|r| nf.ctx.ratfun_text(r)).collect::<Vec<_>>(),
+                })
+            })
+            .collect();
+        let v = json!({
+            "system": nf.name, "restriction": nf.restriction, "symmetries": s.vectors.len(), "rank": rep.rank,
+            "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
+            "complete": rep.complete, "exact": true,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        let mut o = format!(
+            "{}: rank {}, {} symmetr{}\n",
+            system_title(&nf),
+            rep.rank,
+            s.vectors.len(),
+            if s.vectors.len() == 1 { "y" } else { "ies" }
+        );
+        for (m, c) in a.modes.iter().zip(&rep.checks) {
+            if c.is_mode {
+                o.push_str(&format!(
+                    "PASS {m}: satisfies eq. (11) for every symmetry (exact)\n"
+                ));
+            } else {
+                let k = c
+                    .residuals
+                    .iter()
+                    .position(|r| !r.is_zero())
+                    .expect("a non-zero residual");
+                o.push_str(&format!(
+                    "FAIL {m}: grad({m}) . w{} = {}\n",
+                    k + 1,
+                    fmt_rf(&nf, &c.residuals[k], &a.out)
+                ));
+            }
+        }
+        let accepted = rep.checks.iter().filter(|c| c.is_mode).count();
+        o.push_str(&format!(
+            "accepted modes: {accepted}; independent: {} (gradient rank {}){}\n",
+            if rep.independent { "yes" } else { "no" },
+            rep.independent_count,
+            if rep.independent {
+                String::new()
+            } else {
+                format!(", wrong with probability <= {:.1e}", rep.dependence_error)
+            }
+        ));
+        o.push_str(&format!(
+            "complete: {} ({} independent modes for rank {})\n",
+            if rep.complete { "yes" } else { "no" },
+            rep.independent_count,
+            rep.rank
+        ));
+        print!("{o}");
+    }
+    Ok(if all_pass {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
+    let src = std::fs::read_to_string(&a.file)
+        .map_err(|e| Failure(format!("cannot read {}: {e}", a.file)))?;
+    let d = Decomposition::parse(&src, &a.file).map_err(|e| Failure(e.to_string()))?;
+    let base = std::path::Path::new(&a.file)
+        .parent()
+        .unwrap_or(std::path::Path::new("."));
+    let sys_path = base.join(&d.system);
+    let sys_path = sys_path.to_string_lossy().to_string();
+    let sys = load_system(&sys_path)?;
+    let mut nf = sys
+        .normal_form(d.restriction.as_deref(), &d.set)
+        .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
+    let checks =
+        verify_decomposition(&mut nf, &d, a.an.seed).map_err(|e| Failure(e.to_string()))?;
+    let ok = checks.iter().all(|c| c.pass);
+    if a.out.json {
+        let v = json!({
+            "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
+            "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
+            "pass": ok, "exact": true,
+        });
+        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+    } else {
+        let mut o = format!(
+            "{} -> new state [{}] ({})\n",
+            system_title(&nf),
+            d.new_state.join(", "),
+            a.file
+        );
+        for c in &checks {
+            o.push_str(&format!(
+                "{} {}\n",
+                if c.pass { "PASS" } else { "FAIL" },
+                c.name
+            ));
+            if !c.pass && !c.detail.is_empty() {
+                o.push_str(&format!("     {}\n", c.detail));
+            }
+        }
+        o.push_str(if ok {
+            "decomposition verified (exact)\n"
+        } else {
+            "decomposition NOT verified\n"
+        });
+        print!("{o}");
+    }
+    Ok(if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
