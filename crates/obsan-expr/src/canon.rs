@@ -294,8 +294,15 @@ impl Ctx {
         if a.is_zero() {
             return None;
         }
-        if a.num.vars().iter().any(|v| self.has_relation(*v)) {
-            return Some(self.normalize(a.den.clone(), a.num.clone()));
+        let vars = a.num.vars();
+        if vars.iter().any(|v| self.has_relation(*v)) {
+            let sqrt = vars
+                .iter()
+                .any(|v| matches!(self.leaves[*v as usize].kind, LeafKind::Sqrt(_)));
+            if sqrt {
+                return Some(self.normalize(a.den.clone(), a.num.clone()));
+            }
+            return Some(self.inv_via_tan_half(a));
         }
         let (mut num, mut den) = (a.den.clone(), a.num.clone());
         if den.lc_sign() == dashu_int::Sign::Negative {

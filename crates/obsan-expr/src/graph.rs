@@ -86,6 +86,8 @@ pub struct Ctx {
     pub(crate) diff_memo: FxHashMap<(Id, Var), Id>,
     /// Per-symbol unit denominators of angles and exponentials.
     pub(crate) angle_units: FxHashMap<(Var, bool), u32>,
+    /// (sin leaf, cos leaf, half-angle symbol t) for every angle pair.
+    pub(crate) half_angles: Vec<(Var, Var, Var)>,
 }
 
 impl fmt::Debug for Ctx {

@@ -113,8 +113,14 @@ impl Ctx {
     fn angle_pair(&mut self, a: Angle) -> (Id, Id) {
         let s = self.leaf(LeafKind::Sin(a.clone()));
         let c = self.leaf(LeafKind::Cos(a));
-        self.leaves[s as usize].partner = Some(c);
-        self.leaves[c as usize].partner = Some(s);
+        if self.leaves[s as usize].partner.is_none() {
+            self.leaves[s as usize].partner = Some(c);
+            self.leaves[c as usize].partner = Some(s);
+            // The half-angle symbol of this pair (see tanhalf.rs), made now so
+            // that inversion, which only reads the context, can use it.
+            let t = self.symbol(&format!("\u{27e8}t{s}\u{27e9}")).var;
+            self.half_angles.push((s, c, t));
+        }
         (self.leaf_node(c), self.leaf_node(s))
     }
 

@@ -30,17 +30,9 @@ impl TanHalf {
 impl Ctx {
     /// Half-angle symbols for every sin/cos pair of the context.
     pub fn tan_half(&mut self) -> TanHalf {
-        let mut pairs = Vec::new();
-        let n = self.leaves.len();
-        for v in 0..n {
-            if let LeafKind::Sin(_) = self.leaves[v].kind {
-                let c = self.leaves[v].partner.expect("pair");
-                let name = format!("\u{27e8}t{v}\u{27e9}");
-                let t = self.symbol(&name).var;
-                pairs.push((v as Var, c, t));
-            }
+        TanHalf {
+            pairs: self.half_angles.clone(),
         }
-        TanHalf { pairs }
     }
 
     fn poly_to_tan_half(&self, th: &TanHalf, p: &Poly) -> (Poly, Vec<u32>) {
@@ -101,19 +93,51 @@ impl Ctx {
     }
 
     /// Back from the half-angle view: `t = s/(1 + c)`; the result is canonical.
-    pub fn from_tan_half(&mut self, th: &TanHalf, r: &RatFun) -> RatFun {
-        let id = self.from_canonical(r);
-        let mut map = Vec::new();
+    pub fn from_tan_half(&self, th: &TanHalf, r: &RatFun) -> RatFun {
+        let (nn, nd) = self.poly_from_tan_half(th, &r.num);
+        let (dn, dd) = self.poly_from_tan_half(th, &r.den);
+        self.normalize(nn.mul(&dd), nd.mul(&dn))
+    }
+
+    /// `p(t)` with `t = s/(1+c)` for each pair: `(numerator, (1+c)^k)`.
+    fn poly_from_tan_half(&self, th: &TanHalf, p: &Poly) -> (Poly, Poly) {
+        let mut num = p.clone();
+        let mut den = Poly::one();
         for &(s, c, t) in &th.pairs {
-            let (sn, cn) = (self.leaf_node(s), self.leaf_node(c));
-            let one = self.one();
-            let den = self.add(&[one, cn]);
-            let q = self.div(sn, den);
-            map.push((t, q));
+            let deg = num.degree(t);
+            if deg == 0 {
+                continue;
+            }
+            let one_plus_c = Poly::one().add(&Poly::var(c));
+            let mut acc = Poly::zero();
+            for (e, k) in num.coeffs_in(t) {
+                acc = acc.add(&k.mul(&Poly::var(s).pow(e)).mul(&one_plus_c.pow(deg - e)));
+            }
+            num = acc;
+            den = den.mul(&one_plus_c.pow(deg));
         }
-        let back = self
-            .substitute(id, &map)
-            .expect("t = s/(1+c) has no pole generically");
-        self.canon(back)
+        (num, den)
+    }
+
+    /// Inverse through the half-angle view: cancel there (a UFD), then map
+    /// back, so that only what truly remains in the denominator is rationalised.
+    pub(crate) fn inv_via_tan_half(&self, a: &RatFun) -> RatFun {
+        let th = TanHalf {
+            pairs: self.half_angles.clone(),
+        };
+        let at = self.to_tan_half(&th, a);
+        let inv = RatFun {
+            num: at.den.clone(),
+            den: at.num.clone(),
+        };
+        let inv = if inv.den.lc_is_negative() {
+            RatFun {
+                num: inv.num.neg(),
+                den: inv.den.neg(),
+            }
+        } else {
+            inv
+        };
+        self.from_tan_half(&th, &inv)
     }
 }
