@@ -1,5 +1,6 @@
 //! The one integration-test target: runs the `obsan` binary as a user would.
 
+mod analysis;
 mod expr;
 mod show;
 mod util;

@@ -440,3 +440,41 @@ pub fn symmetries(
         rows_checked: checked,
     })
 }
+
+/// Exact determinant of a square matrix of canonical forms, by elimination
+/// in the half-angle view (where every step cancels common factors fully).
+pub fn determinant(ctx: &mut Ctx, m: &[Vec<RatFun>]) -> RatFun {
+    let th = ctx.tan_half();
+    let mut a: Vec<Vec<RatFun>> = m
+        .iter()
+        .map(|row| row.iter().map(|e| ctx.to_tan_half(&th, e)).collect())
+        .collect();
+    let n = a.len();
+    let mut det = RatFun::one();
+    for c in 0..n {
+        let Some(p) = (c..n)
+            .filter(|&i| !a[i][c].is_zero())
+            .min_by_key(|&i| a[i][c].term_count())
+        else {
+            return RatFun::zero();
+        };
+        if p != c {
+            a.swap(p, c);
+            det = det.neg();
+        }
+        let piv = a[c][c].clone();
+        det = ctx.rf_mul(&det, &piv);
+        let inv = ctx.rf_inv(&piv).expect("nonzero pivot");
+        for i in c + 1..n {
+            if a[i][c].is_zero() {
+                continue;
+            }
+            let f = ctx.rf_mul(&a[i][c], &inv);
+            for j in c..n {
+                let t = ctx.rf_mul(&f, &a[c][j]);
+                a[i][j] = ctx.rf_sub(&a[i][j], &t);
+            }
+        }
+    }
+    ctx.from_tan_half(&th, &det)
+}

@@ -1,0 +1,367 @@
+//! The paper's claims, computed by the obsan binary and checked here against
+//! the paper (Martinelli, IEEE T-RO 2011) and ERRATA.md.
+
+use crate::util::*;
+use obsan_expr::{Ctx, Fp, SplitMix};
+use serde_json::Value;
+
+fn json(args: &[&str]) -> Value {
+    let mut a = args.to_vec();
+    a.push("--json");
+    serde_json::from_str(&ok(&a)).expect("json output")
+}
+
+fn rank_of(sys: &str, extra: &[&str]) -> (u64, u64, Value) {
+    let mut a = vec!["rank", sys];
+    a.extend_from_slice(extra);
+    let v = json(&a);
+    (v["rank"].as_u64().unwrap(), v["n"].as_u64().unwrap(), v)
+}
+
+/// Rank over F_p, at random points, of vectors given as expression texts over
+/// the named state (an independent check of spans; wrong only with
+/// probability ~deg/2^61 per point).
+fn span_rank(state: &[&str], vectors: &[Vec<String>]) -> usize {
+    let mut best = 0;
+    for seed in 1..=3 {
+        let mut ctx = Ctx::new();
+        for s in state {
+            ctx.symbol(s);
+        }
+        let ids: Vec<Vec<_>> = vectors
+            .iter()
+            .map(|v| v.iter().map(|e| ctx.parse(e).unwrap()).collect())
+            .collect();
+        let mut rng = SplitMix(seed);
+        let pt = ctx.random_fp_point(&mut rng, &|_| None).unwrap();
+        let mut m: Vec<Vec<Fp>> = ids.iter().map(|v| ctx.eval_fp(v, &pt).unwrap()).collect();
+        // Gaussian elimination.
+        let (mut r, n) = (0, state.len());
+        for c in 0..n {
+            let Some(i) = (r..m.len()).find(|&i| !m[i][c].is_zero()) else {
+                continue;
+            };
+            m.swap(r, i);
+            let inv = m[r][c].inv().unwrap();
+            for i in 0..m.len() {
+                if i != r && !m[i][c].is_zero() {
+                    let f = m[i][c] * inv;
+                    let p = m[r].clone();
+                    for (x, y) in m[i].iter_mut().zip(&p) {
+                        *x = *x - f * *y;
+                    }
+                }
+            }
+            r += 1;
+        }
+        best = best.max(r);
+    }
+    best
+}
+
+/// The symmetry vectors of `obsan symmetries --json`, in the given state order.
+fn symmetry_vectors(v: &Value, order: &[&str]) -> Vec<Vec<String>> {
+    v["symmetries"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| {
+            order
+                .iter()
+                .map(|s| w[*s]["text"].as_str().unwrap().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+fn strs(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| s.to_string()).collect()
+}
+
+#[test]
+fn localization_eq3_rank_symmetry_and_modes() {
+    let (r, n, v) = rank_of("systems/localization.sys", &[]);
+    assert_eq!((r, n), (2, 3));
+    assert_eq!(v["observable_variables"], serde_json::json!(["D"]));
+    let s = json(&["symmetries", "systems/localization.sys"]);
+    assert_eq!(s["exact"], true);
+    let state = ["D", "phiR", "thetaR"];
+    let mut w = symmetry_vectors(&s, &state);
+    assert_eq!(w.len(), 1);
+    // Spanned by [0, 1, 1] (section III-C).
+    w.push(strs(&["0", "1", "1"]));
+    assert_eq!(span_rank(&state, &w), 1);
+    let out = ok(&[
+        "check",
+        "systems/localization.sys",
+        "--mode",
+        "D",
+        "--mode",
+        "thetaR - phiR",
+    ]);
+    assert!(
+        out.contains("PASS D:")
+            && out.contains("PASS thetaR - phiR:")
+            && out.contains("complete: yes"),
+        "{out}"
+    );
+    let r = obsan(&["check", "systems/localization.sys", "--mode", "thetaR"]);
+    assert_eq!(r.code, 1);
+    assert!(
+        r.stdout.contains("FAIL thetaR: grad(thetaR) . w1 = "),
+        "{}",
+        r.stdout
+    );
+}
+
+#[test]
+fn localization_cartesian_eqs_1_2() {
+    let (r, n, _) = rank_of("systems/localization_xy.sys", &[]);
+    assert_eq!((r, n), (2, 3));
+    let s = json(&["symmetries", "systems/localization_xy.sys"]);
+    let state = ["xR", "yR", "thetaR"];
+    let mut w = symmetry_vectors(&s, &state);
+    // A rotation about the feature: [-yR, xR, 1].
+    w.push(strs(&["-yR", "xR", "1"]));
+    assert_eq!(span_rank(&state, &w), 1);
+    assert_eq!(rank_of("systems/localization_modes.sys", &[]).0, 2);
+}
+
+#[test]
+fn calib_eq16_is_observable_with_order_2() {
+    let (r, n, v) = rank_of("systems/calib.sys", &[]);
+    assert_eq!((r, n), (7, 7));
+    assert_eq!(v["weakly_locally_observable"], true);
+    assert_eq!(v["max_order"], 2);
+    assert_eq!(v["exact"], true);
+    assert_eq!(v["basis"].as_array().unwrap().len(), 7);
+}
+
+#[test]
+fn calib_circular_restriction_has_rank_4_and_appendix_b_symmetry() {
+    let (r, n, _) = rank_of("systems/calib.sys", &["--input", "q"]);
+    assert_eq!((r, n), (4, 7));
+    let s = json(&["symmetries", "systems/calib.sys", "--input", "q"]);
+    assert_eq!(s["exact"], true);
+    let state = ["mu", "gamma", "phi", "psi", "eta", "delta", "xi"];
+    let mut w = symmetry_vectors(&s, &state);
+    assert_eq!(w.len(), 3);
+    assert_eq!(span_rank(&state, &w), 3, "three independent symmetries");
+    // Appendix B: delta -> lambda with eta(1 + q delta) and xi(1 - q delta) fixed:
+    // d eta/d lambda = -q eta/(1 + q delta), d xi/d lambda = q xi/(1 - q delta).
+    w.push(strs(&[
+        "0",
+        "0",
+        "0",
+        "0",
+        "-q*eta/(1 + q*delta)",
+        "1",
+        "q*xi/(1 - q*delta)",
+    ]));
+    assert_eq!(
+        span_rank(&state, &w),
+        3,
+        "the Appendix B direction is a symmetry"
+    );
+}
+
+#[test]
+fn calib_q_eq19_has_rank_4_of_6() {
+    assert_eq!(rank_of("systems/calib_q.sys", &[]).0, 4);
+    assert_eq!(rank_of("systems/calib_q.sys", &[]).1, 6);
+}
+
+#[test]
+fn eq20_symmetry_matches_the_paper() {
+    let (r, n, _) = rank_of("systems/calib_q_nopsi.sys", &[]);
+    assert_eq!((r, n), (4, 5));
+    let s = json(&["symmetries", "systems/calib_q_nopsi.sys"]);
+    let state = ["mu", "gamma", "eta_q", "xi_q", "phi"];
+    let mut w = symmetry_vectors(&s, &state);
+    assert_eq!(w.len(), 1);
+    w.push(strs(&[
+        "mu*cos(gamma) + 1",
+        "sin(gamma)",
+        "(xi_q*sin(phi) - eta_q)/mu",
+        "0",
+        "xi_q*cos(phi)/(eta_q*mu)",
+    ]));
+    assert_eq!(span_rank(&state, &w), 1);
+}
+
+#[test]
+fn psi_system_symmetry_matches_the_paper() {
+    let (r, n, _) = rank_of("systems/psi.sys", &[]);
+    assert_eq!((r, n), (4, 5));
+    let s = json(&["symmetries", "systems/psi.sys"]);
+    let state = ["Psi1", "Psi2", "Psi3", "xi_q", "psi"];
+    let mut w = symmetry_vectors(&s, &state);
+    w.push(strs(&[
+        "Psi1^2 + 1",
+        "Psi2*(Psi3 - Psi1)",
+        "Psi3^2 + 1",
+        "0",
+        "1",
+    ]));
+    assert_eq!(span_rank(&state, &w), 1);
+}
+
+#[test]
+fn avl_and_ekf_models_are_observable() {
+    assert_eq!(rank_of("systems/avl.sys", &[]).0, 4);
+    assert_eq!(rank_of("systems/ekf.sys", &[]).0, 4);
+}
+
+#[test]
+fn avl_modes_are_complete_for_eq16_on_circles() {
+    let eq = "eta*(1 + q*delta)";
+    let xq = "xi*(1 - q*delta)";
+    let p1 = format!("(({xq}) - ({eq})*sin(phi))/(({eq})*cos(phi))");
+    let p2 = format!("mu*({eq})*cos(phi)/sin(gamma)");
+    let p3 = "(mu + cos(gamma))/sin(gamma)".to_string();
+    let a = format!("(({p1}) - ({p3}))/(1 + ({p1})*({p3}))");
+    let v = format!("({p2})*(1 + ({p1})*({p3}))/(1 + ({p3})^2)");
+    let l = format!("psi - atan({p1})");
+    let out = json(&[
+        "check",
+        "systems/calib.sys",
+        "--input",
+        "q",
+        "--mode",
+        &a,
+        "--mode",
+        &v,
+        "--mode",
+        &l,
+        "--mode",
+        xq,
+    ]);
+    assert!(
+        out["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["observable_mode"] == true),
+        "{out}"
+    );
+    assert_eq!(out["independent_count"], 4);
+    assert_eq!(out["complete"], true);
+}
+
+#[test]
+fn paper_decompositions_verify() {
+    for f in [
+        "systems/decomp_localization.dec",
+        "systems/decomp_21_22.dec",
+        "systems/decomp_23_24.dec",
+    ] {
+        let out = ok(&["verify", f]);
+        assert!(
+            out.contains("decomposition verified (exact)") && !out.contains("FAIL"),
+            "{f}:\n{out}"
+        );
+    }
+}
+
+#[test]
+fn a_wrong_decomposition_fails_with_the_residual() {
+    // Eq. (22) with one sign changed: -xi_q*Psi3^2 -> +xi_q*Psi3^2.
+    let src = std::fs::read_to_string("systems/decomp_21_22.dec").unwrap();
+    let bad = src
+        .replace("xi_q - xi_q*Psi3^2", "xi_q + xi_q*Psi3^2")
+        .replace(
+            "system calib_q_nopsi.sys",
+            &format!(
+                "system {}/systems/calib_q_nopsi.sys",
+                env!("CARGO_MANIFEST_DIR")
+            ),
+        );
+    assert_ne!(src, bad);
+    let p = temp_file("wrong.dec", &bad);
+    let r = obsan(&["verify", &p]);
+    assert_eq!(r.code, 1, "{}", r.stdout);
+    assert!(
+        r.stdout
+            .contains("FAIL Psi3' = nu*(Psi2 + Psi1*Psi2*Psi3 - xi_q + xi_q*Psi3^2)"),
+        "{}",
+        r.stdout
+    );
+    // The residual is the flipped term, -2 nu xi_q Psi3^2 in the original variables:
+    // L_f Psi3 - claimed = -2 xi_q (mu + cos g)^2 / sin(g)^2 as the coefficient of nu.
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.contains("coefficient of nu"))
+        .expect("residual line");
+    let residual = line.split(" = ").last().unwrap();
+    assert!(
+        same_function(residual, "-2*xi_q*(mu + cos(gamma))^2/sin(gamma)^2"),
+        "{line}"
+    );
+    assert!(r.stdout.contains("PASS Psi2'"));
+}
+
+#[test]
+fn lie_derivatives_are_printed_exactly() {
+    let v = json(&["lie", "systems/localization.sys", "--order", "1"]);
+    let l = v["lie_derivatives"].as_array().unwrap();
+    assert_eq!(l.len(), 3);
+    assert_eq!(l[1]["lie_derivative"], "L_v y");
+    assert!(same_function(
+        l[1]["text"].as_str().unwrap(),
+        "cos(thetaR - phiR)"
+    ));
+    assert_eq!(l[2]["text"], "0");
+}
+
+#[test]
+fn analysis_errors_exit_2() {
+    bad(
+        &["rank", "systems/calib.sys", "--input", "circle"],
+        "no restriction named 'circle'",
+    );
+    bad(
+        &["rank", "systems/calib.sys", "--set", "zz=1"],
+        "'zz' is not a constant of calib",
+    );
+    bad(
+        &["check", "systems/calib.sys", "--mode", "mu + foo"],
+        "--mode:1:6: unknown symbol 'foo'",
+    );
+    bad(
+        &["check", "systems/calib.sys", "--mode", "wR*mu"],
+        "'wR' is an input",
+    );
+    bad(
+        &["verify", "systems/nope.dec"],
+        "cannot read systems/nope.dec",
+    );
+    let p = temp_file(
+        "bad.dec",
+        "system calib_q_nopsi.sys\nlet X = mu +\nstate X\n",
+    );
+    bad(&["verify", &p], "bad.dec:2:");
+    bad(&["lie", "systems/calib.sys", "--order", "20"], "too high");
+}
+
+#[test]
+fn rank_is_reproducible_and_seed_independent() {
+    let a = ok(&["rank", "systems/calib.sys", "--input", "q", "--seed", "7"]);
+    let b = ok(&["rank", "systems/calib.sys", "--input", "q", "--seed", "7"]);
+    assert_eq!(a, b);
+    for seed in ["1", "2", "99"] {
+        assert_eq!(
+            rank_of("systems/calib.sys", &["--input", "q", "--seed", seed]).0,
+            4
+        );
+    }
+}
+
+#[test]
+fn set_constant_changes_nothing_generic() {
+    // With q = 9/10 the circular system still has rank 4.
+    assert_eq!(
+        rank_of("systems/calib.sys", &["--input", "q", "--set", "q=0.9"]).0,
+        4
+    );
+}
