@@ -470,9 +470,10 @@ pub fn determinant(ctx: &mut Ctx, m: &[Vec<RatFun>]) -> RatFun {
                 continue;
             }
             let f = ctx.rf_mul(&a[i][c], &inv);
-            for j in c..n {
-                let t = ctx.rf_mul(&f, &a[c][j]);
-                a[i][j] = ctx.rf_sub(&a[i][j], &t);
+            let pivot_row = a[c].clone();
+            for (x, p) in a[i].iter_mut().zip(&pivot_row).skip(c) {
+                let t = ctx.rf_mul(&f, p);
+                *x = ctx.rf_sub(x, &t);
             }
         }
     }
