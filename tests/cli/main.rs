@@ -4,4 +4,5 @@ mod analysis;
 mod classic;
 mod expr;
 mod show;
+mod tutorial;
 mod util;
