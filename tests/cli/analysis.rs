@@ -365,3 +365,29 @@ fn set_constant_changes_nothing_generic() {
         4
     );
 }
+
+#[test]
+fn timeout_is_honoured() {
+    // A unicycle observing 12 landmarks by bearing: 27 states.
+    let mut s = String::from("system big\nstate x, y, theta\ninput v, omega\n");
+    let ps: Vec<String> = (1..=12)
+        .flat_map(|i| [format!("lx{i}"), format!("ly{i}")])
+        .collect();
+    s.push_str(&format!(
+        "param {}\nx' = v*cos(theta)\ny' = v*sin(theta)\ntheta' = omega\n",
+        ps.join(", ")
+    ));
+    for i in 1..=12 {
+        s.push_str(&format!(
+            "output b{i} = atan2(ly{i} - y, lx{i} - x) - theta\n"
+        ));
+    }
+    let p = temp_file("big.sys", &s);
+    bad(
+        &["rank", &p, "--timeout", "0"],
+        "timed out: at Lie derivative order 0",
+    );
+    // Without the limit it finishes: translation and rotation are the symmetries.
+    let v: serde_json::Value = serde_json::from_str(&ok(&["rank", &p, "--json"])).unwrap();
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(24), Some(27)));
+}

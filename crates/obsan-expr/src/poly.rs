@@ -295,8 +295,11 @@ impl Poly {
         if o.terms.len() == 1 {
             return self.mul_term(&o.terms[0].0, &o.terms[0].1);
         }
-        let mut map: HashMap<Mono, Int> =
-            HashMap::with_capacity_and_hasher(self.len() * o.len(), Default::default());
+        // At most len(a) len(b) terms, usually far fewer: cap the reservation.
+        let mut map: HashMap<Mono, Int> = HashMap::with_capacity_and_hasher(
+            (self.len() * o.len()).min(1 << 16),
+            Default::default(),
+        );
         for (ma, ca) in &self.terms {
             for (mb, cb) in &o.terms {
                 let c = ca * cb;
