@@ -37,6 +37,18 @@ pub enum Command {
     Verify(VerifyArgs),
 }
 
+impl Command {
+    /// The `--timeout` of the commands that take one.
+    pub fn timeout(&self) -> Option<f64> {
+        match self {
+            Command::Rank(a) | Command::Symmetries(a) => a.an.timeout,
+            Command::Check(a) => a.an.timeout,
+            Command::Verify(a) => a.an.timeout,
+            _ => None,
+        }
+    }
+}
+
 /// Options of the analysis commands.
 #[derive(Args, Clone)]
 pub struct AnalysisArgs {

@@ -23,7 +23,27 @@ impl<E: std::fmt::Display> From<E> for Failure {
 
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
-    let result = match args.command {
+    let Some(secs) = args.command.timeout() else {
+        return run(args.command);
+    };
+    // The whole command runs on a worker; the deadline covers every stage,
+    // including long exact computations that cannot poll a clock themselves.
+    let (tx, rx) = std::sync::mpsc::channel();
+    let command = args.command;
+    std::thread::spawn(move || {
+        let _ = tx.send(run(command));
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs_f64(secs.max(0.0))) {
+        Ok(code) => code,
+        Err(_) => {
+            eprintln!("error: timed out after {secs} s (--timeout)");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(command: cli::Command) -> ExitCode {
+    let result = match command {
         cli::Command::Show(a) => show::run(&a),
         cli::Command::Simplify(a) => expr_cmds::simplify(&a),
         cli::Command::Diff(a) => expr_cmds::diff(&a),
