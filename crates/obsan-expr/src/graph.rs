@@ -159,6 +159,11 @@ impl Ctx {
         }
     }
 
+    /// Number of leaves (symbols and atoms); leaves are numbered 0..n.
+    pub fn leaf_count(&self) -> usize {
+        self.leaves.len()
+    }
+
     /// Look up an existing symbol.
     pub fn lookup(&self, name: &str) -> Option<Symbol> {
         self.symbols.get(name).map(|&v| Symbol {

@@ -385,3 +385,35 @@ proptest! {
         prop_assert_eq!(ctx.canon(q), inv);
     }
 }
+
+/// Exact rational evaluation agrees with f64 at the matching real point:
+/// symbols x, y rational; the angle leaves of x from t = 1/3 (x = 2 atan t).
+#[test]
+fn exact_rational_evaluation_matches_f64() {
+    use obsan_expr::{rational_angle, Q};
+    let mut ctx = Ctx::new();
+    let (x, y) = (ctx.symbol("x"), ctx.symbol("y"));
+    let e = ctx
+        .parse("(sin(x)^3 - 2*cos(x)*y)/(1 + y^2) + cos(2*x)*y^3")
+        .unwrap();
+    let t = Q::new(1.into(), 3.into());
+    let (s, c) = rational_angle(&t);
+    let yq = Q::new(5.into(), 7.into());
+    let names: Vec<(obsan_expr::Var, String)> = (0..ctx.leaf_count() as obsan_expr::Var)
+        .map(|v| (v, ctx.leaf_text(v)))
+        .collect();
+    let leaf = |v: obsan_expr::Var| -> Option<Q> {
+        let n = &names.iter().find(|(w, _)| *w == v)?.1;
+        match n.as_str() {
+            "y" => Some(yq.clone()),
+            "sin(x)" => Some(s.clone()),
+            "cos(x)" => Some(c.clone()),
+            _ => None,
+        }
+    };
+    let exact = ctx.eval_q(&[e], &leaf).unwrap()[0].to_f64();
+    let xv = 2.0 * (1.0f64 / 3.0).atan();
+    let tape = Tape::compile(&ctx, &[e], &[x.var, y.var]).unwrap();
+    let float = tape.eval(&[xv, 5.0 / 7.0])[0];
+    assert!((exact - float).abs() < 1e-13, "{exact} vs {float}");
+}
