@@ -234,6 +234,12 @@ impl Ctx {
 
     /// All nodes reachable from `roots`, in increasing id order (children first).
     pub fn reachable(&self, roots: &[Id]) -> Vec<Id> {
+        self.reachable_with(roots, true)
+    }
+
+    /// As [`Ctx::reachable`]; without leaf arguments when `leaf_args` is false
+    /// (for evaluations that are given the value of every leaf).
+    pub(crate) fn reachable_with(&self, roots: &[Id], leaf_args: bool) -> Vec<Id> {
         let mut seen = vec![false; self.nodes.len()];
         let mut stack: Vec<Id> = roots.to_vec();
         let mut out = Vec::new();
@@ -242,7 +248,9 @@ impl Ctx {
                 continue;
             }
             out.push(id);
-            stack.extend(self.deps(id));
+            if leaf_args || !matches!(self.node(id), Node::Leaf(_)) {
+                stack.extend(self.deps(id));
+            }
         }
         out.sort_unstable();
         out
