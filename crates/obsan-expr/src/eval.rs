@@ -246,7 +246,7 @@ impl Ctx {
         roots: &[Id],
         leaf: &dyn Fn(Var) -> Option<Q>,
     ) -> Result<Vec<Q>, EvalQError> {
-        let order = self.reachable(roots);
+        let order = self.reachable_with(roots, false);
         let mut val: Vec<Option<Q>> = vec![None; self.len()];
         for id in order {
             let get = |c: &Id| val[c.index()].clone().expect("child first");
