@@ -383,28 +383,17 @@ fn build_over(
     placeholders: &[(String, Id, Var)],
 ) -> Result<Id, ParseError> {
     let state = nf.state.clone();
-    let consts = nf.consts.clone();
-    let inputs = nf.inputs.clone();
-    let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+    let extra = |n: &str, s: Span| -> Option<Result<Id, ParseError>> {
         if let Some(p) = placeholders.iter().find(|p| p.0 == n) {
-            return Ok(p.1);
+            return Some(Ok(p.1));
         }
         if let Some((_, id)) = defs.iter().find(|(x, _)| x == n) {
-            return Ok(*id);
+            return Some(Ok(*id));
         }
         if !placeholders.is_empty() && state.iter().any(|x| x == n) {
-            return Err(ParseError::new(format!("'{n}' is an original variable, not one of the new state: the claim must use the new variables"), s));
+            return Some(Err(ParseError::new(format!("'{n}' is an original variable, not one of the new state: the claim must use the new variables"), s)));
         }
-        if state.iter().any(|x| x == n) || inputs.iter().any(|x| x == n) {
-            return Ok(c.symbol(n).id);
-        }
-        if let Some((_, v)) = consts.iter().find(|(x, _)| x == n) {
-            return Ok(match v {
-                Some(q) => c.num(q.clone()),
-                None => c.symbol(n).id,
-            });
-        }
-        Err(ParseError::new(format!("unknown symbol '{n}'"), s))
+        None
     };
-    nf.ctx.build(ast, &mut resolve)
+    nf.build_expr(ast, true, &extra)
 }

@@ -2,7 +2,10 @@
 
 use crate::error::ModelError;
 use crate::sys::{Kind, System};
-use obsan_expr::{parse_ast, Ctx, Id, ParseError, Span, Var, Q};
+use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Var, Q};
+
+/// Resolves names beyond the system's own first: `None` to fall through.
+pub type ExtraNames<'a> = dyn Fn(&str, Span) -> Option<Result<Id, ParseError>> + 'a;
 
 /// A system in input-affine normal form, ready for analysis.
 ///
@@ -196,11 +199,25 @@ impl NormalForm {
     /// (constants with a value are replaced by it), and the inputs if `inputs`.
     pub fn parse_expr(&mut self, text: &str, inputs: bool) -> Result<Id, ParseError> {
         let ast = parse_ast(text)?;
+        self.build_expr(&ast, inputs, &|_, _| None)
+    }
+
+    /// Build a syntax tree over the state, constants and (if `inputs`) inputs;
+    /// `extra` resolves other names first (or refuses one with an error).
+    pub fn build_expr(
+        &mut self,
+        ast: &Ast,
+        inputs: bool,
+        extra: &ExtraNames,
+    ) -> Result<Id, ParseError> {
         let state = self.state.clone();
         let consts = self.consts.clone();
         let ins = if inputs { self.inputs.clone() } else { vec![] };
         let all_inputs = self.inputs.clone();
         let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+            if let Some(r) = extra(n, s) {
+                return r;
+            }
             if state.iter().any(|x| x == n) || ins.iter().any(|x| x == n) {
                 return Ok(c.symbol(n).id);
             }
@@ -224,6 +241,6 @@ impl NormalForm {
                 s,
             ))
         };
-        self.ctx.build(&ast, &mut resolve)
+        self.ctx.build(ast, &mut resolve)
     }
 }

@@ -375,54 +375,30 @@ impl System {
                 }
                 "description" => description.push(t[rest_start..].trim().to_string()),
                 "output" => {
-                    let body = &t[rest_start..];
-                    let Some(eq) = body.find('=') else {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            t.len(),
-                            "an output needs a name and an expression: output y = EXPR",
-                        ));
-                    };
-                    let (a, b) = trim_range(body, (0, eq));
-                    let nm = &body[a..b];
-                    if !is_ident(nm) {
-                        return Err(rd.err(
-                            st,
-                            rest_start + a,
-                            rest_start + b.max(a + 1),
-                            "an output needs a name: output y = EXPR",
-                        ));
-                    }
-                    let rs = rest_start + eq + 1;
-                    let (rhs, map) = st.slice(rs, t.len());
-                    outputs_raw.push((
-                        nm.to_string(),
-                        st.src(rest_start + a),
-                        rhs.to_string(),
-                        map,
-                    ));
+                    let (nm, a, eq) = named_head(
+                        &rd,
+                        st,
+                        lead,
+                        rest_start,
+                        '=',
+                        "an output",
+                        "output y = EXPR",
+                    )?;
+                    let (rhs, map) = st.slice(rest_start + eq + 1, t.len());
+                    outputs_raw.push((nm.clone(), st.src(rest_start + a), rhs.to_string(), map));
                 }
                 "restrict" => {
-                    let body = &t[rest_start..];
-                    let Some(colon) = body.find(':') else {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            t.len(),
-                            "a restriction needs a name and a colon: restrict NAME: u1 = EXPR, ...",
-                        ));
-                    };
-                    let (a, b) = trim_range(body, (0, colon));
-                    let nm = &body[a..b];
-                    if !is_ident(nm) {
-                        return Err(rd.err(
-                            st,
-                            rest_start + a,
-                            rest_start + b.max(a + 1),
-                            "a restriction needs a name: restrict NAME: u1 = EXPR, ...",
-                        ));
-                    }
+                    let (nm, a, _) = named_head(
+                        &rd,
+                        st,
+                        lead,
+                        rest_start,
+                        ':',
+                        "a restriction",
+                        "restrict NAME: u1 = EXPR, ...",
+                    )?;
+                    let b = a + nm.len();
+                    let nm = nm.as_str();
                     if restrict_raw.iter().any(|r| r.1 == nm) {
                         return Err(rd.err(
                             st,
@@ -869,6 +845,45 @@ impl System {
     pub fn output_names(&self) -> Vec<&str> {
         self.outputs.iter().map(|o| o.0.as_str()).collect()
     }
+}
+
+/// The name before `sep` in `KEYWORD NAME sep ...`: (name, its offset in the
+/// body, the offset of `sep` in the body).
+fn named_head(
+    rd: &Reader,
+    st: &Stmt,
+    lead: usize,
+    rest_start: usize,
+    sep: char,
+    what: &str,
+    usage: &str,
+) -> Result<(String, usize, usize), ModelError> {
+    let t = &st.text;
+    let body = &t[rest_start..];
+    let Some(pos) = body.find(sep) else {
+        let sep_word = if sep == '=' {
+            "an expression"
+        } else {
+            "a colon"
+        };
+        return Err(rd.err(
+            st,
+            lead,
+            t.len(),
+            format!("{what} needs a name and {sep_word}: {usage}"),
+        ));
+    };
+    let (a, b) = trim_range(body, (0, pos));
+    let nm = &body[a..b];
+    if !is_ident(nm) {
+        return Err(rd.err(
+            st,
+            rest_start + a,
+            rest_start + b.max(a + 1),
+            format!("{what} needs a name: {usage}"),
+        ));
+    }
+    Ok((nm.to_string(), a, pos))
 }
 
 /// Build an expression, allowing only identifiers of the given kinds.
