@@ -1,0 +1,419 @@
+//! The paper's simulator (section VI-A, Tables II and III, ERRATA.md): a
+//! differential-drive robot (eqs. 1 and 12) with wheel encoders at 50 Hz
+//! (error model of [10]) and a bearing sensor observing one feature at the
+//! origin, plus the named effects of the discrepancy workflow.
+
+use crate::data::{Dataset, DatasetMeta, Series, Trajectory};
+use crate::rng::Rng;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+
+/// How the commanded wheel speed varies with time (the wheels keep the ratio q).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpeedProfile {
+    Constant,
+    /// nu (1 + a sin(2 pi t / period)).
+    Sine {
+        amplitude: f64,
+        period: f64,
+    },
+    /// nu for `run` seconds, then 0 for `pause` seconds, repeated.
+    StopGo {
+        run: f64,
+        pause: f64,
+    },
+}
+
+/// Effects hidden in the data for the discrepancy workflow (all off by default).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Effects {
+    /// Camera clock minus encoder clock (s): a bearing stamped t was taken at t - offset.
+    pub time_offset: f64,
+    /// beta_meas = (1 + k) beta.
+    pub bearing_scale: f64,
+    /// beta_meas = beta + a sin(2 beta).
+    pub bearing_distortion: f64,
+    /// Each wheel loses the fraction a |omega| (omega in rad/s) of its rotation.
+    pub wheel_slip: f64,
+    /// The right wheel's radius changes by this amount (m) from the second trajectory on.
+    pub radius_change: f64,
+}
+
+impl Effects {
+    /// Set an effect by name (`--effect NAME=VALUE`).
+    pub fn set(&mut self, name: &str, value: f64) -> Result<(), String> {
+        let slot = match name {
+            "time_offset" => &mut self.time_offset,
+            "bearing_scale" => &mut self.bearing_scale,
+            "bearing_distortion" => &mut self.bearing_distortion,
+            "wheel_slip" => &mut self.wheel_slip,
+            "radius_change" => &mut self.radius_change,
+            _ => {
+                return Err(format!(
+                    "unknown effect '{name}' (known: time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change)"
+                ))
+            }
+        };
+        *slot = value;
+        Ok(())
+    }
+}
+
+/// The robot and sensor (Table III defaults).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Robot {
+    pub r_right: f64,
+    pub r_left: f64,
+    pub wheel_base: f64,
+    pub rho: f64,
+    pub phi: f64,
+    pub psi: f64,
+}
+
+impl Default for Robot {
+    fn default() -> Robot {
+        Robot {
+            r_right: 0.297,
+            r_left: 0.3018,
+            wheel_base: 0.485,
+            rho: 0.3,
+            phi: 0.0,
+            psi: PI / 2.0,
+        }
+    }
+}
+
+/// Simulation options (Table II defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimOptions {
+    pub robot: Robot,
+    /// Commanded wheel-speed ratios, one trajectory each (eq. 17).
+    pub q: Vec<f64>,
+    /// Right wheel angular speed nu (rad/s).
+    pub nu: f64,
+    pub profile: SpeedProfile,
+    /// Bearing noise standard deviation (rad).
+    pub sigma_beta: f64,
+    /// Encoder noise K (m^1/2); variance K^2 |increment| / r_nominal.
+    pub k_encoder: f64,
+    /// Nominal wheel radius (m) of the encoder error model.
+    pub r_nominal: f64,
+    /// Non-circular path: relative std of each wheel's displacement per segment.
+    pub iota: f64,
+    /// Number of segments of a loop for `iota`.
+    pub segments: usize,
+    /// Systematic error of the executed ratio: q + dq.
+    pub dq: f64,
+    pub encoder_rate: f64,
+    pub bearing_rate: f64,
+    /// Initial distance to the feature (m).
+    pub d0: f64,
+    pub effects: Effects,
+    pub seed: u64,
+    /// A trajectory stops after one full loop or after this many seconds.
+    pub max_duration: f64,
+    /// Instead of circles: true wheel speeds (t, wR, wL) of one trajectory.
+    pub inputs: Option<Series>,
+}
+
+impl Default for SimOptions {
+    fn default() -> SimOptions {
+        SimOptions {
+            robot: Robot::default(),
+            q: vec![0.9, 0.0, -1.0],
+            nu: 0.168,
+            profile: SpeedProfile::Constant,
+            sigma_beta: 1f64.to_radians(),
+            k_encoder: 0.001,
+            r_nominal: 0.3,
+            iota: 0.0,
+            segments: 10_000,
+            dq: 0.0,
+            encoder_rate: 50.0,
+            bearing_rate: 1.0,
+            d0: 1.2,
+            effects: Effects::default(),
+            seed: 1,
+            max_duration: 3600.0,
+            inputs: None,
+        }
+    }
+}
+
+/// What the estimators must recover (written to truth.json; never read by them).
+#[derive(Clone, Debug, Serialize)]
+pub struct Truth {
+    pub phi: f64,
+    pub psi: f64,
+    pub rho: f64,
+    pub r_right: f64,
+    pub r_left: f64,
+    pub wheel_base: f64,
+    pub eta: f64,
+    pub delta: f64,
+    pub xi: f64,
+    pub effects: Effects,
+    pub trajectories: Vec<TrajectoryTruth>,
+}
+
+/// Per trajectory: the start and the observable modes of a circle.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrajectoryTruth {
+    pub name: String,
+    pub q: Option<f64>,
+    pub x0: f64,
+    pub y0: f64,
+    pub theta0: f64,
+    pub mu0: f64,
+    pub gamma0: f64,
+    pub duration: f64,
+    /// eq. (18), with the right-wheel radius of this trajectory.
+    pub eta_q: Option<f64>,
+    pub xi_q: Option<f64>,
+    /// L = psi - atan2(xi_q - eta_q sin(phi), eta_q cos(phi)) (ERRATA.md).
+    pub l: Option<f64>,
+}
+
+/// Bearing of the feature at the origin seen from pose (x, y, theta), in (-pi, pi].
+pub fn bearing(robot: &Robot, x: f64, y: f64, theta: f64) -> f64 {
+    let cx = x + robot.rho * (theta + robot.phi).cos();
+    let cy = y + robot.rho * (theta + robot.phi).sin();
+    wrap((-cy).atan2(-cx) - theta - robot.phi - robot.psi)
+}
+
+/// Angle in (-pi, pi].
+pub fn wrap(a: f64) -> f64 {
+    let mut b = a.rem_euclid(2.0 * PI);
+    if b > PI {
+        b -= 2.0 * PI;
+    }
+    b
+}
+
+/// Advance a pose by wheel rotations (exact arc of constant v and omega).
+fn step(
+    robot: &Robot,
+    r_right: f64,
+    pose: (f64, f64, f64),
+    da_r: f64,
+    da_l: f64,
+) -> (f64, f64, f64) {
+    let ds = (r_right * da_r + robot.r_left * da_l) / 2.0;
+    let dth = (r_right * da_r - robot.r_left * da_l) / robot.wheel_base;
+    let (x, y, th) = pose;
+    if dth.abs() < 1e-12 {
+        (x + ds * th.cos(), y + ds * th.sin(), th)
+    } else {
+        let r = ds / dth;
+        (
+            x + r * ((th + dth).sin() - th.sin()),
+            y - r * ((th + dth).cos() - th.cos()),
+            th + dth,
+        )
+    }
+}
+
+fn speed(profile: &SpeedProfile, nu: f64, t: f64) -> f64 {
+    match profile {
+        SpeedProfile::Constant => nu,
+        SpeedProfile::Sine { amplitude, period } => {
+            nu * (1.0 + amplitude * (2.0 * PI * t / period).sin())
+        }
+        SpeedProfile::StopGo { run, pause } => {
+            if t.rem_euclid(run + pause) < *run {
+                nu
+            } else {
+                0.0
+            }
+        }
+    }
+}
+
+/// Simulate the dataset and its truth.
+pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
+    let rb = &o.robot;
+    if !(rb.r_right > 0.0 && rb.r_left > 0.0 && rb.wheel_base > 0.0 && rb.rho > 0.0) {
+        return Err("wheel radii, wheel base and rho must be positive".into());
+    }
+    if o.d0 <= rb.rho {
+        return Err(format!("the initial distance d0 = {} must exceed rho = {} (the feature would be inside the robot)", o.d0, rb.rho));
+    }
+    if !(o.encoder_rate > 0.0 && o.bearing_rate > 0.0 && o.encoder_rate >= o.bearing_rate) {
+        return Err("rates must be positive, the encoder rate at least the bearing rate".into());
+    }
+    let dt = 1.0 / o.encoder_rate;
+    let mut trajectories = Vec::new();
+    let mut truths = Vec::new();
+    let plans: Vec<(String, Option<f64>)> = match &o.inputs {
+        Some(_) => vec![("custom".to_string(), None)],
+        None => o.q.iter().map(|q| (format!("q{q}"), Some(*q))).collect(),
+    };
+    for (index, (name, q)) in plans.iter().enumerate() {
+        let mut rng = Rng::new(o.seed.wrapping_mul(1_000_003).wrapping_add(index as u64));
+        let r_right = rb.r_right
+            + if index >= 1 {
+                o.effects.radius_change
+            } else {
+                0.0
+            };
+        // Start at distance d0 from the feature, heading so that it lies to the left.
+        let pose0 = (o.d0, 0.0, PI / 2.0);
+        let mut pose = pose0;
+        let mut poses = vec![pose];
+        let mut inputs = Series::new(vec!["wR".into(), "wL".into()]);
+        let mut turned = 0.0;
+        let mut t = 0.0;
+        let loop_guess =
+            q.map(|q| 2.0 * PI * rb.wheel_base / (o.nu * (rb.r_right - q * rb.r_left)).abs());
+        let seg_len = loop_guess.map_or(f64::INFINITY, |l| l / o.segments as f64);
+        let mut seg_index = usize::MAX;
+        let (mut fr, mut fl) = (1.0, 1.0);
+        loop {
+            let (w_r, w_l) = match (&o.inputs, q) {
+                (Some(s), _) => {
+                    let k = s.t.partition_point(|&x| x <= t).saturating_sub(1);
+                    let get = |c: usize| s.values[c][k].unwrap_or(0.0);
+                    (get(0), get(1))
+                }
+                (None, Some(q)) => {
+                    let nu = speed(&o.profile, o.nu, t);
+                    (nu, (q + o.dq) * nu)
+                }
+                (None, None) => unreachable!("a plan has q or inputs"),
+            };
+            if o.iota > 0.0 {
+                let s = (t / seg_len) as usize;
+                if s != seg_index {
+                    seg_index = s;
+                    fr = 1.0 + o.iota * rng.normal();
+                    fl = 1.0 + o.iota * rng.normal();
+                }
+            }
+            let (da_r, da_l) = (w_r * fr * dt, w_l * fl * dt);
+            // Encoders measure the wheel rotation (error model of [10]).
+            let noise = |rng: &mut Rng, da: f64| {
+                da + (o.k_encoder * o.k_encoder * da.abs() / o.r_nominal).sqrt() * rng.normal()
+            };
+            let (m_r, m_l) = (noise(&mut rng, da_r), noise(&mut rng, da_l));
+            inputs.push(t, &[Some(m_r / dt), Some(m_l / dt)]);
+            // Slip proportional to the turn rate reduces the rotation that moves the robot.
+            let omega = (r_right * da_r - rb.r_left * da_l) / rb.wheel_base / dt;
+            let keep = 1.0 - o.effects.wheel_slip * omega.abs();
+            let next = step(rb, r_right, pose, da_r * keep, da_l * keep);
+            turned += next.2 - pose.2;
+            pose = next;
+            poses.push(pose);
+            t += dt;
+            let done = match (&o.inputs, q) {
+                (Some(s), _) => t >= *s.t.last().unwrap_or(&0.0),
+                _ => turned.abs() >= 2.0 * PI,
+            };
+            if done {
+                break;
+            }
+            if t > o.max_duration {
+                let qs = q.map_or(String::new(), |q| format!("q = {q} "));
+                return Err(format!(
+                    "degenerate trajectory: {qs}turned only {:.3} rad in {} s (q = rR/rL = {:.4} is a straight line); no full loop",
+                    turned.abs(),
+                    o.max_duration,
+                    rb.r_right / rb.r_left
+                ));
+            }
+        }
+        let duration = t;
+        // Bearings at the bearing rate, in camera time.
+        let mut outputs = Series::new(vec!["beta".into()]);
+        let mut k = 0usize;
+        loop {
+            let tc = k as f64 / o.bearing_rate;
+            if tc > duration + 1e-9 {
+                break;
+            }
+            let te = tc - o.effects.time_offset;
+            k += 1;
+            if te < 0.0 || te > duration {
+                continue;
+            }
+            // Pose at encoder time te: linear interpolation within the 20 ms step.
+            let i = ((te / dt) as usize).min(poses.len() - 2);
+            let f = (te - i as f64 * dt) / dt;
+            let (a, b) = (poses[i], poses[i + 1]);
+            let p = (
+                a.0 + f * (b.0 - a.0),
+                a.1 + f * (b.1 - a.1),
+                a.2 + f * (b.2 - a.2),
+            );
+            let beta = bearing(rb, p.0, p.1, p.2);
+            let e = &o.effects;
+            let meas = (1.0 + e.bearing_scale) * beta
+                + e.bearing_distortion * (2.0 * beta).sin()
+                + o.sigma_beta * rng.normal();
+            outputs.push(tc, &[Some(wrap(meas))]);
+        }
+        let mut meta = BTreeMap::new();
+        if let Some(q) = q {
+            meta.insert("q".to_string(), *q);
+        }
+        let (eta, delta, xi) = (
+            r_right / (2.0 * rb.rho),
+            rb.r_left / r_right,
+            r_right / rb.wheel_base,
+        );
+        let modes = q.map(|q| {
+            let (eta_q, xi_q) = (eta * (1.0 + q * delta), xi * (1.0 - q * delta));
+            (
+                eta_q,
+                xi_q,
+                rb.psi - (xi_q - eta_q * rb.phi.sin()).atan2(eta_q * rb.phi.cos()),
+            )
+        });
+        let theta_rel = pose0.2 - pose0.1.atan2(pose0.0);
+        truths.push(TrajectoryTruth {
+            name: name.clone(),
+            q: *q,
+            x0: pose0.0,
+            y0: pose0.1,
+            theta0: pose0.2,
+            mu0: rb.rho / o.d0,
+            gamma0: wrap(theta_rel + rb.phi),
+            duration,
+            eta_q: modes.map(|m| m.0),
+            xi_q: modes.map(|m| m.1),
+            l: modes.map(|m| wrap(m.2)),
+        });
+        trajectories.push(Trajectory {
+            name: name.clone(),
+            inputs,
+            outputs,
+            meta,
+        });
+    }
+    let mut nominal = BTreeMap::new();
+    nominal.insert("r_right".to_string(), o.r_nominal);
+    nominal.insert("r_left".to_string(), o.r_nominal);
+    let mut noise = BTreeMap::new();
+    noise.insert("beta".to_string(), o.sigma_beta);
+    noise.insert("encoder_k".to_string(), o.k_encoder);
+    let meta = DatasetMeta {
+        model: Some("systems/calib.sys".into()),
+        nominal,
+        d0: Some(o.d0),
+        noise,
+    };
+    let truth = Truth {
+        phi: rb.phi,
+        psi: rb.psi,
+        rho: rb.rho,
+        r_right: rb.r_right,
+        r_left: rb.r_left,
+        wheel_base: rb.wheel_base,
+        eta: rb.r_right / (2.0 * rb.rho),
+        delta: rb.r_left / rb.r_right,
+        xi: rb.r_right / rb.wheel_base,
+        effects: o.effects.clone(),
+        trajectories: truths,
+    };
+    Ok((Dataset { meta, trajectories }, truth))
+}
