@@ -35,6 +35,58 @@ pub enum Command {
     Check(CheckArgs),
     /// Check a claimed local decomposition (new state, reduced dynamics, output) exactly.
     Verify(VerifyArgs),
+    /// Simulate the paper's calibration experiment (section VI-A) and write a dataset.
+    Simulate(SimulateArgs),
+}
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    /// The dataset folder to create (it must not exist, unless --force).
+    #[arg(long)]
+    pub out: String,
+    /// Replace the folder if it exists.
+    #[arg(long)]
+    pub force: bool,
+    /// Wheel-speed ratios, one circular trajectory each (eq. 17).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0.9,0,-1",
+        allow_hyphen_values = true
+    )]
+    pub q: Vec<f64>,
+    /// Bearing noise standard deviation, degrees.
+    #[arg(long, default_value_t = 1.0)]
+    pub sigma_beta_deg: f64,
+    /// Encoder noise K (m^1/2): increment variance K^2 |increment| / r.
+    #[arg(long, default_value_t = 0.001)]
+    pub k: f64,
+    /// Non-circular path: relative std of each wheel's displacement per segment.
+    #[arg(long, default_value_t = 0.0)]
+    pub iota: f64,
+    /// Systematic error of the executed wheel-speed ratio (q + dq).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub dq: f64,
+    /// Right wheel angular speed (rad/s).
+    #[arg(long, default_value_t = 0.168)]
+    pub nu: f64,
+    /// constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE (seconds).
+    #[arg(long, default_value = "constant")]
+    pub speed_profile: String,
+    /// Bearings per second.
+    #[arg(long, default_value_t = 1.0)]
+    pub bearing_rate: f64,
+    /// Initial distance to the feature (m).
+    #[arg(long, default_value_t = 1.2)]
+    pub d0: f64,
+    /// A hidden effect NAME=VALUE (time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change).
+    #[arg(long = "effect", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    pub effects: Vec<String>,
+    /// Drive one trajectory by this wheel-speed history (CSV t,wR,wL) instead of circles.
+    #[arg(long)]
+    pub inputs: Option<String>,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
 }
 
 impl Command {

@@ -8,6 +8,7 @@ mod analysis_cmds;
 mod cli;
 mod expr_cmds;
 mod show;
+mod simulate;
 
 use clap::Parser;
 use std::process::ExitCode;
@@ -52,6 +53,7 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Lie(a) => analysis_cmds::lie(&a),
         cli::Command::Check(a) => analysis_cmds::check(&a),
         cli::Command::Verify(a) => analysis_cmds::verify(&a),
+        cli::Command::Simulate(a) => simulate::run(&a),
     };
     match result {
         Ok(code) => code,

@@ -4,5 +4,6 @@ mod analysis;
 mod classic;
 mod expr;
 mod show;
+mod simulate;
 mod tutorial;
 mod util;

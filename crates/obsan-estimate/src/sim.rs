@@ -264,6 +264,7 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
         let mut inputs = Series::new(vec!["wR".into(), "wL".into()]);
         let mut turned = 0.0;
         let mut t = 0.0;
+        let mut steps = 0u64;
         let loop_guess =
             q.map(|q| 2.0 * PI * rb.wheel_base / (o.nu * (rb.r_right - q * rb.r_left)).abs());
         let seg_len = loop_guess.map_or(f64::INFINITY, |l| l / o.segments as f64);
@@ -304,7 +305,8 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
             turned += next.2 - pose.2;
             pose = next;
             poses.push(pose);
-            t += dt;
+            steps += 1;
+            t = steps as f64 * dt; // not accumulated: clean time stamps
             let done = match (&o.inputs, q) {
                 (Some(s), _) => t >= *s.t.last().unwrap_or(&0.0),
                 _ => turned.abs() >= 2.0 * PI,

@@ -1,0 +1,180 @@
+//! `obsan simulate`: the paper's simulator, written atomically as a dataset.
+
+use crate::cli::SimulateArgs;
+use crate::Failure;
+use obsan_estimate::{simulate, Dataset, Series, SimOptions, SpeedProfile};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+fn profile(s: &str) -> Result<SpeedProfile, Failure> {
+    let parts: Vec<&str> = s.split(':').collect();
+    let num = |x: &str| x.parse::<f64>().ok().filter(|v| v.is_finite());
+    match parts.as_slice() {
+        ["constant"] => Ok(SpeedProfile::Constant),
+        ["sine", a, p] => match (num(a), num(p)) {
+            (Some(amplitude), Some(period)) if period > 0.0 && amplitude.abs() < 1.0 => {
+                Ok(SpeedProfile::Sine { amplitude, period })
+            }
+            _ => Err(Failure(format!(
+                "--speed-profile {s}: sine:AMPLITUDE:PERIOD needs |AMPLITUDE| < 1 and PERIOD > 0"
+            ))),
+        },
+        ["stopgo", r, p] => match (num(r), num(p)) {
+            (Some(run), Some(pause)) if run > 0.0 && pause >= 0.0 => {
+                Ok(SpeedProfile::StopGo { run, pause })
+            }
+            _ => Err(Failure(format!(
+                "--speed-profile {s}: stopgo:RUN:PAUSE needs RUN > 0 and PAUSE >= 0 (seconds)"
+            ))),
+        },
+        _ => Err(Failure(format!(
+            "--speed-profile {s}: expected constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE"
+        ))),
+    }
+}
+
+/// The files of a dataset, relative to its folder.
+pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, String)> {
+    let mut files = vec![(
+        PathBuf::from("dataset.json"),
+        serde_json::to_string_pretty(&data.meta).expect("json") + "\n",
+    )];
+    for (name, content) in extra {
+        files.push((PathBuf::from(name), content.clone()));
+    }
+    for tr in &data.trajectories {
+        let dir = PathBuf::from(&tr.name);
+        files.push((dir.join("inputs.csv"), tr.inputs.to_csv()));
+        files.push((dir.join("outputs.csv"), tr.outputs.to_csv()));
+        files.push((
+            dir.join("meta.json"),
+            serde_json::to_string_pretty(&tr.meta).expect("json") + "\n",
+        ));
+    }
+    files
+}
+
+/// Write all files into a temporary sibling folder, then rename it into
+/// place: a failure leaves nothing behind.
+pub fn write_folder_atomically(
+    out: &str,
+    force: bool,
+    files: &[(PathBuf, String)],
+) -> Result<(), Failure> {
+    let target = Path::new(out);
+    if target.exists() && !force {
+        return Err(Failure(format!(
+            "{out} already exists (use --force to replace it)"
+        )));
+    }
+    let parent = target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !parent.is_dir() {
+        return Err(Failure(format!(
+            "cannot create {out}: {} is not a folder",
+            parent.display()
+        )));
+    }
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_else(|| "dataset".into());
+    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = (|| -> std::io::Result<()> {
+        std::fs::create_dir_all(&tmp)?;
+        for (rel, content) in files {
+            let p = tmp.join(rel);
+            if let Some(d) = p.parent() {
+                std::fs::create_dir_all(d)?;
+            }
+            std::fs::write(p, content)?;
+        }
+        if target.exists() {
+            std::fs::remove_dir_all(target)?;
+        }
+        std::fs::rename(&tmp, target)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(Failure(format!("cannot write {out}: {e}")));
+    }
+    Ok(())
+}
+
+pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
+    let mut o = SimOptions {
+        q: a.q.clone(),
+        sigma_beta: a.sigma_beta_deg.to_radians(),
+        k_encoder: a.k,
+        iota: a.iota,
+        dq: a.dq,
+        nu: a.nu,
+        profile: profile(&a.speed_profile)?,
+        bearing_rate: a.bearing_rate,
+        d0: a.d0,
+        seed: a.seed,
+        ..SimOptions::default()
+    };
+    for (flag, v) in [
+        ("--sigma-beta-deg", a.sigma_beta_deg),
+        ("--k", a.k),
+        ("--iota", a.iota),
+        ("--nu", a.nu),
+    ] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(Failure(format!(
+                "{flag} must be a finite number >= 0, got {v}"
+            )));
+        }
+    }
+    if a.q.is_empty() || a.q.iter().any(|q| !q.is_finite()) {
+        return Err(Failure(
+            "--q needs one or more finite ratios, e.g. --q 0.9,0,-1".into(),
+        ));
+    }
+    for e in &a.effects {
+        let Some((n, v)) = e.split_once('=') else {
+            return Err(Failure(format!("--effect {e}: expected NAME=VALUE")));
+        };
+        let v: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| Failure(format!("--effect {e}: the value must be a finite number")))?;
+        o.effects
+            .set(n.trim(), v)
+            .map_err(|m| Failure(format!("--effect {e}: {m}")))?;
+    }
+    if let Some(path) = &a.inputs {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+        let s = Series::parse_csv(&text, path, &["wR", "wL"], false)?;
+        if s.len() < 2 {
+            return Err(Failure(format!(
+                "{path}: at least two rows of wheel speeds are needed"
+            )));
+        }
+        o.inputs = Some(s);
+    }
+    let (data, truth) = simulate(&o).map_err(Failure)?;
+    let truth_json = serde_json::to_string_pretty(&truth).expect("json") + "\n";
+    let files = dataset_files(&data, &[("truth.json", truth_json)]);
+    write_folder_atomically(&a.out, a.force, &files)?;
+    let summary: Vec<String> = data
+        .trajectories
+        .iter()
+        .map(|t| {
+            format!(
+                "{} ({} bearings, {:.1} s)",
+                t.name,
+                t.outputs.len(),
+                t.inputs.t.last().copied().unwrap_or(0.0)
+            )
+        })
+        .collect();
+    eprintln!("wrote {}: {}", a.out, summary.join(", "));
+    Ok(ExitCode::SUCCESS)
+}
