@@ -10,10 +10,12 @@
 //! ```
 
 mod data;
+mod predict;
 mod rng;
 mod sim;
 
 pub use data::{DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
+pub use predict::Predictor;
 pub use rng::Rng;
 pub use sim::{
     bearing, simulate, wrap, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth,

@@ -294,3 +294,66 @@ fn csv_roundtrip_and_rejections() {
         assert!(e.to_string().starts_with("in.csv"));
     }
 }
+
+/// The generic predictor, fed systems/calib.sys, the true parameters and the
+/// true initial state, reproduces the noise-free simulated bearings.
+#[test]
+fn predictor_reproduces_simulated_bearings() {
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/calib.sys"
+    ))
+    .unwrap();
+    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
+    let nf = sys.normal_form(None, &[]).unwrap();
+    let p = obsan_estimate::Predictor::new(&nf);
+    assert_eq!(p.angular, vec![true], "beta is an angle");
+    assert_eq!(p.consts, vec!["q"]);
+    for profile in [
+        obsan_estimate::SpeedProfile::Constant,
+        obsan_estimate::SpeedProfile::StopGo {
+            run: 7.0,
+            pause: 3.0,
+        },
+    ] {
+        let o = SimOptions {
+            profile,
+            ..noise_free(vec![0.9, 0.0, -1.0])
+        };
+        let (data, truth) = simulate(&o).unwrap();
+        for (tr, tt) in data.trajectories.iter().zip(&truth.trajectories) {
+            let x0 = [
+                tt.mu0,
+                tt.gamma0,
+                truth.phi,
+                truth.psi,
+                truth.eta,
+                truth.delta,
+                truth.xi,
+            ];
+            let y = p
+                .predict(&x0, &[tt.q.unwrap()], &tr.inputs, &tr.outputs.t)
+                .unwrap();
+            let worst = y
+                .iter()
+                .zip(&tr.outputs.values[0])
+                .map(|(a, b)| wrap(a[0] - b.unwrap()).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 1e-7, "{}: {worst}", tr.name);
+        }
+    }
+    // The restricted model wants the input nu, which the data do not have.
+    let nfq = sys.normal_form(Some("q"), &[]).unwrap();
+    let pq = obsan_estimate::Predictor::new(&nfq);
+    let (data, _) = simulate(&noise_free(vec![0.0])).unwrap();
+    let tr = &data.trajectories[0];
+    let e = pq
+        .predict(
+            &[0.2, 1.0, 0.0, 1.5, 0.5, 1.0, 0.6],
+            &[0.0],
+            &tr.inputs,
+            &tr.outputs.t,
+        )
+        .unwrap_err();
+    assert!(e.contains("no column 'nu'"), "{e}");
+}

@@ -432,3 +432,13 @@ impl Ctx {
         self.mul(&[a, ib])
     }
 }
+
+impl Ctx {
+    /// Whether an expression contains an `atan` or `atan2` leaf: its values
+    /// are angles, and differences of them should be wrapped to (-pi, pi].
+    pub fn is_angle_valued(&self, id: Id) -> bool {
+        self.reachable(&[id])
+            .iter()
+            .any(|&n| matches!(self.node(n), Node::Leaf(v) if matches!(self.leaves[*v as usize].kind, LeafKind::Atan(_) | LeafKind::Atan2(_, _))))
+    }
+}

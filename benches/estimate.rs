@@ -1,0 +1,58 @@
+//! Estimation benchmark (so far): simulating the paper's experiment and one
+//! prediction of all three trajectories by the generic predictor (the inner
+//! loop of maximum likelihood). Run: `cargo bench --bench estimate`.
+
+use obsan_estimate::{simulate, Predictor, SimOptions};
+use std::time::Instant;
+
+fn main() {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/systems/calib.sys"))
+        .expect("calib.sys");
+    let sys = obsan_model::System::parse(&src, "calib.sys").expect("parses");
+    let nf = sys.normal_form(None, &[]).expect("normal form");
+    let p = Predictor::new(&nf);
+    let o = SimOptions::default();
+    let reps = 21;
+    let mut sim = Vec::new();
+    let mut pred = Vec::new();
+    let mut steps = 0;
+    for seed in 0..reps {
+        let t = Instant::now();
+        let (data, truth) = simulate(&SimOptions { seed, ..o.clone() }).expect("simulates");
+        sim.push(t.elapsed());
+        steps = data
+            .trajectories
+            .iter()
+            .map(|t| t.inputs.len())
+            .sum::<usize>();
+        let t = Instant::now();
+        for (tr, tt) in data.trajectories.iter().zip(&truth.trajectories) {
+            let x0 = [
+                tt.mu0,
+                tt.gamma0,
+                truth.phi,
+                truth.psi,
+                truth.eta,
+                truth.delta,
+                truth.xi,
+            ];
+            p.predict(&x0, &[tt.q.unwrap_or(0.0)], &tr.inputs, &tr.outputs.t)
+                .expect("predicts");
+        }
+        pred.push(t.elapsed());
+    }
+    sim.sort();
+    pred.sort();
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    println!("paper's experiment (q = 0.9, 0, -1; {steps} encoder steps), median (min) of {reps}:");
+    println!(
+        "simulate: {:.2} ms ({:.2})",
+        ms(sim[reps as usize / 2]),
+        ms(sim[0])
+    );
+    println!(
+        "predict all trajectories from calib.sys (RK4 per encoder step): {:.2} ms ({:.2})",
+        ms(pred[reps as usize / 2]),
+        ms(pred[0])
+    );
+}
