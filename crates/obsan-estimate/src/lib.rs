@@ -10,11 +10,13 @@
 //! ```
 
 mod data;
+mod fit;
 mod predict;
 mod rng;
 mod sim;
 
 pub use data::{DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
+pub use fit::{fit, FitOptions, FitResult, FitTrajectory};
 pub use predict::Predictor;
 pub use rng::Rng;
 pub use sim::{

@@ -1,0 +1,93 @@
+//! Maximum-likelihood fitting of systems/calib.sys to simulated data.
+
+use obsan_estimate::{fit, simulate, FitOptions, FitTrajectory, Predictor, SimOptions};
+
+fn predictor() -> Predictor {
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/calib.sys"
+    ))
+    .unwrap();
+    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
+    Predictor::new(&sys.normal_form(None, &[]).unwrap())
+}
+
+fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate::Truth) {
+    let p = predictor();
+    let (data, truth) = simulate(o).unwrap();
+    let trajs: Vec<FitTrajectory> = data
+        .trajectories
+        .iter()
+        .map(|t| FitTrajectory {
+            inputs: &t.inputs,
+            outputs: &t.outputs,
+            consts: vec![t.meta["q"]],
+        })
+        .collect();
+    // A start 5-10% off the truth (the estimators' own initialisation is DET/LS).
+    let init = vec![
+        truth.phi + 0.05,
+        truth.psi * 0.95,
+        truth.eta * 1.08,
+        truth.delta * 0.97,
+        truth.xi * 1.05,
+    ];
+    let states: Vec<Vec<f64>> = truth
+        .trajectories
+        .iter()
+        .map(|t| vec![t.mu0 * 1.1, t.gamma0 - 0.05])
+        .collect();
+    let opts = FitOptions {
+        max_iterations: 50,
+        cost_tolerance: 1e-14,
+        sigma: vec![sigma],
+        diff_step: 1e-7,
+    };
+    (fit(&p, &trajs, &init, &states, &opts).unwrap(), truth)
+}
+
+#[test]
+fn noise_free_data_give_the_true_parameters() {
+    let o = SimOptions {
+        sigma_beta: 0.0,
+        k_encoder: 0.0,
+        ..SimOptions::default()
+    };
+    let (r, truth) = run(&o, 1f64.to_radians());
+    let want = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
+    for (k, (e, w)) in r.params.iter().zip(want).enumerate() {
+        assert!(
+            (e - w).abs() < 1e-6,
+            "param {k}: {e} vs {w} after {} iterations",
+            r.iterations
+        );
+    }
+    for (s, t) in r.initial_states.iter().zip(&truth.trajectories) {
+        assert!((s[0] - t.mu0).abs() < 1e-6 && (s[1] - t.gamma0).abs() < 1e-6);
+    }
+    assert!(r.residual_rms[0] < 1e-8);
+}
+
+#[test]
+fn noisy_data_give_estimates_within_their_standard_deviations() {
+    let o = SimOptions {
+        seed: 11,
+        ..SimOptions::default()
+    };
+    let (r, truth) = run(&o, o.sigma_beta);
+    let want = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
+    for (k, ((e, w), sd)) in r.params.iter().zip(want).zip(&r.params_sd).enumerate() {
+        assert!(sd.is_finite() && *sd > 0.0);
+        assert!(
+            (e - w).abs() < 4.0 * sd,
+            "param {k}: error {} is more than 4 sd ({sd})",
+            e - w
+        );
+    }
+    // The residual level matches the bearing noise (1 deg) within 10%.
+    assert!(
+        (r.residual_rms[0] / o.sigma_beta - 1.0).abs() < 0.1,
+        "rms {}",
+        r.residual_rms[0]
+    );
+}
