@@ -137,7 +137,7 @@ pub fn fit(
     {
         return Err("initial values do not match the model".into());
     }
-    if opts.sigma.len() != p.outputs.len() || opts.sigma.iter().any(|s| !(*s > 0.0)) {
+    if opts.sigma.len() != p.outputs.len() || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0) {
         return Err("one positive noise level per output is needed".into());
     }
     let cols: Vec<Vec<usize>> = trajs

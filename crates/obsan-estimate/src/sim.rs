@@ -233,13 +233,21 @@ fn speed(profile: &SpeedProfile, nu: f64, t: f64) -> f64 {
 /// Simulate the dataset and its truth.
 pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
     let rb = &o.robot;
-    if !(rb.r_right > 0.0 && rb.r_left > 0.0 && rb.wheel_base > 0.0 && rb.rho > 0.0) {
+    if [rb.r_right, rb.r_left, rb.wheel_base, rb.rho]
+        .iter()
+        .any(|v| v.is_nan() || *v <= 0.0)
+    {
         return Err("wheel radii, wheel base and rho must be positive".into());
     }
     if o.d0 <= rb.rho {
         return Err(format!("the initial distance d0 = {} must exceed rho = {} (the feature would be inside the robot)", o.d0, rb.rho));
     }
-    if !(o.encoder_rate > 0.0 && o.bearing_rate > 0.0 && o.encoder_rate >= o.bearing_rate) {
+    if o.encoder_rate.is_nan()
+        || o.bearing_rate.is_nan()
+        || o.encoder_rate <= 0.0
+        || o.bearing_rate <= 0.0
+        || o.encoder_rate < o.bearing_rate
+    {
         return Err("rates must be positive, the encoder rate at least the bearing rate".into());
     }
     let dt = 1.0 / o.encoder_rate;
