@@ -6,7 +6,7 @@ use crate::show::{load_normal_form, load_system};
 use crate::Failure;
 use obsan_analysis::{
     canonical_lie, check_modes, rank as rank_test, symmetries as sym_basis, verify_decomposition,
-    Decomposition, LieWord, RankOptions, RankReport, SymmetryReport,
+    Decomposition, Fields, LieWord, RankOptions, RankReport, SymmetryReport,
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
@@ -56,9 +56,9 @@ fn run_rank(nf: &mut NormalForm, an: &AnalysisArgs) -> Result<RankReport, Failur
     report.map_err(|e| Failure(e.to_string()))
 }
 
-fn word_text(nf: &NormalForm, r: &RankReport, w: &LieWord) -> String {
+fn word_text(nf: &NormalForm, fields: &Fields, w: &LieWord) -> String {
     let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
-    w.display(&r.fields.names, &outs)
+    w.display(&fields.names, &outs)
 }
 
 fn system_title(nf: &NormalForm) -> String {
@@ -80,7 +80,11 @@ fn system_title(nf: &NormalForm) -> String {
 pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
     let r = run_rank(&mut nf, &a.an)?;
-    let words: Vec<String> = r.basis.iter().map(|(w, _)| word_text(&nf, &r, w)).collect();
+    let words: Vec<String> = r
+        .basis
+        .iter()
+        .map(|(w, _)| word_text(&nf, &r.fields, w))
+        .collect();
     let obs: Vec<&String> = nf
         .state
         .iter()
@@ -237,21 +241,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
         )));
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    // A rank report only to name the fields; the words are enumerated here.
     let fields = obsan_analysis::Fields::of(&mut nf);
-    let dummy = RankReport {
-        n: nf.state.len(),
-        rank: 0,
-        basis: vec![],
-        max_order: 0,
-        evaluated: 0,
-        observable: vec![],
-        pivots: vec![],
-        degree_bound: 0,
-        error_bound: 0.0,
-        fields: fields.clone(),
-        seed: 0,
-    };
     let mut words: Vec<LieWord> = (0..nf.outputs.len())
         .map(|o| LieWord {
             output: o,
@@ -273,8 +263,8 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
     }
     let mut rows = Vec::new();
     for w in &words {
-        let f = canonical_lie(&mut nf, &dummy, w);
-        rows.push((word_text(&nf, &dummy, w), w.order(), f));
+        let f = canonical_lie(&mut nf, &fields, w);
+        rows.push((word_text(&nf, &fields, w), w.order(), f));
     }
     if a.out.json {
         let v: Vec<Value> = rows

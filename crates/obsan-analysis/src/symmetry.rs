@@ -12,7 +12,7 @@
 //! basis rows: if d(phi_k) span it and every d(L_f phi_k) lies in that span,
 //! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
 
-use crate::rank::{gradient, random_point, AnalysisError, LieWord, RankReport};
+use crate::rank::{gradient, random_point, AnalysisError, Fields, LieWord, RankReport};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -37,9 +37,8 @@ pub struct LieCache {
 }
 
 impl LieCache {
-    pub fn new(nf: &mut NormalForm, report: &RankReport) -> LieCache {
-        let fields = report
-            .fields
+    pub fn new(nf: &mut NormalForm, fields: &Fields) -> LieCache {
+        let fields = fields
             .vectors
             .iter()
             .map(|f| f.iter().map(|&c| nf.ctx.canon(c)).collect())
@@ -76,8 +75,8 @@ impl LieCache {
 }
 
 /// The canonical form of the Lie derivative named by `word`.
-pub fn canonical_lie(nf: &mut NormalForm, report: &RankReport, word: &LieWord) -> RatFun {
-    LieCache::new(nf, report).get(nf, word)
+pub fn canonical_lie(nf: &mut NormalForm, fields: &Fields, word: &LieWord) -> RatFun {
+    LieCache::new(nf, fields).get(nf, word)
 }
 
 fn grad(ctx: &mut Ctx, f: &RatFun, vars: &[obsan_expr::Var]) -> Vec<RatFun> {
@@ -354,7 +353,7 @@ pub fn symmetries(
     let n = report.n;
     let r = report.rank;
     let vars = nf.state_vars.clone();
-    let mut cache = LieCache::new(nf, report);
+    let mut cache = LieCache::new(nf, &report.fields);
     let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);
     for (w, _) in &report.basis {
         let f = cache.get(nf, w);

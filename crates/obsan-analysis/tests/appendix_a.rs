@@ -21,7 +21,7 @@ fn matrix(words: &[Vec<usize>]) -> (obsan_model::NormalForm, Vec<Vec<RatFun>>) {
     for w in words {
         let f = canonical_lie(
             &mut nf,
-            &report,
+            &report.fields,
             &LieWord {
                 output: 0,
                 fields: w.clone(),
