@@ -15,11 +15,12 @@ use std::io::IsTerminal;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
+/// Formulas for people: partially factored (exact; parses back to the same form).
 fn fmt_rf(nf: &NormalForm, r: &RatFun, out: &OutputArgs) -> String {
     if out.latex {
-        nf.ctx.ratfun_latex(r)
+        nf.ctx.ratfun_latex_factored(r)
     } else {
-        nf.ctx.ratfun_text(r)
+        nf.ctx.ratfun_text_factored(r)
     }
 }
 

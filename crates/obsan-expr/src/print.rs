@@ -252,3 +252,123 @@ pub fn latex_name(name: &str) -> String {
         None => b,
     }
 }
+
+impl Ctx {
+    /// Plain text with numerator and denominator partially factored: monomial
+    /// and integer content, then the content with respect to each leaf,
+    /// recursively. Parses back to the same canonical form.
+    pub fn ratfun_text_factored(&self, r: &RatFun) -> String {
+        self.fmt_factored(r, Style::Text)
+    }
+
+    /// LaTeX, partially factored as [`Ctx::ratfun_text_factored`].
+    pub fn ratfun_latex_factored(&self, r: &RatFun) -> String {
+        self.fmt_factored(r, Style::Latex)
+    }
+
+    fn fmt_factored(&self, r: &RatFun, st: Style) -> String {
+        let num = self.fmt_product(&r.num, st);
+        if r.den.is_one() {
+            return num;
+        }
+        let den = self.fmt_product(&r.den, st);
+        match st {
+            Style::Latex => format!("\\frac{{{num}}}{{{den}}}"),
+            Style::Text => {
+                // A top-level sum needs parentheses; so does any denominator
+                // but a single leaf or a positive constant (a/b*c is (a/b)*c).
+                let n = if r.num.len() > 1 && factor_list(&r.num).len() <= 1 {
+                    format!("({num})")
+                } else {
+                    num
+                };
+                let simple = r.den.len() == 1 && {
+                    let (m, c) = &r.den.terms()[0];
+                    (m.is_one() && !r.den.lc_is_negative()) || (c.is_one() && m.iter().count() == 1)
+                };
+                let d = if simple { den } else { format!("({den})") };
+                format!("{n}/{d}")
+            }
+        }
+    }
+
+    fn fmt_product(&self, p: &Poly, st: Style) -> String {
+        let facs = factor_list(p);
+        if facs.len() <= 1 {
+            return self.fmt_poly(p, st);
+        }
+        let mut sign = String::new();
+        let mut parts = Vec::new();
+        for f in facs {
+            if let Some(c) = f.as_constant() {
+                if c == crate::num::int(-1) {
+                    sign = "-".into();
+                    continue;
+                }
+            }
+            let s = self.fmt_poly(&f, st);
+            let paren = f.len() > 1 || s.starts_with('-');
+            parts.push(match (paren, st) {
+                (true, Style::Text) => format!("({s})"),
+                (true, Style::Latex) => format!("\\left({s}\\right)"),
+                (false, _) => s,
+            });
+        }
+        format!(
+            "{sign}{}",
+            parts.join(if st == Style::Text { "*" } else { " " })
+        )
+    }
+}
+
+/// Factors whose product is `p`: a constant (possibly -1 only), monomial
+/// leaves, and polynomials split by their content in each variable.
+fn factor_list(p: &Poly) -> Vec<Poly> {
+    if p.is_zero() || p.len() == 1 {
+        return vec![p.clone()];
+    }
+    let mut out = Vec::new();
+    let c = p.content();
+    let c = if p.lc_is_negative() { -c } else { c };
+    if !c.is_one() {
+        out.push(Poly::constant(c.clone()));
+    }
+    let m = p.mono_content();
+    for (v, e) in m.iter() {
+        out.push(Poly::monomial(
+            crate::poly::Mono::var(v, e),
+            crate::num::int(1),
+        ));
+    }
+    let mut rest = p
+        .div_mono(&m)
+        .div_exact(&Poly::constant(c))
+        .expect("content divides");
+    let mut stack = vec![];
+    // Split by the content in each variable until nothing splits.
+    'outer: loop {
+        for v in rest.vars() {
+            let mut g = Poly::zero();
+            for (_, k) in rest.coeffs_in(v) {
+                g = crate::gcd::gcd(&g, &k);
+                if g.is_constant() {
+                    break;
+                }
+            }
+            if !g.is_constant() {
+                let q = rest.div_exact(&g).expect("content divides");
+                stack.push(g);
+                rest = q;
+                continue 'outer;
+            }
+        }
+        break;
+    }
+    for g in stack {
+        out.extend(factor_list(&g).into_iter().filter(|f| !f.is_one()));
+    }
+    if !rest.is_one() {
+        out.push(rest);
+    }
+    out
+}

@@ -107,7 +107,10 @@ proptest! {
         let c = ctx.canon(id);
         let printed = ctx.ratfun_text(&c);
         let again = ctx.parse(&printed).map_err(|e| TestCaseError::fail(format!("{printed}: {e}")))?;
-        prop_assert_eq!(ctx.canon(again), c, "printed: {}", printed);
+        prop_assert_eq!(ctx.canon(again), c.clone(), "printed: {}", printed);
+        let factored = ctx.ratfun_text_factored(&c);
+        let again = ctx.parse(&factored).map_err(|e| TestCaseError::fail(format!("{factored}: {e}")))?;
+        prop_assert_eq!(ctx.canon(again), c, "factored: {}", factored);
     }
 
     /// Zero-testing agrees with evaluation: e - e is zero, e - (e + tiny change) is not.
@@ -243,6 +246,21 @@ fn atan_sqrt_exp_log_identities() {
     assert!(is_zero("x^(3/2) - x*sqrt(x)"));
     assert_eq!(canon_text("(x^2 - 1)/(x + 1)"), "x - 1");
     assert_eq!(canon_text("0.25*x + 1/4*x"), "x/2");
+    let mut ctx = Ctx::new();
+    let e = ctx
+        .parse("mu^2*eta*delta*q*cos(g) + mu^2*eta*cos(g) + mu*eta*delta*q + mu*eta")
+        .unwrap();
+    let c = ctx.canon(e);
+    assert_eq!(
+        ctx.ratfun_text_factored(&c),
+        "mu*eta*(delta*q + 1)*(mu*cos(g) + 1)"
+    );
+    let e = ctx.parse("-(x^2 - 1)/(2*y*(x + 3))").unwrap();
+    let c = ctx.canon(e);
+    assert_eq!(ctx.ratfun_text_factored(&c), "-(x^2 - 1)/(2*y*(x + 3))");
+    let e = ctx.parse("(x + 1)/(2*y)").unwrap();
+    let c = ctx.canon(e);
+    assert_eq!(ctx.ratfun_text_factored(&c), "(x + 1)/(2*y)");
 }
 
 #[test]
