@@ -262,11 +262,11 @@ impl Ctx {
             return RatFun::zero();
         }
         if a.den.is_one() && b.den.is_one() && (a.num.is_constant() || b.num.is_constant()) {
+            // A constant times a reduced polynomial stays reduced.
             return RatFun {
                 num: a.num.mul(&b.num),
                 den: Poly::one(),
-            }
-            .fix_sign_const();
+            };
         }
         let g1 = gcd(&a.num, &b.den);
         let g2 = gcd(&b.num, &a.den);
@@ -423,8 +423,5 @@ impl RatFun {
         } else {
             self
         }
-    }
-    fn fix_sign_const(self) -> RatFun {
-        self
     }
 }
