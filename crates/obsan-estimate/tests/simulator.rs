@@ -4,6 +4,16 @@
 use obsan_estimate::{bearing, simulate, wrap, Rng, Robot, Series, SimOptions};
 use std::f64::consts::PI;
 
+/// The model file the simulator must agree with.
+fn calib_sys() -> obsan_model::System {
+    let src = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/calib.sys"
+    ))
+    .unwrap();
+    obsan_model::System::parse(&src, "calib.sys").unwrap()
+}
+
 fn noise_free(q: Vec<f64>) -> SimOptions {
     SimOptions {
         q,
@@ -76,12 +86,7 @@ fn noise_free_circles_have_the_paper_geometry() {
 /// simulated wheel speeds and compare its output with the simulated bearings.
 #[test]
 fn calib_sys_reproduces_the_simulated_bearings() {
-    let src = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/calib.sys"
-    ))
-    .unwrap();
-    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
+    let sys = calib_sys();
     let nf = sys.normal_form(None, &[]).unwrap();
     let ctx = &nf.ctx;
     let mut roots = vec![
@@ -299,12 +304,7 @@ fn csv_roundtrip_and_rejections() {
 /// true initial state, reproduces the noise-free simulated bearings.
 #[test]
 fn predictor_reproduces_simulated_bearings() {
-    let src = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/calib.sys"
-    ))
-    .unwrap();
-    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
+    let sys = calib_sys();
     let nf = sys.normal_form(None, &[]).unwrap();
     let p = obsan_estimate::Predictor::new(&nf);
     assert_eq!(p.angular, vec![true], "beta is an angle");

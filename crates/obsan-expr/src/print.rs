@@ -27,11 +27,11 @@ impl Ctx {
     }
 
     pub fn ratfun_text(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Text)
+        self.fmt_ratfun(r, Style::Text, false)
     }
 
     pub fn ratfun_latex(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Latex)
+        self.fmt_ratfun(r, Style::Latex, false)
     }
 
     /// Plain text of a polynomial over the leaves.
@@ -39,26 +39,32 @@ impl Ctx {
         self.fmt_poly(p, Style::Text)
     }
 
-    fn fmt_ratfun(&self, r: &RatFun, st: Style) -> String {
-        let num = self.fmt_poly(&r.num, st);
+    /// A fraction, expanded or partially factored. In text, a top-level sum
+    /// needs parentheses, and so does any denominator but a single leaf or a
+    /// positive constant (a/b*c is (a/b)*c).
+    fn fmt_ratfun(&self, r: &RatFun, st: Style, factored: bool) -> String {
+        let part = |p: &Poly| {
+            if factored {
+                self.fmt_product(p, st)
+            } else {
+                self.fmt_poly(p, st)
+            }
+        };
+        let num = part(&r.num);
         if r.den.is_one() {
             return num;
         }
-        let den = self.fmt_poly(&r.den, st);
+        let den = part(&r.den);
         match st {
             Style::Latex => format!("\\frac{{{num}}}{{{den}}}"),
             Style::Text => {
-                let n = if r.num.len() > 1 {
-                    format!("({num})")
-                } else {
-                    num
-                };
-                let simple_den = r.den.len() == 1 && {
+                let sum = r.num.len() > 1 && (!factored || factor_list(&r.num).len() <= 1);
+                let n = if sum { format!("({num})") } else { num };
+                let simple = r.den.len() == 1 && {
                     let (m, c) = &r.den.terms()[0];
-                    (m.is_one() && c.sign() == Sign::Positive)
-                        || (c.is_one() && m.iter().count() == 1)
+                    (m.is_one() && !r.den.lc_is_negative()) || (c.is_one() && m.iter().count() == 1)
                 };
-                let d = if simple_den { den } else { format!("({den})") };
+                let d = if simple { den } else { format!("({den})") };
                 format!("{n}/{d}")
             }
         }
@@ -124,7 +130,7 @@ impl Ctx {
             .canon_memo
             .get(&id)
             .expect("atom arguments are canonical");
-        self.fmt_ratfun(r, st)
+        self.fmt_ratfun(r, st, false)
     }
 
     fn fmt_leaf(&self, v: Var, st: Style) -> String {
@@ -258,38 +264,12 @@ impl Ctx {
     /// and integer content, then the content with respect to each leaf,
     /// recursively. Parses back to the same canonical form.
     pub fn ratfun_text_factored(&self, r: &RatFun) -> String {
-        self.fmt_factored(r, Style::Text)
+        self.fmt_ratfun(r, Style::Text, true)
     }
 
     /// LaTeX, partially factored as [`Ctx::ratfun_text_factored`].
     pub fn ratfun_latex_factored(&self, r: &RatFun) -> String {
-        self.fmt_factored(r, Style::Latex)
-    }
-
-    fn fmt_factored(&self, r: &RatFun, st: Style) -> String {
-        let num = self.fmt_product(&r.num, st);
-        if r.den.is_one() {
-            return num;
-        }
-        let den = self.fmt_product(&r.den, st);
-        match st {
-            Style::Latex => format!("\\frac{{{num}}}{{{den}}}"),
-            Style::Text => {
-                // A top-level sum needs parentheses; so does any denominator
-                // but a single leaf or a positive constant (a/b*c is (a/b)*c).
-                let n = if r.num.len() > 1 && factor_list(&r.num).len() <= 1 {
-                    format!("({num})")
-                } else {
-                    num
-                };
-                let simple = r.den.len() == 1 && {
-                    let (m, c) = &r.den.terms()[0];
-                    (m.is_one() && !r.den.lc_is_negative()) || (c.is_one() && m.iter().count() == 1)
-                };
-                let d = if simple { den } else { format!("({den})") };
-                format!("{n}/{d}")
-            }
-        }
+        self.fmt_ratfun(r, Style::Latex, true)
     }
 
     fn fmt_product(&self, p: &Poly, st: Style) -> String {
