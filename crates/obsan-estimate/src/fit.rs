@@ -3,11 +3,13 @@
 //! with Gaussian output noise (so least squares of residual / sigma). Angle
 //! outputs have their residuals wrapped to (-pi, pi].
 //!
-//! The Jacobian is by forward differences, organised by trajectory: a
-//! trajectory's initial state affects only its own residuals.
+//! The Jacobian comes from the forward sensitivity equations (exact
+//! derivatives of the model from the engine, integrated with the state),
+//! organised by trajectory: a trajectory's initial state affects only its
+//! own residuals.
 
 use crate::data::Series;
-use crate::predict::Predictor;
+use crate::predict::{Integration, Predictor};
 use crate::sim::wrap;
 
 /// One trajectory to fit.
@@ -26,8 +28,9 @@ pub struct FitOptions {
     pub cost_tolerance: f64,
     /// Noise standard deviation of each output (residuals are divided by it).
     pub sigma: Vec<f64>,
-    /// Relative step of the forward differences.
-    pub diff_step: f64,
+    /// Longest integration step (s) over merged input rows; 0 = one step per
+    /// input row (see [`Integration::max_step`]).
+    pub max_step: f64,
 }
 
 /// The estimate and its uncertainty.
@@ -40,6 +43,8 @@ pub struct FitResult {
     /// Standard deviations from the inverse Fisher information (J^T J)^-1.
     pub params_sd: Vec<f64>,
     pub initial_states_sd: Vec<Vec<f64>>,
+    /// The whole covariance, params first, then each trajectory's initial state.
+    pub covariance: Vec<Vec<f64>>,
     /// Sum of squared normalised residuals at the estimate.
     pub cost: f64,
     pub n_residuals: usize,
@@ -66,26 +71,43 @@ impl Layout {
     }
 }
 
-/// Normalised residuals of one trajectory (measured cells only).
+/// Normalised residuals of one trajectory (measured cells only) and, with
+/// `jac`, the Jacobian rows d(prediction / sigma) / d(x0) over the whole
+/// initial state (dynamic states, then params).
 fn residuals(
     p: &Predictor,
     t: &FitTrajectory,
     x0: &[f64],
     opts: &FitOptions,
     cols: &[usize],
-) -> Result<Vec<f64>, String> {
-    let y = p.predict(x0, &t.consts, t.inputs, &t.outputs.t)?;
+    jac: bool,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
+    let integ = Integration {
+        max_step: opts.max_step,
+        sensitivities: jac,
+    };
+    let pred = p.predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)?;
+    let n = p.state.len();
     let mut r = Vec::new();
-    for (k, yk) in y.iter().enumerate() {
+    let mut rows = Vec::new();
+    for (k, yk) in pred.outputs.iter().enumerate() {
         for (o, &c) in cols.iter().enumerate() {
             if let Some(m) = t.outputs.values[c][k] {
                 let d = m - yk[o];
                 let d = if p.angular[o] { wrap(d) } else { d };
                 r.push(d / opts.sigma[o]);
+                if jac {
+                    rows.push(
+                        pred.jacobians[k][o * n..(o + 1) * n]
+                            .iter()
+                            .map(|v| v / opts.sigma[o])
+                            .collect(),
+                    );
+                }
             }
         }
     }
-    Ok(r)
+    Ok((r, rows))
 }
 
 /// Solve the symmetric system `a x = b` by Gaussian elimination with partial pivoting.
@@ -117,6 +139,149 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
     Some(x)
 }
 
+/// The problem's fixed parts: model, data, options, column indices.
+struct Problem<'a> {
+    p: &'a Predictor,
+    trajs: &'a [FitTrajectory<'a>],
+    opts: &'a FitOptions,
+    lay: Layout,
+    cols: Vec<Vec<usize>>,
+}
+
+impl Problem<'_> {
+    fn new<'a>(
+        p: &'a Predictor,
+        trajs: &'a [FitTrajectory<'a>],
+        opts: &'a FitOptions,
+        init_params: &[f64],
+        init_states: &[Vec<f64>],
+    ) -> Result<Problem<'a>, String> {
+        let n_params = p.state.len() - p.n_dynamic;
+        if init_params.len() != n_params
+            || init_states.len() != trajs.len()
+            || init_states.iter().any(|s| s.len() != p.n_dynamic)
+        {
+            return Err("initial values do not match the model".into());
+        }
+        if opts.sigma.len() != p.outputs.len()
+            || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0)
+        {
+            return Err("one positive noise level per output is needed".into());
+        }
+        let cols: Vec<Vec<usize>> = trajs
+            .iter()
+            .map(|t| {
+                p.outputs
+                    .iter()
+                    .map(|o| {
+                        t.outputs
+                            .columns
+                            .iter()
+                            .position(|c| c == o)
+                            .ok_or_else(|| format!("the outputs have no column '{o}'"))
+                    })
+                    .collect()
+            })
+            .collect::<Result<_, _>>()?;
+        Ok(Problem {
+            p,
+            trajs,
+            opts,
+            lay: Layout {
+                n_params,
+                n_dyn: p.n_dynamic,
+                n_traj: trajs.len(),
+            },
+            cols,
+        })
+    }
+
+    fn residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
+        self.trajs
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                Ok(residuals(
+                    self.p,
+                    t,
+                    &self.lay.state_of(theta, k),
+                    self.opts,
+                    &self.cols[k],
+                    false,
+                )?
+                .0)
+            })
+            .collect()
+    }
+
+    /// Residuals and the normal equations `J^T J`, `J^T r`, trajectory by
+    /// trajectory (a trajectory's initial state touches only its residuals).
+    #[allow(clippy::type_complexity)]
+    fn normal(&self, theta: &[f64]) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>), String> {
+        let (lay, n_params) = (&self.lay, self.lay.n_params);
+        let n = lay.len();
+        let mut jtj = vec![vec![0.0; n]; n];
+        let mut jtr = vec![0.0; n];
+        let mut res = Vec::with_capacity(self.trajs.len());
+        for (k, t) in self.trajs.iter().enumerate() {
+            // Theta index of each column of the trajectory's Jacobian: its own
+            // initial dynamic state, then the shared params.
+            let idx: Vec<usize> = (0..lay.n_dyn)
+                .map(|i| n_params + k * lay.n_dyn + i)
+                .chain(0..n_params)
+                .collect();
+            let (r0, rows) = residuals(
+                self.p,
+                t,
+                &lay.state_of(theta, k),
+                self.opts,
+                &self.cols[k],
+                true,
+            )?;
+            for (row, r) in rows.iter().zip(&r0) {
+                for (a, &ja) in idx.iter().enumerate() {
+                    jtr[ja] += row[a] * r;
+                    for (b, &jb) in idx.iter().enumerate() {
+                        jtj[ja][jb] += row[a] * row[b];
+                    }
+                }
+            }
+            res.push(r0);
+        }
+        Ok((res, jtj, jtr))
+    }
+}
+
+fn theta_of(init_params: &[f64], init_states: &[Vec<f64>]) -> Vec<f64> {
+    let mut theta: Vec<f64> = init_params.to_vec();
+    for s in init_states {
+        theta.extend_from_slice(s);
+    }
+    theta
+}
+
+/// The inverse of the Fisher information `(J^T J)^-1` at the given values:
+/// the Cramér–Rao bound of the model's params and initial states (in the
+/// order of [`FitResult::covariance`]) for Gaussian output noise `opts.sigma`.
+pub fn crlb(
+    p: &Predictor,
+    trajs: &[FitTrajectory],
+    params: &[f64],
+    states: &[Vec<f64>],
+    opts: &FitOptions,
+) -> Result<Vec<Vec<f64>>, String> {
+    let prob = Problem::new(p, trajs, opts, params, states)?;
+    let (_, jtj, _) = prob.normal(&theta_of(params, states))?;
+    inverse(&jtj).ok_or_else(|| "the Fisher information is singular: some unknowns are not identifiable from these data".into())
+}
+
+fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    let n = a.len();
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let inv = m.try_inverse()?;
+    Some((0..n).map(|i| (0..n).map(|j| inv[(i, j)]).collect()).collect())
+}
+
 /// Fit `params` (the predictor's params) and each trajectory's initial dynamic state.
 pub fn fit(
     p: &Predictor,
@@ -125,112 +290,22 @@ pub fn fit(
     init_states: &[Vec<f64>],
     opts: &FitOptions,
 ) -> Result<FitResult, String> {
-    let n_params = p.state.len() - p.n_dynamic;
-    let lay = Layout {
-        n_params,
-        n_dyn: p.n_dynamic,
-        n_traj: trajs.len(),
-    };
-    if init_params.len() != n_params
-        || init_states.len() != trajs.len()
-        || init_states.iter().any(|s| s.len() != p.n_dynamic)
-    {
-        return Err("initial values do not match the model".into());
-    }
-    if opts.sigma.len() != p.outputs.len() || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0) {
-        return Err("one positive noise level per output is needed".into());
-    }
-    let cols: Vec<Vec<usize>> = trajs
-        .iter()
-        .map(|t| {
-            p.outputs
-                .iter()
-                .map(|o| {
-                    t.outputs
-                        .columns
-                        .iter()
-                        .position(|c| c == o)
-                        .ok_or_else(|| format!("the outputs have no column '{o}'"))
-                })
-                .collect()
-        })
-        .collect::<Result<_, _>>()?;
-    // Output index of each residual of each trajectory (the same for every evaluation).
-    let which: Vec<Vec<usize>> = trajs
-        .iter()
-        .zip(&cols)
-        .map(|(t, c)| {
-            (0..t.outputs.len())
-                .flat_map(|row| {
-                    c.iter()
-                        .enumerate()
-                        .filter(move |(_, &ci)| t.outputs.values[ci][row].is_some())
-                        .map(|(o, _)| o)
-                })
-                .collect()
-        })
-        .collect();
-    let mut theta: Vec<f64> = init_params.to_vec();
-    for s in init_states {
-        theta.extend_from_slice(s);
-    }
-    let all_res = |theta: &[f64]| -> Result<Vec<Vec<f64>>, String> {
-        trajs
-            .iter()
-            .enumerate()
-            .map(|(k, t)| residuals(p, t, &lay.state_of(theta, k), opts, &cols[k]))
-            .collect()
-    };
+    let prob = Problem::new(p, trajs, opts, init_params, init_states)?;
+    let (lay, n_params) = (&prob.lay, prob.lay.n_params);
+    let mut theta = theta_of(init_params, init_states);
     let cost_of = |r: &[Vec<f64>]| r.iter().flatten().map(|x| x * x).sum::<f64>();
-    let mut res = all_res(&theta)?;
-    let mut cost = cost_of(&res);
     let n = lay.len();
     let mut lambda = 1e-3;
     let mut iterations = 0;
-    let mut jtj = vec![vec![0.0; n]; n];
+    let (mut res, mut jtj, mut jtr) = prob.normal(&theta)?;
+    let mut cost = cost_of(&res);
     loop {
-        // Normal equations J^T J and J^T r, trajectory by trajectory.
-        jtj = vec![vec![0.0; n]; n];
-        let mut jtr = vec![0.0; n];
-        for (k, t) in trajs.iter().enumerate() {
-            let idx: Vec<usize> = (0..n_params)
-                .chain((0..lay.n_dyn).map(|i| n_params + k * lay.n_dyn + i))
-                .collect();
-            let mut cols_j: Vec<Vec<f64>> = Vec::with_capacity(idx.len());
-            for &j in &idx {
-                let h = opts.diff_step * theta[j].abs().max(1e-3);
-                let mut th = theta.clone();
-                th[j] += h;
-                let r2 = residuals(p, t, &lay.state_of(&th, k), opts, &cols[k])?;
-                // r = meas - pred, so dr/dtheta = -(dpred/dtheta); keep J = d(-r)/dtheta.
-                cols_j.push(
-                    r2.iter()
-                        .zip(&res[k])
-                        .zip(&which[k])
-                        .map(|((a, b), &o)| -fold(a - b, o, p, opts) / h)
-                        .collect(),
-                );
-            }
-            for (a, &ja) in idx.iter().enumerate() {
-                jtr[ja] += cols_j[a]
-                    .iter()
-                    .zip(&res[k])
-                    .map(|(x, y)| x * y)
-                    .sum::<f64>();
-                for (b, &jb) in idx.iter().enumerate() {
-                    jtj[ja][jb] += cols_j[a]
-                        .iter()
-                        .zip(&cols_j[b])
-                        .map(|(x, y)| x * y)
-                        .sum::<f64>();
-                }
-            }
-        }
         if iterations >= opts.max_iterations {
             break;
         }
         iterations += 1;
         let mut improved = false;
+        let mut moved = false;
         for _ in 0..20 {
             let mut a = jtj.clone();
             for (i, row) in a.iter_mut().enumerate() {
@@ -241,39 +316,37 @@ pub fn fit(
                 continue;
             };
             let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
-            if let Ok(r2) = all_res(&cand) {
+            if let Ok(r2) = prob.residuals(&cand) {
                 let c2 = cost_of(&r2);
                 if c2 < cost {
                     let rel = (cost - c2) / cost.max(1e-300);
                     theta = cand;
-                    res = r2;
                     cost = c2;
                     lambda = (lambda / 3.0).max(1e-12);
                     improved = rel > opts.cost_tolerance;
+                    moved = true;
                     break;
                 }
             }
             lambda *= 4.0;
+        }
+        if moved {
+            (res, jtj, jtr) = prob.normal(&theta)?;
         }
         if !improved {
             break;
         }
     }
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
-    let cov_diag: Vec<f64> = (0..n)
-        .map(|i| {
-            let mut e = vec![0.0; n];
-            e[i] = 1.0;
-            solve(jtj.clone(), e).map_or(f64::NAN, |x| x[i].max(0.0).sqrt())
-        })
-        .collect();
+    let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
+    let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
     let n_res: usize = res.iter().map(Vec::len).sum();
     let mut rms = vec![0.0; p.outputs.len()];
     let mut counts = vec![0usize; p.outputs.len()];
     for (k, t) in trajs.iter().enumerate() {
         let mut it = res[k].iter();
         for row in 0..t.outputs.len() {
-            for (o, &c) in cols[k].iter().enumerate() {
+            for (o, &c) in prob.cols[k].iter().enumerate() {
                 if t.outputs.values[c][row].is_some() {
                     let r = it.next().expect("residual") * opts.sigma[o];
                     rms[o] += r * r;
@@ -296,20 +369,10 @@ pub fn fit(
         initial_states_sd: (0..trajs.len())
             .map(|k| cov_diag[n_params + k * lay.n_dyn..n_params + (k + 1) * lay.n_dyn].to_vec())
             .collect(),
+        covariance,
         cost,
         n_residuals: n_res,
         iterations,
         residual_rms,
     })
-}
-
-/// A difference of normalised residuals of output `o`: for an angle it can
-/// jump by 2 pi / sigma across the wrap, and a difference step is tiny, so
-/// such jumps are folded back.
-fn fold(d: f64, o: usize, p: &Predictor, opts: &FitOptions) -> f64 {
-    if !p.angular[o] {
-        return d;
-    }
-    let period = 2.0 * std::f64::consts::PI / opts.sigma[o];
-    d - period * (d / period).round()
 }

@@ -9,15 +9,25 @@
 //! assert!((truth.xi - 0.297 / 0.485).abs() < 1e-12);
 //! ```
 
+mod calib;
+mod calibrate;
+mod cekf;
+mod circle;
 mod data;
 mod fit;
 mod predict;
 mod rng;
 mod sim;
 
+pub use calib::{arc_data, combine, start_state, Calibration, Metric, Modes, PARAMS};
+pub use calibrate::{
+    calibrate, CalibrateOptions, CalibrationReport, CekfInit, Method, TrajectoryEstimate,
+};
+pub use cekf::{cekf, cekf_start, CekfResult};
+pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
 pub use data::{DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
-pub use fit::{fit, FitOptions, FitResult, FitTrajectory};
-pub use predict::Predictor;
+pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
+pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;
 pub use sim::{
     bearing, simulate, wrap, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth,

@@ -22,6 +22,10 @@ pub struct Predictor {
     /// Roots: for each dynamic state k, f0[k] then f_i[k] for each input.
     dyn_tape: Tape,
     out_tape: Tape,
+    /// d(dyn_tape root)/d(state_j), root-major.
+    jac_tape: Tape,
+    /// d(output)/d(state_j), output-major.
+    out_jac_tape: Tape,
 }
 
 impl Predictor {
@@ -52,6 +56,23 @@ impl Predictor {
         let outs: Vec<_> = nf.outputs.iter().map(|o| o.1).collect();
         let out_tape =
             Tape::compile(&nf.ctx, &outs, &vars).expect("outputs use only the state and constants");
+        // Exact partial derivatives from the engine, for the sensitivities.
+        let mut ctx = nf.ctx.clone();
+        let mut jac_roots = Vec::with_capacity(roots.len() * nf.state_vars.len());
+        for &r in &roots {
+            for &x in &nf.state_vars {
+                jac_roots.push(ctx.diff(r, x));
+            }
+        }
+        let mut out_jac_roots = Vec::with_capacity(outs.len() * nf.state_vars.len());
+        for &h in &outs {
+            for &x in &nf.state_vars {
+                out_jac_roots.push(ctx.diff(h, x));
+            }
+        }
+        let jac_tape = Tape::compile(&ctx, &jac_roots, &vars).expect("derivatives use the same symbols");
+        let out_jac_tape =
+            Tape::compile(&ctx, &out_jac_roots, &vars).expect("derivatives use the same symbols");
         Predictor {
             state: nf.state.clone(),
             n_dynamic,
@@ -61,22 +82,64 @@ impl Predictor {
             angular: outs.iter().map(|&h| nf.ctx.is_angle_valued(h)).collect(),
             dyn_tape,
             out_tape,
+            jac_tape,
+            out_jac_tape,
         }
     }
 
+    /// `d(state)/dt` (`jac` false) or, with `jac`, also the sensitivity
+    /// `d(Phi)/dt = J Phi_full` packed after the state (`nd + nd*n` values).
+    #[allow(clippy::too_many_arguments)]
     fn derivative(
         &self,
-        x: &[f64],
+        z: &[f64],
+        consts: &[f64],
         u: &[f64],
-        scratch: &mut Vec<f64>,
-        vals: &mut [f64],
-        dx: &mut [f64],
+        jac: bool,
+        w: &mut Work,
+        dz: &mut [f64],
     ) {
-        self.dyn_tape.eval_into(x, scratch, vals);
+        let nd = self.n_dynamic;
+        let n = self.state.len();
         let m = self.inputs.len();
-        for k in 0..self.n_dynamic {
-            let row = &vals[k * (m + 1)..(k + 1) * (m + 1)];
-            dx[k] = row[0] + row[1..].iter().zip(u).map(|(f, ui)| f * ui).sum::<f64>();
+        // The tapes take the whole state (dynamic then params) then the constants.
+        w.x.clear();
+        w.x.extend_from_slice(&z[..nd]);
+        w.x.extend_from_slice(&w.params);
+        w.x.extend_from_slice(consts);
+        self.dyn_tape.eval_into(&w.x, &mut w.scratch, &mut w.vals);
+        for k in 0..nd {
+            let row = &w.vals[k * (m + 1)..(k + 1) * (m + 1)];
+            dz[k] = row[0] + row[1..].iter().zip(u).map(|(f, ui)| f * ui).sum::<f64>();
+        }
+        if !jac {
+            return;
+        }
+        self.jac_tape.eval_into(&w.x, &mut w.scratch, &mut w.jvals);
+        // J (nd x n): sum over the drift and the fields of d f[k] / d x_j times u.
+        for k in 0..nd {
+            for j in 0..n {
+                let base = (k * (m + 1)) * n + j;
+                let mut s = w.jvals[base];
+                for (i, ui) in u.iter().enumerate() {
+                    s += w.jvals[base + (i + 1) * n] * ui;
+                }
+                w.jac[k * n + j] = s;
+            }
+        }
+        // dPhi/dt = J * Phi_full, where Phi_full = [Phi; 0 I] (params are constant).
+        let phi = &z[nd..];
+        for k in 0..nd {
+            for c in 0..n {
+                let mut s = 0.0;
+                for j in 0..nd {
+                    s += w.jac[k * n + j] * phi[j * n + c];
+                }
+                if c >= nd {
+                    s += w.jac[k * n + c];
+                }
+                dz[nd + k * n + c] = s;
+            }
         }
     }
 
@@ -91,6 +154,23 @@ impl Predictor {
         inputs: &Series,
         times: &[f64],
     ) -> Result<Vec<Vec<f64>>, String> {
+        Ok(self
+            .predict_with(x0, consts, inputs, times, &Integration::default())?
+            .outputs)
+    }
+
+    /// [`Predictor::predict`] with integration options: merged input rows
+    /// (`max_step`) and, on request, the exact sensitivities of the outputs
+    /// to the whole initial state (forward sensitivity equations built from
+    /// the engine's symbolic Jacobian, integrated with the state).
+    pub fn predict_with(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        times: &[f64],
+        opts: &Integration,
+    ) -> Result<Prediction, String> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(format!(
                 "expected {} state values and {} constants",
@@ -109,18 +189,38 @@ impl Predictor {
                     .ok_or_else(|| format!("the inputs have no column '{n}'"))
             })
             .collect::<Result<_, _>>()?;
-        let mut x: Vec<f64> = x0.iter().chain(consts).copied().collect();
         let nd = self.n_dynamic;
-        let mut scratch = Vec::new();
-        let mut vals = vec![0.0; self.dyn_tape.n_outputs()];
-        let mut out = Vec::with_capacity(times.len());
-        let mut yv = vec![0.0; self.outputs.len()];
+        let n = self.state.len();
+        let m = self.inputs.len();
+        let nz = if opts.sensitivities { nd + nd * n } else { nd };
+        let mut z = vec![0.0; nz];
+        z[..nd].copy_from_slice(&x0[..nd]);
+        if opts.sensitivities {
+            for k in 0..nd {
+                z[nd + k * n + k] = 1.0;
+            }
+        }
+        let mut w = Work {
+            params: x0[nd..].to_vec(),
+            x: Vec::with_capacity(n + consts.len()),
+            scratch: Vec::new(),
+            vals: vec![0.0; self.dyn_tape.n_outputs()],
+            jvals: vec![0.0; self.jac_tape.n_outputs()],
+            jac: vec![0.0; nd * n],
+        };
+        let mut outputs = Vec::with_capacity(times.len());
+        let mut jacobians = Vec::new();
+        let no = self.outputs.len();
+        let mut yv = vec![0.0; no];
+        let mut gy = vec![0.0; no * n];
         let t_start = inputs.t.first().copied().unwrap_or(0.0);
         let mut t = t_start;
         let mut row = 0usize;
         let (mut k1, mut k2, mut k3, mut k4) =
-            (vec![0.0; nd], vec![0.0; nd], vec![0.0; nd], vec![0.0; nd]);
-        let mut tmp = x.clone();
+            (vec![0.0; nz], vec![0.0; nz], vec![0.0; nz], vec![0.0; nz]);
+        let mut tmp = z.clone();
+        let mut u = vec![0.0; m];
+        let sens = opts.sensitivities;
         for &target in times {
             if target < t - 1e-12 {
                 return Err(format!("output time {target} is before {t}: times must not decrease and start at or after the inputs"));
@@ -129,41 +229,110 @@ impl Predictor {
                 while row + 1 < inputs.len() && inputs.t[row + 1] <= t + 1e-12 {
                     row += 1;
                 }
-                let next = if row + 1 < inputs.len() {
+                // One step: this row's interval, merged with the next rows while
+                // the step stays within max_step (inputs averaged over time).
+                let mut next = if row + 1 < inputs.len() {
                     inputs.t[row + 1].min(target)
                 } else {
                     target
                 };
+                for (ui, &c) in u.iter_mut().zip(&cols) {
+                    *ui = inputs.values[c][row].unwrap_or(0.0) * (next - t);
+                }
+                while next < target - 1e-12 && row + 1 < inputs.len() {
+                    let r = row + 1;
+                    let end = if r + 1 < inputs.len() {
+                        inputs.t[r + 1].min(target)
+                    } else {
+                        target
+                    };
+                    if end - t > opts.max_step {
+                        break;
+                    }
+                    for (ui, &c) in u.iter_mut().zip(&cols) {
+                        *ui += inputs.values[c][r].unwrap_or(0.0) * (end - next);
+                    }
+                    row = r;
+                    next = end;
+                }
                 let h = next - t;
-                let u: Vec<f64> = cols
-                    .iter()
-                    .map(|&c| inputs.values[c][row].unwrap_or(0.0))
-                    .collect();
-                self.derivative(&x, &u, &mut scratch, &mut vals, &mut k1);
-                for i in 0..nd {
-                    tmp[i] = x[i] + h / 2.0 * k1[i];
+                for ui in u.iter_mut() {
+                    *ui /= h;
                 }
-                self.derivative(&tmp, &u, &mut scratch, &mut vals, &mut k2);
-                for i in 0..nd {
-                    tmp[i] = x[i] + h / 2.0 * k2[i];
+                self.derivative(&z, consts, &u, sens, &mut w, &mut k1);
+                for i in 0..nz {
+                    tmp[i] = z[i] + h / 2.0 * k1[i];
                 }
-                self.derivative(&tmp, &u, &mut scratch, &mut vals, &mut k3);
-                for i in 0..nd {
-                    tmp[i] = x[i] + h * k3[i];
+                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k2);
+                for i in 0..nz {
+                    tmp[i] = z[i] + h / 2.0 * k2[i];
                 }
-                self.derivative(&tmp, &u, &mut scratch, &mut vals, &mut k4);
-                for i in 0..nd {
-                    x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k3);
+                for i in 0..nz {
+                    tmp[i] = z[i] + h * k3[i];
                 }
-                tmp[..nd].copy_from_slice(&x[..nd]);
-                if x[..nd].iter().any(|v| !v.is_finite()) {
+                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k4);
+                for i in 0..nz {
+                    z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+                }
+                if z[..nd].iter().any(|v| !v.is_finite()) {
                     return Err(format!("the state diverged at t = {next}"));
                 }
                 t = next;
             }
-            self.out_tape.eval_into(&x, &mut scratch, &mut yv);
-            out.push(yv.clone());
+            w.x.clear();
+            w.x.extend_from_slice(&z[..nd]);
+            w.x.extend_from_slice(&w.params);
+            w.x.extend_from_slice(consts);
+            self.out_tape.eval_into(&w.x, &mut w.scratch, &mut yv);
+            outputs.push(yv.clone());
+            if sens {
+                self.out_jac_tape.eval_into(&w.x, &mut w.scratch, &mut gy);
+                // dy/dx0 = grad h * Phi_full.
+                let phi = &z[nd..];
+                let mut jrow = vec![0.0; no * n];
+                for o in 0..no {
+                    for c in 0..n {
+                        let mut s = if c >= nd { gy[o * n + c] } else { 0.0 };
+                        for j in 0..nd {
+                            s += gy[o * n + j] * phi[j * n + c];
+                        }
+                        jrow[o * n + c] = s;
+                    }
+                }
+                jacobians.push(jrow);
+            }
         }
-        Ok(out)
+        Ok(Prediction { outputs, jacobians })
     }
+}
+
+/// Integration options of [`Predictor::predict_with`].
+#[derive(Clone, Debug, Default)]
+pub struct Integration {
+    /// Merge consecutive input rows into one RK4 step of at most this length
+    /// (inputs averaged over the step); 0 keeps one step per row, which is
+    /// exact up to RK4's error. Merging is exact for constant inputs and, for
+    /// a driftless model, changes the result only through the commutator of
+    /// the fields times the input variation within a step.
+    pub max_step: f64,
+    /// Also integrate the forward sensitivities.
+    pub sensitivities: bool,
+}
+
+/// Outputs (per time, per output) and, when requested, their Jacobians with
+/// respect to the whole initial state (per time: outputs x state, row-major).
+#[derive(Clone, Debug)]
+pub struct Prediction {
+    pub outputs: Vec<Vec<f64>>,
+    pub jacobians: Vec<Vec<f64>>,
+}
+
+struct Work {
+    params: Vec<f64>,
+    x: Vec<f64>,
+    scratch: Vec<f64>,
+    vals: Vec<f64>,
+    jvals: Vec<f64>,
+    jac: Vec<f64>,
 }

@@ -41,7 +41,7 @@ fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate
         max_iterations: 50,
         cost_tolerance: 1e-14,
         sigma: vec![sigma],
-        diff_step: 1e-7,
+        max_step: 0.0,
     };
     (fit(&p, &trajs, &init, &states, &opts).unwrap(), truth)
 }

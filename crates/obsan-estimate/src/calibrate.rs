@@ -1,0 +1,361 @@
+//! `obsan calibrate`: from a dataset of circles to phi, psi, eta, delta, xi
+//! (and rho, rR, rL, B with one metric distance) by DET, LS, CEKF or joint
+//! maximum likelihood.
+
+use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
+use crate::cekf::{cekf, cekf_start};
+use crate::circle::{det, ls, weights, ArcData, Closed, Degenerate, Det};
+use crate::data::Dataset;
+use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
+use crate::predict::Predictor;
+use nalgebra::{Matrix4, SMatrix};
+
+/// The estimator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    Det,
+    Ls,
+    Cekf,
+    Ml,
+}
+
+impl TrajectoryEstimate {
+    /// Standard deviations of xi_q and L, when known.
+    pub fn modes_sd(&self) -> Option<[f64; 2]> {
+        self.modes_cov
+            .map(|c| [c[(0, 0)].max(0.0).sqrt(), c[(1, 1)].max(0.0).sqrt()])
+    }
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Det => "det",
+            Method::Ls => "ls",
+            Method::Cekf => "cekf",
+            Method::Ml => "ml",
+        }
+    }
+}
+
+/// How CEKF starts.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CekfInit {
+    /// From DET (the paper's CEKFd), with this relative initial uncertainty.
+    Det { relative_sd: f64 },
+    /// From a given `[A_v, V, xi_q, L]` per trajectory, with this relative
+    /// uncertainty (and `relative_sd` radians on L).
+    Given {
+        states: Vec<[f64; 4]>,
+        relative_sd: f64,
+    },
+}
+
+/// Options; every tolerance explicit.
+#[derive(Clone, Debug)]
+pub struct CalibrateOptions {
+    pub method: Method,
+    /// Initial distance (m) to the feature on the first trajectory.
+    pub d0: Option<f64>,
+    /// Bearing noise (rad); `None` estimates it from the LS residuals.
+    pub sigma_beta: Option<f64>,
+    /// Encoder noise K (m^1/2) and the nominal radius of its model.
+    pub encoder_k: f64,
+    pub r_nominal: f64,
+    pub cekf_init: CekfInit,
+    /// LS: iterations and relative cost decrease at which to stop.
+    pub ls_max_iterations: usize,
+    pub ls_tolerance: f64,
+    /// ML: iterations, relative cost tolerance, longest integration step (s).
+    pub ml_max_iterations: usize,
+    pub ml_tolerance: f64,
+    pub ml_max_step: f64,
+    /// Column names: right-wheel speed and bearing.
+    pub input: String,
+    pub output: String,
+}
+
+impl CalibrateOptions {
+    /// Defaults, with the noise levels and d0 taken from `dataset.json` when present.
+    pub fn for_dataset(data: &Dataset, method: Method) -> CalibrateOptions {
+        let m = &data.meta;
+        CalibrateOptions {
+            method,
+            d0: m.d0,
+            sigma_beta: m.noise.get("beta").copied().filter(|s| *s > 0.0),
+            encoder_k: m.noise.get("encoder_k").copied().unwrap_or(0.0),
+            r_nominal: m.nominal.get("r_right").copied().unwrap_or(1.0),
+            cekf_init: CekfInit::Det { relative_sd: 0.1 },
+            ls_max_iterations: 100,
+            ls_tolerance: 1e-12,
+            ml_max_iterations: 50,
+            ml_tolerance: 1e-10,
+            ml_max_step: 0.2,
+            input: "wR".into(),
+            output: "beta".into(),
+        }
+    }
+}
+
+/// One trajectory's observable modes (xi_q, L, c, k) and the DET curves.
+#[derive(Clone, Debug)]
+pub struct TrajectoryEstimate {
+    pub name: String,
+    pub q: f64,
+    pub closed: Closed,
+    /// Covariance of (xi_q, L), when the method gives one.
+    pub modes_cov: Option<SMatrix<f64, 2, 2>>,
+    pub rms: f64,
+    pub det: Det,
+    pub arc: ArcData,
+    /// The starting state (mu0, gamma0): from the closed form, or ML's.
+    pub start: (f64, f64),
+}
+
+/// The outcome of a calibration.
+#[derive(Clone, Debug)]
+pub struct CalibrationReport {
+    pub method: Method,
+    /// The bearing noise used to weigh the data, and whether it was estimated.
+    pub sigma_beta: f64,
+    pub sigma_estimated: bool,
+    pub trajectories: Vec<TrajectoryEstimate>,
+    pub calibration: Calibration,
+    pub metric: Option<(Metric, Option<[f64; 4]>)>,
+    pub ml: Option<FitResult>,
+}
+
+fn rms_of(c: &Closed, d: &ArcData) -> f64 {
+    let ss: f64 = d
+        .s
+        .iter()
+        .zip(&d.beta)
+        .map(|(&s, &b)| crate::sim::wrap(b - c.beta(s)).powi(2))
+        .sum();
+    (ss / d.s.len().max(1) as f64).sqrt()
+}
+
+/// Calibrate. `predictor` (calib.sys without restriction) is needed by `ml` only.
+pub fn calibrate(
+    data: &Dataset,
+    predictor: Option<&Predictor>,
+    o: &CalibrateOptions,
+) -> Result<CalibrationReport, Degenerate> {
+    let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
+    // Per trajectory: DET always (it initialises everything else).
+    let mut trajs = Vec::new();
+    for t in &data.trajectories {
+        let q = *t.meta.get("q").ok_or_else(|| {
+            Degenerate(format!(
+                "trajectory '{}': no q in its meta.json (the commanded wheel-speed ratio of the circle, eq. 17)",
+                t.name
+            ))
+        })?;
+        let arc = arc_data(t, &o.input, &o.output)
+            .map_err(|e| Degenerate(format!("trajectory '{}': {e}", t.name)))?;
+        let d = det(&arc).map_err(|e| {
+            Degenerate(format!(
+                "trajectory '{}' (q = {q}): {e}; its xi_q and L are unknown, so phi, psi, eta, delta, xi cannot all be estimated",
+                t.name
+            ))
+        })?;
+        // Coverage: DET needs the node and the mirror points inside the data.
+        let mut gap: f64 = 0.0;
+        for w in arc.s.windows(2) {
+            gap = gap.max(w[1] - w[0]);
+        }
+        if gap > d.period / 4.0 {
+            return Err(Degenerate(format!(
+                "trajectory '{}' (q = {q}): no bearing over {:.0}% of the loop (the feature is out of view): the nodes and mirror points of the observation function are not observed, so xi_q, L and k cannot be estimated from it",
+                t.name,
+                100.0 * gap / d.period
+            )));
+        }
+        let span = arc.s.last().copied().unwrap_or(0.0) - arc.s[0];
+        if span < 0.75 * d.period {
+            return Err(Degenerate(format!(
+                "trajectory '{}' (q = {q}): the data cover {:.0}% of a loop; one whole loop is needed to read xi_q (eq. 35)",
+                t.name,
+                100.0 * span / d.period
+            )));
+        }
+        trajs.push(TrajectoryEstimate {
+            name: t.name.clone(),
+            q,
+            closed: d.closed,
+            modes_cov: None,
+            rms: rms_of(&d.closed, &arc),
+            det: d,
+            arc,
+            start: (f64::NAN, f64::NAN),
+        });
+    }
+    let mut sigma = o.sigma_beta.unwrap_or(f64::NAN);
+    let sigma_estimated = o.sigma_beta.is_none();
+    // LS per trajectory (also the start of ML).
+    let need_ls = matches!(o.method, Method::Ls | Method::Ml);
+    if need_ls {
+        for pass in 0..2 {
+            let s_used = if sigma.is_nan() { 1e-2 } else { sigma };
+            let mut rss = 0.0;
+            let mut count = 0usize;
+            for tr in trajs.iter_mut() {
+                let w = weights(&tr.det.closed, &tr.arc, s_used, enc_var);
+                let f = ls(&tr.arc, &tr.det.closed, &w, o.ls_max_iterations, o.ls_tolerance);
+                rss += f.rms * f.rms * tr.arc.s.len() as f64;
+                count += tr.arc.s.len();
+                tr.closed = f.closed;
+                tr.rms = f.rms;
+                tr.modes_cov = Some(f.cov.fixed_view::<2, 2>(0, 0).into_owned());
+            }
+            if pass == 0 && sigma_estimated {
+                // sigma from the residuals (4 unknowns per trajectory), then weigh again.
+                let dof = count.saturating_sub(4 * trajs.len()).max(1);
+                sigma = (rss / dof as f64).sqrt().max(1e-12);
+                continue;
+            }
+            break;
+        }
+    }
+    let modes: Vec<Modes> = match o.method {
+        Method::Det => trajs
+            .iter()
+            .map(|t| Modes {
+                q: t.q,
+                xi_q: t.closed.xi_q,
+                l: t.closed.l,
+                cov: None,
+            })
+            .collect(),
+        Method::Ls | Method::Ml => trajs
+            .iter()
+            .map(|t| Modes {
+                q: t.q,
+                xi_q: t.closed.xi_q,
+                l: t.closed.l,
+                cov: t.modes_cov,
+            })
+            .collect(),
+        Method::Cekf => {
+            if sigma.is_nan() {
+                return Err(Degenerate(
+                    "cekf needs the bearing noise: give it in dataset.json (noise.beta) or use ls/ml".into(),
+                ));
+            }
+            let mut out = Vec::new();
+            for (i, (tr, t)) in trajs.iter_mut().zip(&data.trajectories).enumerate() {
+                let (x0, rel) = match &o.cekf_init {
+                    CekfInit::Det { relative_sd } => (cekf_start(&tr.det.closed), *relative_sd),
+                    CekfInit::Given {
+                        states,
+                        relative_sd,
+                    } => {
+                        let s = states.get(i).ok_or_else(|| {
+                            Degenerate(format!("no CEKF initial state for trajectory {}", tr.name))
+                        })?;
+                        (nalgebra::Vector4::from(*s), *relative_sd)
+                    }
+                };
+                let p0 = Matrix4::from_diagonal(&nalgebra::Vector4::new(
+                    (rel * x0[0].abs().max(0.05)).powi(2),
+                    (rel * x0[1].abs().max(0.05)).powi(2),
+                    (rel * x0[2].abs()).powi(2),
+                    rel.max(0.05).powi(2),
+                ));
+                let r = cekf(t, &o.input, &o.output, x0, p0, sigma, enc_var)
+                    .map_err(|e| Degenerate(format!("trajectory '{}': {e}", tr.name)))?;
+                tr.closed.xi_q = r.x[2];
+                tr.closed.l = r.x[3];
+                tr.modes_cov = Some(r.cov.fixed_view::<2, 2>(2, 2).into_owned());
+                out.push(Modes {
+                    q: tr.q,
+                    xi_q: r.x[2],
+                    l: r.x[3],
+                    cov: tr.modes_cov,
+                });
+            }
+            out
+        }
+    };
+    let mut calibration = combine(&modes)?;
+    for t in trajs.iter_mut() {
+        t.start = start_state(&calibration, &t.closed, t.q);
+    }
+    let mut ml = None;
+    if o.method == Method::Ml {
+        let p = predictor.ok_or_else(|| Degenerate("ml needs the model (calib.sys)".into()))?;
+        let fts: Vec<FitTrajectory> = data
+            .trajectories
+            .iter()
+            .map(|t| FitTrajectory {
+                inputs: &t.inputs,
+                outputs: &t.outputs,
+                consts: p
+                    .consts
+                    .iter()
+                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+                    .collect(),
+            })
+            .collect();
+        let states: Vec<Vec<f64>> = trajs.iter().map(|t| vec![t.start.0, t.start.1]).collect();
+        let opts = FitOptions {
+            max_iterations: o.ml_max_iterations,
+            cost_tolerance: o.ml_tolerance,
+            sigma: vec![sigma],
+            max_step: o.ml_max_step,
+        };
+        let r = fit(p, &fts, &calibration.values(), &states, &opts)
+            .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
+        let cov = SMatrix::<f64, 5, 5>::from_fn(|i, j| r.covariance[i][j]);
+        calibration = Calibration {
+            phi: r.params[0],
+            psi: crate::sim::wrap(r.params[1]),
+            eta: r.params[2],
+            delta: r.params[3],
+            xi: r.params[4],
+            cov: Some(cov),
+        };
+        for (k, t) in trajs.iter_mut().enumerate() {
+            t.start = (r.initial_states[k][0], r.initial_states[k][1]);
+            let (_, xq, l) = calibration.modes(t.q);
+            t.closed.xi_q = xq;
+            t.closed.l = l;
+        }
+        ml = Some(r);
+    }
+    let metric = o.d0.map(|d0| {
+        let m = Metric::new(&calibration, trajs[0].start.0, d0);
+        // Standard deviations by the delta method from ML's joint covariance.
+        let sd = ml.as_ref().map(|r| {
+            // Unknowns: eta (2), delta (3), xi (4), mu0 of trajectory 0 (index 5).
+            let idx = [2usize, 3, 4, 5];
+            let (eta, delta, xi) = (calibration.eta, calibration.delta, calibration.xi);
+            let rho = m.rho;
+            let grads: [[f64; 4]; 4] = [
+                [0.0, 0.0, 0.0, d0],
+                [2.0 * rho, 0.0, 0.0, 2.0 * d0 * eta],
+                [2.0 * rho * delta, 2.0 * rho * eta, 0.0, 2.0 * d0 * eta * delta],
+                [2.0 * rho / xi, 0.0, -2.0 * rho * eta / (xi * xi), 2.0 * d0 * eta / xi],
+            ];
+            std::array::from_fn(|g| {
+                let mut v = 0.0;
+                for a in 0..4 {
+                    for b in 0..4 {
+                        v += grads[g][a] * grads[g][b] * r.covariance[idx[a]][idx[b]];
+                    }
+                }
+                v.max(0.0).sqrt()
+            })
+        });
+        (m, sd)
+    });
+    Ok(CalibrationReport {
+        method: o.method,
+        sigma_beta: sigma,
+        sigma_estimated,
+        trajectories: trajs,
+        calibration,
+        metric,
+        ml,
+    })
+}
