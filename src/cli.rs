@@ -37,6 +37,60 @@ pub enum Command {
     Verify(VerifyArgs),
     /// Simulate the paper's calibration experiment (section VI-A) and write a dataset.
     Simulate(SimulateArgs),
+    /// Calibrate from a dataset of circles: phi, psi, eta, delta, xi with
+    /// standard deviations (and rho, rR, rL, B with --d0), per trajectory
+    /// xi_q, L, c, k.
+    Calibrate(CalibrateArgs),
+    /// The Cramér–Rao lower bound of phi, psi, eta, delta, xi for a simulated set-up.
+    Crlb(CrlbArgs),
+    /// Monte Carlo runs laid out like the paper's Tables IV-VII, beside the
+    /// paper's figures and the Cramér–Rao bound.
+    Montecarlo(MontecarloArgs),
+}
+
+#[derive(Args)]
+pub struct CalibrateArgs {
+    /// The dataset folder (docs/data-format.md).
+    pub dataset: String,
+    /// det, ls, cekf or ml (joint maximum likelihood on eq. 16).
+    #[arg(long, default_value = "ml")]
+    pub method: String,
+    /// Initial distance (m) to the feature on the first trajectory (gives rho, rR, rL, B).
+    #[arg(long)]
+    pub d0: Option<f64>,
+    /// Bearing noise (deg); default: dataset.json's, else estimated from the residuals.
+    #[arg(long)]
+    pub sigma_beta_deg: Option<f64>,
+    /// Write the paper's Figures 5-7 into this folder (not implemented yet).
+    #[arg(long)]
+    pub plot: Option<String>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct CrlbArgs {
+    #[command(flatten)]
+    pub sim: SimFlags,
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct MontecarloArgs {
+    #[arg(long, default_value_t = 100)]
+    pub runs: usize,
+    /// 4, 5, 6, 7 or all.
+    #[arg(long, default_value = "all")]
+    pub table: String,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[arg(long)]
+    pub json: bool,
+    /// Run r uses seed + r.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
 }
 
 #[derive(Args)]
@@ -47,6 +101,13 @@ pub struct SimulateArgs {
     /// Replace the folder if it exists.
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub sim: SimFlags,
+}
+
+/// The simulated set-up (section VI-A; Tables II and III by default).
+#[derive(Args, Clone)]
+pub struct SimFlags {
     /// Wheel-speed ratios, one circular trajectory each (eq. 17).
     #[arg(
         long,
@@ -76,6 +137,9 @@ pub struct SimulateArgs {
     /// Bearings per second.
     #[arg(long, default_value_t = 1.0)]
     pub bearing_rate: f64,
+    /// Instead of --bearing-rate: this many bearings per trajectory, evenly spread.
+    #[arg(long)]
+    pub bearings: Option<usize>,
     /// Initial distance to the feature (m).
     #[arg(long, default_value_t = 1.2)]
     pub d0: f64,

@@ -6,6 +6,7 @@
 
 mod analysis_cmds;
 mod cli;
+mod estimate_cmds;
 mod expr_cmds;
 mod show;
 mod simulate;
@@ -54,6 +55,9 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Check(a) => analysis_cmds::check(&a),
         cli::Command::Verify(a) => analysis_cmds::verify(&a),
         cli::Command::Simulate(a) => simulate::run(&a),
+        cli::Command::Calibrate(a) => estimate_cmds::calibrate_cmd(&a),
+        cli::Command::Crlb(a) => estimate_cmds::crlb_cmd(&a),
+        cli::Command::Montecarlo(a) => estimate_cmds::montecarlo_cmd(&a),
     };
     match result {
         Ok(code) => code,

@@ -1,6 +1,6 @@
 //! `obsan simulate`: the paper's simulator, written atomically as a dataset.
 
-use crate::cli::SimulateArgs;
+use crate::cli::{SimFlags, SimulateArgs};
 use crate::Failure;
 use obsan_estimate::{simulate, Dataset, Series, SimOptions, SpeedProfile};
 use std::path::{Path, PathBuf};
@@ -103,7 +103,8 @@ pub fn write_folder_atomically(
     Ok(())
 }
 
-pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
+/// The simulator's options from the command line, checked.
+pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
     let mut o = SimOptions {
         q: a.q.clone(),
         sigma_beta: a.sigma_beta_deg.to_radians(),
@@ -113,6 +114,7 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
         nu: a.nu,
         profile: profile(&a.speed_profile)?,
         bearing_rate: a.bearing_rate,
+        bearings: a.bearings,
         d0: a.d0,
         seed: a.seed,
         ..SimOptions::default()
@@ -159,6 +161,17 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
         }
         o.inputs = Some(s);
     }
+    if a.bearings.is_some_and(|n| n < obsan_estimate::MIN_OUTPUT_SAMPLES) {
+        return Err(Failure(format!(
+            "--bearings must be at least {}",
+            obsan_estimate::MIN_OUTPUT_SAMPLES
+        )));
+    }
+    Ok(o)
+}
+
+pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
+    let o = sim_options(&a.sim)?;
     let (data, truth) = simulate(&o).map_err(Failure)?;
     let truth_json = serde_json::to_string_pretty(&truth).expect("json") + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)]);

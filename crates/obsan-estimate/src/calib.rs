@@ -24,7 +24,7 @@ impl Calibration {
     pub fn values(&self) -> [f64; 5] {
         [self.phi, self.psi, self.eta, self.delta, self.xi]
     }
-    fn from_values(v: &[f64], cov: Option<SMatrix<f64, 5, 5>>) -> Calibration {
+    pub(crate) fn from_values(v: &[f64], cov: Option<SMatrix<f64, 5, 5>>) -> Calibration {
         Calibration {
             phi: wrap(v[0]),
             psi: wrap(v[1]),
@@ -314,4 +314,17 @@ pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, St
 
 fn column<'a>(s: &'a Series, name: &str) -> Result<&'a [Option<f64>], String> {
     s.column(name).ok_or_else(|| format!("no column '{name}'"))
+}
+
+/// `(A, V)` of eq. (23) from the state `(mu, gamma)` of eq. (16) and the
+/// calibration, through `Psi1..Psi3` of eq. (21).
+pub fn av_from_state(cal: &Calibration, q: f64, mu: f64, gamma: f64) -> (f64, f64) {
+    let (eta_q, xi_q, _) = cal.modes(q);
+    let psi1 = (xi_q - eta_q * cal.phi.sin()) / (eta_q * cal.phi.cos());
+    let psi2 = mu * eta_q * cal.phi.cos() / gamma.sin();
+    let psi3 = (mu + gamma.cos()) / gamma.sin();
+    (
+        (psi1 - psi3) / (1.0 + psi1 * psi3),
+        psi2 * (1.0 + psi1 * psi3) / (1.0 + psi3 * psi3),
+    )
 }

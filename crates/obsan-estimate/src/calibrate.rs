@@ -320,6 +320,20 @@ pub fn calibrate(
             let (_, xq, l) = calibration.modes(t.q);
             t.closed.xi_q = xq;
             t.closed.l = l;
+            // Covariance of (xi_q, L) from ML's by the delta method.
+            let v = calibration.values();
+            let mut j = SMatrix::<f64, 2, 5>::zeros();
+            for c in 0..5 {
+                let h = 1e-7 * v[c].abs().max(1e-3);
+                let (mut vp, mut vm) = (v, v);
+                vp[c] += h;
+                vm[c] -= h;
+                let cp = Calibration::from_values(&vp, None).modes(t.q);
+                let cm = Calibration::from_values(&vm, None).modes(t.q);
+                j[(0, c)] = (cp.1 - cm.1) / (2.0 * h);
+                j[(1, c)] = crate::sim::wrap(cp.2 - cm.2) / (2.0 * h);
+            }
+            t.modes_cov = Some(j * cov * j.transpose());
         }
         ml = Some(r);
     }

@@ -355,7 +355,6 @@ fn rms(c: &Closed, d: &ArcData) -> f64 {
 /// when the data cover a single loop, where a period cannot be seen by
 /// comparing the signal with a shifted copy of itself.
 pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
-    let g = (5f64.sqrt() - 1.0) / 2.0;
     let n = d.s.len();
     if n < 10 {
         return Err(Degenerate(format!(
@@ -381,37 +380,83 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
     // Scan the total turn over the data, in steps small against a radian, on
     // at most 200 evenly chosen bearings (LS refines on all of them).
     let sub = subsample(d, 200);
-    let (lo, hi, step) = (0.5 * PI, 12.0 * PI, 0.1);
-    let mut best = (f64::INFINITY, 0.0);
-    let mut values = Vec::new();
+    // From 0.7 turn: the implicit equation degenerates as xi_q -> 0 (eps = 1,
+    // u = L' fits anything), so shorter turns would win on noise alone; and
+    // DET needs about one loop of data anyway (eq. 35).
+    let (lo, hi, step) = (1.4 * PI, 12.0 * PI, 0.1);
+    let mut grid = Vec::new();
     for sign in [1.0, -1.0] {
-        for (v, xi) in scan(&sub, sign * lo / span, sign * step / span, ((hi - lo) / step) as usize) {
-            values.push(v);
-            if v < best.0 {
-                best = (v, xi);
+        grid.extend(scan(&sub, sign * lo / span, sign * step / span, ((hi - lo) / step) as usize));
+    }
+    let mut sorted: Vec<f64> = grid.iter().map(|g| g.0).collect();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    // Noise biases the algebraic residual: keep the three deepest local minima
+    // and let the closed form's fit choose (a wrong period fits badly).
+    let mut minima: Vec<(f64, f64)> = (0..grid.len())
+        .filter(|&i| {
+            let same_sign = |j: usize| grid[j].1.signum() == grid[i].1.signum();
+            // Interior minima only: an edge of the scan is not a period.
+            i > 0
+                && i + 1 < grid.len()
+                && same_sign(i - 1)
+                && same_sign(i + 1)
+                && grid[i - 1].0 >= grid[i].0
+                && grid[i + 1].0 >= grid[i].0
+        })
+        .map(|i| grid[i])
+        .collect();
+    minima.sort_by(|a, b| a.0.total_cmp(&b.0));
+    minima.truncate(3);
+    let mut best: Option<(f64, Det)> = None;
+    let mut last_err = None;
+    for (v0, xi0) in minima {
+        if v0 > 0.5 * median {
+            continue;
+        }
+        match det_from(d, &sub, xi0, step / span, span, &interp) {
+            Ok(r) => {
+                let e = rms(&r.closed, d);
+                if best.as_ref().is_none_or(|b| e < b.0) {
+                    best = Some((e, r));
+                }
             }
+            Err(e) => last_err = Some(e),
         }
     }
-    // Golden section around the best grid point.
-    let h = step / span;
-    let (mut a, mut b) = (best.1 - h, best.1 + h);
+    match best {
+        Some((_, r)) => Ok(r),
+        None => Err(last_err.unwrap_or_else(|| {
+            Degenerate(format!(
+                "no period found in the bearings (best algebraic residual vs median {median:.3e}): xi_q cannot be estimated"
+            ))
+        })),
+    }
+}
+
+/// DET from a period candidate: refine xi_q, then Algorithm 1, (37), (38).
+fn det_from(
+    d: &ArcData,
+    sub: &ArcData,
+    xi_start: f64,
+    h: f64,
+    span: f64,
+    interp: &Interp,
+) -> Result<Det, Degenerate> {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let n = d.s.len();
+    // Golden section around the grid point.
+    let (mut a, mut b) = (xi_start - h, xi_start + h);
     for _ in 0..30 {
         let (c1, c2) = (b - g * (b - a), a + g * (b - a));
-        if algebraic(&sub, c1).0 < algebraic(&sub, c2).0 {
+        if algebraic(sub, c1).0 < algebraic(sub, c2).0 {
             b = c2;
         } else {
             a = c1;
         }
     }
     let xi_q = (a + b) / 2.0;
-    let (vmin, vec) = algebraic(&sub, xi_q);
-    values.sort_by(f64::total_cmp);
-    let median = values[values.len() / 2];
-    if vmin > 0.5 * median {
-        return Err(Degenerate(format!(
-            "no period found in the bearings (best algebraic residual {vmin:.3e} vs median {median:.3e}): xi_q cannot be estimated"
-        )));
-    }
+    let (_, vec) = algebraic(sub, xi_q);
     let period = 2.0 * PI / xi_q.abs();
     // Algorithm 1: sigma(s_c) of beta(s) + beta(2 s_c - s) (mod pi) for s_c
     // over half a period (nodes are half a period apart).

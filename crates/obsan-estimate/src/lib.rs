@@ -15,11 +15,12 @@ mod cekf;
 mod circle;
 mod data;
 mod fit;
+mod montecarlo;
 mod predict;
 mod rng;
 mod sim;
 
-pub use calib::{arc_data, combine, start_state, Calibration, Metric, Modes, PARAMS};
+pub use calib::{arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS};
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationReport, CekfInit, Method, TrajectoryEstimate,
 };
@@ -27,6 +28,10 @@ pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
 pub use data::{DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
+pub use montecarlo::{
+    crlb_sd, kc_from_av, run_cell, table, Cell, CellResult, McMethod, MethodStats, Table,
+    MODE_COLUMNS, PARAM_COLUMNS,
+};
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;
 pub use sim::{

@@ -107,6 +107,9 @@ pub struct SimOptions {
     pub dq: f64,
     pub encoder_rate: f64,
     pub bearing_rate: f64,
+    /// Instead of `bearing_rate`: this many bearings per trajectory, evenly
+    /// spread over it (the paper's Tables IV and V count bearings this way).
+    pub bearings: Option<usize>,
     /// Initial distance to the feature (m).
     pub d0: f64,
     pub effects: Effects,
@@ -132,6 +135,7 @@ impl Default for SimOptions {
             dq: 0.0,
             encoder_rate: 50.0,
             bearing_rate: 1.0,
+            bearings: None,
             d0: 1.2,
             effects: Effects::default(),
             seed: 1,
@@ -337,7 +341,11 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
         let mut outputs = Series::new(vec!["beta".into()]);
         let mut k = 0usize;
         loop {
-            let tc = k as f64 / o.bearing_rate;
+            let tc = match o.bearings {
+                Some(n) if k >= n => break,
+                Some(n) => k as f64 * duration / n as f64,
+                None => k as f64 / o.bearing_rate,
+            };
             if tc > duration + 1e-9 {
                 break;
             }

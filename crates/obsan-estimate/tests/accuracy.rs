@@ -56,3 +56,19 @@ fn timing_det() {
         eprintln!("   arc {:?}", t0.elapsed() / 20);
     }
 }
+#[test]
+fn explore3() {
+    let p = predictor();
+    for seed in 1..12 {
+        let o = SimOptions { sigma_beta: 3f64.to_radians(), bearings: Some(100), seed, ..SimOptions::default() };
+        let (data, truth) = simulate(&o).unwrap();
+        let co = CalibrateOptions::for_dataset(&data, Method::Ls);
+        let r = calibrate(&data, Some(&p), &co).unwrap();
+        let e: Vec<f64> = r.calibration.values().iter().zip(truth_values(&truth)).map(|(a, b)| a - b).collect();
+        let mut s = format!("seed {seed} phi err {:.4}", e[0]);
+        for (te, tt) in r.trajectories.iter().zip(&truth.trajectories) {
+            s += &format!(" | {} dxi {:.2e} dL {:.4} det dL {:.4}", te.name, te.closed.xi_q - tt.xi_q.unwrap(), obsan_estimate::wrap(te.closed.l - tt.l.unwrap()), obsan_estimate::wrap(te.det.closed.l - tt.l.unwrap()));
+        }
+        eprintln!("{s}");
+    }
+}

@@ -40,6 +40,13 @@ fn det_and_ls_recover_the_modes_of_noise_free_circles() {
         let (mu0, g0) = start_state(&cal, &f.closed, t.meta["q"]);
         eprintln!("mu0 {mu0} ({}) g0 {g0} ({})", tt.mu0, tt.gamma0);
         assert!((mu0 - tt.mu0).abs() < 1e-6 && obsan_estimate::wrap(g0 - tt.gamma0).abs() < 1e-6);
+        // A0, V0 of the sign-free form against (21) and (23) from the true state.
+        let (a, v) = obsan_estimate::av_from_state(&cal, t.meta["q"], tt.mu0, tt.gamma0);
+        let (a2, v2) = f.closed.av(0.0);
+        assert!((a - a2).abs() < 1e-8 * a.abs().max(1.0) && (v - v2).abs() < 1e-8, "{a} {a2} {v} {v2}");
+        // k and c: eq. (30)-(31) from A0, V0 against the sign-free form's.
+        let (k, c) = obsan_estimate::kc_from_av(f.closed.xi_q, a, v);
+        assert!((k - f.closed.k()).abs() < 1e-8 * k.abs() && (c - f.closed.c()).abs() < 1e-8);
     }
     let (mu0, _) = start_state(&cal, &fits[0].closed, data.trajectories[0].meta["q"]);
     let m = Metric::new(&cal, mu0, data.meta.d0.unwrap());

@@ -1,0 +1,401 @@
+//! Monte Carlo runs laid out like the paper's Tables IV-VII, with the
+//! paper's figures beside ours, the Cramér–Rao bound and the efficiency
+//! (RMS error / CRLB standard deviation). Runs are independent and seeded by
+//! `seed + run`, so results do not depend on scheduling.
+
+use crate::calib::av_from_state;
+use crate::calibrate::{calibrate, CalibrateOptions, CekfInit, Method};
+use crate::fit::{crlb, FitOptions, FitTrajectory};
+use crate::predict::Predictor;
+use crate::sim::{simulate, wrap, SimOptions, Truth};
+use rayon::prelude::*;
+
+/// A method as the tables name it (CEKF from a 30% off guess, CEKFd from DET).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum McMethod {
+    Det,
+    Ls,
+    Cekf,
+    Cekfd,
+    Ml,
+}
+
+impl McMethod {
+    pub fn name(self) -> &'static str {
+        match self {
+            McMethod::Det => "DET",
+            McMethod::Ls => "LS",
+            McMethod::Cekf => "CEKF",
+            McMethod::Cekfd => "CEKFd",
+            McMethod::Ml => "ML",
+        }
+    }
+}
+
+/// One cell: a set-up, its label, the methods to run and the paper's figures.
+#[derive(Clone, Debug)]
+pub struct Cell {
+    pub label: String,
+    pub sim: SimOptions,
+    pub methods: Vec<McMethod>,
+    /// The paper's figures for (method, values) in this cell's columns.
+    pub paper: Vec<(McMethod, Vec<f64>)>,
+}
+
+/// A table: which columns it reports.
+#[derive(Clone, Debug)]
+pub struct Table {
+    pub number: u8,
+    pub title: String,
+    /// Column names; Table VI reports the modes, the others the parameters.
+    pub columns: Vec<&'static str>,
+    pub modes: bool,
+    /// Table IV reports estimates of a single run, not errors.
+    pub estimates: bool,
+    pub cells: Vec<Cell>,
+}
+
+pub const PARAM_COLUMNS: [&str; 5] = ["phi (deg)", "psi (deg)", "eta (%)", "delta (%)", "xi (%)"];
+pub const MODE_COLUMNS: [&str; 4] = ["xi_q (%)", "L (deg)", "c (deg)", "k (%)"];
+
+fn setup(sigma_deg: f64, iota: f64, dq: f64, bearings: usize) -> SimOptions {
+    SimOptions {
+        sigma_beta: sigma_deg.to_radians(),
+        iota,
+        dq,
+        bearings: Some(bearings),
+        ..SimOptions::default()
+    }
+}
+
+/// The paper's tables as cells (bearings per trajectory: 300 in Table IV,
+/// 100 elsewhere, as the paper states).
+pub fn table(number: u8) -> Option<Table> {
+    let p = |m, v: &[f64]| (m, v.to_vec());
+    Some(match number {
+        4 => Table {
+            number,
+            title: "Table IV: estimates by LS (initialised by DET), one run per sigma_beta, 300 bearings".into(),
+            columns: PARAM_COLUMNS.to_vec(),
+            modes: false,
+            estimates: true,
+            cells: [
+                (1.0, [-0.08, 90.05, 0.49596, 1.01610, 0.61296]),
+                (3.0, [0.21, 90.08, 0.49362, 1.01629, 0.61167]),
+                (5.0, [0.13, 89.83, 0.50103, 1.01607, 0.61323]),
+            ]
+            .iter()
+            .map(|(s, v)| Cell {
+                label: format!("sigma_beta = {s} deg"),
+                sim: setup(*s, 0.0, 0.0, 300),
+                methods: vec![McMethod::Ls, McMethod::Ml],
+                paper: vec![p(McMethod::Ls, v)],
+            })
+            .collect(),
+        },
+        5 => Table {
+            number,
+            title: "Table V: mean absolute errors over the runs, 100 bearings per trajectory".into(),
+            columns: PARAM_COLUMNS.to_vec(),
+            modes: false,
+            estimates: false,
+            cells: [
+                (0.0, 1.0, [0.10, 0.08, 0.32, 0.005, 0.045]),
+                (0.02, 1.0, [0.65, 0.37, 1.5, 0.05, 0.15]),
+                (0.04, 1.0, [1.3, 0.5, 3.2, 0.10, 0.19]),
+                (0.0, 3.0, [0.19, 0.13, 0.53, 0.012, 0.087]),
+                (0.02, 3.0, [1.2, 0.71, 2.5, 0.11, 0.25]),
+                (0.04, 3.0, [2.2, 0.9, 5.2, 0.23, 0.41]),
+                (0.0, 5.0, [0.28, 0.23, 0.85, 0.019, 0.13]),
+                (0.02, 5.0, [1.7, 1.0, 3.9, 0.18, 0.56]),
+                (0.04, 5.0, [3.1, 1.6, 5.7, 0.35, 0.66]),
+            ]
+            .iter()
+            .map(|(iota, s, v)| Cell {
+                label: format!("iota = {iota}, sigma_beta = {s} deg"),
+                sim: setup(*s, *iota, 0.0, 100),
+                methods: vec![McMethod::Ls, McMethod::Ml],
+                paper: vec![p(McMethod::Ls, v)],
+            })
+            .collect(),
+        },
+        6 => Table {
+            number,
+            title: "Table VI: mean absolute errors of the modes (all trajectories), 100 bearings per trajectory".into(),
+            columns: MODE_COLUMNS.to_vec(),
+            modes: true,
+            estimates: false,
+            cells: [
+                (0.04, 5.0, [9.3, 4.3], [3.2, 3.8, 1.1, 27.0], [1.6, 1.2], [0.74, 0.41, 0.83, 1.6]),
+                (0.0, 5.0, [2.8, 1.5], [1.4, 1.1, 0.45, 16.0], [0.55, 0.37], [0.23, 0.17, 0.22, 0.85]),
+                (0.04, 1.0, [5.8, 3.5], [3.1, 0.25, 0.28, 6.3], [0.87, 0.13], [0.18, 0.11, 0.27, 0.29]),
+                (0.0, 1.0, [1.7, 0.75], [1.5, 0.061, 0.093, 2.7], [0.11, 0.039], [0.059, 0.040, 0.065, 0.12]),
+            ]
+            .iter()
+            .map(|(iota, s, cekf, det, cekfd, ls)| Cell {
+                label: format!("iota = {iota}, sigma_beta = {s} deg"),
+                sim: setup(*s, *iota, 0.0, 100),
+                methods: vec![McMethod::Cekf, McMethod::Det, McMethod::Cekfd, McMethod::Ls, McMethod::Ml],
+                paper: vec![
+                    p(McMethod::Cekf, cekf),
+                    p(McMethod::Det, det),
+                    p(McMethod::Cekfd, cekfd),
+                    p(McMethod::Ls, ls),
+                ],
+            })
+            .collect(),
+        },
+        7 => Table {
+            number,
+            title: "Table VII: mean absolute errors under a systematic ratio error dq, sigma_beta = 1 deg, 100 bearings".into(),
+            columns: PARAM_COLUMNS.to_vec(),
+            modes: false,
+            estimates: false,
+            cells: [
+                (0.0, [0.10, 0.08, 0.32, 0.005, 0.045]),
+                (0.01, [0.17, 0.20, 1.4, 0.69, 0.40]),
+                (0.03, [0.48, 0.51, 3.3, 2.3, 1.2]),
+                (0.05, [0.83, 0.92, 6.3, 4.1, 2.0]),
+                (0.10, [1.5, 1.6, 13.0, 7.9, 4.2]),
+            ]
+            .iter()
+            .map(|(dq, v)| Cell {
+                label: format!("dq = {dq}"),
+                sim: setup(1.0, 0.0, *dq, 100),
+                methods: vec![McMethod::Ls, McMethod::Ml],
+                paper: vec![p(McMethod::Ls, v)],
+            })
+            .collect(),
+        },
+        _ => return None,
+    })
+}
+
+/// Per method: the mean absolute error, the RMS error (or, for Table IV, the
+/// mean estimate) per column, and the runs it could not complete.
+#[derive(Clone, Debug)]
+pub struct MethodStats {
+    pub method: McMethod,
+    pub mean_abs: Vec<f64>,
+    pub rms: Vec<f64>,
+    pub mean_estimate: Vec<f64>,
+    pub failures: usize,
+    pub first_failure: Option<String>,
+}
+
+/// A cell's outcome.
+#[derive(Clone, Debug)]
+pub struct CellResult {
+    pub label: String,
+    pub runs: usize,
+    pub methods: Vec<MethodStats>,
+    /// CRLB standard deviation per parameter column (bearing noise only), if computed.
+    pub crlb_sd: Option<Vec<f64>>,
+}
+
+/// Errors of one run in the table's units: parameters (deg, deg, %, %, %)
+/// or modes (%, deg, deg, %), averaged over the trajectories for modes.
+fn param_errors(est: &[f64; 5], t: &Truth) -> Vec<f64> {
+    vec![
+        wrap(est[0] - t.phi).to_degrees(),
+        wrap(est[1] - t.psi).to_degrees(),
+        100.0 * (est[2] - t.eta) / t.eta,
+        100.0 * (est[3] - t.delta) / t.delta,
+        100.0 * (est[4] - t.xi) / t.xi,
+    ]
+}
+
+fn param_estimates(est: &[f64; 5]) -> Vec<f64> {
+    vec![est[0].to_degrees(), est[1].to_degrees(), est[2], est[3], est[4]]
+}
+
+/// (k, c) of eqs. (30)-(31) from A0, V0.
+pub fn kc_from_av(xi_q: f64, a0: f64, v0: f64) -> (f64, f64) {
+    let k = (1.0 + a0 * a0) * v0 * v0 / (2.0 * v0 - xi_q);
+    let sw = -a0.signum() * v0.signum();
+    let c = (sw * ((2.0 * k - xi_q) * v0 - xi_q * k) / (xi_q * a0 * v0)).atan();
+    (k, c)
+}
+
+fn true_cal(t: &Truth) -> crate::Calibration {
+    crate::Calibration {
+        phi: t.phi,
+        psi: t.psi,
+        eta: t.eta,
+        delta: t.delta,
+        xi: t.xi,
+        cov: None,
+    }
+}
+
+/// Run one calibration of a simulated dataset; the per-column errors.
+fn one(
+    method: McMethod,
+    data: &crate::Dataset,
+    truth: &Truth,
+    predictor: &Predictor,
+    modes: bool,
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let m = match method {
+        McMethod::Det => Method::Det,
+        McMethod::Ls => Method::Ls,
+        McMethod::Cekf | McMethod::Cekfd => Method::Cekf,
+        McMethod::Ml => Method::Ml,
+    };
+    let mut o = CalibrateOptions::for_dataset(data, m);
+    let cal_true = true_cal(truth);
+    if method == McMethod::Cekf {
+        // The paper's CEKF: every initial component 30% off (L by 0.3 rad).
+        let states = truth
+            .trajectories
+            .iter()
+            .map(|tt| {
+                let q = tt.q.unwrap_or(0.0);
+                let (a, v) = av_from_state(&cal_true, q, tt.mu0, tt.gamma0);
+                let (_, xq, l) = cal_true.modes(q);
+                [a * v * 1.3, v * 1.3, xq * 1.3, l + 0.3]
+            })
+            .collect();
+        o.cekf_init = CekfInit::Given {
+            states,
+            relative_sd: 0.3,
+        };
+    }
+    let r = calibrate(data, Some(predictor), &o).map_err(|e| e.0)?;
+    let est = r.calibration.values();
+    if !modes {
+        return Ok((param_errors(&est, truth), param_estimates(&est)));
+    }
+    // Modes: mean over trajectories of |error| per column (c, k by DET and LS only).
+    let mut acc = vec![0.0; 4];
+    let n = r.trajectories.len() as f64;
+    for (te, tt) in r.trajectories.iter().zip(&truth.trajectories) {
+        let q = tt.q.unwrap_or(0.0);
+        let (a0, v0) = av_from_state(&cal_true, q, tt.mu0, tt.gamma0);
+        let (_, xq, l) = cal_true.modes(q);
+        let (k, c) = kc_from_av(xq, a0, v0);
+        acc[0] += (100.0 * (te.closed.xi_q - xq) / xq).abs() / n;
+        acc[1] += wrap(te.closed.l - l).to_degrees().abs() / n;
+        if matches!(method, McMethod::Det | McMethod::Ls) {
+            // c is defined modulo pi.
+            let dc = wrap(2.0 * (te.closed.c() - c)) / 2.0;
+            acc[2] += dc.to_degrees().abs() / n;
+            acc[3] += (100.0 * (te.closed.k() - k) / k).abs() / n;
+        } else {
+            acc[2] = f64::NAN;
+            acc[3] = f64::NAN;
+        }
+    }
+    Ok((acc.clone(), acc))
+}
+
+/// The CRLB standard deviations (table units) of the parameters for a set-up:
+/// the inverse Fisher information of the bearings at the truth, on the
+/// noise-free data of that set-up (circles: iota = 0).
+pub fn crlb_sd(sim: &SimOptions, predictor: &Predictor) -> Result<Vec<f64>, String> {
+    let clean = SimOptions {
+        sigma_beta: 0.0,
+        k_encoder: 0.0,
+        iota: 0.0,
+        ..sim.clone()
+    };
+    let (data, truth) = simulate(&clean)?;
+    let fts: Vec<FitTrajectory> = data
+        .trajectories
+        .iter()
+        .map(|t| FitTrajectory {
+            inputs: &t.inputs,
+            outputs: &t.outputs,
+            consts: vec![t.meta.get("q").copied().unwrap_or(0.0)],
+        })
+        .collect();
+    let states: Vec<Vec<f64>> = truth
+        .trajectories
+        .iter()
+        .map(|t| vec![t.mu0, t.gamma0])
+        .collect();
+    let opts = FitOptions {
+        max_iterations: 0,
+        cost_tolerance: 0.0,
+        sigma: vec![sim.sigma_beta],
+        max_step: 0.5,
+    };
+    let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
+    let cov = crlb(predictor, &fts, &params, &states, &opts)?;
+    let sd: Vec<f64> = (0..5).map(|i| cov[i][i].max(0.0).sqrt()).collect();
+    Ok(vec![
+        sd[0].to_degrees(),
+        sd[1].to_degrees(),
+        100.0 * sd[2] / truth.eta,
+        100.0 * sd[3] / truth.delta,
+        100.0 * sd[4] / truth.xi,
+    ])
+}
+
+/// Run a cell: `runs` simulations (seeds `seed + run`), each calibrated by
+/// every method of the cell. `tick` is called after each run.
+pub fn run_cell(
+    cell: &Cell,
+    modes: bool,
+    runs: usize,
+    seed: u64,
+    predictor: &Predictor,
+    tick: &(dyn Fn() + Sync),
+) -> CellResult {
+    let per_run: Vec<Vec<Result<(Vec<f64>, Vec<f64>), String>>> = (0..runs)
+        .into_par_iter()
+        .map(|r| {
+            let sim = SimOptions {
+                seed: seed.wrapping_add(r as u64),
+                ..cell.sim.clone()
+            };
+            let out = match simulate(&sim) {
+                Ok((data, truth)) => cell
+                    .methods
+                    .iter()
+                    .map(|&m| one(m, &data, &truth, predictor, modes))
+                    .collect(),
+                Err(e) => cell.methods.iter().map(|_| Err(e.clone())).collect(),
+            };
+            tick();
+            out
+        })
+        .collect();
+    let ncols = if modes { 4 } else { 5 };
+    let methods = cell
+        .methods
+        .iter()
+        .enumerate()
+        .map(|(mi, &m)| {
+            let ok: Vec<&(Vec<f64>, Vec<f64>)> =
+                per_run.iter().filter_map(|r| r[mi].as_ref().ok()).collect();
+            let first_failure = per_run
+                .iter()
+                .find_map(|r| r[mi].as_ref().err().cloned());
+            let n = ok.len().max(1) as f64;
+            let col = |f: &dyn Fn(&(Vec<f64>, Vec<f64>), usize) -> f64| -> Vec<f64> {
+                (0..ncols)
+                    .map(|c| ok.iter().map(|e| f(e, c)).sum::<f64>() / n)
+                    .collect()
+            };
+            MethodStats {
+                method: m,
+                mean_abs: col(&|e, c| e.0[c].abs()),
+                rms: col(&|e, c| e.0[c] * e.0[c]).iter().map(|v| v.sqrt()).collect(),
+                mean_estimate: col(&|e, c| e.1[c]),
+                failures: runs - ok.len(),
+                first_failure,
+            }
+        })
+        .collect();
+    CellResult {
+        label: cell.label.clone(),
+        runs,
+        methods,
+        crlb_sd: if modes {
+            None
+        } else {
+            crlb_sd(&cell.sim, predictor).ok()
+        },
+    }
+}

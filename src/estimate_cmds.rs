@@ -1,0 +1,321 @@
+//! `obsan calibrate | crlb | montecarlo`: reading datasets, formatting.
+
+use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
+use crate::simulate::sim_options;
+use crate::Failure;
+use obsan_estimate::{
+    calibrate, crlb_sd, run_cell, simulate, table, CalibrateOptions, Dataset, DatasetMeta, Method,
+    Predictor, Series, Trajectory, PARAMS, PARAM_COLUMNS,
+};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// The calibration model: eq. (16), compiled into the binary so that the
+/// estimators and `obsan rank` share one source of truth.
+const CALIB_SYS: &str = include_str!("../systems/calib.sys");
+
+pub fn calib_predictor() -> Predictor {
+    let sys = obsan_model::System::parse(CALIB_SYS, "systems/calib.sys").expect("calib.sys parses");
+    Predictor::new(&sys.normal_form(None, &[]).expect("calib.sys normal form"))
+}
+
+fn read(path: &Path) -> Result<String, Failure> {
+    std::fs::read_to_string(path).map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))
+}
+
+/// Read a dataset folder (docs/data-format.md): dataset.json (optional), one
+/// folder per trajectory with inputs.csv, outputs.csv, meta.json (optional).
+pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Dataset, Failure> {
+    let root = Path::new(dir);
+    if !root.is_dir() {
+        return Err(Failure(format!("{dir}: not a dataset folder")));
+    }
+    let meta_path = root.join("dataset.json");
+    let meta: DatasetMeta = if meta_path.exists() {
+        serde_json::from_str(&read(&meta_path)?)
+            .map_err(|e| Failure(format!("{}: line {}, column {}: {e}", meta_path.display(), e.line(), e.column())))?
+    } else {
+        DatasetMeta::default()
+    };
+    let mut names: Vec<String> = std::fs::read_dir(root)
+        .map_err(|e| Failure(format!("cannot list {dir}: {e}")))?
+        .filter_map(|e| e.ok())
+        .filter(|e| e.path().is_dir())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut trajectories = Vec::new();
+    for name in names {
+        let tdir = root.join(&name);
+        let ipath = tdir.join("inputs.csv");
+        let opath = tdir.join("outputs.csv");
+        if !ipath.exists() && !opath.exists() {
+            continue; // not a trajectory
+        }
+        let ip = ipath.display().to_string();
+        let op = opath.display().to_string();
+        let inputs_s = Series::parse_csv(&read(&ipath)?, &ip, inputs, false)?;
+        let outputs_s = Series::parse_csv(&read(&opath)?, &op, outputs, true)?;
+        let mpath = tdir.join("meta.json");
+        let meta: BTreeMap<String, f64> = if mpath.exists() {
+            serde_json::from_str(&read(&mpath)?).map_err(|e| {
+                Failure(format!("{}: line {}, column {}: {e} (expected {{\"name\": number}})", mpath.display(), e.line(), e.column()))
+            })?
+        } else {
+            BTreeMap::new()
+        };
+        let t = Trajectory {
+            name: name.clone(),
+            inputs: inputs_s,
+            outputs: outputs_s,
+            meta,
+        };
+        t.check(&tdir.display().to_string())?;
+        trajectories.push(t);
+    }
+    if trajectories.is_empty() {
+        return Err(Failure(format!("{dir}: no trajectory folder (with inputs.csv and outputs.csv)")));
+    }
+    Ok(Dataset { meta, trajectories })
+}
+
+fn method(s: &str) -> Result<Method, Failure> {
+    Ok(match s {
+        "det" => Method::Det,
+        "ls" => Method::Ls,
+        "cekf" => Method::Cekf,
+        "ml" => Method::Ml,
+        _ => return Err(Failure(format!("--method {s}: expected det, ls, cekf or ml"))),
+    })
+}
+
+/// Units of display: angles in degrees, the rest as is.
+fn shown(i: usize, v: f64) -> f64 {
+    if i < 2 {
+        v.to_degrees()
+    } else {
+        v
+    }
+}
+
+pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
+    let m = method(&a.method)?;
+    let data = read_dataset(&a.dataset, &["wR", "wL"], &["beta"])?;
+    let mut o = CalibrateOptions::for_dataset(&data, m);
+    if let Some(d0) = a.d0 {
+        if !(d0.is_finite() && d0 > 0.0) {
+            return Err(Failure(format!("--d0 must be a positive distance in metres, got {d0}")));
+        }
+        o.d0 = Some(d0);
+    }
+    if let Some(s) = a.sigma_beta_deg {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(Failure(format!("--sigma-beta-deg must be positive, got {s}")));
+        }
+        o.sigma_beta = Some(s.to_radians());
+    }
+    let p = calib_predictor();
+    let r = calibrate(&data, Some(&p), &o).map_err(|e| Failure(format!("{}: {e}", a.dataset)))?;
+    let sd = r.calibration.sd();
+    if a.json {
+        let trajs: Vec<Value> = r
+            .trajectories
+            .iter()
+            .map(|t| {
+                json!({"name": t.name, "q": t.q, "xi_q": t.closed.xi_q, "L": t.closed.l,
+                       "c": t.closed.c(), "k": t.closed.k(), "sd": t.modes_sd().map(|s| json!({"xi_q": s[0], "L": s[1]})),
+                       "mu0": t.start.0, "gamma0": t.start.1, "residual_rms": t.rms})
+            })
+            .collect();
+        let mut params = serde_json::Map::new();
+        for (i, name) in PARAMS.iter().enumerate() {
+            params.insert(name.to_string(), json!({"value": r.calibration.values()[i], "sd": sd.map(|s| s[i])}));
+        }
+        let metric = r.metric.as_ref().map(|(mm, msd)| {
+            let names = ["rho", "r_right", "r_left", "B"];
+            let mut o = serde_json::Map::new();
+            for (i, n) in names.iter().enumerate() {
+                o.insert(n.to_string(), json!({"value": mm.values()[i], "sd": msd.map(|s| s[i])}));
+            }
+            Value::Object(o)
+        });
+        let out = json!({"method": m.name(), "exact": false,
+            "sigma_beta": r.sigma_beta, "sigma_beta_estimated": r.sigma_estimated,
+            "params": params, "metric": metric, "trajectories": trajs,
+            "ml": r.ml.as_ref().map(|f| json!({"iterations": f.iterations, "cost": f.cost, "residuals": f.n_residuals}))});
+        println!("{}", serde_json::to_string_pretty(&out).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!(
+        "method {} on {} ({} trajectories); bearing noise {:.3} deg{}",
+        m.name(),
+        a.dataset,
+        r.trajectories.len(),
+        r.sigma_beta.to_degrees(),
+        if r.sigma_estimated { " (estimated from the LS residuals)" } else { " (from dataset.json)" }
+    );
+    println!("{:<10} {:>7} {:>22} {:>22} {:>10} {:>11} {:>9}", "trajectory", "q", "xi_q", "L (deg)", "c (deg)", "k", "rms (deg)");
+    for t in &r.trajectories {
+        let s = t.modes_sd();
+        let pm = |v: f64, e: Option<f64>| match e {
+            Some(e) => format!("{v:.6} ± {e:.6}"),
+            None => format!("{v:.6}"),
+        };
+        println!(
+            "{:<10} {:>7} {:>22} {:>22} {:>10.4} {:>11.6} {:>9.3}",
+            t.name,
+            t.q,
+            pm(t.closed.xi_q, s.map(|s| s[0])),
+            pm(t.closed.l.to_degrees(), s.map(|s| s[1].to_degrees())),
+            t.closed.c().to_degrees(),
+            t.closed.k(),
+            t.rms.to_degrees()
+        );
+    }
+    println!();
+    let units = ["deg", "deg", "", "", ""];
+    for (i, name) in PARAMS.iter().enumerate() {
+        let v = shown(i, r.calibration.values()[i]);
+        match sd {
+            Some(s) => println!("{name:<6} = {v:>12.6} ± {:.6} {}", shown(i, s[i]), units[i]),
+            None => println!("{name:<6} = {v:>12.6} {}", units[i]),
+        }
+    }
+    if sd.is_none() {
+        println!("(det gives no standard deviations; use ls or ml)");
+    }
+    match &r.metric {
+        Some((mm, msd)) => {
+            println!();
+            for (i, n) in ["rho", "rR", "rL", "B"].iter().enumerate() {
+                match msd {
+                    Some(s) => println!("{n:<6} = {:>12.6} ± {:.6} m", mm.values()[i], s[i]),
+                    None => println!("{n:<6} = {:>12.6} m", mm.values()[i]),
+                }
+            }
+            println!("(metric from d0 = {} m on trajectory {})", o.d0.unwrap_or(0.0), r.trajectories[0].name);
+        }
+        None => println!("\nrho, rR, rL, B need one metric distance: --d0 METRES (initial distance to the feature, first trajectory)"),
+    }
+    if a.plot.is_some() {
+        eprintln!("note: --plot is not implemented yet; nothing was written");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
+    let o = sim_options(&a.sim)?;
+    let p = calib_predictor();
+    let sd = crlb_sd(&o, &p).map_err(Failure)?;
+    let (data, _) = simulate(&o).map_err(Failure)?;
+    let counts: Vec<String> = data
+        .trajectories
+        .iter()
+        .map(|t| format!("{} {}", t.name, t.outputs.len()))
+        .collect();
+    if a.json {
+        let mut m = serde_json::Map::new();
+        for (i, c) in PARAM_COLUMNS.iter().enumerate() {
+            m.insert(c.to_string(), json!(sd[i]));
+        }
+        println!("{}", serde_json::to_string_pretty(&json!({"crlb_sd": m, "noise": "bearing only", "bearings": counts})).expect("json"));
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("Cramér–Rao bound (bearing noise {} deg only; encoder noise not included), bearings: {}", a.sim.sigma_beta_deg, counts.join(", "));
+    for (i, c) in PARAM_COLUMNS.iter().enumerate() {
+        println!("  sd {c:<10} >= {:.4}", sd[i]);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
+    let tables: Vec<u8> = match a.table.as_str() {
+        "all" => vec![4, 5, 6, 7],
+        t => vec![t
+            .parse::<u8>()
+            .ok()
+            .filter(|n| (4..=7).contains(n))
+            .ok_or_else(|| Failure(format!("--table {t}: expected 4, 5, 6, 7 or all")))?],
+    };
+    if a.runs == 0 {
+        return Err(Failure("--runs must be at least 1".into()));
+    }
+    if let Some(n) = a.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .map_err(|e| Failure(format!("--threads {n}: {e}")))?;
+    }
+    let p = calib_predictor();
+    let mut all = Vec::new();
+    for tn in tables {
+        let t = table(tn).expect("known table");
+        let runs = if t.estimates { 1 } else { a.runs };
+        let total = (runs * t.cells.len()) as u64;
+        let bar = crate::analysis_cmds::progress_bar(total, &format!("table {tn}"));
+        let start = std::time::Instant::now();
+        let results: Vec<_> = t
+            .cells
+            .iter()
+            .map(|c| run_cell(c, t.modes, runs, a.seed, &p, &|| bar.inc(1)))
+            .collect();
+        bar.finish_and_clear();
+        let secs = start.elapsed().as_secs_f64();
+        if !a.json {
+            print_table(&t, &results, runs, secs);
+        }
+        all.push(json!({"table": tn, "title": t.title, "runs": runs, "seconds": secs, "columns": t.columns,
+            "cells": t.cells.iter().zip(&results).map(|(c, r)| json!({
+                "label": r.label,
+                "crlb_sd": r.crlb_sd,
+                "paper": c.paper.iter().map(|(m, v)| json!({"method": m.name(), "values": v})).collect::<Vec<_>>(),
+                "methods": r.methods.iter().map(|m| json!({"method": m.method.name(), "mean_abs_error": m.mean_abs,
+                    "rms_error": m.rms, "mean_estimate": m.mean_estimate, "failures": m.failures,
+                    "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
+    }
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&Value::Array(all)).expect("json"));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_table(t: &obsan_estimate::Table, results: &[obsan_estimate::CellResult], runs: usize, secs: f64) {
+    println!("{} ({} run{} per cell, seed-determined; {:.1} s)", t.title, runs, if runs == 1 { "" } else { "s" }, secs);
+    let head: String = t.columns.iter().map(|c| format!("{c:>11}")).collect();
+    println!("{:<32} {:<22}{head}", "set-up", "row");
+    for (cell, r) in t.cells.iter().zip(results) {
+        for (m, v) in &cell.paper {
+            let vals: String = v.iter().map(|x| format!("{x:>11.4}")).collect();
+            println!("{:<32} {:<22}{vals}", r.label, format!("paper {}", m.name()));
+        }
+        for ms in &r.methods {
+            let fail = if ms.failures > 0 {
+                format!("  ({} failed: {})", ms.failures, ms.first_failure.clone().unwrap_or_default())
+            } else {
+                String::new()
+            };
+            let (name, vals) = if t.estimates {
+                ("estimate", &ms.mean_estimate)
+            } else {
+                ("mean |err|", &ms.mean_abs)
+            };
+            let row: String = vals.iter().map(|x| if x.is_nan() { format!("{:>11}", "-") } else { format!("{x:>11.4}") }).collect();
+            println!("{:<32} {:<22}{row}{fail}", r.label, format!("{} {name}", ms.method.name()));
+            if !t.estimates && !t.modes {
+                let row: String = ms.rms.iter().map(|x| format!("{x:>11.4}")).collect();
+                println!("{:<32} {:<22}{row}", r.label, format!("{} rms err", ms.method.name()));
+            }
+        }
+        if let Some(sd) = &r.crlb_sd {
+            let row: String = sd.iter().map(|x| format!("{x:>11.4}")).collect();
+            println!("{:<32} {:<22}{row}", r.label, "CRLB sd");
+            for ms in &r.methods {
+                let row: String = ms.rms.iter().zip(sd).map(|(e, s)| format!("{:>11.2}", e / s)).collect();
+                println!("{:<32} {:<22}{row}", r.label, format!("{} rms/CRLB", ms.method.name()));
+            }
+        }
+    }
+    println!();
+}
