@@ -428,8 +428,10 @@ pub fn progress_bar(total: u64, label: &str) -> indicatif::ProgressBar {
     }
     let b = indicatif::ProgressBar::new(total);
     b.set_style(
-        indicatif::ProgressStyle::with_template(&format!("{label} {{bar:30}} {{pos}}/{{len}} runs, eta {{eta}}"))
-            .expect("template"),
+        indicatif::ProgressStyle::with_template(&format!(
+            "{label} {{bar:30}} {{pos}}/{{len}} runs, eta {{eta}}"
+        ))
+        .expect("template"),
     );
     b
 }

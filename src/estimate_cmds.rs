@@ -22,7 +22,8 @@ pub fn calib_predictor() -> Predictor {
 }
 
 fn read(path: &Path) -> Result<String, Failure> {
-    std::fs::read_to_string(path).map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))
+    std::fs::read_to_string(path)
+        .map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))
 }
 
 /// Read a dataset folder (docs/data-format.md): dataset.json (optional), one
@@ -34,8 +35,14 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
     }
     let meta_path = root.join("dataset.json");
     let meta: DatasetMeta = if meta_path.exists() {
-        serde_json::from_str(&read(&meta_path)?)
-            .map_err(|e| Failure(format!("{}: line {}, column {}: {e}", meta_path.display(), e.line(), e.column())))?
+        serde_json::from_str(&read(&meta_path)?).map_err(|e| {
+            Failure(format!(
+                "{}: line {}, column {}: {e}",
+                meta_path.display(),
+                e.line(),
+                e.column()
+            ))
+        })?
     } else {
         DatasetMeta::default()
     };
@@ -61,7 +68,12 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
         let mpath = tdir.join("meta.json");
         let meta: BTreeMap<String, f64> = if mpath.exists() {
             serde_json::from_str(&read(&mpath)?).map_err(|e| {
-                Failure(format!("{}: line {}, column {}: {e} (expected {{\"name\": number}})", mpath.display(), e.line(), e.column()))
+                Failure(format!(
+                    "{}: line {}, column {}: {e} (expected {{\"name\": number}})",
+                    mpath.display(),
+                    e.line(),
+                    e.column()
+                ))
             })?
         } else {
             BTreeMap::new()
@@ -76,7 +88,9 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
         trajectories.push(t);
     }
     if trajectories.is_empty() {
-        return Err(Failure(format!("{dir}: no trajectory folder (with inputs.csv and outputs.csv)")));
+        return Err(Failure(format!(
+            "{dir}: no trajectory folder (with inputs.csv and outputs.csv)"
+        )));
     }
     Ok(Dataset { meta, trajectories })
 }
@@ -87,7 +101,11 @@ fn method(s: &str) -> Result<Method, Failure> {
         "ls" => Method::Ls,
         "cekf" => Method::Cekf,
         "ml" => Method::Ml,
-        _ => return Err(Failure(format!("--method {s}: expected det, ls, cekf or ml"))),
+        _ => {
+            return Err(Failure(format!(
+                "--method {s}: expected det, ls, cekf or ml"
+            )))
+        }
     })
 }
 
@@ -106,13 +124,17 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     let mut o = CalibrateOptions::for_dataset(&data, m);
     if let Some(d0) = a.d0 {
         if !(d0.is_finite() && d0 > 0.0) {
-            return Err(Failure(format!("--d0 must be a positive distance in metres, got {d0}")));
+            return Err(Failure(format!(
+                "--d0 must be a positive distance in metres, got {d0}"
+            )));
         }
         o.d0 = Some(d0);
     }
     if let Some(s) = a.sigma_beta_deg {
         if !(s.is_finite() && s > 0.0) {
-            return Err(Failure(format!("--sigma-beta-deg must be positive, got {s}")));
+            return Err(Failure(format!(
+                "--sigma-beta-deg must be positive, got {s}"
+            )));
         }
         o.sigma_beta = Some(s.to_radians());
     }
@@ -131,13 +153,19 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             .collect();
         let mut params = serde_json::Map::new();
         for (i, name) in PARAMS.iter().enumerate() {
-            params.insert(name.to_string(), json!({"value": r.calibration.values()[i], "sd": sd.map(|s| s[i])}));
+            params.insert(
+                name.to_string(),
+                json!({"value": r.calibration.values()[i], "sd": sd.map(|s| s[i])}),
+            );
         }
         let metric = r.metric.as_ref().map(|(mm, msd)| {
             let names = ["rho", "r_right", "r_left", "B"];
             let mut o = serde_json::Map::new();
             for (i, n) in names.iter().enumerate() {
-                o.insert(n.to_string(), json!({"value": mm.values()[i], "sd": msd.map(|s| s[i])}));
+                o.insert(
+                    n.to_string(),
+                    json!({"value": mm.values()[i], "sd": msd.map(|s| s[i])}),
+                );
             }
             Value::Object(o)
         });
@@ -154,9 +182,16 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
         a.dataset,
         r.trajectories.len(),
         r.sigma_beta.to_degrees(),
-        if r.sigma_estimated { " (estimated from the LS residuals)" } else { " (from dataset.json)" }
+        if r.sigma_estimated {
+            " (estimated from the LS residuals)"
+        } else {
+            " (from dataset.json)"
+        }
     );
-    println!("{:<10} {:>7} {:>22} {:>22} {:>10} {:>11} {:>9}", "trajectory", "q", "xi_q", "L (deg)", "c (deg)", "k", "rms (deg)");
+    println!(
+        "{:<10} {:>7} {:>22} {:>22} {:>10} {:>11} {:>9}",
+        "trajectory", "q", "xi_q", "L (deg)", "c (deg)", "k", "rms (deg)"
+    );
     for t in &r.trajectories {
         let s = t.modes_sd();
         let pm = |v: f64, e: Option<f64>| match e {
@@ -220,10 +255,20 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
         for (i, c) in PARAM_COLUMNS.iter().enumerate() {
             m.insert(c.to_string(), json!(sd[i]));
         }
-        println!("{}", serde_json::to_string_pretty(&json!({"crlb_sd": m, "noise": "bearing only", "bearings": counts})).expect("json"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(
+                &json!({"crlb_sd": m, "noise": "bearing only", "bearings": counts})
+            )
+            .expect("json")
+        );
         return Ok(ExitCode::SUCCESS);
     }
-    println!("Cramér–Rao bound (bearing noise {} deg only; encoder noise not included), bearings: {}", a.sim.sigma_beta_deg, counts.join(", "));
+    println!(
+        "Cramér–Rao bound (bearing noise {} deg only; encoder noise not included), bearings: {}",
+        a.sim.sigma_beta_deg,
+        counts.join(", ")
+    );
     for (i, c) in PARAM_COLUMNS.iter().enumerate() {
         println!("  sd {c:<10} >= {:.4}", sd[i]);
     }
@@ -276,23 +321,45 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
                     "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
     }
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&Value::Array(all)).expect("json"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&Value::Array(all)).expect("json")
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn print_table(t: &obsan_estimate::Table, results: &[obsan_estimate::CellResult], runs: usize, secs: f64) {
-    println!("{} ({} run{} per cell, seed-determined; {:.1} s)", t.title, runs, if runs == 1 { "" } else { "s" }, secs);
+fn print_table(
+    t: &obsan_estimate::Table,
+    results: &[obsan_estimate::CellResult],
+    runs: usize,
+    secs: f64,
+) {
+    println!(
+        "{} ({} run{} per cell, seed-determined; {:.1} s)",
+        t.title,
+        runs,
+        if runs == 1 { "" } else { "s" },
+        secs
+    );
     let head: String = t.columns.iter().map(|c| format!("{c:>11}")).collect();
     println!("{:<32} {:<22}{head}", "set-up", "row");
     for (cell, r) in t.cells.iter().zip(results) {
         for (m, v) in &cell.paper {
             let vals: String = v.iter().map(|x| format!("{x:>11.4}")).collect();
-            println!("{:<32} {:<22}{vals}", r.label, format!("paper {}", m.name()));
+            println!(
+                "{:<32} {:<22}{vals}",
+                r.label,
+                format!("paper {}", m.name())
+            );
         }
         for ms in &r.methods {
             let fail = if ms.failures > 0 {
-                format!("  ({} failed: {})", ms.failures, ms.first_failure.clone().unwrap_or_default())
+                format!(
+                    "  ({} failed: {})",
+                    ms.failures,
+                    ms.first_failure.clone().unwrap_or_default()
+                )
             } else {
                 String::new()
             };
@@ -301,19 +368,45 @@ fn print_table(t: &obsan_estimate::Table, results: &[obsan_estimate::CellResult]
             } else {
                 ("mean |err|", &ms.mean_abs)
             };
-            let row: String = vals.iter().map(|x| if x.is_nan() { format!("{:>11}", "-") } else { format!("{x:>11.4}") }).collect();
-            println!("{:<32} {:<22}{row}{fail}", r.label, format!("{} {name}", ms.method.name()));
+            let row: String = vals
+                .iter()
+                .map(|x| {
+                    if x.is_nan() {
+                        format!("{:>11}", "-")
+                    } else {
+                        format!("{x:>11.4}")
+                    }
+                })
+                .collect();
+            println!(
+                "{:<32} {:<22}{row}{fail}",
+                r.label,
+                format!("{} {name}", ms.method.name())
+            );
             if !t.estimates && !t.modes {
                 let row: String = ms.rms.iter().map(|x| format!("{x:>11.4}")).collect();
-                println!("{:<32} {:<22}{row}", r.label, format!("{} rms err", ms.method.name()));
+                println!(
+                    "{:<32} {:<22}{row}",
+                    r.label,
+                    format!("{} rms err", ms.method.name())
+                );
             }
         }
         if let Some(sd) = &r.crlb_sd {
             let row: String = sd.iter().map(|x| format!("{x:>11.4}")).collect();
             println!("{:<32} {:<22}{row}", r.label, "CRLB sd");
             for ms in &r.methods {
-                let row: String = ms.rms.iter().zip(sd).map(|(e, s)| format!("{:>11.2}", e / s)).collect();
-                println!("{:<32} {:<22}{row}", r.label, format!("{} rms/CRLB", ms.method.name()));
+                let row: String = ms
+                    .rms
+                    .iter()
+                    .zip(sd)
+                    .map(|(e, s)| format!("{:>11.2}", e / s))
+                    .collect();
+                println!(
+                    "{:<32} {:<22}{row}",
+                    r.label,
+                    format!("{} rms/CRLB", ms.method.name())
+                );
             }
         }
     }

@@ -161,7 +161,9 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
         }
         o.inputs = Some(s);
     }
-    if a.bearings.is_some_and(|n| n < obsan_estimate::MIN_OUTPUT_SAMPLES) {
+    if a.bearings
+        .is_some_and(|n| n < obsan_estimate::MIN_OUTPUT_SAMPLES)
+    {
         return Err(Failure(format!(
             "--bearings must be at least {}",
             obsan_estimate::MIN_OUTPUT_SAMPLES

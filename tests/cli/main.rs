@@ -1,6 +1,7 @@
 //! The one integration-test target: runs the `obsan` binary as a user would.
 
 mod analysis;
+mod calibrate;
 mod classic;
 mod expr;
 mod show;

@@ -87,7 +87,8 @@ pub fn combine(modes_in: &[Modes]) -> Result<Calibration, Degenerate> {
     let n = modes_in.len();
     let a = DMatrix::from_fn(n, 2, |i, j| if j == 0 { 1.0 } else { -modes_in[i].q });
     let b = DVector::from_fn(n, |i, _| modes_in[i].xi_q);
-    let sol = lstsq(&a, &b).ok_or_else(|| Degenerate("xi_q does not determine xi and delta".into()))?;
+    let sol =
+        lstsq(&a, &b).ok_or_else(|| Degenerate("xi_q does not determine xi and delta".into()))?;
     let (xi, delta) = (sol[0], sol[1] / sol[0]);
     if qs.len() < 3 {
         return Err(Degenerate(format!(

@@ -126,12 +126,11 @@ pub struct CalibrationReport {
 }
 
 fn rms_of(c: &Closed, d: &ArcData) -> f64 {
-    let ss: f64 = d
-        .s
-        .iter()
-        .zip(&d.beta)
-        .map(|(&s, &b)| crate::sim::wrap(b - c.beta(s)).powi(2))
-        .sum();
+    let ss: f64 =
+        d.s.iter()
+            .zip(&d.beta)
+            .map(|(&s, &b)| crate::sim::wrap(b - c.beta(s)).powi(2))
+            .sum();
     (ss / d.s.len().max(1) as f64).sqrt()
 }
 
@@ -160,11 +159,14 @@ pub fn calibrate(
             ))
         })?;
         // Coverage: DET needs the node and the mirror points inside the data.
-        let mut gap: f64 = 0.0;
+        // Gaps between bearings, and before the first / after the last one
+        // (the trajectory's whole curve length from the encoders).
+        let s_total = integral(t, &o.input).unwrap_or(0.0);
+        let mut gap: f64 = arc.s[0].max(s_total - arc.s[arc.s.len() - 1]);
         for w in arc.s.windows(2) {
             gap = gap.max(w[1] - w[0]);
         }
-        if gap > d.period / 4.0 {
+        if gap > d.period.min(s_total.abs()) / 4.0 {
             return Err(Degenerate(format!(
                 "trajectory '{}' (q = {q}): no bearing over {:.0}% of the loop (the feature is out of view): the nodes and mirror points of the observation function are not observed, so xi_q, L and k cannot be estimated from it",
                 t.name,
@@ -201,7 +203,13 @@ pub fn calibrate(
             let mut count = 0usize;
             for tr in trajs.iter_mut() {
                 let w = weights(&tr.det.closed, &tr.arc, s_used, enc_var);
-                let f = ls(&tr.arc, &tr.det.closed, &w, o.ls_max_iterations, o.ls_tolerance);
+                let f = ls(
+                    &tr.arc,
+                    &tr.det.closed,
+                    &w,
+                    o.ls_max_iterations,
+                    o.ls_tolerance,
+                );
                 rss += f.rms * f.rms * tr.arc.s.len() as f64;
                 count += tr.arc.s.len();
                 tr.closed = f.closed;
@@ -277,6 +285,21 @@ pub fn calibrate(
             out
         }
     };
+    // ML starts from section V-C with the *measured* wheel-speed ratio of
+    // each trajectory (integral of wL / integral of wR): a commanded-ratio
+    // error (Table VII's dq) then biases neither the start nor the result.
+    let modes = if o.method == Method::Ml {
+        modes
+            .into_iter()
+            .zip(&data.trajectories)
+            .map(|(m, t)| Modes {
+                q: measured_ratio(t, &o.input, "wL").unwrap_or(m.q),
+                ..m
+            })
+            .collect()
+    } else {
+        modes
+    };
     let mut calibration = combine(&modes)?;
     for t in trajs.iter_mut() {
         t.start = start_state(&calibration, &t.closed, t.q);
@@ -297,7 +320,14 @@ pub fn calibrate(
                     .collect(),
             })
             .collect();
-        let states: Vec<Vec<f64>> = trajs.iter().map(|t| vec![t.start.0, t.start.1]).collect();
+        let states: Vec<Vec<f64>> = trajs
+            .iter()
+            .zip(&modes)
+            .map(|(t, m)| {
+                let (mu0, g0) = start_state(&calibration, &t.closed, m.q);
+                vec![mu0, g0]
+            })
+            .collect();
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
@@ -348,8 +378,18 @@ pub fn calibrate(
             let grads: [[f64; 4]; 4] = [
                 [0.0, 0.0, 0.0, d0],
                 [2.0 * rho, 0.0, 0.0, 2.0 * d0 * eta],
-                [2.0 * rho * delta, 2.0 * rho * eta, 0.0, 2.0 * d0 * eta * delta],
-                [2.0 * rho / xi, 0.0, -2.0 * rho * eta / (xi * xi), 2.0 * d0 * eta / xi],
+                [
+                    2.0 * rho * delta,
+                    2.0 * rho * eta,
+                    0.0,
+                    2.0 * d0 * eta * delta,
+                ],
+                [
+                    2.0 * rho / xi,
+                    0.0,
+                    -2.0 * rho * eta / (xi * xi),
+                    2.0 * d0 * eta / xi,
+                ],
             ];
             std::array::from_fn(|g| {
                 let mut v = 0.0;
@@ -372,4 +412,26 @@ pub fn calibrate(
         metric,
         ml,
     })
+}
+
+/// `integral of c dt` over a trajectory's inputs.
+fn integral(t: &crate::data::Trajectory, c: &str) -> Option<f64> {
+    let v = t.inputs.column(c)?;
+    Some(
+        (0..t.inputs.len().saturating_sub(1))
+            .map(|k| v[k].unwrap_or(0.0) * (t.inputs.t[k + 1] - t.inputs.t[k]))
+            .sum(),
+    )
+}
+
+/// `integral of wL dt / integral of wR dt` over a trajectory.
+fn measured_ratio(t: &crate::data::Trajectory, right: &str, left: &str) -> Option<f64> {
+    let (r, l) = (t.inputs.column(right)?, t.inputs.column(left)?);
+    let (mut sr, mut sl) = (0.0, 0.0);
+    for k in 0..t.inputs.len().saturating_sub(1) {
+        let dt = t.inputs.t[k + 1] - t.inputs.t[k];
+        sr += r[k].unwrap_or(0.0) * dt;
+        sl += l[k].unwrap_or(0.0) * dt;
+    }
+    (sr.abs() > 0.0).then(|| sl / sr)
 }

@@ -118,9 +118,5 @@ pub fn cekf(
         updates += 1;
     }
     x[3] = wrap(x[3]);
-    Ok(CekfResult {
-        x,
-        cov: p,
-        updates,
-    })
+    Ok(CekfResult { x, cov: p, updates })
 }

@@ -159,7 +159,11 @@ impl Interp {
             // DET reads beta between sparse bearings (30 on a q = -1 loop).
             let (a, b) = (d.s[j - 1], d.s[j]);
             let w = b - a;
-            let f = if w > 0.0 { ((x - a) / w).clamp(0.0, 1.0) } else { 0.0 };
+            let f = if w > 0.0 {
+                ((x - a) / w).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             let (m0, m1) = (slope(j - 1) * w, slope(j) * w);
             let (y0, y1) = (unwrapped[j - 1], unwrapped[j]);
             let (f2, f3) = (f * f, f * f * f);
@@ -170,7 +174,11 @@ impl Interp {
                     + (f3 - f2) * m1,
             );
         }
-        let table2 = table.iter().map(|b| (2.0 * b).sin_cos()).map(|(s, c)| (c, s)).collect();
+        let table2 = table
+            .iter()
+            .map(|b| (2.0 * b).sin_cos())
+            .map(|(s, c)| (c, s))
+            .collect();
         Interp {
             table2,
             s0,
@@ -302,12 +310,11 @@ fn subsample(d: &ArcData, max: usize) -> ArcData {
 fn scan(d: &ArcData, xi0: f64, dxi: f64, count: usize) -> Vec<(f64, f64)> {
     let n = d.s.len();
     let rot: Vec<(f64, f64)> = d.s.iter().map(|&s| (dxi * s).sin_cos()).collect();
-    let mut cur: Vec<(f64, f64)> = d
-        .s
-        .iter()
-        .zip(&d.beta)
-        .map(|(&s, &b)| (xi0 * s + b).sin_cos())
-        .collect();
+    let mut cur: Vec<(f64, f64)> =
+        d.s.iter()
+            .zip(&d.beta)
+            .map(|(&s, &b)| (xi0 * s + b).sin_cos())
+            .collect();
     let sb: Vec<(f64, f64)> = d.beta.iter().map(|b| b.sin_cos()).collect();
     let mut out = Vec::with_capacity(count);
     for j in 0..count {
@@ -334,12 +341,11 @@ fn scan(d: &ArcData, xi0: f64, dxi: f64, count: usize) -> Vec<(f64, f64)> {
 
 /// Root-mean-square wrapped residual of `c` on the data.
 fn rms(c: &Closed, d: &ArcData) -> f64 {
-    let ss: f64 = d
-        .s
-        .iter()
-        .zip(&d.beta)
-        .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
-        .sum();
+    let ss: f64 =
+        d.s.iter()
+            .zip(&d.beta)
+            .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
+            .sum();
     (ss / d.s.len().max(1) as f64).sqrt()
 }
 
@@ -386,7 +392,12 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
     let (lo, hi, step) = (1.4 * PI, 12.0 * PI, 0.1);
     let mut grid = Vec::new();
     for sign in [1.0, -1.0] {
-        grid.extend(scan(&sub, sign * lo / span, sign * step / span, ((hi - lo) / step) as usize));
+        grid.extend(scan(
+            &sub,
+            sign * lo / span,
+            sign * step / span,
+            ((hi - lo) / step) as usize,
+        ));
     }
     let mut sorted: Vec<f64> = grid.iter().map(|g| g.0).collect();
     sorted.sort_by(f64::total_cmp);
@@ -505,7 +516,8 @@ fn det_from(
             sigma_at(sc, &coarse).map(|v| (sc, v))
         })
         .collect();
-    let Some(imin) = (0..sigma_curve.len()).min_by(|&i, &j| sigma_curve[i].1.total_cmp(&sigma_curve[j].1))
+    let Some(imin) =
+        (0..sigma_curve.len()).min_by(|&i, &j| sigma_curve[i].1.total_cmp(&sigma_curve[j].1))
     else {
         return Err(Degenerate(
             "too few bearings pairs around any node candidate (Algorithm 1)".into(),

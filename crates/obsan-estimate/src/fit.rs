@@ -163,8 +163,7 @@ impl Problem<'_> {
         {
             return Err("initial values do not match the model".into());
         }
-        if opts.sigma.len() != p.outputs.len()
-            || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0)
+        if opts.sigma.len() != p.outputs.len() || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0)
         {
             return Err("one positive noise level per output is needed".into());
         }
@@ -272,14 +271,21 @@ pub fn crlb(
 ) -> Result<Vec<Vec<f64>>, String> {
     let prob = Problem::new(p, trajs, opts, params, states)?;
     let (_, jtj, _) = prob.normal(&theta_of(params, states))?;
-    inverse(&jtj).ok_or_else(|| "the Fisher information is singular: some unknowns are not identifiable from these data".into())
+    inverse(&jtj).ok_or_else(|| {
+        "the Fisher information is singular: some unknowns are not identifiable from these data"
+            .into()
+    })
 }
 
 fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     let n = a.len();
     let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[i][j]);
     let inv = m.try_inverse()?;
-    Some((0..n).map(|i| (0..n).map(|j| inv[(i, j)]).collect()).collect())
+    Some(
+        (0..n)
+            .map(|i| (0..n).map(|j| inv[(i, j)]).collect())
+            .collect(),
+    )
 }
 
 /// Fit `params` (the predictor's params) and each trajectory's initial dynamic state.

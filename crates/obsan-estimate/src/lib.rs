@@ -20,7 +20,9 @@ mod predict;
 mod rng;
 mod sim;
 
-pub use calib::{arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS};
+pub use calib::{
+    arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS,
+};
 pub use calibrate::{
     calibrate, CalibrateOptions, CalibrationReport, CekfInit, Method, TrajectoryEstimate,
 };

@@ -206,7 +206,13 @@ fn param_errors(est: &[f64; 5], t: &Truth) -> Vec<f64> {
 }
 
 fn param_estimates(est: &[f64; 5]) -> Vec<f64> {
-    vec![est[0].to_degrees(), est[1].to_degrees(), est[2], est[3], est[4]]
+    vec![
+        est[0].to_degrees(),
+        est[1].to_degrees(),
+        est[2],
+        est[3],
+        est[4],
+    ]
 }
 
 /// (k, c) of eqs. (30)-(31) from A0, V0.
@@ -369,9 +375,7 @@ pub fn run_cell(
         .map(|(mi, &m)| {
             let ok: Vec<&(Vec<f64>, Vec<f64>)> =
                 per_run.iter().filter_map(|r| r[mi].as_ref().ok()).collect();
-            let first_failure = per_run
-                .iter()
-                .find_map(|r| r[mi].as_ref().err().cloned());
+            let first_failure = per_run.iter().find_map(|r| r[mi].as_ref().err().cloned());
             let n = ok.len().max(1) as f64;
             let col = |f: &dyn Fn(&(Vec<f64>, Vec<f64>), usize) -> f64| -> Vec<f64> {
                 (0..ncols)
@@ -381,7 +385,10 @@ pub fn run_cell(
             MethodStats {
                 method: m,
                 mean_abs: col(&|e, c| e.0[c].abs()),
-                rms: col(&|e, c| e.0[c] * e.0[c]).iter().map(|v| v.sqrt()).collect(),
+                rms: col(&|e, c| e.0[c] * e.0[c])
+                    .iter()
+                    .map(|v| v.sqrt())
+                    .collect(),
                 mean_estimate: col(&|e, c| e.1[c]),
                 failures: runs - ok.len(),
                 first_failure,

@@ -70,7 +70,8 @@ impl Predictor {
                 out_jac_roots.push(ctx.diff(h, x));
             }
         }
-        let jac_tape = Tape::compile(&ctx, &jac_roots, &vars).expect("derivatives use the same symbols");
+        let jac_tape =
+            Tape::compile(&ctx, &jac_roots, &vars).expect("derivatives use the same symbols");
         let out_jac_tape =
             Tape::compile(&ctx, &out_jac_roots, &vars).expect("derivatives use the same symbols");
         Predictor {

@@ -139,7 +139,7 @@ impl Default for SimOptions {
             d0: 1.2,
             effects: Effects::default(),
             seed: 1,
-            max_duration: 3600.0,
+            max_duration: 14_400.0,
             inputs: None,
         }
     }

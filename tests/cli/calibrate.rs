@@ -1,0 +1,118 @@
+use crate::util::*;
+
+fn tmp_dir(name: &str) -> String {
+    let d = std::env::temp_dir().join(format!("obsan-cal-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d.to_string_lossy().into_owned()
+}
+
+fn truth(dir: &str) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(format!("{dir}/truth.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn calibrate_recovers_the_parameters_within_their_standard_deviations() {
+    let out = tmp_dir("ok");
+    ok(&[
+        "simulate",
+        "--out",
+        &out,
+        "--seed",
+        "7",
+        "--bearings",
+        "100",
+    ]);
+    let t = truth(&out);
+    for method in ["ls", "ml", "cekf"] {
+        let j: serde_json::Value =
+            serde_json::from_str(&ok(&["calibrate", &out, "--method", method, "--json"])).unwrap();
+        for name in ["phi", "psi", "eta", "delta", "xi"] {
+            let (v, sd) = (
+                j["params"][name]["value"].as_f64().unwrap(),
+                j["params"][name]["sd"].as_f64().unwrap(),
+            );
+            let want = t[name].as_f64().unwrap();
+            // delta's spread includes encoder noise, which the bearing-only sd leaves out.
+            let k = if name == "delta" { 8.0 } else { 4.0 };
+            assert!(
+                (v - want).abs() < k * sd,
+                "{method} {name}: {v} ± {sd} vs {want}"
+            );
+        }
+        assert_eq!(j["trajectories"].as_array().unwrap().len(), 3);
+    }
+    // Text output names every parameter and the metric values (d0 from dataset.json).
+    let text = ok(&["calibrate", &out, "--method", "det"]);
+    for w in [
+        "phi",
+        "xi_q",
+        "rho",
+        "B",
+        "det gives no standard deviations",
+    ] {
+        assert!(text.contains(w), "{w} in\n{text}");
+    }
+}
+
+#[test]
+fn degenerate_data_get_a_message_naming_what_cannot_be_estimated() {
+    let two = tmp_dir("two");
+    ok(&["simulate", "--out", &two, "--q", "0,-1"]);
+    bad(&["calibrate", &two], "phi, psi and eta need a third circle");
+    let one = tmp_dir("one");
+    ok(&["simulate", "--out", &one, "--q", "0"]);
+    bad(&["calibrate", &one], "xi and delta need two circles");
+    // The feature out of view half of the time: drop the second half's bearings.
+    let half = tmp_dir("half");
+    ok(&["simulate", "--out", &half, "--seed", "2"]);
+    let path = format!("{half}/q0/outputs.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let n = lines.len();
+    let cut: Vec<String> = lines
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            if i > n / 2 {
+                format!("{},", l.split(',').next().unwrap())
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    std::fs::write(&path, cut.join("\n") + "\n").unwrap();
+    bad(&["calibrate", &half], "out of view");
+    // Bad input: a malformed cell names file, row and column.
+    let broken = tmp_dir("broken");
+    ok(&["simulate", "--out", &broken, "--q", "0,-1,0.5"]);
+    let path = format!("{broken}/q0/inputs.csv");
+    let text = std::fs::read_to_string(&path)
+        .unwrap()
+        .replacen("\n0.04,", "\n0.04,abc", 1);
+    std::fs::write(&path, text).unwrap();
+    bad(&["calibrate", &broken], "inputs.csv:");
+    bad(&["calibrate", "/nonexistent/obsan"], "not a dataset folder");
+    bad(
+        &["calibrate", &two, "--method", "magic"],
+        "expected det, ls, cekf or ml",
+    );
+}
+
+#[test]
+fn crlb_and_montecarlo_run() {
+    let text = ok(&["crlb", "--bearings", "100"]);
+    assert!(text.contains("sd phi (deg)"), "{text}");
+    let j: serde_json::Value =
+        serde_json::from_str(&ok(&["montecarlo", "--table", "4", "--json"])).unwrap();
+    let cells = j[0]["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 3);
+    // Table IV reports estimates: LS's psi near 90 deg in every cell.
+    for c in cells {
+        let psi = c["methods"][0]["mean_estimate"][1].as_f64().unwrap();
+        assert!((psi - 90.0).abs() < 15.0, "{psi}");
+    }
+    bad(
+        &["montecarlo", "--table", "9"],
+        "expected 4, 5, 6, 7 or all",
+    );
+}
