@@ -1,8 +1,9 @@
-//! Estimation benchmark (so far): simulating the paper's experiment and one
-//! prediction of all three trajectories by the generic predictor (the inner
-//! loop of maximum likelihood). Run: `cargo bench --bench estimate`.
+//! Estimation benchmark: simulating the paper's experiment, one prediction of
+//! all three trajectories by the generic predictor, and each calibration
+//! method end to end (compute only, no process start or file reading).
+//! Run: `cargo bench --bench estimate`.
 
-use obsan_estimate::{simulate, Predictor, SimOptions};
+use obsan_estimate::{calibrate, simulate, CalibrateOptions, Method, Predictor, SimOptions};
 use std::time::Instant;
 
 fn main() {
@@ -55,4 +56,33 @@ fn main() {
         ms(pred[reps as usize / 2]),
         ms(pred[0])
     );
+    for (label, o) in [
+        ("1 Hz bearings (808 in all)", SimOptions::default()),
+        (
+            "100 bearings per trajectory",
+            SimOptions {
+                bearings: Some(100),
+                ..SimOptions::default()
+            },
+        ),
+    ] {
+        println!("calibration of three trajectories, {label}, median (min) of {reps}:");
+        for m in [Method::Det, Method::Ls, Method::Cekf, Method::Ml] {
+            let mut times = Vec::new();
+            for seed in 0..reps {
+                let (data, _) = simulate(&SimOptions { seed, ..o.clone() }).expect("simulates");
+                let co = CalibrateOptions::for_dataset(&data, m);
+                let t = Instant::now();
+                calibrate(&data, Some(&p), &co).expect("calibrates");
+                times.push(t.elapsed());
+            }
+            times.sort();
+            println!(
+                "  {:<5} {:.2} ms ({:.2})",
+                m.name(),
+                ms(times[reps as usize / 2]),
+                ms(times[0])
+            );
+        }
+    }
 }

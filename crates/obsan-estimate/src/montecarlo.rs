@@ -76,7 +76,7 @@ pub fn table(number: u8) -> Option<Table> {
         4 => Table {
             number,
             title: "Table IV: estimates by LS (initialised by DET), one run per sigma_beta, 300 bearings".into(),
-            columns: PARAM_COLUMNS.to_vec(),
+            columns: vec!["phi (deg)", "psi (deg)", "eta", "delta", "xi"],
             modes: false,
             estimates: true,
             cells: [
@@ -234,6 +234,10 @@ fn true_cal(t: &Truth) -> crate::Calibration {
     }
 }
 
+/// One run's (errors, estimates) per column, or why it failed.
+type RunOutcome = Result<(Vec<f64>, Vec<f64>), String>;
+type Outcome = (Vec<f64>, Vec<f64>);
+
 /// Run one calibration of a simulated dataset; the per-column errors.
 fn one(
     method: McMethod,
@@ -241,7 +245,7 @@ fn one(
     truth: &Truth,
     predictor: &Predictor,
     modes: bool,
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+) -> RunOutcome {
     let m = match method {
         McMethod::Det => Method::Det,
         McMethod::Ls => Method::Ls,
@@ -348,7 +352,7 @@ pub fn run_cell(
     predictor: &Predictor,
     tick: &(dyn Fn() + Sync),
 ) -> CellResult {
-    let per_run: Vec<Vec<Result<(Vec<f64>, Vec<f64>), String>>> = (0..runs)
+    let per_run: Vec<Vec<RunOutcome>> = (0..runs)
         .into_par_iter()
         .map(|r| {
             let sim = SimOptions {
@@ -373,11 +377,10 @@ pub fn run_cell(
         .iter()
         .enumerate()
         .map(|(mi, &m)| {
-            let ok: Vec<&(Vec<f64>, Vec<f64>)> =
-                per_run.iter().filter_map(|r| r[mi].as_ref().ok()).collect();
+            let ok: Vec<&Outcome> = per_run.iter().filter_map(|r| r[mi].as_ref().ok()).collect();
             let first_failure = per_run.iter().find_map(|r| r[mi].as_ref().err().cloned());
             let n = ok.len().max(1) as f64;
-            let col = |f: &dyn Fn(&(Vec<f64>, Vec<f64>), usize) -> f64| -> Vec<f64> {
+            let col = |f: &dyn Fn(&Outcome, usize) -> f64| -> Vec<f64> {
                 (0..ncols)
                     .map(|c| ok.iter().map(|e| f(e, c)).sum::<f64>() / n)
                     .collect()

@@ -109,9 +109,9 @@ impl Predictor {
         w.x.extend_from_slice(&w.params);
         w.x.extend_from_slice(consts);
         self.dyn_tape.eval_into(&w.x, &mut w.scratch, &mut w.vals);
-        for k in 0..nd {
+        for (k, d) in dz.iter_mut().enumerate().take(nd) {
             let row = &w.vals[k * (m + 1)..(k + 1) * (m + 1)];
-            dz[k] = row[0] + row[1..].iter().zip(u).map(|(f, ui)| f * ui).sum::<f64>();
+            *d = row[0] + row[1..].iter().zip(u).map(|(f, ui)| f * ui).sum::<f64>();
         }
         if !jac {
             return;
