@@ -3,15 +3,11 @@
 //! method end to end (compute only, no process start or file reading).
 //! Run: `cargo bench --bench estimate`.
 
-use obsan_estimate::{calibrate, simulate, CalibrateOptions, Method, Predictor, SimOptions};
+use obsan_estimate::{calibrate, simulate, CalibrateOptions, Method, SimOptions};
 use std::time::Instant;
 
 fn main() {
-    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/systems/calib.sys"))
-        .expect("calib.sys");
-    let sys = obsan_model::System::parse(&src, "calib.sys").expect("parses");
-    let nf = sys.normal_form(None, &[]).expect("normal form");
-    let p = Predictor::new(&nf);
+    let p = obsan_estimate::calib_predictor();
     let o = SimOptions::default();
     let reps = 21;
     let mut sim = Vec::new();

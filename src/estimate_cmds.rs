@@ -4,22 +4,13 @@ use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
 use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_estimate::{
-    calibrate, crlb_sd, run_cell, simulate, table, CalibrateOptions, Dataset, DatasetMeta, Method,
-    Predictor, Series, Trajectory, PARAMS, PARAM_COLUMNS,
+    calib_predictor, calibrate, crlb_sd, run_cell, simulate, table, CalibrateOptions, Dataset,
+    DatasetMeta, Method, Series, Trajectory, PARAMS, PARAM_COLUMNS,
 };
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
-
-/// The calibration model: eq. (16), compiled into the binary so that the
-/// estimators and `obsan rank` share one source of truth.
-const CALIB_SYS: &str = include_str!("../systems/calib.sys");
-
-pub fn calib_predictor() -> Predictor {
-    let sys = obsan_model::System::parse(CALIB_SYS, "systems/calib.sys").expect("calib.sys parses");
-    Predictor::new(&sys.normal_form(None, &[]).expect("calib.sys normal form"))
-}
 
 fn read(path: &Path) -> Result<String, Failure> {
     std::fs::read_to_string(path)

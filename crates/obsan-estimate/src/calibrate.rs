@@ -10,6 +10,20 @@ use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
 use crate::predict::Predictor;
 use nalgebra::{Matrix4, SMatrix};
 
+/// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
+/// the estimators and `obsan rank` share one source of truth for the dynamics.
+pub const CALIB_SYS: &str = include_str!("../../../systems/calib.sys");
+
+/// [`CALIB_SYS`] without restriction (inputs wR, wL), compiled for prediction.
+pub fn calib_predictor() -> Predictor {
+    let sys = obsan_model::System::parse(CALIB_SYS, "systems/calib.sys")
+        .expect("the shipped calib.sys parses");
+    Predictor::new(
+        &sys.normal_form(None, &[])
+            .expect("calib.sys has a normal form"),
+    )
+}
+
 /// The estimator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -307,19 +321,7 @@ pub fn calibrate(
     let mut ml = None;
     if o.method == Method::Ml {
         let p = predictor.ok_or_else(|| Degenerate("ml needs the model (calib.sys)".into()))?;
-        let fts: Vec<FitTrajectory> = data
-            .trajectories
-            .iter()
-            .map(|t| FitTrajectory {
-                inputs: &t.inputs,
-                outputs: &t.outputs,
-                consts: p
-                    .consts
-                    .iter()
-                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
-                    .collect(),
-            })
-            .collect();
+        let fts = FitTrajectory::all(p, data);
         let states: Vec<Vec<f64>> = trajs
             .iter()
             .zip(&modes)

@@ -20,6 +20,25 @@ pub struct FitTrajectory<'a> {
     pub consts: Vec<f64>,
 }
 
+impl<'a> FitTrajectory<'a> {
+    /// Every trajectory of a dataset, with the predictor's constants from
+    /// each `meta.json` (0 where absent: a constant the dynamics do not use).
+    pub fn all(p: &Predictor, data: &'a crate::data::Dataset) -> Vec<FitTrajectory<'a>> {
+        data.trajectories
+            .iter()
+            .map(|t| FitTrajectory {
+                inputs: &t.inputs,
+                outputs: &t.outputs,
+                consts: p
+                    .consts
+                    .iter()
+                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+                    .collect(),
+            })
+            .collect()
+    }
+}
+
 /// Options of the fit; every tolerance explicit.
 #[derive(Clone, Debug)]
 pub struct FitOptions {

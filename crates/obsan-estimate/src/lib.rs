@@ -24,7 +24,8 @@ pub use calib::{
     arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS,
 };
 pub use calibrate::{
-    calibrate, CalibrateOptions, CalibrationReport, CekfInit, Method, TrajectoryEstimate,
+    calib_predictor, calibrate, CalibrateOptions, CalibrationReport, CekfInit, Method,
+    TrajectoryEstimate, CALIB_SYS,
 };
 pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};

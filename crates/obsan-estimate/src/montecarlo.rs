@@ -310,15 +310,7 @@ pub fn crlb_sd(sim: &SimOptions, predictor: &Predictor) -> Result<Vec<f64>, Stri
         ..sim.clone()
     };
     let (data, truth) = simulate(&clean)?;
-    let fts: Vec<FitTrajectory> = data
-        .trajectories
-        .iter()
-        .map(|t| FitTrajectory {
-            inputs: &t.inputs,
-            outputs: &t.outputs,
-            consts: vec![t.meta.get("q").copied().unwrap_or(0.0)],
-        })
-        .collect();
+    let fts = FitTrajectory::all(predictor, &data);
     let states: Vec<Vec<f64>> = truth
         .trajectories
         .iter()

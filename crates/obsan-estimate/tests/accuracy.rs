@@ -6,13 +6,7 @@ use obsan_estimate::{
 };
 
 fn predictor() -> Predictor {
-    let src = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/calib.sys"
-    ))
-    .unwrap();
-    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
-    Predictor::new(&sys.normal_form(None, &[]).unwrap())
+    obsan_estimate::calib_predictor()
 }
 
 fn truth_values(t: &Truth) -> [f64; 5] {

@@ -3,13 +3,7 @@
 use obsan_estimate::{fit, simulate, FitOptions, FitTrajectory, Predictor, SimOptions};
 
 fn predictor() -> Predictor {
-    let src = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/calib.sys"
-    ))
-    .unwrap();
-    let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
-    Predictor::new(&sys.normal_form(None, &[]).unwrap())
+    obsan_estimate::calib_predictor()
 }
 
 fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate::Truth) {
