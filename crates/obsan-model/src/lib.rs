@@ -11,10 +11,12 @@
 //! assert_eq!(nf.ctx.to_text(nf.fields[0][0]), "1");
 //! ```
 
+mod effect;
 mod error;
 mod normal;
 mod sys;
 
+pub use effect::{Effect, EffectLibrary};
 pub use error::ModelError;
 pub use normal::NormalForm;
 pub use sys::{Decl, Kind, Restriction, System};

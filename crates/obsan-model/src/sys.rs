@@ -39,6 +39,10 @@ pub struct Decl {
     pub sym: Symbol,
     /// For constants declared with a value (`const g = 9.81`).
     pub value: Option<Q>,
+    /// For derived inputs (`input dwR = rate(wR)`): the defining text, which
+    /// the data layer evaluates from the measured inputs. To the analysis a
+    /// derived input is an input like any other.
+    pub derived: Option<String>,
     /// Byte offset of the name in the source.
     pub(crate) at: usize,
 }
@@ -83,6 +87,16 @@ pub struct System {
     pub restrictions: Vec<Restriction>,
     pub(crate) origin: String,
     pub(crate) src: String,
+    /// Source text of each dynamics right-hand side, output expression and
+    /// restriction statement (for [`System::to_sys_text`]).
+    pub(crate) texts: Texts,
+}
+
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Texts {
+    pub dynamics: Vec<String>,
+    pub outputs: Vec<String>,
+    pub restrictions: Vec<String>,
 }
 
 /// A logical statement: its text and, per byte, the source offset.
@@ -133,7 +147,16 @@ fn split_statements(src: &str, origin: &str) -> Result<Vec<Stmt>, ModelError> {
             cur.map.extend(std::iter::repeat_n(pos, ch.len_utf8()));
         }
         let trimmed = code.trim_end();
-        let continues = depth > 0 || trimmed.ends_with(['+', '-', '*', '/', '^', ',']);
+        // A description is free text: one line, whatever its brackets.
+        let free_text = {
+            let t = cur.text.trim_start();
+            t.starts_with("description ") || t == "description"
+        };
+        if free_text {
+            depth = 0;
+        }
+        let continues =
+            !free_text && (depth > 0 || trimmed.ends_with(['+', '-', '*', '/', '^', ',']));
         if continues && !cur.text.trim().is_empty() {
             cur.text.push(' ');
             cur.map.push(line_start + code.len());
@@ -323,7 +346,7 @@ impl System {
                         ));
                     }
                     let value = match (val, kind) {
-                        (Some(v), Kind::Const) => {
+                        (Some(v), Kind::Const | Kind::Input) => {
                             let off = rest_start + a + item.find('=').expect("has '=") + 1;
                             Some((
                                 v.to_string(),
@@ -336,7 +359,7 @@ impl System {
                                 na,
                                 rest_start + b,
                                 format!(
-                                    "only constants can be given a value, not a {}",
+                                    "only constants (a value) and inputs (a derivation from other inputs) take '=', not a {}",
                                     kind.word()
                                 ),
                             ))
@@ -497,6 +520,7 @@ impl System {
             let sym = ctx.symbol(&p.name);
             let value = match &p.value {
                 None => None,
+                Some(_) if p.kind == Kind::Input => None,
                 Some((text, map)) => {
                     let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
                     let mut tmp = Ctx::new();
@@ -527,8 +551,17 @@ impl System {
                 kind: p.kind,
                 sym,
                 value,
+                derived: match (&p.value, p.kind) {
+                    (Some((text, _)), Kind::Input) => Some(text.trim().to_string()),
+                    _ => None,
+                },
                 at: p.at,
             });
+        }
+        for p in pending.iter().filter(|p| p.kind == Kind::Input) {
+            if let Some((text, map)) = &p.value {
+                check_derived(&rd, text, map, &decls)?;
+            }
         }
         if !decls
             .iter()
@@ -553,6 +586,7 @@ impl System {
         // Dynamics.
         let states: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::State).collect();
         let mut dynamics: Vec<Option<Located>> = vec![None; states.len()];
+        let mut dyn_text: Vec<String> = vec![String::new(); states.len()];
         for (si, at, rhs, map) in &equations {
             let st = &stmts[*si];
             let t = st.text.trim_start();
@@ -612,6 +646,7 @@ impl System {
             };
             check_affine(&mut ctx, &loc, &decls, &rd, nm)?;
             dynamics[idx] = Some(loc);
+            dyn_text[idx] = rhs.trim().to_string();
         }
         let mut dyn_out = Vec::with_capacity(states.len());
         for (s, d) in states.iter().zip(dynamics) {
@@ -826,7 +861,71 @@ impl System {
             restrictions,
             origin: origin.to_string(),
             src: src.to_string(),
+            texts: Texts {
+                dynamics: dyn_text,
+                outputs: outputs_raw.iter().map(|o| o.2.trim().to_string()).collect(),
+                restrictions: restrict_raw
+                    .iter()
+                    .map(|r| stmts[r.0].text.trim().to_string())
+                    .collect(),
+            },
         })
+    }
+
+    /// The system as `.sys` text (declarations, dynamics, outputs,
+    /// restrictions; comments dropped): what `obsan diagnose` writes for an
+    /// extended model, and what [`System::parse`] reads back.
+    pub fn to_sys_text(&self) -> String {
+        let mut out = format!("system {}\n", self.name);
+        if !self.description.is_empty() {
+            out.push_str(&format!("description {}\n", self.description));
+        }
+        for kind in [Kind::State, Kind::Param, Kind::Const, Kind::Input] {
+            let items: Vec<String> = self
+                .decls_of(kind)
+                .map(|d| match (&d.value, &d.derived) {
+                    (Some(v), _) => format!("{} = {}", d.name, v),
+                    (_, Some(t)) => format!("{} = {}", d.name, t),
+                    _ => d.name.clone(),
+                })
+                .collect();
+            if items.is_empty() {
+                continue;
+            }
+            // Derived inputs one per line: their definitions contain commas.
+            if kind == Kind::Input {
+                for it in items {
+                    out.push_str(&format!("input {it}\n"));
+                }
+            } else {
+                out.push_str(&format!("{} {}\n", kind.word(), items.join(", ")));
+            }
+        }
+        out.push('\n');
+        for (d, rhs) in self.decls_of(Kind::State).zip(&self.texts.dynamics) {
+            out.push_str(&format!("{}' = {}\n", d.name, rhs));
+        }
+        out.push('\n');
+        for ((name, _), rhs) in self.outputs.iter().zip(&self.texts.outputs) {
+            out.push_str(&format!("output {name} = {rhs}\n"));
+        }
+        if !self.texts.restrictions.is_empty() {
+            out.push('\n');
+            for r in &self.texts.restrictions {
+                out.push_str(r);
+                out.push('\n');
+            }
+        }
+        out
+    }
+
+    /// The source text of a state's right-hand side or an output's expression.
+    pub fn rhs_text(&self, name: &str) -> Option<&str> {
+        if let Some(i) = self.decls_of(Kind::State).position(|d| d.name == name) {
+            return self.texts.dynamics.get(i).map(String::as_str);
+        }
+        let i = self.outputs.iter().position(|o| o.0 == name)?;
+        self.texts.outputs.get(i).map(String::as_str)
     }
 
     pub fn decls_of(&self, kind: Kind) -> impl Iterator<Item = &Decl> {
@@ -845,6 +944,51 @@ impl System {
     pub fn output_names(&self) -> Vec<&str> {
         self.outputs.iter().map(|o| o.0.as_str()).collect()
     }
+}
+
+/// A derived input is `rate(u)` (the time derivative of a measured input) or
+/// an expression of measured inputs and constants (e.g. `sqrt((wR - wL)^2)*wR`).
+fn check_derived(
+    rd: &Reader,
+    text: &str,
+    map: &[usize],
+    decls: &[Decl],
+) -> Result<(), ModelError> {
+    let measured = |n: &str| {
+        decls
+            .iter()
+            .any(|d| d.name == n && d.kind == Kind::Input && d.derived.is_none())
+    };
+    let t = text.trim();
+    if let Some(inner) = t.strip_prefix("rate(").and_then(|r| r.strip_suffix(')')) {
+        if measured(inner.trim()) {
+            return Ok(());
+        }
+        let lead = text.len() - text.trim_start().len();
+        let (a, b) = (map[lead], map[(lead + t.len()).min(map.len()) - 1] + 1);
+        return Err(rd.err_src(
+            a,
+            b,
+            format!(
+                "rate(...) takes one measured input, not '{}'",
+                inner.trim()
+            ),
+        ));
+    }
+    let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
+    for (n, span) in ast.idents() {
+        let ok = measured(n) || decls.iter().any(|d| d.name == n && d.kind == Kind::Const);
+        if !ok {
+            let a = map[span.start.min(map.len() - 1)];
+            let b = map[span.end.saturating_sub(1).min(map.len() - 1)] + 1;
+            return Err(rd.err_src(
+                a,
+                b.max(a + 1),
+                format!("a derived input may use measured inputs and constants, not '{n}'"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The name before `sep` in `KEYWORD NAME sep ...`: (name, its offset in the

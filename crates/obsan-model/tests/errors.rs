@@ -87,7 +87,7 @@ fn statement_errors() {
         &edit("param a", "param a = 3"),
         3,
         7,
-        "only constants can be given a value",
+        "only constants (a value) and inputs (a derivation from other inputs) take '='",
     );
     check(&edit("const k", "const k = z"), 4, 11, "must be a number");
     check(&edit("x' = a*y + u", "x' a*y + u"), 6, 1, "needs '='");

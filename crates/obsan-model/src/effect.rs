@@ -1,0 +1,382 @@
+//! Effect libraries (`.eff` files): named extensions of a model, each a patch
+//! of its `.sys` text, for the discrepancy workflow (`docs/effects-format.md`).
+//!
+//! ```text
+//! model calib
+//! effect bearing_scale
+//! description Bearing sensor scale error: beta_meas = (1 + kb) beta
+//! param kb
+//! output beta = (1 + kb)*atan2(sin(beta), cos(beta))
+//! ```
+//!
+//! In `output y = EXPR` the name `y` stands for the nominal expression of `y`;
+//! `subst u = EXPR` replaces the input `u` in every dynamics right-hand side
+//! (where `u` in `EXPR` is the measured input); `x' = EXPR` replaces a state's
+//! dynamics. `param`, `const` and `input` declare new names (a new input is
+//! usually derived, e.g. `input dwR = rate(wR)`).
+
+use crate::error::ModelError;
+use crate::sys::{Kind, System};
+
+/// One named model extension.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Effect {
+    pub name: String,
+    pub description: String,
+    /// New unknown params (started at 0 by the workflow).
+    pub params: Vec<String>,
+    /// New known constants (e.g. `later`, supplied by the workflow).
+    pub consts: Vec<String>,
+    /// New inputs and their derivation (`None`: the data must hold a column).
+    pub inputs: Vec<(String, Option<String>)>,
+    /// `subst u = EXPR`.
+    pub substs: Vec<(String, String)>,
+    /// `output y = EXPR` (y in EXPR is the nominal y).
+    pub outputs: Vec<(String, String)>,
+    /// `x' = EXPR`.
+    pub dynamics: Vec<(String, String)>,
+    /// `compare u = EXPR`: a relation the measured inputs should satisfy
+    /// (an input-side effect: it changes no dynamics or output, and its
+    /// params are fitted to the inputs alone).
+    pub compares: Vec<(String, String)>,
+    /// 1-based line of the `effect` statement.
+    pub line: usize,
+}
+
+/// The effects of one file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectLibrary {
+    /// The system name the effects are written for (`model NAME`), if given.
+    pub model: Option<String>,
+    pub effects: Vec<Effect>,
+    pub origin: String,
+}
+
+fn is_ident(s: &str) -> bool {
+    let mut c = s.chars();
+    matches!(c.next(), Some(ch) if ch.is_ascii_alphabetic() || ch == '_')
+        && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+}
+
+/// Split `a = x, b = f(y, z)` at top-level commas.
+fn split_top(body: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0i32, 0);
+    for (i, c) in body.char_indices() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                out.push(&body[start..i]);
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    out.push(&body[start..]);
+    out
+}
+
+/// Replace whole identifiers of `text` by `(replacement)`, simultaneously;
+/// number literals such as `1.5e-3` are left alone.
+pub(crate) fn substitute(text: &str, map: &[(String, String)]) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if c.is_ascii_digit() || c == b'.' {
+            let start = i;
+            while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
+                i += 1;
+            }
+            if i < b.len() && (b[i] == b'e' || b[i] == b'E') {
+                let mut j = i + 1;
+                if j < b.len() && (b[j] == b'+' || b[j] == b'-') {
+                    j += 1;
+                }
+                if j < b.len() && b[j].is_ascii_digit() {
+                    i = j;
+                    while i < b.len() && b[i].is_ascii_digit() {
+                        i += 1;
+                    }
+                }
+            }
+            out.push_str(&text[start..i]);
+        } else if c.is_ascii_alphabetic() || c == b'_' {
+            let start = i;
+            while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
+                i += 1;
+            }
+            let word = &text[start..i];
+            match map.iter().find(|(k, _)| k == word) {
+                Some((_, r)) => {
+                    out.push('(');
+                    out.push_str(r);
+                    out.push(')');
+                }
+                None => out.push_str(word),
+            }
+        } else {
+            out.push(c as char);
+            i += 1;
+        }
+    }
+    out
+}
+
+impl EffectLibrary {
+    /// Read an effects file; `origin` names it in messages.
+    pub fn parse(src: &str, origin: &str) -> Result<EffectLibrary, ModelError> {
+        let mut model = None;
+        let mut effects: Vec<Effect> = Vec::new();
+        for (ln, raw) in src.lines().enumerate() {
+            let line_no = ln + 1;
+            let line = raw.split('#').next().unwrap_or("");
+            let t = line.trim();
+            if t.is_empty() {
+                continue;
+            }
+            let col = line.len() - line.trim_start().len() + 1;
+            let err = |msg: String| ModelError::general(&format!("{origin}:{line_no}:{col}"), msg);
+            let (word, rest) = match t.find(|c: char| c.is_whitespace() || c == '=') {
+                Some(i) => (&t[..i], t[i..].trim()),
+                None => (t, ""),
+            };
+            if word == "model" {
+                if !is_ident(rest) {
+                    return Err(err("'model' needs one system name: model NAME".into()));
+                }
+                model = Some(rest.to_string());
+                continue;
+            }
+            if word == "effect" {
+                if !is_ident(rest) {
+                    return Err(err("'effect' needs one name: effect NAME".into()));
+                }
+                if effects.iter().any(|e| e.name == rest) {
+                    return Err(err(format!("effect '{rest}' is defined twice")));
+                }
+                effects.push(Effect {
+                    name: rest.to_string(),
+                    description: String::new(),
+                    params: vec![],
+                    consts: vec![],
+                    inputs: vec![],
+                    substs: vec![],
+                    outputs: vec![],
+                    dynamics: vec![],
+                    compares: vec![],
+                    line: line_no,
+                });
+                continue;
+            }
+            let Some(e) = effects.last_mut() else {
+                return Err(err(format!(
+                    "'{word}' before any 'effect NAME' line (a file is: [model NAME] then effect blocks)"
+                )));
+            };
+            let assignment = |item: &str| -> Result<(String, String), ModelError> {
+                let Some((n, v)) = item.split_once('=') else {
+                    return Err(err(format!("expected NAME = EXPR, found '{}'", item.trim())));
+                };
+                let (n, v) = (n.trim(), v.trim());
+                if !is_ident(n) || v.is_empty() {
+                    return Err(err(format!("expected NAME = EXPR, found '{}'", item.trim())));
+                }
+                Ok((n.to_string(), v.to_string()))
+            };
+            match word {
+                "description" => {
+                    if !e.description.is_empty() {
+                        e.description.push(' ');
+                    }
+                    e.description.push_str(rest);
+                }
+                "param" | "params" | "const" | "consts" => {
+                    for n in rest.split(',').map(str::trim) {
+                        if !is_ident(n) {
+                            return Err(err(format!("'{n}' is not a valid name in a '{word}' list")));
+                        }
+                        if word.starts_with("param") {
+                            e.params.push(n.into());
+                        } else {
+                            e.consts.push(n.into());
+                        }
+                    }
+                }
+                "input" | "inputs" => {
+                    for item in split_top(rest) {
+                        match item.split_once('=') {
+                            Some(_) => {
+                                let (n, v) = assignment(item)?;
+                                e.inputs.push((n, Some(v)));
+                            }
+                            None if is_ident(item.trim()) => e.inputs.push((item.trim().into(), None)),
+                            None => return Err(err(format!("'{}' is not a valid input name", item.trim()))),
+                        }
+                    }
+                }
+                "subst" => {
+                    for item in split_top(rest) {
+                        e.substs.push(assignment(item)?);
+                    }
+                }
+                "output" => e.outputs.push(assignment(rest)?),
+                "compare" => e.compares.push(assignment(rest)?),
+                w if w.ends_with('\'') || t[w.len()..].trim_start().starts_with('\'') => {
+                    let (lhs, rhs) = t.split_once('=').ok_or_else(|| err("an equation needs '=': x' = EXPR".into()))?;
+                    let n = lhs.trim().trim_end_matches('\'').trim();
+                    if !is_ident(n) || rhs.trim().is_empty() {
+                        return Err(err("expected x' = EXPR".into()));
+                    }
+                    e.dynamics.push((n.into(), rhs.trim().into()));
+                }
+                _ => {
+                    return Err(err(format!(
+                        "expected one of model, effect, description, param, const, input, subst, output, compare, x' = ..., found '{word}'"
+                    )))
+                }
+            }
+        }
+        if effects.is_empty() {
+            return Err(ModelError::general(origin, "no 'effect NAME' block in the file"));
+        }
+        Ok(EffectLibrary {
+            model,
+            effects,
+            origin: origin.to_string(),
+        })
+    }
+
+    pub fn get(&self, name: &str) -> Option<&Effect> {
+        self.effects.iter().find(|e| e.name == name)
+    }
+
+    /// Check that every effect extends `sys` into a valid system; the error
+    /// names this file's line of the faulty effect.
+    pub fn check(&self, sys: &System) -> Result<(), ModelError> {
+        if let Some(m) = &self.model {
+            if m != &sys.name {
+                return Err(ModelError::general(
+                    &self.origin,
+                    format!("these effects are written for system '{m}', not '{}'", sys.name),
+                ));
+            }
+        }
+        for e in &self.effects {
+            if e.is_input_side() {
+                let fail = |msg: String| {
+                    ModelError::general(&format!("{}:{}", self.origin, e.line), format!("effect '{}': {msg}", e.name))
+                };
+                if !(e.substs.is_empty() && e.outputs.is_empty() && e.dynamics.is_empty()) {
+                    return Err(fail("an effect with 'compare' changes only the inputs' relation: it cannot also subst, replace outputs or dynamics".into()));
+                }
+                for (u, _) in &e.compares {
+                    if !sys.decls.iter().any(|d| &d.name == u && d.kind == Kind::Input) {
+                        return Err(fail(format!("compare of '{u}', which is not an input of {}", sys.name)));
+                    }
+                }
+                continue;
+            }
+            sys.extend(&[e], &self.origin)?;
+        }
+        Ok(())
+    }
+}
+
+impl Effect {
+    /// An effect on the measured inputs (`compare`), not on the model.
+    pub fn is_input_side(&self) -> bool {
+        !self.compares.is_empty()
+    }
+}
+
+impl System {
+    /// The system extended by `effects`, applied in order. `origin` (the
+    /// effects file) is used in error messages.
+    pub fn extend(&self, effects: &[&Effect], origin: &str) -> Result<System, ModelError> {
+        let mut cur = self.clone();
+        for e in effects {
+            if e.is_input_side() {
+                continue;
+            }
+            let fail = |msg: String| {
+                ModelError::general(&format!("{origin}:{}", e.line), format!("effect '{}': {msg}", e.name))
+            };
+            let taken = |n: &str| cur.decls.iter().any(|d| d.name == n) || cur.outputs.iter().any(|o| o.0 == n);
+            for n in e.params.iter().chain(&e.consts).chain(e.inputs.iter().map(|i| &i.0)) {
+                if taken(n) {
+                    return Err(fail(format!("'{n}' is already a name of {}", cur.name)));
+                }
+            }
+            let mut s = cur.clone();
+            for (u, _) in &e.substs {
+                if !cur.decls.iter().any(|d| &d.name == u && d.kind == Kind::Input) {
+                    return Err(fail(format!("subst of '{u}', which is not an input of {}", cur.name)));
+                }
+            }
+            let states: Vec<String> = cur.decls_of(Kind::State).map(|d| d.name.clone()).collect();
+            for (k, name) in states.iter().enumerate() {
+                let base = match e.dynamics.iter().find(|d| &d.0 == name) {
+                    Some((_, rhs)) => rhs.clone(),
+                    None => cur.texts.dynamics[k].clone(),
+                };
+                s.texts.dynamics[k] = if e.substs.is_empty() {
+                    base
+                } else {
+                    substitute(&base, &e.substs)
+                };
+            }
+            for (x, _) in &e.dynamics {
+                if !states.contains(x) {
+                    return Err(fail(format!("an equation for '{x}', which is not a state of {}", cur.name)));
+                }
+            }
+            for (y, rhs) in &e.outputs {
+                let Some(k) = cur.outputs.iter().position(|o| &o.0 == y) else {
+                    return Err(fail(format!("output '{y}' is not an output of {}", cur.name)));
+                };
+                let nominal = cur.texts.outputs[k].clone();
+                s.texts.outputs[k] = substitute(rhs, &[(y.clone(), nominal)]);
+            }
+            let mut text = s.to_sys_text();
+            // New declarations after the old ones keep the old params first.
+            let mut extra = String::new();
+            if !e.params.is_empty() {
+                extra.push_str(&format!("param {}\n", e.params.join(", ")));
+            }
+            if !e.consts.is_empty() {
+                extra.push_str(&format!("const {}\n", e.consts.join(", ")));
+            }
+            for (n, d) in &e.inputs {
+                match d {
+                    Some(d) => extra.push_str(&format!("input {n} = {d}\n")),
+                    None => extra.push_str(&format!("input {n}\n")),
+                }
+            }
+            let cut = text.find("\n\n").map_or(text.len(), |i| i + 1);
+            text.insert_str(cut, &extra);
+            let mut next = System::parse(&text, &format!("{}+{}", cur.name, e.name))
+                .map_err(|err| fail(format!("the extended model is not valid: {err}")))?;
+            next.description = if cur.description.is_empty() {
+                format!("with {}", e.name)
+            } else {
+                format!("{} With {}: {}", cur.description, e.name, e.description)
+            };
+            cur = next;
+        }
+        Ok(cur)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn substitution_is_whole_word_and_simultaneous() {
+        let m = vec![("u".to_string(), "u - t*du".to_string()), ("x".to_string(), "y".to_string())];
+        assert_eq!(substitute("u*x + ux + 1.5e-3*u", &m), "(u - t*du)*(y) + ux + 1.5e-3*(u - t*du)");
+    }
+}

@@ -1,0 +1,105 @@
+//! Effect libraries: every shipped effect extends its model into a valid
+//! system, the extension round-trips through text, and bad files get
+//! positioned errors.
+
+use obsan_model::{EffectLibrary, Kind, System};
+
+fn read(p: &str) -> String {
+    std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+#[test]
+fn every_calib_effect_extends_calib() {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
+    lib.check(&sys).unwrap();
+    for want in [
+        "time_offset",
+        "bearing_scale",
+        "bearing_distortion",
+        "wheel_slip",
+        "radius_change",
+        "bearing_bias",
+        "commanded_ratio",
+    ] {
+        assert!(lib.get(want).is_some(), "{want} missing");
+    }
+    let e = lib.get("time_offset").unwrap();
+    let ext = sys.extend(&[e], "calib.eff").unwrap();
+    // Old params first, the new one last.
+    let params: Vec<&str> = ext.decls_of(Kind::Param).map(|d| d.name.as_str()).collect();
+    assert_eq!(params, ["phi", "psi", "eta", "delta", "xi", "tau"]);
+    let derived: Vec<_> = ext
+        .decls_of(Kind::Input)
+        .filter_map(|d| d.derived.clone())
+        .collect();
+    assert_eq!(derived, ["rate(wR)", "rate(wL)"]);
+    // Text round trip: same text again, and the restriction survives.
+    let again = System::parse(&ext.to_sys_text(), "again.sys").unwrap();
+    assert_eq!(again.to_sys_text(), ext.to_sys_text());
+    assert!(again.restriction("q").is_some());
+    // Two effects at once.
+    let both = sys
+        .extend(&[lib.get("bearing_scale").unwrap(), lib.get("bearing_bias").unwrap()], "calib.eff")
+        .unwrap();
+    let out = both.rhs_text("beta").unwrap();
+    assert!(out.contains("kb") && out.contains("+ b"), "{out}");
+}
+
+#[test]
+fn extended_output_keeps_the_nominal_value_at_zero() {
+    // With the new param at 0 the extended output equals the nominal one
+    // (modulo 2 pi: the scale effect wraps beta into (-pi, pi]).
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
+    let base = sys.normal_form(None, &[]).unwrap();
+    let tb = obsan_expr::Tape::compile(&base.ctx, &[base.outputs[0].1], &base.state_vars).unwrap();
+    for name in ["bearing_scale", "bearing_distortion", "bearing_bias"] {
+        let ext = sys.extend(&[lib.get(name).unwrap()], "calib.eff").unwrap();
+        let nf = ext.normal_form(None, &[]).unwrap();
+        let te = obsan_expr::Tape::compile(&nf.ctx, &[nf.outputs[0].1], &nf.state_vars).unwrap();
+        for k in 0..20 {
+            let x = k as f64;
+            let s = [0.3 + 0.02 * x, 0.7 * x, 0.1, 1.2 + 0.1 * x, 0.2, 1.0, 0.6];
+            let mut se = s.to_vec();
+            se.push(0.0);
+            let d = te.eval(&se)[0] - tb.eval(&s)[0];
+            let d = d - (d / std::f64::consts::TAU).round() * std::f64::consts::TAU;
+            assert!(d.abs() < 1e-12, "{name}: {d}");
+        }
+    }
+}
+
+#[test]
+fn bad_effect_files_name_the_line() {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let cases = [
+        ("param x\n", "calib.eff:1:1", "before any 'effect"),
+        ("effect a\nparam phi\n", "calib.eff:1", "already a name"),
+        ("effect a\nparam k\nsubst vv = k\n", "calib.eff:1", "not an input"),
+        ("effect a\nparam k\noutput zz = k\n", "calib.eff:1", "not an output"),
+        ("effect a\nparam k\noutput beta = beta + k*nope\n", "calib.eff:1", "nope"),
+        ("effect a\nfrobnicate\n", "calib.eff:2:1", "expected one of"),
+        ("effect a\neffect a\n", "calib.eff:2:1", "twice"),
+        ("model other\neffect a\nparam k\noutput beta = beta + k\n", "calib.eff", "not 'calib'"),
+    ];
+    for (src, at, what) in cases {
+        let r = EffectLibrary::parse(src, "calib.eff").and_then(|l| l.check(&sys));
+        let msg = r.expect_err(src).to_string();
+        assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
+    }
+}
+
+#[test]
+fn derived_inputs_are_checked() {
+    let base = "system d\nstate x\ninput u\nx' = u*x\noutput y = x\n";
+    for (decl, ok) in [
+        ("input du = rate(u)\n", true),
+        ("input a = sqrt(u^2)*u\n", true),
+        ("input du = rate(x)\n", false),
+        ("input a = x*u\n", false),
+    ] {
+        let r = System::parse(&format!("{base}{decl}"), "d.sys");
+        assert_eq!(r.is_ok(), ok, "{decl}: {r:?}");
+    }
+}
