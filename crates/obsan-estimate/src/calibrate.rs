@@ -335,6 +335,7 @@ pub fn calibrate(
             cost_tolerance: o.ml_tolerance,
             sigma: vec![sigma],
             max_step: o.ml_max_step,
+            input_noise: None,
         };
         let r = fit(p, &fts, &calibration.values(), &states, &opts)
             .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;

@@ -271,3 +271,121 @@ pub struct Dataset {
     pub meta: DatasetMeta,
     pub trajectories: Vec<Trajectory>,
 }
+
+/// Add a model's derived inputs (`input dwR = rate(wR)`, see
+/// docs/sys-format.md) to `series` as columns computed from the measured
+/// ones. `rate(u)` on row k is `(u[k+1] - u[k]) / (t[k+1] - t[k])` (0 on the
+/// last row), so its integral over any rows telescopes exactly to the change
+/// of `u`; other definitions are evaluated row by row, with `consts` known.
+/// A column already present (measured) is kept.
+pub fn add_derived_inputs(
+    series: &mut Series,
+    derived: &[(String, String)],
+    consts: &BTreeMap<String, f64>,
+) -> Result<(), String> {
+    for (name, def) in derived {
+        if series.columns.iter().any(|c| c == name) {
+            continue;
+        }
+        let def = def.trim();
+        let col: Vec<Option<f64>> = if let Some(inner) =
+            def.strip_prefix("rate(").and_then(|r| r.strip_suffix(')'))
+        {
+            let src = series.column(inner.trim()).ok_or_else(|| {
+                format!(
+                    "derived input {name} = {def}: no input column '{}'",
+                    inner.trim()
+                )
+            })?;
+            let n = series.t.len();
+            (0..n)
+                .map(|k| {
+                    if k + 1 >= n {
+                        return Some(0.0);
+                    }
+                    let dt = series.t[k + 1] - series.t[k];
+                    match (src[k], src[k + 1]) {
+                        (Some(a), Some(b)) if dt > 0.0 => Some((b - a) / dt),
+                        _ => Some(0.0),
+                    }
+                })
+                .collect()
+        } else {
+            // Evaluated in floating point from the syntax tree (not the exact
+            // engine): `sqrt(x^2)` is |x| here, which is what a derivation wants.
+            let ast = obsan_expr::parse_ast(def)
+                .map_err(|e| format!("derived input {name} = {def}: {}", e.message))?;
+            let mut names: Vec<String> = Vec::new();
+            for (n, _) in ast.idents() {
+                if !names.iter().any(|x| x == n) {
+                    names.push(n.to_string());
+                }
+            }
+            enum Src<'a> {
+                Col(&'a [Option<f64>]),
+                Const(f64),
+            }
+            let srcs: Vec<Src> = names
+                .iter()
+                .map(|n| match series.column(n) {
+                    Some(c) => Ok(Src::Col(c)),
+                    None => consts
+                        .get(n)
+                        .map(|v| Src::Const(*v))
+                        .ok_or_else(|| format!("derived input {name} = {def}: '{n}' is neither an input column nor a known constant")),
+                })
+                .collect::<Result<_, String>>()?;
+            let mut x = vec![0.0; names.len()];
+            (0..series.t.len())
+                .map(|k| {
+                    for (xi, s) in x.iter_mut().zip(&srcs) {
+                        *xi = match s {
+                            Src::Col(c) => c[k]?,
+                            Src::Const(v) => *v,
+                        };
+                    }
+                    let v = eval_ast(&ast, &names, &x);
+                    v.is_finite().then_some(v)
+                })
+                .collect()
+        };
+        series.columns.push(name.clone());
+        series.values.push(col);
+    }
+    Ok(())
+}
+
+fn eval_ast(a: &obsan_expr::Ast, names: &[String], x: &[f64]) -> f64 {
+    use obsan_expr::{AstKind, BinOp};
+    let ev = |b: &obsan_expr::Ast| eval_ast(b, names, x);
+    match &a.kind {
+        AstKind::Num(q) => q.to_f64(),
+        AstKind::Pi => std::f64::consts::PI,
+        AstKind::Ident(n) => names.iter().position(|m| m == n).map_or(f64::NAN, |i| x[i]),
+        AstKind::Neg(b) => -ev(b),
+        AstKind::Bin(op, l, r) => {
+            let (l, r) = (ev(l), ev(r));
+            match op {
+                BinOp::Add => l + r,
+                BinOp::Sub => l - r,
+                BinOp::Mul => l * r,
+                BinOp::Div => l / r,
+                BinOp::Pow => l.powf(r),
+            }
+        }
+        AstKind::Call(f, args) => {
+            let v: Vec<f64> = args.iter().map(ev).collect();
+            match (f.as_str(), v.as_slice()) {
+                ("sin", [a]) => a.sin(),
+                ("cos", [a]) => a.cos(),
+                ("tan", [a]) => a.tan(),
+                ("atan", [a]) => a.atan(),
+                ("atan2", [y, x]) => y.atan2(*x),
+                ("exp", [a]) => a.exp(),
+                ("log", [a]) => a.ln(),
+                ("sqrt", [a]) => a.sqrt(),
+                _ => f64::NAN,
+            }
+        }
+    }
+}

@@ -50,6 +50,12 @@ pub struct FitOptions {
     /// Longest integration step (s) over merged input rows; 0 = one step per
     /// input row (see [`Integration::max_step`]).
     pub max_step: f64,
+    /// Noise of the measured inputs (see [`Integration::input_noise`]);
+    /// when given the fit is generalised least squares: the residuals of a
+    /// trajectory are whitened by the Cholesky factor of their covariance
+    /// `I + A M A^T` (output noise plus the integrated input noise,
+    /// linearised), computed at the start and again at the estimate.
+    pub input_noise: Option<Vec<f64>>,
 }
 
 /// The estimate and its uncertainty.
@@ -70,6 +76,10 @@ pub struct FitResult {
     pub iterations: usize,
     /// Root mean square of the (un-normalised) residuals per output.
     pub residual_rms: Vec<f64>,
+    /// Per trajectory, with input noise: the lower Cholesky factor L of the
+    /// covariance of its normalised residuals (rows in time order, outputs
+    /// within a time in model order; measured cells only).
+    pub whitening: Vec<Option<nalgebra::DMatrix<f64>>>,
 }
 
 struct Layout {
@@ -101,20 +111,43 @@ fn residuals(
     cols: &[usize],
     jac: bool,
 ) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
+    residuals_full(p, t, x0, opts, cols, jac, false).map(|x| (x.0, x.1))
+}
+
+/// [`residuals`] and, with `noise`, the output-time index of each residual
+/// and the input-noise matrices `M(t)` of the prediction.
+#[allow(clippy::type_complexity)]
+fn residuals_full(
+    p: &Predictor,
+    t: &FitTrajectory,
+    x0: &[f64],
+    opts: &FitOptions,
+    cols: &[usize],
+    jac: bool,
+    noise: bool,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>, Vec<usize>, Vec<Vec<f64>>), String> {
     let integ = Integration {
         max_step: opts.max_step,
-        sensitivities: jac,
+        sensitivities: jac || noise,
+        input_noise: if noise {
+            opts.input_noise.clone()
+        } else {
+            None
+        },
     };
+    let jac = jac || noise;
     let pred = p.predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)?;
     let n = p.state.len();
     let mut r = Vec::new();
     let mut rows = Vec::new();
+    let mut at = Vec::new();
     for (k, yk) in pred.outputs.iter().enumerate() {
         for (o, &c) in cols.iter().enumerate() {
             if let Some(m) = t.outputs.values[c][k] {
                 let d = m - yk[o];
                 let d = if p.angular[o] { wrap(d) } else { d };
                 r.push(d / opts.sigma[o]);
+                at.push(k);
                 if jac {
                     rows.push(
                         pred.jacobians[k][o * n..(o + 1) * n]
@@ -126,7 +159,39 @@ fn residuals(
             }
         }
     }
-    Ok((r, rows))
+    Ok((r, rows, at, pred.noise_m))
+}
+
+/// Lower Cholesky factor of `I + A M A^T` for one trajectory's residuals.
+fn whitening(
+    p: &Predictor,
+    rows: &[Vec<f64>],
+    at: &[usize],
+    noise_m: &[Vec<f64>],
+) -> Option<nalgebra::DMatrix<f64>> {
+    let nd = p.n_dynamic;
+    let nr = rows.len();
+    // A_i M(t) for each row i at each needed t is formed on the fly.
+    let mut c = nalgebra::DMatrix::<f64>::identity(nr, nr);
+    for i in 0..nr {
+        for j in 0..=i {
+            // M at the earlier of the two times (at[] is non-decreasing).
+            let mm = &noise_m[at[j].min(at[i])];
+            let mut s = 0.0;
+            for a in 0..nd {
+                let mut t = 0.0;
+                for b in 0..nd {
+                    t += mm[a * nd + b] * rows[j][b];
+                }
+                s += rows[i][a] * t;
+            }
+            c[(i, j)] += s;
+            if i != j {
+                c[(j, i)] += s;
+            }
+        }
+    }
+    c.cholesky().map(|ch| ch.l())
 }
 
 /// Solve the symmetric system `a x = b` by Gaussian elimination with partial pivoting.
@@ -165,6 +230,8 @@ struct Problem<'a> {
     opts: &'a FitOptions,
     lay: Layout,
     cols: Vec<Vec<usize>>,
+    /// Per trajectory, the whitening factor L (residuals become L^-1 r).
+    whiten: std::cell::RefCell<Vec<Option<nalgebra::DMatrix<f64>>>>,
 }
 
 impl Problem<'_> {
@@ -210,11 +277,56 @@ impl Problem<'_> {
                 n_dyn: p.n_dynamic,
                 n_traj: trajs.len(),
             },
+            whiten: std::cell::RefCell::new(vec![None; trajs.len()]),
             cols,
         })
     }
 
-    fn residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
+    /// Compute the whitening factors at `theta` (no-op without input noise).
+    fn set_whitening(&self, theta: &[f64]) -> Result<(), String> {
+        if self.opts.input_noise.is_none() {
+            return Ok(());
+        }
+        let mut w = self.whiten.borrow_mut();
+        for (k, t) in self.trajs.iter().enumerate() {
+            let (_, rows, at, m) = residuals_full(
+                self.p,
+                t,
+                &self.lay.state_of(theta, k),
+                self.opts,
+                &self.cols[k],
+                true,
+                true,
+            )?;
+            w[k] = whitening(self.p, &rows, &at, &m);
+        }
+        Ok(())
+    }
+
+    fn apply(&self, k: usize, r: Vec<f64>, rows: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
+        let w = self.whiten.borrow();
+        let Some(l) = &w[k] else {
+            return (r, rows);
+        };
+        let nr = r.len();
+        let rv = nalgebra::DVector::from_vec(r);
+        let r2 = l
+            .solve_lower_triangular(&rv)
+            .map_or_else(|| rv.as_slice().to_vec(), |v| v.as_slice().to_vec());
+        if rows.is_empty() {
+            return (r2, rows);
+        }
+        let nc = rows[0].len();
+        let jm = nalgebra::DMatrix::from_fn(nr, nc, |i, j| rows[i][j]);
+        let j2 = l.solve_lower_triangular(&jm).unwrap_or(jm);
+        let rows2 = (0..nr)
+            .map(|i| (0..nc).map(|j| j2[(i, j)]).collect())
+            .collect();
+        (r2, rows2)
+    }
+
+    /// Residuals before whitening (for their root mean square).
+    fn raw_residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
         self.trajs
             .iter()
             .enumerate()
@@ -228,6 +340,25 @@ impl Problem<'_> {
                     false,
                 )?
                 .0)
+            })
+            .collect()
+    }
+
+    fn residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
+        self.trajs
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let r = residuals(
+                    self.p,
+                    t,
+                    &self.lay.state_of(theta, k),
+                    self.opts,
+                    &self.cols[k],
+                    false,
+                )?
+                .0;
+                Ok(self.apply(k, r, vec![]).0)
             })
             .collect()
     }
@@ -256,6 +387,7 @@ impl Problem<'_> {
                 &self.cols[k],
                 true,
             )?;
+            let (r0, rows) = self.apply(k, r0, rows);
             for (row, r) in rows.iter().zip(&r0) {
                 for (a, &ja) in idx.iter().enumerate() {
                     jtr[ja] += row[a] * r;
@@ -289,6 +421,7 @@ pub fn crlb(
     opts: &FitOptions,
 ) -> Result<Vec<Vec<f64>>, String> {
     let prob = Problem::new(p, trajs, opts, params, states)?;
+    prob.set_whitening(&theta_of(params, states))?;
     let (_, jtj, _) = prob.normal(&theta_of(params, states))?;
     inverse(&jtj).ok_or_else(|| {
         "the Fisher information is singular: some unknowns are not identifiable from these data"
@@ -322,54 +455,66 @@ pub fn fit(
     let n = lay.len();
     let mut lambda = 1e-3;
     let mut iterations = 0;
+    prob.set_whitening(&theta)?;
     let (mut res, mut jtj, mut jtr) = prob.normal(&theta)?;
     let mut cost = cost_of(&res);
-    loop {
-        if iterations >= opts.max_iterations {
-            break;
-        }
-        iterations += 1;
-        let mut improved = false;
-        let mut moved = false;
-        for _ in 0..20 {
-            let mut a = jtj.clone();
-            for (i, row) in a.iter_mut().enumerate() {
-                row[i] += lambda * jtj[i][i].max(1e-12);
-            }
-            let Some(step) = solve(a, jtr.clone()) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
-            if let Ok(r2) = prob.residuals(&cand) {
-                let c2 = cost_of(&r2);
-                if c2 < cost {
-                    let rel = (cost - c2) / cost.max(1e-300);
-                    theta = cand;
-                    cost = c2;
-                    lambda = (lambda / 3.0).max(1e-12);
-                    improved = rel > opts.cost_tolerance;
-                    moved = true;
-                    break;
-                }
-            }
-            lambda *= 4.0;
-        }
-        if moved {
+    // With input noise: a second pass with the covariance at the first estimate.
+    let passes = if opts.input_noise.is_some() { 2 } else { 1 };
+    for pass in 0..passes {
+        if pass > 0 {
+            prob.set_whitening(&theta)?;
             (res, jtj, jtr) = prob.normal(&theta)?;
+            cost = cost_of(&res);
+            lambda = 1e-3;
         }
-        if !improved {
-            break;
+        loop {
+            if iterations >= opts.max_iterations {
+                break;
+            }
+            iterations += 1;
+            let mut improved = false;
+            let mut moved = false;
+            for _ in 0..20 {
+                let mut a = jtj.clone();
+                for (i, row) in a.iter_mut().enumerate() {
+                    row[i] += lambda * jtj[i][i].max(1e-12);
+                }
+                let Some(step) = solve(a, jtr.clone()) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
+                if let Ok(r2) = prob.residuals(&cand) {
+                    let c2 = cost_of(&r2);
+                    if c2 < cost {
+                        let rel = (cost - c2) / cost.max(1e-300);
+                        theta = cand;
+                        cost = c2;
+                        lambda = (lambda / 3.0).max(1e-12);
+                        improved = rel > opts.cost_tolerance;
+                        moved = true;
+                        break;
+                    }
+                }
+                lambda *= 4.0;
+            }
+            if moved {
+                (res, jtj, jtr) = prob.normal(&theta)?;
+            }
+            if !improved {
+                break;
+            }
         }
     }
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
     let n_res: usize = res.iter().map(Vec::len).sum();
+    let raw = prob.raw_residuals(&theta)?;
     let mut rms = vec![0.0; p.outputs.len()];
     let mut counts = vec![0usize; p.outputs.len()];
     for (k, t) in trajs.iter().enumerate() {
-        let mut it = res[k].iter();
+        let mut it = raw[k].iter();
         for row in 0..t.outputs.len() {
             for (o, &c) in prob.cols[k].iter().enumerate() {
                 if t.outputs.values[c][row].is_some() {
@@ -385,6 +530,7 @@ pub fn fit(
         .zip(&counts)
         .map(|(s, c)| (s / (*c).max(1) as f64).sqrt())
         .collect();
+    let whitening = prob.whiten.borrow().clone();
     Ok(FitResult {
         params: theta[..n_params].to_vec(),
         initial_states: (0..trajs.len())
@@ -399,5 +545,6 @@ pub fn fit(
         n_residuals: n_res,
         iterations,
         residual_rms,
+        whitening,
     })
 }

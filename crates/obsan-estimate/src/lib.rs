@@ -29,7 +29,9 @@ pub use calibrate::{
 };
 pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
-pub use data::{DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
+pub use data::{
+    add_derived_inputs, DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES,
+};
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use montecarlo::{
     crlb_sd, kc_from_av, run_cell, table, Cell, CellResult, McMethod, MethodStats, Table,

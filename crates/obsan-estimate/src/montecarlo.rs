@@ -321,6 +321,7 @@ pub fn crlb_sd(sim: &SimOptions, predictor: &Predictor) -> Result<Vec<f64>, Stri
         cost_tolerance: 0.0,
         sigma: vec![sim.sigma_beta],
         max_step: 0.5,
+        input_noise: None,
     };
     let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
     let cov = crlb(predictor, &fts, &params, &states, &opts)?;

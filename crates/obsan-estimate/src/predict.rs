@@ -211,6 +211,18 @@ impl Predictor {
         };
         let mut outputs = Vec::with_capacity(times.len());
         let mut jacobians = Vec::new();
+        let noise = match &opts.input_noise {
+            Some(c) if opts.sensitivities => {
+                if c.len() != m {
+                    return Err(format!("input noise: expected {m} values, one per input"));
+                }
+                Some(c.clone())
+            }
+            Some(_) => return Err("input noise needs the sensitivities".into()),
+            None => None,
+        };
+        let mut noise_acc = vec![0.0; nd * nd];
+        let mut noise_m = Vec::new();
         let no = self.outputs.len();
         let mut yv = vec![0.0; no];
         let mut gy = vec![0.0; no * n];
@@ -261,6 +273,10 @@ impl Predictor {
                     *ui /= h;
                 }
                 self.derivative(&z, consts, &u, sens, &mut w, &mut k1);
+                if let Some(c) = &noise {
+                    // w.vals now holds f0 and the fields at the step start.
+                    self.accumulate_noise(&z, &w.vals, &u, c, h, &mut noise_acc);
+                }
                 for i in 0..nz {
                     tmp[i] = z[i] + h / 2.0 * k1[i];
                 }
@@ -287,6 +303,9 @@ impl Predictor {
             w.x.extend_from_slice(consts);
             self.out_tape.eval_into(&w.x, &mut w.scratch, &mut yv);
             outputs.push(yv.clone());
+            if noise.is_some() {
+                noise_m.push(noise_acc.clone());
+            }
             if sens {
                 self.out_jac_tape.eval_into(&w.x, &mut w.scratch, &mut gy);
                 // dy/dx0 = grad h * Phi_full.
@@ -304,7 +323,43 @@ impl Predictor {
                 jacobians.push(jrow);
             }
         }
-        Ok(Prediction { outputs, jacobians })
+        Ok(Prediction {
+            outputs,
+            jacobians,
+            noise_m,
+        })
+    }
+
+    /// `acc += h * sum_i c_i |u_i| (Phi^-1 f_i)(Phi^-1 f_i)^T` (left point).
+    fn accumulate_noise(
+        &self,
+        z: &[f64],
+        vals: &[f64],
+        u: &[f64],
+        c: &[f64],
+        h: f64,
+        acc: &mut [f64],
+    ) {
+        let nd = self.n_dynamic;
+        let n = self.state.len();
+        let m = self.inputs.len();
+        let phi = nalgebra::DMatrix::from_fn(nd, nd, |i, j| z[nd + i * n + j]);
+        let Some(inv) = phi.try_inverse() else {
+            return;
+        };
+        for (i, (&ci, &ui)) in c.iter().zip(u).enumerate() {
+            let q = ci * ui.abs();
+            if q == 0.0 {
+                continue;
+            }
+            let b = nalgebra::DVector::from_fn(nd, |k, _| vals[k * (m + 1) + 1 + i]);
+            let g = &inv * b;
+            for a in 0..nd {
+                for bb in 0..nd {
+                    acc[a * nd + bb] += h * q * g[a] * g[bb];
+                }
+            }
+        }
     }
 }
 
@@ -319,6 +374,14 @@ pub struct Integration {
     pub max_step: f64,
     /// Also integrate the forward sensitivities.
     pub sensitivities: bool,
+    /// Input noise (needs `sensitivities`): per input, `c_i` such that the
+    /// measured input carries white noise of spectral density `c_i |u_i|`
+    /// (encoders with the error model of [10]: `c = K^2 / r`). Then
+    /// [`Prediction::noise_m`] holds, per output time t, the matrix
+    /// `M(t) = int_0^t Phi(s)^-1 B(s) Q(s) B(s)^T Phi(s)^-T ds` (dynamic
+    /// states), so that the state error it causes has covariance
+    /// `Phi(t_i) M(min(t_i, t_j)) Phi(t_j)^T`.
+    pub input_noise: Option<Vec<f64>>,
 }
 
 /// Outputs (per time, per output) and, when requested, their Jacobians with
@@ -327,6 +390,9 @@ pub struct Integration {
 pub struct Prediction {
     pub outputs: Vec<Vec<f64>>,
     pub jacobians: Vec<Vec<f64>>,
+    /// Per output time, `M(t)` (n_dynamic x n_dynamic, row-major) when
+    /// [`Integration::input_noise`] is given.
+    pub noise_m: Vec<Vec<f64>>,
 }
 
 struct Work {

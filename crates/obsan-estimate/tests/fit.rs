@@ -36,6 +36,7 @@ fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate
         cost_tolerance: 1e-14,
         sigma: vec![sigma],
         max_step: 0.0,
+        input_noise: None,
     };
     (fit(&p, &trajs, &init, &states, &opts).unwrap(), truth)
 }
@@ -84,4 +85,34 @@ fn noisy_data_give_estimates_within_their_standard_deviations() {
         "rms {}",
         r.residual_rms[0]
     );
+}
+
+#[test]
+fn derived_inputs_rate_telescopes_and_abs_keeps_its_sign() {
+    use obsan_estimate::{add_derived_inputs, Series};
+    let mut s = Series::new(vec!["u".into(), "w".into()]);
+    for k in 0..50 {
+        let t = k as f64 * 0.1;
+        s.push(t, &[Some((t * 0.7).sin()), Some(-1.0 - t)]);
+    }
+    let defs = vec![
+        ("du".to_string(), "rate(u)".to_string()),
+        ("a".to_string(), "sqrt((u - w)^2)*w".to_string()),
+        ("b".to_string(), "sqrt(w^2)".to_string()),
+    ];
+    add_derived_inputs(&mut s, &defs, &Default::default()).unwrap();
+    let du = s.column("du").unwrap();
+    // The integral of rate(u) over rows 0..k is u[k] - u[0] (identity).
+    let mut acc = 0.0;
+    for (k, d) in du.iter().enumerate().take(49) {
+        acc += d.unwrap() * (s.t[k + 1] - s.t[k]);
+        let want = s.column("u").unwrap()[k + 1].unwrap() - s.column("u").unwrap()[0].unwrap();
+        assert!((acc - want).abs() < 1e-12);
+    }
+    for k in 0..50 {
+        let (u, w) = (s.values[0][k].unwrap(), s.values[1][k].unwrap());
+        assert!((s.column("a").unwrap()[k].unwrap() - (u - w).abs() * w).abs() < 1e-12);
+        // sqrt(w^2) is |w|, not w, for negative w.
+        assert!((s.column("b").unwrap()[k].unwrap() - w.abs()).abs() < 1e-12);
+    }
 }

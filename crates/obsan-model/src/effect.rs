@@ -79,7 +79,7 @@ fn split_top(body: &str) -> Vec<&str> {
 
 /// Replace whole identifiers of `text` by `(replacement)`, simultaneously;
 /// number literals such as `1.5e-3` are left alone.
-pub(crate) fn substitute(text: &str, map: &[(String, String)]) -> String {
+pub fn substitute(text: &str, map: &[(String, String)]) -> String {
     let b = text.as_bytes();
     let mut out = String::with_capacity(text.len());
     let mut i = 0;
@@ -178,11 +178,17 @@ impl EffectLibrary {
             };
             let assignment = |item: &str| -> Result<(String, String), ModelError> {
                 let Some((n, v)) = item.split_once('=') else {
-                    return Err(err(format!("expected NAME = EXPR, found '{}'", item.trim())));
+                    return Err(err(format!(
+                        "expected NAME = EXPR, found '{}'",
+                        item.trim()
+                    )));
                 };
                 let (n, v) = (n.trim(), v.trim());
                 if !is_ident(n) || v.is_empty() {
-                    return Err(err(format!("expected NAME = EXPR, found '{}'", item.trim())));
+                    return Err(err(format!(
+                        "expected NAME = EXPR, found '{}'",
+                        item.trim()
+                    )));
                 }
                 Ok((n.to_string(), v.to_string()))
             };
@@ -240,7 +246,10 @@ impl EffectLibrary {
             }
         }
         if effects.is_empty() {
-            return Err(ModelError::general(origin, "no 'effect NAME' block in the file"));
+            return Err(ModelError::general(
+                origin,
+                "no 'effect NAME' block in the file",
+            ));
         }
         Ok(EffectLibrary {
             model,
@@ -260,21 +269,34 @@ impl EffectLibrary {
             if m != &sys.name {
                 return Err(ModelError::general(
                     &self.origin,
-                    format!("these effects are written for system '{m}', not '{}'", sys.name),
+                    format!(
+                        "these effects are written for system '{m}', not '{}'",
+                        sys.name
+                    ),
                 ));
             }
         }
         for e in &self.effects {
             if e.is_input_side() {
                 let fail = |msg: String| {
-                    ModelError::general(&format!("{}:{}", self.origin, e.line), format!("effect '{}': {msg}", e.name))
+                    ModelError::general(
+                        &format!("{}:{}", self.origin, e.line),
+                        format!("effect '{}': {msg}", e.name),
+                    )
                 };
                 if !(e.substs.is_empty() && e.outputs.is_empty() && e.dynamics.is_empty()) {
                     return Err(fail("an effect with 'compare' changes only the inputs' relation: it cannot also subst, replace outputs or dynamics".into()));
                 }
                 for (u, _) in &e.compares {
-                    if !sys.decls.iter().any(|d| &d.name == u && d.kind == Kind::Input) {
-                        return Err(fail(format!("compare of '{u}', which is not an input of {}", sys.name)));
+                    if !sys
+                        .decls
+                        .iter()
+                        .any(|d| &d.name == u && d.kind == Kind::Input)
+                    {
+                        return Err(fail(format!(
+                            "compare of '{u}', which is not an input of {}",
+                            sys.name
+                        )));
                     }
                 }
                 continue;
@@ -302,18 +324,35 @@ impl System {
                 continue;
             }
             let fail = |msg: String| {
-                ModelError::general(&format!("{origin}:{}", e.line), format!("effect '{}': {msg}", e.name))
+                ModelError::general(
+                    &format!("{origin}:{}", e.line),
+                    format!("effect '{}': {msg}", e.name),
+                )
             };
-            let taken = |n: &str| cur.decls.iter().any(|d| d.name == n) || cur.outputs.iter().any(|o| o.0 == n);
-            for n in e.params.iter().chain(&e.consts).chain(e.inputs.iter().map(|i| &i.0)) {
+            let taken = |n: &str| {
+                cur.decls.iter().any(|d| d.name == n) || cur.outputs.iter().any(|o| o.0 == n)
+            };
+            for n in e
+                .params
+                .iter()
+                .chain(&e.consts)
+                .chain(e.inputs.iter().map(|i| &i.0))
+            {
                 if taken(n) {
                     return Err(fail(format!("'{n}' is already a name of {}", cur.name)));
                 }
             }
             let mut s = cur.clone();
             for (u, _) in &e.substs {
-                if !cur.decls.iter().any(|d| &d.name == u && d.kind == Kind::Input) {
-                    return Err(fail(format!("subst of '{u}', which is not an input of {}", cur.name)));
+                if !cur
+                    .decls
+                    .iter()
+                    .any(|d| &d.name == u && d.kind == Kind::Input)
+                {
+                    return Err(fail(format!(
+                        "subst of '{u}', which is not an input of {}",
+                        cur.name
+                    )));
                 }
             }
             let states: Vec<String> = cur.decls_of(Kind::State).map(|d| d.name.clone()).collect();
@@ -330,12 +369,18 @@ impl System {
             }
             for (x, _) in &e.dynamics {
                 if !states.contains(x) {
-                    return Err(fail(format!("an equation for '{x}', which is not a state of {}", cur.name)));
+                    return Err(fail(format!(
+                        "an equation for '{x}', which is not a state of {}",
+                        cur.name
+                    )));
                 }
             }
             for (y, rhs) in &e.outputs {
                 let Some(k) = cur.outputs.iter().position(|o| &o.0 == y) else {
-                    return Err(fail(format!("output '{y}' is not an output of {}", cur.name)));
+                    return Err(fail(format!(
+                        "output '{y}' is not an output of {}",
+                        cur.name
+                    )));
                 };
                 let nominal = cur.texts.outputs[k].clone();
                 s.texts.outputs[k] = substitute(rhs, &[(y.clone(), nominal)]);
@@ -376,7 +421,13 @@ mod tests {
 
     #[test]
     fn substitution_is_whole_word_and_simultaneous() {
-        let m = vec![("u".to_string(), "u - t*du".to_string()), ("x".to_string(), "y".to_string())];
-        assert_eq!(substitute("u*x + ux + 1.5e-3*u", &m), "(u - t*du)*(y) + ux + 1.5e-3*(u - t*du)");
+        let m = vec![
+            ("u".to_string(), "u - t*du".to_string()),
+            ("x".to_string(), "y".to_string()),
+        ];
+        assert_eq!(
+            substitute("u*x + ux + 1.5e-3*u", &m),
+            "(u - t*du)*(y) + ux + 1.5e-3*(u - t*du)"
+        );
     }
 }

@@ -16,7 +16,7 @@ mod error;
 mod normal;
 mod sys;
 
-pub use effect::{Effect, EffectLibrary};
+pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
 pub use error::ModelError;
 pub use normal::NormalForm;
 pub use sys::{Decl, Kind, Restriction, System};

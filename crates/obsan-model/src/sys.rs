@@ -948,12 +948,7 @@ impl System {
 
 /// A derived input is `rate(u)` (the time derivative of a measured input) or
 /// an expression of measured inputs and constants (e.g. `sqrt((wR - wL)^2)*wR`).
-fn check_derived(
-    rd: &Reader,
-    text: &str,
-    map: &[usize],
-    decls: &[Decl],
-) -> Result<(), ModelError> {
+fn check_derived(rd: &Reader, text: &str, map: &[usize], decls: &[Decl]) -> Result<(), ModelError> {
     let measured = |n: &str| {
         decls
             .iter()
@@ -969,10 +964,7 @@ fn check_derived(
         return Err(rd.err_src(
             a,
             b,
-            format!(
-                "rate(...) takes one measured input, not '{}'",
-                inner.trim()
-            ),
+            format!("rate(...) takes one measured input, not '{}'", inner.trim()),
         ));
     }
     let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;

@@ -40,7 +40,13 @@ fn every_calib_effect_extends_calib() {
     assert!(again.restriction("q").is_some());
     // Two effects at once.
     let both = sys
-        .extend(&[lib.get("bearing_scale").unwrap(), lib.get("bearing_bias").unwrap()], "calib.eff")
+        .extend(
+            &[
+                lib.get("bearing_scale").unwrap(),
+                lib.get("bearing_bias").unwrap(),
+            ],
+            "calib.eff",
+        )
         .unwrap();
     let out = both.rhs_text("beta").unwrap();
     assert!(out.contains("kb") && out.contains("+ b"), "{out}");
@@ -76,12 +82,28 @@ fn bad_effect_files_name_the_line() {
     let cases = [
         ("param x\n", "calib.eff:1:1", "before any 'effect"),
         ("effect a\nparam phi\n", "calib.eff:1", "already a name"),
-        ("effect a\nparam k\nsubst vv = k\n", "calib.eff:1", "not an input"),
-        ("effect a\nparam k\noutput zz = k\n", "calib.eff:1", "not an output"),
-        ("effect a\nparam k\noutput beta = beta + k*nope\n", "calib.eff:1", "nope"),
+        (
+            "effect a\nparam k\nsubst vv = k\n",
+            "calib.eff:1",
+            "not an input",
+        ),
+        (
+            "effect a\nparam k\noutput zz = k\n",
+            "calib.eff:1",
+            "not an output",
+        ),
+        (
+            "effect a\nparam k\noutput beta = beta + k*nope\n",
+            "calib.eff:1",
+            "nope",
+        ),
         ("effect a\nfrobnicate\n", "calib.eff:2:1", "expected one of"),
         ("effect a\neffect a\n", "calib.eff:2:1", "twice"),
-        ("model other\neffect a\nparam k\noutput beta = beta + k\n", "calib.eff", "not 'calib'"),
+        (
+            "model other\neffect a\nparam k\noutput beta = beta + k\n",
+            "calib.eff",
+            "not 'calib'",
+        ),
     ];
     for (src, at, what) in cases {
         let r = EffectLibrary::parse(src, "calib.eff").and_then(|l| l.check(&sys));

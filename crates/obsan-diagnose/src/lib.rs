@@ -1,0 +1,29 @@
+//! obsan's discrepancy workflow (issue 5): where a model and measured data
+//! disagree, which candidate effect explains it, and whether the data can
+//! reveal it at all.
+//!
+//! 1. [`diagnose`] fits the nominal model by maximum likelihood (the same
+//!    fitter as `obsan calibrate --method ml`), then tests its residuals
+//!    ([`ResidualReport`]).
+//! 2. Each candidate [`obsan_model::Effect`] extends the model. The rank
+//!    test of the extended model on this data's input class
+//!    ([`input_class`], [`stacked_rank`]) decides whether its params are
+//!    identifiable; if not, the null vector that hides them is reported.
+//! 3. Identifiable candidates are fitted from the current fit and scored
+//!    (likelihood ratio, BIC); the best significant one is named, and the
+//!    search repeats on the extended model.
+
+mod identify;
+mod residual;
+mod start;
+mod stats;
+mod workflow;
+
+pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
+pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
+pub use start::start_values;
+pub use stats::{chi2_1_p, chi2_z, normal_critical};
+pub use workflow::{
+    diagnose, fit_model, input_noise, prepare, CandidateResult, DiagnoseOptions, Diagnosis,
+    InputCheck, ModelFit, Named, Start,
+};

@@ -1,0 +1,711 @@
+//! The discrepancy workflow (issue 5): fit the nominal model, test the
+//! residuals, try every candidate effect that the data can reveal, name the
+//! significant ones greedily.
+
+use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
+use crate::residual::{analyse, ResidualReport, ResidualSeries};
+use crate::stats::{chi2_1_p, normal_critical};
+use obsan_estimate::{
+    add_derived_inputs, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration, Predictor,
+};
+use obsan_model::{Effect, EffectLibrary, Kind, System};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Options; every threshold explicit.
+#[derive(Clone, Debug)]
+pub struct DiagnoseOptions {
+    /// Probability of naming an effect on data without one, per round
+    /// (split over the candidates, Bonferroni).
+    pub alpha: f64,
+    /// At most this many effects are named.
+    pub max_rounds: usize,
+    pub max_iterations: usize,
+    pub cost_tolerance: f64,
+    /// Longest integration step (s), see `obsan_estimate::Integration`.
+    pub max_step: f64,
+    /// Trajectories stacked in the rank test (the first ones).
+    pub rank_trajectories: usize,
+    /// Output noise levels; `None` takes `dataset.json`'s, else estimates.
+    pub sigma: Option<Vec<f64>>,
+    /// Weigh the residuals by the input noise of `dataset.json` too
+    /// (generalised least squares, see [`input_noise`]).
+    pub input_noise: bool,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            alpha: 0.01,
+            max_rounds: 3,
+            max_iterations: 60,
+            cost_tolerance: 1e-6,
+            max_step: 0.5,
+            rank_trajectories: 4,
+            sigma: None,
+            input_noise: true,
+        }
+    }
+}
+
+/// A fitted model and its residuals.
+#[derive(Clone, Debug, Serialize)]
+pub struct ModelFit {
+    pub model: String,
+    pub params: Vec<(String, f64, f64)>,
+    /// Per trajectory: initial dynamic state.
+    pub initial_states: Vec<Vec<f64>>,
+    /// Sum of squared normalised residuals, their number, unknowns fitted.
+    pub cost: f64,
+    pub n: usize,
+    pub n_fitted: usize,
+    pub iterations: usize,
+    /// Per output: residual RMS (in the output's units).
+    pub rms: Vec<(String, f64)>,
+    pub residuals: ResidualReport,
+    #[serde(skip)]
+    pub series: Vec<ResidualSeries>,
+    #[serde(skip)]
+    pub covariance: Vec<Vec<f64>>,
+}
+
+impl ModelFit {
+    pub fn param(&self, name: &str) -> Option<(f64, f64)> {
+        self.params.iter().find(|p| p.0 == name).map(|p| (p.1, p.2))
+    }
+    fn reduced_chi2(&self) -> f64 {
+        self.cost / (self.n as f64 - self.n_fitted as f64).max(1.0)
+    }
+    /// Variance inflation of the quasi-likelihood: excess residual level
+    /// times serial correlation, at least 1.
+    pub fn inflation(&self) -> f64 {
+        self.reduced_chi2().max(1.0) * self.residuals.correlation_factor
+    }
+}
+
+/// What happened to one candidate in one round.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidateResult {
+    pub effect: String,
+    pub description: String,
+    /// Identifiable on these data (the rank test).
+    pub identifiable: bool,
+    pub rank: Option<(usize, usize)>,
+    /// When not identifiable: what absorbs it (a null vector at the fit).
+    pub symmetry: Vec<(String, f64)>,
+    /// Fitted new params with standard deviations.
+    pub estimates: Vec<(String, f64, f64)>,
+    /// Likelihood-ratio statistic (quasi-likelihood: divided by the larger
+    /// model's reduced chi-square when above 1), its p-value, BIC change
+    /// (negative is better), residual RMS per output, whiteness z.
+    pub lr: f64,
+    pub p_value: f64,
+    pub delta_bic: f64,
+    pub rms: Vec<(String, f64)>,
+    pub whiteness_z: f64,
+    pub significant: bool,
+    pub error: Option<String>,
+}
+
+/// One named effect.
+#[derive(Clone, Debug, Serialize)]
+pub struct Named {
+    pub effect: String,
+    pub description: String,
+    pub estimates: Vec<(String, f64, f64)>,
+    pub rms_before: Vec<(String, f64)>,
+    pub rms_after: Vec<(String, f64)>,
+    pub lr: f64,
+    pub p_value: f64,
+}
+
+/// An effect on the measured inputs (`compare` relations).
+#[derive(Clone, Debug, Serialize)]
+pub struct InputCheck {
+    pub effect: String,
+    pub description: String,
+    pub estimates: Vec<(String, f64, f64)>,
+    pub z: f64,
+    pub significant: bool,
+    pub note: String,
+}
+
+/// The whole outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    pub model: String,
+    pub sigma: Vec<(String, f64)>,
+    pub sigma_estimated: bool,
+    pub input_class: String,
+    pub nominal: ModelFit,
+    pub rounds: Vec<Vec<CandidateResult>>,
+    pub named: Vec<Named>,
+    pub input_checks: Vec<InputCheck>,
+    pub final_fit: ModelFit,
+    /// Effects these data cannot reveal, with what absorbs them.
+    pub hidden: Vec<CandidateResult>,
+    /// The extended model (nominal plus the named effects) as .sys text.
+    pub extended_sys: String,
+    /// Per-round critical value of the LR statistic.
+    pub lr_critical: f64,
+}
+
+/// The dataset with the model's derived inputs and the workflow's
+/// constants (`later`: 0 on the first trajectory, 1 after; `index`).
+pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
+    let mut d = data.clone();
+    let derived: Vec<(String, String)> = sys
+        .decls_of(Kind::Input)
+        .filter_map(|x| x.derived.clone().map(|t| (x.name.clone(), t)))
+        .collect();
+    for (k, t) in d.trajectories.iter_mut().enumerate() {
+        t.meta
+            .entry("later".into())
+            .or_insert(if k == 0 { 0.0 } else { 1.0 });
+        t.meta.entry("index".into()).or_insert(k as f64);
+        add_derived_inputs(&mut t.inputs, &derived, &t.meta)
+            .map_err(|e| format!("trajectory {}: {e}", t.name))?;
+    }
+    Ok(d)
+}
+
+/// The measured inputs' noise (see `obsan_estimate::Integration::input_noise`)
+/// from `dataset.json`: `noise.<input>` gives `c` for that input; otherwise
+/// `noise.encoder_k` = K with `nominal.r_right` = r gives `c = K^2 / r` for
+/// every measured input (wheel encoders, the error model of [10]). Derived
+/// inputs carry none. `None` when the dataset states no input noise.
+pub fn input_noise(sys: &System, data: &Dataset) -> Option<Vec<f64>> {
+    let m = &data.meta;
+    let enc = match (m.noise.get("encoder_k"), m.nominal.get("r_right")) {
+        (Some(k), Some(r)) if *k > 0.0 && *r > 0.0 => Some(k * k / r),
+        _ => None,
+    };
+    let c: Vec<f64> = sys
+        .decls_of(Kind::Input)
+        .map(|d| match (&d.derived, m.noise.get(&d.name)) {
+            (Some(_), _) => 0.0,
+            (None, Some(c)) => *c,
+            (None, None) => enc.unwrap_or(0.0),
+        })
+        .collect();
+    c.iter().any(|x| *x > 0.0).then_some(c)
+}
+
+/// Fit `sys` to prepared `data` from the given start.
+pub fn fit_model(
+    sys: &System,
+    data: &Dataset,
+    params0: &[f64],
+    states0: &[Vec<f64>],
+    sigma: &[f64],
+    o: &DiagnoseOptions,
+) -> Result<ModelFit, String> {
+    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
+    let p = Predictor::new(&nf);
+    let trajs = FitTrajectory::all(&p, data);
+    let noise = input_noise(sys, data);
+    let fo = FitOptions {
+        max_iterations: o.max_iterations,
+        cost_tolerance: o.cost_tolerance,
+        sigma: sigma.to_vec(),
+        max_step: o.max_step,
+        input_noise: if o.input_noise { noise } else { None },
+    };
+    let r = fit(&p, &trajs, params0, states0, &fo)?;
+    let names: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
+    let measured: Vec<String> = sys
+        .decls_of(Kind::Input)
+        .filter(|d| d.derived.is_none())
+        .map(|d| d.name.clone())
+        .collect();
+    let mut series = Vec::new();
+    for (k, (tr, ft)) in data.trajectories.iter().zip(&trajs).enumerate() {
+        // The fit's residual rows: (time index, output) of the measured cells.
+        let cols: Vec<Option<&[Option<f64>]>> =
+            p.outputs.iter().map(|o| tr.outputs.column(o)).collect();
+        let mut row_of = Vec::new();
+        for j in 0..tr.outputs.len() {
+            for (oi, c) in cols.iter().enumerate() {
+                if c.is_some_and(|c| c[j].is_some()) {
+                    row_of.push((j, oi));
+                }
+            }
+        }
+        let cov = r
+            .whitening
+            .get(k)
+            .cloned()
+            .flatten()
+            .map(|l| &l * l.transpose());
+        let mut x0 = r.initial_states[k].clone();
+        x0.extend_from_slice(&r.params);
+        let integ = Integration {
+            max_step: o.max_step,
+            sensitivities: false,
+            input_noise: None,
+        };
+        let pred = p.predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)?;
+        for (oi, oname) in p.outputs.iter().enumerate() {
+            let Some(col) = tr.outputs.column(oname) else {
+                continue;
+            };
+            let mut s = ResidualSeries {
+                trajectory: tr.name.clone(),
+                output: oname.clone(),
+                t: vec![],
+                e: vec![],
+                predicted: vec![],
+                angular: p.angular[oi],
+                inputs: measured.iter().map(|n| (n.clone(), vec![])).collect(),
+                input_integrals: measured.iter().map(|n| (n.clone(), vec![])).collect(),
+                whiten: None,
+            };
+            if let Some(c) = &cov {
+                let idx: Vec<usize> = row_of
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, x)| x.1 == oi)
+                    .map(|(i, _)| i)
+                    .collect();
+                let sub =
+                    nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |a, b| c[(idx[a], idx[b])]);
+                s.whiten = sub.cholesky().map(|ch| std::sync::Arc::new(ch.l()));
+            }
+            // Held input values and their integrals at the output times.
+            let mut row = 0usize;
+            let mut integral = vec![0.0; measured.len()];
+            let mut t_int = tr.inputs.t.first().copied().unwrap_or(0.0);
+            for (j, &t) in tr.outputs.t.iter().enumerate() {
+                while row + 1 < tr.inputs.len() && tr.inputs.t[row + 1] <= t {
+                    for (m, n) in measured.iter().enumerate() {
+                        let u = tr.inputs.column(n).and_then(|c| c[row]).unwrap_or(0.0);
+                        integral[m] += u * (tr.inputs.t[row + 1] - t_int);
+                    }
+                    t_int = tr.inputs.t[row + 1];
+                    row += 1;
+                }
+                let Some(m) = col[j] else { continue };
+                let y = pred.outputs[j][oi];
+                let d = if s.angular { wrap(m - y) } else { m - y };
+                s.t.push(t);
+                s.e.push(d / sigma[oi]);
+                s.predicted.push(y);
+                for (mi, n) in measured.iter().enumerate() {
+                    let u = tr.inputs.column(n).and_then(|c| c[row]).unwrap_or(0.0);
+                    s.inputs[mi].1.push(u);
+                    s.input_integrals[mi].1.push(integral[mi] + u * (t - t_int));
+                }
+            }
+            if !s.e.is_empty() {
+                series.push(s);
+            }
+        }
+    }
+    let n_fitted = r.params.len() + r.initial_states.iter().map(Vec::len).sum::<usize>();
+    let residuals = analyse(&series, n_fitted);
+    Ok(ModelFit {
+        model: sys.name.clone(),
+        params: names
+            .iter()
+            .zip(r.params.iter().zip(&r.params_sd))
+            .map(|(n, (v, s))| (n.clone(), *v, *s))
+            .collect(),
+        initial_states: r.initial_states.clone(),
+        cost: r.cost,
+        n: r.n_residuals,
+        n_fitted,
+        iterations: r.iterations,
+        rms: p
+            .outputs
+            .iter()
+            .cloned()
+            .zip(r.residual_rms.iter().copied())
+            .collect(),
+        residuals,
+        series,
+        covariance: r.covariance,
+    })
+}
+
+/// Start values for `sys` on `data`: a function of the model (see
+/// [`crate::start_values`]).
+pub type Start = (Vec<f64>, Vec<Vec<f64>>);
+
+/// Run the workflow. `progress` is told what is being done.
+pub fn diagnose(
+    sys: &System,
+    lib: Option<&EffectLibrary>,
+    data: &Dataset,
+    start: &Start,
+    o: &DiagnoseOptions,
+    progress: &(dyn Fn(&str) + Sync),
+) -> Result<Diagnosis, String> {
+    let outputs: Vec<String> = sys.output_names().iter().map(|s| s.to_string()).collect();
+    // Noise levels: given, from dataset.json, or estimated (then the chi-square
+    // test of the level is void and the LR uses the fitted level).
+    let mut sigma_estimated = false;
+    let mut sigma: Vec<f64> = match &o.sigma {
+        Some(s) => s.clone(),
+        None => outputs
+            .iter()
+            .map(|n| {
+                data.meta
+                    .noise
+                    .get(n)
+                    .copied()
+                    .filter(|s| *s > 0.0)
+                    .unwrap_or(f64::NAN)
+            })
+            .collect(),
+    };
+    let prepared = prepare(sys, data)?;
+    progress("fitting the nominal model");
+    if sigma.iter().any(|s| s.is_nan()) {
+        sigma_estimated = true;
+        let ones: Vec<f64> = sigma
+            .iter()
+            .map(|s| if s.is_nan() { 1.0 } else { *s })
+            .collect();
+        let f = fit_model(sys, &prepared, &start.0, &start.1, &ones, o)?;
+        let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
+        for (s, r) in sigma.iter_mut().zip(&f.rms) {
+            if s.is_nan() {
+                *s = (r.1 * scale).max(1e-12);
+            }
+        }
+    }
+    let nominal = fit_model(sys, &prepared, &start.0, &start.1, &sigma, o)?;
+    let effects: Vec<&Effect> = lib.map(|l| l.effects.iter().collect()).unwrap_or_default();
+    let model_effects: Vec<&Effect> = effects
+        .iter()
+        .copied()
+        .filter(|e| !e.is_input_side())
+        .collect();
+    let k = model_effects.len().max(1);
+    let crit = normal_critical(o.alpha / k as f64).powi(2);
+    let input_checks: Vec<InputCheck> = effects
+        .iter()
+        .filter(|e| e.is_input_side())
+        .map(|e| input_check(e, data, o.alpha / k as f64))
+        .collect();
+
+    let which: Vec<usize> = (0..data.trajectories.len().min(o.rank_trajectories)).collect();
+    let mut current_sys = sys.clone();
+    let mut current = nominal.clone();
+    let mut named: Vec<Named> = Vec::new();
+    let mut rounds = Vec::new();
+    let mut hidden = Vec::new();
+    let mut class_text = String::new();
+    for round in 0..o.max_rounds {
+        let remaining: Vec<&Effect> = model_effects
+            .iter()
+            .copied()
+            .filter(|e| !named.iter().any(|n| n.effect == e.name))
+            .collect();
+        if remaining.is_empty() {
+            break;
+        }
+        progress(&format!(
+            "round {}: {} candidate effects",
+            round + 1,
+            remaining.len()
+        ));
+        let results: Vec<(CandidateResult, Option<(System, ModelFit)>)> = remaining
+            .par_iter()
+            .map(|e| {
+                candidate(
+                    &current_sys,
+                    &current,
+                    e,
+                    data,
+                    &which,
+                    &sigma,
+                    crit,
+                    o,
+                    lib,
+                )
+            })
+            .collect();
+        if round == 0 {
+            if let Ok(ext) = current_sys.extend(&[], "") {
+                let prepared = prepare(&ext, data)?;
+                let ins: Vec<String> = ext.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+                let der: Vec<Option<String>> = ext
+                    .decls_of(Kind::Input)
+                    .map(|d| d.derived.clone())
+                    .collect();
+                if let Ok(c) = input_class(&ins, &der, &prepared) {
+                    class_text = c.describe();
+                }
+            }
+            hidden = results
+                .iter()
+                .filter(|r| !r.0.identifiable && r.0.error.is_none())
+                .map(|r| r.0.clone())
+                .collect();
+        }
+        let best = results
+            .iter()
+            .filter(|r| r.0.significant)
+            .max_by(|a, b| a.0.lr.total_cmp(&b.0.lr))
+            .map(|r| (r.0.clone(), r.1.clone()));
+        rounds.push(results.into_iter().map(|r| r.0).collect());
+        let Some((res, Some((ext_sys, ext_fit)))) = best else {
+            break;
+        };
+        let eff = model_effects
+            .iter()
+            .find(|e| e.name == res.effect)
+            .expect("candidate");
+        named.push(Named {
+            effect: res.effect.clone(),
+            description: eff.description.clone(),
+            estimates: res.estimates.clone(),
+            rms_before: current.rms.clone(),
+            rms_after: ext_fit.rms.clone(),
+            lr: res.lr,
+            p_value: res.p_value,
+        });
+        current_sys = ext_sys;
+        current = ext_fit;
+    }
+    // Estimates of earlier named effects are refined by later rounds.
+    for n in &mut named {
+        for e in &mut n.estimates {
+            if let Some((v, s)) = current.param(&e.0) {
+                e.1 = v;
+                e.2 = s * current.inflation().sqrt();
+            }
+        }
+    }
+    Ok(Diagnosis {
+        model: sys.name.clone(),
+        sigma: outputs.into_iter().zip(sigma).collect(),
+        sigma_estimated,
+        input_class: class_text,
+        nominal,
+        rounds,
+        named,
+        input_checks,
+        final_fit: current,
+        hidden,
+        extended_sys: current_sys.to_sys_text(),
+        lr_critical: crit,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn candidate(
+    base: &System,
+    base_fit: &ModelFit,
+    e: &Effect,
+    data: &Dataset,
+    which: &[usize],
+    sigma: &[f64],
+    crit: f64,
+    o: &DiagnoseOptions,
+    lib: Option<&EffectLibrary>,
+) -> (CandidateResult, Option<(System, ModelFit)>) {
+    let mut res = CandidateResult {
+        effect: e.name.clone(),
+        description: e.description.clone(),
+        identifiable: false,
+        rank: None,
+        symmetry: vec![],
+        estimates: vec![],
+        lr: 0.0,
+        p_value: 1.0,
+        delta_bic: 0.0,
+        rms: vec![],
+        whiteness_z: 0.0,
+        significant: false,
+        error: None,
+    };
+    let origin = lib.map_or("effects", |l| l.origin.as_str());
+    let mut run = || -> Result<Option<(System, ModelFit)>, String> {
+        let ext = base.extend(&[e], origin).map_err(|x| x.to_string())?;
+        let prepared = prepare(&ext, data)?;
+        let ins: Vec<String> = ext.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+        let der: Vec<Option<String>> = ext
+            .decls_of(Kind::Input)
+            .map(|d| d.derived.clone())
+            .collect();
+        let class: InputClass = input_class(&ins, &der, &prepared)?;
+        let consts: Vec<Vec<(String, f64)>> = prepared
+            .trajectories
+            .iter()
+            .map(|t| {
+                ext.decls_of(Kind::Const)
+                    .filter(|c| c.value.is_none())
+                    .map(|c| (c.name.clone(), t.meta.get(&c.name).copied().unwrap_or(0.0)))
+                    .collect()
+            })
+            .collect();
+        let outs = ext.output_names();
+        let seen: Vec<Vec<bool>> = prepared
+            .trajectories
+            .iter()
+            .map(|t| {
+                outs.iter()
+                    .map(|o| {
+                        t.outputs
+                            .column(o)
+                            .is_some_and(|c| c.iter().any(Option::is_some))
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
+        pv.extend(e.params.iter().map(|_| 0.0));
+        let id: Identifiability = stacked_rank(
+            &ext,
+            &class,
+            &consts,
+            &seen,
+            which,
+            (&pv, &base_fit.initial_states),
+        )?;
+        res.rank = Some((id.rank, id.n));
+        res.identifiable = e.params.iter().all(|p| id.param_observable(p));
+        if !res.identifiable {
+            if let Some((_, terms)) = id.symmetries.iter().find(|s| e.params.contains(&s.0)) {
+                res.symmetry = terms.clone();
+            }
+            return Ok(None);
+        }
+        let f = fit_model(&ext, &prepared, &pv, &base_fit.initial_states, sigma, o)?;
+        let inflate = f.inflation();
+        res.lr = (base_fit.cost - f.cost).max(0.0) / inflate;
+        res.p_value = chi2_1_p(res.lr);
+        res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
+        res.significant = res.lr > crit && res.delta_bic < 0.0;
+        res.estimates = e
+            .params
+            .iter()
+            .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
+            .collect();
+        res.rms = f.rms.clone();
+        res.whiteness_z = f
+            .residuals
+            .tests
+            .iter()
+            .find(|t| t.test == "whiteness")
+            .map_or(0.0, |t| t.z);
+        Ok(Some((ext, f)))
+    };
+    match run() {
+        Ok(x) => (res, x),
+        Err(msg) => {
+            res.error = Some(msg);
+            (res, None)
+        }
+    }
+}
+
+/// Fit the params of an input relation `compare u = EXPR` to the measured
+/// inputs of every trajectory where EXPR can be evaluated (Gauss–Newton,
+/// numeric derivatives; residual scatter gives the standard deviations).
+fn input_check(e: &Effect, data: &Dataset, alpha: f64) -> InputCheck {
+    let mut out = InputCheck {
+        effect: e.name.clone(),
+        description: e.description.clone(),
+        estimates: vec![],
+        z: 0.0,
+        significant: false,
+        note: String::new(),
+    };
+    let np = e.params.len();
+    let resid = |theta: &[f64]| -> Vec<f64> {
+        let mut r = Vec::new();
+        for t in &data.trajectories {
+            let mut consts: BTreeMap<String, f64> = t.meta.clone();
+            for (p, v) in e.params.iter().zip(theta) {
+                consts.insert(p.clone(), *v);
+            }
+            for (u, rhs) in &e.compares {
+                let mut s = t.inputs.clone();
+                if add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts).is_err() {
+                    continue;
+                }
+                let (Some(m), Some(c)) = (s.column(u), s.column("__cmp")) else {
+                    continue;
+                };
+                // Compared over 1 s block means: averaging keeps the relation
+                // (linear in the inputs) and removes the errors-in-variables
+                // bias that per-sample encoder noise would give.
+                let (mut a, mut b, mut n) = (0.0, 0.0, 0usize);
+                let mut t0 = s.t.first().copied().unwrap_or(0.0);
+                for ((x, y), t) in m.iter().zip(c).zip(&s.t) {
+                    if *t >= t0 + 1.0 && n > 0 {
+                        r.push((a - b) / n as f64);
+                        (a, b, n, t0) = (0.0, 0.0, 0, *t);
+                    }
+                    if let (Some(x), Some(y)) = (x, y) {
+                        a += x;
+                        b += y;
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    r.push((a - b) / n as f64);
+                }
+            }
+        }
+        r
+    };
+    let mut theta = vec![0.0; np];
+    let r0 = resid(&theta);
+    if r0.is_empty() {
+        out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
+        return out;
+    }
+    let mut cov: nalgebra::DMatrix<f64> = nalgebra::DMatrix::zeros(np, np);
+    for _ in 0..5 {
+        let r = resid(&theta);
+        let mut jac = Vec::new();
+        for i in 0..np {
+            let mut t2 = theta.clone();
+            let h = 1e-6 * (1.0 + theta[i].abs());
+            t2[i] += h;
+            let r2 = resid(&t2);
+            jac.push(
+                r.iter()
+                    .zip(&r2)
+                    .map(|(a, b)| (a - b) / h)
+                    .collect::<Vec<f64>>(),
+            );
+        }
+        let jtj: nalgebra::DMatrix<f64> = nalgebra::DMatrix::from_fn(np, np, |i, j| {
+            jac[i].iter().zip(&jac[j]).map(|(a, b)| a * b).sum()
+        });
+        let jtr: nalgebra::DVector<f64> =
+            nalgebra::DVector::from_fn(np, |i, _| jac[i].iter().zip(&r).map(|(a, b)| a * b).sum());
+        let Some(inv) = jtj.clone().try_inverse() else {
+            out.note = "the inputs do not determine the relation's params".into();
+            return out;
+        };
+        let step = &inv * jtr;
+        for i in 0..np {
+            theta[i] += step[i];
+        }
+        let r = resid(&theta);
+        let s2 = r.iter().map(|x| x * x).sum::<f64>() / (r.len() as f64 - np as f64).max(1.0);
+        cov = inv * s2;
+    }
+    let zcrit = normal_critical(alpha);
+    out.estimates = e
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.clone(), theta[i], cov[(i, i)].max(0.0).sqrt()))
+        .collect();
+    out.z = out
+        .estimates
+        .iter()
+        .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
+        .fold(0.0, f64::max);
+    out.significant = out.z > zcrit;
+    out.note = format!("{} input samples", r0.len());
+    out
+}
