@@ -46,6 +46,44 @@ pub enum Command {
     /// Monte Carlo runs laid out like the paper's Tables IV-VII, beside the
     /// paper's figures and the Cramér–Rao bound.
     Montecarlo(MontecarloArgs),
+    /// Where a model and measured data disagree: fit the model, test the
+    /// residuals, try each candidate effect the data can reveal (rank test
+    /// first), name the significant ones.
+    Diagnose(DiagnoseArgs),
+}
+
+#[derive(Args)]
+pub struct DiagnoseArgs {
+    /// The model (.sys).
+    #[arg(long)]
+    pub model: String,
+    /// The dataset folder (docs/data-format.md).
+    #[arg(long)]
+    pub data: String,
+    /// Candidate effects (docs/effects-format.md); default: the model's file
+    /// with the extension .eff, if there is one.
+    #[arg(long)]
+    pub effects: Option<String>,
+    /// Write a report folder: report.md, SVG plots, extended.sys, diagnosis.json.
+    #[arg(long)]
+    pub report: Option<String>,
+    /// Replace the report folder if it exists.
+    #[arg(long)]
+    pub force: bool,
+    #[arg(long)]
+    pub json: bool,
+    /// Start value of a param or state (every trajectory), NAME=VALUE; repeatable.
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub init: Vec<String>,
+    /// Probability of naming an effect on data without one, per round.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Name at most this many effects.
+    #[arg(long, default_value_t = 3)]
+    pub max_effects: usize,
+    /// Ignore the input noise stated in dataset.json (ordinary least squares).
+    #[arg(long)]
+    pub no_input_noise: bool,
 }
 
 #[derive(Args)]
@@ -143,7 +181,7 @@ pub struct SimFlags {
     /// Initial distance to the feature (m).
     #[arg(long, default_value_t = 1.2)]
     pub d0: f64,
-    /// A hidden effect NAME=VALUE (time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change).
+    /// A hidden effect NAME=VALUE (time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change, bearing_bias).
     #[arg(long = "effect", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     pub effects: Vec<String>,
     /// Drive one trajectory by this wheel-speed history (CSV t,wR,wL) instead of circles.

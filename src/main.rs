@@ -6,10 +6,12 @@
 
 mod analysis_cmds;
 mod cli;
+mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
 mod show;
 mod simulate;
+mod svg;
 
 use clap::Parser;
 use std::process::ExitCode;
@@ -58,6 +60,7 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Calibrate(a) => estimate_cmds::calibrate_cmd(&a),
         cli::Command::Crlb(a) => estimate_cmds::crlb_cmd(&a),
         cli::Command::Montecarlo(a) => estimate_cmds::montecarlo_cmd(&a),
+        cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
     };
     match result {
         Ok(code) => code,

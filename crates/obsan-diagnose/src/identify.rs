@@ -136,7 +136,11 @@ pub fn input_class(
             .collect();
         let a =
             nalgebra::DMatrix::from_fn(nb, inputs.len(), |r, c| (cols[c][r] - mean[c]) / scale[c]);
-        let svd = a.svd(false, true);
+        if a.iter().any(|x| !x.is_finite()) {
+            return Err(format!("trajectory {}: non-finite input values", tr.name));
+        }
+        let svd = nalgebra::SVD::try_new(a, false, true, 1e-14, 10_000)
+            .ok_or_else(|| format!("trajectory {}: the input class did not converge", tr.name))?;
         let vt = svd.v_t.expect("requested");
         let smax = svd.singular_values.max();
         let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
@@ -312,7 +316,21 @@ pub fn stacked_rank(
                 m[(i, j)] = g[i * n + j];
             }
         }
-        let svd = m.svd(false, true);
+        // A point where the gradients are not finite gives no null vector.
+        let svd = if m.iter().all(|x| x.is_finite()) {
+            nalgebra::SVD::try_new(m, false, true, 1e-14, 10_000)
+        } else {
+            None
+        };
+        let Some(svd) = svd else {
+            return Ok(Identifiability {
+                rank: report.rank,
+                n: report.n,
+                observable,
+                error_bound: report.error_bound,
+                symmetries,
+            });
+        };
         let vt = svd.v_t.expect("requested");
         let smax = svd.singular_values.max().max(1e-300);
         let null: Vec<Vec<f64>> = (0..n)

@@ -89,6 +89,8 @@ impl ModelFit {
 pub struct CandidateResult {
     pub effect: String,
     pub description: String,
+    /// The effect's new params.
+    pub params: Vec<String>,
     /// Identifiable on these data (the rank test).
     pub identifiable: bool,
     pub rank: Option<(usize, usize)>,
@@ -510,6 +512,7 @@ fn candidate(
     let mut res = CandidateResult {
         effect: e.name.clone(),
         description: e.description.clone(),
+        params: e.params.clone(),
         identifiable: false,
         rank: None,
         symmetry: vec![],

@@ -38,6 +38,8 @@ pub struct Effects {
     pub wheel_slip: f64,
     /// The right wheel's radius changes by this amount (m) from the second trajectory on.
     pub radius_change: f64,
+    /// beta_meas = beta + b (rad): a constant bearing bias.
+    pub bearing_bias: f64,
 }
 
 impl Effects {
@@ -49,9 +51,10 @@ impl Effects {
             "bearing_distortion" => &mut self.bearing_distortion,
             "wheel_slip" => &mut self.wheel_slip,
             "radius_change" => &mut self.radius_change,
+            "bearing_bias" => &mut self.bearing_bias,
             _ => {
                 return Err(format!(
-                    "unknown effect '{name}' (known: time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change)"
+                    "unknown effect '{name}' (known: time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change, bearing_bias)"
                 ))
             }
         };
@@ -367,6 +370,7 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
             let e = &o.effects;
             let meas = (1.0 + e.bearing_scale) * beta
                 + e.bearing_distortion * (2.0 * beta).sin()
+                + e.bearing_bias
                 + o.sigma_beta * rng.normal();
             outputs.push(tc, &[Some(wrap(meas))]);
         }

@@ -1,0 +1,275 @@
+//! The discrepancy workflow on simulated data with hidden effects (issue 5):
+//! each identifiable effect is named with its magnitude, effects the data
+//! cannot reveal are reported as such, clean data name nothing.
+//!
+//! Magnitudes: "small" and "large" make the nominal model's bearing residual
+//! RMS about 1.3 and 3 times the noise (ordinary least squares; docs/diagnose.md
+//! has the scan). Data designs: the paper's constant-speed circles, and
+//! speed profiles where an effect needs a varying speed.
+
+use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis};
+use obsan_estimate::{simulate, SimOptions, SpeedProfile, Truth};
+use obsan_model::{EffectLibrary, System};
+use rayon::prelude::*;
+
+fn read(p: &str) -> String {
+    std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+pub fn run(design: &str, effects: &[(&str, f64)], seed: u64) -> (Diagnosis, Truth) {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
+    let mut o = SimOptions {
+        seed,
+        ..SimOptions::default()
+    };
+    match design {
+        "circles" => {}
+        "sine" => {
+            o.profile = SpeedProfile::Sine {
+                amplitude: 0.5,
+                period: 60.0,
+            }
+        }
+        "sine-wide" => {
+            o.profile = SpeedProfile::Sine {
+                amplitude: 0.9,
+                period: 60.0,
+            }
+        }
+        "stopgo" => {
+            o.profile = SpeedProfile::StopGo {
+                run: 20.0,
+                pause: 10.0,
+            }
+        }
+        _ => panic!("design {design}"),
+    }
+    for (n, v) in effects {
+        if *n == "dq" {
+            o.dq = *v;
+        } else {
+            o.effects.set(n, *v).unwrap();
+        }
+    }
+    let (data, truth) = simulate(&o).unwrap();
+    let start = start_values(&sys, &data, &Default::default()).unwrap();
+    let d = diagnose(
+        &sys,
+        Some(&lib),
+        &data,
+        &start,
+        &DiagnoseOptions::default(),
+        &|_| {},
+    )
+    .unwrap();
+    (d, truth)
+}
+
+/// The true value of an effect's param, from the simulator's definition.
+pub fn true_param(effect: &str, v: f64, t: &Truth) -> f64 {
+    match effect {
+        "radius_change" => v / t.r_right,
+        _ => v,
+    }
+}
+
+pub fn named(d: &Diagnosis) -> Vec<String> {
+    d.named.iter().map(|n| n.effect.clone()).collect()
+}
+
+/// (effect, design, small, large)
+pub const CASES: [(&str, &str, f64, f64); 5] = [
+    ("bearing_scale", "circles", 0.032, 0.117),
+    ("bearing_distortion", "circles", 0.032, 0.118),
+    ("radius_change", "sine-wide", 0.046, 0.1),
+    ("wheel_slip", "sine-wide", 0.4, 1.34),
+    ("time_offset", "stopgo", 0.71, 2.76),
+];
+
+const SEEDS: [u64; 3] = [1, 2, 3];
+
+/// Named exactly the hidden effect, with its magnitude within 3 sd, on
+/// every seed, at both magnitudes.
+fn named_with_magnitude(effect: &str) {
+    let c = CASES.iter().find(|c| c.0 == effect).unwrap();
+    let jobs: Vec<(f64, u64)> = [c.2, c.3]
+        .iter()
+        .flat_map(|v| SEEDS.iter().map(move |s| (*v, *s)))
+        .collect();
+    let bad: Vec<String> = jobs
+        .par_iter()
+        .filter_map(|&(v, seed)| {
+            let (d, t) = run(c.1, &[(effect, v)], seed);
+            let want = true_param(effect, v, &t);
+            let ok = named(&d) == [effect]
+                && d.named[0]
+                    .estimates
+                    .iter()
+                    .all(|(_, x, sd)| (x - want).abs() < 3.0 * sd);
+            (!ok).then(|| {
+                format!(
+                    "{effect}={v} seed {seed}: named {:?} {:?} (truth {want})",
+                    named(&d),
+                    d.named.first().map(|n| &n.estimates)
+                )
+            })
+        })
+        .collect();
+    assert!(bad.is_empty(), "{bad:#?}");
+}
+
+#[test]
+fn names_bearing_distortion() {
+    named_with_magnitude("bearing_distortion");
+}
+
+#[test]
+fn names_radius_change() {
+    named_with_magnitude("radius_change");
+}
+
+#[test]
+fn names_wheel_slip_when_the_speed_varies() {
+    named_with_magnitude("wheel_slip");
+}
+
+#[test]
+fn names_bearing_scale() {
+    // Named on every seed; its magnitude is biased low (a local minimum at
+    // the bearing wrap, docs/diagnose.md), so only the naming is claimed.
+    let c = CASES.iter().find(|c| c.0 == "bearing_scale").unwrap();
+    for v in [c.2, c.3] {
+        for seed in SEEDS {
+            let (d, _) = run(c.1, &[("bearing_scale", v)], seed);
+            assert_eq!(named(&d), ["bearing_scale"], "v {v} seed {seed}");
+        }
+    }
+}
+
+#[test]
+fn what_constant_speed_circles_cannot_reveal() {
+    // A camera-encoder time offset changes nothing on constant-speed circles
+    // (the derived input rate(w) vanishes); a constant bearing bias is
+    // absorbed by psi anywhere. Neither is named; both are reported hidden,
+    // the bias with psi in its null vector.
+    for (effect, v) in [("time_offset", 0.5), ("bearing_bias", 0.05)] {
+        let (d, _) = run("circles", &[(effect, v)], 1);
+        assert!(d.named.is_empty(), "{effect}: named {:?}", named(&d));
+        let h = d
+            .hidden
+            .iter()
+            .find(|c| c.effect == effect)
+            .expect("reported hidden");
+        if effect == "bearing_bias" {
+            let psi = h
+                .symmetry
+                .iter()
+                .find(|t| t.0 == "psi")
+                .expect("psi absorbs it");
+            assert!((psi.1 - 1.0).abs() < 1e-6, "{:?}", h.symmetry);
+        } else {
+            assert_eq!(h.symmetry.len(), 1, "{:?}", h.symmetry);
+        }
+    }
+    // With a varying speed the rank test finds the time offset identifiable.
+    let (d, _) = run("sine", &[], 1);
+    let c = d.rounds[0]
+        .iter()
+        .find(|c| c.effect == "time_offset")
+        .unwrap();
+    assert!(c.identifiable);
+}
+
+#[test]
+fn clean_data_name_nothing() {
+    let seeds: Vec<u64> = (101..121).collect();
+    let named_runs: Vec<(u64, Vec<String>)> = seeds
+        .par_iter()
+        .map(|&s| (s, named(&run("circles", &[], s).0)))
+        .filter(|(_, n)| !n.is_empty())
+        .collect();
+    // At least 95% of 20 runs name nothing.
+    assert!(named_runs.len() <= 1, "{named_runs:?}");
+}
+
+#[test]
+fn two_hidden_effects_are_both_named() {
+    let (d, t) = run(
+        "circles",
+        &[("bearing_distortion", 0.06), ("radius_change", 0.06)],
+        7,
+    );
+    let mut n = named(&d);
+    n.sort();
+    assert_eq!(n, ["bearing_distortion", "radius_change"]);
+    for e in &d.named {
+        let (name, x, sd) = &e.estimates[0];
+        let want = if name == "kr" { 0.06 / t.r_right } else { 0.06 };
+        assert!((x - want).abs() < 3.0 * sd, "{name} {x} ± {sd} vs {want}");
+    }
+}
+
+#[test]
+fn commanded_ratio_error_shows_in_the_inputs() {
+    let (d, _) = run("circles", &[("dq", 0.02)], 3);
+    let c = &d.input_checks[0];
+    assert!(c.significant);
+    let (_, x, sd) = c.estimates[0];
+    assert!((x - 0.02).abs() < 3.0 * sd, "{x} ± {sd}");
+    // The bearings do not see it: the fit uses the measured wheel speeds.
+    assert!(d.named.is_empty(), "{:?}", named(&d));
+}
+
+#[test]
+#[ignore]
+fn print_cases() {
+    let seeds: u64 = std::env::var("SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(2);
+    let only = std::env::var("ONLY").unwrap_or_default();
+    let extra: Vec<(&str, &str, f64, f64)> = match std::env::var("EXTRA") {
+        Ok(x) => {
+            let v: Vec<&str> = x.leak().split(',').collect();
+            vec![(v[0], v[1], v[2].parse().unwrap(), v[3].parse().unwrap())]
+        }
+        Err(_) => vec![],
+    };
+    let cases: Vec<(&str, &str, f64, f64)> = if extra.is_empty() {
+        CASES.to_vec()
+    } else {
+        extra
+    };
+    let jobs: Vec<(&str, &str, f64, u64)> = cases
+        .iter()
+        .filter(|c| only.is_empty() || c.0 == only)
+        .flat_map(|c| [(c.0, c.1, c.2), (c.0, c.1, c.3)])
+        .flat_map(|(e, d, v)| (1..=seeds).map(move |s| (e, d, v, s)))
+        .collect();
+    let out: Vec<String> = jobs
+        .par_iter()
+        .map(|(e, design, v, s)| {
+            let (d, t) = run(design, &[(e, *v)], *s);
+            let tv = true_param(e, *v, &t);
+            let est: Vec<String> = d
+                .named
+                .iter()
+                .flat_map(|n| {
+                    n.estimates.iter().map(|x| {
+                        format!("{}={:.4}±{:.4} (z {:.1})", x.0, x.1, x.2, (x.1 - tv) / x.2)
+                    })
+                })
+                .collect();
+            format!(
+                "{e} {design} {v} seed {s}: named {:?} {} | white {:.3}",
+                named(&d),
+                est.join(" "),
+                (d.nominal.cost / d.nominal.n as f64).sqrt()
+            )
+        })
+        .collect();
+    for l in out {
+        eprintln!("{l}");
+    }
+}

@@ -1,0 +1,436 @@
+//! `obsan diagnose`: reading the model, effects and data, printing the
+//! diagnosis, writing the report folder.
+
+use crate::cli::DiagnoseArgs;
+use crate::estimate_cmds::read_dataset;
+use crate::show::load_system;
+use crate::simulate::write_folder_atomically;
+use crate::svg::{bars, chart, Series, Style, COLORS};
+use crate::Failure;
+use obsan_diagnose::{
+    diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, ModelFit,
+};
+use obsan_model::{EffectLibrary, Kind};
+use std::collections::BTreeMap;
+use std::fmt::Write;
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
+    let path = match &a.effects {
+        Some(p) => p.clone(),
+        None => {
+            let p = PathBuf::from(&a.model).with_extension("eff");
+            if !p.exists() {
+                return Ok(None);
+            }
+            p.display().to_string()
+        }
+    };
+    let src =
+        std::fs::read_to_string(&path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    Ok(Some(EffectLibrary::parse(&src, &path)?))
+}
+
+fn parse_init(v: &[String]) -> Result<BTreeMap<String, f64>, Failure> {
+    let mut out = BTreeMap::new();
+    for s in v {
+        let Some((n, x)) = s.split_once('=') else {
+            return Err(Failure(format!("--init {s}: expected NAME=VALUE")));
+        };
+        let x: f64 = x
+            .trim()
+            .parse()
+            .map_err(|_| Failure(format!("--init {s}: '{}' is not a number", x.trim())))?;
+        if !x.is_finite() {
+            return Err(Failure(format!("--init {s}: the value must be finite")));
+        }
+        out.insert(n.trim().to_string(), x);
+    }
+    Ok(out)
+}
+
+pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
+    if !(a.alpha > 0.0 && a.alpha < 1.0) {
+        return Err(Failure(format!("--alpha {}: must be in (0, 1)", a.alpha)));
+    }
+    let sys = load_system(&a.model)?;
+    let lib = load_effects(a)?;
+    if let Some(l) = &lib {
+        l.check(&sys)?;
+    }
+    let inputs: Vec<&str> = sys
+        .decls_of(Kind::Input)
+        .filter(|d| d.derived.is_none())
+        .map(|d| d.name.as_str())
+        .collect();
+    let outputs = sys.output_names();
+    let data = read_dataset(&a.data, &inputs, &outputs)?;
+    let init = parse_init(&a.init)?;
+    let start = start_values(&sys, &data, &init).map_err(Failure)?;
+    let opts = DiagnoseOptions {
+        alpha: a.alpha,
+        max_rounds: a.max_effects,
+        input_noise: !a.no_input_noise,
+        ..DiagnoseOptions::default()
+    };
+    let bar = if std::io::stderr().is_terminal() {
+        let b = indicatif::ProgressBar::new_spinner();
+        b.enable_steady_tick(std::time::Duration::from_millis(120));
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let progress = |m: &str| bar.set_message(m.to_string());
+    let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress).map_err(Failure)?;
+    bar.finish_and_clear();
+    let text = render_text(&d, &a.data);
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&d)?);
+    } else {
+        print!("{text}");
+    }
+    if let Some(dir) = &a.report {
+        write_folder_atomically(dir, a.force, &report_files(&d, &text))?;
+        if !a.json {
+            println!("report written to {dir}/report.md");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn pm(v: f64, s: f64) -> String {
+    format!("{v:.4e} ± {s:.1e}")
+}
+
+fn white_rms(f: &ModelFit) -> f64 {
+    (f.cost / f.n.max(1) as f64).sqrt()
+}
+
+fn rms_text(f: &ModelFit, d: &Diagnosis) -> String {
+    f.rms
+        .iter()
+        .zip(&d.sigma)
+        .map(|((n, r), (_, s))| format!("{n} {r:.4e} ({:.2} sigma)", r / s))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn structure_text(f: &ModelFit, out: &mut String) {
+    let st = f.residuals.structure();
+    if st.is_empty() {
+        let _ = writeln!(
+            out,
+            "  consistent with noise (no test above z = {})",
+            obsan_diagnose::Z_STRUCTURE
+        );
+    }
+    for s in st {
+        let _ = writeln!(out, "  {:<10} z = {:>6.2}  {}", s.test, s.z, s.description);
+    }
+}
+
+fn hidden_text(c: &CandidateResult) -> String {
+    let vector: Vec<String> = c
+        .symmetry
+        .iter()
+        .map(|(n, v)| format!("{v:+.3} d/d{n}"))
+        .collect();
+    // Other params in the null vector absorb the effect; entries with
+    // [k] are trajectory k's initial state.
+    let absorbers: Vec<&str> = c
+        .symmetry
+        .iter()
+        .map(|t| t.0.as_str())
+        .filter(|n| !n.contains('[') && !c.params.iter().any(|p| p == n))
+        .collect();
+    if c.symmetry.is_empty() {
+        "the rank test finds it not identifiable (no null vector could be evaluated at the fit)"
+            .into()
+    } else if c.symmetry.len() == 1 {
+        "these data leave it without effect on the outputs (its inputs vanish here, e.g. at constant speed)".into()
+    } else if absorbers.is_empty() {
+        format!(
+            "absorbed by the initial states (null vector {})",
+            vector.join(" ")
+        )
+    } else {
+        format!(
+            "absorbed by {} (null vector {})",
+            absorbers.join(", "),
+            vector.join(" ")
+        )
+    }
+}
+
+pub fn render_text(d: &Diagnosis, data: &str) -> String {
+    let mut s = String::new();
+    let n_traj = d.nominal.initial_states.len();
+    let _ = writeln!(
+        s,
+        "obsan diagnose: model {} on {data} ({n_traj} trajectories, {} output samples)",
+        d.model, d.nominal.n
+    );
+    let sig: Vec<String> = d
+        .sigma
+        .iter()
+        .map(|(n, v)| format!("{n} {v:.4e}"))
+        .collect();
+    let _ = writeln!(
+        s,
+        "output noise: {} ({}); input class: {}",
+        sig.join(", "),
+        if d.sigma_estimated {
+            "estimated from the residuals: the level test is void"
+        } else {
+            "stated"
+        },
+        d.input_class
+    );
+    let _ = writeln!(
+        s,
+        "\nnominal fit: residual RMS {}; whitened RMS {:.3} (white noise: 1)",
+        rms_text(&d.nominal, d),
+        white_rms(&d.nominal)
+    );
+    structure_text(&d.nominal, &mut s);
+    for (i, round) in d.rounds.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "\ncandidates, round {} (named when LR > {:.2}: p < alpha / candidates, and BIC falls):",
+            i + 1,
+            d.lr_critical
+        );
+        for c in round {
+            if let Some(e) = &c.error {
+                let _ = writeln!(s, "  {:<20} failed: {e}", c.effect);
+            } else if !c.identifiable {
+                let _ = writeln!(
+                    s,
+                    "  {:<20} not identifiable on these data: {}",
+                    c.effect,
+                    hidden_text(c)
+                );
+            } else {
+                let est: Vec<String> = c
+                    .estimates
+                    .iter()
+                    .map(|(n, v, sd)| format!("{n} = {}", pm(*v, *sd)))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
+                    c.effect,
+                    est.join(", "),
+                    c.lr,
+                    c.p_value,
+                    c.delta_bic,
+                    if c.significant { "  significant" } else { "" }
+                );
+            }
+        }
+    }
+    let _ = writeln!(s);
+    if d.named.is_empty() {
+        let _ = writeln!(s, "named: none: no candidate effect is significant");
+    }
+    for n in &d.named {
+        let est: Vec<String> = n
+            .estimates
+            .iter()
+            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+            .collect();
+        let before: Vec<String> = n
+            .rms_before
+            .iter()
+            .map(|r| format!("{:.4e}", r.1))
+            .collect();
+        let after: Vec<String> = n.rms_after.iter().map(|r| format!("{:.4e}", r.1)).collect();
+        let _ = writeln!(
+            s,
+            "named: {}: {} ({})",
+            n.effect,
+            est.join(", "),
+            n.description
+        );
+        let _ = writeln!(
+            s,
+            "  residual RMS {} -> {} (LR {:.1}, p {:.1e})",
+            before.join(", "),
+            after.join(", "),
+            n.lr,
+            n.p_value
+        );
+    }
+    for c in &d.input_checks {
+        let est: Vec<String> = c
+            .estimates
+            .iter()
+            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "input check {}: {} (z {:.1}): {}",
+            c.effect,
+            if est.is_empty() {
+                c.note.clone()
+            } else {
+                est.join(", ")
+            },
+            c.z,
+            if c.significant {
+                "the measured inputs disagree with the commanded relation"
+            } else {
+                "consistent"
+            }
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nfinal fit: residual RMS {}; whitened RMS {:.3}",
+        rms_text(&d.final_fit, d),
+        white_rms(&d.final_fit)
+    );
+    structure_text(&d.final_fit, &mut s);
+    if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
+        let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+    }
+    if !d.hidden.is_empty() {
+        let _ = writeln!(s, "\nthese data cannot reveal:");
+        for c in &d.hidden {
+            let _ = writeln!(s, "  {}: {}", c.effect, hidden_text(c));
+        }
+    }
+    s
+}
+
+fn residual_chart(title: &str, f: &ModelFit) -> String {
+    let series: Vec<Series> = f
+        .series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| Series {
+            name: &s.trajectory,
+            color: COLORS[i % COLORS.len()],
+            style: Style::Points,
+            xy: s.t.iter().zip(&s.e).map(|(t, e)| (*t, *e)).collect(),
+        })
+        .collect();
+    chart(title, "time (s)", "residual / sigma", &series)
+}
+
+fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
+    let mut files = vec![
+        (PathBuf::from("extended.sys"), d.extended_sys.clone()),
+        (
+            PathBuf::from("diagnosis.json"),
+            serde_json::to_string_pretty(d).unwrap_or_default(),
+        ),
+        (
+            PathBuf::from("residuals_before.svg"),
+            residual_chart("residuals of the nominal model", &d.nominal),
+        ),
+        (
+            PathBuf::from("residuals_after.svg"),
+            residual_chart("residuals with the named effects", &d.final_fit),
+        ),
+    ];
+    // Fitted outputs per trajectory: measured, nominal, extended.
+    let mut fit_links = Vec::new();
+    for (k, (sb, sa)) in d.nominal.series.iter().zip(&d.final_fit.series).enumerate() {
+        let sigma = d
+            .sigma
+            .iter()
+            .find(|x| x.0 == sb.output)
+            .map_or(1.0, |x| x.1);
+        let measured: Vec<(f64, f64)> =
+            sb.t.iter()
+                .zip(sb.predicted.iter().zip(&sb.e))
+                .map(|(t, (y, e))| (*t, y + e * sigma))
+                .collect();
+        let series = vec![
+            Series {
+                name: "measured",
+                color: "#888",
+                style: Style::Points,
+                xy: measured,
+            },
+            Series {
+                name: "nominal",
+                color: COLORS[0],
+                style: Style::Line,
+                xy: sb
+                    .t
+                    .iter()
+                    .copied()
+                    .zip(sb.predicted.iter().copied())
+                    .collect(),
+            },
+            Series {
+                name: "with effects",
+                color: COLORS[1],
+                style: Style::Line,
+                xy: sa
+                    .t
+                    .iter()
+                    .copied()
+                    .zip(sa.predicted.iter().copied())
+                    .collect(),
+            },
+        ];
+        let name = format!("fit_{k}_{}.svg", sb.output);
+        files.push((
+            PathBuf::from(&name),
+            chart(
+                &format!("{} on {}", sb.output, sb.trajectory),
+                "time (s)",
+                &sb.output,
+                &series,
+            ),
+        ));
+        fit_links.push(name);
+    }
+    // Candidate scores of the first round.
+    if let Some(r) = d.rounds.first() {
+        let items: Vec<(String, f64, &str)> = r
+            .iter()
+            .map(|c| {
+                let color = if !c.identifiable {
+                    "#bbb"
+                } else if c.significant {
+                    COLORS[1]
+                } else {
+                    COLORS[0]
+                };
+                let label = if c.identifiable {
+                    c.effect.clone()
+                } else {
+                    format!("{} (hidden)", c.effect)
+                };
+                (label, c.lr, color)
+            })
+            .collect();
+        files.push((
+            PathBuf::from("candidates.svg"),
+            bars(
+                "candidate effects, round 1: likelihood ratio",
+                "LR statistic",
+                &items,
+                Some((d.lr_critical, "critical")),
+            ),
+        ));
+    }
+    let mut md = String::new();
+    let _ = writeln!(md, "# obsan diagnose: {}\n", d.model);
+    let _ = writeln!(md, "```\n{text}```\n");
+    let _ = writeln!(md, "## Candidate scores\n\n![candidates](candidates.svg)\n");
+    let _ = writeln!(md, "## Residuals\n\nBefore (nominal model):\n\n![before](residuals_before.svg)\n\nAfter (with the named effects):\n\n![after](residuals_after.svg)\n");
+    let _ = writeln!(md, "## Fitted outputs\n");
+    for l in &fit_links {
+        let _ = writeln!(md, "![{l}]({l})\n");
+    }
+    let _ = writeln!(md, "## Extended model\n\n`extended.sys` (the nominal model with the named effects; `obsan rank extended.sys` and `obsan diagnose --model extended.sys` read it):\n\n```\n{}```", d.extended_sys);
+    files.push((PathBuf::from("report.md"), md));
+    files
+}
