@@ -3,6 +3,7 @@
 mod analysis;
 mod calibrate;
 mod classic;
+mod diagnose;
 mod expr;
 mod show;
 mod simulate;

@@ -1,0 +1,184 @@
+//! Discrepancy-workflow benchmark and confusion matrix.
+//! Run: `cargo bench --bench diagnose` (timing of one full run on a
+//! three-trajectory calib dataset, all candidates) and
+//! `cargo bench --bench diagnose -- confusion [SEEDS]` (hidden effect x
+//! named effect per data design, the table in docs/diagnose.md).
+
+use obsan_diagnose::{diagnose, start_values, DiagnoseOptions};
+use obsan_estimate::{simulate, SimOptions, SpeedProfile};
+use obsan_model::{EffectLibrary, System};
+use rayon::prelude::*;
+use std::time::Instant;
+
+fn read(p: &str) -> String {
+    std::fs::read_to_string(format!("{}/{p}", env!("CARGO_MANIFEST_DIR"))).expect("reads")
+}
+
+fn options(design: &str, effects: &[(&str, f64)], seed: u64) -> SimOptions {
+    let mut o = SimOptions {
+        seed,
+        ..SimOptions::default()
+    };
+    match design {
+        "sine" => {
+            o.profile = SpeedProfile::Sine {
+                amplitude: 0.5,
+                period: 60.0,
+            }
+        }
+        "sine-wide" => {
+            o.profile = SpeedProfile::Sine {
+                amplitude: 0.9,
+                period: 60.0,
+            }
+        }
+        "stopgo" => {
+            o.profile = SpeedProfile::StopGo {
+                run: 20.0,
+                pause: 10.0,
+            }
+        }
+        _ => {}
+    }
+    for (n, v) in effects {
+        o.effects.set(n, *v).expect("effect");
+    }
+    o
+}
+
+fn main() {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").expect("model");
+    let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").expect("effects");
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(i) = args.iter().position(|a| a == "confusion") {
+        let seeds: u64 = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5);
+        confusion(&sys, &lib, seeds);
+        return;
+    }
+    let mut times = Vec::new();
+    for seed in 1..=11 {
+        let (data, _) = simulate(&options("circles", &[], seed)).expect("simulates");
+        let t = Instant::now();
+        let start = start_values(&sys, &data, &Default::default()).expect("start");
+        let d = diagnose(
+            &sys,
+            Some(&lib),
+            &data,
+            &start,
+            &DiagnoseOptions::default(),
+            &|_| {},
+        )
+        .expect("runs");
+        times.push(t.elapsed().as_secs_f64());
+        assert!(d.rounds[0].len() == 6);
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "diagnose, calib, 3 trajectories, 6 candidates + 1 input check, clean data: median {:.0} ms, min {:.0} ms, max {:.0} ms over {} runs ({} threads)",
+        times[times.len() / 2] * 1e3,
+        times[0] * 1e3,
+        times[times.len() - 1] * 1e3,
+        times.len(),
+        rayon::current_num_threads()
+    );
+}
+
+fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
+    // (hidden, design, value): small and large magnitudes of tests/hidden.rs.
+    let rows: Vec<(&str, &str, f64)> = vec![
+        ("none", "circles", 0.0),
+        ("none", "sine-wide", 0.0),
+        ("bearing_scale", "circles", 0.032),
+        ("bearing_scale", "circles", 0.117),
+        ("bearing_distortion", "circles", 0.032),
+        ("bearing_distortion", "circles", 0.118),
+        ("radius_change", "sine-wide", 0.046),
+        ("radius_change", "sine-wide", 0.1),
+        ("radius_change", "circles", 0.046),
+        ("wheel_slip", "sine-wide", 0.4),
+        ("wheel_slip", "sine-wide", 1.34),
+        ("wheel_slip", "circles", 0.4),
+        ("time_offset", "circles", 0.71),
+        ("time_offset", "sine-wide", 1.0),
+        ("time_offset", "stopgo", 0.71),
+        ("bearing_bias", "circles", 0.05),
+    ];
+    let cols = [
+        "none",
+        "time_offset",
+        "bearing_scale",
+        "bearing_distortion",
+        "wheel_slip",
+        "radius_change",
+        "bearing_bias",
+    ];
+    println!(
+        "| hidden | design | value | runs | {} | magnitude within 3 sd |",
+        cols.join(" | ")
+    );
+    println!("|{}", "---|".repeat(cols.len() + 5));
+    for (hidden, design, v) in rows {
+        let res: Vec<(Vec<String>, bool)> = (1..=seeds)
+            .into_par_iter()
+            .map(|seed| {
+                let eff: Vec<(&str, f64)> = if hidden == "none" {
+                    vec![]
+                } else {
+                    vec![(hidden, v)]
+                };
+                let (data, truth) = simulate(&options(design, &eff, seed)).expect("simulates");
+                let Ok(start) = start_values(sys, &data, &Default::default()) else {
+                    return (vec!["start failed".into()], false);
+                };
+                let d = diagnose(
+                    sys,
+                    Some(lib),
+                    &data,
+                    &start,
+                    &DiagnoseOptions::default(),
+                    &|_| {},
+                )
+                .expect("runs");
+                let names: Vec<String> = d.named.iter().map(|n| n.effect.clone()).collect();
+                let want = if hidden == "radius_change" {
+                    v / truth.r_right
+                } else {
+                    v
+                };
+                let within = d
+                    .named
+                    .iter()
+                    .find(|n| n.effect == hidden)
+                    .is_some_and(|n| {
+                        n.estimates
+                            .iter()
+                            .all(|(_, x, sd)| (x - want).abs() < 3.0 * sd)
+                    });
+                (names, within)
+            })
+            .collect();
+        let count = |c: &str| {
+            res.iter()
+                .filter(|(n, _)| {
+                    if c == "none" {
+                        n.is_empty()
+                    } else {
+                        n.iter().any(|x| x == c)
+                    }
+                })
+                .count()
+        };
+        let cells: Vec<String> = cols.iter().map(|c| count(c).to_string()).collect();
+        let within = res.iter().filter(|r| r.1).count();
+        println!(
+            "| {hidden} | {design} | {v} | {} | {} | {} |",
+            res.len(),
+            cells.join(" | "),
+            if hidden == "none" {
+                "-".into()
+            } else {
+                within.to_string()
+            }
+        );
+    }
+}
