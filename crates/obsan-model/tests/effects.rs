@@ -125,3 +125,12 @@ fn derived_inputs_are_checked() {
         assert_eq!(r.is_ok(), ok, "{decl}: {r:?}");
     }
 }
+
+#[test]
+fn descriptions_are_one_line_of_free_text() {
+    // Regression: a description ending with ',' swallowed the next
+    // 'description' line, and one with an unclosed '(' the rest of the file.
+    let src = "system d\ndescription about a feature at the origin,\ndescription with a range (in (-pi, pi]\nstate x\ninput u\nx' = u\noutput y = x\n";
+    let s = System::parse(src, "d.sys").unwrap();
+    assert_eq!(s.description, "about a feature at the origin, with a range (in (-pi, pi]");
+}
