@@ -132,5 +132,8 @@ fn descriptions_are_one_line_of_free_text() {
     // 'description' line, and one with an unclosed '(' the rest of the file.
     let src = "system d\ndescription about a feature at the origin,\ndescription with a range (in (-pi, pi]\nstate x\ninput u\nx' = u\noutput y = x\n";
     let s = System::parse(src, "d.sys").unwrap();
-    assert_eq!(s.description, "about a feature at the origin, with a range (in (-pi, pi]");
+    assert_eq!(
+        s.description,
+        "about a feature at the origin, with a range (in (-pi, pi]"
+    );
 }
