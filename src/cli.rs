@@ -50,6 +50,40 @@ pub enum Command {
     /// residuals, try each candidate effect the data can reveal (rank test
     /// first), name the significant ones.
     Diagnose(DiagnoseArgs),
+    /// Convert an external data set into the obsan data format.
+    #[command(subcommand)]
+    Import(ImportCommand),
+}
+
+#[derive(Subcommand)]
+pub enum ImportCommand {
+    /// One robot of the UTIAS MRCLAM data set (Leung et al., IJRR 2011), cut
+    /// into windows for systems/mrclam.sys; ground truth goes to truth.json.
+    Mrclam(MrclamArgs),
+}
+
+#[derive(Args)]
+pub struct MrclamArgs {
+    /// The folder with robotN_Odometry.txt, robotN_Measurement.txt,
+    /// robotN_Groundtruth.txt, Landmark_Groundtruth.dat.
+    pub source: String,
+    /// Robot number.
+    #[arg(long, default_value_t = 1)]
+    pub robot: u32,
+    /// The dataset folder to create.
+    #[arg(long)]
+    pub out: String,
+    /// Window length (s): each window is a trajectory with its own initial state.
+    #[arg(long, default_value_t = 60.0)]
+    pub window: f64,
+    /// Skip windows with fewer landmark measurements than this.
+    #[arg(long, default_value_t = 30)]
+    pub min_measurements: usize,
+    /// Only the first N windows (0: all).
+    #[arg(long, default_value_t = 0)]
+    pub max_windows: usize,
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Args)]

@@ -1,7 +1,7 @@
 //! `obsan diagnose`: reading the model, effects and data, printing the
 //! diagnosis, writing the report folder.
 
-use crate::cli::DiagnoseArgs;
+use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
 use crate::show::load_system;
 use crate::simulate::write_folder_atomically;
@@ -433,4 +433,51 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
     let _ = writeln!(md, "## Extended model\n\n`extended.sys` (the nominal model with the named effects; `obsan rank extended.sys` and `obsan diagnose --model extended.sys` read it):\n\n```\n{}```", d.extended_sys);
     files.push((PathBuf::from("report.md"), md));
     files
+}
+
+/// `obsan import mrclam`: read one robot's files, write a dataset folder.
+pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
+    let dir = std::path::Path::new(&a.source);
+    let read = |name: &str| -> Result<(String, String), Failure> {
+        let p = dir.join(name);
+        let s = std::fs::read_to_string(&p)
+            .map_err(|e| Failure(format!("cannot read {}: {e}", p.display())))?;
+        Ok((s, p.display().to_string()))
+    };
+    let odo = read(&format!("robot{}_Odometry.txt", a.robot))?;
+    let meas = read(&format!("robot{}_Measurement.txt", a.robot))?;
+    let lms = read("Landmark_Groundtruth.dat")?;
+    let gt = read(&format!("robot{}_Groundtruth.txt", a.robot)).ok();
+    let text = obsan_estimate::MrclamText {
+        odometry: (&odo.0, &odo.1),
+        measurements: (&meas.0, &meas.1),
+        landmarks: (&lms.0, &lms.1),
+        groundtruth: gt.as_ref().map(|g| (g.0.as_str(), g.1.as_str())),
+    };
+    let (mut data, mut truth) =
+        obsan_estimate::mrclam_convert(&text, a.window, a.min_measurements)?;
+    if a.max_windows > 0 {
+        data.trajectories.truncate(a.max_windows);
+        truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));
+    }
+    let truth_json = serde_json::json!({
+        "source": "UTIAS MRCLAM (Leung, Halpern, Barfoot, Liu, IJRR 2011): Vicon ground truth per window; estimators never read it",
+        "robot": a.robot,
+        "windows": truth,
+    });
+    let files = crate::simulate::dataset_files(
+        &data,
+        &[("truth.json", serde_json::to_string_pretty(&truth_json)?)],
+    );
+    write_folder_atomically(&a.out, a.force, &files)?;
+    let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
+    println!(
+        "wrote {}: robot {}, {} windows of {} s, {} landmark measurements",
+        a.out,
+        a.robot,
+        data.trajectories.len(),
+        a.window,
+        n
+    );
+    Ok(ExitCode::SUCCESS)
 }

@@ -61,6 +61,7 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Crlb(a) => estimate_cmds::crlb_cmd(&a),
         cli::Command::Montecarlo(a) => estimate_cmds::montecarlo_cmd(&a),
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
+        cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
     };
     match result {
         Ok(code) => code,

@@ -170,3 +170,104 @@ fn diagnose_rejects_bad_input_with_positions() {
     );
     bad(&["diagnose", "--model", &sys, "--data", &data], "--init x=");
 }
+
+fn mrclam_dir() -> Option<String> {
+    let d = format!("{}/../shared/data/mrclam", env!("CARGO_MANIFEST_DIR"));
+    if std::path::Path::new(&format!("{d}/robot1_Odometry.txt")).exists() {
+        Some(d)
+    } else {
+        eprintln!("skipped: the MRCLAM data are not at {d}");
+        None
+    }
+}
+
+/// Median ratio of the Vicon turn rate to the commanded one while the command
+/// is steady (the same for 1 s before and after), over 0.5 s of poses: an
+/// independent measure of the turn-rate scale.
+fn vicon_steady_turn_ratio(dir: &str, robot: u32) -> f64 {
+    let read = |f: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(format!("{dir}/robot{robot}_{f}.txt"))
+            .unwrap()
+            .lines()
+            .map(|l| l.split_whitespace().map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let (gt, od) = (read("Groundtruth"), read("Odometry"));
+    let gts: Vec<f64> = gt.iter().map(|g| g[0]).collect();
+    let mut ratios = Vec::new();
+    for i in (50..od.len() - 50).step_by(10) {
+        let (t, v, w) = (od[i][0], od[i][1], od[i][2]);
+        if (i - 50..i + 50).any(|j| od[j][1] != v || od[j][2] != w) || w.abs() <= 0.1 {
+            continue;
+        }
+        let a = gts.partition_point(|&x| x < t - 0.25);
+        let b = gts.partition_point(|&x| x < t + 0.25);
+        if b >= gt.len() || gt[b][0] - gt[a][0] < 0.4 {
+            continue;
+        }
+        let d = gt[b][3] - gt[a][3];
+        let d = d.sin().atan2(d.cos());
+        ratios.push(d / (gt[b][0] - gt[a][0]) / w);
+    }
+    ratios.sort_by(f64::total_cmp);
+    ratios[ratios.len() / 2]
+}
+
+#[test]
+fn diagnose_on_mrclam_robot_1_names_the_odometry_effects() {
+    let Some(src) = mrclam_dir() else { return };
+    let data = tmp_dir("mrclam1");
+    let out = ok(&["import", "mrclam", &src, "--robot", "1", "--out", &data]);
+    assert!(out.contains("32 windows"), "{out}");
+    let j: serde_json::Value = serde_json::from_str(&ok(&[
+        "diagnose",
+        "--model",
+        "systems/mrclam.sys",
+        "--data",
+        &data,
+        "--json",
+    ]))
+    .unwrap();
+    let named: Vec<&str> = j["named"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n["effect"].as_str().unwrap())
+        .collect();
+    // The commanded forward speed is what the robot does in steady state
+    // (Vicon: median ratio 0.997): no speed scale may be named.
+    assert!(!named.contains(&"speed_scale"), "{named:?}");
+    // It turns less than commanded, and reacts late.
+    assert!(
+        named.contains(&"turn_scale") && named.contains(&"time_offset"),
+        "{named:?}"
+    );
+    let params = j["final_fit"]["params"].as_array().unwrap();
+    let get = |n: &str| {
+        let p = params.iter().find(|p| p[0] == n).unwrap();
+        (p[1].as_f64().unwrap(), p[2].as_f64().unwrap())
+    };
+    let (kw, sd) = get("kw");
+    let vicon = vicon_steady_turn_ratio(&src, 1) - 1.0;
+    assert!(
+        (kw - vicon).abs() < 3.0 * sd.max(0.004),
+        "kw {kw} ± {sd}, Vicon {vicon}"
+    );
+    let (tau, _) = get("tau");
+    assert!(tau > 0.05 && tau < 0.5, "lag {tau}");
+}
+
+#[test]
+fn import_mrclam_rejects_bad_input() {
+    let Some(src) = mrclam_dir() else { return };
+    let out = tmp_dir("mrclam-bad");
+    bad(
+        &["import", "mrclam", &src, "--robot", "9", "--out", &out],
+        "robot9_Odometry.txt",
+    );
+    bad(
+        &["import", "mrclam", &src, "--out", &out, "--window", "0"],
+        "positive",
+    );
+    assert!(!std::path::Path::new(&out).exists());
+}

@@ -167,9 +167,22 @@ impl Echelon {
 }
 
 pub(crate) fn random_point(ctx: &mut Ctx, rng: &mut SplitMix) -> Result<FpPoint, AnalysisError> {
-    for _ in 0..32 {
+    random_point_counted(ctx, rng).map(|p| p.0)
+}
+
+/// A random point and the number of draws it took. Each square root needs
+/// its radicand to be a square mod p (half the values), so a system with k
+/// independent radicands (e.g. ranges to k landmarks) needs about 2^k draws;
+/// up to 2^22 are tried. The accepted point is uniform on the points where
+/// every radicand is a square, a set of density about 1/draws, so the
+/// Schwartz–Zippel bound D/p of a bad point grows by that factor at most.
+pub(crate) fn random_point_counted(
+    ctx: &mut Ctx,
+    rng: &mut SplitMix,
+) -> Result<(FpPoint, u64), AnalysisError> {
+    for k in 1..=(1u64 << 22) {
         if let Ok(p) = ctx.random_fp_point(rng, &|_| None) {
-            return Ok(p);
+            return Ok((p, k));
         }
     }
     Err(AnalysisError::NoPoint)
@@ -288,10 +301,12 @@ pub fn rank(nf: &mut NormalForm, mut opts: RankOptions) -> Result<RankReport, An
     let fields = Fields::of(nf);
     let n = nf.state.len();
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
-    let p1 = random_point(&mut nf.ctx, &mut rng)?;
+    let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
     let r1 = grow(nf, &fields, p1, &mut opts)?;
-    let p2 = random_point(&mut nf.ctx, &mut rng)?;
+    let (p2, k2) = random_point_counted(&mut nf.ctx, &mut rng)?;
     let r2 = grow(nf, &fields, p2, &mut opts)?;
+    // Density correction of the sampling (see random_point_counted).
+    let draws = k1.max(k2) as f64;
     let best = if r2.echelon.rank() > r1.echelon.rank() {
         r2
     } else {
@@ -309,7 +324,7 @@ pub fn rank(nf: &mut NormalForm, mut opts: RankOptions) -> Result<RankReport, An
     let mut pivots: Vec<usize> = best.echelon.rows.iter().map(|(p, _)| *p).collect();
     pivots.sort_unstable();
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
-    let per_point = (degree_bound as f64 / P as f64).min(1.0);
+    let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);
     let max_order = best.basis.iter().map(|(w, _)| w.order()).max().unwrap_or(0);
     Ok(RankReport {
         n,

@@ -36,6 +36,15 @@ pub fn start_values(
             s[k].insert("gamma".into(), t.start.1);
         }
     }
+    if states == ["x", "y", "th"] {
+        for (k, t) in data.trajectories.iter().enumerate() {
+            if let Some(x0) = unicycle_start(t) {
+                s[k].insert("x".into(), x0[0]);
+                s[k].insert("y".into(), x0[1]);
+                s[k].insert("th".into(), x0[2]);
+            }
+        }
+    }
     for (n, v) in given {
         if params.contains(n) {
             p.insert(n.clone(), *v);
@@ -71,4 +80,84 @@ pub fn start_values(
         sv.push(v);
     }
     Ok((pv, sv))
+}
+
+/// The start pose of a unicycle window observing known landmarks (outputs
+/// `r<c>`, `b<c>`, constants `lx<c>`, `ly<c>`): dead-reckon the window from
+/// the origin with the commanded (v, omega), turn every range-bearing
+/// measurement into the landmark's position in that frame, and register
+/// those points onto the known landmarks (2-D Procrustes, closed form).
+fn unicycle_start(t: &obsan_estimate::Trajectory) -> Option<[f64; 3]> {
+    let (v, w) = (t.inputs.column("v")?, t.inputs.column("omega")?);
+    // Relative poses at the input rows.
+    let mut pose = vec![(0.0f64, 0.0f64, 0.0f64)];
+    for k in 0..t.inputs.len().saturating_sub(1) {
+        let dt = t.inputs.t[k + 1] - t.inputs.t[k];
+        let (x, y, th) = pose[k];
+        let (vk, wk) = (v[k].unwrap_or(0.0), w[k].unwrap_or(0.0));
+        let thm = th + 0.5 * wk * dt;
+        pose.push((
+            x + vk * dt * thm.cos(),
+            y + vk * dt * thm.sin(),
+            th + wk * dt,
+        ));
+    }
+    let mut q = Vec::new();
+    let mut l = Vec::new();
+    for (ci, name) in t.outputs.columns.iter().enumerate() {
+        let Some(code) = name.strip_prefix('r') else {
+            continue;
+        };
+        let Some(bi) = t
+            .outputs
+            .columns
+            .iter()
+            .position(|c| c == &format!("b{code}"))
+        else {
+            continue;
+        };
+        let (Some(lx), Some(ly)) = (
+            t.meta.get(&format!("lx{code}")),
+            t.meta.get(&format!("ly{code}")),
+        ) else {
+            continue;
+        };
+        for (j, &tj) in t.outputs.t.iter().enumerate() {
+            let (Some(r), Some(b)) = (t.outputs.values[ci][j], t.outputs.values[bi][j]) else {
+                continue;
+            };
+            let k = t
+                .inputs
+                .t
+                .partition_point(|&x| x <= tj)
+                .saturating_sub(1)
+                .min(pose.len() - 1);
+            let (px, py, pth) = pose[k];
+            q.push((px + r * (pth + b).cos(), py + r * (pth + b).sin()));
+            l.push((*lx, *ly));
+        }
+    }
+    if q.len() < 2 {
+        return None;
+    }
+    let n = q.len() as f64;
+    let qc = (
+        q.iter().map(|p| p.0).sum::<f64>() / n,
+        q.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let lc = (
+        l.iter().map(|p| p.0).sum::<f64>() / n,
+        l.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let (mut sc, mut ss) = (0.0, 0.0);
+    for (a, b) in q.iter().zip(&l) {
+        let (ax, ay, bx, by) = (a.0 - qc.0, a.1 - qc.1, b.0 - lc.0, b.1 - lc.1);
+        sc += ax * bx + ay * by;
+        ss += ax * by - ay * bx;
+    }
+    let th0 = ss.atan2(sc);
+    let (c, s) = (th0.cos(), th0.sin());
+    let x0 = lc.0 - (c * qc.0 - s * qc.1);
+    let y0 = lc.1 - (s * qc.0 + c * qc.1);
+    Some([x0, y0, th0])
 }

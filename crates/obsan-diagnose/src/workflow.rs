@@ -13,6 +13,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+/// Outputs per trajectory used by the rank test (the most measured ones).
+pub const MAX_RANK_OUTPUTS: usize = 4;
+
 /// Options; every threshold explicit.
 #[derive(Clone, Debug)]
 pub struct DiagnoseOptions {
@@ -546,17 +549,25 @@ fn candidate(
             })
             .collect();
         let outs = ext.output_names();
+        // Per trajectory, the most measured outputs (at most
+        // MAX_RANK_OUTPUTS): enough for the test, and every square-root
+        // output (a range) halves the density of usable random points.
         let seen: Vec<Vec<bool>> = prepared
             .trajectories
             .iter()
             .map(|t| {
-                outs.iter()
+                let counts: Vec<usize> = outs
+                    .iter()
                     .map(|o| {
                         t.outputs
                             .column(o)
-                            .is_some_and(|c| c.iter().any(Option::is_some))
+                            .map_or(0, |c| c.iter().filter(|v| v.is_some()).count())
                     })
-                    .collect()
+                    .collect();
+                let mut order: Vec<usize> = (0..outs.len()).filter(|&i| counts[i] > 0).collect();
+                order.sort_by(|&a, &b| counts[b].cmp(&counts[a]).then(a.cmp(&b)));
+                order.truncate(MAX_RANK_OUTPUTS);
+                (0..outs.len()).map(|i| order.contains(&i)).collect()
             })
             .collect();
         let mut pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();

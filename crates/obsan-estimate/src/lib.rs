@@ -16,6 +16,7 @@ mod circle;
 mod data;
 mod fit;
 mod montecarlo;
+mod mrclam;
 mod predict;
 mod rng;
 mod sim;
@@ -36,6 +37,10 @@ pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use montecarlo::{
     crlb_sd, kc_from_av, run_cell, table, Cell, CellResult, McMethod, MethodStats, Table,
     MODE_COLUMNS, PARAM_COLUMNS,
+};
+pub use mrclam::{
+    convert as mrclam_convert, landmarks as mrclam_landmarks, model_text as mrclam_model_text,
+    MrclamText, WindowTruth,
 };
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;

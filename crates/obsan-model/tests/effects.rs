@@ -137,3 +137,22 @@ fn descriptions_are_one_line_of_free_text() {
         "about a feature at the origin, with a range (in (-pi, pi]"
     );
 }
+
+#[test]
+fn every_mrclam_effect_extends_mrclam() {
+    let sys = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/mrclam.eff"), "mrclam.eff").unwrap();
+    lib.check(&sys).unwrap();
+    let names: Vec<&str> = lib.effects.iter().map(|e| e.name.as_str()).collect();
+    for want in [
+        "speed_scale",
+        "turn_scale",
+        "turn_bias",
+        "time_offset",
+        "bearing_bias",
+        "range_scale",
+        "range_bias",
+    ] {
+        assert!(names.contains(&want), "{want}");
+    }
+}

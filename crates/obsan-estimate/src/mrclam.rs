@@ -1,0 +1,275 @@
+//! The UTIAS Multi-Robot Cooperative Localization and Mapping data set
+//! (Leung, Halpern, Barfoot, Liu, IJRR 2011) in obsan's data format, for
+//! `systems/mrclam.sys`: a unicycle driven by the commanded (v, omega)
+//! observing known landmarks by range and bearing.
+//!
+//! Dead reckoning over a 30-minute log diverges, so the log is cut into
+//! windows, each a trajectory with its own initial state (fitted from its
+//! own measurements); the params (odometry and sensor errors) are shared.
+//! Text in, dataset out: no file I/O here.
+
+use crate::data::{DataError, Dataset, DatasetMeta, Series, Trajectory};
+use std::collections::BTreeMap;
+
+/// One robot's files, as text, with the names used in messages.
+pub struct MrclamText<'a> {
+    pub odometry: (&'a str, &'a str),
+    pub measurements: (&'a str, &'a str),
+    pub landmarks: (&'a str, &'a str),
+    /// Ground truth (t, x, y, theta): kept apart, for the comparison only.
+    pub groundtruth: Option<(&'a str, &'a str)>,
+}
+
+/// Ground truth of one window, for checking estimates afterwards (no
+/// estimator reads it): distance travelled and heading change by the Vicon
+/// poses and by the commanded odometry.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct WindowTruth {
+    pub name: String,
+    pub truth_distance: f64,
+    pub commanded_distance: f64,
+    pub truth_turn: f64,
+    pub commanded_turn: f64,
+    /// Pose at the window's start.
+    pub start: [f64; 3],
+}
+
+fn rows<'a>(
+    text: &'a str,
+    file: &'a str,
+    ncols: usize,
+) -> impl Iterator<Item = Result<(usize, Vec<f64>), DataError>> + 'a {
+    text.lines().enumerate().filter_map(move |(i, l)| {
+        let l = l.trim();
+        if l.is_empty() || l.starts_with('#') {
+            return None;
+        }
+        let v: Result<Vec<f64>, DataError> = l
+            .split_whitespace()
+            .enumerate()
+            .map(|(c, x)| {
+                x.parse::<f64>()
+                    .ok()
+                    .filter(|v| v.is_finite())
+                    .ok_or_else(|| DataError {
+                        file: file.into(),
+                        row: Some(i + 1),
+                        column: Some(format!("{}", c + 1)),
+                        message: format!("'{x}' is not a finite number"),
+                    })
+            })
+            .collect();
+        Some(v.and_then(|v| {
+            if v.len() < ncols {
+                Err(DataError {
+                    file: file.into(),
+                    row: Some(i + 1),
+                    column: None,
+                    message: format!("expected {ncols} columns, found {}", v.len()),
+                })
+            } else {
+                Ok((i + 1, v))
+            }
+        }))
+    })
+}
+
+/// Landmarks (barcode, x, y) of `Landmark_Groundtruth.dat`.
+pub fn landmarks(text: &str, file: &str) -> Result<Vec<(u32, f64, f64)>, DataError> {
+    rows(text, file, 3)
+        .map(|r| r.map(|(_, v)| (v[0] as u32, v[1], v[2])))
+        .collect()
+}
+
+/// Convert one robot's log into windows of `window` seconds (a window
+/// needs at least `min_measurements` landmark observations, else it is
+/// skipped). Output columns `r<barcode>`, `b<barcode>`; the landmark
+/// positions are each window's constants `lx<barcode>`, `ly<barcode>`.
+pub fn convert(
+    t: &MrclamText,
+    window: f64,
+    min_measurements: usize,
+) -> Result<(Dataset, Vec<WindowTruth>), DataError> {
+    if window.is_nan() || window <= 0.0 {
+        return Err(DataError {
+            file: "--window".into(),
+            row: None,
+            column: None,
+            message: "the window must be a positive number of seconds".into(),
+        });
+    }
+    let lms = landmarks(t.landmarks.0, t.landmarks.1)?;
+    let mut odo: Vec<(f64, f64, f64)> = Vec::new();
+    for r in rows(t.odometry.0, t.odometry.1, 3) {
+        let (line, v) = r?;
+        if let Some(last) = odo.last() {
+            if v[0] < last.0 {
+                return Err(DataError {
+                    file: t.odometry.1.into(),
+                    row: Some(line),
+                    column: Some("1".into()),
+                    message: format!("time goes backwards ({} after {})", v[0], last.0),
+                });
+            }
+        }
+        odo.push((v[0], v[1], v[2]));
+    }
+    if odo.len() < 2 {
+        return Err(DataError {
+            file: t.odometry.1.into(),
+            row: None,
+            column: None,
+            message: "fewer than two odometry rows".into(),
+        });
+    }
+    let mut meas: Vec<(f64, u32, f64, f64)> = Vec::new();
+    for r in rows(t.measurements.0, t.measurements.1, 4) {
+        let (_, v) = r?;
+        let code = v[1] as u32;
+        // Other robots' barcodes are not landmarks: skipped.
+        if lms.iter().any(|l| l.0 == code) {
+            meas.push((v[0], code, v[2], v[3]));
+        }
+    }
+    meas.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let gt: Vec<(f64, f64, f64, f64)> = match &t.groundtruth {
+        Some((text, file)) => rows(text, file, 4)
+            .map(|r| r.map(|(_, v)| (v[0], v[1], v[2], v[3])))
+            .collect::<Result<_, _>>()?,
+        None => vec![],
+    };
+    let mut cols = Vec::new();
+    for (code, _, _) in &lms {
+        cols.push(format!("r{code}"));
+    }
+    for (code, _, _) in &lms {
+        cols.push(format!("b{code}"));
+    }
+    let nl = lms.len();
+    let (t0, t1) = (odo[0].0, odo[odo.len() - 1].0);
+    let mut trajectories = Vec::new();
+    let mut truths = Vec::new();
+    let mut k = 0usize;
+    loop {
+        let (a, b) = (t0 + k as f64 * window, t0 + (k + 1) as f64 * window);
+        if a >= t1 {
+            break;
+        }
+        k += 1;
+        let b = b.min(t1);
+        let mut inputs = Series::new(vec!["v".into(), "omega".into()]);
+        for &(t, v, w) in odo.iter().filter(|o| o.0 >= a && o.0 < b) {
+            inputs.push(t, &[Some(v), Some(w)]);
+        }
+        if inputs.len() < 2 {
+            continue;
+        }
+        let start = inputs.t[0];
+        let end = *inputs.t.last().expect("rows");
+        let mut outputs = Series::new(cols.clone());
+        let mut n_meas = 0;
+        for &(t, code, r, brg) in meas.iter().filter(|m| m.0 >= start && m.0 <= end) {
+            let i = lms.iter().position(|l| l.0 == code).expect("landmark");
+            let mut row = vec![None; 2 * nl];
+            row[i] = Some(r);
+            row[nl + i] = Some(brg);
+            // Same time twice is allowed (two landmarks at once).
+            outputs.push(t, &row);
+            n_meas += 1;
+        }
+        if n_meas < min_measurements {
+            continue;
+        }
+        let name = format!("w{:03}", k - 1);
+        let mut meta = BTreeMap::new();
+        for (code, x, y) in &lms {
+            meta.insert(format!("lx{code}"), *x);
+            meta.insert(format!("ly{code}"), *y);
+        }
+        if !gt.is_empty() {
+            // Vicon poses every 0.5 s: summing 100 Hz jitter would inflate the distance.
+            let mut seg: Vec<&(f64, f64, f64, f64)> = Vec::new();
+            for g in gt.iter().filter(|g| g.0 >= start && g.0 <= end) {
+                if seg.last().is_none_or(|l| g.0 >= l.0 + 0.5) {
+                    seg.push(g);
+                }
+            }
+            if seg.len() >= 2 {
+                let dist: f64 = seg
+                    .windows(2)
+                    .map(|w| ((w[1].1 - w[0].1).powi(2) + (w[1].2 - w[0].2).powi(2)).sqrt())
+                    .sum();
+                let turn: f64 = seg
+                    .windows(2)
+                    .map(|w| crate::sim::wrap(w[1].3 - w[0].3))
+                    .sum();
+                let (mut cd, mut ct) = (0.0, 0.0);
+                for i in 0..inputs.len() {
+                    let dt = if i + 1 < inputs.len() {
+                        inputs.t[i + 1] - inputs.t[i]
+                    } else {
+                        end - inputs.t[i]
+                    };
+                    cd += inputs.values[0][i].unwrap_or(0.0).abs() * dt;
+                    ct += inputs.values[1][i].unwrap_or(0.0) * dt;
+                }
+                truths.push(WindowTruth {
+                    name: name.clone(),
+                    truth_distance: dist,
+                    commanded_distance: cd,
+                    truth_turn: turn,
+                    commanded_turn: ct,
+                    start: [seg[0].1, seg[0].2, seg[0].3],
+                });
+            }
+        }
+        trajectories.push(Trajectory {
+            name,
+            inputs,
+            outputs,
+            meta,
+        });
+    }
+    if trajectories.is_empty() {
+        return Err(DataError {
+            file: t.measurements.1.into(),
+            row: None,
+            column: None,
+            message: format!(
+                "no window of {window} s has {min_measurements} landmark measurements"
+            ),
+        });
+    }
+    let meta = DatasetMeta {
+        model: Some("systems/mrclam.sys".into()),
+        ..DatasetMeta::default()
+    };
+    Ok((Dataset { meta, trajectories }, truths))
+}
+
+/// `systems/mrclam.sys`-style model text for the given landmark barcodes:
+/// what the shipped file holds for the data set's 15 landmarks.
+pub fn model_text(codes: &[u32]) -> String {
+    let mut s = String::from(
+        "# A unicycle driven by its commanded speed v and turn rate omega (MRCLAM odometry),\n\
+         # observing known landmarks by range r<code> and bearing b<code> (Leung et al., IJRR 2011).\n\
+         # Landmark positions are constants given per trajectory (meta.json, from `obsan import mrclam`).\n\
+         system mrclam\n\
+         description Unicycle with commanded (v, omega) observing known landmarks by range and bearing.\n\
+         state x, y, th\n\
+         input v, omega\n",
+    );
+    for c in codes {
+        s.push_str(&format!("const lx{c}, ly{c}\n"));
+    }
+    s.push_str("\nx' = v*cos(th)\ny' = v*sin(th)\nth' = omega\n\n");
+    for c in codes {
+        s.push_str(&format!(
+            "output r{c} = sqrt((lx{c} - x)^2 + (ly{c} - y)^2)\n"
+        ));
+    }
+    for c in codes {
+        s.push_str(&format!("output b{c} = atan2(ly{c} - y, lx{c} - x) - th\n"));
+    }
+    s
+}

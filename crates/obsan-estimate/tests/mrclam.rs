@@ -1,0 +1,83 @@
+//! The MRCLAM converter on small synthetic logs (the real files are read by
+//! tests/cli/diagnose.rs when present).
+
+use obsan_estimate::{mrclam_convert, mrclam_model_text, MrclamText};
+
+const LMS: &str = " 18 \t 0.5 \t -1.0 \t 0.0001 \t 0.001\n 45 \t 2.0 \t 1.0 \t 0.0001 \t 0.001\n";
+
+fn odometry(n: usize) -> String {
+    (0..n)
+        .map(|k| format!("{:.2} 0.1 0.05\n", k as f64 * 0.02))
+        .collect()
+}
+
+#[test]
+fn windows_hold_measurements_landmarks_and_skip_other_robots() {
+    let odo = odometry(1000); // 20 s
+    let meas: String = (0..40)
+        .map(|k| {
+            format!(
+                "{:.1} {} 1.5 0.1\n",
+                k as f64 * 0.5,
+                if k % 4 == 0 { 5 } else { 18 }
+            )
+        })
+        .collect();
+    let t = MrclamText {
+        odometry: (&odo, "o.txt"),
+        measurements: (&meas, "m.txt"),
+        landmarks: (LMS, "l.dat"),
+        groundtruth: None,
+    };
+    let (d, truth) = mrclam_convert(&t, 10.0, 5).unwrap();
+    assert_eq!(d.trajectories.len(), 2);
+    assert!(truth.is_empty());
+    let w = &d.trajectories[0];
+    assert_eq!(w.meta["lx45"], 2.0);
+    // Barcode 5 is a robot: 3 of every 4 measurements are kept, 15 in 10 s.
+    assert_eq!(
+        w.outputs.column("r18").unwrap().iter().flatten().count(),
+        15
+    );
+    assert!(w.outputs.column("r45").unwrap().iter().all(Option::is_none));
+    assert_eq!(w.inputs.columns, ["v", "omega"]);
+}
+
+#[test]
+fn malformed_lines_name_file_row_and_column() {
+    let odo = "0.0 0.1 0.0\n0.02 x 0.0\n";
+    let t = MrclamText {
+        odometry: (odo, "o.txt"),
+        measurements: ("", "m.txt"),
+        landmarks: (LMS, "l.dat"),
+        groundtruth: None,
+    };
+    let e = mrclam_convert(&t, 10.0, 1).unwrap_err().to_string();
+    assert!(e.contains("o.txt:2 (column 2)") && e.contains("'x'"), "{e}");
+    let odo = "0.5 0.1 0.0\n0.2 0.1 0.0\n";
+    let t = MrclamText {
+        odometry: (odo, "o.txt"),
+        ..t
+    };
+    let e = mrclam_convert(&t, 10.0, 1).unwrap_err().to_string();
+    assert!(e.contains("o.txt:2") && e.contains("backwards"), "{e}");
+    let odo = odometry(100);
+    let t = MrclamText {
+        odometry: (&odo, "o.txt"),
+        measurements: ("1.0 18 nan 0.1\n", "m.txt"),
+        ..t
+    };
+    let e = mrclam_convert(&t, 10.0, 1).unwrap_err().to_string();
+    assert!(e.contains("m.txt:1 (column 3)"), "{e}");
+}
+
+#[test]
+fn the_shipped_model_is_the_generated_one() {
+    let shipped = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/mrclam.sys"
+    ))
+    .unwrap();
+    let codes = [18, 45, 7, 63, 16, 90, 61, 81, 9, 25, 36, 70, 54, 72, 27];
+    assert_eq!(shipped, mrclam_model_text(&codes));
+}
