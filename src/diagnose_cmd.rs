@@ -338,7 +338,16 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
     ];
     // Fitted outputs per trajectory: measured, nominal, extended.
     let mut fit_links = Vec::new();
-    for (k, (sb, sa)) in d.nominal.series.iter().zip(&d.final_fit.series).enumerate() {
+    // At most MAX_FIT_CHARTS charts (a real log has hundreds of series).
+    const MAX_FIT_CHARTS: usize = 8;
+    for (k, (sb, sa)) in d
+        .nominal
+        .series
+        .iter()
+        .zip(&d.final_fit.series)
+        .enumerate()
+        .take(MAX_FIT_CHARTS)
+    {
         let sigma = d
             .sigma
             .iter()
@@ -426,7 +435,12 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
     let _ = writeln!(md, "```\n{text}```\n");
     let _ = writeln!(md, "## Candidate scores\n\n![candidates](candidates.svg)\n");
     let _ = writeln!(md, "## Residuals\n\nBefore (nominal model):\n\n![before](residuals_before.svg)\n\nAfter (with the named effects):\n\n![after](residuals_after.svg)\n");
-    let _ = writeln!(md, "## Fitted outputs\n");
+    let _ = writeln!(
+        md,
+        "## Fitted outputs\n\nThe first {} of {} series (trajectory, output):\n",
+        fit_links.len(),
+        d.nominal.series.len()
+    );
     for l in &fit_links {
         let _ = writeln!(md, "![{l}]({l})\n");
     }
