@@ -100,6 +100,7 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
         ("wheel_slip", "circles", 0.4),
         ("time_offset", "circles", 0.71),
         ("time_offset", "sine-wide", 1.0),
+        ("time_offset", "sine-wide", 2.5),
         ("time_offset", "stopgo", 0.71),
         ("bearing_bias", "circles", 0.05),
     ];

@@ -35,5 +35,20 @@ fn field_names(nf: &mut NormalForm) -> (Vec<String>, Vec<Vec<Id>>) {
         names.push(nf.inputs[i].clone());
         vectors.push(f.clone());
     }
+    // A delay tau (inputs u(t - tau)) to first order: u - tau du/dt, the rates
+    // du/dt being further free inputs with fields -tau f_i.
+    if let Some(d) = nf.delay {
+        let tau = nf.ctx.lookup(&nf.state[d]).expect("delay param").id;
+        let minus_tau = nf.ctx.neg(tau);
+        for i in 0..nf.fields.len() {
+            let v: Vec<Id> = nf.fields[i]
+                .clone()
+                .into_iter()
+                .map(|x| nf.ctx.mul(&[minus_tau, x]))
+                .collect();
+            names.push(format!("rate_{}", nf.inputs[i]));
+            vectors.push(v);
+        }
+    }
     (names, vectors)
 }

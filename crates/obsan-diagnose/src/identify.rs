@@ -241,8 +241,16 @@ pub fn stacked_rank(
                 .enumerate()
                 .map(|(a, u)| {
                     let mut m = base.clone();
-                    for (n, v) in inputs.iter().zip(u) {
-                        m.push((n.clone(), num(*v)));
+                    // With a delay the class also holds each input's rate
+                    // (after the inputs): u(t - tau) ~ u - tau du/dt.
+                    for (i, n) in inputs.iter().enumerate() {
+                        let val = match (&sys.delay, u.get(inputs.len() + i)) {
+                            (Some(tau), Some(du)) => {
+                                format!("{} - {tau}*({})", num(u[i]), num(*du))
+                            }
+                            _ => num(u[i]),
+                        };
+                        m.push((n.clone(), val));
                     }
                     format!("v__t{c}_{a}*({})", substitute(rhs, &m))
                 })

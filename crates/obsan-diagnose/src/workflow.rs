@@ -156,14 +156,37 @@ pub struct Diagnosis {
     pub lr_critical: f64,
 }
 
+/// The inputs whose class the rank test reads: the model's, then with a
+/// delay each one's rate (`rate__<u>`, see `identify::stacked_rank`).
+fn class_inputs(sys: &System) -> (Vec<String>, Vec<Option<String>>) {
+    let mut ins: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+    let mut der: Vec<Option<String>> = sys
+        .decls_of(Kind::Input)
+        .map(|d| d.derived.clone())
+        .collect();
+    if sys.delay.is_some() {
+        let n = ins.len();
+        for i in 0..n {
+            der.push(Some(format!("rate({})", ins[i])));
+            ins.push(format!("rate__{}", ins[i]));
+        }
+    }
+    (ins, der)
+}
+
 /// The dataset with the model's derived inputs and the workflow's
 /// constants (`later`: 0 on the first trajectory, 1 after; `index`).
 pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
     let mut d = data.clone();
-    let derived: Vec<(String, String)> = sys
+    let mut derived: Vec<(String, String)> = sys
         .decls_of(Kind::Input)
         .filter_map(|x| x.derived.clone().map(|t| (x.name.clone(), t)))
         .collect();
+    if sys.delay.is_some() {
+        for d in sys.decls_of(Kind::Input) {
+            derived.push((format!("rate__{}", d.name), format!("rate({})", d.name)));
+        }
+    }
     for (k, t) in d.trajectories.iter_mut().enumerate() {
         t.meta
             .entry("later".into())
@@ -435,11 +458,7 @@ pub fn diagnose(
         if round == 0 {
             if let Ok(ext) = current_sys.extend(&[], "") {
                 let prepared = prepare(&ext, data)?;
-                let ins: Vec<String> = ext.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
-                let der: Vec<Option<String>> = ext
-                    .decls_of(Kind::Input)
-                    .map(|d| d.derived.clone())
-                    .collect();
+                let (ins, der) = class_inputs(&ext);
                 if let Ok(c) = input_class(&ins, &der, &prepared) {
                     class_text = c.describe();
                 }
@@ -532,11 +551,7 @@ fn candidate(
     let mut run = || -> Result<Option<(System, ModelFit)>, String> {
         let ext = base.extend(&[e], origin).map_err(|x| x.to_string())?;
         let prepared = prepare(&ext, data)?;
-        let ins: Vec<String> = ext.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
-        let der: Vec<Option<String>> = ext
-            .decls_of(Kind::Input)
-            .map(|d| d.derived.clone())
-            .collect();
+        let (ins, der) = class_inputs(&ext);
         let class: InputClass = input_class(&ins, &der, &prepared)?;
         let consts: Vec<Vec<(String, f64)>> = prepared
             .trajectories

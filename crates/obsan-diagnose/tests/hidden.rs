@@ -84,7 +84,7 @@ pub const CASES: [(&str, &str, f64, f64); 5] = [
     ("bearing_distortion", "circles", 0.032, 0.118),
     ("radius_change", "sine-wide", 0.046, 0.1),
     ("wheel_slip", "sine-wide", 0.4, 1.34),
-    ("time_offset", "stopgo", 0.71, 2.76),
+    ("time_offset", "sine-wide", 1.0, 2.5),
 ];
 
 const SEEDS: [u64; 3] = [1, 2, 3];
@@ -132,6 +132,11 @@ fn names_radius_change() {
 #[test]
 fn names_wheel_slip_when_the_speed_varies() {
     named_with_magnitude("wheel_slip");
+}
+
+#[test]
+fn names_time_offset_when_the_speed_varies() {
+    named_with_magnitude("time_offset");
 }
 
 #[test]

@@ -19,6 +19,8 @@ pub struct Predictor {
     pub outputs: Vec<String>,
     /// Per output: its values are angles (contains atan/atan2), so residuals wrap.
     pub angular: Vec<bool>,
+    /// Index in `state` of the delay param: the dynamics see `u(t - tau)`.
+    pub delay: Option<usize>,
     /// Roots: for each dynamic state k, f0[k] then f_i[k] for each input.
     dyn_tape: Tape,
     out_tape: Tape,
@@ -81,6 +83,7 @@ impl Predictor {
             inputs: nf.inputs.clone(),
             outputs: nf.outputs.iter().map(|o| o.0.clone()).collect(),
             angular: outs.iter().map(|&h| nf.ctx.is_angle_valued(h)).collect(),
+            delay: nf.delay,
             dyn_tape,
             out_tape,
             jac_tape,
@@ -97,6 +100,7 @@ impl Predictor {
         consts: &[f64],
         u: &[f64],
         jac: bool,
+        dudtau: Option<&[f64]>,
         w: &mut Work,
         dz: &mut [f64],
     ) {
@@ -140,6 +144,13 @@ impl Predictor {
                     s += w.jac[k * n + c];
                 }
                 dz[nd + k * n + c] = s;
+            }
+        }
+        // The delay enters through the inputs: B (the fields) times d(u)/d(tau).
+        if let (Some(d), Some(du)) = (self.delay, dudtau) {
+            for k in 0..nd {
+                let row = &w.vals[k * (m + 1)..(k + 1) * (m + 1)];
+                dz[nd + k * n + d] += row[1..].iter().zip(du).map(|(f, x)| f * x).sum::<f64>();
             }
         }
     }
@@ -227,6 +238,14 @@ impl Predictor {
         let mut yv = vec![0.0; no];
         let mut gy = vec![0.0; no * n];
         let t_start = inputs.t.first().copied().unwrap_or(0.0);
+        // With a delay tau the rows act at t_k + tau (the first row also
+        // before that): the state is the one seen from the output clock.
+        let tau = self.delay.map_or(0.0, |d| x0[d]);
+        if !tau.is_finite() {
+            return Err("the delay is not finite".into());
+        }
+        let et = |k: usize| inputs.t[k] + tau;
+        let mut dudtau = vec![0.0; m];
         let mut t = t_start;
         let mut row = 0usize;
         let (mut k1, mut k2, mut k3, mut k4) =
@@ -239,13 +258,20 @@ impl Predictor {
                 return Err(format!("output time {target} is before {t}: times must not decrease and start at or after the inputs"));
             }
             while t < target - 1e-12 {
-                while row + 1 < inputs.len() && inputs.t[row + 1] <= t + 1e-12 {
+                while row + 1 < inputs.len() && et(row + 1) <= t + 1e-12 {
                     row += 1;
                 }
+                // The row in force just before the step (a row change at the
+                // step's start belongs to this step, for d/dtau).
+                let before = if row > 0 && (et(row) - t).abs() <= 1e-12 {
+                    row - 1
+                } else {
+                    row
+                };
                 // One step: this row's interval, merged with the next rows while
                 // the step stays within max_step (inputs averaged over time).
                 let mut next = if row + 1 < inputs.len() {
-                    inputs.t[row + 1].min(target)
+                    et(row + 1).min(target)
                 } else {
                     target
                 };
@@ -255,7 +281,7 @@ impl Predictor {
                 while next < target - 1e-12 && row + 1 < inputs.len() {
                     let r = row + 1;
                     let end = if r + 1 < inputs.len() {
-                        inputs.t[r + 1].min(target)
+                        et(r + 1).min(target)
                     } else {
                         target
                     };
@@ -272,7 +298,19 @@ impl Predictor {
                 for ui in u.iter_mut() {
                     *ui /= h;
                 }
-                self.derivative(&z, consts, &u, sens, &mut w, &mut k1);
+                // d(mean input)/dtau: each row change inside the step moves
+                // later with tau; the sum telescopes to (before - last) / h.
+                let dd = if sens && self.delay.is_some() {
+                    for (d, &c) in dudtau.iter_mut().zip(&cols) {
+                        let a = inputs.values[c][before].unwrap_or(0.0);
+                        let b = inputs.values[c][row].unwrap_or(0.0);
+                        *d = (a - b) / h;
+                    }
+                    Some(dudtau.as_slice())
+                } else {
+                    None
+                };
+                self.derivative(&z, consts, &u, sens, dd, &mut w, &mut k1);
                 if let Some(c) = &noise {
                     // w.vals now holds f0 and the fields at the step start.
                     self.accumulate_noise(&z, &w.vals, &u, c, h, &mut noise_acc);
@@ -280,15 +318,15 @@ impl Predictor {
                 for i in 0..nz {
                     tmp[i] = z[i] + h / 2.0 * k1[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k2);
+                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k2);
                 for i in 0..nz {
                     tmp[i] = z[i] + h / 2.0 * k2[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k3);
+                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k3);
                 for i in 0..nz {
                     tmp[i] = z[i] + h * k3[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, &mut w, &mut k4);
+                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k4);
                 for i in 0..nz {
                     z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
                 }

@@ -39,6 +39,8 @@ pub struct Effect {
     /// (an input-side effect: it changes no dynamics or output, and its
     /// params are fitted to the inputs alone).
     pub compares: Vec<(String, String)>,
+    /// `delay tau`: the extended dynamics see `u(t - tau)`.
+    pub delay: Option<String>,
     /// 1-based line of the `effect` statement.
     pub line: usize,
 }
@@ -167,6 +169,7 @@ impl EffectLibrary {
                     outputs: vec![],
                     dynamics: vec![],
                     compares: vec![],
+                    delay: None,
                     line: line_no,
                 });
                 continue;
@@ -230,6 +233,12 @@ impl EffectLibrary {
                 }
                 "output" => e.outputs.push(assignment(rest)?),
                 "compare" => e.compares.push(assignment(rest)?),
+                "delay" => {
+                    if !is_ident(rest) {
+                        return Err(err("'delay' needs one param name: delay NAME".into()));
+                    }
+                    e.delay = Some(rest.to_string());
+                }
                 w if w.ends_with('\'') || t[w.len()..].trim_start().starts_with('\'') => {
                     let (lhs, rhs) = t.split_once('=').ok_or_else(|| err("an equation needs '=': x' = EXPR".into()))?;
                     let n = lhs.trim().trim_end_matches('\'').trim();
@@ -240,7 +249,7 @@ impl EffectLibrary {
                 }
                 _ => {
                     return Err(err(format!(
-                        "expected one of model, effect, description, param, const, input, subst, output, compare, x' = ..., found '{word}'"
+                        "expected one of model, effect, description, param, const, input, subst, output, compare, delay, x' = ..., found '{word}'"
                     )))
                 }
             }
@@ -384,6 +393,12 @@ impl System {
                 };
                 let nominal = cur.texts.outputs[k].clone();
                 s.texts.outputs[k] = substitute(rhs, &[(y.clone(), nominal)]);
+            }
+            if let Some(d) = &e.delay {
+                if cur.delay.is_some() {
+                    return Err(fail(format!("{} already has a delay", cur.name)));
+                }
+                s.delay = Some(d.clone());
             }
             let mut text = s.to_sys_text();
             // New declarations after the old ones keep the old params first.

@@ -32,6 +32,10 @@ pub struct NormalForm {
     pub outputs: Vec<(String, Id)>,
     /// The restriction applied, if any.
     pub restriction: Option<String>,
+    /// Index in `state` of the delay param (`delay tau`): the dynamics see
+    /// `u(t - tau)`. The predictor applies it exactly; the analysis to first
+    /// order (`u - tau du/dt`, with `du/dt` as further free inputs).
+    pub delay: Option<usize>,
 }
 
 impl NormalForm {
@@ -185,6 +189,10 @@ impl System {
             fields,
             outputs,
             restriction: restriction.map(str::to_string),
+            delay: self
+                .delay
+                .as_ref()
+                .and_then(|d| state_decls.iter().position(|s| &s.name == d)),
         })
     }
 

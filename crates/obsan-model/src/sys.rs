@@ -85,6 +85,9 @@ pub struct System {
     pub(crate) dynamics: Vec<Located>,
     pub(crate) outputs: Vec<(String, Located)>,
     pub restrictions: Vec<Restriction>,
+    /// `delay tau`: the dynamics see the inputs `u(t - tau)`, tau a param
+    /// (a clock offset between input and output stamps, or an actuation lag).
+    pub delay: Option<String>,
     pub(crate) origin: String,
     pub(crate) src: String,
     /// Source text of each dynamics right-hand side, output expression and
@@ -241,8 +244,9 @@ fn edit_distance(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
-const KEYWORDS: [&str; 12] = [
+const KEYWORDS: [&str; 13] = [
     "system",
+    "delay",
     "description",
     "state",
     "states",
@@ -299,6 +303,7 @@ impl System {
         let mut equations: Vec<(usize, usize, String, Vec<usize>)> = Vec::new(); // (stmt idx, name at, rhs, map)
         let mut outputs_raw: Vec<(String, usize, String, Vec<usize>)> = Vec::new();
         let mut restrict_raw: Vec<(usize, String, usize)> = Vec::new(); // stmt idx, name, at
+        let mut delay: Option<(String, usize)> = None;
         for (si, st) in stmts.iter().enumerate() {
             let t = st.text.as_str();
             let lead = t.len() - t.trim_start().len();
@@ -397,6 +402,29 @@ impl System {
                     name = Some(n.to_string());
                 }
                 "description" => description.push(t[rest_start..].trim().to_string()),
+                "delay" => {
+                    let n = t[rest_start..].trim();
+                    if !is_ident(n) {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            t.len(),
+                            "'delay' needs one param name: delay NAME",
+                        ));
+                    }
+                    if delay.is_some() {
+                        return Err(rd.err(
+                            st,
+                            lead,
+                            word_end,
+                            "a second 'delay': a system has at most one",
+                        ));
+                    }
+                    delay = Some((
+                        n.to_string(),
+                        st.src(rest_start + t[rest_start..].find(n).unwrap_or(0)),
+                    ));
+                }
                 "output" => {
                     let (nm, a, eq) = named_head(
                         &rd,
@@ -851,6 +879,15 @@ impl System {
             });
         }
 
+        if let Some((n, at)) = &delay {
+            if !decls.iter().any(|d| &d.name == n && d.kind == Kind::Param) {
+                return Err(rd.err_src(
+                    *at,
+                    at + n.len(),
+                    format!("delay '{n}': it must be a declared param (an unknown constant)"),
+                ));
+            }
+        }
         Ok(System {
             name,
             description: description.join(" ").trim().to_string(),
@@ -859,6 +896,7 @@ impl System {
             dynamics: dyn_out,
             outputs,
             restrictions,
+            delay: delay.map(|d| d.0),
             origin: origin.to_string(),
             src: src.to_string(),
             texts: Texts {
@@ -900,6 +938,9 @@ impl System {
             } else {
                 out.push_str(&format!("{} {}\n", kind.word(), items.join(", ")));
             }
+        }
+        if let Some(d) = &self.delay {
+            out.push_str(&format!("delay {d}\n"));
         }
         out.push('\n');
         for (d, rhs) in self.decls_of(Kind::State).zip(&self.texts.dynamics) {

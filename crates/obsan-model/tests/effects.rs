@@ -29,15 +29,15 @@ fn every_calib_effect_extends_calib() {
     // Old params first, the new one last.
     let params: Vec<&str> = ext.decls_of(Kind::Param).map(|d| d.name.as_str()).collect();
     assert_eq!(params, ["phi", "psi", "eta", "delta", "xi", "tau"]);
-    let derived: Vec<_> = ext
-        .decls_of(Kind::Input)
-        .filter_map(|d| d.derived.clone())
-        .collect();
-    assert_eq!(derived, ["rate(wR)", "rate(wL)"]);
+    // The time offset is a delay of the inputs by the new param.
+    assert_eq!(ext.delay.as_deref(), Some("tau"));
+    let nf = ext.normal_form(None, &[]).unwrap();
+    assert_eq!(nf.delay, Some(7));
     // Text round trip: same text again, and the restriction survives.
     let again = System::parse(&ext.to_sys_text(), "again.sys").unwrap();
     assert_eq!(again.to_sys_text(), ext.to_sys_text());
     assert!(again.restriction("q").is_some());
+    assert_eq!(again.delay.as_deref(), Some("tau"));
     // Two effects at once.
     let both = sys
         .extend(
