@@ -5,7 +5,7 @@
 //! named effect per data design, the table in docs/diagnose.md).
 
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions};
-use obsan_estimate::{simulate, SimOptions, SpeedProfile};
+use obsan_estimate::{simulate, SimOptions};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -17,29 +17,9 @@ fn read(p: &str) -> String {
 fn options(design: &str, effects: &[(&str, f64)], seed: u64) -> SimOptions {
     let mut o = SimOptions {
         seed,
+        profile: design.parse().expect("a speed profile"),
         ..SimOptions::default()
     };
-    match design {
-        "sine" => {
-            o.profile = SpeedProfile::Sine {
-                amplitude: 0.5,
-                period: 60.0,
-            }
-        }
-        "sine-wide" => {
-            o.profile = SpeedProfile::Sine {
-                amplitude: 0.9,
-                period: 60.0,
-            }
-        }
-        "stopgo" => {
-            o.profile = SpeedProfile::StopGo {
-                run: 20.0,
-                pause: 10.0,
-            }
-        }
-        _ => {}
-    }
     for (n, v) in effects {
         o.effects.set(n, *v).expect("effect");
     }
@@ -57,7 +37,7 @@ fn main() {
     }
     let mut times = Vec::new();
     for seed in 1..=11 {
-        let (data, _) = simulate(&options("circles", &[], seed)).expect("simulates");
+        let (data, _) = simulate(&options("constant", &[], seed)).expect("simulates");
         let t = Instant::now();
         let start = start_values(&sys, &data, &Default::default()).expect("start");
         let d = diagnose(
@@ -86,23 +66,23 @@ fn main() {
 fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
     // (hidden, design, value): small and large magnitudes of tests/hidden.rs.
     let rows: Vec<(&str, &str, f64)> = vec![
-        ("none", "circles", 0.0),
-        ("none", "sine-wide", 0.0),
-        ("bearing_scale", "circles", 0.032),
-        ("bearing_scale", "circles", 0.117),
-        ("bearing_distortion", "circles", 0.032),
-        ("bearing_distortion", "circles", 0.118),
-        ("radius_change", "sine-wide", 0.046),
-        ("radius_change", "sine-wide", 0.1),
-        ("radius_change", "circles", 0.046),
-        ("wheel_slip", "sine-wide", 0.4),
-        ("wheel_slip", "sine-wide", 1.34),
-        ("wheel_slip", "circles", 0.4),
-        ("time_offset", "circles", 0.71),
-        ("time_offset", "sine-wide", 1.0),
-        ("time_offset", "sine-wide", 2.5),
-        ("time_offset", "stopgo", 0.71),
-        ("bearing_bias", "circles", 0.05),
+        ("none", "constant", 0.0),
+        ("none", "sine:0.9:60", 0.0),
+        ("bearing_scale", "constant", 0.032),
+        ("bearing_scale", "constant", 0.117),
+        ("bearing_distortion", "constant", 0.032),
+        ("bearing_distortion", "constant", 0.118),
+        ("radius_change", "sine:0.9:60", 0.046),
+        ("radius_change", "sine:0.9:60", 0.1),
+        ("radius_change", "constant", 0.046),
+        ("wheel_slip", "sine:0.9:60", 0.4),
+        ("wheel_slip", "sine:0.9:60", 1.34),
+        ("wheel_slip", "constant", 0.4),
+        ("time_offset", "constant", 0.71),
+        ("time_offset", "sine:0.9:60", 1.0),
+        ("time_offset", "sine:0.9:60", 2.5),
+        ("time_offset", "stopgo:20:10", 0.71),
+        ("bearing_bias", "constant", 0.05),
     ];
     let cols = [
         "none",

@@ -2,36 +2,9 @@
 
 use crate::cli::{SimFlags, SimulateArgs};
 use crate::Failure;
-use obsan_estimate::{simulate, Dataset, Series, SimOptions, SpeedProfile};
+use obsan_estimate::{simulate, Dataset, Series, SimOptions};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-
-fn profile(s: &str) -> Result<SpeedProfile, Failure> {
-    let parts: Vec<&str> = s.split(':').collect();
-    let num = |x: &str| x.parse::<f64>().ok().filter(|v| v.is_finite());
-    match parts.as_slice() {
-        ["constant"] => Ok(SpeedProfile::Constant),
-        ["sine", a, p] => match (num(a), num(p)) {
-            (Some(amplitude), Some(period)) if period > 0.0 && amplitude.abs() < 1.0 => {
-                Ok(SpeedProfile::Sine { amplitude, period })
-            }
-            _ => Err(Failure(format!(
-                "--speed-profile {s}: sine:AMPLITUDE:PERIOD needs |AMPLITUDE| < 1 and PERIOD > 0"
-            ))),
-        },
-        ["stopgo", r, p] => match (num(r), num(p)) {
-            (Some(run), Some(pause)) if run > 0.0 && pause >= 0.0 => {
-                Ok(SpeedProfile::StopGo { run, pause })
-            }
-            _ => Err(Failure(format!(
-                "--speed-profile {s}: stopgo:RUN:PAUSE needs RUN > 0 and PAUSE >= 0 (seconds)"
-            ))),
-        },
-        _ => Err(Failure(format!(
-            "--speed-profile {s}: expected constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE"
-        ))),
-    }
-}
 
 /// The files of a dataset, relative to its folder.
 pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, String)> {
@@ -112,7 +85,10 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
         iota: a.iota,
         dq: a.dq,
         nu: a.nu,
-        profile: profile(&a.speed_profile)?,
+        profile: a
+            .speed_profile
+            .parse()
+            .map_err(|e: String| Failure(format!("--speed-profile {e}")))?,
         bearing_rate: a.bearing_rate,
         bearings: a.bearings,
         d0: a.d0,

@@ -6,6 +6,20 @@ fn tmp_dir(name: &str) -> String {
     d.to_string_lossy().into_owned()
 }
 
+/// `obsan diagnose --model systems/calib.sys --data DATA` plus `extra`.
+fn diag(data: &str, extra: &[&str]) -> Vec<String> {
+    let mut a: Vec<String> = ["diagnose", "--model", "systems/calib.sys", "--data", data]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+    a.extend(extra.iter().map(|x| x.to_string()));
+    a
+}
+
+fn refs(v: &[String]) -> Vec<&str> {
+    v.iter().map(String::as_str).collect()
+}
+
 #[test]
 fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
     let data = tmp_dir("dist");
@@ -66,15 +80,7 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
     assert!((v - 0.06).abs() < 3.0 * sd, "{v} ± {sd}");
     // The report folder is not overwritten without --force.
     bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            &data,
-            "--report",
-            &report,
-        ],
+        &refs(&diag(&data, &["--report", &report])),
         "already exists",
     );
 }
@@ -100,65 +106,18 @@ fn diagnose_rejects_bad_input_with_positions() {
         "bad.eff",
         "model calib\neffect x\nparam k\noutput beta = beta + k*nope\n",
     );
-    bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            &data,
-            "--effects",
-            &eff,
-        ],
-        "bad.eff:2",
-    );
+    bad(&refs(&diag(&data, &["--effects", &eff])), "bad.eff:2");
     let eff = temp_file("bad2.eff", "effect x\nfrob\n");
+    bad(&refs(&diag(&data, &["--effects", &eff])), "bad2.eff:2:1");
     bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            &data,
-            "--effects",
-            &eff,
-        ],
-        "bad2.eff:2:1",
-    );
-    bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            &data,
-            "--init",
-            "phi",
-        ],
+        &refs(&diag(&data, &["--init", "phi"])),
         "expected NAME=VALUE",
     );
     bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            &data,
-            "--init",
-            "zz=1",
-        ],
+        &refs(&diag(&data, &["--init", "zz=1"])),
         "neither a param nor a state",
     );
-    bad(
-        &[
-            "diagnose",
-            "--model",
-            "systems/calib.sys",
-            "--data",
-            "/nonexistent/x",
-        ],
-        "not a dataset folder",
-    );
+    bad(&refs(&diag("/nonexistent/x", &[])), "not a dataset folder");
     bad(
         &["diagnose", "--model", "systems/nope.sys", "--data", &data],
         "cannot read",

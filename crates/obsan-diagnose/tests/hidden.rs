@@ -5,10 +5,11 @@
 //! Magnitudes: "small" and "large" make the nominal model's bearing residual
 //! RMS about 1.3 and 3 times the noise (ordinary least squares; docs/diagnose.md
 //! has the scan). Data designs: the paper's constant-speed circles, and
-//! speed profiles where an effect needs a varying speed.
+//! speed profiles where an effect needs a varying speed; a design is named
+//! by its `--speed-profile` (`constant`, `sine:0.9:60`, ...).
 
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis};
-use obsan_estimate::{simulate, SimOptions, SpeedProfile, Truth};
+use obsan_estimate::{simulate, SimOptions, Truth};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 
@@ -21,30 +22,9 @@ pub fn run(design: &str, effects: &[(&str, f64)], seed: u64) -> (Diagnosis, Trut
     let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
     let mut o = SimOptions {
         seed,
+        profile: design.parse().expect("a speed profile"),
         ..SimOptions::default()
     };
-    match design {
-        "circles" => {}
-        "sine" => {
-            o.profile = SpeedProfile::Sine {
-                amplitude: 0.5,
-                period: 60.0,
-            }
-        }
-        "sine-wide" => {
-            o.profile = SpeedProfile::Sine {
-                amplitude: 0.9,
-                period: 60.0,
-            }
-        }
-        "stopgo" => {
-            o.profile = SpeedProfile::StopGo {
-                run: 20.0,
-                pause: 10.0,
-            }
-        }
-        _ => panic!("design {design}"),
-    }
     for (n, v) in effects {
         if *n == "dq" {
             o.dq = *v;
@@ -80,11 +60,11 @@ pub fn named(d: &Diagnosis) -> Vec<String> {
 
 /// (effect, design, small, large)
 pub const CASES: [(&str, &str, f64, f64); 5] = [
-    ("bearing_scale", "circles", 0.032, 0.117),
-    ("bearing_distortion", "circles", 0.032, 0.118),
-    ("radius_change", "sine-wide", 0.046, 0.1),
-    ("wheel_slip", "sine-wide", 0.4, 1.34),
-    ("time_offset", "sine-wide", 1.0, 2.5),
+    ("bearing_scale", "constant", 0.032, 0.117),
+    ("bearing_distortion", "constant", 0.032, 0.118),
+    ("radius_change", "sine:0.9:60", 0.046, 0.1),
+    ("wheel_slip", "sine:0.9:60", 0.4, 1.34),
+    ("time_offset", "sine:0.9:60", 1.0, 2.5),
 ];
 
 const SEEDS: [u64; 3] = [1, 2, 3];
@@ -159,7 +139,7 @@ fn what_constant_speed_circles_cannot_reveal() {
     // absorbed by psi anywhere. Neither is named; both are reported hidden,
     // the bias with psi in its null vector.
     for (effect, v) in [("time_offset", 0.5), ("bearing_bias", 0.05)] {
-        let (d, _) = run("circles", &[(effect, v)], 1);
+        let (d, _) = run("constant", &[(effect, v)], 1);
         assert!(d.named.is_empty(), "{effect}: named {:?}", named(&d));
         let h = d
             .hidden
@@ -178,7 +158,7 @@ fn what_constant_speed_circles_cannot_reveal() {
         }
     }
     // With a varying speed the rank test finds the time offset identifiable.
-    let (d, _) = run("sine", &[], 1);
+    let (d, _) = run("sine:0.5:60", &[], 1);
     let c = d.rounds[0]
         .iter()
         .find(|c| c.effect == "time_offset")
@@ -191,7 +171,7 @@ fn clean_data_name_nothing() {
     let seeds: Vec<u64> = (101..121).collect();
     let named_runs: Vec<(u64, Vec<String>)> = seeds
         .par_iter()
-        .map(|&s| (s, named(&run("circles", &[], s).0)))
+        .map(|&s| (s, named(&run("constant", &[], s).0)))
         .filter(|(_, n)| !n.is_empty())
         .collect();
     // At least 95% of 20 runs name nothing.
@@ -201,7 +181,7 @@ fn clean_data_name_nothing() {
 #[test]
 fn two_hidden_effects_are_both_named() {
     let (d, t) = run(
-        "circles",
+        "constant",
         &[("bearing_distortion", 0.06), ("radius_change", 0.06)],
         7,
     );
@@ -217,7 +197,7 @@ fn two_hidden_effects_are_both_named() {
 
 #[test]
 fn commanded_ratio_error_shows_in_the_inputs() {
-    let (d, _) = run("circles", &[("dq", 0.02)], 3);
+    let (d, _) = run("constant", &[("dq", 0.02)], 3);
     let c = &d.input_checks[0];
     assert!(c.significant);
     let (_, x, sd) = c.estimates[0];

@@ -102,22 +102,10 @@ impl Layout {
 
 /// Normalised residuals of one trajectory (measured cells only) and, with
 /// `jac`, the Jacobian rows d(prediction / sigma) / d(x0) over the whole
-/// initial state (dynamic states, then params).
-fn residuals(
-    p: &Predictor,
-    t: &FitTrajectory,
-    x0: &[f64],
-    opts: &FitOptions,
-    cols: &[usize],
-    jac: bool,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
-    residuals_full(p, t, x0, opts, cols, jac, false).map(|x| (x.0, x.1))
-}
-
-/// [`residuals`] and, with `noise`, the output-time index of each residual
-/// and the input-noise matrices `M(t)` of the prediction.
+/// initial state (dynamic states, then params); with `noise`, also the
+/// output-time index of each residual and the input-noise matrices `M(t)`.
 #[allow(clippy::type_complexity)]
-fn residuals_full(
+fn residuals(
     p: &Predictor,
     t: &FitTrajectory,
     x0: &[f64],
@@ -289,7 +277,7 @@ impl Problem<'_> {
         }
         let mut w = self.whiten.borrow_mut();
         for (k, t) in self.trajs.iter().enumerate() {
-            let (_, rows, at, m) = residuals_full(
+            let (_, rows, at, m) = residuals(
                 self.p,
                 t,
                 &self.lay.state_of(theta, k),
@@ -325,42 +313,26 @@ impl Problem<'_> {
         (r2, rows2)
     }
 
-    /// Residuals before whitening (for their root mean square).
-    fn raw_residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
+    /// Residuals of every trajectory, whitened or (for their root mean
+    /// square) not.
+    fn residuals_of(&self, theta: &[f64], whiten: bool) -> Result<Vec<Vec<f64>>, String> {
         self.trajs
             .iter()
             .enumerate()
             .map(|(k, t)| {
-                Ok(residuals(
-                    self.p,
-                    t,
-                    &self.lay.state_of(theta, k),
-                    self.opts,
-                    &self.cols[k],
-                    false,
-                )?
-                .0)
+                let x0 = self.lay.state_of(theta, k);
+                let r = residuals(self.p, t, &x0, self.opts, &self.cols[k], false, false)?.0;
+                Ok(if whiten {
+                    self.apply(k, r, vec![]).0
+                } else {
+                    r
+                })
             })
             .collect()
     }
 
     fn residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
-        self.trajs
-            .iter()
-            .enumerate()
-            .map(|(k, t)| {
-                let r = residuals(
-                    self.p,
-                    t,
-                    &self.lay.state_of(theta, k),
-                    self.opts,
-                    &self.cols[k],
-                    false,
-                )?
-                .0;
-                Ok(self.apply(k, r, vec![]).0)
-            })
-            .collect()
+        self.residuals_of(theta, true)
     }
 
     /// Residuals and the normal equations `J^T J`, `J^T r`, trajectory by
@@ -379,13 +351,14 @@ impl Problem<'_> {
                 .map(|i| n_params + k * lay.n_dyn + i)
                 .chain(0..n_params)
                 .collect();
-            let (r0, rows) = residuals(
+            let (r0, rows, _, _) = residuals(
                 self.p,
                 t,
                 &lay.state_of(theta, k),
                 self.opts,
                 &self.cols[k],
                 true,
+                false,
             )?;
             let (r0, rows) = self.apply(k, r0, rows);
             for (row, r) in rows.iter().zip(&r0) {
@@ -510,7 +483,7 @@ pub fn fit(
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
     let n_res: usize = res.iter().map(Vec::len).sum();
-    let raw = prob.raw_residuals(&theta)?;
+    let raw = prob.residuals_of(&theta, false)?;
     let mut rms = vec![0.0; p.outputs.len()];
     let mut counts = vec![0usize; p.outputs.len()];
     for (k, t) in trajs.iter().enumerate() {

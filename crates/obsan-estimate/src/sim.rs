@@ -25,6 +25,37 @@ pub enum SpeedProfile {
     },
 }
 
+impl std::str::FromStr for SpeedProfile {
+    type Err = String;
+    /// `constant`, `sine:AMPLITUDE:PERIOD` or `stopgo:RUN:PAUSE` (seconds).
+    fn from_str(s: &str) -> Result<SpeedProfile, String> {
+        let parts: Vec<&str> = s.split(':').collect();
+        let num = |x: &str| x.parse::<f64>().ok().filter(|v| v.is_finite());
+        match parts.as_slice() {
+            ["constant"] => Ok(SpeedProfile::Constant),
+            ["sine", a, p] => match (num(a), num(p)) {
+                (Some(amplitude), Some(period)) if period > 0.0 && amplitude.abs() < 1.0 => {
+                    Ok(SpeedProfile::Sine { amplitude, period })
+                }
+                _ => Err(format!(
+                    "{s}: sine:AMPLITUDE:PERIOD needs |AMPLITUDE| < 1 and PERIOD > 0"
+                )),
+            },
+            ["stopgo", r, p] => match (num(r), num(p)) {
+                (Some(run), Some(pause)) if run > 0.0 && pause >= 0.0 => {
+                    Ok(SpeedProfile::StopGo { run, pause })
+                }
+                _ => Err(format!(
+                    "{s}: stopgo:RUN:PAUSE needs RUN > 0 and PAUSE >= 0 (seconds)"
+                )),
+            },
+            _ => Err(format!(
+                "{s}: expected constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE"
+            )),
+        }
+    }
+}
+
 /// Effects hidden in the data for the discrepancy workflow (all off by default).
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Effects {

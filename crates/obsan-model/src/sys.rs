@@ -382,44 +382,26 @@ impl System {
             }
             match word {
                 "system" => {
-                    let n = t[rest_start..].trim();
-                    if !is_ident(n) {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            t.len(),
-                            "'system' needs one name (letters, digits, '_'): system NAME",
-                        ));
-                    }
-                    if name.is_some() {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            word_end,
-                            "a second 'system' line: a file describes one system",
-                        ));
-                    }
+                    let n = single_name(
+                        &rd,
+                        st,
+                        (lead, word_end, rest_start),
+                        name.is_some(),
+                        "'system' needs one name (letters, digits, '_'): system NAME",
+                        "a second 'system' line: a file describes one system",
+                    )?;
                     name = Some(n.to_string());
                 }
                 "description" => description.push(t[rest_start..].trim().to_string()),
                 "delay" => {
-                    let n = t[rest_start..].trim();
-                    if !is_ident(n) {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            t.len(),
-                            "'delay' needs one param name: delay NAME",
-                        ));
-                    }
-                    if delay.is_some() {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            word_end,
-                            "a second 'delay': a system has at most one",
-                        ));
-                    }
+                    let n = single_name(
+                        &rd,
+                        st,
+                        (lead, word_end, rest_start),
+                        delay.is_some(),
+                        "'delay' needs one param name: delay NAME",
+                        "a second 'delay': a system has at most one",
+                    )?;
                     delay = Some((
                         n.to_string(),
                         st.src(rest_start + t[rest_start..].find(n).unwrap_or(0)),
@@ -985,6 +967,26 @@ impl System {
     pub fn output_names(&self) -> Vec<&str> {
         self.outputs.iter().map(|o| o.0.as_str()).collect()
     }
+}
+
+/// The one name of `KEYWORD NAME` (`system`, `delay`), refused when it is
+/// not a name or when the statement was already given.
+fn single_name<'s>(
+    rd: &Reader,
+    st: &'s Stmt,
+    (lead, word_end, rest_start): (usize, usize, usize),
+    again: bool,
+    usage: &str,
+    twice: &str,
+) -> Result<&'s str, ModelError> {
+    let n = st.text[rest_start..].trim();
+    if !is_ident(n) {
+        return Err(rd.err(st, lead, st.text.len(), usage));
+    }
+    if again {
+        return Err(rd.err(st, lead, word_end, twice));
+    }
+    Ok(n)
 }
 
 /// A derived input is `rate(u)` (the time derivative of a measured input) or
