@@ -133,9 +133,13 @@ pub struct CalibrateArgs {
     /// Bearing noise (deg); default: dataset.json's, else estimated from the residuals.
     #[arg(long)]
     pub sigma_beta_deg: Option<f64>,
-    /// Write the paper's Figures 5-7 into this folder (not implemented yet).
+    /// Write the paper's Figures 5-7 (PNG and SVG) per trajectory into this
+    /// new folder: observation function with nodes, sigma(s_c), DET/LS/ML fits.
     #[arg(long)]
     pub plot: Option<String>,
+    /// Replace the --plot folder if it exists.
+    #[arg(long)]
+    pub force: bool,
     #[arg(long)]
     pub json: bool,
 }

@@ -3,9 +3,9 @@
 
 use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
+use crate::plot::{bars, chart, Figure, Series, Style, COLORS, GREY, PALE};
 use crate::show::load_system;
 use crate::simulate::write_folder_atomically;
-use crate::svg::{bars, chart, Series, Style, COLORS};
 use crate::Failure;
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, ModelFit,
@@ -305,7 +305,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     s
 }
 
-fn residual_chart(title: &str, f: &ModelFit) -> String {
+fn residual_chart(title: &str, f: &ModelFit) -> Figure {
     let series: Vec<Series> = f
         .series
         .iter()
@@ -320,22 +320,38 @@ fn residual_chart(title: &str, f: &ModelFit) -> String {
     chart(title, "time (s)", "residual / sigma", &series)
 }
 
-fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
+/// A figure as `stem.svg` and `stem.png`.
+pub fn figure_files(stem: &str, f: &Figure) -> [(PathBuf, Vec<u8>); 2] {
+    [
+        (
+            PathBuf::from(format!("{stem}.svg")),
+            f.to_svg().into_bytes(),
+        ),
+        (PathBuf::from(format!("{stem}.png")), f.to_png(2.0)),
+    ]
+}
+
+fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
     let mut files = vec![
-        (PathBuf::from("extended.sys"), d.extended_sys.clone()),
+        (
+            PathBuf::from("extended.sys"),
+            d.extended_sys.clone().into_bytes(),
+        ),
         (
             PathBuf::from("diagnosis.json"),
-            serde_json::to_string_pretty(d).unwrap_or_default(),
-        ),
-        (
-            PathBuf::from("residuals_before.svg"),
-            residual_chart("residuals of the nominal model", &d.nominal),
-        ),
-        (
-            PathBuf::from("residuals_after.svg"),
-            residual_chart("residuals with the named effects", &d.final_fit),
+            serde_json::to_string_pretty(d)
+                .unwrap_or_default()
+                .into_bytes(),
         ),
     ];
+    files.extend(figure_files(
+        "residuals_before",
+        &residual_chart("residuals of the nominal model", &d.nominal),
+    ));
+    files.extend(figure_files(
+        "residuals_after",
+        &residual_chart("residuals with the named effects", &d.final_fit),
+    ));
     // Fitted outputs per trajectory: measured, nominal, extended.
     let mut fit_links = Vec::new();
     // At most MAX_FIT_CHARTS charts (a real log has hundreds of series).
@@ -361,7 +377,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
         let series = vec![
             Series {
                 name: "measured",
-                color: "#888",
+                color: GREY,
                 style: Style::Points,
                 xy: measured,
             },
@@ -388,25 +404,25 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
                     .collect(),
             },
         ];
-        let name = format!("fit_{k}_{}.svg", sb.output);
-        files.push((
-            PathBuf::from(&name),
-            chart(
+        let stem = format!("fit_{k}_{}", sb.output);
+        files.extend(figure_files(
+            &stem,
+            &chart(
                 &format!("{} on {}", sb.output, sb.trajectory),
                 "time (s)",
                 &sb.output,
                 &series,
             ),
         ));
-        fit_links.push(name);
+        fit_links.push(stem);
     }
     // Candidate scores of the first round.
     if let Some(r) = d.rounds.first() {
-        let items: Vec<(String, f64, &str)> = r
+        let items: Vec<(String, f64, crate::plot::Rgb)> = r
             .iter()
             .map(|c| {
                 let color = if !c.identifiable {
-                    "#bbb"
+                    PALE
                 } else if c.significant {
                     COLORS[1]
                 } else {
@@ -420,9 +436,9 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
                 (label, c.lr, color)
             })
             .collect();
-        files.push((
-            PathBuf::from("candidates.svg"),
-            bars(
+        files.extend(figure_files(
+            "candidates",
+            &bars(
                 "candidate effects, round 1: likelihood ratio",
                 "LR statistic",
                 &items,
@@ -433,8 +449,8 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
     let mut md = String::new();
     let _ = writeln!(md, "# obsan diagnose: {}\n", d.model);
     let _ = writeln!(md, "```\n{text}```\n");
-    let _ = writeln!(md, "## Candidate scores\n\n![candidates](candidates.svg)\n");
-    let _ = writeln!(md, "## Residuals\n\nBefore (nominal model):\n\n![before](residuals_before.svg)\n\nAfter (with the named effects):\n\n![after](residuals_after.svg)\n");
+    let _ = writeln!(md, "## Candidate scores\n\n![candidates](candidates.png)\n");
+    let _ = writeln!(md, "## Residuals\n\nBefore (nominal model):\n\n![before](residuals_before.png)\n\nAfter (with the named effects):\n\n![after](residuals_after.png)\n");
     let _ = writeln!(
         md,
         "## Fitted outputs\n\nThe first {} of {} series (trajectory, output):\n",
@@ -442,10 +458,14 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, String)> {
         d.nominal.series.len()
     );
     for l in &fit_links {
-        let _ = writeln!(md, "![{l}]({l})\n");
+        let _ = writeln!(md, "![{l}]({l}.png)\n");
     }
     let _ = writeln!(md, "## Extended model\n\n`extended.sys` (the nominal model with the named effects; `obsan rank extended.sys` and `obsan diagnose --model extended.sys` read it):\n\n```\n{}```", d.extended_sys);
-    files.push((PathBuf::from("report.md"), md));
+    let _ = writeln!(
+        md,
+        "\nEvery chart is also written as SVG (same name, `.svg`)."
+    );
+    files.push((PathBuf::from("report.md"), md.into_bytes()));
     files
 }
 

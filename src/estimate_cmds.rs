@@ -1,11 +1,13 @@
 //! `obsan calibrate | crlb | montecarlo`: reading datasets, formatting.
 
 use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
-use crate::simulate::sim_options;
+use crate::plot::{self, chart, Style, BLACK, COLORS};
+use crate::simulate::{sim_options, write_folder_atomically};
 use crate::Failure;
 use obsan_estimate::{
-    calib_predictor, calibrate, crlb_sd, run_cell, simulate, table, CalibrateOptions, Dataset,
-    DatasetMeta, Method, Series, Trajectory, PARAMS, PARAM_COLUMNS,
+    calib_predictor, calibrate, crlb_sd, figure_curves, run_cell, simulate, table,
+    CalibrateOptions, Dataset, DatasetMeta, Method, Predictor, Series, Trajectory, PARAMS,
+    PARAM_COLUMNS,
 };
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -131,6 +133,10 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     }
     let p = calib_predictor();
     let r = calibrate(&data, Some(&p), &o).map_err(|e| Failure(format!("{}: {e}", a.dataset)))?;
+    if let Some(dir) = &a.plot {
+        let n = write_figures(dir, a.force, &data, &p, &o)?;
+        eprintln!("wrote {n} figures (PNG and SVG) to {dir}");
+    }
     let sd = r.calibration.sd();
     if a.json {
         let trajs: Vec<Value> = r
@@ -224,9 +230,6 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             println!("(metric from d0 = {} m on trajectory {})", o.d0.unwrap_or(0.0), r.trajectories[0].name);
         }
         None => println!("\nrho, rR, rL, B need one metric distance: --d0 METRES (initial distance to the feature, first trajectory)"),
-    }
-    if a.plot.is_some() {
-        eprintln!("note: --plot is not implemented yet; nothing was written");
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -402,4 +405,148 @@ fn print_table(
         }
     }
     println!();
+}
+
+/// Angles wrapped to (-pi, pi]: lift the pen where the curve wraps, so that
+/// a line chart does not draw the jump.
+fn unwrapped_breaks(xy: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    let mut out = Vec::with_capacity(xy.len());
+    for p in xy {
+        if let Some(last) = out.last().copied() {
+            let (_, y0): (f64, f64) = last;
+            if (p.1 - y0).abs() > std::f64::consts::PI {
+                out.push((f64::NAN, f64::NAN));
+            }
+        }
+        out.push(p);
+    }
+    out
+}
+
+/// The paper's Figures 5-7 for each trajectory, as PNG and SVG: the
+/// observation function with the nodes (5c-d, 6a-b), sigma(s_c) of
+/// Algorithm 1 (5e-f, 6c-d), and observed vs DET vs LS vs ML (6e-f).
+fn write_figures(
+    dir: &str,
+    force: bool,
+    data: &Dataset,
+    p: &Predictor,
+    o: &CalibrateOptions,
+) -> Result<usize, Failure> {
+    let curves = figure_curves(data, p, o).map_err(|e| Failure(format!("--plot: {e}")))?;
+    let mut files = Vec::new();
+    let mut index = String::from("# Figures 5-7 (Martinelli 2011)\n\n");
+    let xlabel = "s (rad of right-wheel rotation)";
+    for c in &curves {
+        let zip = |y: &[f64]| {
+            c.s.iter()
+                .copied()
+                .zip(y.iter().copied())
+                .collect::<Vec<_>>()
+        };
+        let observed = plot::Series {
+            name: "observed",
+            color: COLORS[0],
+            style: Style::Points,
+            xy: zip(&c.observed),
+        };
+        let stem = |kind: &str| format!("{}_{kind}", c.name.replace(['/', '\\', ' '], "_"));
+        let fig = chart(
+            &format!("{} (q = {}): observation function and nodes", c.name, c.q),
+            xlabel,
+            "beta (rad)",
+            &[
+                observed,
+                plot::Series {
+                    name: "nodes",
+                    color: COLORS[1],
+                    style: Style::Stars,
+                    xy: c.nodes.clone(),
+                },
+            ],
+        );
+        files.extend(crate::diagnose_cmd::figure_files(
+            &stem("observation"),
+            &fig,
+        ));
+        let best = c
+            .sigma_curve
+            .iter()
+            .copied()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .into_iter()
+            .collect();
+        let fig = chart(
+            &format!("{} (q = {}): sigma(s_c) of Algorithm 1", c.name, c.q),
+            "s_c (rad of right-wheel rotation)",
+            "sigma (rad)",
+            &[
+                plot::Series {
+                    name: "sigma(s_c)",
+                    color: COLORS[0],
+                    style: Style::Line,
+                    xy: c.sigma_curve.clone(),
+                },
+                plot::Series {
+                    name: "minimum",
+                    color: COLORS[1],
+                    style: Style::Stars,
+                    xy: best,
+                },
+            ],
+        );
+        files.extend(crate::diagnose_cmd::figure_files(&stem("sigma"), &fig));
+        let mut series = vec![
+            plot::Series {
+                name: "observed",
+                color: COLORS[0],
+                style: Style::Points,
+                xy: zip(&c.observed),
+            },
+            plot::Series {
+                name: "DET",
+                color: COLORS[1],
+                style: Style::Line,
+                xy: unwrapped_breaks(zip(&c.det)),
+            },
+            plot::Series {
+                name: "LS",
+                color: BLACK,
+                style: Style::Line,
+                xy: unwrapped_breaks(zip(&c.ls)),
+            },
+        ];
+        if let Some(ml) = &c.ml {
+            series.push(plot::Series {
+                name: "ML",
+                color: COLORS[2],
+                style: Style::Line,
+                xy: unwrapped_breaks(zip(ml)),
+            });
+        }
+        let fig = chart(
+            &format!("{} (q = {}): observed, DET, LS, ML", c.name, c.q),
+            xlabel,
+            "beta (rad)",
+            &series,
+        );
+        files.extend(crate::diagnose_cmd::figure_files(&stem("fits"), &fig));
+        index.push_str(&format!(
+            "## {} (q = {})\n\n![observation]({o}.png)\n\n![sigma]({s}.png)\n\n![fits]({f}.png)\n\n",
+            c.name,
+            c.q,
+            o = stem("observation"),
+            s = stem("sigma"),
+            f = stem("fits")
+        ));
+        if c.ml.is_none() {
+            index.push_str(
+                "(maximum likelihood did not converge on these data; its curve is left out)\n\n",
+            );
+        }
+    }
+    let n = files.len() / 2;
+    files.push((std::path::PathBuf::from("index.md"), index.into_bytes()));
+    write_folder_atomically(dir, force, &files)?;
+    Ok(n)
 }

@@ -9,9 +9,9 @@ mod cli;
 mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
+mod plot;
 mod show;
 mod simulate;
-mod svg;
 
 use clap::Parser;
 use std::process::ExitCode;

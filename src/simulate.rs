@@ -32,7 +32,7 @@ pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, 
 pub fn write_folder_atomically(
     out: &str,
     force: bool,
-    files: &[(PathBuf, String)],
+    files: &[(PathBuf, impl AsRef<[u8]>)],
 ) -> Result<(), Failure> {
     let target = Path::new(out);
     if target.exists() && !force {
@@ -62,7 +62,7 @@ pub fn write_folder_atomically(
             if let Some(d) = p.parent() {
                 std::fs::create_dir_all(d)?;
             }
-            std::fs::write(p, content)?;
+            std::fs::write(p, content.as_ref())?;
         }
         if target.exists() {
             std::fs::remove_dir_all(target)?;

@@ -116,3 +116,44 @@ fn crlb_and_montecarlo_run() {
         "expected 4, 5, 6, 7 or all",
     );
 }
+
+#[test]
+fn plot_writes_figures_5_to_7_as_png_and_svg_and_never_overwrites() {
+    let data = tmp_dir("plotdata");
+    ok(&[
+        "simulate",
+        "--out",
+        &data,
+        "--seed",
+        "2",
+        "--bearings",
+        "100",
+    ]);
+    let figs = tmp_dir("figs");
+    let r = obsan(&["calibrate", &data, "--method", "ls", "--plot", &figs]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    for traj in ["q0.9", "q0", "q-1"] {
+        for kind in ["observation", "sigma", "fits"] {
+            let png = std::fs::read(format!("{figs}/{traj}_{kind}.png")).unwrap();
+            assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{traj}_{kind}.png");
+            // IHDR: width and height at twice the 760 x 360 chart.
+            assert_eq!(&png[16..24], &[0, 0, 5, 0xf0, 0, 0, 2, 0xd0]);
+            let svg = std::fs::read_to_string(format!("{figs}/{traj}_{kind}.svg")).unwrap();
+            assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+        }
+        // The fits figure compares the methods, as in Figure 6e-f.
+        let svg = std::fs::read_to_string(format!("{figs}/{traj}_fits.svg")).unwrap();
+        for m in [">DET<", ">LS<", ">ML<", ">observed<"] {
+            assert!(svg.contains(m), "{m} in {traj}_fits.svg");
+        }
+    }
+    assert!(std::fs::read_to_string(format!("{figs}/index.md"))
+        .unwrap()
+        .contains("q0.9_sigma.png"));
+    // An existing folder is kept unless --force.
+    bad(
+        &["calibrate", &data, "--plot", &figs],
+        "already exists (use --force",
+    );
+    ok(&["calibrate", &data, "--plot", &figs, "--force"]);
+}

@@ -438,3 +438,105 @@ fn measured_ratio(t: &crate::data::Trajectory, right: &str, left: &str) -> Optio
     }
     (sr.abs() > 0.0).then(|| sl / sr)
 }
+
+/// One trajectory's curves for the paper's Figures 5-7, against the curve
+/// length s (radians of right-wheel rotation, eq. 17).
+#[derive(Clone, Debug)]
+pub struct FigureCurves {
+    pub name: String,
+    pub q: f64,
+    pub s: Vec<f64>,
+    /// The measured bearings.
+    pub observed: Vec<f64>,
+    /// The closed-form observation function (eqs. 26-31) by DET and by LS.
+    pub det: Vec<f64>,
+    pub ls: Vec<f64>,
+    /// The bearings predicted by joint maximum likelihood (eq. 16 driven by
+    /// the measured wheel speeds); `None` when ML did not converge.
+    pub ml: Option<Vec<f64>>,
+    /// The nodes inside the data (Algorithm 1's node and those half a
+    /// period away), as (s, bearing of the DET curve).
+    pub nodes: Vec<(f64, f64)>,
+    /// sigma(s_c) of Algorithm 1 and its minimiser.
+    pub sigma_curve: Vec<(f64, f64)>,
+    pub node: f64,
+}
+
+/// The curves of Figures 5-7 for every trajectory: runs DET, LS and ML
+/// whatever method `o` names (each figure compares them).
+pub fn figure_curves(
+    data: &Dataset,
+    predictor: &Predictor,
+    o: &CalibrateOptions,
+) -> Result<Vec<FigureCurves>, Degenerate> {
+    let with = |m: Method| CalibrateOptions {
+        method: m,
+        ..o.clone()
+    };
+    let ls_run = calibrate(data, None, &with(Method::Ls))?;
+    // ML may fail where LS does not (e.g. a poor start); the figure then
+    // shows DET and LS only.
+    let ml_run = calibrate(data, Some(predictor), &with(Method::Ml)).ok();
+    let mut out = Vec::new();
+    for (k, (tr, t)) in ls_run
+        .trajectories
+        .iter()
+        .zip(&data.trajectories)
+        .enumerate()
+    {
+        let curve = |c: &Closed| tr.arc.s.iter().map(|&s| c.beta(s)).collect::<Vec<f64>>();
+        let ml = ml_run.as_ref().and_then(|r| {
+            let f = r.ml.as_ref()?;
+            let times = arc_times(t, &o.output);
+            let consts: Vec<f64> = predictor
+                .consts
+                .iter()
+                .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+                .collect();
+            let mut x0 = f.initial_states[k].clone();
+            x0.extend(&f.params);
+            let y = predictor.predict(&x0, &consts, &t.inputs, &times).ok()?;
+            let col = predictor.outputs.iter().position(|n| *n == o.output)?;
+            let v: Vec<f64> = y.iter().map(|r| crate::sim::wrap(r[col])).collect();
+            (v.len() == tr.arc.s.len()).then_some(v)
+        });
+        let d = &tr.det;
+        let (s_lo, s_hi) = (tr.arc.s[0], tr.arc.s[tr.arc.s.len() - 1]);
+        let half = d.period / 2.0;
+        let mut nodes = Vec::new();
+        let mut s = d.node - half * ((d.node - s_lo) / half).floor();
+        while s <= s_hi {
+            nodes.push((s, d.closed.beta(s)));
+            s += half;
+        }
+        out.push(FigureCurves {
+            name: tr.name.clone(),
+            q: tr.q,
+            s: tr.arc.s.clone(),
+            observed: tr.arc.beta.clone(),
+            det: curve(&d.closed),
+            ls: curve(&tr.closed),
+            ml,
+            nodes,
+            sigma_curve: d.sigma_curve.clone(),
+            node: d.node,
+        });
+    }
+    Ok(out)
+}
+
+/// The times of the bearings that [`arc_data`] keeps (measured, not before
+/// the first input row), in order.
+fn arc_times(t: &crate::data::Trajectory, output: &str) -> Vec<f64> {
+    let t0 = t.inputs.t.first().copied().unwrap_or(0.0);
+    let Some(col) = t.outputs.columns.iter().position(|c| c == output) else {
+        return Vec::new();
+    };
+    t.outputs
+        .t
+        .iter()
+        .zip(&t.outputs.values[col])
+        .filter(|(tb, v)| **tb >= t0 && v.is_some())
+        .map(|(tb, _)| *tb)
+        .collect()
+}

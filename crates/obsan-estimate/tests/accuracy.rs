@@ -148,3 +148,62 @@ fn ml_is_not_biased_by_a_ratio_error_that_biases_ls() {
         );
     }
 }
+
+/// Figures 5-7 on noise-free data: the closed form (DET, LS) and the
+/// integrated model (ML) are independent computations of the same bearings,
+/// so every curve lies on the observations; the nodes are centres of the
+/// observation function's mirror symmetry, beta(n + x) + beta(n - x) equal
+/// modulo pi for every x (Algorithm 1).
+#[test]
+fn figure_curves_lie_on_noise_free_data_and_nodes_are_mirror_centres() {
+    let p = predictor();
+    let o = SimOptions {
+        sigma_beta: 0.0,
+        k_encoder: 0.0,
+        ..SimOptions::default()
+    };
+    let (data, _) = simulate(&o).unwrap();
+    let mut co = CalibrateOptions::for_dataset(&data, Method::Ml);
+    co.sigma_beta = Some(1e-5);
+    let curves = obsan_estimate::figure_curves(&data, &p, &co).unwrap();
+    assert_eq!(curves.len(), 3);
+    for c in &curves {
+        let ml = c.ml.as_ref().expect("ML converges on noise-free data");
+        for (k, &b) in c.observed.iter().enumerate() {
+            assert!(wrap(c.det[k] - b).abs() < 2e-3, "{} DET at {k}", c.name);
+            assert!(wrap(c.ls[k] - b).abs() < 1e-6, "{} LS at {k}", c.name);
+            assert!(wrap(ml[k] - b).abs() < 1e-6, "{} ML at {k}", c.name);
+        }
+        assert!(!c.nodes.is_empty(), "{}: no node inside the data", c.name);
+        // Mirror symmetry about each node, read on the noise-free LS curve
+        // (it equals the data, checked above) by linear interpolation.
+        let at = |s: f64| -> Option<f64> {
+            let i = c.s.windows(2).position(|w| w[0] <= s && s <= w[1])?;
+            let u = (s - c.s[i]) / (c.s[i + 1] - c.s[i]);
+            Some(c.ls[i] + u * wrap(c.ls[i + 1] - c.ls[i]))
+        };
+        let (lo, hi) = (c.s[0], c.s[c.s.len() - 1]);
+        let widest = c
+            .nodes
+            .iter()
+            .map(|&(n, _)| (n - lo).min(hi - n))
+            .fold(0.0, f64::max);
+        assert!(
+            widest > (hi - lo) / 8.0,
+            "{}: no node away from the ends",
+            c.name
+        );
+        for &(n, _) in &c.nodes {
+            let reach = (n - lo).min(hi - n);
+            let pairs: Vec<f64> = (1..20)
+                .map(|j| reach * j as f64 / 20.0)
+                .filter_map(|x| Some(at(n + x)? + at(n - x)?))
+                .collect();
+            for v in &pairs {
+                // Equal modulo pi: the doubled angles agree.
+                let d = wrap(2.0 * (v - pairs[0]));
+                assert!(d.abs() < 1e-2, "{} node {n}: {v} vs {}", c.name, pairs[0]);
+            }
+        }
+    }
+}
