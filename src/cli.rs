@@ -41,7 +41,8 @@ pub enum Command {
     /// standard deviations (and rho, rR, rL, B with --d0), per trajectory
     /// xi_q, L, c, k.
     Calibrate(CalibrateArgs),
-    /// The Cramér–Rao lower bound of phi, psi, eta, delta, xi for a simulated set-up.
+    /// The Cramér–Rao lower bound of phi, psi, eta, delta, xi for a simulated
+    /// set-up (the simulate flags) or a measured dataset (at its ML estimate).
     Crlb(CrlbArgs),
     /// Monte Carlo runs laid out like the paper's Tables IV-VII, beside the
     /// paper's figures and the Cramér–Rao bound.
@@ -146,6 +147,10 @@ pub struct CalibrateArgs {
 
 #[derive(Args)]
 pub struct CrlbArgs {
+    /// A dataset folder: the bound at its maximum-likelihood estimate
+    /// (instead of a simulated set-up).
+    #[arg(conflicts_with = "SimFlags")]
+    pub dataset: Option<String>,
     #[command(flatten)]
     pub sim: SimFlags,
     #[arg(long)]

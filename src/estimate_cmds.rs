@@ -5,7 +5,7 @@ use crate::plot::{self, chart, Style, BLACK, COLORS};
 use crate::simulate::{sim_options, write_folder_atomically};
 use crate::Failure;
 use obsan_estimate::{
-    calib_predictor, calibrate, crlb_sd, figure_curves, run_cell, simulate, table,
+    calib_predictor, calibrate, crlb_sd, dataset_crlb, figure_curves, run_cell, simulate, table,
     CalibrateOptions, Dataset, DatasetMeta, Method, Predictor, Series, Trajectory, PARAMS,
     PARAM_COLUMNS,
 };
@@ -235,37 +235,96 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
 }
 
 pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
-    let o = sim_options(&a.sim)?;
     let p = calib_predictor();
-    let sd = crlb_sd(&o, &p).map_err(Failure)?;
-    let (data, _) = simulate(&o).map_err(Failure)?;
-    let counts: Vec<String> = data
-        .trajectories
-        .iter()
-        .map(|t| format!("{} {}", t.name, t.outputs.len()))
-        .collect();
-    if a.json {
-        let mut m = serde_json::Map::new();
-        for (i, c) in PARAM_COLUMNS.iter().enumerate() {
-            m.insert(c.to_string(), json!(sd[i]));
+    // (set-up text, bearing-only sd, sd with encoder noise) in table units.
+    let (setup, bearing, full, counts) = match &a.dataset {
+        Some(dir) => {
+            let data = read_dataset(dir, &["wR", "wL"], &["beta"])?;
+            let o = CalibrateOptions::for_dataset(&data, Method::Ml);
+            let (cal, b, f) =
+                dataset_crlb(&data, &p, &o).map_err(|e| Failure(format!("{dir}: {e}")))?;
+            let v = cal.values();
+            let units = |s: [f64; 5]| -> Vec<f64> {
+                vec![
+                    s[0].to_degrees(),
+                    s[1].to_degrees(),
+                    100.0 * s[2] / v[2].abs(),
+                    100.0 * s[3] / v[3].abs(),
+                    100.0 * s[4] / v[4].abs(),
+                ]
+            };
+            let k = if o.encoder_k > 0.0 {
+                format!("encoder K {} m^1/2", o.encoder_k)
+            } else {
+                "no encoder noise stated in dataset.json".into()
+            };
+            (
+                format!("dataset {dir}, at its ML estimate; {k}"),
+                units(b),
+                f.map(units),
+                data.trajectories
+                    .iter()
+                    .map(|t| format!("{} {}", t.name, t.outputs.len()))
+                    .collect::<Vec<_>>(),
+            )
         }
+        None => {
+            let o = sim_options(&a.sim)?;
+            let b = crlb_sd(&o, &p, false).map_err(Failure)?;
+            let f = (o.k_encoder > 0.0)
+                .then(|| crlb_sd(&o, &p, true))
+                .transpose()
+                .map_err(Failure)?;
+            let (data, _) = simulate(&o).map_err(Failure)?;
+            (
+                format!(
+                    "simulated set-up, bearing noise {} deg, encoder K {} m^1/2",
+                    a.sim.sigma_beta_deg, o.k_encoder
+                ),
+                b,
+                f,
+                data.trajectories
+                    .iter()
+                    .map(|t| format!("{} {}", t.name, t.outputs.len()))
+                    .collect(),
+            )
+        }
+    };
+    if a.json {
+        let obj = |sd: &[f64]| {
+            let mut m = serde_json::Map::new();
+            for (i, c) in PARAM_COLUMNS.iter().enumerate() {
+                m.insert(c.to_string(), json!(sd[i]));
+            }
+            Value::Object(m)
+        };
         println!(
             "{}",
-            serde_json::to_string_pretty(
-                &json!({"crlb_sd": m, "noise": "bearing only", "bearings": counts})
-            )
+            serde_json::to_string_pretty(&json!({
+                "setup": setup,
+                "crlb_sd": obj(&bearing),
+                "crlb_sd_with_encoder_noise": full.as_ref().map(|f| obj(f)),
+                "bearings": counts,
+            }))
             .expect("json")
         );
         return Ok(ExitCode::SUCCESS);
     }
+    println!("Cramér–Rao bound: {setup}; bearings: {}", counts.join(", "));
     println!(
-        "Cramér–Rao bound (bearing noise {} deg only; encoder noise not included), bearings: {}",
-        a.sim.sigma_beta_deg,
-        counts.join(", ")
+        "  {:<15} {:>14} {:>22}",
+        "", "bearing noise", "+ encoder noise"
     );
     for (i, c) in PARAM_COLUMNS.iter().enumerate() {
-        println!("  sd {c:<10} >= {:.4}", sd[i]);
+        let f = full
+            .as_ref()
+            .map_or("-".to_string(), |f| format!("{:.4}", f[i]));
+        println!("  sd {c:<9} >= {:>14.4} {:>22}", bearing[i], f);
     }
+    println!(
+        "(the encoder-noise bound is for estimators driven by the measured wheel speeds, as ml;
+ one that knows the circle exactly, as ls with the commanded q, is bounded by the first column)"
+    );
     Ok(ExitCode::SUCCESS)
 }
 
@@ -309,6 +368,7 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
             "cells": t.cells.iter().zip(&results).map(|(c, r)| json!({
                 "label": r.label,
                 "crlb_sd": r.crlb_sd,
+                "crlb_sd_with_encoder_noise": r.crlb_sd_encoders,
                 "paper": c.paper.iter().map(|(m, v)| json!({"method": m.name(), "values": v})).collect::<Vec<_>>(),
                 "methods": r.methods.iter().map(|m| json!({"method": m.method.name(), "mean_abs_error": m.mean_abs,
                     "rms_error": m.rms, "mean_estimate": m.mean_estimate, "failures": m.failures,
@@ -386,22 +446,30 @@ fn print_table(
                 );
             }
         }
-        if let Some(sd) = &r.crlb_sd {
-            let row: String = sd.iter().map(|x| format!("{x:>11.4}")).collect();
-            println!("{:<32} {:<22}{row}", r.label, "CRLB sd");
-            for ms in &r.methods {
-                let row: String = ms
-                    .rms
-                    .iter()
-                    .zip(sd)
-                    .map(|(e, s)| format!("{:>11.2}", e / s))
-                    .collect();
-                println!(
-                    "{:<32} {:<22}{row}",
-                    r.label,
-                    format!("{} rms/CRLB", ms.method.name())
-                );
+        for (sd, label) in [
+            (&r.crlb_sd, "CRLB sd (bearings)"),
+            (&r.crlb_sd_encoders, "CRLB sd (+encoders)"),
+        ] {
+            if let Some(sd) = sd {
+                let row: String = sd.iter().map(|x| format!("{x:>11.4}")).collect();
+                println!("{:<32} {:<22}{row}", r.label, label);
             }
+        }
+        for ms in &r.methods {
+            let Some((sd, which)) = r.bound_for(ms.method) else {
+                continue;
+            };
+            let row: String = ms
+                .rms
+                .iter()
+                .zip(sd)
+                .map(|(e, s)| format!("{:>11.2}", e / s))
+                .collect();
+            println!(
+                "{:<32} {:<22}{row}",
+                r.label,
+                format!("{} rms/{which}", ms.method.name())
+            );
         }
     }
     println!();

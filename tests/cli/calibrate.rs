@@ -157,3 +157,34 @@ fn plot_writes_figures_5_to_7_as_png_and_svg_and_never_overwrites() {
     );
     ok(&["calibrate", &data, "--plot", &figs, "--force"]);
 }
+
+#[test]
+fn crlb_of_a_dataset_at_its_estimate_matches_the_bound_at_the_truth() {
+    // Two routes to one bound: `crlb --bearings 100` evaluates the Fisher
+    // information at the simulator's truth; `crlb DATASET` at the ML estimate
+    // from those data. They agree to within the estimate's error.
+    let data = tmp_dir("crlbdata");
+    ok(&[
+        "simulate",
+        "--out",
+        &data,
+        "--seed",
+        "5",
+        "--bearings",
+        "100",
+    ]);
+    let at_truth: serde_json::Value =
+        serde_json::from_str(&ok(&["crlb", "--bearings", "100", "--json"])).unwrap();
+    let at_estimate: serde_json::Value =
+        serde_json::from_str(&ok(&["crlb", &data, "--json"])).unwrap();
+    for key in ["crlb_sd", "crlb_sd_with_encoder_noise"] {
+        for (c, v) in at_truth[key].as_object().unwrap() {
+            let (a, b) = (v.as_f64().unwrap(), at_estimate[key][c].as_f64().unwrap());
+            assert!((a - b).abs() < 0.1 * a, "{key} {c}: {a} vs {b}");
+        }
+    }
+    // Encoder noise raises delta's bound (it is read from the wheel speeds).
+    let d = |k: &str| at_truth[k]["delta (%)"].as_f64().unwrap();
+    assert!(d("crlb_sd_with_encoder_noise") > 1.5 * d("crlb_sd"));
+    bad(&["crlb", &data, "--seed", "3"], "cannot be used with");
+}

@@ -642,8 +642,8 @@ fn candidate(
         if base_fit.cost - f.cost > crit * f.inflation() {
             if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                 let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
-                let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, o)
-                    .and_then(|t| {
+                let f2 =
+                    fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, o).and_then(|t| {
                         let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
                         fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, o)
                     });

@@ -84,6 +84,11 @@ pub struct CalibrateOptions {
     pub ml_max_iterations: usize,
     pub ml_tolerance: f64,
     pub ml_max_step: f64,
+    /// ML weighs the residuals by their covariance with the encoder noise
+    /// (`encoder_k`) integrated through the model (generalised least
+    /// squares): standard deviations then include it, and the estimates
+    /// come closer to the bound with encoder noise. Off: bearings only.
+    pub ml_input_noise: bool,
     /// Column names: right-wheel speed and bearing.
     pub input: String,
     pub output: String,
@@ -105,6 +110,7 @@ impl CalibrateOptions {
             ml_max_iterations: 50,
             ml_tolerance: 1e-10,
             ml_max_step: 0.2,
+            ml_input_noise: true,
             input: "wR".into(),
             output: "beta".into(),
         }
@@ -335,7 +341,9 @@ pub fn calibrate(
             cost_tolerance: o.ml_tolerance,
             sigma: vec![sigma],
             max_step: o.ml_max_step,
-            input_noise: None,
+            // Generalised least squares with the encoder noise: the wheel
+            // speeds drive the model, so their noise is in the residuals too.
+            input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
         };
         let r = fit(p, &fts, &calibration.values(), &states, &opts)
             .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
@@ -539,4 +547,51 @@ fn arc_times(t: &crate::data::Trajectory, output: &str) -> Vec<f64> {
         .filter(|(tb, v)| **tb >= t0 && v.is_some())
         .map(|(tb, _)| *tb)
         .collect()
+}
+
+/// The Cramér–Rao bound for a measured dataset, evaluated at its joint
+/// maximum-likelihood estimate (the truth is unknown): standard deviations
+/// of phi, psi (rad), eta, delta, xi, with bearing noise only and with the
+/// encoder noise of `o.encoder_k` too (`None` when it is 0). This is the
+/// bound of an estimator that uses the measured wheel speeds (ML); one that
+/// knows the circle exactly (LS with the commanded q) is bounded by the
+/// bearing-only figure.
+pub fn dataset_crlb(
+    data: &Dataset,
+    predictor: &Predictor,
+    o: &CalibrateOptions,
+) -> Result<(Calibration, [f64; 5], Option<[f64; 5]>), Degenerate> {
+    let run = calibrate(
+        data,
+        Some(predictor),
+        &CalibrateOptions {
+            method: Method::Ml,
+            ..o.clone()
+        },
+    )?;
+    let f = run
+        .ml
+        .as_ref()
+        .ok_or_else(|| Degenerate("maximum likelihood gave no estimate".into()))?;
+    let fts = FitTrajectory::all(predictor, data);
+    let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
+    let bound = |noise: Option<Vec<f64>>| -> Result<[f64; 5], Degenerate> {
+        let opts = FitOptions {
+            max_iterations: 0,
+            cost_tolerance: 0.0,
+            sigma: vec![run.sigma_beta],
+            max_step: o.ml_max_step,
+            input_noise: noise,
+        };
+        let cov = crate::fit::crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
+            .map_err(Degenerate)?;
+        Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
+    };
+    let bearing = bound(None)?;
+    let full = if enc_var > 0.0 {
+        Some(bound(Some(vec![enc_var, enc_var]))?)
+    } else {
+        None
+    };
+    Ok((run.calibration, bearing, full))
 }

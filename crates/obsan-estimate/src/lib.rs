@@ -25,8 +25,8 @@ pub use calib::{
     arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS,
 };
 pub use calibrate::{
-    calib_predictor, calibrate, figure_curves, CalibrateOptions, CalibrationReport, CekfInit,
-    FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
+    calib_predictor, calibrate, dataset_crlb, figure_curves, CalibrateOptions, CalibrationReport,
+    CekfInit, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
 };
 pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};

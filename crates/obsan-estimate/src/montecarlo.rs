@@ -189,8 +189,23 @@ pub struct CellResult {
     pub label: String,
     pub runs: usize,
     pub methods: Vec<MethodStats>,
-    /// CRLB standard deviation per parameter column (bearing noise only), if computed.
+    /// CRLB standard deviation per parameter column (bearing noise only), if
+    /// computed: the bound of an estimator that knows the circle (DET, LS, CEKF).
     pub crlb_sd: Option<Vec<f64>>,
+    /// With the encoder noise too: the bound of one driven by the measured
+    /// wheel speeds (ML); `None` without encoder noise.
+    pub crlb_sd_encoders: Option<Vec<f64>>,
+}
+
+impl CellResult {
+    /// The bound that matches a method's information (see the fields), and
+    /// its name: "CRLB" (bearings) or "CRLB+enc".
+    pub fn bound_for(&self, m: McMethod) -> Option<(&[f64], &'static str)> {
+        match (m, &self.crlb_sd_encoders) {
+            (McMethod::Ml, Some(b)) => Some((b, "CRLB+enc")),
+            _ => self.crlb_sd.as_deref().map(|b| (b, "CRLB")),
+        }
+    }
 }
 
 /// Errors of one run in the table's units: parameters (deg, deg, %, %, %)
@@ -301,8 +316,13 @@ fn one(
 
 /// The CRLB standard deviations (table units) of the parameters for a set-up:
 /// the inverse Fisher information of the bearings at the truth, on the
-/// noise-free data of that set-up (circles: iota = 0).
-pub fn crlb_sd(sim: &SimOptions, predictor: &Predictor) -> Result<Vec<f64>, String> {
+/// noise-free data of that set-up (circles: iota = 0); bearing noise only,
+/// or with the encoder noise too.
+pub fn crlb_sd(
+    sim: &SimOptions,
+    predictor: &Predictor,
+    with_encoder_noise: bool,
+) -> Result<Vec<f64>, String> {
     let clean = SimOptions {
         sigma_beta: 0.0,
         k_encoder: 0.0,
@@ -316,12 +336,17 @@ pub fn crlb_sd(sim: &SimOptions, predictor: &Predictor) -> Result<Vec<f64>, Stri
         .iter()
         .map(|t| vec![t.mu0, t.gamma0])
         .collect();
+    // Encoder noise of [10] as the simulator draws it: white noise on each
+    // wheel's rotation with density K^2 / r_nominal per radian turned. The
+    // bound is then the linearised one of the errors-in-variables model
+    // (residual covariance I + A M A^T, see `Integration::input_noise`).
+    let c = sim.k_encoder * sim.k_encoder / sim.r_nominal;
     let opts = FitOptions {
         max_iterations: 0,
         cost_tolerance: 0.0,
         sigma: vec![sim.sigma_beta],
         max_step: 0.5,
-        input_noise: None,
+        input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),
     };
     let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
     let cov = crlb(predictor, &fts, &params, &states, &opts)?;
@@ -398,7 +423,12 @@ pub fn run_cell(
         crlb_sd: if modes {
             None
         } else {
-            crlb_sd(&cell.sim, predictor).ok()
+            crlb_sd(&cell.sim, predictor, false).ok()
+        },
+        crlb_sd_encoders: if modes || cell.sim.k_encoder <= 0.0 {
+            None
+        } else {
+            crlb_sd(&cell.sim, predictor, true).ok()
         },
     }
 }
