@@ -549,6 +549,10 @@ fn arc_times(t: &crate::data::Trajectory, output: &str) -> Vec<f64> {
         .collect()
 }
 
+/// [`dataset_crlb`]'s answer: the estimate, the bound's standard deviations
+/// with bearing noise only, and with the encoder noise too (if stated).
+pub type DatasetCrlb = (Calibration, [f64; 5], Option<[f64; 5]>);
+
 /// The Cramér–Rao bound for a measured dataset, evaluated at its joint
 /// maximum-likelihood estimate (the truth is unknown): standard deviations
 /// of phi, psi (rad), eta, delta, xi, with bearing noise only and with the
@@ -560,7 +564,7 @@ pub fn dataset_crlb(
     data: &Dataset,
     predictor: &Predictor,
     o: &CalibrateOptions,
-) -> Result<(Calibration, [f64; 5], Option<[f64; 5]>), Degenerate> {
+) -> Result<DatasetCrlb, Degenerate> {
     let run = calibrate(
         data,
         Some(predictor),

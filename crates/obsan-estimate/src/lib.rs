@@ -26,7 +26,7 @@ pub use calib::{
 };
 pub use calibrate::{
     calib_predictor, calibrate, dataset_crlb, figure_curves, CalibrateOptions, CalibrationReport,
-    CekfInit, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
+    CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
 };
 pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
