@@ -3,7 +3,7 @@
 
 use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
-use crate::plot::{bars, chart, Figure, Series, Style, COLORS, GREY, PALE};
+use crate::plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use crate::show::load_system;
 use crate::simulate::write_folder_atomically;
 use crate::Failure;
@@ -318,17 +318,6 @@ fn residual_chart(title: &str, f: &ModelFit) -> Figure {
         })
         .collect();
     chart(title, "time (s)", "residual / sigma", &series)
-}
-
-/// A figure as `stem.svg` and `stem.png`.
-pub fn figure_files(stem: &str, f: &Figure) -> [(PathBuf, Vec<u8>); 2] {
-    [
-        (
-            PathBuf::from(format!("{stem}.svg")),
-            f.to_svg().into_bytes(),
-        ),
-        (PathBuf::from(format!("{stem}.png")), f.to_png(2.0)),
-    ]
 }
 
 fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {

@@ -134,7 +134,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     let p = calib_predictor();
     let r = calibrate(&data, Some(&p), &o).map_err(|e| Failure(format!("{}: {e}", a.dataset)))?;
     if let Some(dir) = &a.plot {
-        let n = write_figures(dir, a.force, &data, &p, &o)?;
+        let n = write_figures(dir, a.force, &data, &p, &o, &r)?;
         eprintln!("wrote {n} figures (PNG and SVG) to {dir}");
     }
     let sd = r.calibration.sd();
@@ -500,8 +500,9 @@ fn write_figures(
     data: &Dataset,
     p: &Predictor,
     o: &CalibrateOptions,
+    done: &obsan_estimate::CalibrationReport,
 ) -> Result<usize, Failure> {
-    let curves = figure_curves(data, p, o).map_err(|e| Failure(format!("--plot: {e}")))?;
+    let curves = figure_curves(data, p, o, done).map_err(|e| Failure(format!("--plot: {e}")))?;
     let mut files = Vec::new();
     let mut index = String::from("# Figures 5-7 (Martinelli 2011)\n\n");
     let xlabel = "s (rad of right-wheel rotation)";
@@ -533,10 +534,7 @@ fn write_figures(
                 },
             ],
         );
-        files.extend(crate::diagnose_cmd::figure_files(
-            &stem("observation"),
-            &fig,
-        ));
+        files.extend(plot::figure_files(&stem("observation"), &fig));
         let best = c
             .sigma_curve
             .iter()
@@ -563,7 +561,7 @@ fn write_figures(
                 },
             ],
         );
-        files.extend(crate::diagnose_cmd::figure_files(&stem("sigma"), &fig));
+        files.extend(plot::figure_files(&stem("sigma"), &fig));
         let mut series = vec![
             plot::Series {
                 name: "observed",
@@ -598,7 +596,7 @@ fn write_figures(
             "beta (rad)",
             &series,
         );
-        files.extend(crate::diagnose_cmd::figure_files(&stem("fits"), &fig));
+        files.extend(plot::figure_files(&stem("fits"), &fig));
         index.push_str(&format!(
             "## {} (q = {})\n\n![observation]({o}.png)\n\n![sigma]({s}.png)\n\n![fits]({f}.png)\n\n",
             c.name,

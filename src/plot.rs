@@ -278,6 +278,20 @@ impl Figure {
     }
 }
 
+/// A figure as `stem.svg` and `stem.png`.
+pub fn figure_files(stem: &str, f: &Figure) -> [(std::path::PathBuf, Vec<u8>); 2] {
+    [
+        (
+            std::path::PathBuf::from(format!("{stem}.svg")),
+            f.to_svg().into_bytes(),
+        ),
+        (
+            std::path::PathBuf::from(format!("{stem}.png")),
+            f.to_png(2.0),
+        ),
+    ]
+}
+
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")

@@ -288,6 +288,7 @@ pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, St
     let beta = column(&t.outputs, output)?;
     let mut s = Vec::new();
     let mut b = Vec::new();
+    let mut times = Vec::new();
     let (mut acc, mut row) = (0.0, 0usize);
     let mut tcur = t.inputs.t.first().copied().unwrap_or(0.0);
     for (k, &tb) in t.outputs.t.iter().enumerate() {
@@ -309,8 +310,13 @@ pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, St
         }
         s.push(acc);
         b.push(value);
+        times.push(tb);
     }
-    Ok(ArcData { s, beta: b })
+    Ok(ArcData {
+        s,
+        beta: b,
+        t: times,
+    })
 }
 
 fn column<'a>(s: &'a Series, name: &str) -> Result<&'a [Option<f64>], String> {

@@ -470,21 +470,35 @@ pub struct FigureCurves {
     pub node: f64,
 }
 
-/// The curves of Figures 5-7 for every trajectory: runs DET, LS and ML
-/// whatever method `o` names (each figure compares them).
+/// The curves of Figures 5-7 for every trajectory. Each figure compares DET,
+/// LS and ML: `done` (a calibration of `data` with options `o`) is reused
+/// when it is the LS or ML run, the other runs are made here.
 pub fn figure_curves(
     data: &Dataset,
     predictor: &Predictor,
     o: &CalibrateOptions,
+    done: &CalibrationReport,
 ) -> Result<Vec<FigureCurves>, Degenerate> {
     let with = |m: Method| CalibrateOptions {
         method: m,
         ..o.clone()
     };
-    let ls_run = calibrate(data, None, &with(Method::Ls))?;
+    let ls_own;
+    let ls_run = if done.method == Method::Ls {
+        done
+    } else {
+        ls_own = calibrate(data, None, &with(Method::Ls))?;
+        &ls_own
+    };
     // ML may fail where LS does not (e.g. a poor start); the figure then
     // shows DET and LS only.
-    let ml_run = calibrate(data, Some(predictor), &with(Method::Ml)).ok();
+    let ml_own;
+    let ml_run = if done.method == Method::Ml {
+        Some(done)
+    } else {
+        ml_own = calibrate(data, Some(predictor), &with(Method::Ml)).ok();
+        ml_own.as_ref()
+    };
     let mut out = Vec::new();
     for (k, (tr, t)) in ls_run
         .trajectories
@@ -493,9 +507,8 @@ pub fn figure_curves(
         .enumerate()
     {
         let curve = |c: &Closed| tr.arc.s.iter().map(|&s| c.beta(s)).collect::<Vec<f64>>();
-        let ml = ml_run.as_ref().and_then(|r| {
+        let ml = ml_run.and_then(|r| {
             let f = r.ml.as_ref()?;
-            let times = arc_times(t, &o.output);
             let consts: Vec<f64> = predictor
                 .consts
                 .iter()
@@ -503,7 +516,7 @@ pub fn figure_curves(
                 .collect();
             let mut x0 = f.initial_states[k].clone();
             x0.extend(&f.params);
-            let y = predictor.predict(&x0, &consts, &t.inputs, &times).ok()?;
+            let y = predictor.predict(&x0, &consts, &t.inputs, &tr.arc.t).ok()?;
             let col = predictor.outputs.iter().position(|n| *n == o.output)?;
             let v: Vec<f64> = y.iter().map(|r| crate::sim::wrap(r[col])).collect();
             (v.len() == tr.arc.s.len()).then_some(v)
@@ -531,22 +544,6 @@ pub fn figure_curves(
         });
     }
     Ok(out)
-}
-
-/// The times of the bearings that [`arc_data`] keeps (measured, not before
-/// the first input row), in order.
-fn arc_times(t: &crate::data::Trajectory, output: &str) -> Vec<f64> {
-    let t0 = t.inputs.t.first().copied().unwrap_or(0.0);
-    let Some(col) = t.outputs.columns.iter().position(|c| c == output) else {
-        return Vec::new();
-    };
-    t.outputs
-        .t
-        .iter()
-        .zip(&t.outputs.values[col])
-        .filter(|(tb, v)| **tb >= t0 && v.is_some())
-        .map(|(tb, _)| *tb)
-        .collect()
 }
 
 /// [`dataset_crlb`]'s answer: the estimate, the bound's standard deviations

@@ -22,6 +22,8 @@ use std::f64::consts::PI;
 pub struct ArcData {
     pub s: Vec<f64>,
     pub beta: Vec<f64>,
+    /// The time of each bearing (s).
+    pub t: Vec<f64>,
 }
 
 /// The parameters of the sign-free observation function.
@@ -301,7 +303,8 @@ fn subsample(d: &ArcData, max: usize) -> ArcData {
     let idx = (0..max).map(|i| i * (n - 1) / (max - 1));
     ArcData {
         s: idx.clone().map(|i| d.s[i]).collect(),
-        beta: idx.map(|i| d.beta[i]).collect(),
+        beta: idx.clone().map(|i| d.beta[i]).collect(),
+        t: idx.map(|i| d.t[i]).collect(),
     }
 }
 

@@ -170,7 +170,8 @@ fn figure_curves_lie_on_noise_free_data_and_nodes_are_mirror_centres() {
     let (data, _) = simulate(&o).unwrap();
     let mut co = CalibrateOptions::for_dataset(&data, Method::Ml);
     co.sigma_beta = Some(1e-5);
-    let curves = obsan_estimate::figure_curves(&data, &p, &co).unwrap();
+    let done = obsan_estimate::calibrate(&data, Some(&p), &co).unwrap();
+    let curves = obsan_estimate::figure_curves(&data, &p, &co, &done).unwrap();
     assert_eq!(curves.len(), 3);
     for c in &curves {
         let ml = c.ml.as_ref().expect("ML converges on noise-free data");
