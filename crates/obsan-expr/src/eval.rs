@@ -112,24 +112,9 @@ impl Tape {
     pub fn eval_into(&self, inputs: &[f64], scratch: &mut Vec<f64>, out: &mut [f64]) {
         assert_eq!(inputs.len(), self.n_inputs, "wrong number of inputs");
         scratch.clear();
-        scratch.reserve(self.ops.len());
-        for op in &self.ops {
-            let v = |i: &u32| scratch[*i as usize];
-            let x = match op {
-                Op::Const(c) => *c,
-                Op::Input(k) => inputs[*k as usize],
-                Op::Add(cs) => cs.iter().map(v).sum(),
-                Op::Mul(cs) => cs.iter().map(v).product(),
-                Op::Pow(b, e) => v(b).powi(*e),
-                Op::Sin(a, k) => (v(a) * k).sin(),
-                Op::Cos(a, k) => (v(a) * k).cos(),
-                Op::Exp(a, k) => (v(a) * k).exp(),
-                Op::Atan(a) => v(a).atan(),
-                Op::Atan2(y, x) => v(y).atan2(v(x)),
-                Op::Log(a) => v(a).ln(),
-                Op::Sqrt(a) => v(a).sqrt(),
-            };
-            scratch.push(x);
+        scratch.resize(self.ops.len(), 0.0);
+        for (i, op) in self.ops.iter().enumerate() {
+            scratch[i] = op.eval(inputs, scratch);
         }
         for (o, &s) in out.iter_mut().zip(&self.outputs) {
             *o = scratch[s as usize];
@@ -141,6 +126,101 @@ impl Tape {
         let mut out = vec![0.0; self.outputs.len()];
         self.eval_into(inputs, &mut scratch, &mut out);
         out
+    }
+
+    /// This tape with the inputs not flagged in `varying` fixed at their
+    /// values in `inputs`: every op that does not depend on a varying input
+    /// is evaluated here, once (e.g. `sin(phi)` of a parameter while only the
+    /// state changes along an integration).
+    pub fn freeze(&self, inputs: &[f64], varying: &[bool]) -> FrozenTape<'_> {
+        assert_eq!(inputs.len(), self.n_inputs, "wrong number of inputs");
+        assert_eq!(varying.len(), self.n_inputs, "one flag per input");
+        let mut values = Vec::new();
+        let mut out = vec![0.0; self.outputs.len()];
+        self.eval_into(inputs, &mut values, &mut out);
+        let mut depends = vec![false; self.ops.len()];
+        let mut ops = Vec::new();
+        for (i, op) in self.ops.iter().enumerate() {
+            let d = match op {
+                Op::Const(_) => false,
+                Op::Input(k) => varying[*k as usize],
+                Op::Add(cs) | Op::Mul(cs) => cs.iter().any(|&c| depends[c as usize]),
+                Op::Pow(a, _)
+                | Op::Sin(a, _)
+                | Op::Cos(a, _)
+                | Op::Exp(a, _)
+                | Op::Atan(a)
+                | Op::Log(a)
+                | Op::Sqrt(a) => depends[*a as usize],
+                Op::Atan2(y, x) => depends[*y as usize] || depends[*x as usize],
+            };
+            depends[i] = d;
+            if d {
+                ops.push(i as u32);
+            }
+        }
+        FrozenTape {
+            tape: self,
+            ops,
+            values,
+            out,
+        }
+    }
+}
+
+impl Op {
+    /// The value of this op given the values of the earlier ops.
+    #[inline]
+    fn eval(&self, inputs: &[f64], before: &[f64]) -> f64 {
+        let v = |i: &u32| before[*i as usize];
+        match self {
+            Op::Const(c) => *c,
+            Op::Input(k) => inputs[*k as usize],
+            Op::Add(cs) => cs.iter().map(v).sum(),
+            Op::Mul(cs) => cs.iter().map(v).product(),
+            Op::Pow(b, e) => v(b).powi(*e),
+            Op::Sin(a, k) => (v(a) * k).sin(),
+            Op::Cos(a, k) => (v(a) * k).cos(),
+            Op::Exp(a, k) => (v(a) * k).exp(),
+            Op::Atan(a) => v(a).atan(),
+            Op::Atan2(y, x) => v(y).atan2(v(x)),
+            Op::Log(a) => v(a).ln(),
+            Op::Sqrt(a) => v(a).sqrt(),
+        }
+    }
+}
+
+/// A [`Tape`] partially evaluated at fixed values of some inputs
+/// ([`Tape::freeze`]); each evaluation recomputes only the ops that depend on
+/// the varying inputs.
+#[derive(Clone, Debug)]
+pub struct FrozenTape<'a> {
+    tape: &'a Tape,
+    /// Indices of the ops to recompute, in tape order (children first).
+    ops: Vec<u32>,
+    /// The value of every op at the last evaluation.
+    values: Vec<f64>,
+    out: Vec<f64>,
+}
+
+impl FrozenTape<'_> {
+    /// Evaluate at `inputs` (all inputs; only the varying ones are read)
+    /// and return the outputs.
+    pub fn eval(&mut self, inputs: &[f64]) -> &[f64] {
+        assert_eq!(inputs.len(), self.tape.n_inputs, "wrong number of inputs");
+        for &i in &self.ops {
+            let x = self.tape.ops[i as usize].eval(inputs, &self.values);
+            self.values[i as usize] = x;
+        }
+        for (o, &s) in self.out.iter_mut().zip(&self.tape.outputs) {
+            *o = self.values[s as usize];
+        }
+        &self.out
+    }
+
+    /// Number of ops recomputed per evaluation (the tape has [`Tape::len`]).
+    pub fn n_varying_ops(&self) -> usize {
+        self.ops.len()
     }
 }
 

@@ -37,7 +37,9 @@ mod tanhalf;
 pub mod tutorial;
 
 pub use canon::RatFun;
-pub use eval::{degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, Tape, UnboundSymbol};
+pub use eval::{
+    degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
+};
 pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
 pub use lower::EngineError;

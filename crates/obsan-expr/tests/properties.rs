@@ -83,6 +83,25 @@ proptest! {
         }
     }
 
+    /// A frozen tape (some inputs fixed, only dependent ops recomputed)
+    /// gives exactly the full evaluation when only the varying inputs move.
+    #[test]
+    fn frozen_tape_equals_full_evaluation(text in expr_text(), seed in any::<u64>(), mask in 0usize..8) {
+        let (mut ctx, id, vars) = setup(&text)?;
+        let d = ctx.diff(id, vars[0]);
+        let tape = Tape::compile(&ctx, &[id, d], &vars).unwrap();
+        let varying: Vec<bool> = (0..3).map(|i| mask & (1 << i) != 0).collect();
+        let pts = points(seed, 4);
+        let mut frozen = tape.freeze(&pts[0], &varying);
+        for p in &pts[1..] {
+            // The fixed inputs keep their frozen values.
+            let q: Vec<f64> = (0..3).map(|i| if varying[i] { p[i] } else { pts[0][i] }).collect();
+            let full = tape.eval(&q);
+            let fast = frozen.eval(&q).to_vec();
+            prop_assert_eq!(&full, &fast, "{}", text);
+        }
+    }
+
     /// Symbolic derivatives agree with central finite differences.
     #[test]
     fn derivative_matches_finite_differences(text in expr_text(), seed in any::<u64>(), k in 0usize..3) {
