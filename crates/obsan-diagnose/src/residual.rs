@@ -28,22 +28,18 @@ pub struct ResidualSeries {
     pub inputs: Vec<(String, Vec<f64>)>,
     /// Integral of each measured input up to the output times (e.g. wheel angle).
     pub input_integrals: Vec<(String, Vec<f64>)>,
-    /// Lower Cholesky factor of the covariance of `e` when the errors are
-    /// correlated (input noise integrated by the dynamics): the tests run on
-    /// `L^-1 e` and `L^-1 X` (generalised least squares).
-    pub whiten: Option<std::sync::Arc<nalgebra::DMatrix<f64>>>,
+    /// Whitener (lower Cholesky factor L) of the covariance of `e` when the
+    /// errors are correlated (input noise integrated by the dynamics): the
+    /// tests run on `L^-1 e` and `L^-1 X` (generalised least squares).
+    pub whiten: Option<std::sync::Arc<obsan_estimate::Whitener>>,
 }
 
 impl ResidualSeries {
     /// `L^-1 v`, or `v` without whitening.
     pub fn whitened(&self, v: &[f64]) -> Vec<f64> {
         match &self.whiten {
-            Some(l) => {
-                let x = nalgebra::DVector::from_column_slice(v);
-                l.solve_lower_triangular(&x)
-                    .map_or_else(|| v.to_vec(), |y| y.as_slice().to_vec())
-            }
-            None => v.to_vec(),
+            Some(l) if l.len() == v.len() => l.whiten(v),
+            _ => v.to_vec(),
         }
     }
 }

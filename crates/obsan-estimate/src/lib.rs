@@ -20,6 +20,7 @@ mod mrclam;
 mod predict;
 mod rng;
 mod sim;
+mod whiten;
 
 pub use calib::{
     arc_data, av_from_state, combine, start_state, Calibration, Metric, Modes, PARAMS,
@@ -47,3 +48,4 @@ pub use rng::Rng;
 pub use sim::{
     bearing, simulate, wrap, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth,
 };
+pub use whiten::Whitener;
