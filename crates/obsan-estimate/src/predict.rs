@@ -4,7 +4,7 @@
 //! the single source of truth.
 
 use crate::data::Series;
-use obsan_expr::{Tape, Var};
+use obsan_expr::{FrozenTape, Tape, Var};
 use obsan_model::NormalForm;
 
 /// A compiled model: `S' = f0 + sum_i f_i u_i`, `y = h(S)`.
@@ -24,8 +24,9 @@ pub struct Predictor {
     /// Roots: for each dynamic state k, f0[k] then f_i[k] for each input.
     dyn_tape: Tape,
     out_tape: Tape,
-    /// d(dyn_tape root)/d(state_j), root-major.
-    jac_tape: Tape,
+    /// The roots of `dyn_tape`, then d(root)/d(state_j), root-major: one
+    /// tape so that shared subexpressions (sines, cosines) are computed once.
+    dyn_jac_tape: Tape,
     /// d(output)/d(state_j), output-major.
     out_jac_tape: Tape,
 }
@@ -72,8 +73,9 @@ impl Predictor {
                 out_jac_roots.push(ctx.diff(h, x));
             }
         }
-        let jac_tape =
-            Tape::compile(&ctx, &jac_roots, &vars).expect("derivatives use the same symbols");
+        let all: Vec<_> = roots.iter().chain(&jac_roots).copied().collect();
+        let dyn_jac_tape =
+            Tape::compile(&ctx, &all, &vars).expect("derivatives use the same symbols");
         let out_jac_tape =
             Tape::compile(&ctx, &out_jac_roots, &vars).expect("derivatives use the same symbols");
         Predictor {
@@ -86,7 +88,7 @@ impl Predictor {
             delay: nf.delay,
             dyn_tape,
             out_tape,
-            jac_tape,
+            dyn_jac_tape,
             out_jac_tape,
         }
     }
@@ -97,7 +99,6 @@ impl Predictor {
     fn derivative(
         &self,
         z: &[f64],
-        consts: &[f64],
         u: &[f64],
         jac: bool,
         dudtau: Option<&[f64]>,
@@ -107,12 +108,18 @@ impl Predictor {
         let nd = self.n_dynamic;
         let n = self.state.len();
         let m = self.inputs.len();
-        // The tapes take the whole state (dynamic then params) then the constants.
-        w.x.clear();
-        w.x.extend_from_slice(&z[..nd]);
-        w.x.extend_from_slice(&w.params);
-        w.x.extend_from_slice(consts);
-        self.dyn_tape.eval_into(&w.x, &mut w.scratch, &mut w.vals);
+        // The tapes take the whole state (dynamic then params) then the
+        // constants; only the dynamic part changes.
+        w.x[..nd].copy_from_slice(&z[..nd]);
+        let nv = w.vals.len();
+        if jac {
+            let all = w.dyn_jac.eval(&w.x);
+            w.vals.copy_from_slice(&all[..nv]);
+            w.jvals.copy_from_slice(&all[nv..]);
+        } else {
+            let v = w.dyn_only.eval(&w.x);
+            w.vals.copy_from_slice(v);
+        }
         for (k, d) in dz.iter_mut().enumerate().take(nd) {
             let row = &w.vals[k * (m + 1)..(k + 1) * (m + 1)];
             *d = row[0] + row[1..].iter().zip(u).map(|(f, ui)| f * ui).sum::<f64>();
@@ -120,7 +127,6 @@ impl Predictor {
         if !jac {
             return;
         }
-        self.jac_tape.eval_into(&w.x, &mut w.scratch, &mut w.jvals);
         // J (nd x n): sum over the drift and the fields of d f[k] / d x_j times u.
         for k in 0..nd {
             for j in 0..n {
@@ -212,12 +218,20 @@ impl Predictor {
                 z[nd + k * n + k] = 1.0;
             }
         }
+        // Tape inputs: the whole state then the constants; params and
+        // constants are fixed along the integration, so every subexpression
+        // of theirs is evaluated once here.
+        let x: Vec<f64> = x0.iter().chain(consts).copied().collect();
+        let varying: Vec<bool> = (0..x.len()).map(|i| i < nd).collect();
+        let nv = self.dyn_tape.n_outputs();
         let mut w = Work {
-            params: x0[nd..].to_vec(),
-            x: Vec::with_capacity(n + consts.len()),
-            scratch: Vec::new(),
-            vals: vec![0.0; self.dyn_tape.n_outputs()],
-            jvals: vec![0.0; self.jac_tape.n_outputs()],
+            dyn_only: self.dyn_tape.freeze(&x, &varying),
+            dyn_jac: self.dyn_jac_tape.freeze(&x, &varying),
+            out: self.out_tape.freeze(&x, &varying),
+            out_jac: self.out_jac_tape.freeze(&x, &varying),
+            x,
+            vals: vec![0.0; nv],
+            jvals: vec![0.0; self.dyn_jac_tape.n_outputs() - nv],
             jac: vec![0.0; nd * n],
         };
         let mut outputs = Vec::with_capacity(times.len());
@@ -235,8 +249,6 @@ impl Predictor {
         let mut noise_acc = vec![0.0; nd * nd];
         let mut noise_m = Vec::new();
         let no = self.outputs.len();
-        let mut yv = vec![0.0; no];
-        let mut gy = vec![0.0; no * n];
         let t_start = inputs.t.first().copied().unwrap_or(0.0);
         // With a delay tau the rows act at t_k + tau (the first row also
         // before that): the state is the one seen from the output clock.
@@ -310,7 +322,7 @@ impl Predictor {
                 } else {
                     None
                 };
-                self.derivative(&z, consts, &u, sens, dd, &mut w, &mut k1);
+                self.derivative(&z, &u, sens, dd, &mut w, &mut k1);
                 if let Some(c) = &noise {
                     // w.vals now holds f0 and the fields at the step start.
                     self.accumulate_noise(&z, &w.vals, &u, c, h, &mut noise_acc);
@@ -318,15 +330,15 @@ impl Predictor {
                 for i in 0..nz {
                     tmp[i] = z[i] + h / 2.0 * k1[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k2);
+                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k2);
                 for i in 0..nz {
                     tmp[i] = z[i] + h / 2.0 * k2[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k3);
+                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k3);
                 for i in 0..nz {
                     tmp[i] = z[i] + h * k3[i];
                 }
-                self.derivative(&tmp, consts, &u, sens, dd, &mut w, &mut k4);
+                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k4);
                 for i in 0..nz {
                     z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
                 }
@@ -335,17 +347,13 @@ impl Predictor {
                 }
                 t = next;
             }
-            w.x.clear();
-            w.x.extend_from_slice(&z[..nd]);
-            w.x.extend_from_slice(&w.params);
-            w.x.extend_from_slice(consts);
-            self.out_tape.eval_into(&w.x, &mut w.scratch, &mut yv);
-            outputs.push(yv.clone());
+            w.x[..nd].copy_from_slice(&z[..nd]);
+            outputs.push(w.out.eval(&w.x).to_vec());
             if noise.is_some() {
                 noise_m.push(noise_acc.clone());
             }
             if sens {
-                self.out_jac_tape.eval_into(&w.x, &mut w.scratch, &mut gy);
+                let gy = w.out_jac.eval(&w.x);
                 // dy/dx0 = grad h * Phi_full.
                 let phi = &z[nd..];
                 let mut jrow = vec![0.0; no * n];
@@ -433,10 +441,13 @@ pub struct Prediction {
     pub noise_m: Vec<Vec<f64>>,
 }
 
-struct Work {
-    params: Vec<f64>,
+struct Work<'a> {
+    /// Tape inputs: dynamic state (updated per evaluation), params, constants.
     x: Vec<f64>,
-    scratch: Vec<f64>,
+    dyn_only: FrozenTape<'a>,
+    dyn_jac: FrozenTape<'a>,
+    out: FrozenTape<'a>,
+    out_jac: FrozenTape<'a>,
     vals: Vec<f64>,
     jvals: Vec<f64>,
     jac: Vec<f64>,
