@@ -26,6 +26,8 @@ pub struct DiagnoseOptions {
     pub max_rounds: usize,
     pub max_iterations: usize,
     pub cost_tolerance: f64,
+    /// Stop a fit when its step is shorter than this many standard deviations.
+    pub step_tolerance: f64,
     /// Longest integration step (s), see `obsan_estimate::Integration`.
     pub max_step: f64,
     /// Trajectories stacked in the rank test (the first ones).
@@ -44,6 +46,7 @@ impl Default for DiagnoseOptions {
             max_rounds: 3,
             max_iterations: 60,
             cost_tolerance: 1e-6,
+            step_tolerance: 1e-2,
             max_step: 0.5,
             rank_trajectories: 4,
             sigma: None,
@@ -264,6 +267,7 @@ pub fn fit_model(
     let fo = FitOptions {
         max_iterations: o.max_iterations,
         cost_tolerance: o.cost_tolerance,
+        step_tolerance: o.step_tolerance,
         sigma: sigma.to_vec(),
         max_step: o.max_step,
         input_noise: if o.input_noise { noise } else { None },
@@ -288,12 +292,7 @@ pub fn fit_model(
                 }
             }
         }
-        let cov = r
-            .whitening
-            .get(k)
-            .cloned()
-            .flatten()
-            .map(|l| &l * l.transpose());
+        let whitener = r.whitening.get(k).cloned().flatten();
         let mut x0 = r.initial_states[k].clone();
         x0.extend_from_slice(&r.params);
         let integ = Integration {
@@ -317,16 +316,14 @@ pub fn fit_model(
                 input_integrals: measured.iter().map(|n| (n.clone(), vec![])).collect(),
                 whiten: None,
             };
-            if let Some(c) = &cov {
+            if let Some(w) = &whitener {
                 let idx: Vec<usize> = row_of
                     .iter()
                     .enumerate()
                     .filter(|(_, x)| x.1 == oi)
                     .map(|(i, _)| i)
                     .collect();
-                let sub =
-                    nalgebra::DMatrix::from_fn(idx.len(), idx.len(), |a, b| c[(idx[a], idx[b])]);
-                s.whiten = sub.cholesky().map(|ch| std::sync::Arc::new(ch.l()));
+                s.whiten = w.subset(&idx).map(std::sync::Arc::new);
             }
             // Held input values and their integrals at the output times.
             let mut row = 0usize;

@@ -80,9 +80,12 @@ pub struct CalibrateOptions {
     /// LS: iterations and relative cost decrease at which to stop.
     pub ls_max_iterations: usize,
     pub ls_tolerance: f64,
-    /// ML: iterations, relative cost tolerance, longest integration step (s).
+    /// ML: iterations, relative cost tolerance, step length in standard
+    /// deviations (see `FitOptions::step_tolerance`), longest integration
+    /// step (s).
     pub ml_max_iterations: usize,
     pub ml_tolerance: f64,
+    pub ml_step_tolerance: f64,
     pub ml_max_step: f64,
     /// ML weighs the residuals by their covariance with the encoder noise
     /// (`encoder_k`) integrated through the model (generalised least
@@ -109,7 +112,8 @@ impl CalibrateOptions {
             ls_tolerance: 1e-12,
             ml_max_iterations: 50,
             ml_tolerance: 1e-10,
-            ml_max_step: 0.2,
+            ml_step_tolerance: 1e-2,
+            ml_max_step: 0.5,
             ml_input_noise: true,
             input: "wR".into(),
             output: "beta".into(),
@@ -339,6 +343,7 @@ pub fn calibrate(
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
+            step_tolerance: o.ml_step_tolerance,
             sigma: vec![sigma],
             max_step: o.ml_max_step,
             // Generalised least squares with the encoder noise: the wheel
@@ -580,6 +585,7 @@ pub fn dataset_crlb(
         let opts = FitOptions {
             max_iterations: 0,
             cost_tolerance: 0.0,
+            step_tolerance: 0.0,
             sigma: vec![run.sigma_beta],
             max_step: o.ml_max_step,
             input_noise: noise,

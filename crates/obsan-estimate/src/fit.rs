@@ -11,6 +11,7 @@
 use crate::data::Series;
 use crate::predict::{Integration, Predictor};
 use crate::sim::wrap;
+use crate::whiten::Whitener;
 
 /// One trajectory to fit.
 pub struct FitTrajectory<'a> {
@@ -45,6 +46,12 @@ pub struct FitOptions {
     pub max_iterations: usize,
     /// Stop when the relative decrease of the cost is below this.
     pub cost_tolerance: f64,
+    /// Or when the undamped Gauss-Newton step from the current estimate is
+    /// shorter than this many of its standard deviations
+    /// (`sqrt(g^T (J^T J)^-1 g)`, `g = J^T r`, residuals normalised by
+    /// sigma): the estimate would move by much less than its uncertainty.
+    /// 0 disables.
+    pub step_tolerance: f64,
     /// Noise standard deviation of each output (residuals are divided by it).
     pub sigma: Vec<f64>,
     /// Longest integration step (s) over merged input rows; 0 = one step per
@@ -76,10 +83,10 @@ pub struct FitResult {
     pub iterations: usize,
     /// Root mean square of the (un-normalised) residuals per output.
     pub residual_rms: Vec<f64>,
-    /// Per trajectory, with input noise: the lower Cholesky factor L of the
-    /// covariance of its normalised residuals (rows in time order, outputs
-    /// within a time in model order; measured cells only).
-    pub whitening: Vec<Option<nalgebra::DMatrix<f64>>>,
+    /// Per trajectory, with input noise: the whitener (Cholesky factor L) of
+    /// the covariance of its normalised residuals (rows in time order,
+    /// outputs within a time in model order; measured cells only).
+    pub whitening: Vec<Option<Whitener>>,
 }
 
 struct Layout {
@@ -150,36 +157,22 @@ fn residuals(
     Ok((r, rows, at, pred.noise_m))
 }
 
-/// Lower Cholesky factor of `I + A M A^T` for one trajectory's residuals.
+/// The whitener of `I + A M A^T` for one trajectory's residuals: `A` is the
+/// dynamic-state part of the Jacobian rows, `M` the input-noise matrix at
+/// each row's output time.
 fn whitening(
     p: &Predictor,
     rows: &[Vec<f64>],
     at: &[usize],
     noise_m: &[Vec<f64>],
-) -> Option<nalgebra::DMatrix<f64>> {
+) -> Option<Whitener> {
     let nd = p.n_dynamic;
-    let nr = rows.len();
-    // A_i M(t) for each row i at each needed t is formed on the fly.
-    let mut c = nalgebra::DMatrix::<f64>::identity(nr, nr);
-    for i in 0..nr {
-        for j in 0..=i {
-            // M at the earlier of the two times (at[] is non-decreasing).
-            let mm = &noise_m[at[j].min(at[i])];
-            let mut s = 0.0;
-            for a in 0..nd {
-                let mut t = 0.0;
-                for b in 0..nd {
-                    t += mm[a * nd + b] * rows[j][b];
-                }
-                s += rows[i][a] * t;
-            }
-            c[(i, j)] += s;
-            if i != j {
-                c[(j, i)] += s;
-            }
-        }
-    }
-    c.cholesky().map(|ch| ch.l())
+    let a = rows.iter().flat_map(|r| r[..nd].iter().copied()).collect();
+    let m = at
+        .iter()
+        .flat_map(|&k| noise_m[k].iter().copied())
+        .collect();
+    Whitener::new(nd, a, m)
 }
 
 /// Solve the symmetric system `a x = b` by Gaussian elimination with partial pivoting.
@@ -219,7 +212,7 @@ struct Problem<'a> {
     lay: Layout,
     cols: Vec<Vec<usize>>,
     /// Per trajectory, the whitening factor L (residuals become L^-1 r).
-    whiten: std::cell::RefCell<Vec<Option<nalgebra::DMatrix<f64>>>>,
+    whiten: std::cell::RefCell<Vec<Option<Whitener>>>,
 }
 
 impl Problem<'_> {
@@ -270,80 +263,45 @@ impl Problem<'_> {
         })
     }
 
-    /// Compute the whitening factors at `theta` (no-op without input noise).
-    fn set_whitening(&self, theta: &[f64]) -> Result<(), String> {
-        if self.opts.input_noise.is_none() {
-            return Ok(());
-        }
-        let mut w = self.whiten.borrow_mut();
-        for (k, t) in self.trajs.iter().enumerate() {
-            let (_, rows, at, m) = residuals(
-                self.p,
-                t,
-                &self.lay.state_of(theta, k),
-                self.opts,
-                &self.cols[k],
-                true,
-                true,
-            )?;
-            w[k] = whitening(self.p, &rows, &at, &m);
-        }
-        Ok(())
-    }
-
-    fn apply(&self, k: usize, r: Vec<f64>, rows: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
+    fn apply(&self, k: usize, mut r: Vec<f64>, rows: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
         let w = self.whiten.borrow();
         let Some(l) = &w[k] else {
             return (r, rows);
         };
-        let nr = r.len();
-        let rv = nalgebra::DVector::from_vec(r);
-        let r2 = l
-            .solve_lower_triangular(&rv)
-            .map_or_else(|| rv.as_slice().to_vec(), |v| v.as_slice().to_vec());
+        l.whiten_in_place(&mut r);
         if rows.is_empty() {
-            return (r2, rows);
+            return (r, rows);
         }
-        let nc = rows[0].len();
-        let jm = nalgebra::DMatrix::from_fn(nr, nc, |i, j| rows[i][j]);
-        let j2 = l.solve_lower_triangular(&jm).unwrap_or(jm);
-        let rows2 = (0..nr)
-            .map(|i| (0..nc).map(|j| j2[(i, j)]).collect())
-            .collect();
-        (r2, rows2)
-    }
-
-    /// Residuals of every trajectory, whitened or (for their root mean
-    /// square) not.
-    fn residuals_of(&self, theta: &[f64], whiten: bool) -> Result<Vec<Vec<f64>>, String> {
-        self.trajs
-            .iter()
-            .enumerate()
-            .map(|(k, t)| {
-                let x0 = self.lay.state_of(theta, k);
-                let r = residuals(self.p, t, &x0, self.opts, &self.cols[k], false, false)?.0;
-                Ok(if whiten {
-                    self.apply(k, r, vec![]).0
-                } else {
-                    r
-                })
-            })
-            .collect()
-    }
-
-    fn residuals(&self, theta: &[f64]) -> Result<Vec<Vec<f64>>, String> {
-        self.residuals_of(theta, true)
+        // Column by column: L^-1 J.
+        let (nr, nc) = (rows.len(), rows[0].len());
+        let mut col = vec![0.0; nr];
+        let mut out = vec![vec![0.0; nc]; nr];
+        for j in 0..nc {
+            for (c, row) in col.iter_mut().zip(&rows) {
+                *c = row[j];
+            }
+            l.whiten_in_place(&mut col);
+            for (o, c) in out.iter_mut().zip(&col) {
+                o[j] = *c;
+            }
+        }
+        (r, out)
     }
 
     /// Residuals and the normal equations `J^T J`, `J^T r`, trajectory by
-    /// trajectory (a trajectory's initial state touches only its residuals).
-    #[allow(clippy::type_complexity)]
-    fn normal(&self, theta: &[f64]) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>), String> {
+    /// trajectory (a trajectory's initial state touches only its residuals),
+    /// from one prediction with sensitivities per trajectory. With `refresh`
+    /// (and input noise), the whitening is first recomputed at `theta`
+    /// from the same prediction.
+    fn normal(&self, theta: &[f64], refresh: bool) -> Result<Normal, String> {
         let (lay, n_params) = (&self.lay, self.lay.n_params);
         let n = lay.len();
         let mut jtj = vec![vec![0.0; n]; n];
         let mut jtr = vec![0.0; n];
         let mut res = Vec::with_capacity(self.trajs.len());
+        let mut raw = Vec::with_capacity(self.trajs.len());
+        let mut jac = Vec::with_capacity(self.trajs.len());
+        let noise = refresh && self.opts.input_noise.is_some();
         for (k, t) in self.trajs.iter().enumerate() {
             // Theta index of each column of the trajectory's Jacobian: its own
             // initial dynamic state, then the shared params.
@@ -351,15 +309,19 @@ impl Problem<'_> {
                 .map(|i| n_params + k * lay.n_dyn + i)
                 .chain(0..n_params)
                 .collect();
-            let (r0, rows, _, _) = residuals(
+            let (r0, rows, at, m) = residuals(
                 self.p,
                 t,
                 &lay.state_of(theta, k),
                 self.opts,
                 &self.cols[k],
                 true,
-                false,
+                noise,
             )?;
+            if noise {
+                self.whiten.borrow_mut()[k] = whitening(self.p, &rows, &at, &m);
+            }
+            raw.push(r0.clone());
             let (r0, rows) = self.apply(k, r0, rows);
             for (row, r) in rows.iter().zip(&r0) {
                 for (a, &ja) in idx.iter().enumerate() {
@@ -370,8 +332,95 @@ impl Problem<'_> {
                 }
             }
             res.push(r0);
+            jac.push((idx, rows));
         }
-        Ok((res, jtj, jtr))
+        let cost = res.iter().flatten().map(|x| x * x).sum();
+        Ok(Normal {
+            res,
+            raw,
+            jtj,
+            jtr,
+            cost,
+            jac,
+        })
+    }
+}
+
+/// One linearisation: whitened residuals, their cost, the normal equations,
+/// and the residuals before whitening (for their root mean square).
+struct Normal {
+    res: Vec<Vec<f64>>,
+    raw: Vec<Vec<f64>>,
+    jtj: Vec<Vec<f64>>,
+    jtr: Vec<f64>,
+    cost: f64,
+    /// Per trajectory: theta index of each Jacobian column, whitened rows.
+    jac: Vec<(Vec<usize>, Vec<Vec<f64>>)>,
+}
+
+impl Normal {
+    /// `J^T r` with this linearisation's Jacobian and another point's
+    /// residuals (for the secant update of the residual curvature).
+    fn jt(&self, res: &[Vec<f64>], n: usize) -> Vec<f64> {
+        let mut out = vec![0.0; n];
+        for ((idx, rows), r) in self.jac.iter().zip(res) {
+            for (row, ri) in rows.iter().zip(r) {
+                for (a, &ja) in idx.iter().enumerate() {
+                    out[ja] += row[a] * ri;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Length of the undamped Gauss-Newton step from this linearisation in
+/// standard deviations of the estimate, `sqrt(g^T (J^T J)^-1 g)` with
+/// `g = J^T r`: how far the optimum is, whatever the damping did.
+fn gn_distance(l: &Normal) -> f64 {
+    match solve(l.jtj.clone(), l.jtr.clone()) {
+        Some(x) => dot(&x, &l.jtr).max(0.0).sqrt(),
+        None => f64::INFINITY,
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+fn mat_vec(m: &[Vec<f64>], v: &[f64]) -> Vec<f64> {
+    m.iter().map(|row| dot(row, v)).collect()
+}
+
+/// The structured secant update of NL2SOL (Dennis, Gay and Welsch, ACM TOMS
+/// 1981) of `s_mat`, the approximation of the residuals' own curvature
+/// `sum_i r_i d2 r_i` that Gauss-Newton leaves out; `step` the last step, `y`
+/// the change of the gradient of half the cost, `ys` the change of that
+/// gradient that `J^T J` does not explain. Sized first so that the update
+/// does not overshoot. Skipped when `y^T step` is not positive.
+fn secant_update(s_mat: &mut [Vec<f64>], step: &[f64], y: &[f64], ys: &[f64]) {
+    let n = step.len();
+    let yt_s = dot(y, step);
+    if yt_s <= 0.0 || !yt_s.is_finite() {
+        return;
+    }
+    let ss = mat_vec(s_mat, step);
+    let s_ss = dot(step, &ss);
+    if s_ss != 0.0 {
+        let tau = (dot(step, ys) / s_ss).abs().min(1.0);
+        for row in s_mat.iter_mut() {
+            for x in row.iter_mut() {
+                *x *= tau;
+            }
+        }
+    }
+    let ss = mat_vec(s_mat, step);
+    let w: Vec<f64> = ys.iter().zip(&ss).map(|(a, b)| a - b).collect();
+    let ws = dot(&w, step);
+    for i in 0..n {
+        for j in 0..n {
+            s_mat[i][j] += (w[i] * y[j] + y[i] * w[j]) / yt_s - ws * y[i] * y[j] / (yt_s * yt_s);
+        }
     }
 }
 
@@ -394,8 +443,7 @@ pub fn crlb(
     opts: &FitOptions,
 ) -> Result<Vec<Vec<f64>>, String> {
     let prob = Problem::new(p, trajs, opts, params, states)?;
-    prob.set_whitening(&theta_of(params, states))?;
-    let (_, jtj, _) = prob.normal(&theta_of(params, states))?;
+    let jtj = prob.normal(&theta_of(params, states), true)?.jtj;
     inverse(&jtj).ok_or_else(|| {
         "the Fisher information is singular: some unknowns are not identifiable from these data"
             .into()
@@ -424,66 +472,105 @@ pub fn fit(
     let prob = Problem::new(p, trajs, opts, init_params, init_states)?;
     let (lay, n_params) = (&prob.lay, prob.lay.n_params);
     let mut theta = theta_of(init_params, init_states);
-    let cost_of = |r: &[Vec<f64>]| r.iter().flatten().map(|x| x * x).sum::<f64>();
     let n = lay.len();
     let mut lambda = 1e-3;
     let mut iterations = 0;
-    prob.set_whitening(&theta)?;
-    let (mut res, mut jtj, mut jtr) = prob.normal(&theta)?;
-    let mut cost = cost_of(&res);
-    // With input noise: a second pass with the covariance at the first estimate.
+    let mut cur = prob.normal(&theta, true)?;
+    // Gauss-Newton leaves out the residuals' curvature; where it matters
+    // (a weakly determined direction whose noise-driven curvature is
+    // comparable to J^T J) plain steps zig-zag or creep. `s_mat`
+    // approximates it by secant updates; each step uses the model (with
+    // or without it) that predicted the last reduction better.
+    let mut s_mat = vec![vec![0.0; n]; n];
+    let mut augmented = false;
+    // With input noise: a second pass with the covariance at the first
+    // estimate (the curvature model carries over: the residuals barely change).
     let passes = if opts.input_noise.is_some() { 2 } else { 1 };
     for pass in 0..passes {
         if pass > 0 {
-            prob.set_whitening(&theta)?;
-            (res, jtj, jtr) = prob.normal(&theta)?;
-            cost = cost_of(&res);
+            cur = prob.normal(&theta, true)?;
             lambda = 1e-3;
         }
+        // A pass that only places the whitening for the next one needs the
+        // estimate to a tenth of its uncertainty, not more.
+        let step_tolerance = if pass + 1 < passes {
+            opts.step_tolerance.max(0.1)
+        } else {
+            opts.step_tolerance
+        };
         loop {
-            if iterations >= opts.max_iterations {
+            if iterations >= opts.max_iterations || gn_distance(&cur) < step_tolerance {
                 break;
             }
             iterations += 1;
             let mut improved = false;
-            let mut moved = false;
             for _ in 0..20 {
-                let mut a = jtj.clone();
+                let mut a = cur.jtj.clone();
                 for (i, row) in a.iter_mut().enumerate() {
-                    row[i] += lambda * jtj[i][i].max(1e-12);
+                    if augmented {
+                        for (x, sx) in row.iter_mut().zip(&s_mat[i]) {
+                            *x += sx;
+                        }
+                    }
+                    row[i] += lambda * cur.jtj[i][i].max(1e-12);
                 }
-                let Some(step) = solve(a, jtr.clone()) else {
-                    lambda *= 10.0;
+                let step = solve(a, cur.jtr.clone()).filter(|st| dot(st, &cur.jtr) > 0.0);
+                let Some(step) = step else {
+                    if augmented {
+                        augmented = false;
+                    } else {
+                        lambda *= 10.0;
+                    }
                     continue;
                 };
                 let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
-                if let Ok(r2) = prob.residuals(&cand) {
-                    let c2 = cost_of(&r2);
-                    if c2 < cost {
-                        let rel = (cost - c2) / cost.max(1e-300);
-                        theta = cand;
-                        cost = c2;
-                        lambda = (lambda / 3.0).max(1e-12);
-                        improved = rel > opts.cost_tolerance;
-                        moved = true;
-                        break;
+                // The trial point is linearised at once: accepted steps (most,
+                // near the optimum) then need no second prediction.
+                let next = match prob.normal(&cand, false) {
+                    Ok(next) if next.cost < cur.cost => next,
+                    _ => {
+                        lambda *= 4.0;
+                        continue;
                     }
-                }
-                lambda *= 4.0;
-            }
-            if moved {
-                (res, jtj, jtr) = prob.normal(&theta)?;
+                };
+                let rel = (cur.cost - next.cost) / cur.cost.max(1e-300);
+                let jtj_s = mat_vec(&cur.jtj, &step);
+                // Which model predicted this reduction better (cost = r^T r).
+                let actual = cur.cost - next.cost;
+                let gn = 2.0 * dot(&step, &cur.jtr) - dot(&step, &jtj_s);
+                let aug = gn - dot(&step, &mat_vec(&s_mat, &step));
+                // The secant model only near the optimum (within a few
+                // standard deviations): far away the curvature it learnt
+                // from long steps misleads.
+                augmented = (aug - actual).abs() < (gn - actual).abs() && gn_distance(&next) < 3.0;
+                // Half-cost gradient g = -J^T r: y = g+ - g, and the part
+                // of it that J+^T J+ does not explain, -(J+ - J)^T r+.
+                let y: Vec<f64> = cur.jtr.iter().zip(&next.jtr).map(|(a, b)| a - b).collect();
+                let old_jt = cur.jt(&next.res, n);
+                let ys: Vec<f64> = old_jt.iter().zip(&next.jtr).map(|(a, b)| a - b).collect();
+                secant_update(&mut s_mat, &step, &y, &ys);
+                theta = cand;
+                cur = next;
+                lambda = (lambda / 3.0).max(1e-12);
+                improved = rel > opts.cost_tolerance;
+                break;
             }
             if !improved {
                 break;
             }
         }
     }
+    let Normal {
+        res,
+        raw,
+        jtj,
+        cost,
+        ..
+    } = cur;
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
     let n_res: usize = res.iter().map(Vec::len).sum();
-    let raw = prob.residuals_of(&theta, false)?;
     let mut rms = vec![0.0; p.outputs.len()];
     let mut counts = vec![0usize; p.outputs.len()];
     for (k, t) in trajs.iter().enumerate() {

@@ -344,6 +344,7 @@ pub fn crlb_sd(
     let opts = FitOptions {
         max_iterations: 0,
         cost_tolerance: 0.0,
+        step_tolerance: 0.0,
         sigma: vec![sim.sigma_beta],
         max_step: 0.5,
         input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),

@@ -34,6 +34,7 @@ fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate
     let opts = FitOptions {
         max_iterations: 50,
         cost_tolerance: 1e-14,
+        step_tolerance: 0.0,
         sigma: vec![sigma],
         max_step: 0.0,
         input_noise: None,
