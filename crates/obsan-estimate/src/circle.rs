@@ -256,18 +256,118 @@ fn circular_mod_pi(angles: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 /// the minimum of `v^T M v / n` over `v` with `(v3, v4)` a unit vector (the
 /// first two eliminated by their Schur complement) measures how well any
 /// (eps, t0, L) fits. Returns it with the minimising v.
-fn algebraic(d: &ArcData, xi_q: f64) -> (f64, SVector<f64, 4>) {
-    let mut m = Matrix4::<f64>::zeros();
-    for (&s, &b) in d.s.iter().zip(&d.beta) {
-        let (sa, ca) = (xi_q * s + b).sin_cos();
-        let (sb, cb) = b.sin_cos();
-        let row = SVector::<f64, 4>::from([sa, ca, -sb, -cb]);
-        m += row * row.transpose();
-    }
-    schur_min(&m, d.s.len())
+///
+/// Evaluated for many `xi_q` on the same data: the (sin beta, cos beta)
+/// block of the normal matrix does not depend on `xi_q`, and
+/// `sin^2 + cos^2 = 1` gives the other diagonal block's trace, so each
+/// bearing adds six products per `xi_q` instead of a 4x4 outer product.
+struct Implicit<'a> {
+    d: &'a ArcData,
+    sb: Vec<(f64, f64)>,
+    c: (f64, f64, f64),
 }
 
-/// See [`algebraic`]: `min over unit w of w^T (C - B^T A^-1 B) w`, where
+impl<'a> Implicit<'a> {
+    fn new(d: &'a ArcData) -> Implicit<'a> {
+        let sb: Vec<(f64, f64)> = d.beta.iter().map(|b| b.sin_cos()).collect();
+        let mut c = (0.0, 0.0, 0.0);
+        for &(s, co) in &sb {
+            c.0 += s * s;
+            c.1 += s * co;
+            c.2 += co * co;
+        }
+        Implicit { d, sb, c }
+    }
+
+    /// The normal matrix from `(sin, cos)(xi_q s_i + beta_i)` of each bearing.
+    fn normal(&self, rows: impl Iterator<Item = (f64, f64)>) -> Matrix4<f64> {
+        let (mut a00, mut a01) = (0.0, 0.0);
+        let (mut b02, mut b03, mut b12, mut b13) = (0.0, 0.0, 0.0, 0.0);
+        for ((sa, ca), &(sbi, cbi)) in rows.zip(&self.sb) {
+            a00 += sa * sa;
+            a01 += sa * ca;
+            b02 -= sa * sbi;
+            b03 -= sa * cbi;
+            b12 -= ca * sbi;
+            b13 -= ca * cbi;
+        }
+        let n = self.sb.len() as f64;
+        let (c22, c23, c33) = self.c;
+        #[rustfmt::skip]
+        let m = Matrix4::new(
+            a00, a01, b02, b03,
+            a01, n - a00, b12, b13,
+            b02, b12, c22, c23,
+            b03, b13, c23, c33,
+        );
+        m
+    }
+
+    /// Golden section on `[xi_start - h, xi_start + h]`, one new evaluation
+    /// per step; 24 steps narrow it to 2e-5 h (LS refines further). Returns
+    /// `xi_q` and its algebraic solution.
+    fn refine(&self, xi_start: f64, h: f64) -> (f64, SVector<f64, 4>) {
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        let f = |x: f64| self.at(x).0;
+        let (mut a, mut b) = (xi_start - h, xi_start + h);
+        let (mut c1, mut c2) = (b - g * (b - a), a + g * (b - a));
+        let (mut f1, mut f2) = (f(c1), f(c2));
+        for _ in 0..24 {
+            if f1 < f2 {
+                b = c2;
+                (c2, f2) = (c1, f1);
+                c1 = b - g * (b - a);
+                f1 = f(c1);
+            } else {
+                a = c1;
+                (c1, f1) = (c2, f2);
+                c2 = a + g * (b - a);
+                f2 = f(c2);
+            }
+        }
+        let xi_q = (a + b) / 2.0;
+        (xi_q, self.at(xi_q).1)
+    }
+
+    fn at(&self, xi_q: f64) -> (f64, SVector<f64, 4>) {
+        let d = self.d;
+        let rows =
+            d.s.iter()
+                .zip(&d.beta)
+                .map(|(&s, &b)| (xi_q * s + b).sin_cos());
+        schur_min(&self.normal(rows), d.s.len())
+    }
+
+    /// `(residual, xi_q)` at `xi_0 + j dxi`, `j < count`, with the angles
+    /// advanced by rotation (no trigonometric call inside the loop).
+    fn scan(&self, xi0: f64, dxi: f64, count: usize) -> Vec<(f64, f64)> {
+        let d = self.d;
+        let rot: Vec<(f64, f64)> = d.s.iter().map(|&s| (dxi * s).sin_cos()).collect();
+        let mut cur: Vec<(f64, f64)> =
+            d.s.iter()
+                .zip(&d.beta)
+                .map(|(&s, &b)| (xi0 * s + b).sin_cos())
+                .collect();
+        let mut out = Vec::with_capacity(count);
+        for j in 0..count {
+            if j % 16 == 15 {
+                // Re-anchor against rounding drift.
+                for ((c, &s), &b) in cur.iter_mut().zip(&d.s).zip(&d.beta) {
+                    *c = ((xi0 + j as f64 * dxi) * s + b).sin_cos();
+                }
+            }
+            let m = self.normal(cur.iter().copied());
+            out.push((schur_min(&m, d.s.len()).0, xi0 + j as f64 * dxi));
+            for (c, r) in cur.iter_mut().zip(&rot) {
+                let (s, co) = *c;
+                *c = (s * r.1 + co * r.0, co * r.1 - s * r.0);
+            }
+        }
+        out
+    }
+}
+
+/// See [`Implicit`]: `min over unit w of w^T (C - B^T A^-1 B) w`, where
 /// `M = [[A, B], [B^T, C]]` in 2x2 blocks, and the minimiser `(-A^-1 B w, w)`.
 fn schur_min(m: &Matrix4<f64>, n: usize) -> (f64, SVector<f64, 4>) {
     let a = m.fixed_view::<2, 2>(0, 0).into_owned();
@@ -308,40 +408,6 @@ fn subsample(d: &ArcData, max: usize) -> ArcData {
     }
 }
 
-/// [`algebraic`] at `xi_0 + j dxi`, `j < count`, with the angles advanced by
-/// rotation (no trigonometric call inside the loop).
-fn scan(d: &ArcData, xi0: f64, dxi: f64, count: usize) -> Vec<(f64, f64)> {
-    let n = d.s.len();
-    let rot: Vec<(f64, f64)> = d.s.iter().map(|&s| (dxi * s).sin_cos()).collect();
-    let mut cur: Vec<(f64, f64)> =
-        d.s.iter()
-            .zip(&d.beta)
-            .map(|(&s, &b)| (xi0 * s + b).sin_cos())
-            .collect();
-    let sb: Vec<(f64, f64)> = d.beta.iter().map(|b| b.sin_cos()).collect();
-    let mut out = Vec::with_capacity(count);
-    for j in 0..count {
-        if j % 16 == 15 {
-            // Re-anchor against rounding drift.
-            for ((c, &s), &b) in cur.iter_mut().zip(&d.s).zip(&d.beta) {
-                *c = ((xi0 + j as f64 * dxi) * s + b).sin_cos();
-            }
-        }
-        let mut m = Matrix4::<f64>::zeros();
-        for i in 0..n {
-            let (sa, ca) = cur[i];
-            let row = SVector::<f64, 4>::from([sa, ca, -sb[i].0, -sb[i].1]);
-            m += row * row.transpose();
-        }
-        out.push((schur_min(&m, n).0, xi0 + j as f64 * dxi));
-        for (c, r) in cur.iter_mut().zip(&rot) {
-            let (s, co) = *c;
-            *c = (s * r.1 + co * r.0, co * r.1 - s * r.0);
-        }
-    }
-    out
-}
-
 /// Root-mean-square wrapped residual of `c` on the data.
 fn rms(c: &Closed, d: &ArcData) -> f64 {
     let ss: f64 =
@@ -359,7 +425,7 @@ fn rms(c: &Closed, d: &ArcData) -> f64 {
 ///
 /// The period is found by scanning xi_q (both signs, from half a turn to six
 /// turns over the data) for the smallest algebraic residual of the implicit
-/// observation equation (see [`algebraic`]), refined by golden section: a
+/// observation equation (see [`Implicit`]), refined by golden section: a
 /// non-iterative, initialisation-free reading of the period that also works
 /// when the data cover a single loop, where a period cannot be seen by
 /// comparing the signal with a shifted copy of itself.
@@ -393,10 +459,10 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
     // u = L' fits anything), so shorter turns would win on noise alone; and
     // DET needs about one loop of data anyway (eq. 35).
     let (lo, hi, step) = (1.4 * PI, 12.0 * PI, 0.1);
+    let implicit = Implicit::new(&sub);
     let mut grid = Vec::new();
     for sign in [1.0, -1.0] {
-        grid.extend(scan(
-            &sub,
+        grid.extend(implicit.scan(
             sign * lo / span,
             sign * step / span,
             ((hi - lo) / step) as usize,
@@ -422,55 +488,63 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
         .collect();
     minima.sort_by(|a, b| a.0.total_cmp(&b.0));
     minima.truncate(3);
-    let mut best: Option<(f64, Det)> = None;
+    // Rank the candidates by how well the closed form that the algebraic
+    // solution gives fits the bearings; the rest of DET (Algorithm 1, eqs.
+    // 37-38) runs on the best one, on the next only if that one fails.
+    let mut ranked: Vec<(f64, f64, SVector<f64, 4>)> = minima
+        .into_iter()
+        .filter(|m| m.0 <= 0.5 * median)
+        .map(|(_, xi0)| {
+            let (xi_q, v) = implicit.refine(xi0, step / span);
+            let e = algebraic_closed(xi_q, &v)
+                .iter()
+                .map(|c| rms(c, d))
+                .fold(f64::INFINITY, f64::min);
+            (e, xi_q, v)
+        })
+        .collect();
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut last_err = None;
-    for (v0, xi0) in minima {
-        if v0 > 0.5 * median {
-            continue;
-        }
-        match det_from(d, &sub, xi0, step / span, span, &interp) {
-            Ok(r) => {
-                let e = rms(&r.closed, d);
-                if best.as_ref().is_none_or(|b| e < b.0) {
-                    best = Some((e, r));
-                }
-            }
+    for (_, xi_q, v) in ranked {
+        match det_from(d, xi_q, &v, span, &interp) {
+            Ok(r) => return Ok(r),
             Err(e) => last_err = Some(e),
         }
     }
-    match best {
-        Some((_, r)) => Ok(r),
-        None => Err(last_err.unwrap_or_else(|| {
-            Degenerate(format!(
-                "no period found in the bearings (best algebraic residual vs median {median:.3e}): xi_q cannot be estimated"
-            ))
-        })),
-    }
+    Err(last_err.unwrap_or_else(|| {
+        Degenerate(format!(
+            "no period found in the bearings (best algebraic residual vs median {median:.3e}): xi_q cannot be estimated"
+        ))
+    }))
 }
 
-/// DET from a period candidate: refine xi_q, then Algorithm 1, (37), (38).
+/// The two closed forms (L and L + pi) of an algebraic solution
+/// `v = (eps cos u, eps sin u, cos L', sin L')`, `u = t0 + L'`,
+/// `L' = L - pi/2` (see [`Implicit`]; `-v` is the same solution).
+fn algebraic_closed(xi_q: f64, v: &SVector<f64, 4>) -> [Closed; 2] {
+    let lp = v[3].atan2(v[2]);
+    let eps = v[0].hypot(v[1]);
+    let t0 = wrap(v[1].atan2(v[0]) - lp);
+    let c = |l: f64| Closed {
+        xi_q,
+        l: wrap(l),
+        t0,
+        eps,
+    };
+    [c(lp + PI / 2.0), c(lp + 1.5 * PI)]
+}
+
+/// DET from a refined period candidate and its algebraic solution `vec`:
+/// Algorithm 1, (37), (38).
 fn det_from(
     d: &ArcData,
-    sub: &ArcData,
-    xi_start: f64,
-    h: f64,
+    xi_q: f64,
+    vec: &SVector<f64, 4>,
     span: f64,
     interp: &Interp,
 ) -> Result<Det, Degenerate> {
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let n = d.s.len();
-    // Golden section around the grid point.
-    let (mut a, mut b) = (xi_start - h, xi_start + h);
-    for _ in 0..30 {
-        let (c1, c2) = (b - g * (b - a), a + g * (b - a));
-        if algebraic(sub, c1).0 < algebraic(sub, c2).0 {
-            b = c2;
-        } else {
-            a = c1;
-        }
-    }
-    let xi_q = (a + b) / 2.0;
-    let (_, vec) = algebraic(sub, xi_q);
     let period = 2.0 * PI / xi_q.abs();
     // Algorithm 1: sigma(s_c) of beta(s) + beta(2 s_c - s) (mod pi) for s_c
     // over half a period (nodes are half a period apart).
