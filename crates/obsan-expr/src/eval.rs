@@ -12,8 +12,12 @@ use std::ops::{Add, Mul, Sub};
 enum Op {
     Const(f64),
     Input(u32),
-    Add(Box<[u32]>),
-    Mul(Box<[u32]>),
+    Add2(u32, u32),
+    Mul2(u32, u32),
+    /// Children `args[start..start + len]` of the tape's flat argument list.
+    Add(u32, u32),
+    Mul(u32, u32),
+    Square(u32),
     Pow(u32, i32),
     Sin(u32, f64),
     Cos(u32, f64),
@@ -28,6 +32,8 @@ enum Op {
 #[derive(Clone, Debug)]
 pub struct Tape {
     ops: Vec<Op>,
+    /// Children of the n-ary sums and products, flat (no box per op).
+    args: Vec<u32>,
     outputs: Vec<u32>,
     n_inputs: usize,
 }
@@ -49,6 +55,7 @@ impl Tape {
         let order = ctx.reachable(roots);
         let mut slot = vec![u32::MAX; ctx.len()];
         let mut ops = Vec::with_capacity(order.len());
+        let mut args = Vec::new();
         for (i, &id) in order.iter().enumerate() {
             slot[id.index()] = i as u32;
             let s = |x: Id| {
@@ -57,8 +64,19 @@ impl Tape {
             };
             let op = match ctx.node(id) {
                 Node::Num(q) => Op::Const(q.to_f64()),
-                Node::Add(cs) => Op::Add(cs.iter().map(|&c| s(c)).collect()),
-                Node::Mul(cs) => Op::Mul(cs.iter().map(|&c| s(c)).collect()),
+                Node::Add(cs) if cs.len() == 2 => Op::Add2(s(cs[0]), s(cs[1])),
+                Node::Mul(cs) if cs.len() == 2 => Op::Mul2(s(cs[0]), s(cs[1])),
+                Node::Add(cs) | Node::Mul(cs) => {
+                    let start = args.len() as u32;
+                    args.extend(cs.iter().map(|&c| s(c)));
+                    let len = cs.len() as u32;
+                    if matches!(ctx.node(id), Node::Add(_)) {
+                        Op::Add(start, len)
+                    } else {
+                        Op::Mul(start, len)
+                    }
+                }
+                Node::Pow(b, 2) => Op::Square(s(*b)),
                 Node::Pow(b, e) => Op::Pow(s(*b), *e),
                 Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
                     LeafKind::Symbol(name) => match inputs.iter().position(|x| x == v) {
@@ -90,6 +108,7 @@ impl Tape {
         let outputs = roots.iter().map(|r| slot[r.index()]).collect();
         Ok(Tape {
             ops,
+            args,
             outputs,
             n_inputs: inputs.len(),
         })
@@ -114,7 +133,7 @@ impl Tape {
         scratch.clear();
         scratch.resize(self.ops.len(), 0.0);
         for (i, op) in self.ops.iter().enumerate() {
-            scratch[i] = op.eval(inputs, scratch);
+            scratch[i] = op.eval(inputs, scratch, &self.args);
         }
         for (o, &s) in out.iter_mut().zip(&self.outputs) {
             *o = scratch[s as usize];
@@ -144,8 +163,13 @@ impl Tape {
             let d = match op {
                 Op::Const(_) => false,
                 Op::Input(k) => varying[*k as usize],
-                Op::Add(cs) | Op::Mul(cs) => cs.iter().any(|&c| depends[c as usize]),
-                Op::Pow(a, _)
+                Op::Add2(a, b) | Op::Mul2(a, b) => depends[*a as usize] || depends[*b as usize],
+                Op::Add(st, len) | Op::Mul(st, len) => self.args
+                    [*st as usize..(*st + *len) as usize]
+                    .iter()
+                    .any(|&c| depends[c as usize]),
+                Op::Square(a)
+                | Op::Pow(a, _)
                 | Op::Sin(a, _)
                 | Op::Cos(a, _)
                 | Op::Exp(a, _)
@@ -171,13 +195,17 @@ impl Tape {
 impl Op {
     /// The value of this op given the values of the earlier ops.
     #[inline]
-    fn eval(&self, inputs: &[f64], before: &[f64]) -> f64 {
+    fn eval(&self, inputs: &[f64], before: &[f64], args: &[u32]) -> f64 {
         let v = |i: &u32| before[*i as usize];
+        let children = |st: u32, len: u32| &args[st as usize..(st + len) as usize];
         match self {
             Op::Const(c) => *c,
             Op::Input(k) => inputs[*k as usize],
-            Op::Add(cs) => cs.iter().map(v).sum(),
-            Op::Mul(cs) => cs.iter().map(v).product(),
+            Op::Add2(a, b) => v(a) + v(b),
+            Op::Mul2(a, b) => v(a) * v(b),
+            Op::Add(st, len) => children(*st, *len).iter().map(v).sum(),
+            Op::Mul(st, len) => children(*st, *len).iter().map(v).product(),
+            Op::Square(b) => v(b) * v(b),
             Op::Pow(b, e) => v(b).powi(*e),
             Op::Sin(a, k) => (v(a) * k).sin(),
             Op::Cos(a, k) => (v(a) * k).cos(),
@@ -209,7 +237,7 @@ impl FrozenTape<'_> {
     pub fn eval(&mut self, inputs: &[f64]) -> &[f64] {
         assert_eq!(inputs.len(), self.tape.n_inputs, "wrong number of inputs");
         for &i in &self.ops {
-            let x = self.tape.ops[i as usize].eval(inputs, &self.values);
+            let x = self.tape.ops[i as usize].eval(inputs, &self.values, &self.tape.args);
             self.values[i as usize] = x;
         }
         for (o, &s) in self.out.iter_mut().zip(&self.tape.outputs) {
