@@ -204,7 +204,7 @@ impl Interp {
     /// `(cos 2 beta, sin 2 beta)` at s, periodically extended like [`Interp::at_mod`].
     fn at_mod2(&self, s: f64, period: Option<f64>) -> Option<(f64, f64)> {
         let x = match period {
-            Some(p) => self.s0 + (s - self.s0).rem_euclid(p),
+            Some(p) => self.s0 + modulo(s - self.s0, p),
             None => s,
         };
         if x >= self.s0 && x <= self.s_last && self.h > 0.0 {
@@ -224,13 +224,48 @@ impl Interp {
     /// anywhere in the loop).
     fn at_mod(&self, s: f64, period: Option<f64>) -> Option<f64> {
         let Some(p) = period else { return self.at(s) };
-        let x = self.s0 + (s - self.s0).rem_euclid(p);
+        let x = self.s0 + modulo(s - self.s0, p);
         if x <= self.s_last {
             return self.at(x);
         }
         // The gap between the last sample and the first one a period later.
         let f = (x - self.s_last) / (self.s0 + p - self.s_last);
         Some(self.last + f * wrap(self.first - self.last))
+    }
+}
+
+/// The minimiser of a unimodal `f` on `[a, b]` by golden section, one new
+/// evaluation per step (`steps` steps shrink the bracket by 0.618^steps).
+fn golden_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, steps: usize) -> f64 {
+    let g = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c1, mut c2) = (b - g * (b - a), a + g * (b - a));
+    let (mut f1, mut f2) = (f(c1), f(c2));
+    for _ in 0..steps {
+        if f1 < f2 {
+            b = c2;
+            (c2, f2) = (c1, f1);
+            c1 = b - g * (b - a);
+            f1 = f(c1);
+        } else {
+            a = c1;
+            (c1, f1) = (c2, f2);
+            c2 = a + g * (b - a);
+            f2 = f(c2);
+        }
+    }
+    (a + b) / 2.0
+}
+
+/// `x` modulo `p > 0` in `[0, p)`, by one floor: `rem_euclid` goes through
+/// `fmod`, which dominated Algorithm 1's inner loop.
+fn modulo(x: f64, p: f64) -> f64 {
+    let r = x - p * (x / p).floor();
+    if r >= p {
+        r - p
+    } else if r < 0.0 {
+        r + p
+    } else {
+        r
     }
 }
 
@@ -307,25 +342,7 @@ impl<'a> Implicit<'a> {
     /// per step; 24 steps narrow it to 2e-5 h (LS refines further). Returns
     /// `xi_q` and its algebraic solution.
     fn refine(&self, xi_start: f64, h: f64) -> (f64, SVector<f64, 4>) {
-        let g = (5f64.sqrt() - 1.0) / 2.0;
-        let f = |x: f64| self.at(x).0;
-        let (mut a, mut b) = (xi_start - h, xi_start + h);
-        let (mut c1, mut c2) = (b - g * (b - a), a + g * (b - a));
-        let (mut f1, mut f2) = (f(c1), f(c2));
-        for _ in 0..24 {
-            if f1 < f2 {
-                b = c2;
-                (c2, f2) = (c1, f1);
-                c1 = b - g * (b - a);
-                f1 = f(c1);
-            } else {
-                a = c1;
-                (c1, f1) = (c2, f2);
-                c2 = a + g * (b - a);
-                f2 = f(c2);
-            }
-        }
-        let xi_q = (a + b) / 2.0;
+        let xi_q = golden_min(|x| self.at(x).0, xi_start - h, xi_start + h, 24);
         (xi_q, self.at(xi_q).1)
     }
 
@@ -350,8 +367,8 @@ impl<'a> Implicit<'a> {
                 .collect();
         let mut out = Vec::with_capacity(count);
         for j in 0..count {
-            if j % 16 == 15 {
-                // Re-anchor against rounding drift.
+            if j % 64 == 63 {
+                // Re-anchor against rounding drift (1e-16 per rotation).
                 for ((c, &s), &b) in cur.iter_mut().zip(&d.s).zip(&d.beta) {
                     *c = ((xi0 + j as f64 * dxi) * s + b).sin_cos();
                 }
@@ -416,6 +433,25 @@ fn rms(c: &Closed, d: &ArcData) -> f64 {
             .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
             .sum();
     (ss / d.s.len().max(1) as f64).sqrt()
+}
+
+/// Of the closed forms that differ from `c` only in L (one of `ls`), the one
+/// with the smallest RMS residual, with that RMS: L only shifts the bearing,
+/// so the curve `alpha(s)` is computed once for all of them.
+fn best_l(c: Closed, ls: &[f64], d: &ArcData) -> (f64, Closed) {
+    let resid: Vec<f64> =
+        d.s.iter()
+            .zip(&d.beta)
+            .map(|(&s, &b)| b - c.alpha(s).0 - PI / 2.0)
+            .collect();
+    ls.iter()
+        .map(|&l| {
+            let ss: f64 = resid.iter().map(|r| wrap(r + l).powi(2)).sum();
+            let e = (ss / resid.len().max(1) as f64).sqrt();
+            (e, Closed { l, ..c })
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("at least one L")
 }
 
 /// The deterministic method (section V-A): xi_q from the period of the
@@ -496,10 +532,8 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
         .filter(|m| m.0 <= 0.5 * median)
         .map(|(_, xi0)| {
             let (xi_q, v) = implicit.refine(xi0, step / span);
-            let e = algebraic_closed(xi_q, &v)
-                .iter()
-                .map(|c| rms(c, d))
-                .fold(f64::INFINITY, f64::min);
+            let [c, other] = algebraic_closed(xi_q, &v);
+            let (e, _) = best_l(c, &[c.l, other.l], d);
             (e, xi_q, v)
         })
         .collect();
@@ -543,7 +577,6 @@ fn det_from(
     span: f64,
     interp: &Interp,
 ) -> Result<Det, Degenerate> {
-    let g = (5f64.sqrt() - 1.0) / 2.0;
     let n = d.s.len();
     let period = 2.0 * PI / xi_q.abs();
     // Algorithm 1: sigma(s_c) of beta(s) + beta(2 s_c - s) (mod pi) for s_c
@@ -601,17 +634,13 @@ fn det_from(
         ));
     };
     let h = width / grid as f64;
-    let (mut a, mut b) = (sigma_curve[imin].0 - 1.5 * h, sigma_curve[imin].0 + 1.5 * h);
     let full = |sc: f64| sigma_at(sc, &all).unwrap_or(f64::INFINITY);
-    for _ in 0..24 {
-        let (c1, c2) = (b - g * (b - a), a + g * (b - a));
-        if full(c1) < full(c2) {
-            b = c2;
-        } else {
-            a = c1;
-        }
-    }
-    let node = (a + b) / 2.0;
+    let node = golden_min(
+        full,
+        sigma_curve[imin].0 - 1.5 * h,
+        sigma_curve[imin].0 + 1.5 * h,
+        24,
+    );
     // Eq. (37): beta(s) + beta(s_hat) = -2 L (mod pi), at the node.
     let (mean2l, _) = pair_stats(node, &all).expect("the node has pairs");
     let l37 = -mean2l / 2.0;
@@ -641,21 +670,20 @@ fn det_from(
         None => eps_alg,
     };
     // Discrete choices: L + j pi/2, the node at t = 0 or t = pi.
-    let mut cands = Vec::new();
-    for j in 0..4 {
-        for t_node in [0.0, PI] {
-            cands.push(Closed {
+    let ls: Vec<f64> = (0..4).map(|j| wrap(l37 + j as f64 * PI / 2.0)).collect();
+    let (_, closed) = [0.0, PI]
+        .into_iter()
+        .map(|t_node| {
+            let c = Closed {
                 xi_q,
-                l: wrap(l37 + j as f64 * PI / 2.0),
+                l: 0.0,
                 t0: wrap(t_node - xi_q * node),
                 eps,
-            });
-        }
-    }
-    let closed = cands
-        .into_iter()
-        .min_by(|a, b| rms(a, d).total_cmp(&rms(b, d)))
-        .expect("eight candidates");
+            };
+            best_l(c, &ls, d)
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .expect("two candidates");
     Ok(Det {
         closed,
         period,
