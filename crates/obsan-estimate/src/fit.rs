@@ -288,6 +288,23 @@ impl Problem<'_> {
         (r, out)
     }
 
+    /// The cost (sum of squared whitened residuals) at `theta`, without
+    /// sensitivities.
+    fn cost(&self, theta: &[f64]) -> Result<f64, String> {
+        let mut total = 0.0;
+        for (k, t) in self.trajs.iter().enumerate() {
+            let x0 = self.lay.state_of(theta, k);
+            let r = residuals(self.p, t, &x0, self.opts, &self.cols[k], false, false)?.0;
+            total += self
+                .apply(k, r, vec![])
+                .0
+                .iter()
+                .map(|x| x * x)
+                .sum::<f64>();
+        }
+        Ok(total)
+    }
+
     /// Residuals and the normal equations `J^T J`, `J^T r`, trajectory by
     /// trajectory (a trajectory's initial state touches only its residuals),
     /// from one prediction with sensitivities per trajectory. With `refresh`
@@ -504,7 +521,7 @@ pub fn fit(
             }
             iterations += 1;
             let mut improved = false;
-            for _ in 0..20 {
+            for attempt in 0..20 {
                 let mut a = cur.jtj.clone();
                 for (i, row) in a.iter_mut().enumerate() {
                     if augmented {
@@ -524,8 +541,13 @@ pub fn fit(
                     continue;
                 };
                 let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
-                // The trial point is linearised at once: accepted steps (most,
-                // near the optimum) then need no second prediction.
+                // The first trial point of an iteration is linearised at once:
+                // accepted steps (most, near the optimum) then need no second
+                // prediction. After a rejection, trials are costed first.
+                if attempt > 0 && !prob.cost(&cand).is_ok_and(|c| c < cur.cost) {
+                    lambda *= 4.0;
+                    continue;
+                }
                 let next = match prob.normal(&cand, false) {
                     Ok(next) if next.cost < cur.cost => next,
                     _ => {
