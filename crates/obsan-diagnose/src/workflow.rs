@@ -301,6 +301,35 @@ pub fn fit_model(
             input_noise: None,
         };
         let pred = p.predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)?;
+        // Held input values and their integrals at every output time, once
+        // per trajectory (shared by its outputs).
+        let in_cols: Vec<Option<&[Option<f64>]>> =
+            measured.iter().map(|n| tr.inputs.column(n)).collect();
+        let held = |c: &Option<&[Option<f64>]>, row: usize| c.and_then(|c| c[row]).unwrap_or(0.0);
+        let mut held_at = Vec::with_capacity(tr.outputs.len());
+        {
+            let mut row = 0usize;
+            let mut integral = vec![0.0; measured.len()];
+            let mut t_int = tr.inputs.t.first().copied().unwrap_or(0.0);
+            for &t in &tr.outputs.t {
+                while row + 1 < tr.inputs.len() && tr.inputs.t[row + 1] <= t {
+                    for (m, c) in in_cols.iter().enumerate() {
+                        integral[m] += held(c, row) * (tr.inputs.t[row + 1] - t_int);
+                    }
+                    t_int = tr.inputs.t[row + 1];
+                    row += 1;
+                }
+                let at: Vec<(f64, f64)> = in_cols
+                    .iter()
+                    .enumerate()
+                    .map(|(m, c)| {
+                        let u = held(c, row);
+                        (u, integral[m] + u * (t - t_int))
+                    })
+                    .collect();
+                held_at.push(at);
+            }
+        }
         for (oi, oname) in p.outputs.iter().enumerate() {
             let Some(col) = tr.outputs.column(oname) else {
                 continue;
@@ -325,29 +354,16 @@ pub fn fit_model(
                     .collect();
                 s.whiten = w.subset(&idx).map(std::sync::Arc::new);
             }
-            // Held input values and their integrals at the output times.
-            let mut row = 0usize;
-            let mut integral = vec![0.0; measured.len()];
-            let mut t_int = tr.inputs.t.first().copied().unwrap_or(0.0);
             for (j, &t) in tr.outputs.t.iter().enumerate() {
-                while row + 1 < tr.inputs.len() && tr.inputs.t[row + 1] <= t {
-                    for (m, n) in measured.iter().enumerate() {
-                        let u = tr.inputs.column(n).and_then(|c| c[row]).unwrap_or(0.0);
-                        integral[m] += u * (tr.inputs.t[row + 1] - t_int);
-                    }
-                    t_int = tr.inputs.t[row + 1];
-                    row += 1;
-                }
                 let Some(m) = col[j] else { continue };
                 let y = pred.outputs[j][oi];
                 let d = if s.angular { wrap(m - y) } else { m - y };
                 s.t.push(t);
                 s.e.push(d / sigma[oi]);
                 s.predicted.push(y);
-                for (mi, n) in measured.iter().enumerate() {
-                    let u = tr.inputs.column(n).and_then(|c| c[row]).unwrap_or(0.0);
+                for (mi, &(u, integral)) in held_at[j].iter().enumerate() {
                     s.inputs[mi].1.push(u);
-                    s.input_integrals[mi].1.push(integral[mi] + u * (t - t_int));
+                    s.input_integrals[mi].1.push(integral);
                 }
             }
             if !s.e.is_empty() {
