@@ -145,7 +145,8 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             .map(|t| {
                 json!({"name": t.name, "q": t.q, "xi_q": t.closed.xi_q, "L": t.closed.l,
                        "c": t.closed.c(), "k": t.closed.k(), "sd": t.modes_sd().map(|s| json!({"xi_q": s[0], "L": s[1]})),
-                       "mu0": t.start.0, "gamma0": t.start.1, "residual_rms": t.rms})
+                       "mu0": t.start.0, "gamma0": t.start.1, "residual_rms": t.rms,
+                       "period_from_others": t.period_from_others})
             })
             .collect();
         let mut params = serde_json::Map::new();
@@ -204,6 +205,12 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             t.closed.c().to_degrees(),
             t.closed.k(),
             t.rms.to_degrees()
+        );
+    }
+    for t in r.trajectories.iter().filter(|t| t.period_from_others) {
+        println!(
+            "note: {}: DET misread the period (LS fitted far worse than on the other circles); xi_q was started from the other circles' eq. (18) line",
+            t.name
         );
     }
     println!();

@@ -199,3 +199,17 @@ fn commanded_ratio_error_shows_in_the_inputs() {
     // The bearings do not see it: the fit uses the measured wheel speeds.
     assert!(d.named.is_empty(), "{:?}", named(&d));
 }
+
+/// Regression: at a large bearing scale error the q = -1 circle's bearings
+/// wrap at +-pi where the model's do not, DET read a period twice the true
+/// one there (LS RMS 78 deg), the nominal fit stayed at 31 sigma and
+/// wheel_slip was named. The calibration now rereads that circle's period
+/// from the other two (eq. 18).
+#[test]
+fn names_a_large_bearing_scale_when_one_circles_period_is_misread() {
+    let (d, t) = run("constant", &[("bearing_scale", 0.117)], 4);
+    assert_eq!(named(&d), ["bearing_scale"]);
+    let (_, x, sd) = d.named[0].estimates[0].clone();
+    let want = true_param("bearing_scale", 0.117, &t);
+    assert!((x - want).abs() < 3.0 * sd, "{x} ± {sd} vs {want}");
+}

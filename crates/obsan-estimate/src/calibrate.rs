@@ -4,7 +4,7 @@
 
 use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
-use crate::circle::{det, ls, weights, ArcData, Closed, Degenerate, Det};
+use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det};
 use crate::data::Dataset;
 use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
 use crate::predict::Predictor;
@@ -134,6 +134,9 @@ pub struct TrajectoryEstimate {
     pub arc: ArcData,
     /// The starting state (mu0, gamma0): from the closed form, or ML's.
     pub start: (f64, f64),
+    /// DET's own period reading failed (LS fitted far worse than on the other
+    /// trajectories) and was replaced by the period the other circles predict.
+    pub period_from_others: bool,
 }
 
 /// The outcome of a calibration.
@@ -147,6 +150,76 @@ pub struct CalibrationReport {
     pub calibration: Calibration,
     pub metric: Option<(Metric, Option<[f64; 4]>)>,
     pub ml: Option<FitResult>,
+}
+
+/// LS on one trajectory from its DET (section V-B weights).
+fn ls_trajectory(tr: &mut TrajectoryEstimate, sigma: f64, enc_var: f64, o: &CalibrateOptions) {
+    let w = weights(&tr.det.closed, &tr.arc, sigma, enc_var);
+    let f = ls(
+        &tr.arc,
+        &tr.det.closed,
+        &w,
+        o.ls_max_iterations,
+        o.ls_tolerance,
+    );
+    tr.closed = f.closed;
+    tr.rms = f.rms;
+    tr.modes_cov = Some(f.cov.fixed_view::<2, 2>(0, 0).into_owned());
+}
+
+/// A trajectory whose LS fit is far worse than the others' (RMS over four
+/// times their median and over 4 sigma) most likely had its period misread
+/// by DET: gross errors in its bearings (a sensor scale error wraps some
+/// bearings to the other side of +-pi, for instance) can hide the true
+/// period from the scan. With two or more good circles of distinct q,
+/// `xi_q = xi (1 - delta q)` (eq. 18) predicts its `xi_q`; DET is rerun at
+/// that period ([`det_at`]) and LS from there, and the new fit is kept if it
+/// is better. Marks the trajectories it repaired.
+fn repair_periods(
+    trajs: &mut [TrajectoryEstimate],
+    sigma: f64,
+    enc_var: f64,
+    o: &CalibrateOptions,
+) {
+    let mut rms: Vec<f64> = trajs.iter().map(|t| t.rms).collect();
+    rms.sort_by(f64::total_cmp);
+    let Some(&median) = rms.get(rms.len() / 2) else {
+        return;
+    };
+    let limit = (4.0 * median).max(4.0 * sigma);
+    let bad: Vec<usize> = (0..trajs.len()).filter(|&k| trajs[k].rms > limit).collect();
+    let good: Vec<(f64, f64)> = trajs
+        .iter()
+        .filter(|t| t.rms <= limit)
+        .map(|t| (t.q, t.closed.xi_q))
+        .collect();
+    let distinct = good.iter().any(|g| (g.0 - good[0].0).abs() > 1e-9);
+    if bad.is_empty() || good.len() < 2 || !distinct {
+        return;
+    }
+    // Least squares line xi_q = a + b q through the good circles.
+    let n = good.len() as f64;
+    let (mq, mx) = (
+        good.iter().map(|g| g.0).sum::<f64>() / n,
+        good.iter().map(|g| g.1).sum::<f64>() / n,
+    );
+    let sqq: f64 = good.iter().map(|g| (g.0 - mq).powi(2)).sum();
+    let sqx: f64 = good.iter().map(|g| (g.0 - mq) * (g.1 - mx)).sum();
+    let b = sqx / sqq;
+    let a = mx - b * mq;
+    for k in bad {
+        let tr = &trajs[k];
+        let Ok(d) = det_at(&tr.arc, a + b * tr.q) else {
+            continue;
+        };
+        let mut cand = tr.clone();
+        cand.det = d;
+        ls_trajectory(&mut cand, sigma, enc_var, o);
+        if cand.rms < trajs[k].rms {
+            cand.period_from_others = true;
+            trajs[k] = cand;
+        }
+    }
 }
 
 fn rms_of(c: &Closed, d: &ArcData) -> f64 {
@@ -214,6 +287,7 @@ pub fn calibrate(
             det: d,
             arc,
             start: (f64::NAN, f64::NAN),
+            period_from_others: false,
         });
     }
     let mut sigma = o.sigma_beta.unwrap_or(f64::NAN);
@@ -223,23 +297,17 @@ pub fn calibrate(
     if need_ls {
         for pass in 0..2 {
             let s_used = if sigma.is_nan() { 1e-2 } else { sigma };
-            let mut rss = 0.0;
-            let mut count = 0usize;
             for tr in trajs.iter_mut() {
-                let w = weights(&tr.det.closed, &tr.arc, s_used, enc_var);
-                let f = ls(
-                    &tr.arc,
-                    &tr.det.closed,
-                    &w,
-                    o.ls_max_iterations,
-                    o.ls_tolerance,
-                );
-                rss += f.rms * f.rms * tr.arc.s.len() as f64;
-                count += tr.arc.s.len();
-                tr.closed = f.closed;
-                tr.rms = f.rms;
-                tr.modes_cov = Some(f.cov.fixed_view::<2, 2>(0, 0).into_owned());
+                ls_trajectory(tr, s_used, enc_var, o);
             }
+            if pass == 0 {
+                repair_periods(&mut trajs, s_used, enc_var, o);
+            }
+            let rss: f64 = trajs
+                .iter()
+                .map(|t| t.rms * t.rms * t.arc.s.len() as f64)
+                .sum();
+            let count: usize = trajs.iter().map(|t| t.arc.s.len()).sum();
             if pass == 0 && sigma_estimated {
                 // sigma from the residuals (4 unknowns per trajectory), then weigh again.
                 let dof = count.saturating_sub(4 * trajs.len()).max(1);

@@ -436,18 +436,28 @@ fn rms(c: &Closed, d: &ArcData) -> f64 {
 }
 
 /// Of the closed forms that differ from `c` only in L (one of `ls`), the one
-/// with the smallest RMS residual, with that RMS: L only shifts the bearing,
-/// so the curve `alpha(s)` is computed once for all of them.
+/// that fits best, with its score: the median absolute residual, so that a
+/// few gross errors (a bearing wrapped on the wrong side of +-pi by a scale
+/// error, an outlier) do not choose the period or the branch. L only shifts
+/// the bearing, so the curve `alpha(s)` is computed once for all of them.
 fn best_l(c: Closed, ls: &[f64], d: &ArcData) -> (f64, Closed) {
     let resid: Vec<f64> =
         d.s.iter()
             .zip(&d.beta)
             .map(|(&s, &b)| b - c.alpha(s).0 - PI / 2.0)
             .collect();
+    let mut abs = vec![0.0; resid.len()];
     ls.iter()
         .map(|&l| {
-            let ss: f64 = resid.iter().map(|r| wrap(r + l).powi(2)).sum();
-            let e = (ss / resid.len().max(1) as f64).sqrt();
+            for (a, r) in abs.iter_mut().zip(&resid) {
+                *a = wrap(r + l).abs();
+            }
+            let mid = abs.len() / 2;
+            let e = if abs.is_empty() {
+                f64::INFINITY
+            } else {
+                *abs.select_nth_unstable_by(mid, f64::total_cmp).1
+            };
             (e, Closed { l, ..c })
         })
         .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -550,6 +560,23 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
             "no period found in the bearings (best algebraic residual vs median {median:.3e}): xi_q cannot be estimated"
         ))
     }))
+}
+
+/// DET with the period known (`xi_q` from the other trajectories, for
+/// example): Algorithm 1, eqs. (37) and (38) at that `xi_q`. For a
+/// trajectory whose own period reading failed.
+pub fn det_at(d: &ArcData, xi_q: f64) -> Result<Det, Degenerate> {
+    let n = d.s.len();
+    if n < 10 || !xi_q.is_finite() || xi_q == 0.0 {
+        return Err(Degenerate(format!(
+            "DET at a given period needs 10 bearings and a finite, non-zero xi_q (have {n}, {xi_q})"
+        )));
+    }
+    let span = d.s[n - 1] - d.s[0];
+    let interp = Interp::new(d);
+    let sub = subsample(d, 200);
+    let (_, v) = Implicit::new(&sub).at(xi_q);
+    det_from(d, xi_q, &v, span, &interp)
 }
 
 /// The two closed forms (L and L + pi) of an algebraic solution

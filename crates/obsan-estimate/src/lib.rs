@@ -30,7 +30,7 @@ pub use calibrate::{
     CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
 };
 pub use cekf::{cekf, cekf_start, CekfResult};
-pub use circle::{det, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
+pub use circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
 pub use data::{
     add_derived_inputs, DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES,
 };
