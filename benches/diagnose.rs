@@ -94,12 +94,12 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
         "bearing_bias",
     ];
     println!(
-        "| hidden | design | value | runs | {} | magnitude within 3 sd |",
+        "| hidden | design | value | runs | {} | magnitude within 3 sd | named with a confounded rival |",
         cols.join(" | ")
     );
-    println!("|{}", "---|".repeat(cols.len() + 5));
+    println!("|{}", "---|".repeat(cols.len() + 6));
     for (hidden, design, v) in rows {
-        let res: Vec<(Vec<String>, bool)> = (1..=seeds)
+        let res: Vec<(Vec<String>, bool, bool)> = (1..=seeds)
             .into_par_iter()
             .map(|seed| {
                 let eff: Vec<(&str, f64)> = if hidden == "none" {
@@ -109,7 +109,7 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
                 };
                 let (data, truth) = simulate(&options(design, &eff, seed)).expect("simulates");
                 let Ok(start) = start_values(sys, &data, &Default::default()) else {
-                    return (vec!["start failed".into()], false);
+                    return (vec!["start failed".into()], false, false);
                 };
                 let d = diagnose(
                     sys,
@@ -135,12 +135,17 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
                             .iter()
                             .all(|(_, x, sd)| (x - want).abs() < 3.0 * sd)
                     });
-                (names, within)
+                let confounded = d.named.iter().any(|n| {
+                    n.rivals
+                        .iter()
+                        .any(|r| r.jointly_identifiable == Some(false))
+                });
+                (names, within, confounded)
             })
             .collect();
         let count = |c: &str| {
             res.iter()
-                .filter(|(n, _)| {
+                .filter(|(n, _, _)| {
                     if c == "none" {
                         n.is_empty()
                     } else {
@@ -151,8 +156,9 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
         };
         let cells: Vec<String> = cols.iter().map(|c| count(c).to_string()).collect();
         let within = res.iter().filter(|r| r.1).count();
+        let confounded = res.iter().filter(|r| r.2).count();
         println!(
-            "| {hidden} | {design} | {v} | {} | {} | {} |",
+            "| {hidden} | {design} | {v} | {} | {} | {} | {confounded} |",
             res.len(),
             cells.join(" | "),
             if hidden == "none" {

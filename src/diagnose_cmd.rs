@@ -262,6 +262,18 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             n.lr,
             n.p_value
         );
+        for rv in &n.rivals {
+            let why = match rv.jointly_identifiable {
+                Some(false) => "together they are not identifiable on these data, so which one acts cannot be told from them",
+                Some(true) => "both stay identifiable together, but these data favour neither strongly",
+                None => "not tested together",
+            };
+            let _ = writeln!(
+                s,
+                "  caution: {} fits almost as well (BIC {:+.1} against it): {why}",
+                rv.effect, rv.delta_bic
+            );
+        }
     }
     for c in &d.input_checks {
         let est: Vec<String> = c

@@ -11,7 +11,9 @@
 //!    identifiable; if not, the null vector that hides them is reported.
 //! 3. Identifiable candidates are fitted from the current fit and scored
 //!    (likelihood ratio, BIC); the best significant one is named, and the
-//!    search repeats on the extended model.
+//!    search repeats on the extended model. Candidates that fit about as
+//!    well as the named one are reported with it ([`Rival`]), with whether
+//!    the data can separate them at all.
 
 mod identify;
 mod residual;
@@ -25,5 +27,5 @@ pub use start::start_values;
 pub use stats::{chi2_1_p, chi2_z, normal_critical};
 pub use workflow::{
     diagnose, fit_model, input_noise, prepare, CandidateResult, DiagnoseOptions, Diagnosis,
-    InputCheck, ModelFit, Named, Start,
+    InputCheck, ModelFit, Named, Rival, Start, RIVAL_BIC,
 };

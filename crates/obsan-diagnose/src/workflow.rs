@@ -126,7 +126,26 @@ pub struct Named {
     pub rms_after: Vec<(String, f64)>,
     pub lr: f64,
     pub p_value: f64,
+    /// Other significant candidates of the same round that fit almost as
+    /// well (BIC within [`RIVAL_BIC`]): the data hardly tell them apart.
+    pub rivals: Vec<Rival>,
 }
+
+/// A candidate that explains the data about as well as a named effect.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rival {
+    pub effect: String,
+    /// Its BIC change minus the named effect's (>= 0).
+    pub delta_bic: f64,
+    /// Whether it stays identifiable once the named effect is in the model
+    /// (the next round's rank test); `false`: on these data the two are
+    /// confounded, so naming one rather than the other is arbitrary.
+    pub jointly_identifiable: Option<bool>,
+}
+
+/// Candidates whose BIC is within this of the best one's are reported as
+/// rivals ("strong evidence" starts at 6 on Kass and Raftery's scale).
+pub const RIVAL_BIC: f64 = 6.0;
 
 /// An effect on the measured inputs (`compare` relations).
 #[derive(Clone, Debug, Serialize)]
@@ -463,7 +482,7 @@ pub fn diagnose(
     let mut current_sys = sys.clone();
     let mut current = nominal.clone();
     let mut named: Vec<Named> = Vec::new();
-    let mut rounds = Vec::new();
+    let mut rounds: Vec<Vec<CandidateResult>> = Vec::new();
     let mut hidden = Vec::new();
     let mut class_text = String::new();
     for round in 0..o.max_rounds {
@@ -515,6 +534,24 @@ pub fn diagnose(
             .filter(|r| r.0.significant)
             .max_by(|a, b| a.0.lr.total_cmp(&b.0.lr))
             .map(|r| (r.0.clone(), r.1.clone()));
+        let rivals: Vec<Rival> = best
+            .as_ref()
+            .map(|(b, _)| {
+                results
+                    .iter()
+                    .filter(|r| {
+                        r.0.significant
+                            && r.0.effect != b.effect
+                            && r.0.delta_bic - b.delta_bic < RIVAL_BIC
+                    })
+                    .map(|r| Rival {
+                        effect: r.0.effect.clone(),
+                        delta_bic: (r.0.delta_bic - b.delta_bic).max(0.0),
+                        jointly_identifiable: None,
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
         rounds.push(results.into_iter().map(|r| r.0).collect());
         let Some((res, Some((ext_sys, ext_fit)))) = best else {
             break;
@@ -531,9 +568,21 @@ pub fn diagnose(
             rms_after: ext_fit.rms.clone(),
             lr: res.lr,
             p_value: res.p_value,
+            rivals,
         });
         current_sys = ext_sys;
         current = ext_fit;
+    }
+    // A rival's rank test in the round after its named effect says whether
+    // the two are confounded on these data.
+    for (i, n) in named.iter_mut().enumerate() {
+        for rv in &mut n.rivals {
+            rv.jointly_identifiable = rounds
+                .get(i + 1)
+                .and_then(|r| r.iter().find(|c| c.effect == rv.effect))
+                .filter(|c| c.error.is_none())
+                .map(|c| c.identifiable);
+        }
     }
     // Estimates of earlier named effects are refined by later rounds.
     for n in &mut named {

@@ -213,3 +213,25 @@ fn names_a_large_bearing_scale_when_one_circles_period_is_misread() {
     let want = true_param("bearing_scale", 0.117, &t);
     assert!((x - want).abs() < 3.0 * sd, "{x} ± {sd} vs {want}");
 }
+
+/// On the paper's constant-speed circles wheel slip and a radius change are
+/// each identifiable but not both (rank test): whichever is named, the other
+/// is reported with it as a rival the data cannot separate from it.
+#[test]
+fn confounded_effects_are_named_with_their_rival() {
+    let (d, _) = run("constant", &[("radius_change", 0.046)], 1);
+    assert_eq!(d.named.len(), 1, "{:?}", named(&d));
+    let n = &d.named[0];
+    let other = if n.effect == "radius_change" {
+        "wheel_slip"
+    } else {
+        "radius_change"
+    };
+    assert!(n.effect == "radius_change" || n.effect == "wheel_slip");
+    let rv = n
+        .rivals
+        .iter()
+        .find(|r| r.effect == other)
+        .expect("the other effect as a rival");
+    assert_eq!(rv.jointly_identifiable, Some(false));
+}
