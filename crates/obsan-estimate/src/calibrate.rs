@@ -9,6 +9,7 @@ use crate::data::Dataset;
 use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
 use crate::predict::Predictor;
 use nalgebra::{Matrix4, SMatrix};
+use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
 /// the estimators and `obsan rank` share one source of truth for the dynamics.
@@ -418,13 +419,70 @@ pub fn calibrate(
             // speeds drive the model, so their noise is in the residuals too.
             input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
         };
-        let r = fit(p, &fts, &calibration.values(), &states, &opts)
+        let mut r = fit(p, &fts, &calibration.values(), &states, &opts)
             .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
-        let cov = SMatrix::<f64, 5, 5>::from_fn(|i, j| r.covariance[i][j]);
+        // Section V-C can fail (a nearly straight "circle": q + dq close to
+        // rR / rL); it then says eta ~ 0, a sensor metres from the axle, and
+        // ML from there can stop in a wrong minimum. Screen a small grid of
+        // (phi, eta) starts (xi and delta from V-C, which stay good) with a
+        // few iterations each, and finish from the best if it beats the fit.
+        if calibration.eta.abs() < 0.02 {
+            let screen = FitOptions {
+                max_iterations: 4,
+                input_noise: None,
+                ..opts.clone()
+            };
+            let mut best: Option<FitResult> = None;
+            for phi0 in [0.0, PI / 2.0, PI, -PI / 2.0] {
+                for eta0 in [0.3, 1.0] {
+                    let c = Calibration {
+                        phi: phi0,
+                        eta: eta0,
+                        ..calibration
+                    };
+                    let st: Vec<Vec<f64>> = trajs
+                        .iter()
+                        .zip(&modes)
+                        .map(|(t, m)| {
+                            let (mu0, g0) = start_state(&c, &t.closed, m.q);
+                            vec![mu0, g0]
+                        })
+                        .collect();
+                    if let Ok(f) = fit(p, &fts, &c.values(), &st, &screen) {
+                        if best.as_ref().is_none_or(|b| f.cost < b.cost) {
+                            best = Some(f);
+                        }
+                    }
+                }
+            }
+            if let Some(b) = best {
+                // (The screen's cost has no input noise: compare full fits.)
+                if let Ok(f) = fit(p, &fts, &b.params, &b.initial_states, &opts) {
+                    if f.cost < r.cost {
+                        r = f;
+                    }
+                }
+            }
+        }
+        let mut cov = SMatrix::<f64, 5, 5>::from_fn(|i, j| r.covariance[i][j]);
+        let (mut phi, mut eta) = (r.params[0], r.params[2]);
+        if eta < 0.0 {
+            // (phi + pi, -eta) gives eq. (16) exactly (cos and sin of
+            // gamma - phi change sign with eta), so the likelihood cannot
+            // tell them apart; eta = rR / (2 rho) > 0 picks the physical one.
+            phi += PI;
+            eta = -eta;
+            for k in 0..5 {
+                if k != 2 {
+                    cov[(2, k)] = -cov[(2, k)];
+                    cov[(k, 2)] = -cov[(k, 2)];
+                }
+            }
+        }
         calibration = Calibration {
-            phi: r.params[0],
+            phi: crate::sim::wrap(phi),
             psi: crate::sim::wrap(r.params[1]),
-            eta: r.params[2],
+            eta,
             delta: r.params[3],
             xi: r.params[4],
             cov: Some(cov),
