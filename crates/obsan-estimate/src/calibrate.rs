@@ -401,14 +401,18 @@ pub fn calibrate(
     if o.method == Method::Ml {
         let p = predictor.ok_or_else(|| Degenerate("ml needs the model (calib.sys)".into()))?;
         let fts = FitTrajectory::all(p, data);
-        let states: Vec<Vec<f64>> = trajs
-            .iter()
-            .zip(&modes)
-            .map(|(t, m)| {
-                let (mu0, g0) = start_state(&calibration, &t.closed, m.q);
-                vec![mu0, g0]
-            })
-            .collect();
+        // Each trajectory's (mu0, gamma0) from its closed form and a calibration.
+        let states_for = |c: &Calibration| -> Vec<Vec<f64>> {
+            trajs
+                .iter()
+                .zip(&modes)
+                .map(|(t, m)| {
+                    let (mu0, g0) = start_state(c, &t.closed, m.q);
+                    vec![mu0, g0]
+                })
+                .collect()
+        };
+        let states = states_for(&calibration);
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
@@ -440,14 +444,7 @@ pub fn calibrate(
                         eta: eta0,
                         ..calibration
                     };
-                    let st: Vec<Vec<f64>> = trajs
-                        .iter()
-                        .zip(&modes)
-                        .map(|(t, m)| {
-                            let (mu0, g0) = start_state(&c, &t.closed, m.q);
-                            vec![mu0, g0]
-                        })
-                        .collect();
+                    let st = states_for(&c);
                     if let Ok(f) = fit(p, &fts, &c.values(), &st, &screen) {
                         if best.as_ref().is_none_or(|b| f.cost < b.cost) {
                             best = Some(f);

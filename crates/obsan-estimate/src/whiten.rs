@@ -89,9 +89,8 @@ impl Whitener {
     pub fn whiten_in_place(&self, v: &mut [f64]) {
         debug_assert_eq!(v.len(), self.len());
         let r = self.r;
-        let mut w = [0.0f64; 8];
-        let mut wv = vec![0.0; if r > 8 { r } else { 0 }];
-        let w: &mut [f64] = if r <= 8 { &mut w[..r] } else { &mut wv };
+        // The filtered state estimate.
+        let mut w = vec![0.0; r];
         for (i, vi) in v.iter_mut().enumerate() {
             let ai = &self.a[i * r..(i + 1) * r];
             let e = *vi - ai.iter().zip(w.iter()).map(|(x, y)| x * y).sum::<f64>();

@@ -252,25 +252,25 @@ fn a_misread_period_is_recovered_from_the_other_circles() {
     );
 }
 
-/// Regression: ML's phi was returned unwrapped (130679.94 deg, that is
-/// -0.06 deg, on this run, where the start had eta near 0 so phi moved
-/// freely); angles come back in (-pi, pi].
-#[test]
-fn ml_returns_phi_as_an_angle() {
+/// ML on Table VII's dq = 0.1 set-up (100 bearings per circle).
+fn ml_at_dq_0_1(seed: u64) -> (obsan_estimate::CalibrationReport, Truth) {
     let o = SimOptions {
-        seed: 1,
+        seed,
         dq: 0.1,
         bearings: Some(100),
         ..SimOptions::default()
     };
     let (data, truth) = simulate(&o).unwrap();
-    let p = predictor();
-    let r = calibrate(
-        &data,
-        Some(&p),
-        &CalibrateOptions::for_dataset(&data, Method::Ml),
-    )
-    .unwrap();
+    let opts = CalibrateOptions::for_dataset(&data, Method::Ml);
+    (calibrate(&data, Some(&predictor()), &opts).unwrap(), truth)
+}
+
+/// Regression: ML's phi was returned unwrapped (130679.94 deg, that is
+/// -0.06 deg, on this run, where the start had eta near 0 so phi moved
+/// freely); angles come back in (-pi, pi].
+#[test]
+fn ml_returns_phi_as_an_angle() {
+    let (r, truth) = ml_at_dq_0_1(1);
     let c = &r.calibration;
     let sd = c.sd().unwrap();
     assert!(
@@ -293,20 +293,7 @@ fn ml_returns_phi_as_an_angle() {
 /// V-C's eta is implausible and keeps the better fit.
 #[test]
 fn ml_recovers_the_parameters_when_a_circle_is_nearly_straight() {
-    let o = SimOptions {
-        seed: 2,
-        dq: 0.1,
-        bearings: Some(100),
-        ..SimOptions::default()
-    };
-    let (data, truth) = simulate(&o).unwrap();
-    let p = predictor();
-    let r = calibrate(
-        &data,
-        Some(&p),
-        &CalibrateOptions::for_dataset(&data, Method::Ml),
-    )
-    .unwrap();
+    let (r, truth) = ml_at_dq_0_1(2);
     let est = r.calibration.values();
     let sd = r.calibration.sd().unwrap();
     let want = truth_values(&truth);
