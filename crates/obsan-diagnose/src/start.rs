@@ -1,10 +1,14 @@
 //! Where the nominal fit starts. Maximum likelihood needs a start near the
 //! optimum; for the models obsan ships there is a data-only initialiser
 //! (the paper's DET + LS + section V-C for calib.sys); for any other model
-//! the user gives values by name, and params not given start at 0.
+//! the user gives values by name; otherwise a declaration's start value
+//! (`param T = 0.2`, `state va = v`) is used, and params without one start
+//! at 0.
 
-use obsan_estimate::{calibrate, CalibrateOptions, Dataset, Method};
-use obsan_model::{Kind, System};
+use obsan_estimate::{
+    add_derived_inputs, calibrate, CalibrateOptions, Dataset, Method, Trajectory,
+};
+use obsan_model::{Kind, Start, System};
 use std::collections::BTreeMap;
 
 /// Start values (params, per trajectory the dynamic state) for `sys` on
@@ -36,12 +40,27 @@ pub fn start_values(
             s[k].insert("gamma".into(), t.start.1);
         }
     }
-    if states == ["x", "y", "th"] {
+    if states.starts_with(&["x".to_string(), "y".to_string(), "th".to_string()]) {
         for (k, t) in data.trajectories.iter().enumerate() {
             if let Some(x0) = unicycle_start(t) {
                 s[k].insert("x".into(), x0[0]);
                 s[k].insert("y".into(), x0[1]);
                 s[k].insert("th".into(), x0[2]);
+            }
+        }
+    }
+    // Declared starts where nothing better is known.
+    for d in sys.decls_of(Kind::Param) {
+        if let Some(Start::Number(q)) = &d.start {
+            p.entry(d.name.clone()).or_insert(q.to_f64());
+        }
+    }
+    for (k, t) in data.trajectories.iter().enumerate() {
+        for d in sys.decls_of(Kind::State) {
+            if let Some(Start::Inputs(e)) = &d.start {
+                if !s[k].contains_key(&d.name) {
+                    s[k].insert(d.name.clone(), state_start(&d.name, e, t)?);
+                }
             }
         }
     }
@@ -160,4 +179,61 @@ fn unicycle_start(t: &obsan_estimate::Trajectory) -> Option<[f64; 3]> {
     let x0 = lc.0 - (c * qc.0 - s * qc.1);
     let y0 = lc.1 - (s * qc.0 + c * qc.1);
     Some([x0, y0, th0])
+}
+
+/// A state's declared start on one trajectory: `expr` evaluated at the
+/// inputs' first row (with the trajectory's constants).
+fn state_start(name: &str, expr: &str, t: &Trajectory) -> Result<f64, String> {
+    let mut head = t.inputs.clone();
+    head.t.truncate(2);
+    for c in &mut head.values {
+        c.truncate(2);
+    }
+    let key = format!("{name}__start");
+    add_derived_inputs(&mut head, &[(key.clone(), expr.to_string())], &t.meta)
+        .map_err(|e| format!("start of state {name} on trajectory {}: {e}", t.name))?;
+    head.column(&key)
+        .and_then(|c| c.first().copied().flatten())
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            format!(
+                "start of state {name} = {expr} on trajectory {}: no value at the first input row",
+                t.name
+            )
+        })
+}
+
+/// Start values of `ext`, a model extended from one whose fit gave
+/// `params` and `states` (per trajectory): those first, then each new
+/// param's declared start (else 0) and each new state's declared start.
+pub fn extended_start(
+    ext: &System,
+    params: &[f64],
+    states: &[Vec<f64>],
+    data: &Dataset,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
+    let mut pv = params.to_vec();
+    for d in ext.decls_of(Kind::Param).skip(params.len()) {
+        pv.push(match &d.start {
+            Some(Start::Number(q)) => q.to_f64(),
+            _ => 0.0,
+        });
+    }
+    let mut sv = Vec::with_capacity(states.len());
+    for (k, (x0, t)) in states.iter().zip(&data.trajectories).enumerate() {
+        let mut x = x0.clone();
+        for d in ext.decls_of(Kind::State).skip(x0.len()) {
+            match &d.start {
+                Some(Start::Inputs(e)) => x.push(state_start(&d.name, e, t)?),
+                _ => {
+                    return Err(format!(
+                        "the new state {} has no start value on trajectory {k} (declare it as state {} = EXPR)",
+                        d.name, d.name
+                    ))
+                }
+            }
+        }
+        sv.push(x);
+    }
+    Ok((pv, sv))
 }

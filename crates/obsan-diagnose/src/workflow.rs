@@ -4,6 +4,7 @@
 
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::residual::{analyse, ResidualReport, ResidualSeries};
+use crate::start::extended_start;
 use crate::stats::{chi2_1_p, normal_critical};
 use obsan_estimate::{
     add_derived_inputs, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration, Predictor,
@@ -675,16 +676,9 @@ fn candidate(
                 (0..outs.len()).map(|i| order.contains(&i)).collect()
             })
             .collect();
-        let mut pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
-        pv.extend(e.params.iter().map(|_| 0.0));
-        let id: Identifiability = stacked_rank(
-            &ext,
-            &class,
-            &consts,
-            &seen,
-            which,
-            (&pv, &base_fit.initial_states),
-        )?;
+        let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
+        let (pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
         res.rank = Some((id.rank, id.n));
         res.identifiable = e.params.iter().all(|p| id.param_observable(p));
         if !res.identifiable {
@@ -693,7 +687,7 @@ fn candidate(
             }
             return Ok(None);
         }
-        let mut f = fit_model(&ext, &prepared, &pv, &base_fit.initial_states, sigma, o)?;
+        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, o)?;
         // A second start for a candidate that improves the fit, from a fit
         // without the gross outliers (|e| > OUTLIER_Z sigma). Outputs that
         // wrap make the cost discontinuous: a scaled bearing jumps at +-pi,

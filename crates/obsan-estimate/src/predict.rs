@@ -7,6 +7,10 @@ use crate::data::Series;
 use obsan_expr::{FrozenTape, Tape, Var};
 use obsan_model::NormalForm;
 
+/// Integration steps are at most this over the largest diagonal entry of
+/// the dynamics' Jacobian (see `predict_with`).
+const STIFF_STEP: f64 = 0.5;
+
 /// A compiled model: `S' = f0 + sum_i f_i u_i`, `y = h(S)`.
 #[derive(Clone, Debug)]
 pub struct Predictor {
@@ -258,6 +262,56 @@ impl Predictor {
         }
         let et = |k: usize| inputs.t[k] + tau;
         let mut dudtau = vec![0.0; m];
+        // A fast decaying state (a first-order lag `va' = (v - va)/T`) needs
+        // steps shorter than its time constant: bound h by STIFF_STEP over
+        // the largest diagonal Jacobian entry at the start (h |lambda| <= 1/2
+        // keeps RK4's decay factor per step within 2.5e-4 of exp). One bound per
+        // prediction, so the steps do not depend on whether sensitivities
+        // are computed.
+        let max_step = {
+            let all = w.dyn_jac.eval(&w.x);
+            let jv = &all[nv..];
+            let u0: Vec<f64> = cols
+                .iter()
+                .map(|&c| inputs.values[c].first().copied().flatten().unwrap_or(0.0))
+                .collect();
+            let mut stiff = 0.0f64;
+            for k in 0..nd {
+                let base = (k * (m + 1)) * n + k;
+                let mut d = jv[base].abs();
+                for (i, ui) in u0.iter().enumerate() {
+                    d += (jv[base + (i + 1) * n] * ui).abs();
+                }
+                stiff = stiff.max(d);
+            }
+            // max_step 0 means row by row (no merging), not no bound.
+            let cap = if opts.max_step > 0.0 {
+                opts.max_step
+            } else {
+                f64::INFINITY
+            };
+            // A time scale below the input rows' spacing cannot be resolved
+            // from these data, and steps that short would cost without
+            // bound: refuse it (a fit then rejects the trial, so a fitted
+            // lag stops at the rows' spacing instead of running to 0).
+            let n_rows = inputs.t.len();
+            let spacing = if n_rows > 1 {
+                (inputs.t[n_rows - 1] - inputs.t[0]) / (n_rows - 1) as f64
+            } else {
+                0.0
+            };
+            if !stiff.is_finite() || stiff * spacing > 1.0 {
+                return Err(format!(
+                    "the dynamics have a time scale of {:.3e} s at the start, shorter than the input rows' spacing ({spacing:.3e} s)",
+                    1.0 / stiff
+                ));
+            }
+            if stiff > 0.0 {
+                cap.min(STIFF_STEP / stiff)
+            } else {
+                cap
+            }
+        };
         let mut t = t_start;
         let mut row = 0usize;
         let (mut k1, mut k2, mut k3, mut k4) =
@@ -282,11 +336,13 @@ impl Predictor {
                 };
                 // One step: this row's interval, merged with the next rows while
                 // the step stays within max_step (inputs averaged over time).
+                // (A row longer than max_step is split.)
                 let mut next = if row + 1 < inputs.len() {
                     et(row + 1).min(target)
                 } else {
                     target
-                };
+                }
+                .min(t + max_step);
                 for (ui, &c) in u.iter_mut().zip(&cols) {
                     *ui = inputs.values[c][row].unwrap_or(0.0) * (next - t);
                 }
@@ -297,7 +353,7 @@ impl Predictor {
                     } else {
                         target
                     };
-                    if end - t > opts.max_step {
+                    if end - t > max_step.min(opts.max_step) {
                         break;
                     }
                     for (ui, &c) in u.iter_mut().zip(&cols) {

@@ -208,3 +208,43 @@ fn the_delay_sensitivity_matches_finite_differences() {
         }
     }
 }
+
+/// A first-order lag `va' = (v - va)/T` driven by a unit step at t = 1 s,
+/// with input rows 0.02 s apart: the prediction must follow the exact
+/// solution `1 - exp(-(t - 1)/T)` even when T is far below max_step
+/// (explicit RK4 over merged 0.5 s steps would blow up for T = 0.05: the
+/// steps are bounded by the dynamics' own time scale).
+#[test]
+fn a_fast_lag_follows_its_exact_solution() {
+    let src = "system lag\nstate va = v\nparam T = 1/5\ninput v\nva' = (v - va)/T\noutput y = va\n";
+    let sys = obsan_model::System::parse(src, "lag.sys").unwrap();
+    let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
+    let mut s = obsan_estimate::Series::new(vec!["v".into()]);
+    for k in 0..300 {
+        s.push(k as f64 * 0.02, &[Some(if k >= 50 { 1.0 } else { 0.0 })]);
+    }
+    let times: Vec<f64> = (1..100).map(|k| k as f64 * 0.05).collect();
+    for t_lag in [0.05, 0.3] {
+        for max_step in [0.0, 0.5] {
+            let integ = obsan_estimate::Integration {
+                max_step,
+                ..Default::default()
+            };
+            let pr = p
+                .predict_with(&[0.0, t_lag], &[], &s, &times, &integ)
+                .unwrap();
+            for (t, y) in times.iter().zip(&pr.outputs) {
+                let want = if *t <= 1.0 {
+                    0.0
+                } else {
+                    1.0 - (-(t - 1.0) / t_lag).exp()
+                };
+                assert!(
+                    (y[0] - want).abs() < 5e-4,
+                    "T {t_lag}, max_step {max_step}, t {t}: {} vs {want}",
+                    y[0]
+                );
+            }
+        }
+    }
+}

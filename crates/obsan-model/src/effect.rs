@@ -23,8 +23,14 @@ use crate::sys::{Kind, System};
 pub struct Effect {
     pub name: String,
     pub description: String,
-    /// New unknown params (started at 0 by the workflow).
+    /// New unknown params (started at 0 by the workflow unless `starts`
+    /// gives a value).
     pub params: Vec<String>,
+    /// New dynamic states (`state va = v`); each needs an `x' = EXPR`.
+    pub states: Vec<String>,
+    /// Start values written with the declaration: `param T = 0.2` (a
+    /// number), `state va = v` (an expression of the inputs' first row).
+    pub starts: Vec<(String, String)>,
     /// New known constants (e.g. `later`, supplied by the workflow).
     pub consts: Vec<String>,
     /// New inputs and their derivation (`None`: the data must hold a column).
@@ -163,6 +169,8 @@ impl EffectLibrary {
                     name: rest.to_string(),
                     description: String::new(),
                     params: vec![],
+                    states: vec![],
+                    starts: vec![],
                     consts: vec![],
                     inputs: vec![],
                     substs: vec![],
@@ -202,16 +210,32 @@ impl EffectLibrary {
                     }
                     e.description.push_str(rest);
                 }
-                "param" | "params" | "const" | "consts" => {
+                "param" | "params" | "state" | "states" => {
+                    for item in split_top(rest) {
+                        let n = match item.split_once('=') {
+                            Some(_) => {
+                                let (n, v) = assignment(item)?;
+                                e.starts.push((n.clone(), v));
+                                n
+                            }
+                            None => item.trim().to_string(),
+                        };
+                        if !is_ident(&n) {
+                            return Err(err(format!("'{n}' is not a valid name in a '{word}' list")));
+                        }
+                        if word.starts_with("param") {
+                            e.params.push(n);
+                        } else {
+                            e.states.push(n);
+                        }
+                    }
+                }
+                "const" | "consts" => {
                     for n in rest.split(',').map(str::trim) {
                         if !is_ident(n) {
                             return Err(err(format!("'{n}' is not a valid name in a '{word}' list")));
                         }
-                        if word.starts_with("param") {
-                            e.params.push(n.into());
-                        } else {
-                            e.consts.push(n.into());
-                        }
+                        e.consts.push(n.into());
                     }
                 }
                 "input" | "inputs" => {
@@ -249,7 +273,7 @@ impl EffectLibrary {
                 }
                 _ => {
                     return Err(err(format!(
-                        "expected one of model, effect, description, param, const, input, subst, output, compare, delay, x' = ..., found '{word}'"
+                        "expected one of model, effect, description, param, state, const, input, subst, output, compare, delay, x' = ..., found '{word}'"
                     )))
                 }
             }
@@ -344,6 +368,7 @@ impl System {
             for n in e
                 .params
                 .iter()
+                .chain(&e.states)
                 .chain(&e.consts)
                 .chain(e.inputs.iter().map(|i| &i.0))
             {
@@ -377,10 +402,17 @@ impl System {
                 };
             }
             for (x, _) in &e.dynamics {
-                if !states.contains(x) {
+                if !states.contains(x) && !e.states.contains(x) {
                     return Err(fail(format!(
-                        "an equation for '{x}', which is not a state of {}",
+                        "an equation for '{x}', which is neither a state of {} nor a new state",
                         cur.name
+                    )));
+                }
+            }
+            for x in &e.states {
+                if !e.dynamics.iter().any(|d| &d.0 == x) {
+                    return Err(fail(format!(
+                        "the new state '{x}' needs an equation {x}' = ..."
                     )));
                 }
             }
@@ -403,8 +435,21 @@ impl System {
             let mut text = s.to_sys_text();
             // New declarations after the old ones keep the old params first.
             let mut extra = String::new();
+            let declared = |names: &[String]| -> String {
+                let items: Vec<String> = names
+                    .iter()
+                    .map(|n| match e.starts.iter().find(|s| &s.0 == n) {
+                        Some((_, v)) => format!("{n} = {v}"),
+                        None => n.clone(),
+                    })
+                    .collect();
+                items.join(", ")
+            };
+            if !e.states.is_empty() {
+                extra.push_str(&format!("state {}\n", declared(&e.states)));
+            }
             if !e.params.is_empty() {
-                extra.push_str(&format!("param {}\n", e.params.join(", ")));
+                extra.push_str(&format!("param {}\n", declared(&e.params)));
             }
             if !e.consts.is_empty() {
                 extra.push_str(&format!("const {}\n", e.consts.join(", ")));
@@ -417,6 +462,13 @@ impl System {
             }
             let cut = text.find("\n\n").map_or(text.len(), |i| i + 1);
             text.insert_str(cut, &extra);
+            // The new states' equations, untouched by `subst` (they see the
+            // measured inputs).
+            for x in &e.states {
+                if let Some((_, rhs)) = e.dynamics.iter().find(|d| &d.0 == x) {
+                    text.push_str(&format!("{x}' = {rhs}\n"));
+                }
+            }
             let mut next = System::parse(&text, &format!("{}+{}", cur.name, e.name))
                 .map_err(|err| fail(format!("the extended model is not valid: {err}")))?;
             next.description = if cur.description.is_empty() {

@@ -19,4 +19,4 @@ mod sys;
 pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
 pub use error::ModelError;
 pub use normal::NormalForm;
-pub use sys::{Decl, Kind, Restriction, System};
+pub use sys::{Decl, Kind, Restriction, Start, System};

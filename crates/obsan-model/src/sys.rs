@@ -43,8 +43,32 @@ pub struct Decl {
     /// the data layer evaluates from the measured inputs. To the analysis a
     /// derived input is an input like any other.
     pub derived: Option<String>,
+    /// A start value for fitting, never used by the analysis: for a param a
+    /// number (`param T = 0.2`), for a state an expression of the constants
+    /// and the inputs' first row of each trajectory (`state va = v`).
+    pub start: Option<Start>,
     /// Byte offset of the name in the source.
     pub(crate) at: usize,
+}
+
+/// Where fitting starts a param or a state (`Decl::start`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Start {
+    /// A param's start value (exact as written).
+    Number(Q),
+    /// A state's start in each trajectory: an expression of the constants
+    /// and of the inputs at the trajectory's first row.
+    Inputs(String),
+}
+
+impl Start {
+    /// The `.sys` text after `=`.
+    pub fn text(&self) -> String {
+        match self {
+            Start::Number(q) => q.to_string(),
+            Start::Inputs(t) => t.clone(),
+        }
+    }
 }
 
 /// An expression with the map from its text offsets to source offsets.
@@ -350,27 +374,13 @@ impl System {
                             format!("{shown} is not a valid name in a '{word}' list"),
                         ));
                     }
-                    let value = match (val, kind) {
-                        (Some(v), Kind::Const | Kind::Input) => {
-                            let off = rest_start + a + item.find('=').expect("has '=") + 1;
-                            Some((
-                                v.to_string(),
-                                (off..off + v.len()).map(|i| st.src(i)).collect(),
-                            ))
-                        }
-                        (Some(_), _) => {
-                            return Err(rd.err(
-                                st,
-                                na,
-                                rest_start + b,
-                                format!(
-                                    "only constants (a value) and inputs (a derivation from other inputs) take '=', not a {}",
-                                    kind.word()
-                                ),
-                            ))
-                        }
-                        (None, _) => None,
-                    };
+                    let value = val.map(|v| {
+                        let off = rest_start + a + item.find('=').expect("has '=") + 1;
+                        (
+                            v.to_string(),
+                            (off..off + v.len()).map(|i| st.src(i)).collect(),
+                        )
+                    });
                     pending.push(PendingDecl {
                         name: nm.to_string(),
                         kind,
@@ -528,33 +538,35 @@ impl System {
         });
         for p in order {
             let sym = ctx.symbol(&p.name);
-            let value = match &p.value {
-                None => None,
-                Some(_) if p.kind == Kind::Input => None,
-                Some((text, map)) => {
-                    let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
-                    let mut tmp = Ctx::new();
-                    let id = tmp
-                        .build(&ast, &mut |_, n, s| {
-                            Err(ParseError::new(
-                                format!("a constant's value must be a number, not '{n}'"),
-                                s,
-                            ))
-                        })
-                        .map_err(|e| rd.parse_err(map, e))?;
-                    match tmp.canon(id).as_q() {
-                        Some(q) => Some(q),
-                        None => {
-                            return Err(rd.parse_err(
-                                map,
-                                ParseError::new(
-                                    "a constant's value must be a rational number",
-                                    ast.span,
-                                ),
-                            ))
-                        }
-                    }
+            // A number: a constant's value or a param's start.
+            let number = |text: &str, map: &[usize], what: &str| -> Result<Q, ModelError> {
+                let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
+                let mut tmp = Ctx::new();
+                let id = tmp
+                    .build(&ast, &mut |_, n, s| {
+                        Err(ParseError::new(
+                            format!("{what} must be a number, not '{n}'"),
+                            s,
+                        ))
+                    })
+                    .map_err(|e| rd.parse_err(map, e))?;
+                tmp.canon(id).as_q().ok_or_else(|| {
+                    rd.parse_err(
+                        map,
+                        ParseError::new(format!("{what} must be a rational number"), ast.span),
+                    )
+                })
+            };
+            let value = match (&p.value, p.kind) {
+                (Some((text, map)), Kind::Const) => Some(number(text, map, "a constant's value")?),
+                _ => None,
+            };
+            let start = match (&p.value, p.kind) {
+                (Some((text, map)), Kind::Param) => {
+                    Some(Start::Number(number(text, map, "a param's start value")?))
                 }
+                (Some((text, _)), Kind::State) => Some(Start::Inputs(text.trim().to_string())),
+                _ => None,
             };
             decls.push(Decl {
                 name: p.name.clone(),
@@ -565,12 +577,13 @@ impl System {
                     (Some((text, _)), Kind::Input) => Some(text.trim().to_string()),
                     _ => None,
                 },
+                start,
                 at: p.at,
             });
         }
-        for p in pending.iter().filter(|p| p.kind == Kind::Input) {
-            if let Some((text, map)) = &p.value {
-                check_derived(&rd, text, map, &decls)?;
+        for p in &pending {
+            if let (Some((text, map)), Kind::Input | Kind::State) = (&p.value, p.kind) {
+                check_derived(&rd, text, map, &decls, p.kind)?;
             }
         }
         if !decls
@@ -903,9 +916,10 @@ impl System {
         for kind in [Kind::State, Kind::Param, Kind::Const, Kind::Input] {
             let items: Vec<String> = self
                 .decls_of(kind)
-                .map(|d| match (&d.value, &d.derived) {
-                    (Some(v), _) => format!("{} = {}", d.name, v),
-                    (_, Some(t)) => format!("{} = {}", d.name, t),
+                .map(|d| match (&d.value, &d.derived, &d.start) {
+                    (Some(v), _, _) => format!("{} = {}", d.name, v),
+                    (_, Some(t), _) => format!("{} = {}", d.name, t),
+                    (_, _, Some(s)) => format!("{} = {}", d.name, s.text()),
                     _ => d.name.clone(),
                 })
                 .collect();
@@ -991,7 +1005,20 @@ fn single_name<'s>(
 
 /// A derived input is `rate(u)` (the time derivative of a measured input) or
 /// an expression of measured inputs and constants (e.g. `sqrt((wR - wL)^2)*wR`).
-fn check_derived(rd: &Reader, text: &str, map: &[usize], decls: &[Decl]) -> Result<(), ModelError> {
+/// A derived input's definition, or a state's start (`kind` says which):
+/// measured inputs and constants only.
+fn check_derived(
+    rd: &Reader,
+    text: &str,
+    map: &[usize],
+    decls: &[Decl],
+    kind: Kind,
+) -> Result<(), ModelError> {
+    let what = if kind == Kind::State {
+        "a state's start value"
+    } else {
+        "a derived input"
+    };
     let measured = |n: &str| {
         decls
             .iter()
@@ -1019,7 +1046,7 @@ fn check_derived(rd: &Reader, text: &str, map: &[usize], decls: &[Decl]) -> Resu
             return Err(rd.err_src(
                 a,
                 b.max(a + 1),
-                format!("a derived input may use measured inputs and constants, not '{n}'"),
+                format!("{what} may use measured inputs and constants, not '{n}'"),
             ));
         }
     }

@@ -2,7 +2,8 @@
 //! system, the extension round-trips through text, and bad files get
 //! positioned errors.
 
-use obsan_model::{EffectLibrary, Kind, System};
+use obsan_expr::Q;
+use obsan_model::{EffectLibrary, Kind, Start, System};
 
 fn read(p: &str) -> String {
     std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -152,7 +153,64 @@ fn every_mrclam_effect_extends_mrclam() {
         "bearing_bias",
         "range_scale",
         "range_bias",
+        "actuator_lag",
     ] {
         assert!(names.contains(&want), "{want}");
+    }
+}
+
+#[test]
+fn an_effect_can_add_states_with_start_values() {
+    let sys = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/mrclam.eff"), "mrclam.eff").unwrap();
+    let e = lib.get("actuator_lag").unwrap();
+    let ext = sys.extend(&[e], "mrclam.eff").unwrap();
+    let states: Vec<&str> = ext.decls_of(Kind::State).map(|d| d.name.as_str()).collect();
+    assert_eq!(states, ["x", "y", "th", "va", "wa"]);
+    let start = |n: &str| {
+        ext.decls
+            .iter()
+            .find(|d| d.name == n)
+            .and_then(|d| d.start.clone())
+    };
+    assert_eq!(start("va"), Some(Start::Inputs("v".into())));
+    assert_eq!(start("T"), Some(Start::Number(Q::new(1.into(), 5.into()))));
+    // `subst` rewrote the model's dynamics, not the new states' equations
+    // (they see the commanded inputs).
+    assert_eq!(ext.rhs_text("x"), Some("(va)*cos(th)"));
+    assert_eq!(ext.rhs_text("va"), Some("(v - va)/T"));
+    // Input-affine with a drift: va' = -va/T + v/T.
+    let nf = ext.normal_form(None, &[]).unwrap();
+    assert_eq!(nf.n_dynamic, 5);
+    // The text round trip keeps the start values.
+    let again = System::parse(&ext.to_sys_text(), "again.sys").unwrap();
+    assert_eq!(again.to_sys_text(), ext.to_sys_text());
+    assert!(ext
+        .to_sys_text()
+        .contains("state x, y, th, va = v, wa = omega"));
+}
+
+#[test]
+fn new_states_are_checked() {
+    let sys = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").unwrap();
+    let cases = [
+        (
+            "effect a\nstate z\nparam k\n",
+            "a.eff:1",
+            "needs an equation z' = ...",
+        ),
+        ("effect a\nstate th\nth' = 0\n", "a.eff:1", "already a name"),
+        ("effect a\nstate z = x\nz' = -z\n", "a.eff:1", "not 'x'"),
+        (
+            "effect a\nparam k = v\nsubst v = k*v\n",
+            "a.eff:1",
+            "must be a number",
+        ),
+        ("effect a\nstate 2z\n", "a.eff:2:1", "not a valid name"),
+    ];
+    for (src, at, what) in cases {
+        let r = EffectLibrary::parse(src, "a.eff").and_then(|l| l.check(&sys));
+        let msg = r.expect_err(src).to_string();
+        assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
     }
 }

@@ -83,11 +83,18 @@ fn statement_errors() {
         "not a valid name",
     );
     check(&edit("state x, y", "state x,, y"), 2, 9, "not a valid name");
+    // `param a = 3` is a start value; it must be a number.
     check(
-        &edit("param a", "param a = 3"),
+        &edit("param a", "param a = k"),
         3,
-        7,
-        "only constants (a value) and inputs (a derivation from other inputs) take '='",
+        11,
+        "a param's start value must be a number, not 'k'",
+    );
+    check(
+        &edit("state x, y", "state x = y, y"),
+        2,
+        11,
+        "a state's start value may use measured inputs and constants, not 'y'",
     );
     check(&edit("const k", "const k = z"), 4, 11, "must be a number");
     check(&edit("x' = a*y + u", "x' a*y + u"), 6, 1, "needs '='");

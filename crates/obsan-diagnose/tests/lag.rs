@@ -1,0 +1,145 @@
+//! An effect that adds dynamic states: a first-order actuator lag hidden in
+//! simulated range-bearing data of a unicycle (systems/mrclam.sys with the
+//! landmarks on a ring), found by the workflow with its time constant.
+
+use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis};
+use obsan_estimate::{Dataset, DatasetMeta, Predictor, Series, Trajectory};
+use obsan_expr::SplitMix;
+use obsan_model::{EffectLibrary, Kind, System};
+use std::collections::BTreeMap;
+
+fn read(p: &str) -> String {
+    std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+struct Rng(SplitMix);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn normal(&mut self) -> f64 {
+        let (a, b) = (self.uniform().max(1e-300), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+const SIGMA_RANGE: f64 = 0.05;
+const SIGMA_BEARING: f64 = 0.02;
+
+/// Six 60 s windows of piecewise-constant commands (50 Hz rows), one
+/// landmark's range and bearing every 0.2 s, driven through `sys` (the
+/// nominal model or one extended by an effect) at `params`.
+fn simulate(sys: &System, params: &[f64], seed: u64) -> Dataset {
+    let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
+    let mut rng = Rng(SplitMix(seed));
+    let codes: Vec<String> = sys
+        .decls_of(Kind::Const)
+        .filter_map(|d| d.name.strip_prefix("lx").map(str::to_string))
+        .collect();
+    let mut meta = BTreeMap::new();
+    for (i, c) in codes.iter().enumerate() {
+        let a = std::f64::consts::TAU * i as f64 / codes.len() as f64;
+        meta.insert(format!("lx{c}"), 4.0 * a.cos());
+        meta.insert(format!("ly{c}"), 4.0 * a.sin());
+    }
+    let consts: Vec<f64> = p.consts.iter().map(|c| meta[c]).collect();
+    let mut trajectories = Vec::new();
+    for w in 0..6 {
+        let mut inputs = Series::new(vec!["v".into(), "omega".into()]);
+        let (mut v, mut om, mut next) = (0.0, 0.0, 0.0);
+        for k in 0..3000 {
+            let t = k as f64 * 0.02;
+            if t >= next {
+                v = [0.0, 0.15, 0.3][(rng.uniform() * 3.0) as usize];
+                om = rng.uniform() - 0.5;
+                next = t + 0.5 + 2.5 * rng.uniform();
+            }
+            inputs.push(t, &[Some(v), Some(om)]);
+        }
+        // Start near the centre; lag states (if any) at the first command.
+        let mut x0 = vec![
+            rng.uniform() - 0.5,
+            rng.uniform() - 0.5,
+            std::f64::consts::TAU * rng.uniform(),
+        ];
+        x0.extend(p.state[3..p.n_dynamic].iter().map(|s| {
+            let c = if s == "va" { 0 } else { 1 };
+            inputs.values[c][0].unwrap()
+        }));
+        x0.extend_from_slice(params);
+        let times: Vec<f64> = (1..300).map(|k| k as f64 * 0.2).collect();
+        let y = p.predict(&x0, &consts, &inputs, &times).unwrap();
+        let mut outputs = Series::new(p.outputs.clone());
+        for (t, yk) in times.iter().zip(&y) {
+            let c = (rng.uniform() * codes.len() as f64) as usize;
+            let mut row = vec![None; p.outputs.len()];
+            let ri = p
+                .outputs
+                .iter()
+                .position(|o| *o == format!("r{}", codes[c]))
+                .unwrap();
+            let bi = p
+                .outputs
+                .iter()
+                .position(|o| *o == format!("b{}", codes[c]))
+                .unwrap();
+            row[ri] = Some(yk[ri] + SIGMA_RANGE * rng.normal());
+            let b = yk[bi] + SIGMA_BEARING * rng.normal();
+            row[bi] = Some(b.sin().atan2(b.cos()));
+            outputs.push(*t, &row);
+        }
+        trajectories.push(Trajectory {
+            name: format!("w{w}"),
+            inputs,
+            outputs,
+            meta: meta.clone(),
+        });
+    }
+    Dataset {
+        meta: DatasetMeta::default(),
+        trajectories,
+    }
+}
+
+fn run(effect: Option<(&str, f64)>, seed: u64) -> Diagnosis {
+    let sys = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/mrclam.eff"), "mrclam.eff").unwrap();
+    let data = match effect {
+        Some((name, value)) => {
+            let ext = sys.extend(&[lib.get(name).unwrap()], "mrclam.eff").unwrap();
+            simulate(&ext, &[value], seed)
+        }
+        None => simulate(&sys, &[], seed),
+    };
+    let start = start_values(&sys, &data, &Default::default()).unwrap();
+    diagnose(
+        &sys,
+        Some(&lib),
+        &data,
+        &start,
+        &DiagnoseOptions::default(),
+        &|_| {},
+    )
+    .unwrap()
+}
+
+#[test]
+fn names_a_hidden_actuator_lag_with_its_time_constant() {
+    for seed in [1, 2] {
+        let d = run(Some(("actuator_lag", 0.3)), seed);
+        let named: Vec<&str> = d.named.iter().map(|n| n.effect.as_str()).collect();
+        assert_eq!(named, ["actuator_lag"], "seed {seed}");
+        let (_, t, sd) = d.named[0].estimates[0].clone();
+        assert!((t - 0.3).abs() < 3.0 * sd, "seed {seed}: T {t} ± {sd}");
+    }
+}
+
+#[test]
+fn clean_unicycle_data_name_nothing() {
+    let d = run(None, 3);
+    assert!(
+        d.named.is_empty(),
+        "{:?}",
+        d.named.iter().map(|n| &n.effect).collect::<Vec<_>>()
+    );
+}
