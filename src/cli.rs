@@ -83,6 +83,11 @@ pub struct MrclamArgs {
     /// Only the first N windows (0: all).
     #[arg(long, default_value_t = 0)]
     pub max_windows: usize,
+    /// Outputs are the Vicon poses (px, py, pth every 0.5 s) instead of the
+    /// landmark measurements, in the same windows: for systems/mrclam-pose.sys,
+    /// the ground truth's own estimate of the odometry effects.
+    #[arg(long)]
+    pub vicon_poses: bool,
     #[arg(long)]
     pub force: bool,
 }
@@ -113,9 +118,10 @@ pub struct DiagnoseArgs {
     /// Probability of naming an effect on data without one, per round.
     #[arg(long, default_value_t = 0.01)]
     pub alpha: f64,
-    /// Name at most this many effects.
-    #[arg(long, default_value_t = 3)]
-    pub max_effects: usize,
+    /// Name at most this many effects (default: while a candidate stays
+    /// significant).
+    #[arg(long)]
+    pub max_effects: Option<usize>,
     /// Ignore the input noise stated in dataset.json (ordinary least squares).
     #[arg(long)]
     pub no_input_noise: bool,

@@ -71,7 +71,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let start = start_values(&sys, &data, &init).map_err(Failure)?;
     let opts = DiagnoseOptions {
         alpha: a.alpha,
-        max_rounds: a.max_effects,
+        max_rounds: a.max_effects.unwrap_or(usize::MAX),
         input_noise: !a.no_input_noise,
         ..DiagnoseOptions::default()
     };
@@ -489,8 +489,13 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
         landmarks: (&lms.0, &lms.1),
         groundtruth: gt.as_ref().map(|g| (g.0.as_str(), g.1.as_str())),
     };
+    let what = if a.vicon_poses {
+        obsan_estimate::MrclamOutputs::ViconPoses
+    } else {
+        obsan_estimate::MrclamOutputs::Landmarks
+    };
     let (mut data, mut truth) =
-        obsan_estimate::mrclam_convert(&text, a.window, a.min_measurements)?;
+        obsan_estimate::mrclam_convert(&text, a.window, a.min_measurements, what)?;
     if a.max_windows > 0 {
         data.trajectories.truncate(a.max_windows);
         truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));
@@ -507,12 +512,17 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     write_folder_atomically(&a.out, a.force, &files)?;
     let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
     println!(
-        "wrote {}: robot {}, {} windows of {} s, {} landmark measurements",
+        "wrote {}: robot {}, {} windows of {} s, {} {}",
         a.out,
         a.robot,
         data.trajectories.len(),
         a.window,
-        n
+        n,
+        if a.vicon_poses {
+            "Vicon poses"
+        } else {
+            "landmark measurements"
+        }
     );
     Ok(ExitCode::SUCCESS)
 }

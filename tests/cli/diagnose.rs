@@ -122,10 +122,12 @@ fn diagnose_rejects_bad_input_with_positions() {
         &["diagnose", "--model", "systems/nope.sys", "--data", &data],
         "cannot read",
     );
-    // A model without a data-only start needs --init for its states.
+    // A model without a data-only start needs --init for its states (a
+    // state measured directly, `output beta = x`, would start at its first
+    // measurement).
     let sys = temp_file(
         "lin.sys",
-        "system lin\nstate x\nparam a\ninput wR, wL\nx' = a*wR\noutput beta = x\n",
+        "system lin\nstate x\nparam a\ninput wR, wL\nx' = a*wR\noutput beta = x + a\n",
     );
     bad(&["diagnose", "--model", &sys, "--data", &data], "--init x=");
 }
@@ -216,6 +218,46 @@ fn diagnose_on_mrclam_robot_1_names_the_odometry_effects() {
     );
     let (lag, _) = get("T");
     assert!(lag > 0.05 && lag < 0.5, "lag {lag}");
+}
+
+/// The same windows with the Vicon poses as outputs (systems/mrclam-pose.sys):
+/// the ground truth's own diagnosis. The robots travel 7% less than
+/// commanded by the window sums of Vicon distance (docs/diagnose.md), and
+/// the pose data must say so.
+#[test]
+fn diagnose_on_mrclam_vicon_poses_names_the_speed_shortfall() {
+    let Some(src) = mrclam_dir() else { return };
+    let data = tmp_dir("mrclam1-poses");
+    let out = ok(&[
+        "import",
+        "mrclam",
+        &src,
+        "--robot",
+        "1",
+        "--out",
+        &data,
+        "--vicon-poses",
+    ]);
+    assert!(
+        out.contains("32 windows") && out.contains("Vicon poses"),
+        "{out}"
+    );
+    let j: serde_json::Value = serde_json::from_str(&ok(&[
+        "diagnose",
+        "--model",
+        "systems/mrclam-pose.sys",
+        "--data",
+        &data,
+        "--json",
+    ]))
+    .unwrap();
+    let kv = j["named"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["effect"] == "speed_scale")
+        .map(|n| n["estimates"][0][1].as_f64().unwrap());
+    assert!(kv.is_some_and(|k| k < -0.02 && k > -0.1), "{kv:?}");
 }
 
 #[test]

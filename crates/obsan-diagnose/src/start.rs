@@ -49,6 +49,27 @@ pub fn start_values(
             }
         }
     }
+    // A state measured directly (`output px = x`, or its angle
+    // `atan2(sin(th), cos(th))`) starts at its first measurement.
+    for (k, t) in data.trajectories.iter().enumerate() {
+        for n in &states {
+            if s[k].contains_key(n) {
+                continue;
+            }
+            let direct = [n.clone(), format!("atan2(sin({n}), cos({n}))")];
+            let first = sys
+                .output_names()
+                .iter()
+                .filter(|o| {
+                    sys.rhs_text(o)
+                        .is_some_and(|r| direct.iter().any(|d| d == r))
+                })
+                .find_map(|o| t.outputs.column(o)?.iter().flatten().next().copied());
+            if let Some(v) = first {
+                s[k].insert(n.clone(), v);
+            }
+        }
+    }
     // Declared starts where nothing better is known.
     for d in sys.decls_of(Kind::Param) {
         if let Some(Start::Number(q)) = &d.start {

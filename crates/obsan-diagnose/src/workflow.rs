@@ -23,7 +23,8 @@ pub struct DiagnoseOptions {
     /// Probability of naming an effect on data without one, per round
     /// (split over the candidates, Bonferroni).
     pub alpha: f64,
-    /// At most this many effects are named.
+    /// At most this many effects are named (default: no limit; the rounds
+    /// go on while a candidate stays significant).
     pub max_rounds: usize,
     pub max_iterations: usize,
     pub cost_tolerance: f64,
@@ -44,7 +45,7 @@ impl Default for DiagnoseOptions {
     fn default() -> Self {
         DiagnoseOptions {
             alpha: 0.01,
-            max_rounds: 3,
+            max_rounds: usize::MAX,
             max_iterations: 60,
             cost_tolerance: 1e-6,
             step_tolerance: 1e-2,

@@ -41,7 +41,7 @@ pub use montecarlo::{
 };
 pub use mrclam::{
     convert as mrclam_convert, landmarks as mrclam_landmarks, model_text as mrclam_model_text,
-    MrclamText, WindowTruth,
+    MrclamOutputs, MrclamText, WindowTruth, POSE_INTERVAL,
 };
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;

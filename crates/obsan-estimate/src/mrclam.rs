@@ -85,10 +85,25 @@ pub fn landmarks(text: &str, file: &str) -> Result<Vec<(u32, f64, f64)>, DataErr
 /// needs at least `min_measurements` landmark observations, else it is
 /// skipped). Output columns `r<barcode>`, `b<barcode>`; the landmark
 /// positions are each window's constants `lx<barcode>`, `ly<barcode>`.
+/// Vicon poses as outputs (`px`, `py`, `pth`) are sampled this often.
+pub const POSE_INTERVAL: f64 = 0.5;
+
+/// What a window's outputs are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MrclamOutputs {
+    /// The landmark ranges and bearings (`systems/mrclam.sys`).
+    Landmarks,
+    /// The Vicon poses every [`POSE_INTERVAL`] s (`systems/mrclam-pose.sys`):
+    /// the ground truth's own answer to the same questions, for checking
+    /// what the landmark data give. Same windows as `Landmarks`.
+    ViconPoses,
+}
+
 pub fn convert(
     t: &MrclamText,
     window: f64,
     min_measurements: usize,
+    what: MrclamOutputs,
 ) -> Result<(Dataset, Vec<WindowTruth>), DataError> {
     if window.is_nan() || window <= 0.0 {
         return Err(DataError {
@@ -180,6 +195,19 @@ pub fn convert(
         if n_meas < min_measurements {
             continue;
         }
+        if what == MrclamOutputs::ViconPoses {
+            outputs = Series::new(vec!["px".into(), "py".into(), "pth".into()]);
+            let mut last = f64::NEG_INFINITY;
+            for g in gt.iter().filter(|g| g.0 >= start && g.0 <= end) {
+                if g.0 >= last + POSE_INTERVAL - 1e-9 {
+                    outputs.push(g.0, &[Some(g.1), Some(g.2), Some(g.3)]);
+                    last = g.0;
+                }
+            }
+            if outputs.len() < 2 {
+                continue;
+            }
+        }
         let name = format!("w{:03}", k - 1);
         let mut meta = BTreeMap::new();
         for (code, x, y) in &lms {
@@ -230,6 +258,14 @@ pub fn convert(
             meta,
         });
     }
+    if what == MrclamOutputs::ViconPoses && gt.is_empty() {
+        return Err(DataError {
+            file: t.odometry.1.into(),
+            row: None,
+            column: None,
+            message: "Vicon poses as outputs need the robot's ground-truth file".into(),
+        });
+    }
     if trajectories.is_empty() {
         return Err(DataError {
             file: t.measurements.1.into(),
@@ -241,7 +277,10 @@ pub fn convert(
         });
     }
     let meta = DatasetMeta {
-        model: Some("systems/mrclam.sys".into()),
+        model: Some(match what {
+            MrclamOutputs::Landmarks => "systems/mrclam.sys".into(),
+            MrclamOutputs::ViconPoses => "systems/mrclam-pose.sys".into(),
+        }),
         ..DatasetMeta::default()
     };
     Ok((Dataset { meta, trajectories }, truths))
