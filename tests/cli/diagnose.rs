@@ -218,6 +218,8 @@ fn diagnose_on_mrclam_robot_1_names_the_odometry_effects() {
     );
     let (lag, _) = get("T");
     assert!(lag > 0.05 && lag < 0.5, "lag {lag}");
+    // Kept on failure, for a look.
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 /// The same windows with the Vicon poses as outputs (systems/mrclam-pose.sys):
@@ -258,6 +260,7 @@ fn diagnose_on_mrclam_vicon_poses_names_the_speed_shortfall() {
         .find(|n| n["effect"] == "speed_scale")
         .map(|n| n["estimates"][0][1].as_f64().unwrap());
     assert!(kv.is_some_and(|k| k < -0.02 && k > -0.1), "{kv:?}");
+    let _ = std::fs::remove_dir_all(&data);
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! positioned errors.
 
 use obsan_expr::Q;
-use obsan_model::{EffectLibrary, Kind, Start, System};
+use obsan_model::{Effect, EffectLibrary, Kind, Start, System};
 
 fn read(p: &str) -> String {
     std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -213,4 +213,29 @@ fn new_states_are_checked() {
         let msg = r.expect_err(src).to_string();
         assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
     }
+}
+
+#[test]
+fn the_pose_model_shares_mrclams_odometry_effects() {
+    let pose = System::parse(&read("systems/mrclam-pose.sys"), "mrclam-pose.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/mrclam-pose.eff"), "mrclam-pose.eff").unwrap();
+    lib.check(&pose).unwrap();
+    let full = EffectLibrary::parse(&read("systems/mrclam.eff"), "mrclam.eff").unwrap();
+    for e in &lib.effects {
+        let f = full.get(&e.name).unwrap();
+        // The same effect, wherever it sits in its file.
+        assert_eq!(
+            Effect {
+                line: 0,
+                ..e.clone()
+            },
+            Effect {
+                line: 0,
+                ..f.clone()
+            },
+            "{}",
+            e.name
+        );
+    }
+    assert_eq!(lib.effects.len(), 5);
 }
