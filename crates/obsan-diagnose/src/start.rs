@@ -8,7 +8,7 @@
 use obsan_estimate::{
     add_derived_inputs, calibrate, CalibrateOptions, Dataset, Method, Trajectory,
 };
-use obsan_model::{Kind, Start, System};
+use obsan_model::{Decl, Kind, Start, System};
 use std::collections::BTreeMap;
 
 /// Start values (params, per trajectory the dynamic state) for `sys` on
@@ -72,8 +72,8 @@ pub fn start_values(
     }
     // Declared starts where nothing better is known.
     for d in sys.decls_of(Kind::Param) {
-        if let Some(Start::Number(q)) = &d.start {
-            p.entry(d.name.clone()).or_insert(q.to_f64());
+        if let Some(v) = declared_number(d) {
+            p.entry(d.name.clone()).or_insert(v);
         }
     }
     for (k, t) in data.trajectories.iter().enumerate() {
@@ -202,6 +202,14 @@ fn unicycle_start(t: &obsan_estimate::Trajectory) -> Option<[f64; 3]> {
     Some([x0, y0, th0])
 }
 
+/// A param's declared start value (`param T = 0.2`).
+fn declared_number(d: &Decl) -> Option<f64> {
+    match &d.start {
+        Some(Start::Number(q)) => Some(q.to_f64()),
+        _ => None,
+    }
+}
+
 /// A state's declared start on one trajectory: `expr` evaluated at the
 /// inputs' first row (with the trajectory's constants).
 fn state_start(name: &str, expr: &str, t: &Trajectory) -> Result<f64, String> {
@@ -235,10 +243,7 @@ pub fn extended_start(
 ) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
     let mut pv = params.to_vec();
     for d in ext.decls_of(Kind::Param).skip(params.len()) {
-        pv.push(match &d.start {
-            Some(Start::Number(q)) => q.to_f64(),
-            _ => 0.0,
-        });
+        pv.push(declared_number(d).unwrap_or(0.0));
     }
     let mut sv = Vec::with_capacity(states.len());
     for (k, (x0, t)) in states.iter().zip(&data.trajectories).enumerate() {

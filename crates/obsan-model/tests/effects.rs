@@ -77,6 +77,15 @@ fn extended_output_keeps_the_nominal_value_at_zero() {
     }
 }
 
+/// Each (source, place, words) is refused with a message holding both.
+fn rejected(sys: &System, origin: &str, cases: &[(&str, &str, &str)]) {
+    for (src, at, what) in cases {
+        let r = EffectLibrary::parse(src, origin).and_then(|l| l.check(sys));
+        let msg = r.expect_err(src).to_string();
+        assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
+    }
+}
+
 #[test]
 fn bad_effect_files_name_the_line() {
     let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
@@ -106,11 +115,7 @@ fn bad_effect_files_name_the_line() {
             "not 'calib'",
         ),
     ];
-    for (src, at, what) in cases {
-        let r = EffectLibrary::parse(src, "calib.eff").and_then(|l| l.check(&sys));
-        let msg = r.expect_err(src).to_string();
-        assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
-    }
+    rejected(&sys, "calib.eff", &cases);
 }
 
 #[test]
@@ -208,11 +213,7 @@ fn new_states_are_checked() {
         ),
         ("effect a\nstate 2z\n", "a.eff:2:1", "not a valid name"),
     ];
-    for (src, at, what) in cases {
-        let r = EffectLibrary::parse(src, "a.eff").and_then(|l| l.check(&sys));
-        let msg = r.expect_err(src).to_string();
-        assert!(msg.contains(at) && msg.contains(what), "{src:?}: {msg}");
-    }
+    rejected(&sys, "a.eff", &cases);
 }
 
 #[test]
