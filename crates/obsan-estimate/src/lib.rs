@@ -17,6 +17,7 @@ mod data;
 mod fit;
 mod montecarlo;
 mod mrclam;
+mod noise;
 mod predict;
 mod rng;
 mod sim;
@@ -43,6 +44,7 @@ pub use mrclam::{
     convert as mrclam_convert, landmarks as mrclam_landmarks, model_text as mrclam_model_text,
     MrclamOutputs, MrclamText, WindowTruth, POSE_INTERVAL,
 };
+pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;
 pub use sim::{

@@ -85,6 +85,11 @@ impl Whitener {
         self.sd.is_empty()
     }
 
+    /// `log det` of the covariance (twice the log of `L`'s diagonal).
+    pub fn log_det(&self) -> f64 {
+        self.sd.iter().map(|s| 2.0 * s.ln()).sum()
+    }
+
     /// `L^-1 v` in place.
     pub fn whiten_in_place(&self, v: &mut [f64]) {
         debug_assert_eq!(v.len(), self.len());
@@ -178,6 +183,15 @@ mod tests {
             for (x, y) in dense.iter().zip(&fast) {
                 assert!((x - y).abs() <= 1e-9 * (1.0 + x.abs()), "{x} vs {y}");
             }
+        }
+    }
+
+    #[test]
+    fn log_det_is_the_dense_determinants() {
+        for (n, r, seed) in [(1, 1, 1), (30, 2, 2), (57, 3, 3)] {
+            let w = example(n, r, seed);
+            let dense = w.covariance().determinant().ln();
+            assert!((w.log_det() - dense).abs() < 1e-9 * (1.0 + dense.abs()));
         }
     }
 

@@ -1,0 +1,484 @@
+//! Maximum-likelihood noise levels: each output's white-noise standard
+//! deviation and each measured input's noise intensity, from the residuals
+//! of a fit (variance components).
+//!
+//! Linearised about the fitted trajectory, the residuals of one trajectory
+//! are `d = A w + v`: `v` white with `sd(v_i) = sigma_o(i)`, `w(t)` the
+//! integrated input noise (a random walk with `Cov w(t) = sum_j c_j M_j(t)`,
+//! [`crate::Integration::input_noise`] with `c = e_j`) and `A` the
+//! residuals' sensitivities to the initial dynamic state. With the
+//! sensitivities held at the fit, the restricted likelihood of the levels
+//! (each trajectory's initial state profiled out, since it is fitted) is
+//! `-2 log L(sigma, c) = sum_i [ e_i^2 + log S_i + 2 log sigma_o(i) ]
+//! - e^T W (W^T W)^-1 W^T e + log det(W^T W) + n log(2 pi)`, where `e_i`, `S_i`
+//! are the normalised innovations and variances of the [`Whitener`] (the
+//! Cholesky factor `L` of `I + A' M A'^T`, `A' = diag(1/sigma) A`) and
+//! `W = L^-1 A'`; one evaluation costs O(n r^2). Holding the initial state
+//! at a fit made under other levels instead biases the intensities (an
+//! initial-pose error then looks like early drift). It is minimised over
+//! `log sigma` and `log c` by BFGS with central-difference gradients, from
+//! the best point of a grid. The shared params are held (the caller refits
+//! with the new levels and may call again).
+//!
+//! Linearised about the fitted path, the estimate is consistent while the
+//! drift stays small against the geometry (tests/noise.rs: a heading sd of
+//! 0.03 rad, ranges of metres); with larger drift (0.1 rad and more) the
+//! neglected second-order terms are read as extra input noise, so the
+//! intensities come out high (up to twice), which errs towards larger
+//! standard deviations, not smaller.
+
+use crate::fit::FitTrajectory;
+use crate::predict::{Integration, Predictor};
+use crate::sim::wrap;
+use crate::whiten::Whitener;
+use rayon::prelude::*;
+
+/// Options; every tolerance explicit.
+#[derive(Clone, Debug)]
+pub struct NoiseOptions {
+    /// BFGS iterations at most.
+    pub max_iterations: usize,
+    /// Stop when an iteration lowers `-2 log L` by less than this.
+    pub tolerance: f64,
+    /// Longest integration step (s), see [`Integration::max_step`].
+    pub max_step: f64,
+    /// Smallest input-noise intensity considered (below it the input is
+    /// reported as noiseless: its `c` is set to 0).
+    pub min_intensity: f64,
+}
+
+impl Default for NoiseOptions {
+    fn default() -> Self {
+        NoiseOptions {
+            max_iterations: 200,
+            tolerance: 1e-3,
+            max_step: 0.5,
+            min_intensity: 1e-12,
+        }
+    }
+}
+
+/// The estimated levels.
+#[derive(Clone, Debug)]
+pub struct NoiseEstimate {
+    /// Per output of the predictor (outputs without data keep the given level).
+    pub sigma: Vec<f64>,
+    /// Per input of the predictor: `c_j` (0 where not estimated).
+    pub input_noise: Vec<f64>,
+    /// `-2 log L` at the estimate and at the best white-noise model (every
+    /// `c = 0`, each `sigma` its output's RMS residual); their difference is
+    /// the likelihood-ratio statistic of the input noise.
+    pub m2ll: f64,
+    pub m2ll_white: f64,
+    /// Residuals used.
+    pub n: usize,
+    pub iterations: usize,
+}
+
+/// One trajectory's residuals and the matrices of the likelihood.
+struct Parts {
+    /// Raw residual, its output, its sensitivity to the initial dynamic state.
+    d: Vec<f64>,
+    o: Vec<usize>,
+    a: Vec<f64>,
+    /// Per estimated input: `M_j` at each residual's time (nd x nd each).
+    m: Vec<Vec<f64>>,
+}
+
+/// Estimate the noise levels at a fit (`params`, `states` per trajectory).
+/// `sigma0` starts the output levels; `inputs[j]` says whether input `j`'s
+/// intensity is estimated (false for derived inputs, which carry none).
+pub fn estimate_noise(
+    p: &Predictor,
+    trajs: &[FitTrajectory],
+    params: &[f64],
+    states: &[Vec<f64>],
+    sigma0: &[f64],
+    inputs: &[bool],
+    opts: &NoiseOptions,
+) -> Result<NoiseEstimate, String> {
+    let no = p.outputs.len();
+    let nd = p.n_dynamic;
+    let n = p.state.len();
+    if sigma0.len() != no || inputs.len() != p.inputs.len() || states.len() != trajs.len() {
+        return Err("noise estimate: sizes do not match the model".into());
+    }
+    let est_in: Vec<usize> = (0..inputs.len()).filter(|&j| inputs[j]).collect();
+    let parts: Vec<Parts> = trajs
+        .par_iter()
+        .zip(states)
+        .map(|(t, x)| {
+            let mut x0 = x.clone();
+            x0.extend_from_slice(params);
+            let cols: Vec<Option<usize>> = p
+                .outputs
+                .iter()
+                .map(|o| t.outputs.columns.iter().position(|c| c == o))
+                .collect();
+            let mut ms: Vec<Vec<Vec<f64>>> = Vec::new();
+            let mut pred = None;
+            for &j in &est_in {
+                let mut c = vec![0.0; inputs.len()];
+                c[j] = 1.0;
+                let integ = Integration {
+                    max_step: opts.max_step,
+                    sensitivities: true,
+                    input_noise: Some(c),
+                };
+                let pr = p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)?;
+                ms.push(pr.noise_m.clone());
+                pred = Some(pr);
+            }
+            let pred = match pred {
+                Some(p) => p,
+                None => {
+                    let integ = Integration {
+                        max_step: opts.max_step,
+                        sensitivities: true,
+                        input_noise: None,
+                    };
+                    p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)?
+                }
+            };
+            let mut parts = Parts {
+                d: vec![],
+                o: vec![],
+                a: vec![],
+                m: vec![Vec::new(); est_in.len()],
+            };
+            for (k, yk) in pred.outputs.iter().enumerate() {
+                for (o, c) in cols.iter().enumerate() {
+                    let Some(v) = c.and_then(|c| t.outputs.values[c][k]) else {
+                        continue;
+                    };
+                    let d = v - yk[o];
+                    parts.d.push(if p.angular[o] { wrap(d) } else { d });
+                    parts.o.push(o);
+                    parts
+                        .a
+                        .extend_from_slice(&pred.jacobians[k][o * n..o * n + nd]);
+                    for (mj, src) in parts.m.iter_mut().zip(&ms) {
+                        mj.extend_from_slice(&src[k]);
+                    }
+                }
+            }
+            Ok(parts)
+        })
+        .collect::<Result<_, String>>()?;
+    let count: usize = parts.iter().map(|p| p.d.len()).sum();
+    // Outputs with data get a free level; the rest keep sigma0.
+    let mut seen = vec![0usize; no];
+    let mut sq = vec![0.0; no];
+    for pt in &parts {
+        for (d, &o) in pt.d.iter().zip(&pt.o) {
+            seen[o] += 1;
+            sq[o] += d * d;
+        }
+    }
+    let est_out: Vec<usize> = (0..no).filter(|&o| seen[o] > 0).collect();
+    let white: Vec<f64> = (0..no)
+        .map(|o| {
+            if seen[o] > 0 {
+                (sq[o] / seen[o] as f64).sqrt().max(1e-300)
+            } else {
+                sigma0[o]
+            }
+        })
+        .collect();
+
+    let dim = est_out.len() + est_in.len();
+    let log_min_c = opts.min_intensity.max(1e-300).ln();
+    let unpack = |th: &[f64]| -> (Vec<f64>, Vec<f64>) {
+        let mut s = sigma0.to_vec();
+        for (k, &o) in est_out.iter().enumerate() {
+            s[o] = th[k].exp();
+        }
+        let c: Vec<f64> = th[est_out.len()..].iter().map(|x| x.exp()).collect();
+        (s, c)
+    };
+    let m2ll = |sigma: &[f64], c: &[f64]| -> f64 {
+        parts
+            .par_iter()
+            .map(|pt| {
+                let len = pt.d.len();
+                let mut a = Vec::with_capacity(len * nd);
+                let mut e = Vec::with_capacity(len);
+                let mut logs = 0.0;
+                for i in 0..len {
+                    let s = sigma[pt.o[i]];
+                    e.push(pt.d[i] / s);
+                    a.extend(pt.a[i * nd..(i + 1) * nd].iter().map(|v| v / s));
+                    logs += 2.0 * s.ln();
+                }
+                let mut m = vec![0.0; len * nd * nd];
+                for (cj, mj) in c.iter().zip(&pt.m) {
+                    for (x, y) in m.iter_mut().zip(mj) {
+                        *x += cj * y;
+                    }
+                }
+                let Some(w) = Whitener::new(nd, a.clone(), m) else {
+                    return f64::INFINITY;
+                };
+                w.whiten_in_place(&mut e);
+                // Each initial state is profiled out (its generalised least-
+                // squares correction under this covariance) and its
+                // restricted-likelihood term added: the levels are not
+                // judged at an initial state fitted under other ones.
+                let cols: Vec<Vec<f64>> = (0..nd)
+                    .map(|c| w.whiten(&(0..len).map(|i| a[i * nd + c]).collect::<Vec<f64>>()))
+                    .collect();
+                let ata = nalgebra::DMatrix::from_fn(nd, nd, |x, y| {
+                    cols[x]
+                        .iter()
+                        .zip(&cols[y])
+                        .map(|(p, q)| p * q)
+                        .sum::<f64>()
+                });
+                let ate = nalgebra::DVector::from_fn(nd, |x, _| {
+                    cols[x].iter().zip(&e).map(|(p, q)| p * q).sum::<f64>()
+                });
+                let ee: f64 = e.iter().map(|x| x * x).sum();
+                let (fit, logdet) = match ata.clone().cholesky() {
+                    Some(ch) => {
+                        let sol = ch.solve(&ate);
+                        let ld: f64 = ch.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
+                        (ate.dot(&sol), ld)
+                    }
+                    None => (0.0, 0.0),
+                };
+                ee - fit + logdet + w.log_det() + logs
+            })
+            .sum::<f64>()
+            + count as f64 * (2.0 * std::f64::consts::PI).ln()
+    };
+    let m2ll_white = m2ll(&white, &vec![0.0; est_in.len()]);
+    if est_in.is_empty() {
+        return Ok(NoiseEstimate {
+            sigma: white,
+            input_noise: vec![0.0; inputs.len()],
+            m2ll: m2ll_white,
+            m2ll_white,
+            n: count,
+            iterations: 0,
+        });
+    }
+    // Start: the output levels at their white-noise values or half of them
+    // (drift taken out of the residuals lowers them) with a common
+    // intensity on a half-decade grid; then each intensity on the grid in
+    // turn, the others held (the likelihood need not be unimodal in them).
+    let grid: Vec<f64> = (-24..=2)
+        .map(|k| (10f64.powf(k as f64 / 2.0)).ln().max(log_min_c))
+        .collect();
+    let eval = |th: &[f64]| {
+        let (s, c) = unpack(th);
+        m2ll(&s, &c)
+    };
+    let mut best = (f64::INFINITY, vec![0.0; dim]);
+    for &lc in &grid {
+        for f in [1.0f64, 0.5] {
+            let mut th: Vec<f64> = est_out.iter().map(|&o| (white[o] * f).ln()).collect();
+            th.extend(std::iter::repeat_n(lc, est_in.len()));
+            let v = eval(&th);
+            if v < best.0 {
+                best = (v, th);
+            }
+        }
+    }
+    if est_in.len() > 1 {
+        for _ in 0..2 {
+            for k in 0..est_in.len() {
+                let i = est_out.len() + k;
+                for &lc in &grid {
+                    let mut th = best.1.clone();
+                    th[i] = lc;
+                    let v = eval(&th);
+                    if v < best.0 {
+                        best = (v, th);
+                    }
+                }
+            }
+        }
+    }
+    let lo: Vec<f64> = est_out
+        .iter()
+        .map(|&o| (white[o] * 1e-4).ln())
+        .chain(std::iter::repeat_n(log_min_c, est_in.len()))
+        .collect();
+    let hi: Vec<f64> = est_out
+        .iter()
+        .map(|&o| (white[o] * 10.0).ln())
+        .chain(std::iter::repeat_n(1e6f64.ln(), est_in.len()))
+        .collect();
+    let (th, iterations) = bfgs(&eval, best.1, &lo, &hi, opts.max_iterations, opts.tolerance);
+    let (sigma, c) = unpack(&th);
+    let value = m2ll(&sigma, &c);
+    let mut input_noise = vec![0.0; inputs.len()];
+    for (k, &j) in est_in.iter().enumerate() {
+        // At the lower bound the data see no noise on this input.
+        input_noise[j] = if th[est_out.len() + k] <= log_min_c + 1e-9 {
+            0.0
+        } else {
+            c[k]
+        };
+    }
+    Ok(NoiseEstimate {
+        sigma,
+        input_noise,
+        m2ll: value.min(m2ll_white),
+        m2ll_white,
+        n: count,
+        iterations,
+    })
+}
+
+/// Minimise `f` within the box `[lo, hi]` by BFGS (projected steps,
+/// backtracking line search, central-difference gradients). Returns the
+/// minimiser and the iterations used.
+fn bfgs(
+    f: &(dyn Fn(&[f64]) -> f64 + Sync),
+    x0: Vec<f64>,
+    lo: &[f64],
+    hi: &[f64],
+    max_iterations: usize,
+    tolerance: f64,
+) -> (Vec<f64>, usize) {
+    let d = x0.len();
+    let clamp = |x: &mut [f64]| {
+        for i in 0..d {
+            x[i] = x[i].clamp(lo[i], hi[i]);
+        }
+    };
+    let grad = |x: &[f64]| -> Vec<f64> {
+        (0..d)
+            .map(|i| {
+                let h = 1e-4;
+                let (mut a, mut b) = (x.to_vec(), x.to_vec());
+                a[i] += h;
+                b[i] -= h;
+                (f(&a) - f(&b)) / (2.0 * h)
+            })
+            .collect()
+    };
+    let mut x = x0;
+    clamp(&mut x);
+    let mut fx = f(&x);
+    let mut g = grad(&x);
+    // Inverse Hessian approximation, row-major.
+    let mut h = vec![0.0; d * d];
+    for i in 0..d {
+        h[i * d + i] = 1.0;
+    }
+    let mut it = 0;
+    // Small decreases in a row, and whether H was just reset.
+    let mut small = 0;
+    let mut fresh = true;
+    while it < max_iterations {
+        it += 1;
+        // Bound-active coordinates pushing outwards are frozen this step.
+        let free: Vec<bool> = (0..d)
+            .map(|i| !((x[i] <= lo[i] && g[i] > 0.0) || (x[i] >= hi[i] && g[i] < 0.0)))
+            .collect();
+        let mut dir: Vec<f64> = (0..d)
+            .map(|i| {
+                if !free[i] {
+                    return 0.0;
+                }
+                -(0..d)
+                    .filter(|&j| free[j])
+                    .map(|j| h[i * d + j] * g[j])
+                    .sum::<f64>()
+            })
+            .collect();
+        let mut slope: f64 = dir.iter().zip(&g).map(|(a, b)| a * b).sum();
+        if slope >= 0.0 {
+            // Not a descent direction: reset to steepest descent.
+            for i in 0..d {
+                h[i * d..(i + 1) * d].fill(0.0);
+                h[i * d + i] = 1.0;
+                dir[i] = if free[i] { -g[i] } else { 0.0 };
+            }
+            slope = dir.iter().zip(&g).map(|(a, b)| a * b).sum();
+            if slope >= 0.0 {
+                break;
+            }
+        }
+        // Steps in log levels beyond 2 (a factor e^2) are cut.
+        let len = dir.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut step = if len > 2.0 { 2.0 / len } else { 1.0 };
+        let mut accepted = None;
+        for _ in 0..40 {
+            let mut xn: Vec<f64> = (0..d).map(|i| x[i] + step * dir[i]).collect();
+            clamp(&mut xn);
+            let fnew = f(&xn);
+            let moved: f64 = (0..d).map(|i| (xn[i] - x[i]) * g[i]).sum();
+            if fnew.is_finite() && fnew <= fx + 1e-4 * moved.min(0.0) {
+                accepted = Some((xn, fnew));
+                break;
+            }
+            step *= 0.5;
+        }
+        let Some((xn, fnew)) = accepted else {
+            if fresh {
+                break;
+            }
+            // A stale curvature estimate can point nowhere useful: retry
+            // once from steepest descent.
+            for i in 0..d {
+                h[i * d..(i + 1) * d].fill(0.0);
+                h[i * d + i] = 1.0;
+            }
+            fresh = true;
+            continue;
+        };
+        fresh = false;
+        let gn = grad(&xn);
+        let s: Vec<f64> = (0..d).map(|i| xn[i] - x[i]).collect();
+        let y: Vec<f64> = (0..d).map(|i| gn[i] - g[i]).collect();
+        let sy: f64 = s.iter().zip(&y).map(|(a, b)| a * b).sum();
+        if sy > 1e-12 {
+            // H <- (I - rho s y^T) H (I - rho y s^T) + rho s s^T
+            let rho = 1.0 / sy;
+            let hy: Vec<f64> = (0..d)
+                .map(|i| (0..d).map(|j| h[i * d + j] * y[j]).sum())
+                .collect();
+            let yhy: f64 = y.iter().zip(&hy).map(|(a, b)| a * b).sum();
+            for i in 0..d {
+                for j in 0..d {
+                    h[i * d + j] += -rho * (hy[i] * s[j] + s[i] * hy[j])
+                        + (rho * rho * yhy + rho) * s[i] * s[j];
+                }
+            }
+        }
+        let drop = fx - fnew;
+        x = xn;
+        fx = fnew;
+        g = gn;
+        small = if drop < tolerance { small + 1 } else { 0 };
+        if small >= 3 {
+            break;
+        }
+    }
+    (x, it)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bfgs;
+
+    #[test]
+    fn bfgs_finds_the_minimum_of_a_quadratic_and_respects_bounds() {
+        // f = (x - 1)^2 + 10 (y + 2)^2 + x y: minimum at the solution of the
+        // normal equations 2(x-1) + y = 0, 20(y+2) + x = 0.
+        let f = |v: &[f64]| (v[0] - 1.0).powi(2) + 10.0 * (v[1] + 2.0).powi(2) + v[0] * v[1];
+        let det = 2.0 * 20.0 - 1.0;
+        let (x, y) = ((2.0 * 20.0 + 40.0) / det, (2.0 * -40.0 - 2.0) / det);
+        let (v, _) = bfgs(&f, vec![0.0, 0.0], &[-9.0, -9.0], &[9.0, 9.0], 100, 1e-14);
+        assert!((v[0] - x).abs() < 1e-5 && (v[1] - y).abs() < 1e-5, "{v:?}");
+        // With y >= -1 the minimum lies on that bound, x from 2(x-1) + y = 0.
+        let (v, _) = bfgs(&f, vec![0.0, 0.0], &[-9.0, -1.0], &[9.0, 9.0], 100, 1e-14);
+        assert!(
+            (v[1] + 1.0).abs() < 1e-12 && (v[0] - 1.5).abs() < 1e-5,
+            "{v:?}"
+        );
+    }
+}
