@@ -9,9 +9,13 @@
 //! residuals' sensitivities to the initial dynamic state. With the
 //! sensitivities held at the fit, the restricted likelihood of the levels
 //! (each trajectory's initial state profiled out, since it is fitted) is
-//! `-2 log L(sigma, c) = sum_i [ e_i^2 + log S_i + 2 log sigma_o(i) ]
-//! - e^T W (W^T W)^-1 W^T e + log det(W^T W) + n log(2 pi)`, where `e_i`, `S_i`
-//! are the normalised innovations and variances of the [`Whitener`] (the
+//!
+//! ```text
+//! -2 log L(sigma, c) = sum_i [ e_i^2 + log S_i + 2 log sigma_o(i) ]
+//!                      - e^T W (W^T W)^-1 W^T e + log det(W^T W) + n log(2 pi)
+//! ```
+//!
+//! where `e_i`, `S_i` are the normalised innovations and variances of the [`Whitener`] (the
 //! Cholesky factor `L` of `I + A' M A'^T`, `A' = diag(1/sigma) A`) and
 //! `W = L^-1 A'`; one evaluation costs O(n r^2). Holding the initial state
 //! at a fit made under other levels instead biases the intensities (an
