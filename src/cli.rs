@@ -122,9 +122,11 @@ pub struct DiagnoseArgs {
     /// significant).
     #[arg(long)]
     pub max_effects: Option<usize>,
-    /// Ignore the input noise stated in dataset.json (ordinary least squares).
-    #[arg(long)]
-    pub no_input_noise: bool,
+    /// The measured inputs' noise: stated (dataset.json's, if any),
+    /// estimate (restricted maximum likelihood, linearised about the fit)
+    /// or none (ordinary least squares).
+    #[arg(long, default_value = "stated", value_name = "SOURCE")]
+    pub input_noise: String,
 }
 
 #[derive(Args)]

@@ -8,7 +8,7 @@ use crate::show::load_system;
 use crate::simulate::write_folder_atomically;
 use crate::Failure;
 use obsan_diagnose::{
-    diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, ModelFit,
+    diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
 };
 use obsan_model::{EffectLibrary, Kind};
 use std::collections::BTreeMap;
@@ -72,7 +72,16 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let opts = DiagnoseOptions {
         alpha: a.alpha,
         max_rounds: a.max_effects.unwrap_or(usize::MAX),
-        input_noise: !a.no_input_noise,
+        input_noise: match a.input_noise.as_str() {
+            "stated" => InputNoise::Stated,
+            "estimate" => InputNoise::Estimate,
+            "none" => InputNoise::None,
+            s => {
+                return Err(Failure(format!(
+                    "--input-noise {s}: expected stated, estimate or none"
+                )))
+            }
+        },
         ..DiagnoseOptions::default()
     };
     let bar = if std::io::stderr().is_terminal() {
@@ -164,6 +173,20 @@ fn hidden_text(c: &CandidateResult) -> String {
     }
 }
 
+/// `name = value ± sd [± robust]`: the robust sd (trajectories as
+/// clusters) where there is one.
+fn with_robust(est: &[(String, f64, f64)], robust: &[f64]) -> Vec<String> {
+    est.iter()
+        .enumerate()
+        .map(
+            |(i, (n, v, sd))| match robust.get(i).filter(|r| r.is_finite()) {
+                Some(r) => format!("{n} = {} [± {r:.1e}]", pm(*v, *sd)),
+                None => format!("{n} = {}", pm(*v, *sd)),
+            },
+        )
+        .collect()
+}
+
 pub fn render_text(d: &Diagnosis, data: &str) -> String {
     let mut s = String::new();
     let n_traj = d.nominal.initial_states.len();
@@ -188,6 +211,26 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         },
         d.input_class
     );
+    if !d.input_noise.is_empty() {
+        let c: Vec<String> = d
+            .input_noise
+            .iter()
+            .map(|(n, v)| format!("{n} {v:.3e}"))
+            .collect();
+        let how = match (d.input_noise_source.as_str(), d.input_noise_lr.last()) {
+            ("estimated", Some(lr)) => format!(
+                "estimated by restricted maximum likelihood, linearised about the fit; \
+                 likelihood ratio against white output noise {lr:.0}"
+            ),
+            (src, _) => src.to_string(),
+        };
+        let _ = writeln!(
+            s,
+            "input noise c (spectral density c|u|): {} ({how}); residuals weighed by \
+             generalised least squares",
+            c.join(", ")
+        );
+    }
     let _ = writeln!(
         s,
         "\nnominal fit: residual RMS {}; whitened RMS {:.3} (white noise: 1)",
@@ -198,7 +241,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     for (i, round) in d.rounds.iter().enumerate() {
         let _ = writeln!(
             s,
-            "\ncandidates, round {} (named when LR > {:.2}: p < alpha / candidates, and BIC falls):",
+            "\ncandidates, round {} (named when LR > {:.2}: p < alpha / candidates, and BIC falls; [± sd across trajectories], cluster-robust):",
             i + 1,
             d.lr_critical
         );
@@ -213,11 +256,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                     hidden_text(c)
                 );
             } else {
-                let est: Vec<String> = c
-                    .estimates
-                    .iter()
-                    .map(|(n, v, sd)| format!("{n} = {}", pm(*v, *sd)))
-                    .collect();
+                let est = with_robust(&c.estimates, &c.robust_sd);
                 let _ = writeln!(
                     s,
                     "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
@@ -236,11 +275,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
     }
     for n in &d.named {
-        let est: Vec<String> = n
-            .estimates
-            .iter()
-            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
-            .collect();
+        let est = with_robust(&n.estimates, &n.robust_sd);
         let before: Vec<String> = n
             .rms_before
             .iter()
@@ -262,6 +297,20 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             n.lr,
             n.p_value
         );
+        // The LR test reads the residuals as independent within a
+        // trajectory (up to the inflation); the spread across trajectories
+        // does not need that.
+        let crit = d.lr_critical.sqrt();
+        for ((p, v, _), r) in n.estimates.iter().zip(&n.robust_sd) {
+            if r.is_finite() && *r > 0.0 && (v / r).abs() < crit {
+                let _ = writeln!(
+                    s,
+                    "  caution: across trajectories {p} is only {:.1} sd from 0 (critical {crit:.1}): \
+                     the residuals are correlated within trajectories and the LR overstates the evidence",
+                    (v / r).abs()
+                );
+            }
+        }
         for rv in &n.rivals {
             let why = match rv.jointly_identifiable {
                 Some(false) => "together they are not identifiable on these data, so which one acts cannot be told from them",

@@ -7,7 +7,8 @@ use crate::residual::{analyse, ResidualReport, ResidualSeries};
 use crate::start::extended_start;
 use crate::stats::{chi2_1_p, normal_critical};
 use obsan_estimate::{
-    add_derived_inputs, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration, Predictor,
+    add_derived_inputs, estimate_noise, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration,
+    NoiseOptions, Predictor,
 };
 use obsan_model::{Effect, EffectLibrary, Kind, System};
 use rayon::prelude::*;
@@ -36,9 +37,24 @@ pub struct DiagnoseOptions {
     pub rank_trajectories: usize,
     /// Output noise levels; `None` takes `dataset.json`'s, else estimates.
     pub sigma: Option<Vec<f64>>,
-    /// Weigh the residuals by the input noise of `dataset.json` too
-    /// (generalised least squares, see [`input_noise`]).
-    pub input_noise: bool,
+    /// Where the measured inputs' noise comes from (it weighs the residuals
+    /// by generalised least squares, see [`input_noise`]).
+    pub input_noise: InputNoise,
+}
+
+/// The source of the measured inputs' noise levels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputNoise {
+    /// `dataset.json`'s, none if it states none.
+    Stated,
+    /// Estimated by restricted maximum likelihood (with the output levels
+    /// unless they are given), at the nominal fit and again after every
+    /// named effect ([`obsan_estimate::estimate_noise`]). Linearised about
+    /// the fitted path: for drift that stays small against the geometry
+    /// (docs/diagnose.md says where it does not).
+    Estimate,
+    /// None: ordinary least squares.
+    None,
 }
 
 impl Default for DiagnoseOptions {
@@ -52,7 +68,7 @@ impl Default for DiagnoseOptions {
             max_step: 0.5,
             rank_trajectories: 4,
             sigma: None,
-            input_noise: true,
+            input_noise: InputNoise::Stated,
         }
     }
 }
@@ -62,10 +78,17 @@ impl Default for DiagnoseOptions {
 pub struct ModelFit {
     pub model: String,
     pub params: Vec<(String, f64, f64)>,
+    /// Per param: the cluster-robust sd, trajectories as clusters (right
+    /// whatever the correlation within a trajectory; NaN with one).
+    pub params_robust_sd: Vec<f64>,
     /// Per trajectory: initial dynamic state.
     pub initial_states: Vec<Vec<f64>>,
     /// Sum of squared normalised residuals, their number, unknowns fitted.
     pub cost: f64,
+    /// With input noise: the log-determinant of the residuals' covariance
+    /// (normalised by the output levels), which depends on the params; the
+    /// likelihood ratio between two fits needs it (0 without input noise).
+    pub log_det: f64,
     pub n: usize,
     pub n_fitted: usize,
     pub iterations: usize,
@@ -81,6 +104,16 @@ pub struct ModelFit {
 impl ModelFit {
     pub fn param(&self, name: &str) -> Option<(f64, f64)> {
         self.params.iter().find(|p| p.0 == name).map(|p| (p.1, p.2))
+    }
+    /// A param's cluster-robust sd.
+    pub fn robust_sd(&self, name: &str) -> Option<f64> {
+        let i = self.params.iter().position(|p| p.0 == name)?;
+        self.params_robust_sd.get(i).copied()
+    }
+    /// `-2 log L` up to terms that do not depend on the fit (the output
+    /// levels are shared by the fits compared).
+    pub fn m2ll(&self) -> f64 {
+        self.cost + self.log_det
     }
     fn reduced_chi2(&self) -> f64 {
         self.cost / (self.n as f64 - self.n_fitted as f64).max(1.0)
@@ -106,6 +139,8 @@ pub struct CandidateResult {
     pub symmetry: Vec<(String, f64)>,
     /// Fitted new params with standard deviations.
     pub estimates: Vec<(String, f64, f64)>,
+    /// Their cluster-robust sds (trajectories as clusters).
+    pub robust_sd: Vec<f64>,
     /// Likelihood-ratio statistic (quasi-likelihood: divided by the larger
     /// model's reduced chi-square when above 1), its p-value, BIC change
     /// (negative is better), residual RMS per output, whiteness z.
@@ -124,6 +159,8 @@ pub struct Named {
     pub effect: String,
     pub description: String,
     pub estimates: Vec<(String, f64, f64)>,
+    /// Cluster-robust sds of the estimates (trajectories as clusters).
+    pub robust_sd: Vec<f64>,
     pub rms_before: Vec<(String, f64)>,
     pub rms_after: Vec<(String, f64)>,
     pub lr: f64,
@@ -166,6 +203,15 @@ pub struct Diagnosis {
     pub model: String,
     pub sigma: Vec<(String, f64)>,
     pub sigma_estimated: bool,
+    /// Per measured input, the noise intensity `c` (spectral density
+    /// `c |u|`) used in the final fit; empty: none.
+    pub input_noise: Vec<(String, f64)>,
+    /// "stated", "estimated" or "none".
+    pub input_noise_source: String,
+    /// When estimated: per estimate (at the nominal fit, then after each
+    /// named effect), the likelihood-ratio statistic of the input noise
+    /// against white output noise alone.
+    pub input_noise_lr: Vec<f64>,
     pub input_class: String,
     pub nominal: ModelFit,
     pub rounds: Vec<Vec<CandidateResult>>,
@@ -223,25 +269,82 @@ pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
 }
 
 /// The measured inputs' noise (see `obsan_estimate::Integration::input_noise`)
-/// from `dataset.json`: `noise.<input>` gives `c` for that input; otherwise
-/// `noise.encoder_k` = K with `nominal.r_right` = r gives `c = K^2 / r` for
-/// every measured input (wheel encoders, the error model of [10]). Derived
-/// inputs carry none. `None` when the dataset states no input noise.
-pub fn input_noise(sys: &System, data: &Dataset) -> Option<Vec<f64>> {
+/// from `dataset.json`, per measured input of `sys` by name: `noise.<input>`
+/// gives `c` for that input; otherwise `noise.encoder_k` = K with
+/// `nominal.r_right` = r gives `c = K^2 / r` for every measured input (wheel
+/// encoders, the error model of [10]). Empty when the dataset states none.
+pub fn input_noise(sys: &System, data: &Dataset) -> Vec<(String, f64)> {
     let m = &data.meta;
     let enc = match (m.noise.get("encoder_k"), m.nominal.get("r_right")) {
         (Some(k), Some(r)) if *k > 0.0 && *r > 0.0 => Some(k * k / r),
         _ => None,
     };
+    let c: Vec<(String, f64)> = sys
+        .decls_of(Kind::Input)
+        .filter(|d| d.derived.is_none())
+        .map(|d| {
+            let c = m.noise.get(&d.name).copied().or(enc).unwrap_or(0.0);
+            (d.name.clone(), c)
+        })
+        .collect();
+    if c.iter().any(|x| x.1 > 0.0) {
+        c
+    } else {
+        vec![]
+    }
+}
+
+/// The per-input vector of `sys`'s predictor for named intensities (derived
+/// inputs carry none); `None` when there is no noise.
+fn noise_vector(sys: &System, noise: &[(String, f64)]) -> Option<Vec<f64>> {
     let c: Vec<f64> = sys
         .decls_of(Kind::Input)
-        .map(|d| match (&d.derived, m.noise.get(&d.name)) {
-            (Some(_), _) => 0.0,
-            (None, Some(c)) => *c,
-            (None, None) => enc.unwrap_or(0.0),
+        .map(|d| match &d.derived {
+            Some(_) => 0.0,
+            None => noise.iter().find(|n| n.0 == d.name).map_or(0.0, |n| n.1),
         })
         .collect();
     c.iter().any(|x| *x > 0.0).then_some(c)
+}
+
+/// Output levels, named input intensities, and the likelihood-ratio
+/// statistic of the input noise.
+type Levels = (Vec<f64>, Vec<(String, f64)>, f64);
+
+/// Restricted-ML noise levels at `f` (a fit of `sys`): the output levels
+/// (held when `outputs` is false) and each measured input's intensity, with
+/// the likelihood-ratio statistic against white output noise.
+fn estimate_levels(
+    sys: &System,
+    data: &Dataset,
+    f: &ModelFit,
+    sigma: &[f64],
+    outputs: bool,
+    o: &DiagnoseOptions,
+) -> Result<Levels, String> {
+    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
+    let p = Predictor::new(&nf);
+    let trajs = FitTrajectory::all(&p, data);
+    let mask: Vec<bool> = sys
+        .decls_of(Kind::Input)
+        .map(|d| d.derived.is_none())
+        .collect();
+    let names: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+    let params: Vec<f64> = f.params.iter().map(|p| p.1).collect();
+    let opts = NoiseOptions {
+        max_step: o.max_step,
+        outputs,
+        ..NoiseOptions::default()
+    };
+    let e = estimate_noise(&p, &trajs, &params, &f.initial_states, sigma, &mask, &opts)?;
+    let named = names
+        .into_iter()
+        .zip(e.input_noise)
+        .zip(mask)
+        .filter(|(_, m)| *m)
+        .map(|(x, _)| x)
+        .collect();
+    Ok((e.sigma, named, e.m2ll_white - e.m2ll))
 }
 
 /// Normalised residuals beyond this are gross outliers for the restart of
@@ -272,28 +375,66 @@ fn without_outliers(data: &Dataset, f: &ModelFit, z: f64) -> Option<Dataset> {
     (removed > 0).then_some(out)
 }
 
-/// Fit `sys` to prepared `data` from the given start.
+/// How the residuals of a fit are weighed.
+#[derive(Clone, Copy, Debug)]
+pub enum Weights<'a> {
+    /// Independent residuals (ordinary least squares).
+    None,
+    /// Input-noise intensities by input name (generalised least squares,
+    /// the covariance at the fit's own estimate).
+    Noise(&'a [(String, f64)]),
+}
+
+impl<'a> Weights<'a> {
+    fn of(noise: &'a [(String, f64)]) -> Weights<'a> {
+        if noise.is_empty() {
+            Weights::None
+        } else {
+            Weights::Noise(noise)
+        }
+    }
+}
+
+/// Fit `sys` to prepared `data` from the given start, with output levels
+/// `sigma`, the residuals weighed by `weights`.
 pub fn fit_model(
     sys: &System,
     data: &Dataset,
     params0: &[f64],
     states0: &[Vec<f64>],
     sigma: &[f64],
+    weights: Weights,
     o: &DiagnoseOptions,
 ) -> Result<ModelFit, String> {
     let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
     let p = Predictor::new(&nf);
     let trajs = FitTrajectory::all(&p, data);
-    let noise = input_noise(sys, data);
     let fo = FitOptions {
         max_iterations: o.max_iterations,
         cost_tolerance: o.cost_tolerance,
         step_tolerance: o.step_tolerance,
         sigma: sigma.to_vec(),
         max_step: o.max_step,
-        input_noise: if o.input_noise { noise } else { None },
+        input_noise: match weights {
+            Weights::Noise(n) => noise_vector(sys, n),
+            _ => None,
+        },
     };
+    let weighted = fo.input_noise.is_some();
     let r = fit(&p, &trajs, params0, states0, &fo)?;
+    // The noise is mapped back to each trajectory's start through the
+    // inverse transition matrix, which a fast decaying state (a lag of time
+    // constant T over a trajectory of many T) makes overflow: then the
+    // residuals cannot be weighed and no likelihood can be compared.
+    if weighted {
+        if let Some(k) = r.whitening.iter().position(Option::is_none) {
+            return Err(format!(
+                "the input-noise covariance cannot be formed on trajectory {}: a state decays \
+                 too fast over it for the linearised noise model (use --input-noise none)",
+                data.trajectories[k].name
+            ));
+        }
+    }
     let names: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
     let measured: Vec<String> = sys
         .decls_of(Kind::Input)
@@ -401,8 +542,10 @@ pub fn fit_model(
             .zip(r.params.iter().zip(&r.params_sd))
             .map(|(n, (v, s))| (n.clone(), *v, *s))
             .collect(),
+        params_robust_sd: r.params_sd_robust.clone(),
         initial_states: r.initial_states.clone(),
         cost: r.cost,
+        log_det: r.whitening.iter().flatten().map(|w| w.log_det()).sum(),
         n: r.n_residuals,
         n_fitted,
         iterations: r.iterations,
@@ -457,7 +600,7 @@ pub fn diagnose(
             .iter()
             .map(|s| if s.is_nan() { 1.0 } else { *s })
             .collect();
-        let f = fit_model(sys, &prepared, &start.0, &start.1, &ones, o)?;
+        let f = fit_model(sys, &prepared, &start.0, &start.1, &ones, Weights::None, o)?;
         let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
         for (s, r) in sigma.iter_mut().zip(&f.rms) {
             if s.is_nan() {
@@ -465,7 +608,36 @@ pub fn diagnose(
             }
         }
     }
-    let nominal = fit_model(sys, &prepared, &start.0, &start.1, &sigma, o)?;
+    // Input noise: stated, or estimated by restricted ML (twice: the levels
+    // at the white-noise fit, the refit under them, the levels again).
+    let stated = input_noise(sys, data);
+    let estimate = o.input_noise == InputNoise::Estimate;
+    let mut noise = match o.input_noise {
+        InputNoise::Stated => stated,
+        InputNoise::Estimate | InputNoise::None => vec![],
+    };
+    let mut nominal = fit_model(
+        sys,
+        &prepared,
+        &start.0,
+        &start.1,
+        &sigma,
+        Weights::of(&noise),
+        o,
+    )?;
+    let mut noise_lr = Vec::new();
+    if estimate {
+        progress("estimating the noise levels");
+        let mut lr = 0.0;
+        for _ in 0..2 {
+            let (s, c, l) = estimate_levels(sys, &prepared, &nominal, &sigma, sigma_estimated, o)?;
+            (sigma, noise, lr) = (s, c, l);
+            let pv: Vec<f64> = nominal.params.iter().map(|p| p.1).collect();
+            let states = nominal.initial_states.clone();
+            nominal = fit_model(sys, &prepared, &pv, &states, &sigma, Weights::of(&noise), o)?;
+        }
+        noise_lr.push(lr);
+    }
     let effects: Vec<&Effect> = lib.map(|l| l.effects.iter().collect()).unwrap_or_default();
     let model_effects: Vec<&Effect> = effects
         .iter()
@@ -510,7 +682,7 @@ pub fn diagnose(
                     e,
                     data,
                     &which,
-                    &sigma,
+                    (&sigma, &noise),
                     crit,
                     o,
                     lib,
@@ -566,6 +738,7 @@ pub fn diagnose(
             effect: res.effect.clone(),
             description: eff.description.clone(),
             estimates: res.estimates.clone(),
+            robust_sd: res.robust_sd.clone(),
             rms_before: current.rms.clone(),
             rms_after: ext_fit.rms.clone(),
             lr: res.lr,
@@ -574,6 +747,51 @@ pub fn diagnose(
         });
         current_sys = ext_sys;
         current = ext_fit;
+        // The named effect takes its share of the drift: the levels again,
+        // and the extended model refitted under them (the next round's
+        // candidates are compared with that fit).
+        if estimate {
+            progress("estimating the noise levels");
+            let prep = prepare(&current_sys, data)?;
+            let est = estimate_levels(&current_sys, &prep, &current, &sigma, sigma_estimated, o);
+            if let Ok((s, c, l)) = est {
+                let pv: Vec<f64> = current.params.iter().map(|p| p.1).collect();
+                let states = current.initial_states.clone();
+                if let Ok(f) = fit_model(&current_sys, &prep, &pv, &states, &s, Weights::of(&c), o)
+                {
+                    (sigma, noise) = (s, c);
+                    noise_lr.push(l);
+                    current = f;
+                }
+            }
+        }
+    }
+    // A significant candidate that the next round's rank test finds
+    // confounded with the named effect is a rival whatever its BIC: on
+    // these data the two differ only outside what the data identify.
+    for (i, n) in named.iter_mut().enumerate() {
+        let (Some(this), Some(next)) = (rounds.get(i), rounds.get(i + 1)) else {
+            continue;
+        };
+        let best = this
+            .iter()
+            .find(|c| c.effect == n.effect)
+            .map(|c| c.delta_bic);
+        for c in this
+            .iter()
+            .filter(|c| c.significant && c.effect != n.effect)
+        {
+            let confounded = next
+                .iter()
+                .any(|x| x.effect == c.effect && x.error.is_none() && !x.identifiable);
+            if confounded && !n.rivals.iter().any(|r| r.effect == c.effect) {
+                n.rivals.push(Rival {
+                    effect: c.effect.clone(),
+                    delta_bic: (c.delta_bic - best.unwrap_or(c.delta_bic)).max(0.0),
+                    jointly_identifiable: None,
+                });
+            }
+        }
     }
     // A rival's rank test in the round after its named effect says whether
     // the two are confounded on these data.
@@ -588,10 +806,13 @@ pub fn diagnose(
     }
     // Estimates of earlier named effects are refined by later rounds.
     for n in &mut named {
-        for e in &mut n.estimates {
+        for (i, e) in n.estimates.iter_mut().enumerate() {
             if let Some((v, s)) = current.param(&e.0) {
                 e.1 = v;
                 e.2 = s * current.inflation().sqrt();
+            }
+            if let (Some(r), Some(slot)) = (current.robust_sd(&e.0), n.robust_sd.get_mut(i)) {
+                *slot = r;
             }
         }
     }
@@ -599,6 +820,16 @@ pub fn diagnose(
         model: sys.name.clone(),
         sigma: outputs.into_iter().zip(sigma).collect(),
         sigma_estimated,
+        input_noise_source: if estimate {
+            "estimated"
+        } else if noise.is_empty() {
+            "none"
+        } else {
+            "stated"
+        }
+        .into(),
+        input_noise: noise,
+        input_noise_lr: noise_lr,
         input_class: class_text,
         nominal,
         rounds,
@@ -618,7 +849,7 @@ fn candidate(
     e: &Effect,
     data: &Dataset,
     which: &[usize],
-    sigma: &[f64],
+    (sigma, noise): (&[f64], &[(String, f64)]),
     crit: f64,
     o: &DiagnoseOptions,
     lib: Option<&EffectLibrary>,
@@ -631,6 +862,7 @@ fn candidate(
         rank: None,
         symmetry: vec![],
         estimates: vec![],
+        robust_sd: vec![],
         lr: 0.0,
         p_value: 1.0,
         delta_bic: 0.0,
@@ -688,7 +920,13 @@ fn candidate(
             }
             return Ok(None);
         }
-        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, o)?;
+        // Each fit weighs its residuals by the covariance at its own
+        // estimate; their likelihoods then differ by cost and log-determinant
+        // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners instead
+        // froze the fits where the drift is large: a covariance linearised
+        // about one path judges another badly.)
+        let weights = Weights::of(noise);
+        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, weights, o)?;
         // A second start for a candidate that improves the fit, from a fit
         // without the gross outliers (|e| > OUTLIER_Z sigma). Outputs that
         // wrap make the cost discontinuous: a scaled bearing jumps at +-pi,
@@ -696,23 +934,31 @@ fn candidate(
         // model's biased params is a 40-sigma residual that holds the fit
         // short of the effect's size. Without it the fit finds the right
         // side; the full data then polish that start, and the lower cost wins.
-        if base_fit.cost - f.cost > crit * f.inflation() {
+        if base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
             if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                 let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
-                let f2 =
-                    fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, o).and_then(|t| {
-                        let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
-                        fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, o)
-                    });
+                let f2 = fit_model(
+                    &ext,
+                    &trimmed,
+                    &pv,
+                    &f.initial_states,
+                    sigma,
+                    Weights::None,
+                    o,
+                )
+                .and_then(|t| {
+                    let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
+                    fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, weights, o)
+                });
                 if let Ok(f2) = f2 {
-                    if f2.cost < f.cost {
+                    if f2.m2ll() < f.m2ll() {
                         f = f2;
                     }
                 }
             }
         }
         let inflate = f.inflation();
-        res.lr = (base_fit.cost - f.cost).max(0.0) / inflate;
+        res.lr = (base_fit.m2ll() - f.m2ll()).max(0.0) / inflate;
         res.p_value = chi2_1_p(res.lr);
         res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
         res.significant = res.lr > crit && res.delta_bic < 0.0;
@@ -721,6 +967,7 @@ fn candidate(
             .iter()
             .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
             .collect();
+        res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
         res.rms = f.rms.clone();
         res.whiteness_z = f
             .residuals

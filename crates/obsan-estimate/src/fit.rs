@@ -74,6 +74,11 @@ pub struct FitResult {
     pub initial_states: Vec<Vec<f64>>,
     /// Standard deviations from the inverse Fisher information (J^T J)^-1.
     pub params_sd: Vec<f64>,
+    /// Cluster-robust ("sandwich") standard deviations of the params, the
+    /// trajectories being the clusters: right whatever the correlation of
+    /// the residuals within a trajectory, since trajectories are
+    /// independent (see [`clustered_sd`]). NaN with fewer than two.
+    pub params_sd_robust: Vec<f64>,
     pub initial_states_sd: Vec<Vec<f64>>,
     /// The whole covariance, params first, then each trajectory's initial state.
     pub covariance: Vec<Vec<f64>>,
@@ -173,6 +178,40 @@ fn whitening(
         .flat_map(|&k| noise_m[k].iter().copied())
         .collect();
     Whitener::new(nd, a, m)
+}
+
+/// The params block of `A^-1 B A^-1 K/(K-1)`: `A = J^T J` (its inverse
+/// `cov`), `B = sum_k g_k g_k^T` with `g_k = J_k^T r_k` the score of
+/// trajectory `k` (Liang and Zeger, Biometrika 1986; the small-sample factor
+/// of Hansen 2007). Each trajectory's own initial state sets its part of
+/// `g_k` to zero at the optimum, so with `K` trajectories the variance has
+/// about `K - 1` degrees of freedom whatever the number of residuals.
+fn clustered_sd(
+    cov: &[Vec<f64>],
+    jac: &[(Vec<usize>, Vec<Vec<f64>>)],
+    res: &[Vec<f64>],
+    n_params: usize,
+) -> Vec<f64> {
+    let k = jac.len();
+    if k < 2 {
+        return vec![f64::NAN; n_params];
+    }
+    // For each param i: var_i = sum_k (row i of cov . g_k)^2 * K/(K-1).
+    let mut var = vec![0.0; n_params];
+    for ((idx, rows), r) in jac.iter().zip(res) {
+        let mut g = vec![0.0; idx.len()];
+        for (row, ri) in rows.iter().zip(r) {
+            for (a, x) in g.iter_mut().enumerate() {
+                *x += row[a] * ri;
+            }
+        }
+        for (i, v) in var.iter_mut().enumerate() {
+            let c: f64 = idx.iter().zip(&g).map(|(&j, gj)| cov[i][j] * gj).sum();
+            *v += c * c;
+        }
+    }
+    let f = k as f64 / (k as f64 - 1.0);
+    var.iter().map(|v| (v * f).sqrt()).collect()
 }
 
 /// Solve the symmetric system `a x = b` by Gaussian elimination with partial pivoting.
@@ -587,11 +626,13 @@ pub fn fit(
         raw,
         jtj,
         cost,
+        jac,
         ..
     } = cur;
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
+    let params_sd_robust = clustered_sd(&covariance, &jac, &res, n_params);
     let n_res: usize = res.iter().map(Vec::len).sum();
     let mut rms = vec![0.0; p.outputs.len()];
     let mut counts = vec![0usize; p.outputs.len()];
@@ -619,6 +660,7 @@ pub fn fit(
             .map(|k| theta[n_params + k * lay.n_dyn..n_params + (k + 1) * lay.n_dyn].to_vec())
             .collect(),
         params_sd: cov_diag[..n_params].to_vec(),
+        params_sd_robust,
         initial_states_sd: (0..trajs.len())
             .map(|k| cov_diag[n_params + k * lay.n_dyn..n_params + (k + 1) * lay.n_dyn].to_vec())
             .collect(),

@@ -46,6 +46,8 @@ pub struct NoiseOptions {
     pub tolerance: f64,
     /// Longest integration step (s), see [`Integration::max_step`].
     pub max_step: f64,
+    /// Estimate the output levels too (else they stay at the given ones).
+    pub outputs: bool,
     /// Smallest input-noise intensity considered (below it the input is
     /// reported as noiseless: its `c` is set to 0).
     pub min_intensity: f64,
@@ -57,6 +59,7 @@ impl Default for NoiseOptions {
             max_iterations: 200,
             tolerance: 1e-3,
             max_step: 0.5,
+            outputs: true,
             min_intensity: 1e-12,
         }
     }
@@ -70,8 +73,8 @@ pub struct NoiseEstimate {
     /// Per input of the predictor: `c_j` (0 where not estimated).
     pub input_noise: Vec<f64>,
     /// `-2 log L` at the estimate and at the best white-noise model (every
-    /// `c = 0`, each `sigma` its output's RMS residual); their difference is
-    /// the likelihood-ratio statistic of the input noise.
+    /// `c = 0`, each estimated `sigma` its output's RMS residual); their
+    /// difference is the likelihood-ratio statistic of the input noise.
     pub m2ll: f64,
     pub m2ll_white: f64,
     /// Residuals used.
@@ -179,10 +182,10 @@ pub fn estimate_noise(
             sq[o] += d * d;
         }
     }
-    let est_out: Vec<usize> = (0..no).filter(|&o| seen[o] > 0).collect();
+    let est_out: Vec<usize> = (0..no).filter(|&o| opts.outputs && seen[o] > 0).collect();
     let white: Vec<f64> = (0..no)
         .map(|o| {
-            if seen[o] > 0 {
+            if opts.outputs && seen[o] > 0 {
                 (sq[o] / seen[o] as f64).sqrt().max(1e-300)
             } else {
                 sigma0[o]
@@ -287,6 +290,13 @@ pub fn estimate_noise(
                 best = (v, th);
             }
         }
+    }
+    if !best.0.is_finite() {
+        return Err(
+            "the input noise cannot be carried back to the trajectories' starts \
+                    (a state decays too fast over them): no intensity can be estimated"
+                .into(),
+        );
     }
     if est_in.len() > 1 {
         for _ in 0..2 {
