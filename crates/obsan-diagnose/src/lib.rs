@@ -27,5 +27,5 @@ pub use start::start_values;
 pub use stats::{chi2_1_p, chi2_z, normal_critical};
 pub use workflow::{
     diagnose, fit_model, input_noise, prepare, CandidateResult, DiagnoseOptions, Diagnosis,
-    InputCheck, InputNoise, ModelFit, Named, Rival, Start, Weights, RIVAL_BIC,
+    InputCheck, InputNoise, ModelFit, Named, Rival, Start, RIVAL_BIC,
 };

@@ -375,35 +375,16 @@ fn without_outliers(data: &Dataset, f: &ModelFit, z: f64) -> Option<Dataset> {
     (removed > 0).then_some(out)
 }
 
-/// How the residuals of a fit are weighed.
-#[derive(Clone, Copy, Debug)]
-pub enum Weights<'a> {
-    /// Independent residuals (ordinary least squares).
-    None,
-    /// Input-noise intensities by input name (generalised least squares,
-    /// the covariance at the fit's own estimate).
-    Noise(&'a [(String, f64)]),
-}
-
-impl<'a> Weights<'a> {
-    fn of(noise: &'a [(String, f64)]) -> Weights<'a> {
-        if noise.is_empty() {
-            Weights::None
-        } else {
-            Weights::Noise(noise)
-        }
-    }
-}
-
 /// Fit `sys` to prepared `data` from the given start, with output levels
-/// `sigma`, the residuals weighed by `weights`.
+/// `sigma` and input-noise intensities `noise` by input name (generalised
+/// least squares, the covariance at the fit's own estimate; empty: none).
 pub fn fit_model(
     sys: &System,
     data: &Dataset,
     params0: &[f64],
     states0: &[Vec<f64>],
     sigma: &[f64],
-    weights: Weights,
+    noise: &[(String, f64)],
     o: &DiagnoseOptions,
 ) -> Result<ModelFit, String> {
     let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
@@ -415,10 +396,7 @@ pub fn fit_model(
         step_tolerance: o.step_tolerance,
         sigma: sigma.to_vec(),
         max_step: o.max_step,
-        input_noise: match weights {
-            Weights::Noise(n) => noise_vector(sys, n),
-            _ => None,
-        },
+        input_noise: noise_vector(sys, noise),
     };
     let weighted = fo.input_noise.is_some();
     let r = fit(&p, &trajs, params0, states0, &fo)?;
@@ -600,7 +578,7 @@ pub fn diagnose(
             .iter()
             .map(|s| if s.is_nan() { 1.0 } else { *s })
             .collect();
-        let f = fit_model(sys, &prepared, &start.0, &start.1, &ones, Weights::None, o)?;
+        let f = fit_model(sys, &prepared, &start.0, &start.1, &ones, &[], o)?;
         let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
         for (s, r) in sigma.iter_mut().zip(&f.rms) {
             if s.is_nan() {
@@ -616,15 +594,7 @@ pub fn diagnose(
         InputNoise::Stated => stated,
         InputNoise::Estimate | InputNoise::None => vec![],
     };
-    let mut nominal = fit_model(
-        sys,
-        &prepared,
-        &start.0,
-        &start.1,
-        &sigma,
-        Weights::of(&noise),
-        o,
-    )?;
+    let mut nominal = fit_model(sys, &prepared, &start.0, &start.1, &sigma, &noise, o)?;
     let mut noise_lr = Vec::new();
     if estimate {
         progress("estimating the noise levels");
@@ -634,7 +604,7 @@ pub fn diagnose(
             (sigma, noise, lr) = (s, c, l);
             let pv: Vec<f64> = nominal.params.iter().map(|p| p.1).collect();
             let states = nominal.initial_states.clone();
-            nominal = fit_model(sys, &prepared, &pv, &states, &sigma, Weights::of(&noise), o)?;
+            nominal = fit_model(sys, &prepared, &pv, &states, &sigma, &noise, o)?;
         }
         noise_lr.push(lr);
     }
@@ -757,8 +727,7 @@ pub fn diagnose(
             if let Ok((s, c, l)) = est {
                 let pv: Vec<f64> = current.params.iter().map(|p| p.1).collect();
                 let states = current.initial_states.clone();
-                if let Ok(f) = fit_model(&current_sys, &prep, &pv, &states, &s, Weights::of(&c), o)
-                {
+                if let Ok(f) = fit_model(&current_sys, &prep, &pv, &states, &s, &c, o) {
                     (sigma, noise) = (s, c);
                     noise_lr.push(l);
                     current = f;
@@ -922,11 +891,10 @@ fn candidate(
         }
         // Each fit weighs its residuals by the covariance at its own
         // estimate; their likelihoods then differ by cost and log-determinant
-        // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners instead
-        // froze the fits where the drift is large: a covariance linearised
-        // about one path judges another badly.)
-        let weights = Weights::of(noise);
-        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, weights, o)?;
+        // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners for
+        // every candidate was tried: with large estimated drift the
+        // candidate fits did not leave their start.)
+        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, noise, o)?;
         // A second start for a candidate that improves the fit, from a fit
         // without the gross outliers (|e| > OUTLIER_Z sigma). Outputs that
         // wrap make the cost discontinuous: a scaled bearing jumps at +-pi,
@@ -937,19 +905,12 @@ fn candidate(
         if base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
             if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                 let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
-                let f2 = fit_model(
-                    &ext,
-                    &trimmed,
-                    &pv,
-                    &f.initial_states,
-                    sigma,
-                    Weights::None,
-                    o,
-                )
-                .and_then(|t| {
-                    let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
-                    fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, weights, o)
-                });
+                let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o).and_then(
+                    |t| {
+                        let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
+                        fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, noise, o)
+                    },
+                );
                 if let Ok(f2) = f2 {
                     if f2.m2ll() < f.m2ll() {
                         f = f2;

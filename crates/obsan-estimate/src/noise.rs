@@ -338,7 +338,7 @@ pub fn estimate_noise(
     Ok(NoiseEstimate {
         sigma,
         input_noise,
-        m2ll: value.min(m2ll_white),
+        m2ll: value,
         m2ll_white,
         n: count,
         iterations,
