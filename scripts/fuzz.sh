@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Run every fuzz target for SECONDS each (default 60), on the stable toolchain
+# (`--sanitizer none`: the sanitizers need nightly; libFuzzer's coverage
+# guidance and the targets' own oracles still run). Seed corpora come from
+# systems/ and the test data, copied into fuzz/corpus/TARGET (not committed).
+# A crash leaves its input in fuzz/artifacts/TARGET and makes this exit 1;
+# turn each into a regression test in the crate that owns the reader.
+#   scripts/fuzz.sh 600            # ten minutes per target
+#   scripts/fuzz.sh 30 expr sys    # some targets only
+set -euo pipefail
+cd "$(dirname "$0")/.."
+secs="${1:-60}"
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(expr sys eff dataset)
+
+if ! cargo fuzz --version >/dev/null 2>&1; then
+  echo "== installing cargo-fuzz (crates.io)"
+  cargo install cargo-fuzz --locked >/dev/null
+fi
+
+seed() {
+  local t=$1 dir=fuzz/corpus/$1
+  mkdir -p "$dir"
+  case $t in
+    expr)
+      # One expression a file: every right-hand side of the shipped systems.
+      local i=0
+      while IFS= read -r line; do
+        i=$((i + 1))
+        printf '%s' "$line" > "$dir/seed-$i"
+      done < <(grep -h -o "=.*" systems/*.sys systems/classic/*.sys 2>/dev/null | sed 's/^=//; s/#.*//' | sort -u)
+      ;;
+    sys) cp systems/*.sys systems/classic/*.sys "$dir/" 2>/dev/null || true ;;
+    eff) cp systems/*.eff "$dir/" 2>/dev/null || true ;;
+    dataset)
+      # A dataset's files framed as the target reads them (see fuzz_targets/dataset.rs).
+      [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true
+      ;;
+  esac
+}
+
+status=0
+for t in "${targets[@]}"; do
+  seed "$t"
+  echo "== fuzz $t for ${secs}s"
+  if ! cargo fuzz run --sanitizer none "$t" "fuzz/corpus/$t" -- \
+      -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+      >"fuzz/$t.log" 2>&1; then
+    echo "   FAILED: see fuzz/$t.log and fuzz/artifacts/$t/"
+    tail -30 "fuzz/$t.log"
+    status=1
+  else
+    grep -E "^stat::number_of_executed_units|^stat::peak_rss_mb" "fuzz/$t.log" | sed 's/^/   /'
+  fi
+done
+exit $status
