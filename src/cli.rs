@@ -249,6 +249,10 @@ impl Command {
             Command::Rank(a) | Command::Symmetries(a) => a.an.timeout,
             Command::Check(a) => a.an.timeout,
             Command::Verify(a) => a.an.timeout,
+            Command::Simplify(a) => a.limit.timeout,
+            Command::Diff(a) => a.limit.timeout,
+            Command::Show(a) => a.limit.timeout,
+            Command::Lie(a) => a.limit.timeout,
             _ => None,
         }
     }
@@ -261,8 +265,26 @@ pub struct AnalysisArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Give up after this many seconds (exit code 2).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
     pub timeout: Option<f64>,
+}
+
+/// The time limit of the commands that do exact work but take no analysis options.
+#[derive(Args, Clone)]
+pub struct LimitArgs {
+    /// Give up after this many seconds (exit code 2).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
+}
+
+/// A `--timeout` value: positive, finite, at most a year (a Duration must hold it).
+fn seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v > 0.0 && v <= 3.2e7 => Ok(v),
+        _ => Err(format!(
+            "'{s}' is not a number of seconds between 0 and 3.2e7 (a year)"
+        )),
+    }
 }
 
 #[derive(Args)]
@@ -283,6 +305,8 @@ pub struct LieArgs {
     #[arg(long)]
     pub order: usize,
     #[command(flatten)]
+    pub limit: LimitArgs,
+    #[command(flatten)]
     pub out: OutputArgs,
 }
 
@@ -291,7 +315,12 @@ pub struct CheckArgs {
     #[command(flatten)]
     pub sys: SystemArgs,
     /// A candidate observable mode (repeat the flag for several).
-    #[arg(long = "mode", value_name = "EXPR", required = true)]
+    #[arg(
+        long = "mode",
+        value_name = "EXPR",
+        required = true,
+        allow_hyphen_values = true
+    )]
     pub modes: Vec<String>,
     #[command(flatten)]
     pub an: AnalysisArgs,
@@ -337,23 +366,31 @@ pub struct ShowArgs {
     #[command(flatten)]
     pub sys: SystemArgs,
     #[command(flatten)]
+    pub limit: LimitArgs,
+    #[command(flatten)]
     pub out: OutputArgs,
 }
 
 #[derive(Args)]
 pub struct ExprArgs {
-    /// An expression, e.g. 'sin(x)^2 + cos(x)^2'.
+    /// An expression, e.g. 'sin(x)^2 + cos(x)^2' (a leading '-' is part of it).
+    #[arg(allow_hyphen_values = true)]
     pub expr: String,
+    #[command(flatten)]
+    pub limit: LimitArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }
 
 #[derive(Args)]
 pub struct DiffArgs {
-    /// An expression.
+    /// An expression (a leading '-' is part of it).
+    #[arg(allow_hyphen_values = true)]
     pub expr: String,
     /// The symbol to differentiate by.
     pub var: String,
+    #[command(flatten)]
+    pub limit: LimitArgs,
     #[command(flatten)]
     pub out: OutputArgs,
 }

@@ -3,9 +3,9 @@
 
 use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
+use crate::fsio::write_folder_atomically;
 use crate::plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use crate::show::load_system;
-use crate::simulate::write_folder_atomically;
 use crate::Failure;
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,

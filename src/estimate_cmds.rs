@@ -1,8 +1,9 @@
 //! `obsan calibrate | crlb | montecarlo`: reading datasets, formatting.
 
 use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
+use crate::fsio::write_folder_atomically;
 use crate::plot::{self, chart, Style, BLACK, COLORS};
-use crate::simulate::{sim_options, write_folder_atomically};
+use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_estimate::{
     calib_predictor, calibrate, crlb_sd, dataset_crlb, figure_curves, run_cell, simulate, table,

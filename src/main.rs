@@ -9,6 +9,7 @@ mod cli;
 mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
+mod fsio;
 mod plot;
 mod show;
 mod simulate;
@@ -37,12 +38,15 @@ fn main() -> ExitCode {
     std::thread::spawn(move || {
         let _ = tx.send(run(command));
     });
-    match rx.recv_timeout(std::time::Duration::from_secs_f64(secs.max(0.0))) {
+    // `seconds` in cli.rs bounds the value, so the Duration cannot overflow.
+    match rx.recv_timeout(std::time::Duration::from_secs_f64(secs)) {
         Ok(code) => code,
-        Err(_) => {
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
             eprintln!("error: timed out after {secs} s (--timeout)");
             ExitCode::from(2)
         }
+        // The worker ended without an answer: it panicked, and said so on stderr.
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => ExitCode::from(101),
     }
 }
 

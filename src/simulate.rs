@@ -1,9 +1,10 @@
 //! `obsan simulate`: the paper's simulator, written atomically as a dataset.
 
 use crate::cli::{SimFlags, SimulateArgs};
+use crate::fsio::write_folder_atomically;
 use crate::Failure;
 use obsan_estimate::{simulate, Dataset, Series, SimOptions};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// The files of a dataset, relative to its folder.
@@ -25,55 +26,6 @@ pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, 
         ));
     }
     files
-}
-
-/// Write all files into a temporary sibling folder, then rename it into
-/// place: a failure leaves nothing behind.
-pub fn write_folder_atomically(
-    out: &str,
-    force: bool,
-    files: &[(PathBuf, impl AsRef<[u8]>)],
-) -> Result<(), Failure> {
-    let target = Path::new(out);
-    if target.exists() && !force {
-        return Err(Failure(format!(
-            "{out} already exists (use --force to replace it)"
-        )));
-    }
-    let parent = target
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    if !parent.is_dir() {
-        return Err(Failure(format!(
-            "cannot create {out}: {} is not a folder",
-            parent.display()
-        )));
-    }
-    let name = target
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_else(|| "dataset".into());
-    let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = (|| -> std::io::Result<()> {
-        std::fs::create_dir_all(&tmp)?;
-        for (rel, content) in files {
-            let p = tmp.join(rel);
-            if let Some(d) = p.parent() {
-                std::fs::create_dir_all(d)?;
-            }
-            std::fs::write(p, content.as_ref())?;
-        }
-        if target.exists() {
-            std::fs::remove_dir_all(target)?;
-        }
-        std::fs::rename(&tmp, target)
-    })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_dir_all(&tmp);
-        return Err(Failure(format!("cannot write {out}: {e}")));
-    }
-    Ok(())
 }
 
 /// The simulator's options from the command line, checked.
@@ -151,6 +103,20 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
     let o = sim_options(&a.sim)?;
     let (data, truth) = simulate(&o).map_err(Failure)?;
+    // A dataset calibrate would refuse is not worth writing.
+    if let Some(t) = data
+        .trajectories
+        .iter()
+        .find(|t| t.outputs.len() < obsan_estimate::MIN_OUTPUT_SAMPLES)
+    {
+        return Err(Failure(format!(
+            "trajectory '{}' would have {} bearings; calibrate needs at least {} per \
+             trajectory: raise --bearing-rate or set --bearings",
+            t.name,
+            t.outputs.len(),
+            obsan_estimate::MIN_OUTPUT_SAMPLES
+        )));
+    }
     let truth_json = serde_json::to_string_pretty(&truth).expect("json") + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)]);
     write_folder_atomically(&a.out, a.force, &files)?;

@@ -7,5 +7,6 @@ mod diagnose;
 mod expr;
 mod show;
 mod simulate;
+mod trust;
 mod tutorial;
 mod util;

@@ -60,3 +60,25 @@ pub fn same_function(a: &str, b: &str) -> bool {
     let (x, y) = (ctx.parse(a).unwrap(), ctx.parse(b).unwrap());
     ctx.canon(x) == ctx.canon(y)
 }
+
+/// Run obsan in another working directory.
+pub fn obsan_in(dir: &str, args: &[&str]) -> Run {
+    let out = Command::new(env!("CARGO_BIN_EXE_obsan"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("obsan runs");
+    Run {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// A fresh, empty temporary folder for one test.
+pub fn fresh_dir(name: &str) -> String {
+    let d = std::env::temp_dir().join(format!("obsan-t-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d.to_string_lossy().into_owned()
+}
