@@ -119,7 +119,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             "degree_bound": r.degree_bound,
             "seed": r.seed,
         });
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = String::new();
@@ -158,7 +158,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             r.seed, r.error_bound, r.degree_bound
         ));
     }
-    print!("{o}");
+    out!("{o}");
     Ok(ExitCode::SUCCESS)
 }
 
@@ -204,7 +204,7 @@ pub fn symmetries(a: &RankArgs) -> Result<ExitCode, Failure> {
         m.insert("state".into(), json!(nf.state));
         m.insert("rank".into(), json!(r.rank));
         m.insert("n".into(), json!(r.n));
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -230,7 +230,7 @@ pub fn symmetries(a: &RankArgs) -> Result<ExitCode, Failure> {
     } else {
         o.push_str("warning: a one-step Lie derivative is not annihilated: the rank test was unlucky; run again with another --seed\n");
     }
-    print!("{o}");
+    out!("{o}");
     Ok(ExitCode::SUCCESS)
 }
 
@@ -272,7 +272,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
             .iter()
             .map(|(t, k, f)| json!({"lie_derivative": t, "order": k, "text": nf.ctx.ratfun_text(f), "latex": nf.ctx.ratfun_latex(f)}))
             .collect();
-        println!("{}", serde_json::to_string_pretty(&json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})).expect("json"));
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -283,7 +283,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
     for (t, _, f) in &rows {
         o.push_str(&format!("{t} = {}\n", fmt_rf(&nf, f, &a.out)));
     }
-    print!("{o}");
+    out!("{o}");
     Ok(ExitCode::SUCCESS)
 }
 
@@ -314,7 +314,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
             "complete": rep.complete, "exact": true,
         });
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
         let mut o = format!(
             "{}: rank {}, {} symmetr{}\n",
@@ -358,7 +358,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             rep.independent_count,
             rep.rank
         ));
-        print!("{o}");
+        out!("{o}");
     }
     Ok(if all_pass {
         ExitCode::SUCCESS
@@ -389,7 +389,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
             "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
             "pass": ok, "exact": true,
         });
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else {
         let mut o = format!(
             "{} -> new state [{}] ({})\n",
@@ -412,7 +412,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
         } else {
             "decomposition NOT verified\n"
         });
-        print!("{o}");
+        out!("{o}");
     }
     Ok(if ok {
         ExitCode::SUCCESS

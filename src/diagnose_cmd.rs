@@ -96,14 +96,14 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     bar.finish_and_clear();
     let text = render_text(&d, &a.data);
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&d)?);
+        outln!("{}", serde_json::to_string_pretty(&d)?);
     } else {
-        print!("{text}");
+        out!("{text}");
     }
     if let Some(dir) = &a.report {
         write_folder_atomically(dir, a.force, &report_files(&d, &text))?;
         if !a.json {
-            println!("report written to {dir}/report.md");
+            outln!("report written to {dir}/report.md");
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -560,7 +560,7 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     );
     write_folder_atomically(&a.out, a.force, &files)?;
     let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
-    println!(
+    outln!(
         "wrote {}: robot {}, {} windows of {} s, {} {}",
         a.out,
         a.robot,

@@ -172,10 +172,10 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             "sigma_beta": r.sigma_beta, "sigma_beta_estimated": r.sigma_estimated,
             "params": params, "metric": metric, "trajectories": trajs,
             "ml": r.ml.as_ref().map(|f| json!({"iterations": f.iterations, "cost": f.cost, "residuals": f.n_residuals}))});
-        println!("{}", serde_json::to_string_pretty(&out).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&out).expect("json"));
         return Ok(ExitCode::SUCCESS);
     }
-    println!(
+    outln!(
         "method {} on {} ({} trajectories); bearing noise {:.3} deg{}",
         m.name(),
         a.dataset,
@@ -187,9 +187,15 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             " (from dataset.json)"
         }
     );
-    println!(
+    outln!(
         "{:<10} {:>7} {:>22} {:>22} {:>10} {:>11} {:>9}",
-        "trajectory", "q", "xi_q", "L (deg)", "c (deg)", "k", "rms (deg)"
+        "trajectory",
+        "q",
+        "xi_q",
+        "L (deg)",
+        "c (deg)",
+        "k",
+        "rms (deg)"
     );
     for t in &r.trajectories {
         let s = t.modes_sd();
@@ -197,7 +203,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             Some(e) => format!("{v:.6} ± {e:.6}"),
             None => format!("{v:.6}"),
         };
-        println!(
+        outln!(
             "{:<10} {:>7} {:>22} {:>22} {:>10.4} {:>11.6} {:>9.3}",
             t.name,
             t.q,
@@ -209,35 +215,35 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
         );
     }
     for t in r.trajectories.iter().filter(|t| t.period_from_others) {
-        println!(
+        outln!(
             "note: {}: DET misread the period (LS fitted far worse than on the other circles); xi_q was started from the other circles' eq. (18) line",
             t.name
         );
     }
-    println!();
+    outln!();
     let units = ["deg", "deg", "", "", ""];
     for (i, name) in PARAMS.iter().enumerate() {
         let v = shown(i, r.calibration.values()[i]);
         match sd {
-            Some(s) => println!("{name:<6} = {v:>12.6} ± {:.6} {}", shown(i, s[i]), units[i]),
-            None => println!("{name:<6} = {v:>12.6} {}", units[i]),
+            Some(s) => outln!("{name:<6} = {v:>12.6} ± {:.6} {}", shown(i, s[i]), units[i]),
+            None => outln!("{name:<6} = {v:>12.6} {}", units[i]),
         }
     }
     if sd.is_none() {
-        println!("(det gives no standard deviations; use ls or ml)");
+        outln!("(det gives no standard deviations; use ls or ml)");
     }
     match &r.metric {
         Some((mm, msd)) => {
-            println!();
+            outln!();
             for (i, n) in ["rho", "rR", "rL", "B"].iter().enumerate() {
                 match msd {
-                    Some(s) => println!("{n:<6} = {:>12.6} ± {:.6} m", mm.values()[i], s[i]),
-                    None => println!("{n:<6} = {:>12.6} m", mm.values()[i]),
+                    Some(s) => outln!("{n:<6} = {:>12.6} ± {:.6} m", mm.values()[i], s[i]),
+                    None => outln!("{n:<6} = {:>12.6} m", mm.values()[i]),
                 }
             }
-            println!("(metric from d0 = {} m on trajectory {})", o.d0.unwrap_or(0.0), r.trajectories[0].name);
+            outln!("(metric from d0 = {} m on trajectory {})", o.d0.unwrap_or(0.0), r.trajectories[0].name);
         }
-        None => println!("\nrho, rR, rL, B need one metric distance: --d0 METRES (initial distance to the feature, first trajectory)"),
+        None => outln!("\nrho, rR, rL, B need one metric distance: --d0 METRES (initial distance to the feature, first trajectory)"),
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -306,7 +312,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
             }
             Value::Object(m)
         };
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&json!({
                 "setup": setup,
@@ -318,18 +324,20 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    println!("Cramér–Rao bound: {setup}; bearings: {}", counts.join(", "));
-    println!(
+    outln!("Cramér–Rao bound: {setup}; bearings: {}", counts.join(", "));
+    outln!(
         "  {:<15} {:>14} {:>22}",
-        "", "bearing noise", "+ encoder noise"
+        "",
+        "bearing noise",
+        "+ encoder noise"
     );
     for (i, c) in PARAM_COLUMNS.iter().enumerate() {
         let f = full
             .as_ref()
             .map_or("-".to_string(), |f| format!("{:.4}", f[i]));
-        println!("  sd {c:<9} >= {:>14.4} {:>22}", bearing[i], f);
+        outln!("  sd {c:<9} >= {:>14.4} {:>22}", bearing[i], f);
     }
-    println!(
+    outln!(
         "(the encoder-noise bound is for estimators driven by the measured wheel speeds, as ml;
  one that knows the circle exactly, as ls with the commanded q, is bounded by the first column)"
     );
@@ -383,7 +391,7 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
                     "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
     }
     if a.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&Value::Array(all)).expect("json")
         );
@@ -397,7 +405,7 @@ fn print_table(
     runs: usize,
     secs: f64,
 ) {
-    println!(
+    outln!(
         "{} ({} run{} per cell, seed-determined; {:.1} s)",
         t.title,
         runs,
@@ -405,11 +413,11 @@ fn print_table(
         secs
     );
     let head: String = t.columns.iter().map(|c| format!("{c:>11}")).collect();
-    println!("{:<32} {:<22}{head}", "set-up", "row");
+    outln!("{:<32} {:<22}{head}", "set-up", "row");
     for (cell, r) in t.cells.iter().zip(results) {
         for (m, v) in &cell.paper {
             let vals: String = v.iter().map(|x| format!("{x:>11.4}")).collect();
-            println!(
+            outln!(
                 "{:<32} {:<22}{vals}",
                 r.label,
                 format!("paper {}", m.name())
@@ -440,14 +448,14 @@ fn print_table(
                     }
                 })
                 .collect();
-            println!(
+            outln!(
                 "{:<32} {:<22}{row}{fail}",
                 r.label,
                 format!("{} {name}", ms.method.name())
             );
             if !t.estimates && !t.modes {
                 let row: String = ms.rms.iter().map(|x| format!("{x:>11.4}")).collect();
-                println!(
+                outln!(
                     "{:<32} {:<22}{row}",
                     r.label,
                     format!("{} rms err", ms.method.name())
@@ -460,7 +468,7 @@ fn print_table(
         ] {
             if let Some(sd) = sd {
                 let row: String = sd.iter().map(|x| format!("{x:>11.4}")).collect();
-                println!("{:<32} {:<22}{row}", r.label, label);
+                outln!("{:<32} {:<22}{row}", r.label, label);
             }
         }
         for ms in &r.methods {
@@ -473,14 +481,14 @@ fn print_table(
                 .zip(sd)
                 .map(|(e, s)| format!("{:>11.2}", e / s))
                 .collect();
-            println!(
+            outln!(
                 "{:<32} {:<22}{row}",
                 r.label,
                 format!("{} rms/{which}", ms.method.name())
             );
         }
     }
-    println!();
+    outln!();
 }
 
 /// Angles wrapped to (-pi, pi]: lift the pen where the curve wraps, so that

@@ -33,11 +33,11 @@ fn emit(
         if let (Some(m), Some(e)) = (v.as_object_mut(), extra.as_object()) {
             m.extend(e.clone());
         }
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
     } else if out.latex {
-        println!("{}", ctx.ratfun_latex(&c));
+        outln!("{}", ctx.ratfun_latex(&c));
     } else {
-        println!("{}", ctx.ratfun_text(&c));
+        outln!("{}", ctx.ratfun_text(&c));
     }
     ExitCode::SUCCESS
 }

@@ -4,6 +4,17 @@
 //! Exit codes: 0 success; 1 the command ran but a check it performs failed;
 //! 2 bad input (a malformed file, an unknown symbol, a bad flag) or an error.
 
+/// `print!` to stdout; a closed pipe (`obsan ... | head`) ends the program
+/// quietly instead of panicking.
+macro_rules! out {
+    ($($t:tt)*) => { $crate::emit(format_args!($($t)*), false) };
+}
+/// `println!`, with [`out!`]'s handling of a closed pipe.
+macro_rules! outln {
+    () => { $crate::emit(format_args!(""), true) };
+    ($($t:tt)*) => { $crate::emit(format_args!($($t)*), true) };
+}
+
 mod analysis_cmds;
 mod cli;
 mod diagnose_cmd;
@@ -23,6 +34,23 @@ pub struct Failure(pub String);
 impl<E: std::fmt::Display> From<E> for Failure {
     fn from(e: E) -> Failure {
         Failure(e.to_string())
+    }
+}
+
+/// Write to stdout. A reader that went away (broken pipe) has all it wanted:
+/// exit 0 without a message, as `head` expects; any other write error is one.
+pub fn emit(args: std::fmt::Arguments, newline: bool) {
+    use std::io::Write;
+    let mut o = std::io::stdout().lock();
+    let r = o
+        .write_fmt(args)
+        .and_then(|_| if newline { o.write_all(b"\n") } else { Ok(()) });
+    if let Err(e) = r {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(0);
+        }
+        eprintln!("error: cannot write the output: {e}");
+        std::process::exit(2);
     }
 }
 

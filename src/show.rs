@@ -95,7 +95,7 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
             "outputs": outs,
             "exact": true,
         });
-        println!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
         return Ok(ExitCode::SUCCESS);
     }
     let fmt = |nf: &mut NormalForm, id: Id| -> String {
@@ -177,6 +177,6 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
         let s = fmt(&mut nf, h);
         out.push_str(&format!("output {n} = {s}\n"));
     }
-    print!("{out}");
+    out!("{out}");
     Ok(ExitCode::SUCCESS)
 }

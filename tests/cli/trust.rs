@@ -153,3 +153,22 @@ fn simulate_refuses_datasets_calibrate_cannot_use() {
     );
     assert!(files_in(&d).is_empty(), "nothing is written");
 }
+
+/// `obsan lie ... | head` panicked with "failed printing to stdout: Broken pipe".
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    use std::process::{Command, Stdio};
+    // Order 4 prints over 1 MB, far more than a pipe buffers.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_obsan"))
+        .args(["lie", "systems/calib.sys", "--order", "4"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(0), "{stderr}");
+}
