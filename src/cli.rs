@@ -18,38 +18,117 @@ pub struct Cli {
 pub enum Command {
     /// Print a system in input-affine normal form: states, params, consts,
     /// inputs, f0, each f_i, outputs (after a restriction, if one is named).
+    #[command(after_help = "Examples:
+  obsan show systems/calib.sys
+  obsan show systems/calib.sys --input q --set q=0.9
+  obsan show systems/calib.sys --json
+
+--json prints {system, description, state, params, consts, inputs, f0, fields, outputs}, each
+formula as {text, latex}; \"exact\": true.")]
     Show(ShowArgs),
     /// Print the exact canonical form of an expression.
+    #[command(after_help = "Examples:
+  obsan simplify 'sin(g-p)*cos(p) + cos(g-p)*sin(p) - sin(g)'     # 0
+  obsan simplify '-x^2 + (x+1)^2'                                # 2*x + 1
+  obsan simplify '(a^2-b^2)/(a-b)' --latex
+
+--json prints {input, canonical, latex, is_zero, exact}.")]
     Simplify(ExprArgs),
     /// Print the derivative of an expression with respect to a symbol, in canonical form.
+    #[command(after_help = "Examples:
+  obsan diff 'atan2(sin(g), -mu - cos(g))' g
+  obsan diff 'x^3*exp(x)' x --latex
+
+--json prints {input, variable, canonical, latex, is_zero, exact}.")]
     Diff(DiffArgs),
     /// The observability rank test (Hermann-Krener): generic rank, a basis of
     /// Lie derivatives, which variables are observable on their own.
+    #[command(after_help = "Examples:
+  obsan rank systems/calib.sys                      # rank 7 of 7, proven
+  obsan rank systems/calib.sys --input q            # on circles (eq. 17): rank 4
+  obsan rank systems/calib.sys --input q --set q=0.9 --json
+
+--json prints {system, restriction, n, rank, exact, error_bound, degree_bound, basis (Lie
+words with their order), observable (per variable), max_order, evaluated}.")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), exact, each checked before it is printed.
+    #[command(after_help = "Examples:
+  obsan symmetries systems/localization.sys         # d/dphiR + d/dthetaR (eq. 3)
+  obsan symmetries systems/calib.sys --input q --timeout 60
+
+--json prints {system, restriction, n, rank, symmetries (one object per vector: variable ->
+{text, latex}), rows_checked, exact}.")]
     Symmetries(RankArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
+    #[command(after_help = "Examples:
+  obsan lie systems/localization.sys --order 2
+  obsan lie systems/calib.sys --order 1 --latex
+
+--json prints {lie_derivatives: [{lie_derivative, order, text, latex}], exact}.")]
     Lie(LieArgs),
     /// Check candidate observable modes against the symmetry PDE (eq. 11).
+    #[command(after_help = "Examples:
+  obsan check systems/localization.sys --mode D --mode 'thetaR - phiR'
+  obsan check systems/localization.sys --mode D --json
+
+--json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode,
+residuals}], independent, independent_count, complete, exact}. Exit 1 when a mode fails.")]
     Check(CheckArgs),
     /// Check a claimed local decomposition (new state, reduced dynamics, output) exactly.
+    #[command(after_help = "Examples:
+  obsan verify systems/decomp_localization.dec
+  obsan verify systems/decomp_21_22.dec --json
+
+--json prints {checks: [{check, pass, detail}], ...}. Exit 1 when a check fails.")]
     Verify(VerifyArgs),
     /// Simulate the paper's calibration experiment (section VI-A) and write a dataset.
+    #[command(after_help = "Examples:
+  obsan simulate --out data/sim                              # section VI-A, q = 0.9, 0, -1
+  obsan simulate --out data/sim2 --q 0.5,-0.5 --seed 7 --effect bearing_scale=0.04
+  obsan simulate --out data/sine --speed-profile sine:0.5:60
+
+Writes dataset.json, one folder per trajectory (inputs.csv, outputs.csv, meta.json) and
+truth.json; --force replaces only a folder obsan wrote.")]
     Simulate(SimulateArgs),
     /// Calibrate from a dataset of circles: phi, psi, eta, delta, xi with
     /// standard deviations (and rho, rR, rL, B with --d0), per trajectory
     /// xi_q, L, c, k.
+    #[command(after_help = "Examples:
+  obsan calibrate data/sim                         # joint maximum likelihood
+  obsan calibrate data/sim --method ls --d0 1.2    # DET + LS; rho, rR, rL, B from one distance
+  obsan calibrate data/sim --plot figs             # Figures 5-7 per trajectory (PNG, SVG)
+
+--json prints {method, params (name -> {value, sd}), metric, trajectories, sigma_beta,
+sigma_beta_estimated, ml, exact}.")]
     Calibrate(CalibrateArgs),
     /// The Cramér–Rao lower bound of phi, psi, eta, delta, xi for a simulated
     /// set-up (the simulate flags) or a measured dataset (at its ML estimate).
+    #[command(after_help = "Examples:
+  obsan crlb --bearings 100
+  obsan crlb data/sim --json
+
+--json prints {setup, bearings, crlb_sd, crlb_sd_with_encoder_noise}.")]
     Crlb(CrlbArgs),
     /// Monte Carlo runs laid out like the paper's Tables IV-VII, beside the
     /// paper's figures and the Cramér–Rao bound.
+    #[command(after_help = "Examples:
+  obsan montecarlo --table 5 --runs 100
+  obsan montecarlo --table 4 --runs 20 --threads 2 --json
+
+--json prints a list of tables {table, title, columns, cells, runs, seconds}.")]
     Montecarlo(MontecarloArgs),
     /// Where a model and measured data disagree: fit the model, test the
     /// residuals, try each candidate effect the data can reveal (rank test
     /// first), name the significant ones.
+    #[command(after_help = "Examples:
+  obsan diagnose --model systems/calib.sys --data data/sim
+  obsan diagnose --model systems/calib.sys --data data/sim --report data/report
+  obsan diagnose --model systems/mrclam.sys --data data/mrclam1 --json
+
+--json prints {model, nominal, rounds, named, input_checks, final_fit, extended_sys, sigma,
+input_noise, lr_critical, ...}; --report writes report.md, SVG plots, extended.sys and
+diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
     #[command(subcommand)]
@@ -60,6 +139,11 @@ pub enum Command {
 pub enum ImportCommand {
     /// One robot of the UTIAS MRCLAM data set (Leung et al., IJRR 2011), cut
     /// into windows for systems/mrclam.sys; ground truth goes to truth.json.
+    #[command(after_help = "Examples:
+  obsan import mrclam ../shared/data/mrclam --robot 1 --out data/mrclam1
+  obsan import mrclam ../shared/data/mrclam --robot 1 --out data/vicon1 --vicon-poses
+
+Writes a dataset (docs/data-format.md) with the Vicon ground truth in truth.json.")]
     Mrclam(MrclamArgs),
 }
 

@@ -172,3 +172,94 @@ fn a_closed_pipe_ends_the_output_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.code(), Some(0), "{stderr}");
 }
+
+/// Every example in a subcommand's --help runs (issue 19: examples in every --help).
+/// Paths under data/ go to a temporary folder; the slow examples run smaller.
+#[test]
+fn every_help_example_runs() {
+    let tmp = fresh_dir("help-examples");
+    let commands = [
+        "simulate",
+        "show",
+        "simplify",
+        "diff",
+        "rank",
+        "symmetries",
+        "lie",
+        "check",
+        "verify",
+        "calibrate",
+        "crlb",
+        "montecarlo",
+        "diagnose",
+    ];
+    let mut ran = 0;
+    for c in commands {
+        let help = ok(&[c, "--help"]);
+        assert!(
+            help.contains("Examples:"),
+            "obsan {c} --help has no examples"
+        );
+        assert!(
+            help.contains("--json prints") || c == "simulate",
+            "obsan {c} --help does not say what --json prints"
+        );
+        for line in help.lines().filter(|l| l.starts_with("  obsan ")) {
+            let cmd = line.split("  #").next().unwrap().trim();
+            let words = shell_words(cmd);
+            // The MRCLAM diagnosis takes tens of seconds: tests/cli/diagnose.rs runs it.
+            if words.iter().any(|w| w.contains("mrclam")) {
+                continue;
+            }
+            let words: Vec<String> = words
+                .into_iter()
+                .skip(1)
+                .map(|w| {
+                    w.replace("data/", &format!("{tmp}/"))
+                        .replace("figs", &format!("{tmp}/figs"))
+                })
+                .map(|w| {
+                    if w == "100" && c == "montecarlo" {
+                        "2".into()
+                    } else {
+                        w
+                    }
+                })
+                .map(|w| {
+                    if w == "20" && c == "montecarlo" {
+                        "2".into()
+                    } else {
+                        w
+                    }
+                })
+                .collect();
+            let args: Vec<&str> = words.iter().map(|s| s.as_str()).collect();
+            let r = obsan(&args);
+            assert_eq!(r.code, 0, "example `{line}` failed:\n{}", r.stderr);
+            ran += 1;
+        }
+    }
+    assert!(ran >= 25, "only {ran} examples ran");
+}
+
+/// Split a command line on spaces, keeping single-quoted words whole.
+fn shell_words(s: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut cur = String::new();
+    let mut quoted = false;
+    for ch in s.chars() {
+        match ch {
+            '\'' => quoted = !quoted,
+            ' ' if !quoted => {
+                if !cur.is_empty() {
+                    words.push(std::mem::take(&mut cur));
+                }
+            }
+            _ => cur.push(ch),
+        }
+    }
+    if !cur.is_empty() {
+        words.push(cur);
+    }
+    words
+}
