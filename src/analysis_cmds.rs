@@ -33,7 +33,7 @@ fn run_rank(nf: &mut NormalForm, an: &AnalysisArgs) -> Result<RankReport, Failur
         let b = indicatif::ProgressBar::new(nf.state.len() as u64);
         b.set_style(
             indicatif::ProgressStyle::with_template("{spinner} rank {pos}/{len} {msg}")
-                .expect("template"),
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
         );
         b
     });
@@ -119,7 +119,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             "degree_bound": r.degree_bound,
             "seed": r.seed,
         });
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = String::new();
@@ -198,13 +198,17 @@ pub fn symmetries(a: &RankArgs) -> Result<ExitCode, Failure> {
     let (r, s) = compute_symmetries(&mut nf, &a.an)?;
     if a.out.json {
         let mut v = symmetry_json(&nf, &s);
-        let m = v.as_object_mut().expect("object");
+        let Some(m) = v.as_object_mut() else {
+            return Err(Failure(
+                "internal: the symmetry report is not a JSON object".into(),
+            ));
+        };
         m.insert("system".into(), json!(nf.name));
         m.insert("restriction".into(), json!(nf.restriction));
         m.insert("state".into(), json!(nf.state));
         m.insert("rank".into(), json!(r.rank));
         m.insert("n".into(), json!(r.n));
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -272,7 +276,12 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
             .iter()
             .map(|(t, k, f)| json!({"lie_derivative": t, "order": k, "text": nf.ctx.ratfun_text(f), "latex": nf.ctx.ratfun_latex(f)}))
             .collect();
-        outln!("{}", serde_json::to_string_pretty(&json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})).expect("json"));
+        outln!(
+            "{}",
+            serde_json::to_string_pretty(
+                &json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})
+            )?
+        );
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -314,7 +323,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
             "complete": rep.complete, "exact": true,
         });
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let mut o = format!(
             "{}: rank {}, {} symmetr{}\n",
@@ -329,11 +338,8 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
                     "PASS {m}: satisfies eq. (11) for every symmetry (exact)\n"
                 ));
             } else {
-                let k = c
-                    .residuals
-                    .iter()
-                    .position(|r| !r.is_zero())
-                    .expect("a non-zero residual");
+                // A failed mode has a non-zero residual; 0 keeps the line well-formed regardless.
+                let k = c.residuals.iter().position(|r| !r.is_zero()).unwrap_or(0);
                 o.push_str(&format!(
                     "FAIL {m}: grad({m}) . w{} = {}\n",
                     k + 1,
@@ -389,7 +395,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
             "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
             "pass": ok, "exact": true,
         });
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let mut o = format!(
             "{} -> new state [{}] ({})\n",
@@ -431,7 +437,7 @@ pub fn progress_bar(total: u64, label: &str) -> indicatif::ProgressBar {
         indicatif::ProgressStyle::with_template(&format!(
             "{label} {{bar:30}} {{pos}}/{{len}} runs, eta {{eta}}"
         ))
-        .expect("template"),
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     b
 }

@@ -557,7 +557,7 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     let files = crate::simulate::dataset_files(
         &data,
         &[("truth.json", serde_json::to_string_pretty(&truth_json)?)],
-    );
+    )?;
     write_folder_atomically(&a.out, a.force, &files)?;
     let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
     outln!(

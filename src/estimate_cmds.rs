@@ -172,7 +172,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             "sigma_beta": r.sigma_beta, "sigma_beta_estimated": r.sigma_estimated,
             "params": params, "metric": metric, "trajectories": trajs,
             "ml": r.ml.as_ref().map(|f| json!({"iterations": f.iterations, "cost": f.cost, "residuals": f.n_residuals}))});
-        outln!("{}", serde_json::to_string_pretty(&out).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(ExitCode::SUCCESS);
     }
     outln!(
@@ -319,8 +319,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
                 "crlb_sd": obj(&bearing),
                 "crlb_sd_with_encoder_noise": full.as_ref().map(|f| obj(f)),
                 "bearings": counts,
-            }))
-            .expect("json")
+            }))?
         );
         return Ok(ExitCode::SUCCESS);
     }
@@ -365,7 +364,7 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
     let p = calib_predictor();
     let mut all = Vec::new();
     for tn in tables {
-        let t = table(tn).expect("known table");
+        let t = table(tn).ok_or_else(|| Failure(format!("--table {tn}: no such table")))?;
         let runs = if t.estimates { 1 } else { a.runs };
         let total = (runs * t.cells.len()) as u64;
         let bar = crate::analysis_cmds::progress_bar(total, &format!("table {tn}"));
@@ -391,10 +390,7 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
                     "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
     }
     if a.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&Value::Array(all)).expect("json")
-        );
+        outln!("{}", serde_json::to_string_pretty(&Value::Array(all))?);
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -20,7 +20,7 @@ fn emit(
     id: Id,
     out: &OutputArgs,
     extra: serde_json::Value,
-) -> ExitCode {
+) -> Result<ExitCode, Failure> {
     let c = ctx.canon(id);
     if out.json {
         let mut v = json!({
@@ -33,19 +33,19 @@ fn emit(
         if let (Some(m), Some(e)) = (v.as_object_mut(), extra.as_object()) {
             m.extend(e.clone());
         }
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else if out.latex {
         outln!("{}", ctx.ratfun_latex(&c));
     } else {
         outln!("{}", ctx.ratfun_text(&c));
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }
 
 pub fn simplify(a: &ExprArgs) -> Result<ExitCode, Failure> {
     let mut ctx = Ctx::new();
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
-    Ok(emit(&mut ctx, &a.expr, id, &a.out, json!({})))
+    emit(&mut ctx, &a.expr, id, &a.out, json!({}))
 }
 
 pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
@@ -66,13 +66,7 @@ pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
     let x = ctx.symbol(&a.var);
     let d = ctx.diff(id, x.var);
-    Ok(emit(
-        &mut ctx,
-        &a.expr,
-        d,
-        &a.out,
-        json!({ "variable": a.var }),
-    ))
+    emit(&mut ctx, &a.expr, d, &a.out, json!({ "variable": a.var }))
 }
 
 /// Parse a command-line expression over a system's state and constants.

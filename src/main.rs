@@ -4,6 +4,11 @@
 //! Exit codes: 0 success; 1 the command ran but a check it performs failed;
 //! 2 bad input (a malformed file, an unknown symbol, a bad flag) or an error.
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 /// `print!` to stdout; a closed pipe (`obsan ... | head`) ends the program
 /// quietly instead of panicking.
 macro_rules! out {

@@ -95,7 +95,7 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
             "outputs": outs,
             "exact": true,
         });
-        outln!("{}", serde_json::to_string_pretty(&v).expect("json"));
+        outln!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(ExitCode::SUCCESS);
     }
     let fmt = |nf: &mut NormalForm, id: Id| -> String {

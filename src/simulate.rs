@@ -8,10 +8,13 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// The files of a dataset, relative to its folder.
-pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, String)> {
+pub fn dataset_files(
+    data: &Dataset,
+    extra: &[(&str, String)],
+) -> Result<Vec<(PathBuf, String)>, Failure> {
     let mut files = vec![(
         PathBuf::from("dataset.json"),
-        serde_json::to_string_pretty(&data.meta).expect("json") + "\n",
+        serde_json::to_string_pretty(&data.meta)? + "\n",
     )];
     for (name, content) in extra {
         files.push((PathBuf::from(name), content.clone()));
@@ -22,10 +25,10 @@ pub fn dataset_files(data: &Dataset, extra: &[(&str, String)]) -> Vec<(PathBuf, 
         files.push((dir.join("outputs.csv"), tr.outputs.to_csv()));
         files.push((
             dir.join("meta.json"),
-            serde_json::to_string_pretty(&tr.meta).expect("json") + "\n",
+            serde_json::to_string_pretty(&tr.meta)? + "\n",
         ));
     }
-    files
+    Ok(files)
 }
 
 /// The simulator's options from the command line, checked.
@@ -117,8 +120,8 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
             obsan_estimate::MIN_OUTPUT_SAMPLES
         )));
     }
-    let truth_json = serde_json::to_string_pretty(&truth).expect("json") + "\n";
-    let files = dataset_files(&data, &[("truth.json", truth_json)]);
+    let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
+    let files = dataset_files(&data, &[("truth.json", truth_json)])?;
     write_folder_atomically(&a.out, a.force, &files)?;
     let summary: Vec<String> = data
         .trajectories
