@@ -12,7 +12,12 @@ cd "$(dirname "$0")/.."
 secs="${1:-60}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(expr sys eff dataset)
+# Default: every [[bin]] of fuzz/Cargo.toml.
+[ ${#targets[@]} -gt 0 ] || mapfile -t targets < <(awk '/^\[\[bin\]\]/{b=1; next} b && /^name *=/{gsub(/[" ]/, "", $0); sub(/name=/, "", $0); print; b=0}' fuzz/Cargo.toml)
+if [ ${#targets[@]} -eq 0 ]; then
+  echo "no fuzz targets in fuzz/Cargo.toml"
+  exit 0
+fi
 
 if ! cargo fuzz --version >/dev/null 2>&1; then
   echo "== installing cargo-fuzz (crates.io)"
