@@ -402,13 +402,15 @@ impl System {
             for (k, name) in states.iter().enumerate() {
                 let base = match e.dynamics.iter().find(|d| &d.0 == name) {
                     Some((_, rhs)) => rhs.clone(),
-                    None => cur.texts.dynamics[k].clone(),
+                    None => cur.texts.dynamics.get(k).cloned().unwrap_or_default(),
                 };
-                s.texts.dynamics[k] = if e.substs.is_empty() {
-                    base
-                } else {
-                    substitute(&base, &e.substs)
-                };
+                if let Some(slot) = s.texts.dynamics.get_mut(k) {
+                    *slot = if e.substs.is_empty() {
+                        base
+                    } else {
+                        substitute(&base, &e.substs)
+                    };
+                }
             }
             for (x, _) in &e.dynamics {
                 if !states.contains(x) && !e.states.contains(x) {
@@ -432,8 +434,10 @@ impl System {
                         cur.name
                     )));
                 };
-                let nominal = cur.texts.outputs[k].clone();
-                s.texts.outputs[k] = substitute(rhs, &[(y.clone(), nominal)]);
+                let nominal = cur.texts.outputs.get(k).cloned().unwrap_or_default();
+                if let Some(slot) = s.texts.outputs.get_mut(k) {
+                    *slot = substitute(rhs, &[(y.clone(), nominal)]);
+                }
             }
             if let Some(d) = &e.delay {
                 if cur.delay.is_some() {

@@ -6,6 +6,8 @@
 //! are collected first, then every expression is built and checked.
 
 use crate::error::{normalize_text, ModelError};
+use std::collections::HashMap;
+
 use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, FUNCTIONS, Q};
 
 /// What a declared name is.
@@ -675,8 +677,12 @@ impl Reader<'_> {
         ctx: &mut Ctx,
         pending: &[PendingDecl],
     ) -> Result<Vec<Decl>, ModelError> {
+        // First declaration of each name (a map: files with many names stay
+        // linear).
+        let mut first: HashMap<&str, &PendingDecl> = HashMap::new();
         for p in pending {
-            if let Some(prev) = pending.iter().find(|q| q.name == p.name && q.at < p.at) {
+            let prev = *first.entry(p.name.as_str()).or_insert(p);
+            if prev.at < p.at {
                 let e = ModelError::at(self.origin, self.src, prev.at, prev.at + 1, "");
                 let (l, c) = (e.line.unwrap_or(0), e.col.unwrap_or(0));
                 return Err(self.err_src(
@@ -1317,8 +1323,9 @@ fn build_checked(
     allowed: &[Kind],
     what: &str,
 ) -> Result<Id, ModelError> {
+    let index: HashMap<&str, &Decl> = decls.iter().map(|d| (d.name.as_str(), d)).collect();
     let mut resolve = |_c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
-        match decls.iter().find(|d| d.name == n) {
+        match index.get(n).copied() {
             // The declaration's symbol was made in this context.
             Some(d) if allowed.contains(&d.kind) => Ok(d.sym.id),
             Some(d) => Err(ParseError::new(

@@ -282,6 +282,70 @@ mod props {
         "",
     ];
 
+    /// A valid system: BASE's statements in any order (declarations may come
+    /// in any order), with comments and blank lines between them.
+    fn valid_sys() -> impl Strategy<Value = String> {
+        let lines: Vec<&'static str> = BASE.lines().collect();
+        (
+            Just(lines).prop_shuffle(),
+            prop::collection::vec(
+                prop::sample::select(&["", "# für α", "\t# tab", "  "][..]),
+                0..4,
+            ),
+            prop::sample::select(&["\n", "\r\n", "\r"][..]),
+            any::<bool>(),
+        )
+            .prop_map(|(mut lines, extra, nl, bom)| {
+                for (i, c) in extra.into_iter().enumerate() {
+                    lines.insert((i * 3) % (lines.len() + 1), c);
+                }
+                let bom = if bom { "\u{feff}" } else { "" };
+                format!("{bom}{}{nl}", lines.join(nl))
+            })
+    }
+
+    /// Same names, restrictions and normal forms, compared exactly: each
+    /// entry of `a`'s forms printed, re-read in `b`'s context, and subtracted.
+    fn equivalent(a: &System, b: &System) -> Result<(), TestCaseError> {
+        let kinds = |s: &System| -> Vec<(String, obsan_model::Kind)> {
+            s.decls.iter().map(|d| (d.name.clone(), d.kind)).collect()
+        };
+        prop_assert_eq!(kinds(a), kinds(b));
+        prop_assert_eq!(a.output_names(), b.output_names());
+        prop_assert_eq!(a.restrictions.len(), b.restrictions.len());
+        let mut names = vec![None];
+        names.extend(a.restrictions.iter().map(|r| Some(r.name.as_str())));
+        for r in names {
+            let (Ok(mut x), Ok(mut y)) = (a.normal_form(r, &[]), b.normal_form(r, &[])) else {
+                prop_assert_eq!(a.normal_form(r, &[]).is_ok(), b.normal_form(r, &[]).is_ok());
+                continue;
+            };
+            prop_assert_eq!(&x.state, &y.state);
+            prop_assert_eq!(&x.inputs, &y.inputs);
+            let xs: Vec<_> =
+                x.f0.iter()
+                    .chain(x.fields.iter().flatten())
+                    .chain(x.outputs.iter().map(|o| &o.1))
+                    .copied()
+                    .collect();
+            let ys: Vec<_> =
+                y.f0.iter()
+                    .chain(y.fields.iter().flatten())
+                    .chain(y.outputs.iter().map(|o| &o.1))
+                    .copied()
+                    .collect();
+            prop_assert_eq!(xs.len(), ys.len());
+            for (i, j) in xs.into_iter().zip(ys) {
+                let text = x.ctx.to_text(i);
+                let back = y.parse_expr(&text, true);
+                prop_assert!(back.is_ok(), "'{}' does not re-parse", text);
+                let d = y.ctx.sub(back.unwrap(), j);
+                prop_assert!(y.ctx.is_identically_zero(d), "'{}' changed", text);
+            }
+        }
+        Ok(())
+    }
+
     fn file(pieces: &'static [&'static str]) -> impl Strategy<Value = String> {
         (
             prop::collection::vec(prop::sample::select(pieces), 0..14),
@@ -376,7 +440,7 @@ mod props {
         #![proptest_config(config())]
 
         #[test]
-        fn sys_reader_never_panics_and_locates(src in file(SYS_PIECES), edits in prop::collection::vec(edit(), 0..6)) {
+        fn sys_reader_never_panics_and_locates(src in prop_oneof![file(SYS_PIECES), valid_sys()], edits in prop::collection::vec(edit(), 0..4)) {
             let bytes = mutate(&src, &edits);
             let text = match decode_text(&bytes, "p.sys") {
                 Ok(t) => t,
@@ -394,11 +458,16 @@ mod props {
                 Ok(s) => {
                     let back = System::parse(&s.to_sys_text(), "printed.sys");
                     prop_assert!(back.is_ok(), "printed text not re-read: {:?}", back.err());
-                    for r in std::iter::once(None).chain(s.restrictions.iter().map(|r| Some(r.name.as_str()))) {
-                        let _ = s.normal_form(r, &[]);
-                    }
+                    equivalent(&s, &back.unwrap())?;
                 }
             }
+        }
+
+        #[test]
+        fn shuffled_valid_files_read_as_the_plain_one(src in valid_sys()) {
+            let s = System::parse(&src, "p.sys");
+            prop_assert!(s.is_ok(), "{:?}", s.err());
+            equivalent(&s.unwrap(), &System::parse(BASE, "base.sys").unwrap())?;
         }
 
         #[test]
