@@ -15,7 +15,7 @@
 //! dynamics. `param`, `const` and `input` declare new names (a new input is
 //! usually derived, e.g. `input dwR = rate(wR)`).
 
-use crate::error::ModelError;
+use crate::error::{normalize_text, ModelError};
 use crate::sys::{Kind, System};
 
 /// One named model extension.
@@ -126,27 +126,36 @@ pub fn substitute(text: &str, map: &[(String, String)]) -> String {
                 None => out.push_str(word),
             }
         } else {
-            out.push(c as char);
-            i += 1;
+            // Copy one whole character (non-ASCII text stays intact).
+            let ch = text[i..].chars().next().unwrap_or('\u{fffd}');
+            out.push(ch);
+            i += ch.len_utf8().max(1);
         }
     }
     out
 }
 
 impl EffectLibrary {
-    /// Read an effects file; `origin` names it in messages.
+    /// Read an effects file; `origin` names it in messages. A leading
+    /// byte-order mark is ignored and CRLF or CR line ends read as lines.
+    /// Errors point at the statement (line, column, caret).
     pub fn parse(src: &str, origin: &str) -> Result<EffectLibrary, ModelError> {
+        let src = normalize_text(src);
+        let src: &str = &src;
         let mut model = None;
         let mut effects: Vec<Effect> = Vec::new();
-        for (ln, raw) in src.lines().enumerate() {
+        let mut line_start = 0;
+        for (ln, raw) in src.split('\n').enumerate() {
             let line_no = ln + 1;
+            let here = line_start;
+            line_start += raw.len() + 1;
             let line = raw.split('#').next().unwrap_or("");
             let t = line.trim();
             if t.is_empty() {
                 continue;
             }
-            let col = line.len() - line.trim_start().len() + 1;
-            let err = |msg: String| ModelError::general(&format!("{origin}:{line_no}:{col}"), msg);
+            let lead = here + (line.len() - line.trim_start().len());
+            let err = |msg: String| ModelError::at(origin, src, lead, lead + t.len(), msg);
             let (word, rest) = match t.find(|c: char| c.is_whitespace() || c == '=') {
                 Some(i) => (&t[..i], t[i..].trim()),
                 None => (t, ""),
@@ -393,13 +402,15 @@ impl System {
             for (k, name) in states.iter().enumerate() {
                 let base = match e.dynamics.iter().find(|d| &d.0 == name) {
                     Some((_, rhs)) => rhs.clone(),
-                    None => cur.texts.dynamics[k].clone(),
+                    None => cur.texts.dynamics.get(k).cloned().unwrap_or_default(),
                 };
-                s.texts.dynamics[k] = if e.substs.is_empty() {
-                    base
-                } else {
-                    substitute(&base, &e.substs)
-                };
+                if let Some(slot) = s.texts.dynamics.get_mut(k) {
+                    *slot = if e.substs.is_empty() {
+                        base
+                    } else {
+                        substitute(&base, &e.substs)
+                    };
+                }
             }
             for (x, _) in &e.dynamics {
                 if !states.contains(x) && !e.states.contains(x) {
@@ -423,8 +434,10 @@ impl System {
                         cur.name
                     )));
                 };
-                let nominal = cur.texts.outputs[k].clone();
-                s.texts.outputs[k] = substitute(rhs, &[(y.clone(), nominal)]);
+                let nominal = cur.texts.outputs.get(k).cloned().unwrap_or_default();
+                if let Some(slot) = s.texts.outputs.get_mut(k) {
+                    *slot = substitute(rhs, &[(y.clone(), nominal)]);
+                }
             }
             if let Some(d) = &e.delay {
                 if cur.delay.is_some() {

@@ -1,6 +1,11 @@
 //! Errors with a place: file, line, column, and the offending line with a caret.
+//!
+//! Places are byte offsets into the text read; lines and columns are counted
+//! in characters, so a non-ASCII character before the place moves the column
+//! by one. Offsets that are past the end or inside a character are clamped,
+//! never trusted: building a message must not panic whatever offsets it is
+//! given.
 
-use obsan_expr::line_col;
 use std::fmt;
 
 /// A mistake in a system description or in what was asked of it.
@@ -12,12 +17,42 @@ pub struct ModelError {
     pub line: Option<usize>,
     pub col: Option<usize>,
     pub message: String,
-    /// The source line and the length of the underlined part.
-    snippet: Option<(String, usize)>,
+    /// The source line, the text before the caret (tabs kept, every other
+    /// character a space, so the caret aligns under the character), and the
+    /// length of the underlined part in characters.
+    snippet: Option<Box<Snippet>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Snippet {
+    text: String,
+    pad: String,
+    width: usize,
+}
+
+/// The largest char boundary of `s` at or below `i`.
+fn floor_boundary(s: &str, i: usize) -> usize {
+    let mut i = i.min(s.len());
+    while !s.is_char_boundary(i) {
+        i -= 1;
+    }
+    i
+}
+
+/// 1-based line and column (in characters) of byte `offset` of `src`, with
+/// the byte range of that line (without its line break).
+fn locate(src: &str, offset: usize) -> (usize, usize, usize, usize) {
+    let offset = floor_boundary(src, offset);
+    let line_start = src[..offset].rfind('\n').map_or(0, |i| i + 1);
+    let line = src[..line_start].matches('\n').count() + 1;
+    let col = src[line_start..offset].chars().count() + 1;
+    let line_end = src[offset..].find('\n').map_or(src.len(), |i| offset + i);
+    (line, col, line_start, line_end)
 }
 
 impl ModelError {
-    /// An error at byte range `start..end` of `src`.
+    /// An error at byte range `start..end` of `src` (clamped to the text and
+    /// to its characters).
     pub fn at(
         origin: &str,
         src: &str,
@@ -25,18 +60,42 @@ impl ModelError {
         end: usize,
         message: impl Into<String>,
     ) -> ModelError {
-        let (line, col) = line_col(src, start);
-        let text = src.lines().nth(line - 1).unwrap_or("").to_string();
-        let width = src[start.min(src.len())..end.clamp(start, src.len())]
-            .split('\n')
-            .next()
-            .map_or(1, |s| s.chars().count().max(1));
+        let (line, col, line_start, line_end) = locate(src, start);
+        let start = floor_boundary(src, start);
+        let end = floor_boundary(src, end.max(start)).min(line_end);
+        let raw = src[line_start..line_end].trim_end_matches('\r');
+        let before = &src[line_start..start];
+        let pad = before
+            .chars()
+            .map(|c| if c == '\t' { '\t' } else { ' ' })
+            .collect();
+        let width = src[start..end.max(start)].chars().count().max(1);
         ModelError {
             origin: origin.into(),
             line: Some(line),
             col: Some(col),
             message: message.into(),
-            snippet: Some((text, width)),
+            snippet: Some(Box::new(Snippet {
+                text: raw.to_string(),
+                pad,
+                width,
+            })),
+        }
+    }
+
+    /// An error at a known line and column with no source text to show.
+    pub fn at_line_col(
+        origin: &str,
+        line: usize,
+        col: usize,
+        message: impl Into<String>,
+    ) -> ModelError {
+        ModelError {
+            origin: origin.into(),
+            line: Some(line),
+            col: Some(col),
+            message: message.into(),
+            snippet: None,
         }
     }
 
@@ -58,15 +117,16 @@ impl fmt::Display for ModelError {
             (Some(l), Some(c)) => write!(f, "{}:{l}:{c}: {}", self.origin, self.message)?,
             _ => write!(f, "{}: {}", self.origin, self.message)?,
         }
-        if let (Some((text, width)), Some(l), Some(c)) = (&self.snippet, self.line, self.col) {
+        if let (Some(s), Some(l)) = (&self.snippet, self.line) {
             let gutter = l.to_string().len();
             write!(
                 f,
-                "\n{:gutter$} |\n{l} | {text}\n{:gutter$} | {}{}",
+                "\n{:gutter$} |\n{l} | {}\n{:gutter$} | {}{}",
                 "",
+                s.text,
                 "",
-                " ".repeat(c - 1),
-                "^".repeat(*width)
+                s.pad,
+                "^".repeat(s.width)
             )?;
         }
         Ok(())
@@ -74,3 +134,46 @@ impl fmt::Display for ModelError {
 }
 
 impl std::error::Error for ModelError {}
+
+/// The text of a file as the readers want it: a leading UTF-8 byte-order
+/// mark dropped, and CRLF and CR-only line ends read as `\n` (a CR-only file
+/// is not one long line). Lines and columns of the result are those of the
+/// original text.
+pub fn normalize_text(src: &str) -> std::borrow::Cow<'_, str> {
+    let s = src.strip_prefix('\u{feff}').unwrap_or(src);
+    if s.contains('\r') {
+        std::borrow::Cow::Owned(s.replace("\r\n", "\n").replace('\r', "\n"))
+    } else {
+        std::borrow::Cow::Borrowed(s)
+    }
+}
+
+/// Decode a file's bytes as UTF-8 text for [`crate::System::parse`] and
+/// [`crate::EffectLibrary::parse`], normalized as [`normalize_text`] does.
+/// Invalid UTF-8 is an error at the line and column (in characters) of the
+/// first bad byte; `origin` names the file.
+pub fn decode_text(bytes: &[u8], origin: &str) -> Result<String, ModelError> {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(s) => Ok(normalize_text(s).into_owned()),
+        Err(e) => {
+            let at = e.valid_up_to();
+            // Lossy decoding keeps the valid prefix as it is and turns the
+            // bad byte into U+FFFD: the caret lands under it.
+            let good = normalize_text(&String::from_utf8_lossy(&bytes[..at])).len();
+            let full = String::from_utf8_lossy(bytes);
+            let full = normalize_text(&full);
+            let byte = bytes.get(at).copied().unwrap_or(0);
+            Err(ModelError::at(
+                origin,
+                &full,
+                good,
+                good + 1,
+                format!(
+                    "invalid UTF-8 (byte 0x{byte:02X}): the file must be UTF-8 text \
+                     (re-save it as UTF-8)"
+                ),
+            ))
+        }
+    }
+}

@@ -11,12 +11,17 @@
 //! assert_eq!(nf.ctx.to_text(nf.fields[0][0]), "1");
 //! ```
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod effect;
 mod error;
 mod normal;
 mod sys;
 
 pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
-pub use error::ModelError;
+pub use error::{decode_text, normalize_text, ModelError};
 pub use normal::NormalForm;
 pub use sys::{Decl, Kind, Restriction, Start, System};

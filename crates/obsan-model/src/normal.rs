@@ -2,7 +2,7 @@
 
 use crate::error::ModelError;
 use crate::sys::{Kind, System};
-use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Var, Q};
+use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, Var, Q};
 
 /// Resolves names beyond the system's own first: `None` to fall through.
 pub type ExtraNames<'a> = dyn Fn(&str, Span) -> Option<Result<Id, ParseError>> + 'a;
@@ -120,11 +120,15 @@ impl System {
                 let rhs = ctx
                     .substitute(loc.id, &subst)
                     .map_err(|e| self.err_at(loc, &e.0))?;
-                subst.push((input_decls[*ii].sym.var, rhs));
+                // `ii` indexes the inputs (made so by the reader).
+                if let Some(d) = input_decls.get(*ii) {
+                    subst.push((d.sym.var, rhs));
+                }
             }
             inputs = r.inputs.clone();
         }
-        let input_vars: Vec<Var> = inputs.iter().map(|n| ctx.symbol(n).var).collect();
+        let input_syms: Vec<Symbol> = inputs.iter().map(|n| ctx.symbol(n)).collect();
+        let input_vars: Vec<Var> = input_syms.iter().map(|s| s.var).collect();
         let state_decls: Vec<_> = self
             .decls
             .iter()
@@ -160,8 +164,7 @@ impl System {
                     "affine"
                 );
                 let fi = ctx.from_canonical(&c);
-                let uid = ctx.lookup(&inputs[i]).expect("input symbol").id;
-                let term = ctx.mul(&[fi, uid]);
+                let term = ctx.mul(&[fi, input_syms[i].id]);
                 rest = ctx.sub(rest, term);
                 fields[i].push(fi);
             }

@@ -5,7 +5,9 @@
 //! comma. `#` starts a comment. Declarations may come in any order: all names
 //! are collected first, then every expression is built and checked.
 
-use crate::error::ModelError;
+use crate::error::{normalize_text, ModelError};
+use std::collections::HashMap;
+
 use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, FUNCTIONS, Q};
 
 /// What a declared name is.
@@ -81,9 +83,7 @@ pub(crate) struct Located {
 
 impl Located {
     pub(crate) fn src_span(&self, s: Span) -> (usize, usize) {
-        let a = self.map[s.start.min(self.map.len() - 1)];
-        let b = self.map[s.end.saturating_sub(1).min(self.map.len() - 1)] + 1;
-        (a, b.max(a + 1))
+        span_in(&self.map, s)
     }
 }
 
@@ -139,8 +139,14 @@ impl Stmt {
             .copied()
             .unwrap_or_else(|| self.map.last().map_or(0, |x| x + 1))
     }
+    /// Text and source map of `a..b` (clamped; empty if not on characters).
     fn slice(&self, a: usize, b: usize) -> (&str, Vec<usize>) {
-        (&self.text[a..b], self.map[a..b].to_vec())
+        let b = b.min(self.text.len());
+        let a = a.min(b);
+        match (self.text.get(a..b), self.map.get(a..b)) {
+            (Some(t), Some(m)) => (t, m.to_vec()),
+            _ => ("", Vec::new()),
+        }
     }
 }
 
@@ -215,11 +221,17 @@ fn split_statements(src: &str, origin: &str) -> Result<Vec<Stmt>, ModelError> {
         ));
     }
     if !cur.text.trim().is_empty() {
+        // A file that ends inside a continued statement: drop the joining
+        // space, so an error at its end points just after its last character.
+        let keep = cur.text.trim_end().len();
+        cur.text.truncate(keep);
+        cur.map.truncate(keep);
         out.push(cur);
     }
     Ok(out)
 }
 
+/// A name: an ASCII letter or '_', then ASCII letters, digits or '_'.
 fn is_ident(s: &str) -> bool {
     let mut c = s.chars();
     c.next()
@@ -305,210 +317,375 @@ impl<'a> Reader<'a> {
         let b = map
             .get(e.span.end.saturating_sub(1))
             .map_or(a + 1, |x| x + 1);
-        self.err_src(a, b, e.message)
+        // The expression language's names are ASCII: say so at a letter
+        // it does not know.
+        let mut msg = e.message;
+        if msg.starts_with("unexpected character") && !msg.is_ascii() {
+            msg.push_str(" (names are ASCII: letters a-z A-Z, digits and '_')");
+        }
+        self.err_src(a, b, msg)
+    }
+}
+
+/// A declared name before the symbols exist.
+struct PendingDecl {
+    name: String,
+    kind: Kind,
+    /// Source offset of the name.
+    at: usize,
+    /// The text after `=` and its source map.
+    value: Option<(String, Vec<usize>)>,
+}
+
+/// `x' = EXPR` as read: its statement, the offset of `x`, the right side.
+struct RawEquation {
+    stmt: usize,
+    at: usize,
+    rhs: String,
+    map: Vec<usize>,
+}
+
+/// `output y = EXPR` as read.
+struct RawOutput {
+    name: String,
+    at: usize,
+    rhs: String,
+    map: Vec<usize>,
+}
+
+/// `restrict NAME: ...` as read: its statement, name, the name's source
+/// offset and the offset of the colon in the statement.
+struct RawRestrict {
+    stmt: usize,
+    name: String,
+    at: usize,
+    colon: usize,
+}
+
+/// Pass 1: every statement sorted by what it is, nothing built yet.
+#[derive(Default)]
+struct Statements {
+    name: Option<String>,
+    description: Vec<String>,
+    pending: Vec<PendingDecl>,
+    equations: Vec<RawEquation>,
+    outputs: Vec<RawOutput>,
+    restricts: Vec<RawRestrict>,
+    delay: Option<(String, usize)>,
+}
+
+/// Why a name is refused; non-ASCII letters get said so (the expression
+/// language's names are ASCII, see docs/sys-format.md).
+fn not_a_name(nm: &str) -> &'static str {
+    if nm.is_ascii() {
+        ""
+    } else {
+        " (names are ASCII: letters a-z A-Z, digits and '_')"
     }
 }
 
 impl System {
     /// Read a system from `.sys` text; `origin` names the file in messages.
+    /// A leading byte-order mark is ignored and CRLF or CR line ends read as
+    /// lines ([`crate::normalize_text`]).
     pub fn parse(src: &str, origin: &str) -> Result<System, ModelError> {
+        let src = normalize_text(src);
+        let src: &str = &src;
         let rd = Reader { src, origin };
         let stmts = split_statements(src, origin)?;
-        let mut name: Option<String> = None;
-        let mut description = Vec::new();
-        // Pass 1: declarations.
-        struct PendingDecl {
-            name: String,
-            kind: Kind,
-            at: usize,
-            value: Option<(String, Vec<usize>)>,
-        }
-        let mut pending: Vec<PendingDecl> = Vec::new();
-        let mut equations: Vec<(usize, usize, String, Vec<usize>)> = Vec::new(); // (stmt idx, name at, rhs, map)
-        let mut outputs_raw: Vec<(String, usize, String, Vec<usize>)> = Vec::new();
-        let mut restrict_raw: Vec<(usize, String, usize)> = Vec::new(); // stmt idx, name, at
-        let mut delay: Option<(String, usize)> = None;
+        let mut raw = Statements::default();
         for (si, st) in stmts.iter().enumerate() {
-            let t = st.text.as_str();
-            let lead = t.len() - t.trim_start().len();
-            let word_end = t[lead..]
-                .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '\''))
-                .map_or(t.len(), |i| lead + i);
-            let word = &t[lead..word_end];
-            let rest_start = word_end;
-            let kind = match word {
-                "state" | "states" => Some(Kind::State),
-                "param" | "params" => Some(Kind::Param),
-                "const" | "consts" => Some(Kind::Const),
-                "input" | "inputs" => Some(Kind::Input),
-                _ => None,
-            };
-            if let Some(kind) = kind {
-                let body = &t[rest_start..];
-                if body.trim().is_empty() {
-                    return Err(rd.err(
-                        st,
-                        lead,
-                        word_end,
-                        format!("'{word}' needs a list of names"),
-                    ));
-                }
-                for r in split_commas(body) {
-                    let (a, b) = trim_range(body, r);
-                    let item = &body[a..b];
-                    let (nm, val) = match item.split_once('=') {
-                        Some((n, v)) => (n.trim_end(), Some(v)),
-                        None => (item, None),
-                    };
-                    let na = rest_start + a;
-                    if !is_ident(nm) {
-                        let shown = if nm.is_empty() {
-                            "an empty name".to_string()
-                        } else {
-                            format!("'{nm}'")
-                        };
-                        return Err(rd.err(
-                            st,
-                            na,
-                            na + nm.len().max(1),
-                            format!("{shown} is not a valid name in a '{word}' list"),
-                        ));
-                    }
-                    let value = val.map(|v| {
-                        let off = rest_start + a + item.find('=').expect("has '=") + 1;
-                        (
-                            v.to_string(),
-                            (off..off + v.len()).map(|i| st.src(i)).collect(),
-                        )
-                    });
-                    pending.push(PendingDecl {
-                        name: nm.to_string(),
-                        kind,
-                        at: st.src(na),
-                        value,
-                    });
-                }
-                continue;
-            }
-            match word {
-                "system" => {
-                    let n = single_name(
-                        &rd,
-                        st,
-                        (lead, word_end, rest_start),
-                        name.is_some(),
-                        "'system' needs one name (letters, digits, '_'): system NAME",
-                        "a second 'system' line: a file describes one system",
-                    )?;
-                    name = Some(n.to_string());
-                }
-                "description" => description.push(t[rest_start..].trim().to_string()),
-                "delay" => {
-                    let n = single_name(
-                        &rd,
-                        st,
-                        (lead, word_end, rest_start),
-                        delay.is_some(),
-                        "'delay' needs one param name: delay NAME",
-                        "a second 'delay': a system has at most one",
-                    )?;
-                    delay = Some((
-                        n.to_string(),
-                        st.src(rest_start + t[rest_start..].find(n).unwrap_or(0)),
-                    ));
-                }
-                "output" => {
-                    let (nm, a, eq) = named_head(
-                        &rd,
-                        st,
-                        lead,
-                        rest_start,
-                        '=',
-                        "an output",
-                        "output y = EXPR",
-                    )?;
-                    let (rhs, map) = st.slice(rest_start + eq + 1, t.len());
-                    outputs_raw.push((nm.clone(), st.src(rest_start + a), rhs.to_string(), map));
-                }
-                "restrict" => {
-                    let (nm, a, _) = named_head(
-                        &rd,
-                        st,
-                        lead,
-                        rest_start,
-                        ':',
-                        "a restriction",
-                        "restrict NAME: u1 = EXPR, ...",
-                    )?;
-                    let b = a + nm.len();
-                    let nm = nm.as_str();
-                    if restrict_raw.iter().any(|r| r.1 == nm) {
-                        return Err(rd.err(
-                            st,
-                            rest_start + a,
-                            rest_start + b,
-                            format!("restriction '{nm}' is defined twice"),
-                        ));
-                    }
-                    restrict_raw.push((si, nm.to_string(), st.src(rest_start + a)));
-                }
-                w if t[word_end..].starts_with('\'') || w.ends_with('\'') => {
-                    let nm = w.trim_end_matches('\'');
-                    let after = if w.ends_with('\'') {
-                        word_end
-                    } else {
-                        word_end + 1
-                    };
-                    let rest = &t[after..];
-                    let Some(eq) = rest.find('=') else {
-                        return Err(rd.err(
-                            st,
-                            lead,
-                            t.len(),
-                            format!("an equation needs '=': {nm}' = EXPR"),
-                        ));
-                    };
-                    if !rest[..eq].trim().is_empty() {
-                        return Err(rd.err(
-                            st,
-                            after,
-                            after + eq,
-                            format!("expected '=' after {nm}'"),
-                        ));
-                    }
-                    let rs = after + eq + 1;
-                    let (rhs, map) = st.slice(rs, t.len());
-                    equations.push((si, st.src(lead), rhs.to_string(), map));
-                }
-                _ => {
-                    let hint = if t.contains('=') && is_ident(word) {
-                        format!(" (for the dynamics of {word} write {word}' = ..., for an output write output {word} = ...)")
-                    } else {
-                        String::new()
-                    };
-                    return Err(rd.err(
-                        st,
-                        lead,
-                        word_end.max(lead + 1),
-                        format!("expected a declaration (system, description, state, param, const, input, output, restrict) or an equation x' = ...{hint}"),
-                    ));
-                }
-            }
+            rd.statement(&mut raw, si, st)?;
         }
-        let Some(name) = name else {
+        let Some(name) = raw.name.take() else {
             return Err(ModelError::general(
                 origin,
                 "no 'system NAME' line: every .sys file starts by naming its system",
             ));
         };
-
-        // Declarations: duplicates, reserved names, symbol creation in order.
         let mut ctx = Ctx::new();
-        let mut decls: Vec<Decl> = Vec::new();
-        for p in &pending {
-            if let Some(prev) = pending.iter().find(|q| q.name == p.name && q.at < p.at) {
-                let (l, c) = obsan_expr::line_col(src, prev.at);
+        let decls = rd.declarations(&mut ctx, &raw.pending)?;
+        let (dynamics, dyn_text) = rd.dynamics(&mut ctx, &stmts, &raw.equations, &decls)?;
+        let outputs = rd.outputs(&mut ctx, &raw.outputs, &decls)?;
+        let restrictions = rd.restrictions(&mut ctx, &stmts, &raw.restricts, &decls, &outputs)?;
+        if let Some((n, at)) = &raw.delay {
+            if !decls.iter().any(|d| &d.name == n && d.kind == Kind::Param) {
                 return Err(rd.err_src(
+                    *at,
+                    at + n.len(),
+                    format!("delay '{n}': it must be a declared param (an unknown constant)"),
+                ));
+            }
+        }
+        Ok(System {
+            name,
+            description: raw.description.join(" ").trim().to_string(),
+            ctx,
+            decls,
+            dynamics,
+            outputs,
+            restrictions,
+            delay: raw.delay.map(|d| d.0),
+            origin: origin.to_string(),
+            src: src.to_string(),
+            texts: Texts {
+                dynamics: dyn_text,
+                outputs: raw
+                    .outputs
+                    .iter()
+                    .map(|o| o.rhs.trim().to_string())
+                    .collect(),
+                restrictions: raw
+                    .restricts
+                    .iter()
+                    .filter_map(|r| stmts.get(r.stmt))
+                    .map(|s| s.text.trim().to_string())
+                    .collect(),
+            },
+        })
+    }
+}
+
+impl Reader<'_> {
+    /// Pass 1, one statement: which it is, its names and unbuilt expressions.
+    fn statement(&self, raw: &mut Statements, si: usize, st: &Stmt) -> Result<(), ModelError> {
+        let t = st.text.as_str();
+        let lead = t.len() - t.trim_start().len();
+        let word_end = t[lead..]
+            .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '\''))
+            .map_or(t.len(), |i| lead + i);
+        let word = &t[lead..word_end];
+        let rest_start = word_end;
+        let kind = match word {
+            "state" | "states" => Some(Kind::State),
+            "param" | "params" => Some(Kind::Param),
+            "const" | "consts" => Some(Kind::Const),
+            "input" | "inputs" => Some(Kind::Input),
+            _ => None,
+        };
+        if let Some(kind) = kind {
+            return self.declaration_list(raw, st, kind, (lead, word_end));
+        }
+        match word {
+            "system" => {
+                let n = single_name(
+                    self,
+                    st,
+                    (lead, word_end, rest_start),
+                    raw.name.is_some(),
+                    "'system' needs one name (letters, digits, '_'): system NAME",
+                    "a second 'system' line: a file describes one system",
+                )?;
+                raw.name = Some(n.to_string());
+            }
+            "description" => raw.description.push(t[rest_start..].trim().to_string()),
+            "delay" => {
+                let n = single_name(
+                    self,
+                    st,
+                    (lead, word_end, rest_start),
+                    raw.delay.is_some(),
+                    "'delay' needs one param name: delay NAME",
+                    "a second 'delay': a system has at most one",
+                )?;
+                raw.delay = Some((
+                    n.to_string(),
+                    st.src(rest_start + t[rest_start..].find(n).unwrap_or(0)),
+                ));
+            }
+            "output" => {
+                let (nm, a, eq) = named_head(
+                    self,
+                    st,
+                    lead,
+                    rest_start,
+                    '=',
+                    "an output",
+                    "output y = EXPR",
+                )?;
+                let (rhs, map) = st.slice(rest_start + eq + 1, t.len());
+                raw.outputs.push(RawOutput {
+                    name: nm,
+                    at: st.src(rest_start + a),
+                    rhs: rhs.to_string(),
+                    map,
+                });
+            }
+            "restrict" => {
+                let (nm, a, colon) = named_head(
+                    self,
+                    st,
+                    lead,
+                    rest_start,
+                    ':',
+                    "a restriction",
+                    "restrict NAME: u1 = EXPR, ...",
+                )?;
+                if raw.restricts.iter().any(|r| r.name == nm) {
+                    return Err(self.err(
+                        st,
+                        rest_start + a,
+                        rest_start + a + nm.len(),
+                        format!("restriction '{nm}' is defined twice"),
+                    ));
+                }
+                raw.restricts.push(RawRestrict {
+                    stmt: si,
+                    at: st.src(rest_start + a),
+                    name: nm,
+                    colon: rest_start + colon,
+                });
+            }
+            w if t[word_end..].starts_with('\'') || w.ends_with('\'') => {
+                self.equation(raw, si, st, (lead, word_end))?
+            }
+            _ => {
+                let first = t[lead..].chars().next().unwrap_or(' ');
+                let hint = if !first.is_ascii() && first.is_alphabetic() {
+                    format!(" ('{first}': names are ASCII: letters a-z A-Z, digits and '_')")
+                } else if t.contains('=') && is_ident(word) {
+                    format!(" (for the dynamics of {word} write {word}' = ..., for an output write output {word} = ...)")
+                } else {
+                    String::new()
+                };
+                return Err(self.err(
+                    st,
+                    lead,
+                    word_end.max(lead + first.len_utf8()),
+                    format!("expected a declaration (system, description, state, param, const, input, output, restrict) or an equation x' = ...{hint}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `state a, b = EXPR, ...` (and param, const, input): the names and the
+    /// text after each `=`.
+    fn declaration_list(
+        &self,
+        raw: &mut Statements,
+        st: &Stmt,
+        kind: Kind,
+        (lead, word_end): (usize, usize),
+    ) -> Result<(), ModelError> {
+        let t = st.text.as_str();
+        let word = &t[lead..word_end];
+        let body = &t[word_end..];
+        if body.trim().is_empty() {
+            return Err(self.err(
+                st,
+                lead,
+                word_end,
+                format!("'{word}' needs a list of names"),
+            ));
+        }
+        for r in split_commas(body) {
+            let (a, b) = trim_range(body, r);
+            let item = &body[a..b];
+            let (nm, val) = match item.split_once('=') {
+                Some((n, v)) => (n.trim_end(), Some(v)),
+                None => (item, None),
+            };
+            let na = word_end + a;
+            if !is_ident(nm) {
+                let shown = if nm.is_empty() {
+                    "an empty name".to_string()
+                } else {
+                    format!("'{nm}'")
+                };
+                return Err(self.err(
+                    st,
+                    na,
+                    na + nm.len().max(1),
+                    format!(
+                        "{shown} is not a valid name in a '{word}' list{}",
+                        not_a_name(nm)
+                    ),
+                ));
+            }
+            let value = match val {
+                Some(v) if v.trim().is_empty() => {
+                    return Err(self.err(
+                        st,
+                        na,
+                        na + nm.len(),
+                        format!("'{nm} =' needs a value after '='"),
+                    ))
+                }
+                Some(v) => {
+                    // `v` is the tail of `item` after its first '='.
+                    let off = na + (item.len() - v.len());
+                    Some((
+                        v.to_string(),
+                        (off..off + v.len()).map(|i| st.src(i)).collect(),
+                    ))
+                }
+                None => None,
+            };
+            raw.pending.push(PendingDecl {
+                name: nm.to_string(),
+                kind,
+                at: st.src(na),
+                value,
+            });
+        }
+        Ok(())
+    }
+
+    /// `x' = EXPR`.
+    fn equation(
+        &self,
+        raw: &mut Statements,
+        si: usize,
+        st: &Stmt,
+        (lead, word_end): (usize, usize),
+    ) -> Result<(), ModelError> {
+        let t = st.text.as_str();
+        let w = &t[lead..word_end];
+        let nm = w.trim_end_matches('\'');
+        let after = if w.ends_with('\'') {
+            word_end
+        } else {
+            word_end + 1
+        };
+        let rest = &t[after..];
+        let Some(eq) = rest.find('=') else {
+            return Err(self.err(
+                st,
+                lead,
+                t.len(),
+                format!("an equation needs '=': {nm}' = EXPR"),
+            ));
+        };
+        if !rest[..eq].trim().is_empty() {
+            return Err(self.err(st, after, after + eq, format!("expected '=' after {nm}'")));
+        }
+        let (rhs, map) = st.slice(after + eq + 1, t.len());
+        raw.equations.push(RawEquation {
+            stmt: si,
+            at: st.src(lead),
+            rhs: rhs.to_string(),
+            map,
+        });
+        Ok(())
+    }
+
+    /// Declarations: duplicates, reserved names, the symbols (states, params,
+    /// consts, inputs in that order), values, starts and derived inputs.
+    fn declarations(
+        &self,
+        ctx: &mut Ctx,
+        pending: &[PendingDecl],
+    ) -> Result<Vec<Decl>, ModelError> {
+        // First declaration of each name (a map: files with many names stay
+        // linear).
+        let mut first: HashMap<&str, &PendingDecl> = HashMap::new();
+        for p in pending {
+            let prev = *first.entry(p.name.as_str()).or_insert(p);
+            if prev.at < p.at {
+                let e = ModelError::at(self.origin, self.src, prev.at, prev.at + 1, "");
+                let (l, c) = (e.line.unwrap_or(0), e.col.unwrap_or(0));
+                return Err(self.err_src(
                     p.at,
                     p.at + p.name.len(),
                     format!(
@@ -522,7 +699,7 @@ impl System {
                 || FUNCTIONS.iter().any(|f| f.0 == p.name)
                 || KEYWORDS.contains(&p.name.as_str())
             {
-                return Err(rd.err_src(
+                return Err(self.err_src(
                     p.at,
                     p.at + p.name.len(),
                     format!("'{}' is a reserved word and cannot be a name", p.name),
@@ -536,35 +713,21 @@ impl System {
             Kind::Const => 2,
             Kind::Input => 3,
         });
+        let mut decls: Vec<Decl> = Vec::new();
         for p in order {
             let sym = ctx.symbol(&p.name);
-            // A number: a constant's value or a param's start.
-            let number = |text: &str, map: &[usize], what: &str| -> Result<Q, ModelError> {
-                let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
-                let mut tmp = Ctx::new();
-                let id = tmp
-                    .build(&ast, &mut |_, n, s| {
-                        Err(ParseError::new(
-                            format!("{what} must be a number, not '{n}'"),
-                            s,
-                        ))
-                    })
-                    .map_err(|e| rd.parse_err(map, e))?;
-                tmp.canon(id).as_q().ok_or_else(|| {
-                    rd.parse_err(
-                        map,
-                        ParseError::new(format!("{what} must be a rational number"), ast.span),
-                    )
-                })
-            };
             let value = match (&p.value, p.kind) {
-                (Some((text, map)), Kind::Const) => Some(number(text, map, "a constant's value")?),
+                (Some((text, map)), Kind::Const) => {
+                    Some(self.number(text, map, "a constant's value")?)
+                }
                 _ => None,
             };
             let start = match (&p.value, p.kind) {
-                (Some((text, map)), Kind::Param) => {
-                    Some(Start::Number(number(text, map, "a param's start value")?))
-                }
+                (Some((text, map)), Kind::Param) => Some(Start::Number(self.number(
+                    text,
+                    map,
+                    "a param's start value",
+                )?)),
                 (Some((text, _)), Kind::State) => Some(Start::Inputs(text.trim().to_string())),
                 _ => None,
             };
@@ -581,9 +744,9 @@ impl System {
                 at: p.at,
             });
         }
-        for p in &pending {
+        for p in pending {
             if let (Some((text, map)), Kind::Input | Kind::State) = (&p.value, p.kind) {
-                check_derived(&rd, text, map, &decls, p.kind)?;
+                check_derived(self, text, map, &decls, p.kind)?;
             }
         }
         if !decls
@@ -591,137 +754,175 @@ impl System {
             .any(|d| matches!(d.kind, Kind::State | Kind::Param))
         {
             return Err(ModelError::general(
-                origin,
+                self.origin,
                 "the system has no state and no param: declare them with 'state' and 'param'",
             ));
         }
+        Ok(decls)
+    }
 
-        let find = |n: &str| decls.iter().find(|d| d.name == n);
-        let suggest = |n: &str| -> String {
-            let best = decls
-                .iter()
-                .map(|d| (edit_distance(n, &d.name), &d.name))
-                .filter(|(k, _)| *k <= 2)
-                .min();
-            best.map_or(String::new(), |(_, m)| format!(" (did you mean '{m}'?)"))
-        };
+    /// A number: a constant's value or a param's start.
+    fn number(&self, text: &str, map: &[usize], what: &str) -> Result<Q, ModelError> {
+        let ast = parse_ast(text).map_err(|e| self.parse_err(map, e))?;
+        let mut tmp = Ctx::new();
+        let id = tmp
+            .build(&ast, &mut |_, n, s| {
+                Err(ParseError::new(
+                    format!("{what} must be a number, not '{n}'"),
+                    s,
+                ))
+            })
+            .map_err(|e| self.parse_err(map, e))?;
+        tmp.canon(id).as_q().ok_or_else(|| {
+            self.parse_err(
+                map,
+                ParseError::new(format!("{what} must be a rational number"), ast.span),
+            )
+        })
+    }
 
-        // Dynamics.
+    /// Did-you-mean for an unknown name.
+    fn suggest(decls: &[Decl], n: &str) -> String {
+        let best = decls
+            .iter()
+            .map(|d| (edit_distance(n, &d.name), &d.name))
+            .filter(|(k, _)| *k <= 2)
+            .min();
+        best.map_or(String::new(), |(_, m)| format!(" (did you mean '{m}'?)"))
+    }
+
+    /// The equations: one per state, built over every declared name and
+    /// affine in the inputs. Returns them in state order with their text.
+    fn dynamics(
+        &self,
+        ctx: &mut Ctx,
+        stmts: &[Stmt],
+        equations: &[RawEquation],
+        decls: &[Decl],
+    ) -> Result<(Vec<Located>, Vec<String>), ModelError> {
         let states: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::State).collect();
         let mut dynamics: Vec<Option<Located>> = vec![None; states.len()];
         let mut dyn_text: Vec<String> = vec![String::new(); states.len()];
-        for (si, at, rhs, map) in &equations {
-            let st = &stmts[*si];
-            let t = st.text.trim_start();
+        for eqn in equations {
+            let at = eqn.at;
+            let t = stmts.get(eqn.stmt).map_or("", |s| s.text.trim_start());
             let nm = t[..t.find('\'').unwrap_or(0)].trim();
             let width = nm.len() + 1;
-            let Some(d) = find(nm) else {
-                return Err(rd.err_src(
-                    *at,
-                    at + width,
-                    format!(
+            let idx = match decls.iter().find(|d| d.name == nm) {
+                None => {
+                    return Err(self.err_src(
+                        at,
+                        at + width,
+                        format!(
                         "equation for '{nm}', which is not declared{} (declare it with 'state')",
-                        suggest(nm)
+                        Self::suggest(decls, nm)
                     ),
-                ));
-            };
-            let idx = match d.kind {
-                Kind::State => states.iter().position(|s| s.name == nm).expect("state"),
-                Kind::Param => {
-                    return Err(rd.err_src(
-                        *at,
+                    ))
+                }
+                Some(d) if d.kind == Kind::Param => {
+                    return Err(self.err_src(
+                        at,
                         at + width,
                         format!("'{nm}' is a param: params are constant and take no equation"),
                     ))
                 }
-                k => {
-                    return Err(rd.err_src(
-                        *at,
-                        at + width,
-                        format!("'{nm}' is a {}: only states have equations", k.word()),
-                    ))
-                }
+                Some(d) => match states.iter().position(|s| s.name == nm) {
+                    Some(i) => i,
+                    None => {
+                        return Err(self.err_src(
+                            at,
+                            at + width,
+                            format!("'{nm}' is a {}: only states have equations", d.kind.word()),
+                        ))
+                    }
+                },
             };
             if dynamics[idx].is_some() {
-                return Err(rd.err_src(*at, at + width, format!("a second equation for '{nm}'")));
+                return Err(self.err_src(at, at + width, format!("a second equation for '{nm}'")));
             }
-            if rhs.trim().is_empty() {
-                return Err(rd.err_src(
-                    *at,
+            if eqn.rhs.trim().is_empty() {
+                return Err(self.err_src(
+                    at,
                     at + width,
                     format!("the equation for '{nm}' has no right-hand side"),
                 ));
             }
-            let ast = parse_ast(rhs).map_err(|e| rd.parse_err(map, e))?;
+            let ast = parse_ast(&eqn.rhs).map_err(|e| self.parse_err(&eqn.map, e))?;
             let id = build_checked(
-                &mut ctx,
+                ctx,
                 &ast,
-                map,
-                &rd,
-                &decls,
+                &eqn.map,
+                self,
+                decls,
                 &[Kind::State, Kind::Param, Kind::Const, Kind::Input],
                 &format!("the dynamics of {nm}"),
             )?;
             let loc = Located {
                 ast,
                 id,
-                map: map.clone(),
+                map: eqn.map.clone(),
             };
-            check_affine(&mut ctx, &loc, &decls, &rd, nm)?;
+            check_affine(ctx, &loc, decls, self, nm)?;
             dynamics[idx] = Some(loc);
-            dyn_text[idx] = rhs.trim().to_string();
+            dyn_text[idx] = eqn.rhs.trim().to_string();
         }
-        let mut dyn_out = Vec::with_capacity(states.len());
+        let mut out = Vec::with_capacity(states.len());
         for (s, d) in states.iter().zip(dynamics) {
             match d {
-                Some(d) => dyn_out.push(d),
+                Some(d) => out.push(d),
                 None => {
-                    return Err(rd.err_src(s.at, s.at + s.name.len(), format!("state '{}' has no equation: add {}' = ... (or declare it as a param if it is constant)", s.name, s.name)))
+                    return Err(self.err_src(s.at, s.at + s.name.len(), format!("state '{}' has no equation: add {}' = ... (or declare it as a param if it is constant)", s.name, s.name)))
                 }
             }
         }
+        Ok((out, dyn_text))
+    }
 
-        // Outputs.
-        if outputs_raw.is_empty() {
+    /// The outputs: at least one, fresh names, functions of states, params
+    /// and constants only.
+    fn outputs(
+        &self,
+        ctx: &mut Ctx,
+        raw: &[RawOutput],
+        decls: &[Decl],
+    ) -> Result<Vec<(String, Located)>, ModelError> {
+        if raw.is_empty() {
             return Err(ModelError::general(
-                origin,
+                self.origin,
                 "the system has no output: add at least one 'output y = EXPR'",
             ));
         }
-        let mut outputs = Vec::new();
-        for (nm, at, rhs, map) in &outputs_raw {
-            if find(nm).is_some() || outputs.iter().any(|(o, _): &(String, Located)| o == nm) {
-                return Err(rd.err_src(
-                    *at,
+        let find = |n: &str| decls.iter().find(|d| d.name == n);
+        let mut outputs: Vec<(String, Located)> = Vec::new();
+        for o in raw {
+            let (nm, at, map) = (&o.name, o.at, &o.map);
+            if find(nm).is_some() || outputs.iter().any(|(p, _)| p == nm) {
+                return Err(self.err_src(
+                    at,
                     at + nm.len(),
                     format!("output name '{nm}' is already used"),
                 ));
             }
-            if rhs.trim().is_empty() {
-                return Err(rd.err_src(
-                    *at,
+            if o.rhs.trim().is_empty() {
+                return Err(self.err_src(
+                    at,
                     at + nm.len(),
                     format!("output '{nm}' has no expression"),
                 ));
             }
-            let ast = parse_ast(rhs).map_err(|e| rd.parse_err(map, e))?;
+            let ast = parse_ast(&o.rhs).map_err(|e| self.parse_err(map, e))?;
             for (id_name, span) in ast.idents() {
                 if find(id_name).is_some_and(|d| d.kind == Kind::Input) {
-                    let (a, b) = Located {
-                        ast: ast.clone(),
-                        id: ctx.int(0),
-                        map: map.clone(),
-                    }
-                    .src_span(span);
-                    return Err(rd.err_src(a, b, format!("output '{nm}' uses the input '{id_name}': outputs must be functions of states, params and constants")));
+                    let (a, b) = span_in(map, span);
+                    return Err(self.err_src(a, b, format!("output '{nm}' uses the input '{id_name}': outputs must be functions of states, params and constants")));
                 }
             }
             let id = build_checked(
-                &mut ctx,
+                ctx,
                 &ast,
                 map,
-                &rd,
-                &decls,
+                self,
+                decls,
                 &[Kind::State, Kind::Param, Kind::Const],
                 &format!("output {nm}"),
             )?;
@@ -734,177 +935,198 @@ impl System {
                 },
             ));
         }
-
-        // Restrictions.
-        let inputs: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::Input).collect();
-        let mut restrictions = Vec::new();
-        for (si, rname, at) in &restrict_raw {
-            let st = &stmts[*si];
-            let t = &st.text;
-            let colon = t.find(':').expect("checked") + 1;
-            let body = &t[colon..];
-            let mut subs: Vec<(usize, Located)> = Vec::new();
-            let mut fresh: Vec<String> = Vec::new();
-            let mut raw: Vec<(usize, Ast, Vec<usize>)> = Vec::new();
-            if body.trim().is_empty() {
-                return Err(rd.err_src(*at, at + rname.len(), format!("restriction '{rname}' substitutes nothing: restrict {rname}: u1 = EXPR, ...")));
-            }
-            for r in split_commas(body) {
-                let (a, b) = trim_range(body, r);
-                let item = &body[a..b];
-                let Some(eq) = item.find('=') else {
-                    return Err(rd.err(
-                        st,
-                        colon + a,
-                        colon + b.max(a + 1),
-                        "each part of a restriction is INPUT = EXPR",
-                    ));
-                };
-                let lhs = item[..eq].trim();
-                let la = colon + a;
-                let Some(ii) = inputs.iter().position(|d| d.name == lhs) else {
-                    let what = match find(lhs) {
-                        Some(d) => format!("'{lhs}' is a {}, not an input", d.kind.word()),
-                        None => format!("'{lhs}' is not a declared input{}", suggest(lhs)),
-                    };
-                    return Err(rd.err(
-                        st,
-                        la,
-                        la + lhs.len().max(1),
-                        format!("restriction '{rname}': {what}"),
-                    ));
-                };
-                if raw.iter().any(|(k, _, _)| *k == ii) {
-                    return Err(rd.err(
-                        st,
-                        la,
-                        la + lhs.len(),
-                        format!("restriction '{rname}' sets '{lhs}' twice"),
-                    ));
-                }
-                let rs = colon + a + eq + 1;
-                let (rhs, map) = st.slice(rs, colon + b);
-                if rhs.trim().is_empty() {
-                    return Err(rd.err(
-                        st,
-                        la,
-                        la + lhs.len(),
-                        format!("restriction '{rname}': '{lhs} =' needs an expression"),
-                    ));
-                }
-                let ast = parse_ast(rhs).map_err(|e| rd.parse_err(&map, e))?;
-                raw.push((ii, ast, map));
-            }
-            let replaced: Vec<usize> = raw.iter().map(|r| r.0).collect();
-            for (_, ast, map) in &raw {
-                for (n, span) in ast.idents() {
-                    let loc = Located {
-                        ast: ast.clone(),
-                        id: ctx.int(0),
-                        map: map.clone(),
-                    };
-                    match find(n) {
-                        Some(d) if d.kind == Kind::Const => {}
-                        Some(d) if d.kind == Kind::Input => {
-                            let ii = inputs.iter().position(|x| x.name == n).expect("input");
-                            if replaced.contains(&ii) {
-                                let (a, b) = loc.src_span(span);
-                                return Err(rd.err_src(a, b, format!("restriction '{rname}' replaces '{n}' and also uses it on a right side")));
-                            }
-                        }
-                        Some(d) => {
-                            let (a, b) = loc.src_span(span);
-                            return Err(rd.err_src(a, b, format!("restriction '{rname}': the right side may use known constants and inputs only, not the {} '{n}'", d.kind.word())));
-                        }
-                        None if outputs.iter().any(|(o, _)| o == n) => {
-                            let (a, b) = loc.src_span(span);
-                            return Err(rd.err_src(
-                                a,
-                                b,
-                                format!("restriction '{rname}': '{n}' is an output, not an input"),
-                            ));
-                        }
-                        None => {
-                            if !fresh.iter().any(|f| f == n) {
-                                fresh.push(n.to_string());
-                            }
-                        }
-                    }
-                }
-            }
-            let mut new_inputs: Vec<String> = inputs
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| !replaced.contains(i))
-                .map(|(_, d)| d.name.clone())
-                .collect();
-            new_inputs.extend(fresh.iter().cloned());
-            for (ii, ast, map) in raw {
-                let fresh_ref = &fresh;
-                let decls_ref = &decls;
-                let mut resolve = |c: &mut Ctx, n: &str, _s: Span| -> Result<Id, ParseError> {
-                    if fresh_ref.iter().any(|f| f == n) || decls_ref.iter().any(|d| d.name == n) {
-                        Ok(c.symbol(n).id)
-                    } else {
-                        unreachable!("identifiers were classified above")
-                    }
-                };
-                let id = ctx
-                    .build(&ast, &mut resolve)
-                    .map_err(|e| rd.parse_err(&map, e))?;
-                let loc = Located { ast, id, map };
-                // Affine in the new inputs.
-                let vars: Vec<_> = new_inputs.iter().map(|n| ctx.symbol(n).var).collect();
-                for &v in &vars {
-                    let d = ctx.diff(id, v);
-                    for &w in &vars {
-                        let dd = ctx.diff(d, w);
-                        if !ctx.is_identically_zero(dd) {
-                            let (a, b) = loc.src_span(loc.ast.span);
-                            return Err(rd.err_src(a, b, format!("restriction '{rname}': {} = ... is not affine in the inputs ({})", inputs[ii].name, new_inputs.join(", "))));
-                        }
-                    }
-                }
-                subs.push((ii, loc));
-            }
-            restrictions.push(Restriction {
-                name: rname.clone(),
-                subs,
-                inputs: new_inputs,
-            });
-        }
-
-        if let Some((n, at)) = &delay {
-            if !decls.iter().any(|d| &d.name == n && d.kind == Kind::Param) {
-                return Err(rd.err_src(
-                    *at,
-                    at + n.len(),
-                    format!("delay '{n}': it must be a declared param (an unknown constant)"),
-                ));
-            }
-        }
-        Ok(System {
-            name,
-            description: description.join(" ").trim().to_string(),
-            ctx,
-            decls,
-            dynamics: dyn_out,
-            outputs,
-            restrictions,
-            delay: delay.map(|d| d.0),
-            origin: origin.to_string(),
-            src: src.to_string(),
-            texts: Texts {
-                dynamics: dyn_text,
-                outputs: outputs_raw.iter().map(|o| o.2.trim().to_string()).collect(),
-                restrictions: restrict_raw
-                    .iter()
-                    .map(|r| stmts[r.0].text.trim().to_string())
-                    .collect(),
-            },
-        })
+        Ok(outputs)
     }
 
+    fn restrictions(
+        &self,
+        ctx: &mut Ctx,
+        stmts: &[Stmt],
+        raw: &[RawRestrict],
+        decls: &[Decl],
+        outputs: &[(String, Located)],
+    ) -> Result<Vec<Restriction>, ModelError> {
+        let mut out = Vec::new();
+        for r in raw {
+            if let Some(st) = stmts.get(r.stmt) {
+                out.push(self.restriction(ctx, st, r, decls, outputs)?);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `restrict NAME: u1 = EXPR, ...`: each left side an input set once;
+    /// right sides of constants, inputs not replaced and new names (the new
+    /// inputs), affine in the new inputs.
+    fn restriction(
+        &self,
+        ctx: &mut Ctx,
+        st: &Stmt,
+        r: &RawRestrict,
+        decls: &[Decl],
+        outputs: &[(String, Located)],
+    ) -> Result<Restriction, ModelError> {
+        let (rname, at) = (&r.name, r.at);
+        let find = |n: &str| decls.iter().find(|d| d.name == n);
+        let inputs: Vec<&Decl> = decls.iter().filter(|d| d.kind == Kind::Input).collect();
+        let t = &st.text;
+        let colon = r.colon + 1;
+        let body = t.get(colon..).unwrap_or("");
+        if body.trim().is_empty() {
+            return Err(self.err_src(
+                at,
+                at + rname.len(),
+                format!(
+                    "restriction '{rname}' substitutes nothing: restrict {rname}: u1 = EXPR, ..."
+                ),
+            ));
+        }
+        let mut raw: Vec<(usize, Ast, Vec<usize>)> = Vec::new();
+        for part in split_commas(body) {
+            let (a, b) = trim_range(body, part);
+            let item = &body[a..b];
+            let Some(eq) = item.find('=') else {
+                return Err(self.err(
+                    st,
+                    colon + a,
+                    colon + b.max(a + 1),
+                    "each part of a restriction is INPUT = EXPR",
+                ));
+            };
+            let lhs = item[..eq].trim();
+            let la = colon + a;
+            let Some(ii) = inputs.iter().position(|d| d.name == lhs) else {
+                let what = match find(lhs) {
+                    Some(d) => format!("'{lhs}' is a {}, not an input", d.kind.word()),
+                    None => format!(
+                        "'{lhs}' is not a declared input{}{}",
+                        Self::suggest(decls, lhs),
+                        not_a_name(lhs)
+                    ),
+                };
+                return Err(self.err(
+                    st,
+                    la,
+                    la + lhs.len().max(1),
+                    format!("restriction '{rname}': {what}"),
+                ));
+            };
+            if raw.iter().any(|(k, _, _)| *k == ii) {
+                return Err(self.err(
+                    st,
+                    la,
+                    la + lhs.len(),
+                    format!("restriction '{rname}' sets '{lhs}' twice"),
+                ));
+            }
+            let (rhs, map) = st.slice(colon + a + eq + 1, colon + b);
+            if rhs.trim().is_empty() {
+                return Err(self.err(
+                    st,
+                    la,
+                    la + lhs.len(),
+                    format!("restriction '{rname}': '{lhs} =' needs an expression"),
+                ));
+            }
+            let ast = parse_ast(rhs).map_err(|e| self.parse_err(&map, e))?;
+            raw.push((ii, ast, map));
+        }
+        let replaced: Vec<usize> = raw.iter().map(|r| r.0).collect();
+        let mut fresh: Vec<String> = Vec::new();
+        for (_, ast, map) in &raw {
+            for (n, span) in ast.idents() {
+                let (a, b) = span_in(map, span);
+                match find(n) {
+                    Some(d) if d.kind == Kind::Const => {}
+                    Some(d) if d.kind == Kind::Input => {
+                        if inputs
+                            .iter()
+                            .position(|x| x.name == n)
+                            .is_some_and(|ii| replaced.contains(&ii))
+                        {
+                            return Err(self.err_src(a, b, format!("restriction '{rname}' replaces '{n}' and also uses it on a right side")));
+                        }
+                    }
+                    Some(d) => {
+                        return Err(self.err_src(a, b, format!("restriction '{rname}': the right side may use known constants and inputs only, not the {} '{n}'", d.kind.word())));
+                    }
+                    None if outputs.iter().any(|(o, _)| o == n) => {
+                        return Err(self.err_src(
+                            a,
+                            b,
+                            format!("restriction '{rname}': '{n}' is an output, not an input"),
+                        ));
+                    }
+                    None => {
+                        if !fresh.iter().any(|f| f == n) {
+                            fresh.push(n.to_string());
+                        }
+                    }
+                }
+            }
+        }
+        let mut new_inputs: Vec<String> = inputs
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| !replaced.contains(i))
+            .map(|(_, d)| d.name.clone())
+            .collect();
+        new_inputs.extend(fresh.iter().cloned());
+        let mut subs: Vec<(usize, Located)> = Vec::new();
+        for (ii, ast, map) in raw {
+            let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+                if fresh.iter().any(|f| f == n) || decls.iter().any(|d| d.name == n) {
+                    Ok(c.symbol(n).id)
+                } else {
+                    // Every identifier was classified above.
+                    Err(ParseError::new(format!("unknown symbol '{n}'"), s))
+                }
+            };
+            let id = ctx
+                .build(&ast, &mut resolve)
+                .map_err(|e| self.parse_err(&map, e))?;
+            let loc = Located { ast, id, map };
+            // Affine in the new inputs.
+            let vars: Vec<_> = new_inputs.iter().map(|n| ctx.symbol(n).var).collect();
+            for &v in &vars {
+                let d = ctx.diff(id, v);
+                for &w in &vars {
+                    let dd = ctx.diff(d, w);
+                    if !ctx.is_identically_zero(dd) {
+                        let (a, b) = loc.src_span(loc.ast.span);
+                        let u = inputs.get(ii).map_or("", |d| d.name.as_str());
+                        return Err(self.err_src(
+                            a,
+                            b,
+                            format!(
+                                "restriction '{rname}': {u} = ... is not affine in the inputs ({})",
+                                new_inputs.join(", ")
+                            ),
+                        ));
+                    }
+                }
+            }
+            subs.push((ii, loc));
+        }
+        Ok(Restriction {
+            name: rname.clone(),
+            subs,
+            inputs: new_inputs,
+        })
+    }
+}
+
+/// Source range of `span` of an expression whose text has the source map `map`.
+fn span_in(map: &[usize], s: Span) -> (usize, usize) {
+    let last = map.len().saturating_sub(1);
+    let a = map.get(s.start.min(last)).copied().unwrap_or(0);
+    let b = map
+        .get(s.end.saturating_sub(1).min(last))
+        .map_or(a, |x| x + 1);
+    (a, b.max(a + 1))
+}
+
+impl System {
     /// The system as `.sys` text (declarations, dynamics, outputs,
     /// restrictions; comments dropped): what `obsan diagnose` writes for an
     /// extended model, and what [`System::parse`] reads back.
@@ -1030,7 +1252,7 @@ fn check_derived(
             return Ok(());
         }
         let lead = text.len() - text.trim_start().len();
-        let (a, b) = (map[lead], map[(lead + t.len()).min(map.len()) - 1] + 1);
+        let (a, b) = span_in(map, Span::new(lead, lead + t.len()));
         return Err(rd.err_src(
             a,
             b,
@@ -1041,11 +1263,10 @@ fn check_derived(
     for (n, span) in ast.idents() {
         let ok = measured(n) || decls.iter().any(|d| d.name == n && d.kind == Kind::Const);
         if !ok {
-            let a = map[span.start.min(map.len() - 1)];
-            let b = map[span.end.saturating_sub(1).min(map.len() - 1)] + 1;
+            let (a, b) = span_in(map, span);
             return Err(rd.err_src(
                 a,
-                b.max(a + 1),
+                b,
                 format!("{what} may use measured inputs and constants, not '{n}'"),
             ));
         }
@@ -1102,9 +1323,11 @@ fn build_checked(
     allowed: &[Kind],
     what: &str,
 ) -> Result<Id, ModelError> {
-    let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
-        match decls.iter().find(|d| d.name == n) {
-            Some(d) if allowed.contains(&d.kind) => Ok(c.lookup(n).expect("declared").id),
+    let index: HashMap<&str, &Decl> = decls.iter().map(|d| (d.name.as_str(), d)).collect();
+    let mut resolve = |_c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+        match index.get(n).copied() {
+            // The declaration's symbol was made in this context.
+            Some(d) if allowed.contains(&d.kind) => Ok(d.sym.id),
             Some(d) => Err(ParseError::new(
                 format!("{what} cannot use the {} '{n}'", d.kind.word()),
                 s,
@@ -1162,15 +1385,17 @@ fn check_affine(
         .map(|d| d.name.as_str())
         .collect();
     for (_, term) in loc.ast.additive_terms() {
-        let mut resolve = |c: &mut Ctx, n: &str, _s: Span| -> Result<Id, ParseError> {
-            Ok(c.lookup(n).expect("checked").id)
+        let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+            c.lookup(n)
+                .map(|x| x.id)
+                .ok_or_else(|| ParseError::new(format!("unknown symbol '{n}'"), s))
         };
         let Ok(tid) = ctx.build(term, &mut resolve) else {
             continue;
         };
         if !affine(ctx, tid) {
             let (a, b) = loc.src_span(term.span);
-            let text = &rd.src[a..b];
+            let text = rd.src.get(a..b).unwrap_or("");
             return Err(rd.err_src(a, b, format!("the dynamics of {state} are not affine in the inputs ({}): the term '{text}' is not", names.join(", "))));
         }
     }
