@@ -374,8 +374,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
 }
 
 pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
-    let src = std::fs::read_to_string(&a.file)
-        .map_err(|e| Failure(format!("cannot read {}: {e}", a.file)))?;
+    let src = crate::fsio::read_text(&a.file)?;
     let d = Decomposition::parse(&src, &a.file).map_err(|e| Failure(e.to_string()))?;
     let base = std::path::Path::new(&a.file)
         .parent()

@@ -28,8 +28,7 @@ fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
             p.display().to_string()
         }
     };
-    let src =
-        std::fs::read_to_string(&path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    let src = crate::fsio::read_text(&path)?;
     Ok(Some(EffectLibrary::parse(&src, &path)?))
 }
 

@@ -15,6 +15,14 @@ pub const MANIFEST: &str = ".obsan-manifest";
 /// The manifest's first line; the rest is one relative path per line.
 const MANIFEST_HEADER: &str = "# written by obsan: these files may be replaced by --force";
 
+/// Read a text file the user wrote (.sys, .eff, .dec): a BOM is dropped,
+/// line endings normalised, and invalid UTF-8 is an error at its line and
+/// column.
+pub fn read_text(path: &str) -> Result<String, Failure> {
+    let bytes = std::fs::read(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    obsan_model::decode_text(&bytes, path).map_err(|e| Failure(e.to_string()))
+}
+
 /// Write all files into a temporary sibling folder, then rename it into
 /// place: a failure leaves nothing behind. Missing parent folders are
 /// created (as `mkdir -p` does).

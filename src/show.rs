@@ -10,8 +10,7 @@ use std::process::ExitCode;
 
 /// Read and check a .sys file.
 pub fn load_system(path: &str) -> Result<System, Failure> {
-    let src =
-        std::fs::read_to_string(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    let src = crate::fsio::read_text(path)?;
     System::parse(&src, path).map_err(|e| Failure(e.to_string()))
 }
 

@@ -263,3 +263,38 @@ fn shell_words(s: &str) -> Vec<String> {
     }
     words
 }
+
+/// Issue 14.2 and 14.9: a BOM, non-ASCII text and invalid UTF-8 in a .sys file.
+#[test]
+fn sys_files_with_bom_unicode_or_bad_bytes() {
+    let loc = std::fs::read_to_string("systems/localization.sys").unwrap();
+    // A BOM and CRLF line endings read as the same system.
+    let bom = temp_file("bom.sys", &format!("\u{feff}{}", loc.replace('\n', "\r\n")));
+    let plain = ok(&["rank", "systems/localization.sys", "--json"]);
+    let with_bom = ok(&["rank", &bom, "--json"]);
+    let rank = |s: &str| serde_json::from_str::<serde_json::Value>(s).unwrap()["rank"].clone();
+    assert_eq!(rank(&with_bom), rank(&plain));
+    // A Greek state name and an umlaut in a comment: no panic; an answer or a located error.
+    let greek = temp_file(
+        "greek.sys",
+        &loc.replace("thetaR", "θR")
+            .replace("# Section II", "# für Section II"),
+    );
+    let r = obsan(&["rank", &greek]);
+    assert!(r.code == 0 || r.code == 2, "{}", r.stderr);
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    if r.code == 2 {
+        assert!(r.stderr.contains("greek.sys:"), "{}", r.stderr);
+    }
+    // Invalid UTF-8 on line 3: the error names the file, line and column.
+    let dir = fresh_dir("bad-utf8");
+    let p = format!("{dir}/bad.sys");
+    let mut bytes = b"system s\nstate x\noutput y = x # caf".to_vec();
+    bytes.extend([0xE9, b'\n']);
+    std::fs::write(&p, bytes).unwrap();
+    let e = bad(&["rank", &p], "invalid UTF-8");
+    assert!(e.contains("bad.sys:3:"), "{e}");
+    // A file that ends with an operator and no final newline.
+    let cut = temp_file("cut.sys", "system s\nstate x\nx' = x*");
+    bad(&["rank", &cut], "cut.sys:3:");
+}
