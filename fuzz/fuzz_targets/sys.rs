@@ -16,9 +16,15 @@ fn located(e: &ModelError, text: &str) {
     assert!(shown.starts_with(ORIGIN), "origin not named: {shown}");
     if let (Some(l), Some(c)) = (e.line, e.col) {
         let lines: Vec<&str> = text.split('\n').collect();
-        assert!(l >= 1 && l <= lines.len(), "line {l} outside the text: {shown}");
+        assert!(
+            l >= 1 && l <= lines.len(),
+            "line {l} outside the text: {shown}"
+        );
         let len = lines[l - 1].chars().count();
-        assert!(c >= 1 && c <= len + 1, "column {c} outside line {l}: {shown}");
+        assert!(
+            c >= 1 && c <= len + 1,
+            "column {c} outside line {l}: {shown}"
+        );
     }
 }
 

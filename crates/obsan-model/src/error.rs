@@ -39,6 +39,15 @@ fn floor_boundary(s: &str, i: usize) -> usize {
     i
 }
 
+/// The smallest char boundary of `s` at or above `i` (at most its length).
+fn ceil_boundary(s: &str, i: usize) -> usize {
+    let mut i = i.min(s.len());
+    while !s.is_char_boundary(i) {
+        i += 1;
+    }
+    i
+}
+
 /// 1-based line and column (in characters) of byte `offset` of `src`, with
 /// the byte range of that line (without its line break).
 fn locate(src: &str, offset: usize) -> (usize, usize, usize, usize) {
@@ -62,7 +71,8 @@ impl ModelError {
     ) -> ModelError {
         let (line, col, line_start, line_end) = locate(src, start);
         let start = floor_boundary(src, start);
-        let end = floor_boundary(src, end.max(start)).min(line_end);
+        // An end inside a character takes the whole character.
+        let end = ceil_boundary(src, end.max(start)).min(line_end);
         let raw = src[line_start..line_end].trim_end_matches('\r');
         let before = &src[line_start..start];
         let pad = before
@@ -80,22 +90,6 @@ impl ModelError {
                 pad,
                 width,
             })),
-        }
-    }
-
-    /// An error at a known line and column with no source text to show.
-    pub fn at_line_col(
-        origin: &str,
-        line: usize,
-        col: usize,
-        message: impl Into<String>,
-    ) -> ModelError {
-        ModelError {
-            origin: origin.into(),
-            line: Some(line),
-            col: Some(col),
-            message: message.into(),
-            snippet: None,
         }
     }
 

@@ -147,6 +147,11 @@ fn columns_count_characters_and_the_caret_aligns() {
     assert_eq!((e.line, e.col), (Some(1), Some(7)));
     caret_under(&e, 'c');
     assert!(e.to_string().ends_with("      ^^"), "{e}");
+    // An end inside a character underlines the whole character.
+    let e = ModelError::at("f", "a üb", 2, 3, "here");
+    assert!(e.to_string().ends_with("|   ^"), "{e}");
+    let e = ModelError::at("f", "a üb", 0, 3, "here");
+    assert!(e.to_string().ends_with("| ^^^"), "{e}");
     // A tab before the place is kept in the caret line.
     let src = "\tx = ü";
     let e = ModelError::at("f", src, src.find('ü').unwrap(), src.len(), "here");
