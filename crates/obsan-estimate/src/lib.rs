@@ -9,6 +9,11 @@
 //! assert!((truth.xi - 0.297 / 0.485).abs() < 1e-12);
 //! ```
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod calib;
 mod calibrate;
 mod cekf;
