@@ -72,7 +72,14 @@ impl Series {
         let mut s = String::from("t");
         for c in &self.columns {
             s.push(',');
-            s.push_str(c);
+            // Quoted when the reader would otherwise split it.
+            if c.contains([',', '"']) {
+                s.push('"');
+                s.push_str(&c.replace('"', "\"\""));
+                s.push('"');
+            } else {
+                s.push_str(c);
+            }
         }
         s.push('\n');
         for k in 0..self.t.len() {
@@ -375,6 +382,7 @@ fn split_fields(line: &str) -> Result<Vec<String>, (usize, String)> {
                     Some(c) => field.push(c),
                 }
             }
+            let field = field.trim().to_string();
             while chars.peek().is_some_and(|c| *c == ' ' || *c == '\t') {
                 chars.next();
             }
