@@ -7,39 +7,34 @@ use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_estimate::{
     calib_predictor, calibrate, crlb_sd, dataset_crlb, figure_curves, run_cell, simulate, table,
-    CalibrateOptions, Dataset, DatasetMeta, Method, Predictor, Series, Trajectory, PARAMS,
+    CalibrateOptions, DataFile, Dataset, DatasetFiles, Method, Predictor, TrajectoryFiles, PARAMS,
     PARAM_COLUMNS,
 };
 use serde_json::{json, Value};
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
 
-fn read(path: &Path) -> Result<String, Failure> {
-    std::fs::read_to_string(path)
-        .map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))
+fn read(path: &Path) -> Result<Option<DataFile>, Failure> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let bytes =
+        std::fs::read(path).map_err(|e| Failure(format!("cannot read {}: {e}", path.display())))?;
+    Ok(Some(DataFile {
+        path: path.display().to_string(),
+        bytes,
+    }))
 }
 
 /// Read a dataset folder (docs/data-format.md): dataset.json (optional), one
 /// folder per trajectory with inputs.csv, outputs.csv, meta.json (optional).
+/// The files are read here and checked by the library; its warnings (e.g.
+/// an ignored text column) are printed once each.
 pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Dataset, Failure> {
     let root = Path::new(dir);
     if !root.is_dir() {
         return Err(Failure(format!("{dir}: not a dataset folder")));
     }
-    let meta_path = root.join("dataset.json");
-    let meta: DatasetMeta = if meta_path.exists() {
-        serde_json::from_str(&read(&meta_path)?).map_err(|e| {
-            Failure(format!(
-                "{}: line {}, column {}: {e}",
-                meta_path.display(),
-                e.line(),
-                e.column()
-            ))
-        })?
-    } else {
-        DatasetMeta::default()
-    };
     let mut names: Vec<String> = std::fs::read_dir(root)
         .map_err(|e| Failure(format!("cannot list {dir}: {e}")))?
         .filter_map(|e| e.ok())
@@ -47,46 +42,33 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    let mut trajectories = Vec::new();
+    let mut files = DatasetFiles {
+        meta: read(&root.join("dataset.json"))?,
+        trajectories: Vec::new(),
+    };
     for name in names {
         let tdir = root.join(&name);
-        let ipath = tdir.join("inputs.csv");
-        let opath = tdir.join("outputs.csv");
+        let (ipath, opath) = (tdir.join("inputs.csv"), tdir.join("outputs.csv"));
         if !ipath.exists() && !opath.exists() {
             continue; // not a trajectory
         }
-        let ip = ipath.display().to_string();
-        let op = opath.display().to_string();
-        let inputs_s = Series::parse_csv(&read(&ipath)?, &ip, inputs, false)?;
-        let outputs_s = Series::parse_csv(&read(&opath)?, &op, outputs, true)?;
-        let mpath = tdir.join("meta.json");
-        let meta: BTreeMap<String, f64> = if mpath.exists() {
-            serde_json::from_str(&read(&mpath)?).map_err(|e| {
-                Failure(format!(
-                    "{}: line {}, column {}: {e} (expected {{\"name\": number}})",
-                    mpath.display(),
-                    e.line(),
-                    e.column()
-                ))
-            })?
-        } else {
-            BTreeMap::new()
-        };
-        let t = Trajectory {
-            name: name.clone(),
-            inputs: inputs_s,
-            outputs: outputs_s,
-            meta,
-        };
-        t.check(&tdir.display().to_string())?;
-        trajectories.push(t);
+        files.trajectories.push(TrajectoryFiles {
+            name,
+            inputs: read(&ipath)?,
+            outputs: read(&opath)?,
+            meta: read(&tdir.join("meta.json"))?,
+        });
     }
-    if trajectories.is_empty() {
+    if files.trajectories.is_empty() {
         return Err(Failure(format!(
             "{dir}: no trajectory folder (with inputs.csv and outputs.csv)"
         )));
     }
-    Ok(Dataset { meta, trajectories })
+    let r = obsan_estimate::read_dataset(&files, inputs, outputs)?;
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(r.dataset)
 }
 
 fn method(s: &str) -> Result<Method, Failure> {

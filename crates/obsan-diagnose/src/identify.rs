@@ -141,7 +141,9 @@ pub fn input_class(
         }
         let svd = nalgebra::SVD::try_new(a, false, true, 1e-14, 10_000)
             .ok_or_else(|| format!("trajectory {}: the input class did not converge", tr.name))?;
-        let vt = svd.v_t.expect("requested");
+        let Some(vt) = svd.v_t else {
+            return Err("the SVD returned no right singular vectors".into());
+        };
         let smax = svd.singular_values.max();
         let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
         order.sort_by(|&i, &j| svd.singular_values[j].total_cmp(&svd.singular_values[i]));
@@ -339,7 +341,9 @@ pub fn stacked_rank(
                 symmetries,
             });
         };
-        let vt = svd.v_t.expect("requested");
+        let Some(vt) = svd.v_t else {
+            return Err("the SVD returned no right singular vectors".into());
+        };
         let smax = svd.singular_values.max().max(1e-300);
         let null: Vec<Vec<f64>> = (0..n)
             .filter(|&i| svd.singular_values[i] < 1e-8 * smax)

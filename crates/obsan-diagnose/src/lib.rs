@@ -15,6 +15,11 @@
 //!    well as the named one are reported with it ([`Rival`]), with whether
 //!    the data can separate them at all.
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod identify;
 mod residual;
 mod start;

@@ -700,10 +700,10 @@ pub fn diagnose(
         let Some((res, Some((ext_sys, ext_fit)))) = best else {
             break;
         };
-        let eff = model_effects
-            .iter()
-            .find(|e| e.name == res.effect)
-            .expect("candidate");
+        // `best` is one of the candidates, each from `model_effects`.
+        let Some(eff) = model_effects.iter().find(|e| e.name == res.effect) else {
+            break;
+        };
         named.push(Named {
             effect: res.effect.clone(),
             description: eff.description.clone(),

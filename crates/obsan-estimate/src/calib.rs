@@ -109,8 +109,20 @@ pub fn combine(modes_in: &[Modes]) -> Result<Calibration, Degenerate> {
         let (sl, cl) = m.l.sin_cos();
         [g * cl, g * sl, -m.xi_q * cl, -m.xi_q * sl][j]
     });
-    let svd = a.svd(false, true);
-    let vt = svd.v_t.expect("requested");
+    if a.iter().any(|x| !x.is_finite()) {
+        return Err(Degenerate("the modes are not finite numbers".into()));
+    }
+    let Some(svd) = nalgebra::SVD::try_new_unordered(a, false, true, SVD_EPS, SVD_MAX_ITERATIONS)
+    else {
+        return Err(Degenerate(format!(
+            "the singular value decomposition of the circles' equations did not converge in {SVD_MAX_ITERATIONS} iterations"
+        )));
+    };
+    let Some(vt) = svd.v_t else {
+        return Err(Degenerate(
+            "the decomposition returned no right singular vectors".into(),
+        ));
+    };
     let mut order: Vec<usize> = (0..4).collect();
     order.sort_by(|&i, &j| svd.singular_values[i].total_cmp(&svd.singular_values[j]));
     if svd.singular_values[order[1]] < 1e-9 * svd.singular_values[order[3]] {
@@ -141,8 +153,18 @@ pub fn combine(modes_in: &[Modes]) -> Result<Calibration, Degenerate> {
     refine(modes_in, &[phi, psi, eta, delta, xi])
 }
 
+/// An iteration cap of nalgebra's SVD (whose default, 0, runs until
+/// convergence, which non-finite or extreme entries never reach). Well-posed
+/// 4-column problems converge in a few dozen sweeps.
+const SVD_MAX_ITERATIONS: usize = 10_000;
+/// nalgebra's default tolerance of `svd()`.
+const SVD_EPS: f64 = 5.0 * f64::EPSILON;
+
 fn lstsq(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
-    let svd = a.clone().svd(true, true);
+    if a.iter().chain(b.iter()).any(|x| !x.is_finite()) {
+        return None;
+    }
+    let svd = nalgebra::SVD::try_new_unordered(a.clone(), true, true, SVD_EPS, SVD_MAX_ITERATIONS)?;
     let smax = svd.singular_values.max();
     if smax == 0.0 || svd.singular_values.min() < 1e-12 * smax {
         return None;

@@ -16,6 +16,7 @@ use std::f64::consts::PI;
 pub const CALIB_SYS: &str = include_str!("../../../systems/calib.sys");
 
 /// [`CALIB_SYS`] without restriction (inputs wR, wL), compiled for prediction.
+#[allow(clippy::expect_used)] // the shipped calib.sys is tested to parse
 pub fn calib_predictor() -> Predictor {
     let sys = obsan_model::System::parse(CALIB_SYS, "systems/calib.sys")
         .expect("the shipped calib.sys parses");
@@ -654,7 +655,8 @@ pub fn figure_curves(
         let half = d.period / 2.0;
         let mut nodes = Vec::new();
         let mut s = d.node - half * ((d.node - s_lo) / half).floor();
-        while s <= s_hi {
+        // A figure marks a few nodes: a degenerate period marks none.
+        while s <= s_hi && half > 0.0 && nodes.len() < 10_000 {
             nodes.push((s, d.closed.beta(s)));
             s += half;
         }

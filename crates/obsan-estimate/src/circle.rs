@@ -440,6 +440,7 @@ fn rms(c: &Closed, d: &ArcData) -> f64 {
 /// few gross errors (a bearing wrapped on the wrong side of +-pi by a scale
 /// error, an outlier) do not choose the period or the branch. L only shifts
 /// the bearing, so the curve `alpha(s)` is computed once for all of them.
+#[allow(clippy::expect_used)] // `ls` is one of the callers' four fixed candidates
 fn best_l(c: Closed, ls: &[f64], d: &ArcData) -> (f64, Closed) {
     let resid: Vec<f64> =
         d.s.iter()
@@ -669,7 +670,8 @@ fn det_from(
         24,
     );
     // Eq. (37): beta(s) + beta(s_hat) = -2 L (mod pi), at the node.
-    let (mean2l, _) = pair_stats(node, &all).expect("the node has pairs");
+    let (mean2l, _) = pair_stats(node, &all)
+        .ok_or_else(|| Degenerate("no pairs of bearings around the node (Algorithm 1)".into()))?;
     let l37 = -mean2l / 2.0;
     // Eq. (38): k from two consecutive mirror points, a quarter period from the node.
     let mirror = [
@@ -698,6 +700,7 @@ fn det_from(
     };
     // Discrete choices: L + j pi/2, the node at t = 0 or t = pi.
     let ls: Vec<f64> = (0..4).map(|j| wrap(l37 + j as f64 * PI / 2.0)).collect();
+    #[allow(clippy::expect_used)] // two fixed node choices: the minimum exists
     let (_, closed) = [0.0, PI]
         .into_iter()
         .map(|t_node| {

@@ -72,7 +72,14 @@ impl Series {
         let mut s = String::from("t");
         for c in &self.columns {
             s.push(',');
-            s.push_str(c);
+            // Quoted when the reader would otherwise split it.
+            if c.contains([',', '"']) {
+                s.push('"');
+                s.push_str(&c.replace('"', "\"\""));
+                s.push('"');
+            } else {
+                s.push_str(c);
+            }
         }
         s.push('\n');
         for k in 0..self.t.len() {
@@ -88,35 +95,82 @@ impl Series {
         s
     }
 
-    /// Parse CSV text. `required` columns must be present (others are kept);
-    /// empty cells are allowed only if `allow_empty`.
+    /// Parse CSV text. `required` columns must be present (other numeric
+    /// columns are kept, text columns dropped); empty cells are allowed only
+    /// if `allow_empty`. Warnings (dropped columns) are discarded: see
+    /// [`Series::parse_csv_warn`].
     pub fn parse_csv(
         text: &str,
         file: &str,
         required: &[&str],
         allow_empty: bool,
     ) -> Result<Series, DataError> {
+        Series::parse_csv_warn(text, file, required, allow_empty).map(|(s, _)| s)
+    }
+
+    /// [`Series::parse_csv`] of raw bytes: invalid UTF-8 is an error naming
+    /// the line.
+    pub fn parse_csv_bytes(
+        bytes: &[u8],
+        file: &str,
+        required: &[&str],
+        allow_empty: bool,
+    ) -> Result<(Series, Vec<DataWarning>), DataError> {
+        Series::parse_csv_warn(utf8(bytes, file)?, file, required, allow_empty)
+    }
+
+    /// [`Series::parse_csv`], with a warning for each ignored column. Accepted
+    /// besides plain CSV (docs/data-format.md): a UTF-8 byte-order mark, LF,
+    /// CRLF or CR line endings, blank lines and `#` comment lines, quoted
+    /// fields (`"t","wR"`, `""` inside for a quote), a trailing comma, and
+    /// columns outside `required` that hold text (ignored, one warning each).
+    pub fn parse_csv_warn(
+        text: &str,
+        file: &str,
+        required: &[&str],
+        allow_empty: bool,
+    ) -> Result<(Series, Vec<DataWarning>), DataError> {
+        parse_rows(text, file, required, allow_empty).map(|(s, w, _)| (s, w))
+    }
+}
+
+/// The body of [`Series::parse_csv_warn`], also returning the 1-based line of
+/// each row.
+#[allow(clippy::type_complexity)]
+fn parse_rows(
+    text: &str,
+    file: &str,
+    required: &[&str],
+    allow_empty: bool,
+) -> Result<(Series, Vec<DataWarning>, Vec<usize>), DataError> {
+    {
         let err = |row: Option<usize>, column: Option<String>, message: String| DataError {
             file: file.to_string(),
             row,
             column,
             message,
         };
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .filter(|(_, l)| !l.trim().is_empty());
-        let Some((_, header)) = lines.next() else {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let mut lines = split_lines(text).into_iter().filter(|(_, l)| {
+            let l = l.trim();
+            !l.is_empty() && !l.starts_with('#')
+        });
+        let Some((hrow, header)) = lines.next() else {
             return Err(err(
                 None,
                 None,
                 "the file is empty: expected a header line t,...".into(),
             ));
         };
-        let cols: Vec<String> = header.split(',').map(|c| c.trim().to_string()).collect();
+        let mut cols =
+            split_fields(header).map_err(|(c, m)| err(Some(hrow), Some(format!("{c}")), m))?;
+        // A trailing comma ends the header with an empty name.
+        if cols.len() > 1 && cols.last().is_some_and(String::is_empty) {
+            cols.pop();
+        }
         if cols.first().map(String::as_str) != Some("t") {
             return Err(err(
-                Some(1),
+                Some(hrow),
                 None,
                 format!(
                     "the first column must be 't', found '{}'",
@@ -127,14 +181,14 @@ impl Series {
         for (i, c) in cols.iter().enumerate() {
             if c.is_empty() {
                 return Err(err(
-                    Some(1),
+                    Some(hrow),
                     None,
                     format!("column {} of the header has no name", i + 1),
                 ));
             }
             if cols[..i].contains(c) {
                 return Err(err(
-                    Some(1),
+                    Some(hrow),
                     Some(c.clone()),
                     "this column appears twice".into(),
                 ));
@@ -143,16 +197,19 @@ impl Series {
         for r in required {
             if !cols.iter().any(|c| c == r) {
                 return Err(err(
-                    Some(1),
+                    Some(hrow),
                     Some(r.to_string()),
-                    format!("missing column '{r}' (the header is '{header}')"),
+                    format!("missing column '{r}' (the header is '{}')", cols.join(",")),
                 ));
             }
         }
-        let mut s = Series::new(cols[1..].to_vec());
-        for (i, line) in lines {
-            let row = i + 1;
-            let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
+        let mut rows: Vec<(usize, Vec<String>)> = Vec::new();
+        for (row, line) in lines {
+            let mut cells =
+                split_fields(line).map_err(|(c, m)| err(Some(row), cols.get(c - 1).cloned(), m))?;
+            if cells.len() == cols.len() + 1 && cells.last().is_some_and(String::is_empty) {
+                cells.pop();
+            }
             if cells.len() != cols.len() {
                 return Err(err(
                     Some(row),
@@ -160,9 +217,47 @@ impl Series {
                     format!("{} fields, the header has {}", cells.len(), cols.len()),
                 ));
             }
-            let mut vals = Vec::with_capacity(cols.len() - 1);
+            rows.push((row, cells));
+        }
+        // A column the caller does not need that holds text is ignored.
+        let mut keep = vec![true; cols.len()];
+        let mut warnings = Vec::new();
+        for (j, c) in cols.iter().enumerate().skip(1) {
+            if required.contains(&c.as_str()) {
+                continue;
+            }
+            let text_cell = rows
+                .iter()
+                .find(|(_, cells)| !cells[j].is_empty() && cells[j].parse::<f64>().is_err());
+            if let Some((row, cells)) = text_cell {
+                keep[j] = false;
+                warnings.push(DataWarning {
+                    file: file.to_string(),
+                    message: format!(
+                        "column '{c}' holds text (line {row}: '{}') and is not needed: ignored",
+                        cells[j]
+                    ),
+                });
+            }
+        }
+        let kept: Vec<String> = cols
+            .iter()
+            .zip(&keep)
+            .skip(1)
+            .filter(|(_, k)| **k)
+            .map(|(c, _)| c.clone())
+            .collect();
+        let mut s = Series::new(kept);
+        let mut vals = Vec::with_capacity(cols.len());
+        for (row, cells) in &rows {
+            let row = *row;
+            vals.clear();
             let mut t = 0.0;
             for (j, cell) in cells.iter().enumerate() {
+                if !keep[j] {
+                    continue;
+                }
+                let bound = if j == 0 { MAX_ABS_TIME } else { MAX_ABS_VALUE };
                 let v = if cell.is_empty() {
                     if j == 0 || !allow_empty {
                         return Err(err(Some(row), Some(cols[j].clone()), "empty value".into()));
@@ -170,14 +265,24 @@ impl Series {
                     None
                 } else {
                     match cell.parse::<f64>() {
-                        Ok(x) if x.is_finite() => Some(x),
-                        Ok(_) => {
+                        Ok(x) if !x.is_finite() => {
                             return Err(err(
                                 Some(row),
                                 Some(cols[j].clone()),
                                 format!("'{cell}' is not a finite number"),
                             ))
                         }
+                        Ok(x) if x.abs() > bound => {
+                            return Err(err(
+                                Some(row),
+                                Some(cols[j].clone()),
+                                format!(
+                                    "'{cell}' is outside the accepted range |{}| <= {bound:e}",
+                                    if j == 0 { "t" } else { "value" }
+                                ),
+                            ))
+                        }
+                        Ok(x) => Some(x),
                         Err(_) => {
                             return Err(err(
                                 Some(row),
@@ -187,10 +292,10 @@ impl Series {
                         }
                     }
                 };
-                if j == 0 {
-                    t = v.expect("t present");
-                } else {
-                    vals.push(v);
+                match (j, v) {
+                    (0, Some(x)) => t = x,
+                    (0, None) => {}
+                    _ => vals.push(v),
                 }
             }
             if let Some(&prev) = s.t.last() {
@@ -204,8 +309,127 @@ impl Series {
             }
             s.push(t, &vals);
         }
-        Ok(s)
+        Ok((s, warnings, rows.iter().map(|(r, _)| *r).collect()))
     }
+}
+
+/// The largest magnitude of a value in a CSV file (docs/data-format.md):
+/// far outside any physical range of the models' inputs and outputs (SI
+/// units), and small enough that sums of squares stay far from overflow.
+pub const MAX_ABS_VALUE: f64 = 1e9;
+/// The largest magnitude of a time (s): room for Unix timestamps.
+pub const MAX_ABS_TIME: f64 = 1e10;
+
+/// Something accepted but worth saying once (e.g. an ignored column).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataWarning {
+    pub file: String,
+    pub message: String,
+}
+
+impl fmt::Display for DataWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.file, self.message)
+    }
+}
+
+/// Lines with their 1-based numbers; `\n`, `\r\n` and a lone `\r` each end one.
+fn split_lines(text: &str) -> Vec<(usize, &str)> {
+    let b = text.as_bytes();
+    let (mut out, mut start, mut line, mut i) = (Vec::new(), 0, 1, 0);
+    while i < b.len() {
+        match b[i] {
+            b'\n' | b'\r' => {
+                out.push((line, &text[start..i]));
+                line += 1;
+                i += if b[i] == b'\r' && b.get(i + 1) == Some(&b'\n') {
+                    2
+                } else {
+                    1
+                };
+                start = i;
+            }
+            _ => i += 1,
+        }
+    }
+    if start < b.len() {
+        out.push((line, &text[start..]));
+    }
+    out
+}
+
+/// The fields of one CSV line, trimmed; a field may be quoted (`"a,b"`, with
+/// `""` for a quote inside). An error gives the 1-based field number.
+fn split_fields(line: &str) -> Result<Vec<String>, (usize, String)> {
+    let mut out = Vec::new();
+    let mut chars = line.chars().peekable();
+    loop {
+        let n = out.len() + 1;
+        let mut field = String::new();
+        while chars.peek().is_some_and(|c| *c == ' ' || *c == '\t') {
+            chars.next();
+        }
+        if chars.peek() == Some(&'"') {
+            chars.next();
+            loop {
+                match chars.next() {
+                    None => return Err((n, "a quoted field is not closed on its line".into())),
+                    Some('"') if chars.peek() == Some(&'"') => {
+                        chars.next();
+                        field.push('"');
+                    }
+                    Some('"') => break,
+                    Some(c) => field.push(c),
+                }
+            }
+            let field = field.trim().to_string();
+            while chars.peek().is_some_and(|c| *c == ' ' || *c == '\t') {
+                chars.next();
+            }
+            match chars.next() {
+                None => {
+                    out.push(field);
+                    return Ok(out);
+                }
+                Some(',') => out.push(field),
+                Some(c) => {
+                    return Err((n, format!("'{c}' after the closing quote of a field")));
+                }
+            }
+        } else {
+            loop {
+                match chars.next() {
+                    None => {
+                        out.push(field.trim().to_string());
+                        return Ok(out);
+                    }
+                    Some(',') => break,
+                    Some(c) => field.push(c),
+                }
+            }
+            out.push(field.trim().to_string());
+        }
+    }
+}
+
+/// The text of a file's bytes (a byte-order mark dropped); invalid UTF-8 is
+/// an error naming the line.
+fn utf8<'a>(bytes: &'a [u8], file: &str) -> Result<&'a str, DataError> {
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    std::str::from_utf8(bytes).map_err(|e| {
+        let ok = &bytes[..e.valid_up_to()];
+        let line = 1 + ok
+            .iter()
+            .enumerate()
+            .filter(|&(i, &c)| c == b'\n' || (c == b'\r' && ok.get(i + 1) != Some(&b'\n')))
+            .count();
+        DataError {
+            file: file.to_string(),
+            row: Some(line),
+            column: None,
+            message: format!("invalid UTF-8 (byte {} of the file)", e.valid_up_to() + 1),
+        }
+    })
 }
 
 /// `dataset.json`.
@@ -270,6 +494,172 @@ impl Trajectory {
 pub struct Dataset {
     pub meta: DatasetMeta,
     pub trajectories: Vec<Trajectory>,
+}
+
+/// One file of a dataset: its path (for messages) and its bytes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DataFile {
+    pub path: String,
+    pub bytes: Vec<u8>,
+}
+
+/// The files of one trajectory folder (`None`: the file is absent).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TrajectoryFiles {
+    /// The folder's name, the trajectory's name.
+    pub name: String,
+    pub inputs: Option<DataFile>,
+    pub outputs: Option<DataFile>,
+    pub meta: Option<DataFile>,
+}
+
+/// The files of a dataset folder, trajectories in name order. `truth.json`
+/// is not among them: estimators never read it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DatasetFiles {
+    pub meta: Option<DataFile>,
+    pub trajectories: Vec<TrajectoryFiles>,
+}
+
+/// A dataset read, with what was accepted but worth saying.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReadDataset {
+    pub dataset: Dataset,
+    pub warnings: Vec<DataWarning>,
+}
+
+/// Read a dataset from its files (docs/data-format.md): `inputs` and
+/// `outputs` are the columns the model needs. Every rejection names the file
+/// and, where there is one, the line and the column.
+pub fn read_dataset(
+    files: &DatasetFiles,
+    inputs: &[&str],
+    outputs: &[&str],
+) -> Result<ReadDataset, DataError> {
+    let located = |f: &DataFile, e: serde_json::Error, hint: &str| DataError {
+        file: f.path.clone(),
+        row: Some(e.line()),
+        column: Some(e.column().to_string()),
+        message: format!("{e}{hint}"),
+    };
+    let meta: DatasetMeta = match &files.meta {
+        Some(f) => {
+            let m: DatasetMeta =
+                serde_json::from_str(utf8(&f.bytes, &f.path)?).map_err(|e| located(f, e, ""))?;
+            let values = m
+                .nominal
+                .iter()
+                .chain(&m.noise)
+                .map(|(k, v)| (k.as_str(), *v))
+                .chain(m.d0.map(|v| ("d0", v)));
+            check_json_values(f, values)?;
+            m
+        }
+        None => DatasetMeta::default(),
+    };
+    let mut warnings = Vec::new();
+    let mut trajectories = Vec::new();
+    for tf in &files.trajectories {
+        let missing = |which: &str| DataError {
+            file: format!("{}/{which}", tf.name),
+            row: None,
+            column: None,
+            message: format!("trajectory '{}' has no {which}", tf.name),
+        };
+        let fi = tf.inputs.as_ref().ok_or_else(|| missing("inputs.csv"))?;
+        let fo = tf.outputs.as_ref().ok_or_else(|| missing("outputs.csv"))?;
+        let (ins, w, _) = parse_rows(utf8(&fi.bytes, &fi.path)?, &fi.path, inputs, false)?;
+        warnings.extend(w);
+        let (outs, w, out_lines) = parse_rows(utf8(&fo.bytes, &fo.path)?, &fo.path, outputs, true)?;
+        warnings.extend(w);
+        let meta: BTreeMap<String, f64> = match &tf.meta {
+            Some(f) => {
+                let m: BTreeMap<String, f64> = serde_json::from_str(utf8(&f.bytes, &f.path)?)
+                    .map_err(|e| located(f, e, " (expected {\"name\": number})"))?;
+                check_json_values(f, m.iter().map(|(k, v)| (k.as_str(), *v)))?;
+                m
+            }
+            None => BTreeMap::new(),
+        };
+        let measured = outs
+            .values
+            .iter()
+            .map(|c| c.iter().filter(|v| v.is_some()).count())
+            .sum::<usize>();
+        if measured < MIN_OUTPUT_SAMPLES {
+            return Err(DataError {
+                file: fo.path.clone(),
+                row: None,
+                column: None,
+                message: format!("only {measured} output samples: a trajectory needs at least {MIN_OUTPUT_SAMPLES}"),
+            });
+        }
+        if ins.len() < 2 {
+            return Err(DataError {
+                file: fi.path.clone(),
+                row: None,
+                column: None,
+                message: "fewer than 2 input rows".into(),
+            });
+        }
+        // Outputs are predicted from the inputs on: none may come before
+        // them, nor after their end by more than their span (which bounds
+        // the integration's work by the data's own size).
+        let (t0, t1) = (ins.t[0], ins.t[ins.len() - 1]);
+        let late = t1 + (t1 - t0);
+        if let Some(k) = outs.t.iter().position(|&t| t < t0 || t > late) {
+            let t = outs.t[k];
+            return Err(DataError {
+                file: fo.path.clone(),
+                row: out_lines.get(k).copied(),
+                column: Some("t".into()),
+                message: if t < t0 {
+                    format!(
+                        "output time {t} is before the first input time {t0} ({})",
+                        fi.path
+                    )
+                } else {
+                    format!("output time {t} is after {late}, the inputs' end {t1} plus their span ({})", fi.path)
+                },
+            });
+        }
+        trajectories.push(Trajectory {
+            name: tf.name.clone(),
+            inputs: ins,
+            outputs: outs,
+            meta,
+        });
+    }
+    if trajectories.is_empty() {
+        return Err(DataError {
+            file: "the dataset".into(),
+            row: None,
+            column: None,
+            message: "no trajectory folder (with inputs.csv and outputs.csv)".into(),
+        });
+    }
+    Ok(ReadDataset {
+        dataset: Dataset { meta, trajectories },
+        warnings,
+    })
+}
+
+/// Numbers from a JSON file obey the CSV bound ([`MAX_ABS_VALUE`]).
+fn check_json_values<'a>(
+    f: &DataFile,
+    values: impl Iterator<Item = (&'a str, f64)>,
+) -> Result<(), DataError> {
+    for (k, v) in values {
+        if !(v.is_finite() && v.abs() <= MAX_ABS_VALUE) {
+            return Err(DataError {
+                file: f.path.clone(),
+                row: None,
+                column: Some(k.to_string()),
+                message: format!("{v} is outside the accepted range |value| <= {MAX_ABS_VALUE:e}"),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Add a model's derived inputs (`input dwR = rate(wR)`, see

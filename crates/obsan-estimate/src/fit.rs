@@ -15,6 +15,8 @@ use crate::whiten::Whitener;
 
 /// One trajectory to fit.
 pub struct FitTrajectory<'a> {
+    /// For messages.
+    pub name: &'a str,
     pub inputs: &'a Series,
     pub outputs: &'a Series,
     /// Values of the predictor's constants (e.g. q).
@@ -28,6 +30,7 @@ impl<'a> FitTrajectory<'a> {
         data.trajectories
             .iter()
             .map(|t| FitTrajectory {
+                name: &t.name,
                 inputs: &t.inputs,
                 outputs: &t.outputs,
                 consts: p
@@ -136,7 +139,9 @@ fn residuals(
         },
     };
     let jac = jac || noise;
-    let pred = p.predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)?;
+    let pred = p
+        .predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+        .map_err(|e| format!("trajectory '{}': {e}", t.name))?;
     let n = p.state.len();
     let mut r = Vec::new();
     let mut rows = Vec::new();
@@ -641,7 +646,8 @@ pub fn fit(
         for row in 0..t.outputs.len() {
             for (o, &c) in prob.cols[k].iter().enumerate() {
                 if t.outputs.values[c][row].is_some() {
-                    let r = it.next().expect("residual") * opts.sigma[o];
+                    let Some(r) = it.next() else { break };
+                    let r = r * opts.sigma[o];
                     rms[o] += r * r;
                     counts[o] += 1;
                 }

@@ -9,6 +9,11 @@
 //! assert!((truth.xi - 0.297 / 0.485).abs() < 1e-12);
 //! ```
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod calib;
 mod calibrate;
 mod cekf;
@@ -33,7 +38,9 @@ pub use calibrate::{
 pub use cekf::{cekf, cekf_start, CekfResult};
 pub use circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det, LsFit};
 pub use data::{
-    add_derived_inputs, DataError, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES,
+    add_derived_inputs, read_dataset, DataError, DataFile, DataWarning, Dataset, DatasetFiles,
+    DatasetMeta, ReadDataset, Series, Trajectory, TrajectoryFiles, MAX_ABS_TIME, MAX_ABS_VALUE,
+    MIN_OUTPUT_SAMPLES,
 };
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use montecarlo::{

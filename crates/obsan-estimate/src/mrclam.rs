@@ -99,6 +99,9 @@ pub enum MrclamOutputs {
     ViconPoses,
 }
 
+/// The most windows a log may be cut into.
+const MAX_WINDOWS: f64 = 1e6;
+
 pub fn convert(
     t: &MrclamText,
     window: f64,
@@ -162,6 +165,19 @@ pub fn convert(
     }
     let nl = lms.len();
     let (t0, t1) = (odo[0].0, odo[odo.len() - 1].0);
+    // The window loop runs once per window: bound it (a tiny --window would
+    // otherwise spin for hours over empty windows).
+    if (t1 - t0) / window > MAX_WINDOWS {
+        return Err(DataError {
+            file: "--window".into(),
+            row: None,
+            column: None,
+            message: format!(
+                "{window} s cuts the log's {:.0} s into more than {MAX_WINDOWS:e} windows",
+                t1 - t0
+            ),
+        });
+    }
     let mut trajectories = Vec::new();
     let mut truths = Vec::new();
     let mut k = 0usize;
@@ -180,11 +196,14 @@ pub fn convert(
             continue;
         }
         let start = inputs.t[0];
-        let end = *inputs.t.last().expect("rows");
+        let end = inputs.t[inputs.len() - 1];
         let mut outputs = Series::new(cols.clone());
         let mut n_meas = 0;
         for &(t, code, r, brg) in meas.iter().filter(|m| m.0 >= start && m.0 <= end) {
-            let i = lms.iter().position(|l| l.0 == code).expect("landmark");
+            // Only landmarks' codes were kept in `meas`.
+            let Some(i) = lms.iter().position(|l| l.0 == code) else {
+                continue;
+            };
             let mut row = vec![None; 2 * nl];
             row[i] = Some(r);
             row[nl + i] = Some(brg);

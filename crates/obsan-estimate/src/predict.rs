@@ -36,6 +36,9 @@ pub struct Predictor {
 }
 
 impl Predictor {
+    // The normal form's expressions use only its state and constants, so
+    // every symbol looked up and every tape compiled exists.
+    #[allow(clippy::expect_used)]
     pub fn new(nf: &NormalForm) -> Predictor {
         let n_dynamic = nf.n_dynamic;
         let m = nf.inputs.len();
@@ -399,7 +402,15 @@ impl Predictor {
                     z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
                 }
                 if z[..nd].iter().any(|v| !v.is_finite()) {
-                    return Err(format!("the state diverged at t = {next}"));
+                    let at: Vec<String> = self.state[nd..]
+                        .iter()
+                        .zip(&x0[nd..])
+                        .map(|(n, v)| format!("{n} = {v}"))
+                        .collect();
+                    return Err(format!(
+                        "the state diverged at t = {next} with {}: these parameter values (or the start values, --init) make the model blow up; try start values nearer the truth, or check the data's units",
+                        if at.is_empty() { "no parameters".to_string() } else { at.join(", ") }
+                    ));
                 }
                 t = next;
             }

@@ -410,6 +410,14 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
                 + o.sigma_beta * rng.normal();
             outputs.push(tc, &[Some(wrap(meas))]);
         }
+        // The readers refuse such a trajectory (data.rs): refuse to write it.
+        if outputs.len() < crate::data::MIN_OUTPUT_SAMPLES {
+            return Err(format!(
+                "trajectory {name}: only {} bearings in its {duration:.1} s, and a dataset needs at least {} per trajectory: raise the bearing rate (or --bearings)",
+                outputs.len(),
+                crate::data::MIN_OUTPUT_SAMPLES
+            ));
+        }
         let mut meta = BTreeMap::new();
         if let Some(q) = q {
             meta.insert("q".to_string(), *q);

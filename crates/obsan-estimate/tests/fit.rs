@@ -13,6 +13,7 @@ fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate
         .trajectories
         .iter()
         .map(|t| FitTrajectory {
+            name: &t.name,
             inputs: &t.inputs,
             outputs: &t.outputs,
             consts: vec![t.meta["q"]],
