@@ -82,9 +82,11 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
             .map_err(|m| Failure(format!("--effect {e}: {m}")))?;
     }
     if let Some(path) = &a.inputs {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
-        let s = Series::parse_csv(&text, path, &["wR", "wL"], false)?;
+        let bytes = std::fs::read(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+        let (s, warnings) = Series::parse_csv_bytes(&bytes, path, &["wR", "wL"], false)?;
+        for w in warnings {
+            eprintln!("warning: {w}");
+        }
         if s.len() < 2 {
             return Err(Failure(format!(
                 "{path}: at least two rows of wheel speeds are needed"
@@ -106,20 +108,6 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
     let o = sim_options(&a.sim)?;
     let (data, truth) = simulate(&o).map_err(Failure)?;
-    // A dataset calibrate would refuse is not worth writing.
-    if let Some(t) = data
-        .trajectories
-        .iter()
-        .find(|t| t.outputs.len() < obsan_estimate::MIN_OUTPUT_SAMPLES)
-    {
-        return Err(Failure(format!(
-            "trajectory '{}' would have {} bearings; calibrate needs at least {} per \
-             trajectory: raise --bearing-rate or set --bearings",
-            t.name,
-            t.outputs.len(),
-            obsan_estimate::MIN_OUTPUT_SAMPLES
-        )));
-    }
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;
     write_folder_atomically(&a.out, a.force, &files)?;

@@ -149,7 +149,7 @@ fn simulate_refuses_datasets_calibrate_cannot_use() {
     let out = format!("{d}/sim");
     bad(
         &["simulate", "--out", &out, "--bearing-rate", "0.001"],
-        "calibrate needs at least",
+        "a dataset needs at least",
     );
     assert!(files_in(&d).is_empty(), "nothing is written");
 }
@@ -297,4 +297,79 @@ fn sys_files_with_bom_unicode_or_bad_bytes() {
     // A file that ends with an operator and no final newline.
     let cut = temp_file("cut.sys", "system s\nstate x\nx' = x*");
     bad(&["rank", &cut], "cut.sys:3:");
+}
+
+/// Issue 14.1: exponents above 65535 wrapped (x^70000 printed as x^4464).
+#[test]
+fn large_exponents_are_exact() {
+    let seven = vec!["x^10000"; 7].join("*");
+    let out = ok(&["simplify", &seven]);
+    assert_eq!(out.trim(), "x^70000");
+    let out = ok(&["simplify", "(x^10000)^7 - x^4464"]);
+    assert!(same_function(out.trim(), "x^70000 - x^4464"), "{out}");
+    assert_ne!(out.trim(), "0");
+    // The same inside a .sys file.
+    let sys = temp_file(
+        "bigexp.sys",
+        "system s\nstate x\ninput u\nx' = u*x^40000*x^40000\noutput y = x\n",
+    );
+    let out = ok(&["show", &sys, "--json"]);
+    assert!(out.contains("x^80000"), "{out}");
+}
+
+/// Issue 14.2: `((x^10000)^10000)^100` panicked; past the engine's exponent
+/// range it is a clear error, never a wrapped answer.
+#[test]
+fn exponents_past_the_range_are_an_error() {
+    let r = obsan(&["simplify", "((x^10000)^10000)^100"]);
+    assert!(!r.stderr.contains("panicked"), "{}", r.stderr);
+    assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("exponent"), "{}", r.stderr);
+}
+
+/// Issue 14.2: a sum of 100,000 terms overflowed the stack (exit 134).
+#[test]
+fn long_and_deep_expressions_do_not_overflow_the_stack() {
+    let terms = vec!["x"; 100_000].join(" + ");
+    let sys = temp_file(
+        "long.sys",
+        &format!("system s\nstate x\ninput u\nx' = u*({terms})\noutput y = x\n"),
+    );
+    let out = ok(&["show", &sys]);
+    assert!(out.contains("100000*"), "{out}");
+    // Deep nesting: an answer or a located error, never a crash.
+    let deep = format!("{}x{}", "(".repeat(100_000), ")".repeat(100_000));
+    let sys = temp_file(
+        "deep.sys",
+        &format!("system s\nstate x\ninput u\nx' = u*{deep}\noutput y = x\n"),
+    );
+    let r = obsan(&["show", &sys]);
+    assert!(r.code == 0 || r.code == 2, "exit {}: {}", r.code, r.stderr);
+    assert!(
+        !r.stderr.contains("panicked") && !r.stderr.contains("overflow"),
+        "{}",
+        r.stderr
+    );
+    if r.code == 2 {
+        assert!(r.stderr.contains("deep.sys:4:"), "{}", r.stderr);
+    }
+}
+
+/// Issue 14.6: a product of 22 binomials took 22 s and 1.5 GB; the budget
+/// stops it with a clear error, and a flag raises the budget.
+#[test]
+fn expression_size_has_a_budget() {
+    let product: Vec<String> = (1..=22).map(|i| format!("(x{i} + 1)")).collect();
+    let e = bad(&["simplify", &product.join("*")], "too large");
+    assert!(
+        e.contains("--max-terms"),
+        "the message says how to raise it: {e}"
+    );
+    // Small products are untouched, and --max-terms raises the limit.
+    let small: Vec<String> = (1..=10).map(|i| format!("(x{i} + 1)")).collect();
+    ok(&["simplify", &small.join("*")]);
+    bad(
+        &["simplify", &small.join("*"), "--max-terms", "100"],
+        "too large",
+    );
 }
