@@ -7,5 +7,6 @@ mod diagnose;
 mod expr;
 mod show;
 mod simulate;
+mod suite;
 mod tutorial;
 mod util;
