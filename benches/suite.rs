@@ -266,7 +266,7 @@ fn main() {
         "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    let (mut agree, mut total) = (0, 0);
+    let (mut agree, mut differ, mut total) = (0, 0, 0);
     for e in &entries {
         if !filter.is_empty() && !filter.iter().any(|f| e.path.contains(f.as_str())) {
             continue;
@@ -301,6 +301,8 @@ fn main() {
         total += 1;
         if verdict == "agrees" {
             agree += 1;
+        } else if verdict.starts_with("DIFFERS") {
+            differ += 1;
         }
         let mut args = vec![
             "symmetries",
@@ -333,7 +335,8 @@ fn main() {
     }
     println!();
     println!(
-        "{agree} of {total} verdicts agree; memory: {how}; symmetries --timeout {sym_timeout} s; \
-         rank --timeout {rank_timeout} s"
+        "{total} runs: {agree} verdicts agree with the cited ones, {differ} differ, {} gave no \
+         answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s",
+        total - agree - differ
     );
 }
