@@ -122,7 +122,17 @@ def run_one(path, restriction):
     kw, back = translate(m, restriction)
     model = symident.Model(**kw)
     t = time.perf_counter()
-    r = symident.detect(model)
+    try:
+        r = symident.detect(model)
+    except ValueError as e:
+        # Name the offending expression in the .sys names (the message quotes it renamed).
+        bad = [ln.strip() for ln in str(e).splitlines() if ln.startswith("  ")]
+        what = re.sub(r"z\d+", lambda t: back.get(t.group(0), t.group(0)), "; ".join(bad))
+        funcs = sorted(set(re.findall(r"\b(atan2|sqrt|atan|tan|log|exp|sin|cos)\(", what)))
+        where = sorted(set(re.findall(r"(\w+) =", what)))
+        print(json.dumps({"error": f"its modular engine refuses {', '.join(funcs) or 'a term'} "
+                                   f"in {', '.join(where)}; symbolic engine not run"}))
+        return
     secs = time.perf_counter() - t
     un = set()
     for s in r.symmetries:
@@ -228,14 +238,20 @@ def main():
                                cwd=ROOT, capture_output=True, text=True, timeout=timeout)
             if q.returncode == 0 and q.stdout.strip():
                 s = json.loads(q.stdout.strip().splitlines()[-1])
+            else:
+                s = None
+            if s is not None and "error" in s:
+                srank, sverdict, ssecs = "-", "cannot take it: " + s["error"][:120].replace("|", "/"), "-"
+            elif s is not None:
                 srank = s["rank"]
                 sverdict = judge(srank, s["dim"], s["unobservable"], cited)
                 if s.get("status") and s["status"] != "proven":
                     sverdict += f" ({s['status']})"
                 ssecs = f"{s['secs']:.2f}"
             else:
-                err = (q.stderr.strip().splitlines() or ["no output"])[-1]
-                srank, sverdict, ssecs = "-", "cannot take it: " + err[:90].replace("|", "/"), "-"
+                lines = q.stderr.strip().splitlines() or ["no output"]
+                err = next((ln for ln in lines if re.match(r"^\w+(Error|Exception):", ln)), lines[-1])
+                srank, sverdict, ssecs = "-", "cannot take it: " + err[:110].replace("|", "/"), "-"
         except subprocess.TimeoutExpired:
             srank, sverdict, ssecs = "-", f"no answer in {timeout:.0f} s", f">{timeout:.0f}"
         score["total"] += 1
