@@ -7,6 +7,7 @@ mod diagnose;
 mod expr;
 mod show;
 mod simulate;
+mod suite;
 mod trust;
 mod tutorial;
 mod util;

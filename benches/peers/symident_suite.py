@@ -1,0 +1,276 @@
+#!/usr/bin/env python3
+"""Run the obsan benchmark suite in symident (PyPI) and obsan side by side.
+
+Usage, from the repository root after `cargo build --release`:
+
+    python3 benches/peers/symident_suite.py [--timeout S] [--obsan PATH] [FILTER ...]
+
+Each suite entry (systems/benchmarks/*.sys, systems/vins.sys, systems/benchmarks/paper.list) is
+translated mechanically from .sys: states get ODEs, params stay free symbols (symident's
+parameters), consts become `fixed`, inputs `known_inputs`, outputs `observables`; a named input
+restriction is substituted. Every name is renamed to z0, z1, ... first, so that .sys names such
+as I, E, S, N, beta or gamma cannot collide with SymPy's built-ins. symident runs in a child
+process per model (fresh interpreter, --timeout seconds); its time is that of `detect()` alone,
+without the interpreter start and the SymPy import. obsan's time is the wall time of one
+`obsan rank --json` process. A variable is non-identifiable in symident when it lies in the
+support of one of its directions. Prints one Markdown table.
+"""
+
+import importlib.metadata
+import json
+import os
+import re
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+FUNCS = {"sin", "cos", "tan", "atan", "atan2", "exp", "log", "sqrt", "pi"}
+
+
+def statements(text):
+    """The .sys statements: comments stripped, continuation lines joined (docs/sys-format.md)."""
+    out, cur, depth = [], "", 0
+    for raw in text.splitlines():
+        line = raw.split("#", 1)[0].rstrip()
+        if not line.strip() and not cur:
+            continue
+        cur = (cur + " " + line.strip()) if cur else line.strip()
+        depth = cur.count("(") - cur.count(")")
+        if depth > 0 or re.search(r"[-+*/^,]$", cur):
+            continue
+        out.append(cur)
+        cur = ""
+    if cur:
+        out.append(cur)
+    return out
+
+
+def read_sys(path):
+    """Parse a .sys file into declarations, equations, outputs and restrictions."""
+    m = {"state": [], "param": [], "const": [], "input": [], "ode": {}, "out": {}, "restrict": {}}
+    with open(path) as f:
+        text = f.read()
+    for st in statements(text):
+        word = st.split(None, 1)[0]
+        rest = st[len(word):].strip()
+        key = {"states": "state", "params": "param", "consts": "const", "inputs": "input"}.get(word, word)
+        if key in ("state", "param", "const", "input"):
+            for d in rest.split(","):
+                name = d.split("=", 1)[0].strip()
+                if key == "const" and "=" in d:
+                    m.setdefault("const_value", {})[name] = d.split("=", 1)[1].strip()
+                m[key].append(name)
+        elif key in ("system", "description", "delay"):
+            continue
+        elif key == "output":
+            name, expr = rest.split("=", 1)
+            m["out"][name.strip()] = expr.strip()
+        elif key == "restrict":
+            name, body = rest.split(":", 1)
+            subs = {}
+            for part in body.split(","):
+                u, e = part.split("=", 1)
+                subs[u.strip()] = e.strip()
+            m["restrict"][name.strip()] = subs
+        elif re.match(r"^\w+\s*'\s*=", st):
+            lhs, rhs = st.split("=", 1)
+            m["ode"][lhs.replace("'", "").strip()] = rhs.strip()
+        else:
+            raise ValueError(f"{path}: cannot read statement '{st}'")
+    return m
+
+
+def translate(m, restriction):
+    """symident keyword arguments and the renaming back, for one (restricted) .sys model."""
+    import sympy
+
+    names = m["state"] + m["param"] + m["const"] + m["input"]
+    subs = m["restrict"].get(restriction, {}) if restriction else {}
+    new_inputs = []
+    for e in subs.values():
+        for tok in re.findall(r"[A-Za-z_]\w*", e):
+            if tok not in names and tok not in FUNCS and tok not in new_inputs:
+                new_inputs.append(tok)
+    all_names = names + new_inputs
+    ren = {n: f"z{i}" for i, n in enumerate(all_names)}
+    back = {v: k for k, v in ren.items()}
+    syms = {z: sympy.Symbol(z) for z in ren.values()}
+
+    def conv(expr):
+        e = re.sub(r"[A-Za-z_]\w*", lambda t: ren.get(t.group(0), t.group(0)), expr)
+        return sympy.sympify(e.replace("^", "**"), locals=syms)
+
+    sub_exprs = {syms[ren[u]]: conv(e) for u, e in subs.items()}
+    const_vals = {syms[ren[c]]: conv(v) for c, v in m.get("const_value", {}).items()}
+    odes = {ren[x]: str(conv(e).subs(sub_exprs).subs(const_vals)) for x, e in m["ode"].items()}
+    obs = {f"obs{i}": str(conv(e).subs(const_vals)) for i, e in enumerate(m["out"].values())}
+    inputs = [ren[u] for u in m["input"] if u not in subs] + [ren[u] for u in new_inputs]
+    used = set(re.findall(r"z\d+", " ".join(list(odes.values()) + list(obs.values()))))
+    fixed = [ren[c] for c in m["const"] if c not in m.get("const_value", {}) and ren[c] in used]
+    kw = dict(odes=odes, observables=obs, known_inputs=inputs, fixed=fixed,
+              parameters=[ren[p] for p in m["param"]])
+    return kw, back
+
+
+def run_one(path, restriction):
+    """Child: translate, detect, print one JSON line."""
+    import symident
+
+    m = read_sys(os.path.join(ROOT, path))
+    kw, back = translate(m, restriction)
+    model = symident.Model(**kw)
+    t = time.perf_counter()
+    try:
+        r = symident.detect(model)
+    except ValueError as e:
+        # Name the offending expression in the .sys names (the message quotes it renamed).
+        bad = [ln.strip() for ln in str(e).splitlines() if ln.startswith("  ")]
+        what = re.sub(r"z\d+", lambda t: back.get(t.group(0), t.group(0)), "; ".join(bad))
+        funcs = sorted(set(re.findall(r"\b(atan2|sqrt|atan|tan|log|exp|sin|cos)\(", what)))
+        where = sorted(set(re.findall(r"(\w+) =", what)))
+        print(json.dumps({"error": f"its modular engine refuses {', '.join(funcs) or 'a term'} "
+                                   f"in {', '.join(where)}; symbolic engine not run"}))
+        return
+    secs = time.perf_counter() - t
+    un = set()
+    for s in r.symmetries:
+        for z in s.get("support") or []:
+            un.add(back.get(z, z))
+    status = (r.info or {}).get("rank_status") or {}
+    print(json.dumps({"rank": r.rank, "dim": r.dim, "unobservable": sorted(un), "secs": secs,
+                      "status": status.get("status")}))
+
+
+def parse_verdict(spec):
+    v = {"rank": None, "unobservable": None}
+    for part in spec.split(";"):
+        w = part.split()
+        if not w:
+            continue
+        if w[0] == "observable":
+            v["unobservable"] = set()
+        elif w[0] == "unobservable":
+            v["unobservable"] = set(w[1:])
+        elif w[0] == "rank":
+            v["rank"] = int(w[1])
+    return v
+
+
+def entries():
+    bench = os.path.join(ROOT, "systems", "benchmarks")
+    files = sorted(f"systems/benchmarks/{f}" for f in os.listdir(bench) if f.endswith(".sys"))
+    files.append("systems/vins.sys")
+    out = []
+    for path in files:
+        with open(os.path.join(ROOT, path)) as f:
+            for line in f:
+                mm = re.match(r"^# verdict(?:\((\w+)\))?: (.*)$", line.rstrip())
+                if mm:
+                    out.append((path, mm.group(1), parse_verdict(mm.group(2))))
+    with open(os.path.join(bench, "paper.list")) as f:
+        for line in f:
+            line = line.strip()
+            if not line or line.startswith("#"):
+                continue
+            lhs, spec = line.split("|", 1)
+            w = lhs.split()
+            out.append((w[0], w[2] if len(w) > 2 else None, parse_verdict(spec)))
+    return out
+
+
+def judge(rank, n, un, cited):
+    if rank is None:
+        return "no answer"
+    diffs = []
+    if cited["rank"] is not None and cited["rank"] != rank:
+        diffs.append(f"cited rank {cited['rank']}")
+    want = cited["unobservable"]
+    if want is not None:
+        if not want and rank != n:
+            diffs.append("cited observable")
+        elif set(un) != want:
+            diffs.append(f"non-identifiable {sorted(set(un) - want)} extra, {sorted(want - set(un))} missing")
+    return "agrees" if not diffs else "DIFFERS: " + "; ".join(diffs)
+
+
+def main():
+    args = sys.argv[1:]
+    if args[:1] == ["--one"]:
+        run_one(args[1], args[2] if len(args) > 2 and args[2] else None)
+        return
+    timeout, obsan, filt = 120.0, os.path.join(ROOT, "target", "release", "obsan"), []
+    i = 0
+    while i < len(args):
+        if args[i] == "--timeout":
+            timeout = float(args[i + 1])
+            i += 2
+        elif args[i] == "--obsan":
+            obsan = args[i + 1]
+            i += 2
+        else:
+            filt.append(args[i])
+            i += 1
+    import symident
+
+    print("| model | n | obsan rank | obsan verdict | obsan s | symident rank | symident verdict | symident s |")
+    print("|---|---|---|---|---|---|---|---|")
+    score = {"obsan": 0, "symident": 0, "total": 0, "faster": 0, "both": 0}
+    for path, restriction, cited in entries():
+        if filt and not any(f in path for f in filt):
+            continue
+        label = path + (f" --input {restriction}" if restriction else "")
+        cmd = [obsan, "rank", path, "--json", "--timeout", str(int(timeout))]
+        if restriction:
+            cmd += ["--input", restriction]
+        t = time.perf_counter()
+        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        osecs = time.perf_counter() - t
+        if p.returncode == 0:
+            v = json.loads(p.stdout)
+            n, orank = v["n"], v["rank"]
+            overdict = judge(orank, n, v["unobservable_variables"], cited)
+        else:
+            n, orank, overdict = "-", "-", f"exit {p.returncode}"
+        try:
+            q = subprocess.run([sys.executable, __file__, "--one", path, restriction or ""],
+                               cwd=ROOT, capture_output=True, text=True, timeout=timeout)
+            if q.returncode == 0 and q.stdout.strip():
+                s = json.loads(q.stdout.strip().splitlines()[-1])
+            else:
+                s = None
+            if s is not None and "error" in s:
+                srank, sverdict, ssecs = "-", "cannot take it: " + s["error"][:120].replace("|", "/"), "-"
+            elif s is not None:
+                srank = s["rank"]
+                sverdict = judge(srank, s["dim"], s["unobservable"], cited)
+                if s.get("status") and s["status"] != "proven":
+                    sverdict += f" ({s['status']})"
+                ssecs = f"{s['secs']:.2f}"
+            else:
+                lines = q.stderr.strip().splitlines() or ["no output"]
+                err = next((ln for ln in lines if re.match(r"^\w+(Error|Exception):", ln)), lines[-1])
+                srank, sverdict, ssecs = "-", "cannot take it: " + err[:110].replace("|", "/"), "-"
+        except subprocess.TimeoutExpired:
+            srank, sverdict, ssecs = "-", f"no answer in {timeout:.0f} s", f">{timeout:.0f}"
+        score["total"] += 1
+        score["obsan"] += overdict == "agrees"
+        score["symident"] += sverdict.startswith("agrees")
+        if ssecs != "-" and not ssecs.startswith(">") and p.returncode == 0:
+            score["both"] += 1
+            score["faster"] += osecs < float(ssecs)
+        elif ssecs.startswith(">") and p.returncode == 0:
+            score["both"] += 1
+            score["faster"] += osecs < timeout
+        print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} |",
+              flush=True)
+    print()
+    print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, "
+          f"symident {score['symident']}; obsan faster on {score['faster']} of the {score['both']} "
+          f"that both answered or symident timed out; symident "
+          f"{importlib.metadata.version('symident')}, timeout {timeout:.0f} s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,342 @@
+//! The public benchmark suite (docs/benchmarks.md): `obsan rank` and `obsan symmetries` on
+//! every model of systems/benchmarks/, on systems/vins.sys and on the systems listed in
+//! systems/benchmarks/paper.list, through the built binary, one child process per run.
+//!
+//! `cargo bench --bench suite [-- FILTER]` prints one Markdown table: n (states + params), rank,
+//! the verdict against the cited one, the symmetries found and their certificate, wall time and
+//! peak memory of each run. Peak memory is the child's maximum resident set size as reported by
+//! GNU time (`/usr/bin/time -f %M`, from wait4) when it is installed, otherwise the largest
+//! VmHWM read from /proc/PID/status while the child runs (polled every 2 ms, so a run shorter
+//! than that may show less). The column header says which was used.
+//!
+//! Environment: OBSAN_SUITE_SYM_TIMEOUT (seconds for `symmetries --timeout`, default 10),
+//! OBSAN_SUITE_RANK_TIMEOUT (default 60).
+
+use serde_json::Value;
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const GNU_TIME: &str = "/usr/bin/time";
+
+/// A cited verdict (the grammar of docs/benchmarks.md).
+#[derive(Default)]
+struct Verdict {
+    rank: Option<u64>,
+    unobservable: Option<BTreeSet<String>>,
+}
+
+struct Entry {
+    path: String,
+    input: Option<String>,
+    verdict: Verdict,
+}
+
+fn parse_verdict(spec: &str) -> Result<Verdict, String> {
+    let mut v = Verdict::default();
+    for part in spec.split(';').map(str::trim) {
+        let mut words = part.split_whitespace();
+        match words.next() {
+            Some("observable") if words.next().is_none() => v.unobservable = Some(BTreeSet::new()),
+            Some("unobservable") => v.unobservable = Some(words.map(String::from).collect()),
+            Some("rank") => {
+                v.rank = Some(
+                    words
+                        .next()
+                        .and_then(|w| w.parse().ok())
+                        .ok_or(format!("bad rank in '{spec}'"))?,
+                )
+            }
+            _ => return Err(format!("cannot read '{part}' in '{spec}'")),
+        }
+    }
+    Ok(v)
+}
+
+fn file_entries(path: &str, text: &str, out: &mut Vec<Entry>) -> Result<(), String> {
+    for line in text.lines() {
+        let Some(rest) = line.strip_prefix("# verdict") else {
+            continue;
+        };
+        if rest.starts_with("-source:") {
+            continue;
+        }
+        let (input, spec) = if let Some(s) = rest.strip_prefix(':') {
+            (None, s)
+        } else if let Some((name, s)) = rest.strip_prefix('(').and_then(|r| r.split_once("):")) {
+            (Some(name.trim().to_string()), s)
+        } else {
+            return Err(format!("{path}: malformed verdict line '{line}'"));
+        };
+        out.push(Entry {
+            path: path.to_string(),
+            input,
+            verdict: parse_verdict(spec).map_err(|e| format!("{path}: {e}"))?,
+        });
+    }
+    Ok(())
+}
+
+fn entries(root: &Path) -> Result<Vec<Entry>, String> {
+    let dir = root.join("systems/benchmarks");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .map_err(|e| e.to_string())?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".sys"))
+        .map(|n| format!("systems/benchmarks/{n}"))
+        .collect();
+    files.sort();
+    files.push("systems/vins.sys".to_string());
+    let mut out = Vec::new();
+    for path in &files {
+        let text = std::fs::read_to_string(root.join(path)).map_err(|e| format!("{path}: {e}"))?;
+        file_entries(path, &text, &mut out)?;
+    }
+    let list = std::fs::read_to_string(dir.join("paper.list")).map_err(|e| e.to_string())?;
+    for line in list.lines().map(str::trim) {
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let (lhs, spec) = line
+            .split_once('|')
+            .ok_or(format!("paper.list: '{line}'"))?;
+        let mut words = lhs.split_whitespace();
+        let path = words.next().ok_or("paper.list: no path")?.to_string();
+        let input = match (words.next(), words.next()) {
+            (Some("--input"), Some(name)) => Some(name.to_string()),
+            _ => None,
+        };
+        out.push(Entry {
+            path,
+            input,
+            verdict: parse_verdict(spec)?,
+        });
+    }
+    Ok(out)
+}
+
+/// One child run: exit code, stdout, wall time, peak resident memory in KiB.
+struct Run {
+    code: i32,
+    stdout: String,
+    secs: f64,
+    peak_kib: Option<u64>,
+}
+
+fn run(root: &Path, args: &[&str], gnu_time: bool) -> Run {
+    let obsan = env!("CARGO_BIN_EXE_obsan");
+    let tmp = std::env::temp_dir().join(format!("obsan-suite-time-{}", std::process::id()));
+    let mut cmd = if gnu_time {
+        let mut c = Command::new(GNU_TIME);
+        c.arg("-f").arg("%M").arg("-o").arg(&tmp).arg(obsan);
+        c
+    } else {
+        Command::new(obsan)
+    };
+    cmd.args(args)
+        .current_dir(root)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null());
+    let start = Instant::now();
+    let Ok(mut child) = cmd.spawn() else {
+        return Run {
+            code: -1,
+            stdout: String::new(),
+            secs: 0.0,
+            peak_kib: None,
+        };
+    };
+    // Drain stdout on a thread so a large answer cannot block the child.
+    let mut pipe = child.stdout.take();
+    let reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        if let Some(p) = pipe.as_mut() {
+            let _ = std::io::Read::read_to_string(p, &mut s);
+        }
+        s
+    });
+    let mut hwm = 0;
+    let pid = child.id();
+    let status = loop {
+        if !gnu_time {
+            if let Some(k) = vm_hwm(pid) {
+                hwm = hwm.max(k);
+            }
+        }
+        match child.try_wait() {
+            Ok(Some(s)) => break Some(s),
+            Ok(None) => std::thread::sleep(Duration::from_millis(2)),
+            Err(_) => break None,
+        }
+    };
+    let secs = start.elapsed().as_secs_f64();
+    let stdout = reader.join().unwrap_or_default();
+    let peak_kib = if gnu_time {
+        std::fs::read_to_string(&tmp)
+            .ok()
+            .and_then(|s| s.lines().last().and_then(|l| l.trim().parse().ok()))
+    } else {
+        Some(hwm).filter(|&k| k > 0)
+    };
+    Run {
+        code: status.and_then(|s| s.code()).unwrap_or(-1),
+        stdout,
+        secs,
+        peak_kib,
+    }
+}
+
+fn vm_hwm(pid: u32) -> Option<u64> {
+    let s = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = s.lines().find(|l| l.starts_with("VmHWM:"))?;
+    line.split_whitespace().nth(1)?.parse().ok()
+}
+
+fn mem(k: Option<u64>) -> String {
+    k.map_or("-".into(), |k| format!("{:.1}", k as f64 / 1024.0))
+}
+
+fn env_secs(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(default)
+}
+
+/// The rank run against the cited verdict: "agrees" or what differs.
+fn judge(v: &Value, cited: &Verdict) -> String {
+    let (Some(rank), Some(n)) = (v["rank"].as_u64(), v["n"].as_u64()) else {
+        return "no answer".into();
+    };
+    let un: BTreeSet<String> = v["unobservable_variables"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|x| x.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut diffs = Vec::new();
+    if let Some(r) = cited.rank {
+        if r != rank {
+            diffs.push(format!("cited rank {r}"));
+        }
+    }
+    if let Some(want) = &cited.unobservable {
+        if want.is_empty() && rank != n {
+            diffs.push("cited observable".into());
+        } else if *want != un {
+            let extra: Vec<&String> = un.difference(want).collect();
+            let missing: Vec<&String> = want.difference(&un).collect();
+            diffs.push(format!("unobservable also {extra:?}, not {missing:?}"));
+        }
+    }
+    if diffs.is_empty() {
+        "agrees".into()
+    } else {
+        format!("DIFFERS: {}", diffs.join("; "))
+    }
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // `cargo bench` passes `--bench`; any other argument filters the entries by path.
+    let filter: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let entries = match entries(root) {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("suite: {e}");
+            std::process::exit(2);
+        }
+    };
+    let sym_timeout = env_secs("OBSAN_SUITE_SYM_TIMEOUT", 10).to_string();
+    let rank_timeout = env_secs("OBSAN_SUITE_RANK_TIMEOUT", 60).to_string();
+    let gnu_time = Path::new(GNU_TIME).exists();
+    let how = if gnu_time {
+        "GNU time %M"
+    } else {
+        "VmHWM polled"
+    };
+    println!(
+        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let (mut agree, mut differ, mut total) = (0, 0, 0);
+    for e in &entries {
+        if !filter.is_empty() && !filter.iter().any(|f| e.path.contains(f.as_str())) {
+            continue;
+        }
+        let mut extra: Vec<&str> = Vec::new();
+        if let Some(name) = &e.input {
+            extra.extend(["--input", name.as_str()]);
+        }
+        let label = match &e.input {
+            Some(name) => format!("{} --input {name}", e.path),
+            None => e.path.clone(),
+        };
+        let mut args = vec![
+            "rank",
+            e.path.as_str(),
+            "--json",
+            "--timeout",
+            &rank_timeout,
+        ];
+        args.extend(&extra);
+        let r = run(root, &args, gnu_time);
+        let rv: Value = serde_json::from_str(&r.stdout).unwrap_or(Value::Null);
+        let (n, rank, verdict) = if r.code == 0 {
+            (
+                rv["n"].to_string(),
+                rv["rank"].to_string(),
+                judge(&rv, &e.verdict),
+            )
+        } else {
+            ("-".into(), "-".into(), format!("rank exit {}", r.code))
+        };
+        total += 1;
+        if verdict == "agrees" {
+            agree += 1;
+        } else if verdict.starts_with("DIFFERS") {
+            differ += 1;
+        }
+        let mut args = vec![
+            "symmetries",
+            e.path.as_str(),
+            "--json",
+            "--timeout",
+            &sym_timeout,
+        ];
+        args.extend(&extra);
+        let s = run(root, &args, gnu_time);
+        let sv: Value = serde_json::from_str(&s.stdout).unwrap_or(Value::Null);
+        let (found, cert) = if s.code == 0 {
+            let found = sv["symmetries"].as_array().map_or(0, |a| a.len());
+            let cert = match (&sv["certificate"], &sv["exact"]) {
+                (Value::String(c), _) => c.clone(),
+                (_, Value::Bool(true)) => "exact".into(),
+                _ => "-".into(),
+            };
+            (found.to_string(), cert)
+        } else {
+            (format!("none (exit {})", s.code), "-".into())
+        };
+        println!(
+            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} |",
+            r.secs,
+            mem(r.peak_kib),
+            s.secs,
+            mem(s.peak_kib)
+        );
+    }
+    println!();
+    println!(
+        "{total} runs: {agree} verdicts agree with the cited ones, {differ} differ, {} gave no \
+         answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s",
+        total - agree - differ
+    );
+}
