@@ -373,3 +373,63 @@ fn expression_size_has_a_budget() {
         "too large",
     );
 }
+
+/// Issue 14.5: one value 1e308 in outputs.csv made calibrate and diagnose run for minutes.
+#[test]
+fn absurd_values_are_located_errors() {
+    let d = fresh_dir("absurd");
+    let data = format!("{d}/sim");
+    ok(&["simulate", "--out", &data]);
+    let path = format!("{data}/q0/outputs.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let t = lines[4].split(',').next().unwrap().to_string();
+    lines[4] = format!("{t},1e308");
+    std::fs::write(&path, lines.join("\n") + "\n").unwrap();
+    let e = bad(&["calibrate", &data], "outputs.csv:5");
+    assert!(e.contains("beta"), "names the column: {e}");
+    bad(
+        &["diagnose", "--model", "systems/calib.sys", "--data", &data],
+        "outputs.csv:5",
+    );
+}
+
+/// Issue 14.7: what spreadsheets and loggers write is read as the same data:
+/// a BOM, CRLF or CR-only line endings, comment lines, quoted headers, a
+/// trailing comma and an extra text column.
+#[test]
+fn benign_data_file_variations_give_the_same_calibration() {
+    let d = fresh_dir("benign");
+    let data = format!("{d}/sim");
+    ok(&["simulate", "--out", &data, "--q", "0.9,0,-1", "--seed", "4"]);
+    let plain = ok(&["calibrate", &data, "--method", "ls", "--json"]);
+    for (i, tr) in ["q0.9", "q0", "q-1"].iter().enumerate() {
+        for file in ["inputs.csv", "outputs.csv"] {
+            let path = format!("{data}/{tr}/{file}");
+            let text = std::fs::read_to_string(&path).unwrap();
+            let mut out = String::from("\u{feff}# exported by a logger\n");
+            for (k, line) in text.lines().enumerate() {
+                let quoted = if k == 0 {
+                    line.split(',')
+                        .map(|c| format!("\"{c}\""))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                } else {
+                    line.to_string()
+                };
+                let note = if k == 0 { "note" } else { "ok" };
+                out.push_str(&format!("{quoted},{note},"));
+                out.push_str(["\r\n", "\r", "\n"][i]);
+            }
+            std::fs::write(&path, out).unwrap();
+        }
+    }
+    let r = obsan(&["calibrate", &data, "--method", "ls", "--json"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert_eq!(r.stdout, plain, "the same numbers from the same data");
+    assert!(
+        r.stderr.contains("note"),
+        "the ignored column is named: {}",
+        r.stderr
+    );
+}
