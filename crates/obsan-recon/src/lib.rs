@@ -531,7 +531,18 @@ impl Acc {
             if g == UBig::ZERO {
                 return None;
             }
-            let gi = IBig::from(g);
+            // Sign: the leading denominator term (first as printed) positive.
+            let lead_negative = {
+                let den = &ints[1];
+                den.iter()
+                    .max_by(|a, b| low_key(&a.0).cmp(&low_key(&b.0)))
+                    .is_some_and(|(_, c)| *c < IBig::ZERO)
+            };
+            let gi = if lead_negative {
+                -IBig::from(g)
+            } else {
+                IBig::from(g)
+            };
             let poly = |v: &Vec<(Vec<u32>, IBig)>| {
                 Poly::from_terms(v.iter().map(|(e, c)| Term {
                     exps: e.clone(),

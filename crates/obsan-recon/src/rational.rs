@@ -137,9 +137,9 @@ impl Poly {
 }
 
 /// An exact rational function `num / den` with integer coefficients in
-/// canonical form: coprime as reconstructed, the coefficients of `num` and
-/// `den` together have gcd 1, and the lowest term of `den` (smallest total
-/// degree, then smallest exponent vector) is positive.
+/// canonical form: `num` and `den` coprime (as reconstructed), the
+/// coefficients of both together have gcd 1, and the leading term of `den`
+/// (its first term as printed) is positive.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Rational {
     num: Poly,
