@@ -422,8 +422,8 @@ where
                     y[..k].copy_from_slice(&pw);
                     y[k] = self.cvals[j];
                     ys.push(self.hval(c, part, r, &y, budget)?);
-                    for l in 0..k {
-                        pw[l] = mul(pw[l], self.bases[l], p);
+                    for (w, &b) in pw.iter_mut().zip(&self.bases[..k]) {
+                        *w = mul(*w, b, p);
                     }
                 }
                 let sol = vandermonde_t(&node, &ys, p).ok_or(Fail::Unlucky)?;
