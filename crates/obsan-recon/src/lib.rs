@@ -74,7 +74,7 @@ pub struct Options {
     pub max_degree: u32,
     /// Largest number of terms of one homogeneous piece.
     pub max_terms: usize,
-    /// Largest number of primes (at most [`MAX_RECON_PRIMES`]).
+    /// Largest number of primes, in `2..=`[`MAX_RECON_PRIMES`].
     pub max_primes: usize,
     /// Largest number of black-box calls.
     pub max_points: u64,
@@ -284,8 +284,9 @@ pub fn reconstruct_vec<F, E>(
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    if opts.max_primes == 0 || opts.max_primes > MAX_RECON_PRIMES {
-        return Err(ReconError::InvalidOptions("max_primes must be in 1..=20"));
+    if opts.max_primes < 2 || opts.max_primes > MAX_RECON_PRIMES {
+        // Two primes at least: the lift stops when one more prime changes nothing.
+        return Err(ReconError::InvalidOptions("max_primes must be in 2..=20"));
     }
     if m == 0 {
         return Err(ReconError::InvalidOptions("no function to reconstruct"));
@@ -342,7 +343,7 @@ where
     let mut acc: Option<Acc> = None;
     let mut prev: Option<Vec<Rational>> = None;
     let mut result = None;
-    for &p in &PRIMES[..opts.max_primes] {
+    'primes: for &p in &PRIMES[..opts.max_primes] {
         let mut tries = 0;
         let image = loop {
             tries += 1;
@@ -363,6 +364,29 @@ where
             ) {
                 Ok(x) => break x,
                 Err(Fail::Unlucky) => continue,
+                Err(Fail::Stale) => {
+                    // Start the lift again from full interpolation.
+                    skeleton = None;
+                    acc = None;
+                    prev = None;
+                    continue;
+                }
+                Err(Fail::Degrees(d)) => {
+                    let higher = degs.as_ref().is_some_and(|old| {
+                        old.iter().zip(&d).all(|(o, n)| n.0 >= o.0 && n.1 >= o.1)
+                    });
+                    if !higher {
+                        // Lower degrees than before: this prime (or its
+                        // line) is the unlucky one.
+                        continue 'primes;
+                    }
+                    // Higher: the earlier primes lost terms; start again.
+                    degs = None;
+                    skeleton = None;
+                    acc = None;
+                    prev = None;
+                    continue;
+                }
                 Err(Fail::Hard(e)) => return Err(e),
             }
         };
@@ -421,7 +445,7 @@ where
             budget.degrees = d.iter().map(|&(a, b)| (a as u32, b as u32)).collect();
             *degs = Some(d.clone());
         }
-        Some(known) if *known != d => return Err(Fail::Unlucky),
+        Some(known) if *known != d => return Err(Fail::Degrees(d)),
         Some(_) => {}
     }
     run.set_degrees(d);

@@ -37,6 +37,11 @@ pub(crate) enum Fail<E> {
     /// Bad luck of the random choices (a vanishing shift, coinciding
     /// Vandermonde nodes, a singular line system): retry with new ones.
     Unlucky,
+    /// The monomials found modulo an earlier prime do not fit this one
+    /// (a term lost to an unlucky anchor or prime): interpolate afresh.
+    Stale,
+    /// Degrees differing from the earlier primes' (these ones found here).
+    Degrees(Vec<(usize, usize)>),
 }
 
 impl<E> From<ReconError<E>> for Fail<E> {
@@ -462,9 +467,6 @@ where
         budget: &mut Budget,
     ) -> Result<Terms, Fail<E>> {
         let p = self.p;
-        if monos.is_empty() {
-            return Ok(Vec::new());
-        }
         let node: Vec<u64> = monos
             .iter()
             .map(|ex| {
@@ -473,15 +475,23 @@ where
                     .fold(1, |acc, (&e, &b)| mul(acc, pow(b, e as u64, p), p))
             })
             .collect();
-        let mut ys = Vec::with_capacity(monos.len());
+        // One point more than unknowns: the last checks the monomial set.
+        let t = monos.len();
+        let mut ys = Vec::with_capacity(t + 1);
         let mut pw = vec![1u64; self.n - 1];
-        for _ in 0..monos.len() {
+        for _ in 0..=t {
             ys.push(self.hval(c, part, r, &pw.clone(), budget)?);
             for (w, &b) in pw.iter_mut().zip(&self.bases) {
                 *w = mul(*w, b, p);
             }
         }
         let sol = vandermonde_t(&node, &ys, p).ok_or(Fail::Unlucky)?;
+        let predicted = sol.iter().zip(&node).fold(0, |acc, (&a, &v)| {
+            add(acc, mul(a, pow(v, t as u64, p), p), p)
+        });
+        if predicted != ys[t] {
+            return Err(Fail::Stale);
+        }
         Ok(monos
             .iter()
             .zip(sol)

@@ -375,3 +375,36 @@ fn equal_seeds_give_equal_runs() {
     let b = reconstruct(2, &mut bb_of(&num, &den, &calls), &Options::default()).unwrap();
     assert_eq!(a, b);
 }
+
+#[test]
+fn terms_that_vanish_modulo_the_first_prime_are_recovered() {
+    // Coefficients divisible by the first prime vanish from its image: its
+    // monomials miss y^2 and the denominator's constant term. The next
+    // prime notices (its check point does not fit), interpolates afresh and
+    // the lift starts again.
+    let p0 = IBig::from(PRIMES[0]);
+    let num = vec![t(&[1, 0], 1), tb(&[0, 2], p0.clone())];
+    let den = vec![tb(&[0, 0], p0 * IBig::from(3)), t(&[1, 1], 1)];
+    let r = rec(2, &num, &den);
+    assert_eq!(r.functions[0].num().terms().len(), 2);
+    assert_eq!(r.functions[0].den().terms().len(), 2);
+    assert!(r.stats.primes >= 3);
+    // Same degrees modulo the first prime, one term fewer: the skeleton
+    // check of the second prime fails and the lift starts again.
+    let p0 = IBig::from(PRIMES[0]);
+    let num = vec![
+        t(&[2, 0], 1),
+        tb(&[0, 2], p0 * IBig::from(5)),
+        t(&[1, 1], -1),
+    ];
+    let den = vec![t(&[0, 0], 1), t(&[1, 0], 1)];
+    let r = rec(2, &num, &den);
+    assert_eq!(r.functions[0].num().terms().len(), 3);
+    // A top term divisible by the second prime: that prime's degrees are
+    // lower, and it is skipped.
+    let p1 = IBig::from(PRIMES[1]);
+    let num = vec![t(&[1], 1), tb(&[3], p1)];
+    let den = vec![t(&[0], 1), t(&[1], 2)];
+    let r = rec(1, &num, &den);
+    assert_eq!(r.stats.degrees, vec![(3, 1)]);
+}
