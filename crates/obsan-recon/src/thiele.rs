@@ -88,8 +88,8 @@ impl Thiele {
         let mut v: Option<u64> = None;
         for j in (0..self.a.len()).rev() {
             v = match v {
-                None if j + 1 == self.a.len() => Some(self.a[j]),
-                None => Some(self.a[j]), // a_j + (t - t_j)/inf = a_j
+                // The last coefficient, or a_j + (t - t_j)/inf = a_j.
+                None => Some(self.a[j]),
                 Some(w) => match inv(w, p) {
                     Some(iw) => Some(add(self.a[j], mul(sub(t, self.ts[j], p), iw, p), p)),
                     None if t == self.ts[j] => Some(self.a[j]), // 0/0 on a node: the node's value

@@ -408,3 +408,58 @@ fn terms_that_vanish_modulo_the_first_prime_are_recovered() {
     let r = rec(1, &num, &den);
     assert_eq!(r.stats.degrees, vec![(3, 1)]);
 }
+
+/// Kernel vector of a 2 x 3 matrix mod p, normalised so component 0 is 1;
+/// `None` where the matrix drops rank or the normalisation degenerates.
+fn kernel_2x3(a: [[u64; 3]; 2], p: u64) -> Option<Vec<u64>> {
+    let m = |x: u64, y: u64| (x as u128 * y as u128 % p as u128) as u64;
+    let s = |x: u64, y: u64| (x + p - y) % p;
+    // Cross product of the rows spans the kernel.
+    let w = [
+        s(m(a[0][1], a[1][2]), m(a[0][2], a[1][1])),
+        s(m(a[0][2], a[1][0]), m(a[0][0], a[1][2])),
+        s(m(a[0][0], a[1][1]), m(a[0][1], a[1][0])),
+    ];
+    if w[0] == 0 {
+        return None;
+    }
+    let inv = {
+        let (mut b, mut e, mut r) = (w[0], p - 2, 1u64);
+        while e > 0 {
+            if e & 1 == 1 {
+                r = m(r, b);
+            }
+            b = m(b, b);
+            e >>= 1;
+        }
+        r
+    };
+    Some(w.iter().map(|&c| m(c, inv)).collect())
+}
+
+#[test]
+fn a_scaling_symmetry_from_null_vectors() {
+    // h1 = x/y and h2 = z/x^2 are invariant under (x, y, z) -> (l x, l y,
+    // l^2 z), whose generator is (x, y, 2 z): normalised, (1, y/x, 2 z/x).
+    // The black box computes the null vector of the gradients mod p.
+    let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+        let m = |x: u64, y: u64| (x as u128 * y as u128 % p as u128) as u64;
+        let inv = |x: u64| eval(&vec![t(&[0], 1)], &vec![t(&[1], 1)], &[x], p);
+        let (x, y, z) = (pt[0], pt[1], pt[2]);
+        let (Some(ix), Some(iy)) = (inv(x), inv(y)) else {
+            return Ok(None);
+        };
+        let ix2 = m(ix, ix);
+        // grad h1 = (1/y, -x/y^2, 0); grad h2 = (-2 z/x^3, 0, 1/x^2)
+        let g1 = [iy, (p - m(x, m(iy, iy))) % p, 0];
+        let g2 = [(p - m(2 * z % p, m(ix2, ix))) % p, 0, ix2];
+        Ok(kernel_2x3([g1, g2], p))
+    };
+    let r = reconstruct_vec(3, 3, &mut bb, &Options::default()).unwrap();
+    let shown: Vec<String> = r
+        .functions
+        .iter()
+        .map(|f| f.display(&["x", "y", "z"]).to_string())
+        .collect();
+    assert_eq!(shown, ["1", "y/x", "2*z/x"]);
+}
