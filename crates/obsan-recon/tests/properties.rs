@@ -40,7 +40,7 @@ fn nonzero(mut d: Terms, n: usize) -> Terms {
 
 fn config() -> ProptestConfig {
     ProptestConfig {
-        cases: 40,
+        cases: 64,
         failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
         ..ProptestConfig::default()
     }
@@ -51,7 +51,7 @@ proptest! {
 
     #[test]
     fn random_sparse_functions_reconstruct_exactly(
-        (n, num, den) in (1usize..=5).prop_flat_map(|n| (Just(n), poly(n, 5, 6), poly(n, 4, 5))),
+        (n, num, den) in (1usize..=6).prop_flat_map(|n| (Just(n), poly(n, 6, 10), poly(n, 4, 8))),
         seed in any::<u64>(),
     ) {
         let den = nonzero(den, n);
