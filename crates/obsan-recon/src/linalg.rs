@@ -108,7 +108,6 @@ pub(crate) fn trim(mut a: Vec<u64>) -> Vec<u64> {
     a
 }
 
-#[cfg(test)]
 pub(crate) fn eval(a: &[u64], x: u64, p: u64) -> u64 {
     a.iter().rev().fold(0, |acc, &c| add(mul(acc, x, p), c, p))
 }

@@ -17,7 +17,7 @@ use std::time::Instant;
 use rustc_hash::FxHashMap;
 
 use crate::field::{add, mul, pow, sub};
-use crate::linalg::{newton, poly_add, poly_mul, solve, vandermonde_t};
+use crate::linalg::{eval, newton, poly_add, poly_mul, solve, vandermonde_t};
 use crate::rng::Rng;
 use crate::thiele::Thiele;
 use crate::{Limit, Progress, ReconError};
@@ -117,6 +117,13 @@ where
             Ok(Some(v))
         }
     }
+}
+
+/// True when the interpolant of all but the last point passes through the
+/// last one (early termination of Newton interpolation).
+fn predicted(xs: &[u64], ys: &[u64], p: u64) -> bool {
+    let j = ys.len() - 1;
+    newton(&xs[..j], &ys[..j], p).is_some_and(|c| eval(&c, xs[j], p) == ys[j])
 }
 
 /// Per component, numerator and denominator coefficients in t at one y.
@@ -380,14 +387,25 @@ where
                 vec![(Vec::new(), val)]
             });
         }
-        // Stage 0: univariate in y_0, the others at the anchors.
+        // Stage 0: univariate in y_0, the others at the anchors; early
+        // termination once `agree` further values are predicted.
+        let agree = budget.agree;
         let mut vals = Vec::with_capacity(r + 1);
+        let mut streak = 0;
         for j in 0..=r {
             let mut y = self.anchors.clone();
             y[0] = self.cvals[j];
             vals.push(self.hval(c, part, r, &y, budget)?);
+            streak = if j > 0 && predicted(&self.cvals[..=j], &vals, p) {
+                streak + 1
+            } else {
+                0
+            };
+            if streak >= agree {
+                break;
+            }
         }
-        let coeffs = newton(&self.cvals[..=r], &vals, p).ok_or(Fail::Unlucky)?;
+        let coeffs = newton(&self.cvals[..vals.len()], &vals, p).ok_or(Fail::Unlucky)?;
         let mut skel: Terms = coeffs
             .iter()
             .enumerate()
@@ -412,13 +430,14 @@ where
                     (0..k).fold(1, |acc, l| mul(acc, pow(self.bases[l], ex[l] as u64, p), p))
                 })
                 .collect();
-            let mindeg = skel
+            // Degree bound of each coefficient in the new variable.
+            let caps: Vec<usize> = skel
                 .iter()
-                .map(|(ex, _)| ex.iter().sum::<u32>())
-                .min()
-                .unwrap_or(0);
-            let dk = r - mindeg as usize;
+                .map(|(ex, _)| r - ex.iter().sum::<u32>() as usize)
+                .collect();
+            let dk = caps.iter().copied().max().unwrap_or(0);
             let mut table = vec![Vec::with_capacity(dk + 1); t];
+            let mut streaks = vec![0usize; t];
             for j in 0..=dk {
                 let mut ys = Vec::with_capacity(t);
                 let mut pw = vec![1u64; k];
@@ -435,11 +454,29 @@ where
                 for (row, s) in table.iter_mut().zip(sol) {
                     row.push(s);
                 }
+                // Every coefficient is complete at its cap, or earlier once
+                // `agree` values in a row were predicted (racing termination).
+                let mut all = true;
+                for ((row, streak), &cap) in table.iter().zip(&mut streaks).zip(&caps) {
+                    if j > cap || *streak >= agree {
+                        continue;
+                    }
+                    *streak = if j > 0 && predicted(&self.cvals[..=j], row, p) {
+                        *streak + 1
+                    } else {
+                        0
+                    };
+                    all &= j == cap || *streak >= agree;
+                }
+                if all {
+                    break;
+                }
             }
             let mut next = Vec::new();
-            for ((ex, _), row) in skel.iter().zip(&table) {
-                let dm = r - ex.iter().sum::<u32>() as usize;
-                let uni = newton(&self.cvals[..=dm], &row[..=dm], p).ok_or(Fail::Unlucky)?;
+            for (((ex, _), row), &cap) in skel.iter().zip(&table).zip(&caps) {
+                let used = row.len().min(cap + 1);
+                let uni =
+                    newton(&self.cvals[..used], &row[..used], p).ok_or(Fail::Unlucky)?;
                 for (e, &a) in uni.iter().enumerate() {
                     if a != 0 {
                         let mut ex2 = ex.clone();
