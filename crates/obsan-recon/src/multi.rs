@@ -475,8 +475,7 @@ where
             let mut next = Vec::new();
             for (((ex, _), row), &cap) in skel.iter().zip(&table).zip(&caps) {
                 let used = row.len().min(cap + 1);
-                let uni =
-                    newton(&self.cvals[..used], &row[..used], p).ok_or(Fail::Unlucky)?;
+                let uni = newton(&self.cvals[..used], &row[..used], p).ok_or(Fail::Unlucky)?;
                 for (e, &a) in uni.iter().enumerate() {
                     if a != 0 {
                         let mut ex2 = ex.clone();
