@@ -215,7 +215,7 @@ where
                 return Err(Fail::Unlucky);
             }
             let dn = num.len().saturating_sub(1);
-            let dd = den.len() - 1;
+            let dd = den.len().saturating_sub(1);
             if dn.max(dd) > budget.max_degree as usize {
                 return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
             }

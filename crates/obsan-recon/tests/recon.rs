@@ -463,3 +463,32 @@ fn a_scaling_symmetry_from_null_vectors() {
         .collect();
     assert_eq!(shown, ["1", "y/x", "2*z/x"]);
 }
+
+#[test]
+fn a_deadline_mid_run_reports_how_far_it_got() {
+    // A slow black box (1 ms a call) and a 20 ms deadline: the run stops
+    // inside its first prime, after at most 20 calls.
+    let num = vec![t(&[2, 1, 0], 1), t(&[0, 0, 3], -2)];
+    let den = vec![t(&[0, 0, 0], 1), t(&[1, 1, 1], 1)];
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<u64>, ()> {
+        std::thread::sleep(std::time::Duration::from_millis(1));
+        Ok(eval(&num, &den, x, p))
+    };
+    let opts = Options {
+        deadline: Some(Instant::now() + std::time::Duration::from_millis(20)),
+        ..Options::default()
+    };
+    match reconstruct(3, &mut bb, &opts) {
+        Err(ReconError::Budget {
+            limit: Limit::Deadline,
+            progress,
+        }) => {
+            assert!(
+                progress.points >= 1 && progress.points <= 20,
+                "{progress:?}"
+            );
+            assert_eq!(progress.primes, 0);
+        }
+        other => panic!("{other:?}"),
+    }
+}
