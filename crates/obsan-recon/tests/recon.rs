@@ -489,3 +489,32 @@ fn a_deadline_mid_run_reports_how_far_it_got() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn the_term_budget_is_an_error_not_a_truncation() {
+    // All ten monomials of degree 3 in three variables, at most five allowed.
+    let mut num = Vec::new();
+    for a in 0..=3u32 {
+        for b in 0..=(3 - a) {
+            num.push(t(&[a, b, 3 - a - b], 1 + a as i64 + 3 * b as i64));
+        }
+    }
+    assert!(num.len() > 5);
+    let den = vec![t(&[0, 0, 0], 1)];
+    let calls = Cell::new(0);
+    let opts = Options {
+        max_terms: 5,
+        ..Options::default()
+    };
+    match reconstruct(3, &mut bb_of(&num, &den, &calls), &opts) {
+        Err(ReconError::Budget {
+            limit: Limit::Terms(5),
+            progress,
+        }) => {
+            assert_eq!(progress.degrees, vec![(3, 0)]);
+        }
+        other => panic!("{other:?}"),
+    }
+    // With the default budget the same function comes back whole.
+    rec(3, &num, &den);
+}
