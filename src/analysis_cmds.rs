@@ -84,7 +84,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let words: Vec<String> = r
         .basis
         .iter()
-        .map(|(w, _)| word_text(&nf, &r.fields, w))
+        .map(|w| word_text(&nf, &r.fields, w))
         .collect();
     let obs: Vec<&String> = nf
         .state
@@ -109,7 +109,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             "n": r.n,
             "rank": r.rank,
             "weakly_locally_observable": exact,
-            "basis": r.basis.iter().zip(&words).map(|((w, _), t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
+            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
             "max_order": r.max_order,
             "observable_variables": obs,
             "unobservable_variables": unobs,

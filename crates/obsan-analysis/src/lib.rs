@@ -17,7 +17,7 @@ mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
 pub use modes::{check_modes, ModeCheck, ModeReport};
-pub use rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
+pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use symmetry::{canonical_lie, determinant, symmetries, SymmetryReport};
 
 use obsan_expr::Id;

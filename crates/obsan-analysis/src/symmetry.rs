@@ -12,7 +12,7 @@
 //! basis rows: if d(phi_k) span it and every d(L_f phi_k) lies in that span,
 //! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
 
-use crate::rank::{gradient, random_point, AnalysisError, Fields, LieWord, RankReport};
+use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -253,14 +253,13 @@ fn choose_free_columns(
     }
     let mut rng = SplitMix(report.seed ^ 0x5e1ec7);
     let pt = random_point(&mut nf.ctx, &mut rng)?;
+    let jets = lie_jets(nf, &report.fields);
     let mut m: Vec<Vec<Fp>> = Vec::new();
-    for (_, f) in &report.basis {
-        let g = gradient(nf, *f);
-        m.push(
-            nf.ctx
-                .eval_fp(&g, &pt)
-                .map_err(|_| AnalysisError::NoPoint)?,
-        );
+    for w in &report.basis {
+        let row = jets
+            .row(w.output, &w.fields, &pt)
+            .map_err(|_| AnalysisError::NoPoint)?;
+        m.push(row.gradient);
     }
     let mut best: (usize, Vec<usize>) = (0, report_free.clone());
     let mut found = false;
@@ -355,7 +354,7 @@ pub fn symmetries(
     let vars = nf.state_vars.clone();
     let mut cache = LieCache::new(nf, &report.fields);
     let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);
-    for (w, _) in &report.basis {
+    for w in &report.basis {
         let f = cache.get(nf, w);
         rows.push(grad(&mut nf.ctx, &f, &vars));
     }
@@ -412,7 +411,7 @@ pub fn symmetries(
     }
     let mut exact = true;
     if !vectors.is_empty() {
-        'outer: for (w, _) in &report.basis {
+        'outer: for w in &report.basis {
             for k in 0..report.fields.vectors.len() {
                 let mut w2 = w.clone();
                 w2.fields.push(k);
