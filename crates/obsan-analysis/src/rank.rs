@@ -154,6 +154,7 @@ impl Echelon {
         let Some(p) = v.iter().position(|x| !x.is_zero()) else {
             return false;
         };
+        #[allow(clippy::expect_used)] // v[p] is the first non-zero entry
         let inv = v[p].inv().expect("nonzero");
         for x in v.iter_mut() {
             *x = *x * inv;
@@ -424,10 +425,7 @@ pub fn rank(nf: &mut NormalForm, opts: RankOptions) -> Result<RankReport, Analys
 /// degree bound from the gradient expressions. The same points and the same
 /// growth, so the same ranks, words and pivots; kept as an independent
 /// computation for the tests (and much slower at high orders).
-pub fn rank_symbolic(
-    nf: &mut NormalForm,
-    opts: RankOptions,
-) -> Result<RankReport, AnalysisError> {
+pub fn rank_symbolic(nf: &mut NormalForm, opts: RankOptions) -> Result<RankReport, AnalysisError> {
     rank_with(nf, opts, true)
 }
 

@@ -120,6 +120,7 @@ pub(crate) fn normalize_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut best: Vec<RatFun> = primitive_vector(ctx, v);
     let mut best_size = size(&best);
     for &k in &order {
+        #[allow(clippy::expect_used)] // `order` holds non-zero entries only
         let inv = ctx.rf_inv(&v[k]).expect("nonzero");
         let u: Vec<RatFun> = v.iter().map(|e| ctx.rf_mul(e, &inv)).collect();
         let p = primitive_vector(ctx, &u);
@@ -170,7 +171,10 @@ fn null_space(ctx: &mut Ctx, rows: &[Vec<RatFun>], n: usize) -> Vec<Vec<RatFun>>
                 best = Some((size, next));
             }
         }
-        basis = best.expect("a candidate").1;
+        // `candidates` is not empty, so neither is `best`.
+        if let Some((_, next)) = best {
+            basis = next;
+        }
     }
     basis
 }
@@ -205,6 +209,7 @@ fn eliminate(
 }
 
 /// `v` times the lcm of its denominators, divided by the gcd of the numerators.
+#[allow(clippy::expect_used)] // a gcd divides its arguments exactly
 fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut lcm = Poly::one();
     for e in v.iter().filter(|e| !e.is_zero()) {
@@ -462,6 +467,7 @@ pub fn determinant(ctx: &mut Ctx, m: &[Vec<RatFun>]) -> RatFun {
         }
         let piv = a[c][c].clone();
         det = ctx.rf_mul(&det, &piv);
+        #[allow(clippy::expect_used)] // the pivot was chosen non-zero
         let inv = ctx.rf_inv(&piv).expect("nonzero pivot");
         for i in c + 1..n {
             if a[i][c].is_zero() {

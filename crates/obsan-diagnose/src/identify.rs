@@ -307,7 +307,7 @@ pub fn stacked_rank(
         x.resize(nf.state.len(), 0.0);
         let vars = nf.state_vars.clone();
         let mut grads = Vec::new();
-        for id in report.basis_functions(nf) {
+        for id in report.basis_functions(&mut nf) {
             for &v in &vars {
                 grads.push(nf.ctx.diff(id, v));
             }

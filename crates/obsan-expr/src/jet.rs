@@ -100,12 +100,11 @@ impl Bases {
     }
     /// The bound of `1 / v` for `v` bounded by `d`: `prod B^e / P`, P a new base.
     fn register_inverse(&mut self, d: &Deg) -> Deg {
-        let n = d
-            .e
-            .iter()
-            .zip(&self.deg)
-            .map(|(&e, &g)| (e as u64).saturating_mul(g))
-            .fold(0u64, u64::saturating_add);
+        let n =
+            d.e.iter()
+                .zip(&self.deg)
+                .map(|(&e, &g)| (e as u64).saturating_mul(g))
+                .fold(0u64, u64::saturating_add);
         self.deg.push(d.n);
         let mut e = vec![0; self.deg.len()];
         e[self.deg.len() - 1] = 1;
@@ -117,6 +116,8 @@ impl Bases {
 #[derive(Clone, Debug)]
 enum Op {
     Const(Fp),
+    /// A rational number with no value mod p.
+    NoValue,
     /// The k-th state variable.
     State(usize),
     /// A leaf that is constant here (a symbol outside the state, pi, or an
@@ -233,8 +234,8 @@ impl LieJets {
         for &a in word {
             let mut next = s.clone();
             let mut any = false;
-            for i in 0..self.n {
-                if s[i] && self.moves[a][i] {
+            for (i, &si) in s.iter().enumerate() {
+                if si && self.moves[a][i] {
                     any = true;
                     for (x, &y) in next.iter_mut().zip(&self.field_support[a][i]) {
                         *x |= y;
@@ -342,19 +343,25 @@ impl Compiler<'_> {
             let (op, d) = match ctx.node(id) {
                 Node::Num(q) => match q.to_fp() {
                     Some(v) => (Op::Const(v), Deg::poly(0)),
-                    // A denominator divisible by p: every point is bad.
-                    None => (Op::Const(Fp::ZERO), Deg::poly(0)),
+                    // A denominator divisible by p: no point is good.
+                    None => (Op::NoValue, Deg::poly(0)),
                 },
                 Node::Add(cs) => {
-                    let d = cs.iter().skip(1).fold(deg0[l(cs[0]) as usize].clone(), |a, c| {
-                        self.bases.add(&a, &deg0[l(*c) as usize])
-                    });
+                    let d = cs
+                        .iter()
+                        .skip(1)
+                        .fold(deg0[l(cs[0]) as usize].clone(), |a, c| {
+                            self.bases.add(&a, &deg0[l(*c) as usize])
+                        });
                     (Op::Add(cs.iter().map(|&c| l(c)).collect()), d)
                 }
                 Node::Mul(cs) => {
-                    let d = cs.iter().skip(1).fold(deg0[l(cs[0]) as usize].clone(), |a, c| {
-                        self.bases.mul(&a, &deg0[l(*c) as usize])
-                    });
+                    let d = cs
+                        .iter()
+                        .skip(1)
+                        .fold(deg0[l(cs[0]) as usize].clone(), |a, c| {
+                            self.bases.mul(&a, &deg0[l(*c) as usize])
+                        });
                     (Op::Mul(cs.iter().map(|&c| l(c)).collect()), d)
                 }
                 Node::Pow(b, e) => {
@@ -364,11 +371,11 @@ impl Compiler<'_> {
                     } else {
                         let idx = self.inverse(&deg0[l(*b) as usize].clone());
                         ops.push(Op::InvPow(l(*b), k, idx));
-                        let d = pow_deg(&self.bases, &self.inverses[idx], k);
+                        let d = pow_deg(&self.inverses[idx], k);
                         deg0.push(d);
                         continue;
                     };
-                    (Op::Pow(l(*b), k), pow_deg(&self.bases, &base, k))
+                    (Op::Pow(l(*b), k), pow_deg(&base, k))
                 }
                 Node::Leaf(v) => self.leaf(*v, &l, &deg0),
             };
@@ -444,7 +451,10 @@ impl Compiler<'_> {
                         .max()
                         .unwrap_or(0)
                 };
-                let n = leaf.radicand.as_ref().map_or(0, |r| count(&r.num) + count(&r.den));
+                let n = leaf
+                    .radicand
+                    .as_ref()
+                    .map_or(0, |r| count(&r.num) + count(&r.den));
                 let d = deg0[l(*u) as usize].clone();
                 (Op::Sqrt(v, l(*u), self.inverse(&d)), Deg::poly(n))
             }
@@ -452,12 +462,11 @@ impl Compiler<'_> {
     }
 }
 
-fn pow_deg(b: &Bases, d: &Deg, k: u32) -> Deg {
-    let mut acc = Deg::poly(0);
-    for _ in 0..k {
-        acc = b.mul(&acc, d);
+fn pow_deg(d: &Deg, k: u32) -> Deg {
+    Deg {
+        n: d.n.saturating_mul(k as u64),
+        e: d.e.iter().map(|&x| x.saturating_mul(k)).collect(),
     }
-    acc
 }
 
 /// The truncation box of a word: one variable per run, truncated at the
@@ -537,7 +546,9 @@ struct Arith<'a> {
 
 fn inv_small(k: u64) -> Fp {
     #[allow(clippy::expect_used)]
-    Fp::new(k).inv().expect("small positive integers are invertible mod p")
+    Fp::new(k)
+        .inv()
+        .expect("small positive integers are invertible mod p")
 }
 
 impl Arith<'_> {
@@ -578,8 +589,7 @@ impl Arith<'_> {
     fn scale(&self, a: &Jet, s: Fp, sd: &Deg) -> Jet {
         Jet {
             c: a.c.iter().map(|&x| x * s).collect(),
-            d: a
-                .d
+            d: a.d
                 .iter()
                 .map(|x| x.as_ref().map(|x| self.bases.mul(x, sd)))
                 .collect(),
@@ -594,7 +604,11 @@ impl Arith<'_> {
         n
     }
     fn mul(&self, a: &Jet, b: &Jet) -> Jet {
-        let (a, b) = if b.tconst && !a.tconst { (b, a) } else { (a, b) };
+        let (a, b) = if b.tconst && !a.tconst {
+            (b, a)
+        } else {
+            (a, b)
+        };
         let w = self.sh.w;
         let mut c = vec![Fp::ZERO; self.sh.size * w];
         let ilim = if a.tconst { 1 } else { self.sh.size };
@@ -641,12 +655,24 @@ impl Arith<'_> {
             eps: a.eps || b.eps,
         }
     }
-    fn pow(&self, a: &Jet, k: u32) -> Jet {
-        let mut acc = self.constant(Fp::ONE, Deg::poly(0));
-        for _ in 0..k {
-            acc = self.mul(&acc, a);
+    /// `a^k` by squaring.
+    fn pow(&self, a: &Jet, mut k: u32) -> Jet {
+        let mut acc: Option<Jet> = None;
+        let mut b = a.clone();
+        loop {
+            if k & 1 == 1 {
+                acc = Some(match acc {
+                    None => b.clone(),
+                    Some(x) => self.mul(&x, &b),
+                });
+            }
+            k >>= 1;
+            if k == 0 {
+                break;
+            }
+            b = self.mul(&b, &b);
         }
-        acc
+        acc.unwrap_or_else(|| self.constant(Fp::ONE, Deg::poly(0)))
     }
     fn is_const(a: &Jet) -> bool {
         a.tconst && !a.eps
@@ -693,9 +719,7 @@ impl Arith<'_> {
             }
         }
         let mut d = vec![None; self.sh.grades + 1];
-        for g in 0..self.sh.grades {
-            d[g + 1] = a.d[g].clone();
-        }
+        d[1..].clone_from_slice(&a.d[..self.sh.grades]);
         Jet {
             c,
             d,
@@ -715,6 +739,7 @@ impl Arith<'_> {
             let at = |k: &u32| &vals[*k as usize];
             let mut j = match op {
                 Op::Const(v) => self.constant(*v, d0.clone()),
+                Op::NoValue => return Err(BadPoint),
                 Op::State(k) => x[*k].clone(),
                 Op::Fixed(v) => self.constant(pv(*v), d0.clone()),
                 Op::Add(cs) => {
@@ -746,7 +771,13 @@ impl Arith<'_> {
                 }
                 Op::Sin(v, p, arg, den) | Op::Cos(v, p, arg, den) => {
                     let n = self.scale(&self.nil(at(arg)), inv_small(*den), &Deg::poly(0));
-                    let sign = |k: u64| if (k / 2) % 2 == 0 { Fp::ONE } else { -Fp::ONE };
+                    let sign = |k: u64| {
+                        if (k / 2).is_multiple_of(2) {
+                            Fp::ONE
+                        } else {
+                            -Fp::ONE
+                        }
+                    };
                     let cs = self.series(&n, &|k| {
                         if k % 2 == 0 {
                             sign(k) * Self::fact_inv(k)
@@ -833,14 +864,18 @@ impl Arith<'_> {
             j.d[0] = Some(d0);
             vals.push(j);
         }
-        Ok(prog.roots.iter().map(|&r| vals[r as usize].clone()).collect())
+        Ok(prog
+            .roots
+            .iter()
+            .map(|&r| vals[r as usize].clone())
+            .collect())
     }
 
     fn atan_series(&self, z: &Jet) -> Jet {
         self.series(z, &|k| {
             if k % 2 == 0 {
                 Fp::ZERO
-            } else if (k / 2) % 2 == 0 {
+            } else if (k / 2).is_multiple_of(2) {
                 inv_small(k)
             } else {
                 -inv_small(k)
