@@ -18,12 +18,14 @@
 mod decomp;
 mod modes;
 mod rank;
+pub mod structure;
 mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
-pub use symmetry::{canonical_lie, determinant, symmetries, SymmetryReport};
+pub use structure::SymmetryKind;
+pub use symmetry::{canonical_lie, determinant, symmetries, Certificate, SymmetryReport};
 
 use obsan_expr::Id;
 use obsan_model::NormalForm;

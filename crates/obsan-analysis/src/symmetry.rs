@@ -13,6 +13,7 @@
 //! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
 
 use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
+use crate::structure::{cheap_symmetries, SymmetryKind};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -26,8 +27,23 @@ pub struct SymmetryReport {
     pub vectors: Vec<Vec<RatFun>>,
     /// The exact closure check passed: the rank and the symmetries are exact.
     pub exact: bool,
-    /// Number of gradient rows each vector was checked against.
+    /// Number of exact identities checked (gradient rows times vectors for
+    /// the closure check, invariance identities for the cheap structure).
     pub rows_checked: usize,
+    /// Which exact certificate proved the vectors.
+    pub certificate: Certificate,
+}
+
+/// How a symmetry basis was proved.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Certificate {
+    /// Each vector annihilates the gradients of the basis Lie derivatives and
+    /// of all their one-step Lie derivatives (canonical forms).
+    Closure,
+    /// Cheap structure ([`crate::structure`]): each vector leaves every
+    /// output invariant and commutes with every field (canonical forms), so
+    /// it annihilates every Lie derivative; the kinds, one per vector.
+    Invariance(Vec<SymmetryKind>),
 }
 
 /// Canonical Lie derivatives by word, sharing prefixes.
@@ -356,6 +372,18 @@ pub fn symmetries(
 ) -> Result<SymmetryReport, AnalysisError> {
     let n = report.n;
     let r = report.rank;
+    // Free variables, translations and scalings first: when they account
+    // for the whole deficiency, their certificate proves everything.
+    if let Some(c) = cheap_symmetries(nf, report)? {
+        return Ok(SymmetryReport {
+            n,
+            rank: r,
+            vectors: c.vectors,
+            exact: true,
+            rows_checked: c.identities,
+            certificate: Certificate::Invariance(c.kinds),
+        });
+    }
     let vars = nf.state_vars.clone();
     let mut cache = LieCache::new(nf, &report.fields);
     let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);
@@ -441,6 +469,7 @@ pub fn symmetries(
         vectors,
         exact,
         rows_checked: checked,
+        certificate: Certificate::Closure,
     })
 }
 
