@@ -20,6 +20,7 @@
 use crate::field_names;
 use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, P};
 use obsan_model::NormalForm;
+use std::collections::HashMap;
 use std::fmt;
 use std::time::Instant;
 
@@ -315,6 +316,7 @@ pub(crate) fn lie_jets(nf: &NormalForm, fields: &Fields) -> LieJets {
 fn grow_jets(
     nf: &NormalForm,
     jets: &LieJets,
+    degrees: &mut HashMap<(usize, Vec<usize>), u64>,
     fields: &Fields,
     point: FpPoint,
     opts: &mut RankOptions,
@@ -348,16 +350,20 @@ fn grow_jets(
                     )));
                 }
             }
+            let key = (word.output, word.fields.clone());
+            let known = degrees.get(&key).copied();
             let row = jets
-                .row(word.output, &word.fields, &run.point)
+                .row(word.output, &word.fields, &run.point, known.is_none())
                 .map_err(|BadPoint| AnalysisError::NoPoint)?;
+            let degree = known.or(row.degree).unwrap_or(0);
+            degrees.insert(key, degree);
             run.evaluated += 1;
             if run.echelon.insert(row.gradient) {
-                run.degree = run.degree.saturating_add(row.degree);
+                run.degree = run.degree.saturating_add(degree);
                 kept.push(word.clone());
                 run.basis.push(word);
             } else {
-                run.worst_rejected = run.worst_rejected.max(row.degree);
+                run.worst_rejected = run.worst_rejected.max(degree);
             }
             if run.echelon.rank() == n {
                 break;
@@ -439,8 +445,10 @@ fn rank_with(
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
     let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
     let jets = (!symbolic).then(|| lie_jets(nf, &fields));
-    let grow = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
-        Some(j) => grow_jets(nf, j, &fields, p, opts),
+    // Degree bounds depend on the word only: computed at the first point.
+    let mut degrees = HashMap::new();
+    let mut grow = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
+        Some(j) => grow_jets(nf, j, &mut degrees, &fields, p, opts),
         None => grow_symbolic(nf, &fields, p, opts),
     };
     let r1 = grow(nf, p1, &mut opts)?;

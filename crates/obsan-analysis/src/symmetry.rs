@@ -278,7 +278,7 @@ fn choose_free_columns(
     let mut m: Vec<Vec<Fp>> = Vec::new();
     for w in &report.basis {
         let row = jets
-            .row(w.output, &w.fields, &pt)
+            .row(w.output, &w.fields, &pt, false)
             .map_err(|_| AnalysisError::NoPoint)?;
         m.push(row.gradient);
     }

@@ -171,12 +171,12 @@ pub struct LieJets {
 }
 
 /// The gradient of one Lie derivative at a point, its value, and the
-/// numerator degree bound of the row (see the module docs).
+/// numerator degree bound of the row (see the module docs) when asked for.
 #[derive(Clone, Debug)]
 pub struct LieRow {
     pub value: Fp,
     pub gradient: Vec<Fp>,
-    pub degree: u64,
+    pub degree: Option<u64>,
 }
 
 impl LieJets {
@@ -250,8 +250,16 @@ impl LieJets {
         Some(s)
     }
 
-    /// `L_{word[k-1]} ... L_{word[0]} h_output` and its gradient at `point`.
-    pub fn row(&self, output: usize, word: &[usize], point: &FpPoint) -> Result<LieRow, BadPoint> {
+    /// `L_{word[k-1]} ... L_{word[0]} h_output` and its gradient at `point`,
+    /// with the degree bound of the row if `track` (it does not depend on
+    /// the point, and costs about as much as the values).
+    pub fn row(
+        &self,
+        output: usize,
+        word: &[usize],
+        point: &FpPoint,
+        track: bool,
+    ) -> Result<LieRow, BadPoint> {
         // Runs of one field, first applied first: (field, length).
         let mut runs: Vec<(usize, usize)> = Vec::new();
         for &a in word {
@@ -263,6 +271,7 @@ impl LieJets {
         let shape = Shape::new(self.n, &runs.iter().map(|r| r.1).collect::<Vec<_>>());
         let ar = Arith {
             sh: &shape,
+            track,
             bases: &self.bases,
             inverses: &self.inverses,
             point,
@@ -277,8 +286,10 @@ impl LieJets {
                 j.c[0] = point.value(v);
                 j.c[1 + k] = Fp::ONE;
                 j.eps = true;
-                j.d[0] = Some(Deg::poly(1));
-                j.d[1] = Some(Deg::poly(0));
+                if track {
+                    j.d[0] = Some(Deg::poly(1));
+                    j.d[1] = Some(Deg::poly(0));
+                }
                 j
             })
             .collect();
@@ -303,7 +314,7 @@ impl LieJets {
                 fact = fact * Fp::new(i as u64);
             }
         }
-        let degree = h.d[shape.grades].as_ref().map_or(0, |d| d.n);
+        let degree = h.d.get(shape.grades).and_then(|d| d.as_ref()).map(|d| d.n);
         Ok(LieRow {
             value: h.c[top * w] * fact,
             gradient: h.c[top * w + 1..top * w + w]
@@ -539,6 +550,8 @@ struct Jet {
 
 struct Arith<'a> {
     sh: &'a Shape,
+    /// Track the degree bounds (`d` is empty otherwise).
+    track: bool,
     bases: &'a Bases,
     inverses: &'a [Deg],
     point: &'a FpPoint,
@@ -552,10 +565,17 @@ fn inv_small(k: u64) -> Fp {
 }
 
 impl Arith<'_> {
+    fn grades(&self) -> usize {
+        if self.track {
+            self.sh.grades + 1
+        } else {
+            0
+        }
+    }
     fn zero(&self) -> Jet {
         Jet {
             c: vec![Fp::ZERO; self.sh.size * self.sh.w],
-            d: vec![None; self.sh.grades + 1],
+            d: vec![None; self.grades()],
             tconst: true,
             eps: false,
         }
@@ -563,7 +583,9 @@ impl Arith<'_> {
     fn constant(&self, v: Fp, d: Deg) -> Jet {
         let mut j = self.zero();
         j.c[0] = v;
-        j.d[0] = Some(d);
+        if let Some(x) = j.d.first_mut() {
+            *x = Some(d);
+        }
         j
     }
     fn join(&self, a: &Option<Deg>, b: &Option<Deg>) -> Option<Deg> {
@@ -600,7 +622,9 @@ impl Arith<'_> {
     fn nil(&self, a: &Jet) -> Jet {
         let mut n = a.clone();
         n.c[0] = Fp::ZERO;
-        n.d[0] = None;
+        if let Some(x) = n.d.first_mut() {
+            *x = None;
+        }
         n
     }
     fn mul(&self, a: &Jet, b: &Jet) -> Jet {
@@ -639,7 +663,7 @@ impl Arith<'_> {
             }
         }
         let g = self.sh.grades;
-        let mut d: Vec<Option<Deg>> = vec![None; g + 1];
+        let mut d: Vec<Option<Deg>> = vec![None; self.grades()];
         for (i, x) in a.d.iter().enumerate() {
             let Some(x) = x else { continue };
             for (j, y) in b.d.iter().enumerate().take(g + 1 - i) {
@@ -718,8 +742,10 @@ impl Arith<'_> {
                 c[i * w + q] = a.c[src * w + q] * inv;
             }
         }
-        let mut d = vec![None; self.sh.grades + 1];
-        d[1..].clone_from_slice(&a.d[..self.sh.grades]);
+        let mut d = vec![None; self.grades()];
+        if self.track {
+            d[1..].clone_from_slice(&a.d[..self.sh.grades]);
+        }
         Jet {
             c,
             d,
@@ -861,7 +887,9 @@ impl Arith<'_> {
                     }
                 }
             };
-            j.d[0] = Some(d0);
+            if let Some(x) = j.d.first_mut() {
+                *x = Some(d0);
+            }
             vals.push(j);
         }
         Ok(prog
