@@ -277,3 +277,68 @@ fn random_systems_agree_with_the_symbolic_route() {
     }
     assert!(ran >= 50, "only {ran} systems compared");
 }
+
+/// The degree bound of each row against the true degree: with the row over
+/// its least common denominator, every numerator's total degree (in the
+/// random coordinates: symbols, and t = tan(x/2) for angles) is at most the
+/// bound (a bound `P / prod B^e` reduces to `N / D` with `deg N <= deg P`).
+#[test]
+fn row_degree_bounds_cover_the_true_degrees() {
+    use obsan_analysis::{canonical_lie, Fields, LieWord};
+    use obsan_expr::{LieJets, RatFun, SplitMix};
+    for (path, max) in [
+        ("systems/classic/hiv.sys", 3),
+        ("systems/classic/fitzhugh_nagumo.sys", 4),
+        ("systems/classic/michaelis_menten_pk.sys", 3),
+        ("crates/obsan-analysis/tests/data/pharmacokinetics.sys", 3),
+        ("crates/obsan-analysis/tests/data/seir.sys", 3),
+        ("systems/localization.sys", 2),
+        ("systems/calib.sys", 2),
+    ] {
+        let mut nf = load(path).normal_form(None, &[]).unwrap();
+        let fields = Fields::of(&mut nf);
+        let outs: Vec<_> = nf.outputs.iter().map(|o| o.1).collect();
+        let jets = LieJets::new(&nf.ctx, &nf.state_vars, &fields.vectors, &outs);
+        let pt = nf.ctx.random_fp_point(&mut SplitMix(3), &|_| None).unwrap();
+        let th = nf.ctx.tan_half();
+        let vars = nf.state_vars.clone();
+        let mut words: Vec<Vec<usize>> = vec![vec![]];
+        while let Some(w) = words.pop() {
+            if w.len() < max {
+                for k in 0..fields.vectors.len() {
+                    let mut v = w.clone();
+                    v.push(k);
+                    words.push(v);
+                }
+            }
+            let bound = jets.row(0, &w, &pt, true).unwrap().degree.unwrap_or(0);
+            let word = LieWord {
+                output: 0,
+                fields: w.clone(),
+            };
+            let g = canonical_lie(&mut nf, &fields, &word);
+            let row: Vec<RatFun> = vars
+                .iter()
+                .map(|&x| {
+                    let d = nf.ctx.rf_diff(&g, x);
+                    nf.ctx.to_tan_half(&th, &d)
+                })
+                .collect();
+            let mut lcm = obsan_expr::Poly::one();
+            for e in row.iter().filter(|e| !e.is_zero()) {
+                let gg = obsan_expr::gcd(&lcm, e.denominator());
+                lcm = lcm.mul(&e.denominator().div_exact(&gg).unwrap());
+            }
+            let l = RatFun::from_poly(lcm);
+            let true_deg = row
+                .iter()
+                .map(|e| nf.ctx.rf_mul(e, &l).numerator().total_degree() as u64)
+                .max()
+                .unwrap_or(0);
+            assert!(
+                true_deg <= bound,
+                "{path} {w:?}: degree {true_deg} > bound {bound}"
+            );
+        }
+    }
+}
