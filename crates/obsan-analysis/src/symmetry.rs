@@ -373,8 +373,9 @@ pub fn symmetries(
     let n = report.n;
     let r = report.rank;
     // Free variables, translations and scalings first: when they account
-    // for the whole deficiency, their certificate proves everything.
-    if let Some(c) = cheap_symmetries(nf, report)? {
+    // for the whole deficiency, their certificate proves everything. (No
+    // usable point for the candidates: the general route decides.)
+    if let Ok(Some(c)) = cheap_symmetries(nf, report) {
         return Ok(SymmetryReport {
             n,
             rank: r,
