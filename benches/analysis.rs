@@ -2,7 +2,9 @@
 //! whole `obsan` processes, and the scaling of the rank test with the state
 //! dimension. Run: `cargo bench --bench analysis` (`-- quick` for fewer runs).
 
-use obsan_analysis::{rank, symmetries, verify_decomposition, Decomposition, RankOptions};
+use obsan_analysis::{
+    rank, rank_symbolic, symmetries, verify_decomposition, Decomposition, RankOptions,
+};
 use obsan_model::System;
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -77,6 +79,55 @@ fn main() {
         let inp = input.map(|i| format!(" --input {i}")).unwrap_or_default();
         println!("{what:18} {path}{inp}: {:.2} ms ({:.2})", ms(med), ms(min));
     }
+    // Rank by jets against the older graph route (issue 15): the paper's
+    // systems and the order-10 pharmacokinetic model (the graph route takes
+    // tens of seconds there, so it runs once, and not with `quick`).
+    println!("\n== rank: jets vs the graph route (rank_symbolic), median (min)");
+    let pk = "crates/obsan-analysis/tests/data/pharmacokinetics.sys";
+    for (path, input) in [
+        ("systems/calib.sys", None),
+        ("systems/calib.sys", Some("q")),
+        ("systems/psi.sys", None),
+        ("systems/classic/hiv.sys", None),
+        (pk, None),
+    ] {
+        let sys = load(path);
+        let mut order = 0;
+        let (med, min) = time(reps, || {
+            let mut nf = sys.normal_form(input, &[]).expect("normal form");
+            order = rank(&mut nf, RankOptions::default())
+                .expect("rank")
+                .max_order;
+        });
+        let slow = path == pk;
+        let sym = if slow && quick {
+            "(skipped with quick)".to_string()
+        } else {
+            let (smed, smin) = time(if slow { 1 } else { reps }, || {
+                let mut nf = sys.normal_form(input, &[]).expect("normal form");
+                rank_symbolic(&mut nf, RankOptions::default()).expect("rank");
+            });
+            format!("{:.2} ms ({:.2})", ms(smed), ms(smin))
+        };
+        let inp = input.map(|i| format!(" --input {i}")).unwrap_or_default();
+        println!(
+            "{path}{inp} (order {order}): jets {:.2} ms ({:.2}), graph {sym}",
+            ms(med),
+            ms(min)
+        );
+    }
+    // Cheap structure (free variable, scaling) before the general route.
+    let seir = load("crates/obsan-analysis/tests/data/seir.sys");
+    let (med, min) = time(reps, || {
+        let mut nf = seir.normal_form(None, &[]).expect("nf");
+        let r = rank(&mut nf, RankOptions::default()).expect("rank");
+        symmetries(&mut nf, &r).expect("symmetries");
+    });
+    println!(
+        "rank + symmetries seir (free R, scaling N, beta): {:.2} ms ({:.2})\n",
+        ms(med),
+        ms(min)
+    );
     for dec in [
         "systems/decomp_localization.dec",
         "systems/decomp_21_22.dec",
@@ -99,6 +150,11 @@ fn main() {
     if std::path::Path::new(&bin).exists() {
         for args in [
             vec!["rank", "systems/calib.sys"],
+            vec![
+                "rank",
+                "crates/obsan-analysis/tests/data/pharmacokinetics.sys",
+            ],
+            vec!["symmetries", "crates/obsan-analysis/tests/data/seir.sys"],
             vec!["symmetries", "systems/calib_q_nopsi.sys"],
             vec!["verify", "systems/decomp_21_22.dec"],
             vec!["verify", "systems/decomp_23_24.dec"],

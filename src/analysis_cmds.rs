@@ -84,7 +84,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let words: Vec<String> = r
         .basis
         .iter()
-        .map(|(w, _)| word_text(&nf, &r.fields, w))
+        .map(|w| word_text(&nf, &r.fields, w))
         .collect();
     let obs: Vec<&String> = nf
         .state
@@ -109,7 +109,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             "n": r.n,
             "rank": r.rank,
             "weakly_locally_observable": exact,
-            "basis": r.basis.iter().zip(&words).map(|((w, _), t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
+            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
             "max_order": r.max_order,
             "observable_variables": obs,
             "unobservable_variables": unobs,
@@ -181,7 +181,8 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
             Value::Object(comps)
         })
         .collect();
-    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked })
+    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked,
+        "certificate": if matches!(s.certificate, obsan_analysis::Certificate::Closure) { "closure" } else { "invariance" } })
 }
 
 fn compute_symmetries(
@@ -226,6 +227,23 @@ pub fn symmetries(a: &RankArgs) -> Result<ExitCode, Failure> {
     }
     if s.vectors.is_empty() {
         o.push_str("no continuous symmetry: the state is weakly locally observable (exact)\n");
+    } else if let obsan_analysis::Certificate::Invariance(kinds) = &s.certificate {
+        let names: Vec<String> = kinds
+            .iter()
+            .map(|k| match k {
+                obsan_analysis::SymmetryKind::Free(j) => {
+                    format!("{} appears nowhere", nf.state[*j])
+                }
+                obsan_analysis::SymmetryKind::Translation => "translation".into(),
+                obsan_analysis::SymmetryKind::Scaling => "scaling".into(),
+            })
+            .collect();
+        o.push_str(&format!(
+            "exact: cheap structure ({}); each symmetry leaves every output invariant and commutes with every field ({} identities checked in canonical form), so it annihilates every Lie derivative, which proves the rank {} exactly\n",
+            names.join(", "),
+            s.rows_checked,
+            r.rank
+        ));
     } else if s.exact {
         o.push_str(&format!(
             "exact: each symmetry annihilates the gradients of the basis Lie derivatives and of all their Lie derivatives ({} products checked), which proves the rank {} exactly\n",

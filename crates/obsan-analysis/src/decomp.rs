@@ -154,6 +154,7 @@ impl Decomposition {
                     }
                 }
                 w if w.ends_with('\'') || line.contains("' =") || line.contains("'=") => {
+                    #[allow(clippy::expect_used)] // this arm is taken only for lines with a tick
                     let tick = line.find('\'').expect("has a tick");
                     let name = line[..tick].trim().to_string();
                     let Some(eq) = line.find('=') else {

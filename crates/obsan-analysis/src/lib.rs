@@ -10,15 +10,22 @@
 //! assert_eq!((r.rank, r.n), (2, 3));
 //! ```
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod decomp;
 mod modes;
 mod rank;
+pub mod structure;
 mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
 pub use modes::{check_modes, ModeCheck, ModeReport};
-pub use rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
-pub use symmetry::{canonical_lie, determinant, symmetries, SymmetryReport};
+pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
+pub use structure::SymmetryKind;
+pub use symmetry::{canonical_lie, determinant, symmetries, Certificate, SymmetryReport};
 
 use obsan_expr::Id;
 use obsan_model::NormalForm;
@@ -38,6 +45,8 @@ fn field_names(nf: &mut NormalForm) -> (Vec<String>, Vec<Vec<Id>>) {
     // A delay tau (inputs u(t - tau)) to first order: u - tau du/dt, the rates
     // du/dt being further free inputs with fields -tau f_i.
     if let Some(d) = nf.delay {
+        #[allow(clippy::expect_used)]
+        // normal_form puts the delay param in the state and the context
         let tau = nf.ctx.lookup(&nf.state[d]).expect("delay param").id;
         let minus_tau = nf.ctx.neg(tau);
         for i in 0..nf.fields.len() {

@@ -69,6 +69,7 @@ pub(crate) fn fp_rank(mut m: Vec<Vec<Fp>>, n: usize) -> usize {
             continue;
         };
         m.swap(r, i);
+        #[allow(clippy::expect_used)] // the pivot was found non-zero
         let inv = m[r][c].inv().expect("nonzero");
         for i in 0..m.len() {
             if i != r && !m[i][c].is_zero() {

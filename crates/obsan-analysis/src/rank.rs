@@ -8,10 +8,19 @@
 //! span, d(L_f phi) is in the span of the old gradients and of the L_f of the
 //! kept functions, so nothing is lost; the growth stops when a level adds
 //! nothing, after at most n levels.
+//!
+//! Each Lie derivative's gradient is evaluated at the point by truncated
+//! Taylor jets along the flows of the fields ([`obsan_expr::LieJets`]), never
+//! built as an expression: the cost is polynomial in the order. The degree
+//! bound of each row comes from the same computation (see that module). The
+//! older route, which builds every Lie derivative on the expression graph
+//! and differentiates it, stays as [`rank_symbolic`], an independent
+//! computation for the tests.
 
 use crate::field_names;
-use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, SplitMix, P};
+use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, P};
 use obsan_model::NormalForm;
+use std::collections::HashMap;
 use std::fmt;
 use std::time::Instant;
 
@@ -101,8 +110,9 @@ pub struct RankReport {
     pub n: usize,
     /// Generic rank of the observability codistribution.
     pub rank: usize,
-    /// Lie derivatives whose gradients form a basis, in the order found.
-    pub basis: Vec<(LieWord, Id)>,
+    /// Lie derivatives whose gradients form a basis, in the order found
+    /// (their expressions: [`RankReport::basis_functions`]).
+    pub basis: Vec<LieWord>,
     /// The highest order among the basis functions.
     pub max_order: usize,
     /// How many Lie derivatives were evaluated.
@@ -145,6 +155,7 @@ impl Echelon {
         let Some(p) = v.iter().position(|x| !x.is_zero()) else {
             return false;
         };
+        #[allow(clippy::expect_used)] // v[p] is the first non-zero entry
         let inv = v[p].inv().expect("nonzero");
         for x in v.iter_mut() {
             *x = *x * inv;
@@ -195,7 +206,7 @@ pub(crate) fn gradient(nf: &mut NormalForm, f: Id) -> Vec<Id> {
 }
 
 struct Run {
-    basis: Vec<(LieWord, Id)>,
+    basis: Vec<LieWord>,
     echelon: Echelon,
     evaluated: usize,
     degree: u64,
@@ -210,7 +221,7 @@ fn row_degree(ctx: &Ctx, grad: &[Id]) -> u64 {
     max_num.saturating_add(sum_den)
 }
 
-fn grow(
+fn grow_symbolic(
     nf: &mut NormalForm,
     fields: &Fields,
     point: FpPoint,
@@ -263,7 +274,7 @@ fn grow(
             if run.echelon.insert(vals) {
                 run.degree = run.degree.saturating_add(deg);
                 kept.push((word.clone(), f));
-                run.basis.push((word, f));
+                run.basis.push(word);
             } else {
                 run.worst_rejected = run.worst_rejected.max(deg);
             }
@@ -295,16 +306,154 @@ fn grow(
     Ok(run)
 }
 
+/// Outputs and fields compiled for jet evaluation.
+pub(crate) fn lie_jets(nf: &NormalForm, fields: &Fields) -> LieJets {
+    let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+    LieJets::new(&nf.ctx, &nf.state_vars, &fields.vectors, &outputs)
+}
+
+/// The growth of [`grow_symbolic`], each gradient by jets at the point.
+fn grow_jets(
+    nf: &NormalForm,
+    jets: &LieJets,
+    degrees: &mut HashMap<(usize, Vec<usize>), u64>,
+    fields: &Fields,
+    point: FpPoint,
+    opts: &mut RankOptions,
+) -> Result<Run, AnalysisError> {
+    let n = nf.state.len();
+    let mut run = Run {
+        basis: vec![],
+        echelon: Echelon { rows: vec![] },
+        evaluated: 0,
+        degree: 0,
+        worst_rejected: 0,
+        point,
+    };
+    let mut level: Vec<LieWord> = (0..nf.outputs.len())
+        .map(|i| LieWord {
+            output: i,
+            fields: vec![],
+        })
+        .collect();
+    let outputs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
+    let mut depth = 0;
+    loop {
+        let mut kept = Vec::new();
+        for word in level {
+            if let Some(d) = opts.deadline {
+                if Instant::now() > d {
+                    return Err(AnalysisError::Timeout(format!(
+                        "at Lie derivative order {depth}, rank {} of {n} so far (last: {})",
+                        run.echelon.rank(),
+                        word.display(&fields.names, &outputs)
+                    )));
+                }
+            }
+            let key = (word.output, word.fields.clone());
+            let known = degrees.get(&key).copied();
+            let row = jets
+                .row(word.output, &word.fields, &run.point, known.is_none())
+                .map_err(|BadPoint| AnalysisError::NoPoint)?;
+            let degree = known.or(row.degree).unwrap_or(0);
+            degrees.insert(key, degree);
+            run.evaluated += 1;
+            if run.echelon.insert(row.gradient) {
+                run.degree = run.degree.saturating_add(degree);
+                kept.push(word.clone());
+                run.basis.push(word);
+            } else {
+                run.worst_rejected = run.worst_rejected.max(degree);
+            }
+            if run.echelon.rank() == n {
+                break;
+            }
+        }
+        if let Some(p) = opts.progress.as_mut() {
+            p(depth, run.echelon.rank(), n);
+        }
+        if kept.is_empty() || run.echelon.rank() == n {
+            break;
+        }
+        depth += 1;
+        let mut next = Vec::new();
+        for word in &kept {
+            for k in 0..fields.vectors.len() {
+                let mut w = word.clone();
+                w.fields.push(k);
+                // Structurally zero (the old route's `is_zero` skip).
+                if jets.support(w.output, &w.fields).is_none() {
+                    continue;
+                }
+                next.push(w);
+            }
+        }
+        level = next;
+    }
+    Ok(run)
+}
+
+impl RankReport {
+    /// The basis Lie derivatives as expressions on the graph (built here,
+    /// prefixes shared; the rank test itself never builds them).
+    pub fn basis_functions(&self, nf: &mut NormalForm) -> Vec<Id> {
+        let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> = Default::default();
+        let vars = nf.state_vars.clone();
+        self.basis
+            .iter()
+            .map(|w| {
+                let mut g = nf.outputs[w.output].1;
+                for (i, &k) in w.fields.iter().enumerate() {
+                    let key = (w.output, w.fields[..=i].to_vec());
+                    g = match memo.get(&key) {
+                        Some(&x) => x,
+                        None => {
+                            let x = nf.ctx.lie_derivative(g, &vars, &self.fields.vectors[k]);
+                            memo.insert(key, x);
+                            x
+                        }
+                    };
+                }
+                g
+            })
+            .collect()
+    }
+}
+
 /// The generic rank of the observability codistribution, by two independent
 /// runs at random points of F_p (the larger is the answer).
-pub fn rank(nf: &mut NormalForm, mut opts: RankOptions) -> Result<RankReport, AnalysisError> {
+pub fn rank(nf: &mut NormalForm, opts: RankOptions) -> Result<RankReport, AnalysisError> {
+    rank_with(nf, opts, false)
+}
+
+/// [`rank`] by the older route: every Lie derivative built on the expression
+/// graph and differentiated there, its gradient evaluated at the point, the
+/// degree bound from the gradient expressions. The same points and the same
+/// growth, so the same ranks, words and pivots; kept as an independent
+/// computation for the tests (and much slower at high orders).
+pub fn rank_symbolic(nf: &mut NormalForm, opts: RankOptions) -> Result<RankReport, AnalysisError> {
+    rank_with(nf, opts, true)
+}
+
+fn rank_with(
+    nf: &mut NormalForm,
+    mut opts: RankOptions,
+    symbolic: bool,
+) -> Result<RankReport, AnalysisError> {
     let fields = Fields::of(nf);
     let n = nf.state.len();
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
     let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
-    let r1 = grow(nf, &fields, p1, &mut opts)?;
+    let jets = (!symbolic).then(|| lie_jets(nf, &fields));
+    // Degree bounds depend on the word only: computed at the first point.
+    let mut degrees = HashMap::new();
+    let mut grow = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
+        Some(j) => grow_jets(nf, j, &mut degrees, &fields, p, opts),
+        None => grow_symbolic(nf, &fields, p, opts),
+    };
+    let r1 = grow(nf, p1, &mut opts)?;
     let (p2, k2) = random_point_counted(&mut nf.ctx, &mut rng)?;
-    let r2 = grow(nf, &fields, p2, &mut opts)?;
+    let r2 = grow(nf, p2, &mut opts)?;
     // Density correction of the sampling (see random_point_counted).
     let draws = k1.max(k2) as f64;
     let best = if r2.echelon.rank() > r1.echelon.rank() {
@@ -325,7 +474,7 @@ pub fn rank(nf: &mut NormalForm, mut opts: RankOptions) -> Result<RankReport, An
     pivots.sort_unstable();
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);
-    let max_order = best.basis.iter().map(|(w, _)| w.order()).max().unwrap_or(0);
+    let max_order = best.basis.iter().map(|w| w.order()).max().unwrap_or(0);
     Ok(RankReport {
         n,
         rank,

@@ -12,7 +12,8 @@
 //! basis rows: if d(phi_k) span it and every d(L_f phi_k) lies in that span,
 //! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
 
-use crate::rank::{gradient, random_point, AnalysisError, Fields, LieWord, RankReport};
+use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
+use crate::structure::{cheap_symmetries, SymmetryKind};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -26,8 +27,23 @@ pub struct SymmetryReport {
     pub vectors: Vec<Vec<RatFun>>,
     /// The exact closure check passed: the rank and the symmetries are exact.
     pub exact: bool,
-    /// Number of gradient rows each vector was checked against.
+    /// Number of exact identities checked (gradient rows times vectors for
+    /// the closure check, invariance identities for the cheap structure).
     pub rows_checked: usize,
+    /// Which exact certificate proved the vectors.
+    pub certificate: Certificate,
+}
+
+/// How a symmetry basis was proved.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Certificate {
+    /// Each vector annihilates the gradients of the basis Lie derivatives and
+    /// of all their one-step Lie derivatives (canonical forms).
+    Closure,
+    /// Cheap structure ([`crate::structure`]): each vector leaves every
+    /// output invariant and commutes with every field (canonical forms), so
+    /// it annihilates every Lie derivative; the kinds, one per vector.
+    Invariance(Vec<SymmetryKind>),
 }
 
 /// Canonical Lie derivatives by word, sharing prefixes.
@@ -120,6 +136,7 @@ pub(crate) fn normalize_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut best: Vec<RatFun> = primitive_vector(ctx, v);
     let mut best_size = size(&best);
     for &k in &order {
+        #[allow(clippy::expect_used)] // `order` holds non-zero entries only
         let inv = ctx.rf_inv(&v[k]).expect("nonzero");
         let u: Vec<RatFun> = v.iter().map(|e| ctx.rf_mul(e, &inv)).collect();
         let p = primitive_vector(ctx, &u);
@@ -170,7 +187,10 @@ fn null_space(ctx: &mut Ctx, rows: &[Vec<RatFun>], n: usize) -> Vec<Vec<RatFun>>
                 best = Some((size, next));
             }
         }
-        basis = best.expect("a candidate").1;
+        // `candidates` is not empty, so neither is `best`.
+        if let Some((_, next)) = best {
+            basis = next;
+        }
     }
     basis
 }
@@ -205,6 +225,7 @@ fn eliminate(
 }
 
 /// `v` times the lcm of its denominators, divided by the gcd of the numerators.
+#[allow(clippy::expect_used)] // a gcd divides its arguments exactly
 fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut lcm = Poly::one();
     for e in v.iter().filter(|e| !e.is_zero()) {
@@ -253,14 +274,13 @@ fn choose_free_columns(
     }
     let mut rng = SplitMix(report.seed ^ 0x5e1ec7);
     let pt = random_point(&mut nf.ctx, &mut rng)?;
+    let jets = lie_jets(nf, &report.fields);
     let mut m: Vec<Vec<Fp>> = Vec::new();
-    for (_, f) in &report.basis {
-        let g = gradient(nf, *f);
-        m.push(
-            nf.ctx
-                .eval_fp(&g, &pt)
-                .map_err(|_| AnalysisError::NoPoint)?,
-        );
+    for w in &report.basis {
+        let row = jets
+            .row(w.output, &w.fields, &pt, false)
+            .map_err(|_| AnalysisError::NoPoint)?;
+        m.push(row.gradient);
     }
     let mut best: (usize, Vec<usize>) = (0, report_free.clone());
     let mut found = false;
@@ -352,10 +372,23 @@ pub fn symmetries(
 ) -> Result<SymmetryReport, AnalysisError> {
     let n = report.n;
     let r = report.rank;
+    // Free variables, translations and scalings first: when they account
+    // for the whole deficiency, their certificate proves everything. (No
+    // usable point for the candidates: the general route decides.)
+    if let Ok(Some(c)) = cheap_symmetries(nf, report) {
+        return Ok(SymmetryReport {
+            n,
+            rank: r,
+            vectors: c.vectors,
+            exact: true,
+            rows_checked: c.identities,
+            certificate: Certificate::Invariance(c.kinds),
+        });
+    }
     let vars = nf.state_vars.clone();
     let mut cache = LieCache::new(nf, &report.fields);
     let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);
-    for (w, _) in &report.basis {
+    for w in &report.basis {
         let f = cache.get(nf, w);
         rows.push(grad(&mut nf.ctx, &f, &vars));
     }
@@ -412,7 +445,7 @@ pub fn symmetries(
     }
     let mut exact = true;
     if !vectors.is_empty() {
-        'outer: for (w, _) in &report.basis {
+        'outer: for w in &report.basis {
             for k in 0..report.fields.vectors.len() {
                 let mut w2 = w.clone();
                 w2.fields.push(k);
@@ -437,6 +470,7 @@ pub fn symmetries(
         vectors,
         exact,
         rows_checked: checked,
+        certificate: Certificate::Closure,
     })
 }
 
@@ -463,6 +497,7 @@ pub fn determinant(ctx: &mut Ctx, m: &[Vec<RatFun>]) -> RatFun {
         }
         let piv = a[c][c].clone();
         det = ctx.rf_mul(&det, &piv);
+        #[allow(clippy::expect_used)] // the pivot was chosen non-zero
         let inv = ctx.rf_inv(&piv).expect("nonzero pivot");
         for i in c + 1..n {
             if a[i][c].is_zero() {

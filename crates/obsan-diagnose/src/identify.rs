@@ -309,9 +309,9 @@ pub fn stacked_rank(
         x.resize(nf.state.len(), 0.0);
         let vars = nf.state_vars.clone();
         let mut grads = Vec::new();
-        for (_, id) in &report.basis {
+        for id in report.basis_functions(&mut nf) {
             for &v in &vars {
-                grads.push(nf.ctx.diff(*id, v));
+                grads.push(nf.ctx.diff(id, v));
             }
         }
         let tape =

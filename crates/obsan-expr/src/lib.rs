@@ -27,6 +27,7 @@ mod diff;
 mod eval;
 mod gcd;
 mod graph;
+mod jet;
 mod lower;
 mod num;
 mod parse;
@@ -42,6 +43,7 @@ pub use eval::{
 };
 pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
+pub use jet::{LieJets, LieRow};
 pub use lower::EngineError;
 pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
