@@ -47,9 +47,12 @@ fuzz_target!(|data: &[u8]| {
     let all: Vec<&DataFile> = files
         .meta
         .iter()
-        .chain(files.trajectories.iter().flat_map(|t| {
-            t.inputs.iter().chain(t.outputs.iter()).chain(t.meta.iter())
-        }))
+        .chain(
+            files
+                .trajectories
+                .iter()
+                .flat_map(|t| t.inputs.iter().chain(t.outputs.iter()).chain(t.meta.iter())),
+        )
         .collect();
     match read_dataset(&files, &INPUTS, &OUTPUTS) {
         Ok(r) => {
@@ -77,7 +80,12 @@ fuzz_target!(|data: &[u8]| {
                     .collect(),
             };
             let again = read_dataset(&back, &INPUTS, &OUTPUTS).expect("re-read");
-            for (a, b) in again.dataset.trajectories.iter().zip(&r.dataset.trajectories) {
+            for (a, b) in again
+                .dataset
+                .trajectories
+                .iter()
+                .zip(&r.dataset.trajectories)
+            {
                 assert_eq!((&a.inputs, &a.outputs), (&b.inputs, &b.outputs));
             }
         }

@@ -538,8 +538,9 @@ pub fn read_dataset(
 ) -> Result<ReadDataset, DataError> {
     let located = |f: &DataFile, e: serde_json::Error, hint: &str| DataError {
         file: f.path.clone(),
-        row: Some(e.line()),
-        column: Some(e.column().to_string()),
+        // serde_json counts lines from 1; 0 means no position.
+        row: (e.line() > 0).then_some(e.line()),
+        column: (e.line() > 0).then(|| e.column().to_string()),
         message: format!("{e}{hint}"),
     };
     let meta: DatasetMeta = match &files.meta {

@@ -249,3 +249,35 @@ fn a_fast_lag_follows_its_exact_solution() {
         }
     }
 }
+
+/// Issue 14 item 9: a start that makes the state blow up is an error that
+/// names the trajectory, the parameter values and what to do.
+#[test]
+fn a_diverging_start_names_the_trajectory_and_the_params() {
+    let p = predictor();
+    let (data, truth) = simulate(&SimOptions::default()).unwrap();
+    let trajs = FitTrajectory::all(&p, &data);
+    let init = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
+    // mu' = -mu^2 eta (wR + delta wL) cos(gamma - phi) from mu = -50 and
+    // gamma = phi reaches -inf in about 1/(50 * 0.16) s.
+    let states: Vec<Vec<f64>> = truth
+        .trajectories
+        .iter()
+        .map(|_| vec![-50.0, truth.phi])
+        .collect();
+    let opts = FitOptions {
+        max_iterations: 5,
+        cost_tolerance: 1e-14,
+        step_tolerance: 0.0,
+        sigma: vec![1f64.to_radians()],
+        max_step: 0.0,
+        input_noise: None,
+    };
+    let e = fit(&p, &trajs, &init, &states, &opts).unwrap_err();
+    assert!(e.contains("trajectory 'q0.9'"), "{e}");
+    assert!(
+        e.contains("diverged") && e.contains(&format!("eta = {}", truth.eta)),
+        "{e}"
+    );
+    assert!(e.contains("start values"), "{e}");
+}
