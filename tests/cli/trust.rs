@@ -302,7 +302,7 @@ fn sys_files_with_bom_unicode_or_bad_bytes() {
 /// Issue 14.1: exponents above 65535 wrapped (x^70000 printed as x^4464).
 #[test]
 fn large_exponents_are_exact() {
-    let seven = vec!["x^10000"; 7].join("*");
+    let seven = ["x^10000"; 7].join("*");
     let out = ok(&["simplify", &seven]);
     assert_eq!(out.trim(), "x^70000");
     let out = ok(&["simplify", "(x^10000)^7 - x^4464"]);
