@@ -1,0 +1,195 @@
+//! Arithmetic in the prime field F_p for any prime p < 2^63.
+//!
+//! Residues are `u64` in `0..p`; products go through `u128`, so sums of two
+//! residues never overflow (p < 2^63).
+
+/// Primes just below 2^62, largest first. Reconstruction uses them in order;
+/// the last [`VERIFY_PRIMES`] are never used for reconstruction and serve
+/// the final check at fresh points. Every entry is proven prime by the
+/// deterministic Miller–Rabin test in this module's tests.
+pub const PRIMES: [u64; 24] = [
+    0x3fff_ffff_ffff_ffc7,
+    0x3fff_ffff_ffff_ffa9,
+    0x3fff_ffff_ffff_ff8b,
+    0x3fff_ffff_ffff_ff71,
+    0x3fff_ffff_ffff_ff67,
+    0x3fff_ffff_ffff_ff59,
+    0x3fff_ffff_ffff_ff55,
+    0x3fff_ffff_ffff_ff3d,
+    0x3fff_ffff_ffff_ff35,
+    0x3fff_ffff_ffff_feef,
+    0x3fff_ffff_ffff_fee1,
+    0x3fff_ffff_ffff_fec3,
+    0x3fff_ffff_ffff_fe45,
+    0x3fff_ffff_ffff_fe1d,
+    0x3fff_ffff_ffff_fe11,
+    0x3fff_ffff_ffff_fdc1,
+    0x3fff_ffff_ffff_fdbb,
+    0x3fff_ffff_ffff_fda5,
+    0x3fff_ffff_ffff_fd87,
+    0x3fff_ffff_ffff_fd69,
+    0x3fff_ffff_ffff_fd03,
+    0x3fff_ffff_ffff_fcfb,
+    0x3fff_ffff_ffff_fcf7,
+    0x3fff_ffff_ffff_fce9,
+];
+
+/// How many entries at the end of [`PRIMES`] are reserved for verification.
+pub const VERIFY_PRIMES: usize = 4;
+
+/// How many primes reconstruction may use at most.
+pub const MAX_RECON_PRIMES: usize = PRIMES.len() - VERIFY_PRIMES;
+
+#[inline]
+pub(crate) fn add(a: u64, b: u64, p: u64) -> u64 {
+    let s = a + b;
+    if s >= p {
+        s - p
+    } else {
+        s
+    }
+}
+
+#[inline]
+pub(crate) fn sub(a: u64, b: u64, p: u64) -> u64 {
+    if a >= b {
+        a - b
+    } else {
+        a + (p - b)
+    }
+}
+
+#[cfg(test)]
+pub(crate) fn neg(a: u64, p: u64) -> u64 {
+    if a == 0 {
+        0
+    } else {
+        p - a
+    }
+}
+
+#[inline]
+pub(crate) fn mul(a: u64, b: u64, p: u64) -> u64 {
+    ((a as u128 * b as u128) % p as u128) as u64
+}
+
+pub(crate) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
+    let mut r = 1 % p;
+    while e > 0 {
+        if e & 1 == 1 {
+            r = mul(r, a, p);
+        }
+        a = mul(a, a, p);
+        e >>= 1;
+    }
+    r
+}
+
+/// Inverse modulo p (extended Euclid); `None` for zero.
+pub(crate) fn inv(a: u64, p: u64) -> Option<u64> {
+    if a == 0 {
+        return None;
+    }
+    let (mut r0, mut r1) = (p as i128, a as i128);
+    let (mut s0, mut s1) = (0i128, 1i128);
+    while r1 != 0 {
+        let q = r0 / r1;
+        (r0, r1) = (r1, r0 - q * r1);
+        (s0, s1) = (s1, s0 - q * s1);
+    }
+    // r0 = gcd(p, a); 1 for a prime p and 0 < a < p.
+    if r0 != 1 {
+        return None;
+    }
+    Some(s0.rem_euclid(p as i128) as u64)
+}
+
+/// Deterministic Miller–Rabin for every `u64`: the first twelve primes as
+/// bases suffice below 3.3e24 (Sorenson & Webster 2015).
+pub fn is_prime(n: u64) -> bool {
+    const BASES: [u64; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
+    if n < 2 {
+        return false;
+    }
+    for &b in &BASES {
+        if n % b == 0 {
+            return n == b;
+        }
+    }
+    let mut d = n - 1;
+    let mut s = 0;
+    while d % 2 == 0 {
+        d /= 2;
+        s += 1;
+    }
+    'base: for &a in &BASES {
+        let mut x = pow(a, d, n);
+        if x == 1 || x == n - 1 {
+            continue;
+        }
+        for _ in 1..s {
+            x = mul(x, x, n);
+            if x == n - 1 {
+                continue 'base;
+            }
+        }
+        return false;
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_prime_list_is_prime_distinct_and_below_2_62() {
+        for (i, &p) in PRIMES.iter().enumerate() {
+            assert!(is_prime(p), "{p:#x}");
+            assert!(p < 1 << 62);
+            if i > 0 {
+                assert!(p < PRIMES[i - 1]);
+            }
+        }
+        // Nothing between consecutive entries (and above the first) is prime:
+        // the list is the largest primes below 2^62.
+        let mut n = (1u64 << 62) - 1;
+        for &p in &PRIMES {
+            while n > p {
+                assert!(!is_prime(n), "{n:#x} is prime but missing");
+                n -= 1;
+            }
+            n = p - 1;
+        }
+    }
+
+    #[test]
+    fn miller_rabin_agrees_with_trial_division() {
+        let trial = |n: u64| n >= 2 && (2..).take_while(|d| d * d <= n).all(|d| n % d != 0);
+        for n in 0..20_000 {
+            assert_eq!(is_prime(n), trial(n), "{n}");
+        }
+        // Strong pseudoprimes to several bases, and a Carmichael number.
+        for n in [3_215_031_751u64, 2_152_302_898_747, 3_474_749_660_383, 561] {
+            assert!(!is_prime(n));
+        }
+        assert!(is_prime(18_446_744_073_709_551_557)); // largest u64 prime
+    }
+
+    #[test]
+    fn inverse_and_power_identities() {
+        let p = PRIMES[0];
+        let mut a = 12345u64;
+        for _ in 0..200 {
+            let ia = inv(a, p).unwrap();
+            assert_eq!(mul(a, ia, p), 1);
+            // Fermat: a^(p-1) = 1.
+            assert_eq!(pow(a, p - 1, p), 1);
+            assert_eq!(add(a, neg(a, p), p), 0);
+            assert_eq!(sub(add(a, 7, p), 7, p), a);
+            a = mul(a, 0x9e37_79b9_7f4a_7c15 % p, p);
+        }
+        assert_eq!(inv(0, p), None);
+        assert_eq!(inv(p - 1, p), Some(p - 1));
+    }
+}

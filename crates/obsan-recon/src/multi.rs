@@ -1,0 +1,542 @@
+//! One image modulo one prime of a vector of sparse rational functions,
+//! from a black box (Cuyt & Lee 2011, as in FireFly, Klappert & Lange 2020).
+//!
+//! With `x = t z + s` (random shift `s`, direction `z = (1, y)`), each
+//! component is `f(t z + s) = sum_r n_r(z) t^r / sum_r d_r(z) t^r`
+//! normalised by `d_0 = 1`, which is `D(s)`-scaled and independent of `z`.
+//! `n_r` is homogeneous of degree r in z: the degree-r part of `N(z + s)`.
+//! Writing `N = sum_k N_k` (homogeneous parts), `n_r(z) = sum_{k>=r}
+//! [lambda^r] N_k(lambda z + s)`, so once the parts above r are known,
+//! `N_r(z) = n_r(z) - sum_{k>r} [lambda^r] N_k(lambda z + s)` is one more
+//! sparse polynomial to interpolate, with `z_1 = 1` by homogeneity (Zippel
+//! variable by variable, transposed Vandermonde systems per stage).
+
+use std::rc::Rc;
+use std::time::Instant;
+
+use rustc_hash::FxHashMap;
+
+use crate::field::{add, mul, pow, sub};
+use crate::linalg::{newton, poly_add, poly_mul, solve, vandermonde_t};
+use crate::rng::Rng;
+use crate::thiele::Thiele;
+use crate::{Limit, Progress, ReconError};
+
+/// Terms of one mod-p polynomial: exponent vector and non-zero residue.
+pub(crate) type Terms = Vec<(Vec<u32>, u64)>;
+
+/// Per component: numerator and denominator terms over all n variables.
+pub(crate) type Image = Vec<(Terms, Terms)>;
+
+/// Per component, per part (0 numerator, 1 denominator), per degree r:
+/// the monomials over `y = (z_2..z_n)` of the homogeneous part of degree r.
+pub(crate) type Skeleton = Vec<[Vec<Vec<Vec<u32>>>; 2]>;
+
+pub(crate) enum Fail<E> {
+    Hard(ReconError<E>),
+    /// Bad luck of the random choices (a vanishing shift, coinciding
+    /// Vandermonde nodes, a singular line system): retry with new ones.
+    Unlucky,
+}
+
+impl<E> From<ReconError<E>> for Fail<E> {
+    fn from(e: ReconError<E>) -> Self {
+        Fail::Hard(e)
+    }
+}
+
+/// Budgets and counters shared across primes.
+pub(crate) struct Budget {
+    pub(crate) points: u64,
+    pub(crate) primes: usize,
+    pub(crate) max_points: u64,
+    pub(crate) max_degree: u32,
+    pub(crate) max_terms: usize,
+    pub(crate) deadline: Option<Instant>,
+    pub(crate) agree: usize,
+    pub(crate) degrees: Vec<(u32, u32)>,
+    pub(crate) stage: &'static str,
+}
+
+impl Budget {
+    pub(crate) fn progress(&self) -> Progress {
+        Progress {
+            points: self.points,
+            primes: self.primes,
+            degrees: self.degrees.clone(),
+            stage: self.stage,
+        }
+    }
+
+    pub(crate) fn limit<E>(&self, limit: Limit) -> ReconError<E> {
+        ReconError::Budget {
+            limit,
+            progress: self.progress(),
+        }
+    }
+}
+
+/// Consecutive bad points (black box answered `None`) tolerated in a row.
+const MAX_BAD_STREAK: u32 = 200;
+
+/// Calls the black box once, within the budgets.
+pub(crate) fn call<F, E>(
+    bb: &mut F,
+    budget: &mut Budget,
+    m: usize,
+    x: &[u64],
+    p: u64,
+) -> Result<Option<Vec<u64>>, ReconError<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    if let Some(d) = budget.deadline {
+        if Instant::now() >= d {
+            return Err(budget.limit(Limit::Deadline));
+        }
+    }
+    if budget.points >= budget.max_points {
+        return Err(budget.limit(Limit::Points(budget.max_points)));
+    }
+    budget.points += 1;
+    match bb(x, p).map_err(ReconError::BlackBox)? {
+        None => Ok(None),
+        Some(v) if v.len() != m => Err(ReconError::WrongLength {
+            expected: m,
+            got: v.len(),
+        }),
+        Some(mut v) => {
+            for y in &mut v {
+                *y %= p;
+            }
+            Ok(Some(v))
+        }
+    }
+}
+
+/// Per component, numerator and denominator coefficients in t at one y.
+type Line = Vec<(Vec<u64>, Vec<u64>)>;
+
+pub(crate) struct PrimeRun<'a, F> {
+    p: u64,
+    n: usize,
+    m: usize,
+    bb: &'a mut F,
+    rng: &'a mut Rng,
+    shift: Vec<u64>,
+    anchors: Vec<u64>,
+    bases: Vec<u64>,
+    cvals: Vec<u64>,
+    degs: Vec<(usize, usize)>,
+    lines: FxHashMap<Vec<u64>, Rc<Line>>,
+    lam: FxHashMap<(usize, usize, usize, Vec<u64>), Vec<u64>>,
+    known: Vec<[Vec<Option<Terms>>; 2]>,
+}
+
+impl<'a, F, E> PrimeRun<'a, F>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    pub(crate) fn new(p: u64, n: usize, m: usize, bb: &'a mut F, rng: &'a mut Rng) -> Self {
+        let shift = (0..n).map(|_| rng.nonzero(p)).collect();
+        let v = n.saturating_sub(1);
+        let anchors = (0..v).map(|_| rng.nonzero(p)).collect();
+        let bases = (0..v).map(|_| rng.nonzero(p)).collect();
+        PrimeRun {
+            p,
+            n,
+            m,
+            bb,
+            rng,
+            shift,
+            anchors,
+            bases,
+            cvals: Vec::new(),
+            degs: Vec::new(),
+            lines: FxHashMap::default(),
+            lam: FxHashMap::default(),
+            known: Vec::new(),
+        }
+    }
+
+    fn point(&self, t: u64, z: &[u64]) -> Vec<u64> {
+        z.iter()
+            .zip(&self.shift)
+            .map(|(&zi, &si)| add(mul(t, zi, self.p), si, self.p))
+            .collect()
+    }
+
+    /// Degrees of every component along one random line, by Thiele with
+    /// early termination; checks that the shift keeps `D(s) != 0`.
+    pub(crate) fn degrees(&mut self, budget: &mut Budget) -> Result<Vec<(usize, usize)>, Fail<E>> {
+        let p = self.p;
+        let z: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
+        let mut th: Vec<Thiele> = (0..self.m).map(|_| Thiele::new(p, budget.agree)).collect();
+        let cap = 2 * budget.max_degree as usize + 2;
+        let mut bad = 0;
+        while th.iter().any(|t| !t.done()) {
+            let t = self.rng.nonzero(p);
+            let x = self.point(t, &z);
+            let Some(y) = call(self.bb, budget, self.m, &x, p)? else {
+                bad += 1;
+                if bad > MAX_BAD_STREAK {
+                    return Err(Fail::Hard(ReconError::NoGoodPoints {
+                        progress: budget.progress(),
+                    }));
+                }
+                continue;
+            };
+            bad = 0;
+            for (c, th) in th.iter_mut().enumerate() {
+                if !th.done() {
+                    th.add(t, y[c]);
+                    if th.len() > cap {
+                        return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
+                    }
+                }
+            }
+        }
+        let mut degs = Vec::with_capacity(self.m);
+        for th in &th {
+            let (num, den) = th.rational();
+            if den.first().copied().unwrap_or(0) == 0 {
+                return Err(Fail::Unlucky);
+            }
+            let dn = num.len().saturating_sub(1);
+            let dd = den.len() - 1;
+            if dn.max(dd) > budget.max_degree as usize {
+                return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
+            }
+            degs.push((dn, dd));
+        }
+        Ok(degs)
+    }
+
+    /// Sets the degrees and prepares the per-degree storage.
+    pub(crate) fn set_degrees(&mut self, degs: Vec<(usize, usize)>) {
+        let top = degs.iter().map(|&(a, b)| a.max(b)).max().unwrap_or(0);
+        let mut cvals: Vec<u64> = Vec::with_capacity(top + 1);
+        while cvals.len() <= top {
+            let c = self.rng.nonzero(self.p);
+            if !cvals.contains(&c) {
+                cvals.push(c);
+            }
+        }
+        self.cvals = cvals;
+        self.known = degs
+            .iter()
+            .map(|&(dn, dd)| [vec![None; dn + 1], vec![None; dd + 1]])
+            .collect();
+        self.degs = degs;
+    }
+
+    /// Coefficients in t of every component on the line through `s` in
+    /// direction `(1, y)`, by solving the rational interpolation system of
+    /// known degrees with `d_0 = 1`.
+    fn line(&mut self, y: &[u64], budget: &mut Budget) -> Result<Rc<Line>, Fail<E>> {
+        if let Some(l) = self.lines.get(y) {
+            return Ok(Rc::clone(l));
+        }
+        let p = self.p;
+        let mut z = Vec::with_capacity(self.n);
+        z.push(1);
+        z.extend_from_slice(y);
+        let k = self.degs.iter().map(|&(a, b)| a + b + 1).max().unwrap_or(1);
+        let mut pts: Vec<(u64, Vec<u64>)> = Vec::with_capacity(k);
+        let mut bad = 0;
+        while pts.len() < k {
+            let t = self.rng.nonzero(p);
+            if pts.iter().any(|(u, _)| *u == t) {
+                continue;
+            }
+            let x = self.point(t, &z);
+            match call(self.bb, budget, self.m, &x, p)? {
+                Some(v) => {
+                    bad = 0;
+                    pts.push((t, v));
+                }
+                None => {
+                    bad += 1;
+                    if bad > MAX_BAD_STREAK {
+                        return Err(Fail::Hard(ReconError::NoGoodPoints {
+                            progress: budget.progress(),
+                        }));
+                    }
+                }
+            }
+        }
+        let mut line = Vec::with_capacity(self.m);
+        for (c, &(dn, dd)) in self.degs.iter().enumerate() {
+            let k = dn + dd + 1;
+            let rows: Vec<Vec<u64>> = pts[..k]
+                .iter()
+                .map(|(t, v)| {
+                    let yv = v[c];
+                    let mut row = Vec::with_capacity(k + 1);
+                    let mut tp = 1u64;
+                    for _ in 0..=dn {
+                        row.push(tp);
+                        tp = mul(tp, *t, p);
+                    }
+                    let mut tp = *t;
+                    for _ in 0..dd {
+                        row.push(sub(0, mul(yv, tp, p), p));
+                        tp = mul(tp, *t, p);
+                    }
+                    row.push(yv);
+                    row
+                })
+                .collect();
+            let Some(sol) = solve(rows, p) else {
+                return Err(Fail::Unlucky);
+            };
+            let num = sol[..=dn].to_vec();
+            let mut den = Vec::with_capacity(dd + 1);
+            den.push(1);
+            den.extend_from_slice(&sol[dn + 1..]);
+            line.push((num, den));
+        }
+        let line = Rc::new(line);
+        self.lines.insert(y.to_vec(), Rc::clone(&line));
+        Ok(line)
+    }
+
+    /// `[lambda^0..k] P_k(lambda z + s)` for the known part of degree k.
+    fn lambda_poly(&mut self, c: usize, part: usize, k: usize, y: &[u64]) -> Vec<u64> {
+        let key = (c, part, k, y.to_vec());
+        if let Some(v) = self.lam.get(&key) {
+            return v.clone();
+        }
+        let p = self.p;
+        let mut total: Vec<u64> = Vec::new();
+        if let Some(Some(terms)) = self.known[c][part].get(k) {
+            for (ey, coef) in terms {
+                let e1 = k as u32 - ey.iter().sum::<u32>();
+                let mut acc = vec![*coef];
+                let factors = std::iter::once((1u64, self.shift[0], e1)).chain(
+                    y.iter()
+                        .zip(&self.shift[1..])
+                        .zip(ey)
+                        .map(|((&zi, &si), &e)| (zi, si, e)),
+                );
+                for (zi, si, e) in factors {
+                    for _ in 0..e {
+                        acc = poly_mul(&acc, &[si, zi], p);
+                    }
+                }
+                total = poly_add(&total, &acc, p);
+            }
+        }
+        self.lam.insert(key, total.clone());
+        total
+    }
+
+    /// The value at y of the homogeneous part of degree r (with z_1 = 1).
+    fn hval(
+        &mut self,
+        c: usize,
+        part: usize,
+        r: usize,
+        y: &[u64],
+        budget: &mut Budget,
+    ) -> Result<u64, Fail<E>> {
+        let p = self.p;
+        let line = self.line(y, budget)?;
+        let coeffs = if part == 0 { &line[c].0 } else { &line[c].1 };
+        let mut val = coeffs.get(r).copied().unwrap_or(0);
+        let top = if part == 0 {
+            self.degs[c].0
+        } else {
+            self.degs[c].1
+        };
+        for k in r + 1..=top {
+            let lp = self.lambda_poly(c, part, k, y);
+            val = sub(val, lp.get(r).copied().unwrap_or(0), p);
+        }
+        Ok(val)
+    }
+
+    /// Zippel's variable-by-variable sparse interpolation of the part of
+    /// degree r over `y` (total degree <= r).
+    fn zippel(
+        &mut self,
+        c: usize,
+        part: usize,
+        r: usize,
+        budget: &mut Budget,
+    ) -> Result<Terms, Fail<E>> {
+        let p = self.p;
+        let v = self.n - 1;
+        if v == 0 {
+            let val = self.hval(c, part, r, &[], budget)?;
+            return Ok(if val == 0 {
+                Vec::new()
+            } else {
+                vec![(Vec::new(), val)]
+            });
+        }
+        // Stage 0: univariate in y_0, the others at the anchors.
+        let mut vals = Vec::with_capacity(r + 1);
+        for j in 0..=r {
+            let mut y = self.anchors.clone();
+            y[0] = self.cvals[j];
+            vals.push(self.hval(c, part, r, &y, budget)?);
+        }
+        let coeffs = newton(&self.cvals[..=r], &vals, p).ok_or(Fail::Unlucky)?;
+        let mut skel: Terms = coeffs
+            .iter()
+            .enumerate()
+            .filter(|(_, &a)| a != 0)
+            .map(|(e, &a)| {
+                let mut ex = vec![0u32; v];
+                ex[0] = e as u32;
+                (ex, a)
+            })
+            .collect();
+        for k in 1..v {
+            if skel.is_empty() {
+                return Ok(skel);
+            }
+            let t = skel.len();
+            if t > budget.max_terms {
+                return Err(Fail::Hard(budget.limit(Limit::Terms(budget.max_terms))));
+            }
+            let node: Vec<u64> = skel
+                .iter()
+                .map(|(ex, _)| {
+                    (0..k).fold(1, |acc, l| mul(acc, pow(self.bases[l], ex[l] as u64, p), p))
+                })
+                .collect();
+            let mindeg = skel
+                .iter()
+                .map(|(ex, _)| ex.iter().sum::<u32>())
+                .min()
+                .unwrap_or(0);
+            let dk = r - mindeg as usize;
+            let mut table = vec![Vec::with_capacity(dk + 1); t];
+            for j in 0..=dk {
+                let mut ys = Vec::with_capacity(t);
+                let mut pw = vec![1u64; k];
+                for _ in 0..t {
+                    let mut y = self.anchors.clone();
+                    y[..k].copy_from_slice(&pw);
+                    y[k] = self.cvals[j];
+                    ys.push(self.hval(c, part, r, &y, budget)?);
+                    for (w, &b) in pw.iter_mut().zip(&self.bases[..k]) {
+                        *w = mul(*w, b, p);
+                    }
+                }
+                let sol = vandermonde_t(&node, &ys, p).ok_or(Fail::Unlucky)?;
+                for (row, s) in table.iter_mut().zip(sol) {
+                    row.push(s);
+                }
+            }
+            let mut next = Vec::new();
+            for ((ex, _), row) in skel.iter().zip(&table) {
+                let dm = r - ex.iter().sum::<u32>() as usize;
+                let uni = newton(&self.cvals[..=dm], &row[..=dm], p).ok_or(Fail::Unlucky)?;
+                for (e, &a) in uni.iter().enumerate() {
+                    if a != 0 {
+                        let mut ex2 = ex.clone();
+                        ex2[k] = e as u32;
+                        next.push((ex2, a));
+                    }
+                }
+            }
+            skel = next;
+        }
+        if skel.len() > budget.max_terms {
+            return Err(Fail::Hard(budget.limit(Limit::Terms(budget.max_terms))));
+        }
+        Ok(skel)
+    }
+
+    /// The part of degree r on a known set of monomials: one transposed
+    /// Vandermonde system at the points `y_i = bases^i`.
+    fn on_skeleton(
+        &mut self,
+        c: usize,
+        part: usize,
+        r: usize,
+        monos: &[Vec<u32>],
+        budget: &mut Budget,
+    ) -> Result<Terms, Fail<E>> {
+        let p = self.p;
+        if monos.is_empty() {
+            return Ok(Vec::new());
+        }
+        let node: Vec<u64> = monos
+            .iter()
+            .map(|ex| {
+                ex.iter()
+                    .zip(&self.bases)
+                    .fold(1, |acc, (&e, &b)| mul(acc, pow(b, e as u64, p), p))
+            })
+            .collect();
+        let mut ys = Vec::with_capacity(monos.len());
+        let mut pw = vec![1u64; self.n - 1];
+        for _ in 0..monos.len() {
+            ys.push(self.hval(c, part, r, &pw.clone(), budget)?);
+            for (w, &b) in pw.iter_mut().zip(&self.bases) {
+                *w = mul(*w, b, p);
+            }
+        }
+        let sol = vandermonde_t(&node, &ys, p).ok_or(Fail::Unlucky)?;
+        Ok(monos
+            .iter()
+            .zip(sol)
+            .filter(|(_, a)| *a != 0)
+            .map(|(ex, a)| (ex.clone(), a))
+            .collect())
+    }
+
+    /// The image of every component modulo this prime. With a skeleton
+    /// (from an earlier prime) only the coefficients are solved for.
+    pub(crate) fn image(
+        &mut self,
+        skeleton: Option<&Skeleton>,
+        budget: &mut Budget,
+    ) -> Result<(Image, Skeleton), Fail<E>> {
+        let mut sk: Skeleton = Vec::with_capacity(self.m);
+        for c in 0..self.m {
+            let mut parts: [Vec<Vec<Vec<u32>>>; 2] = [Vec::new(), Vec::new()];
+            for (part, slot) in parts.iter_mut().enumerate() {
+                let top = if part == 0 {
+                    self.degs[c].0
+                } else {
+                    self.degs[c].1
+                };
+                *slot = vec![Vec::new(); top + 1];
+                for r in (0..=top).rev() {
+                    let terms = match skeleton {
+                        None => self.zippel(c, part, r, budget)?,
+                        Some(s) => {
+                            let monos = s[c][part].get(r).cloned().unwrap_or_default();
+                            self.on_skeleton(c, part, r, &monos, budget)?
+                        }
+                    };
+                    slot[r] = terms.iter().map(|(e, _)| e.clone()).collect();
+                    self.known[c][part][r] = Some(terms);
+                }
+            }
+            sk.push(parts);
+        }
+        let mut image = Vec::with_capacity(self.m);
+        for c in 0..self.m {
+            let mut both: [Terms; 2] = [Vec::new(), Vec::new()];
+            for (part, out) in both.iter_mut().enumerate() {
+                for (r, terms) in self.known[c][part].iter().enumerate() {
+                    for (ey, a) in terms.iter().flatten() {
+                        let mut ex = Vec::with_capacity(self.n);
+                        ex.push(r as u32 - ey.iter().sum::<u32>());
+                        ex.extend_from_slice(ey);
+                        out.push((ex, *a));
+                    }
+                }
+            }
+            let [num, den] = both;
+            image.push((num, den));
+        }
+        Ok((image, sk))
+    }
+}

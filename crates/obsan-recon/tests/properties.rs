@@ -1,0 +1,85 @@
+//! Property tests: random sparse rational functions, reconstructed exactly.
+
+mod common;
+
+use common::{eval, is_canonical, same_function, Terms};
+use dashu_int::IBig;
+use obsan_recon::{reconstruct, reconstruct_vec, Options};
+use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
+
+/// A sparse polynomial in `n` variables: up to `terms` terms of total degree
+/// at most `deg`, coefficients small or up to ~2^120.
+fn poly(n: usize, terms: usize, deg: u32) -> impl Strategy<Value = Terms> {
+    let term = (
+        prop::collection::vec(0..=deg, n),
+        prop_oneof![
+            3 => (-50i64..=50).prop_map(IBig::from),
+            1 => (any::<i64>(), any::<u64>()).prop_map(|(a, b)| (IBig::from(a) << 64) + IBig::from(b)),
+        ],
+    )
+        .prop_map(move |(mut e, c)| {
+            // Scale the exponents down to total degree <= deg.
+            while e.iter().sum::<u32>() > deg {
+                if let Some(x) = e.iter_mut().find(|x| **x > 0) {
+                    *x -= 1;
+                }
+            }
+            (e, c)
+        });
+    prop::collection::vec(term, 1..=terms)
+}
+
+fn nonzero(mut d: Terms, n: usize) -> Terms {
+    d.retain(|(_, c)| *c != IBig::ZERO);
+    if d.is_empty() {
+        d.push((vec![0; n], IBig::ONE));
+    }
+    d
+}
+
+fn config() -> ProptestConfig {
+    ProptestConfig {
+        cases: 40,
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
+        ..ProptestConfig::default()
+    }
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    #[test]
+    fn random_sparse_functions_reconstruct_exactly(
+        (n, num, den) in (1usize..=5).prop_flat_map(|n| (Just(n), poly(n, 5, 6), poly(n, 4, 5))),
+        seed in any::<u64>(),
+    ) {
+        let den = nonzero(den, n);
+        let mut bb = |x: &[u64], p: u64| -> Result<Option<u64>, ()> { Ok(eval(&num, &den, x, p)) };
+        let opts = Options { seed, ..Options::default() };
+        let r = reconstruct(n, &mut bb, &opts).unwrap();
+        let f = &r.functions[0];
+        prop_assert!(same_function(f, &num, &den), "{}", f);
+        prop_assert!(is_canonical(f));
+        // The reduced form is never of higher degree than the input.
+        let deg = |t: &Terms| t.iter().filter(|(_, c)| *c != IBig::ZERO).map(|(e, _)| e.iter().sum::<u32>()).max().unwrap_or(0);
+        prop_assert!(f.den().degree() <= deg(&den));
+        prop_assert!(f.num().degree() <= deg(&num));
+        prop_assert!(r.certificate.error_bound < 1e-60);
+    }
+
+    #[test]
+    fn vectors_agree_with_their_components(
+        (n, fs) in (1usize..=4).prop_flat_map(|n| (Just(n), prop::collection::vec((poly(n, 3, 4), poly(n, 3, 3)), 1..=3))),
+    ) {
+        let fs: Vec<(Terms, Terms)> = fs.into_iter().map(|(a, b)| (a, nonzero(b, n))).collect();
+        let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+            Ok(fs.iter().map(|(a, b)| eval(a, b, x, p)).collect())
+        };
+        let r = reconstruct_vec(n, fs.len(), &mut bb, &Options::default()).unwrap();
+        for (f, (a, b)) in r.functions.iter().zip(&fs) {
+            prop_assert!(same_function(f, a, b), "{}", f);
+            prop_assert!(is_canonical(f));
+        }
+    }
+}
