@@ -11,10 +11,14 @@
 //! ```
 
 mod decomp;
+mod derive;
 mod modes;
 mod rank;
 mod symmetry;
 
+pub use derive::{
+    derive_modes, verify_derivation, DeriveOptions, Derivation, DerivedMode, ModeKind,
+};
 pub use decomp::{verify_decomposition, Check, Decomposition};
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
