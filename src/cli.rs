@@ -86,7 +86,7 @@ residuals}], independent, independent_count, complete, exact}. Exit 1 when a mod
     #[command(after_help = "Examples:
   obsan modes systems/localization.sys
   obsan modes systems/calib_q_nopsi.sys --json
-  obsan modes systems/calib.sys --input q --out /tmp/obsan-calib-q-modes --force
+  obsan modes systems/classic/two_compartment.sys --out /tmp/obsan-two-compartment-modes --force
 
 --json prints {system, restriction, n, rank, full_rank, symmetries, modes: [{name, expr, kind,
 angle, domain}], reduced: {inputs, dynamics: [{name, rhs}], outputs: [{name, expr}], closed,

@@ -22,11 +22,11 @@ macro_rules! outln {
 
 mod analysis_cmds;
 mod cli;
-mod modes_cmd;
 mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
 mod fsio;
+mod modes_cmd;
 mod plot;
 mod show;
 mod simulate;

@@ -84,9 +84,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         ),
         None => None,
     };
-    let verified = checks
-        .as_ref()
-        .is_some_and(|c| c.iter().all(|c| c.pass));
+    let verified = checks.as_ref().is_some_and(|c| c.iter().all(|c| c.pass));
     let modes_ok = d.mode_report.checks.iter().all(|c| c.is_mode)
         && d.mode_report.independent
         && d.mode_report.complete;

@@ -28,6 +28,9 @@ use obsan_expr::{Fp, FpPoint, Id, Poly, RatFun, SplitMix, P, Q};
 use obsan_model::NormalForm;
 use std::time::Instant;
 
+/// Largest linear system of an ansatz (unknown coefficients).
+const MAX_UNKNOWNS: usize = 500;
+
 /// Budgets of the search.
 #[derive(Clone, Debug)]
 pub struct DeriveOptions {
@@ -119,10 +122,7 @@ impl Derivation {
         for (k, ds) in self.derivatives.iter().enumerate() {
             for (i, d) in ds.iter().enumerate() {
                 if d.is_none() {
-                    v.push(format!(
-                        "L_{} {}",
-                        self.field_names[i], self.modes[k].name
-                    ));
+                    v.push(format!("L_{} {}", self.field_names[i], self.modes[k].name));
                 }
             }
         }
@@ -142,8 +142,17 @@ impl Derivation {
             if d == "0" {
                 continue;
             }
-            if self.field_names[i] == "f0" && i == 0 && !self.has_input(0) {
-                parts.push(format!("({d})"));
+            let simple = !d.contains([' ', '/']);
+            if !self.has_input(i) {
+                parts.push(if simple {
+                    d.to_string()
+                } else {
+                    format!("({d})")
+                });
+            } else if d == "1" {
+                parts.push(self.field_names[i].clone());
+            } else if simple && !d.starts_with('-') {
+                parts.push(format!("{}*{d}", self.field_names[i]));
             } else {
                 parts.push(format!("{}*({d})", self.field_names[i]));
             }
@@ -182,9 +191,8 @@ impl Derivation {
         restriction: Option<&str>,
         set: &[(String, String)],
     ) -> Option<String> {
-        let mut o = String::from(
-            "# Observable modes and reduced dynamics derived by `obsan modes`.\n",
-        );
+        let mut o =
+            String::from("# Observable modes and reduced dynamics derived by `obsan modes`.\n");
         o.push_str(&format!("system {system_path}\n"));
         if let Some(r) = restriction {
             o.push_str(&format!("input {r}\n"));
@@ -200,7 +208,11 @@ impl Derivation {
         let names: Vec<&str> = self.modes.iter().map(|m| m.name.as_str()).collect();
         o.push_str(&format!("state {}\n", names.join(", ")));
         for k in 0..self.modes.len() {
-            o.push_str(&format!("{}' = {}\n", self.modes[k].name, self.dynamics(k)?));
+            o.push_str(&format!(
+                "{}' = {}\n",
+                self.modes[k].name,
+                self.dynamics(k)?
+            ));
         }
         for (name, e) in &self.outputs {
             o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
@@ -241,7 +253,11 @@ impl Derivation {
         }
         for k in 0..self.modes.len() {
             if !self.is_constant(k) {
-                o.push_str(&format!("{}' = {}\n", self.modes[k].name, self.dynamics(k)?));
+                o.push_str(&format!(
+                    "{}' = {}\n",
+                    self.modes[k].name,
+                    self.dynamics(k)?
+                ));
             }
         }
         for (name, e) in &self.outputs {
@@ -501,14 +517,23 @@ impl Indep {
     }
 }
 
-fn exact_mode(
+/// The PDE (11) at two random points in F_p (a screen: the exact check of
+/// every accepted mode follows, once, in [`check_modes`]).
+fn screen_mode(
     nf: &mut NormalForm,
-    sym: &SymmetryReport,
+    w_ids: &[Vec<Id>],
     g: Id,
     seed: u64,
 ) -> Result<bool, AnalysisError> {
-    let r = check_modes(nf, sym, &[g], seed)?;
-    Ok(r.checks.first().is_some_and(|c| c.is_mode))
+    let roots: Vec<Id> = w_ids.iter().map(|w| lie(nf, g, w)).collect();
+    let mut rng = SplitMix(seed ^ 0x7363_7265_656e);
+    for _ in 0..2 {
+        let (_, v) = point_for(nf, &mut rng, &roots)?;
+        if v.iter().any(|x| !x.is_zero()) {
+            return Ok(false);
+        }
+    }
+    Ok(true)
 }
 
 /// Builds the modes and the reduced system.
@@ -571,6 +596,12 @@ pub fn derive_modes(
         }
     }
 
+    // w components as expressions.
+    let w_ids: Vec<Vec<Id>> = sym
+        .vectors
+        .iter()
+        .map(|w| w.iter().map(|c| nf.ctx.from_canonical(c)).collect())
+        .collect();
     // 1. Variables the symmetries leave alone.
     for i in 0..n {
         if modes.len() == rank {
@@ -592,12 +623,6 @@ pub fn derive_modes(
     }
     check_deadline(opts, "the variables", modes.len())?;
 
-    // w components as expressions.
-    let w_ids: Vec<Vec<Id>> = sym
-        .vectors
-        .iter()
-        .map(|w| w.iter().map(|c| nf.ctx.from_canonical(c)).collect())
-        .collect();
     let nsym = w_ids.len();
     let mut rng = SplitMix(opts.seed ^ 0x6d6f_6465_7321);
 
@@ -624,8 +649,16 @@ pub fn derive_modes(
                 continue;
             }
             // Leading coefficient positive, for readability.
-            let lead_neg = qs.iter().rev().find(|q| !q.is_zero()).is_some_and(|q| q.is_negative());
-            let qs: Vec<Q> = if lead_neg { qs.iter().map(|q| q.neg()).collect() } else { qs };
+            let lead_neg = qs
+                .iter()
+                .rev()
+                .find(|q| !q.is_zero())
+                .is_some_and(|q| q.is_negative());
+            let qs: Vec<Q> = if lead_neg {
+                qs.iter().map(|q| q.neg()).collect()
+            } else {
+                qs
+            };
             let blocks: Vec<Id> = angles.iter().map(|&i| vars_id(nf, &names[i])).collect();
             let monos: Vec<Vec<u32>> = (0..angles.len())
                 .map(|k| (0..angles.len()).map(|l| u32::from(k == l)).collect())
@@ -636,7 +669,7 @@ pub fn derive_modes(
             let bnames: Vec<String> = angles.iter().map(|&i| names[i].clone()).collect();
             let g = build_poly(nf, &qs_o, &monos_o, &blocks);
             let text = poly_text(&qs_o, &monos_o, &bnames);
-            if indep.raises_rank(nf, g)? && exact_mode(nf, sym, g, opts.seed)? {
+            if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
                 modes.push(DerivedMode {
                     name: next_name(&mut used_names),
                     expr: g,
@@ -726,9 +759,16 @@ pub fn derive_modes(
             if modes.len() >= rank {
                 break;
             }
-            check_deadline(opts, &format!("the invariant ansatz of degree {d}"), modes.len())?;
+            check_deadline(
+                opts,
+                &format!("the invariant ansatz of degree {d}"),
+                modes.len(),
+            )?;
             let monos = monomials(nb, 0, d);
             let nm = monos.len();
+            if nm > MAX_UNKNOWNS {
+                break;
+            }
             let mut roots: Vec<Id> = blocks.clone();
             roots.push(qd);
             for j in 0..nsym {
@@ -737,9 +777,11 @@ pub fn derive_modes(
             }
             let npts = nm / nsym + 8;
             let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
+            let mut last_bv: Vec<Fp> = Vec::new();
             for _ in 0..npts {
                 let (_, v) = point_for(nf, &mut rng, &roots)?;
                 let bv = &v[..nb];
+                last_bv = bv.to_vec();
                 let qv = v[nb];
                 for j in 0..nsym {
                     let off = nb + 1 + j * (nb + 1);
@@ -769,22 +811,46 @@ pub fn derive_modes(
                 if !nonconst {
                     continue;
                 }
-                let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>()
-                else {
+                // A multiple of a constant, or a relation (cos^2 + sin^2 - 1) that
+                // vanishes identically: not a new mode.
+                let all_const_factor = v.iter().zip(&monos).all(|(x, e)| {
+                    x.is_zero()
+                        || e.iter()
+                            .enumerate()
+                            .any(|(k, &p)| p > 0 && consts.contains(&bnames[k]))
+                });
+                if all_const_factor {
+                    continue;
+                }
+                let val: Fp = v
+                    .iter()
+                    .zip(&monos)
+                    .fold(Fp::ZERO, |a, (&c, e)| a + c * mono_value(e, &last_bv));
+                if val.is_zero() {
+                    continue;
+                }
+                let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
                     continue;
                 };
                 let num = build_poly(nf, &qs, &monos, &blocks);
                 let g = if qi == 0 { num } else { nf.ctx.div(num, qd) };
-                if !indep.raises_rank(nf, g)? || !exact_mode(nf, sym, g, opts.seed)? {
+                if !indep.raises_rank(nf, g)? || !screen_mode(nf, &w_ids, g, opts.seed)? {
                     continue;
                 }
                 let c = nf.ctx.canon(g);
-                let text = nf.ctx.ratfun_text_factored(&c);
                 let poly = c.denominator().is_constant();
+                // The ansatz's own form reads better than the canonical one
+                // (which writes sin^2 as 1 - cos^2); both are the same function.
+                let ptext = poly_text(&qs, &monos, &bnames);
+                let text = if qi == 0 {
+                    ptext
+                } else {
+                    format!("({ptext})/({})", nf.ctx.to_text(qd))
+                };
                 let domain = if poly {
                     "everywhere".to_string()
                 } else {
-                    format!("where {} != 0", nf.ctx.poly_text(c.denominator()))
+                    format!("where {} != 0", nf.ctx.to_text(qd))
                 };
                 modes.push(DerivedMode {
                     name: next_name(&mut used_names),
@@ -807,7 +873,7 @@ pub fn derive_modes(
         if modes.len() >= rank {
             break;
         }
-        if indep.raises_rank(nf, h)? && exact_mode(nf, sym, h, opts.seed)? {
+        if indep.raises_rank(nf, h)? && screen_mode(nf, &w_ids, h, opts.seed)? {
             let is_angle = nf.ctx.is_angle_valued(h);
             let text = nf.ctx.to_text(h);
             modes.push(DerivedMode {
@@ -833,7 +899,7 @@ pub fn derive_modes(
         for &k in &w.fields {
             g = lie(nf, g, &report.fields.vectors[k]);
         }
-        if indep.raises_rank(nf, g)? && exact_mode(nf, sym, g, opts.seed)? {
+        if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
             let c = nf.ctx.canon(g);
             let text = nf.ctx.ratfun_text_factored(&c);
             let domain = if c.denominator().is_constant() {
@@ -925,8 +991,7 @@ fn in_modes(
     rng: &mut SplitMix,
     opts: &DeriveOptions,
 ) -> Result<Option<String>, AnalysisError> {
-    let tc = nf.ctx.canon(t);
-    if tc.is_zero() {
+    if nf.ctx.is_zero(t) {
         return Ok(Some("0".into()));
     }
     if nf.ctx.is_angle_valued(t) {
@@ -936,9 +1001,17 @@ fn in_modes(
     let mut roots: Vec<Id> = zb.to_vec();
     roots.push(t);
     for d in 0..=opts.max_closure_degree {
-        check_deadline(opts, &format!("the reduced dynamics (degree {d})"), modes.len())?;
+        check_deadline(
+            opts,
+            &format!("the reduced dynamics (degree {d})"),
+            modes.len(),
+        )?;
         let monos = monomials(nb, 0, d);
         let nm = monos.len();
+        // A dense F_p elimination of 2 nm unknowns: keep it well under a second.
+        if 2 * nm > MAX_UNKNOWNS {
+            break;
+        }
         let npts = 2 * nm + 8;
         let mut rows = Vec::with_capacity(npts);
         for _ in 0..npts {
@@ -969,9 +1042,17 @@ fn in_modes(
             let (pc, qc) = qs.split_at(nm);
             let pn = build_poly(nf, pc, &monos, zb);
             let qn = build_poly(nf, qc, &monos, zb);
+            // Screened at fresh points here; proven exactly by the decomposition
+            // checks (verify_derivation) of the whole reduced system.
             let r = nf.ctx.div(pn, qn);
             let diff = nf.ctx.sub(r, t);
-            if !nf.ctx.is_identically_zero(diff) {
+            let mut fresh = SplitMix(rng.next_u64());
+            let mut ok = true;
+            for _ in 0..2 {
+                let (_, v) = point_for(nf, &mut fresh, &[diff])?;
+                ok &= v[0].is_zero();
+            }
+            if !ok {
                 continue;
             }
             let ptext = poly_text(pc, &monos, znames);

@@ -16,10 +16,10 @@ mod modes;
 mod rank;
 mod symmetry;
 
-pub use derive::{
-    derive_modes, verify_derivation, DeriveOptions, Derivation, DerivedMode, ModeKind,
-};
 pub use decomp::{verify_decomposition, Check, Decomposition};
+pub use derive::{
+    derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use symmetry::{canonical_lie, determinant, symmetries, SymmetryReport};
