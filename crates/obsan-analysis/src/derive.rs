@@ -1066,3 +1066,38 @@ fn in_modes(
     }
     Ok(None)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rational_reconstruction_inverts_reduction_mod_p() {
+        for (a, b) in [(1i64, 1i64), (-3, 7), (22, 7), (-1, 2), (123_456, 789)] {
+            let u = Fp::from_i64(a) * Fp::from_i64(b).inv().unwrap();
+            let q = rat_recon(u).unwrap();
+            assert_eq!(q, Q::from_i64(a).div(&Q::from_i64(b)).unwrap());
+        }
+    }
+
+    #[test]
+    fn null_space_vectors_annihilate_the_rows() {
+        let f = Fp::from_i64;
+        let m = vec![vec![f(1), f(2), f(3), f(4)], vec![f(2), f(4), f(7), f(1)]];
+        let ns = null_space(m.clone(), 4);
+        assert_eq!(ns.len(), 2); // rank 2 of 4 columns
+        for v in &ns {
+            for row in &m {
+                let dot = row.iter().zip(v).fold(Fp::ZERO, |a, (&x, &y)| a + x * y);
+                assert!(dot.is_zero());
+            }
+        }
+    }
+
+    #[test]
+    fn monomials_count_as_binomials() {
+        // C(nb + d, d) exponent vectors of degree <= d.
+        assert_eq!(monomials(3, 0, 2).len(), 10);
+        assert_eq!(monomials(4, 0, 3).len(), 35);
+    }
+}
