@@ -82,6 +82,18 @@ residuals}], independent, independent_count, complete, exact}. Exit 1 when a mod
 
 --json prints {checks: [{check, pass, detail}], ...}. Exit 1 when a check fails.")]
     Verify(VerifyArgs),
+    /// Derive observable modes and the reduced system, each proven exactly (eqs. 9-11).
+    #[command(after_help = "Examples:
+  obsan modes systems/localization.sys
+  obsan modes systems/calib_q_nopsi.sys --json
+  obsan modes systems/classic/two_compartment.sys --out /tmp/obsan-two-compartment-modes --force
+
+--json prints {system, restriction, n, rank, full_rank, symmetries, modes: [{name, expr, kind,
+angle, domain}], reduced: {inputs, dynamics: [{name, rhs}], outputs: [{name, expr}], closed,
+missing}, certificate: {text, modes_exact, independent, complete, verified, checks}, sys, dec}.
+--out PREFIX writes PREFIX.sys (the reduced system) and PREFIX.dec (for obsan verify).
+Exit 1 when the reduced system could not be closed or a check failed.")]
+    Modes(ModesArgs),
     /// Simulate the paper's calibration experiment (section VI-A) and write a dataset.
     #[command(after_help = "Examples:
   obsan simulate --out data/sim                              # section VI-A, q = 0.9, 0, -1
@@ -333,6 +345,7 @@ impl Command {
             Command::Rank(a) | Command::Symmetries(a) => a.an.timeout,
             Command::Check(a) => a.an.timeout,
             Command::Verify(a) => a.an.timeout,
+            Command::Modes(a) => a.timeout,
             Command::Simplify(a) => a.limit.timeout,
             Command::Diff(a) => a.limit.timeout,
             Command::Show(a) => a.limit.timeout,
@@ -408,6 +421,26 @@ pub struct CheckArgs {
     pub modes: Vec<String>,
     #[command(flatten)]
     pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct ModesArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    /// Seed of the random evaluation points (same seed, same answer).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Give up after this many seconds (exit code 2).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
+    /// Write PREFIX.sys (the reduced system) and PREFIX.dec (its decomposition file).
+    #[arg(long = "out", value_name = "PREFIX")]
+    pub out_prefix: Option<String>,
+    /// Replace existing PREFIX.sys / PREFIX.dec.
+    #[arg(long)]
+    pub force: bool,
     #[command(flatten)]
     pub out: OutputArgs,
 }

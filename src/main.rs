@@ -26,6 +26,7 @@ mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
 mod fsio;
+mod modes_cmd;
 mod plot;
 mod show;
 mod simulate;
@@ -93,6 +94,7 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Lie(a) => analysis_cmds::lie(&a),
         cli::Command::Check(a) => analysis_cmds::check(&a),
         cli::Command::Verify(a) => analysis_cmds::verify(&a),
+        cli::Command::Modes(a) => modes_cmd::run(&a),
         cli::Command::Simulate(a) => simulate::run(&a),
         cli::Command::Calibrate(a) => estimate_cmds::calibrate_cmd(&a),
         cli::Command::Crlb(a) => estimate_cmds::crlb_cmd(&a),

@@ -5,6 +5,7 @@ mod calibrate;
 mod classic;
 mod diagnose;
 mod expr;
+mod modes;
 mod show;
 mod simulate;
 mod suite;

@@ -188,6 +188,7 @@ fn every_help_example_runs() {
         "lie",
         "check",
         "verify",
+        "modes",
         "calibrate",
         "crlb",
         "montecarlo",

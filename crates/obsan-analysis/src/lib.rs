@@ -16,12 +16,16 @@
 )]
 
 mod decomp;
+mod derive;
 mod modes;
 mod rank;
 pub mod structure;
 mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
+pub use derive::{
+    derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use structure::SymmetryKind;

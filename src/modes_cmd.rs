@@ -1,0 +1,231 @@
+//! `obsan modes`: observable modes and the reduced system, derived and proven.
+
+use crate::cli::ModesArgs;
+use crate::show::load_normal_form;
+use crate::Failure;
+use obsan_analysis::{
+    derive_modes, rank as rank_test, symmetries, verify_derivation, DeriveOptions, RankOptions,
+};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
+    let (_, mut nf) = load_normal_form(&a.sys)?;
+    if nf.outputs.is_empty() {
+        return Err(Failure(format!(
+            "{}: the system has no output, so nothing is observable",
+            a.sys.system
+        )));
+    }
+    let deadline = a
+        .timeout
+        .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let r = rank_test(
+        &mut nf,
+        RankOptions {
+            seed: a.seed,
+            deadline,
+            progress: None,
+        },
+    )
+    .map_err(|e| Failure(e.to_string()))?;
+    let title = match &nf.restriction {
+        Some(q) => format!("{} (input {q})", nf.name),
+        None => nf.name.clone(),
+    };
+    if r.rank == r.n {
+        if a.out.json {
+            let v = json!({
+                "system": nf.name, "restriction": nf.restriction, "n": r.n, "rank": r.rank,
+                "full_rank": true,
+                "modes": nf.state.iter().map(|s| json!({"name": s, "expr": s, "kind": "variable"})).collect::<Vec<_>>(),
+                "reduced": Value::Null,
+                "certificate": "rank equals the dimension: a non-zero minor at a point proves it (exact)",
+            });
+            outln!("{}", serde_json::to_string_pretty(&v)?);
+        } else {
+            outln!(
+                "{title}: rank {} of {}: every variable is observable; the modes are the variables",
+                r.rank,
+                r.n
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let sym = symmetries(&mut nf, &r).map_err(|e| Failure(e.to_string()))?;
+    let opts = DeriveOptions {
+        seed: a.seed,
+        deadline,
+        ..DeriveOptions::default()
+    };
+    let d = derive_modes(&mut nf, &r, &sym, &opts).map_err(|e| Failure(e.to_string()))?;
+    let sets: Vec<(String, String)> = a
+        .sys
+        .set
+        .iter()
+        .filter_map(|s| {
+            s.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        })
+        .collect();
+    // The decomposition names the system by an absolute path, so it reads
+    // from wherever it is written.
+    let sys_path = std::fs::canonicalize(&a.sys.system)
+        .map(|p| p.to_string_lossy().to_string())
+        .unwrap_or_else(|_| a.sys.system.clone());
+    let dec = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
+    let sys_text = d.sys_text(&nf.name, &format!("observable modes of {title}"));
+    let checks = match &dec {
+        Some(t) => Some(
+            verify_derivation(&mut nf, t, "derived decomposition", a.seed)
+                .map_err(|e| Failure(format!("internal: the derived decomposition: {e}")))?,
+        ),
+        None => None,
+    };
+    let verified = checks.as_ref().is_some_and(|c| c.iter().all(|c| c.pass));
+    let modes_ok = d.mode_report.checks.iter().all(|c| c.is_mode)
+        && d.mode_report.independent
+        && d.mode_report.complete;
+    let certificate = format!(
+        "{} mode(s), each satisfies eq. (11) for all {} symmetr{} exactly (canonical forms); gradients independent (a non-zero minor at a point, exact); {} = rank{}{}",
+        d.modes.len(),
+        sym.vectors.len(),
+        if sym.vectors.len() == 1 { "y" } else { "ies" },
+        d.mode_report.independent_count,
+        if sym.exact { " (exact: symmetry closure check passed)" } else { " (rank a lower bound: closure check failed)" },
+        match &checks {
+            Some(c) if verified => format!("; reduced system proven: all {} decomposition checks pass exactly", c.len()),
+            Some(_) => "; reduced system: a decomposition check FAILED".to_string(),
+            None => format!("; reduced system not closed: no form in the modes found for {}", d.missing().join(", ")),
+        }
+    );
+    if let (Some(prefix), Some(dec), Some(sys_text)) = (&a.out_prefix, &dec, &sys_text) {
+        write_pair(prefix, a.force, sys_text, dec)?;
+    }
+    if a.out.json {
+        let modes: Vec<Value> = d
+            .modes
+            .iter()
+            .map(|m| {
+                let mut v = json!({"name": m.name, "expr": m.text, "kind": m.kind.word(), "angle": m.angle, "domain": m.domain});
+                if a.out.latex {
+                    v["latex"] = json!(nf.ctx.to_latex(m.expr));
+                }
+                v
+            })
+            .collect();
+        let dynamics: Vec<Value> = (0..d.modes.len())
+            .map(|k| json!({"name": d.modes[k].name, "rhs": d.dynamics(k)}))
+            .collect();
+        let v = json!({
+            "system": nf.name, "restriction": nf.restriction, "n": d.n, "rank": d.rank,
+            "full_rank": false, "symmetries": sym.vectors.len(),
+            "modes": modes,
+            "reduced": {
+                "inputs": d.inputs(),
+                "dynamics": dynamics,
+                "outputs": d.outputs.iter().map(|(n, e)| json!({"name": n, "expr": e})).collect::<Vec<_>>(),
+                "closed": d.closed(),
+                "missing": d.missing(),
+            },
+            "certificate": {
+                "text": certificate,
+                "modes_exact": modes_ok,
+                "independent": d.mode_report.independent,
+                "complete": d.mode_report.complete,
+                "verified": verified,
+                "checks": checks.as_ref().map(|cs| cs.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>()),
+            },
+            "sys": sys_text, "dec": dec,
+        });
+        outln!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        let mut o = format!(
+            "{title}: rank {} of {}, {} symmetr{}; {} observable modes:\n",
+            d.rank,
+            d.n,
+            sym.vectors.len(),
+            if sym.vectors.len() == 1 { "y" } else { "ies" },
+            d.modes.len()
+        );
+        for m in &d.modes {
+            let e = if a.out.latex {
+                nf.ctx.to_latex(m.expr)
+            } else {
+                m.text.clone()
+            };
+            o.push_str(&format!(
+                "  {} = {}    ({}; {})\n",
+                m.name,
+                e,
+                m.kind.word(),
+                m.domain
+            ));
+        }
+        o.push_str("reduced system:\n");
+        for k in 0..d.modes.len() {
+            o.push_str(&format!(
+                "  {}' = {}\n",
+                d.modes[k].name,
+                d.dynamics(k).unwrap_or_else(|| "(not found)".into())
+            ));
+        }
+        for (name, e) in &d.outputs {
+            o.push_str(&format!(
+                "  {name} = {}\n",
+                e.as_deref().unwrap_or("(not found)")
+            ));
+        }
+        o.push_str(&format!("certificate: {certificate}\n"));
+        if let Some(p) = &a.out_prefix {
+            if dec.is_some() {
+                o.push_str(&format!("wrote {p}.sys and {p}.dec\n"));
+            }
+        }
+        out!("{o}");
+    }
+    if !modes_ok || !verified {
+        if a.out_prefix.is_some() && dec.is_none() {
+            eprintln!("error: the reduced system is not closed; nothing written");
+        }
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Write PREFIX.sys and PREFIX.dec: each to a temporary sibling, then renamed;
+/// an existing file is replaced only with --force.
+fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
+    let targets = [
+        (PathBuf::from(format!("{prefix}.sys")), sys),
+        (PathBuf::from(format!("{prefix}.dec")), dec),
+    ];
+    for (p, _) in &targets {
+        if !force && std::fs::symlink_metadata(p).is_ok() {
+            return Err(Failure(format!(
+                "{} already exists (use --force to replace it)",
+                p.display()
+            )));
+        }
+    }
+    if let Some(parent) = Path::new(prefix).parent() {
+        if !parent.as_os_str().is_empty() {
+            std::fs::create_dir_all(parent)
+                .map_err(|e| Failure(format!("cannot create {}: {e}", parent.display())))?;
+        }
+    }
+    let mut temps = Vec::new();
+    for (p, text) in &targets {
+        let tmp = PathBuf::from(format!("{}.tmp-{}", p.display(), std::process::id()));
+        std::fs::write(&tmp, text)
+            .map_err(|e| Failure(format!("cannot write {}: {e}", tmp.display())))?;
+        temps.push((tmp, p));
+    }
+    for (tmp, p) in temps {
+        std::fs::rename(&tmp, p)
+            .map_err(|e| Failure(format!("cannot write {}: {e}", p.display())))?;
+    }
+    Ok(())
+}

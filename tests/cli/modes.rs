@@ -1,0 +1,182 @@
+//! `obsan modes`: the derived modes span the paper's (and the published
+//! identifiable combinations), compared by gradient span with the exact
+//! `obsan check`; the written reduced system is observable and its
+//! decomposition passes `obsan verify`.
+
+use crate::util::{bad, fresh_dir, obsan, ok, temp_file};
+use serde_json::Value;
+
+fn modes_json(args: &[&str]) -> Value {
+    let mut a = vec!["modes"];
+    a.extend_from_slice(args);
+    a.push("--json");
+    serde_json::from_str(&ok(&a)).expect("json")
+}
+
+fn mode_exprs(v: &Value) -> Vec<String> {
+    v["modes"]
+        .as_array()
+        .expect("modes")
+        .iter()
+        .map(|m| m["expr"].as_str().expect("expr").to_string())
+        .collect()
+}
+
+/// Gradient span equality, exactly: every derived and every expected mode
+/// passes the PDE (11), each set alone has full rank r, and stacked they still
+/// have rank r (all lie in the r-dimensional observable codistribution).
+fn assert_same_span(sys: &[&str], derived: &[String], expected: &[&str], rank: usize) {
+    let check = |modes: Vec<&str>| -> Value {
+        let mut a: Vec<&str> = vec!["check"];
+        a.extend_from_slice(sys);
+        for m in &modes {
+            a.push("--mode");
+            a.push(m);
+        }
+        a.push("--json");
+        let r = obsan(&a);
+        // Exit 1 only says the stacked modes are dependent, as they should be.
+        assert!(
+            r.code == 0 || r.code == 1,
+            "{a:?}: {}{}",
+            r.stdout,
+            r.stderr
+        );
+        serde_json::from_str(&r.stdout).expect("json")
+    };
+    let d = check(derived.iter().map(|s| s.as_str()).collect());
+    assert_eq!(d["independent_count"], rank, "derived: {d}");
+    assert_eq!(d["complete"], true);
+    assert_eq!(d["independent"], true);
+    let e = check(expected.to_vec());
+    assert_eq!(e["independent_count"], rank, "expected: {e}");
+    let mut both: Vec<&str> = derived.iter().map(|s| s.as_str()).collect();
+    both.extend_from_slice(expected);
+    let b = check(both);
+    assert!(
+        b["checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["observable_mode"] == true),
+        "{b}"
+    );
+    assert_eq!(b["independent_count"], rank, "stacked: {b}");
+}
+
+/// Writes PREFIX.sys/.dec and checks them with the binary's own commands.
+fn assert_written_pair_checks(sys: &[&str], name: &str, rank: usize) {
+    let dir = fresh_dir(name);
+    let prefix = format!("{dir}/{name}");
+    let mut a = vec!["modes"];
+    a.extend_from_slice(sys);
+    a.extend_from_slice(&["--out", &prefix]);
+    ok(&a);
+    let r = ok(&["rank", &format!("{prefix}.sys"), "--json"]);
+    let v: Value = serde_json::from_str(&r).unwrap();
+    assert_eq!(v["rank"], rank, "{r}");
+    assert_eq!(v["n"], rank, "{r}");
+    let out = ok(&["verify", &format!("{prefix}.dec")]);
+    assert!(out.contains("decomposition verified (exact)"), "{out}");
+    // Never over an existing file without --force.
+    let again = obsan(&a);
+    assert_eq!(again.code, 2, "{}", again.stderr);
+    assert!(again.stderr.contains("already exists"), "{}", again.stderr);
+    a.push("--force");
+    ok(&a);
+}
+
+#[test]
+fn localization_eq3_modes_span_d_and_the_angle_difference() {
+    let v = modes_json(&["systems/localization.sys"]);
+    assert_eq!(v["rank"], 2);
+    assert_eq!(v["certificate"]["verified"], true, "{v}");
+    assert_eq!(v["reduced"]["closed"], true);
+    let m = mode_exprs(&v);
+    // The observable variable comes first, as itself.
+    assert_eq!(m[0], "D");
+    assert_same_span(
+        &["systems/localization.sys"],
+        &m,
+        &["D", "thetaR - phiR"],
+        2,
+    );
+    assert_written_pair_checks(&["systems/localization.sys"], "loc", 2);
+}
+
+#[test]
+fn calib_eq20_modes_span_psi1_psi2_psi3_xi_q() {
+    let sys = ["systems/calib_q_nopsi.sys"];
+    let v = modes_json(&sys);
+    assert_eq!(v["rank"], 4);
+    assert_eq!(v["certificate"]["verified"], true, "{v}");
+    let m = mode_exprs(&v);
+    assert!(m.contains(&"xi_q".to_string()), "{m:?}");
+    // ERRATA.md, eq. (21).
+    assert_same_span(
+        &sys,
+        &m,
+        &[
+            "(xi_q - eta_q*sin(phi))/(eta_q*cos(phi))",
+            "mu*eta_q*cos(phi)/sin(gamma)",
+            "(mu + cos(gamma))/sin(gamma)",
+            "xi_q",
+        ],
+        4,
+    );
+    // The output y = 1/Psi3 is written in the modes.
+    let outs = v["reduced"]["outputs"].as_array().unwrap();
+    assert_eq!(outs.len(), 1);
+    assert!(outs[0]["expr"].is_string());
+    assert_written_pair_checks(&sys, "calib20", 4);
+}
+
+#[test]
+fn two_compartment_modes_are_the_published_identifiable_combinations() {
+    let sys = ["systems/classic/two_compartment.sys"];
+    let v = modes_json(&sys);
+    assert_eq!(v["rank"], 5);
+    assert_eq!(v["certificate"]["verified"], true, "{v}");
+    let m = mode_exprs(&v);
+    // The file's cited verdict: k01 + k21, k02 + k12, k12 k21, with x1 and k12 x2.
+    assert_same_span(
+        &sys,
+        &m,
+        &["x1", "k01 + k21", "k02 + k12", "k12*k21", "k12*x2"],
+        5,
+    );
+    assert_written_pair_checks(&sys, "twocomp", 5);
+}
+
+#[test]
+fn full_rank_systems_say_the_modes_are_the_variables() {
+    let out = ok(&["modes", "systems/classic/michaelis_menten_pk.sys"]);
+    assert!(
+        out.contains("every variable is observable; the modes are the variables"),
+        "{out}"
+    );
+}
+
+#[test]
+fn bad_input_is_exit_2() {
+    let p = temp_file(
+        "modes_no_output.sys",
+        "system s\nstate x\ninput u\nx' = u\n",
+    );
+    bad(&["modes", &p], "no output");
+    bad(
+        &["modes", "systems/calib.sys", "--input", "nosuch"],
+        "nosuch",
+    );
+    // eq. (16) with q: the exact checks run past a short time limit.
+    let r = obsan(&[
+        "modes",
+        "systems/calib.sys",
+        "--input",
+        "q",
+        "--timeout",
+        "1",
+    ]);
+    assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("timed out"), "{}", r.stderr);
+}
