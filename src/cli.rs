@@ -374,10 +374,10 @@ pub struct LimitArgs {
     pub timeout: Option<f64>,
 }
 
-/// A `--timeout` value: positive, finite, at most a year (a Duration must hold it).
+/// A `--timeout` value: finite, 0 (give up at once) to a year (a Duration must hold it).
 fn seconds(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
-        Ok(v) if v > 0.0 && v <= 3.2e7 => Ok(v),
+        Ok(v) if (0.0..=3.2e7).contains(&v) => Ok(v),
         _ => Err(format!(
             "'{s}' is not a number of seconds between 0 and 3.2e7 (a year)"
         )),

@@ -124,7 +124,7 @@ fn expressions_may_start_with_a_minus() {
 /// A --timeout that no clock can hold was a panic in Duration::from_secs_f64.
 #[test]
 fn timeouts_are_checked() {
-    for t in ["inf", "NaN", "-1", "0", "1e300"] {
+    for t in ["inf", "NaN", "-1", "1e300"] {
         let flag = format!("--timeout={t}");
         bad(&["rank", "systems/calib.sys", &flag], "seconds");
     }
