@@ -41,9 +41,9 @@ pub struct Budget {
 }
 
 impl Budget {
-    /// Default term limit: a product of 17 distinct binomials (131072 terms)
-    /// passes, one of 18 stops within about a second.
-    pub const DEFAULT_MAX_TERMS: usize = 200_000;
+    /// Default term limit: a product of 16 distinct binomials (65536 terms)
+    /// passes, one of 17 or more stops within about a second.
+    pub const DEFAULT_MAX_TERMS: usize = 100_000;
     /// Default arena limit: about 1.5 GB of nodes.
     pub const DEFAULT_MAX_NODES: usize = 50_000_000;
     /// Default degree limit: dense univariate images stay below 8 MB.
@@ -232,7 +232,7 @@ pub(crate) fn poll() -> bool {
         t.set(v);
         v
     });
-    if t % 64 == 0 {
+    if t.is_multiple_of(64) {
         if let Some(d) = ARMED.with(|a| a.get()).and_then(|a| a.deadline) {
             if Instant::now() >= d {
                 trip(Limit::Timeout);

@@ -18,6 +18,9 @@ use crate::num::{int, Q};
 use crate::poly::{Mono, Poly, Var};
 use rustc_hash::FxHashSet;
 
+/// Sums and products with more operands than this are combined pairwise.
+const BALANCE_MIN: usize = 64;
+
 /// A canonical rational function (see the module documentation).
 #[derive(Clone, PartialEq, Eq, Hash, Debug)]
 pub struct RatFun {
@@ -394,14 +397,8 @@ impl Ctx {
             let r = match self.node(n).clone() {
                 Node::Num(q) => RatFun::from_q(&q),
                 Node::Leaf(v) => RatFun::var(v),
-                Node::Add(cs) => self.canon_sum(&cs),
-                Node::Mul(cs) => {
-                    let mut acc = RatFun::one();
-                    for c in cs.iter() {
-                        acc = self.rf_mul(&acc, &self.canon_memo[c]);
-                    }
-                    acc
-                }
+                Node::Add(cs) => self.canon_tree(&cs, false),
+                Node::Mul(cs) => self.canon_tree(&cs, true),
                 Node::Pow(b, e) => invariant(
                     self.rf_pow(&self.canon_memo[&b], e as i64),
                     "no division by zero in a canonical form (builders check divisors)",
@@ -417,10 +414,31 @@ impl Ctx {
         self.canon_memo[&id].clone()
     }
 
-    /// The form of a sum, added in a balanced tree: a long sum costs
-    /// O(n log n) term copies instead of O(n^2).
-    fn canon_sum(&self, cs: &[Id]) -> RatFun {
+    /// The form of a sum or product of already canonical children, combined
+    /// in a balanced tree: a long chain costs O(n log n) term copies instead
+    /// of O(n^2).
+    fn canon_tree(&self, cs: &[Id], product: bool) -> RatFun {
         let mut level: Vec<RatFun> = cs.iter().map(|c| self.canon_memo[c].clone()).collect();
+        // Short chains, and sums of fractions (pairing two large denominators
+        // costs a large gcd), go left to right: each step meets a small operand.
+        if level.len() <= BALANCE_MIN || (!product && level.iter().any(|r| !r.den.is_one())) {
+            let mut acc = if product {
+                RatFun::one()
+            } else {
+                RatFun::zero()
+            };
+            for r in &level {
+                if budget::tripped() {
+                    return RatFun::zero();
+                }
+                acc = if product {
+                    self.rf_mul(&acc, r)
+                } else {
+                    self.rf_add(&acc, r)
+                };
+            }
+            return acc;
+        }
         while level.len() > 1 {
             if !budget::poll() {
                 return RatFun::zero();
@@ -429,6 +447,7 @@ impl Ctx {
             let mut it = level.into_iter();
             while let Some(a) = it.next() {
                 next.push(match it.next() {
+                    Some(b) if product => self.rf_mul(&a, &b),
                     Some(b) => self.rf_add(&a, &b),
                     None => a,
                 });
@@ -463,7 +482,9 @@ impl Ctx {
             let den = self.poly_node(&r.den);
             self.div(num, den)
         };
-        self.canon_memo.entry(id).or_insert_with(|| r.clone());
+        if !budget::tripped() {
+            self.canon_memo.entry(id).or_insert_with(|| r.clone());
+        }
         id
     }
 

@@ -345,7 +345,10 @@ impl Ctx {
                 k = k.add(&terms[j].1);
                 j += 1;
             }
-            if !k.is_zero() {
+            if k.is_one() {
+                // A unit coefficient needs no product node (long sums rebuild many).
+                merged.push(terms[i].0);
+            } else if !k.is_zero() {
                 let kn = self.num(k);
                 merged.push(self.mul(&[kn, terms[i].0]));
             }
@@ -505,10 +508,10 @@ impl Ctx {
         self.budget
     }
 
-    /// Run `f` under the context's budget. When a limit is hit, every memo
-    /// entry made during the run is dropped (it may hold placeholders) and the
-    /// limit is returned; the context stays valid. Nested calls share the
-    /// outermost budget.
+    /// Run `f` under the context's budget. When a limit is hit, `f`'s value
+    /// (built from placeholders) is dropped and the limit is returned; the
+    /// context stays valid, since no placeholder reaches its memo tables or
+    /// leaves. Nested calls share the outermost budget.
     pub fn within_budget<T>(&mut self, f: impl FnOnce(&mut Ctx) -> T) -> Result<T, Limit> {
         match self.budgeted(f) {
             (r, None) => Ok(r),
@@ -522,12 +525,11 @@ impl Ctx {
         let b = self.budget;
         let outer_cap = self.cell_cap;
         self.cell_cap = Some(outer_cap.map_or(b.max_nodes, |c| c.min(b.max_nodes)));
+        // Memo tables and leaves are only written while nothing has tripped
+        // (canon, diff, from_canonical and the lowering check), so nothing
+        // needs undoing here.
         let (r, lim) = budget::scope(&b, || f(self));
         self.cell_cap = outer_cap;
-        if lim.is_some() {
-            self.canon_memo.clear();
-            self.diff_memo.clear();
-        }
         (r, lim)
     }
 }

@@ -22,6 +22,11 @@
 //! See `docs/engine.md` in the repository for the mathematics and the
 //! limitations, and the [`tutorial`] module for a guided tour.
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 mod budget;
 mod canon;
 mod diff;

@@ -447,7 +447,12 @@ impl Ctx {
 
     /// `b^q` for a rational exponent: integers and halves.
     pub fn pow_q(&mut self, b: Id, q: &Q) -> R<Id> {
-        let zero = self.canon_ok(b)?.is_zero();
+        // Only a negative power needs the zero test (and its canonical form).
+        let zero = if q.is_negative() {
+            self.canon_ok(b)?.is_zero()
+        } else {
+            false
+        };
         if q.is_integer() {
             let e = i64::try_from(q.num())
                 .ok()

@@ -65,8 +65,12 @@ impl fmt::Display for ParseError {
 impl std::error::Error for ParseError {}
 
 /// 1-based line and column (in characters) of a byte offset.
+/// An offset inside a multi-byte character counts as that character's start.
 pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(src.len());
+    let mut offset = offset.min(src.len());
+    while !src.is_char_boundary(offset) {
+        offset -= 1;
+    }
     let before = &src[..offset];
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;

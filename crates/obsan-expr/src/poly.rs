@@ -44,7 +44,7 @@ fn add_exp(a: u32, b: u32) -> u32 {
 
 /// A monomial: packed words in decreasing word order (increasing variable).
 #[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Debug, Default)]
-pub struct Mono(SmallVec<[u64; 4]>);
+pub struct Mono(SmallVec<[u64; 8]>);
 
 impl Mono {
     pub fn one() -> Mono {
@@ -82,7 +82,7 @@ impl Mono {
     }
     pub fn mul(&self, o: &Mono) -> Mono {
         let (a, b) = (&self.0, &o.0);
-        let mut out: SmallVec<[u64; 4]> = SmallVec::with_capacity(a.len() + b.len());
+        let mut out: SmallVec<[u64; 8]> = SmallVec::with_capacity(a.len() + b.len());
         let (mut i, mut j) = (0, 0);
         while i < a.len() && j < b.len() {
             let ((va, ea), (vb, eb)) = (unpack(a[i]), unpack(b[j]));
@@ -104,7 +104,7 @@ impl Mono {
     }
     /// `self / o` when `o` divides `self`.
     pub fn div(&self, o: &Mono) -> Option<Mono> {
-        let mut out: SmallVec<[u64; 4]> = SmallVec::with_capacity(self.0.len());
+        let mut out: SmallVec<[u64; 8]> = SmallVec::with_capacity(self.0.len());
         let mut j = 0;
         for &w in &self.0 {
             let (v, e) = unpack(w);
@@ -462,7 +462,7 @@ impl Poly {
     }
     /// Sorted list of the variables that occur.
     pub fn vars(&self) -> Vec<Var> {
-        let mut bits: SmallVec<[u64; 4]> = SmallVec::new();
+        let mut bits: SmallVec<[u64; 8]> = SmallVec::new();
         for (m, _) in &self.terms {
             for &w in m.0.iter() {
                 let v = unpack(w).0 as usize;

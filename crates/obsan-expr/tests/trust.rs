@@ -20,7 +20,7 @@ fn large_exponents_are_exact_not_wrapped() {
     // Issue 14, defect 1: this printed x^4464 (70000 mod 65536).
     let mut ctx = Ctx::new();
     let x = ctx.symbol("x").var;
-    let src = vec!["x^10000"; 7].join("*");
+    let src = ["x^10000"; 7].join("*");
     let e = ctx.parse(&src).unwrap();
     let r = ctx.try_canon(e).unwrap();
     assert_eq!(monomial(&r), vec![(x, 70_000)]);
@@ -175,6 +175,9 @@ fn columns_count_characters() {
     let src3 = "\u{feff}x";
     let e3 = parse_ast(src3).unwrap_err();
     assert_eq!(line_col(src3, e3.span.end), (1, 2));
+    // An offset inside a character never panics; it names that character.
+    assert_eq!(line_col("aα", 2), (1, 2));
+    assert_eq!(line_col("aα\nb", 99), (2, 2));
 }
 
 #[test]
