@@ -21,7 +21,14 @@ fn emit(
     out: &OutputArgs,
     extra: serde_json::Value,
 ) -> ExitCode {
-    let c = ctx.canon(id);
+    // Under the engine's budget: a huge expansion is an error, not minutes of work.
+    let c = match ctx.try_canon(id) {
+        Ok(c) => c,
+        Err(limit) => {
+            eprintln!("error: <expression>: {limit}");
+            return ExitCode::from(2);
+        }
+    };
     if out.json {
         let mut v = json!({
             "input": input,
