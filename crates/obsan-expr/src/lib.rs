@@ -52,7 +52,8 @@ pub use graph::{Ctx, Id, Symbol};
 pub use lower::EngineError;
 pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{
-    line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS, MAX_DEPTH, MAX_HEIGHT,
+    line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS, MAX_DEPTH, MAX_DIGITS,
+    MAX_HEIGHT,
 };
 pub use poly::{Mono, Poly, Var};
 pub use print::latex_name;

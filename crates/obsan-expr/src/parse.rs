@@ -275,7 +275,9 @@ impl<'a> Lexer<'a> {
                 Span::new(start, p + 1),
             ));
         }
-        if int_end - start + frac.len() > 400 {
+        // Printed canonical forms carry their exact coefficients, which can be
+        // long; they must read back (see print.rs), so only absurd lengths are refused.
+        if int_end - start + frac.len() > MAX_DIGITS {
             return Err(ParseError::new("number has too many digits", span));
         }
         let mantissa: Int = format!("{}{}", &self.src[start..int_end], frac)
@@ -298,6 +300,9 @@ struct Parser<'a> {
     span: Span,
     depth: usize,
 }
+
+/// Most digits of a number literal.
+pub const MAX_DIGITS: usize = 1_000_000;
 
 /// Deepest nesting of parentheses, signs, powers and calls.
 pub const MAX_DEPTH: usize = 500;

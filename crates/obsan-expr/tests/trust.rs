@@ -332,3 +332,17 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn printed_forms_with_long_coefficients_read_back() {
+    // Found by fuzzing: the printed form had a 430-digit coefficient, past the
+    // reader's old 400-digit limit, so it did not parse back.
+    let src = " sqrt((l/63 - xxy)^118 - x)^4 + (HXXX)";
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    let text = ctx.ratfun_text(&r);
+    assert!(text.len() > 10_000);
+    let back = ctx.parse(&text).unwrap();
+    assert_eq!(ctx.try_canon(back).unwrap(), r);
+}
