@@ -130,7 +130,7 @@ const IMAGE_MAX_DEGREE: u32 = 1 << 16;
 
 /// Largest `degree * bits(xi)` for which the heuristic gcd is tried (its
 /// integer images have about that many bits).
-const HEURISTIC_MAX_BITS: u64 = 1 << 20;
+const HEURISTIC_MAX_BITS: u64 = 1 << 26;
 
 /// Exact proof of coprimality by univariate images modulo p (see module docs).
 fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
