@@ -372,6 +372,10 @@ pub struct LimitArgs {
     /// Give up after this many seconds (exit code 2).
     #[arg(long, value_name = "SECONDS", value_parser = seconds)]
     pub timeout: Option<f64>,
+    /// Largest polynomial (terms) the engine may build before it stops with
+    /// "expression too large" (simplify and diff; docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 /// A `--timeout` value: finite, 0 (give up at once) to a year (a Duration must hold it).

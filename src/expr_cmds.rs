@@ -1,8 +1,8 @@
 //! `obsan simplify` and `obsan diff`.
 
-use crate::cli::{DiffArgs, ExprArgs, OutputArgs};
+use crate::cli::{DiffArgs, ExprArgs, LimitArgs, OutputArgs};
 use crate::Failure;
-use obsan_expr::{Ctx, Id};
+use obsan_expr::{Budget, Ctx, Id};
 use obsan_model::ModelError;
 use serde_json::json;
 use std::process::ExitCode;
@@ -21,7 +21,10 @@ fn emit(
     out: &OutputArgs,
     extra: serde_json::Value,
 ) -> Result<ExitCode, Failure> {
-    let c = ctx.canon(id);
+    // Under the engine's budget: a huge expansion is an error, not minutes of work.
+    let c = ctx
+        .try_canon(id)
+        .map_err(|limit| Failure(format!("<expression>: {limit}")))?;
     if out.json {
         let mut v = json!({
             "input": input,
@@ -42,8 +45,18 @@ fn emit(
     Ok(ExitCode::SUCCESS)
 }
 
-pub fn simplify(a: &ExprArgs) -> Result<ExitCode, Failure> {
+/// A context whose budget is the command line's.
+fn budgeted_ctx(limit: &LimitArgs) -> Ctx {
     let mut ctx = Ctx::new();
+    ctx.set_budget(Budget {
+        max_terms: limit.max_terms,
+        ..Budget::default()
+    });
+    ctx
+}
+
+pub fn simplify(a: &ExprArgs) -> Result<ExitCode, Failure> {
+    let mut ctx = budgeted_ctx(&a.limit);
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
     emit(&mut ctx, &a.expr, id, &a.out, json!({}))
 }
@@ -62,7 +75,7 @@ pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
             a.var
         )));
     }
-    let mut ctx = Ctx::new();
+    let mut ctx = budgeted_ctx(&a.limit);
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
     let x = ctx.symbol(&a.var);
     let d = ctx.diff(id, x.var);

@@ -890,7 +890,7 @@ pub fn derive_modes(
             });
         }
     }
-    for (w, _) in &report.basis {
+    for w in &report.basis {
         if modes.len() >= rank {
             break;
         }

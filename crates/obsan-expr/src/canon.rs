@@ -11,17 +11,28 @@
 //! Two expressions are equal as functions iff their forms are identical (up
 //! to the limitations listed in docs/engine.md), so zero-testing is exact.
 
+use crate::budget::{self, invariant, Limit};
 use crate::gcd::gcd;
 use crate::graph::{Ctx, Id, LeafKind, Node};
 use crate::num::{int, Q};
 use crate::poly::{Mono, Poly, Var};
 use rustc_hash::FxHashSet;
 
+/// Sums and products with more operands than this are combined pairwise.
+const BALANCE_MIN: usize = 64;
+
 /// A canonical rational function (see the module documentation).
 #[derive(Clone, PartialEq, Eq, Hash, Debug)]
 pub struct RatFun {
     pub(crate) num: Poly,
     pub(crate) den: Poly,
+}
+
+impl Default for RatFun {
+    /// Zero (`0/1`).
+    fn default() -> RatFun {
+        RatFun::zero()
+    }
 }
 
 impl RatFun {
@@ -103,12 +114,8 @@ impl Ctx {
     fn relation(&self, v: Var) -> Option<Relation<'_>> {
         let leaf = &self.leaves[v as usize];
         match leaf.kind {
-            LeafKind::Sin(_) => Some(Relation::Sin(
-                leaf.partner.expect("sin leaf has a cos partner"),
-            )),
-            LeafKind::Sqrt(_) => Some(Relation::Sqrt(
-                leaf.radicand.as_ref().expect("sqrt leaf has a radicand"),
-            )),
+            LeafKind::Sin(_) => leaf.partner.map(Relation::Sin),
+            LeafKind::Sqrt(_) => leaf.radicand.as_ref().map(Relation::Sqrt),
             _ => None,
         }
     }
@@ -129,7 +136,7 @@ impl Ctx {
     fn reduce_poly(&self, p: Poly) -> (Poly, Poly) {
         let mut num = p;
         let mut den = Poly::one();
-        loop {
+        while budget::poll() {
             // Highest leaf first: reductions only introduce lower leaves.
             let v = num
                 .vars()
@@ -138,7 +145,13 @@ impl Ctx {
                 .find(|&v| self.has_relation(v) && num.degree(v) >= 2);
             let Some(v) = v else { break };
             let cs = num.coeffs_in(v);
-            match self.relation(v).expect("checked") {
+            let Some(rel) = self.relation(v) else {
+                budget::trip(Limit::Internal(
+                    "a sin leaf without cos, or a sqrt without radicand",
+                ));
+                break;
+            };
+            match rel {
                 Relation::Sin(c) => {
                     let one_minus_c2 = Poly::one().sub(&Poly::var(c).pow(2));
                     let mut acc = Poly::zero();
@@ -170,7 +183,12 @@ impl Ctx {
 
     /// Bring any fraction to canonical form.
     pub(crate) fn normalize(&self, num: Poly, den: Poly) -> RatFun {
-        assert!(!den.is_zero(), "canonical form with zero denominator");
+        if den.is_zero() {
+            if !budget::tripped() {
+                budget::trip(Limit::Internal("canonical form with zero denominator"));
+            }
+            return RatFun::zero();
+        }
         if num.is_zero() {
             return RatFun::zero();
         }
@@ -181,6 +199,9 @@ impl Ctx {
         num = num.mul(&m2);
         // Rationalise: remove relation leaves from the denominator, highest first.
         while let Some(v) = den.vars().into_iter().rev().find(|&v| self.has_relation(v)) {
+            if !budget::poll() {
+                return RatFun::zero();
+            }
             let cs = den.coeffs_in(v);
             let d1 = cs
                 .iter()
@@ -195,17 +216,21 @@ impl Ctx {
             let conj = d0.sub(&d1.mul(&Poly::var(v)));
             let (n2, m3) = self.reduce_poly(num.mul(&conj));
             let (d2, m4) = self.reduce_poly(den.mul(&conj));
-            assert!(
-                !d2.is_zero(),
-                "conjugate norm vanished: a sqrt radicand is a perfect square"
-            );
+            if d2.is_zero() {
+                if !budget::tripped() {
+                    budget::trip(Limit::Internal(
+                        "conjugate norm vanished: a sqrt radicand is a perfect square",
+                    ));
+                }
+                return RatFun::zero();
+            }
             num = n2.mul(&m4);
             den = d2.mul(&m3);
         }
         let g = gcd(&num, &den);
         if !g.is_one() {
-            num = num.div_exact(&g).expect("gcd divides numerator");
-            den = den.div_exact(&g).expect("gcd divides denominator");
+            num = invariant(num.div_exact(&g), "gcd divides numerator");
+            den = invariant(den.div_exact(&g), "gcd divides denominator");
         }
         if den.lc_sign() == dashu_int::Sign::Negative {
             num = num.neg();
@@ -232,15 +257,15 @@ impl Ctx {
             }
             let g = gcd(&num, &a.den);
             return RatFun {
-                num: num.div_exact(&g).expect("gcd"),
-                den: a.den.div_exact(&g).expect("gcd"),
+                num: invariant(num.div_exact(&g), "gcd divides"),
+                den: invariant(a.den.div_exact(&g), "gcd divides"),
             }
             .fix_zero();
         }
         // Henrici: only the gcd of the denominators can cancel.
         let g = gcd(&a.den, &b.den);
-        let da = a.den.div_exact(&g).expect("gcd");
-        let db = b.den.div_exact(&g).expect("gcd");
+        let da = invariant(a.den.div_exact(&g), "gcd divides");
+        let db = invariant(b.den.div_exact(&g), "gcd divides");
         let num = a.num.mul(&db).add(&b.num.mul(&da));
         if num.is_zero() {
             return RatFun::zero();
@@ -251,8 +276,8 @@ impl Ctx {
             RatFun { num, den }
         } else {
             RatFun {
-                num: num.div_exact(&g2).expect("gcd"),
-                den: den.div_exact(&g2).expect("gcd"),
+                num: invariant(num.div_exact(&g2), "gcd divides"),
+                den: invariant(den.div_exact(&g2), "gcd divides"),
             }
         }
     }
@@ -270,10 +295,10 @@ impl Ctx {
         }
         let g1 = gcd(&a.num, &b.den);
         let g2 = gcd(&b.num, &a.den);
-        let an = a.num.div_exact(&g1).expect("gcd");
-        let bn = b.num.div_exact(&g2).expect("gcd");
-        let ad = a.den.div_exact(&g2).expect("gcd");
-        let bd = b.den.div_exact(&g1).expect("gcd");
+        let an = invariant(a.num.div_exact(&g1), "gcd divides");
+        let bn = invariant(b.num.div_exact(&g2), "gcd divides");
+        let ad = invariant(a.den.div_exact(&g2), "gcd divides");
+        let bd = invariant(b.den.div_exact(&g1), "gcd divides");
         let num = an.mul(&bn);
         let den = ad.mul(&bd);
         // A product of two reduced numerators may need the relations again.
@@ -315,9 +340,18 @@ impl Ctx {
     pub fn rf_pow(&self, a: &RatFun, e: i64) -> Option<RatFun> {
         let base = if e < 0 { self.rf_inv(a)? } else { a.clone() };
         let mut k = e.unsigned_abs();
+        // The result's degree is known in advance: refuse it before computing.
+        let top = base.num.max_exponent().max(base.den.max_exponent()) as u128 * k as u128;
+        if k > 1 && top > budget::max_degree() as u128 {
+            budget::trip(Limit::Degree {
+                degree: top,
+                max: budget::max_degree() as u128,
+            });
+            return Some(RatFun::zero());
+        }
         let mut r = RatFun::one();
         let mut b = base;
-        while k > 0 {
+        while k > 0 && !budget::tripped() {
             if k & 1 == 1 {
                 r = self.rf_mul(&r, &b);
             }
@@ -335,8 +369,10 @@ impl Ctx {
 
     /// The canonical form of a node (memoised; children first, no recursion).
     ///
-    /// Panics only on a division by an expression whose canonical form is zero;
-    /// builders reject such divisions with an error first.
+    /// Panics only on a division by an expression whose canonical form is zero
+    /// (builders reject such divisions with an error first) and on the hard
+    /// limits of docs/engine.md; no size or time limit applies. Use
+    /// [`Ctx::try_canon`] for untrusted input.
     pub fn canon(&mut self, id: Id) -> RatFun {
         if let Some(r) = self.canon_memo.get(&id) {
             return r.clone();
@@ -361,27 +397,75 @@ impl Ctx {
             let r = match self.node(n).clone() {
                 Node::Num(q) => RatFun::from_q(&q),
                 Node::Leaf(v) => RatFun::var(v),
-                Node::Add(cs) => {
-                    let mut acc = RatFun::zero();
-                    for c in cs.iter() {
-                        acc = self.rf_add(&acc, &self.canon_memo[c]);
-                    }
-                    acc
-                }
-                Node::Mul(cs) => {
-                    let mut acc = RatFun::one();
-                    for c in cs.iter() {
-                        acc = self.rf_mul(&acc, &self.canon_memo[c]);
-                    }
-                    acc
-                }
-                Node::Pow(b, e) => self
-                    .rf_pow(&self.canon_memo[&b], e as i64)
-                    .expect("division by zero in a canonical form"),
+                Node::Add(cs) => self.canon_tree(&cs, false),
+                Node::Mul(cs) => self.canon_tree(&cs, true),
+                Node::Pow(b, e) => invariant(
+                    self.rf_pow(&self.canon_memo[&b], e as i64),
+                    "no division by zero in a canonical form (builders check divisors)",
+                ),
             };
+            // A tripped computation leaves placeholders: never memoise them.
+            let d = r.num.max_exponent().max(r.den.max_exponent());
+            if !budget::check_degree(d as u64) || budget::tripped() {
+                return RatFun::zero();
+            }
             self.canon_memo.insert(n, r);
         }
         self.canon_memo[&id].clone()
+    }
+
+    /// The form of a sum or product of already canonical children, combined
+    /// in a balanced tree: a long chain costs O(n log n) term copies instead
+    /// of O(n^2).
+    fn canon_tree(&self, cs: &[Id], product: bool) -> RatFun {
+        let mut level: Vec<RatFun> = cs.iter().map(|c| self.canon_memo[c].clone()).collect();
+        // Short chains, and sums of fractions (pairing two large denominators
+        // costs a large gcd), go left to right: each step meets a small operand.
+        if level.len() <= BALANCE_MIN || (!product && level.iter().any(|r| !r.den.is_one())) {
+            let mut acc = if product {
+                RatFun::one()
+            } else {
+                RatFun::zero()
+            };
+            for r in &level {
+                if budget::tripped() {
+                    return RatFun::zero();
+                }
+                acc = if product {
+                    self.rf_mul(&acc, r)
+                } else {
+                    self.rf_add(&acc, r)
+                };
+            }
+            return acc;
+        }
+        while level.len() > 1 {
+            if !budget::poll() {
+                return RatFun::zero();
+            }
+            let mut next = Vec::with_capacity(level.len().div_ceil(2));
+            let mut it = level.into_iter();
+            while let Some(a) = it.next() {
+                next.push(match it.next() {
+                    Some(b) if product => self.rf_mul(&a, &b),
+                    Some(b) => self.rf_add(&a, &b),
+                    None => a,
+                });
+            }
+            level = next;
+        }
+        level.pop().unwrap_or_else(RatFun::zero)
+    }
+
+    /// [`Ctx::canon`] under the context's budget ([`Ctx::set_budget`]): the
+    /// entry point for untrusted input.
+    pub fn try_canon(&mut self, id: Id) -> Result<RatFun, Limit> {
+        self.within_budget(|c| c.canon(id))
+    }
+
+    /// [`Ctx::is_identically_zero`] under the context's budget.
+    pub fn try_is_identically_zero(&mut self, id: Id) -> Result<bool, Limit> {
+        self.within_budget(|c| c.canon(id).is_zero())
     }
 
     /// `true` iff the expression is identically zero (exact).
@@ -398,7 +482,9 @@ impl Ctx {
             let den = self.poly_node(&r.den);
             self.div(num, den)
         };
-        self.canon_memo.entry(id).or_insert_with(|| r.clone());
+        if !budget::tripped() {
+            self.canon_memo.entry(id).or_insert_with(|| r.clone());
+        }
         id
     }
 

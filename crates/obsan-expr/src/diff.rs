@@ -28,6 +28,10 @@ impl Ctx {
         todo.sort_unstable();
         for n in todo {
             let d = self.diff_node(n, x);
+            if crate::budget::tripped() {
+                // A placeholder: never memoise it (the budgeted caller discards it).
+                return d;
+            }
             self.diff_memo.insert((n, x), d);
         }
         self.diff_memo[&(id, x)]
@@ -93,7 +97,10 @@ impl Ctx {
             LeafKind::Pi => self.zero(),
             LeafKind::Sin(a) | LeafKind::Cos(a) => {
                 let is_sin = matches!(self.leaves[v as usize].kind, LeafKind::Sin(_));
-                let partner = self.leaf_node(leaf.partner.expect("angle leaves come in pairs"));
+                let partner = self.leaf_node(crate::budget::invariant(
+                    leaf.partner,
+                    "angle leaves come in pairs",
+                ));
                 let darg = self.angle_darg(&a, x);
                 if self.is_zero(darg) {
                     return self.zero();
@@ -201,8 +208,8 @@ impl Ctx {
             // With g = gcd(D, D'), D = g D1, D' = g E:
             // (N' D - N D')/D^2 = (N' D1 - N E)/(D D1); the rest rarely cancels.
             let g = crate::gcd::gcd(&r.den, &dd.num);
-            let d1 = r.den.div_exact(&g).expect("gcd divides");
-            let e = dd.num.div_exact(&g).expect("gcd divides");
+            let d1 = crate::budget::invariant(r.den.div_exact(&g), "gcd divides");
+            let e = crate::budget::invariant(dd.num.div_exact(&g), "gcd divides");
             let a = self.rf_mul(
                 &dn,
                 &RatFun {

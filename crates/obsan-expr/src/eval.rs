@@ -67,6 +67,8 @@ impl Tape {
                 Node::Add(cs) if cs.len() == 2 => Op::Add2(s(cs[0]), s(cs[1])),
                 Node::Mul(cs) if cs.len() == 2 => Op::Mul2(s(cs[0]), s(cs[1])),
                 Node::Add(cs) | Node::Mul(cs) => {
+                    // Fits: the arena stores every child id (4 bytes) too, and
+                    // 2^32 of them would take 16 GB before a tape is compiled.
                     let start = args.len() as u32;
                     args.extend(cs.iter().map(|&c| s(c)));
                     let len = cs.len() as u32;
@@ -301,14 +303,14 @@ impl Ctx {
                     let inv = Fp::ONE.add(t2).inv().ok_or(BadPoint)?;
                     let s = Fp(2).mul(t).mul(inv);
                     let c = Fp::ONE.sub(t2).mul(inv);
-                    let p = leaf.partner.expect("angle pair") as usize;
+                    let p = leaf.partner.ok_or(BadPoint)? as usize;
                     let is_sin = matches!(leaf.kind, LeafKind::Sin(_));
                     values[v] = if is_sin { s } else { c };
                     values[p] = if is_sin { c } else { s };
                     done[p] = true;
                 }
                 LeafKind::Sqrt(_) => {
-                    let r = leaf.radicand.as_ref().expect("radicand");
+                    let r = leaf.radicand.as_ref().ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];
                     let n = r.num.eval_fp(&val);
                     let d = r.den.eval_fp(&val);
@@ -357,7 +359,8 @@ impl Ctx {
         let order = self.reachable_with(roots, false);
         let mut val: Vec<Option<Q>> = vec![None; self.len()];
         for id in order {
-            let get = |c: &Id| val[c.index()].clone().expect("child first");
+            // Children come first in `order`, so their values are set.
+            let get = |c: &Id| val[c.index()].clone().unwrap_or_else(Q::zero);
             let x = match self.node(id) {
                 Node::Num(q) => q.clone(),
                 Node::Leaf(v) => leaf(*v).ok_or(EvalQError::Unbound(*v))?,
@@ -369,7 +372,7 @@ impl Ctx {
         }
         Ok(roots
             .iter()
-            .map(|r| val[r.index()].clone().expect("evaluated"))
+            .map(|r| val[r.index()].clone().unwrap_or_else(Q::zero))
             .collect())
     }
 }
@@ -385,8 +388,9 @@ pub enum EvalQError {
 pub fn rational_angle(t: &Q) -> (Q, Q) {
     let t2 = t.mul(t);
     let d = Q::one().add(&t2);
-    let s = Q::from_i64(2).mul(t).div(&d).expect("1 + t^2 > 0");
-    let c = Q::one().sub(&t2).div(&d).expect("1 + t^2 > 0");
+    // 1 + t^2 >= 1, so both quotients exist.
+    let s = Q::from_i64(2).mul(t).div(&d).unwrap_or_else(Q::zero);
+    let c = Q::one().sub(&t2).div(&d).unwrap_or_else(Q::one);
     (s, c)
 }
 
@@ -404,7 +408,9 @@ pub fn degree_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(u64, u64)> {
             Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
                 LeafKind::Sin(_) | LeafKind::Cos(_) => (2, 2),
                 LeafKind::Sqrt(_) => {
-                    let r = ctx.leaves[*v as usize].radicand.as_ref().expect("radicand");
+                    let Some(r) = ctx.leaves[*v as usize].radicand.as_ref() else {
+                        return vec![(u64::MAX, u64::MAX); roots.len()];
+                    };
                     let leaf_deg = |p: &crate::poly::Poly| {
                         p.terms()
                             .iter()

@@ -12,9 +12,10 @@
 //!    exact division: a verified answer is always correct);
 //! 5. the primitive polynomial remainder sequence, which always succeeds.
 
+use crate::budget::{self, invariant};
 use crate::num::{int, int_gcd, int_symmetric_mod, Fp, Int, SplitMix};
 use crate::poly::{Mono, Poly, Var};
-use dashu_int::ops::SquareRoot;
+use dashu_int::ops::{BitTest, SquareRoot};
 use dashu_int::UBig;
 use std::ops::{Mul, Sub};
 
@@ -87,8 +88,7 @@ fn strip(p: &Poly, m: &Mono, c: &Int) -> Poly {
     if c.is_one() {
         q
     } else {
-        q.div_exact(&Poly::constant(c.clone()))
-            .expect("content divides")
+        invariant(q.div_exact(&Poly::constant(c.clone())), "content divides")
     }
 }
 
@@ -125,6 +125,13 @@ fn gcd_with_content(other: &Poly, p: &Poly, x: Var, method: Method) -> Poly {
     g
 }
 
+/// Largest degree for which the dense image test is tried.
+const IMAGE_MAX_DEGREE: u32 = 1 << 16;
+
+/// Largest `degree * bits(xi)` for which the heuristic gcd is tried (its
+/// integer images have about that many bits).
+const HEURISTIC_MAX_BITS: u64 = 1 << 26;
+
 /// Exact proof of coprimality by univariate images modulo p (see module docs).
 fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
     let mut rng = SplitMix(0x5eed_0b5a_u64 ^ (a.len() as u64) << 20 ^ b.len() as u64);
@@ -136,6 +143,10 @@ fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
             .unwrap_or(Fp::ZERO)
     };
     for &x in vars {
+        // Dense images: beyond this degree leave the proof to the PRS.
+        if a.degree(x).max(b.degree(x)) > IMAGE_MAX_DEGREE {
+            return false;
+        }
         let ia = a.univariate_image(x, &val);
         let ib = b.univariate_image(x, &val);
         // Degrees must survive the substitution for the bound to hold.
@@ -159,11 +170,15 @@ fn trim(p: &mut Vec<Fp>) {
 fn uni_gcd_degree(mut a: Vec<Fp>, mut b: Vec<Fp>) -> usize {
     trim(&mut a);
     trim(&mut b);
-    while !b.is_empty() {
+    // `b` is trimmed, so its last coefficient is nonzero and invertible.
+    while let Some(inv) = b.last().and_then(|l| l.inv()) {
+        if !budget::poll() {
+            return 1;
+        }
         // a mod b
-        let inv = b.last().expect("nonempty").inv().expect("trimmed");
         while a.len() >= b.len() {
-            let c = a.last().expect("nonempty").mul(inv);
+            let Some(&top) = a.last() else { break };
+            let c = top.mul(inv);
             let shift = a.len() - b.len();
             for (i, bi) in b.iter().enumerate() {
                 a[shift + i] = a[shift + i].sub(c.mul(*bi));
@@ -185,7 +200,11 @@ fn heuristic(a: &Poly, b: &Poly, vars: &[Var]) -> Option<Poly> {
     let nb = b.max_abs_coeff();
     let m = if na < nb { na } else { nb };
     let mut xi: Int = m * int(2) + int(29);
+    let deg = a.degree(x).max(b.degree(x)) as u64;
     for _ in 0..6 {
+        if deg.saturating_mul(xi.bit_len() as u64) > HEURISTIC_MAX_BITS || !budget::poll() {
+            return None;
+        }
         let ea = a.eval_var(x, &xi);
         let eb = b.eval_var(x, &xi);
         if !ea.is_zero() && !eb.is_zero() {
@@ -225,7 +244,7 @@ fn primitive_part(p: &Poly) -> Poly {
     if c.is_zero() || c.is_one() {
         p.clone()
     } else {
-        p.div_exact(&Poly::constant(c)).expect("content divides")
+        invariant(p.div_exact(&Poly::constant(c)), "content divides")
     }
 }
 
@@ -244,10 +263,10 @@ fn interpolate(h: &Poly, xi: &Int, x: Var) -> Poly {
         for (m, c) in digit.terms() {
             terms.push((m.mul(&Mono::var(x, e)), c.clone()));
         }
-        rest = rest
-            .sub(&digit)
-            .div_exact(&Poly::constant(xi.clone()))
-            .expect("digit removed");
+        rest = invariant(
+            rest.sub(&digit).div_exact(&Poly::constant(xi.clone())),
+            "digit removed",
+        );
         e += 1;
         if e > 0xFFFF {
             return Poly::zero();
@@ -270,12 +289,12 @@ fn prs(a: &Poly, b: &Poly, x: Var, method: Method) -> Poly {
     };
     let (ca, cb) = (content(a), content(b));
     let c = gcd_with(&ca, &cb, method);
-    let mut f = a.div_exact(&ca).expect("content divides");
-    let mut g = b.div_exact(&cb).expect("content divides");
+    let mut f = invariant(a.div_exact(&ca), "content divides");
+    let mut g = invariant(b.div_exact(&cb), "content divides");
     if f.degree(x) < g.degree(x) {
         std::mem::swap(&mut f, &mut g);
     }
-    while !g.is_zero() {
+    while !g.is_zero() && budget::poll() {
         if g.degree(x) == 0 {
             // Primitive in x and of degree 0: a unit.
             f = Poly::one();
@@ -286,21 +305,25 @@ fn prs(a: &Poly, b: &Poly, x: Var, method: Method) -> Poly {
         g = if r.is_zero() {
             r
         } else {
-            r.div_exact(&content(&r)).expect("content divides")
+            invariant(r.div_exact(&content(&r)), "content divides")
         };
     }
-    let pp = f.div_exact(&content(&f)).expect("content divides");
+    let pp = invariant(f.div_exact(&content(&f)), "content divides");
     c.mul(&pp).normalize_sign()
 }
 
 /// Pseudo-remainder of f by g in variable x.
 fn pseudo_rem(f: &Poly, g: &Poly, x: Var) -> Poly {
     let dg = g.degree(x);
-    let lg = g.coeffs_in(x)[0].1.clone();
+    let Some(lg) = g.coeffs_in(x).first().map(|c| c.1.clone()) else {
+        return Poly::zero();
+    };
     let mut r = f.clone();
-    while !r.is_zero() && r.degree(x) >= dg {
+    while !r.is_zero() && r.degree(x) >= dg && budget::poll() {
         let dr = r.degree(x);
-        let lr = r.coeffs_in(x)[0].1.clone();
+        let Some(lr) = r.coeffs_in(x).first().map(|c| c.1.clone()) else {
+            break;
+        };
         let shift = Poly::monomial(Mono::var(x, dr - dg), int(1));
         r = r.mul(&lg).sub(&lr.mul(&shift).mul(g));
     }

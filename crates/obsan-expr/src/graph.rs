@@ -12,9 +12,11 @@
 //! arguments become atom leaves with their derivative rules. The leaves are
 //! exactly the variables of the canonical form's polynomials.
 
+use crate::budget::{self, Budget, Limit, NUM_BITS_MAX, POW_MAX};
 use crate::canon::RatFun;
 use crate::num::Q;
 use crate::poly::Var;
+use dashu_int::ops::BitTest;
 use rustc_hash::FxHashMap;
 use std::fmt;
 
@@ -88,6 +90,12 @@ pub struct Ctx {
     pub(crate) angle_units: FxHashMap<(Var, bool), u32>,
     /// (sin leaf, cos leaf, half-angle symbol t) for every angle pair.
     pub(crate) half_angles: Vec<(Var, Var, Var)>,
+    /// The limits of budgeted entry points ([`Ctx::within_budget`]).
+    budget: Budget,
+    /// Arena size in cells (a node and its children).
+    cells: usize,
+    /// The node budget while a budgeted entry point runs.
+    cell_cap: Option<usize>,
 }
 
 impl fmt::Debug for Ctx {
@@ -129,7 +137,25 @@ impl Ctx {
         if let Some(&id) = self.dedup.get(&n) {
             return id;
         }
-        let id = Id(u32::try_from(self.nodes.len()).expect("expression arena exceeds 2^32 nodes"));
+        let Ok(next) = u32::try_from(self.nodes.len()) else {
+            budget::trip(Limit::Nodes {
+                nodes: self.nodes.len(),
+                max: u32::MAX as usize,
+            });
+            // Placeholder for a tripped computation, which is discarded.
+            return Id(0);
+        };
+        let id = Id(next);
+        self.cells += 1 + match &n {
+            Node::Add(cs) | Node::Mul(cs) => cs.len(),
+            _ => 0,
+        };
+        if let Some(max) = self.cell_cap.filter(|&m| self.cells > m) {
+            budget::trip(Limit::Nodes {
+                nodes: self.cells,
+                max,
+            });
+        }
         #[cfg(debug_assertions)]
         match &n {
             Node::Add(cs) | Node::Mul(cs) => {
@@ -184,10 +210,13 @@ impl Ctx {
         if let Some(&v) = self.leaf_dedup.get(&kind) {
             return v;
         }
-        let v = u32::try_from(self.leaves.len())
-            .ok()
-            .filter(|&v| v < 0xFFFF)
-            .expect("more than 65535 leaves");
+        let Ok(v) = u32::try_from(self.leaves.len()) else {
+            budget::trip(Limit::Nodes {
+                nodes: self.leaves.len(),
+                max: u32::MAX as usize,
+            });
+            return 0;
+        };
         // Reserve the leaf before interning its node (the node refers to it).
         self.leaves.push(Leaf {
             kind: kind.clone(),
@@ -316,7 +345,10 @@ impl Ctx {
                 k = k.add(&terms[j].1);
                 j += 1;
             }
-            if !k.is_zero() {
+            if k.is_one() {
+                // A unit coefficient needs no product node (long sums rebuild many).
+                merged.push(terms[i].0);
+            } else if !k.is_zero() {
                 let kn = self.num(k);
                 merged.push(self.mul(&[kn, terms[i].0]));
             }
@@ -356,16 +388,13 @@ impl Ctx {
     pub fn mul(&mut self, xs: &[Id]) -> Id {
         let mut c = Q::one();
         let mut facs: Vec<(Id, i64)> = Vec::new();
-        let mut stack: Vec<(Id, i64)> = xs.iter().map(|&x| (x, 1)).collect();
-        while let Some((x, e)) = stack.pop() {
-            match self.node(x).clone() {
-                Node::Num(q) => match q.powi(e) {
-                    Some(p) => c = c.mul(&p),
-                    None => panic!("division by zero in a product"),
-                },
-                Node::Mul(cs) => stack.extend(cs.iter().map(|&y| (y, e))),
-                Node::Pow(b, k) => facs.push((b, k as i64 * e)),
-                _ => facs.push((x, e)),
+        let mut stack: Vec<Id> = xs.to_vec();
+        while let Some(x) = stack.pop() {
+            match self.node(x) {
+                Node::Num(q) => c = c.mul(q),
+                Node::Mul(cs) => stack.extend(cs.iter().copied()),
+                Node::Pow(b, k) => facs.push((*b, *k as i64)),
+                _ => facs.push((x, 1)),
             }
         }
         if c.is_zero() {
@@ -375,10 +404,11 @@ impl Ctx {
         let mut out: Vec<Id> = Vec::new();
         let mut i = 0;
         while i < facs.len() {
+            // Each exponent is an i32 and there are fewer than 2^32 factors: no i64 overflow.
             let mut e = facs[i].1;
             let mut j = i + 1;
             while j < facs.len() && facs[j].0 == facs[i].0 {
-                e += facs[j].1;
+                e = e.saturating_add(facs[j].1);
                 j += 1;
             }
             if e != 0 {
@@ -398,7 +428,16 @@ impl Ctx {
     }
 
     fn pow_raw(&mut self, b: Id, e: i64) -> Id {
-        let e = i32::try_from(e).expect("exponent out of range");
+        let Some(e) = i32::try_from(e)
+            .ok()
+            .filter(|e| (*e as i64).abs() <= POW_MAX)
+        else {
+            budget::trip(Limit::Degree {
+                degree: e.unsigned_abs() as u128,
+                max: POW_MAX as u128,
+            });
+            return b;
+        };
         match e {
             0 => self.one(),
             1 => b,
@@ -406,14 +445,28 @@ impl Ctx {
         }
     }
 
-    /// Integer power. Panics on `0^-k` (the caller checks divisors).
+    /// Integer power. Panics on `0^-k` (the caller checks divisors) and on an
+    /// exponent beyond `i32` outside a budgeted scope, where both are errors.
     pub fn pow(&mut self, b: Id, e: i64) -> Id {
         if let Node::Num(q) = self.node(b) {
-            let q = q.powi(e).expect("division by zero in a power");
+            // The value has about bits * |e| bits: refuse what cannot be stored sensibly.
+            let bits = (q.num().bit_len() + q.den().bit_len()) as u128;
+            let trivial = q.is_zero() || q.is_one() || q.neg().is_one();
+            if !trivial && bits * e.unsigned_abs() as u128 > NUM_BITS_MAX {
+                budget::trip(Limit::Number {
+                    bits: bits * e.unsigned_abs() as u128,
+                    max: NUM_BITS_MAX,
+                });
+                return b;
+            }
+            let Some(q) = q.powi(e) else {
+                budget::trip(Limit::Internal("0 raised to a negative power"));
+                return b;
+            };
             return self.num(q);
         }
         if let Node::Pow(bb, k) = *self.node(b) {
-            return self.pow(bb, k as i64 * e);
+            return self.pow(bb, (k as i64).saturating_mul(e));
         }
         self.pow_raw(b, e)
     }
@@ -426,7 +479,7 @@ impl Ctx {
         let nb = self.neg(b);
         self.add(&[a, nb])
     }
-    /// Quotient. Panics if `b` is the number 0; use [`Ctx::canon`] to test zero first.
+    /// Quotient. Panics if `b` is the number 0; use [`Ctx::checked_div`] for untrusted input.
     pub fn div(&mut self, a: Id, b: Id) -> Id {
         let ib = self.pow(b, -1);
         self.mul(&[a, ib])
@@ -440,5 +493,43 @@ impl Ctx {
         self.reachable(&[id])
             .iter()
             .any(|&n| matches!(self.node(n), Node::Leaf(v) if matches!(self.leaves[*v as usize].kind, LeafKind::Atan(_) | LeafKind::Atan2(_, _))))
+    }
+}
+
+impl Ctx {
+    /// Set the limits that budgeted entry points ([`Ctx::within_budget`],
+    /// [`Ctx::try_canon`], parsing, building and substitution) enforce.
+    pub fn set_budget(&mut self, b: Budget) {
+        self.budget = b;
+    }
+
+    /// The current limits (the defaults unless [`Ctx::set_budget`] was called).
+    pub fn budget(&self) -> Budget {
+        self.budget
+    }
+
+    /// Run `f` under the context's budget. When a limit is hit, `f`'s value
+    /// (built from placeholders) is dropped and the limit is returned; the
+    /// context stays valid, since no placeholder reaches its memo tables or
+    /// leaves. Nested calls share the outermost budget.
+    pub fn within_budget<T>(&mut self, f: impl FnOnce(&mut Ctx) -> T) -> Result<T, Limit> {
+        match self.budgeted(f) {
+            (r, None) => Ok(r),
+            (_, Some(l)) => Err(l),
+        }
+    }
+
+    /// As [`Ctx::within_budget`], keeping `f`'s value (a placeholder when
+    /// the limit is `Some`, but it may hold a located error worth reporting).
+    pub(crate) fn budgeted<T>(&mut self, f: impl FnOnce(&mut Ctx) -> T) -> (T, Option<Limit>) {
+        let b = self.budget;
+        let outer_cap = self.cell_cap;
+        self.cell_cap = Some(outer_cap.map_or(b.max_nodes, |c| c.min(b.max_nodes)));
+        // Memo tables and leaves are only written while nothing has tripped
+        // (canon, diff, from_canonical and the lowering check), so nothing
+        // needs undoing here.
+        let (r, lim) = budget::scope(&b, || f(self));
+        self.cell_cap = outer_cap;
+        (r, lim)
     }
 }

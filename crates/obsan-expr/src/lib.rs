@@ -22,6 +22,12 @@
 //! See `docs/engine.md` in the repository for the mathematics and the
 //! limitations, and the [`tutorial`] module for a guided tour.
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod budget;
 mod canon;
 mod diff;
 mod eval;
@@ -37,6 +43,7 @@ mod subst;
 mod tanhalf;
 pub mod tutorial;
 
+pub use budget::{Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX};
 pub use canon::RatFun;
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
@@ -46,7 +53,10 @@ pub use graph::{Ctx, Id, Symbol};
 pub use jet::{LieJets, LieRow};
 pub use lower::EngineError;
 pub use num::{Fp, Int, SplitMix, P, Q};
-pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
+pub use parse::{
+    line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS, MAX_DEPTH, MAX_DIGITS,
+    MAX_HEIGHT,
+};
 pub use poly::{Mono, Poly, Var};
 pub use print::latex_name;
 pub use tanhalf::TanHalf;

@@ -12,6 +12,7 @@
 //! `x/2` and `3x/2`); mixing `sin(x)` with `sin(x/3)` is refused with an error,
 //! never silently treated as independent.
 
+use crate::budget;
 use crate::canon::RatFun;
 use crate::graph::{Angle, Ctx, Id, Leaf, LeafKind};
 use crate::num::{int, int_exact_sqrt, Int, Q};
@@ -36,6 +37,21 @@ fn err<T>(msg: impl Into<String>) -> R<T> {
     Err(EngineError(msg.into()))
 }
 
+impl From<crate::budget::Limit> for EngineError {
+    fn from(l: crate::budget::Limit) -> EngineError {
+        EngineError(l.to_string())
+    }
+}
+
+/// An error if the budget has tripped: no leaf may be made from a placeholder.
+fn stop() -> R<()> {
+    if budget::tripped() {
+        let why = budget::reason().map_or_else(|| "engine limit".to_string(), |l| l.to_string());
+        return err(why);
+    }
+    Ok(())
+}
+
 /// The linear part of an argument: `sum coeff_i sym_i + pi_coeff pi + rest`.
 struct Linear {
     syms: Vec<(Var, Q)>,
@@ -44,6 +60,13 @@ struct Linear {
 }
 
 impl Ctx {
+    /// The canonical form, or an error if computing it hit the budget.
+    fn canon_ok(&mut self, u: Id) -> R<RatFun> {
+        let c = self.canon(u);
+        stop()?;
+        Ok(c)
+    }
+
     fn split_linear(&self, c: &RatFun) -> Linear {
         let Some(d) = c.den.as_constant() else {
             return Linear {
@@ -63,7 +86,11 @@ impl Ctx {
             };
             let coeff = Q::new(k.clone(), d.clone());
             match single.map(|v| &self.leaves[v as usize].kind) {
-                Some(LeafKind::Symbol(_)) => syms.push((single.expect("matched"), coeff)),
+                Some(LeafKind::Symbol(_)) => {
+                    if let Some(v) = single {
+                        syms.push((v, coeff))
+                    }
+                }
                 Some(LeafKind::Pi) => pi = pi.add(&coeff),
                 _ => rest.push((m.clone(), k.clone())),
             }
@@ -147,8 +174,7 @@ impl Ctx {
     /// (cos, sin) of `k pi`: exact for multiples of pi/4 and pi/6.
     fn pi_rotation(&mut self, k: &Q) -> R<(Id, Id)> {
         // Reduce k modulo 2.
-        let two = Q::from_i64(2);
-        let q = k.div(&two).expect("nonzero");
+        let q = k.mul(&Q::new(int(1), int(2)));
         let fl = q.num() / q.den()
             - if q.is_negative() && !q.is_integer() {
                 int(1)
@@ -157,7 +183,8 @@ impl Ctx {
             };
         let k = k.sub(&Q::from_int(fl * int(2)));
         let den = k.den().clone();
-        let num = i64::try_from(k.num()).expect("reduced");
+        // k is reduced to [0, 2), and its denominator is small when it matters.
+        let num = i64::try_from(k.num()).unwrap_or(0);
         let (cq, sq): (Id, Id);
         if den == int(1) || den == int(2) {
             let quarter = if den == int(1) { num * 2 } else { num }; // multiples of pi/2
@@ -219,15 +246,16 @@ impl Ctx {
         let pi = self.pi();
         let kn = self.num(k);
         let arg = self.mul(&[kn, pi]);
-        let c = self.canon(arg);
+        let c = self.canon_ok(arg)?;
         let id = self.from_canonical(&c);
         Ok(self.angle_pair(Angle::Generic(id)))
     }
 
     /// (cos u, sin u).
     fn cos_sin(&mut self, u: Id) -> R<(Id, Id)> {
-        let c = self.canon(u);
+        let c = self.canon_ok(u)?;
         let lin = self.split_linear(&c);
+        stop()?;
         let (one, zero) = (self.one(), self.zero());
         let mut acc = (one, zero);
         if !lin.rest.is_zero() {
@@ -263,21 +291,23 @@ impl Ctx {
     }
     pub fn tan(&mut self, u: Id) -> R<Id> {
         let (c, s) = self.cos_sin(u)?;
-        if self.canon(c).is_zero() {
+        if self.canon_ok(c)?.is_zero() {
             return err("tan is undefined here: its cosine is identically 0");
         }
         Ok(self.div(s, c))
     }
 
     pub fn exp(&mut self, u: Id) -> R<Id> {
-        let c = self.canon(u);
+        let c = self.canon_ok(u)?;
         let lin = self.split_linear(&c);
+        stop()?;
         let mut factors = Vec::new();
         let mut rest = lin.rest.clone();
         if !lin.pi.is_zero() {
             let pv = self.pi_var();
             let pi_part = self.rf_mul(&RatFun::from_q(&lin.pi), &RatFun::var(pv));
             rest = self.rf_add(&rest, &pi_part);
+            stop()?;
         }
         for (sym, coeff) in lin.syms {
             let (den, n) = self.unit_multiple(sym, &coeff, true)?;
@@ -298,7 +328,7 @@ impl Ctx {
     }
 
     pub fn atan(&mut self, u: Id) -> R<Id> {
-        let c = self.canon(u);
+        let c = self.canon_ok(u)?;
         if c.is_zero() {
             return Ok(self.zero());
         }
@@ -318,7 +348,7 @@ impl Ctx {
     }
 
     pub fn atan2(&mut self, y: Id, x: Id) -> R<Id> {
-        let (cy, cx) = (self.canon(y), self.canon(x));
+        let (cy, cx) = (self.canon_ok(y)?, self.canon_ok(x)?);
         if cy.is_zero() && cx.is_zero() {
             return err("atan2(0, 0) is undefined");
         }
@@ -341,7 +371,7 @@ impl Ctx {
     }
 
     pub fn log(&mut self, u: Id) -> R<Id> {
-        let c = self.canon(u);
+        let c = self.canon_ok(u)?;
         if let Some(q) = c.as_q() {
             if q.is_one() {
                 return Ok(self.zero());
@@ -361,7 +391,7 @@ impl Ctx {
     }
 
     pub fn sqrt(&mut self, u: Id) -> R<Id> {
-        let c = self.canon(u);
+        let c = self.canon_ok(u)?;
         if c.is_zero() {
             return Ok(self.zero());
         }
@@ -378,25 +408,22 @@ impl Ctx {
         // sqrt(c) = (sn/sd) * sqrt(c * sd^2 / sn^2)
         let outside = Q::new(sn.clone(), sd.clone());
         let inner = RatFun {
-            num: c
-                .num
-                .div_exact(&Poly::constant(&sn * &sn))
-                .expect("square divides content"),
-            den: c
-                .den
-                .div_exact(&Poly::constant(&sd * &sd))
-                .expect("square divides content"),
+            num: budget::invariant(
+                c.num.div_exact(&Poly::constant(&sn * &sn)),
+                "square divides content",
+            ),
+            den: budget::invariant(
+                c.den.div_exact(&Poly::constant(&sd * &sd)),
+                "square divides content",
+            ),
         };
+        stop()?;
         let out = self.num(outside);
         if inner.is_one() {
             return Ok(out);
         }
-        if inner.num.is_constant() && inner.den.is_constant() {
+        if let (Some(a), Some(b)) = (inner.num.as_constant(), inner.den.as_constant()) {
             // sqrt(a/b) = sqrt(a b) / b for constants, so the atom is an integer.
-            let (a, b) = (
-                inner.num.as_constant().expect("const"),
-                inner.den.as_constant().expect("const"),
-            );
             if !b.is_one() {
                 let ab = self.num(Q::from_int(&a * &b));
                 let r = self.sqrt(ab)?;
@@ -409,6 +436,7 @@ impl Ctx {
                 "sqrt of a perfect square is not supported (it is |.|, not a polynomial): write the root without sqrt",
             );
         }
+        stop()?;
         let id = self.from_canonical(&inner);
         let v = self.leaf(LeafKind::Sqrt(id));
         let leaf: &mut Leaf = &mut self.leaves[v as usize];
@@ -419,9 +447,16 @@ impl Ctx {
 
     /// `b^q` for a rational exponent: integers and halves.
     pub fn pow_q(&mut self, b: Id, q: &Q) -> R<Id> {
-        let zero = self.canon(b).is_zero();
+        // Only a negative power needs the zero test (and its canonical form).
+        let zero = if q.is_negative() {
+            self.canon_ok(b)?.is_zero()
+        } else {
+            false
+        };
         if q.is_integer() {
-            let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
+            let e = i64::try_from(q.num())
+                .ok()
+                .filter(|e| e.abs() <= budget::POW_MAX);
             let Some(e) = e else {
                 return err(format!("exponent {q} is too large"));
             };
@@ -432,7 +467,9 @@ impl Ctx {
         }
         if q.den() == &int(2) {
             let r = self.sqrt(b)?;
-            let e = i64::try_from(q.num()).ok().filter(|e| e.abs() <= 10_000);
+            let e = i64::try_from(q.num())
+                .ok()
+                .filter(|e| e.abs() <= budget::POW_MAX);
             let Some(e) = e else {
                 return err(format!("exponent {q} is too large"));
             };
@@ -448,7 +485,7 @@ impl Ctx {
 
     /// `b^e`: a constant exponent goes to [`Ctx::pow_q`], any other is `exp(e log b)`.
     pub fn pow_expr(&mut self, b: Id, e: Id) -> R<Id> {
-        if let Some(q) = self.canon(e).as_q() {
+        if let Some(q) = self.canon_ok(e)?.as_q() {
             return self.pow_q(b, &q);
         }
         let l = self.log(b)?;
@@ -458,7 +495,7 @@ impl Ctx {
 
     /// Checked division: an error when the divisor is identically zero.
     pub fn checked_div(&mut self, a: Id, b: Id) -> R<Id> {
-        if self.canon(b).is_zero() {
+        if self.canon_ok(b)?.is_zero() {
             return err("division by an expression that is identically zero");
         }
         Ok(self.div(a, b))
@@ -505,6 +542,9 @@ fn is_square_poly(p: &Poly) -> bool {
     let mut root = Poly::monomial(rm.clone(), rc.clone());
     let two_lead = (rm, &rc * int(2));
     for _ in 0..=p.len() {
+        if !budget::poll() {
+            return false;
+        }
         let rem = p.sub(&root.mul(&root));
         let Some((m, c)) = rem.leading().cloned() else {
             return true;

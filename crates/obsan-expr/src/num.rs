@@ -219,7 +219,8 @@ impl Fp {
         if r.sign() == Sign::Negative {
             r += &p;
         }
-        Fp(u64::try_from(&r).expect("reduced value fits u64"))
+        // 0 <= r < p < 2^64.
+        Fp(u64::try_from(&r).unwrap_or(0))
     }
     pub fn pow(self, mut e: u64) -> Fp {
         let (mut b, mut r) = (self, Fp::ONE);

@@ -5,12 +5,18 @@
 //! optional exponent `1.5e-3`), identifiers, `+ - * / ^`, unary minus,
 //! parentheses, `pi`, and the functions `sin cos tan atan atan2 exp log sqrt`.
 //! `^` is right-associative and binds tighter than unary minus: `-x^2 = -(x^2)`.
+//!
+//! Depth: parentheses, unary signs, powers and calls nest at most
+//! [`MAX_DEPTH`] deep (the parser recurses once per level), and a long flat
+//! chain such as a sum of 100,000 terms is read in a loop and stored as a
+//! balanced tree, so the tree is at most [`MAX_HEIGHT`] high and every
+//! recursive pass over it (building, dropping, evaluating) stays shallow.
 
 use crate::graph::{Ctx, Id};
 use crate::num::{int, Int, Q};
 use std::fmt;
 
-/// Byte range in the source text.
+/// Byte range in the source text (use [`line_col`] for a line and a column in characters).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub struct Span {
     pub start: usize,
@@ -59,8 +65,12 @@ impl fmt::Display for ParseError {
 impl std::error::Error for ParseError {}
 
 /// 1-based line and column (in characters) of a byte offset.
+/// An offset inside a multi-byte character counts as that character's start.
 pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(src.len());
+    let mut offset = offset.min(src.len());
+    while !src.is_char_boundary(offset) {
+        offset -= 1;
+    }
     let before = &src[..offset];
     let line = before.matches('\n').count() + 1;
     let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
@@ -265,7 +275,9 @@ impl<'a> Lexer<'a> {
                 Span::new(start, p + 1),
             ));
         }
-        if int_end - start + frac.len() > 400 {
+        // Printed canonical forms carry their exact coefficients, which can be
+        // long; they must read back (see print.rs), so only absurd lengths are refused.
+        if int_end - start + frac.len() > MAX_DIGITS {
             return Err(ParseError::new("number has too many digits", span));
         }
         let mantissa: Int = format!("{}{}", &self.src[start..int_end], frac)
@@ -289,7 +301,111 @@ struct Parser<'a> {
     depth: usize,
 }
 
-const MAX_DEPTH: usize = 500;
+/// Most digits of a number literal.
+pub const MAX_DIGITS: usize = 1_000_000;
+
+/// Deepest nesting of parentheses, signs, powers and calls.
+pub const MAX_DEPTH: usize = 500;
+
+/// Highest syntax tree [`parse_ast`] returns (flat chains count log2 of their length).
+pub const MAX_HEIGHT: usize = 1000;
+
+/// Chains of `+ -` or `* /` longer than this are stored as balanced trees.
+const CHAIN_BALANCE: usize = 32;
+
+/// Whether two operators bind equally tightly (one flat chain).
+fn same_level(a: BinOp, b: BinOp) -> bool {
+    matches!(
+        (a, b),
+        (BinOp::Add | BinOp::Sub, BinOp::Add | BinOp::Sub)
+            | (BinOp::Mul | BinOp::Div, BinOp::Mul | BinOp::Div)
+    )
+}
+
+/// A chain `x0 op1 x1 op2 x2 ...` as a tree. Short chains associate to the
+/// left as written; long ones become `x0 + (-x1) + ...` or `x0 * (1/x1) * ...`
+/// summed pairwise, which the context folds to the same value.
+fn fold_chain(first: Ast, rest: Vec<(BinOp, Ast)>) -> Ast {
+    if rest.len() < CHAIN_BALANCE {
+        let mut lhs = first;
+        for (op, rhs) in rest {
+            let span = lhs.span.join(rhs.span);
+            lhs = Ast {
+                kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)),
+                span,
+            };
+        }
+        return lhs;
+    }
+    let additive = matches!(rest[0].0, BinOp::Add | BinOp::Sub);
+    let join = if additive { BinOp::Add } else { BinOp::Mul };
+    let mut level: Vec<Ast> = Vec::with_capacity(rest.len() + 1);
+    level.push(first);
+    for (op, x) in rest {
+        let span = x.span;
+        level.push(match op {
+            BinOp::Sub => Ast {
+                kind: AstKind::Neg(Box::new(x)),
+                span,
+            },
+            BinOp::Div => Ast {
+                kind: AstKind::Bin(
+                    BinOp::Div,
+                    Box::new(Ast {
+                        kind: AstKind::Num(Q::one()),
+                        span: Span::new(span.start, span.start),
+                    }),
+                    Box::new(x),
+                ),
+                span,
+            },
+            _ => x,
+        });
+    }
+    while level.len() > 1 {
+        let mut next = Vec::with_capacity(level.len().div_ceil(2));
+        let mut it = level.into_iter();
+        while let Some(a) = it.next() {
+            next.push(match it.next() {
+                Some(b) => {
+                    let span = a.span.join(b.span);
+                    Ast {
+                        kind: AstKind::Bin(join, Box::new(a), Box::new(b)),
+                        span,
+                    }
+                }
+                None => a,
+            });
+        }
+        level = next;
+    }
+    // `level` started non-empty and pairing never empties it.
+    level.pop().unwrap_or(Ast {
+        kind: AstKind::Num(Q::zero()),
+        span: Span::default(),
+    })
+}
+
+/// Height of a tree, and the span of its deepest node (no recursion).
+fn height(a: &Ast) -> (usize, Span) {
+    let mut best = (0, a.span);
+    let mut stack = vec![(a, 1usize)];
+    while let Some((n, h)) = stack.pop() {
+        if h > best.0 {
+            best = (h, n.span);
+        }
+        match &n.kind {
+            AstKind::Neg(x) => stack.push((x, h + 1)),
+            AstKind::Bin(_, l, r) => {
+                stack.push((l, h + 1));
+                stack.push((r, h + 1));
+            }
+            AstKind::Call(_, args) => stack.extend(args.iter().map(|x| (x, h + 1))),
+            AstKind::Num(_) | AstKind::Pi | AstKind::Ident(_) => {}
+        }
+    }
+    best
+}
 
 impl<'a> Parser<'a> {
     fn bump(&mut self) -> Result<(), ParseError> {
@@ -302,31 +418,48 @@ impl<'a> Parser<'a> {
     fn expr(&mut self, min_bp: u8) -> Result<Ast, ParseError> {
         self.depth += 1;
         if self.depth > MAX_DEPTH {
-            return Err(ParseError::new("expression nested too deeply", self.span));
+            return Err(ParseError::new(
+                format!("expression nested too deeply (more than {MAX_DEPTH} levels)"),
+                self.span,
+            ));
         }
         let mut lhs = self.prefix()?;
-        loop {
-            let (op, l_bp, r_bp) = match self.tok {
-                Tok::Op('+') => (BinOp::Add, 1, 2),
-                Tok::Op('-') => (BinOp::Sub, 1, 2),
-                Tok::Op('*') => (BinOp::Mul, 3, 4),
-                Tok::Op('/') => (BinOp::Div, 3, 4),
-                Tok::Op('^') => (BinOp::Pow, 8, 7),
-                _ => break,
-            };
+        while let Some((op, l_bp, r_bp)) = self.infix() {
             if l_bp < min_bp {
                 break;
             }
             self.bump()?;
             let rhs = self.expr(r_bp)?;
-            let span = lhs.span.join(rhs.span);
-            lhs = Ast {
-                kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)),
-                span,
-            };
+            if op == BinOp::Pow {
+                let span = lhs.span.join(rhs.span);
+                lhs = Ast {
+                    kind: AstKind::Bin(op, Box::new(lhs), Box::new(rhs)),
+                    span,
+                };
+                continue;
+            }
+            // The rest of a flat chain at this level, in a loop (no recursion per term).
+            let mut rest = vec![(op, rhs)];
+            while let Some((op2, _, r_bp2)) = self.infix().filter(|t| same_level(t.0, op)) {
+                self.bump()?;
+                rest.push((op2, self.expr(r_bp2)?));
+            }
+            lhs = fold_chain(lhs, rest);
         }
         self.depth -= 1;
         Ok(lhs)
+    }
+
+    /// The current token as an infix operator with its binding powers.
+    fn infix(&self) -> Option<(BinOp, u8, u8)> {
+        Some(match self.tok {
+            Tok::Op('+') => (BinOp::Add, 1, 2),
+            Tok::Op('-') => (BinOp::Sub, 1, 2),
+            Tok::Op('*') => (BinOp::Mul, 3, 4),
+            Tok::Op('/') => (BinOp::Div, 3, 4),
+            Tok::Op('^') => (BinOp::Pow, 8, 7),
+            _ => return None,
+        })
     }
 
     fn prefix(&mut self) -> Result<Ast, ParseError> {
@@ -460,12 +593,48 @@ pub fn parse_ast(src: &str) -> Result<Ast, ParseError> {
         };
         return Err(ParseError::new(what, p.span));
     }
+    let (h, at) = height(&a);
+    if h > MAX_HEIGHT {
+        return Err(ParseError::new(
+            format!("expression nested too deeply (more than {MAX_HEIGHT} levels)"),
+            at,
+        ));
+    }
     Ok(a)
 }
 
 impl Ctx {
-    /// Build a syntax tree; `resolve` maps each identifier to a node.
+    /// Build a syntax tree; `resolve` maps each identifier to a node. Runs
+    /// under the context's budget ([`Ctx::set_budget`]): a limit is reported
+    /// at the innermost subexpression that reached it.
     pub fn build(
+        &mut self,
+        ast: &Ast,
+        resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>,
+    ) -> Result<Id, ParseError> {
+        match self.budgeted(|ctx| ctx.build_node(ast, resolve)) {
+            (Err(e), _) => Err(e),
+            (Ok(_), Some(l)) => Err(ParseError::new(l.to_string(), ast.span)),
+            (Ok(id), None) => Ok(id),
+        }
+    }
+
+    /// [`Ctx::build`] without arming the budget (the tree is at most
+    /// [`MAX_HEIGHT`] high, so the recursion is shallow).
+    fn build_node(
+        &mut self,
+        ast: &Ast,
+        resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>,
+    ) -> Result<Id, ParseError> {
+        let id = self.build_one(ast, resolve)?;
+        if crate::budget::tripped() {
+            let why = crate::budget::reason().map_or_else(String::new, |l| l.to_string());
+            return Err(ParseError::new(why, ast.span));
+        }
+        Ok(id)
+    }
+
+    fn build_one(
         &mut self,
         ast: &Ast,
         resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>,
@@ -476,12 +645,12 @@ impl Ctx {
             AstKind::Pi => self.pi(),
             AstKind::Ident(n) => resolve(self, n, ast.span)?,
             AstKind::Neg(x) => {
-                let v = self.build(x, resolve)?;
+                let v = self.build_node(x, resolve)?;
                 self.neg(v)
             }
             AstKind::Bin(op, l, r) => {
-                let a = self.build(l, resolve)?;
-                let b = self.build(r, resolve)?;
+                let a = self.build_node(l, resolve)?;
+                let b = self.build_node(r, resolve)?;
                 match op {
                     BinOp::Add => self.add(&[a, b]),
                     BinOp::Sub => self.sub(a, b),
@@ -493,18 +662,21 @@ impl Ctx {
             AstKind::Call(f, args) => {
                 let mut v = Vec::with_capacity(args.len());
                 for a in args {
-                    v.push(self.build(a, resolve)?);
+                    v.push(self.build_node(a, resolve)?);
                 }
-                let r = match f.as_str() {
-                    "sin" => self.sin(v[0]),
-                    "cos" => self.cos(v[0]),
-                    "tan" => self.tan(v[0]),
-                    "atan" => self.atan(v[0]),
-                    "atan2" => self.atan2(v[0], v[1]),
-                    "exp" => self.exp(v[0]),
-                    "log" => self.log(v[0]),
-                    "sqrt" => self.sqrt(v[0]),
-                    _ => unreachable!("the parser accepts only known functions"),
+                let r = match (f.as_str(), v.as_slice()) {
+                    ("sin", &[u]) => self.sin(u),
+                    ("cos", &[u]) => self.cos(u),
+                    ("tan", &[u]) => self.tan(u),
+                    ("atan", &[u]) => self.atan(u),
+                    ("atan2", &[y, x]) => self.atan2(y, x),
+                    ("exp", &[u]) => self.exp(u),
+                    ("log", &[u]) => self.log(u),
+                    ("sqrt", &[u]) => self.sqrt(u),
+                    _ => Err(crate::lower::EngineError(format!(
+                        "unknown function '{f}' with {} arguments",
+                        v.len()
+                    ))),
                 };
                 r.map_err(|e| at(e, ast.span))?
             }

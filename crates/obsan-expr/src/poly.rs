@@ -1,10 +1,13 @@
 //! Sparse multivariate polynomials with integer coefficients.
 //!
 //! A monomial is a list of packed `(variable, exponent)` words, sorted by
-//! variable. The packing `((0xFFFF - var) << 16) | exp` makes the derived
-//! lexicographic order of the word slices equal to the lex monomial order
-//! with variable 0 highest, so sorting and leading terms need no custom code.
+//! variable. The packing `((u32::MAX - var) << 32) | exp` in a `u64` makes the
+//! derived lexicographic order of the word slices equal to the lex monomial
+//! order with variable 0 highest, so sorting and leading terms need no custom
+//! code. Every variable index and every exponent up to `u32::MAX` is
+//! representable; exponent sums are checked (see `budget.rs`), never wrapped.
 
+use crate::budget::{self, invariant};
 use crate::num::{int, int_div_exact, int_gcd, Fp, Int};
 use dashu_int::Sign;
 use rustc_hash::FxHashMap as HashMap;
@@ -15,24 +18,33 @@ use std::ops::{Add, Mul};
 /// Index of a polynomial variable (a leaf of the expression context).
 pub type Var = u32;
 
-const VAR_MAX: u32 = 0xFFFF;
-
 #[inline]
-fn pack(v: Var, e: u32) -> u32 {
-    debug_assert!(
-        v <= VAR_MAX && e > 0 && e <= 0xFFFF,
-        "variable or exponent out of range"
-    );
-    ((VAR_MAX - v) << 16) | e
+fn pack(v: Var, e: u32) -> u64 {
+    debug_assert!(e > 0, "zero exponents are not stored");
+    (((u32::MAX - v) as u64) << 32) | e as u64
 }
 #[inline]
-fn unpack(w: u32) -> (Var, u32) {
-    (VAR_MAX - (w >> 16), w & 0xFFFF)
+fn unpack(w: u64) -> (Var, u32) {
+    (u32::MAX - (w >> 32) as u32, w as u32)
+}
+
+/// `a + b` for exponents; past `u32::MAX` the budget trips (a panic outside
+/// an armed scope) and the result is a placeholder the caller discards. The
+/// softer degree budget is checked at coarser points (`Poly::max_exponent`).
+#[inline]
+fn add_exp(a: u32, b: u32) -> u32 {
+    match a.checked_add(b) {
+        Some(s) => s,
+        None => {
+            budget::check_degree(a as u64 + b as u64);
+            1
+        }
+    }
 }
 
 /// A monomial: packed words in decreasing word order (increasing variable).
 #[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Debug, Default)]
-pub struct Mono(SmallVec<[u32; 8]>);
+pub struct Mono(SmallVec<[u64; 8]>);
 
 impl Mono {
     pub fn one() -> Mono {
@@ -61,17 +73,21 @@ impl Mono {
     pub fn degree(&self, v: Var) -> u32 {
         self.iter().find(|&(x, _)| x == v).map_or(0, |(_, e)| e)
     }
-    pub fn total_degree(&self) -> u32 {
-        self.iter().map(|(_, e)| e).sum()
+    pub fn total_degree(&self) -> u64 {
+        self.iter().map(|(_, e)| e as u64).sum()
+    }
+    /// The largest exponent of any variable.
+    pub fn max_exponent(&self) -> u32 {
+        self.iter().map(|(_, e)| e).max().unwrap_or(0)
     }
     pub fn mul(&self, o: &Mono) -> Mono {
         let (a, b) = (&self.0, &o.0);
-        let mut out: SmallVec<[u32; 8]> = SmallVec::with_capacity(a.len() + b.len());
+        let mut out: SmallVec<[u64; 8]> = SmallVec::with_capacity(a.len() + b.len());
         let (mut i, mut j) = (0, 0);
         while i < a.len() && j < b.len() {
             let ((va, ea), (vb, eb)) = (unpack(a[i]), unpack(b[j]));
             if va == vb {
-                out.push(pack(va, ea + eb));
+                out.push(pack(va, add_exp(ea, eb)));
                 i += 1;
                 j += 1;
             } else if va < vb {
@@ -88,7 +104,7 @@ impl Mono {
     }
     /// `self / o` when `o` divides `self`.
     pub fn div(&self, o: &Mono) -> Option<Mono> {
-        let mut out: SmallVec<[u32; 8]> = SmallVec::with_capacity(self.0.len());
+        let mut out: SmallVec<[u64; 8]> = SmallVec::with_capacity(self.0.len());
         let mut j = 0;
         for &w in &self.0 {
             let (v, e) = unpack(w);
@@ -283,6 +299,7 @@ impl Poly {
                 }
             }
         }
+        budget::check_terms(out.len());
         Poly { terms: out }
     }
     pub fn mul(&self, o: &Poly) -> Poly {
@@ -295,12 +312,19 @@ impl Poly {
         if o.terms.len() == 1 {
             return self.mul_term(&o.terms[0].0, &o.terms[0].1);
         }
+        if budget::tripped() {
+            return Poly::zero();
+        }
         // At most len(a) len(b) terms, usually far fewer: cap the reservation.
         let mut map: HashMap<Mono, Int> = HashMap::with_capacity_and_hasher(
-            (self.len() * o.len()).min(1 << 16),
+            self.len().saturating_mul(o.len()).min(1 << 16),
             Default::default(),
         );
         for (ma, ca) in &self.terms {
+            // The product only grows: stop as soon as it passes the budget.
+            if !budget::poll() || !budget::check_terms(map.len()) {
+                return Poly::zero();
+            }
             for (mb, cb) in &o.terms {
                 let c = ca * cb;
                 match map.entry(ma.mul(mb)) {
@@ -312,6 +336,7 @@ impl Poly {
             }
         }
         let mut terms: Vec<_> = map.into_iter().filter(|(_, c)| !c.is_zero()).collect();
+        budget::check_terms(terms.len());
         terms.sort_unstable_by(|a, b| b.0.cmp(&a.0));
         Poly { terms }
     }
@@ -332,6 +357,13 @@ impl Poly {
         self.mul_term(&Mono::one(), c)
     }
     pub fn pow(&self, e: u32) -> Poly {
+        if e > 1 {
+            let top = self.max_exponent() as u64 * e as u64;
+            if top > budget::max_degree() as u64 {
+                budget::check_degree(top);
+                return Poly::zero();
+            }
+        }
         let mut r = Poly::one();
         let mut b = self.clone();
         let mut e = e;
@@ -347,8 +379,11 @@ impl Poly {
         r
     }
     /// Exact quotient `self / d`, or `None` if `d` does not divide `self` over Z.
+    /// `None` also for a zero divisor.
     pub fn div_exact(&self, d: &Poly) -> Option<Poly> {
-        assert!(!d.is_zero(), "polynomial division by zero");
+        if d.is_zero() {
+            return None;
+        }
         if let Some(c) = d.as_constant() {
             let mut terms = Vec::with_capacity(self.len());
             for (m, x) in &self.terms {
@@ -376,6 +411,9 @@ impl Poly {
         let mut q = Vec::new();
         let rest: Vec<(Mono, Int)> = d.terms[1..].to_vec();
         while let Some((rm, rc)) = r.pop_last() {
+            if !budget::poll() {
+                return None;
+            }
             let m = rm.div(&lm)?;
             if !(&rc % &lc).is_zero() {
                 return None;
@@ -407,16 +445,24 @@ impl Poly {
             .max()
             .unwrap_or(0)
     }
-    pub fn total_degree(&self) -> u32 {
+    pub fn total_degree(&self) -> u64 {
         self.terms
             .iter()
             .map(|(m, _)| m.total_degree())
             .max()
             .unwrap_or(0)
     }
+    /// The largest exponent of any variable in any term.
+    pub fn max_exponent(&self) -> u32 {
+        self.terms
+            .iter()
+            .map(|(m, _)| m.max_exponent())
+            .max()
+            .unwrap_or(0)
+    }
     /// Sorted list of the variables that occur.
     pub fn vars(&self) -> Vec<Var> {
-        let mut bits: SmallVec<[u64; 4]> = SmallVec::new();
+        let mut bits: SmallVec<[u64; 8]> = SmallVec::new();
         for (m, _) in &self.terms {
             for &w in m.0.iter() {
                 let v = unpack(w).0 as usize;
@@ -471,7 +517,7 @@ impl Poly {
         Poly::from_terms(self.terms.iter().map(|(m, c)| {
             let (e, rest) = m.split(v);
             while pows.len() <= e as usize {
-                let next = pows.last().expect("nonempty") * x;
+                let next = invariant(pows.last().cloned(), "powers start at 1") * x;
                 pows.push(next);
             }
             (rest, c * &pows[e as usize])
@@ -505,6 +551,7 @@ impl Poly {
         acc
     }
     /// Dense univariate image in F_p[v], the other variables given values.
+    /// Dense, so the caller bounds the degree first.
     pub fn univariate_image(&self, v: Var, val: &dyn Fn(Var) -> Fp) -> Vec<Fp> {
         let mut out = vec![Fp::ZERO; self.degree(v) as usize + 1];
         for (m, c) in &self.terms {
@@ -552,7 +599,7 @@ impl Poly {
             terms: self
                 .terms
                 .iter()
-                .map(|(mm, c)| (mm.div(m).expect("monomial divides"), c.clone()))
+                .map(|(mm, c)| (invariant(mm.div(m), "monomial content divides"), c.clone()))
                 .collect(),
         }
     }
@@ -584,7 +631,7 @@ impl Poly {
             if e == 0 {
                 return None;
             }
-            let m2 = m.div(&Mono::var(v, 1)).expect("degree checked");
+            let m2 = invariant(m.div(&Mono::var(v, 1)), "degree checked");
             Some((m2, c * int(e as i64)))
         }))
     }

@@ -126,11 +126,11 @@ impl Ctx {
     }
 
     fn arg(&self, id: Id, st: Style) -> String {
-        let r = self
-            .canon_memo
-            .get(&id)
-            .expect("atom arguments are canonical");
-        self.fmt_ratfun(r, st, false)
+        let r = crate::budget::invariant(
+            self.canon_memo.get(&id).cloned(),
+            "atom arguments are canonical",
+        );
+        self.fmt_ratfun(&r, st, false)
     }
 
     fn fmt_leaf(&self, v: Var, st: Style) -> String {
@@ -320,10 +320,10 @@ fn factor_list(p: &Poly) -> Vec<Poly> {
             crate::num::int(1),
         ));
     }
-    let mut rest = p
-        .div_mono(&m)
-        .div_exact(&Poly::constant(c))
-        .expect("content divides");
+    let mut rest = crate::budget::invariant(
+        p.div_mono(&m).div_exact(&Poly::constant(c)),
+        "content divides",
+    );
     let mut stack = vec![];
     // Split by the content in each variable until nothing splits.
     'outer: loop {
@@ -336,7 +336,7 @@ fn factor_list(p: &Poly) -> Vec<Poly> {
                 }
             }
             if !g.is_constant() {
-                let q = rest.div_exact(&g).expect("content divides");
+                let q = crate::budget::invariant(rest.div_exact(&g), "content divides");
                 stack.push(g);
                 rest = q;
                 continue 'outer;

@@ -9,7 +9,12 @@ use rustc_hash::FxHashMap;
 
 impl Ctx {
     /// `id` with each symbol `map[i].0` replaced by the node `map[i].1`.
+    /// Runs under the context's budget ([`Ctx::set_budget`]).
     pub fn substitute(&mut self, id: Id, map: &[(Var, Id)]) -> Result<Id, EngineError> {
+        self.within_budget(|c| c.substitute_raw(id, map))?
+    }
+
+    fn substitute_raw(&mut self, id: Id, map: &[(Var, Id)]) -> Result<Id, EngineError> {
         let order = self.reachable(&[id]);
         let mut new: FxHashMap<Id, Id> = FxHashMap::default();
         for n in order {
@@ -18,10 +23,14 @@ impl Ctx {
             let is_target =
                 matches!(self.node(n), Node::Leaf(v) if map.iter().any(|(s, _)| s == v));
             let r = if is_target {
-                let Node::Leaf(v) = *self.node(n) else {
-                    unreachable!()
+                let v = match *self.node(n) {
+                    Node::Leaf(v) => Some(v),
+                    _ => None,
                 };
-                map.iter().find(|(s, _)| *s == v).expect("target").1
+                match map.iter().find(|(s, _)| Some(*s) == v) {
+                    Some(t) => t.1,
+                    None => n,
+                }
             } else if !changed {
                 n
             } else {
@@ -39,7 +48,7 @@ impl Ctx {
                     }
                     Node::Pow(b, e) => {
                         let nb = get(&b);
-                        if e < 0 && self.canon(nb).is_zero() {
+                        if e < 0 && self.canon(nb).is_zero() && !crate::budget::tripped() {
                             return Err(EngineError(
                                 "the substitution makes a denominator zero".into(),
                             ));
@@ -49,9 +58,12 @@ impl Ctx {
                     Node::Leaf(v) => self.rebuild_leaf(v, &get)?,
                 }
             };
+            if crate::budget::tripped() {
+                return Err(EngineError("engine limit".into()));
+            }
             new.insert(n, r);
         }
-        Ok(new[&id])
+        Ok(new.get(&id).copied().unwrap_or(id))
     }
 
     fn rebuild_leaf(&mut self, v: Var, get: &dyn Fn(&Id) -> Id) -> Result<Id, EngineError> {

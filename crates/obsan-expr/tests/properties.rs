@@ -3,6 +3,7 @@
 
 use obsan_expr::{gcd, parse_ast, Ctx, Id, Poly, PolyGcd, PrsGcd, SplitMix, Tape, Var};
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 
 const SYMS: [&str; 3] = ["x", "y", "z"];
 
@@ -68,7 +69,7 @@ fn points(seed: u64, n: usize) -> Vec<[f64; 3]> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
 
     /// The canonical form has the value of the expression it came from.
     #[test]
@@ -375,7 +376,7 @@ fn substitution_relowers_functions() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
 
     /// Differentiating the canonical form directly agrees with canonicalising
     /// the differentiated graph (two independent routes to the same form).
@@ -391,7 +392,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
 
     /// The half-angle view and back is the identity on canonical forms.
     #[test]
@@ -406,7 +407,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: None, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
 
     /// Inversion (through the half-angle view when sines are present) gives
     /// the canonical inverse: a * (1/a) = 1, and the same form as dividing.

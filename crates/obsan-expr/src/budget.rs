@@ -1,0 +1,257 @@
+//! Engine limits: a size and time budget, and the error when it is exceeded.
+//!
+//! The polynomial kernels (`poly.rs`, `gcd.rs`) cannot return errors without
+//! threading `Result` through every ring operation, so a budget is armed per
+//! thread for the duration of a fallible entry point ([`crate::Ctx::try_canon`],
+//! [`crate::Ctx::within_budget`], parsing). A kernel that exceeds it *trips*
+//! the budget: the first reason is recorded, every later operation returns a
+//! cheap placeholder at once, and the entry point discards all of it and
+//! returns the recorded [`Limit`]. A tripped computation never reaches a memo
+//! table or a caller, so no placeholder can be mistaken for a result.
+//!
+//! Outside an armed scope (the infallible API used by trusted callers) no size
+//! or time limit applies, and an exceeded hard limit (an exponent beyond
+//! `u32::MAX`, a leaf count beyond `u32::MAX`) or a broken internal invariant
+//! panics with its reason instead of returning a wrong answer.
+
+use std::cell::Cell;
+use std::fmt;
+use std::time::Instant;
+
+/// Largest exponent of a variable in a polynomial (the packing's hard limit).
+pub const EXP_MAX: u32 = u32::MAX;
+
+/// Largest exponent of a power node in the expression graph.
+pub const POW_MAX: i64 = i32::MAX as i64;
+
+/// Largest number of bits of a rational power `q^e` of the graph.
+pub const NUM_BITS_MAX: u128 = 1 << 24;
+
+/// Size and time limits of an engine computation (see docs/engine.md, Limits).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Budget {
+    /// Most terms of any one polynomial (numerator or denominator).
+    pub max_terms: usize,
+    /// Most nodes in the expression arena, counted as `1 + children`.
+    pub max_nodes: usize,
+    /// Largest exponent of any variable in a polynomial.
+    pub max_degree: u32,
+    /// Wall-clock deadline.
+    pub deadline: Option<Instant>,
+}
+
+impl Budget {
+    /// Default term limit: a product of 16 distinct binomials (65536 terms)
+    /// passes, one of 17 or more stops within about a second.
+    pub const DEFAULT_MAX_TERMS: usize = 100_000;
+    /// Default arena limit: about 1.5 GB of nodes.
+    pub const DEFAULT_MAX_NODES: usize = 50_000_000;
+    /// Default degree limit: dense univariate images stay below 8 MB.
+    pub const DEFAULT_MAX_DEGREE: u32 = 1_000_000;
+
+    /// No limit beyond the hard ones.
+    pub fn unlimited() -> Budget {
+        Budget {
+            max_terms: usize::MAX,
+            max_nodes: usize::MAX,
+            max_degree: EXP_MAX,
+            deadline: None,
+        }
+    }
+}
+
+impl Default for Budget {
+    /// Limits that the shipped systems and the paper's analyses never reach.
+    fn default() -> Budget {
+        Budget {
+            max_terms: Budget::DEFAULT_MAX_TERMS,
+            max_nodes: Budget::DEFAULT_MAX_NODES,
+            max_degree: Budget::DEFAULT_MAX_DEGREE,
+            deadline: None,
+        }
+    }
+}
+
+/// Why a computation was stopped.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Limit {
+    /// A polynomial grew past the term budget.
+    Terms { terms: usize, max: usize },
+    /// The arena grew past the node budget.
+    Nodes { nodes: usize, max: usize },
+    /// An exponent passed the degree budget or the hard exponent range.
+    Degree { degree: u128, max: u128 },
+    /// A numeric power would have more bits than the engine stores.
+    Number { bits: u128, max: u128 },
+    /// The deadline passed.
+    Timeout,
+    /// An internal invariant failed (a bug: please report the input).
+    Internal(&'static str),
+}
+
+impl fmt::Display for Limit {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Limit::Terms { terms, max } => write!(
+                f,
+                "expression too large: {terms} terms, budget {max}; raise it with --max-terms"
+            ),
+            Limit::Nodes { nodes, max } => write!(
+                f,
+                "expression too large: {nodes} graph nodes, budget {max}; raise it with --max-terms"
+            ),
+            Limit::Degree { degree, max } => {
+                write!(f, "exponent too large: {degree}, the limit is {max}")
+            }
+            Limit::Number { bits, max } => {
+                write!(f, "number too large: about {bits} bits, the limit is {max}")
+            }
+            Limit::Timeout => f.write_str("time limit reached; raise it with --timeout"),
+            Limit::Internal(what) => write!(f, "internal error in the symbolic engine: {what}"),
+        }
+    }
+}
+
+impl std::error::Error for Limit {}
+
+#[derive(Clone, Copy)]
+struct Armed {
+    max_terms: usize,
+    max_degree: u32,
+    deadline: Option<Instant>,
+}
+
+thread_local! {
+    static ARMED: Cell<Option<Armed>> = const { Cell::new(None) };
+    static TRIPPED: Cell<bool> = const { Cell::new(false) };
+    static REASON: std::cell::RefCell<Option<Limit>> = const { std::cell::RefCell::new(None) };
+    static TICK: Cell<u32> = const { Cell::new(0) };
+}
+
+/// Run `f` with `b` armed on this thread. A nested scope keeps the outer
+/// budget (the outermost caller's limits apply) and reports the outer trip.
+/// The value is a placeholder whenever the limit is `Some`.
+pub(crate) fn scope<T>(b: &Budget, f: impl FnOnce() -> T) -> (T, Option<Limit>) {
+    if ARMED.with(|a| a.get()).is_some() {
+        let r = f();
+        return (r, reason());
+    }
+    ARMED.with(|a| {
+        a.set(Some(Armed {
+            max_terms: b.max_terms,
+            max_degree: b.max_degree,
+            deadline: b.deadline,
+        }))
+    });
+    // Disarm and clear even if `f` unwinds, so a later scope starts clean.
+    struct Reset;
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            ARMED.with(|a| a.set(None));
+            TRIPPED.with(|t| t.set(false));
+            REASON.with(|r| r.borrow_mut().take());
+        }
+    }
+    let _reset = Reset;
+    let r = f();
+    (r, reason())
+}
+
+/// The limit hit in the current scope, if any.
+pub(crate) fn reason() -> Option<Limit> {
+    REASON.with(|r| r.borrow().clone())
+}
+
+/// Whether a limit has been hit in the current scope (work should stop).
+#[inline]
+pub(crate) fn tripped() -> bool {
+    TRIPPED.with(|t| t.get())
+}
+
+/// Record that `l` was hit. Outside a scope this is a broken hard limit or
+/// invariant of the infallible API, and panics rather than go on wrongly.
+#[cold]
+pub(crate) fn trip(l: Limit) {
+    if ARMED.with(|a| a.get()).is_none() {
+        #[allow(clippy::panic)]
+        {
+            panic!(
+                "obsan-expr: {l} (use the budgeted API, e.g. Ctx::try_canon, for untrusted input)"
+            );
+        }
+    }
+    TRIPPED.with(|t| t.set(true));
+    REASON.with(|r| {
+        let mut r = r.borrow_mut();
+        if r.is_none() {
+            *r = Some(l);
+        }
+    });
+}
+
+/// Check a polynomial's size against the armed term budget.
+#[inline]
+pub(crate) fn check_terms(n: usize) -> bool {
+    let max = ARMED.with(|a| a.get()).map_or(usize::MAX, |a| a.max_terms);
+    if n > max {
+        trip(Limit::Terms { terms: n, max });
+        return false;
+    }
+    true
+}
+
+/// The armed degree limit (`EXP_MAX` outside a scope).
+#[inline]
+pub(crate) fn max_degree() -> u32 {
+    ARMED.with(|a| a.get()).map_or(EXP_MAX, |a| a.max_degree)
+}
+
+/// Check an exponent against the armed degree budget and the hard range.
+#[inline]
+pub(crate) fn check_degree(d: u64) -> bool {
+    let max = max_degree();
+    if d > max as u64 {
+        trip(Limit::Degree {
+            degree: d as u128,
+            max: max as u128,
+        });
+        return false;
+    }
+    true
+}
+
+/// Poll the deadline (cheaply: the clock is read every 64th call). Returns
+/// `false` once the scope has tripped for any reason.
+#[inline]
+pub(crate) fn poll() -> bool {
+    if tripped() {
+        return false;
+    }
+    let t = TICK.with(|t| {
+        let v = t.get().wrapping_add(1);
+        t.set(v);
+        v
+    });
+    if t.is_multiple_of(64) {
+        if let Some(d) = ARMED.with(|a| a.get()).and_then(|a| a.deadline) {
+            if Instant::now() >= d {
+                trip(Limit::Timeout);
+                return false;
+            }
+        }
+    }
+    true
+}
+
+/// `Some(x)` or, for `None`, a tripped invariant (`what` names it) and a placeholder.
+pub(crate) fn invariant<T: Default>(x: Option<T>, what: &'static str) -> T {
+    match x {
+        Some(v) => v,
+        None => {
+            if !tripped() {
+                trip(Limit::Internal(what));
+            }
+            T::default()
+        }
+    }
+}

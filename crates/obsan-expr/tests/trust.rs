@@ -1,0 +1,348 @@
+//! Issue 14 (engine part): no silent wrong answer, no panic, a budget.
+//! Every reproducer of the issue is here, checked against an independent
+//! computation (exponent arithmetic, term counts, exact evaluation).
+
+use obsan_expr::{line_col, parse_ast, Budget, Ctx, Limit, Mono, Poly, RatFun, Var, MAX_HEIGHT, Q};
+use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
+use std::time::{Duration, Instant};
+
+/// The single term of a monomial form, as (variable, exponent) pairs.
+fn monomial(r: &RatFun) -> Vec<(Var, u32)> {
+    assert!(r.denominator().is_one(), "not a polynomial");
+    let t = r.numerator().terms();
+    assert_eq!(t.len(), 1, "not a monomial");
+    t[0].0.iter().collect()
+}
+
+#[test]
+fn large_exponents_are_exact_not_wrapped() {
+    // Issue 14, defect 1: this printed x^4464 (70000 mod 65536).
+    let mut ctx = Ctx::new();
+    let x = ctx.symbol("x").var;
+    let src = ["x^10000"; 7].join("*");
+    let e = ctx.parse(&src).unwrap();
+    let r = ctx.try_canon(e).unwrap();
+    assert_eq!(monomial(&r), vec![(x, 70_000)]);
+    assert_eq!(ctx.ratfun_text(&r), "x^70000");
+    // ... and this printed 0.
+    let d = ctx.parse("(x^10000)^7 - x^4464").unwrap();
+    let rd = ctx.try_canon(d).unwrap();
+    assert!(!rd.is_zero());
+    assert_eq!(rd.numerator().len(), 2);
+    // Exact evaluation at x = 1/2 separates the two monomials: 2^-70000 - 2^-4464.
+    let half = Q::new(1.into(), 2.into());
+    let v = ctx.eval_q(&[d], &|_| Some(half.clone())).unwrap();
+    let want = half.powi(70_000).unwrap().sub(&half.powi(4464).unwrap());
+    assert_eq!(v[0], want);
+}
+
+#[test]
+fn exponent_beyond_the_graph_range_is_an_error() {
+    // Issue 14, defect 2: an `expect` on an i32 conversion panicked here.
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("((x^10000)^10000)^100").unwrap_err();
+    assert!(e.message.contains("exponent too large"), "{}", e.message);
+    // A power beyond the degree budget is refused, not computed.
+    let mut ctx = Ctx::new();
+    let id = ctx.parse("(x^100000)^100").unwrap();
+    match ctx.try_canon(id) {
+        Err(Limit::Degree { degree, max }) => {
+            assert_eq!(degree, 10_000_000);
+            assert_eq!(max, Budget::DEFAULT_MAX_DEGREE as u128);
+        }
+        other => panic!("{other:?}"),
+    }
+    // Large powers of numbers are refused by size.
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("((3^10000)^10000)^100").unwrap_err();
+    assert!(e.message.contains("number too large"), "{}", e.message);
+    // 1 and -1 to any power are cheap and exact.
+    let mut ctx = Ctx::new();
+    let id = ctx
+        .parse("((-1)^100001)^30000 * ((1^10000)^10000)^100")
+        .unwrap();
+    assert_eq!(ctx.try_canon(id).unwrap().as_q(), Some(Q::from_i64(1)));
+}
+
+#[test]
+fn many_leaves_keep_their_identity() {
+    // More than 65535 leaves: the old packing had 16 bits for the variable.
+    let n = 70_000;
+    let src: Vec<String> = (0..n).map(|i| format!("{}*v{i}", i % 7 + 1)).collect();
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(&src.join(" + ")).unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    assert_eq!(r.numerator().len(), n);
+    // Exact evaluation with v_i = i: sum (i mod 7 + 1) i.
+    let want: i64 = (0..n as i64).map(|i| (i % 7 + 1) * i).sum();
+    let names: Vec<(Var, i64)> = (0..n)
+        .map(|i| (ctx.lookup(&format!("v{i}")).unwrap().var, i as i64))
+        .collect();
+    let map: std::collections::HashMap<Var, i64> = names.into_iter().collect();
+    let back = ctx.from_canonical(&r);
+    let v = ctx
+        .eval_q(&[back], &|v| map.get(&v).map(|&k| Q::from_i64(k)))
+        .unwrap();
+    assert_eq!(v[0], Q::from_i64(want));
+}
+
+#[test]
+fn an_expression_ending_in_an_operator_is_a_located_error() {
+    for src in ["x*", "x'", "x +", "sin(", "x^", "(x", "2*(x+"] {
+        let e = parse_ast(src).unwrap_err();
+        assert!(
+            e.span.start <= src.len() && e.span.end <= src.len(),
+            "{src}"
+        );
+    }
+    let e = parse_ast("x*").unwrap_err();
+    assert_eq!(e.span.start, 2);
+    assert!(e.message.contains("end of expression"));
+}
+
+#[test]
+fn long_flat_chains_do_not_recurse() {
+    // Issue 14: a sum of 100,000 terms overflowed the stack (exit 134). The
+    // test thread has the default 2 MB stack.
+    let n = 100_000;
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(&vec!["x"; n].join("+")).unwrap();
+    assert_eq!(ctx.to_text(id), format!("{n}*x"));
+    let id = ctx.parse(&vec!["x"; n].join("-")).unwrap();
+    assert_eq!(ctx.to_text(id), format!("-{}*x", n - 2));
+    let id = ctx.parse(&vec!["y"; n].join("*")).unwrap();
+    let y = ctx.lookup("y").unwrap().var;
+    assert_eq!(monomial(&ctx.try_canon(id).unwrap()), vec![(y, n as u32)]);
+    // A chain of quotients keeps its left-to-right meaning: a/b/c = a/(b c).
+    let src = format!("x/{}", vec!["2"; 200].join("/"));
+    let id = ctx.parse(&src).unwrap();
+    let want = Q::new(1.into(), dashu_pow2(200));
+    let r = ctx.try_canon(id).unwrap();
+    let x = ctx.lookup("x").unwrap().var;
+    assert_eq!(r.denominator().as_constant(), Some(want.den().clone()));
+    assert_eq!(
+        monomial(&RatFun::from_poly(r.numerator().clone())),
+        vec![(x, 1)]
+    );
+    // Mixed signs in a long chain: x - 1 + x - 1 + ... (40 pairs) = 40 x - 40.
+    let src = vec!["x - 1"; 40].join(" + ");
+    let id = ctx.parse(&src).unwrap();
+    assert_eq!(ctx.to_text(id), "40*x - 40");
+}
+
+fn dashu_pow2(k: usize) -> obsan_expr::Int {
+    let mut v = obsan_expr::Int::from(1);
+    for _ in 0..k {
+        v *= obsan_expr::Int::from(2);
+    }
+    v
+}
+
+#[test]
+fn deep_nesting_is_refused_with_a_place() {
+    let n = 5_000;
+    let src = format!("{}x{}", "(".repeat(n), ")".repeat(n));
+    let e = parse_ast(&src).unwrap_err();
+    assert!(e.message.contains("nested too deeply"), "{}", e.message);
+    let src = format!("{}x", "-".repeat(n));
+    assert!(parse_ast(&src)
+        .unwrap_err()
+        .message
+        .contains("nested too deeply"));
+    let src = format!("{}x{}", "sin(".repeat(n), ")".repeat(n));
+    assert!(parse_ast(&src)
+        .unwrap_err()
+        .message
+        .contains("nested too deeply"));
+    // Within the limits, the tree height stays below MAX_HEIGHT.
+    let ok = format!("{}x{}", "(".repeat(400), ")".repeat(400));
+    assert!(parse_ast(&ok).is_ok());
+    let _ = MAX_HEIGHT;
+}
+
+#[test]
+fn columns_count_characters() {
+    let src = "x + ä*α";
+    let e = parse_ast(src).unwrap_err();
+    // The error is at 'ä', the fifth character, though its byte offset is 4 too;
+    // 'α' after a two-byte 'ä' and '*' is the seventh character at byte 7.
+    assert_eq!(line_col(src, e.span.start), (1, 5));
+    let src2 = "ää + α";
+    let e2 = parse_ast(src2).unwrap_err();
+    assert_eq!(e2.span.start, 0);
+    assert_eq!(line_col(src2, 7), (1, 6));
+    let src3 = "\u{feff}x";
+    let e3 = parse_ast(src3).unwrap_err();
+    assert_eq!(line_col(src3, e3.span.end), (1, 2));
+    // An offset inside a character never panics; it names that character.
+    assert_eq!(line_col("aα", 2), (1, 2));
+    assert_eq!(line_col("aα\nb", 99), (2, 2));
+}
+
+#[test]
+fn the_term_budget_stops_a_product_of_binomials() {
+    // Issue 14, defect 6: 22 binomials took 22 s and 1.5 GB.
+    let src: Vec<String> = (0..22).map(|i| format!("(a{i} + 1)")).collect();
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(&src.join("*")).unwrap();
+    match ctx.try_canon(id) {
+        Err(Limit::Terms { terms, max }) => {
+            assert_eq!(max, Budget::DEFAULT_MAX_TERMS);
+            assert!(terms > max);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The message names the flag.
+    let msg = Limit::Terms { terms: 5, max: 4 }.to_string();
+    assert!(msg.contains("expression too large") && msg.contains("--max-terms"));
+    // The context stays usable and correct after a trip: 2^10 terms.
+    let small: Vec<String> = (0..10).map(|i| format!("(a{i} + 1)")).collect();
+    let id = ctx.parse(&small.join("*")).unwrap();
+    assert_eq!(ctx.try_canon(id).unwrap().numerator().len(), 1 << 10);
+    // A raised budget lets the same product through: 2^12 terms.
+    let mut ctx = Ctx::new();
+    ctx.set_budget(Budget {
+        max_terms: 5_000,
+        ..Budget::default()
+    });
+    let twelve: Vec<String> = (0..12).map(|i| format!("(a{i} + 1)")).collect();
+    let id = ctx.parse(&twelve.join("*")).unwrap();
+    assert_eq!(ctx.try_canon(id).unwrap().numerator().len(), 1 << 12);
+    let thirteen: Vec<String> = (0..13).map(|i| format!("(a{i} + 1)")).collect();
+    let id = ctx.parse(&thirteen.join("*")).unwrap();
+    assert!(matches!(ctx.try_canon(id), Err(Limit::Terms { .. })));
+}
+
+#[test]
+fn a_passed_deadline_stops_the_engine() {
+    let src: Vec<String> = (0..16).map(|i| format!("(a{i} + b{i})")).collect();
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(&src.join("*")).unwrap();
+    ctx.set_budget(Budget {
+        deadline: Some(Instant::now()),
+        ..Budget::default()
+    });
+    assert_eq!(ctx.try_canon(id), Err(Limit::Timeout));
+    // Budget errors during parsing become located parse errors.
+    ctx.set_budget(Budget {
+        deadline: Some(Instant::now() + Duration::from_secs(3600)),
+        max_terms: 100,
+        ..Budget::default()
+    });
+    let e = ctx
+        .parse(&format!("1 + sqrt({})", src.join("*")))
+        .unwrap_err();
+    assert!(e.message.contains("expression too large"), "{}", e.message);
+    assert!(e.span.start >= 4, "{:?}", e.span);
+}
+
+#[test]
+fn the_node_budget_stops_graph_growth() {
+    let mut ctx = Ctx::new();
+    ctx.set_budget(Budget {
+        max_nodes: 1_000,
+        ..Budget::default()
+    });
+    let src: Vec<String> = (0..2_000).map(|i| format!("v{i}")).collect();
+    let e = ctx.parse(&src.join("*")).unwrap_err();
+    assert!(e.message.contains("graph nodes"), "{}", e.message);
+}
+
+#[test]
+fn substitution_runs_under_the_budget() {
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("x^20").unwrap();
+    let x = ctx.lookup("x").unwrap().var;
+    let s = ctx.substitute(e, &[(x, e)]).unwrap();
+    assert_eq!(monomial(&ctx.try_canon(s).unwrap()), vec![(x, 400)]);
+    // x^2000 in x^2000 is x^4000000, past the default degree budget.
+    let e = ctx.parse("x^2000").unwrap();
+    let s = ctx.substitute(e, &[(x, e)]).unwrap();
+    assert!(matches!(ctx.try_canon(s), Err(Limit::Degree { .. })));
+}
+
+#[test]
+#[should_panic(expected = "exponent too large")]
+fn the_infallible_polynomial_api_refuses_to_wrap() {
+    // Outside a budgeted scope an exponent past u32::MAX panics; it never wraps.
+    let m = Mono::var(0, u32::MAX);
+    let _ = m.mul(&Mono::var(0, 1));
+}
+
+#[test]
+fn exponents_up_to_the_hard_limit_are_stored() {
+    let m = Mono::var(7, u32::MAX - 1).mul(&Mono::var(7, 1));
+    assert_eq!(m.degree(7), u32::MAX);
+    let p = Poly::monomial(m, 3.into());
+    assert_eq!(p.max_exponent(), u32::MAX);
+}
+
+/// Exponents and variables anywhere in their range.
+fn pair() -> impl Strategy<Value = (Var, u32)> {
+    (
+        prop_oneof![0u32..8, (u32::MAX - 8)..u32::MAX, any::<u32>()],
+        1u32..(1 << 28),
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))),
+        ..ProptestConfig::default()
+    })]
+
+    /// Multiplication adds exponents exactly, division undoes it, and the
+    /// packed order is the lex order on (variable ascending, exponent).
+    #[test]
+    fn monomial_arithmetic_is_exact(a in prop::collection::vec(pair(), 0..6), b in prop::collection::vec(pair(), 0..6)) {
+        let (ma, mb) = (Mono::from_pairs(a.clone()), Mono::from_pairs(b.clone()));
+        let p = ma.mul(&mb);
+        let mut vars: Vec<Var> = a.iter().chain(&b).map(|t| t.0).collect();
+        vars.sort_unstable();
+        vars.dedup();
+        for &v in &vars {
+            let sum: u64 = a.iter().chain(&b).filter(|t| t.0 == v).map(|t| t.1 as u64).sum();
+            prop_assert_eq!(p.degree(v) as u64, sum);
+        }
+        prop_assert_eq!(p.div(&mb), Some(ma.clone()));
+        prop_assert_eq!(p.div(&ma), Some(mb.clone()));
+        // Lex order: compare the (variable, exponent) lists with variable 0 highest.
+        let key = |m: &Mono| -> Vec<(std::cmp::Reverse<Var>, u32)> {
+            m.iter().map(|(v, e)| (std::cmp::Reverse(v), e)).collect()
+        };
+        prop_assert_eq!(ma.cmp(&mb), key(&ma).cmp(&key(&mb)));
+    }
+
+    /// `x^a * x^b` is `x^(a+b)` for exponents past the old 16-bit field.
+    #[test]
+    fn products_of_powers_add_exponents(a in 1u32..400_000, b in 1u32..400_000) {
+        let mut ctx = Ctx::new();
+        let x = ctx.symbol("x").var;
+        let id = ctx.parse(&format!("x^{a} * x^{b} * y^{a}")).unwrap();
+        let y = ctx.lookup("y").unwrap().var;
+        let r = ctx.try_canon(id).unwrap();
+        prop_assert_eq!(monomial(&r), vec![(x, a + b), (y, a)]);
+        // And the difference with a wrapped exponent is never zero.
+        let w = (a + b) % 65_536;
+        if w > 0 && w != a + b {
+            let d = ctx.parse(&format!("x^{a} * x^{b} - x^{w}")).unwrap();
+            prop_assert!(!ctx.try_is_identically_zero(d).unwrap());
+        }
+    }
+}
+
+#[test]
+fn printed_forms_with_long_coefficients_read_back() {
+    // Found by fuzzing: the printed form had a 430-digit coefficient, past the
+    // reader's old 400-digit limit, so it did not parse back.
+    let src = " sqrt((l/63 - xxy)^118 - x)^4 + (HXXX)";
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    let text = ctx.ratfun_text(&r);
+    assert!(text.len() > 10_000);
+    let back = ctx.parse(&text).unwrap();
+    assert_eq!(ctx.try_canon(back).unwrap(), r);
+}

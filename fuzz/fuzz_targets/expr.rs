@@ -1,0 +1,61 @@
+//! Fuzz the expression parser and canonicaliser (issue 14).
+//!
+//! Input bytes are an expression (invalid UTF-8 is skipped). It is parsed
+//! and canonicalised under a small budget; an error is fine, a panic or a
+//! hang is a bug. When both succeed, the oracles are:
+//! - the canonical form and the parsed expression agree at random points of
+//!   F_p (p = 2^61 - 1) wherever both are defined;
+//! - a zero canonical form evaluates to zero at every such point;
+//! - the printed canonical form parses back to the same canonical form.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use obsan_expr::{Budget, Ctx, SplitMix};
+use std::time::{Duration, Instant};
+
+fuzz_target!(|data: &[u8]| {
+    let Ok(src) = std::str::from_utf8(data) else {
+        return;
+    };
+    let mut ctx = Ctx::new();
+    ctx.set_budget(Budget {
+        max_terms: 2_000,
+        max_nodes: 200_000,
+        max_degree: 300,
+        deadline: Some(Instant::now() + Duration::from_secs(2)),
+    });
+    let Ok(id) = ctx.parse(src) else {
+        return;
+    };
+    let Ok(r) = ctx.try_canon(id) else {
+        return;
+    };
+    let Ok(back) = ctx.within_budget(|c| c.from_canonical(&r)) else {
+        return;
+    };
+    // The printed form re-reads to the same canonical form.
+    let text = ctx.ratfun_text(&r);
+    let reread = ctx
+        .parse(&text)
+        .map(|t| ctx.try_canon(t))
+        .unwrap_or_else(|e| panic!("printed form {text:?} of {src:?} does not parse: {e}"));
+    if let Ok(r2) = reread {
+        assert_eq!(r, r2, "{src:?} prints as {text:?}, which reads back differently");
+    }
+    let seed = data
+        .iter()
+        .fold(0x9e37_79b9_7f4a_7c15_u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
+    let mut rng = SplitMix(seed);
+    for _ in 0..4 {
+        let Ok(pt) = ctx.random_fp_point(&mut rng, &|_| None) else {
+            continue;
+        };
+        let Ok(v) = ctx.eval_fp(&[id, back], &pt) else {
+            continue;
+        };
+        assert_eq!(v[0], v[1], "{src:?}: canonical form {text:?} differs in value");
+        if r.is_zero() {
+            assert!(v[0].is_zero(), "{src:?} is canonically zero but not at a point");
+        }
+    }
+});
