@@ -332,7 +332,7 @@ fn row_degree_bounds_cover_the_true_degrees() {
             let l = RatFun::from_poly(lcm);
             let true_deg = row
                 .iter()
-                .map(|e| nf.ctx.rf_mul(e, &l).numerator().total_degree() as u64)
+                .map(|e| nf.ctx.rf_mul(e, &l).numerator().total_degree())
                 .max()
                 .unwrap_or(0);
             assert!(
