@@ -86,7 +86,7 @@ residuals}], independent, independent_count, complete, exact}. Exit 1 when a mod
     #[command(after_help = "Examples:
   obsan modes systems/localization.sys
   obsan modes systems/calib_q_nopsi.sys --json
-  obsan modes systems/classic/two_compartment.sys --out /tmp/obsan-two-compartment-modes --force
+  obsan modes systems/classic/two_compartment.sys --out data/two_compartment_modes
 
 --json prints {system, restriction, n, rank, full_rank, symmetries, modes: [{name, expr, kind,
 angle, domain}], reduced: {inputs, dynamics: [{name, rhs}], outputs: [{name, expr}], closed,
@@ -339,6 +339,21 @@ pub struct SimFlags {
 }
 
 impl Command {
+    /// The engine's term budget of the commands that do exact symbolic work
+    /// on user text; `None` for the others (estimation).
+    pub fn max_terms(&self) -> Option<usize> {
+        match self {
+            Command::Rank(a) | Command::Symmetries(a) => Some(a.an.max_terms),
+            Command::Check(a) => Some(a.an.max_terms),
+            Command::Verify(a) => Some(a.an.max_terms),
+            Command::Simplify(a) => Some(a.limit.max_terms),
+            Command::Diff(a) => Some(a.limit.max_terms),
+            Command::Show(a) => Some(a.limit.max_terms),
+            Command::Lie(a) => Some(a.limit.max_terms),
+            _ => None,
+        }
+    }
+
     /// The `--timeout` of the commands that take one.
     pub fn timeout(&self) -> Option<f64> {
         match self {
@@ -364,6 +379,10 @@ pub struct AnalysisArgs {
     /// Give up after this many seconds (exit code 2).
     #[arg(long, value_name = "SECONDS", value_parser = seconds)]
     pub timeout: Option<f64>,
+    /// Largest polynomial (terms) the engine may build before it stops with
+    /// "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 /// The time limit of the commands that do exact work but take no analysis options.
@@ -373,7 +392,7 @@ pub struct LimitArgs {
     #[arg(long, value_name = "SECONDS", value_parser = seconds)]
     pub timeout: Option<f64>,
     /// Largest polynomial (terms) the engine may build before it stops with
-    /// "expression too large" (simplify and diff; docs/engine.md, Limits).
+    /// "expression too large" (docs/engine.md, Limits).
     #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
     pub max_terms: usize,
 }

@@ -43,10 +43,28 @@ impl<E: std::fmt::Display> From<E> for Failure {
     }
 }
 
+thread_local! {
+    /// Output held back while a command runs under the engine's budget.
+    static HOLD: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
 /// Write to stdout. A reader that went away (broken pipe) has all it wanted:
 /// exit 0 without a message, as `head` expects; any other write error is one.
 pub fn emit(args: std::fmt::Arguments, newline: bool) {
     use std::io::Write;
+    let held = HOLD.with(|h| {
+        let mut h = h.borrow_mut();
+        let buf = h.as_mut()?;
+        use std::fmt::Write as _;
+        let _ = buf.write_fmt(args);
+        if newline {
+            buf.push('\n');
+        }
+        Some(())
+    });
+    if held.is_some() {
+        return;
+    }
     let mut o = std::io::stdout().lock();
     let r = o
         .write_fmt(args)
@@ -61,6 +79,14 @@ pub fn emit(args: std::fmt::Arguments, newline: bool) {
 }
 
 fn main() -> ExitCode {
+    // Panics that follow an exceeded engine budget are reported as the limit
+    // (see `run`); any other panic is a bug and prints as usual.
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !obsan_expr::budget_tripped() {
+            default_hook(info)
+        }
+    }));
     let args = cli::Cli::parse();
     let Some(secs) = args.command.timeout() else {
         return run(args.command);
@@ -85,7 +111,45 @@ fn main() -> ExitCode {
 }
 
 fn run(command: cli::Command) -> ExitCode {
-    let result = match command {
+    // The exact commands run under the engine's budget on this thread, for
+    // every context they make (normal forms too), with their stdout held
+    // back: on a limit, what they computed is placeholders and is dropped.
+    let result = match command.max_terms() {
+        Some(max_terms) => {
+            let budget = obsan_expr::Budget {
+                max_terms,
+                ..obsan_expr::Budget::default()
+            };
+            HOLD.with(|h| *h.borrow_mut() = Some(String::new()));
+            // A check of a library's on a placeholder may panic once the
+            // budget has tripped; that panic is the limit's, caught inside
+            // the scope so the limit is still known.
+            let r = obsan_expr::within_thread_budget(&budget, || {
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(command)))
+            });
+            let held = HOLD.with(|h| h.borrow_mut().take()).unwrap_or_default();
+            match r {
+                Ok(Ok(r)) => {
+                    emit(format_args!("{held}"), false);
+                    r
+                }
+                Ok(Err(panic)) => std::panic::resume_unwind(panic),
+                Err(limit) => Err(Failure(limit.to_string())),
+            }
+        }
+        None => dispatch(command),
+    };
+    match result {
+        Ok(code) => code,
+        Err(Failure(msg)) => {
+            eprintln!("error: {msg}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
+    match command {
         cli::Command::Show(a) => show::run(&a),
         cli::Command::Simplify(a) => expr_cmds::simplify(&a),
         cli::Command::Diff(a) => expr_cmds::diff(&a),
@@ -101,12 +165,5 @@ fn run(command: cli::Command) -> ExitCode {
         cli::Command::Montecarlo(a) => estimate_cmds::montecarlo_cmd(&a),
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
-    };
-    match result {
-        Ok(code) => code,
-        Err(Failure(msg)) => {
-            eprintln!("error: {msg}");
-            ExitCode::from(2)
-        }
     }
 }

@@ -195,17 +195,36 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The first line of every file `obsan modes --out` writes: `--force`
+/// replaces a file only when it starts with it.
+const WRITTEN_BY: &str = "# written by obsan modes (--force may replace this file)";
+
 /// Write PREFIX.sys and PREFIX.dec: each to a temporary sibling, then renamed;
-/// an existing file is replaced only with --force.
+/// an existing file is replaced only with --force, and only if obsan wrote it.
 fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
+    let (sys, dec) = (
+        format!("{WRITTEN_BY}\n{sys}"),
+        format!("{WRITTEN_BY}\n{dec}"),
+    );
     let targets = [
-        (PathBuf::from(format!("{prefix}.sys")), sys),
-        (PathBuf::from(format!("{prefix}.dec")), dec),
+        (PathBuf::from(format!("{prefix}.sys")), sys.as_str()),
+        (PathBuf::from(format!("{prefix}.dec")), dec.as_str()),
     ];
     for (p, _) in &targets {
-        if !force && std::fs::symlink_metadata(p).is_ok() {
+        let Ok(meta) = std::fs::symlink_metadata(p) else {
+            continue;
+        };
+        if !force {
             return Err(Failure(format!(
-                "{} already exists (use --force to replace it)",
+                "{} already exists (use --force to replace a file obsan wrote)",
+                p.display()
+            )));
+        }
+        let ours = meta.is_file()
+            && std::fs::read_to_string(p).is_ok_and(|t| t.lines().next() == Some(WRITTEN_BY));
+        if !ours {
+            return Err(Failure(format!(
+                "refusing to replace {} with --force: obsan did not write it",
                 p.display()
             )));
         }
@@ -217,15 +236,25 @@ fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Fai
         }
     }
     let mut temps = Vec::new();
+    let remove = |temps: &[(PathBuf, &PathBuf)]| {
+        for (t, _) in temps {
+            let _ = std::fs::remove_file(t);
+        }
+    };
     for (p, text) in &targets {
         let tmp = PathBuf::from(format!("{}.tmp-{}", p.display(), std::process::id()));
-        std::fs::write(&tmp, text)
-            .map_err(|e| Failure(format!("cannot write {}: {e}", tmp.display())))?;
+        if let Err(e) = std::fs::write(&tmp, text) {
+            let _ = std::fs::remove_file(&tmp);
+            remove(&temps);
+            return Err(Failure(format!("cannot write {}: {e}", tmp.display())));
+        }
         temps.push((tmp, p));
     }
-    for (tmp, p) in temps {
-        std::fs::rename(&tmp, p)
-            .map_err(|e| Failure(format!("cannot write {}: {e}", p.display())))?;
+    for (tmp, p) in &temps {
+        if let Err(e) = std::fs::rename(tmp, p) {
+            remove(&temps);
+            return Err(Failure(format!("cannot write {}: {e}", p.display())));
+        }
     }
     Ok(())
 }

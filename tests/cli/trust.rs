@@ -434,3 +434,65 @@ fn benign_data_file_variations_give_the_same_calibration() {
         r.stderr
     );
 }
+
+/// The engine's budget covers the commands that read a system: a .sys file
+/// whose expansion passes the exponent range, or an analysis past
+/// --max-terms, ends in the limit's message with exit 2, never a panic.
+#[test]
+fn the_budget_covers_systems_and_analyses() {
+    let sys = temp_file(
+        "huge.sys",
+        "system s\nstate x\ninput u\nx' = u*(x^2000000000 + 1)^3\noutput y = x\n",
+    );
+    for cmd in ["show", "rank", "lie"] {
+        let mut args = vec![cmd, sys.as_str()];
+        if cmd == "lie" {
+            args.extend(["--order", "1"]);
+        }
+        bad(&args, "exponent too large");
+    }
+    let e = bad(
+        &[
+            "symmetries",
+            "systems/calib.sys",
+            "--input",
+            "q",
+            "--max-terms",
+            "1000",
+        ],
+        "expression too large",
+    );
+    assert!(e.contains("--max-terms"), "{e}");
+}
+
+/// `modes --out P --force` replaces only files obsan wrote.
+#[test]
+fn modes_force_keeps_the_users_files() {
+    let d = fresh_dir("modes-force");
+    let prefix = format!("{d}/loc");
+    std::fs::write(format!("{prefix}.sys"), "my own system").unwrap();
+    bad(
+        &[
+            "modes",
+            "systems/localization.sys",
+            "--out",
+            &prefix,
+            "--force",
+        ],
+        "obsan did not write it",
+    );
+    assert_eq!(
+        std::fs::read_to_string(format!("{prefix}.sys")).unwrap(),
+        "my own system"
+    );
+    std::fs::remove_file(format!("{prefix}.sys")).unwrap();
+    ok(&["modes", "systems/localization.sys", "--out", &prefix]);
+    ok(&[
+        "modes",
+        "systems/localization.sys",
+        "--out",
+        &prefix,
+        "--force",
+    ]);
+    ok(&["rank", &format!("{prefix}.sys")]);
+}

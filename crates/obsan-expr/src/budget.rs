@@ -157,6 +157,25 @@ pub(crate) fn scope<T>(b: &Budget, f: impl FnOnce() -> T) -> (T, Option<Limit>) 
     (r, reason())
 }
 
+/// Run `f` with `b` armed on this thread, for every context `f` uses: the
+/// way to put code that calls the infallible API (normal forms, symmetries)
+/// under a budget. On a limit, `f`'s value is built from placeholders and is
+/// dropped; the caller must discard everything `f` produced (its printed
+/// output too) and report the limit.
+pub fn within_thread_budget<T>(b: &Budget, f: impl FnOnce() -> T) -> Result<T, Limit> {
+    match scope(b, f) {
+        (r, None) => Ok(r),
+        (_, Some(l)) => Err(l),
+    }
+}
+
+/// Whether a budget armed on this thread has been exceeded: from then on,
+/// what the engine returns inside the scope is placeholders, and a caller's
+/// invariant checks on them may fail (the binary reports the limit instead).
+pub fn budget_tripped() -> bool {
+    tripped()
+}
+
 /// The limit hit in the current scope, if any.
 pub(crate) fn reason() -> Option<Limit> {
     REASON.with(|r| r.borrow().clone())

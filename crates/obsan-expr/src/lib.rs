@@ -43,7 +43,9 @@ mod subst;
 mod tanhalf;
 pub mod tutorial;
 
-pub use budget::{Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX};
+pub use budget::{
+    budget_tripped, within_thread_budget, Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
+};
 pub use canon::RatFun;
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
