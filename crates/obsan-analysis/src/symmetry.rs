@@ -372,6 +372,18 @@ pub fn symmetries(
 ) -> Result<SymmetryReport, AnalysisError> {
     let n = report.n;
     let r = report.rank;
+    // A full rank is proven by the rank test itself (a non-zero minor at a
+    // point): there is no symmetry to find, and nothing to build.
+    if r == n {
+        return Ok(SymmetryReport {
+            n,
+            rank: r,
+            vectors: Vec::new(),
+            exact: true,
+            rows_checked: 0,
+            certificate: Certificate::Closure,
+        });
+    }
     // Free variables, translations and scalings first: when they account
     // for the whole deficiency, their certificate proves everything. (No
     // usable point for the candidates: the general route decides.)
