@@ -17,7 +17,7 @@
 //! and differentiates it, stays as [`rank_symbolic`], an independent
 //! computation for the tests.
 
-use crate::field_names;
+use crate::fields::field_names;
 use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, P};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
