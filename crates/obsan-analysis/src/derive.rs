@@ -24,7 +24,7 @@ use crate::decomp::{verify_decomposition, Check, Decomposition};
 use crate::modes::{check_modes, ModeReport};
 use crate::rank::{AnalysisError, RankReport};
 use crate::symmetry::SymmetryReport;
-use obsan_expr::{Fp, FpPoint, Id, Poly, RatFun, SplitMix, P, Q};
+use obsan_expr::{Fp, FpPoint, Id, Int, Mono, Poly, RatFun, SplitMix, P, Q};
 use obsan_model::NormalForm;
 use std::time::Instant;
 
@@ -561,14 +561,9 @@ pub fn derive_modes(
     used_names.extend(nf.consts.iter().map(|c| c.0.clone()));
     used_names.extend(nf.inputs.iter().cloned());
     used_names.extend(nf.outputs.iter().map(|o| o.0.clone()));
-    let mut fresh = 0usize;
-    let mut next_name = |used: &mut Vec<String>| loop {
-        fresh += 1;
-        let s = format!("z{fresh}");
-        if !used.contains(&s) {
-            used.push(s.clone());
-            return s;
-        }
+    let mut fresh = Names {
+        used: used_names,
+        count: 0,
     };
 
     // Which variables enter through cos/sin (angles) and which polynomially.
@@ -671,7 +666,7 @@ pub fn derive_modes(
             let text = poly_text(&qs_o, &monos_o, &bnames);
             if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
                 modes.push(DerivedMode {
-                    name: next_name(&mut used_names),
+                    name: fresh.next(),
                     expr: g,
                     text,
                     kind: ModeKind::Translation,
@@ -711,7 +706,7 @@ pub fn derive_modes(
     }
     // Denominator candidates: 1, then the factors of the outputs and of the
     // first-order Lie derivatives as they come out of the canonical form.
-    let mut dens: Vec<Id> = vec![nf.ctx.one()];
+    let mut dens: Vec<(usize, Id)> = vec![(0, nf.ctx.one())];
     if modes.len() < rank && nsym > 0 {
         let mut seen: Vec<Poly> = Vec::new();
         let mut srcs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
@@ -730,141 +725,45 @@ pub fn derive_modes(
                 if nf.ctx.is_angle_valued(id) {
                     continue;
                 }
-                seen.push(p);
-                dens.push(id);
+                seen.push(p.clone());
+                dens.push((p.len(), id));
             }
         }
     }
-    let nb = blocks.len();
-    // w-derivatives of the blocks and of the denominators.
-    let mut wb: Vec<Vec<Id>> = Vec::new(); // [sym][block]
-    let mut wq: Vec<Vec<Id>> = Vec::new(); // [sym][den]
-    for w in &w_ids {
-        let mut row = Vec::new();
-        for &b in &blocks {
-            row.push(lie(nf, b, w));
-        }
-        wb.push(row);
-        let mut rq = Vec::new();
-        for &q in &dens {
-            rq.push(lie(nf, q, w));
-        }
-        wq.push(rq);
-    }
-    for (qi, &qd) in dens.clone().iter().enumerate() {
-        if modes.len() >= rank || nsym == 0 {
-            break;
-        }
-        for d in 1..=opts.max_mode_degree {
+    // Shortest denominators first: simpler modes, and a reduced system whose
+    // exact proof stays small (eq. 39's A_v, V share mu^2 + 2 mu cos(gamma) + 1).
+    dens.sort_by_key(|d| d.0);
+    let dens: Vec<Id> = dens.into_iter().map(|d| d.1).collect();
+    let search = Search {
+        w_ids: &w_ids,
+        rank,
+        opts,
+    };
+    let orig_const: Vec<bool> = bnames.iter().map(|b| consts.contains(b)).collect();
+    let coef = coefficient_blocks(nf, &fields, &names, &angle, &trig, &used_vars, &vars);
+    let orig = (blocks, bnames, orig_const);
+    // The coefficient blocks first when they are fewer: the same invariants
+    // at a lower degree (eq. 16: eta (1 + q delta) cos(phi) is one block).
+    let tries: Vec<(Vec<Id>, Vec<String>, Vec<bool>)> = match coef {
+        Some(c) if c.0.len() < orig.0.len() => vec![c, orig],
+        Some(c) => vec![orig, c],
+        None => vec![orig],
+    };
+    if nsym > 0 {
+        for (blocks, bnames, is_const) in &tries {
             if modes.len() >= rank {
                 break;
             }
-            check_deadline(
-                opts,
-                &format!("the invariant ansatz of degree {d}"),
-                modes.len(),
+            invariant_ansatz(
+                nf,
+                &search,
+                (blocks, bnames, is_const),
+                &dens,
+                &mut modes,
+                &mut indep,
+                &mut fresh,
+                &mut rng,
             )?;
-            let monos = monomials(nb, 0, d);
-            let nm = monos.len();
-            if nm > MAX_UNKNOWNS {
-                break;
-            }
-            let mut roots: Vec<Id> = blocks.clone();
-            roots.push(qd);
-            for j in 0..nsym {
-                roots.extend(&wb[j]);
-                roots.push(wq[j][qi]);
-            }
-            let npts = nm / nsym + 8;
-            let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
-            let mut last_bv: Vec<Fp> = Vec::new();
-            for _ in 0..npts {
-                let (_, v) = point_for(nf, &mut rng, &roots)?;
-                let bv = &v[..nb];
-                last_bv = bv.to_vec();
-                let qv = v[nb];
-                for j in 0..nsym {
-                    let off = nb + 1 + j * (nb + 1);
-                    let dv = &v[off..off + nb];
-                    let dq = v[off + nb];
-                    rows.push(
-                        monos
-                            .iter()
-                            .map(|e| qv * mono_deriv(e, bv, dv) - mono_value(e, bv) * dq)
-                            .collect(),
-                    );
-                }
-            }
-            let mut ns = null_space(rows, nm);
-            ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
-            for v in ns {
-                if modes.len() >= rank {
-                    break;
-                }
-                // Skip constants (only the monomial 1 or constants' monomials).
-                let nonconst = v.iter().zip(&monos).any(|(x, e)| {
-                    !x.is_zero()
-                        && e.iter()
-                            .enumerate()
-                            .any(|(k, &p)| p > 0 && !consts.contains(&bnames[k]))
-                });
-                if !nonconst {
-                    continue;
-                }
-                // A multiple of a constant, or a relation (cos^2 + sin^2 - 1) that
-                // vanishes identically: not a new mode.
-                let all_const_factor = v.iter().zip(&monos).all(|(x, e)| {
-                    x.is_zero()
-                        || e.iter()
-                            .enumerate()
-                            .any(|(k, &p)| p > 0 && consts.contains(&bnames[k]))
-                });
-                if all_const_factor {
-                    continue;
-                }
-                let val: Fp = v
-                    .iter()
-                    .zip(&monos)
-                    .fold(Fp::ZERO, |a, (&c, e)| a + c * mono_value(e, &last_bv));
-                if val.is_zero() {
-                    continue;
-                }
-                let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
-                    continue;
-                };
-                let num = build_poly(nf, &qs, &monos, &blocks);
-                let g = if qi == 0 { num } else { nf.ctx.div(num, qd) };
-                if !indep.raises_rank(nf, g)? || !screen_mode(nf, &w_ids, g, opts.seed)? {
-                    continue;
-                }
-                let c = nf.ctx.canon(g);
-                let poly = c.denominator().is_constant();
-                // The ansatz's own form reads better than the canonical one
-                // (which writes sin^2 as 1 - cos^2); both are the same function.
-                let ptext = poly_text(&qs, &monos, &bnames);
-                let text = if qi == 0 {
-                    ptext
-                } else {
-                    format!("({ptext})/({})", nf.ctx.to_text(qd))
-                };
-                let domain = if poly {
-                    "everywhere".to_string()
-                } else {
-                    format!("where {} != 0", nf.ctx.to_text(qd))
-                };
-                modes.push(DerivedMode {
-                    name: next_name(&mut used_names),
-                    expr: g,
-                    text,
-                    kind: if poly {
-                        ModeKind::Polynomial
-                    } else {
-                        ModeKind::Rational
-                    },
-                    angle: false,
-                    domain,
-                });
-            }
         }
     }
 
@@ -877,7 +776,7 @@ pub fn derive_modes(
             let is_angle = nf.ctx.is_angle_valued(h);
             let text = nf.ctx.to_text(h);
             modes.push(DerivedMode {
-                name: next_name(&mut used_names),
+                name: fresh.next(),
                 expr: h,
                 text,
                 kind: ModeKind::Output,
@@ -909,7 +808,7 @@ pub fn derive_modes(
             };
             let g = nf.ctx.from_canonical(&c);
             modes.push(DerivedMode {
-                name: next_name(&mut used_names),
+                name: fresh.next(),
                 expr: g,
                 text,
                 kind: ModeKind::LieDerivative,
@@ -974,6 +873,286 @@ pub fn derive_modes(
         outputs,
         consts,
     })
+}
+
+/// The names of derived modes: z1, z2, ... skipping names the system uses.
+struct Names {
+    used: Vec<String>,
+    count: usize,
+}
+
+impl Names {
+    fn next(&mut self) -> String {
+        loop {
+            self.count += 1;
+            let s = format!("z{}", self.count);
+            if !self.used.contains(&s) {
+                self.used.push(s.clone());
+                return s;
+            }
+        }
+    }
+}
+
+/// What every invariant search needs.
+struct Search<'a> {
+    w_ids: &'a [Vec<Id>],
+    rank: usize,
+    opts: &'a DeriveOptions,
+}
+
+/// The coefficients of the fields as polynomials in the moving variables
+/// (those some field changes, with cos/sin of the moving angles): the
+/// combinations of the constant variables the dynamics see, such as
+/// `eta (1 + q delta) cos(phi)` of eq. (16). An invariant of degree 5 in the
+/// variables (eq. 23's V) is of degree 3 in these blocks, which a
+/// cross-section of the symmetry group would also give. `None` when a
+/// coefficient holds anything but constant variables (an atom of a moving one).
+#[allow(clippy::type_complexity)]
+fn coefficient_blocks(
+    nf: &mut NormalForm,
+    fields: &[Vec<Id>],
+    names: &[String],
+    angle: &[bool],
+    trig: &[Option<(Id, Id)>],
+    used_vars: &[u32],
+    vars: &[u32],
+) -> Option<(Vec<Id>, Vec<String>, Vec<bool>)> {
+    let n = names.len();
+    let mut blocks = Vec::new();
+    let mut bnames = Vec::new();
+    let mut moving: Vec<u32> = Vec::new();
+    let mut fixed: Vec<u32> = Vec::new();
+    for i in 0..n {
+        let sym_var = nf.ctx.symbol(&names[i]).id;
+        let mut vs = nf.ctx.canon(sym_var).vars();
+        if let Some((c, s)) = trig[i] {
+            vs.extend(nf.ctx.canon(c).vars());
+            vs.extend(nf.ctx.canon(s).vars());
+        }
+        if fields.iter().all(|f| nf.ctx.is_zero(f[i])) {
+            fixed.extend(vs);
+            continue;
+        }
+        moving.extend(vs);
+        if !angle[i] || used_vars.contains(&vars[i]) {
+            blocks.push(sym_var);
+            bnames.push(names[i].clone());
+        }
+        if let Some((c, s)) = trig[i] {
+            blocks.push(c);
+            bnames.push(format!("cos({})", names[i]));
+            blocks.push(s);
+            bnames.push(format!("sin({})", names[i]));
+        }
+    }
+    let mut const_vars: Vec<u32> = Vec::new();
+    for (name, val) in nf.consts.clone() {
+        if val.is_none() {
+            if let Some(s) = nf.ctx.lookup(&name) {
+                const_vars.extend(nf.ctx.canon(s.id).vars());
+            }
+        }
+    }
+    fixed.extend(&const_vars);
+    let nmoving = blocks.len();
+    let mut seen: Vec<Poly> = Vec::new();
+    for f in fields {
+        for &e in f {
+            let c = nf.ctx.canon(e);
+            for p in [c.numerator(), c.denominator()] {
+                // Group the terms by their monomial in the moving variables.
+                let mut groups: Vec<(Mono, Vec<(Mono, Int)>)> = Vec::new();
+                for (m, k) in p.terms() {
+                    let mv = Mono::from_pairs(m.iter().filter(|(v, _)| moving.contains(v)));
+                    let rest = Mono::from_pairs(m.iter().filter(|(v, _)| !moving.contains(v)));
+                    match groups.iter_mut().find(|g| g.0 == mv) {
+                        Some(g) => g.1.push((rest, k.clone())),
+                        None => groups.push((mv, vec![(rest, k.clone())])),
+                    }
+                }
+                for (_, ts) in groups {
+                    let q = Poly::from_terms(ts);
+                    if q.is_constant() {
+                        continue;
+                    }
+                    if q.vars().iter().any(|v| !fixed.contains(v)) {
+                        return None;
+                    }
+                    let content = q.content();
+                    let q = q.div_exact(&Poly::constant(content))?.normalize_sign();
+                    if !seen.contains(&q) {
+                        seen.push(q);
+                    }
+                }
+            }
+        }
+    }
+    let mut is_const = vec![false; nmoving];
+    for q in seen {
+        is_const.push(q.vars().iter().all(|v| const_vars.contains(v)));
+        let text = nf.ctx.poly_text(&q);
+        bnames.push(if text.contains([' ', '*', '^', '/', '-', '+']) {
+            format!("({text})")
+        } else {
+            text
+        });
+        blocks.push(nf.ctx.from_canonical(&RatFun::from_poly(q)));
+    }
+    Some((blocks, bnames, is_const))
+}
+
+/// Polynomial and rational invariants `P/Q` over the blocks: for each fixed
+/// denominator `Q` the PDE (11) `Q w(P) - P w(Q) = 0` is linear in the
+/// coefficients of `P`; solved in F_p, lifted by rational reconstruction,
+/// screened at random points (the exact check of the accepted modes follows
+/// in [`check_modes`]).
+#[allow(clippy::too_many_arguments)]
+fn invariant_ansatz(
+    nf: &mut NormalForm,
+    s: &Search,
+    (blocks, bnames, is_const): (&[Id], &[String], &[bool]),
+    dens: &[Id],
+    modes: &mut Vec<DerivedMode>,
+    indep: &mut Indep,
+    fresh: &mut Names,
+    rng: &mut SplitMix,
+) -> Result<(), AnalysisError> {
+    let nsym = s.w_ids.len();
+    let nb = blocks.len();
+    // w-derivatives of the blocks and of the denominators.
+    let mut wb: Vec<Vec<Id>> = Vec::new(); // [sym][block]
+    let mut wq: Vec<Vec<Id>> = Vec::new(); // [sym][den]
+    for w in s.w_ids {
+        let mut row = Vec::new();
+        for &b in blocks {
+            row.push(lie(nf, b, w));
+        }
+        wb.push(row);
+        let mut rq = Vec::new();
+        for &q in dens {
+            rq.push(lie(nf, q, w));
+        }
+        wq.push(rq);
+    }
+    for (qi, &qd) in dens.iter().enumerate() {
+        if modes.len() >= s.rank || nsym == 0 {
+            break;
+        }
+        for d in 1..=s.opts.max_mode_degree {
+            if modes.len() >= s.rank {
+                break;
+            }
+            check_deadline(
+                s.opts,
+                &format!("the invariant ansatz of degree {d}"),
+                modes.len(),
+            )?;
+            let monos = monomials(nb, 0, d);
+            let nm = monos.len();
+            if nm > MAX_UNKNOWNS {
+                break;
+            }
+            let mut roots: Vec<Id> = blocks.to_vec();
+            roots.push(qd);
+            for j in 0..nsym {
+                roots.extend(&wb[j]);
+                roots.push(wq[j][qi]);
+            }
+            let npts = nm / nsym + 8;
+            let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
+            let mut last_bv: Vec<Fp> = Vec::new();
+            for _ in 0..npts {
+                let (_, v) = point_for(nf, rng, &roots)?;
+                let bv = &v[..nb];
+                last_bv = bv.to_vec();
+                let qv = v[nb];
+                for j in 0..nsym {
+                    let off = nb + 1 + j * (nb + 1);
+                    let dv = &v[off..off + nb];
+                    let dq = v[off + nb];
+                    rows.push(
+                        monos
+                            .iter()
+                            .map(|e| qv * mono_deriv(e, bv, dv) - mono_value(e, bv) * dq)
+                            .collect(),
+                    );
+                }
+            }
+            let mut ns = null_space(rows, nm);
+            ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
+            for v in ns {
+                if modes.len() >= s.rank {
+                    break;
+                }
+                // Skip constants (only the monomial 1 or constants' monomials).
+                let nonconst = v.iter().zip(&monos).any(|(x, e)| {
+                    !x.is_zero()
+                        && e.iter()
+                            .enumerate()
+                            .any(|(k, &p)| p > 0 && !is_const[k])
+                });
+                if !nonconst {
+                    continue;
+                }
+                // A multiple of a constant, or a relation (cos^2 + sin^2 - 1) that
+                // vanishes identically: not a new mode.
+                let all_const_factor = v.iter().zip(&monos).all(|(x, e)| {
+                    x.is_zero()
+                        || e.iter()
+                            .enumerate()
+                            .any(|(k, &p)| p > 0 && is_const[k])
+                });
+                if all_const_factor {
+                    continue;
+                }
+                let val: Fp = v
+                    .iter()
+                    .zip(&monos)
+                    .fold(Fp::ZERO, |a, (&c, e)| a + c * mono_value(e, &last_bv));
+                if val.is_zero() {
+                    continue;
+                }
+                let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
+                    continue;
+                };
+                let num = build_poly(nf, &qs, &monos, &blocks);
+                let g = if qi == 0 { num } else { nf.ctx.div(num, qd) };
+                if !indep.raises_rank(nf, g)? || !screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+                    continue;
+                }
+                let c = nf.ctx.canon(g);
+                let poly = c.denominator().is_constant();
+                // The ansatz's own form reads better than the canonical one
+                // (which writes sin^2 as 1 - cos^2); both are the same function.
+                let ptext = poly_text(&qs, &monos, &bnames);
+                let text = if qi == 0 {
+                    ptext
+                } else {
+                    format!("({ptext})/({})", nf.ctx.to_text(qd))
+                };
+                let domain = if poly {
+                    "everywhere".to_string()
+                } else {
+                    format!("where {} != 0", nf.ctx.to_text(qd))
+                };
+                modes.push(DerivedMode {
+                    name: fresh.next(),
+                    expr: g,
+                    text,
+                    kind: if poly {
+                        ModeKind::Polynomial
+                    } else {
+                        ModeKind::Rational
+                    },
+                    angle: false,
+                    domain,
+                });
+            }
+        }
+    }
+
+    Ok(())
 }
 
 fn vars_id(nf: &mut NormalForm, name: &str) -> Id {
