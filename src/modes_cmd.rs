@@ -77,12 +77,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         .unwrap_or_else(|_| a.sys.system.clone());
     let dec = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
     let sys_text = d.sys_text(&nf.name, &format!("observable modes of {title}"));
-    if std::env::var_os("OBSAN_MODES_DEBUG").is_some() {
-        eprintln!("{}", dec.clone().unwrap_or_default());
-    }
     let checks = match &dec {
         Some(t) => Some(
-            verify_derivation(&mut nf, t, "derived decomposition", a.seed)
+            verify_derivation(&mut nf, t, "derived decomposition", a.seed, (&r, &sym))
                 .map_err(|e| Failure(format!("internal: the derived decomposition: {e}")))?,
         ),
         None => None,

@@ -20,7 +20,7 @@
 //! in the modes (and cos/sin of the angle-valued ones) by the same linear
 //! ansatz, lifted, and proven by exact substitution in canonical form.
 
-use crate::decomp::{verify_decomposition, Check, Decomposition};
+use crate::decomp::{verify_decomposition_with, Check, Decomposition};
 use crate::modes::{check_modes, ModeReport};
 use crate::rank::{AnalysisError, RankReport};
 use crate::symmetry::SymmetryReport;
@@ -268,14 +268,16 @@ impl Derivation {
 }
 
 /// Check a derived decomposition with the exact checks of `obsan verify`.
+/// The rank report and symmetries are the ones the derivation used.
 pub fn verify_derivation(
     nf: &mut NormalForm,
     dec_text: &str,
     origin: &str,
     seed: u64,
+    known: (&RankReport, &SymmetryReport),
 ) -> Result<Vec<Check>, AnalysisError> {
     let d = Decomposition::parse(dec_text, origin)?;
-    verify_decomposition(nf, &d, seed)
+    verify_decomposition_with(nf, &d, seed, Some(known))
 }
 
 fn check_deadline(opts: &DeriveOptions, stage: &str, found: usize) -> Result<(), AnalysisError> {
@@ -1087,10 +1089,7 @@ fn invariant_ansatz(
                 }
                 // Skip constants (only the monomial 1 or constants' monomials).
                 let nonconst = v.iter().zip(&monos).any(|(x, e)| {
-                    !x.is_zero()
-                        && e.iter()
-                            .enumerate()
-                            .any(|(k, &p)| p > 0 && !is_const[k])
+                    !x.is_zero() && e.iter().enumerate().any(|(k, &p)| p > 0 && !is_const[k])
                 });
                 if !nonconst {
                     continue;
@@ -1098,10 +1097,7 @@ fn invariant_ansatz(
                 // A multiple of a constant, or a relation (cos^2 + sin^2 - 1) that
                 // vanishes identically: not a new mode.
                 let all_const_factor = v.iter().zip(&monos).all(|(x, e)| {
-                    x.is_zero()
-                        || e.iter()
-                            .enumerate()
-                            .any(|(k, &p)| p > 0 && is_const[k])
+                    x.is_zero() || e.iter().enumerate().any(|(k, &p)| p > 0 && is_const[k])
                 });
                 if all_const_factor {
                     continue;
