@@ -38,8 +38,14 @@ pub(super) fn poly_text(coeffs: &[Q], monos: &[Vec<u32>], names: &[String]) -> S
         for (k, &x) in e.iter().enumerate() {
             match x {
                 0 => {}
-                1 => factors.push(names[k].clone()),
-                _ => factors.push(format!("{}^{x}", names[k])),
+                // A product block reads as itself inside a product; a sum or a
+                // power of a product needs its parentheses.
+                1 if !names[k].contains([' ', '/', '+', '-']) => factors.push(names[k].clone()),
+                1 => factors.push(format!("({})", names[k])),
+                _ if !names[k].contains([' ', '/', '+', '-', '*', '^']) => {
+                    factors.push(format!("{}^{x}", names[k]))
+                }
+                _ => factors.push(format!("({})^{x}", names[k])),
             }
         }
         let neg = c.is_negative();

@@ -94,11 +94,7 @@ pub(super) fn coefficient_blocks(
     for q in seen {
         is_const.push(q.vars().iter().all(|v| const_vars.contains(v)));
         let text = nf.ctx.poly_text(&q);
-        bnames.push(if text.contains([' ', '*', '^', '/', '-', '+']) {
-            format!("({text})")
-        } else {
-            text
-        });
+        bnames.push(text);
         blocks.push(nf.ctx.from_canonical(&RatFun::from_poly(q)));
     }
     Some((blocks, bnames, is_const))
