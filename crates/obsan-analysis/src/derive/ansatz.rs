@@ -272,16 +272,24 @@ pub(super) fn invariant_ansatz(
                 }
                 let c = nf.ctx.canon(g);
                 let poly = c.denominator().is_constant();
-                // The ansatz's own form reads better than the canonical one
-                // (which writes sin^2 as 1 - cos^2); both are the same function.
+                // The ansatz's own form usually reads better than the
+                // canonical one (which writes sin^2 as 1 - cos^2), but the
+                // canonical one has the common factors of P and Q cancelled
+                // (x1 k / (x1 s1) is k/s1): the shorter of the two, the same
+                // function.
                 let ptext = poly_text(&qs, &monos, bnames);
-                let text = if qi == 0 {
+                let ansatz_text = if qi == 0 {
                     ptext
                 } else {
                     format!("({ptext})/({})", nf.ctx.to_text(qd))
                 };
+                let canon_text = nf.ctx.ratfun_text_factored(&c);
+                let use_canon = canon_text.len() < ansatz_text.len();
+                let text = if use_canon { canon_text } else { ansatz_text };
                 let domain = if poly {
                     "everywhere".to_string()
+                } else if use_canon {
+                    format!("where {} != 0", nf.ctx.poly_text(c.denominator()))
                 } else {
                     format!("where {} != 0", nf.ctx.to_text(qd))
                 };
