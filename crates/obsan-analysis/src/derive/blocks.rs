@@ -99,3 +99,56 @@ pub(super) fn coefficient_blocks(
     }
     Some((blocks, bnames, is_const))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eq. (16) on circles (17): the fields see the parameters only through
+    /// eta_q cos(phi), eta_q sin(phi) and xi_q of eq. (18) (ERRATA.md), with
+    /// eta_q = eta (1 + q delta), xi_q = xi (1 - q delta).
+    #[test]
+    fn eq16_with_q_blocks_are_eta_q_cos_phi_eta_q_sin_phi_and_xi_q() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../systems/calib.sys");
+        let src = std::fs::read_to_string(path).unwrap();
+        let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
+        let mut nf = sys.normal_form(Some("q"), &[]).unwrap();
+        let (_, fields) = crate::field_names(&mut nf);
+        let names = nf.state.clone();
+        let vars = nf.state_vars.clone();
+        let mut trig = Vec::new();
+        let mut angle = Vec::new();
+        for s in &names {
+            let is_angle = s == "gamma" || s == "phi";
+            angle.push(is_angle);
+            trig.push(if is_angle {
+                let c = nf.parse_expr(&format!("cos({s})"), false).unwrap();
+                let s = nf.parse_expr(&format!("sin({s})"), false).unwrap();
+                Some((c, s))
+            } else {
+                None
+            });
+        }
+        // No angle enters polynomially, so no angle is a block itself.
+        let (blocks, bnames, is_const) =
+            coefficient_blocks(&mut nf, &fields, &names, &angle, &trig, &[], &vars).unwrap();
+        // The moving blocks: mu, cos(gamma), sin(gamma).
+        assert_eq!(&bnames[..3], &["mu", "cos(gamma)", "sin(gamma)"]);
+        let coef = &blocks[3..];
+        assert_eq!(coef.len(), 3, "{bnames:?}");
+        assert!(is_const.iter().all(|c| !c));
+        for want in [
+            "eta*(1 + q*delta)*cos(phi)",
+            "eta*(1 + q*delta)*sin(phi)",
+            "xi*(1 - q*delta)",
+        ] {
+            let w = nf.parse_expr(want, false).unwrap();
+            let found = coef.iter().any(|&b| {
+                let d = nf.ctx.sub(b, w);
+                let s = nf.ctx.add(&[b, w]);
+                nf.ctx.canon(d).is_zero() || nf.ctx.canon(s).is_zero()
+            });
+            assert!(found, "{want} not among {bnames:?}");
+        }
+    }
+}
