@@ -10,7 +10,10 @@
 //! than that may show less). The column header says which was used.
 //!
 //! Environment: OBSAN_SUITE_SYM_TIMEOUT (seconds for `symmetries --timeout`, default 10),
-//! OBSAN_SUITE_RANK_TIMEOUT (default 60).
+//! OBSAN_SUITE_RANK_TIMEOUT (default 60), OBSAN_SUITE_MODES_TIMEOUT (seconds for
+//! `modes --timeout`, default 10). The modes column: the number of modes, `proven` when the
+//! reduced system closed and every exact check passed, `open` when it did not close (exit 1),
+//! `all` for a full-rank model (the modes are the variables), `none` without an answer.
 
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -256,6 +259,7 @@ fn main() {
     };
     let sym_timeout = env_secs("OBSAN_SUITE_SYM_TIMEOUT", 10).to_string();
     let rank_timeout = env_secs("OBSAN_SUITE_RANK_TIMEOUT", 60).to_string();
+    let modes_timeout = env_secs("OBSAN_SUITE_MODES_TIMEOUT", 10).to_string();
     let gnu_time = Path::new(GNU_TIME).exists();
     let how = if gnu_time {
         "GNU time %M"
@@ -263,9 +267,9 @@ fn main() {
         "VmHWM polled"
     };
     println!(
-        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB |"
+        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB | modes | modes s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     let (mut agree, mut differ, mut total) = (0, 0, 0);
     for e in &entries {
         if !filter.is_empty() && !filter.iter().any(|f| e.path.contains(f.as_str())) {
@@ -325,18 +329,37 @@ fn main() {
         } else {
             (format!("none (exit {})", s.code), "-".into())
         };
+        let mut args = vec![
+            "modes",
+            e.path.as_str(),
+            "--json",
+            "--timeout",
+            &modes_timeout,
+        ];
+        args.extend(&extra);
+        let m = run(root, &args, gnu_time);
+        let mv: Value = serde_json::from_str(&m.stdout).unwrap_or(Value::Null);
+        let count = mv["modes"].as_array().map_or(0, |a| a.len());
+        let modes = match (m.code, &mv["full_rank"]) {
+            (0, Value::Bool(true)) => format!("{count} all"),
+            (0, _) => format!("{count} proven"),
+            (1, _) => format!("{count} open"),
+            (c, _) => format!("none (exit {c})"),
+        };
         println!(
-            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} |",
+            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} | {modes} | {:.2} |",
             r.secs,
             mem(r.peak_kib),
             s.secs,
-            mem(s.peak_kib)
+            mem(s.peak_kib),
+            m.secs
         );
     }
     println!();
     println!(
         "{total} runs: {agree} verdicts agree with the cited ones, {differ} differ, {} gave no \
-         answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s",
+         answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s; \
+         modes --timeout {modes_timeout} s",
         total - agree - differ
     );
 }

@@ -350,6 +350,7 @@ impl Command {
             Command::Diff(a) => Some(a.limit.max_terms),
             Command::Show(a) => Some(a.limit.max_terms),
             Command::Lie(a) => Some(a.limit.max_terms),
+            Command::Modes(a) => Some(a.max_terms),
             _ => None,
         }
     }
@@ -461,6 +462,10 @@ pub struct ModesArgs {
     /// Write PREFIX.sys (the reduced system) and PREFIX.dec (its decomposition file).
     #[arg(long = "out", value_name = "PREFIX")]
     pub out_prefix: Option<String>,
+    /// Largest polynomial (terms) the engine may build before it stops with
+    /// "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
     /// Replace existing PREFIX.sys / PREFIX.dec.
     #[arg(long)]
     pub force: bool,

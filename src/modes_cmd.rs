@@ -19,9 +19,11 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             a.sys.system
         )));
     }
+    // A little before the binary's own --timeout watchdog, so that a run
+    // stopped inside the derivation says how far it got (modes found, stage).
     let deadline = a
         .timeout
-        .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+        .map(|s| Instant::now() + Duration::from_secs_f64(0.9 * s.max(0.0)));
     let r = rank_test(
         &mut nf,
         RankOptions {
@@ -79,7 +81,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     let sys_text = d.sys_text(&nf.name, &format!("observable modes of {title}"));
     let checks = match &dec {
         Some(t) => Some(
-            verify_derivation(&mut nf, t, "derived decomposition", a.seed)
+            verify_derivation(&mut nf, t, "derived decomposition", a.seed, (&r, &sym))
                 .map_err(|e| Failure(format!("internal: the derived decomposition: {e}")))?,
         ),
         None => None,

@@ -168,15 +168,90 @@ fn bad_input_is_exit_2() {
         &["modes", "systems/calib.sys", "--input", "nosuch"],
         "nosuch",
     );
-    // eq. (16) with q: the exact checks run past a short time limit.
+    // eq. (16) with q past a time limit of zero: it gives up at once.
     let r = obsan(&[
         "modes",
         "systems/calib.sys",
         "--input",
         "q",
         "--timeout",
-        "1",
+        "0",
     ]);
     assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
     assert!(r.stderr.contains("timed out"), "{}", r.stderr);
+    // Past the engine's term budget: the limit, named, exit 2, nothing printed.
+    let r = obsan(&["modes", "systems/calib_q_nopsi.sys", "--max-terms", "3"]);
+    assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("too large"), "{}", r.stderr);
+    assert!(r.stdout.is_empty(), "{}", r.stdout);
+}
+
+#[test]
+fn calib_eq16_with_q_modes_span_a_v_l_xi_q() {
+    let sys = ["systems/calib.sys", "--input", "q"];
+    let v = modes_json(&sys);
+    assert_eq!(v["rank"], 4);
+    assert_eq!(v["n"], 7);
+    assert_eq!(v["certificate"]["verified"], true, "{v}");
+    assert_eq!(v["reduced"]["closed"], true, "{v}");
+    let m = mode_exprs(&v);
+    assert_eq!(m.len(), 4);
+    // ERRATA.md, eq. (23), written out in the seven original variables with
+    // eq. (18): eta_q = eta (1 + q delta), xi_q = xi (1 - q delta), and (21).
+    let eq = "(eta*(1 + q*delta))";
+    let xq = "(xi*(1 - q*delta))";
+    let psi1 = format!("(({xq} - {eq}*sin(phi))/({eq}*cos(phi)))");
+    let psi2 = format!("(mu*{eq}*cos(phi)/sin(gamma))");
+    let psi3 = "((mu + cos(gamma))/sin(gamma))";
+    let a = format!("({psi1} - {psi3})/(1 + {psi1}*{psi3})");
+    let vv = format!("{psi2}*(1 + {psi1}*{psi3})/(1 + {psi3}^2)");
+    let l = format!("psi - atan({psi1})");
+    assert_same_span(&sys, &m, &[&a, &vv, &l, xq], 4);
+    // The output beta is written in the modes.
+    let outs = v["reduced"]["outputs"].as_array().unwrap();
+    assert_eq!(outs.len(), 1);
+    assert!(outs[0]["expr"].is_string(), "{v}");
+    assert_written_pair_checks(&sys, "calib16q", 4);
+}
+
+/// The suite's non-identifiable models: the derived modes span the
+/// identifiable combinations their files cite (systems/benchmarks/*.sys,
+/// "verdict-source"), and the reduced system closes and is proven.
+#[test]
+fn suite_models_modes_match_the_cited_identifiable_combinations() {
+    let cases: [(&str, &[&str]); 5] = [
+        // Vajda et al. 1989: t2 t3 identifiable (x2 -> l x2, t2 -> t2/l, t3 -> l t3).
+        (
+            "systems/benchmarks/vajda1989.sys",
+            &["x1", "t1", "t4", "t2*t3", "t2*x2"],
+        ),
+        // alpha, beta and d only through alpha d + beta d^2.
+        (
+            "systems/benchmarks/radiotherapy.sys",
+            &["V", "lambda", "alpha*d + beta*d^2"],
+        ),
+        // x2 -> l x2, p1 -> p1/l; x3 -> m x3, p2 -> p2/m, p1 -> m p1.
+        (
+            "systems/benchmarks/karin_1c.sys",
+            &["x1", "p2*x3", "p1*p2*x2"],
+        ),
+        // p1, p3 identifiable; x1 -> l x1, p2 -> l p2, x2 -> x2/l, p4 -> p4/l.
+        (
+            "systems/benchmarks/llw1987.sys",
+            &["x3", "p1", "p3", "x1*x2", "p2*p4", "x1/p2"],
+        ),
+        // Only b S, b I, k I seen; g the decay rate of y.
+        (
+            "systems/benchmarks/sir_reporting.sys",
+            &["g", "b*S", "b*I", "k*I"],
+        ),
+    ];
+    for (sys, expected) in cases {
+        let v = modes_json(&[sys]);
+        assert_eq!(v["certificate"]["verified"], true, "{sys}: {v}");
+        assert_eq!(v["reduced"]["closed"], true, "{sys}: {v}");
+        let m = mode_exprs(&v);
+        assert_eq!(m.len(), expected.len(), "{sys}: {m:?}");
+        assert_same_span(&[sys], &m, expected, expected.len());
+    }
 }

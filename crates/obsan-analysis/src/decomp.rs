@@ -13,8 +13,8 @@
 //! ```
 
 use crate::modes::{check_modes, gradient_rank};
-use crate::rank::{rank, AnalysisError, RankOptions};
-use crate::symmetry::symmetries;
+use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
+use crate::symmetry::{symmetries, SymmetryReport};
 use obsan_expr::{line_col, parse_ast, Ast, Ctx, Id, ParseError, Span, Var, Q};
 use obsan_model::NormalForm;
 
@@ -193,6 +193,18 @@ pub fn verify_decomposition(
     d: &Decomposition,
     seed: u64,
 ) -> Result<Vec<Check>, AnalysisError> {
+    verify_decomposition_with(nf, d, seed, None)
+}
+
+/// [`verify_decomposition`] with the system's rank report and symmetries
+/// when the caller has them already (`obsan modes`), so they are not
+/// computed twice.
+pub fn verify_decomposition_with(
+    nf: &mut NormalForm,
+    d: &Decomposition,
+    seed: u64,
+    known: Option<(&RankReport, &SymmetryReport)>,
+) -> Result<Vec<Check>, AnalysisError> {
     // Lets, in terms of the original variables (earlier lets may be used).
     let mut defs: Vec<(String, Id)> = Vec::new();
     for (name, ast, at) in &d.lets {
@@ -233,15 +245,23 @@ pub fn verify_decomposition(
     let mut checks = Vec::new();
 
     // 1. Symmetries, and each new variable an observable mode.
-    let report = rank(
-        nf,
-        RankOptions {
-            seed,
-            ..Default::default()
-        },
-    )?;
-    let sym = symmetries(nf, &report)?;
-    let modes = check_modes(nf, &sym, &g, seed)?;
+    let computed;
+    let (report, sym) = match known {
+        Some(k) => k,
+        None => {
+            let report = rank(
+                nf,
+                RankOptions {
+                    seed,
+                    ..Default::default()
+                },
+            )?;
+            let sym = symmetries(nf, &report)?;
+            computed = (report, sym);
+            (&computed.0, &computed.1)
+        }
+    };
+    let modes = check_modes(nf, sym, &g, seed)?;
     for (s, c) in d.new_state.iter().zip(&modes.checks) {
         let detail = match c.residuals.iter().position(|r| !r.is_zero()) {
             None => String::new(),

@@ -1,0 +1,511 @@
+//! Observable modes and the reduced system, derived (Martinelli 2011, eqs.
+//! 9–11; the paper's hand derivations 21 → 22 and 23 → 24).
+//!
+//! Modes are searched from the simplest kind up, each candidate accepted only
+//! when its gradient raises the rank at a random point (a non-zero minor:
+//! exact) and it satisfies the PDE (11) for every symmetry *exactly*
+//! ([`check_modes`]):
+//! 1. single variables every symmetry leaves alone, as themselves;
+//! 2. integer combinations of angle variables (translations, e.g. thetaR - phiR);
+//! 3. polynomial and rational invariants `P/Q` by an ansatz: for a fixed
+//!    denominator `Q` (1, then the factors the outputs and first Lie
+//!    derivatives show) the PDE `Q w(P) - P w(Q) = 0` is linear in the
+//!    coefficients of `P`; solved in F_p at random points, coefficients lifted
+//!    to Q by rational reconstruction (then checked exactly) — over two sets
+//!    of blocks ([`blocks`]): the variables (with cos/sin of the angles), and
+//!    the moving variables with the coefficients the fields show, where eq.
+//!    (16)'s invariants are of degree 3 (shortest denominators first);
+//! 4. the outputs themselves (an `atan2` output is the angle-valued mode the
+//!    paper calls L up to the observable A);
+//! 5. the basis Lie derivatives of the rank test.
+//!
+//! The reduced dynamics `L_f g_k` and each output are then sought as `P(z)/Q(z)`
+//! in the modes (and cos/sin of the angle-valued ones) by the same linear
+//! ansatz, lifted, and proven by exact substitution in canonical form
+//! ([`reduced`]).
+//!
+//! Layout: `linalg` (F_p null spaces, rational reconstruction, monomials),
+//! `ansatz` (the invariant ansatz and its F_p screens), `blocks` (blocks read
+//! off the fields), `reduced` (the reduced system, its files and its proof).
+
+mod ansatz;
+mod blocks;
+mod linalg;
+mod reduced;
+
+use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
+use blocks::coefficient_blocks;
+use linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon};
+use reduced::in_modes;
+pub use reduced::verify_derivation;
+
+use crate::decomp::{verify_decomposition_with, Check, Decomposition};
+use crate::modes::{check_modes, ModeReport};
+use crate::rank::{AnalysisError, RankReport};
+use crate::symmetry::SymmetryReport;
+use obsan_expr::{Fp, FpPoint, Id, Int, Mono, Poly, RatFun, SplitMix, Q};
+use obsan_model::NormalForm;
+use std::time::Instant;
+
+/// Largest linear system of an ansatz (unknown coefficients).
+pub(super) const MAX_UNKNOWNS: usize = 500;
+
+/// Budgets of the search.
+#[derive(Clone, Debug)]
+pub struct DeriveOptions {
+    pub seed: u64,
+    pub deadline: Option<Instant>,
+    /// Highest total degree of the numerator `P` of an invariant ansatz.
+    pub max_mode_degree: usize,
+    /// Highest total degree of `P` and `Q` when writing a derivative in the modes.
+    pub max_closure_degree: usize,
+}
+
+impl Default for DeriveOptions {
+    fn default() -> Self {
+        DeriveOptions {
+            seed: 1,
+            deadline: None,
+            max_mode_degree: 3,
+            max_closure_degree: 6,
+        }
+    }
+}
+
+/// How a mode was found (and so how simple it is).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ModeKind {
+    Variable,
+    Translation,
+    Polynomial,
+    Rational,
+    Output,
+    LieDerivative,
+}
+
+impl ModeKind {
+    pub fn word(self) -> &'static str {
+        match self {
+            ModeKind::Variable => "variable",
+            ModeKind::Translation => "angle difference",
+            ModeKind::Polynomial => "polynomial",
+            ModeKind::Rational => "rational",
+            ModeKind::Output => "output",
+            ModeKind::LieDerivative => "Lie derivative",
+        }
+    }
+}
+
+/// One derived observable mode.
+#[derive(Clone, Debug)]
+pub struct DerivedMode {
+    pub name: String,
+    pub expr: Id,
+    /// The formula in obsan's plain-text syntax (parses back).
+    pub text: String,
+    pub kind: ModeKind,
+    /// An angle (defined modulo 2 pi): the reduced system uses its cos and sin.
+    pub angle: bool,
+    /// Where the formula holds and which branch it takes.
+    pub domain: String,
+}
+
+/// The modes and the reduced system.
+#[derive(Clone, Debug)]
+pub struct Derivation {
+    pub n: usize,
+    pub rank: usize,
+    pub modes: Vec<DerivedMode>,
+    /// The exact PDE (11), independence and completeness verdicts.
+    pub mode_report: ModeReport,
+    /// `f0` (when the drift is not zero), then the inputs.
+    pub field_names: Vec<String>,
+    /// `derivatives[k][i]`: `L_{f_i} g_k` in the modes, proven; `None` if not found.
+    pub derivatives: Vec<Vec<Option<String>>>,
+    /// Each output in the modes, proven; `None` if not found.
+    pub outputs: Vec<(String, Option<String>)>,
+    /// Generic constants of the system the reduced system keeps.
+    pub consts: Vec<String>,
+}
+
+pub(super) fn check_deadline(
+    opts: &DeriveOptions,
+    stage: &str,
+    found: usize,
+) -> Result<(), AnalysisError> {
+    match opts.deadline {
+        Some(d) if Instant::now() > d => Err(AnalysisError::Timeout(format!(
+            "{found} mode(s) found, stopped during {stage}"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Builds the modes and the reduced system.
+pub fn derive_modes(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    sym: &SymmetryReport,
+    opts: &DeriveOptions,
+) -> Result<Derivation, AnalysisError> {
+    if nf.delay.is_some() {
+        return Err(AnalysisError::Invalid(
+            "obsan modes does not handle delayed inputs yet".into(),
+        ));
+    }
+    let rank = report.rank;
+    let n = report.n;
+    let vars = nf.state_vars.clone();
+    let names = nf.state.clone();
+    let mut modes: Vec<DerivedMode> = Vec::new();
+    let mut indep = Indep {
+        grads: Vec::new(),
+        seed: opts.seed,
+    };
+    let mut used_names: Vec<String> = names.clone();
+    used_names.extend(nf.consts.iter().map(|c| c.0.clone()));
+    used_names.extend(nf.inputs.iter().cloned());
+    used_names.extend(nf.outputs.iter().map(|o| o.0.clone()));
+    let mut fresh = Names {
+        used: used_names,
+        count: 0,
+    };
+
+    // Which variables enter through cos/sin (angles) and which polynomially.
+    let (fnames, fields) = crate::field_names(nf);
+    let mut used_vars: Vec<u32> = Vec::new();
+    let mut all: Vec<Id> = fields.iter().flatten().copied().collect();
+    all.extend(nf.outputs.iter().map(|o| o.1));
+    for &e in &all {
+        let c = nf.ctx.canon(e);
+        used_vars.extend(c.vars());
+    }
+    let mut angle = vec![false; n];
+    let mut trig: Vec<Option<(Id, Id)>> = vec![None; n];
+    for i in 0..n {
+        let Ok(c) = nf.parse_expr(&format!("cos({})", names[i]), false) else {
+            continue;
+        };
+        let Ok(s) = nf.parse_expr(&format!("sin({})", names[i]), false) else {
+            continue;
+        };
+        let cv = nf.ctx.canon(c).vars();
+        if cv.iter().any(|v| used_vars.contains(v)) {
+            angle[i] = true;
+            trig[i] = Some((c, s));
+        }
+    }
+
+    // w components as expressions.
+    let w_ids: Vec<Vec<Id>> = sym
+        .vectors
+        .iter()
+        .map(|w| w.iter().map(|c| nf.ctx.from_canonical(c)).collect())
+        .collect();
+    // 1. Variables the symmetries leave alone.
+    for i in 0..n {
+        if modes.len() == rank {
+            break;
+        }
+        if sym.vectors.iter().all(|w| w[i].is_zero()) {
+            let g = nf.ctx.symbol(&names[i]).id;
+            if indep.raises_rank(nf, g)? {
+                modes.push(DerivedMode {
+                    name: names[i].clone(),
+                    expr: g,
+                    text: names[i].clone(),
+                    kind: ModeKind::Variable,
+                    angle: angle[i],
+                    domain: "everywhere".into(),
+                });
+            }
+        }
+    }
+    check_deadline(opts, "the variables", modes.len())?;
+
+    let nsym = w_ids.len();
+    let mut rng = SplitMix(opts.seed ^ 0x6d6f_6465_7321);
+
+    // 2. Integer combinations of angles that every symmetry leaves alone.
+    let angles: Vec<usize> = (0..n).filter(|&i| angle[i]).collect();
+    if modes.len() < rank && angles.len() >= 2 && nsym > 0 {
+        let roots: Vec<Id> = w_ids
+            .iter()
+            .flat_map(|w| angles.iter().map(|&i| w[i]))
+            .collect();
+        let mut rows = Vec::new();
+        for _ in 0..(angles.len() + 2) {
+            let (_, v) = point_for(nf, &mut rng, &roots)?;
+            rows.extend(v.chunks(angles.len()).map(|c| c.to_vec()));
+        }
+        for v in null_space(rows, angles.len()) {
+            if modes.len() == rank {
+                break;
+            }
+            let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
+                continue;
+            };
+            if !qs.iter().all(|q| q.is_integer()) || qs.iter().all(|q| q.is_zero()) {
+                continue;
+            }
+            // Leading coefficient positive, for readability.
+            let lead_neg = qs
+                .iter()
+                .rev()
+                .find(|q| !q.is_zero())
+                .is_some_and(|q| q.is_negative());
+            let qs: Vec<Q> = if lead_neg {
+                qs.iter().map(|q| q.neg()).collect()
+            } else {
+                qs
+            };
+            let blocks: Vec<Id> = angles.iter().map(|&i| vars_id(nf, &names[i])).collect();
+            let monos: Vec<Vec<u32>> = (0..angles.len())
+                .map(|k| (0..angles.len()).map(|l| u32::from(k == l)).collect())
+                .collect();
+            let order: Vec<usize> = (0..angles.len()).rev().collect();
+            let qs_o: Vec<Q> = order.iter().map(|&k| qs[k].clone()).collect();
+            let monos_o: Vec<Vec<u32>> = order.iter().map(|&k| monos[k].clone()).collect();
+            let bnames: Vec<String> = angles.iter().map(|&i| names[i].clone()).collect();
+            let g = build_poly(nf, &qs_o, &monos_o, &blocks);
+            let text = poly_text(&qs_o, &monos_o, &bnames);
+            if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
+                modes.push(DerivedMode {
+                    name: fresh.next(),
+                    expr: g,
+                    text,
+                    kind: ModeKind::Translation,
+                    angle: true,
+                    domain: "everywhere (an angle, modulo 2 pi)".into(),
+                });
+            }
+        }
+    }
+    check_deadline(opts, "the angle differences", modes.len())?;
+
+    // 3. Polynomial and rational invariants.
+    let mut blocks: Vec<Id> = Vec::new();
+    let mut bnames: Vec<String> = Vec::new();
+    for i in 0..n {
+        let sym_var = nf.ctx.symbol(&names[i]).id;
+        if !angle[i] || used_vars.contains(&vars[i]) {
+            blocks.push(sym_var);
+            bnames.push(names[i].clone());
+        }
+        if let Some((c, s)) = trig[i] {
+            blocks.push(c);
+            bnames.push(format!("cos({})", names[i]));
+            blocks.push(s);
+            bnames.push(format!("sin({})", names[i]));
+        }
+    }
+    let mut consts = Vec::new();
+    for (name, val) in nf.consts.clone() {
+        if val.is_none() {
+            if let Some(s) = nf.ctx.lookup(&name) {
+                blocks.push(s.id);
+                bnames.push(name.clone());
+                consts.push(name);
+            }
+        }
+    }
+    // Denominator candidates: 1, then the factors of the outputs and of the
+    // first-order Lie derivatives as they come out of the canonical form.
+    let mut dens: Vec<(usize, Id)> = vec![(0, nf.ctx.one())];
+    if modes.len() < rank && nsym > 0 {
+        let mut seen: Vec<Poly> = Vec::new();
+        let mut srcs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+        for o in nf.outputs.clone() {
+            for f in &fields {
+                srcs.push(lie(nf, o.1, f));
+            }
+        }
+        for e in srcs {
+            let c = nf.ctx.canon(e);
+            for p in [c.numerator().clone(), c.denominator().clone()] {
+                if p.is_constant() || seen.contains(&p) {
+                    continue;
+                }
+                let id = nf.ctx.from_canonical(&RatFun::from_poly(p.clone()));
+                if nf.ctx.is_angle_valued(id) {
+                    continue;
+                }
+                seen.push(p.clone());
+                dens.push((p.len(), id));
+            }
+        }
+    }
+    // Shortest denominators first: simpler modes, and a reduced system whose
+    // exact proof stays small (eq. 39's A_v, V share mu^2 + 2 mu cos(gamma) + 1).
+    dens.sort_by_key(|d| d.0);
+    let dens: Vec<Id> = dens.into_iter().map(|d| d.1).collect();
+    let search = Search {
+        w_ids: &w_ids,
+        rank,
+        opts,
+    };
+    let orig_const: Vec<bool> = bnames.iter().map(|b| consts.contains(b)).collect();
+    let coef = coefficient_blocks(nf, &fields, &names, &angle, &trig, &used_vars, &vars);
+    let orig = (blocks, bnames, orig_const);
+    // The coefficient blocks first when they are fewer: the same invariants
+    // at a lower degree (eq. 16: eta (1 + q delta) cos(phi) is one block).
+    let tries: Vec<(Vec<Id>, Vec<String>, Vec<bool>)> = match coef {
+        Some(c) if c.0.len() < orig.0.len() => vec![c, orig],
+        Some(c) => vec![orig, c],
+        None => vec![orig],
+    };
+    if nsym > 0 {
+        for (blocks, bnames, is_const) in &tries {
+            if modes.len() >= rank {
+                break;
+            }
+            invariant_ansatz(
+                nf,
+                &search,
+                (blocks, bnames, is_const),
+                &dens,
+                &mut modes,
+                &mut indep,
+                &mut fresh,
+                &mut rng,
+            )?;
+        }
+    }
+
+    // 4. The outputs, 5. the basis Lie derivatives.
+    for (oname, h) in nf.outputs.clone() {
+        if modes.len() >= rank {
+            break;
+        }
+        if indep.raises_rank(nf, h)? && screen_mode(nf, &w_ids, h, opts.seed)? {
+            let is_angle = nf.ctx.is_angle_valued(h);
+            let text = nf.ctx.to_text(h);
+            modes.push(DerivedMode {
+                name: fresh.next(),
+                expr: h,
+                text,
+                kind: ModeKind::Output,
+                angle: false,
+                domain: if is_angle {
+                    format!("the branch of the output {oname} as the system defines it")
+                } else {
+                    format!("where the output {oname} is defined")
+                },
+            });
+        }
+    }
+    for w in &report.basis {
+        if modes.len() >= rank {
+            break;
+        }
+        check_deadline(opts, "the Lie derivatives", modes.len())?;
+        let mut g = nf.outputs[w.output].1;
+        for &k in &w.fields {
+            g = lie(nf, g, &report.fields.vectors[k]);
+        }
+        if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
+            let c = nf.ctx.canon(g);
+            let text = nf.ctx.ratfun_text_factored(&c);
+            let domain = if c.denominator().is_constant() {
+                "everywhere".to_string()
+            } else {
+                format!("where {} != 0", nf.ctx.poly_text(c.denominator()))
+            };
+            let g = nf.ctx.from_canonical(&c);
+            modes.push(DerivedMode {
+                name: fresh.next(),
+                expr: g,
+                text,
+                kind: ModeKind::LieDerivative,
+                angle: false,
+                domain,
+            });
+        }
+    }
+    let ids: Vec<Id> = modes.iter().map(|m| m.expr).collect();
+    let mode_report = check_modes(nf, sym, &ids, opts.seed)?;
+
+    // The reduced system: each L_f g_k and each output in the modes.
+    let mut zb: Vec<Id> = Vec::new();
+    let mut znames: Vec<String> = Vec::new();
+    for m in &modes {
+        if m.angle {
+            let c = nf.parse_expr(&format!("cos({})", m.text), false);
+            let s = nf.parse_expr(&format!("sin({})", m.text), false);
+            if let (Ok(c), Ok(s)) = (c, s) {
+                zb.push(c);
+                znames.push(format!("cos({})", m.name));
+                zb.push(s);
+                znames.push(format!("sin({})", m.name));
+            }
+        } else if !nf.ctx.is_angle_valued(m.expr) {
+            zb.push(m.expr);
+            znames.push(m.name.clone());
+        }
+    }
+    for name in &consts {
+        if let Some(s) = nf.ctx.lookup(name) {
+            zb.push(s.id);
+            znames.push(name.clone());
+        }
+    }
+    let mut derivatives = Vec::new();
+    for k in 0..modes.len() {
+        let mut row = Vec::new();
+        for f in &fields {
+            check_deadline(opts, "the reduced dynamics", modes.len())?;
+            let t = lie(nf, modes[k].expr, f);
+            row.push(in_modes(nf, t, &zb, &znames, &modes, &mut rng, opts)?);
+        }
+        derivatives.push(row);
+    }
+    let mut outputs = Vec::new();
+    for (oname, h) in nf.outputs.clone() {
+        let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
+            Some(m.name.clone())
+        } else {
+            in_modes(nf, h, &zb, &znames, &modes, &mut rng, opts)?
+        };
+        outputs.push((oname, e));
+    }
+    Ok(Derivation {
+        n,
+        rank,
+        modes,
+        mode_report,
+        field_names: fnames,
+        derivatives,
+        outputs,
+        consts,
+    })
+}
+
+/// The names of derived modes: z1, z2, ... skipping names the system uses.
+pub(super) struct Names {
+    used: Vec<String>,
+    count: usize,
+}
+
+impl Names {
+    fn next(&mut self) -> String {
+        loop {
+            self.count += 1;
+            let s = format!("z{}", self.count);
+            if !self.used.contains(&s) {
+                self.used.push(s.clone());
+                return s;
+            }
+        }
+    }
+}
+
+/// What every invariant search needs.
+pub(super) struct Search<'a> {
+    w_ids: &'a [Vec<Id>],
+    rank: usize,
+    opts: &'a DeriveOptions,
+}
+
+pub(super) fn vars_id(nf: &mut NormalForm, name: &str) -> Id {
+    nf.ctx.symbol(name).id
+}

@@ -1,0 +1,262 @@
+//! The reduced system: the dynamics and outputs written in the modes, the
+//! files that state it, and its exact proof by the decomposition checks.
+
+use super::*;
+
+impl Derivation {
+    /// Every derivative and every output was written in the modes.
+    pub fn closed(&self) -> bool {
+        self.derivatives.iter().flatten().all(|d| d.is_some())
+            && self.outputs.iter().all(|o| o.1.is_some())
+    }
+
+    /// What could not be written in the modes.
+    pub fn missing(&self) -> Vec<String> {
+        let mut v = Vec::new();
+        for (k, ds) in self.derivatives.iter().enumerate() {
+            for (i, d) in ds.iter().enumerate() {
+                if d.is_none() {
+                    v.push(format!("L_{} {}", self.field_names[i], self.modes[k].name));
+                }
+            }
+        }
+        for (name, o) in &self.outputs {
+            if o.is_none() {
+                v.push(format!("output {name}"));
+            }
+        }
+        v
+    }
+
+    /// `z_k' = F_k(z, u)`, or `None` when a part is missing.
+    pub fn dynamics(&self, k: usize) -> Option<String> {
+        let mut parts = Vec::new();
+        for (i, d) in self.derivatives[k].iter().enumerate() {
+            let d = d.as_deref()?;
+            if d == "0" {
+                continue;
+            }
+            let simple = !d.contains([' ', '/']);
+            if !self.has_input(i) {
+                parts.push(if simple {
+                    d.to_string()
+                } else {
+                    format!("({d})")
+                });
+            } else if d == "1" {
+                parts.push(self.field_names[i].clone());
+            } else if simple && !d.starts_with('-') {
+                parts.push(format!("{}*{d}", self.field_names[i]));
+            } else {
+                parts.push(format!("{}*({d})", self.field_names[i]));
+            }
+        }
+        Some(if parts.is_empty() {
+            "0".into()
+        } else {
+            parts.join(" + ")
+        })
+    }
+
+    fn has_input(&self, i: usize) -> bool {
+        self.field_names[i] != "f0"
+    }
+
+    /// The inputs of the reduced system.
+    pub fn inputs(&self) -> Vec<String> {
+        self.field_names
+            .iter()
+            .filter(|n| *n != "f0")
+            .cloned()
+            .collect()
+    }
+
+    /// Modes whose dynamics are zero are constant (params of the reduced system).
+    pub fn is_constant(&self, k: usize) -> bool {
+        self.derivatives[k]
+            .iter()
+            .all(|d| d.as_deref() == Some("0"))
+    }
+
+    /// A decomposition file (docs/decomposition-format.md) stating the result.
+    pub fn decomposition_text(
+        &self,
+        system_path: &str,
+        restriction: Option<&str>,
+        set: &[(String, String)],
+    ) -> Option<String> {
+        let mut o =
+            String::from("# Observable modes and reduced dynamics derived by `obsan modes`.\n");
+        o.push_str(&format!("system {system_path}\n"));
+        if let Some(r) = restriction {
+            o.push_str(&format!("input {r}\n"));
+        }
+        for (k, v) in set {
+            o.push_str(&format!("set {k} = {v}\n"));
+        }
+        for m in &self.modes {
+            if m.kind != ModeKind::Variable {
+                o.push_str(&format!("let {} = {}\n", m.name, m.text));
+            }
+        }
+        let names: Vec<&str> = self.modes.iter().map(|m| m.name.as_str()).collect();
+        o.push_str(&format!("state {}\n", names.join(", ")));
+        for k in 0..self.modes.len() {
+            o.push_str(&format!(
+                "{}' = {}\n",
+                self.modes[k].name,
+                self.dynamics(k)?
+            ));
+        }
+        for (name, e) in &self.outputs {
+            o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
+        }
+        Some(o)
+    }
+
+    /// A `.sys` file of the reduced system.
+    pub fn sys_text(&self, name: &str, description: &str) -> Option<String> {
+        let mut o = format!(
+            "# The reduced system of {name} in its observable modes (derived by `obsan modes`).\n"
+        );
+        o.push_str(&format!("system {name}_modes\n"));
+        o.push_str(&format!("description {description}\n"));
+        for m in &self.modes {
+            o.push_str(&format!("# {} = {}\n", m.name, m.text));
+        }
+        let states: Vec<&str> = (0..self.modes.len())
+            .filter(|&k| !self.is_constant(k))
+            .map(|k| self.modes[k].name.as_str())
+            .collect();
+        let params: Vec<&str> = (0..self.modes.len())
+            .filter(|&k| self.is_constant(k))
+            .map(|k| self.modes[k].name.as_str())
+            .collect();
+        if !states.is_empty() {
+            o.push_str(&format!("state {}\n", states.join(", ")));
+        }
+        if !params.is_empty() {
+            o.push_str(&format!("param {}\n", params.join(", ")));
+        }
+        if !self.consts.is_empty() {
+            o.push_str(&format!("const {}\n", self.consts.join(", ")));
+        }
+        let inputs = self.inputs();
+        if !inputs.is_empty() {
+            o.push_str(&format!("input {}\n", inputs.join(", ")));
+        }
+        for k in 0..self.modes.len() {
+            if !self.is_constant(k) {
+                o.push_str(&format!(
+                    "{}' = {}\n",
+                    self.modes[k].name,
+                    self.dynamics(k)?
+                ));
+            }
+        }
+        for (name, e) in &self.outputs {
+            o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
+        }
+        Some(o)
+    }
+}
+
+/// Check a derived decomposition with the exact checks of `obsan verify`.
+/// The rank report and symmetries are the ones the derivation used.
+pub fn verify_derivation(
+    nf: &mut NormalForm,
+    dec_text: &str,
+    origin: &str,
+    seed: u64,
+    known: (&RankReport, &SymmetryReport),
+) -> Result<Vec<Check>, AnalysisError> {
+    let d = Decomposition::parse(dec_text, origin)?;
+    verify_decomposition_with(nf, &d, seed, Some(known))
+}
+
+/// `t` written as `P(z)/Q(z)` in the mode blocks, proven exactly; `None` when
+/// no such form of degree up to the budget exists.
+pub(super) fn in_modes(
+    nf: &mut NormalForm,
+    t: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    if nf.ctx.is_zero(t) {
+        return Ok(Some("0".into()));
+    }
+    if nf.ctx.is_angle_valued(t) {
+        return Ok(None);
+    }
+    let nb = zb.len();
+    let mut roots: Vec<Id> = zb.to_vec();
+    roots.push(t);
+    for d in 0..=opts.max_closure_degree {
+        check_deadline(
+            opts,
+            &format!("the reduced dynamics (degree {d})"),
+            modes.len(),
+        )?;
+        let monos = monomials(nb, 0, d);
+        let nm = monos.len();
+        // A dense F_p elimination of 2 nm unknowns: keep it well under a second.
+        if 2 * nm > MAX_UNKNOWNS {
+            break;
+        }
+        let npts = 2 * nm + 8;
+        let mut rows = Vec::with_capacity(npts);
+        for _ in 0..npts {
+            let (_, v) = point_for(nf, rng, &roots)?;
+            let tv = v[nb];
+            let mut row: Vec<Fp> = monos.iter().map(|e| mono_value(e, &v[..nb])).collect();
+            let qpart: Vec<Fp> = row.iter().map(|&m| Fp::ZERO - tv * m).collect();
+            row.extend(qpart);
+            rows.push(row);
+        }
+        let mut ns = null_space(rows, 2 * nm);
+        ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
+        for v in ns {
+            if v[nm..].iter().all(|x| x.is_zero()) {
+                continue;
+            }
+            // Normalise: the first non-zero denominator coefficient is 1.
+            let Some(lead) = v[nm..].iter().find(|x| !x.is_zero()).and_then(|x| x.inv()) else {
+                continue;
+            };
+            let Some(qs) = v
+                .iter()
+                .map(|&x| rat_recon(x * lead))
+                .collect::<Option<Vec<Q>>>()
+            else {
+                continue;
+            };
+            let (pc, qc) = qs.split_at(nm);
+            let pn = build_poly(nf, pc, &monos, zb);
+            let qn = build_poly(nf, qc, &monos, zb);
+            // Screened at fresh points here; proven exactly by the decomposition
+            // checks (verify_derivation) of the whole reduced system.
+            let r = nf.ctx.div(pn, qn);
+            let diff = nf.ctx.sub(r, t);
+            let mut fresh = SplitMix(rng.next_u64());
+            let mut ok = true;
+            for _ in 0..2 {
+                let (_, v) = point_for(nf, &mut fresh, &[diff])?;
+                ok &= v[0].is_zero();
+            }
+            if !ok {
+                continue;
+            }
+            let ptext = poly_text(pc, &monos, znames);
+            let qtext = poly_text(qc, &monos, znames);
+            return Ok(Some(if qtext == "1" {
+                ptext
+            } else {
+                format!("({ptext})/({qtext})")
+            }));
+        }
+    }
+    Ok(None)
+}
