@@ -531,19 +531,19 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     let meas = read(&format!("robot{}_Measurement.txt", a.robot))?;
     let lms = read("Landmark_Groundtruth.dat")?;
     let gt = read(&format!("robot{}_Groundtruth.txt", a.robot)).ok();
-    let text = obsan_estimate::MrclamText {
+    let text = obsan_data::MrclamText {
         odometry: (&odo.0, &odo.1),
         measurements: (&meas.0, &meas.1),
         landmarks: (&lms.0, &lms.1),
         groundtruth: gt.as_ref().map(|g| (g.0.as_str(), g.1.as_str())),
     };
     let what = if a.vicon_poses {
-        obsan_estimate::MrclamOutputs::ViconPoses
+        obsan_data::MrclamOutputs::ViconPoses
     } else {
-        obsan_estimate::MrclamOutputs::Landmarks
+        obsan_data::MrclamOutputs::Landmarks
     };
     let (mut data, mut truth) =
-        obsan_estimate::mrclam_convert(&text, a.window, a.min_measurements, what)?;
+        obsan_data::mrclam_convert(&text, a.window, a.min_measurements, what)?;
     if a.max_windows > 0 {
         data.trajectories.truncate(a.max_windows);
         truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));

@@ -6,9 +6,9 @@ use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::residual::{analyse, ResidualReport, ResidualSeries};
 use crate::start::extended_start;
 use crate::stats::{chi2_1_p, normal_critical};
-use obsan_estimate::{
-    add_derived_inputs, estimate_noise, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration,
-    NoiseOptions, Predictor,
+use obsan_data::{add_derived_inputs, wrap, Dataset};
+use obsan_fit::{
+    estimate_noise, fit, FitOptions, FitTrajectory, Integration, NoiseOptions, Predictor,
 };
 use obsan_model::{Effect, EffectLibrary, Kind, System};
 use rayon::prelude::*;
@@ -31,7 +31,7 @@ pub struct DiagnoseOptions {
     pub cost_tolerance: f64,
     /// Stop a fit when its step is shorter than this many standard deviations.
     pub step_tolerance: f64,
-    /// Longest integration step (s), see `obsan_estimate::Integration`.
+    /// Longest integration step (s), see `obsan_fit::Integration`.
     pub max_step: f64,
     /// Trajectories stacked in the rank test (the first ones).
     pub rank_trajectories: usize,
@@ -49,7 +49,7 @@ pub enum InputNoise {
     Stated,
     /// Estimated by restricted maximum likelihood (with the output levels
     /// unless they are given), at the nominal fit and again after every
-    /// named effect ([`obsan_estimate::estimate_noise`]). Linearised about
+    /// named effect ([`obsan_fit::estimate_noise`]). Linearised about
     /// the fitted path: for drift that stays small against the geometry
     /// (docs/diagnose.md says where it does not).
     Estimate,
@@ -268,7 +268,7 @@ pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
     Ok(d)
 }
 
-/// The measured inputs' noise (see `obsan_estimate::Integration::input_noise`)
+/// The measured inputs' noise (see `obsan_fit::Integration::input_noise`)
 /// from `dataset.json`, per measured input of `sys` by name: `noise.<input>`
 /// gives `c` for that input; otherwise `noise.encoder_k` = K with
 /// `nominal.r_right` = r gives `c = K^2 / r` for every measured input (wheel

@@ -3,10 +3,9 @@
 //! state of each trajectory (the initialisation of maximum likelihood).
 
 use crate::circle::{Closed, Degenerate};
-use crate::data::{Series, Trajectory};
-use crate::sim::wrap;
 use crate::ArcData;
 use nalgebra::{DMatrix, DVector, SMatrix};
+use obsan_data::{wrap, Series, Trajectory};
 
 /// phi, psi, eta, delta, xi (eq. 15) with their covariance, when known.
 #[derive(Clone, Debug)]

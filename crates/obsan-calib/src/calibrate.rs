@@ -5,10 +5,9 @@
 use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
 use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det};
-use crate::data::Dataset;
-use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
-use crate::predict::Predictor;
 use nalgebra::{Matrix4, SMatrix};
+use obsan_data::{wrap, Dataset, Trajectory};
+use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
 use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
@@ -228,7 +227,7 @@ fn rms_of(c: &Closed, d: &ArcData) -> f64 {
     let ss: f64 =
         d.s.iter()
             .zip(&d.beta)
-            .map(|(&s, &b)| crate::sim::wrap(b - c.beta(s)).powi(2))
+            .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
             .sum();
     (ss / d.s.len().max(1) as f64).sqrt()
 }
@@ -478,8 +477,8 @@ pub fn calibrate(
             }
         }
         calibration = Calibration {
-            phi: crate::sim::wrap(phi),
-            psi: crate::sim::wrap(r.params[1]),
+            phi: wrap(phi),
+            psi: wrap(r.params[1]),
             eta,
             delta: r.params[3],
             xi: r.params[4],
@@ -501,7 +500,7 @@ pub fn calibrate(
                 let cp = Calibration::from_values(&vp, None).modes(t.q);
                 let cm = Calibration::from_values(&vm, None).modes(t.q);
                 j[(0, c)] = (cp.1 - cm.1) / (2.0 * h);
-                j[(1, c)] = crate::sim::wrap(cp.2 - cm.2) / (2.0 * h);
+                j[(1, c)] = wrap(cp.2 - cm.2) / (2.0 * h);
             }
             t.modes_cov = Some(j * cov * j.transpose());
         }
@@ -555,7 +554,7 @@ pub fn calibrate(
 }
 
 /// `integral of c dt` over a trajectory's inputs.
-fn integral(t: &crate::data::Trajectory, c: &str) -> Option<f64> {
+fn integral(t: &Trajectory, c: &str) -> Option<f64> {
     let v = t.inputs.column(c)?;
     Some(
         (0..t.inputs.len().saturating_sub(1))
@@ -565,7 +564,7 @@ fn integral(t: &crate::data::Trajectory, c: &str) -> Option<f64> {
 }
 
 /// `integral of wL dt / integral of wR dt` over a trajectory.
-fn measured_ratio(t: &crate::data::Trajectory, right: &str, left: &str) -> Option<f64> {
+fn measured_ratio(t: &Trajectory, right: &str, left: &str) -> Option<f64> {
     let (r, l) = (t.inputs.column(right)?, t.inputs.column(left)?);
     let (mut sr, mut sl) = (0.0, 0.0);
     for k in 0..t.inputs.len().saturating_sub(1) {
@@ -647,7 +646,7 @@ pub fn figure_curves(
             x0.extend(&f.params);
             let y = predictor.predict(&x0, &consts, &t.inputs, &tr.arc.t).ok()?;
             let col = predictor.outputs.iter().position(|n| *n == o.output)?;
-            let v: Vec<f64> = y.iter().map(|r| crate::sim::wrap(r[col])).collect();
+            let v: Vec<f64> = y.iter().map(|r| wrap(r[col])).collect();
             (v.len() == tr.arc.s.len()).then_some(v)
         });
         let d = &tr.det;
@@ -715,8 +714,7 @@ pub fn dataset_crlb(
             max_step: o.ml_max_step,
             input_noise: noise,
         };
-        let cov = crate::fit::crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
-            .map_err(Degenerate)?;
+        let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts).map_err(Degenerate)?;
         Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
     };
     let bearing = bound(None)?;

@@ -8,10 +8,9 @@
 //! organised by trajectory: a trajectory's initial state affects only its
 //! own residuals.
 
-use crate::data::Series;
 use crate::predict::{Integration, Predictor};
-use crate::sim::wrap;
 use crate::whiten::Whitener;
+use obsan_data::{wrap, Dataset, Series};
 
 /// One trajectory to fit.
 pub struct FitTrajectory<'a> {
@@ -26,7 +25,7 @@ pub struct FitTrajectory<'a> {
 impl<'a> FitTrajectory<'a> {
     /// Every trajectory of a dataset, with the predictor's constants from
     /// each `meta.json` (0 where absent: a constant the dynamics do not use).
-    pub fn all(p: &Predictor, data: &'a crate::data::Dataset) -> Vec<FitTrajectory<'a>> {
+    pub fn all(p: &Predictor, data: &'a Dataset) -> Vec<FitTrajectory<'a>> {
         data.trajectories
             .iter()
             .map(|t| FitTrajectory {

@@ -12,8 +12,8 @@
 //! (`alpha` the atan2 term), hence by (24)
 //! `V = xi_q + d(alpha)/ds`, the values `A0`, `V0` at s = 0 and `c` by (31).
 
-use crate::sim::wrap;
 use nalgebra::{Matrix4, SMatrix, SVector};
+use obsan_data::wrap;
 use std::f64::consts::PI;
 
 /// Bearings of one trajectory against the curve length `s = integral of wR dt`
@@ -731,7 +731,6 @@ pub struct LsFit {
     pub cov: SMatrix<f64, 4, 4>,
     /// Root-mean-square of the wrapped residuals (rad).
     pub rms: f64,
-    pub iterations: usize,
 }
 
 /// Weights of section V-B: `sigma_i^2 = sigma_beta^2 + (d beta/ds)^2 var(s_i)`,
@@ -819,6 +818,5 @@ pub fn ls(d: &ArcData, init: &Closed, w: &[f64], max_iter: usize, tol: f64) -> L
         closed: c,
         cov,
         rms: rms(&c, d),
-        iterations,
     }
 }
