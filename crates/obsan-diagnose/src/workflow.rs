@@ -8,7 +8,8 @@ use crate::start::extended_start;
 use crate::stats::{chi2_1_p, normal_critical};
 use obsan_data::{add_derived_inputs, wrap, Dataset};
 use obsan_fit::{
-    estimate_noise, fit, FitOptions, FitTrajectory, Integration, NoiseOptions, Predictor,
+    estimate_noise, fit, minimise, FitOptions, FitTrajectory, Integration, LmOptions, NoiseOptions,
+    Predictor,
 };
 use obsan_model::{Effect, EffectLibrary, Kind, System};
 use rayon::prelude::*;
@@ -998,45 +999,40 @@ fn input_check(e: &Effect, data: &Dataset, alpha: f64) -> InputCheck {
         }
         r
     };
-    let mut theta = vec![0.0; np];
+    let theta = vec![0.0; np];
     let r0 = resid(&theta);
     if r0.is_empty() {
         out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
         return out;
     }
-    let mut cov: nalgebra::DMatrix<f64> = nalgebra::DMatrix::zeros(np, np);
-    for _ in 0..5 {
-        let r = resid(&theta);
-        let mut jac = Vec::new();
-        for i in 0..np {
-            let mut t2 = theta.clone();
-            let h = 1e-6 * (1.0 + theta[i].abs());
-            t2[i] += h;
-            let r2 = resid(&t2);
-            jac.push(
-                r.iter()
-                    .zip(&r2)
-                    .map(|(a, b)| (a - b) / h)
-                    .collect::<Vec<f64>>(),
-            );
-        }
-        let jtj: nalgebra::DMatrix<f64> = nalgebra::DMatrix::from_fn(np, np, |i, j| {
+    // J = -dr/dtheta by forward differences; the normal equations of the core.
+    let normal = |theta: &[f64]| {
+        let r = resid(theta);
+        let jac: Vec<Vec<f64>> = (0..np)
+            .map(|i| {
+                let mut t2 = theta.to_vec();
+                let h = 1e-6 * (1.0 + theta[i].abs());
+                t2[i] += h;
+                let r2 = resid(&t2);
+                r.iter().zip(&r2).map(|(a, b)| (a - b) / h).collect()
+            })
+            .collect();
+        let jtj = nalgebra::DMatrix::from_fn(np, np, |i, j| {
             jac[i].iter().zip(&jac[j]).map(|(a, b)| a * b).sum()
         });
-        let jtr: nalgebra::DVector<f64> =
+        let jtr =
             nalgebra::DVector::from_fn(np, |i, _| jac[i].iter().zip(&r).map(|(a, b)| a * b).sum());
-        let Some(inv) = jtj.clone().try_inverse() else {
-            out.note = "the inputs do not determine the relation's params".into();
-            return out;
-        };
-        let step = &inv * jtr;
-        for i in 0..np {
-            theta[i] += step[i];
-        }
-        let r = resid(&theta);
-        let s2 = r.iter().map(|x| x * x).sum::<f64>() / (r.len() as f64 - np as f64).max(1.0);
-        cov = inv * s2;
-    }
+        (jtj, jtr)
+    };
+    let cost = |theta: &[f64]| resid(theta).iter().map(|x| x * x).sum::<f64>();
+    let theta = minimise(&theta, cost, normal, |_| {}, &LmOptions::default()).x;
+    let Some(inv) = normal(&theta).0.try_inverse() else {
+        out.note = "the inputs do not determine the relation's params".into();
+        return out;
+    };
+    let r = resid(&theta);
+    let s2 = r.iter().map(|x| x * x).sum::<f64>() / (r.len() as f64 - np as f64).max(1.0);
+    let cov = inv * s2;
     let zcrit = normal_critical(alpha);
     out.estimates = e
         .params

@@ -10,12 +10,14 @@
 )]
 
 mod fit;
+mod lsq;
 mod noise;
 mod predict;
 mod rng;
 mod whiten;
 
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
+pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;
