@@ -4,13 +4,13 @@
 use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
 use crate::fsio::write_folder_atomically;
-use crate::plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
 };
 use obsan_model::{EffectLibrary, Kind};
+use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::io::IsTerminal;
@@ -467,7 +467,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
     }
     // Candidate scores of the first round.
     if let Some(r) = d.rounds.first() {
-        let items: Vec<(String, f64, crate::plot::Rgb)> = r
+        let items: Vec<(String, f64, obsan_plot::Rgb)> = r
             .iter()
             .map(|c| {
                 let color = if !c.identifiable {

@@ -2,7 +2,6 @@
 
 use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
 use crate::fsio::write_folder_atomically;
-use crate::plot::{self, chart, Style, BLACK, COLORS};
 use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_calib::{
@@ -11,6 +10,7 @@ use obsan_calib::{
 };
 use obsan_data::{DataFile, Dataset, DatasetFiles, TrajectoryFiles};
 use obsan_fit::Predictor;
+use obsan_plot::{self as plot, chart, Style, BLACK, COLORS};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
