@@ -4,8 +4,8 @@
 //! `cargo bench --bench diagnose -- confusion [SEEDS]` (hidden effect x
 //! named effect per data design, the table in docs/diagnose.md).
 
+use obsan_calib::{simulate, SimOptions};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions};
-use obsan_estimate::{simulate, SimOptions};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 use std::time::Instant;

@@ -3,11 +3,11 @@
 //! method end to end (compute only, no process start or file reading).
 //! Run: `cargo bench --bench estimate`.
 
-use obsan_estimate::{calibrate, simulate, CalibrateOptions, Method, SimOptions};
+use obsan_calib::{calibrate, simulate, CalibrateOptions, Method, SimOptions};
 use std::time::Instant;
 
 fn main() {
-    let p = obsan_estimate::calib_predictor();
+    let p = obsan_calib::calib_predictor();
     let o = SimOptions::default();
     let reps = 21;
     let mut sim = Vec::new();

@@ -6,7 +6,7 @@
 //! cargo run --release --example mrclam_truth -- ../shared/data/mrclam
 //! ```
 
-use obsan_estimate::{mrclam_convert, mrclam_landmarks, MrclamOutputs, MrclamText};
+use obsan_data::{mrclam_convert, mrclam_landmarks, MrclamOutputs, MrclamText};
 use std::error::Error;
 
 type Rows = Vec<Vec<f64>>;

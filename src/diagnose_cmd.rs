@@ -4,13 +4,13 @@
 use crate::cli::{DiagnoseArgs, MrclamArgs};
 use crate::estimate_cmds::read_dataset;
 use crate::fsio::write_folder_atomically;
-use crate::plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
 };
 use obsan_model::{EffectLibrary, Kind};
+use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::io::IsTerminal;
@@ -467,7 +467,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
     }
     // Candidate scores of the first round.
     if let Some(r) = d.rounds.first() {
-        let items: Vec<(String, f64, crate::plot::Rgb)> = r
+        let items: Vec<(String, f64, obsan_plot::Rgb)> = r
             .iter()
             .map(|c| {
                 let color = if !c.identifiable {
@@ -531,19 +531,19 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     let meas = read(&format!("robot{}_Measurement.txt", a.robot))?;
     let lms = read("Landmark_Groundtruth.dat")?;
     let gt = read(&format!("robot{}_Groundtruth.txt", a.robot)).ok();
-    let text = obsan_estimate::MrclamText {
+    let text = obsan_data::MrclamText {
         odometry: (&odo.0, &odo.1),
         measurements: (&meas.0, &meas.1),
         landmarks: (&lms.0, &lms.1),
         groundtruth: gt.as_ref().map(|g| (g.0.as_str(), g.1.as_str())),
     };
     let what = if a.vicon_poses {
-        obsan_estimate::MrclamOutputs::ViconPoses
+        obsan_data::MrclamOutputs::ViconPoses
     } else {
-        obsan_estimate::MrclamOutputs::Landmarks
+        obsan_data::MrclamOutputs::Landmarks
     };
     let (mut data, mut truth) =
-        obsan_estimate::mrclam_convert(&text, a.window, a.min_measurements, what)?;
+        obsan_data::mrclam_convert(&text, a.window, a.min_measurements, what)?;
     if a.max_windows > 0 {
         data.trajectories.truncate(a.max_windows);
         truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));

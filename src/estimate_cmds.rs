@@ -2,14 +2,15 @@
 
 use crate::cli::{CalibrateArgs, CrlbArgs, MontecarloArgs};
 use crate::fsio::write_folder_atomically;
-use crate::plot::{self, chart, Style, BLACK, COLORS};
 use crate::simulate::sim_options;
 use crate::Failure;
-use obsan_estimate::{
+use obsan_calib::{
     calib_predictor, calibrate, crlb_sd, dataset_crlb, figure_curves, run_cell, simulate, table,
-    CalibrateOptions, DataFile, Dataset, DatasetFiles, Method, Predictor, TrajectoryFiles, PARAMS,
-    PARAM_COLUMNS,
+    CalibrateOptions, Method, PARAMS, PARAM_COLUMNS,
 };
+use obsan_data::{DataFile, Dataset, DatasetFiles, TrajectoryFiles};
+use obsan_fit::Predictor;
+use obsan_plot::{self as plot, chart, Style, BLACK, COLORS};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
@@ -64,7 +65,7 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
             "{dir}: no trajectory folder (with inputs.csv and outputs.csv)"
         )));
     }
-    let r = obsan_estimate::read_dataset(&files, inputs, outputs)?;
+    let r = obsan_data::read_dataset(&files, inputs, outputs)?;
     for w in &r.warnings {
         eprintln!("warning: {w}");
     }
@@ -378,8 +379,8 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
 }
 
 fn print_table(
-    t: &obsan_estimate::Table,
-    results: &[obsan_estimate::CellResult],
+    t: &obsan_calib::Table,
+    results: &[obsan_calib::CellResult],
     runs: usize,
     secs: f64,
 ) {
@@ -494,7 +495,7 @@ fn write_figures(
     data: &Dataset,
     p: &Predictor,
     o: &CalibrateOptions,
-    done: &obsan_estimate::CalibrationReport,
+    done: &obsan_calib::CalibrationReport,
 ) -> Result<usize, Failure> {
     let curves = figure_curves(data, p, o, done).map_err(|e| Failure(format!("--plot: {e}")))?;
     let mut files = Vec::new();

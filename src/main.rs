@@ -27,7 +27,6 @@ mod estimate_cmds;
 mod expr_cmds;
 mod fsio;
 mod modes_cmd;
-mod plot;
 mod show;
 mod simulate;
 

@@ -3,7 +3,8 @@
 use crate::cli::{SimFlags, SimulateArgs};
 use crate::fsio::write_folder_atomically;
 use crate::Failure;
-use obsan_estimate::{simulate, Dataset, Series, SimOptions};
+use obsan_calib::{simulate, SimOptions};
+use obsan_data::{Dataset, Series};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -95,11 +96,11 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
         o.inputs = Some(s);
     }
     if a.bearings
-        .is_some_and(|n| n < obsan_estimate::MIN_OUTPUT_SAMPLES)
+        .is_some_and(|n| n < obsan_data::MIN_OUTPUT_SAMPLES)
     {
         return Err(Failure(format!(
             "--bearings must be at least {}",
-            obsan_estimate::MIN_OUTPUT_SAMPLES
+            obsan_data::MIN_OUTPUT_SAMPLES
         )));
     }
     Ok(o)

@@ -1,4 +1,4 @@
-//! The dataset reader (obsan_estimate::read_dataset) on framed files.
+//! The dataset reader (obsan_data::read_dataset) on framed files.
 //!
 //! Framing: the input is split on NUL bytes into dataset.json, then groups of
 //! three per trajectory: inputs.csv, outputs.csv, meta.json (an empty part is
@@ -8,7 +8,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use obsan_estimate::{read_dataset, DataFile, DatasetFiles, TrajectoryFiles, MAX_ABS_VALUE};
+use obsan_data::{read_dataset, DataFile, DatasetFiles, TrajectoryFiles, MAX_ABS_VALUE};
 
 fn part(path: String, bytes: &[u8]) -> Option<DataFile> {
     (!bytes.is_empty()).then(|| DataFile {

@@ -17,7 +17,7 @@
 //! system; what is approximate is only the reading of the class from noisy
 //! data (a derived input such as `rate(u)` counts as free when `u` varies).
 
-use obsan_estimate::Dataset;
+use obsan_data::Dataset;
 use obsan_model::{Kind, System};
 use serde::Serialize;
 

@@ -21,16 +21,19 @@
 )]
 
 mod identify;
+mod model_fit;
+mod relation;
 mod residual;
 mod start;
 mod stats;
 mod workflow;
 
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
+pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
+pub use relation::InputCheck;
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use start::start_values;
 pub use stats::{chi2_1_p, chi2_z, normal_critical};
 pub use workflow::{
-    diagnose, fit_model, input_noise, prepare, CandidateResult, DiagnoseOptions, Diagnosis,
-    InputCheck, InputNoise, ModelFit, Named, Rival, Start, RIVAL_BIC,
+    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival, RIVAL_BIC,
 };

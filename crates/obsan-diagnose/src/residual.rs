@@ -31,7 +31,7 @@ pub struct ResidualSeries {
     /// Whitener (lower Cholesky factor L) of the covariance of `e` when the
     /// errors are correlated (input noise integrated by the dynamics): the
     /// tests run on `L^-1 e` and `L^-1 X` (generalised least squares).
-    pub whiten: Option<std::sync::Arc<obsan_estimate::Whitener>>,
+    pub whiten: Option<std::sync::Arc<obsan_fit::Whitener>>,
 }
 
 impl ResidualSeries {
@@ -204,7 +204,7 @@ pub fn analyse(series: &[ResidualSeries], n_fitted: usize) -> ResidualReport {
                     if b > a {
                         let mut dy = s.predicted[b] - s.predicted[a];
                         if s.angular {
-                            dy = obsan_estimate::wrap(dy);
+                            dy = obsan_data::wrap(dy);
                         }
                         *di = dy / (s.t[b] - s.t[a]).max(1e-12);
                     }

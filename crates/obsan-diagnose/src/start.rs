@@ -5,9 +5,8 @@
 //! (`param T = 0.2`, `state va = v`) is used, and params without one start
 //! at 0.
 
-use obsan_estimate::{
-    add_derived_inputs, calibrate, CalibrateOptions, Dataset, Method, Trajectory,
-};
+use obsan_calib::{calibrate, CalibrateOptions, Method};
+use obsan_data::{add_derived_inputs, Dataset, Trajectory};
 use obsan_model::{Decl, Kind, Start, System};
 use std::collections::BTreeMap;
 
@@ -127,7 +126,7 @@ pub fn start_values(
 /// the origin with the commanded (v, omega), turn every range-bearing
 /// measurement into the landmark's position in that frame, and register
 /// those points onto the known landmarks (2-D Procrustes, closed form).
-fn unicycle_start(t: &obsan_estimate::Trajectory) -> Option<[f64; 3]> {
+fn unicycle_start(t: &obsan_data::Trajectory) -> Option<[f64; 3]> {
     let (v, w) = (t.inputs.column("v")?, t.inputs.column("omega")?);
     // Relative poses at the input rows.
     let mut pose = vec![(0.0f64, 0.0f64, 0.0f64)];

@@ -3,17 +3,17 @@
 //! significant ones greedily.
 
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
-use crate::residual::{analyse, ResidualReport, ResidualSeries};
+use crate::model_fit::{
+    class_inputs, estimate_levels, fit_model, input_noise, prepare, without_outliers, ModelFit,
+    Start, OUTLIER_Z,
+};
+use crate::relation::{input_check, InputCheck};
 use crate::start::extended_start;
 use crate::stats::{chi2_1_p, normal_critical};
-use obsan_estimate::{
-    add_derived_inputs, estimate_noise, fit, wrap, Dataset, FitOptions, FitTrajectory, Integration,
-    NoiseOptions, Predictor,
-};
+use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, Kind, System};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// Outputs per trajectory used by the rank test (the most measured ones).
 pub const MAX_RANK_OUTPUTS: usize = 4;
@@ -31,7 +31,7 @@ pub struct DiagnoseOptions {
     pub cost_tolerance: f64,
     /// Stop a fit when its step is shorter than this many standard deviations.
     pub step_tolerance: f64,
-    /// Longest integration step (s), see `obsan_estimate::Integration`.
+    /// Longest integration step (s), see `obsan_fit::Integration`.
     pub max_step: f64,
     /// Trajectories stacked in the rank test (the first ones).
     pub rank_trajectories: usize,
@@ -49,7 +49,7 @@ pub enum InputNoise {
     Stated,
     /// Estimated by restricted maximum likelihood (with the output levels
     /// unless they are given), at the nominal fit and again after every
-    /// named effect ([`obsan_estimate::estimate_noise`]). Linearised about
+    /// named effect ([`obsan_fit::estimate_noise`]). Linearised about
     /// the fitted path: for drift that stays small against the geometry
     /// (docs/diagnose.md says where it does not).
     Estimate,
@@ -70,58 +70,6 @@ impl Default for DiagnoseOptions {
             sigma: None,
             input_noise: InputNoise::Stated,
         }
-    }
-}
-
-/// A fitted model and its residuals.
-#[derive(Clone, Debug, Serialize)]
-pub struct ModelFit {
-    pub model: String,
-    pub params: Vec<(String, f64, f64)>,
-    /// Per param: the cluster-robust sd, trajectories as clusters (right
-    /// whatever the correlation within a trajectory; NaN with one).
-    pub params_robust_sd: Vec<f64>,
-    /// Per trajectory: initial dynamic state.
-    pub initial_states: Vec<Vec<f64>>,
-    /// Sum of squared normalised residuals, their number, unknowns fitted.
-    pub cost: f64,
-    /// With input noise: the log-determinant of the residuals' covariance
-    /// (normalised by the output levels), which depends on the params; the
-    /// likelihood ratio between two fits needs it (0 without input noise).
-    pub log_det: f64,
-    pub n: usize,
-    pub n_fitted: usize,
-    pub iterations: usize,
-    /// Per output: residual RMS (in the output's units).
-    pub rms: Vec<(String, f64)>,
-    pub residuals: ResidualReport,
-    #[serde(skip)]
-    pub series: Vec<ResidualSeries>,
-    #[serde(skip)]
-    pub covariance: Vec<Vec<f64>>,
-}
-
-impl ModelFit {
-    pub fn param(&self, name: &str) -> Option<(f64, f64)> {
-        self.params.iter().find(|p| p.0 == name).map(|p| (p.1, p.2))
-    }
-    /// A param's cluster-robust sd.
-    pub fn robust_sd(&self, name: &str) -> Option<f64> {
-        let i = self.params.iter().position(|p| p.0 == name)?;
-        self.params_robust_sd.get(i).copied()
-    }
-    /// `-2 log L` up to terms that do not depend on the fit (the output
-    /// levels are shared by the fits compared).
-    pub fn m2ll(&self) -> f64 {
-        self.cost + self.log_det
-    }
-    fn reduced_chi2(&self) -> f64 {
-        self.cost / (self.n as f64 - self.n_fitted as f64).max(1.0)
-    }
-    /// Variance inflation of the quasi-likelihood: excess residual level
-    /// times serial correlation, at least 1.
-    pub fn inflation(&self) -> f64 {
-        self.reduced_chi2().max(1.0) * self.residuals.correlation_factor
     }
 }
 
@@ -186,17 +134,6 @@ pub struct Rival {
 /// rivals ("strong evidence" starts at 6 on Kass and Raftery's scale).
 pub const RIVAL_BIC: f64 = 6.0;
 
-/// An effect on the measured inputs (`compare` relations).
-#[derive(Clone, Debug, Serialize)]
-pub struct InputCheck {
-    pub effect: String,
-    pub description: String,
-    pub estimates: Vec<(String, f64, f64)>,
-    pub z: f64,
-    pub significant: bool,
-    pub note: String,
-}
-
 /// The whole outcome.
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
@@ -225,323 +162,6 @@ pub struct Diagnosis {
     /// Per-round critical value of the LR statistic.
     pub lr_critical: f64,
 }
-
-/// The inputs whose class the rank test reads: the model's, then with a
-/// delay each one's rate (`rate__<u>`, see `identify::stacked_rank`).
-fn class_inputs(sys: &System) -> (Vec<String>, Vec<Option<String>>) {
-    let mut ins: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
-    let mut der: Vec<Option<String>> = sys
-        .decls_of(Kind::Input)
-        .map(|d| d.derived.clone())
-        .collect();
-    if sys.delay.is_some() {
-        let n = ins.len();
-        for i in 0..n {
-            der.push(Some(format!("rate({})", ins[i])));
-            ins.push(format!("rate__{}", ins[i]));
-        }
-    }
-    (ins, der)
-}
-
-/// The dataset with the model's derived inputs and the workflow's
-/// constants (`later`: 0 on the first trajectory, 1 after; `index`).
-pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
-    let mut d = data.clone();
-    let mut derived: Vec<(String, String)> = sys
-        .decls_of(Kind::Input)
-        .filter_map(|x| x.derived.clone().map(|t| (x.name.clone(), t)))
-        .collect();
-    if sys.delay.is_some() {
-        for d in sys.decls_of(Kind::Input) {
-            derived.push((format!("rate__{}", d.name), format!("rate({})", d.name)));
-        }
-    }
-    for (k, t) in d.trajectories.iter_mut().enumerate() {
-        t.meta
-            .entry("later".into())
-            .or_insert(if k == 0 { 0.0 } else { 1.0 });
-        t.meta.entry("index".into()).or_insert(k as f64);
-        add_derived_inputs(&mut t.inputs, &derived, &t.meta)
-            .map_err(|e| format!("trajectory {}: {e}", t.name))?;
-    }
-    Ok(d)
-}
-
-/// The measured inputs' noise (see `obsan_estimate::Integration::input_noise`)
-/// from `dataset.json`, per measured input of `sys` by name: `noise.<input>`
-/// gives `c` for that input; otherwise `noise.encoder_k` = K with
-/// `nominal.r_right` = r gives `c = K^2 / r` for every measured input (wheel
-/// encoders, the error model of [10]). Empty when the dataset states none.
-pub fn input_noise(sys: &System, data: &Dataset) -> Vec<(String, f64)> {
-    let m = &data.meta;
-    let enc = match (m.noise.get("encoder_k"), m.nominal.get("r_right")) {
-        (Some(k), Some(r)) if *k > 0.0 && *r > 0.0 => Some(k * k / r),
-        _ => None,
-    };
-    let c: Vec<(String, f64)> = sys
-        .decls_of(Kind::Input)
-        .filter(|d| d.derived.is_none())
-        .map(|d| {
-            let c = m.noise.get(&d.name).copied().or(enc).unwrap_or(0.0);
-            (d.name.clone(), c)
-        })
-        .collect();
-    if c.iter().any(|x| x.1 > 0.0) {
-        c
-    } else {
-        vec![]
-    }
-}
-
-/// The per-input vector of `sys`'s predictor for named intensities (derived
-/// inputs carry none); `None` when there is no noise.
-fn noise_vector(sys: &System, noise: &[(String, f64)]) -> Option<Vec<f64>> {
-    let c: Vec<f64> = sys
-        .decls_of(Kind::Input)
-        .map(|d| match &d.derived {
-            Some(_) => 0.0,
-            None => noise.iter().find(|n| n.0 == d.name).map_or(0.0, |n| n.1),
-        })
-        .collect();
-    c.iter().any(|x| *x > 0.0).then_some(c)
-}
-
-/// Output levels, named input intensities, and the likelihood-ratio
-/// statistic of the input noise.
-type Levels = (Vec<f64>, Vec<(String, f64)>, f64);
-
-/// Restricted-ML noise levels at `f` (a fit of `sys`): the output levels
-/// (held when `outputs` is false) and each measured input's intensity, with
-/// the likelihood-ratio statistic against white output noise.
-fn estimate_levels(
-    sys: &System,
-    data: &Dataset,
-    f: &ModelFit,
-    sigma: &[f64],
-    outputs: bool,
-    o: &DiagnoseOptions,
-) -> Result<Levels, String> {
-    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
-    let p = Predictor::new(&nf);
-    let trajs = FitTrajectory::all(&p, data);
-    let mask: Vec<bool> = sys
-        .decls_of(Kind::Input)
-        .map(|d| d.derived.is_none())
-        .collect();
-    let names: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
-    let params: Vec<f64> = f.params.iter().map(|p| p.1).collect();
-    let opts = NoiseOptions {
-        max_step: o.max_step,
-        outputs,
-        ..NoiseOptions::default()
-    };
-    let e = estimate_noise(&p, &trajs, &params, &f.initial_states, sigma, &mask, &opts)?;
-    let named = names
-        .into_iter()
-        .zip(e.input_noise)
-        .zip(mask)
-        .filter(|(_, m)| *m)
-        .map(|(x, _)| x)
-        .collect();
-    Ok((e.sigma, named, e.m2ll_white - e.m2ll))
-}
-
-/// Normalised residuals beyond this are gross outliers for the restart of
-/// a candidate fit (see `candidate`): no Gaussian noise gives them.
-const OUTLIER_Z: f64 = 5.0;
-
-/// `data` without the measurements whose residual in `f` exceeds `z`
-/// sigmas; `None` when there are none.
-fn without_outliers(data: &Dataset, f: &ModelFit, z: f64) -> Option<Dataset> {
-    let mut out = data.clone();
-    let mut removed = 0usize;
-    for s in &f.series {
-        let Some(tr) = out.trajectories.iter_mut().find(|t| t.name == s.trajectory) else {
-            continue;
-        };
-        let Some(c) = tr.outputs.columns.iter().position(|n| *n == s.output) else {
-            continue;
-        };
-        for (t, e) in s.t.iter().zip(&s.e) {
-            if e.abs() > z {
-                if let Ok(j) = tr.outputs.t.binary_search_by(|x| x.total_cmp(t)) {
-                    tr.outputs.values[c][j] = None;
-                    removed += 1;
-                }
-            }
-        }
-    }
-    (removed > 0).then_some(out)
-}
-
-/// Fit `sys` to prepared `data` from the given start, with output levels
-/// `sigma` and input-noise intensities `noise` by input name (generalised
-/// least squares, the covariance at the fit's own estimate; empty: none).
-pub fn fit_model(
-    sys: &System,
-    data: &Dataset,
-    params0: &[f64],
-    states0: &[Vec<f64>],
-    sigma: &[f64],
-    noise: &[(String, f64)],
-    o: &DiagnoseOptions,
-) -> Result<ModelFit, String> {
-    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
-    let p = Predictor::new(&nf);
-    let trajs = FitTrajectory::all(&p, data);
-    let fo = FitOptions {
-        max_iterations: o.max_iterations,
-        cost_tolerance: o.cost_tolerance,
-        step_tolerance: o.step_tolerance,
-        sigma: sigma.to_vec(),
-        max_step: o.max_step,
-        input_noise: noise_vector(sys, noise),
-    };
-    let weighted = fo.input_noise.is_some();
-    let r = fit(&p, &trajs, params0, states0, &fo)?;
-    // The noise is mapped back to each trajectory's start through the
-    // inverse transition matrix, which a fast decaying state (a lag of time
-    // constant T over a trajectory of many T) makes overflow: then the
-    // residuals cannot be weighed and no likelihood can be compared.
-    if weighted {
-        if let Some(k) = r.whitening.iter().position(Option::is_none) {
-            return Err(format!(
-                "the input-noise covariance cannot be formed on trajectory {}: a state decays \
-                 too fast over it for the linearised noise model (use --input-noise none)",
-                data.trajectories[k].name
-            ));
-        }
-    }
-    let names: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
-    let measured: Vec<String> = sys
-        .decls_of(Kind::Input)
-        .filter(|d| d.derived.is_none())
-        .map(|d| d.name.clone())
-        .collect();
-    let mut series = Vec::new();
-    for (k, (tr, ft)) in data.trajectories.iter().zip(&trajs).enumerate() {
-        // The fit's residual rows: (time index, output) of the measured cells.
-        let cols: Vec<Option<&[Option<f64>]>> =
-            p.outputs.iter().map(|o| tr.outputs.column(o)).collect();
-        let mut row_of = Vec::new();
-        for j in 0..tr.outputs.len() {
-            for (oi, c) in cols.iter().enumerate() {
-                if c.is_some_and(|c| c[j].is_some()) {
-                    row_of.push((j, oi));
-                }
-            }
-        }
-        let whitener = r.whitening.get(k).cloned().flatten();
-        let mut x0 = r.initial_states[k].clone();
-        x0.extend_from_slice(&r.params);
-        let integ = Integration {
-            max_step: o.max_step,
-            sensitivities: false,
-            input_noise: None,
-        };
-        let pred = p.predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)?;
-        // Held input values and their integrals at every output time, once
-        // per trajectory (shared by its outputs).
-        let in_cols: Vec<Option<&[Option<f64>]>> =
-            measured.iter().map(|n| tr.inputs.column(n)).collect();
-        let held = |c: &Option<&[Option<f64>]>, row: usize| c.and_then(|c| c[row]).unwrap_or(0.0);
-        let mut held_at = Vec::with_capacity(tr.outputs.len());
-        {
-            let mut row = 0usize;
-            let mut integral = vec![0.0; measured.len()];
-            let mut t_int = tr.inputs.t.first().copied().unwrap_or(0.0);
-            for &t in &tr.outputs.t {
-                while row + 1 < tr.inputs.len() && tr.inputs.t[row + 1] <= t {
-                    for (m, c) in in_cols.iter().enumerate() {
-                        integral[m] += held(c, row) * (tr.inputs.t[row + 1] - t_int);
-                    }
-                    t_int = tr.inputs.t[row + 1];
-                    row += 1;
-                }
-                let at: Vec<(f64, f64)> = in_cols
-                    .iter()
-                    .enumerate()
-                    .map(|(m, c)| {
-                        let u = held(c, row);
-                        (u, integral[m] + u * (t - t_int))
-                    })
-                    .collect();
-                held_at.push(at);
-            }
-        }
-        for (oi, oname) in p.outputs.iter().enumerate() {
-            let Some(col) = tr.outputs.column(oname) else {
-                continue;
-            };
-            let mut s = ResidualSeries {
-                trajectory: tr.name.clone(),
-                output: oname.clone(),
-                t: vec![],
-                e: vec![],
-                predicted: vec![],
-                angular: p.angular[oi],
-                inputs: measured.iter().map(|n| (n.clone(), vec![])).collect(),
-                input_integrals: measured.iter().map(|n| (n.clone(), vec![])).collect(),
-                whiten: None,
-            };
-            if let Some(w) = &whitener {
-                let idx: Vec<usize> = row_of
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, x)| x.1 == oi)
-                    .map(|(i, _)| i)
-                    .collect();
-                s.whiten = w.subset(&idx).map(std::sync::Arc::new);
-            }
-            for (j, &t) in tr.outputs.t.iter().enumerate() {
-                let Some(m) = col[j] else { continue };
-                let y = pred.outputs[j][oi];
-                let d = if s.angular { wrap(m - y) } else { m - y };
-                s.t.push(t);
-                s.e.push(d / sigma[oi]);
-                s.predicted.push(y);
-                for (mi, &(u, integral)) in held_at[j].iter().enumerate() {
-                    s.inputs[mi].1.push(u);
-                    s.input_integrals[mi].1.push(integral);
-                }
-            }
-            if !s.e.is_empty() {
-                series.push(s);
-            }
-        }
-    }
-    let n_fitted = r.params.len() + r.initial_states.iter().map(Vec::len).sum::<usize>();
-    let residuals = analyse(&series, n_fitted);
-    Ok(ModelFit {
-        model: sys.name.clone(),
-        params: names
-            .iter()
-            .zip(r.params.iter().zip(&r.params_sd))
-            .map(|(n, (v, s))| (n.clone(), *v, *s))
-            .collect(),
-        params_robust_sd: r.params_sd_robust.clone(),
-        initial_states: r.initial_states.clone(),
-        cost: r.cost,
-        log_det: r.whitening.iter().flatten().map(|w| w.log_det()).sum(),
-        n: r.n_residuals,
-        n_fitted,
-        iterations: r.iterations,
-        rms: p
-            .outputs
-            .iter()
-            .cloned()
-            .zip(r.residual_rms.iter().copied())
-            .collect(),
-        residuals,
-        series,
-        covariance: r.covariance,
-    })
-}
-
-/// Start values for `sys` on `data`: a function of the model (see
-/// [`crate::start_values`]).
-pub type Start = (Vec<f64>, Vec<Vec<f64>>);
 
 /// Run the workflow. `progress` is told what is being done.
 pub fn diagnose(
@@ -945,111 +565,4 @@ fn candidate(
             (res, None)
         }
     }
-}
-
-/// Fit the params of an input relation `compare u = EXPR` to the measured
-/// inputs of every trajectory where EXPR can be evaluated (Gauss–Newton,
-/// numeric derivatives; residual scatter gives the standard deviations).
-fn input_check(e: &Effect, data: &Dataset, alpha: f64) -> InputCheck {
-    let mut out = InputCheck {
-        effect: e.name.clone(),
-        description: e.description.clone(),
-        estimates: vec![],
-        z: 0.0,
-        significant: false,
-        note: String::new(),
-    };
-    let np = e.params.len();
-    let resid = |theta: &[f64]| -> Vec<f64> {
-        let mut r = Vec::new();
-        for t in &data.trajectories {
-            let mut consts: BTreeMap<String, f64> = t.meta.clone();
-            for (p, v) in e.params.iter().zip(theta) {
-                consts.insert(p.clone(), *v);
-            }
-            for (u, rhs) in &e.compares {
-                let mut s = t.inputs.clone();
-                if add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts).is_err() {
-                    continue;
-                }
-                let (Some(m), Some(c)) = (s.column(u), s.column("__cmp")) else {
-                    continue;
-                };
-                // Compared over 1 s block means: averaging keeps the relation
-                // (linear in the inputs) and removes the errors-in-variables
-                // bias that per-sample encoder noise would give.
-                let (mut a, mut b, mut n) = (0.0, 0.0, 0usize);
-                let mut t0 = s.t.first().copied().unwrap_or(0.0);
-                for ((x, y), t) in m.iter().zip(c).zip(&s.t) {
-                    if *t >= t0 + 1.0 && n > 0 {
-                        r.push((a - b) / n as f64);
-                        (a, b, n, t0) = (0.0, 0.0, 0, *t);
-                    }
-                    if let (Some(x), Some(y)) = (x, y) {
-                        a += x;
-                        b += y;
-                        n += 1;
-                    }
-                }
-                if n > 0 {
-                    r.push((a - b) / n as f64);
-                }
-            }
-        }
-        r
-    };
-    let mut theta = vec![0.0; np];
-    let r0 = resid(&theta);
-    if r0.is_empty() {
-        out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
-        return out;
-    }
-    let mut cov: nalgebra::DMatrix<f64> = nalgebra::DMatrix::zeros(np, np);
-    for _ in 0..5 {
-        let r = resid(&theta);
-        let mut jac = Vec::new();
-        for i in 0..np {
-            let mut t2 = theta.clone();
-            let h = 1e-6 * (1.0 + theta[i].abs());
-            t2[i] += h;
-            let r2 = resid(&t2);
-            jac.push(
-                r.iter()
-                    .zip(&r2)
-                    .map(|(a, b)| (a - b) / h)
-                    .collect::<Vec<f64>>(),
-            );
-        }
-        let jtj: nalgebra::DMatrix<f64> = nalgebra::DMatrix::from_fn(np, np, |i, j| {
-            jac[i].iter().zip(&jac[j]).map(|(a, b)| a * b).sum()
-        });
-        let jtr: nalgebra::DVector<f64> =
-            nalgebra::DVector::from_fn(np, |i, _| jac[i].iter().zip(&r).map(|(a, b)| a * b).sum());
-        let Some(inv) = jtj.clone().try_inverse() else {
-            out.note = "the inputs do not determine the relation's params".into();
-            return out;
-        };
-        let step = &inv * jtr;
-        for i in 0..np {
-            theta[i] += step[i];
-        }
-        let r = resid(&theta);
-        let s2 = r.iter().map(|x| x * x).sum::<f64>() / (r.len() as f64 - np as f64).max(1.0);
-        cov = inv * s2;
-    }
-    let zcrit = normal_critical(alpha);
-    out.estimates = e
-        .params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (p.clone(), theta[i], cov[(i, i)].max(0.0).sqrt()))
-        .collect();
-    out.z = out
-        .estimates
-        .iter()
-        .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
-        .fold(0.0, f64::max);
-    out.significant = out.z > zcrit;
-    out.note = format!("{} input samples", r0.len());
-    out
 }

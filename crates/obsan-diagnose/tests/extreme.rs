@@ -2,8 +2,9 @@
 //! minutes. The dataset reader refuses such a value; the workflow, given it
 //! anyway (or the largest value the reader accepts), returns.
 
+use obsan_calib::{simulate, SimOptions};
+use obsan_data::MAX_ABS_VALUE;
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions};
-use obsan_estimate::{simulate, SimOptions, MAX_ABS_VALUE};
 use obsan_model::{EffectLibrary, System};
 
 fn read(p: &str) -> String {

@@ -8,8 +8,8 @@
 //! speed profiles where an effect needs a varying speed; a design is named
 //! by its `--speed-profile` (`constant`, `sine:0.9:60`, ...).
 
+use obsan_calib::{simulate, SimOptions, Truth};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis};
-use obsan_estimate::{simulate, SimOptions, Truth};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 

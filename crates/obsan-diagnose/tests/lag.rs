@@ -2,9 +2,10 @@
 //! simulated range-bearing data of a unicycle (systems/mrclam.sys with the
 //! landmarks on a ring), found by the workflow with its time constant.
 
+use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis, InputNoise};
-use obsan_estimate::{Dataset, DatasetMeta, Predictor, Series, Trajectory};
 use obsan_expr::SplitMix;
+use obsan_fit::Predictor;
 use obsan_model::{EffectLibrary, Kind, System};
 use std::collections::BTreeMap;
 

@@ -5,9 +5,8 @@
 //! with the encoder error model of [10] as input noise (`var(ds) = K^2 |ds| / r`).
 
 use crate::circle::Closed;
-use crate::data::Trajectory;
-use crate::sim::wrap;
 use nalgebra::{Matrix4, Vector4};
+use obsan_data::{wrap, Trajectory};
 use std::f64::consts::PI;
 
 /// The filter's state at the end of the trajectory.
@@ -16,7 +15,6 @@ pub struct CekfResult {
     /// `[A_v, V, xi_q, L]`.
     pub x: Vector4<f64>,
     pub cov: Matrix4<f64>,
-    pub updates: usize,
 }
 
 /// The initial state `[A_v, V, xi_q, L]` at s = 0 from a closed form.
@@ -59,7 +57,6 @@ pub fn cekf(
     let r = sigma_beta * sigma_beta;
     let mut row = 0usize;
     let mut tcur = t.inputs.t.first().copied().unwrap_or(0.0);
-    let mut updates = 0;
     for (k, &tb) in t.outputs.t.iter().enumerate() {
         // Propagate to the bearing's time, one encoder interval at a time.
         while tcur < tb - 1e-12 {
@@ -115,8 +112,7 @@ pub fn cekf(
         // Joseph form keeps P symmetric positive definite.
         let ikh = Matrix4::identity() - gain * hrow.transpose();
         p = ikh * p * ikh.transpose() + gain * gain.transpose() * r;
-        updates += 1;
     }
     x[3] = wrap(x[3]);
-    Ok(CekfResult { x, cov: p, updates })
+    Ok(CekfResult { x, cov: p })
 }

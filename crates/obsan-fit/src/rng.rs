@@ -1,25 +1,25 @@
-//! A small seeded generator (SplitMix64) with normal deviates (Box–Muller):
-//! results depend on the seed only, never on a crate version or on scheduling.
+//! The estimation side's seeded generator: the engine's SplitMix64
+//! ([`obsan_expr::SplitMix`], the one implementation in the workspace) with
+//! uniform and normal (Box–Muller) deviates. Results depend on the seed only,
+//! never on a crate version or on scheduling.
+
+use obsan_expr::SplitMix;
 
 #[derive(Clone, Debug)]
 pub struct Rng {
-    state: u64,
+    bits: SplitMix,
     spare: Option<f64>,
 }
 
 impl Rng {
     pub fn new(seed: u64) -> Rng {
         Rng {
-            state: seed ^ 0x6a09_e667_f3bc_c909,
+            bits: SplitMix(seed ^ 0x6a09_e667_f3bc_c909),
             spare: None,
         }
     }
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.bits.next_u64()
     }
     /// Uniform in (0, 1).
     pub fn uniform(&mut self) -> f64 {

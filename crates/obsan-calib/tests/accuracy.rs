@@ -1,12 +1,12 @@
 //! Accuracy of `calibrate` on simulated data (fixed seeds), against the
 //! simulator's truth and the Cramér–Rao bound (docs/accuracy.md).
 
-use obsan_estimate::{
-    calibrate, crlb_sd, simulate, wrap, CalibrateOptions, Method, Predictor, SimOptions, Truth,
-};
+use obsan_calib::{calibrate, crlb_sd, simulate, CalibrateOptions, Method, SimOptions, Truth};
+use obsan_data::wrap;
+use obsan_fit::Predictor;
 
 fn predictor() -> Predictor {
-    obsan_estimate::calib_predictor()
+    obsan_calib::calib_predictor()
 }
 
 fn truth_values(t: &Truth) -> [f64; 5] {
@@ -170,8 +170,8 @@ fn figure_curves_lie_on_noise_free_data_and_nodes_are_mirror_centres() {
     let (data, _) = simulate(&o).unwrap();
     let mut co = CalibrateOptions::for_dataset(&data, Method::Ml);
     co.sigma_beta = Some(1e-5);
-    let done = obsan_estimate::calibrate(&data, Some(&p), &co).unwrap();
-    let curves = obsan_estimate::figure_curves(&data, &p, &co, &done).unwrap();
+    let done = obsan_calib::calibrate(&data, Some(&p), &co).unwrap();
+    let curves = obsan_calib::figure_curves(&data, &p, &co, &done).unwrap();
     assert_eq!(curves.len(), 3);
     for c in &curves {
         let ml = c.ml.as_ref().expect("ML converges on noise-free data");
@@ -253,7 +253,7 @@ fn a_misread_period_is_recovered_from_the_other_circles() {
 }
 
 /// ML on Table VII's dq = 0.1 set-up (100 bearings per circle).
-fn ml_at_dq_0_1(seed: u64) -> (obsan_estimate::CalibrationReport, Truth) {
+fn ml_at_dq_0_1(seed: u64) -> (obsan_calib::CalibrationReport, Truth) {
     let o = SimOptions {
         seed,
         dq: 0.1,

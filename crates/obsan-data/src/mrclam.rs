@@ -8,6 +8,7 @@
 //! own measurements); the params (odometry and sensor errors) are shared.
 //! Text in, dataset out: no file I/O here.
 
+use crate::angle::wrap;
 use crate::data::{DataError, Dataset, DatasetMeta, Series, Trajectory};
 use std::collections::BTreeMap;
 
@@ -246,10 +247,7 @@ pub fn convert(
                     .windows(2)
                     .map(|w| ((w[1].1 - w[0].1).powi(2) + (w[1].2 - w[0].2).powi(2)).sqrt())
                     .sum();
-                let turn: f64 = seg
-                    .windows(2)
-                    .map(|w| crate::sim::wrap(w[1].3 - w[0].3))
-                    .sum();
+                let turn: f64 = seg.windows(2).map(|w| wrap(w[1].3 - w[0].3)).sum();
                 let (mut cd, mut ct) = (0.0, 0.0);
                 for i in 0..inputs.len() {
                     let dt = if i + 1 < inputs.len() {

@@ -5,9 +5,9 @@
 
 use crate::calib::av_from_state;
 use crate::calibrate::{calibrate, CalibrateOptions, CekfInit, Method};
-use crate::fit::{crlb, FitOptions, FitTrajectory};
-use crate::predict::Predictor;
-use crate::sim::{simulate, wrap, SimOptions, Truth};
+use crate::sim::{simulate, SimOptions, Truth};
+use obsan_data::{wrap, Dataset};
+use obsan_fit::{crlb, FitOptions, FitTrajectory, Predictor};
 use rayon::prelude::*;
 
 /// A method as the tables name it (CEKF from a 30% off guess, CEKFd from DET).
@@ -256,7 +256,7 @@ type Outcome = (Vec<f64>, Vec<f64>);
 /// Run one calibration of a simulated dataset; the per-column errors.
 fn one(
     method: McMethod,
-    data: &crate::Dataset,
+    data: &Dataset,
     truth: &Truth,
     predictor: &Predictor,
     modes: bool,

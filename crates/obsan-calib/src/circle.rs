@@ -12,8 +12,9 @@
 //! (`alpha` the atan2 term), hence by (24)
 //! `V = xi_q + d(alpha)/ds`, the values `A0`, `V0` at s = 0 and `c` by (31).
 
-use crate::sim::wrap;
-use nalgebra::{Matrix4, SMatrix, SVector};
+use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, SVector};
+use obsan_data::wrap;
+use obsan_fit::{minimise, LmOptions};
 use std::f64::consts::PI;
 
 /// Bearings of one trajectory against the curve length `s = integral of wR dt`
@@ -731,7 +732,6 @@ pub struct LsFit {
     pub cov: SMatrix<f64, 4, 4>,
     /// Root-mean-square of the wrapped residuals (rad).
     pub rms: f64,
-    pub iterations: usize,
 }
 
 /// Weights of section V-B: `sigma_i^2 = sigma_beta^2 + (d beta/ds)^2 var(s_i)`,
@@ -772,40 +772,27 @@ pub fn ls(d: &ArcData, init: &Closed, w: &[f64], max_iter: usize, tol: f64) -> L
         }
         (jtj, jtr)
     };
-    let mut c = *init;
-    let mut cost = cost_of(&c);
-    let mut lambda = 1e-3;
-    let mut iterations = 0;
-    let (mut jtj, mut jtr) = normal(&c);
-    while iterations < max_iter {
-        iterations += 1;
-        let mut improved = false;
-        for _ in 0..30 {
-            let mut a = jtj;
-            for i in 0..4 {
-                a[(i, i)] += lambda * jtj[(i, i)].max(1e-12);
-            }
-            let Some(step) = a.cholesky().map(|ch| ch.solve(&jtr)) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let cand = Closed::from_vec(&(c.to_vec() + step));
-            let c2 = cost_of(&cand);
-            if c2 < cost {
-                let rel = (cost - c2) / cost.max(1e-300);
-                c = cand;
-                cost = c2;
-                lambda = (lambda / 3.0).max(1e-12);
-                improved = rel > tol;
-                break;
-            }
-            lambda *= 4.0;
-        }
-        (jtj, jtr) = normal(&c);
-        if !improved {
-            break;
-        }
-    }
+    let opts = LmOptions {
+        max_iterations: max_iter,
+        relative_cost_tolerance: tol,
+        ..LmOptions::default()
+    };
+    let closed = |x: &[f64]| Closed::from_vec(&SVector::<f64, 4>::from_column_slice(x));
+    let out = minimise(
+        init.to_vec().as_slice(),
+        |x| cost_of(&closed(x)),
+        |x| {
+            let (jtj, jtr) = normal(&closed(x));
+            (
+                DMatrix::from_column_slice(4, 4, jtj.as_slice()),
+                DVector::from_column_slice(jtr.as_slice()),
+            )
+        },
+        // The closed form's own chart (L wrapped), as its steps always were.
+        |x| x.copy_from_slice(closed(x).to_vec().as_slice()),
+        &opts,
+    );
+    let mut c = closed(&out.x);
     // eps and -eps with t0 + pi describe the same curve: keep eps > 0.
     if c.eps < 0.0 {
         c.eps = -c.eps;
@@ -819,6 +806,5 @@ pub fn ls(d: &ArcData, init: &Closed, w: &[f64], max_iter: usize, tol: f64) -> L
         closed: c,
         cov,
         rms: rms(&c, d),
-        iterations,
     }
 }

@@ -3,8 +3,8 @@
 //! (error model of [10]) and a bearing sensor observing one feature at the
 //! origin, plus the named effects of the discrepancy workflow.
 
-use crate::data::{Dataset, DatasetMeta, Series, Trajectory};
-use crate::rng::Rng;
+use obsan_data::{wrap, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
+use obsan_fit::Rng;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -220,20 +220,6 @@ pub fn bearing(robot: &Robot, x: f64, y: f64, theta: f64) -> f64 {
     wrap((-cy).atan2(-cx) - theta - robot.phi - robot.psi)
 }
 
-/// Angle in (-pi, pi]; exact (no rounding) for angles already in range.
-/// One floor instead of `rem_euclid`, whose `fmod` was a visible share of
-/// every residual evaluation.
-pub fn wrap(a: f64) -> f64 {
-    let tau = 2.0 * PI;
-    let mut b = a - tau * ((a + PI) / tau).floor();
-    if b <= -PI {
-        b += tau;
-    } else if b > PI {
-        b -= tau;
-    }
-    b
-}
-
 /// Advance a pose by wheel rotations (exact arc of constant v and omega).
 fn step(
     robot: &Robot,
@@ -411,11 +397,11 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
             outputs.push(tc, &[Some(wrap(meas))]);
         }
         // The readers refuse such a trajectory (data.rs): refuse to write it.
-        if outputs.len() < crate::data::MIN_OUTPUT_SAMPLES {
+        if outputs.len() < MIN_OUTPUT_SAMPLES {
             return Err(format!(
                 "trajectory {name}: only {} bearings in its {duration:.1} s, and a dataset needs at least {} per trajectory: raise the bearing rate (or --bearings)",
                 outputs.len(),
-                crate::data::MIN_OUTPUT_SAMPLES
+                MIN_OUTPUT_SAMPLES
             ));
         }
         let mut meta = BTreeMap::new();
@@ -492,7 +478,7 @@ mod tests {
     /// number of turns; in-range angles come back unchanged.
     #[test]
     fn wrap_is_the_angle_modulo_a_turn() {
-        let mut rng = crate::Rng::new(5);
+        let mut rng = Rng::new(5);
         let special = [PI, -PI, 0.0, 3.0 * PI, -3.0 * PI, 1e-300, -1e-300, 1e6];
         for a in special
             .into_iter()

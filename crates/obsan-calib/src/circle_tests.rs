@@ -1,8 +1,10 @@
-//! DET, LS and section V-C on simulated circles, against the simulator's truth.
+//! DET, LS and section V-C on simulated circles, against the simulator's truth
+//! (unit tests: the closed-form steps are not part of the public API).
 
-use obsan_estimate::{
-    arc_data, combine, det, ls, simulate, start_state, weights, Metric, Modes, SimOptions,
-};
+use crate::calib::{arc_data, av_from_state, combine, start_state, Metric, Modes};
+use crate::circle::{det, ls, weights};
+use crate::montecarlo::kc_from_av;
+use crate::sim::{simulate, SimOptions};
 
 fn noise_free() -> SimOptions {
     SimOptions {
@@ -36,7 +38,7 @@ fn det_and_ls_recover_the_modes_of_noise_free_circles() {
         let mut sc: Vec<_> = dr.sigma_curve.iter().map(|p| (p.1, p.0)).collect();
         sc.sort_by(|a, b| a.0.total_cmp(&b.0));
         eprintln!("sigma {:?}", &sc[..5]);
-        assert!(obsan_estimate::wrap(dr.closed.l - l).abs() < 1e-3, "DET L");
+        assert!(obsan_data::wrap(dr.closed.l - l).abs() < 1e-3, "DET L");
         let w = weights(&dr.closed, &d, 1e-3, 0.0);
         let f = ls(&d, &dr.closed, &w, 100, 1e-15);
         eprintln!(
@@ -44,7 +46,7 @@ fn det_and_ls_recover_the_modes_of_noise_free_circles() {
             f.closed.xi_q, f.closed.l, f.rms
         );
         assert!((f.closed.xi_q - xq).abs() < 1e-9, "LS xi_q");
-        assert!(obsan_estimate::wrap(f.closed.l - l).abs() < 1e-9, "LS L");
+        assert!(obsan_data::wrap(f.closed.l - l).abs() < 1e-9, "LS L");
         modes.push(Modes {
             q: t.meta["q"],
             xi_q: f.closed.xi_q,
@@ -63,16 +65,16 @@ fn det_and_ls_recover_the_modes_of_noise_free_circles() {
     for ((f, tt), t) in fits.iter().zip(&truth.trajectories).zip(&data.trajectories) {
         let (mu0, g0) = start_state(&cal, &f.closed, t.meta["q"]);
         eprintln!("mu0 {mu0} ({}) g0 {g0} ({})", tt.mu0, tt.gamma0);
-        assert!((mu0 - tt.mu0).abs() < 1e-6 && obsan_estimate::wrap(g0 - tt.gamma0).abs() < 1e-6);
+        assert!((mu0 - tt.mu0).abs() < 1e-6 && obsan_data::wrap(g0 - tt.gamma0).abs() < 1e-6);
         // A0, V0 of the sign-free form against (21) and (23) from the true state.
-        let (a, v) = obsan_estimate::av_from_state(&cal, t.meta["q"], tt.mu0, tt.gamma0);
+        let (a, v) = av_from_state(&cal, t.meta["q"], tt.mu0, tt.gamma0);
         let (a2, v2) = f.closed.av(0.0);
         assert!(
             (a - a2).abs() < 1e-8 * a.abs().max(1.0) && (v - v2).abs() < 1e-8,
             "{a} {a2} {v} {v2}"
         );
         // k and c: eq. (30)-(31) from A0, V0 against the sign-free form's.
-        let (k, c) = obsan_estimate::kc_from_av(f.closed.xi_q, a, v);
+        let (k, c) = kc_from_av(f.closed.xi_q, a, v);
         assert!((k - f.closed.k()).abs() < 1e-8 * k.abs() && (c - f.closed.c()).abs() < 1e-8);
     }
     let (mu0, _) = start_state(&cal, &fits[0].closed, data.trajectories[0].meta["q"]);

@@ -3,10 +3,10 @@
 //! state of each trajectory (the initialisation of maximum likelihood).
 
 use crate::circle::{Closed, Degenerate};
-use crate::data::{Series, Trajectory};
-use crate::sim::wrap;
 use crate::ArcData;
 use nalgebra::{DMatrix, DVector, SMatrix};
+use obsan_data::{wrap, Series, Trajectory};
+use obsan_fit::{minimise, LmOptions};
 
 /// phi, psi, eta, delta, xi (eq. 15) with their covariance, when known.
 #[derive(Clone, Debug)]
@@ -214,37 +214,28 @@ fn refine(modes_in: &[Modes], init: &[f64; 5]) -> Result<Calibration, Degenerate
         }
         j
     };
-    let mut v = init.to_vec();
-    let mut cost = res(&v).norm_squared();
-    let mut lambda = 1e-6;
-    for _ in 0..50 {
-        let j = jac(&v);
-        let r = res(&v);
-        let jtj = j.transpose() * &j;
-        let jtr = j.transpose() * r;
-        let mut improved = false;
-        for _ in 0..20 {
-            let mut a = jtj.clone();
-            for i in 0..5 {
-                a[(i, i)] += lambda * jtj[(i, i)].max(1e-12);
-            }
-            if let Some(step) = a.cholesky().map(|c| c.solve(&jtr)) {
-                let cand: Vec<f64> = v.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-                let c2 = res(&cand).norm_squared();
-                if c2 <= cost {
-                    improved = cost - c2 > 1e-15 * cost.max(1e-300);
-                    v = cand;
-                    cost = c2;
-                    lambda = (lambda / 3.0).max(1e-12);
-                    break;
-                }
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
-            break;
-        }
-    }
+    // Section V-C's constants: little damping at first (the start is close),
+    // a step that leaves the cost equal accepted.
+    let opts = LmOptions {
+        max_iterations: 50,
+        max_tries: 20,
+        initial_damping: 1e-6,
+        damping_up: 10.0,
+        relative_cost_tolerance: 1e-15,
+        accept_equal_cost: true,
+        ..LmOptions::default()
+    };
+    let v = minimise(
+        init,
+        |v| res(v).norm_squared(),
+        |v| {
+            let j = jac(v);
+            (j.transpose() * &j, j.transpose() * res(v))
+        },
+        |_| {},
+        &opts,
+    )
+    .x;
     let j = jac(&v);
     let info = j.transpose() * &j;
     let has_cov = modes_in.iter().all(|m| m.cov.is_some());

@@ -5,10 +5,9 @@
 use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
 use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det};
-use crate::data::Dataset;
-use crate::fit::{fit, FitOptions, FitResult, FitTrajectory};
-use crate::predict::Predictor;
 use nalgebra::{Matrix4, SMatrix};
+use obsan_data::{wrap, Dataset, Trajectory};
+use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
 use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
@@ -228,7 +227,7 @@ fn rms_of(c: &Closed, d: &ArcData) -> f64 {
     let ss: f64 =
         d.s.iter()
             .zip(&d.beta)
-            .map(|(&s, &b)| crate::sim::wrap(b - c.beta(s)).powi(2))
+            .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
             .sum();
     (ss / d.s.len().max(1) as f64).sqrt()
 }
@@ -243,54 +242,7 @@ pub fn calibrate(
     // Per trajectory: DET always (it initialises everything else).
     let mut trajs = Vec::new();
     for t in &data.trajectories {
-        let q = *t.meta.get("q").ok_or_else(|| {
-            Degenerate(format!(
-                "trajectory '{}': no q in its meta.json (the commanded wheel-speed ratio of the circle, eq. 17)",
-                t.name
-            ))
-        })?;
-        let arc = arc_data(t, &o.input, &o.output)
-            .map_err(|e| Degenerate(format!("trajectory '{}': {e}", t.name)))?;
-        let d = det(&arc).map_err(|e| {
-            Degenerate(format!(
-                "trajectory '{}' (q = {q}): {e}; its xi_q and L are unknown, so phi, psi, eta, delta, xi cannot all be estimated",
-                t.name
-            ))
-        })?;
-        // Coverage: DET needs the node and the mirror points inside the data.
-        // Gaps between bearings, and before the first / after the last one
-        // (the trajectory's whole curve length from the encoders).
-        let s_total = integral(t, &o.input).unwrap_or(0.0);
-        let mut gap: f64 = arc.s[0].max(s_total - arc.s[arc.s.len() - 1]);
-        for w in arc.s.windows(2) {
-            gap = gap.max(w[1] - w[0]);
-        }
-        if gap > d.period.min(s_total.abs()) / 4.0 {
-            return Err(Degenerate(format!(
-                "trajectory '{}' (q = {q}): no bearing over {:.0}% of the loop (the feature is out of view): the nodes and mirror points of the observation function are not observed, so xi_q, L and k cannot be estimated from it",
-                t.name,
-                100.0 * gap / d.period
-            )));
-        }
-        let span = arc.s.last().copied().unwrap_or(0.0) - arc.s[0];
-        if span < 0.75 * d.period {
-            return Err(Degenerate(format!(
-                "trajectory '{}' (q = {q}): the data cover {:.0}% of a loop; one whole loop is needed to read xi_q (eq. 35)",
-                t.name,
-                100.0 * span / d.period
-            )));
-        }
-        trajs.push(TrajectoryEstimate {
-            name: t.name.clone(),
-            q,
-            closed: d.closed,
-            modes_cov: None,
-            rms: rms_of(&d.closed, &arc),
-            det: d,
-            arc,
-            start: (f64::NAN, f64::NAN),
-            period_from_others: false,
-        });
+        trajs.push(det_trajectory(t, o)?);
     }
     let mut sigma = o.sigma_beta.unwrap_or(f64::NAN);
     let sigma_estimated = o.sigma_beta.is_none();
@@ -338,46 +290,7 @@ pub fn calibrate(
                 cov: t.modes_cov,
             })
             .collect(),
-        Method::Cekf => {
-            if sigma.is_nan() {
-                return Err(Degenerate(
-                    "cekf needs the bearing noise: give it in dataset.json (noise.beta) or use ls/ml".into(),
-                ));
-            }
-            let mut out = Vec::new();
-            for (i, (tr, t)) in trajs.iter_mut().zip(&data.trajectories).enumerate() {
-                let (x0, rel) = match &o.cekf_init {
-                    CekfInit::Det { relative_sd } => (cekf_start(&tr.det.closed), *relative_sd),
-                    CekfInit::Given {
-                        states,
-                        relative_sd,
-                    } => {
-                        let s = states.get(i).ok_or_else(|| {
-                            Degenerate(format!("no CEKF initial state for trajectory {}", tr.name))
-                        })?;
-                        (nalgebra::Vector4::from(*s), *relative_sd)
-                    }
-                };
-                let p0 = Matrix4::from_diagonal(&nalgebra::Vector4::new(
-                    (rel * x0[0].abs().max(0.05)).powi(2),
-                    (rel * x0[1].abs().max(0.05)).powi(2),
-                    (rel * x0[2].abs()).powi(2),
-                    rel.max(0.05).powi(2),
-                ));
-                let r = cekf(t, &o.input, &o.output, x0, p0, sigma, enc_var)
-                    .map_err(|e| Degenerate(format!("trajectory '{}': {e}", tr.name)))?;
-                tr.closed.xi_q = r.x[2];
-                tr.closed.l = r.x[3];
-                tr.modes_cov = Some(r.cov.fixed_view::<2, 2>(2, 2).into_owned());
-                out.push(Modes {
-                    q: tr.q,
-                    xi_q: r.x[2],
-                    l: r.x[3],
-                    cov: tr.modes_cov,
-                });
-            }
-            out
-        }
+        Method::Cekf => cekf_modes(data, o, sigma, enc_var, &mut trajs)?,
     };
     // ML starts from section V-C with the *measured* wheel-speed ratio of
     // each trajectory (integral of wL / integral of wR): a commanded-ratio
@@ -401,19 +314,6 @@ pub fn calibrate(
     let mut ml = None;
     if o.method == Method::Ml {
         let p = predictor.ok_or_else(|| Degenerate("ml needs the model (calib.sys)".into()))?;
-        let fts = FitTrajectory::all(p, data);
-        // Each trajectory's (mu0, gamma0) from its closed form and a calibration.
-        let states_for = |c: &Calibration| -> Vec<Vec<f64>> {
-            trajs
-                .iter()
-                .zip(&modes)
-                .map(|(t, m)| {
-                    let (mu0, g0) = start_state(c, &t.closed, m.q);
-                    vec![mu0, g0]
-                })
-                .collect()
-        };
-        let states = states_for(&calibration);
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
@@ -424,125 +324,12 @@ pub fn calibrate(
             // speeds drive the model, so their noise is in the residuals too.
             input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
         };
-        let mut r = fit(p, &fts, &calibration.values(), &states, &opts)
-            .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
-        // Section V-C can fail (a nearly straight "circle": q + dq close to
-        // rR / rL); it then says eta ~ 0, a sensor metres from the axle, and
-        // ML from there can stop in a wrong minimum. Screen a small grid of
-        // (phi, eta) starts (xi and delta from V-C, which stay good) with a
-        // few iterations each, and finish from the best if it beats the fit.
-        if calibration.eta.abs() < 0.02 {
-            let screen = FitOptions {
-                max_iterations: 4,
-                input_noise: None,
-                ..opts.clone()
-            };
-            let mut best: Option<FitResult> = None;
-            for phi0 in [0.0, PI / 2.0, PI, -PI / 2.0] {
-                for eta0 in [0.3, 1.0] {
-                    let c = Calibration {
-                        phi: phi0,
-                        eta: eta0,
-                        ..calibration
-                    };
-                    let st = states_for(&c);
-                    if let Ok(f) = fit(p, &fts, &c.values(), &st, &screen) {
-                        if best.as_ref().is_none_or(|b| f.cost < b.cost) {
-                            best = Some(f);
-                        }
-                    }
-                }
-            }
-            if let Some(b) = best {
-                // (The screen's cost has no input noise: compare full fits.)
-                if let Ok(f) = fit(p, &fts, &b.params, &b.initial_states, &opts) {
-                    if f.cost < r.cost {
-                        r = f;
-                    }
-                }
-            }
-        }
-        let mut cov = SMatrix::<f64, 5, 5>::from_fn(|i, j| r.covariance[i][j]);
-        let (mut phi, mut eta) = (r.params[0], r.params[2]);
-        if eta < 0.0 {
-            // (phi + pi, -eta) gives eq. (16) exactly (cos and sin of
-            // gamma - phi change sign with eta), so the likelihood cannot
-            // tell them apart; eta = rR / (2 rho) > 0 picks the physical one.
-            phi += PI;
-            eta = -eta;
-            for k in 0..5 {
-                if k != 2 {
-                    cov[(2, k)] = -cov[(2, k)];
-                    cov[(k, 2)] = -cov[(k, 2)];
-                }
-            }
-        }
-        calibration = Calibration {
-            phi: crate::sim::wrap(phi),
-            psi: crate::sim::wrap(r.params[1]),
-            eta,
-            delta: r.params[3],
-            xi: r.params[4],
-            cov: Some(cov),
-        };
-        for (k, t) in trajs.iter_mut().enumerate() {
-            t.start = (r.initial_states[k][0], r.initial_states[k][1]);
-            let (_, xq, l) = calibration.modes(t.q);
-            t.closed.xi_q = xq;
-            t.closed.l = l;
-            // Covariance of (xi_q, L) from ML's by the delta method.
-            let v = calibration.values();
-            let mut j = SMatrix::<f64, 2, 5>::zeros();
-            for c in 0..5 {
-                let h = 1e-7 * v[c].abs().max(1e-3);
-                let (mut vp, mut vm) = (v, v);
-                vp[c] += h;
-                vm[c] -= h;
-                let cp = Calibration::from_values(&vp, None).modes(t.q);
-                let cm = Calibration::from_values(&vm, None).modes(t.q);
-                j[(0, c)] = (cp.1 - cm.1) / (2.0 * h);
-                j[(1, c)] = crate::sim::wrap(cp.2 - cm.2) / (2.0 * h);
-            }
-            t.modes_cov = Some(j * cov * j.transpose());
-        }
+        let (c, r) = ml_refine(data, p, &opts, &modes, &mut trajs, &calibration)?;
+        calibration = c;
         ml = Some(r);
     }
-    let metric = o.d0.map(|d0| {
-        let m = Metric::new(&calibration, trajs[0].start.0, d0);
-        // Standard deviations by the delta method from ML's joint covariance.
-        let sd = ml.as_ref().map(|r| {
-            // Unknowns: eta (2), delta (3), xi (4), mu0 of trajectory 0 (index 5).
-            let idx = [2usize, 3, 4, 5];
-            let (eta, delta, xi) = (calibration.eta, calibration.delta, calibration.xi);
-            let rho = m.rho;
-            let grads: [[f64; 4]; 4] = [
-                [0.0, 0.0, 0.0, d0],
-                [2.0 * rho, 0.0, 0.0, 2.0 * d0 * eta],
-                [
-                    2.0 * rho * delta,
-                    2.0 * rho * eta,
-                    0.0,
-                    2.0 * d0 * eta * delta,
-                ],
-                [
-                    2.0 * rho / xi,
-                    0.0,
-                    -2.0 * rho * eta / (xi * xi),
-                    2.0 * d0 * eta / xi,
-                ],
-            ];
-            std::array::from_fn(|g| {
-                let mut v = 0.0;
-                for a in 0..4 {
-                    for b in 0..4 {
-                        v += grads[g][a] * grads[g][b] * r.covariance[idx[a]][idx[b]];
-                    }
-                }
-                v.max(0.0).sqrt()
-            })
-        });
-        (m, sd)
-    });
+    let metric =
+        o.d0.map(|d0| metric_of(&calibration, &trajs, ml.as_ref(), d0));
     Ok(CalibrationReport {
         method: o.method,
         sigma_beta: sigma,
@@ -554,8 +341,263 @@ pub fn calibrate(
     })
 }
 
+/// DET on one trajectory (it initialises every method), with the checks that
+/// its loop is covered: the nodes and mirror points inside the data.
+fn det_trajectory(t: &Trajectory, o: &CalibrateOptions) -> Result<TrajectoryEstimate, Degenerate> {
+    let q = *t.meta.get("q").ok_or_else(|| {
+        Degenerate(format!(
+            "trajectory '{}': no q in its meta.json (the commanded wheel-speed ratio of the circle, eq. 17)",
+            t.name
+        ))
+    })?;
+    let arc = arc_data(t, &o.input, &o.output)
+        .map_err(|e| Degenerate(format!("trajectory '{}': {e}", t.name)))?;
+    let d = det(&arc).map_err(|e| {
+        Degenerate(format!(
+            "trajectory '{}' (q = {q}): {e}; its xi_q and L are unknown, so phi, psi, eta, delta, xi cannot all be estimated",
+            t.name
+        ))
+    })?;
+    // Coverage: DET needs the node and the mirror points inside the data.
+    // Gaps between bearings, and before the first / after the last one
+    // (the trajectory's whole curve length from the encoders).
+    let s_total = integral(t, &o.input).unwrap_or(0.0);
+    let mut gap: f64 = arc.s[0].max(s_total - arc.s[arc.s.len() - 1]);
+    for w in arc.s.windows(2) {
+        gap = gap.max(w[1] - w[0]);
+    }
+    if gap > d.period.min(s_total.abs()) / 4.0 {
+        return Err(Degenerate(format!(
+            "trajectory '{}' (q = {q}): no bearing over {:.0}% of the loop (the feature is out of view): the nodes and mirror points of the observation function are not observed, so xi_q, L and k cannot be estimated from it",
+            t.name,
+            100.0 * gap / d.period
+        )));
+    }
+    let span = arc.s.last().copied().unwrap_or(0.0) - arc.s[0];
+    if span < 0.75 * d.period {
+        return Err(Degenerate(format!(
+            "trajectory '{}' (q = {q}): the data cover {:.0}% of a loop; one whole loop is needed to read xi_q (eq. 35)",
+            t.name,
+            100.0 * span / d.period
+        )));
+    }
+    Ok(TrajectoryEstimate {
+        name: t.name.clone(),
+        q,
+        closed: d.closed,
+        modes_cov: None,
+        rms: rms_of(&d.closed, &arc),
+        det: d,
+        arc,
+        start: (f64::NAN, f64::NAN),
+        period_from_others: false,
+    })
+}
+
+/// Joint maximum likelihood (through obsan-fit) from section V-C's
+/// `calibration`; each trajectory's start, closed form and modes covariance
+/// updated from the fit.
+fn ml_refine(
+    data: &Dataset,
+    p: &Predictor,
+    opts: &FitOptions,
+    modes: &[Modes],
+    trajs: &mut [TrajectoryEstimate],
+    calibration: &Calibration,
+) -> Result<(Calibration, FitResult), Degenerate> {
+    let fts = FitTrajectory::all(p, data);
+    // Each trajectory's (mu0, gamma0) from its closed form and a calibration.
+    let states_for = |c: &Calibration| -> Vec<Vec<f64>> {
+        trajs
+            .iter()
+            .zip(modes)
+            .map(|(t, m)| {
+                let (mu0, g0) = start_state(c, &t.closed, m.q);
+                vec![mu0, g0]
+            })
+            .collect()
+    };
+    let states = states_for(calibration);
+    let mut r = fit(p, &fts, &calibration.values(), &states, opts)
+        .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
+    // Section V-C can fail (a nearly straight "circle": q + dq close to
+    // rR / rL); it then says eta ~ 0, a sensor metres from the axle, and
+    // ML from there can stop in a wrong minimum. Screen a small grid of
+    // (phi, eta) starts (xi and delta from V-C, which stay good) with a
+    // few iterations each, and finish from the best if it beats the fit.
+    if calibration.eta.abs() < 0.02 {
+        let screen = FitOptions {
+            max_iterations: 4,
+            input_noise: None,
+            ..opts.clone()
+        };
+        let mut best: Option<FitResult> = None;
+        for phi0 in [0.0, PI / 2.0, PI, -PI / 2.0] {
+            for eta0 in [0.3, 1.0] {
+                let c = Calibration {
+                    phi: phi0,
+                    eta: eta0,
+                    ..*calibration
+                };
+                let st = states_for(&c);
+                if let Ok(f) = fit(p, &fts, &c.values(), &st, &screen) {
+                    if best.as_ref().is_none_or(|b| f.cost < b.cost) {
+                        best = Some(f);
+                    }
+                }
+            }
+        }
+        if let Some(b) = best {
+            // (The screen's cost has no input noise: compare full fits.)
+            if let Ok(f) = fit(p, &fts, &b.params, &b.initial_states, opts) {
+                if f.cost < r.cost {
+                    r = f;
+                }
+            }
+        }
+    }
+    let mut cov = SMatrix::<f64, 5, 5>::from_fn(|i, j| r.covariance[i][j]);
+    let (mut phi, mut eta) = (r.params[0], r.params[2]);
+    if eta < 0.0 {
+        // (phi + pi, -eta) gives eq. (16) exactly (cos and sin of
+        // gamma - phi change sign with eta), so the likelihood cannot
+        // tell them apart; eta = rR / (2 rho) > 0 picks the physical one.
+        phi += PI;
+        eta = -eta;
+        for k in 0..5 {
+            if k != 2 {
+                cov[(2, k)] = -cov[(2, k)];
+                cov[(k, 2)] = -cov[(k, 2)];
+            }
+        }
+    }
+    let calibration = Calibration {
+        phi: wrap(phi),
+        psi: wrap(r.params[1]),
+        eta,
+        delta: r.params[3],
+        xi: r.params[4],
+        cov: Some(cov),
+    };
+    for (k, t) in trajs.iter_mut().enumerate() {
+        t.start = (r.initial_states[k][0], r.initial_states[k][1]);
+        let (_, xq, l) = calibration.modes(t.q);
+        t.closed.xi_q = xq;
+        t.closed.l = l;
+        // Covariance of (xi_q, L) from ML's by the delta method.
+        let v = calibration.values();
+        let mut j = SMatrix::<f64, 2, 5>::zeros();
+        for c in 0..5 {
+            let h = 1e-7 * v[c].abs().max(1e-3);
+            let (mut vp, mut vm) = (v, v);
+            vp[c] += h;
+            vm[c] -= h;
+            let cp = Calibration::from_values(&vp, None).modes(t.q);
+            let cm = Calibration::from_values(&vm, None).modes(t.q);
+            j[(0, c)] = (cp.1 - cm.1) / (2.0 * h);
+            j[(1, c)] = wrap(cp.2 - cm.2) / (2.0 * h);
+        }
+        t.modes_cov = Some(j * cov * j.transpose());
+    }
+    Ok((calibration, r))
+}
+
+/// The CEKF of Appendix D on every trajectory, started from DET or from
+/// given states: each one's modes `(xi_q, L)` with their covariance.
+fn cekf_modes(
+    data: &Dataset,
+    o: &CalibrateOptions,
+    sigma: f64,
+    enc_var: f64,
+    trajs: &mut [TrajectoryEstimate],
+) -> Result<Vec<Modes>, Degenerate> {
+    if sigma.is_nan() {
+        return Err(Degenerate(
+            "cekf needs the bearing noise: give it in dataset.json (noise.beta) or use ls/ml"
+                .into(),
+        ));
+    }
+    let mut out = Vec::new();
+    for (i, (tr, t)) in trajs.iter_mut().zip(&data.trajectories).enumerate() {
+        let (x0, rel) = match &o.cekf_init {
+            CekfInit::Det { relative_sd } => (cekf_start(&tr.det.closed), *relative_sd),
+            CekfInit::Given {
+                states,
+                relative_sd,
+            } => {
+                let s = states.get(i).ok_or_else(|| {
+                    Degenerate(format!("no CEKF initial state for trajectory {}", tr.name))
+                })?;
+                (nalgebra::Vector4::from(*s), *relative_sd)
+            }
+        };
+        let p0 = Matrix4::from_diagonal(&nalgebra::Vector4::new(
+            (rel * x0[0].abs().max(0.05)).powi(2),
+            (rel * x0[1].abs().max(0.05)).powi(2),
+            (rel * x0[2].abs()).powi(2),
+            rel.max(0.05).powi(2),
+        ));
+        let r = cekf(t, &o.input, &o.output, x0, p0, sigma, enc_var)
+            .map_err(|e| Degenerate(format!("trajectory '{}': {e}", tr.name)))?;
+        tr.closed.xi_q = r.x[2];
+        tr.closed.l = r.x[3];
+        tr.modes_cov = Some(r.cov.fixed_view::<2, 2>(2, 2).into_owned());
+        out.push(Modes {
+            q: tr.q,
+            xi_q: r.x[2],
+            l: r.x[3],
+            cov: tr.modes_cov,
+        });
+    }
+    Ok(out)
+}
+
+/// The metric step from d0 on trajectory 0, with standard deviations by the
+/// delta method from ML's joint covariance when there is one.
+fn metric_of(
+    calibration: &Calibration,
+    trajs: &[TrajectoryEstimate],
+    ml: Option<&FitResult>,
+    d0: f64,
+) -> (Metric, Option<[f64; 4]>) {
+    let m = Metric::new(calibration, trajs[0].start.0, d0);
+    // Standard deviations by the delta method from ML's joint covariance.
+    let sd = ml.map(|r| {
+        // Unknowns: eta (2), delta (3), xi (4), mu0 of trajectory 0 (index 5).
+        let idx = [2usize, 3, 4, 5];
+        let (eta, delta, xi) = (calibration.eta, calibration.delta, calibration.xi);
+        let rho = m.rho;
+        let grads: [[f64; 4]; 4] = [
+            [0.0, 0.0, 0.0, d0],
+            [2.0 * rho, 0.0, 0.0, 2.0 * d0 * eta],
+            [
+                2.0 * rho * delta,
+                2.0 * rho * eta,
+                0.0,
+                2.0 * d0 * eta * delta,
+            ],
+            [
+                2.0 * rho / xi,
+                0.0,
+                -2.0 * rho * eta / (xi * xi),
+                2.0 * d0 * eta / xi,
+            ],
+        ];
+        std::array::from_fn(|g| {
+            let mut v = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    v += grads[g][a] * grads[g][b] * r.covariance[idx[a]][idx[b]];
+                }
+            }
+            v.max(0.0).sqrt()
+        })
+    });
+    (m, sd)
+}
+
 /// `integral of c dt` over a trajectory's inputs.
-fn integral(t: &crate::data::Trajectory, c: &str) -> Option<f64> {
+fn integral(t: &Trajectory, c: &str) -> Option<f64> {
     let v = t.inputs.column(c)?;
     Some(
         (0..t.inputs.len().saturating_sub(1))
@@ -565,7 +607,7 @@ fn integral(t: &crate::data::Trajectory, c: &str) -> Option<f64> {
 }
 
 /// `integral of wL dt / integral of wR dt` over a trajectory.
-fn measured_ratio(t: &crate::data::Trajectory, right: &str, left: &str) -> Option<f64> {
+fn measured_ratio(t: &Trajectory, right: &str, left: &str) -> Option<f64> {
     let (r, l) = (t.inputs.column(right)?, t.inputs.column(left)?);
     let (mut sr, mut sl) = (0.0, 0.0);
     for k in 0..t.inputs.len().saturating_sub(1) {
@@ -647,7 +689,7 @@ pub fn figure_curves(
             x0.extend(&f.params);
             let y = predictor.predict(&x0, &consts, &t.inputs, &tr.arc.t).ok()?;
             let col = predictor.outputs.iter().position(|n| *n == o.output)?;
-            let v: Vec<f64> = y.iter().map(|r| crate::sim::wrap(r[col])).collect();
+            let v: Vec<f64> = y.iter().map(|r| wrap(r[col])).collect();
             (v.len() == tr.arc.s.len()).then_some(v)
         });
         let d = &tr.det;
@@ -715,8 +757,7 @@ pub fn dataset_crlb(
             max_step: o.ml_max_step,
             input_noise: noise,
         };
-        let cov = crate::fit::crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
-            .map_err(Degenerate)?;
+        let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts).map_err(Degenerate)?;
         Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
     };
     let bearing = bound(None)?;

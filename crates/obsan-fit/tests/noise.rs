@@ -3,10 +3,8 @@
 //! noise and the input intensities; on data without input noise it finds
 //! none worth the likelihood.
 
-use obsan_estimate::{
-    estimate_noise, fit, Dataset, DatasetMeta, FitOptions, FitTrajectory, NoiseOptions, Predictor,
-    Rng, Series, Trajectory,
-};
+use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
+use obsan_fit::{estimate_noise, fit, FitOptions, FitTrajectory, NoiseOptions, Predictor, Rng};
 use obsan_model::System;
 use std::collections::BTreeMap;
 
@@ -94,7 +92,7 @@ fn predictor() -> Predictor {
 /// Fit the initial states (white noise at the true output levels), then
 /// estimate the levels; refit by generalised least squares with them and
 /// estimate again.
-fn levels(c: [f64; 2], seed: u64) -> obsan_estimate::NoiseEstimate {
+fn levels(c: [f64; 2], seed: u64) -> obsan_fit::NoiseEstimate {
     let p = predictor();
     let (data, starts) = simulate(&p, c, seed);
     let trajs = FitTrajectory::all(&p, &data);

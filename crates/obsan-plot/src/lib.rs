@@ -4,6 +4,11 @@
 //! Sans (ab_glyph), zlib by miniz_oxide. No system library or font is needed,
 //! so the figures look the same on every machine.
 
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
 use std::fmt::Write;
 
 /// An sRGB colour.

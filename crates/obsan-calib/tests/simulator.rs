@@ -1,7 +1,9 @@
 //! The simulator against independent identities: the closed-form bearing of
 //! ERRATA.md, circle geometry, and eq. (16) integrated from systems/calib.sys.
 
-use obsan_estimate::{bearing, simulate, wrap, Rng, Robot, Series, SimOptions};
+use obsan_calib::{bearing, simulate, Robot, SimOptions};
+use obsan_data::{wrap, Series};
+use obsan_fit::Rng;
 use std::f64::consts::PI;
 
 /// The model file the simulator must agree with.
@@ -99,8 +101,8 @@ fn calib_sys_reproduces_the_simulated_bearings() {
     roots.extend(nf.f0[..2].iter().copied());
     let tape = obsan_expr::Tape::compile(ctx, &roots, &nf.state_vars).unwrap();
     for profile in [
-        obsan_estimate::SpeedProfile::Constant,
-        obsan_estimate::SpeedProfile::Sine {
+        obsan_calib::SpeedProfile::Constant,
+        obsan_calib::SpeedProfile::Sine {
             amplitude: 0.5,
             period: 20.0,
         },
@@ -306,12 +308,12 @@ fn csv_roundtrip_and_rejections() {
 fn predictor_reproduces_simulated_bearings() {
     let sys = calib_sys();
     let nf = sys.normal_form(None, &[]).unwrap();
-    let p = obsan_estimate::Predictor::new(&nf);
+    let p = obsan_fit::Predictor::new(&nf);
     assert_eq!(p.angular, vec![true], "beta is an angle");
     assert_eq!(p.consts, vec!["q"]);
     for profile in [
-        obsan_estimate::SpeedProfile::Constant,
-        obsan_estimate::SpeedProfile::StopGo {
+        obsan_calib::SpeedProfile::Constant,
+        obsan_calib::SpeedProfile::StopGo {
             run: 7.0,
             pause: 3.0,
         },
@@ -344,7 +346,7 @@ fn predictor_reproduces_simulated_bearings() {
     }
     // The restricted model wants the input nu, which the data do not have.
     let nfq = sys.normal_form(Some("q"), &[]).unwrap();
-    let pq = obsan_estimate::Predictor::new(&nfq);
+    let pq = obsan_fit::Predictor::new(&nfq);
     let (data, _) = simulate(&noise_free(vec![0.0])).unwrap();
     let tr = &data.trajectories[0];
     let e = pq

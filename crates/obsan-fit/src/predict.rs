@@ -3,7 +3,7 @@
 //! discrepancy workflow (issue 5). The dynamics come from the model file,
 //! the single source of truth.
 
-use crate::data::Series;
+use obsan_data::Series;
 use obsan_expr::{FrozenTape, Tape, Var};
 use obsan_model::NormalForm;
 

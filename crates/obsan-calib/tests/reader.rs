@@ -2,9 +2,9 @@
 //! files are read to the same numbers; mutated files never panic and every
 //! rejection names a file of the dataset and a line within it.
 
-use obsan_estimate::{
-    read_dataset, simulate, DataError, DataFile, DatasetFiles, Series, SimOptions, TrajectoryFiles,
-    MAX_ABS_VALUE,
+use obsan_calib::{simulate, SimOptions};
+use obsan_data::{
+    read_dataset, DataError, DataFile, DatasetFiles, Series, TrajectoryFiles, MAX_ABS_VALUE,
 };
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -31,7 +31,7 @@ fn one(inputs: impl Into<Vec<u8>>, outputs: impl Into<Vec<u8>>) -> DatasetFiles 
     }
 }
 
-fn read(f: &DatasetFiles) -> Result<obsan_estimate::ReadDataset, DataError> {
+fn read(f: &DatasetFiles) -> Result<obsan_data::ReadDataset, DataError> {
     read_dataset(f, &INPUTS, &OUTPUTS)
 }
 
@@ -391,7 +391,7 @@ proptest! {
 /// given it anyway (or a large value within the bound), return.
 #[test]
 fn extreme_values_do_not_hang_the_estimators() {
-    use obsan_estimate::{calib_predictor, calibrate, CalibrateOptions, Method};
+    use obsan_calib::{calib_predictor, calibrate, CalibrateOptions, Method};
     let p = calib_predictor();
     for v in [1e308, MAX_ABS_VALUE, f64::NAN] {
         let (mut data, _) = simulate(&SimOptions::default()).unwrap();

@@ -33,8 +33,8 @@
 
 use crate::fit::FitTrajectory;
 use crate::predict::{Integration, Predictor};
-use crate::sim::wrap;
 use crate::whiten::Whitener;
+use obsan_data::wrap;
 use rayon::prelude::*;
 
 /// Options; every tolerance explicit.

@@ -8,10 +8,10 @@
 //! organised by trajectory: a trajectory's initial state affects only its
 //! own residuals.
 
-use crate::data::Series;
+use crate::lsq::{solve_symmetric, LmOptions};
 use crate::predict::{Integration, Predictor};
-use crate::sim::wrap;
 use crate::whiten::Whitener;
+use obsan_data::{wrap, Dataset, Series};
 
 /// One trajectory to fit.
 pub struct FitTrajectory<'a> {
@@ -26,7 +26,7 @@ pub struct FitTrajectory<'a> {
 impl<'a> FitTrajectory<'a> {
     /// Every trajectory of a dataset, with the predictor's constants from
     /// each `meta.json` (0 where absent: a constant the dynamics do not use).
-    pub fn all(p: &Predictor, data: &'a crate::data::Dataset) -> Vec<FitTrajectory<'a>> {
+    pub fn all(p: &Predictor, data: &'a Dataset) -> Vec<FitTrajectory<'a>> {
         data.trajectories
             .iter()
             .map(|t| FitTrajectory {
@@ -217,35 +217,6 @@ fn clustered_sd(
     }
     let f = k as f64 / (k as f64 - 1.0);
     var.iter().map(|v| (v * f).sqrt()).collect()
-}
-
-/// Solve the symmetric system `a x = b` by Gaussian elimination with partial pivoting.
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for c in 0..n {
-        let p = (c..n).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if a[p][c].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for i in c + 1..n {
-            let f = a[i][c] / a[c][c];
-            if f != 0.0 {
-                let pivot = a[c].clone();
-                for (x, y) in a[i].iter_mut().zip(&pivot).skip(c) {
-                    *x -= f * y;
-                }
-                b[i] -= f * b[c];
-            }
-        }
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|j| a[i][j] * x[j]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    Some(x)
 }
 
 /// The problem's fixed parts: model, data, options, column indices.
@@ -439,7 +410,7 @@ impl Normal {
 /// standard deviations of the estimate, `sqrt(g^T (J^T J)^-1 g)` with
 /// `g = J^T r`: how far the optimum is, whatever the damping did.
 fn gn_distance(l: &Normal) -> f64 {
-    match solve(l.jtj.clone(), l.jtr.clone()) {
+    match solve_symmetric(&l.jtj, &l.jtr) {
         Some(x) => dot(&x, &l.jtr).max(0.0).sqrt(),
         None => f64::INFINITY,
     }
@@ -534,7 +505,15 @@ pub fn fit(
     let (lay, n_params) = (&prob.lay, prob.lay.n_params);
     let mut theta = theta_of(init_params, init_states);
     let n = lay.len();
-    let mut lambda = 1e-3;
+    // The core's damping schedule; the loop itself stays here for the secant
+    // model and the trajectory blocks.
+    let lm = LmOptions {
+        max_iterations: opts.max_iterations,
+        max_tries: 20,
+        relative_cost_tolerance: opts.cost_tolerance,
+        ..LmOptions::default()
+    };
+    let mut lambda = lm.initial_damping;
     let mut iterations = 0;
     let mut cur = prob.normal(&theta, true)?;
     // Gauss-Newton leaves out the residuals' curvature; where it matters
@@ -550,7 +529,7 @@ pub fn fit(
     for pass in 0..passes {
         if pass > 0 {
             cur = prob.normal(&theta, true)?;
-            lambda = 1e-3;
+            lambda = lm.initial_damping;
         }
         // A pass that only places the whitening for the next one needs the
         // estimate to a tenth of its uncertainty, not more.
@@ -560,12 +539,12 @@ pub fn fit(
             opts.step_tolerance
         };
         loop {
-            if iterations >= opts.max_iterations || gn_distance(&cur) < step_tolerance {
+            if iterations >= lm.max_iterations || gn_distance(&cur) < step_tolerance {
                 break;
             }
             iterations += 1;
             let mut improved = false;
-            for attempt in 0..20 {
+            for attempt in 0..lm.max_tries {
                 let mut a = cur.jtj.clone();
                 for (i, row) in a.iter_mut().enumerate() {
                     if augmented {
@@ -573,14 +552,14 @@ pub fn fit(
                             *x += sx;
                         }
                     }
-                    row[i] += lambda * cur.jtj[i][i].max(1e-12);
+                    row[i] += lambda * cur.jtj[i][i].max(lm.min_diagonal);
                 }
-                let step = solve(a, cur.jtr.clone()).filter(|st| dot(st, &cur.jtr) > 0.0);
+                let step = solve_symmetric(&a, &cur.jtr).filter(|st| dot(st, &cur.jtr) > 0.0);
                 let Some(step) = step else {
                     if augmented {
                         augmented = false;
                     } else {
-                        lambda *= 10.0;
+                        lambda *= lm.damping_up_singular;
                     }
                     continue;
                 };
@@ -589,13 +568,13 @@ pub fn fit(
                 // accepted steps (most, near the optimum) then need no second
                 // prediction. After a rejection, trials are costed first.
                 if attempt > 0 && !prob.cost(&cand).is_ok_and(|c| c < cur.cost) {
-                    lambda *= 4.0;
+                    lambda *= lm.damping_up;
                     continue;
                 }
                 let next = match prob.normal(&cand, false) {
                     Ok(next) if next.cost < cur.cost => next,
                     _ => {
-                        lambda *= 4.0;
+                        lambda *= lm.damping_up;
                         continue;
                     }
                 };
@@ -617,8 +596,8 @@ pub fn fit(
                 secant_update(&mut s_mat, &step, &y, &ys);
                 theta = cand;
                 cur = next;
-                lambda = (lambda / 3.0).max(1e-12);
-                improved = rel > opts.cost_tolerance;
+                lambda = (lambda / lm.damping_down).max(lm.min_damping);
+                improved = rel > lm.relative_cost_tolerance;
                 break;
             }
             if !improved {

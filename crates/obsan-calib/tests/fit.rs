@@ -1,12 +1,13 @@
 //! Maximum-likelihood fitting of systems/calib.sys to simulated data.
 
-use obsan_estimate::{fit, simulate, FitOptions, FitTrajectory, Predictor, SimOptions};
+use obsan_calib::{simulate, SimOptions};
+use obsan_fit::{fit, FitOptions, FitTrajectory, Predictor};
 
 fn predictor() -> Predictor {
-    obsan_estimate::calib_predictor()
+    obsan_calib::calib_predictor()
 }
 
-fn run(o: &SimOptions, sigma: f64) -> (obsan_estimate::FitResult, obsan_estimate::Truth) {
+fn run(o: &SimOptions, sigma: f64) -> (obsan_fit::FitResult, obsan_calib::Truth) {
     let p = predictor();
     let (data, truth) = simulate(o).unwrap();
     let trajs: Vec<FitTrajectory> = data
@@ -91,7 +92,7 @@ fn noisy_data_give_estimates_within_their_standard_deviations() {
 
 #[test]
 fn derived_inputs_rate_telescopes_and_abs_keeps_its_sign() {
-    use obsan_estimate::{add_derived_inputs, Series};
+    use obsan_data::{add_derived_inputs, Series};
     let mut s = Series::new(vec!["u".into(), "w".into()]);
     for k in 0..50 {
         let t = k as f64 * 0.1;
@@ -126,8 +127,8 @@ fn delayed() -> Predictor {
     Predictor::new(&sys.normal_form(None, &[]).unwrap())
 }
 
-fn steps() -> obsan_estimate::Series {
-    let mut s = obsan_estimate::Series::new(vec!["v".into(), "w".into()]);
+fn steps() -> obsan_data::Series {
+    let mut s = obsan_data::Series::new(vec!["v".into(), "w".into()]);
     for k in 0..400 {
         let t = k as f64 * 0.02;
         let v = if (t as i64) % 3 == 0 {
@@ -173,7 +174,7 @@ fn the_delay_sensitivity_matches_finite_differences() {
         .map(|k| 0.37 + 0.02 * k as f64 + 0.01)
         .collect();
     for max_step in [0.0, 0.5] {
-        let integ = obsan_estimate::Integration {
+        let integ = obsan_fit::Integration {
             max_step,
             sensitivities: true,
             input_noise: None,
@@ -181,7 +182,7 @@ fn the_delay_sensitivity_matches_finite_differences() {
         let x0 = [0.1, 0.2, 0.37];
         let pr = p.predict_with(&x0, &[], &inputs, &times, &integ).unwrap();
         let h = 1e-6;
-        let plain = obsan_estimate::Integration {
+        let plain = obsan_fit::Integration {
             max_step,
             ..Default::default()
         };
@@ -220,14 +221,14 @@ fn a_fast_lag_follows_its_exact_solution() {
     let src = "system lag\nstate va = v\nparam T = 1/5\ninput v\nva' = (v - va)/T\noutput y = va\n";
     let sys = obsan_model::System::parse(src, "lag.sys").unwrap();
     let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
-    let mut s = obsan_estimate::Series::new(vec!["v".into()]);
+    let mut s = obsan_data::Series::new(vec!["v".into()]);
     for k in 0..300 {
         s.push(k as f64 * 0.02, &[Some(if k >= 50 { 1.0 } else { 0.0 })]);
     }
     let times: Vec<f64> = (1..100).map(|k| k as f64 * 0.05).collect();
     for t_lag in [0.05, 0.3] {
         for max_step in [0.0, 0.5] {
-            let integ = obsan_estimate::Integration {
+            let integ = obsan_fit::Integration {
                 max_step,
                 ..Default::default()
             };

@@ -1,7 +1,7 @@
 //! The MRCLAM converter on small synthetic logs (the real files are read by
 //! tests/cli/diagnose.rs when present).
 
-use obsan_estimate::{mrclam_convert, mrclam_model_text, MrclamOutputs, MrclamText};
+use obsan_data::{mrclam_convert, mrclam_model_text, MrclamOutputs, MrclamText};
 
 const LMS: &str = " 18 \t 0.5 \t -1.0 \t 0.0001 \t 0.001\n 45 \t 2.0 \t 1.0 \t 0.0001 \t 0.001\n";
 
@@ -109,7 +109,7 @@ fn vicon_poses_replace_the_landmark_outputs_in_the_same_windows() {
     };
     let (lm, _) = mrclam_convert(&t, 10.0, 5, MrclamOutputs::Landmarks).unwrap();
     let (vp, truth) = mrclam_convert(&t, 10.0, 5, MrclamOutputs::ViconPoses).unwrap();
-    let names = |d: &obsan_estimate::Dataset| -> Vec<String> {
+    let names = |d: &obsan_data::Dataset| -> Vec<String> {
         d.trajectories.iter().map(|w| w.name.clone()).collect()
     };
     assert_eq!(names(&lm), names(&vp));
@@ -120,7 +120,7 @@ fn vicon_poses_replace_the_landmark_outputs_in_the_same_windows() {
     let n = w.outputs.len() as f64;
     let span = w.inputs.t.last().unwrap() - w.inputs.t[0];
     assert!(
-        (n - 1.0 - span / obsan_estimate::POSE_INTERVAL).abs() <= 1.0,
+        (n - 1.0 - span / obsan_data::POSE_INTERVAL).abs() <= 1.0,
         "{n}"
     );
     for (k, tk) in w.outputs.t.iter().enumerate() {

@@ -1,0 +1,24 @@
+//! obsan's generic fitter for any `.sys` model: prediction along measured
+//! inputs with exact sensitivities, maximum likelihood over shared params and
+//! per-trajectory initial states, generalised least squares under integrated
+//! input noise, restricted-ML noise levels, the CRLB and cluster-robust sds.
+//! Nothing here knows the paper's calibration model.
+
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod fit;
+mod lsq;
+mod noise;
+mod predict;
+mod rng;
+mod whiten;
+
+pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
+pub use lsq::{minimise, LmOptions, LmResult};
+pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};
+pub use predict::{Integration, Prediction, Predictor};
+pub use rng::Rng;
+pub use whiten::Whitener;
