@@ -7,10 +7,18 @@
 //!    F_p values for the others; if lc_x does not vanish, the degree in x of
 //!    the true gcd is at most that of the image gcd. All images of degree 0
 //!    prove the primitive parts coprime (no probability involved);
-//! 4. the heuristic gcd of Char, Geddes and Gonnet (evaluate the main variable
-//!    at a large integer, recurse, rebuild by xi-adic expansion, verify by
-//!    exact division: a verified answer is always correct);
-//! 5. the primitive polynomial remainder sequence, which always succeeds.
+//! 4. in several variables, the heuristic gcd of Char, Geddes and Gonnet
+//!    (evaluate the main variable at a large integer, recurse, rebuild by
+//!    xi-adic expansion, verify by exact division) while its integer images
+//!    stay below `FAST_HEURISTIC_MAX_BITS`: on small inputs it is the fastest;
+//! 5. Brown's modular gcd (`gcd_modular.rs`): images modulo 62-bit primes and
+//!    at random points, rebuilt by interpolation and CRT, proven by exact
+//!    division; unlucky primes and points are detected and skipped;
+//! 6. the primitive polynomial remainder sequence, which always succeeds
+//!    (reached only if the modular gcd gives up: a tripped budget).
+//!
+//! Before the modular gcd the heuristic gcd ran with images up to 2^26 bits
+//! and then the PRS; that chain stays as [`HeuristicGcd`] for comparison.
 
 use crate::budget::{self, invariant};
 use crate::num::{int, int_gcd, int_symmetric_mod, Fp, Int, SplitMix};
@@ -26,13 +34,35 @@ pub trait PolyGcd {
     fn gcd(&self, a: &Poly, b: &Poly) -> Poly;
 }
 
-/// obsan's own gcd (see the module documentation).
+/// The engine's gcd, [`gcd`] (see the module documentation).
+#[derive(Default, Clone, Copy, Debug)]
+pub struct EngineGcd;
+
+impl PolyGcd for EngineGcd {
+    fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
+        gcd(a, b)
+    }
+}
+
+/// The shortcuts, then the modular gcd alone (no heuristic gcd): what the
+/// engine's gcd uses past small integer images, exposed for tests and benches.
+#[derive(Default, Clone, Copy, Debug)]
+pub struct ModularGcd;
+
+impl PolyGcd for ModularGcd {
+    fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
+        gcd_with(a, b, Method::Modular)
+    }
+}
+
+/// The same shortcuts with the heuristic gcd in place of the modular one (the
+/// engine's gcd before the modular one), for comparison and benchmarks.
 #[derive(Default, Clone, Copy, Debug)]
 pub struct HeuristicGcd;
 
 impl PolyGcd for HeuristicGcd {
     fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
-        gcd(a, b)
+        gcd_with(a, b, Method::Heuristic)
     }
 }
 
@@ -49,6 +79,8 @@ impl PolyGcd for PrsGcd {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     Fast,
+    Modular,
+    Heuristic,
     Prs,
 }
 
@@ -102,13 +134,22 @@ fn primitive_gcd(a: &Poly, b: &Poly, method: Method) -> Poly {
     if let Some(&x) = vb.iter().find(|v| !va.contains(v)) {
         return gcd_with_content(a, b, x, method);
     }
-    if method == Method::Fast {
-        if images_prove_coprime(a, b, &va) {
-            return Poly::one();
-        }
-        if let Some(g) = heuristic(a, b, &va) {
-            return g;
-        }
+    if method != Method::Prs && images_prove_coprime(a, b, &va) {
+        return Poly::one();
+    }
+    let fast = match method {
+        // Small integer images: the heuristic gcd is the cheapest exact
+        // answer; past them (or for one variable) the modular gcd wins.
+        Method::Fast => (va.len() > 1)
+            .then(|| heuristic(a, b, &va, FAST_HEURISTIC_MAX_BITS, method))
+            .flatten()
+            .or_else(|| crate::gcd_modular::modular_gcd(a, b)),
+        Method::Modular => crate::gcd_modular::modular_gcd(a, b),
+        Method::Heuristic => heuristic(a, b, &va, HEURISTIC_MAX_BITS, method),
+        Method::Prs => None,
+    };
+    if let Some(g) = fast {
+        return g;
     }
     prs(a, b, va[0], method)
 }
@@ -131,6 +172,10 @@ const IMAGE_MAX_DEGREE: u32 = 1 << 16;
 /// Largest `degree * bits(xi)` for which the heuristic gcd is tried (its
 /// integer images have about that many bits).
 const HEURISTIC_MAX_BITS: u64 = 1 << 26;
+
+/// The same bound when the modular gcd is there to take over: images of a
+/// few kilobits are where the heuristic gcd is still faster (benches/gcd.rs).
+const FAST_HEURISTIC_MAX_BITS: u64 = 1 << 13;
 
 /// Exact proof of coprimality by univariate images modulo p (see module docs).
 fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
@@ -193,8 +238,9 @@ fn uni_gcd_degree(mut a: Vec<Fp>, mut b: Vec<Fp>) -> usize {
     a.len().saturating_sub(1)
 }
 
-/// Heuristic gcd; `None` after six failed evaluation points.
-fn heuristic(a: &Poly, b: &Poly, vars: &[Var]) -> Option<Poly> {
+/// Heuristic gcd; `None` after six failed evaluation points or past
+/// `max_bits`. The gcds of the integer images use `method`.
+fn heuristic(a: &Poly, b: &Poly, vars: &[Var], max_bits: u64, method: Method) -> Option<Poly> {
     let x = vars[0];
     let na = a.max_abs_coeff();
     let nb = b.max_abs_coeff();
@@ -202,13 +248,13 @@ fn heuristic(a: &Poly, b: &Poly, vars: &[Var]) -> Option<Poly> {
     let mut xi: Int = m * int(2) + int(29);
     let deg = a.degree(x).max(b.degree(x)) as u64;
     for _ in 0..6 {
-        if deg.saturating_mul(xi.bit_len() as u64) > HEURISTIC_MAX_BITS || !budget::poll() {
+        if deg.saturating_mul(xi.bit_len() as u64) > max_bits || !budget::poll() {
             return None;
         }
         let ea = a.eval_var(x, &xi);
         let eb = b.eval_var(x, &xi);
         if !ea.is_zero() && !eb.is_zero() {
-            let h = gcd(&ea, &eb);
+            let h = gcd_with(&ea, &eb, method);
             let cand = primitive_part(&interpolate(&h, &xi, x));
             if !cand.is_constant() || cand.is_one() {
                 if let (Some(_), Some(_)) = (a.div_exact(&cand), b.div_exact(&cand)) {
