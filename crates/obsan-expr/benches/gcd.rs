@@ -132,6 +132,14 @@ fn main() {
             planted: true,
         },
         Family {
+            name: "2 vars, deg 6, 3200-bit",
+            nvars: 2,
+            terms: 6,
+            deg: 6,
+            words: 50,
+            planted: true,
+        },
+        Family {
             name: "6 vars, deg 2, planted",
             nvars: 6,
             terms: 4,
