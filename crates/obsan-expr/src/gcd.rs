@@ -7,10 +7,19 @@
 //!    F_p values for the others; if lc_x does not vanish, the degree in x of
 //!    the true gcd is at most that of the image gcd. All images of degree 0
 //!    prove the primitive parts coprime (no probability involved);
-//! 4. the heuristic gcd of Char, Geddes and Gonnet (evaluate the main variable
-//!    at a large integer, recurse, rebuild by xi-adic expansion, verify by
-//!    exact division: a verified answer is always correct);
-//! 5. the primitive polynomial remainder sequence, which always succeeds.
+//! 4. the heuristic gcd of Char, Geddes and Gonnet
+//!    (evaluate the main variable at a large integer, recurse, rebuild by
+//!    xi-adic expansion, verify by exact division) for coefficients of at most
+//!    128 bits while its integer images stay below 2^20 bits: on such inputs
+//!    it is as fast as the modular gcd or faster;
+//! 5. Brown's modular gcd (`gcd_modular.rs`): images modulo 62-bit primes and
+//!    at random points, rebuilt by interpolation and CRT, proven by exact
+//!    division; unlucky primes and points are detected and skipped;
+//! 6. the primitive polynomial remainder sequence, which always succeeds
+//!    (reached only if the modular gcd gives up: a tripped budget).
+//!
+//! Before the modular gcd the heuristic gcd ran with images up to 2^26 bits
+//! and then the PRS; that chain stays as [`HeuristicGcd`] for comparison.
 
 use crate::budget::{self, invariant};
 use crate::num::{int, int_gcd, int_symmetric_mod, Fp, Int, SplitMix};
@@ -26,13 +35,35 @@ pub trait PolyGcd {
     fn gcd(&self, a: &Poly, b: &Poly) -> Poly;
 }
 
-/// obsan's own gcd (see the module documentation).
+/// The engine's gcd, [`gcd`] (see the module documentation).
+#[derive(Default, Clone, Copy, Debug)]
+pub struct EngineGcd;
+
+impl PolyGcd for EngineGcd {
+    fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
+        gcd(a, b)
+    }
+}
+
+/// The shortcuts, then the modular gcd alone (no heuristic gcd): what the
+/// engine's gcd uses past small integer images, exposed for tests and benches.
+#[derive(Default, Clone, Copy, Debug)]
+pub struct ModularGcd;
+
+impl PolyGcd for ModularGcd {
+    fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
+        gcd_with(a, b, Method::Modular)
+    }
+}
+
+/// The same shortcuts with the heuristic gcd in place of the modular one (the
+/// engine's gcd before the modular one), for comparison and benchmarks.
 #[derive(Default, Clone, Copy, Debug)]
 pub struct HeuristicGcd;
 
 impl PolyGcd for HeuristicGcd {
     fn gcd(&self, a: &Poly, b: &Poly) -> Poly {
-        gcd(a, b)
+        gcd_with(a, b, Method::Heuristic)
     }
 }
 
@@ -49,6 +80,8 @@ impl PolyGcd for PrsGcd {
 #[derive(Clone, Copy, PartialEq)]
 enum Method {
     Fast,
+    Modular,
+    Heuristic,
     Prs,
 }
 
@@ -102,13 +135,25 @@ fn primitive_gcd(a: &Poly, b: &Poly, method: Method) -> Poly {
     if let Some(&x) = vb.iter().find(|v| !va.contains(v)) {
         return gcd_with_content(a, b, x, method);
     }
-    if method == Method::Fast {
-        if images_prove_coprime(a, b, &va) {
-            return Poly::one();
+    if method != Method::Prs && images_prove_coprime(a, b, &va) {
+        return Poly::one();
+    }
+    let fast = match method {
+        // Small integer images: the heuristic gcd is the cheapest exact
+        // answer; past them the modular gcd takes over.
+        Method::Fast => {
+            let bits = a.max_abs_coeff().bit_len().min(b.max_abs_coeff().bit_len());
+            (bits <= FAST_HEURISTIC_MAX_COEFF_BITS)
+                .then(|| heuristic(a, b, &va, FAST_HEURISTIC_MAX_BITS, method))
+                .flatten()
+                .or_else(|| crate::gcd_modular::modular_gcd(a, b))
         }
-        if let Some(g) = heuristic(a, b, &va) {
-            return g;
-        }
+        Method::Modular => crate::gcd_modular::modular_gcd(a, b),
+        Method::Heuristic => heuristic(a, b, &va, HEURISTIC_MAX_BITS, method),
+        Method::Prs => None,
+    };
+    if let Some(g) = fast {
+        return g;
     }
     prs(a, b, va[0], method)
 }
@@ -131,6 +176,17 @@ const IMAGE_MAX_DEGREE: u32 = 1 << 16;
 /// Largest `degree * bits(xi)` for which the heuristic gcd is tried (its
 /// integer images have about that many bits).
 const HEURISTIC_MAX_BITS: u64 = 1 << 26;
+
+/// The same bound when the modular gcd is there to take over. On the small
+/// inputs of canonical forms the heuristic gcd is as fast or faster (the
+/// engine and gcd benches); at a megabit its integer gcds take about a
+/// second, and the modular gcd's cost does not grow with the coefficients.
+const FAST_HEURISTIC_MAX_BITS: u64 = 1 << 20;
+
+/// Coefficients of more bits than this go to the modular gcd at once: the
+/// heuristic's evaluation point exceeds them, so its images grow with them
+/// (benches/gcd.rs: 3200-bit coefficients, 3.4 s heuristic, 0.15 s modular).
+const FAST_HEURISTIC_MAX_COEFF_BITS: usize = 128;
 
 /// Exact proof of coprimality by univariate images modulo p (see module docs).
 fn images_prove_coprime(a: &Poly, b: &Poly, vars: &[Var]) -> bool {
@@ -193,8 +249,9 @@ fn uni_gcd_degree(mut a: Vec<Fp>, mut b: Vec<Fp>) -> usize {
     a.len().saturating_sub(1)
 }
 
-/// Heuristic gcd; `None` after six failed evaluation points.
-fn heuristic(a: &Poly, b: &Poly, vars: &[Var]) -> Option<Poly> {
+/// Heuristic gcd; `None` after six failed evaluation points or past
+/// `max_bits`. The gcds of the integer images use `method`.
+fn heuristic(a: &Poly, b: &Poly, vars: &[Var], max_bits: u64, method: Method) -> Option<Poly> {
     let x = vars[0];
     let na = a.max_abs_coeff();
     let nb = b.max_abs_coeff();
@@ -202,13 +259,13 @@ fn heuristic(a: &Poly, b: &Poly, vars: &[Var]) -> Option<Poly> {
     let mut xi: Int = m * int(2) + int(29);
     let deg = a.degree(x).max(b.degree(x)) as u64;
     for _ in 0..6 {
-        if deg.saturating_mul(xi.bit_len() as u64) > HEURISTIC_MAX_BITS || !budget::poll() {
+        if deg.saturating_mul(xi.bit_len() as u64) > max_bits || !budget::poll() {
             return None;
         }
         let ea = a.eval_var(x, &xi);
         let eb = b.eval_var(x, &xi);
         if !ea.is_zero() && !eb.is_zero() {
-            let h = gcd(&ea, &eb);
+            let h = gcd_with(&ea, &eb, method);
             let cand = primitive_part(&interpolate(&h, &xi, x));
             if !cand.is_constant() || cand.is_one() {
                 if let (Some(_), Some(_)) = (a.div_exact(&cand), b.div_exact(&cand)) {

@@ -32,6 +32,7 @@ mod canon;
 mod diff;
 mod eval;
 mod gcd;
+mod gcd_modular;
 mod graph;
 mod jet;
 mod lower;
@@ -50,7 +51,7 @@ pub use canon::RatFun;
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
 };
-pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
+pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
 pub use jet::{LieJets, LieRow};
 pub use lower::EngineError;
