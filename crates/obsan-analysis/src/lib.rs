@@ -20,6 +20,7 @@ mod derive;
 mod modes;
 mod rank;
 pub mod structure;
+mod sym_recon;
 mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
@@ -29,7 +30,11 @@ pub use derive::{
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use structure::SymmetryKind;
-pub use symmetry::{canonical_lie, determinant, symmetries, Certificate, SymmetryReport};
+pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
+pub use symmetry::{
+    canonical_lie, determinant, symmetries, symmetries_with, Certificate, SymmetryOptions,
+    SymmetryReport,
+};
 
 use obsan_expr::Id;
 use obsan_model::NormalForm;

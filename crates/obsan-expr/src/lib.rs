@@ -52,7 +52,7 @@ pub use eval::{
 };
 pub use gcd::{gcd, HeuristicGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
-pub use jet::{LieJets, LieRow};
+pub use jet::{Coord, LieJets, LieRow};
 pub use lower::EngineError;
 pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{
