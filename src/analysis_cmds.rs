@@ -7,7 +7,7 @@ use crate::Failure;
 use obsan_analysis::{
     canonical_lie, check_modes, rank as rank_test, symmetries as sym_basis, symmetries_with,
     verify_decomposition, Certificate, Decomposition, Fields, LieWord, RankOptions, RankReport,
-    SymmetryOptions, SymmetryReport,
+    Route, SymmetryOptions, SymmetryReport,
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
@@ -209,7 +209,7 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     let r = run_rank(&mut nf, &a.an)?;
     let opts = SymmetryOptions {
         deadline: Some(deadline),
-        exact_only: a.exact,
+        route: if a.exact { Route::Exact } else { Route::Auto },
     };
     let s = symmetries_with(&mut nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
     if a.out.json {

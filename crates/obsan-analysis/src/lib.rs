@@ -32,7 +32,7 @@ pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions,
 pub use structure::SymmetryKind;
 pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
 pub use symmetry::{
-    canonical_lie, determinant, symmetries, symmetries_with, Certificate, SymmetryOptions,
+    canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
     SymmetryReport,
 };
 

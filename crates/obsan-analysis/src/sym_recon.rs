@@ -167,12 +167,7 @@ pub(crate) fn reconstruct_basis(
         ..Options::default()
     };
     let rec = match reconstruct_vec(coords.len(), k * r, &mut bb, &opts) {
-        Ok(x) => {
-            if std::env::var_os("OBSAN_SYM_TIMING").is_some() {
-                eprintln!("recon {:?} coords {}", x.stats, coords.len());
-            }
-            x
-        }
+        Ok(x) => x,
         Err(e @ ReconError::Budget { .. }) => {
             return Err(ReconFail::Error(AnalysisError::Timeout(format!(
                 "reconstructing the symmetries: {e}"
@@ -320,47 +315,46 @@ pub fn certify_symmetries(
     deadline: Option<Instant>,
 ) -> Result<Option<RandomCheck>, AnalysisError> {
     let n = report.n;
-    let t0 = Instant::now();
     let words = closure_words(nf, report);
     let lies = graph_lie(nf, report, &words);
     let vars = nf.state_vars.clone();
-    let mut grads: Vec<Vec<Id>> = Vec::with_capacity(lies.len());
-    for &f in &lies {
-        grads.push(vars.iter().map(|&x| nf.ctx.diff(f, x)).collect());
-    }
     let comps: Vec<Vec<Id>> = vectors
         .iter()
         .map(|v| v.iter().map(|e| nf.ctx.from_canonical(e)).collect())
         .collect();
-    let roots: Vec<Id> = grads
-        .iter()
-        .flatten()
-        .chain(comps.iter().flatten())
-        .copied()
-        .collect();
-    let coords = nf.ctx.free_coords(&roots, &vars).ok_or_else(|| {
+    let flat: Vec<Id> = comps.iter().flatten().copied().collect();
+    let mut all = lies.clone();
+    all.extend(&flat);
+    let coords = nf.ctx.free_coords(&all, &vars).ok_or_else(|| {
         AnalysisError::Invalid("internal: certification needs no square root".into())
     })?;
-    // Degrees of each entry as rational functions of the coordinates.
-    let gdeg: Vec<Vec<(u64, u64)>> = grads.iter().map(|g| degree_bounds(&nf.ctx, g)).collect();
+    // Degrees as rational functions of the coordinates: a gradient entry of
+    // A/B (degrees a, b) is (A'B - AB')/B^2, times (1 + t^2)/2 for an angle
+    // coordinate: degrees at most (a + b + 2, 2b).
+    let gdeg: Vec<(u64, u64)> = degree_bounds(&nf.ctx, &lies)
+        .into_iter()
+        .map(|(a, b)| (a.saturating_add(b).saturating_add(2), b.saturating_mul(2)))
+        .collect();
     let vdeg: Vec<Vec<(u64, u64)>> = comps.iter().map(|c| degree_bounds(&nf.ctx, c)).collect();
     let mut degree = 0u64;
     let mut poles = 0u64;
     for vd in &vdeg {
         for gd in &gdeg {
-            let (mut den, mut top) = (0u64, 0u64);
-            for j in 0..n {
-                den = den.saturating_add(vd[j].1).saturating_add(gd[j].1);
-                top = top.max(vd[j].0.saturating_add(gd[j].0));
-            }
+            // One denominator per gradient row (B^2), one per vector entry.
+            let den = vd.iter().map(|d| d.1).fold(gd.1, u64::saturating_add);
+            let top = vd
+                .iter()
+                .map(|d| d.0)
+                .max()
+                .unwrap_or(0)
+                .saturating_add(gd.0);
             degree = degree.max(den.saturating_add(top));
             poles = poles.max(den);
         }
     }
+    let grads = &lies;
     let identities = vectors.len() * grads.len();
-    let t1 = Instant::now();
     let mut rng = SplitMix(report.seed ^ 0xce27_1f1e);
-    let g_len = grads.len() * n;
     let mut bad = 0;
     for pi in 0..CHECK_PRIMES {
         let q = random_prime(&mut rng);
@@ -374,11 +368,12 @@ pub fn certify_symmetries(
                 )));
             }
             let vals: Vec<u64> = coords.iter().map(|_| rng.next_u64() % q).collect();
-            let x = nf
-                .ctx
-                .mod_point_at(&coords, &vals, q)
-                .and_then(|leaves| nf.ctx.eval_mod_prime(&roots, &leaves, q));
-            let Ok(x) = x else {
+            let x = nf.ctx.mod_point_at(&coords, &vals, q).and_then(|leaves| {
+                let g = nf.ctx.grad_mod_prime(&lies, &leaves, &vars, q)?;
+                let v = nf.ctx.eval_mod_prime(&flat, &leaves, q)?;
+                Ok((g, v))
+            });
+            let Ok((gx, vx)) = x else {
                 bad += 1;
                 if bad > 64 {
                     return Err(AnalysisError::NoPoint);
@@ -386,9 +381,8 @@ pub fn certify_symmetries(
                 continue;
             };
             for vi in 0..vectors.len() {
-                let v = &x[g_len + vi * n..g_len + (vi + 1) * n];
-                for gi in 0..grads.len() {
-                    let g = &x[gi * n..(gi + 1) * n];
+                let v = &vx[vi * n..(vi + 1) * n];
+                for g in &gx {
                     let acc = v
                         .iter()
                         .zip(g)
@@ -400,14 +394,6 @@ pub fn certify_symmetries(
             }
             done += 1;
         }
-    }
-    if std::env::var_os("OBSAN_SYM_TIMING").is_some() {
-        eprintln!(
-            "cert build {:?} eval {:?} nodes {}",
-            t1 - t0,
-            t1.elapsed(),
-            nf.ctx.count_nodes(&roots)
-        );
     }
     let q_min = (1u64 << 61) as f64;
     let beta = (degree as f64 / (q_min - poles as f64).max(1.0)).min(1.0);

@@ -57,8 +57,21 @@ pub enum Certificate {
 pub struct SymmetryOptions {
     /// Give up (with [`AnalysisError::Timeout`], saying how far it got) after this instant.
     pub deadline: Option<Instant>,
-    /// Always take the exact route (canonical forms, exact closure check).
-    pub exact_only: bool,
+    /// Which route decides.
+    pub route: Route,
+}
+
+/// The route of [`symmetries_with`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Route {
+    /// Cheap structure, then exact when cheap, else reconstruction.
+    #[default]
+    Auto,
+    /// Cheap structure, then exact Gauss–Jordan and the exact closure check.
+    Exact,
+    /// Reconstruction and the random certificate only (no cheap structure;
+    /// the exact route only where reconstruction does not apply: square roots).
+    Reconstruct,
 }
 
 /// Canonical Lie derivatives by word, sharing prefixes.
@@ -391,7 +404,7 @@ pub fn symmetries(
         report,
         &SymmetryOptions {
             deadline: None,
-            exact_only: true,
+            route: Route::Exact,
         },
     )
 }
@@ -428,7 +441,11 @@ pub fn symmetries_with(
     // Free variables, translations and scalings first: when they account
     // for the whole deficiency, their certificate proves everything. (No
     // usable point for the candidates: the general route decides.)
-    if let Ok(Some(c)) = cheap_symmetries(nf, report) {
+    let cheap = match opts.route {
+        Route::Reconstruct => None,
+        _ => cheap_symmetries(nf, report).ok().flatten(),
+    };
+    if let Some(c) = cheap {
         return Ok(SymmetryReport {
             n,
             rank: r,
@@ -438,16 +455,15 @@ pub fn symmetries_with(
             certificate: Certificate::Invariance(c.kinds),
         });
     }
-    if !opts.exact_only && !exact_is_cheap(report) {
-        let t0 = Instant::now();
+    let recon = match opts.route {
+        Route::Auto => !exact_is_cheap(report),
+        Route::Exact => false,
+        Route::Reconstruct => true,
+    };
+    if recon {
         let free = choose_free_columns(nf, report)?;
-        let t1 = Instant::now();
         match reconstruct_basis(nf, report, &free, opts.deadline) {
             Ok(raw) => {
-                let t2 = Instant::now();
-                if std::env::var_os("OBSAN_SYM_TIMING").is_some() {
-                    eprintln!("free {:?} recon {:?}", t1 - t0, t2 - t1);
-                }
                 let vectors: Vec<Vec<RatFun>> = raw
                     .iter()
                     .map(|v| normalize_vector(&mut nf.ctx, v))

@@ -1171,3 +1171,164 @@ impl Ctx {
         Ok(roots.iter().map(|r| val[r.index()]).collect())
     }
 }
+
+impl Ctx {
+    /// Gradients with respect to `vars` of `roots` modulo the prime `q`
+    /// (below 2^63), by forward-mode differentiation on the graph (the
+    /// chain rule of `diff.rs` through every leaf, nothing built), given
+    /// every leaf's value mod q. `BadPoint` at a pole.
+    pub fn grad_mod_prime(
+        &self,
+        roots: &[Id],
+        leaf: &[u64],
+        vars: &[Var],
+        q: u64,
+    ) -> Result<Vec<Vec<u64>>, BadPoint> {
+        let n = vars.len();
+        let w = n + 1;
+        let order = self.reachable_with(roots, true);
+        let mut slot = vec![u32::MAX; self.len()];
+        let mut t: Vec<u64> = Vec::with_capacity(order.len() * w);
+        let addq = |a: u64, b: u64| ((a as u128 + b as u128) % q as u128) as u64;
+        for id in order {
+            let base = t.len();
+            t.resize(base + w, 0);
+            let get = |_: &Vec<u64>, c: Id| -> Result<usize, BadPoint> {
+                let k = slot[c.index()];
+                if k == u32::MAX {
+                    return Err(BadPoint);
+                }
+                Ok(k as usize * w)
+            };
+            match self.node(id) {
+                Node::Num(c) => {
+                    let d = invq(int_mod(c.den(), q), q).ok_or(BadPoint)?;
+                    t[base] = mulq(int_mod(c.num(), q), d, q);
+                }
+                Node::Add(cs) => {
+                    for c in cs.iter() {
+                        let o = get(&t, *c)?;
+                        for i in 0..w {
+                            t[base + i] = addq(t[base + i], t[o + i]);
+                        }
+                    }
+                }
+                Node::Mul(cs) => {
+                    t[base] = 1 % q;
+                    for c in cs.iter() {
+                        let o = get(&t, *c)?;
+                        // (v, g) * (a, h) = (v a, v h + a g)
+                        let (v, a) = (t[base], t[o]);
+                        for i in 1..w {
+                            t[base + i] = addq(mulq(v, t[o + i], q), mulq(a, t[base + i], q));
+                        }
+                        t[base] = mulq(v, a, q);
+                    }
+                }
+                Node::Pow(b, e) => {
+                    let o = get(&t, *b)?;
+                    let bv = t[o];
+                    let k = e.unsigned_abs() as u64;
+                    let (val, dfac) = if *e < 0 {
+                        let inv = invq(bv, q).ok_or(BadPoint)?;
+                        // d b^-k = -k b^-(k+1) db
+                        (
+                            powq(inv, k, q),
+                            mulq((q - k % q) % q, powq(inv, k + 1, q), q),
+                        )
+                    } else {
+                        (powq(bv, k, q), mulq(k % q, powq(bv, k - 1, q), q))
+                    };
+                    t[base] = val;
+                    for i in 1..w {
+                        t[base + i] = mulq(dfac, t[o + i], q);
+                    }
+                }
+                Node::Leaf(v) => {
+                    let lv = *leaf.get(*v as usize).ok_or(BadPoint)?;
+                    t[base] = lv;
+                    let l = &self.leaves[*v as usize];
+                    // d(leaf) = fac * d(arg) for one argument node (or a symbol).
+                    let angle_d = |t: &mut Vec<u64>, a: &Angle, fac: u64| -> Result<(), BadPoint> {
+                        match a {
+                            Angle::Symbol { sym, den } => {
+                                if let Some(k) = vars.iter().position(|x| x == sym) {
+                                    let d = invq(*den as u64 % q, q).ok_or(BadPoint)?;
+                                    t[base + 1 + k] = mulq(fac, d, q);
+                                }
+                            }
+                            Angle::Generic(arg) => {
+                                let o = get(t, *arg)?;
+                                for i in 1..w {
+                                    t[base + i] = mulq(fac, t[o + i], q);
+                                }
+                            }
+                        }
+                        Ok(())
+                    };
+                    let chain = |t: &mut Vec<u64>, arg: Id, fac: u64| -> Result<(), BadPoint> {
+                        let o = get(t, arg)?;
+                        for i in 1..w {
+                            t[base + i] = mulq(fac, t[o + i], q);
+                        }
+                        Ok(())
+                    };
+                    match &l.kind {
+                        LeafKind::Symbol(_) => {
+                            if let Some(k) = vars.iter().position(|x| x == v) {
+                                t[base + 1 + k] = 1 % q;
+                            }
+                        }
+                        LeafKind::Pi => {}
+                        LeafKind::Sin(a) | LeafKind::Cos(a) => {
+                            let p = l.partner.ok_or(BadPoint)?;
+                            let pv = *leaf.get(p as usize).ok_or(BadPoint)?;
+                            let fac = if matches!(l.kind, LeafKind::Sin(_)) {
+                                pv
+                            } else {
+                                (q - pv) % q
+                            };
+                            angle_d(&mut t, a, fac)?;
+                        }
+                        LeafKind::Exp(a) => angle_d(&mut t, a, lv)?,
+                        LeafKind::Atan(u) => {
+                            let uv = t[get(&t, *u)?];
+                            let fac = invq(addq(1, mulq(uv, uv, q)), q).ok_or(BadPoint)?;
+                            chain(&mut t, *u, fac)?;
+                        }
+                        LeafKind::Log(u) => {
+                            let uv = t[get(&t, *u)?];
+                            chain(&mut t, *u, invq(uv, q).ok_or(BadPoint)?)?;
+                        }
+                        LeafKind::Sqrt(u) => {
+                            let fac = invq(mulq(2, lv, q), q).ok_or(BadPoint)?;
+                            chain(&mut t, *u, fac)?;
+                        }
+                        LeafKind::Atan2(y, x) => {
+                            let (oy, ox) = (get(&t, *y)?, get(&t, *x)?);
+                            let (yv, xv) = (t[oy], t[ox]);
+                            let inv =
+                                invq(addq(mulq(xv, xv, q), mulq(yv, yv, q)), q).ok_or(BadPoint)?;
+                            for i in 1..w {
+                                let num = addq(mulq(xv, t[oy + i], q), q - mulq(yv, t[ox + i], q));
+                                t[base + i] = mulq(num, inv, q);
+                            }
+                        }
+                    }
+                }
+            }
+            slot[id.index()] = (base / w) as u32;
+        }
+        roots
+            .iter()
+            .map(|r| {
+                let k = slot[r.index()];
+                if k == u32::MAX {
+                    return Err(BadPoint);
+                }
+                let o = k as usize * w;
+                Ok(t[o + 1..o + w].to_vec())
+            })
+            .collect()
+    }
+}
