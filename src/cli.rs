@@ -62,8 +62,8 @@ words with their order), observable (per variable), max_order, evaluated}.")]
 
 The default --timeout is 60 s; a run past it stops with exit code 2 and says how far it got.
 --json prints {system, restriction, n, rank, symmetries (one object per vector: variable ->
-{text, latex}), rows_checked, exact, certificate: {kind: closure | invariance | random,
-points, primes, identities, degree, error_bound}}.")]
+{text, latex}), rows_checked, exact, certificate (closure | invariance | random), certification
+(for random: {points, primes, identities, degree, error_bound}, else null)}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
     #[command(after_help = "Examples:
