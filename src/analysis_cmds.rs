@@ -209,8 +209,11 @@ fn compute_symmetries(
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
     // A little before the watchdog of main.rs, so that the message says how far it got.
-    let deadline = Instant::now() + Duration::from_secs_f64((a.timeout() * 0.9 - 0.05).max(0.0));
-    let r = run_rank(&mut nf, &a.an)?;
+    let secs = (a.timeout() * 0.8 - 0.05).max(0.0);
+    let deadline = Instant::now() + Duration::from_secs_f64(secs);
+    let mut an = a.an.clone();
+    an.timeout = Some(secs);
+    let r = run_rank(&mut nf, &an)?;
     let opts = SymmetryOptions {
         deadline: Some(deadline),
         route: if a.exact { Route::Exact } else { Route::Auto },

@@ -163,7 +163,7 @@ pub(crate) fn reconstruct_basis(
     let opts = Options {
         primes: Some(vec![P]),
         deadline,
-        seed: report.seed ^ 0x5e_c0_4ec0,
+        seed: report.seed ^ 0x5ec0_4ec0,
         ..Options::default()
     };
     let rec = match reconstruct_vec(coords.len(), k * r, &mut bb, &opts) {

@@ -1101,7 +1101,7 @@ fn powq(mut a: u64, mut e: u64, q: u64) -> u64 {
 }
 
 fn invq(a: u64, q: u64) -> Option<u64> {
-    (a % q != 0).then(|| powq(a, q - 2, q))
+    (!a.is_multiple_of(q)).then(|| powq(a, q - 2, q))
 }
 
 fn int_mod(x: &crate::Int, q: u64) -> u64 {
