@@ -109,10 +109,9 @@ pub(crate) fn reconstruct_basis(
     let r = report.rank;
     let piv: Vec<usize> = (0..n).filter(|j| !free.contains(j)).collect();
     let roots = system_roots(nf, report);
-    let states: Vec<obsan_expr::Var> = nf.state_vars.clone();
     let coords = nf
         .ctx
-        .free_coords(&roots, &states)
+        .free_coords(&roots, &[])
         .ok_or(ReconFail::Unsupported)?;
     let jets = lie_jets(nf, &report.fields);
     let ctx = &nf.ctx;
@@ -325,7 +324,7 @@ pub fn certify_symmetries(
     let flat: Vec<Id> = comps.iter().flatten().copied().collect();
     let mut all = lies.clone();
     all.extend(&flat);
-    let coords = nf.ctx.free_coords(&all, &vars).ok_or_else(|| {
+    let coords = nf.ctx.free_coords(&all, &[]).ok_or_else(|| {
         AnalysisError::Invalid("internal: certification needs no square root".into())
     })?;
     // Degrees as rational functions of the coordinates: a gradient entry of

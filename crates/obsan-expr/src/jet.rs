@@ -1009,17 +1009,36 @@ impl Coord {
 }
 
 impl Ctx {
-    /// The free coordinates of the leaves that `roots` and the symbols
-    /// `extra` depend on, in leaf order; `None` if a square root is among
-    /// them (its value is not a rational function of the others).
+    /// The free coordinates of the leaves whose values `roots` depend on,
+    /// and of the symbols `extra`, in leaf order; `None` if a square root is
+    /// among them (its value is not a rational function of the others). A
+    /// symbol seen only as the angle of its own sin/cos (or exp) pair is not
+    /// a coordinate: values and derivatives there come from the pair's leaves.
     pub fn free_coords(&self, roots: &[Id], extra: &[Var]) -> Option<Vec<Coord>> {
         let mut used = vec![false; self.leaves.len()];
         for &v in extra {
             used[v as usize] = true;
         }
-        for id in self.reachable(roots) {
-            if let Node::Leaf(v) = self.node(id) {
-                used[*v as usize] = true;
+        let mut seen = vec![false; self.nodes.len()];
+        let mut stack: Vec<Id> = roots.to_vec();
+        while let Some(id) = stack.pop() {
+            if std::mem::replace(&mut seen[id.index()], true) {
+                continue;
+            }
+            match self.node(id) {
+                Node::Leaf(v) => {
+                    used[*v as usize] = true;
+                    let own_angle = matches!(
+                        self.leaves[*v as usize].kind,
+                        LeafKind::Sin(Angle::Symbol { .. })
+                            | LeafKind::Cos(Angle::Symbol { .. })
+                            | LeafKind::Exp(Angle::Symbol { .. })
+                    );
+                    if !own_angle {
+                        stack.extend(self.leaf_args(*v));
+                    }
+                }
+                _ => stack.extend(self.deps(id)),
             }
         }
         let mut out = Vec::new();
