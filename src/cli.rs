@@ -58,7 +58,7 @@ words with their order), observable (per variable), max_order, evaluated}.")]
     #[command(after_help = "Examples:
   obsan symmetries systems/localization.sys         # d/dphiR + d/dthetaR (eq. 3)
   obsan symmetries systems/calib.sys --input q
-  obsan symmetries systems/vins.sys --exact --timeout 600
+  obsan symmetries systems/psi.sys --exact      # the exact route and closure check
 
 The default --timeout is 60 s; a run past it stops with exit code 2 and says how far it got.
 --json prints {system, restriction, n, rank, symmetries (one object per vector: variable ->
