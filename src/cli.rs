@@ -52,14 +52,19 @@ formula as {text, latex}; \"exact\": true.")]
 words with their order), observable (per variable), max_order, evaluated}.")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
-    /// gradients), exact, each checked before it is printed.
+    /// gradients), each certified before it is printed: cheap structure and
+    /// small systems exactly, others by reconstruction from values modulo a
+    /// prime, certified at random points with a stated error bound.
     #[command(after_help = "Examples:
   obsan symmetries systems/localization.sys         # d/dphiR + d/dthetaR (eq. 3)
-  obsan symmetries systems/calib.sys --input q --timeout 60
+  obsan symmetries systems/calib.sys --input q
+  obsan symmetries systems/psi.sys --exact      # the exact route and closure check
 
+The default --timeout is 60 s; a run past it stops with exit code 2 and says how far it got.
 --json prints {system, restriction, n, rank, symmetries (one object per vector: variable ->
-{text, latex}), rows_checked, exact}.")]
-    Symmetries(RankArgs),
+{text, latex}), rows_checked, exact, certificate (closure | invariance | random), certification
+(for random: {points, primes, identities, degree, error_bound}, else null)}.")]
+    Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
     #[command(after_help = "Examples:
   obsan lie systems/localization.sys --order 2
@@ -343,7 +348,8 @@ impl Command {
     /// on user text; `None` for the others (estimation).
     pub fn max_terms(&self) -> Option<usize> {
         match self {
-            Command::Rank(a) | Command::Symmetries(a) => Some(a.an.max_terms),
+            Command::Rank(a) => Some(a.an.max_terms),
+            Command::Symmetries(a) => Some(a.an.max_terms),
             Command::Check(a) => Some(a.an.max_terms),
             Command::Verify(a) => Some(a.an.max_terms),
             Command::Simplify(a) => Some(a.limit.max_terms),
@@ -358,7 +364,8 @@ impl Command {
     /// The `--timeout` of the commands that take one.
     pub fn timeout(&self) -> Option<f64> {
         match self {
-            Command::Rank(a) | Command::Symmetries(a) => a.an.timeout,
+            Command::Rank(a) => a.an.timeout,
+            Command::Symmetries(a) => Some(a.timeout()),
             Command::Check(a) => a.an.timeout,
             Command::Verify(a) => a.an.timeout,
             Command::Modes(a) => a.timeout,
@@ -416,6 +423,27 @@ pub struct RankArgs {
     pub an: AnalysisArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct SymArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    #[command(flatten)]
+    pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
+    /// Always take the exact route (canonical forms and the exact closure
+    /// check), however long it takes, instead of reconstruction.
+    #[arg(long)]
+    pub exact: bool,
+}
+
+impl SymArgs {
+    /// Symmetries stop after 60 s unless told otherwise.
+    pub fn timeout(&self) -> f64 {
+        self.an.timeout.unwrap_or(60.0)
+    }
 }
 
 #[derive(Args)]

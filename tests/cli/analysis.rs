@@ -142,11 +142,28 @@ fn calib_circular_restriction_has_rank_4_and_appendix_b_symmetry() {
     let (r, n, _) = rank_of("systems/calib.sys", &["--input", "q"]);
     assert_eq!((r, n), (4, 7));
     let s = json(&["symmetries", "systems/calib.sys", "--input", "q"]);
-    assert_eq!(s["exact"], true);
+    // Found by reconstruction, certified modulo fresh primes.
+    assert_eq!(s["certificate"], "random", "{s}");
+    assert!(
+        s["certification"]["error_bound"].as_f64().unwrap() < 1e-30,
+        "{s}"
+    );
+    assert!(s["certification"]["primes"].as_u64().unwrap() >= 2, "{s}");
     let state = ["mu", "gamma", "phi", "psi", "eta", "delta", "xi"];
     let mut w = symmetry_vectors(&s, &state);
     assert_eq!(w.len(), 3);
     assert_eq!(span_rank(&state, &w), 3, "three independent symmetries");
+    // The exact route (canonical Gauss–Jordan, exact closure check) spans the same.
+    let e = json(&["symmetries", "systems/calib.sys", "--input", "q", "--exact"]);
+    assert_eq!(e["exact"], true);
+    assert_eq!(e["certificate"], "closure");
+    let mut both = w.clone();
+    both.extend(symmetry_vectors(&e, &state));
+    assert_eq!(
+        span_rank(&state, &both),
+        3,
+        "exact and reconstructed spans agree"
+    );
     // Appendix B: delta -> lambda with eta(1 + q delta) and xi(1 - q delta) fixed:
     // d eta/d lambda = -q eta/(1 + q delta), d xi/d lambda = q xi/(1 - q delta).
     w.push(strs(&[
@@ -394,9 +411,60 @@ fn timeout_is_honoured() {
             "--timeout",
             "0.05",
         ],
-        "timed out after 0.05 s",
+        "timed out",
     );
     // Without the limit it finishes: translation and rotation are the symmetries.
     let v: serde_json::Value = serde_json::from_str(&ok(&["rank", &p, "--json"])).unwrap();
     assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(24), Some(27)));
+}
+
+#[test]
+fn vins_symmetries_are_global_position_and_yaw() {
+    let s = json(&["symmetries", "systems/vins.sys"]);
+    assert_eq!(s["certificate"], "random", "{s}");
+    let state = [
+        "rx", "ry", "rz", "vx", "vy", "vz", "qw", "qx", "qy", "qz", "bax", "bay", "baz", "bgx",
+        "bgy", "bgz", "pfx", "pfy", "pfz",
+    ];
+    let mut w = symmetry_vectors(&s, &state);
+    assert_eq!(w.len(), 4);
+    let unit = |i: usize, j: usize| -> Vec<String> {
+        (0..19)
+            .map(|k| if k == i || k == j { "1" } else { "0" }.to_string())
+            .collect()
+    };
+    w.push(unit(0, 16));
+    w.push(unit(1, 17));
+    w.push(unit(2, 18));
+    let mut yaw = vec!["0".to_string(); 19];
+    for (k, e) in [
+        (0, "-ry"),
+        (1, "rx"),
+        (3, "-vy"),
+        (4, "vx"),
+        (6, "-qz/2"),
+        (7, "-qy/2"),
+        (8, "qx/2"),
+        (9, "qw/2"),
+        (16, "-pfy"),
+        (17, "pfx"),
+    ] {
+        yaw[k] = e.to_string();
+    }
+    w.push(yaw);
+    assert_eq!(span_rank(&state, &w), 4, "translations and yaw");
+}
+
+#[test]
+fn symmetries_past_the_timeout_say_how_far_they_got() {
+    let r = obsan(&["symmetries", "systems/vins.sys", "--timeout", "0.8"]);
+    assert_eq!(r.code, 2);
+    // Either stage says where it stopped: the rank test's order, or the
+    // reconstruction's stage, points and degrees.
+    assert!(
+        r.stderr.contains("timed out: ")
+            && (r.stderr.contains(" points") || r.stderr.contains("order")),
+        "{}",
+        r.stderr
+    );
 }

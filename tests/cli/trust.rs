@@ -457,6 +457,7 @@ fn the_budget_covers_systems_and_analyses() {
             "systems/calib.sys",
             "--input",
             "q",
+            "--exact",
             "--max-terms",
             "1000",
         ],

@@ -21,6 +21,7 @@ mod fields;
 mod modes;
 mod rank;
 pub mod structure;
+mod sym_recon;
 mod symmetry;
 
 pub use decomp::{verify_decomposition, Check, Decomposition};
@@ -30,7 +31,11 @@ pub use derive::{
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use structure::SymmetryKind;
-pub use symmetry::{canonical_lie, determinant, symmetries, Certificate, SymmetryReport};
+pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
+pub use symmetry::{
+    canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
+    SymmetryReport,
+};
 
 // Re-imported for the modules that name it `crate::field_names`.
 use fields::field_names;

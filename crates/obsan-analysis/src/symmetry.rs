@@ -14,9 +14,11 @@
 
 use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
 use crate::structure::{cheap_symmetries, SymmetryKind};
+use crate::sym_recon::{certify_symmetries, reconstruct_basis, RandomCheck, ReconFail};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
+use std::time::Instant;
 
 /// The symmetries of a system.
 #[derive(Clone, Debug)]
@@ -35,7 +37,7 @@ pub struct SymmetryReport {
 }
 
 /// How a symmetry basis was proved.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Certificate {
     /// Each vector annihilates the gradients of the basis Lie derivatives and
     /// of all their one-step Lie derivatives (canonical forms).
@@ -44,6 +46,32 @@ pub enum Certificate {
     /// output invariant and commutes with every field (canonical forms), so
     /// it annihilates every Lie derivative; the kinds, one per vector.
     Invariance(Vec<SymmetryKind>),
+    /// Found by reconstruction ([`crate::sym_recon`]) and certified by the
+    /// closure identities evaluated exactly over Q at random integer points;
+    /// correct except with the stated probability.
+    Random(RandomCheck),
+}
+
+/// Options of [`symmetries_with`].
+#[derive(Clone, Debug, Default)]
+pub struct SymmetryOptions {
+    /// Give up (with [`AnalysisError::Timeout`], saying how far it got) after this instant.
+    pub deadline: Option<Instant>,
+    /// Which route decides.
+    pub route: Route,
+}
+
+/// The route of [`symmetries_with`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Route {
+    /// Cheap structure, then exact when cheap, else reconstruction.
+    #[default]
+    Auto,
+    /// Cheap structure, then exact Gauss–Jordan and the exact closure check.
+    Exact,
+    /// Reconstruction and the random certificate only (no cheap structure;
+    /// the exact route only where reconstruction does not apply: square roots).
+    Reconstruct,
 }
 
 /// Canonical Lie derivatives by word, sharing prefixes.
@@ -365,10 +393,36 @@ fn subsets(n: usize, k: usize) -> impl Iterator<Item = Vec<usize>> {
     })
 }
 
-/// A basis of the continuous symmetries, exact, each vector checked.
+/// A basis of the continuous symmetries, exact, each vector checked: cheap
+/// structure, then exact Gauss–Jordan on canonical rows (can be slow).
 pub fn symmetries(
     nf: &mut NormalForm,
     report: &RankReport,
+) -> Result<SymmetryReport, AnalysisError> {
+    symmetries_with(
+        nf,
+        report,
+        &SymmetryOptions {
+            deadline: None,
+            route: Route::Exact,
+        },
+    )
+}
+
+/// Whether the exact route is cheap enough to try first: first-order
+/// words only over a small state (its canonical forms stay small).
+fn exact_is_cheap(report: &RankReport) -> bool {
+    report.max_order <= 1 && report.n <= 6
+}
+
+/// A basis of the continuous symmetries, in order: cheap structure (exact);
+/// the exact route when it is cheap (or asked for, or the system has a
+/// square root); otherwise reconstruction from values modulo a prime,
+/// certified at random points ([`crate::sym_recon`]).
+pub fn symmetries_with(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    opts: &SymmetryOptions,
 ) -> Result<SymmetryReport, AnalysisError> {
     let n = report.n;
     let r = report.rank;
@@ -387,7 +441,11 @@ pub fn symmetries(
     // Free variables, translations and scalings first: when they account
     // for the whole deficiency, their certificate proves everything. (No
     // usable point for the candidates: the general route decides.)
-    if let Ok(Some(c)) = cheap_symmetries(nf, report) {
+    let cheap = match opts.route {
+        Route::Reconstruct => None,
+        _ => cheap_symmetries(nf, report).ok().flatten(),
+    };
+    if let Some(c) = cheap {
         return Ok(SymmetryReport {
             n,
             rank: r,
@@ -397,6 +455,44 @@ pub fn symmetries(
             certificate: Certificate::Invariance(c.kinds),
         });
     }
+    let recon = match opts.route {
+        Route::Auto => !exact_is_cheap(report),
+        Route::Exact => false,
+        Route::Reconstruct => true,
+    };
+    if recon {
+        let free = choose_free_columns(nf, report)?;
+        match reconstruct_basis(nf, report, &free, opts.deadline) {
+            Ok(raw) => {
+                let vectors: Vec<Vec<RatFun>> = raw
+                    .iter()
+                    .map(|v| normalize_vector(&mut nf.ctx, v))
+                    .collect();
+                return match certify_symmetries(nf, report, &vectors, opts.deadline)? {
+                    Some(c) => Ok(SymmetryReport {
+                        n,
+                        rank: r,
+                        vectors,
+                        exact: false,
+                        rows_checked: c.identities * c.points as usize,
+                        certificate: Certificate::Random(c),
+                    }),
+                    None => Err(AnalysisError::Invalid(
+                        "the reconstructed symmetries failed certification (a coefficient too large for one prime, or an unlucky rank test); try --exact or another --seed".into(),
+                    )),
+                };
+            }
+            Err(ReconFail::Unsupported) => {}
+            Err(ReconFail::Error(e)) => return Err(e),
+        }
+    }
+    exact_route(nf, report)
+}
+
+/// Exact Gauss–Jordan over canonical rows, then the exact closure check.
+fn exact_route(nf: &mut NormalForm, report: &RankReport) -> Result<SymmetryReport, AnalysisError> {
+    let n = report.n;
+    let r = report.rank;
     let vars = nf.state_vars.clone();
     let mut cache = LieCache::new(nf, &report.fields);
     let mut rows: Vec<Vec<RatFun>> = Vec::with_capacity(r);

@@ -272,7 +272,7 @@ impl std::error::Error for BadPoint {}
 /// every transcendental atom independent and uniform.
 #[derive(Clone, Debug)]
 pub struct FpPoint {
-    values: Vec<Fp>,
+    pub(crate) values: Vec<Fp>,
 }
 
 impl FpPoint {

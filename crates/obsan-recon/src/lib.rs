@@ -87,6 +87,13 @@ pub struct Options {
     pub checks: u32,
     /// Seed of the random points; equal seeds give equal runs.
     pub seed: u64,
+    /// The caller's own primes (each a prime below 2^63, at most
+    /// [`MAX_RECON_PRIMES`]) in place of [`PRIMES`], for a black box that
+    /// only works modulo some primes. No check prime is then known, so the
+    /// result is a *candidate*: the fresh-prime check is skipped (the
+    /// certificate says `checks: 0`, bound 1) and the caller must certify it.
+    /// With a single prime the first complete lift is returned.
+    pub primes: Option<Vec<u64>>,
 }
 
 impl Default for Options {
@@ -100,6 +107,7 @@ impl Default for Options {
             agree: 2,
             checks: 4,
             seed: 0x0b5a_4ec0,
+            primes: None,
         }
     }
 }
@@ -284,7 +292,16 @@ pub fn reconstruct_vec<F, E>(
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    if opts.max_primes < 2 || opts.max_primes > MAX_RECON_PRIMES {
+    if let Some(ps) = &opts.primes {
+        if ps.is_empty() || ps.len() > MAX_RECON_PRIMES {
+            return Err(ReconError::InvalidOptions("primes: 1..=20 of them"));
+        }
+        if ps.iter().any(|&p| p >= 1 << 63 || !is_prime(p)) {
+            return Err(ReconError::InvalidOptions(
+                "primes: each a prime below 2^63",
+            ));
+        }
+    } else if opts.max_primes < 2 || opts.max_primes > MAX_RECON_PRIMES {
         // Two primes at least: the lift stops when one more prime changes nothing.
         return Err(ReconError::InvalidOptions("max_primes must be in 2..=20"));
     }
@@ -343,7 +360,11 @@ where
     let mut acc: Option<Acc> = None;
     let mut prev: Option<Vec<Rational>> = None;
     let mut result = None;
-    'primes: for &p in &PRIMES[..opts.max_primes] {
+    let (primes, single) = match &opts.primes {
+        Some(ps) => (ps.as_slice(), ps.len() == 1),
+        None => (&PRIMES[..opts.max_primes], false),
+    };
+    'primes: for &p in primes {
         let mut tries = 0;
         let image = loop {
             tries += 1;
@@ -401,6 +422,10 @@ where
             continue;
         }
         let cand = a.lift();
+        if single && cand.is_some() {
+            result = cand;
+            break;
+        }
         if let (Some(c), Some(pv)) = (&cand, &prev) {
             if c == pv {
                 result = cand;
@@ -410,8 +435,22 @@ where
         prev = cand;
     }
     let Some(functions) = result else {
-        return Err(budget.limit(Limit::Primes(opts.max_primes)));
+        return Err(budget.limit(Limit::Primes(primes.len())));
     };
+    if opts.primes.is_some() {
+        // A candidate: no prime is known to be fresh for this black box.
+        budget.stage = "done";
+        return Ok(Reconstruction {
+            functions,
+            certificate: Certificate {
+                prime: 0,
+                checks: 0,
+                degree: 0,
+                error_bound: 1.0,
+            },
+            stats: budget.progress(),
+        });
+    }
     let certificate = verify(n, m, bb, &functions, opts, &mut rng, &mut budget)?;
     budget.stage = "done";
     Ok(Reconstruction {

@@ -518,3 +518,38 @@ fn the_term_budget_is_an_error_not_a_truncation() {
     // With the default budget the same function comes back whole.
     rec(3, &num, &den);
 }
+
+#[test]
+fn the_callers_primes_give_an_uncertified_candidate() {
+    // A black box that works modulo 2^61 - 1 only (the engine's prime).
+    let p61 = (1u64 << 61) - 1;
+    let num = vec![t(&[2, 0], 3), t(&[0, 1], -7)];
+    let den = vec![t(&[1, 1], 2), t(&[0, 0], 5)];
+    let calls = Cell::new(0);
+    let mut inner = bb_of(&num, &den, &calls);
+    let mut only_p61 = |x: &[u64], p: u64| -> Result<Option<u64>, String> {
+        assert_eq!(p, p61, "called with another prime");
+        inner(x, p)
+    };
+    let opts = Options {
+        primes: Some(vec![p61]),
+        ..Options::default()
+    };
+    let r = reconstruct(2, &mut only_p61, &opts).unwrap();
+    // Exactly the black box's function (compared over Z), in canonical form.
+    assert!(same_function(&r.functions[0], &num, &den));
+    assert!(is_canonical(&r.functions[0]));
+    assert_eq!(r.certificate.checks, 0, "a candidate, not certified");
+    assert_eq!(r.certificate.error_bound, 1.0);
+    // The list is checked.
+    for bad in [vec![], vec![p61 + 2], vec![1u64 << 63]] {
+        let opts = Options {
+            primes: Some(bad),
+            ..Options::default()
+        };
+        assert!(matches!(
+            reconstruct(2, &mut only_p61, &opts),
+            Err(ReconError::InvalidOptions(_))
+        ));
+    }
+}

@@ -1,0 +1,407 @@
+//! Symmetries by reconstruction (issue 15, item 2; docs/reconstruction.md).
+//!
+//! Black box: at a point of F_p (p = 2^61 - 1, the engine's prime) the
+//! gradients of the basis Lie derivatives come from Taylor jets (nothing is
+//! expanded), and the null vector of free column j is normalised by
+//! `v[j] = 1`, `v[other free] = 0`, the pivot entries solved from the pivot
+//! minor. Each entry is then a well-defined rational function of the point's
+//! coordinates (Cramer's rule), which `obsan_recon` reconstructs. A point
+//! where the pivot minor vanishes (or a denominator of the system) is bad.
+//! Trig systems are read in the tangent half-angle view: an angle pair is one
+//! coordinate t with sin = 2t/(1+t^2), cos = (1-t^2)/(1+t^2), and the result
+//! is mapped back to sin/cos.
+//!
+//! The reconstruction uses one prime, so its output is only a candidate;
+//! [`certify_symmetries`] proves it with high probability, independently of
+//! how it was found, on the expression graph modulo fresh random primes (so
+//! that the reconstruction's prime cannot hide an error in a coefficient).
+
+use crate::rank::{lie_jets, AnalysisError, LieWord, RankReport};
+use obsan_expr::{degree_bounds, Coord, Fp, Id, Mono, Poly, RatFun, SplitMix, P};
+use obsan_model::NormalForm;
+use obsan_recon::{reconstruct_vec, Options, ReconError};
+use std::collections::HashSet;
+use std::time::Instant;
+
+/// How a symmetry basis was certified at random points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RandomCheck {
+    /// Independent random points at which every identity held.
+    pub points: u32,
+    /// Identities per point: vectors times gradient rows.
+    pub identities: usize,
+    /// Largest numerator degree bound of an identity (Schwartz–Zippel).
+    pub degree: u64,
+    /// Fresh random 62-bit primes; `points` is spread evenly over them.
+    pub primes: u32,
+    /// Probability that a wrong basis passes every check.
+    pub error_bound: f64,
+}
+
+/// Why the reconstruction route did not give a basis.
+#[derive(Debug)]
+pub(crate) enum ReconFail {
+    /// Not applicable (a square root): the exact route decides.
+    Unsupported,
+    /// A real error (deadline, budget), for the user.
+    Error(AnalysisError),
+}
+
+/// Gaussian elimination mod P: solve `M_piv X = -M_free` for the rows of
+/// `m` (r x n); `None` if the pivot minor is singular.
+fn solve_free(m: &[Vec<Fp>], piv: &[usize], free: &[usize]) -> Option<Vec<Vec<Fp>>> {
+    let r = piv.len();
+    let mut a: Vec<Vec<Fp>> = m
+        .iter()
+        .map(|row| {
+            piv.iter()
+                .map(|&c| row[c])
+                .chain(free.iter().map(|&c| -row[c]))
+                .collect()
+        })
+        .collect();
+    if a.len() != r {
+        return None;
+    }
+    for c in 0..r {
+        let p = (c..r).find(|&i| !a[i][c].is_zero())?;
+        a.swap(c, p);
+        let inv = a[c][c].inv()?;
+        for x in a[c].iter_mut() {
+            *x = *x * inv;
+        }
+        let pr = a[c].clone();
+        for (i, row) in a.iter_mut().enumerate() {
+            if i != c && !row[c].is_zero() {
+                let f = row[c];
+                for (x, y) in row.iter_mut().zip(&pr) {
+                    *x = *x - f * *y;
+                }
+            }
+        }
+    }
+    // Column r + j of the reduced system: the pivot entries of vector j.
+    Some(
+        (0..free.len())
+            .map(|j| (0..r).map(|i| a[i][r + j]).collect())
+            .collect(),
+    )
+}
+
+/// The roots whose leaves a point must give values to: outputs and fields.
+fn system_roots(nf: &NormalForm, report: &RankReport) -> Vec<Id> {
+    let mut roots: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+    for f in &report.fields.vectors {
+        roots.extend(f.iter().copied());
+    }
+    roots
+}
+
+/// The basis of symmetries for the free columns `free`, by reconstruction;
+/// vectors in sin/cos form, not yet normalised for printing or certified.
+pub(crate) fn reconstruct_basis(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    free: &[usize],
+    deadline: Option<Instant>,
+) -> Result<Vec<Vec<RatFun>>, ReconFail> {
+    let n = report.n;
+    let r = report.rank;
+    let piv: Vec<usize> = (0..n).filter(|j| !free.contains(j)).collect();
+    let roots = system_roots(nf, report);
+    let coords = nf
+        .ctx
+        .free_coords(&roots, &[])
+        .ok_or(ReconFail::Unsupported)?;
+    let jets = lie_jets(nf, &report.fields);
+    let ctx = &nf.ctx;
+    let basis = &report.basis;
+    let k = free.len();
+    // One jet per maximal basis word gives the rows of all its prefixes.
+    let is_prefix = |a: &LieWord, b: &LieWord| {
+        a.output == b.output && a.fields.len() <= b.fields.len() && b.fields.starts_with(&a.fields)
+    };
+    let mut tops: Vec<LieWord> = Vec::new();
+    for w in basis {
+        if !basis
+            .iter()
+            .any(|b| b.fields.len() > w.fields.len() && is_prefix(w, b))
+            && !tops.contains(w)
+        {
+            tops.push(w.clone());
+        }
+    }
+    let place: Vec<(usize, usize)> = basis
+        .iter()
+        .map(|w| {
+            let t = tops.iter().position(|t| is_prefix(w, t)).unwrap_or(0);
+            (t, w.fields.len())
+        })
+        .collect();
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, String> {
+        if p != P {
+            return Err(format!("internal: the black box works modulo {P} only"));
+        }
+        let vals: Vec<Fp> = x.iter().map(|&v| Fp::new(v)).collect();
+        let Ok(pt) = ctx.fp_point_at(&coords, &vals) else {
+            return Ok(None);
+        };
+        let mut rows = Vec::with_capacity(tops.len());
+        for t in &tops {
+            match jets.prefix_rows(t.output, &t.fields, &pt) {
+                Ok(rs) => rows.push(rs),
+                Err(_) => return Ok(None),
+            }
+        }
+        let m: Vec<Vec<Fp>> = place
+            .iter()
+            .map(|&(t, len)| rows[t][len].gradient.clone())
+            .collect();
+        Ok(solve_free(&m, &piv, free).map(|xs| xs.into_iter().flatten().map(|f| f.0).collect()))
+    };
+    let opts = Options {
+        primes: Some(vec![P]),
+        deadline,
+        seed: report.seed ^ 0x5ec0_4ec0,
+        ..Options::default()
+    };
+    let rec = match reconstruct_vec(coords.len(), k * r, &mut bb, &opts) {
+        Ok(x) => x,
+        Err(e @ ReconError::Budget { .. }) => {
+            return Err(ReconFail::Error(AnalysisError::Timeout(format!(
+                "reconstructing the symmetries: {e}"
+            ))))
+        }
+        Err(e) => {
+            return Err(ReconFail::Error(AnalysisError::Invalid(format!(
+                "reconstructing the symmetries: {e}"
+            ))))
+        }
+    };
+    let th = nf.ctx.tan_half();
+    let angles = coords.iter().any(|c| matches!(c, Coord::Angle { .. }));
+    let to_poly = |p: &obsan_recon::Poly| {
+        Poly::from_terms(p.terms().iter().map(|t| {
+            let mono = Mono::from_pairs(
+                t.exps
+                    .iter()
+                    .zip(&coords)
+                    .filter(|(&e, _)| e > 0)
+                    .map(|(&e, c)| (c.var(), e)),
+            );
+            (mono, t.coeff.clone())
+        }))
+    };
+    let mut vectors = Vec::with_capacity(k);
+    for (j, &fc) in free.iter().enumerate() {
+        let mut v = vec![RatFun::zero(); n];
+        v[fc] = RatFun::one();
+        for (i, &pc) in piv.iter().enumerate() {
+            let f = &rec.functions[j * r + i];
+            let num = RatFun::from_poly(to_poly(f.num()));
+            let den = RatFun::from_poly(to_poly(f.den()));
+            let Some(inv) = nf.ctx.rf_inv(&den) else {
+                return Err(ReconFail::Error(AnalysisError::Invalid(
+                    "internal: a reconstructed denominator is zero".into(),
+                )));
+            };
+            let e = nf.ctx.rf_mul(&num, &inv);
+            v[pc] = if angles {
+                nf.ctx.from_tan_half(&th, &e)
+            } else {
+                e
+            };
+        }
+        vectors.push(v);
+    }
+    Ok(vectors)
+}
+
+/// The words whose gradients a symmetry basis must annihilate for the
+/// closure argument of [`crate::symmetry`]: every output (level 0, so that
+/// outputs the rank test set aside are covered too), every basis word and
+/// every one-step extension of one (structurally zero ones left out).
+fn closure_words(nf: &NormalForm, report: &RankReport) -> Vec<LieWord> {
+    let jets = lie_jets(nf, &report.fields);
+    let mut seen: HashSet<(usize, Vec<usize>)> = HashSet::new();
+    let mut out = Vec::new();
+    let mut push = |w: LieWord| {
+        if jets.support(w.output, &w.fields).is_some() && seen.insert((w.output, w.fields.clone()))
+        {
+            out.push(w);
+        }
+    };
+    for i in 0..nf.outputs.len() {
+        push(LieWord {
+            output: i,
+            fields: vec![],
+        });
+    }
+    for w in &report.basis {
+        push(w.clone());
+        for f in 0..report.fields.vectors.len() {
+            let mut w2 = w.clone();
+            w2.fields.push(f);
+            push(w2);
+        }
+    }
+    out
+}
+
+/// Lie derivatives by word on the expression graph (never canonicalised),
+/// prefixes shared.
+fn graph_lie(nf: &mut NormalForm, report: &RankReport, words: &[LieWord]) -> Vec<Id> {
+    let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> = Default::default();
+    let vars = nf.state_vars.clone();
+    words
+        .iter()
+        .map(|w| {
+            let mut g = nf.outputs[w.output].1;
+            for (i, &k) in w.fields.iter().enumerate() {
+                let key = (w.output, w.fields[..=i].to_vec());
+                g = match memo.get(&key) {
+                    Some(&x) => x,
+                    None => {
+                        let x = nf.ctx.lie_derivative(g, &vars, &report.fields.vectors[k]);
+                        memo.insert(key, x);
+                        x
+                    }
+                };
+            }
+            g
+        })
+        .collect()
+}
+
+/// Fresh primes and points per prime of the certificate.
+pub const CHECK_PRIMES: u32 = 2;
+pub const CHECK_POINTS: u32 = 2;
+
+/// A random prime in `(2^61, 2^62)`, never the engine's 2^61 - 1.
+fn random_prime(rng: &mut SplitMix) -> u64 {
+    loop {
+        let c = (rng.next_u64() >> 2) | (1 << 61) | 1;
+        if obsan_recon::is_prime(c) {
+            return c;
+        }
+    }
+}
+
+/// Certifies a symmetry basis: each vector annihilates the gradients of the
+/// outputs, of the basis Lie derivatives and of their one-step Lie
+/// derivatives along every field, evaluated on the expression graph at
+/// [`CHECK_POINTS`] random points modulo each of [`CHECK_PRIMES`] random
+/// 62-bit primes (fresh: the reconstruction works modulo 2^61 - 1 only).
+/// With the rank r of the basis rows (proved by the rank test's non-zero
+/// minor) and n - r vectors independent by construction (each has a unit
+/// entry on its own free column and zeros on the others, up to a non-zero
+/// scalar factor), passing all identities proves the basis (symmetry.rs's
+/// closure argument). A false identity is a non-zero rational function over
+/// Q whose numerator has degree at most D; modulo a prime q not dividing its
+/// content it vanishes at a random point with probability at most
+/// D / (q - B) given that the point avoids the poles (degree at most B), so a
+/// wrong basis passes with probability at most
+/// `K (D / (2^61 - B))^(primes * points)` for K identities (Schwartz–Zippel
+/// and a union bound), plus the chance that both random primes divide the
+/// content (about h/2^55 each for an h-bit content).
+///
+/// `Ok(None)` if some identity fails (the basis is wrong);
+/// `Err` for the deadline, or when no point avoids the poles.
+pub fn certify_symmetries(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    vectors: &[Vec<RatFun>],
+    deadline: Option<Instant>,
+) -> Result<Option<RandomCheck>, AnalysisError> {
+    let n = report.n;
+    let words = closure_words(nf, report);
+    let lies = graph_lie(nf, report, &words);
+    let vars = nf.state_vars.clone();
+    let comps: Vec<Vec<Id>> = vectors
+        .iter()
+        .map(|v| v.iter().map(|e| nf.ctx.from_canonical(e)).collect())
+        .collect();
+    let flat: Vec<Id> = comps.iter().flatten().copied().collect();
+    let mut all = lies.clone();
+    all.extend(&flat);
+    let coords = nf.ctx.free_coords(&all, &[]).ok_or_else(|| {
+        AnalysisError::Invalid("internal: certification needs no square root".into())
+    })?;
+    // Degrees as rational functions of the coordinates: a gradient entry of
+    // A/B (degrees a, b) is (A'B - AB')/B^2, times (1 + t^2)/2 for an angle
+    // coordinate: degrees at most (a + b + 2, 2b).
+    let gdeg: Vec<(u64, u64)> = degree_bounds(&nf.ctx, &lies)
+        .into_iter()
+        .map(|(a, b)| (a.saturating_add(b).saturating_add(2), b.saturating_mul(2)))
+        .collect();
+    let vdeg: Vec<Vec<(u64, u64)>> = comps.iter().map(|c| degree_bounds(&nf.ctx, c)).collect();
+    let mut degree = 0u64;
+    let mut poles = 0u64;
+    for vd in &vdeg {
+        for gd in &gdeg {
+            // One denominator per gradient row (B^2), one per vector entry.
+            let den = vd.iter().map(|d| d.1).fold(gd.1, u64::saturating_add);
+            let top = vd
+                .iter()
+                .map(|d| d.0)
+                .max()
+                .unwrap_or(0)
+                .saturating_add(gd.0);
+            degree = degree.max(den.saturating_add(top));
+            poles = poles.max(den);
+        }
+    }
+    let grads = &lies;
+    let identities = vectors.len() * grads.len();
+    let mut rng = SplitMix(report.seed ^ 0xce27_1f1e);
+    let mut bad = 0;
+    for pi in 0..CHECK_PRIMES {
+        let q = random_prime(&mut rng);
+        let mut done = 0;
+        while done < CHECK_POINTS {
+            if deadline.is_some_and(|d| Instant::now() > d) {
+                return Err(AnalysisError::Timeout(format!(
+                    "certifying the symmetries: {} of {} points checked",
+                    pi * CHECK_POINTS + done,
+                    CHECK_PRIMES * CHECK_POINTS
+                )));
+            }
+            let vals: Vec<u64> = coords.iter().map(|_| rng.next_u64() % q).collect();
+            let x = nf.ctx.mod_point_at(&coords, &vals, q).and_then(|leaves| {
+                let g = nf.ctx.grad_mod_prime(&lies, &leaves, &vars, q)?;
+                let v = nf.ctx.eval_mod_prime(&flat, &leaves, q)?;
+                Ok((g, v))
+            });
+            let Ok((gx, vx)) = x else {
+                bad += 1;
+                if bad > 64 {
+                    return Err(AnalysisError::NoPoint);
+                }
+                continue;
+            };
+            for vi in 0..vectors.len() {
+                let v = &vx[vi * n..(vi + 1) * n];
+                for g in &gx {
+                    let acc = v
+                        .iter()
+                        .zip(g)
+                        .fold(0u128, |a, (&s, &t)| (a + s as u128 * t as u128) % q as u128);
+                    if acc != 0 {
+                        return Ok(None);
+                    }
+                }
+            }
+            done += 1;
+        }
+    }
+    let q_min = (1u64 << 61) as f64;
+    let beta = (degree as f64 / (q_min - poles as f64).max(1.0)).min(1.0);
+    let checks = (CHECK_PRIMES * CHECK_POINTS) as i32;
+    Ok(Some(RandomCheck {
+        primes: CHECK_PRIMES,
+        points: CHECK_PRIMES * CHECK_POINTS,
+        identities,
+        degree,
+        error_bound: (identities as f64 * beta.powi(checks)).min(1.0),
+    }))
+}
