@@ -18,6 +18,7 @@
 mod decomp;
 mod derive;
 mod fields;
+mod fp_linalg;
 mod modes;
 mod rank;
 pub mod structure;

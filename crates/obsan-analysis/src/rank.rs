@@ -397,9 +397,15 @@ impl RankReport {
     /// The basis Lie derivatives as expressions on the graph (built here,
     /// prefixes shared; the rank test itself never builds them).
     pub fn basis_functions(&self, nf: &mut NormalForm) -> Vec<Id> {
+        self.words_on_graph(nf, &self.basis)
+    }
+
+    /// Lie derivatives along `words` on the expression graph (never
+    /// canonicalised), prefixes shared.
+    pub(crate) fn words_on_graph(&self, nf: &mut NormalForm, words: &[LieWord]) -> Vec<Id> {
         let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> = Default::default();
         let vars = nf.state_vars.clone();
-        self.basis
+        words
             .iter()
             .map(|w| {
                 let mut g = nf.outputs[w.output].1;

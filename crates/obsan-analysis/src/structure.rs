@@ -17,6 +17,7 @@
 //! there are `n - rank` of them, the rank test's lower bound (a non-zero minor)
 //! and these upper-bound it, so the rank is exact and they span the symmetries.
 
+use crate::fp_linalg::null_space;
 use crate::rank::{random_point, AnalysisError, RankReport};
 use obsan_expr::{Ctx, Fp, FpPoint, Id, RatFun, SplitMix, Var, P, Q};
 use obsan_model::NormalForm;
@@ -113,12 +114,12 @@ pub(crate) fn cheap_symmetries(
             scale_rows.push(s);
         }
     }
-    for v in kernel(&trans_rows, n) {
+    for v in null_space(trans_rows.clone(), n) {
         if let Some(c) = integer_vector(&v) {
             cands.push((Candidate::Translation(c), SymmetryKind::Translation));
         }
     }
-    for v in kernel(&scale_rows, n) {
+    for v in null_space(scale_rows.clone(), n) {
         if let Some(l) = integer_vector(&v) {
             cands.push((Candidate::Scaling(l), SymmetryKind::Scaling));
         }
@@ -256,46 +257,6 @@ fn insert(span: &mut Vec<(usize, Vec<Fp>)>, mut v: Vec<Fp>) -> bool {
     }
     span.push((p, v));
     true
-}
-
-/// A basis of the kernel of `rows` (n columns) over F_p, one vector per free
-/// column of the reduced echelon form, with a 1 there.
-fn kernel(rows: &[Vec<Fp>], n: usize) -> Vec<Vec<Fp>> {
-    let mut a: Vec<Vec<Fp>> = rows.to_vec();
-    let mut pivots: Vec<usize> = Vec::new();
-    let mut r = 0;
-    for c in 0..n {
-        let Some(i) = (r..a.len()).find(|&i| !a[i][c].is_zero()) else {
-            continue;
-        };
-        a.swap(r, i);
-        let Some(inv) = a[r][c].inv() else { continue };
-        for x in a[r].iter_mut() {
-            *x = *x * inv;
-        }
-        let pr = a[r].clone();
-        for (i, row) in a.iter_mut().enumerate() {
-            if i != r && !row[c].is_zero() {
-                let f = row[c];
-                for (x, y) in row.iter_mut().zip(&pr) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-        pivots.push(c);
-        r += 1;
-    }
-    (0..n)
-        .filter(|c| !pivots.contains(c))
-        .map(|f| {
-            let mut v = vec![Fp::ZERO; n];
-            v[f] = Fp::ONE;
-            for (i, &p) in pivots.iter().enumerate() {
-                v[p] = -a[i][f];
-            }
-            v
-        })
-        .collect()
 }
 
 /// Small rational `a/b` with `a = b x mod p`, |a|, b below 2^30 (Wang's

@@ -248,31 +248,6 @@ fn closure_words(nf: &NormalForm, report: &RankReport) -> Vec<LieWord> {
     out
 }
 
-/// Lie derivatives by word on the expression graph (never canonicalised),
-/// prefixes shared.
-fn graph_lie(nf: &mut NormalForm, report: &RankReport, words: &[LieWord]) -> Vec<Id> {
-    let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> = Default::default();
-    let vars = nf.state_vars.clone();
-    words
-        .iter()
-        .map(|w| {
-            let mut g = nf.outputs[w.output].1;
-            for (i, &k) in w.fields.iter().enumerate() {
-                let key = (w.output, w.fields[..=i].to_vec());
-                g = match memo.get(&key) {
-                    Some(&x) => x,
-                    None => {
-                        let x = nf.ctx.lie_derivative(g, &vars, &report.fields.vectors[k]);
-                        memo.insert(key, x);
-                        x
-                    }
-                };
-            }
-            g
-        })
-        .collect()
-}
-
 /// Fresh primes and points per prime of the certificate.
 pub const CHECK_PRIMES: u32 = 2;
 pub const CHECK_POINTS: u32 = 2;
@@ -315,7 +290,7 @@ pub fn certify_symmetries(
 ) -> Result<Option<RandomCheck>, AnalysisError> {
     let n = report.n;
     let words = closure_words(nf, report);
-    let lies = graph_lie(nf, report, &words);
+    let lies = report.words_on_graph(nf, &words);
     let vars = nf.state_vars.clone();
     let comps: Vec<Vec<Id>> = vectors
         .iter()

@@ -24,18 +24,18 @@
 //! ansatz, lifted, and proven by exact substitution in canonical form
 //! ([`reduced`]).
 //!
-//! Layout: `linalg` (F_p null spaces, rational reconstruction, monomials),
+//! Layout: `crate::fp_linalg` (F_p null spaces, rational reconstruction, monomials),
 //! `ansatz` (the invariant ansatz and its F_p screens), `blocks` (blocks read
 //! off the fields), `reduced` (the reduced system, its files and its proof).
 
 mod ansatz;
 mod blocks;
-mod linalg;
+
 mod reduced;
 
+use crate::fp_linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon};
 use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
 use blocks::coefficient_blocks;
-use linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon};
 use reduced::in_modes;
 pub use reduced::verify_derivation;
 

@@ -4,7 +4,7 @@ use obsan_expr::{Fp, P, Q};
 
 /// A basis of the right null space, in reduced echelon form (each vector has
 /// a 1 at its free column and 0 at the other free columns).
-pub(super) fn null_space(mut m: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
+pub(crate) fn null_space(mut m: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
     let mut pivots: Vec<usize> = Vec::new();
     let mut r = 0;
     for c in 0..ncols {
@@ -44,7 +44,7 @@ pub(super) fn null_space(mut m: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
 }
 
 /// Rational number reconstruction (Wang): `a/b = u mod p` with |a|, |b| < sqrt(p/2).
-pub(super) fn rat_recon(u: Fp) -> Option<Q> {
+pub(crate) fn rat_recon(u: Fp) -> Option<Q> {
     let p = P as i128;
     let bound = ((P / 2) as f64).sqrt() as i128;
     let (mut r0, mut r1) = (p, u.0 as i128);
@@ -64,7 +64,7 @@ pub(super) fn rat_recon(u: Fp) -> Option<Q> {
 }
 
 /// Exponent vectors of total degree `lo..=hi` over `nb` blocks, by degree.
-pub(super) fn monomials(nb: usize, lo: usize, hi: usize) -> Vec<Vec<u32>> {
+pub(crate) fn monomials(nb: usize, lo: usize, hi: usize) -> Vec<Vec<u32>> {
     fn rec(nb: usize, left: usize, cur: &mut Vec<u32>, out: &mut Vec<Vec<u32>>) {
         if cur.len() == nb {
             if left == 0 {
@@ -85,14 +85,14 @@ pub(super) fn monomials(nb: usize, lo: usize, hi: usize) -> Vec<Vec<u32>> {
     out
 }
 
-pub(super) fn mono_value(e: &[u32], v: &[Fp]) -> Fp {
+pub(crate) fn mono_value(e: &[u32], v: &[Fp]) -> Fp {
     e.iter()
         .zip(v)
         .fold(Fp::ONE, |a, (&k, &x)| a * x.pow(k as u64))
 }
 
 /// `w(m)` for a monomial from the block values and the blocks' `w`-derivatives.
-pub(super) fn mono_deriv(e: &[u32], v: &[Fp], dv: &[Fp]) -> Fp {
+pub(crate) fn mono_deriv(e: &[u32], v: &[Fp], dv: &[Fp]) -> Fp {
     let mut acc = Fp::ZERO;
     for k in 0..e.len() {
         if e[k] == 0 || dv[k].is_zero() {
