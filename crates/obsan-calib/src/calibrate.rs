@@ -757,7 +757,8 @@ pub fn dataset_crlb(
             max_step: o.ml_max_step,
             input_noise: noise,
         };
-        let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts).map_err(Degenerate)?;
+        let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
+            .map_err(|e| Degenerate(e.to_string()))?;
         Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
     };
     let bearing = bound(None)?;

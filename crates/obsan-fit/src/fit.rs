@@ -11,6 +11,7 @@
 use crate::lsq::{solve_symmetric, LmOptions};
 use crate::predict::{Integration, Predictor};
 use crate::whiten::Whitener;
+use crate::FitError;
 use obsan_data::{wrap, Dataset, Series};
 
 /// One trajectory to fit.
@@ -128,7 +129,7 @@ fn residuals(
     cols: &[usize],
     jac: bool,
     noise: bool,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>, Vec<usize>, Vec<Vec<f64>>), String> {
+) -> Result<(Vec<f64>, Vec<Vec<f64>>, Vec<usize>, Vec<Vec<f64>>), FitError> {
     let integ = Integration {
         max_step: opts.max_step,
         sensitivities: jac || noise,
@@ -141,7 +142,10 @@ fn residuals(
     let jac = jac || noise;
     let pred = p
         .predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)
-        .map_err(|e| format!("trajectory '{}': {e}", t.name))?;
+        .map_err(|e| FitError::Trajectory {
+            name: t.name.to_string(),
+            source: Box::new(e),
+        })?;
     let n = p.state.len();
     let mut r = Vec::new();
     let mut rows = Vec::new();
@@ -237,17 +241,17 @@ impl Problem<'_> {
         opts: &'a FitOptions,
         init_params: &[f64],
         init_states: &[Vec<f64>],
-    ) -> Result<Problem<'a>, String> {
+    ) -> Result<Problem<'a>, FitError> {
         let n_params = p.state.len() - p.n_dynamic;
         if init_params.len() != n_params
             || init_states.len() != trajs.len()
             || init_states.iter().any(|s| s.len() != p.n_dynamic)
         {
-            return Err("initial values do not match the model".into());
+            return Err(FitError::BadStart);
         }
         if opts.sigma.len() != p.outputs.len() || opts.sigma.iter().any(|s| s.is_nan() || *s <= 0.0)
         {
-            return Err("one positive noise level per output is needed".into());
+            return Err(FitError::NoiseLevels);
         }
         let cols: Vec<Vec<usize>> = trajs
             .iter()
@@ -259,7 +263,7 @@ impl Problem<'_> {
                             .columns
                             .iter()
                             .position(|c| c == o)
-                            .ok_or_else(|| format!("the outputs have no column '{o}'"))
+                            .ok_or_else(|| FitError::MissingOutput(o.clone()))
                     })
                     .collect()
             })
@@ -305,7 +309,7 @@ impl Problem<'_> {
 
     /// The cost (sum of squared whitened residuals) at `theta`, without
     /// sensitivities.
-    fn cost(&self, theta: &[f64]) -> Result<f64, String> {
+    fn cost(&self, theta: &[f64]) -> Result<f64, FitError> {
         let mut total = 0.0;
         for (k, t) in self.trajs.iter().enumerate() {
             let x0 = self.lay.state_of(theta, k);
@@ -325,7 +329,7 @@ impl Problem<'_> {
     /// from one prediction with sensitivities per trajectory. With `refresh`
     /// (and input noise), the whitening is first recomputed at `theta`
     /// from the same prediction.
-    fn normal(&self, theta: &[f64], refresh: bool) -> Result<Normal, String> {
+    fn normal(&self, theta: &[f64], refresh: bool) -> Result<Normal, FitError> {
         let (lay, n_params) = (&self.lay, self.lay.n_params);
         let n = lay.len();
         let mut jtj = vec![vec![0.0; n]; n];
@@ -473,13 +477,10 @@ pub fn crlb(
     params: &[f64],
     states: &[Vec<f64>],
     opts: &FitOptions,
-) -> Result<Vec<Vec<f64>>, String> {
+) -> Result<Vec<Vec<f64>>, FitError> {
     let prob = Problem::new(p, trajs, opts, params, states)?;
     let jtj = prob.normal(&theta_of(params, states), true)?.jtj;
-    inverse(&jtj).ok_or_else(|| {
-        "the Fisher information is singular: some unknowns are not identifiable from these data"
-            .into()
-    })
+    inverse(&jtj).ok_or(FitError::SingularFisher)
 }
 
 fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
@@ -500,7 +501,7 @@ pub fn fit(
     init_params: &[f64],
     init_states: &[Vec<f64>],
     opts: &FitOptions,
-) -> Result<FitResult, String> {
+) -> Result<FitResult, FitError> {
     let prob = Problem::new(p, trajs, opts, init_params, init_states)?;
     let (lay, n_params) = (&prob.lay, prob.lay.n_params);
     let mut theta = theta_of(init_params, init_states);

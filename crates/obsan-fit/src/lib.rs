@@ -9,6 +9,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod error;
 mod fit;
 mod lsq;
 mod noise;
@@ -16,6 +17,7 @@ mod predict;
 mod rng;
 mod whiten;
 
+pub use error::FitError;
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};

@@ -34,6 +34,7 @@
 use crate::fit::FitTrajectory;
 use crate::predict::{Integration, Predictor};
 use crate::whiten::Whitener;
+use crate::FitError;
 use obsan_data::wrap;
 use rayon::prelude::*;
 
@@ -103,12 +104,12 @@ pub fn estimate_noise(
     sigma0: &[f64],
     inputs: &[bool],
     opts: &NoiseOptions,
-) -> Result<NoiseEstimate, String> {
+) -> Result<NoiseEstimate, FitError> {
     let no = p.outputs.len();
     let nd = p.n_dynamic;
     let n = p.state.len();
     if sigma0.len() != no || inputs.len() != p.inputs.len() || states.len() != trajs.len() {
-        return Err("noise estimate: sizes do not match the model".into());
+        return Err(FitError::NoiseSizes);
     }
     let est_in: Vec<usize> = (0..inputs.len()).filter(|&j| inputs[j]).collect();
     let parts: Vec<Parts> = trajs
@@ -171,7 +172,7 @@ pub fn estimate_noise(
             }
             Ok(parts)
         })
-        .collect::<Result<_, String>>()?;
+        .collect::<Result<_, FitError>>()?;
     let count: usize = parts.iter().map(|p| p.d.len()).sum();
     // Outputs with data get a free level; the rest keep sigma0.
     let mut seen = vec![0usize; no];
@@ -292,11 +293,7 @@ pub fn estimate_noise(
         }
     }
     if !best.0.is_finite() {
-        return Err(
-            "the input noise cannot be carried back to the trajectories' starts \
-                    (a state decays too fast over them): no intensity can be estimated"
-                .into(),
-        );
+        return Err(FitError::NoiseNotCarried);
     }
     if est_in.len() > 1 {
         for _ in 0..2 {

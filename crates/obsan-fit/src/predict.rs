@@ -3,6 +3,7 @@
 //! discrepancy workflow (issue 5). The dynamics come from the model file,
 //! the single source of truth.
 
+use crate::FitError;
 use obsan_data::Series;
 use obsan_expr::{FrozenTape, Tape, Var};
 use obsan_model::NormalForm;
@@ -178,7 +179,7 @@ impl Predictor {
         consts: &[f64],
         inputs: &Series,
         times: &[f64],
-    ) -> Result<Vec<Vec<f64>>, String> {
+    ) -> Result<Vec<Vec<f64>>, FitError> {
         Ok(self
             .predict_with(x0, consts, inputs, times, &Integration::default())?
             .outputs)
@@ -195,13 +196,12 @@ impl Predictor {
         inputs: &Series,
         times: &[f64],
         opts: &Integration,
-    ) -> Result<Prediction, String> {
+    ) -> Result<Prediction, FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
-            return Err(format!(
-                "expected {} state values and {} constants",
-                self.state.len(),
-                self.consts.len()
-            ));
+            return Err(FitError::StateSize {
+                states: self.state.len(),
+                consts: self.consts.len(),
+            });
         }
         let cols: Vec<usize> = self
             .inputs
@@ -211,7 +211,7 @@ impl Predictor {
                     .columns
                     .iter()
                     .position(|c| c == n)
-                    .ok_or_else(|| format!("the inputs have no column '{n}'"))
+                    .ok_or_else(|| FitError::MissingInput(n.clone()))
             })
             .collect::<Result<_, _>>()?;
         let nd = self.n_dynamic;
@@ -246,11 +246,11 @@ impl Predictor {
         let noise = match &opts.input_noise {
             Some(c) if opts.sensitivities => {
                 if c.len() != m {
-                    return Err(format!("input noise: expected {m} values, one per input"));
+                    return Err(FitError::InputNoiseSize(m));
                 }
                 Some(c.clone())
             }
-            Some(_) => return Err("input noise needs the sensitivities".into()),
+            Some(_) => return Err(FitError::InputNoiseNeedsSensitivities),
             None => None,
         };
         let mut noise_acc = vec![0.0; nd * nd];
@@ -261,7 +261,7 @@ impl Predictor {
         // before that): the state is the one seen from the output clock.
         let tau = self.delay.map_or(0.0, |d| x0[d]);
         if !tau.is_finite() {
-            return Err("the delay is not finite".into());
+            return Err(FitError::DelayNotFinite);
         }
         let et = |k: usize| inputs.t[k] + tau;
         let mut dudtau = vec![0.0; m];
@@ -304,10 +304,10 @@ impl Predictor {
                 0.0
             };
             if !stiff.is_finite() || stiff * spacing > 1.0 {
-                return Err(format!(
-                    "the dynamics have a time scale of {:.3e} s at the start, shorter than the input rows' spacing ({spacing:.3e} s)",
-                    1.0 / stiff
-                ));
+                return Err(FitError::TooStiff {
+                    time_scale: 1.0 / stiff,
+                    spacing,
+                });
             }
             if stiff > 0.0 {
                 cap.min(STIFF_STEP / stiff)
@@ -324,7 +324,7 @@ impl Predictor {
         let sens = opts.sensitivities;
         for &target in times {
             if target < t - 1e-12 {
-                return Err(format!("output time {target} is before {t}: times must not decrease and start at or after the inputs"));
+                return Err(FitError::TimeBeforeStart { target, t });
             }
             while t < target - 1e-12 {
                 while row + 1 < inputs.len() && et(row + 1) <= t + 1e-12 {
@@ -402,15 +402,14 @@ impl Predictor {
                     z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
                 }
                 if z[..nd].iter().any(|v| !v.is_finite()) {
-                    let at: Vec<String> = self.state[nd..]
-                        .iter()
-                        .zip(&x0[nd..])
-                        .map(|(n, v)| format!("{n} = {v}"))
-                        .collect();
-                    return Err(format!(
-                        "the state diverged at t = {next} with {}: these parameter values (or the start values, --init) make the model blow up; try start values nearer the truth, or check the data's units",
-                        if at.is_empty() { "no parameters".to_string() } else { at.join(", ") }
-                    ));
+                    return Err(FitError::Diverged {
+                        t: next,
+                        params: self.state[nd..]
+                            .iter()
+                            .cloned()
+                            .zip(x0[nd..].iter().copied())
+                            .collect(),
+                    });
                 }
                 t = next;
             }
