@@ -274,7 +274,9 @@ fn a_diverging_start_names_the_trajectory_and_the_params() {
         max_step: 0.0,
         input_noise: None,
     };
-    let e = fit(&p, &trajs, &init, &states, &opts).unwrap_err();
+    let e = fit(&p, &trajs, &init, &states, &opts)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("trajectory 'q0.9'"), "{e}");
     assert!(
         e.contains("diverged") && e.contains(&format!("eta = {}", truth.eta)),

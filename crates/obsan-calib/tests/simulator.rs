@@ -357,5 +357,10 @@ fn predictor_reproduces_simulated_bearings() {
             &tr.outputs.t,
         )
         .unwrap_err();
-    assert!(e.contains("no column 'nu'"), "{e}");
+    // The typed error names the column, and its text says so too.
+    assert!(
+        matches!(&e, obsan_fit::FitError::MissingInput(c) if c == "nu"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("no column 'nu'"), "{e}");
 }
