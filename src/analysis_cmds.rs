@@ -155,7 +155,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         o.push_str("exact: a non-singular minor of full rank was found (a non-zero value at a point proves it)\n");
     } else {
         o.push_str(&format!(
-            "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); the rank is never too high, and too low with probability <= {:.1e} (Schwartz-Zippel, degree bound {}); `obsan symmetries` proves it exactly\n",
+            "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); the rank is never too high, and too low with probability <= {:.1e} (Schwartz-Zippel, degree bound {}); `obsan symmetries --exact` proves it exactly\n",
             r.seed, r.error_bound, r.degree_bound
         ));
     }
