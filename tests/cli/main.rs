@@ -9,6 +9,8 @@ mod modes;
 mod show;
 mod simulate;
 mod suite;
+#[path = "../../benches/suite_entries.rs"]
+mod suite_entries;
 mod trust;
 mod tutorial;
 mod util;
