@@ -221,8 +221,100 @@ fn row_degree(ctx: &Ctx, grad: &[Id]) -> u64 {
     max_num.saturating_add(sum_den)
 }
 
-fn grow_symbolic(
+/// How one route of the rank test gets rows: the symbolic route carries each
+/// Lie derivative's graph id, the jet route nothing (a word is enough).
+trait Rows {
+    type Node;
+    /// The gradient of the word's Lie derivative at the point, and the
+    /// Schwartz–Zippel degree of its entries.
+    fn row(
+        &mut self,
+        nf: &mut NormalForm,
+        word: &LieWord,
+        node: &Self::Node,
+        point: &FpPoint,
+    ) -> Result<(Vec<Fp>, u64), AnalysisError>;
+    /// The Lie derivative of `node` along field `k`; `None` when it is
+    /// structurally zero (never evaluated, never counted).
+    fn extend(
+        &mut self,
+        nf: &mut NormalForm,
+        word: &LieWord,
+        node: &Self::Node,
+        k: usize,
+    ) -> Option<Self::Node>;
+}
+
+/// Every Lie derivative built on the expression graph, its gradient
+/// differentiated there and evaluated at the point.
+struct SymbolicRows<'a> {
+    fields: &'a Fields,
+}
+
+impl Rows for SymbolicRows<'_> {
+    type Node = Id;
+    fn row(
+        &mut self,
+        nf: &mut NormalForm,
+        _: &LieWord,
+        f: &Id,
+        point: &FpPoint,
+    ) -> Result<(Vec<Fp>, u64), AnalysisError> {
+        let grad = gradient(nf, *f);
+        let vals = nf
+            .ctx
+            .eval_fp(&grad, point)
+            .map_err(|BadPoint| AnalysisError::NoPoint)?;
+        Ok((vals, row_degree(&nf.ctx, &grad)))
+    }
+    fn extend(&mut self, nf: &mut NormalForm, _: &LieWord, f: &Id, k: usize) -> Option<Id> {
+        let vars = nf.state_vars.clone();
+        let g = nf.ctx.lie_derivative(*f, &vars, &self.fields.vectors[k]);
+        (!nf.ctx.is_zero(g)).then_some(g)
+    }
+}
+
+/// Gradients by Taylor jets at the point; degree bounds depend on the word
+/// only, so they are computed at the first point and kept.
+struct JetRows<'a> {
+    jets: &'a LieJets,
+    degrees: &'a mut HashMap<(usize, Vec<usize>), u64>,
+}
+
+impl Rows for JetRows<'_> {
+    type Node = ();
+    fn row(
+        &mut self,
+        _: &mut NormalForm,
+        word: &LieWord,
+        _: &(),
+        point: &FpPoint,
+    ) -> Result<(Vec<Fp>, u64), AnalysisError> {
+        let key = (word.output, word.fields.clone());
+        let known = self.degrees.get(&key).copied();
+        let row = self
+            .jets
+            .row(word.output, &word.fields, point, known.is_none())
+            .map_err(|BadPoint| AnalysisError::NoPoint)?;
+        let degree = known.or(row.degree).unwrap_or(0);
+        self.degrees.insert(key, degree);
+        Ok((row.gradient, degree))
+    }
+    fn extend(&mut self, _: &mut NormalForm, word: &LieWord, _: &(), k: usize) -> Option<()> {
+        let mut fields = word.fields.clone();
+        fields.push(k);
+        // Structurally zero (the symbolic route's `is_zero` skip).
+        self.jets.support(word.output, &fields).map(|_| ())
+    }
+}
+
+/// Breadth-first growth of the basis: the outputs, then the Lie derivatives
+/// of the kept words along every field, until the rank is n or no word of
+/// the last order was independent.
+fn grow<R: Rows>(
     nf: &mut NormalForm,
+    rows: &mut R,
+    roots: Vec<R::Node>,
     fields: &Fields,
     point: FpPoint,
     opts: &mut RankOptions,
@@ -236,17 +328,16 @@ fn grow_symbolic(
         worst_rejected: 0,
         point,
     };
-    let mut level: Vec<(LieWord, Id)> = nf
-        .outputs
-        .iter()
+    let mut level: Vec<(LieWord, R::Node)> = roots
+        .into_iter()
         .enumerate()
-        .map(|(i, (_, h))| {
+        .map(|(i, node)| {
             (
                 LieWord {
                     output: i,
                     fields: vec![],
                 },
-                *h,
+                node,
             )
         })
         .collect();
@@ -254,7 +345,7 @@ fn grow_symbolic(
     let mut depth = 0;
     loop {
         let mut kept = Vec::new();
-        for (word, f) in level {
+        for (word, node) in level {
             if let Some(d) = opts.deadline {
                 if Instant::now() > d {
                     return Err(AnalysisError::Timeout(format!(
@@ -264,103 +355,11 @@ fn grow_symbolic(
                     )));
                 }
             }
-            let grad = gradient(nf, f);
-            let vals = nf
-                .ctx
-                .eval_fp(&grad, &run.point)
-                .map_err(|BadPoint| AnalysisError::NoPoint)?;
+            let (vals, degree) = rows.row(nf, &word, &node, &run.point)?;
             run.evaluated += 1;
-            let deg = row_degree(&nf.ctx, &grad);
             if run.echelon.insert(vals) {
-                run.degree = run.degree.saturating_add(deg);
-                kept.push((word.clone(), f));
-                run.basis.push(word);
-            } else {
-                run.worst_rejected = run.worst_rejected.max(deg);
-            }
-            if run.echelon.rank() == n {
-                break;
-            }
-        }
-        if let Some(p) = opts.progress.as_mut() {
-            p(depth, run.echelon.rank(), n);
-        }
-        if kept.is_empty() || run.echelon.rank() == n {
-            break;
-        }
-        depth += 1;
-        let mut next = Vec::new();
-        for (word, f) in &kept {
-            for (k, field) in fields.vectors.iter().enumerate() {
-                let g = nf.ctx.lie_derivative(*f, &nf.state_vars.clone(), field);
-                if nf.ctx.is_zero(g) {
-                    continue;
-                }
-                let mut w = word.clone();
-                w.fields.push(k);
-                next.push((w, g));
-            }
-        }
-        level = next;
-    }
-    Ok(run)
-}
-
-/// Outputs and fields compiled for jet evaluation.
-pub(crate) fn lie_jets(nf: &NormalForm, fields: &Fields) -> LieJets {
-    let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
-    LieJets::new(&nf.ctx, &nf.state_vars, &fields.vectors, &outputs)
-}
-
-/// The growth of [`grow_symbolic`], each gradient by jets at the point.
-fn grow_jets(
-    nf: &NormalForm,
-    jets: &LieJets,
-    degrees: &mut HashMap<(usize, Vec<usize>), u64>,
-    fields: &Fields,
-    point: FpPoint,
-    opts: &mut RankOptions,
-) -> Result<Run, AnalysisError> {
-    let n = nf.state.len();
-    let mut run = Run {
-        basis: vec![],
-        echelon: Echelon { rows: vec![] },
-        evaluated: 0,
-        degree: 0,
-        worst_rejected: 0,
-        point,
-    };
-    let mut level: Vec<LieWord> = (0..nf.outputs.len())
-        .map(|i| LieWord {
-            output: i,
-            fields: vec![],
-        })
-        .collect();
-    let outputs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
-    let mut depth = 0;
-    loop {
-        let mut kept = Vec::new();
-        for word in level {
-            if let Some(d) = opts.deadline {
-                if Instant::now() > d {
-                    return Err(AnalysisError::Timeout(format!(
-                        "at Lie derivative order {depth}, rank {} of {n} so far (last: {})",
-                        run.echelon.rank(),
-                        word.display(&fields.names, &outputs)
-                    )));
-                }
-            }
-            let key = (word.output, word.fields.clone());
-            let known = degrees.get(&key).copied();
-            let row = jets
-                .row(word.output, &word.fields, &run.point, known.is_none())
-                .map_err(|BadPoint| AnalysisError::NoPoint)?;
-            let degree = known.or(row.degree).unwrap_or(0);
-            degrees.insert(key, degree);
-            run.evaluated += 1;
-            if run.echelon.insert(row.gradient) {
                 run.degree = run.degree.saturating_add(degree);
-                kept.push(word.clone());
+                kept.push((word.clone(), node));
                 run.basis.push(word);
             } else {
                 run.worst_rejected = run.worst_rejected.max(degree);
@@ -377,20 +376,24 @@ fn grow_jets(
         }
         depth += 1;
         let mut next = Vec::new();
-        for word in &kept {
+        for (word, node) in &kept {
             for k in 0..fields.vectors.len() {
-                let mut w = word.clone();
-                w.fields.push(k);
-                // Structurally zero (the old route's `is_zero` skip).
-                if jets.support(w.output, &w.fields).is_none() {
-                    continue;
+                if let Some(g) = rows.extend(nf, word, node, k) {
+                    let mut w = word.clone();
+                    w.fields.push(k);
+                    next.push((w, g));
                 }
-                next.push(w);
             }
         }
         level = next;
     }
     Ok(run)
+}
+
+/// Outputs and fields compiled for jet evaluation.
+pub(crate) fn lie_jets(nf: &NormalForm, fields: &Fields) -> LieJets {
+    let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+    LieJets::new(&nf.ctx, &nf.state_vars, &fields.vectors, &outputs)
 }
 
 impl RankReport {
@@ -451,15 +454,30 @@ fn rank_with(
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
     let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
     let jets = (!symbolic).then(|| lie_jets(nf, &fields));
-    // Degree bounds depend on the word only: computed at the first point.
     let mut degrees = HashMap::new();
-    let mut grow = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
-        Some(j) => grow_jets(nf, j, &mut degrees, &fields, p, opts),
-        None => grow_symbolic(nf, &fields, p, opts),
+    let mut grow_at = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
+        Some(jets) => {
+            let mut rows = JetRows {
+                jets,
+                degrees: &mut degrees,
+            };
+            grow(nf, &mut rows, vec![(); nf.outputs.len()], &fields, p, opts)
+        }
+        None => {
+            let roots = nf.outputs.iter().map(|o| o.1).collect();
+            grow(
+                nf,
+                &mut SymbolicRows { fields: &fields },
+                roots,
+                &fields,
+                p,
+                opts,
+            )
+        }
     };
-    let r1 = grow(nf, p1, &mut opts)?;
+    let r1 = grow_at(nf, p1, &mut opts)?;
     let (p2, k2) = random_point_counted(&mut nf.ctx, &mut rng)?;
-    let r2 = grow(nf, p2, &mut opts)?;
+    let r2 = grow_at(nf, p2, &mut opts)?;
     // Density correction of the sampling (see random_point_counted).
     let draws = k1.max(k2) as f64;
     let best = if r2.echelon.rank() > r1.echelon.rank() {
