@@ -694,17 +694,13 @@ pub fn add_derived_inputs(
                 def: def.to_string(),
                 message: e.message,
             })?;
-            let mut names: Vec<String> = Vec::new();
-            for (n, _) in ast.idents() {
-                if !names.iter().any(|x| x == n) {
-                    names.push(n.to_string());
-                }
-            }
+            let expr = obsan_expr::FloatExpr::new(ast);
             enum Src<'a> {
                 Col(&'a [Option<f64>]),
                 Const(f64),
             }
-            let srcs: Vec<Src> = names
+            let srcs: Vec<Src> = expr
+                .names()
                 .iter()
                 .map(|n| match series.column(n) {
                     Some(c) => Ok(Src::Col(c)),
@@ -717,7 +713,7 @@ pub fn add_derived_inputs(
                     }),
                 })
                 .collect::<Result<_, DerivedInputError>>()?;
-            let mut x = vec![0.0; names.len()];
+            let mut x = vec![0.0; srcs.len()];
             (0..series.t.len())
                 .map(|k| {
                     for (xi, s) in x.iter_mut().zip(&srcs) {
@@ -726,7 +722,7 @@ pub fn add_derived_inputs(
                             Src::Const(v) => *v,
                         };
                     }
-                    let v = eval_ast(&ast, &names, &x);
+                    let v = expr.eval(&x);
                     v.is_finite().then_some(v)
                 })
                 .collect()
@@ -737,37 +733,28 @@ pub fn add_derived_inputs(
     Ok(())
 }
 
-fn eval_ast(a: &obsan_expr::Ast, names: &[String], x: &[f64]) -> f64 {
-    use obsan_expr::{AstKind, BinOp};
-    let ev = |b: &obsan_expr::Ast| eval_ast(b, names, x);
-    match &a.kind {
-        AstKind::Num(q) => q.to_f64(),
-        AstKind::Pi => std::f64::consts::PI,
-        AstKind::Ident(n) => names.iter().position(|m| m == n).map_or(f64::NAN, |i| x[i]),
-        AstKind::Neg(b) => -ev(b),
-        AstKind::Bin(op, l, r) => {
-            let (l, r) = (ev(l), ev(r));
-            match op {
-                BinOp::Add => l + r,
-                BinOp::Sub => l - r,
-                BinOp::Mul => l * r,
-                BinOp::Div => l / r,
-                BinOp::Pow => l.powf(r),
-            }
+#[cfg(test)]
+mod tests {
+    use super::{add_derived_inputs, Series};
+    use std::collections::BTreeMap;
+
+    #[test]
+    fn derived_inputs_take_the_real_root_and_the_known_constants() {
+        let mut s = Series::new(vec!["u".into()]);
+        for (t, u) in [(0.0, -2.0), (1.0, 3.0), (2.0, -0.5)] {
+            s.push(t, &[Some(u)]);
         }
-        AstKind::Call(f, args) => {
-            let v: Vec<f64> = args.iter().map(ev).collect();
-            match (f.as_str(), v.as_slice()) {
-                ("sin", [a]) => a.sin(),
-                ("cos", [a]) => a.cos(),
-                ("tan", [a]) => a.tan(),
-                ("atan", [a]) => a.atan(),
-                ("atan2", [y, x]) => y.atan2(*x),
-                ("exp", [a]) => a.exp(),
-                ("log", [a]) => a.ln(),
-                ("sqrt", [a]) => a.sqrt(),
-                _ => f64::NAN,
-            }
-        }
+        let consts = BTreeMap::from([("k".to_string(), 10.0)]);
+        let defs = [
+            ("a".to_string(), "sqrt(u^2)".to_string()),
+            ("b".to_string(), "k*u + log(u)".to_string()),
+            ("r".to_string(), "rate(u)".to_string()),
+        ];
+        add_derived_inputs(&mut s, &defs, &consts).unwrap();
+        assert_eq!(s.column("a").unwrap(), &[Some(2.0), Some(3.0), Some(0.5)]);
+        // log of a negative value is no value, not NaN in the data.
+        assert_eq!(s.column("b").unwrap()[0], None);
+        assert_eq!(s.column("b").unwrap()[1], Some(30.0 + 3f64.ln()));
+        assert_eq!(s.column("r").unwrap(), &[Some(5.0), Some(-3.5), Some(0.0)]);
     }
 }
