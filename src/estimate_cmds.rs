@@ -272,7 +272,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
                 .then(|| crlb_sd(&o, &p, true))
                 .transpose()
                 .map_err(Failure)?;
-            let (data, _) = simulate(&o).map_err(Failure)?;
+            let (data, _) = simulate(&o).map_err(Failure::from)?;
             (
                 format!(
                     "simulated set-up, bearing noise {} deg, encoder K {} m^1/2",

@@ -286,7 +286,7 @@ fn one(
             relative_sd: 0.3,
         };
     }
-    let r = calibrate(data, Some(predictor), &o).map_err(|e| e.0)?;
+    let r = calibrate(data, Some(predictor), &o).map_err(|e| e.to_string())?;
     let est = r.calibration.values();
     if !modes {
         return Ok((param_errors(&est, truth), param_estimates(&est)));
@@ -384,7 +384,7 @@ pub fn run_cell(
                     .iter()
                     .map(|&m| one(m, &data, &truth, predictor, modes))
                     .collect(),
-                Err(e) => cell.methods.iter().map(|_| Err(e.clone())).collect(),
+                Err(e) => cell.methods.iter().map(|_| Err(e.to_string())).collect(),
             };
             tick();
             out

@@ -31,6 +31,7 @@ mod budget;
 mod canon;
 mod diff;
 mod eval;
+mod float_eval;
 mod gcd;
 mod gcd_modular;
 mod graph;
@@ -51,6 +52,7 @@ pub use canon::RatFun;
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
 };
+pub use float_eval::FloatExpr;
 pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
 pub use jet::{Coord, LieJets, LieRow};
