@@ -194,6 +194,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "obsan diagnose: model {} on {data} ({n_traj} trajectories, {} output samples)",
         d.model, d.nominal.n
     );
+    let _ = writeln!(s, "start: {}", d.start);
     let sig: Vec<String> = d
         .sigma
         .iter()

@@ -28,8 +28,8 @@ mod sim;
 
 pub use calib::{Calibration, Metric, PARAMS};
 pub use calibrate::{
-    calib_predictor, calibrate, dataset_crlb, figure_curves, CalibrateOptions, CalibrationReport,
-    CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
+    calib_predictor, calibrate, circle_modes, dataset_crlb, figure_curves, CalibrateOptions,
+    CalibrationReport, CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
 };
 pub use circle::{ArcData, Closed, Det};
 pub use error::CalibError;

@@ -277,7 +277,9 @@ pub fn fit_model(
             sensitivities: false,
             input_noise: None,
         };
-        let pred = p.predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)?;
+        let pred = p
+            .predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)
+            .map_err(|e| format!("trajectory '{}': {e}", tr.name))?;
         // Held input values and their integrals at every output time, once
         // per trajectory (shared by its outputs).
         let in_cols: Vec<Option<&[Option<f64>]>> =
@@ -377,5 +379,7 @@ pub fn fit_model(
 }
 
 /// Start values for `sys` on `data`: a function of the model (see
-/// [`crate::start_values`]).
-pub type Start = (Vec<f64>, Vec<Vec<f64>>);
+/// [`crate::start_values`]): the params, per trajectory the initial dynamic
+/// state, and how they were found (printed with the diagnosis).
+#[derive(Clone, Debug)]
+pub struct Start(pub Vec<f64>, pub Vec<Vec<f64>>, pub String);

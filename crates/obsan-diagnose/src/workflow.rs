@@ -138,6 +138,8 @@ pub const RIVAL_BIC: f64 = 6.0;
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
     pub model: String,
+    /// How the nominal fit's start was found (see [`crate::start_values`]).
+    pub start: String,
     pub sigma: Vec<(String, f64)>,
     pub sigma_estimated: bool,
     /// Per measured input, the noise intensity `c` (spectral density
@@ -407,6 +409,7 @@ pub fn diagnose(
     }
     Ok(Diagnosis {
         model: sys.name.clone(),
+        start: start.2.clone(),
         sigma: outputs.into_iter().zip(sigma).collect(),
         sigma_estimated,
         input_noise_source: if estimate {

@@ -65,7 +65,8 @@ pub struct FitOptions {
     /// when given the fit is generalised least squares: the residuals of a
     /// trajectory are whitened by the Cholesky factor of their covariance
     /// `I + A M A^T` (output noise plus the integrated input noise,
-    /// linearised), computed at the start and again at the estimate.
+    /// linearised), computed at the start, at the first estimate and at the
+    /// final one (where the covariance and the cost are taken).
     pub input_noise: Option<Vec<f64>>,
 }
 
@@ -605,6 +606,13 @@ pub fn fit(
                 break;
             }
         }
+    }
+    // With input noise the last linearisation's weighting was placed at the
+    // pass's start, not at the estimate: the covariance (and the cost and
+    // log-determinant the likelihood ratios read) are those of the
+    // weighting at the estimate itself.
+    if opts.input_noise.is_some() {
+        cur = prob.normal(&theta, true)?;
     }
     let Normal {
         res,

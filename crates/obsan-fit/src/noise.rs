@@ -93,6 +93,14 @@ struct Parts {
     m: Vec<Vec<f64>>,
 }
 
+/// A prediction error of trajectory `t`, naming it.
+fn named(t: &FitTrajectory, e: FitError) -> FitError {
+    FitError::Trajectory {
+        name: t.name.to_string(),
+        source: Box::new(e),
+    }
+}
+
 /// Estimate the noise levels at a fit (`params`, `states` per trajectory).
 /// `sigma0` starts the output levels; `inputs[j]` says whether input `j`'s
 /// intensity is estimated (false for derived inputs, which carry none).
@@ -133,7 +141,9 @@ pub fn estimate_noise(
                     sensitivities: true,
                     input_noise: Some(c),
                 };
-                let pr = p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)?;
+                let pr = p
+                    .predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+                    .map_err(|e| named(t, e))?;
                 ms.push(pr.noise_m.clone());
                 pred = Some(pr);
             }
@@ -145,7 +155,8 @@ pub fn estimate_noise(
                         sensitivities: true,
                         input_noise: None,
                     };
-                    p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)?
+                    p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+                        .map_err(|e| named(t, e))?
                 }
             };
             let mut parts = Parts {
