@@ -522,7 +522,15 @@ fn candidate(
         // model's biased params is a 40-sigma residual that holds the fit
         // short of the effect's size. Without it the fit finds the right
         // side; the full data then polish that start, and the lower cost wins.
-        if base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
+        // Only an effect that replaces an angle output can make such a jump
+        // (the wrapped residual of a continuous prediction is continuous), so
+        // only those pay for the two extra fits (on MRCLAM a third of the
+        // fits that carry the lag's states).
+        let rewrites_angle = e
+            .outputs
+            .iter()
+            .any(|(y, _)| base_fit.series.iter().any(|s| s.output == *y && s.angular));
+        if rewrites_angle && base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
             if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                 let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
                 let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o).and_then(
