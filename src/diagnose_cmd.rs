@@ -276,6 +276,20 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     }
     for n in &d.named {
         let est = with_robust(&n.estimates, &n.robust_sd);
+        if n.origin == obsan_diagnose::ORIGIN_RELATION {
+            let _ = writeln!(
+                s,
+                "named: {}: {} ({}; an input relation: the measured inputs contradict the \
+                 declared restriction, z {:.1}, p {:.1e}; the fit uses the measured inputs, so \
+                 the extended model carries it in its restriction)",
+                n.effect,
+                est.join(", "),
+                n.description,
+                n.lr.sqrt(),
+                n.p_value
+            );
+            continue;
+        }
         let before: Vec<String> = n
             .rms_before
             .iter()
@@ -332,7 +346,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "input check {}: {} (z {:.1}): {}",
+            "input check {}: {} (z {:.1}, {}): {}",
             c.effect,
             if est.is_empty() {
                 c.note.clone()
@@ -340,12 +354,29 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 est.join(", ")
             },
             c.z,
+            c.note,
             if c.significant {
                 "the measured inputs disagree with the commanded relation"
             } else {
                 "consistent"
             }
         );
+        if c.significant {
+            for t in &c.per_trajectory {
+                let est: Vec<String> = t
+                    .estimates
+                    .iter()
+                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "  trajectory {}: {} (z {:.1})",
+                    t.trajectory,
+                    est.join(", "),
+                    t.z
+                );
+            }
+        }
     }
     let _ = writeln!(
         s,

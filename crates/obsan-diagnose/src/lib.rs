@@ -30,10 +30,11 @@ mod workflow;
 
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
-pub use relation::InputCheck;
+pub use relation::{InputCheck, TrajectoryCheck};
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use start::start_values;
 pub use stats::{chi2_1_p, chi2_z, normal_critical};
 pub use workflow::{
-    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival, RIVAL_BIC,
+    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival, ORIGIN_FILE,
+    ORIGIN_RELATION, RIVAL_BIC,
 };

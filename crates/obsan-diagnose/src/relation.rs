@@ -1,7 +1,22 @@
 //! Input checks: an effect on the measured inputs themselves (`compare`
-//! relations of the effects file), estimated by least squares on the inputs.
+//! relations of the effects file), estimated by weighted least squares on
+//! the inputs under the encoder-noise model.
+//!
+//! A measured input `u` held for `dt` carries white noise of variance
+//! `c |u| / dt` (the encoder model of [10], `c = K^2 / r`; see
+//! `obsan_fit::Integration::input_noise`). The relation `u = EXPR(inputs)`
+//! is compared over 1 s block means (averaging keeps a relation linear in
+//! the inputs and removes the errors-in-variables bias of per-sample
+//! noise); each block's residual has variance
+//! `sum_j sum_i g_ij^2 c_i |u_ij| / dt_j / n^2` over its n rows, with `g_ij`
+//! the derivative of `u - EXPR` with respect to input i at row j. Each
+//! trajectory is weighed by its own noise: a trajectory whose compared input
+//! is commanded still (q = 0: `wL = q wR = 0`) has almost noiseless wheel
+//! readings there, so one that turns anyway shows the relation's error
+//! plainly, where an unweighted pool drowns it in the other trajectories'
+//! noise.
 
-use crate::stats::normal_critical;
+use crate::stats::{normal_critical, normal_two_sided};
 use obsan_data::{add_derived_inputs, Dataset};
 use obsan_fit::{minimise, LmOptions};
 use obsan_model::Effect;
@@ -13,73 +28,237 @@ use std::collections::BTreeMap;
 pub struct InputCheck {
     pub effect: String,
     pub description: String,
+    /// The relation's params, each with its sd (scaled by
+    /// `max(1, dispersion)` under stated noise, by the dispersion when the
+    /// noise level is estimated).
     pub estimates: Vec<(String, f64, f64)>,
+    /// The largest |estimate / sd| (0 is the declared relation).
     pub z: f64,
+    /// Two-sided p-value of `z`.
+    pub p_value: f64,
     pub significant: bool,
+    /// "stated" (dataset.json's encoder noise) or "estimated" (one common
+    /// intensity for every input, read from the relation's scatter).
+    pub noise: String,
+    /// Weighted residual sum of squares over its degrees of freedom at the
+    /// estimate: 1 when the encoder model holds; with estimated noise, the
+    /// intensity `c` itself.
+    pub dispersion: f64,
+    /// The same relation fitted on each trajectory alone (linearised at the
+    /// joint estimate, exact for a relation linear in its params).
+    pub per_trajectory: Vec<TrajectoryCheck>,
     pub note: String,
 }
 
+/// One trajectory's own estimate of a relation's params.
+#[derive(Clone, Debug, Serialize)]
+pub struct TrajectoryCheck {
+    pub trajectory: String,
+    pub estimates: Vec<(String, f64, f64)>,
+    pub z: f64,
+}
+
+/// One block: its trajectory, the rows it averages, the residual variance
+/// per unit intensity.
+struct Block {
+    traj: usize,
+    rows: std::ops::Range<usize>,
+    var: f64,
+}
+
+/// The compared input's column and the relation's right side, per row.
+type Sides = (Vec<Option<f64>>, Vec<Option<f64>>);
+
+/// Length of the blocks (s) whose means are compared.
+const BLOCK: f64 = 1.0;
+
+/// Variances below this fraction of the median block variance are raised
+/// to it: a compared input that reads exactly 0 has no encoder noise under
+/// the model (its variance is proportional to |u|), which would weigh it
+/// infinitely; 1e-12 keeps the normal equations finite while still letting
+/// such blocks dominate.
+const VAR_FLOOR: f64 = 1e-12;
+
 /// Fit the params of an input relation `compare u = EXPR` to the measured
-/// inputs of every trajectory where EXPR can be evaluated (Gauss–Newton,
-/// numeric derivatives; residual scatter gives the standard deviations).
-pub(crate) fn input_check(e: &Effect, data: &Dataset, alpha: f64) -> InputCheck {
+/// inputs of every trajectory where EXPR can be evaluated. `noise` holds
+/// each measured input's intensity `c` (empty or all 0: not stated, then
+/// one common intensity is estimated); `alpha` is the test's level.
+pub(crate) fn input_check(
+    e: &Effect,
+    data: &Dataset,
+    noise: &[(String, f64)],
+    alpha: f64,
+) -> InputCheck {
     let mut out = InputCheck {
         effect: e.name.clone(),
         description: e.description.clone(),
         estimates: vec![],
         z: 0.0,
+        p_value: 1.0,
         significant: false,
+        noise: String::new(),
+        dispersion: f64::NAN,
+        per_trajectory: vec![],
         note: String::new(),
     };
     let np = e.params.len();
-    let resid = |theta: &[f64]| -> Vec<f64> {
-        let mut r = Vec::new();
-        for t in &data.trajectories {
-            let mut consts: BTreeMap<String, f64> = t.meta.clone();
-            for (p, v) in e.params.iter().zip(theta) {
-                consts.insert(p.clone(), *v);
-            }
+    let stated = noise.iter().any(|(_, c)| *c > 0.0);
+    out.noise = if stated { "stated" } else { "estimated" }.into();
+    let consts_at = |k: usize, theta: &[f64]| -> BTreeMap<String, f64> {
+        let mut c = data.trajectories[k].meta.clone();
+        for (p, v) in e.params.iter().zip(theta) {
+            c.insert(p.clone(), *v);
+        }
+        c
+    };
+    // The relation's right side per (trajectory, compare) at theta, with the
+    // compared input; None where it cannot be evaluated (e.g. no q).
+    let sides = |theta: &[f64]| -> Vec<Option<Sides>> {
+        let mut v = Vec::new();
+        for (k, t) in data.trajectories.iter().enumerate() {
+            let consts = consts_at(k, theta);
             for (u, rhs) in &e.compares {
                 let mut s = t.inputs.clone();
-                if add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts).is_err() {
+                let ok = add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts);
+                v.push(match (ok, s.column(u), s.column("__cmp")) {
+                    (Ok(()), Some(m), Some(c)) => Some((m.to_vec(), c.to_vec())),
+                    _ => None,
+                });
+            }
+        }
+        v
+    };
+    let nc = e.compares.len();
+    let theta0 = vec![0.0; np];
+    let base = sides(&theta0);
+    // Blocks and their variances per unit intensity, at the declared
+    // relation (theta = 0: the null hypothesis the test is about).
+    let mut blocks: Vec<(usize, Block)> = Vec::new(); // (side index, block)
+    for (k, t) in data.trajectories.iter().enumerate() {
+        let consts = consts_at(k, &theta0);
+        for (ci, (u, rhs)) in e.compares.iter().enumerate() {
+            let si = k * nc + ci;
+            let Some((m, c)) = &base[si] else { continue };
+            let s = &t.inputs;
+            // d(u - EXPR)/d(input i) per row, by a forward difference on the
+            // whole column (EXPR is evaluated row by row).
+            let mut grads: Vec<(usize, Vec<f64>, f64)> = Vec::new(); // input, g per row, c_i
+            for (i, name) in s.columns.iter().enumerate() {
+                let ci = if stated {
+                    noise.iter().find(|n| n.0 == *name).map_or(0.0, |n| n.1)
+                } else {
+                    1.0
+                };
+                if ci <= 0.0 {
                     continue;
                 }
-                let (Some(m), Some(c)) = (s.column(u), s.column("__cmp")) else {
+                let scale = s.values[i]
+                    .iter()
+                    .flatten()
+                    .fold(0.0f64, |a, x| a.max(x.abs()));
+                let h = 1e-6 * (1.0 + scale);
+                let mut p = s.clone();
+                for x in p.values[i].iter_mut().flatten() {
+                    *x += h;
+                }
+                let _ = add_derived_inputs(&mut p, &[("__cmp".into(), rhs.clone())], &consts);
+                let Some(c2) = p.column("__cmp") else {
                     continue;
                 };
-                // Compared over 1 s block means: averaging keeps the relation
-                // (linear in the inputs) and removes the errors-in-variables
-                // bias that per-sample encoder noise would give.
-                let (mut a, mut b, mut n) = (0.0, 0.0, 0usize);
-                let mut t0 = s.t.first().copied().unwrap_or(0.0);
-                for ((x, y), t) in m.iter().zip(c).zip(&s.t) {
-                    if *t >= t0 + 1.0 && n > 0 {
-                        r.push((a - b) / n as f64);
-                        (a, b, n, t0) = (0.0, 0.0, 0, *t);
+                let own = if name == u { 1.0 } else { 0.0 };
+                let g: Vec<f64> = c
+                    .iter()
+                    .zip(c2)
+                    .map(|(a, b)| match (a, b) {
+                        (Some(a), Some(b)) => own - (b - a) / h,
+                        _ => 0.0,
+                    })
+                    .collect();
+                grads.push((i, g, ci));
+            }
+            let n_rows = s.t.len();
+            let dt = |j: usize| -> f64 {
+                if j + 1 < n_rows {
+                    s.t[j + 1] - s.t[j]
+                } else if j > 0 {
+                    s.t[j] - s.t[j - 1]
+                } else {
+                    BLOCK
+                }
+            };
+            let mut start = 0usize;
+            while start < n_rows {
+                let t0 = s.t[start];
+                let mut end = start;
+                while end < n_rows && s.t[end] < t0 + BLOCK {
+                    end += 1;
+                }
+                let mut var = 0.0;
+                let mut n = 0usize;
+                for j in start..end {
+                    if m[j].is_none() || c[j].is_none() {
+                        continue;
                     }
-                    if let (Some(x), Some(y)) = (x, y) {
-                        a += x;
-                        b += y;
-                        n += 1;
+                    n += 1;
+                    let d = dt(j).max(1e-9);
+                    for (col, g, ci) in &grads {
+                        let uj = s.values[*col][j].unwrap_or(0.0).abs();
+                        var += g[j] * g[j] * ci * uj / d;
                     }
                 }
                 if n > 0 {
-                    r.push((a - b) / n as f64);
+                    blocks.push((
+                        si,
+                        Block {
+                            traj: k,
+                            rows: start..end,
+                            var: var / (n * n) as f64,
+                        },
+                    ));
                 }
+                start = end.max(start + 1);
             }
         }
-        r
-    };
-    let theta = vec![0.0; np];
-    let r0 = resid(&theta);
-    if r0.is_empty() {
+    }
+    if blocks.is_empty() {
         out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
         return out;
     }
-    // J = -dr/dtheta by forward differences; the normal equations of the core.
-    let normal = |theta: &[f64]| {
-        let r = resid(theta);
-        let jac: Vec<Vec<f64>> = (0..np)
+    let mut pos: Vec<f64> = blocks
+        .iter()
+        .map(|b| b.1.var)
+        .filter(|v| *v > 0.0)
+        .collect();
+    pos.sort_by(f64::total_cmp);
+    let floor = pos.get(pos.len() / 2).map(|m| m * VAR_FLOOR);
+    let weights: Vec<f64> = blocks
+        .iter()
+        .map(|b| match floor {
+            Some(f) => 1.0 / b.1.var.max(f).sqrt(),
+            None => 1.0, // no noise anywhere: unweighted, scale estimated
+        })
+        .collect();
+    let resid = |theta: &[f64]| -> Vec<f64> {
+        let sd = sides(theta);
+        blocks
+            .iter()
+            .zip(&weights)
+            .map(|((si, b), w)| {
+                let Some((m, c)) = &sd[*si] else { return 0.0 };
+                let (mut a, mut n) = (0.0, 0usize);
+                for j in b.rows.clone() {
+                    if let (Some(x), Some(y)) = (m[j], c[j]) {
+                        a += x - y;
+                        n += 1;
+                    }
+                }
+                w * a / n.max(1) as f64
+            })
+            .collect()
+    };
+    // J = -dr/dtheta by forward differences, rows of the blocks.
+    let jacobian = |theta: &[f64], r: &[f64]| -> Vec<Vec<f64>> {
+        (0..np)
             .map(|i| {
                 let mut t2 = theta.to_vec();
                 let h = 1e-6 * (1.0 + theta[i].abs());
@@ -87,36 +266,92 @@ pub(crate) fn input_check(e: &Effect, data: &Dataset, alpha: f64) -> InputCheck 
                 let r2 = resid(&t2);
                 r.iter().zip(&r2).map(|(a, b)| (a - b) / h).collect()
             })
-            .collect();
+            .collect()
+    };
+    let normal_of = |jac: &[Vec<f64>], r: &[f64], pick: &dyn Fn(usize) -> bool| {
         let jtj = nalgebra::DMatrix::from_fn(np, np, |i, j| {
-            jac[i].iter().zip(&jac[j]).map(|(a, b)| a * b).sum()
+            (0..r.len())
+                .filter(|&b| pick(b))
+                .map(|b| jac[i][b] * jac[j][b])
+                .sum()
         });
-        let jtr =
-            nalgebra::DVector::from_fn(np, |i, _| jac[i].iter().zip(&r).map(|(a, b)| a * b).sum());
+        let jtr = nalgebra::DVector::from_fn(np, |i, _| {
+            (0..r.len())
+                .filter(|&b| pick(b))
+                .map(|b| jac[i][b] * r[b])
+                .sum()
+        });
         (jtj, jtr)
     };
+    let normal = |theta: &[f64]| {
+        let r = resid(theta);
+        let jac = jacobian(theta, &r);
+        normal_of(&jac, &r, &|_| true)
+    };
     let cost = |theta: &[f64]| resid(theta).iter().map(|x| x * x).sum::<f64>();
-    let theta = minimise(&theta, cost, normal, |_| {}, &LmOptions::default()).x;
-    let Some(inv) = normal(&theta).0.try_inverse() else {
+    let theta = minimise(&theta0, cost, normal, |_| {}, &LmOptions::default()).x;
+    let r = resid(&theta);
+    let jac = jacobian(&theta, &r);
+    let (jtj, _) = normal_of(&jac, &r, &|_| true);
+    let Some(inv) = jtj.try_inverse() else {
         out.note = "the inputs do not determine the relation's params".into();
         return out;
     };
-    let r = resid(&theta);
-    let s2 = r.iter().map(|x| x * x).sum::<f64>() / (r.len() as f64 - np as f64).max(1.0);
+    let dof = (r.len() as f64 - np as f64).max(1.0);
+    let dispersion = r.iter().map(|x| x * x).sum::<f64>() / dof;
+    out.dispersion = dispersion;
+    // Stated noise: the model's own variance, inflated if the scatter is
+    // larger (quasi-likelihood); estimated: the scatter sets the level.
+    let s2 = if stated && floor.is_some() {
+        dispersion.max(1.0)
+    } else {
+        dispersion
+    };
     let cov = inv * s2;
     let zcrit = normal_critical(alpha);
-    out.estimates = e
-        .params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (p.clone(), theta[i], cov[(i, i)].max(0.0).sqrt()))
-        .collect();
-    out.z = out
-        .estimates
-        .iter()
-        .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
-        .fold(0.0, f64::max);
+    let with_sd = |x: &[f64], cov: &nalgebra::DMatrix<f64>| -> Vec<(String, f64, f64)> {
+        e.params
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.clone(), x[i], cov[(i, i)].max(0.0).sqrt()))
+            .collect()
+    };
+    let zmax = |est: &[(String, f64, f64)]| {
+        est.iter()
+            .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
+            .fold(0.0, f64::max)
+    };
+    out.estimates = with_sd(&theta, &cov);
+    out.z = zmax(&out.estimates);
+    out.p_value = normal_two_sided(out.z);
     out.significant = out.z > zcrit;
-    out.note = format!("{} input samples", r0.len());
+    // Each trajectory alone: one Gauss-Newton step from the joint estimate
+    // on its own blocks.
+    for (k, t) in data.trajectories.iter().enumerate() {
+        let pick = |b: usize| blocks[b].1.traj == k;
+        if !(0..r.len()).any(pick) {
+            continue;
+        }
+        let (a, g) = normal_of(&jac, &r, &pick);
+        let Some(ai) = a.try_inverse() else { continue };
+        let step = &ai * g;
+        let x: Vec<f64> = (0..np).map(|i| theta[i] + step[i]).collect();
+        let est = with_sd(&x, &(ai * s2));
+        out.per_trajectory.push(TrajectoryCheck {
+            trajectory: t.name.clone(),
+            z: zmax(&est),
+            estimates: est,
+        });
+    }
+    out.note = format!(
+        "{} blocks of {BLOCK} s; encoder noise {}{}",
+        r.len(),
+        out.noise,
+        if stated {
+            format!(", dispersion {dispersion:.2}")
+        } else {
+            format!(", c = {dispersion:.2e} (one for every input)")
+        }
+    );
     out
 }

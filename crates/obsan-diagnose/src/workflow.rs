@@ -106,6 +106,10 @@ pub struct CandidateResult {
 pub struct Named {
     pub effect: String,
     pub description: String,
+    /// Where the effect comes from: [`ORIGIN_FILE`] (the user's effects
+    /// file, fitted in the model) or [`ORIGIN_RELATION`] (a `compare`
+    /// relation the measured inputs contradict, fitted on the inputs).
+    pub origin: String,
     pub estimates: Vec<(String, f64, f64)>,
     /// Cluster-robust sds of the estimates (trajectories as clusters).
     pub robust_sd: Vec<f64>,
@@ -129,6 +133,11 @@ pub struct Rival {
     /// confounded, so naming one rather than the other is arbitrary.
     pub jointly_identifiable: Option<bool>,
 }
+
+/// [`Named::origin`] of an effect from the effects file.
+pub const ORIGIN_FILE: &str = "effects file";
+/// [`Named::origin`] of an input relation the measured inputs contradict.
+pub const ORIGIN_RELATION: &str = "input relation";
 
 /// Candidates whose BIC is within this of the best one's are reported as
 /// rivals ("strong evidence" starts at 6 on Kass and Raftery's scale).
@@ -238,10 +247,19 @@ pub fn diagnose(
         .collect();
     let k = model_effects.len().max(1);
     let crit = normal_critical(o.alpha / k as f64).powi(2);
+    // The relations are weighed by the encoder noise the fit uses (stated
+    // or estimated), else by dataset.json's even under `--input-noise none`
+    // (the fit may ignore it; the inputs' own test should not), else by one
+    // intensity estimated from the relation's scatter.
+    let relation_noise = if noise.is_empty() {
+        input_noise(sys, data)
+    } else {
+        noise.clone()
+    };
     let input_checks: Vec<InputCheck> = effects
         .iter()
         .filter(|e| e.is_input_side())
-        .map(|e| input_check(e, data, o.alpha / k as f64))
+        .map(|e| input_check(e, data, &relation_noise, o.alpha / k as f64))
         .collect();
 
     let which: Vec<usize> = (0..data.trajectories.len().min(o.rank_trajectories)).collect();
@@ -329,6 +347,7 @@ pub fn diagnose(
         named.push(Named {
             effect: res.effect.clone(),
             description: eff.description.clone(),
+            origin: ORIGIN_FILE.into(),
             estimates: res.estimates.clone(),
             robust_sd: res.robust_sd.clone(),
             rms_before: current.rms.clone(),
@@ -407,6 +426,33 @@ pub fn diagnose(
             }
         }
     }
+    // A relation the measured inputs contradict is a missing effect too:
+    // the data were not taken under the declared restriction. Named after
+    // the model's effects (it changes no fit: the fit uses the measured
+    // inputs), and written into the extended model's restriction.
+    let mut extended_sys = current_sys.to_sys_text();
+    for (c, e) in input_checks
+        .iter()
+        .zip(effects.iter().filter(|e| e.is_input_side()))
+    {
+        if !c.significant {
+            continue;
+        }
+        let (lr, p) = (c.z * c.z, c.p_value);
+        named.push(Named {
+            effect: c.effect.clone(),
+            description: c.description.clone(),
+            origin: ORIGIN_RELATION.into(),
+            estimates: c.estimates.clone(),
+            robust_sd: vec![f64::NAN; c.estimates.len()],
+            rms_before: vec![],
+            rms_after: vec![],
+            lr,
+            p_value: p,
+            rivals: vec![],
+        });
+        extended_sys = with_relation(&extended_sys, e, &c.estimates);
+    }
     Ok(Diagnosis {
         model: sys.name.clone(),
         start: start.2.clone(),
@@ -429,7 +475,7 @@ pub fn diagnose(
         input_checks,
         final_fit: current,
         hidden,
-        extended_sys: current_sys.to_sys_text(),
+        extended_sys,
         lr_critical: crit,
     })
 }
@@ -525,7 +571,15 @@ fn candidate(
         // model's biased params is a 40-sigma residual that holds the fit
         // short of the effect's size. Without it the fit finds the right
         // side; the full data then polish that start, and the lower cost wins.
-        if base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
+        // Only an effect that replaces an angle output can make such a jump
+        // (the wrapped residual of a continuous prediction is continuous), so
+        // only those pay for the two extra fits (on MRCLAM a third of the
+        // fits that carry the lag's states).
+        let rewrites_angle = e
+            .outputs
+            .iter()
+            .any(|(y, _)| base_fit.series.iter().any(|s| s.output == *y && s.angular));
+        if rewrites_angle && base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
             if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                 let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
                 let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o).and_then(
@@ -568,4 +622,113 @@ fn candidate(
             (res, None)
         }
     }
+}
+
+/// `text` (a .sys file) with a contradicted input relation written in: its
+/// params as known constants at their estimates, and in every restriction
+/// that sets the compared input, that input's right side replaced by the
+/// relation (its other inputs replaced by the restriction's expressions for
+/// them), e.g. `restrict q: wR = nu, wL = q*nu` with `compare wL = (q +
+/// dq)*wR` becomes `restrict q: wR = nu, wL = ((q + dq)*(nu))`.
+pub(crate) fn with_relation(text: &str, e: &Effect, estimates: &[(String, f64, f64)]) -> String {
+    let mut out = String::new();
+    let mut declared = false;
+    for line in text.lines() {
+        let trimmed = line.trim_start();
+        if !declared && trimmed.starts_with("restrict ") {
+            out.push_str(&relation_consts(e, estimates));
+            declared = true;
+        }
+        let Some(body) = trimmed.strip_prefix("restrict ") else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        let Some((name, rhs)) = body.split_once(':') else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        let parts: Vec<(String, String)> = split_assignments(rhs);
+        let mut changed = parts.clone();
+        for (u, expr) in &e.compares {
+            if let Some(slot) = changed.iter_mut().find(|p| p.0 == *u) {
+                let mut x = expr.clone();
+                for (v, ve) in &parts {
+                    if v != u {
+                        x = replace_ident(&x, v, &format!("({ve})"));
+                    }
+                }
+                slot.1 = format!("({x})");
+            }
+        }
+        let joined: Vec<String> = changed.iter().map(|(a, b)| format!("{a} = {b}")).collect();
+        out.push_str(&format!(
+            "restrict {}: {}\n",
+            name.trim(),
+            joined.join(", ")
+        ));
+    }
+    if !declared {
+        out.push_str(&relation_consts(e, estimates));
+    }
+    out
+}
+
+fn relation_consts(e: &Effect, estimates: &[(String, f64, f64)]) -> String {
+    let mut s = format!(
+        "# named input relation {} (fitted on the measured inputs): {}\n",
+        e.name, e.description
+    );
+    for (p, v, sd) in estimates {
+        s.push_str(&format!("const {p} = {v:e}   # ± {sd:.1e}\n"));
+    }
+    s
+}
+
+/// `a = x, b = f(y, z)` as (name, expression) pairs, split at top-level commas.
+fn split_assignments(s: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0i32, 0usize);
+    let bytes: Vec<char> = s.chars().collect();
+    let mut push = |part: String| {
+        if let Some((a, b)) = part.split_once('=') {
+            out.push((a.trim().to_string(), b.trim().to_string()));
+        }
+    };
+    for (i, c) in bytes.iter().enumerate() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                push(bytes[start..i].iter().collect());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    push(bytes[start..].iter().collect());
+    out
+}
+
+/// `expr` with every whole-word occurrence of the identifier `name` replaced.
+fn replace_ident(expr: &str, name: &str, by: &str) -> String {
+    let is_id = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let chars: Vec<char> = expr.chars().collect();
+    let target: Vec<char> = name.chars().collect();
+    let mut out = String::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let fits = chars[i..].starts_with(&target)
+            && (i == 0 || !is_id(chars[i - 1]))
+            && chars.get(i + target.len()).is_none_or(|c| !is_id(*c));
+        if fits {
+            out.push_str(by);
+            i += target.len();
+        } else {
+            out.push(chars[i]);
+            i += 1;
+        }
+    }
+    out
 }

@@ -208,8 +208,10 @@ fn commanded_ratio_error_shows_in_the_inputs() {
     assert!(c.significant);
     let (_, x, sd) = c.estimates[0];
     assert!((x - 0.02).abs() < 3.0 * sd, "{x} ± {sd}");
-    // The bearings do not see it: the fit uses the measured wheel speeds.
-    assert!(d.named.is_empty(), "{:?}", named(&d));
+    // The bearings do not see it: the fit uses the measured wheel speeds;
+    // it is named as the input relation it is (issue 18), and only that.
+    assert_eq!(named(&d), ["commanded_ratio"]);
+    assert_eq!(d.named[0].origin, obsan_diagnose::ORIGIN_RELATION);
 }
 
 /// Regression: at a large bearing scale error the q = -1 circle's bearings

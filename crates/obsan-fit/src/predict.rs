@@ -29,11 +29,21 @@ pub struct Predictor {
     /// Roots: for each dynamic state k, f0[k] then f_i[k] for each input.
     dyn_tape: Tape,
     out_tape: Tape,
-    /// The roots of `dyn_tape`, then d(root)/d(state_j), root-major: one
-    /// tape so that shared subexpressions (sines, cosines) are computed once.
+    /// The roots of `dyn_tape`, then the structurally non-zero
+    /// d(root)/d(state_j) listed in `jac_entries`: one tape so that shared
+    /// subexpressions (sines, cosines) are computed once.
     dyn_jac_tape: Tape,
-    /// d(output)/d(state_j), output-major.
+    /// Per non-zero derivative of `dyn_jac_tape`: (dynamic state k, term f
+    /// (0 the drift, i + 1 input i's field), state j). The Jacobians of
+    /// these models are sparse (a lag state depends on itself and T, a
+    /// position on the heading and the speed): only these are computed.
+    jac_entries: Vec<(usize, usize, usize)>,
+    /// Per dynamic state k, the dynamic states j < n_dynamic with a
+    /// non-zero d f[k] / d x_j (the columns `J Phi` needs).
+    jac_dyn_cols: Vec<Vec<usize>>,
+    /// The structurally non-zero d(output)/d(state_j), as (output, j).
     out_jac_tape: Tape,
+    out_jac_entries: Vec<(usize, usize)>,
 }
 
 impl Predictor {
@@ -69,16 +79,32 @@ impl Predictor {
             Tape::compile(&nf.ctx, &outs, &vars).expect("outputs use only the state and constants");
         // Exact partial derivatives from the engine, for the sensitivities.
         let mut ctx = nf.ctx.clone();
-        let mut jac_roots = Vec::with_capacity(roots.len() * nf.state_vars.len());
-        for &r in &roots {
-            for &x in &nf.state_vars {
-                jac_roots.push(ctx.diff(r, x));
+        let mut jac_roots = Vec::new();
+        let mut jac_entries = Vec::new();
+        for (ri, &r) in roots.iter().enumerate() {
+            for (j, &x) in nf.state_vars.iter().enumerate() {
+                let d = ctx.diff(r, x);
+                if !ctx.is_zero(d) {
+                    jac_roots.push(d);
+                    jac_entries.push((ri / (m + 1), ri % (m + 1), j));
+                }
             }
         }
-        let mut out_jac_roots = Vec::with_capacity(outs.len() * nf.state_vars.len());
-        for &h in &outs {
-            for &x in &nf.state_vars {
-                out_jac_roots.push(ctx.diff(h, x));
+        let mut jac_dyn_cols = vec![Vec::new(); n_dynamic];
+        for &(k, _, j) in &jac_entries {
+            if j < n_dynamic && !jac_dyn_cols[k].contains(&j) {
+                jac_dyn_cols[k].push(j);
+            }
+        }
+        let mut out_jac_roots = Vec::new();
+        let mut out_jac_entries = Vec::new();
+        for (o, &h) in outs.iter().enumerate() {
+            for (j, &x) in nf.state_vars.iter().enumerate() {
+                let d = ctx.diff(h, x);
+                if !ctx.is_zero(d) {
+                    out_jac_roots.push(d);
+                    out_jac_entries.push((o, j));
+                }
             }
         }
         let all: Vec<_> = roots.iter().chain(&jac_roots).copied().collect();
@@ -97,7 +123,10 @@ impl Predictor {
             dyn_tape,
             out_tape,
             dyn_jac_tape,
+            jac_entries,
+            jac_dyn_cols,
             out_jac_tape,
+            out_jac_entries,
         }
     }
 
@@ -135,29 +164,24 @@ impl Predictor {
         if !jac {
             return;
         }
-        // J (nd x n): sum over the drift and the fields of d f[k] / d x_j times u.
-        for k in 0..nd {
-            for j in 0..n {
-                let base = (k * (m + 1)) * n + j;
-                let mut s = w.jvals[base];
-                for (i, ui) in u.iter().enumerate() {
-                    s += w.jvals[base + (i + 1) * n] * ui;
-                }
-                w.jac[k * n + j] = s;
-            }
+        // J (nd x n): sum over the drift and the fields of d f[k] / d x_j
+        // times u, over the structurally non-zero entries only.
+        w.jac.fill(0.0);
+        for (&(k, f, j), d) in self.jac_entries.iter().zip(&w.jvals) {
+            w.jac[k * n + j] += if f == 0 { *d } else { d * u[f - 1] };
         }
         // dPhi/dt = J * Phi_full, where Phi_full = [Phi; 0 I] (params are constant).
         let phi = &z[nd..];
         for k in 0..nd {
-            for c in 0..n {
-                let mut s = 0.0;
-                for j in 0..nd {
-                    s += w.jac[k * n + j] * phi[j * n + c];
+            let cols = &self.jac_dyn_cols[k];
+            let out = &mut dz[nd + k * n..nd + (k + 1) * n];
+            out.copy_from_slice(&w.jac[k * n..(k + 1) * n]);
+            out[..nd].fill(0.0);
+            for &j in cols {
+                let a = w.jac[k * n + j];
+                for (o, p) in out.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
+                    *o += a * p;
                 }
-                if c >= nd {
-                    s += w.jac[k * n + c];
-                }
-                dz[nd + k * n + c] = s;
             }
         }
         // The delay enters through the inputs: B (the fields) times d(u)/d(tau).
@@ -278,15 +302,17 @@ impl Predictor {
                 .iter()
                 .map(|&c| inputs.values[c].first().copied().flatten().unwrap_or(0.0))
                 .collect();
-            let mut stiff = 0.0f64;
-            for k in 0..nd {
-                let base = (k * (m + 1)) * n + k;
-                let mut d = jv[base].abs();
-                for (i, ui) in u0.iter().enumerate() {
-                    d += (jv[base + (i + 1) * n] * ui).abs();
+            let mut diag = vec![0.0f64; nd];
+            for (&(k, f, j), d) in self.jac_entries.iter().zip(jv) {
+                if j == k {
+                    diag[k] += if f == 0 {
+                        d.abs()
+                    } else {
+                        (d * u0[f - 1]).abs()
+                    };
                 }
-                stiff = stiff.max(d);
             }
+            let stiff = diag.iter().copied().fold(0.0f64, f64::max);
             // max_step 0 means row by row (no merging), not no bound.
             let cap = if opts.max_step > 0.0 {
                 opts.max_step
@@ -420,16 +446,17 @@ impl Predictor {
             }
             if sens {
                 let gy = w.out_jac.eval(&w.x);
-                // dy/dx0 = grad h * Phi_full.
+                // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
                 let phi = &z[nd..];
                 let mut jrow = vec![0.0; no * n];
-                for o in 0..no {
-                    for c in 0..n {
-                        let mut s = if c >= nd { gy[o * n + c] } else { 0.0 };
-                        for j in 0..nd {
-                            s += gy[o * n + j] * phi[j * n + c];
+                for (&(o, j), g) in self.out_jac_entries.iter().zip(gy) {
+                    let row = &mut jrow[o * n..(o + 1) * n];
+                    if j < nd {
+                        for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
+                            *r += g * p;
                         }
-                        jrow[o * n + c] = s;
+                    } else {
+                        row[j] += g;
                     }
                 }
                 jacobians.push(jrow);
