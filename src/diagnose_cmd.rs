@@ -13,7 +13,6 @@ use obsan_model::{EffectLibrary, Kind};
 use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use std::collections::BTreeMap;
 use std::fmt::Write;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -83,16 +82,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         },
         ..DiagnoseOptions::default()
     };
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new_spinner();
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let progress = |m: &str| bar.set_message(m.to_string());
+    let bar = crate::progress::Progress::new("diagnose", 0, "");
+    let progress = |m: &str| bar.set_message(m);
     let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress).map_err(Failure)?;
-    bar.finish_and_clear();
+    drop(bar);
     let text = render_text(&d, &a.data);
     if a.json {
         outln!("{}", serde_json::to_string_pretty(&d)?);
@@ -542,8 +535,11 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     } else {
         obsan_data::MrclamOutputs::Landmarks
     };
+    let bar = crate::progress::Progress::new("import mrclam", 0, "");
+    bar.set_message(&format!("converting robot {}'s logs", a.robot));
     let (mut data, mut truth) =
         obsan_data::mrclam_convert(&text, a.window, a.min_measurements, what)?;
+    drop(bar);
     if a.max_windows > 0 {
         data.trajectories.truncate(a.max_windows);
         truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));
