@@ -370,7 +370,7 @@ fn residual_chart(title: &str, f: &ModelFit) -> Figure {
             xy: s.t.iter().zip(&s.e).map(|(t, e)| (*t, *e)).collect(),
         })
         .collect();
-    chart(title, "time (s)", "residual / sigma", &series)
+    chart(title, "time (s)", "residual / sigma (unitless)", &series)
 }
 
 fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
@@ -411,10 +411,19 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
             .iter()
             .find(|x| x.0 == sb.output)
             .map_or(1.0, |x| x.1);
+        // An angle is drawn in (-pi, pi], its lines cut where they wrap.
+        let angle = |y: f64| if sb.angular { obsan_data::wrap(y) } else { y };
+        let line = |xy: Vec<(f64, f64)>| {
+            if sb.angular {
+                obsan_plot::wrapped_angles(&xy)
+            } else {
+                xy
+            }
+        };
         let measured: Vec<(f64, f64)> =
             sb.t.iter()
                 .zip(sb.predicted.iter().zip(&sb.e))
-                .map(|(t, (y, e))| (*t, y + e * sigma))
+                .map(|(t, (y, e))| (*t, angle(y + e * sigma)))
                 .collect();
         let series = vec![
             Series {
@@ -427,23 +436,23 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
                 name: "nominal",
                 color: COLORS[0],
                 style: Style::Line,
-                xy: sb
-                    .t
-                    .iter()
-                    .copied()
-                    .zip(sb.predicted.iter().copied())
-                    .collect(),
+                xy: line(
+                    sb.t.iter()
+                        .copied()
+                        .zip(sb.predicted.iter().map(|y| angle(*y)))
+                        .collect(),
+                ),
             },
             Series {
                 name: "with effects",
                 color: COLORS[1],
                 style: Style::Line,
-                xy: sa
-                    .t
-                    .iter()
-                    .copied()
-                    .zip(sa.predicted.iter().copied())
-                    .collect(),
+                xy: line(
+                    sa.t.iter()
+                        .copied()
+                        .zip(sa.predicted.iter().map(|y| angle(*y)))
+                        .collect(),
+                ),
             },
         ];
         let stem = format!("fit_{k}_{}", sb.output);
@@ -452,7 +461,11 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
             &chart(
                 &format!("{} on {}", sb.output, sb.trajectory),
                 "time (s)",
-                &sb.output,
+                &if sb.angular {
+                    format!("{} (rad)", sb.output)
+                } else {
+                    format!("{} (units of outputs.csv)", sb.output)
+                },
                 &series,
             ),
         ));

@@ -887,22 +887,6 @@ fn print_table(
     outln!();
 }
 
-/// Angles wrapped to (-pi, pi]: lift the pen where the curve wraps, so that
-/// a line chart does not draw the jump.
-fn unwrapped_breaks(xy: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
-    let mut out = Vec::with_capacity(xy.len());
-    for p in xy {
-        if let Some(last) = out.last().copied() {
-            let (_, y0): (f64, f64) = last;
-            if (p.1 - y0).abs() > std::f64::consts::PI {
-                out.push((f64::NAN, f64::NAN));
-            }
-        }
-        out.push(p);
-    }
-    out
-}
-
 /// The paper's Figures 5-7 for each trajectory, as PNG and SVG: the
 /// observation function with the nodes (5c-d, 6a-b), sigma(s_c) of
 /// Algorithm 1 (5e-f, 6c-d), and observed vs DET vs LS vs ML (6e-f).
@@ -985,13 +969,13 @@ fn write_figures(
                 name: "DET",
                 color: COLORS[1],
                 style: Style::Line,
-                xy: unwrapped_breaks(zip(&c.det)),
+                xy: plot::wrapped_angles(&zip(&c.det)),
             },
             plot::Series {
                 name: "LS",
                 color: BLACK,
                 style: Style::Line,
-                xy: unwrapped_breaks(zip(&c.ls)),
+                xy: plot::wrapped_angles(&zip(&c.ls)),
             },
         ];
         if let Some(ml) = &c.ml {
@@ -999,7 +983,7 @@ fn write_figures(
                 name: "ML",
                 color: COLORS[2],
                 style: Style::Line,
-                xy: unwrapped_breaks(zip(ml)),
+                xy: plot::wrapped_angles(&zip(ml)),
             });
         }
         let fig = chart(
