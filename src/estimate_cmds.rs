@@ -273,7 +273,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
             let f = (o.k_encoder > 0.0)
                 .then(|| crlb_sd(&o, &p, true))
                 .transpose()?;
-            let (data, _) = simulate(&o).map_err(Failure)?;
+            let (data, _) = simulate(&o)?;
             (
                 format!(
                     "simulated set-up, bearing noise {} deg, encoder K {} m^1/2",

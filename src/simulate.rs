@@ -44,7 +44,7 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
         profile: a
             .speed_profile
             .parse()
-            .map_err(|e: String| Failure(format!("--speed-profile {e}")))?,
+            .map_err(|e| Failure(format!("--speed-profile {e}")))?,
         bearing_rate: a.bearing_rate,
         bearings: a.bearings,
         d0: a.d0,
@@ -108,7 +108,7 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
 
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
     let o = sim_options(&a.sim)?;
-    let (data, truth) = simulate(&o).map_err(Failure)?;
+    let (data, truth) = simulate(&o).map_err(Failure::from)?;
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;
     write_folder_atomically(&a.out, a.force, &files)?;

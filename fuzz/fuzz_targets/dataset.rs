@@ -90,7 +90,7 @@ fuzz_target!(|data: &[u8]| {
             }
         }
         Err(e) => {
-            assert!(!e.message.is_empty());
+            assert!(!e.message().is_empty());
             if let Some(f) = all.iter().find(|f| f.path == e.file) {
                 if let Some(row) = e.row {
                     assert!(row >= 1 && row <= lines(&f.bytes), "{e}: beyond the file");

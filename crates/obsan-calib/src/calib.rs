@@ -2,7 +2,8 @@
 //! parameters (section V-C), the metric step (end of V-C), and the starting
 //! state of each trajectory (the initialisation of maximum likelihood).
 
-use crate::circle::{Closed, Degenerate};
+use crate::circle::Closed;
+use crate::error::CalibError::{self, Degenerate};
 use crate::ArcData;
 use nalgebra::{DMatrix, DVector, SMatrix};
 use obsan_data::{wrap, Series, Trajectory};
@@ -73,7 +74,7 @@ pub struct Modes {
 /// `(1 + q delta) cos L_q` so that no row blows up), then weighted
 /// Gauss-Newton on all modes at once (least squares when there are more than
 /// three trajectories), which also gives the covariance.
-pub fn combine(modes_in: &[Modes]) -> Result<Calibration, Degenerate> {
+pub fn combine(modes_in: &[Modes]) -> Result<Calibration, CalibError> {
     let mut qs: Vec<f64> = modes_in.iter().map(|m| m.q).collect();
     qs.sort_by(f64::total_cmp);
     qs.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
@@ -173,7 +174,7 @@ fn lstsq(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
 }
 
 /// Weighted Gauss-Newton (Levenberg-Marquardt damped) of the modes model.
-fn refine(modes_in: &[Modes], init: &[f64; 5]) -> Result<Calibration, Degenerate> {
+fn refine(modes_in: &[Modes], init: &[f64; 5]) -> Result<Calibration, CalibError> {
     // Whitening of each trajectory's (xi_q, L) residual.
     let whiten: Vec<SMatrix<f64, 2, 2>> = modes_in
         .iter()
@@ -296,7 +297,7 @@ impl Metric {
 /// Curve length `s = integral of wR dt` at the measured bearings of a
 /// trajectory (inputs hold from their row's t to the next), with the
 /// bearings. `input` names the right-wheel column and `output` the bearing.
-pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, String> {
+pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, CalibError> {
     let wr = column(&t.inputs, input)?;
     let beta = column(&t.outputs, output)?;
     let mut s = Vec::new();
@@ -332,8 +333,9 @@ pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, St
     })
 }
 
-fn column<'a>(s: &'a Series, name: &str) -> Result<&'a [Option<f64>], String> {
-    s.column(name).ok_or_else(|| format!("no column '{name}'"))
+fn column<'a>(s: &'a Series, name: &str) -> Result<&'a [Option<f64>], CalibError> {
+    s.column(name)
+        .ok_or_else(|| CalibError::MissingColumn(name.to_string()))
 }
 
 /// `(A, V)` of eq. (23) from the state `(mu, gamma)` of eq. (16) and the

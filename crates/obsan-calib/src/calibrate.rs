@@ -4,7 +4,8 @@
 
 use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
-use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Degenerate, Det};
+use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Det};
+use crate::error::CalibError::{self, Degenerate};
 use nalgebra::{Matrix4, SMatrix};
 use obsan_data::{wrap, Dataset, Trajectory};
 use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
@@ -237,7 +238,7 @@ pub fn calibrate(
     data: &Dataset,
     predictor: Option<&Predictor>,
     o: &CalibrateOptions,
-) -> Result<CalibrationReport, Degenerate> {
+) -> Result<CalibrationReport, CalibError> {
     let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
     // Per trajectory: DET always (it initialises everything else).
     let mut trajs = Vec::new();
@@ -313,7 +314,7 @@ pub fn calibrate(
     }
     let mut ml = None;
     if o.method == Method::Ml {
-        let p = predictor.ok_or_else(|| Degenerate("ml needs the model (calib.sys)".into()))?;
+        let p = predictor.ok_or(CalibError::NoModel)?;
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
@@ -343,15 +344,11 @@ pub fn calibrate(
 
 /// DET on one trajectory (it initialises every method), with the checks that
 /// its loop is covered: the nodes and mirror points inside the data.
-fn det_trajectory(t: &Trajectory, o: &CalibrateOptions) -> Result<TrajectoryEstimate, Degenerate> {
-    let q = *t.meta.get("q").ok_or_else(|| {
-        Degenerate(format!(
-            "trajectory '{}': no q in its meta.json (the commanded wheel-speed ratio of the circle, eq. 17)",
-            t.name
-        ))
+fn det_trajectory(t: &Trajectory, o: &CalibrateOptions) -> Result<TrajectoryEstimate, CalibError> {
+    let q = *t.meta.get("q").ok_or_else(|| CalibError::NoQ {
+        trajectory: t.name.clone(),
     })?;
-    let arc = arc_data(t, &o.input, &o.output)
-        .map_err(|e| Degenerate(format!("trajectory '{}': {e}", t.name)))?;
+    let arc = arc_data(t, &o.input, &o.output).map_err(|e| e.in_trajectory(&t.name))?;
     let d = det(&arc).map_err(|e| {
         Degenerate(format!(
             "trajectory '{}' (q = {q}): {e}; its xi_q and L are unknown, so phi, psi, eta, delta, xi cannot all be estimated",
@@ -404,7 +401,7 @@ fn ml_refine(
     modes: &[Modes],
     trajs: &mut [TrajectoryEstimate],
     calibration: &Calibration,
-) -> Result<(Calibration, FitResult), Degenerate> {
+) -> Result<(Calibration, FitResult), CalibError> {
     let fts = FitTrajectory::all(p, data);
     // Each trajectory's (mu0, gamma0) from its closed form and a calibration.
     let states_for = |c: &Calibration| -> Vec<Vec<f64>> {
@@ -418,8 +415,7 @@ fn ml_refine(
             .collect()
     };
     let states = states_for(calibration);
-    let mut r = fit(p, &fts, &calibration.values(), &states, opts)
-        .map_err(|e| Degenerate(format!("maximum likelihood failed: {e}")))?;
+    let mut r = fit(p, &fts, &calibration.values(), &states, opts).map_err(CalibError::Ml)?;
     // Section V-C can fail (a nearly straight "circle": q + dq close to
     // rR / rL); it then says eta ~ 0, a sensor metres from the axle, and
     // ML from there can stop in a wrong minimum. Screen a small grid of
@@ -510,12 +506,9 @@ fn cekf_modes(
     sigma: f64,
     enc_var: f64,
     trajs: &mut [TrajectoryEstimate],
-) -> Result<Vec<Modes>, Degenerate> {
+) -> Result<Vec<Modes>, CalibError> {
     if sigma.is_nan() {
-        return Err(Degenerate(
-            "cekf needs the bearing noise: give it in dataset.json (noise.beta) or use ls/ml"
-                .into(),
-        ));
+        return Err(CalibError::NoBearingNoise);
     }
     let mut out = Vec::new();
     for (i, (tr, t)) in trajs.iter_mut().zip(&data.trajectories).enumerate() {
@@ -525,8 +518,8 @@ fn cekf_modes(
                 states,
                 relative_sd,
             } => {
-                let s = states.get(i).ok_or_else(|| {
-                    Degenerate(format!("no CEKF initial state for trajectory {}", tr.name))
+                let s = states.get(i).ok_or_else(|| CalibError::NoCekfStart {
+                    trajectory: tr.name.clone(),
                 })?;
                 (nalgebra::Vector4::from(*s), *relative_sd)
             }
@@ -538,7 +531,7 @@ fn cekf_modes(
             rel.max(0.05).powi(2),
         ));
         let r = cekf(t, &o.input, &o.output, x0, p0, sigma, enc_var)
-            .map_err(|e| Degenerate(format!("trajectory '{}': {e}", tr.name)))?;
+            .map_err(|e| e.in_trajectory(&tr.name))?;
         tr.closed.xi_q = r.x[2];
         tr.closed.l = r.x[3];
         tr.modes_cov = Some(r.cov.fixed_view::<2, 2>(2, 2).into_owned());
@@ -649,7 +642,7 @@ pub fn figure_curves(
     predictor: &Predictor,
     o: &CalibrateOptions,
     done: &CalibrationReport,
-) -> Result<Vec<FigureCurves>, Degenerate> {
+) -> Result<Vec<FigureCurves>, CalibError> {
     let with = |m: Method| CalibrateOptions {
         method: m,
         ..o.clone()
@@ -733,7 +726,7 @@ pub fn dataset_crlb(
     data: &Dataset,
     predictor: &Predictor,
     o: &CalibrateOptions,
-) -> Result<DatasetCrlb, Degenerate> {
+) -> Result<DatasetCrlb, CalibError> {
     let run = calibrate(
         data,
         Some(predictor),
@@ -742,13 +735,10 @@ pub fn dataset_crlb(
             ..o.clone()
         },
     )?;
-    let f = run
-        .ml
-        .as_ref()
-        .ok_or_else(|| Degenerate("maximum likelihood gave no estimate".into()))?;
+    let f = run.ml.as_ref().ok_or(CalibError::NoMlEstimate)?;
     let fts = FitTrajectory::all(predictor, data);
     let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
-    let bound = |noise: Option<Vec<f64>>| -> Result<[f64; 5], Degenerate> {
+    let bound = |noise: Option<Vec<f64>>| -> Result<[f64; 5], CalibError> {
         let opts = FitOptions {
             max_iterations: 0,
             cost_tolerance: 0.0,
@@ -757,8 +747,8 @@ pub fn dataset_crlb(
             max_step: o.ml_max_step,
             input_noise: noise,
         };
-        let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
-            .map_err(|e| Degenerate(e.to_string()))?;
+        let cov =
+            crlb(predictor, &fts, &f.params, &f.initial_states, &opts).map_err(CalibError::Crlb)?;
         Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
     };
     let bearing = bound(None)?;

@@ -5,6 +5,7 @@
 //! with the encoder error model of [10] as input noise (`var(ds) = K^2 |ds| / r`).
 
 use crate::circle::Closed;
+use crate::error::CalibError;
 use nalgebra::{Matrix4, Vector4};
 use obsan_data::{wrap, Trajectory};
 use std::f64::consts::PI;
@@ -44,15 +45,15 @@ pub fn cekf(
     p0: Matrix4<f64>,
     sigma_beta: f64,
     encoder_var_per_rad: f64,
-) -> Result<CekfResult, String> {
+) -> Result<CekfResult, CalibError> {
     let wr = t
         .inputs
         .column(input)
-        .ok_or_else(|| format!("no input column '{input}'"))?;
+        .ok_or_else(|| CalibError::MissingInput(input.to_string()))?;
     let beta = t
         .outputs
         .column(output)
-        .ok_or_else(|| format!("no output column '{output}'"))?;
+        .ok_or_else(|| CalibError::MissingOutput(output.to_string()))?;
     let (mut x, mut p) = (x0, p0);
     let r = sigma_beta * sigma_beta;
     let mut row = 0usize;
@@ -98,7 +99,7 @@ pub fn cekf(
             p = fx * p * fx.transpose() + fu * fu.transpose() * (encoder_var_per_rad * ds.abs());
             tcur = next;
             if x.iter().any(|v| !v.is_finite()) {
-                return Err(format!("the filter diverged at t = {tcur}"));
+                return Err(CalibError::FilterDiverged { t: tcur });
             }
         }
         let Some(b) = beta[k] else { continue };

@@ -12,6 +12,7 @@
 //! (`alpha` the atan2 term), hence by (24)
 //! `V = xi_q + d(alpha)/ds`, the values `A0`, `V0` at s = 0 and `c` by (31).
 
+use crate::error::CalibError::{self, Degenerate};
 use nalgebra::{DMatrix, DVector, Matrix4, SMatrix, SVector};
 use obsan_data::wrap;
 use obsan_fit::{minimise, LmOptions};
@@ -86,16 +87,6 @@ impl Closed {
             t0: wrap(v[2]),
             eps: v[3],
         }
-    }
-}
-
-/// Why a trajectory cannot give its observable modes.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Degenerate(pub String);
-
-impl std::fmt::Display for Degenerate {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
     }
 }
 
@@ -477,7 +468,7 @@ fn best_l(c: Closed, ls: &[f64], d: &ArcData) -> (f64, Closed) {
 /// non-iterative, initialisation-free reading of the period that also works
 /// when the data cover a single loop, where a period cannot be seen by
 /// comparing the signal with a shifted copy of itself.
-pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
+pub fn det(d: &ArcData) -> Result<Det, CalibError> {
     let n = d.s.len();
     if n < 10 {
         return Err(Degenerate(format!(
@@ -567,7 +558,7 @@ pub fn det(d: &ArcData) -> Result<Det, Degenerate> {
 /// DET with the period known (`xi_q` from the other trajectories, for
 /// example): Algorithm 1, eqs. (37) and (38) at that `xi_q`. For a
 /// trajectory whose own period reading failed.
-pub fn det_at(d: &ArcData, xi_q: f64) -> Result<Det, Degenerate> {
+pub fn det_at(d: &ArcData, xi_q: f64) -> Result<Det, CalibError> {
     let n = d.s.len();
     if n < 10 || !xi_q.is_finite() || xi_q == 0.0 {
         return Err(Degenerate(format!(
@@ -605,7 +596,7 @@ fn det_from(
     vec: &SVector<f64, 4>,
     span: f64,
     interp: &Interp,
-) -> Result<Det, Degenerate> {
+) -> Result<Det, CalibError> {
     let n = d.s.len();
     let period = 2.0 * PI / xi_q.abs();
     // Algorithm 1: sigma(s_c) of beta(s) + beta(2 s_c - s) (mod pi) for s_c

@@ -22,6 +22,7 @@ mod cekf;
 mod circle;
 #[cfg(test)]
 mod circle_tests;
+mod error;
 mod montecarlo;
 mod sim;
 
@@ -31,6 +32,7 @@ pub use calibrate::{
     CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
 };
 pub use circle::{ArcData, Closed, Det};
+pub use error::CalibError;
 pub use montecarlo::{
     cell_bounds, crlb_sd, merge_runs, run_cell, run_runs, run_seed, shard_runs, summarize, table,
     Cell, CellBounds, CellResult, McMethod, MethodStats, MontecarloError, RunOutcome, RunRecord,

@@ -8,40 +8,33 @@
 
 use crate::calib::av_from_state;
 use crate::calibrate::{calibrate, CalibrateOptions, CekfInit, Method};
+use crate::error::CalibError;
 use crate::sim::{simulate, SimOptions, Truth};
 use obsan_data::{wrap, Dataset};
 use obsan_fit::{crlb, FitOptions, FitTrajectory, Predictor};
 use rayon::prelude::*;
 use std::ops::Range;
 
-/// Why a Monte Carlo cell could not be computed or assembled.
+/// Why run records could not be assembled into a cell's table. (Failures of
+/// the simulator and the bound are [`CalibError`]s.)
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub enum MontecarloError {
-    /// The simulator refused the set-up (its message).
-    Simulate(String),
-    /// The Cramér–Rao bound could not be computed.
-    Bound(obsan_fit::FitError),
     /// Records given to [`summarize`] or [`merge_runs`] are not the runs
-    /// 0, 1, ..., n-1 of the cell, each with one outcome per method.
+    /// 0, 1, ..., n-1 of the cell, each with one outcome per method and the
+    /// table's columns: the message says where they differ.
     Records(String),
 }
 
 impl std::fmt::Display for MontecarloError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            MontecarloError::Simulate(s) | MontecarloError::Records(s) => f.write_str(s),
-            MontecarloError::Bound(e) => write!(f, "{e}"),
+            MontecarloError::Records(s) => f.write_str(s),
         }
     }
 }
 
 impl std::error::Error for MontecarloError {}
-
-impl From<obsan_fit::FitError> for MontecarloError {
-    fn from(e: obsan_fit::FitError) -> MontecarloError {
-        MontecarloError::Bound(e)
-    }
-}
 
 impl From<MontecarloError> for String {
     fn from(e: MontecarloError) -> String {
@@ -351,7 +344,7 @@ fn one(
             relative_sd: 0.3,
         };
     }
-    let r = calibrate(data, Some(predictor), &o).map_err(|e| e.0)?;
+    let r = calibrate(data, Some(predictor), &o).map_err(|e| e.to_string())?;
     let est = r.calibration.values();
     if !modes {
         return Ok((param_errors(&est, truth), param_estimates(&est)));
@@ -387,14 +380,14 @@ pub fn crlb_sd(
     sim: &SimOptions,
     predictor: &Predictor,
     with_encoder_noise: bool,
-) -> Result<Vec<f64>, MontecarloError> {
+) -> Result<Vec<f64>, CalibError> {
     let clean = SimOptions {
         sigma_beta: 0.0,
         k_encoder: 0.0,
         iota: 0.0,
         ..sim.clone()
     };
-    let (data, truth) = simulate(&clean).map_err(MontecarloError::Simulate)?;
+    let (data, truth) = simulate(&clean)?;
     let fts = FitTrajectory::all(predictor, &data);
     let states: Vec<Vec<f64>> = truth
         .trajectories
@@ -415,7 +408,7 @@ pub fn crlb_sd(
         input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),
     };
     let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
-    let cov = crlb(predictor, &fts, &params, &states, &opts)?;
+    let cov = crlb(predictor, &fts, &params, &states, &opts).map_err(CalibError::Crlb)?;
     let sd: Vec<f64> = (0..5).map(|i| cov[i][i].max(0.0).sqrt()).collect();
     Ok(vec![
         sd[0].to_degrees(),
@@ -449,7 +442,7 @@ pub fn run_runs(
                     .iter()
                     .map(|&m| one(m, &data, &truth, predictor, modes))
                     .collect(),
-                Err(e) => cell.methods.iter().map(|_| Err(e.clone())).collect(),
+                Err(e) => cell.methods.iter().map(|_| Err(e.to_string())).collect(),
             };
             tick();
             RunRecord { run: r, outcomes }

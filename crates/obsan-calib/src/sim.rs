@@ -3,6 +3,7 @@
 //! (error model of [10]) and a bearing sensor observing one feature at the
 //! origin, plus the named effects of the discrepancy workflow.
 
+use crate::error::CalibError;
 use obsan_data::{wrap, Dataset, DatasetMeta, Series, Trajectory, MIN_OUTPUT_SAMPLES};
 use obsan_fit::Rng;
 use serde::Serialize;
@@ -26,9 +27,9 @@ pub enum SpeedProfile {
 }
 
 impl std::str::FromStr for SpeedProfile {
-    type Err = String;
+    type Err = CalibError;
     /// `constant`, `sine:AMPLITUDE:PERIOD` or `stopgo:RUN:PAUSE` (seconds).
-    fn from_str(s: &str) -> Result<SpeedProfile, String> {
+    fn from_str(s: &str) -> Result<SpeedProfile, CalibError> {
         let parts: Vec<&str> = s.split(':').collect();
         let num = |x: &str| x.parse::<f64>().ok().filter(|v| v.is_finite());
         match parts.as_slice() {
@@ -37,21 +38,21 @@ impl std::str::FromStr for SpeedProfile {
                 (Some(amplitude), Some(period)) if period > 0.0 && amplitude.abs() < 1.0 => {
                     Ok(SpeedProfile::Sine { amplitude, period })
                 }
-                _ => Err(format!(
+                _ => Err(CalibError::SpeedProfile(format!(
                     "{s}: sine:AMPLITUDE:PERIOD needs |AMPLITUDE| < 1 and PERIOD > 0"
-                )),
+                ))),
             },
             ["stopgo", r, p] => match (num(r), num(p)) {
                 (Some(run), Some(pause)) if run > 0.0 && pause >= 0.0 => {
                     Ok(SpeedProfile::StopGo { run, pause })
                 }
-                _ => Err(format!(
+                _ => Err(CalibError::SpeedProfile(format!(
                     "{s}: stopgo:RUN:PAUSE needs RUN > 0 and PAUSE >= 0 (seconds)"
-                )),
+                ))),
             },
-            _ => Err(format!(
+            _ => Err(CalibError::SpeedProfile(format!(
                 "{s}: expected constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE"
-            )),
+            ))),
         }
     }
 }
@@ -75,7 +76,7 @@ pub struct Effects {
 
 impl Effects {
     /// Set an effect by name (`--effect NAME=VALUE`).
-    pub fn set(&mut self, name: &str, value: f64) -> Result<(), String> {
+    pub fn set(&mut self, name: &str, value: f64) -> Result<(), CalibError> {
         let slot = match name {
             "time_offset" => &mut self.time_offset,
             "bearing_scale" => &mut self.bearing_scale,
@@ -83,11 +84,7 @@ impl Effects {
             "wheel_slip" => &mut self.wheel_slip,
             "radius_change" => &mut self.radius_change,
             "bearing_bias" => &mut self.bearing_bias,
-            _ => {
-                return Err(format!(
-                    "unknown effect '{name}' (known: time_offset, bearing_scale, bearing_distortion, wheel_slip, radius_change, bearing_bias)"
-                ))
-            }
+            _ => return Err(CalibError::UnknownEffect(name.to_string())),
         };
         *slot = value;
         Ok(())
@@ -260,16 +257,19 @@ fn speed(profile: &SpeedProfile, nu: f64, t: f64) -> f64 {
 }
 
 /// Simulate the dataset and its truth.
-pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
+pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
     let rb = &o.robot;
     if [rb.r_right, rb.r_left, rb.wheel_base, rb.rho]
         .iter()
         .any(|v| v.is_nan() || *v <= 0.0)
     {
-        return Err("wheel radii, wheel base and rho must be positive".into());
+        return Err(CalibError::RobotNotPositive);
     }
     if o.d0 <= rb.rho {
-        return Err(format!("the initial distance d0 = {} must exceed rho = {} (the feature would be inside the robot)", o.d0, rb.rho));
+        return Err(CalibError::FeatureInsideRobot {
+            d0: o.d0,
+            rho: rb.rho,
+        });
     }
     if o.encoder_rate.is_nan()
         || o.bearing_rate.is_nan()
@@ -277,7 +277,7 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
         || o.bearing_rate <= 0.0
         || o.encoder_rate < o.bearing_rate
     {
-        return Err("rates must be positive, the encoder rate at least the bearing rate".into());
+        return Err(CalibError::Rates);
     }
     let dt = 1.0 / o.encoder_rate;
     let mut trajectories = Vec::new();
@@ -352,13 +352,12 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
                 break;
             }
             if t > o.max_duration {
-                let qs = q.map_or(String::new(), |q| format!("q = {q} "));
-                return Err(format!(
-                    "degenerate trajectory: {qs}turned only {:.3} rad in {} s (q = rR/rL = {:.4} is a straight line); no full loop",
-                    turned.abs(),
-                    o.max_duration,
-                    rb.r_right / rb.r_left
-                ));
+                return Err(CalibError::NoLoop {
+                    q: *q,
+                    turned: turned.abs(),
+                    max_duration: o.max_duration,
+                    ratio: rb.r_right / rb.r_left,
+                });
             }
         }
         let duration = t;
@@ -398,11 +397,12 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), String> {
         }
         // The readers refuse such a trajectory (data.rs): refuse to write it.
         if outputs.len() < MIN_OUTPUT_SAMPLES {
-            return Err(format!(
-                "trajectory {name}: only {} bearings in its {duration:.1} s, and a dataset needs at least {} per trajectory: raise the bearing rate (or --bearings)",
-                outputs.len(),
-                MIN_OUTPUT_SAMPLES
-            ));
+            return Err(CalibError::TooFewBearings {
+                trajectory: name.clone(),
+                bearings: outputs.len(),
+                duration,
+                needed: MIN_OUTPUT_SAMPLES,
+            });
         }
         let mut meta = BTreeMap::new();
         if let Some(q) = q {

@@ -199,14 +199,14 @@ fn real_errors_stay_located() {
         assert_eq!(e.file, f, "{e}");
         assert_eq!(e.row, row, "{e}");
         assert_eq!(e.column.as_deref(), col, "{e}");
-        assert!(e.message.contains(msg), "{e}");
+        assert!(e.message().contains(msg), "{e}");
     }
     let mut bytes = ins.into_bytes();
     let at = bytes.iter().position(|&b| b == b'\n').unwrap() + 1;
     bytes.splice(at..at, [b'\n', b'\r', 0xff, 0xfe]);
     let e = read(&one(bytes, outs.clone())).unwrap_err();
     assert_eq!((e.file.as_str(), e.row), ("a/inputs.csv", Some(4)), "{e}");
-    assert!(e.message.contains("invalid UTF-8"), "{e}");
+    assert!(e.message().contains("invalid UTF-8"), "{e}");
     let mut f = one(plain_inputs(), outs);
     f.meta = file("dataset.json", "{\"d0\": 1e308}");
     let e = read(&f).unwrap_err();
@@ -380,7 +380,7 @@ proptest! {
                 if let Some(row) = e.row {
                     prop_assert!(row >= 1 && row <= lines(&files[k.unwrap()]), "{} (lines {})", e, lines(&files[k.unwrap()]));
                 }
-                prop_assert!(!e.message.is_empty());
+                prop_assert!(!e.message().is_empty());
             }
         }
     }

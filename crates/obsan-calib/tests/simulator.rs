@@ -201,6 +201,7 @@ fn effects_and_errors() {
         .effects
         .set("nope", 1.0)
         .unwrap_err()
+        .to_string()
         .contains("unknown effect"));
     // A straight line never completes a loop: a clear error, not a wrong dataset.
     let straight = SimOptions {
@@ -210,12 +211,16 @@ fn effects_and_errors() {
     };
     assert!(simulate(&straight)
         .unwrap_err()
+        .to_string()
         .contains("degenerate trajectory"));
     let near = SimOptions {
         d0: 0.2,
         ..noise_free(vec![0.0])
     };
-    assert!(simulate(&near).unwrap_err().contains("must exceed rho"));
+    assert!(simulate(&near)
+        .unwrap_err()
+        .to_string()
+        .contains("must exceed rho"));
 }
 
 #[test]
@@ -296,7 +301,7 @@ fn csv_roundtrip_and_rejections() {
     ];
     for (text, want, row) in cases {
         let e = Series::parse_csv(text, "in.csv", &["wR", "wL"], false).unwrap_err();
-        assert!(e.message.contains(want), "{text:?}: {e}");
+        assert!(e.message().contains(want), "{text:?}: {e}");
         assert_eq!(e.row, row, "{text:?}");
         assert!(e.to_string().starts_with("in.csv"));
     }

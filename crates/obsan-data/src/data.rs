@@ -6,29 +6,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt;
 
-/// A rejected file, with the place.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DataError {
-    pub file: String,
-    /// 1-based line number in the file (the header is line 1).
-    pub row: Option<usize>,
-    pub column: Option<String>,
-    pub message: String,
-}
-
-impl fmt::Display for DataError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file)?;
-        if let Some(r) = self.row {
-            write!(f, ":{r}")?;
-        }
-        if let Some(c) = &self.column {
-            write!(f, " (column {c})")?;
-        }
-        write!(f, ": {}", self.message)
-    }
-}
-impl std::error::Error for DataError {}
+use crate::error::{DataError, DataErrorKind as K, DerivedInputError};
 
 /// A time series: a time column and named value columns (`None` = not measured).
 #[derive(Clone, Debug, PartialEq)]
@@ -144,11 +122,8 @@ fn parse_rows(
     allow_empty: bool,
 ) -> Result<(Series, Vec<DataWarning>, Vec<usize>), DataError> {
     {
-        let err = |row: Option<usize>, column: Option<String>, message: String| DataError {
-            file: file.to_string(),
-            row,
-            column,
-            message,
+        let err = |row: Option<usize>, column: Option<String>, kind: K| {
+            DataError::new(file, row, column, kind)
         };
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lines = split_lines(text).into_iter().filter(|(_, l)| {
@@ -156,11 +131,7 @@ fn parse_rows(
             !l.is_empty() && !l.starts_with('#')
         });
         let Some((hrow, header)) = lines.next() else {
-            return Err(err(
-                None,
-                None,
-                "the file is empty: expected a header line t,...".into(),
-            ));
+            return Err(err(None, None, K::EmptyFile));
         };
         let mut cols =
             split_fields(header).map_err(|(c, m)| err(Some(hrow), Some(format!("{c}")), m))?;
@@ -172,26 +143,17 @@ fn parse_rows(
             return Err(err(
                 Some(hrow),
                 None,
-                format!(
-                    "the first column must be 't', found '{}'",
-                    cols.first().map_or("", |s| s.as_str())
-                ),
+                K::FirstColumn {
+                    found: cols.first().cloned().unwrap_or_default(),
+                },
             ));
         }
         for (i, c) in cols.iter().enumerate() {
             if c.is_empty() {
-                return Err(err(
-                    Some(hrow),
-                    None,
-                    format!("column {} of the header has no name", i + 1),
-                ));
+                return Err(err(Some(hrow), None, K::UnnamedColumn { index: i + 1 }));
             }
             if cols[..i].contains(c) {
-                return Err(err(
-                    Some(hrow),
-                    Some(c.clone()),
-                    "this column appears twice".into(),
-                ));
+                return Err(err(Some(hrow), Some(c.clone()), K::DuplicateColumn));
             }
         }
         for r in required {
@@ -199,7 +161,10 @@ fn parse_rows(
                 return Err(err(
                     Some(hrow),
                     Some(r.to_string()),
-                    format!("missing column '{r}' (the header is '{}')", cols.join(",")),
+                    K::MissingColumn {
+                        name: r.to_string(),
+                        header: cols.join(","),
+                    },
                 ));
             }
         }
@@ -214,7 +179,10 @@ fn parse_rows(
                 return Err(err(
                     Some(row),
                     None,
-                    format!("{} fields, the header has {}", cells.len(), cols.len()),
+                    K::FieldCount {
+                        found: cells.len(),
+                        expected: cols.len(),
+                    },
                 ));
             }
             rows.push((row, cells));
@@ -260,7 +228,7 @@ fn parse_rows(
                 let bound = if j == 0 { MAX_ABS_TIME } else { MAX_ABS_VALUE };
                 let v = if cell.is_empty() {
                     if j == 0 || !allow_empty {
-                        return Err(err(Some(row), Some(cols[j].clone()), "empty value".into()));
+                        return Err(err(Some(row), Some(cols[j].clone()), K::EmptyValue));
                     }
                     None
                 } else {
@@ -269,17 +237,18 @@ fn parse_rows(
                             return Err(err(
                                 Some(row),
                                 Some(cols[j].clone()),
-                                format!("'{cell}' is not a finite number"),
+                                K::NotFinite(cell.clone()),
                             ))
                         }
                         Ok(x) if x.abs() > bound => {
                             return Err(err(
                                 Some(row),
                                 Some(cols[j].clone()),
-                                format!(
-                                    "'{cell}' is outside the accepted range |{}| <= {bound:e}",
-                                    if j == 0 { "t" } else { "value" }
-                                ),
+                                K::OutOfRange {
+                                    cell: cell.clone(),
+                                    time: j == 0,
+                                    bound,
+                                },
                             ))
                         }
                         Ok(x) => Some(x),
@@ -287,7 +256,7 @@ fn parse_rows(
                             return Err(err(
                                 Some(row),
                                 Some(cols[j].clone()),
-                                format!("'{cell}' is not a number"),
+                                K::NotANumber(cell.clone()),
                             ))
                         }
                     }
@@ -303,7 +272,7 @@ fn parse_rows(
                     return Err(err(
                         Some(row),
                         Some("t".into()),
-                        format!("time goes backwards: {t} after {prev}"),
+                        K::TimeBackwards { t, prev },
                     ));
                 }
             }
@@ -360,7 +329,7 @@ fn split_lines(text: &str) -> Vec<(usize, &str)> {
 
 /// The fields of one CSV line, trimmed; a field may be quoted (`"a,b"`, with
 /// `""` for a quote inside). An error gives the 1-based field number.
-fn split_fields(line: &str) -> Result<Vec<String>, (usize, String)> {
+fn split_fields(line: &str) -> Result<Vec<String>, (usize, K)> {
     let mut out = Vec::new();
     let mut chars = line.chars().peekable();
     loop {
@@ -373,7 +342,7 @@ fn split_fields(line: &str) -> Result<Vec<String>, (usize, String)> {
             chars.next();
             loop {
                 match chars.next() {
-                    None => return Err((n, "a quoted field is not closed on its line".into())),
+                    None => return Err((n, K::UnclosedQuote)),
                     Some('"') if chars.peek() == Some(&'"') => {
                         chars.next();
                         field.push('"');
@@ -393,7 +362,7 @@ fn split_fields(line: &str) -> Result<Vec<String>, (usize, String)> {
                 }
                 Some(',') => out.push(field),
                 Some(c) => {
-                    return Err((n, format!("'{c}' after the closing quote of a field")));
+                    return Err((n, K::AfterQuote(c)));
                 }
             }
         } else {
@@ -423,12 +392,14 @@ fn utf8<'a>(bytes: &'a [u8], file: &str) -> Result<&'a str, DataError> {
             .enumerate()
             .filter(|&(i, &c)| c == b'\n' || (c == b'\r' && ok.get(i + 1) != Some(&b'\n')))
             .count();
-        DataError {
-            file: file.to_string(),
-            row: Some(line),
-            column: None,
-            message: format!("invalid UTF-8 (byte {} of the file)", e.valid_up_to() + 1),
-        }
+        DataError::new(
+            file,
+            Some(line),
+            None,
+            K::InvalidUtf8 {
+                byte: e.valid_up_to() + 1,
+            },
+        )
     })
 }
 
@@ -474,7 +445,7 @@ impl Trajectory {
                 file: format!("{origin}/outputs.csv"),
                 row: None,
                 column: None,
-                message: format!("only {measured} output samples: a trajectory needs at least {MIN_OUTPUT_SAMPLES}"),
+                kind: K::TooFewOutputs { measured },
             });
         }
         if self.inputs.len() < 2 {
@@ -482,7 +453,7 @@ impl Trajectory {
                 file: format!("{origin}/inputs.csv"),
                 row: None,
                 column: None,
-                message: "fewer than 2 input rows".into(),
+                kind: K::TooFewInputs,
             });
         }
         Ok(())
@@ -536,12 +507,14 @@ pub fn read_dataset(
     inputs: &[&str],
     outputs: &[&str],
 ) -> Result<ReadDataset, DataError> {
-    let located = |f: &DataFile, e: serde_json::Error, hint: &str| DataError {
-        file: f.path.clone(),
-        // serde_json counts lines from 1; 0 means no position.
-        row: (e.line() > 0).then_some(e.line()),
-        column: (e.line() > 0).then(|| e.column().to_string()),
-        message: format!("{e}{hint}"),
+    let located = |f: &DataFile, e: serde_json::Error, hint: &str| {
+        DataError::new(
+            f.path.clone(),
+            // serde_json counts lines from 1; 0 means no position.
+            (e.line() > 0).then_some(e.line()),
+            (e.line() > 0).then(|| e.column().to_string()),
+            K::Json(format!("{e}{hint}")),
+        )
     };
     let meta: DatasetMeta = match &files.meta {
         Some(f) => {
@@ -561,11 +534,16 @@ pub fn read_dataset(
     let mut warnings = Vec::new();
     let mut trajectories = Vec::new();
     for tf in &files.trajectories {
-        let missing = |which: &str| DataError {
-            file: format!("{}/{which}", tf.name),
-            row: None,
-            column: None,
-            message: format!("trajectory '{}' has no {which}", tf.name),
+        let missing = |which: &str| {
+            DataError::new(
+                format!("{}/{which}", tf.name),
+                None,
+                None,
+                K::MissingFile {
+                    trajectory: tf.name.clone(),
+                    which: which.to_string(),
+                },
+            )
         };
         let fi = tf.inputs.as_ref().ok_or_else(|| missing("inputs.csv"))?;
         let fo = tf.outputs.as_ref().ok_or_else(|| missing("outputs.csv"))?;
@@ -592,7 +570,7 @@ pub fn read_dataset(
                 file: fo.path.clone(),
                 row: None,
                 column: None,
-                message: format!("only {measured} output samples: a trajectory needs at least {MIN_OUTPUT_SAMPLES}"),
+                kind: K::TooFewOutputs { measured },
             });
         }
         if ins.len() < 2 {
@@ -600,7 +578,7 @@ pub fn read_dataset(
                 file: fi.path.clone(),
                 row: None,
                 column: None,
-                message: "fewer than 2 input rows".into(),
+                kind: K::TooFewInputs,
             });
         }
         // Outputs are predicted from the inputs on: none may come before
@@ -614,13 +592,19 @@ pub fn read_dataset(
                 file: fo.path.clone(),
                 row: out_lines.get(k).copied(),
                 column: Some("t".into()),
-                message: if t < t0 {
-                    format!(
-                        "output time {t} is before the first input time {t0} ({})",
-                        fi.path
-                    )
+                kind: if t < t0 {
+                    K::OutputBeforeInputs {
+                        t,
+                        t0,
+                        inputs: fi.path.clone(),
+                    }
                 } else {
-                    format!("output time {t} is after {late}, the inputs' end {t1} plus their span ({})", fi.path)
+                    K::OutputAfterInputs {
+                        t,
+                        late,
+                        t1,
+                        inputs: fi.path.clone(),
+                    }
                 },
             });
         }
@@ -636,7 +620,7 @@ pub fn read_dataset(
             file: "the dataset".into(),
             row: None,
             column: None,
-            message: "no trajectory folder (with inputs.csv and outputs.csv)".into(),
+            kind: K::NoTrajectory,
         });
     }
     Ok(ReadDataset {
@@ -656,7 +640,7 @@ fn check_json_values<'a>(
                 file: f.path.clone(),
                 row: None,
                 column: Some(k.to_string()),
-                message: format!("{v} is outside the accepted range |value| <= {MAX_ABS_VALUE:e}"),
+                kind: K::JsonOutOfRange(v),
             });
         }
     }
@@ -673,7 +657,7 @@ pub fn add_derived_inputs(
     series: &mut Series,
     derived: &[(String, String)],
     consts: &BTreeMap<String, f64>,
-) -> Result<(), String> {
+) -> Result<(), DerivedInputError> {
     for (name, def) in derived {
         if series.columns.iter().any(|c| c == name) {
             continue;
@@ -682,12 +666,13 @@ pub fn add_derived_inputs(
         let col: Vec<Option<f64>> = if let Some(inner) =
             def.strip_prefix("rate(").and_then(|r| r.strip_suffix(')'))
         {
-            let src = series.column(inner.trim()).ok_or_else(|| {
-                format!(
-                    "derived input {name} = {def}: no input column '{}'",
-                    inner.trim()
-                )
-            })?;
+            let src = series
+                .column(inner.trim())
+                .ok_or_else(|| DerivedInputError::NoColumn {
+                    name: name.clone(),
+                    def: def.to_string(),
+                    column: inner.trim().to_string(),
+                })?;
             let n = series.t.len();
             (0..n)
                 .map(|k| {
@@ -704,8 +689,11 @@ pub fn add_derived_inputs(
         } else {
             // Evaluated in floating point from the syntax tree (not the exact
             // engine): `sqrt(x^2)` is |x| here, which is what a derivation wants.
-            let ast = obsan_expr::parse_ast(def)
-                .map_err(|e| format!("derived input {name} = {def}: {}", e.message))?;
+            let ast = obsan_expr::parse_ast(def).map_err(|e| DerivedInputError::Parse {
+                name: name.clone(),
+                def: def.to_string(),
+                message: e.message,
+            })?;
             let mut names: Vec<String> = Vec::new();
             for (n, _) in ast.idents() {
                 if !names.iter().any(|x| x == n) {
@@ -720,12 +708,15 @@ pub fn add_derived_inputs(
                 .iter()
                 .map(|n| match series.column(n) {
                     Some(c) => Ok(Src::Col(c)),
-                    None => consts
-                        .get(n)
-                        .map(|v| Src::Const(*v))
-                        .ok_or_else(|| format!("derived input {name} = {def}: '{n}' is neither an input column nor a known constant")),
+                    None => consts.get(n).map(|v| Src::Const(*v)).ok_or_else(|| {
+                        DerivedInputError::Unknown {
+                            name: name.clone(),
+                            def: def.to_string(),
+                            ident: n.clone(),
+                        }
+                    }),
                 })
-                .collect::<Result<_, String>>()?;
+                .collect::<Result<_, DerivedInputError>>()?;
             let mut x = vec![0.0; names.len()];
             (0..series.t.len())
                 .map(|k| {

@@ -9,7 +9,8 @@
 //! Text in, dataset out: no file I/O here.
 
 use crate::angle::wrap;
-use crate::data::{DataError, Dataset, DatasetMeta, Series, Trajectory};
+use crate::data::{Dataset, DatasetMeta, Series, Trajectory};
+use crate::error::{DataError, DataErrorKind as K};
 use std::collections::BTreeMap;
 
 /// One robot's files, as text, with the names used in messages.
@@ -52,11 +53,13 @@ fn rows<'a>(
                 x.parse::<f64>()
                     .ok()
                     .filter(|v| v.is_finite())
-                    .ok_or_else(|| DataError {
-                        file: file.into(),
-                        row: Some(i + 1),
-                        column: Some(format!("{}", c + 1)),
-                        message: format!("'{x}' is not a finite number"),
+                    .ok_or_else(|| {
+                        DataError::new(
+                            file,
+                            Some(i + 1),
+                            Some(format!("{}", c + 1)),
+                            K::NotFinite(x.to_string()),
+                        )
                     })
             })
             .collect();
@@ -66,7 +69,10 @@ fn rows<'a>(
                     file: file.into(),
                     row: Some(i + 1),
                     column: None,
-                    message: format!("expected {ncols} columns, found {}", v.len()),
+                    kind: K::ColumnCount {
+                        expected: ncols,
+                        found: v.len(),
+                    },
                 })
             } else {
                 Ok((i + 1, v))
@@ -114,7 +120,7 @@ pub fn convert(
             file: "--window".into(),
             row: None,
             column: None,
-            message: "the window must be a positive number of seconds".into(),
+            kind: K::BadWindow,
         });
     }
     let lms = landmarks(t.landmarks.0, t.landmarks.1)?;
@@ -127,7 +133,10 @@ pub fn convert(
                     file: t.odometry.1.into(),
                     row: Some(line),
                     column: Some("1".into()),
-                    message: format!("time goes backwards ({} after {})", v[0], last.0),
+                    kind: K::LogTimeBackwards {
+                        t: v[0],
+                        prev: last.0,
+                    },
                 });
             }
         }
@@ -138,7 +147,7 @@ pub fn convert(
             file: t.odometry.1.into(),
             row: None,
             column: None,
-            message: "fewer than two odometry rows".into(),
+            kind: K::TooFewOdometryRows,
         });
     }
     let mut meas: Vec<(f64, u32, f64, f64)> = Vec::new();
@@ -173,10 +182,11 @@ pub fn convert(
             file: "--window".into(),
             row: None,
             column: None,
-            message: format!(
-                "{window} s cuts the log's {:.0} s into more than {MAX_WINDOWS:e} windows",
-                t1 - t0
-            ),
+            kind: K::TooManyWindows {
+                window,
+                span: t1 - t0,
+                max: MAX_WINDOWS,
+            },
         });
     }
     let mut trajectories = Vec::new();
@@ -280,7 +290,7 @@ pub fn convert(
             file: t.odometry.1.into(),
             row: None,
             column: None,
-            message: "Vicon poses as outputs need the robot's ground-truth file".into(),
+            kind: K::NeedsGroundTruth,
         });
     }
     if trajectories.is_empty() {
@@ -288,9 +298,10 @@ pub fn convert(
             file: t.measurements.1.into(),
             row: None,
             column: None,
-            message: format!(
-                "no window of {window} s has {min_measurements} landmark measurements"
-            ),
+            kind: K::NoWindow {
+                window,
+                min_measurements,
+            },
         });
     }
     let meta = DatasetMeta {
