@@ -470,18 +470,3 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
         ExitCode::from(1)
     })
 }
-
-/// A progress bar on stderr when it is a terminal, hidden otherwise (CI, pipes).
-pub fn progress_bar(total: u64, label: &str) -> indicatif::ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let b = indicatif::ProgressBar::new(total);
-    b.set_style(
-        indicatif::ProgressStyle::with_template(&format!(
-            "{label} {{bar:30}} {{pos}}/{{len}} runs, eta {{eta}}"
-        ))
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    b
-}

@@ -131,9 +131,18 @@ sigma_beta_estimated, ml, exact}.")]
     /// paper's figures and the Cramér–Rao bound.
     #[command(after_help = "Examples:
   obsan montecarlo --table 5 --runs 100
+  obsan montecarlo --table 5 --cell 3 --runs 100     # one cell: iota = 0.04, sigma_beta = 1 deg
   obsan montecarlo --table 4 --runs 20 --threads 2 --json
 
---json prints a list of tables {table, title, columns, cells, runs, seconds}.")]
+A sweep in shards, on any batch system (docs/montecarlo.md: Slurm, Dask); the merge is bit for
+bit the table one run gives, since run r always uses seed + r:
+  for k in 1 2 3; do obsan montecarlo --table 5 --shard $k/3 --json > part$k.json; done
+  then: obsan montecarlo merge part1.json part2.json part3.json
+
+--json prints a list of tables {table, title, columns, runs, seed, cells}, each cell {cell,
+label, paper, methods (mean_abs_error, rms_error, mean_estimate, failures, first_failure per
+method), crlb_sd, crlb_sd_with_encoder_noise}; with --shard, a partial result instead (every
+run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes to stderr.")]
     Montecarlo(MontecarloArgs),
     /// Where a model and measured data disagree: fit the model, test the
     /// residuals, try each candidate effect the data can reveal (rank test
@@ -267,12 +276,23 @@ pub struct CrlbArgs {
 }
 
 #[derive(Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub struct MontecarloArgs {
+    #[command(subcommand)]
+    pub merge: Option<MontecarloCommand>,
     #[arg(long, default_value_t = 100)]
     pub runs: usize,
     /// 4, 5, 6, 7 or all.
     #[arg(long, default_value = "all")]
     pub table: String,
+    /// Only this cell of the table (1 = its first row of set-ups); needs a
+    /// single --table.
+    #[arg(long, value_name = "N")]
+    pub cell: Option<usize>,
+    /// Only shard K of N of the runs (contiguous blocks of run indices);
+    /// with --json, a partial result for `obsan montecarlo merge`.
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -281,6 +301,31 @@ pub struct MontecarloArgs {
     /// Run r uses seed + r.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+#[derive(Subcommand)]
+pub enum MontecarloCommand {
+    /// Combine the partial results of `obsan montecarlo --shard K/N --json`
+    /// into the table one run with the same flags gives, bit for bit.
+    #[command(after_help = "Examples (the parts of one sweep, in any order):
+  for k in 1 2 3; do obsan montecarlo --table 5 --shard $k/3 --json > part$k.json; done
+  then: obsan montecarlo merge part1.json part2.json part3.json
+  or:   obsan montecarlo merge part*.json --json
+
+Every shard 1..N of the same tables, cells, runs and seed must be given once; anything else is
+refused (exit 2), naming the missing or mismatched part.
+
+--json prints what `obsan montecarlo --json` prints for the whole sweep.")]
+    Merge(MergeArgs),
+}
+
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The partial results (JSON files written by --shard K/N --json).
+    #[arg(required = true, value_name = "PART")]
+    pub parts: Vec<String>,
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]

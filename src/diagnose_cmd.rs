@@ -13,7 +13,6 @@ use obsan_model::{EffectLibrary, Kind};
 use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use std::collections::BTreeMap;
 use std::fmt::Write;
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -83,16 +82,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         },
         ..DiagnoseOptions::default()
     };
-    let bar = if std::io::stderr().is_terminal() {
-        let b = indicatif::ProgressBar::new_spinner();
-        b.enable_steady_tick(std::time::Duration::from_millis(120));
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    let progress = |m: &str| bar.set_message(m.to_string());
+    let bar = crate::progress::Progress::new("diagnose", 0, "");
+    let progress = |m: &str| bar.set_message(m);
     let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress).map_err(Failure)?;
-    bar.finish_and_clear();
+    drop(bar);
     let text = render_text(&d, &a.data);
     if a.json {
         outln!("{}", serde_json::to_string_pretty(&d)?);
@@ -409,7 +402,7 @@ fn residual_chart(title: &str, f: &ModelFit) -> Figure {
             xy: s.t.iter().zip(&s.e).map(|(t, e)| (*t, *e)).collect(),
         })
         .collect();
-    chart(title, "time (s)", "residual / sigma", &series)
+    chart(title, "time (s)", "residual / sigma (unitless)", &series)
 }
 
 fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
@@ -450,10 +443,19 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
             .iter()
             .find(|x| x.0 == sb.output)
             .map_or(1.0, |x| x.1);
+        // An angle is drawn in (-pi, pi], its lines cut where they wrap.
+        let angle = |y: f64| if sb.angular { obsan_data::wrap(y) } else { y };
+        let line = |xy: Vec<(f64, f64)>| {
+            if sb.angular {
+                obsan_plot::wrapped_angles(&xy)
+            } else {
+                xy
+            }
+        };
         let measured: Vec<(f64, f64)> =
             sb.t.iter()
                 .zip(sb.predicted.iter().zip(&sb.e))
-                .map(|(t, (y, e))| (*t, y + e * sigma))
+                .map(|(t, (y, e))| (*t, angle(y + e * sigma)))
                 .collect();
         let series = vec![
             Series {
@@ -466,23 +468,23 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
                 name: "nominal",
                 color: COLORS[0],
                 style: Style::Line,
-                xy: sb
-                    .t
-                    .iter()
-                    .copied()
-                    .zip(sb.predicted.iter().copied())
-                    .collect(),
+                xy: line(
+                    sb.t.iter()
+                        .copied()
+                        .zip(sb.predicted.iter().map(|y| angle(*y)))
+                        .collect(),
+                ),
             },
             Series {
                 name: "with effects",
                 color: COLORS[1],
                 style: Style::Line,
-                xy: sa
-                    .t
-                    .iter()
-                    .copied()
-                    .zip(sa.predicted.iter().copied())
-                    .collect(),
+                xy: line(
+                    sa.t.iter()
+                        .copied()
+                        .zip(sa.predicted.iter().map(|y| angle(*y)))
+                        .collect(),
+                ),
             },
         ];
         let stem = format!("fit_{k}_{}", sb.output);
@@ -491,7 +493,11 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
             &chart(
                 &format!("{} on {}", sb.output, sb.trajectory),
                 "time (s)",
-                &sb.output,
+                &if sb.angular {
+                    format!("{} (rad)", sb.output)
+                } else {
+                    format!("{} (units of outputs.csv)", sb.output)
+                },
                 &series,
             ),
         ));
@@ -574,8 +580,11 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
     } else {
         obsan_data::MrclamOutputs::Landmarks
     };
+    let bar = crate::progress::Progress::new("import mrclam", 0, "");
+    bar.set_message(&format!("converting robot {}'s logs", a.robot));
     let (mut data, mut truth) =
         obsan_data::mrclam_convert(&text, a.window, a.min_measurements, what)?;
+    drop(bar);
     if a.max_windows > 0 {
         data.trajectories.truncate(a.max_windows);
         truth.retain(|t| data.trajectories.iter().any(|d| d.name == t.name));

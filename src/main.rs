@@ -27,6 +27,7 @@ mod estimate_cmds;
 mod expr_cmds;
 mod fsio;
 mod modes_cmd;
+mod progress;
 mod show;
 mod simulate;
 

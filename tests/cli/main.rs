@@ -6,6 +6,7 @@ mod classic;
 mod diagnose;
 mod expr;
 mod modes;
+mod montecarlo;
 mod show;
 mod simulate;
 mod suite;

@@ -34,8 +34,9 @@ pub use calibrate::{
 pub use circle::{ArcData, Closed, Det};
 pub use error::CalibError;
 pub use montecarlo::{
-    crlb_sd, run_cell, table, Cell, CellResult, McMethod, MethodStats, Table, MODE_COLUMNS,
-    PARAM_COLUMNS,
+    cell_bounds, crlb_sd, merge_runs, run_cell, run_runs, run_seed, shard_runs, summarize, table,
+    Cell, CellBounds, CellResult, McMethod, MethodStats, MontecarloError, RunOutcome, RunRecord,
+    Table, MODE_COLUMNS, PARAM_COLUMNS,
 };
 pub use sim::{
     bearing, simulate, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth,

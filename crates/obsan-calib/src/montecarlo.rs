@@ -1,14 +1,46 @@
 //! Monte Carlo runs laid out like the paper's Tables IV-VII, with the
 //! paper's figures beside ours, the Cramér–Rao bound and the efficiency
 //! (RMS error / CRLB standard deviation). Runs are independent and seeded by
-//! `seed + run`, so results do not depend on scheduling.
+//! `seed + run` ([`run_seed`]), so a run's numbers depend only on the seed,
+//! the cell and the run's index: any subset of the runs (a shard) can be
+//! computed anywhere, and [`summarize`] of all of them, in index order, is
+//! bit for bit the table one process gives.
 
 use crate::calib::av_from_state;
 use crate::calibrate::{calibrate, CalibrateOptions, CekfInit, Method};
+use crate::error::CalibError;
 use crate::sim::{simulate, SimOptions, Truth};
 use obsan_data::{wrap, Dataset};
 use obsan_fit::{crlb, FitOptions, FitTrajectory, Predictor};
 use rayon::prelude::*;
+use std::ops::Range;
+
+/// Why run records could not be assembled into a cell's table. (Failures of
+/// the simulator and the bound are [`CalibError`]s.)
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum MontecarloError {
+    /// Records given to [`summarize`] or [`merge_runs`] are not the runs
+    /// 0, 1, ..., n-1 of the cell, each with one outcome per method and the
+    /// table's columns: the message says where they differ.
+    Records(String),
+}
+
+impl std::fmt::Display for MontecarloError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MontecarloError::Records(s) => f.write_str(s),
+        }
+    }
+}
+
+impl std::error::Error for MontecarloError {}
+
+impl From<MontecarloError> for String {
+    fn from(e: MontecarloError) -> String {
+        e.to_string()
+    }
+}
 
 /// A method as the tables name it (CEKF from a 30% off guess, CEKFd from DET).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -249,9 +281,35 @@ fn true_cal(t: &Truth) -> crate::Calibration {
     }
 }
 
-/// One run's (errors, estimates) per column, or why it failed.
-type RunOutcome = Result<(Vec<f64>, Vec<f64>), String>;
+/// One method's outcome on one run: (errors, estimates) per column, or why
+/// it failed (the text is data: it is reported, counted, never raised).
+pub type RunOutcome = Result<(Vec<f64>, Vec<f64>), String>;
 type Outcome = (Vec<f64>, Vec<f64>);
+
+/// One run of a cell: its index and one outcome per method of the cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunRecord {
+    pub run: usize,
+    pub outcomes: Vec<RunOutcome>,
+}
+
+/// The simulator's seed of run `run`: `seed + run` (wrapping), the same
+/// in every cell and table, so a run can be recomputed on its own.
+pub fn run_seed(seed: u64, run: usize) -> u64 {
+    seed.wrapping_add(run as u64)
+}
+
+/// The runs of shard `k` of `n` (1-based) out of `runs`: contiguous blocks
+/// `[(k-1) runs / n, k runs / n)`, which cover `0..runs` exactly once.
+/// `None` unless `1 <= k <= n`.
+pub fn shard_runs(runs: usize, k: usize, n: usize) -> Option<Range<usize>> {
+    if k == 0 || k > n {
+        return None;
+    }
+    // u128: runs * k cannot overflow.
+    let at = |i: usize| (runs as u128 * i as u128 / n as u128) as usize;
+    Some(at(k - 1)..at(k))
+}
 
 /// Run one calibration of a simulated dataset; the per-column errors.
 fn one(
@@ -322,7 +380,7 @@ pub fn crlb_sd(
     sim: &SimOptions,
     predictor: &Predictor,
     with_encoder_noise: bool,
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, CalibError> {
     let clean = SimOptions {
         sigma_beta: 0.0,
         k_encoder: 0.0,
@@ -350,7 +408,7 @@ pub fn crlb_sd(
         input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),
     };
     let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
-    let cov = crlb(predictor, &fts, &params, &states, &opts)?;
+    let cov = crlb(predictor, &fts, &params, &states, &opts).map_err(CalibError::Crlb)?;
     let sd: Vec<f64> = (0..5).map(|i| cov[i][i].max(0.0).sqrt()).collect();
     Ok(vec![
         sd[0].to_degrees(),
@@ -361,24 +419,24 @@ pub fn crlb_sd(
     ])
 }
 
-/// Run a cell: `runs` simulations (seeds `seed + run`), each calibrated by
-/// every method of the cell. `tick` is called after each run.
-pub fn run_cell(
+/// The runs `runs` of a cell (seeds by [`run_seed`]), each calibrated by
+/// every method of the cell, in parallel; the records in run order. `tick`
+/// is called after each run.
+pub fn run_runs(
     cell: &Cell,
     modes: bool,
-    runs: usize,
+    runs: Range<usize>,
     seed: u64,
     predictor: &Predictor,
     tick: &(dyn Fn() + Sync),
-) -> CellResult {
-    let per_run: Vec<Vec<RunOutcome>> = (0..runs)
-        .into_par_iter()
+) -> Vec<RunRecord> {
+    runs.into_par_iter()
         .map(|r| {
             let sim = SimOptions {
-                seed: seed.wrapping_add(r as u64),
+                seed: run_seed(seed, r),
                 ..cell.sim.clone()
             };
-            let out = match simulate(&sim) {
+            let outcomes = match simulate(&sim) {
                 Ok((data, truth)) => cell
                     .methods
                     .iter()
@@ -387,17 +445,104 @@ pub fn run_cell(
                 Err(e) => cell.methods.iter().map(|_| Err(e.to_string())).collect(),
             };
             tick();
-            out
+            RunRecord { run: r, outcomes }
         })
-        .collect();
+        .collect()
+}
+
+/// The Cramér–Rao bounds a cell reports (see [`CellResult`]): they depend on
+/// the set-up only (noise-free data), not on any run. A bound that cannot be
+/// computed is left out of the table.
+pub fn cell_bounds(cell: &Cell, modes: bool, predictor: &Predictor) -> CellBounds {
+    CellBounds {
+        crlb_sd: if modes {
+            None
+        } else {
+            crlb_sd(&cell.sim, predictor, false).ok()
+        },
+        crlb_sd_encoders: if modes || cell.sim.k_encoder <= 0.0 {
+            None
+        } else {
+            crlb_sd(&cell.sim, predictor, true).ok()
+        },
+    }
+}
+
+/// [`CellResult::crlb_sd`] and [`CellResult::crlb_sd_encoders`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellBounds {
+    pub crlb_sd: Option<Vec<f64>>,
+    pub crlb_sd_encoders: Option<Vec<f64>>,
+}
+
+/// Shards' records, in shard order, as the records of runs `0..runs`; an
+/// error names the first run missing, repeated or out of place.
+pub fn merge_runs(
+    parts: Vec<Vec<RunRecord>>,
+    runs: usize,
+) -> Result<Vec<RunRecord>, MontecarloError> {
+    let all: Vec<RunRecord> = parts.into_iter().flatten().collect();
+    if let Some((i, r)) = all.iter().enumerate().find(|(i, r)| r.run != *i) {
+        return Err(MontecarloError::Records(format!(
+            "run {i} expected, run {} found in its place",
+            r.run
+        )));
+    }
+    if all.len() != runs {
+        return Err(MontecarloError::Records(format!(
+            "{} runs given, {runs} expected",
+            all.len()
+        )));
+    }
+    Ok(all)
+}
+
+/// A cell's statistics from its run records (all of them or a shard's),
+/// reduced in record order: given the records of runs `0..n` in order,
+/// the result is bit for bit that of [`run_cell`] with `n` runs.
+pub fn summarize(
+    cell: &Cell,
+    modes: bool,
+    records: &[RunRecord],
+    bounds: CellBounds,
+) -> Result<CellResult, MontecarloError> {
     let ncols = if modes { 4 } else { 5 };
+    for r in records {
+        if r.outcomes.len() != cell.methods.len() {
+            return Err(MontecarloError::Records(format!(
+                "run {}: {} method outcomes, the cell has {} methods",
+                r.run,
+                r.outcomes.len(),
+                cell.methods.len()
+            )));
+        }
+        if let Some((e, v)) = r
+            .outcomes
+            .iter()
+            .flatten()
+            .find(|(e, v)| e.len() != ncols || v.len() != ncols)
+        {
+            return Err(MontecarloError::Records(format!(
+                "run {}: {} errors and {} estimates, the table has {ncols} columns",
+                r.run,
+                e.len(),
+                v.len()
+            )));
+        }
+    }
+    let runs = records.len();
     let methods = cell
         .methods
         .iter()
         .enumerate()
         .map(|(mi, &m)| {
-            let ok: Vec<&Outcome> = per_run.iter().filter_map(|r| r[mi].as_ref().ok()).collect();
-            let first_failure = per_run.iter().find_map(|r| r[mi].as_ref().err().cloned());
+            let ok: Vec<&Outcome> = records
+                .iter()
+                .filter_map(|r| r.outcomes[mi].as_ref().ok())
+                .collect();
+            let first_failure = records
+                .iter()
+                .find_map(|r| r.outcomes[mi].as_ref().err().cloned());
             let n = ok.len().max(1) as f64;
             let col = |f: &dyn Fn(&Outcome, usize) -> f64| -> Vec<f64> {
                 (0..ncols)
@@ -417,19 +562,89 @@ pub fn run_cell(
             }
         })
         .collect();
-    CellResult {
+    Ok(CellResult {
         label: cell.label.clone(),
         runs,
         methods,
-        crlb_sd: if modes {
-            None
-        } else {
-            crlb_sd(&cell.sim, predictor, false).ok()
-        },
-        crlb_sd_encoders: if modes || cell.sim.k_encoder <= 0.0 {
-            None
-        } else {
-            crlb_sd(&cell.sim, predictor, true).ok()
-        },
+        crlb_sd: bounds.crlb_sd,
+        crlb_sd_encoders: bounds.crlb_sd_encoders,
+    })
+}
+
+/// Run a cell: `runs` simulations (seeds `seed + run`), each calibrated by
+/// every method of the cell. `tick` is called after each run.
+pub fn run_cell(
+    cell: &Cell,
+    modes: bool,
+    runs: usize,
+    seed: u64,
+    predictor: &Predictor,
+    tick: &(dyn Fn() + Sync),
+) -> Result<CellResult, MontecarloError> {
+    let records = run_runs(cell, modes, 0..runs, seed, predictor, tick);
+    summarize(cell, modes, &records, cell_bounds(cell, modes, predictor))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calib_predictor;
+
+    #[test]
+    fn shards_cover_every_run_once_in_order() {
+        for runs in [0, 1, 2, 7, 100, 101] {
+            for n in 1..=9 {
+                let all: Vec<usize> = (1..=n)
+                    .flat_map(|k| shard_runs(runs, k, n).unwrap())
+                    .collect();
+                assert_eq!(
+                    all,
+                    (0..runs).collect::<Vec<_>>(),
+                    "{runs} runs, {n} shards"
+                );
+            }
+        }
+        assert_eq!(shard_runs(10, 0, 3), None);
+        assert_eq!(shard_runs(10, 4, 3), None);
+        assert_eq!(
+            shard_runs(usize::MAX, 2, 2).map(|r| r.end),
+            Some(usize::MAX)
+        );
+    }
+
+    fn bits(r: &CellResult) -> Vec<u64> {
+        let mut v = Vec::new();
+        for m in &r.methods {
+            for x in m.mean_abs.iter().chain(&m.rms).chain(&m.mean_estimate) {
+                v.push(x.to_bits());
+            }
+            v.push(m.failures as u64);
+        }
+        v.push(r.runs as u64);
+        v
+    }
+
+    #[test]
+    fn merged_shards_reduce_to_the_one_run_table_bit_for_bit() {
+        let p = calib_predictor();
+        let t = table(6).unwrap(); // modes: NaN columns for CEKF, five methods
+        let cell = &t.cells[3];
+        let one = run_cell(cell, t.modes, 5, 7, &p, &|| {}).unwrap();
+        let parts: Vec<Vec<RunRecord>> = (1..=3)
+            .map(|k| run_runs(cell, t.modes, shard_runs(5, k, 3).unwrap(), 7, &p, &|| {}))
+            .collect();
+        let merged = merge_runs(parts.clone(), 5).unwrap();
+        let m = summarize(cell, t.modes, &merged, cell_bounds(cell, t.modes, &p)).unwrap();
+        assert_eq!(bits(&m), bits(&one));
+        assert!(one.methods.iter().any(|m| m.mean_abs[0] != 0.0));
+        // A missing shard, or shards out of order, is an error naming the run.
+        let e = merge_runs(vec![parts[0].clone(), parts[2].clone()], 5).unwrap_err(); // runs 0, 3, 4
+        assert!(e.to_string().contains("run 1 expected, run 3 found"), "{e}");
+        let e = merge_runs(vec![parts[0].clone(), parts[1].clone()], 5).unwrap_err();
+        assert!(e.to_string().contains("3 runs given, 5 expected"), "{e}");
+        // Records of another table's cell (other column count) are refused.
+        let v = table(5).unwrap();
+        let e = summarize(&v.cells[0], v.modes, &merged, cell_bounds(cell, true, &p)).unwrap_err();
+        assert!(matches!(e, MontecarloError::Records(_)), "{e}");
     }
 }

@@ -75,6 +75,8 @@ enum Op {
         color: Rgb,
         width: f64,
         dashed: bool,
+        /// 1 opaque; below 1 what is under the line shows through.
+        opacity: f64,
     },
     Dot {
         x: f64,
@@ -123,6 +125,7 @@ impl Figure {
             color,
             width,
             dashed,
+            opacity: 1.0,
         });
     }
 
@@ -167,6 +170,7 @@ impl Figure {
                     color,
                     width,
                     dashed,
+                    opacity,
                 } => {
                     let mut d = String::new();
                     for (i, p) in pts.iter().enumerate() {
@@ -180,13 +184,18 @@ impl Figure {
                     }
                     let _ = writeln!(
                         s,
-                        r#"<path d="{}" fill="none" stroke="{}" stroke-width="{width}"{}/>"#,
+                        r#"<path d="{}" fill="none" stroke="{}" stroke-width="{width}"{}{}/>"#,
                         d.trim_end(),
                         color.hex(),
                         if *dashed {
                             r#" stroke-dasharray="4 3""#
                         } else {
                             ""
+                        },
+                        if *opacity < 1.0 {
+                            format!(r#" stroke-opacity="{opacity}""#)
+                        } else {
+                            String::new()
                         }
                     );
                 }
@@ -251,7 +260,7 @@ impl Figure {
                     }
                     if let Some(c) = stroke {
                         let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)];
-                        r.polyline(&corners, *c, scale, false);
+                        r.polyline(&corners, *c, scale, false, 1.0);
                     }
                 }
                 Op::Path {
@@ -259,9 +268,10 @@ impl Figure {
                     color,
                     width,
                     dashed,
+                    opacity,
                 } => {
                     let p: Vec<(f64, f64)> = pts.iter().map(sc).collect();
-                    r.polyline(&p, *color, width * scale, *dashed);
+                    r.polyline(&p, *color, width * scale, *dashed, *opacity as f32);
                 }
                 Op::Dot {
                     x,
@@ -320,7 +330,57 @@ fn fmt_tick(v: f64, step: f64) -> String {
     format!("{v:.digits$}")
 }
 
-/// Series against shared axes, 760 x 360 px, legend on the right.
+/// Stroke of a line series (px); a point's radius exceeds half of it by more
+/// than a pixel, so a point under a line shows on both sides of it.
+const LINE_WIDTH: f64 = 1.5;
+const LINE_OPACITY: f64 = 0.8;
+const POINT_RADIUS: f64 = 2.2;
+
+/// Angles in (-pi, pi] for a line series: where consecutive values jump by
+/// more than pi the curve wrapped, so the line is carried to the edge it
+/// crossed (+pi or -pi, at the interpolated abscissa), the pen lifted
+/// (a non-finite point) and put down at the opposite edge. A line chart then
+/// shows the wrap as a reader draws it, with no vertical stroke across the
+/// plot. Non-finite points pass through (they already lift the pen).
+pub fn wrapped_angles(xy: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    use std::f64::consts::PI;
+    let mut out = Vec::with_capacity(xy.len());
+    let mut last: Option<(f64, f64)> = None;
+    for &(x, y) in xy {
+        if !(x.is_finite() && y.is_finite()) {
+            out.push((x, y));
+            last = None;
+            continue;
+        }
+        if let Some((x0, y0)) = last {
+            let jump = y - y0;
+            if jump.abs() > PI {
+                // The shorter way round: up through +pi or down through -pi.
+                let d = if jump > 0.0 {
+                    jump - 2.0 * PI
+                } else {
+                    jump + 2.0 * PI
+                };
+                let edge = if d > 0.0 { PI } else { -PI };
+                let frac = if d != 0.0 {
+                    ((edge - y0) / d).clamp(0.0, 1.0)
+                } else {
+                    0.5
+                };
+                let xc = x0 + frac * (x - x0);
+                out.push((xc, edge));
+                out.push((f64::NAN, f64::NAN));
+                out.push((xc, -edge));
+            }
+        }
+        out.push((x, y));
+        last = Some((x, y));
+    }
+    out
+}
+
+/// Series against shared axes, 760 x 360 px, legend on the right. Axis
+/// labels should carry their unit, e.g. "time (s)", "beta (rad)".
 pub fn chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> Figure {
     let (w, h, l, r, t, b) = (760.0, 360.0, 70.0, 150.0, 30.0, 45.0);
     let (mut x0, mut x1, mut y0, mut y1) = (
@@ -385,8 +445,15 @@ pub fn chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> Figu
         anchor: Anchor::Middle,
         vertical: true,
     });
-    for (i, se) in series.iter().enumerate() {
-        let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    // Points and stars first, lines over them: a fitted line is never buried
+    // in a cloud of measurements, and the measurements stay visible under it
+    // (points wider than the line, lines slightly transparent).
+    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let lines_last = series
+        .iter()
+        .filter(|s| s.style != Style::Line)
+        .chain(series.iter().filter(|s| s.style == Style::Line));
+    for se in lines_last {
         match se.style {
             Style::Line => {
                 // A gap (non-finite point) lifts the pen.
@@ -398,8 +465,9 @@ pub fn chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> Figu
                         f.ops.push(Op::Path {
                             pts: std::mem::take(&mut run),
                             color: se.color,
-                            width: 1.5,
+                            width: LINE_WIDTH,
                             dashed: false,
+                            opacity: LINE_OPACITY,
                         });
                     }
                 }
@@ -409,7 +477,7 @@ pub fn chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> Figu
                     f.ops.push(Op::Dot {
                         x: sx(p.0),
                         y: sy(p.1),
-                        r: 1.8,
+                        r: POINT_RADIUS,
                         color: se.color,
                     });
                 }
@@ -420,6 +488,8 @@ pub fn chart(title: &str, xlabel: &str, ylabel: &str, series: &[Series]) -> Figu
                 }
             }
         }
+    }
+    for (i, se) in series.iter().enumerate() {
         let ly = t + 15.0 + 18.0 * i as f64;
         match se.style {
             Style::Stars => star(&mut f, w - r + 16.0, ly - 4.0, 6.0, se.color),
@@ -543,7 +613,7 @@ impl Raster {
 
     /// A stroked polyline: the coverage of each pixel is the largest over the
     /// segments (so joints are not painted twice), then blended once.
-    fn polyline(&mut self, pts: &[(f64, f64)], c: Rgb, width: f64, dashed: bool) {
+    fn polyline(&mut self, pts: &[(f64, f64)], c: Rgb, width: f64, dashed: bool, opacity: f32) {
         if pts.len() < 2 {
             return;
         }
@@ -602,7 +672,7 @@ impl Raster {
         for y in by0..by1 {
             for x in bx0..bx1 {
                 let v = cov[(y - by0) as usize * bw + (x - bx0) as usize];
-                self.blend(x, y, c, v);
+                self.blend(x, y, c, v * opacity);
             }
         }
     }
@@ -829,5 +899,127 @@ mod tests {
         let d = dashes(&[(0.0, 0.0), (70.0, 0.0)], 4.0, 3.0);
         let on: f64 = d.iter().map(|(a, b)| b.0 - a.0).sum();
         assert!((on - 40.0).abs() < 1e-9, "{on}");
+    }
+
+    fn pixel(px: &[u8], w: usize, x: usize, y: usize) -> (u8, u8, u8) {
+        let k = 3 * (y * w + x);
+        (px[k], px[k + 1], px[k + 2])
+    }
+
+    fn reddish(p: (u8, u8, u8)) -> bool {
+        p.0 > 150 && p.1 < 140 && p.2 < 140
+    }
+
+    fn wrap(a: f64) -> f64 {
+        let t = 2.0 * std::f64::consts::PI;
+        a - t * ((a + std::f64::consts::PI) / t).floor()
+    }
+
+    #[test]
+    fn a_wrapped_angle_draws_no_stroke_across_the_plot() {
+        use std::f64::consts::PI;
+        // A sawtooth: y = 3x wrapped to [-pi, pi), wrapping at x = pi/3 and pi.
+        let xy: Vec<(f64, f64)> = (0..=400)
+            .map(|i| {
+                let x = i as f64 / 100.0;
+                (x, wrap(3.0 * x))
+            })
+            .collect();
+        let draw = |xy: Vec<(f64, f64)>| {
+            let s = [Series {
+                name: "angle",
+                color: COLORS[1],
+                style: Style::Line,
+                xy,
+            }];
+            decode(&chart("t", "x (s)", "angle (rad)", &s).to_png(1.0))
+        };
+        // The axes: x in [0, 4] over columns 70..610; y in [-1.1 pi, 1.1 pi]
+        // (the edges +-pi and a 5% pad) over rows 30..315.
+        let col = |x: f64| 70.0 + x / 4.0 * 540.0;
+        let row = |y: f64| 30.0 + (1.1 * PI - y) / (2.2 * PI) * 285.0;
+        let band = |px: &[u8], w: usize, xw: f64| {
+            let (c, r0, r1) = (col(xw), row(1.5), row(-1.5));
+            (c as usize - 4..c as usize + 5)
+                .flat_map(|x| (r0 as usize + 2..r1 as usize - 2).map(move |y| (x, y)))
+                .filter(|&(x, y)| reddish(pixel(px, w, x, y)))
+                .count()
+        };
+        // Drawn as is, the wraps are vertical strokes through the middle.
+        let (w, _, raw) = draw(xy.clone());
+        assert!(band(&raw, w, PI / 3.0) > 50 && band(&raw, w, PI) > 50);
+        let (w, h, px) = draw(wrapped_angles(&xy));
+        assert_eq!((w, h), (760, 360));
+        for xw in [PI / 3.0, PI] {
+            assert_eq!(band(&px, w, xw), 0, "stroke across the middle at x = {xw}");
+            // The curve runs up to the top edge, and on from the bottom one.
+            let c = col(xw) as usize;
+            let near = |y: f64, x0: usize, x1: usize| {
+                (x0..x1).any(|x| {
+                    (row(y) as usize - 2..row(y) as usize + 3).any(|y| reddish(pixel(&px, w, x, y)))
+                })
+            };
+            assert!(near(PI, c - 4, c + 1), "no line to +pi at x = {xw}");
+            assert!(near(-PI, c, c + 5), "no line from -pi at x = {xw}");
+        }
+        // Elsewhere the line is unbroken: it crosses y = 0 at x = 2 pi / 3.
+        let (c, r) = (col(2.0 * PI / 3.0) as usize, row(0.0) as usize);
+        assert!((c - 2..c + 3).any(|x| (r - 2..r + 3).any(|y| reddish(pixel(&px, w, x, y)))));
+    }
+
+    #[test]
+    fn wrapped_angles_cut_at_the_edge_crossed() {
+        use std::f64::consts::PI;
+        // Down through -pi halfway between x = 0 and x = 1.
+        let out = wrapped_angles(&[(0.0, -PI + 0.1), (1.0, PI - 0.1)]);
+        assert_eq!(out.len(), 5);
+        assert!((out[1].0 - 0.5).abs() < 1e-12 && out[1].1 == -PI);
+        assert!(out[2].0.is_nan());
+        assert!((out[3].0 - 0.5).abs() < 1e-12 && out[3].1 == PI);
+        // Up through +pi a quarter of the way.
+        let out = wrapped_angles(&[(0.0, PI - 0.1), (1.0, -PI + 0.3)]);
+        assert!((out[1].0 - 0.25).abs() < 1e-12 && out[1].1 == PI);
+        assert!(out[3].1 == -PI);
+        // No wrap, no change; a gap resets.
+        let xy = [(0.0, 3.0), (1.0, 0.5), (2.0, f64::NAN), (3.0, -3.0)];
+        let out = wrapped_angles(&xy);
+        assert_eq!(out.len(), 4);
+        assert_eq!(out[3], (3.0, -3.0));
+    }
+
+    #[test]
+    fn a_point_under_a_fitted_line_stays_visible() {
+        // A measured point at (0.5, 0.5) and a fitted line through it, the
+        // point given first (as the figures do) and then last.
+        let point = || Series {
+            name: "measured",
+            color: COLORS[0],
+            style: Style::Points,
+            xy: vec![(0.5, 0.5)],
+        };
+        let line = || Series {
+            name: "fit",
+            color: COLORS[1],
+            style: Style::Line,
+            xy: vec![(0.0, 0.5), (1.0, 0.5)],
+        };
+        for s in [[point(), line()], [line(), point()]] {
+            let f = chart("t", "time (s)", "y (m)", &s);
+            let (w, _, px) = decode(&f.to_png(1.0));
+            // The point at column 340, row 172.5; the line over rows 171.75..173.25.
+            let line_alone = pixel(&px, w, 300, 172);
+            assert!(reddish(line_alone), "{line_alone:?}");
+            let centre = pixel(&px, w, 340, 172);
+            assert!(
+                centre.0 + 20 < line_alone.0,
+                "the point does not show through the line: {centre:?} vs {line_alone:?}"
+            );
+            // Above and below the line the point's own colour shows.
+            for y in [170, 174] {
+                let p = pixel(&px, w, 340, y);
+                assert!(p.2 as i32 > p.0 as i32 + 80, "row {y}: {p:?}");
+            }
+            assert!(f.to_svg().contains("stroke-opacity"));
+        }
     }
 }
