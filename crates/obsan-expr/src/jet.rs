@@ -883,7 +883,13 @@ impl Arith<'_> {
         let mut vals: Vec<Jet> = Vec::with_capacity(prog.ops.len());
         let pv = |v: Var| self.point.value(v);
         for (i, op) in prog.ops.iter().enumerate() {
-            let d0 = prog.deg0[i].clone();
+            // Without tracking the bounds are dropped: no clone (an allocation
+            // per op and pass).
+            let d0 = if self.track {
+                prog.deg0[i].clone()
+            } else {
+                Deg::poly(0)
+            };
             let at = |k: &u32| &vals[*k as usize];
             let mut j = match op {
                 Op::Const(v) => self.constant(*v, d0.clone()),
