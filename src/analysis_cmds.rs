@@ -268,8 +268,8 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         ));
     } else if let Certificate::Random(c) = &s.certificate {
         o.push_str(&format!(
-            "certified: found by reconstruction modulo 2^61-1; each symmetry annihilates the gradients of the outputs, of the basis Lie derivatives and of all their Lie derivatives ({} identities), checked at {} random points modulo {} fresh random 62-bit primes; error probability below {:.0e} (Schwartz-Zippel, degree bound {})\n",
-            c.identities, c.points, c.primes, c.error_bound.max(1e-300), c.degree
+            "certified: found by reconstruction modulo 2^61-1; each symmetry annihilates the gradients of the outputs, of the basis Lie derivatives and of all their Lie derivatives ({} identities), checked at {} random points modulo {} fresh random 62-bit primes; error probability below {:.0e} (Schwartz-Zippel, degree bound {}; a prime dividing a content below 2^{})\n",
+            c.identities, c.points, c.primes, c.error_bound.max(1e-300), c.degree, c.content_bits
         ));
     } else if s.exact {
         o.push_str(&format!(

@@ -17,7 +17,7 @@
 //! that the reconstruction's prime cannot hide an error in a coefficient).
 
 use crate::rank::{lie_jets, AnalysisError, LieWord, RankReport};
-use obsan_expr::{degree_bounds, Coord, Fp, Id, Mono, Poly, RatFun, SplitMix, P};
+use obsan_expr::{degree_bounds, height_bounds, Coord, Fp, Id, Mono, Poly, RatFun, SplitMix, P};
 use obsan_model::NormalForm;
 use obsan_recon::{reconstruct_vec, Options, ReconError};
 use std::collections::HashSet;
@@ -34,6 +34,9 @@ pub struct RandomCheck {
     pub degree: u64,
     /// Fresh random 62-bit primes; `points` is spread evenly over them.
     pub primes: u32,
+    /// Bound on log2 of the content of an identity's integer numerator
+    /// (a prime dividing it sees the identity as zero everywhere).
+    pub content_bits: u64,
     /// Probability that a wrong basis passes every check.
     pub error_bound: f64,
 }
@@ -159,8 +162,13 @@ pub(crate) fn reconstruct_basis(
             .collect();
         Ok(solve_free(&m, &piv, free).map(|xs| xs.into_iter().flatten().map(|f| f.0).collect()))
     };
+    // One agreeing value ends an interpolation early (the library's default
+    // is 2): a premature stop has probability about deg/p, and would give a
+    // wrong candidate, which the certificate below rejects; every black-box
+    // point is a jet, so the saved points are most of the run.
     let opts = Options {
         primes: Some(vec![P]),
+        agree: 1,
         deadline,
         seed: report.seed ^ 0x5ec0_4ec0,
         ..Options::default()
@@ -178,6 +186,9 @@ pub(crate) fn reconstruct_basis(
             ))))
         }
     };
+    if std::env::var("OBSAN_PROF").is_ok() {
+        eprintln!("PROF recon stats {:?} coords {}", rec.stats, coords.len());
+    }
     let th = nf.ctx.tan_half();
     let angles = coords.iter().any(|c| matches!(c, Coord::Angle { .. }));
     let to_poly = |p: &obsan_recon::Poly| {
@@ -248,9 +259,30 @@ fn closure_words(nf: &NormalForm, report: &RankReport) -> Vec<LieWord> {
     out
 }
 
-/// Fresh primes and points per prime of the certificate.
-pub const CHECK_PRIMES: u32 = 2;
+/// Fresh primes and points per prime of the certificate. Three primes: the
+/// chance that a random prime divides the content of a false identity is
+/// about `bits / 2^61` (see [`certify_symmetries`]), so it enters the bound
+/// to the power of the number of primes.
+pub const CHECK_PRIMES: u32 = 3;
 pub const CHECK_POINTS: u32 = 2;
+
+/// A lower bound on the number of primes in `(2^61, 2^62)`: by Rosser and
+/// Schoenfeld (1962), `x / ln x < pi(x) < 1.25506 x / ln x` for x >= 17, so
+/// `pi(2^62) - pi(2^61) > (2^61 / ln 2) (2/62 - 1.25506/61) > 2^61 / 60`.
+const PRIMES_IN_RANGE: f64 = (1u64 << 61) as f64 / 60.0;
+
+/// The probability that a wrong basis passes every check (the module docs
+/// of [`certify_symmetries`]): `K (rho + beta^points)^primes`, with
+/// `beta = D / (2^61 - B)` the Schwartz–Zippel bound of one point and
+/// `rho = floor(bits / 61) / PRIMES_IN_RANGE` the chance that a uniformly
+/// random prime of `(2^61, 2^62)` divides a content of at most `2^bits`.
+fn error_bound(identities: usize, degree: u64, poles: u64, bits: f64) -> f64 {
+    let q_min = (1u64 << 61) as f64;
+    let beta = (degree as f64 / (q_min - poles as f64).max(1.0)).min(1.0);
+    let rho = ((bits / 61.0).floor() / PRIMES_IN_RANGE).min(1.0);
+    let per_prime = (rho + beta.powi(CHECK_POINTS as i32)).min(1.0);
+    (identities as f64 * per_prime.powi(CHECK_PRIMES as i32)).min(1.0)
+}
 
 /// A random prime in `(2^61, 2^62)`, never the engine's 2^61 - 1.
 fn random_prime(rng: &mut SplitMix) -> u64 {
@@ -275,10 +307,15 @@ fn random_prime(rng: &mut SplitMix) -> u64 {
 /// Q whose numerator has degree at most D; modulo a prime q not dividing its
 /// content it vanishes at a random point with probability at most
 /// D / (q - B) given that the point avoids the poles (degree at most B), so a
-/// wrong basis passes with probability at most
-/// `K (D / (2^61 - B))^(primes * points)` for K identities (Schwartz–Zippel
-/// and a union bound), plus the chance that both random primes divide the
-/// content (about h/2^55 each for an h-bit content).
+/// false identity passes the points of one prime with probability at most
+/// `beta^points`, `beta = D / (2^61 - B)`. Modulo a prime dividing the
+/// content of its integer numerator P it vanishes identically; that content
+/// is at most `||P||_1 <= 2^bits` (`height_bounds`), so it has at most
+/// `floor(bits / 61)` prime factors above 2^61, and a uniformly random prime
+/// of `(2^61, 2^62)` (there are more than 2^61/60) divides it with
+/// probability at most `rho = floor(bits / 61) * 60 / 2^61`. The primes are
+/// independent, so a wrong basis passes with probability at most
+/// `K (rho + beta^points)^primes` for K identities (a union bound).
 ///
 /// `Ok(None)` if some identity fails (the basis is wrong);
 /// `Err` for the deadline, or when no point avoids the poles.
@@ -326,6 +363,25 @@ pub fn certify_symmetries(
             poles = poles.max(den);
         }
     }
+    // Content: an identity's numerator is sum_i N_i prod_{j != i} M_j G_i for
+    // vector entries N_i / M_i and gradient entries G_i / (2 B^2) of a row
+    // A / B; ||G_i||_1 <= (a + b) ||A||_1 ||B||_1 times 2 for the half-angle
+    // factor (1 + t^2)/2 (L1 norms are submultiplicative, a derivative
+    // multiplies a coefficient by at most the degree).
+    let rdeg = degree_bounds(&nf.ctx, &lies);
+    let ghts: Vec<f64> = height_bounds(&nf.ctx, &lies)
+        .into_iter()
+        .zip(&rdeg)
+        .map(|((ha, hb), &(a, b))| ha + hb + ((a.saturating_add(b)).max(1) as f64).log2() + 1.0)
+        .collect();
+    let mut bits = 0f64;
+    for c in &comps {
+        let vh = height_bounds(&nf.ctx, c);
+        let dens: f64 = vh.iter().map(|h| h.1).sum();
+        let top = vh.iter().map(|h| h.0).fold(0.0, f64::max);
+        let g = ghts.iter().copied().fold(0.0, f64::max);
+        bits = bits.max(top + dens + g + (n.max(1) as f64).log2());
+    }
     let grads = &lies;
     let identities = vectors.len() * grads.len();
     let mut rng = SplitMix(report.seed ^ 0xce27_1f1e);
@@ -369,14 +425,16 @@ pub fn certify_symmetries(
             done += 1;
         }
     }
-    let q_min = (1u64 << 61) as f64;
-    let beta = (degree as f64 / (q_min - poles as f64).max(1.0)).min(1.0);
-    let checks = (CHECK_PRIMES * CHECK_POINTS) as i32;
     Ok(Some(RandomCheck {
         primes: CHECK_PRIMES,
         points: CHECK_PRIMES * CHECK_POINTS,
         identities,
         degree,
-        error_bound: (identities as f64 * beta.powi(checks)).min(1.0),
+        content_bits: if bits.is_finite() {
+            bits.ceil() as u64
+        } else {
+            u64::MAX
+        },
+        error_bound: error_bound(identities, degree, poles, bits),
     }))
 }

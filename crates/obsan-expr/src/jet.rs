@@ -42,7 +42,7 @@
 
 use crate::eval::{BadPoint, FpPoint};
 use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
-use crate::num::Fp;
+use crate::num::{Fp, P};
 use crate::poly::Var;
 use rustc_hash::FxHashMap;
 
@@ -631,7 +631,52 @@ struct Arith<'a> {
     point: &'a FpPoint,
 }
 
+/// Inverses of small integers and factorials, tabulated at compile time: a
+/// series coefficient or an integration step would otherwise pay a Fermat
+/// inversion (60 squarings) per use, which was a fifth of a jet's cost.
+const SMALL: usize = 64;
+
+const fn mul_p(a: u64, b: u64) -> u64 {
+    let w = a as u128 * b as u128;
+    let s = ((w as u64) & P) + (w >> 61) as u64;
+    if s >= P {
+        s - P
+    } else {
+        s
+    }
+}
+
+const fn inv_p(a: u64) -> u64 {
+    let (mut b, mut e, mut r) = (a, P - 2, 1u64);
+    while e > 0 {
+        if e & 1 == 1 {
+            r = mul_p(r, b);
+        }
+        b = mul_p(b, b);
+        e >>= 1;
+    }
+    r
+}
+
+/// `[0, 1/1, 1/2, ...]` (entry 0 unused) and `[1/0!, 1/1!, 1/2!, ...]`.
+const fn small_tables() -> ([u64; SMALL], [u64; SMALL]) {
+    let mut inv = [0u64; SMALL];
+    let mut fact = [1u64; SMALL];
+    let mut k = 1;
+    while k < SMALL {
+        inv[k] = inv_p(k as u64);
+        fact[k] = mul_p(fact[k - 1], inv[k]);
+        k += 1;
+    }
+    (inv, fact)
+}
+
+static TABLES: ([u64; SMALL], [u64; SMALL]) = small_tables();
+
 fn inv_small(k: u64) -> Fp {
+    if (1..SMALL as u64).contains(&k) {
+        return Fp(TABLES.0[k as usize]);
+    }
     #[allow(clippy::expect_used)]
     Fp::new(k)
         .inv()
@@ -828,6 +873,9 @@ impl Arith<'_> {
         }
     }
     fn fact_inv(k: u64) -> Fp {
+        if k < SMALL as u64 {
+            return Fp(TABLES.1[k as usize]);
+        }
         (2..=k).fold(Fp::ONE, |a, i| a * inv_small(i))
     }
 
@@ -835,7 +883,13 @@ impl Arith<'_> {
         let mut vals: Vec<Jet> = Vec::with_capacity(prog.ops.len());
         let pv = |v: Var| self.point.value(v);
         for (i, op) in prog.ops.iter().enumerate() {
-            let d0 = prog.deg0[i].clone();
+            // Without tracking the bounds are dropped: no clone (an allocation
+            // per op and pass).
+            let d0 = if self.track {
+                prog.deg0[i].clone()
+            } else {
+                Deg::poly(0)
+            };
             let at = |k: &u32| &vals[*k as usize];
             let mut j = match op {
                 Op::Const(v) => self.constant(*v, d0.clone()),
@@ -984,6 +1038,57 @@ impl Arith<'_> {
             }
         })
     }
+}
+
+/// Bounds on the coefficient sizes of `roots` as rational functions of the
+/// coordinates of [`Ctx::free_coords`], in the form of [`degree_bounds`]
+/// (`P / B` with the common denominators that bound assumes): per root,
+/// `(log2 ||P||_1, log2 ||B||_1)` for integer polynomials P and B (the
+/// L1 norm of the coefficients, which is submultiplicative). Sin/cos leaves
+/// are `2t/(1+t^2)` and `(1-t^2)/(1+t^2)` (1 bit each); other leaves are
+/// coordinates (0 bits); a rational constant `a/b` is `|a|` over `|b|`. A
+/// square root gives infinity. Used for the chance that a random prime
+/// divides the content of a non-zero identity (its content is at most
+/// `2^bits`).
+///
+/// [`degree_bounds`]: crate::degree_bounds
+pub fn height_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(f64, f64)> {
+    use dashu_int::ops::BitTest;
+    let order = ctx.reachable(roots);
+    let mut h: Vec<(f64, f64)> = vec![(0.0, 0.0); ctx.len()];
+    for id in order {
+        let x = match ctx.node(id) {
+            Node::Num(q) => (q.num().bit_len() as f64, q.den().bit_len() as f64),
+            Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
+                LeafKind::Sin(_) | LeafKind::Cos(_) => (1.0, 1.0),
+                LeafKind::Sqrt(_) => (f64::INFINITY, f64::INFINITY),
+                _ => (0.0, 0.0),
+            },
+            Node::Add(cs) => {
+                // sum_c P_c prod_{d != c} B_d over prod_d B_d.
+                let den: f64 = cs.iter().map(|c| h[c.index()].1).sum();
+                let top = cs
+                    .iter()
+                    .map(|c| h[c.index()].0 + den - h[c.index()].1)
+                    .fold(0.0, f64::max);
+                (top + (cs.len() as f64).log2(), den)
+            }
+            Node::Mul(cs) => cs.iter().fold((0.0, 0.0), |a, c| {
+                (a.0 + h[c.index()].0, a.1 + h[c.index()].1)
+            }),
+            Node::Pow(b, e) => {
+                let (n, d) = h[b.index()];
+                let k = e.unsigned_abs() as f64;
+                if *e > 0 {
+                    (n * k, d * k)
+                } else {
+                    (d * k, n * k)
+                }
+            }
+        };
+        h[id.index()] = x;
+    }
+    roots.iter().map(|r| h[r.index()]).collect()
 }
 
 /// One free coordinate of a point, for black boxes that must be functions of

@@ -55,7 +55,7 @@ pub use eval::{
 pub use float_eval::FloatExpr;
 pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
 pub use graph::{Ctx, Id, Symbol};
-pub use jet::{Coord, LieJets, LieRow};
+pub use jet::{height_bounds, Coord, LieJets, LieRow};
 pub use lower::EngineError;
 pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{

@@ -488,6 +488,10 @@ where
         Some(_) => {}
     }
     run.set_degrees(d);
+    if skeleton.is_none() {
+        budget.stage = "finding degrees per variable";
+        run.var_degrees(budget)?;
+    }
     budget.stage = if skeleton.is_none() {
         "interpolating (first prime)"
     } else {

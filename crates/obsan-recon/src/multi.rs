@@ -143,6 +143,9 @@ pub(crate) struct PrimeRun<'a, F> {
     lines: FxHashMap<Vec<u64>, Rc<Line>>,
     lam: FxHashMap<(usize, usize, usize, Vec<u64>), Vec<u64>>,
     known: Vec<[Vec<Option<Terms>>; 2]>,
+    /// Per component and part, the degree in each variable x_i, once probed
+    /// ([`PrimeRun::var_degrees`]); empty when unknown.
+    vdegs: Vec<[Vec<usize>; 2]>,
 }
 
 impl<'a, F, E> PrimeRun<'a, F>
@@ -168,7 +171,65 @@ where
             lines: FxHashMap::default(),
             lam: FxHashMap::default(),
             known: Vec::new(),
+            vdegs: Vec::new(),
         }
+    }
+
+    /// The degree of every component's numerator and denominator in each
+    /// variable: Thiele with early termination along `x_i = t`, the other
+    /// variables at random values. These cap Zippel's stages (the degree of
+    /// `N_r(z)` in `z_i` is at most that of N in `x_i`), so a stage needs
+    /// `deg + 1` values of its variable instead of `deg + 1 + agree` or the
+    /// total-degree cap. A specialisation that lowers a degree (probability
+    /// about deg/p) gives a wrong image, which the check rejects.
+    pub(crate) fn var_degrees(&mut self, budget: &mut Budget) -> Result<(), Fail<E>> {
+        let p = self.p;
+        let cap = 2 * budget.max_degree as usize + 2;
+        let mut out: Vec<[Vec<usize>; 2]> = vec![[Vec::new(), Vec::new()]; self.m];
+        for i in 0..self.n {
+            let base: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
+            let mut th: Vec<Thiele> = (0..self.m).map(|_| Thiele::new(p, budget.agree)).collect();
+            let mut bad = 0;
+            while th.iter().any(|t| !t.done()) {
+                let mut x = base.clone();
+                x[i] = self.rng.nonzero(p);
+                let Some(y) = call(self.bb, budget, self.m, &x, p)? else {
+                    bad += 1;
+                    if bad > MAX_BAD_STREAK {
+                        return Err(Fail::Hard(ReconError::NoGoodPoints {
+                            progress: budget.progress(),
+                        }));
+                    }
+                    continue;
+                };
+                bad = 0;
+                for (c, th) in th.iter_mut().enumerate() {
+                    if !th.done() {
+                        // A repeated abscissa is not a new value: no step.
+                        th.add(x[i], y[c]);
+                        if th.len() > cap {
+                            return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
+                        }
+                    }
+                }
+            }
+            for (o, th) in out.iter_mut().zip(&th) {
+                let (num, den) = th.rational();
+                o[0].push(num.len().saturating_sub(1));
+                o[1].push(den.len().saturating_sub(1));
+            }
+        }
+        self.vdegs = out;
+        Ok(())
+    }
+
+    /// The cap of variable y_k (x_{k+1}) for component c, part `part`.
+    fn vcap(&self, c: usize, part: usize, k: usize) -> usize {
+        self.vdegs
+            .get(c)
+            .and_then(|v| v[part].get(k + 1))
+            .copied()
+            .unwrap_or(usize::MAX)
     }
 
     fn point(&self, t: u64, z: &[u64]) -> Vec<u64> {
@@ -392,7 +453,7 @@ where
         let agree = budget.agree;
         let mut vals = Vec::with_capacity(r + 1);
         let mut streak = 0;
-        for j in 0..=r {
+        for j in 0..=r.min(self.vcap(c, part, 0)) {
             let mut y = self.anchors.clone();
             y[0] = self.cvals[j];
             vals.push(self.hval(c, part, r, &y, budget)?);
@@ -431,9 +492,10 @@ where
                 })
                 .collect();
             // Degree bound of each coefficient in the new variable.
+            let vk = self.vcap(c, part, k);
             let caps: Vec<usize> = skel
                 .iter()
-                .map(|(ex, _)| r - ex.iter().sum::<u32>() as usize)
+                .map(|(ex, _)| (r - ex.iter().sum::<u32>() as usize).min(vk))
                 .collect();
             let dk = caps.iter().copied().max().unwrap_or(0);
             let mut table = vec![Vec::with_capacity(dk + 1); t];
