@@ -4,7 +4,8 @@ use crate::cli::ModesArgs;
 use crate::show::load_normal_form;
 use crate::Failure;
 use obsan_analysis::{
-    derive_modes, rank as rank_test, symmetries, verify_derivation, DeriveOptions, RankOptions,
+    derive_modes, rank as rank_test, symmetries_with, verify_derivation, Certificate,
+    DeriveOptions, RankOptions, Route, SymmetryOptions,
 };
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -56,7 +57,18 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         }
         return Ok(ExitCode::SUCCESS);
     }
-    let sym = symmetries(&mut nf, &r).map_err(|e| Failure(e.to_string()))?;
+    // The symmetries only guide the search (and give the PDE (11) check):
+    // cheap structure, or reconstruction certified at random points. The
+    // exact certificate of the modes is the closure of the reduced system.
+    let sym = symmetries_with(
+        &mut nf,
+        &r,
+        &SymmetryOptions {
+            deadline,
+            route: Route::Auto,
+        },
+    )
+    .map_err(|e| Failure(e.to_string()))?;
     let opts = DeriveOptions {
         seed: a.seed,
         deadline,
