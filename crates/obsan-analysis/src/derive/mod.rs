@@ -30,6 +30,7 @@
 
 mod ansatz;
 mod blocks;
+mod monomial;
 
 mod reduced;
 
@@ -283,6 +284,16 @@ pub fn derive_modes(
     }
     check_deadline(opts, "the angle differences", modes.len())?;
 
+    // 2b. Monomial invariants of scalings (k1 k2 x2, gamma x2 / x3).
+    let search = Search {
+        w_ids: &w_ids,
+        rank,
+        opts,
+    };
+    monomial::monomial_invariants(
+        nf, &search, &fields, &mut modes, &mut indep, &mut fresh, &mut rng,
+    )?;
+
     // 3. Polynomial and rational invariants.
     let mut blocks: Vec<Id> = Vec::new();
     let mut bnames: Vec<String> = Vec::new();
@@ -339,11 +350,6 @@ pub fn derive_modes(
     // exact proof stays small (eq. 39's A_v, V share mu^2 + 2 mu cos(gamma) + 1).
     dens.sort_by_key(|d| d.0);
     let dens: Vec<Id> = dens.into_iter().map(|d| d.1).collect();
-    let search = Search {
-        w_ids: &w_ids,
-        rank,
-        opts,
-    };
     let orig_const: Vec<bool> = bnames.iter().map(|b| consts.contains(b)).collect();
     let coef = coefficient_blocks(nf, &fields, &names, &angle, &trig, &used_vars, &vars);
     let orig = (blocks, bnames, orig_const);

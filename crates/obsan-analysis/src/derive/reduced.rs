@@ -10,6 +10,32 @@ impl Derivation {
             && self.outputs.iter().all(|o| o.1.is_some())
     }
 
+    /// Whether the closure of the reduced system proves the modes exactly,
+    /// whatever certified the symmetries.
+    ///
+    /// Theorem (closure certificate). Let `g = (g_1, ..., g_r)` have
+    /// independent gradients at a point (a non-zero r x r minor: exact), let
+    /// `L_{f_i} g_k = F_ik(g)` for the drift and every input field, and let
+    /// every output be `h_j = H_j(g) + c_j`, all proven by exact substitution
+    /// in canonical form (`checks`, the decomposition checks). Then by
+    /// induction on the word every Lie derivative `L_{f_i1} ... L_{f_il} h_j`
+    /// is a function of `g` (chain rule: `L_f Phi(g) = sum_k dPhi/dg_k
+    /// F_k(g)`), so the observable codistribution lies in `span(dg_k)`, of
+    /// dimension r. The rank test's non-zero minor proves the codistribution
+    /// has dimension at least r: the two are equal (on the open dense set
+    /// where both are regular), the rank is exactly r, and every symmetry
+    /// `w` (Definition 2: `w` annihilates the codistribution) satisfies
+    /// `sum_i w_i dg_k/dS_i = 0`, eq. (11): the `g_k` are a complete set of
+    /// observable modes. No probability enters.
+    pub fn closure_proves(&self, checks: &[Check]) -> bool {
+        self.closed()
+            && !checks.is_empty()
+            && checks.iter().all(|c| c.pass)
+            && self.modes.len() == self.rank
+            && self.mode_report.independent
+            && self.mode_report.independent_count == self.rank
+    }
+
     /// What could not be written in the modes.
     pub fn missing(&self) -> Vec<String> {
         let mut v = Vec::new();
@@ -174,8 +200,56 @@ pub fn verify_derivation(
     verify_decomposition_with(nf, &d, seed, Some(known))
 }
 
+/// Which modes `t` depends on: at a random point `dt = sum_k c_k dg_k`
+/// (the mode gradients are independent there), and `t = T(g)` has
+/// `dT/dg_k = c_k`; a coefficient zero at two points is taken as absent (a
+/// screen: a form missed here is only a form not found, never a wrong one).
+/// `None` when `dt` is not in the span at some point: no form exists.
+fn needed_modes(
+    nf: &mut NormalForm,
+    t: Id,
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+) -> Result<Option<Vec<bool>>, AnalysisError> {
+    let vars = nf.state_vars.clone();
+    let n = vars.len();
+    let r = modes.len();
+    let mut roots: Vec<Id> = Vec::with_capacity((r + 1) * n);
+    for m in modes {
+        for &x in &vars {
+            roots.push(nf.ctx.diff(m.expr, x));
+        }
+    }
+    for &x in &vars {
+        roots.push(nf.ctx.diff(t, x));
+    }
+    let mut need = vec![false; r];
+    for _ in 0..2 {
+        let (_, v) = point_for(nf, rng, &roots)?;
+        // Columns: the r mode gradients and dt; equations: the n coordinates.
+        let rows: Vec<Vec<Fp>> = (0..n)
+            .map(|i| (0..=r).map(|k| v[k * n + i]).collect())
+            .collect();
+        let ns = null_space(rows, r + 1);
+        // A null vector with a non-zero last entry gives dt in the span.
+        let Some(c) = ns.iter().find(|c| !c[r].is_zero()) else {
+            return Ok(None);
+        };
+        if ns.len() > 1 {
+            // The mode gradients are dependent at this point: no information.
+            return Ok(Some(vec![true; r]));
+        }
+        for k in 0..r {
+            need[k] |= !c[k].is_zero();
+        }
+    }
+    Ok(Some(need))
+}
+
 /// `t` written as `P(z)/Q(z)` in the mode blocks, proven exactly; `None` when
-/// no such form of degree up to the budget exists.
+/// no such form of degree up to the budget exists. Only the blocks of the
+/// modes `t` depends on enter ([`needed_modes`]); at each degree a polynomial
+/// is tried before a quotient (half the unknowns).
 pub(super) fn in_modes(
     nf: &mut NormalForm,
     t: Id,
@@ -191,6 +265,31 @@ pub(super) fn in_modes(
     if nf.ctx.is_angle_valued(t) {
         return Ok(None);
     }
+    let Some(need) = needed_modes(nf, t, modes, rng)? else {
+        return Ok(None);
+    };
+    // The blocks of the needed modes (an angle mode has two: cos, sin) and
+    // the generic constants, which no gradient sees.
+    let mut keep: Vec<usize> = Vec::new();
+    let mut j = 0;
+    for (k, m) in modes.iter().enumerate() {
+        let w = if m.angle {
+            2
+        } else if nf.ctx.is_angle_valued(m.expr) {
+            0
+        } else {
+            1
+        };
+        for _ in 0..w {
+            if need[k] && j < zb.len() && znames[j].contains(m.name.as_str()) {
+                keep.push(j);
+            }
+            j += 1;
+        }
+    }
+    keep.extend(j..zb.len());
+    let zb: Vec<Id> = keep.iter().map(|&j| zb[j]).collect();
+    let znames: Vec<String> = keep.iter().map(|&j| znames[j].clone()).collect();
     let nb = zb.len();
     let mut roots: Vec<Id> = zb.to_vec();
     roots.push(t);
@@ -202,61 +301,99 @@ pub(super) fn in_modes(
         )?;
         let monos = monomials(nb, 0, d);
         let nm = monos.len();
-        // A dense F_p elimination of 2 nm unknowns: keep it well under a second.
-        if 2 * nm > MAX_UNKNOWNS {
+        if nm > MAX_UNKNOWNS {
             break;
         }
-        let npts = 2 * nm + 8;
-        let mut rows = Vec::with_capacity(npts);
-        for _ in 0..npts {
-            let (_, v) = point_for(nf, rng, &roots)?;
-            let tv = v[nb];
-            let mut row: Vec<Fp> = monos.iter().map(|e| mono_value(e, &v[..nb])).collect();
+        for quotient in [false, true] {
+            // A dense F_p elimination: keep it well under a second.
+            let nu = if quotient { 2 * nm } else { nm };
+            if nu > MAX_UNKNOWNS {
+                break;
+            }
+            if let Some(s) = solve_form(nf, t, &zb, &znames, &monos, quotient, rng, &roots)? {
+                return Ok(Some(s));
+            }
+        }
+    }
+    Ok(None)
+}
+
+/// One ansatz `t = P/Q` (or `t = P` when not `quotient`) over `monos`.
+#[allow(clippy::too_many_arguments)]
+fn solve_form(
+    nf: &mut NormalForm,
+    t: Id,
+    zb: &[Id],
+    znames: &[String],
+    monos: &[Vec<u32>],
+    quotient: bool,
+    rng: &mut SplitMix,
+    roots: &[Id],
+) -> Result<Option<String>, AnalysisError> {
+    let nb = zb.len();
+    let nm = monos.len();
+    let nu = if quotient { 2 * nm } else { nm + 1 };
+    let npts = nu + 8;
+    let mut rows = Vec::with_capacity(npts);
+    for _ in 0..npts {
+        let (_, v) = point_for(nf, rng, roots)?;
+        let tv = v[nb];
+        let mut row: Vec<Fp> = monos.iter().map(|e| mono_value(e, &v[..nb])).collect();
+        if quotient {
             let qpart: Vec<Fp> = row.iter().map(|&m| Fp::ZERO - tv * m).collect();
             row.extend(qpart);
-            rows.push(row);
+        } else {
+            row.push(Fp::ZERO - tv);
         }
-        let mut ns = null_space(rows, 2 * nm);
-        ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
-        for v in ns {
-            if v[nm..].iter().all(|x| x.is_zero()) {
-                continue;
-            }
-            // Normalise: the first non-zero denominator coefficient is 1.
-            let Some(lead) = v[nm..].iter().find(|x| !x.is_zero()).and_then(|x| x.inv()) else {
-                continue;
-            };
-            let Some(qs) = v
-                .iter()
-                .map(|&x| rat_recon(x * lead))
-                .collect::<Option<Vec<Q>>>()
-            else {
-                continue;
-            };
-            let (pc, qc) = qs.split_at(nm);
-            let pn = build_poly(nf, pc, &monos, zb);
-            let qn = build_poly(nf, qc, &monos, zb);
-            // Screened at fresh points here; proven exactly by the decomposition
-            // checks (verify_derivation) of the whole reduced system.
-            let r = nf.ctx.div(pn, qn);
-            let diff = nf.ctx.sub(r, t);
-            let mut fresh = SplitMix(rng.next_u64());
-            let mut ok = true;
-            for _ in 0..2 {
-                let (_, v) = point_for(nf, &mut fresh, &[diff])?;
-                ok &= v[0].is_zero();
-            }
-            if !ok {
-                continue;
-            }
-            let ptext = poly_text(pc, &monos, znames);
-            let qtext = poly_text(qc, &monos, znames);
-            return Ok(Some(if qtext == "1" {
-                ptext
-            } else {
-                format!("({ptext})/({qtext})")
-            }));
+        rows.push(row);
+    }
+    let mut ns = null_space(rows, nu);
+    ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
+    for v in ns {
+        if v[nm..].iter().all(|x| x.is_zero()) {
+            continue;
         }
+        // Normalise: the first non-zero denominator coefficient is 1.
+        let Some(lead) = v[nm..].iter().find(|x| !x.is_zero()).and_then(|x| x.inv()) else {
+            continue;
+        };
+        let Some(qs) = v
+            .iter()
+            .map(|&x| rat_recon(x * lead))
+            .collect::<Option<Vec<Q>>>()
+        else {
+            continue;
+        };
+        let (pc, qc) = qs.split_at(nm);
+        let pn = build_poly(nf, pc, monos, zb);
+        // Screened at fresh points here; proven exactly by the decomposition
+        // checks (verify_derivation) of the whole reduced system.
+        let r = if quotient {
+            let qn = build_poly(nf, qc, monos, zb);
+            nf.ctx.div(pn, qn)
+        } else {
+            pn
+        };
+        let diff = nf.ctx.sub(r, t);
+        let mut fresh = SplitMix(rng.next_u64());
+        let mut ok = true;
+        for _ in 0..2 {
+            let (_, v) = point_for(nf, &mut fresh, &[diff])?;
+            ok &= v[0].is_zero();
+        }
+        if !ok {
+            continue;
+        }
+        let ptext = poly_text(pc, monos, znames);
+        if !quotient {
+            return Ok(Some(ptext));
+        }
+        let qtext = poly_text(qc, monos, znames);
+        return Ok(Some(if qtext == "1" {
+            ptext
+        } else {
+            format!("({ptext})/({qtext})")
+        }));
     }
     Ok(None)
 }

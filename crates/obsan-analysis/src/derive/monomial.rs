@@ -1,0 +1,263 @@
+//! Monomial invariants of scaling-like symmetries.
+//!
+//! When a symmetry acts on a block `b` (a variable or an atom such as
+//! `x3^sigma`) by `w(b) = lambda b`, a Laurent monomial `prod b_k^{e_k}` has
+//! `w(prod b^e) = (sum_k e_k lambda_k) prod b^e`, so it satisfies the PDE (11)
+//! exactly when `sum_k e_k lambda_k = 0` as a function. The ratios
+//! `lambda_k = w(b_k) / b_k` are evaluated at random points of F_p (rows of a
+//! linear system in the integer exponents); a column whose ratio is not
+//! constant along the orbits makes no vanishing combination and drops out by
+//! itself. Supports are tried from the smallest up, so the monomials are the
+//! short ones the literature writes (`k1 k2 x2`, `gamma x2 / x3`). Like every
+//! candidate, each is screened in F_p here and proven by the exact checks.
+
+use super::*;
+
+/// Largest support tried, and a cap on the subsets enumerated.
+const MAX_SUPPORT: usize = 5;
+const MAX_SUBSETS: usize = 60_000;
+
+/// The blocks of the monomial search: every state variable, and the atoms
+/// other than sin/cos that the fields and outputs use.
+fn monomial_blocks(nf: &mut NormalForm, fields: &[Vec<Id>]) -> Vec<(Id, String)> {
+    let mut out: Vec<(Id, String)> = nf
+        .state
+        .clone()
+        .into_iter()
+        .map(|s| (nf.ctx.symbol(&s).id, s))
+        .collect();
+    let mut roots: Vec<Id> = fields.iter().flatten().copied().collect();
+    roots.extend(nf.outputs.iter().map(|o| o.1));
+    let mut seen: Vec<u32> = Vec::new();
+    for e in roots {
+        let c = nf.ctx.canon(e);
+        for v in c.vars() {
+            if seen.contains(&v) || nf.ctx.symbol_name(v).is_some() {
+                continue;
+            }
+            seen.push(v);
+            let id = nf.ctx.from_canonical(&RatFun::var(v));
+            let text = nf.ctx.to_text(id);
+            if text.starts_with("sin(") || text.starts_with("cos(") || nf.ctx.is_angle_valued(id) {
+                continue;
+            }
+            out.push((id, text));
+        }
+    }
+    out
+}
+
+/// Subsets of `0..n` of size `k`, in lexicographic order.
+fn subsets(n: usize, k: usize, mut f: impl FnMut(&[usize]) -> bool) {
+    if k > n {
+        return;
+    }
+    let mut c: Vec<usize> = (0..k).collect();
+    loop {
+        if !f(&c) {
+            return;
+        }
+        let mut i = k;
+        loop {
+            if i == 0 {
+                return;
+            }
+            i -= 1;
+            if c[i] < n - k + i {
+                c[i] += 1;
+                for j in i + 1..k {
+                    c[j] = c[j - 1] + 1;
+                }
+                break;
+            }
+        }
+    }
+}
+
+fn gcd(a: i64, b: i64) -> i64 {
+    if b == 0 {
+        a.abs()
+    } else {
+        gcd(b, a % b)
+    }
+}
+
+/// The primitive integer vector of a one-dimensional F_p null space, if its
+/// entries reconstruct to small rationals.
+fn primitive(v: &[Fp]) -> Option<Vec<i64>> {
+    let qs: Vec<Q> = v.iter().map(|&x| rat_recon(x)).collect::<Option<_>>()?;
+    let mut l: i64 = 1;
+    for q in &qs {
+        let d = i64::try_from(q.den()).ok()?;
+        l = l.checked_mul(d / gcd(l, d))?;
+    }
+    let mut e: Vec<i64> = Vec::with_capacity(qs.len());
+    for q in &qs {
+        let n = i64::try_from(q.num()).ok()?;
+        let d = i64::try_from(q.den()).ok()?;
+        e.push(n.checked_mul(l / d)?);
+    }
+    let g = e.iter().fold(0, |a, &x| gcd(a, x));
+    if g == 0 {
+        return None;
+    }
+    let mut e: Vec<i64> = e.into_iter().map(|x| x / g).collect();
+    // More positive exponents than negative ones read better (k12 k21, not 1/(k12 k21)).
+    let neg = e.iter().filter(|&&x| x < 0).count();
+    if 2 * neg > e.len() || (2 * neg == e.len() && e[0] < 0) {
+        for x in e.iter_mut() {
+            *x = -*x;
+        }
+    }
+    if e.iter().any(|x| x.abs() > 6) {
+        return None;
+    }
+    Some(e)
+}
+
+/// `b1^e1 * ...` as text and expression.
+fn monomial(
+    nf: &mut NormalForm,
+    blocks: &[(Id, String)],
+    cols: &[usize],
+    e: &[i64],
+) -> (Id, String) {
+    let mut factors = Vec::new();
+    let (mut num, mut den): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+    for (&c, &x) in cols.iter().zip(e) {
+        let (id, name) = &blocks[c];
+        factors.push(nf.ctx.pow(*id, x));
+        let base = if name.contains([' ', '+', '-', '*', '/', '^']) && !name.ends_with(')') {
+            format!("({name})")
+        } else {
+            name.clone()
+        };
+        let t = if x.abs() == 1 {
+            base
+        } else {
+            format!("{base}^{}", x.abs())
+        };
+        if x > 0 {
+            num.push(t);
+        } else {
+            den.push(t);
+        }
+    }
+    let top = if num.is_empty() {
+        "1".to_string()
+    } else {
+        num.join("*")
+    };
+    let text = match den.len() {
+        0 => top,
+        1 => format!("{top}/{}", den[0]),
+        _ => format!("{top}/({})", den.join("*")),
+    };
+    (nf.ctx.mul(&factors), text)
+}
+
+/// Monomial invariants, accepted while they raise the rank.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn monomial_invariants(
+    nf: &mut NormalForm,
+    s: &Search,
+    fields: &[Vec<Id>],
+    modes: &mut Vec<DerivedMode>,
+    indep: &mut Indep,
+    fresh: &mut Names,
+    rng: &mut SplitMix,
+) -> Result<(), AnalysisError> {
+    let nsym = s.w_ids.len();
+    if nsym == 0 || modes.len() >= s.rank {
+        return Ok(());
+    }
+    let blocks = monomial_blocks(nf, fields);
+    let nb = blocks.len();
+    let mut roots: Vec<Id> = blocks.iter().map(|b| b.0).collect();
+    for w in s.w_ids {
+        for b in &blocks {
+            roots.push(lie(nf, b.0, w));
+        }
+    }
+    // Rows: lambda_jk at enough points that a varying column cannot cancel.
+    let npts = nb / nsym + 3;
+    let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
+    let mut tries = 0;
+    while rows.len() < npts * nsym {
+        tries += 1;
+        if tries > 4 * npts + 16 {
+            return Ok(());
+        }
+        let (_, v) = point_for(nf, rng, &roots)?;
+        let Some(inv) = v[..nb].iter().map(|x| x.inv()).collect::<Option<Vec<Fp>>>() else {
+            continue;
+        };
+        for j in 0..nsym {
+            let off = nb * (j + 1);
+            rows.push((0..nb).map(|k| v[off + k] * inv[k]).collect());
+        }
+    }
+    // Only blocks some symmetry moves take part.
+    let live: Vec<usize> = (0..nb)
+        .filter(|&k| rows.iter().any(|r| !r[k].is_zero()))
+        .collect();
+    let mut cands: Vec<(usize, usize, i64, Vec<usize>, Vec<i64>)> = Vec::new();
+    let mut budget = MAX_SUBSETS;
+    for size in 2..=MAX_SUPPORT.min(live.len()) {
+        check_deadline(s.opts, "the monomial invariants", modes.len())?;
+        subsets(live.len(), size, |sub| {
+            if budget == 0 {
+                return false;
+            }
+            budget -= 1;
+            let cols: Vec<usize> = sub.iter().map(|&i| live[i]).collect();
+            let m: Vec<Vec<Fp>> = rows
+                .iter()
+                .map(|r| cols.iter().map(|&c| r[c]).collect())
+                .collect();
+            let ns = null_space(m, size);
+            if ns.len() == 1 && ns[0].iter().all(|x| !x.is_zero()) {
+                if let Some(e) = primitive(&ns[0]) {
+                    let neg = e.iter().filter(|&&x| x < 0).count();
+                    let tot: i64 = e.iter().map(|x| x.abs()).sum();
+                    cands.push((size, neg, tot, cols, e));
+                }
+            }
+            true
+        });
+        // Smaller supports first; within one, fewer denominators, lower degree.
+        cands.sort_by_key(|c| (c.0, c.1, c.2));
+        for (_, _, _, cols, e) in std::mem::take(&mut cands) {
+            if modes.len() >= s.rank {
+                return Ok(());
+            }
+            let (g, text) = monomial(nf, &blocks, &cols, &e);
+            if !indep.raises_rank(nf, g)? || !screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+                continue;
+            }
+            let dens: Vec<&str> = cols
+                .iter()
+                .zip(&e)
+                .filter(|(_, &x)| x < 0)
+                .map(|(&c, _)| blocks[c].1.as_str())
+                .collect();
+            modes.push(DerivedMode {
+                name: fresh.next(),
+                expr: g,
+                text,
+                kind: if dens.is_empty() {
+                    ModeKind::Polynomial
+                } else {
+                    ModeKind::Rational
+                },
+                angle: false,
+                domain: if dens.is_empty() {
+                    "everywhere".into()
+                } else {
+                    format!("where {} != 0", dens.join(", "))
+                },
+            });
+        }
+    }
+    Ok(())
+}
