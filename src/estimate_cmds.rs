@@ -1009,6 +1009,22 @@ fn write_figures(
     }
     let n = files.len() / 2;
     files.push((std::path::PathBuf::from("index.md"), index.into_bytes()));
+    // The same curves as data, for other plotting tools (the Python example
+    // draws Figure 5 from them).
+    let data: Vec<serde_json::Value> = curves
+        .iter()
+        .map(|c| {
+            serde_json::json!({
+                "name": c.name, "q": c.q, "s": c.s, "observed": c.observed, "det": c.det,
+                "ls": c.ls, "ml": c.ml, "nodes": c.nodes, "sigma_curve": c.sigma_curve,
+                "node": c.node,
+            })
+        })
+        .collect();
+    files.push((
+        std::path::PathBuf::from("curves.json"),
+        (serde_json::to_string(&data)? + "\n").into_bytes(),
+    ));
     write_folder_atomically(dir, force, &files)?;
     Ok(n)
 }

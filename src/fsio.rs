@@ -15,11 +15,39 @@ pub const MANIFEST: &str = ".obsan-manifest";
 /// The manifest's first line; the rest is one relative path per line.
 const MANIFEST_HEADER: &str = "# written by obsan: these files may be replaced by --force";
 
+/// A text held in memory under a name that stands for a file (e.g.
+/// `<string>`): [`read_text`] of that name reads it, so messages read
+/// `<string>:3:7: ...`. Used by the Python package's `obsan.loads`.
+#[derive(Clone, Debug)]
+pub struct Overlay {
+    pub name: String,
+    pub text: String,
+}
+
+thread_local! {
+    /// The overlay of the command running on this thread.
+    static OVERLAY: std::cell::RefCell<Option<Overlay>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Make `o` the overlay of this thread's commands.
+pub(crate) fn set_overlay(o: Option<Overlay>) {
+    OVERLAY.with(|x| *x.borrow_mut() = o);
+}
+
 /// Read a text file the user wrote (.sys, .eff, .dec): a BOM is dropped,
 /// line endings normalised, and invalid UTF-8 is an error at its line and
 /// column.
 pub fn read_text(path: &str) -> Result<String, Failure> {
-    let bytes = std::fs::read(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
+    let held = OVERLAY.with(|x| {
+        x.borrow()
+            .as_ref()
+            .filter(|o| o.name == path)
+            .map(|o| o.text.clone().into_bytes())
+    });
+    let bytes = match held {
+        Some(b) => b,
+        None => std::fs::read(path).map_err(|e| Failure(format!("cannot read {path}: {e}")))?,
+    };
     obsan_model::decode_text(&bytes, path).map_err(|e| Failure(e.to_string()))
 }
 

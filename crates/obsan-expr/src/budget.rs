@@ -16,6 +16,8 @@
 
 use std::cell::Cell;
 use std::fmt;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Largest exponent of a variable in a polynomial (the packing's hard limit).
@@ -88,6 +90,8 @@ pub enum Limit {
     Number { bits: u128, max: u128 },
     /// The deadline passed.
     Timeout,
+    /// The caller asked the computation to stop (see [`with_cancel`]).
+    Cancelled,
     /// An internal invariant failed (a bug: please report the input).
     Internal(&'static str),
 }
@@ -110,6 +114,7 @@ impl fmt::Display for Limit {
                 write!(f, "number too large: about {bits} bits, the limit is {max}")
             }
             Limit::Timeout => f.write_str("time limit reached; raise it with --timeout"),
+            Limit::Cancelled => f.write_str("interrupted"),
             Limit::Internal(what) => write!(f, "internal error in the symbolic engine: {what}"),
         }
     }
@@ -129,6 +134,33 @@ thread_local! {
     static TRIPPED: Cell<bool> = const { Cell::new(false) };
     static REASON: std::cell::RefCell<Option<Limit>> = const { std::cell::RefCell::new(None) };
     static TICK: Cell<u32> = const { Cell::new(0) };
+    /// A flag another thread may set to stop this thread's armed scope.
+    static CANCEL: std::cell::RefCell<Option<Arc<AtomicBool>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Run `f` on this thread with `flag` as its cancel flag: once another
+/// thread sets it, an armed scope trips with [`Limit::Cancelled`] where it
+/// polls its deadline (so a caller can stop work it no longer wants, e.g. on
+/// Ctrl-C). Outside an armed scope the flag is not looked at.
+pub fn with_cancel<T>(flag: Arc<AtomicBool>, f: impl FnOnce() -> T) -> T {
+    struct Reset(Option<Arc<AtomicBool>>);
+    impl Drop for Reset {
+        fn drop(&mut self) {
+            let old = self.0.take();
+            CANCEL.with(|c| *c.borrow_mut() = old);
+        }
+    }
+    let _reset = Reset(CANCEL.with(|c| c.borrow_mut().replace(flag)));
+    f()
+}
+
+/// Whether this thread's cancel flag is set.
+fn cancelled() -> bool {
+    CANCEL.with(|c| {
+        c.borrow()
+            .as_ref()
+            .is_some_and(|f| f.load(Ordering::Relaxed))
+    })
 }
 
 /// Run `f` with `b` armed on this thread. A nested scope keeps the outer
@@ -255,9 +287,13 @@ pub(crate) fn poll() -> bool {
         v
     });
     if t.is_multiple_of(64) {
-        if let Some(d) = ARMED.with(|a| a.get()).and_then(|a| a.deadline) {
-            if Instant::now() >= d {
+        if let Some(a) = ARMED.with(|a| a.get()) {
+            if a.deadline.is_some_and(|d| Instant::now() >= d) {
                 trip(Limit::Timeout);
+                return false;
+            }
+            if cancelled() {
+                trip(Limit::Cancelled);
                 return false;
             }
         }
@@ -275,5 +311,28 @@ pub(crate) fn invariant<T: Default>(x: Option<T>, what: &'static str) -> T {
             }
             T::default()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Ctx;
+
+    /// A set cancel flag stops an armed computation, the flag is this
+    /// thread's only for the scope, and an unset flag changes nothing.
+    #[test]
+    fn a_set_cancel_flag_stops_the_engine() {
+        let src: Vec<String> = (0..16).map(|i| format!("(a{i} + b{i})")).collect();
+        let mut ctx = Ctx::new();
+        let id = ctx.parse(&src.join("*")).unwrap();
+        let flag = Arc::new(AtomicBool::new(true));
+        let r = with_cancel(flag.clone(), || ctx.try_canon(id));
+        assert_eq!(r, Err(Limit::Cancelled));
+        assert!(!cancelled());
+        let small = ctx.parse("(x + 1)^2").unwrap();
+        flag.store(false, Ordering::Relaxed);
+        let r = with_cancel(flag, || ctx.try_canon(small)).unwrap();
+        assert_eq!(r.numerator().len(), 3);
     }
 }

@@ -1,0 +1,299 @@
+"""obsan from Python: exact nonlinear observability analysis and sensor self-calibration.
+
+Every function runs the ``obsan`` command line's own code in-process and returns what
+``obsan ... --json`` prints, as plain dicts and lists; numeric lists become numpy arrays
+when numpy is installed (set ``obsan.NUMPY = False`` to keep lists). See docs/python.md.
+
+Errors (the CLI's exit code 2: bad input, a limit) raise :class:`ObsanError`, a
+``ValueError`` carrying the CLI's text (``file:line:col: ...``). A check that ran and
+failed (the CLI's exit code 1: ``check``, ``verify``, ``modes``) is a value, not an
+exception: the returned dict says what failed, and :func:`run` also gives the code.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Iterable, Mapping, NamedTuple, Optional, Union
+
+from ._native import ObsanError, __version__
+from ._native import run_json as _run_json
+
+__all__ = [
+    "ObsanError",
+    "System",
+    "load",
+    "loads",
+    "simplify",
+    "diff",
+    "calibrate",
+    "crlb",
+    "diagnose",
+    "simulate",
+    "montecarlo",
+    "verify",
+    "run",
+    "Run",
+    "NUMPY",
+    "__version__",
+]
+
+#: Convert numeric lists to numpy arrays (when numpy is importable).
+NUMPY = True
+
+#: The name ``loads`` gives its text in messages: ``<string>:3:7: ...``.
+STRING_NAME = "<string>"
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class Run(NamedTuple):
+    """A command's exit code (0, or 1 when a check it performs failed) and its
+    ``--json`` value as plain Python data (``None`` for a command that prints nothing)."""
+
+    code: int
+    value: Any
+
+
+def run(*argv: Any, source: Optional[tuple] = None) -> Run:
+    """Run ``obsan ARGV...`` in-process and return its exit code and parsed stdout.
+
+    ARGV must ask for ``--json`` where the command has it. ``source`` is an optional
+    ``(name, text)`` file held in memory. Raises :class:`ObsanError` on exit code 2.
+    """
+    code, text = _run_json([_arg(a) for a in argv], source)
+    return Run(code, json.loads(text))
+
+
+def _arg(a: Any) -> str:
+    if isinstance(a, os.PathLike):
+        return os.fspath(a)
+    return str(a)
+
+
+def _value(x: Any) -> str:
+    """A value as the CLI reads it; a float keeps its shortest repr (0.9 is 9/10)."""
+    if isinstance(x, bool):
+        return "true" if x else "false"
+    if isinstance(x, float):
+        return repr(x)
+    return _arg(x)
+
+
+def _flags(options: Mapping[str, Any], join: Iterable[str] = ()) -> list:
+    """Keyword options as flags: ``max_terms=5`` is ``--max-terms 5``, ``True`` a bare
+    flag, ``None``/``False`` nothing; a dict is repeated ``NAME=VALUE`` flags; a list is
+    a repeated flag, or one comma-joined value for the names in ``join``."""
+    join = set(join)
+    out: list = []
+    for name, v in options.items():
+        flag = "--" + name.replace("_", "-")
+        if v is None or v is False:
+            continue
+        if v is True:
+            out.append(flag)
+        elif isinstance(v, Mapping):
+            for k, x in v.items():
+                out += [flag, f"{k}={_value(x)}"]
+        elif isinstance(v, (list, tuple)) or _is_array(v):
+            items = [_value(x) for x in v]
+            if name in join:
+                out += [flag, ",".join(items)]
+            else:
+                for x in items:
+                    out += [flag, x]
+        else:
+            out += [flag, _value(v)]
+    return out
+
+
+def _is_array(v: Any) -> bool:
+    return hasattr(v, "tolist") and hasattr(v, "shape")
+
+
+def _arrays(v: Any) -> Any:
+    """Numeric lists (and rectangular lists of them) as numpy arrays."""
+    if not NUMPY:
+        return v
+    try:
+        import numpy as np
+    except ImportError:
+        return v
+    return _convert(v, np)
+
+
+def _convert(v: Any, np: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _convert(x, np) for k, x in v.items()}
+    if isinstance(v, list):
+        if v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+            a = np.asarray(v)
+            # Integers past int64 stay exact Python ints.
+            return a if a.dtype != object else v
+        items = [_convert(x, np) for x in v]
+        if items and all(isinstance(x, np.ndarray) for x in items):
+            if len({x.shape for x in items}) == 1 and len({x.dtype.kind for x in items}) == 1:
+                return np.stack(items)
+        return items
+    return v
+
+
+def _call(argv: list, source: Optional[tuple] = None) -> Any:
+    return _arrays(run(*argv, source=source).value)
+
+
+_SYSTEM_OPTIONS = ("input", "set", "seed", "timeout", "max_terms")
+
+
+class System:
+    """A ``.sys`` system, read from a file (:func:`load`) or text (:func:`loads`).
+
+    Each method runs the CLI command of the same name on it, with ``--json``;
+    keyword options are the command's flags (``input="q"`` is ``--input q``,
+    ``set={"q": 0.9}`` is ``--set q=0.9``).
+    """
+
+    def __init__(self, path: str, text: Optional[str] = None):
+        self.path = path
+        self.text = text
+        self._source = (path, text) if text is not None else None
+        # Read and checked now, so a bad file is an error here.
+        self.info = self.show()
+
+    @property
+    def name(self) -> str:
+        return self.info["system"]
+
+    def __repr__(self) -> str:
+        where = "text" if self.text is not None else repr(self.path)
+        return f"<obsan.System {self.name} from {where}>"
+
+    def _run(self, command: str, options: Mapping[str, Any], *extra: Any) -> Any:
+        return _call(
+            [command, self.path, *extra, *_flags(options), "--json"],
+            self._source,
+        )
+
+    def show(self, input: Optional[str] = None, set: Optional[Mapping] = None, **options: Any) -> dict:
+        """``obsan show``: the input-affine normal form."""
+        return self._run("show", dict(input=input, set=set, **options))
+
+    def rank(
+        self,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan rank``: the Hermann–Krener rank test (exact at full rank, else a
+        lower bound with ``error_bound``)."""
+        return self._run("rank", dict(input=input, set=set, seed=seed, **options))
+
+    def symmetries(
+        self,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        exact: bool = False,
+        **options: Any,
+    ) -> dict:
+        """``obsan symmetries``: a certified basis of the continuous symmetries."""
+        return self._run("symmetries", dict(input=input, set=set, seed=seed, exact=exact, **options))
+
+    def modes(
+        self,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan modes``: observable modes and the reduced system, proven exactly.
+        ``out="prefix"`` also writes prefix.sys and prefix.dec."""
+        return self._run("modes", dict(input=input, set=set, seed=seed, **options))
+
+    def lie(self, order: int, input: Optional[str] = None, set: Optional[Mapping] = None, **options: Any) -> dict:
+        """``obsan lie``: the Lie derivatives of the outputs up to ``order``."""
+        return self._run("lie", dict(order=order, input=input, set=set, **options))
+
+    def check(self, modes: Union[str, Iterable[str]], input: Optional[str] = None, **options: Any) -> dict:
+        """``obsan check``: candidate observable modes against eq. (11). A failed mode
+        is a value (``checks[i]["observable_mode"]`` false), not an exception."""
+        modes = [modes] if isinstance(modes, str) else list(modes)
+        return self._run("check", dict(mode=modes, input=input, **options))
+
+
+def load(path: PathLike) -> System:
+    """Read a ``.sys`` file. Errors name the path, line and column."""
+    return System(os.fspath(path))
+
+
+def loads(text: str) -> System:
+    """A system from ``.sys`` text; errors read ``<string>:LINE:COL: ...``."""
+    return System(STRING_NAME, text)
+
+
+def simplify(expr: str, **options: Any) -> dict:
+    """``obsan simplify``: the exact canonical form of ``expr``."""
+    return _call(["simplify", expr, *_flags(options), "--json"])
+
+
+def diff(expr: str, var: str, **options: Any) -> dict:
+    """``obsan diff``: d expr / d var, in canonical form."""
+    return _call(["diff", expr, var, *_flags(options), "--json"])
+
+
+def verify(path: PathLike, **options: Any) -> dict:
+    """``obsan verify``: a decomposition file's exact checks (a failed check is a value)."""
+    return _call(["verify", path, *_flags(options), "--json"])
+
+
+def calibrate(
+    dataset: PathLike,
+    method: str = "ml",
+    d0: Optional[float] = None,
+    **options: Any,
+) -> dict:
+    """``obsan calibrate``: phi, psi, eta, delta, xi (and with ``d0`` rho, rR, rL, B)
+    with standard deviations. ``method`` is det, ls, cekf or ml."""
+    return _call(["calibrate", dataset, *_flags(dict(method=method, d0=d0, **options)), "--json"])
+
+
+_SIM_JOIN = ("q",)
+
+
+def crlb(dataset: Optional[PathLike] = None, **options: Any) -> dict:
+    """``obsan crlb``: the Cramér–Rao bound for a dataset (at its ML estimate) or for
+    a simulated set-up given by the :func:`simulate` options."""
+    head = [dataset] if dataset is not None else []
+    return _call(["crlb", *head, *_flags(options, join=_SIM_JOIN), "--json"])
+
+
+def diagnose(
+    model: Union[PathLike, System],
+    data: PathLike,
+    effects: Optional[PathLike] = None,
+    **options: Any,
+) -> dict:
+    """``obsan diagnose``: fit ``model`` to ``data``, test the residuals, name the
+    significant effects. ``model`` is a path or a :class:`System`."""
+    source = None
+    if isinstance(model, System):
+        source, model = model._source, model.path
+    argv = ["diagnose", "--model", model, "--data", data]
+    argv += _flags(dict(effects=effects, **options))
+    return _call([*argv, "--json"], source)
+
+
+def simulate(out: PathLike, **options: Any) -> str:
+    """``obsan simulate``: write the paper's simulated dataset (section VI-A) to the
+    new folder ``out`` (``force=True`` replaces a folder obsan wrote) and return its
+    path; the truth is in ``out/truth.json``. Options are the CLI's flags:
+    ``q=[0.9, 0, -1]``, ``sigma_beta_deg``, ``bearings``, ``seed``,
+    ``effect={"bearing_scale": 0.04}``, ..."""
+    run("simulate", "--out", out, *_flags(options, join=_SIM_JOIN))
+    return os.fspath(out)
+
+
+def montecarlo(**options: Any) -> Any:
+    """``obsan montecarlo``: the paper's Tables IV–VII (``table=5``, ``runs=100``, ...)."""
+    return _call(["montecarlo", *_flags(options), "--json"])

@@ -1,0 +1,39 @@
+"""Shared fixtures: the repository's files and the release binary the CLI tests compare with."""
+
+import os
+import pathlib
+import shutil
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+SYSTEMS = ROOT / "systems"
+
+
+def obsan_binary():
+    """The `obsan` binary to compare with: $OBSAN_BIN, target/release/obsan, or PATH."""
+    env = os.environ.get("OBSAN_BIN")
+    if env:
+        return env
+    for d in (os.environ.get("CARGO_TARGET_DIR"), ROOT / "target"):
+        if d:
+            p = pathlib.Path(d) / "release" / "obsan"
+            if p.exists():
+                return str(p)
+    return shutil.which("obsan")
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """Run the release binary; returns (exit code, stdout, stderr)."""
+    import subprocess
+
+    exe = obsan_binary()
+    if exe is None:
+        pytest.skip("no obsan binary to compare with (cargo build --release, or set OBSAN_BIN)")
+
+    def run(*args):
+        p = subprocess.run([exe, *map(str, args)], capture_output=True, text=True, cwd=ROOT)
+        return p.returncode, p.stdout, p.stderr
+
+    return run

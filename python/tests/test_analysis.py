@@ -1,0 +1,97 @@
+"""The analysis commands against the paper's results and against the CLI."""
+
+import json
+import math
+import random
+
+import pytest
+
+import obsan
+from conftest import SYSTEMS
+
+CALIB = SYSTEMS / "calib.sys"
+STATE = ["mu", "gamma", "phi", "psi", "eta", "delta", "xi"]
+
+
+def test_calib_rank_is_full_without_restriction():
+    # Section V: eq. (16) is weakly locally observable, rank 7 of 7, proven.
+    r = obsan.load(CALIB).rank()
+    assert (r["rank"], r["n"]) == (7, 7)
+    assert r["exact"] is True and r["error_bound"] == 0.0
+    assert r["weakly_locally_observable"] is True
+
+
+def test_calib_rank_on_circles_is_4():
+    # Eq. (17), circular trajectories: rank 4 of 7 (three symmetries, Appendix B).
+    r = obsan.load(CALIB).rank(input="q")
+    assert (r["rank"], r["n"]) == (4, 7)
+    assert r["restriction"] == "q"
+    # Below n the rank is a lower bound with a stated error probability.
+    assert r["exact"] is False and 0 < r["error_bound"] < 1e-6
+    # A fixed q keeps the same rank.
+    assert obsan.load(CALIB).rank(input="q", set={"q": 0.9})["rank"] == 4
+
+
+def test_localization_from_text():
+    # Section II, eq. (3): rank 2 of 3, symmetry [0, 1, 1].
+    text = (SYSTEMS / "localization.sys").read_text()
+    s = obsan.loads(text)
+    assert s.name == "localization"
+    assert s.rank()["rank"] == 2
+    sym = s.symmetries()["symmetries"]
+    assert len(sym) == 1
+    v = [sym[0][x]["text"] for x in ("D", "phiR", "thetaR")]
+    assert v[0] == "0" and v[1] == v[2] != "0"
+
+
+def _eval(text, point):
+    """A formula printed by obsan, evaluated in floating point."""
+    env = dict(vars(math))
+    env.update(point)
+    return eval(text.replace("^", "**"), {"__builtins__": {}}, env)
+
+
+def _span_rank(vectors, names, consts=()):
+    """Numerical rank at random points of vectors of formulas (an independent check)."""
+    np = pytest.importorskip("numpy")
+    best = 0
+    rng = random.Random(7)
+    for _ in range(3):
+        point = {n: rng.uniform(0.2, 1.3) for n in [*names, *consts]}
+        m = np.array([[_eval(v[n], point) for n in names] for v in vectors], dtype=float)
+        best = max(best, np.linalg.matrix_rank(m, tol=1e-9 * max(1.0, abs(m).max())))
+    return best
+
+
+def test_symmetries_span_the_same_space_as_the_cli(cli):
+    s = obsan.load(CALIB).symmetries(input="q")
+    code, out, _ = cli("symmetries", CALIB, "--input", "q", "--json")
+    assert code == 0
+    c = json.loads(out)
+    ours = [{n: w[n]["text"] for n in STATE} for w in s["symmetries"]]
+    theirs = [{n: w[n]["text"] for n in STATE} for w in c["symmetries"]]
+    assert len(ours) == 3 == 7 - s["rank"]
+    assert _span_rank(ours, STATE, ["q"]) == 3
+    assert _span_rank(ours + theirs, STATE, ["q"]) == 3
+    # Appendix B: delta -> lambda with eta(1 + q delta), xi(1 - q delta) fixed.
+    b = {"mu": "0", "gamma": "0", "phi": "0", "psi": "0", "eta": "-q*eta/(1 + q*delta)",
+         "delta": "1", "xi": "q*xi/(1 - q*delta)"}
+    assert _span_rank(ours + [b], STATE, ["q"]) == 3
+
+
+def test_lie_derivatives_of_localization():
+    lie = obsan.load(SYSTEMS / "localization.sys").lie(1)["lie_derivatives"]
+    by_name = {d["lie_derivative"]: d["text"] for d in lie}
+    # h = D; L_v h = cos(thetaR - phiR), L_omega h = 0 (eq. 3).
+    assert by_name["y"] == "D"
+    zero = obsan.simplify(f"({by_name['L_v y']}) - cos(thetaR - phiR)")
+    assert zero["is_zero"] is True
+
+
+def test_check_failure_is_a_value():
+    s = obsan.load(SYSTEMS / "localization.sys")
+    r = s.check(["D", "thetaR - phiR"])
+    assert [c["observable_mode"] for c in r["checks"]] == [True, True]
+    bad = s.check("phiR")
+    assert bad["checks"][0]["observable_mode"] is False
+    assert obsan.run("check", SYSTEMS / "localization.sys", "--mode", "phiR", "--json").code == 1

@@ -1,0 +1,45 @@
+"""simulate, calibrate, crlb on a small simulated dataset."""
+
+import json
+
+import pytest
+
+import obsan
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory):
+    out = tmp_path_factory.mktemp("data") / "sim"
+    path = obsan.simulate(out, bearings=40, seed=3)
+    assert path == str(out)
+    return out
+
+
+def test_simulate_writes_a_dataset(dataset):
+    assert (dataset / "dataset.json").exists()
+    truth = json.loads((dataset / "truth.json").read_text())
+    assert [t["q"] for t in truth["trajectories"]] == [0.9, 0.0, -1.0]
+    with pytest.raises(obsan.ObsanError, match="already exists"):
+        obsan.simulate(dataset, bearings=40)
+
+
+def test_calibrate_recovers_the_truth(dataset):
+    truth = json.loads((dataset / "truth.json").read_text())
+    for method in ("ml", "ls"):
+        c = obsan.calibrate(dataset, method=method)
+        assert c["method"] == method
+        for name in ("eta", "delta", "xi", "psi"):
+            p = c["params"][name]
+            # Within 5 standard deviations of the simulated truth.
+            assert abs(p["value"] - truth[name]) < 5 * p["sd"] + 1e-9, (method, name, p, truth[name])
+    # With d0 the metric follows (rho, rR, rL, B).
+    m = obsan.calibrate(dataset, method="ml", d0=1.2)["metric"]
+    assert abs(m["rho"]["value"] - truth["rho"]) < 5 * m["rho"]["sd"]
+
+
+def test_crlb_is_below_the_estimated_sd(dataset):
+    b = obsan.crlb(bearings=40, seed=3)
+    assert b["bearings"] == ["q0.9 40", "q0 40", "q-1 40"]
+    assert all(v > 0 for v in b["crlb_sd"].values())
+    d = obsan.crlb(dataset)
+    assert set(d["crlb_sd"]) == set(b["crlb_sd"])
