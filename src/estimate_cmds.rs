@@ -534,13 +534,13 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
             })
             .collect();
         computed.push(recs);
-        eprintln!(
+        progress.println(&format!(
             "montecarlo: table {}: {} cell{} in {:.1} s",
             t.number,
             cells.len(),
             if cells.len() == 1 { "" } else { "s" },
             start.elapsed().as_secs_f64()
-        );
+        ));
     }
     drop(progress);
     if let (Some(shard), true) = (shard, a.json) {

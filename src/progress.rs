@@ -151,6 +151,18 @@ impl Progress {
     }
 }
 
+impl Progress {
+    /// A line on stderr that does not tear the bar.
+    pub fn println(&self, line: &str) {
+        match &self.mode {
+            Mode::Bar(b) => b.println(line),
+            _ => {
+                let _ = writeln!(std::io::stderr().lock(), "{line}");
+            }
+        }
+    }
+}
+
 impl Drop for Progress {
     fn drop(&mut self) {
         match &mut self.mode {

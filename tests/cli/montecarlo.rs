@@ -157,3 +157,22 @@ fn a_long_run_prints_progress_lines_when_stderr_is_not_a_terminal() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("/2 runs"), "{err}");
 }
+
+#[test]
+fn diagnose_prints_its_stages_as_progress_lines_when_stderr_is_not_a_terminal() {
+    let data = format!("{}/data", fresh_dir("mc-diag-progress"));
+    ok(&["simulate", "--out", &data, "--seed", "11"]);
+    let out = Command::new(env!("CARGO_BIN_EXE_obsan"))
+        .args(["diagnose", "--model", "systems/calib.sys", "--data", &data])
+        .env("OBSAN_PROGRESS_SECS", "0")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("diagnose: fitting the nominal model, "),
+        "no progress line in:\n{err}"
+    );
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("diagnose: fitting"));
+}
