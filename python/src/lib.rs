@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use std::time::Duration;
 
 create_exception!(
-    _native,
+    obsan,
     ObsanError,
     PyValueError,
     "An error obsan reports (exit code 2 of the CLI): bad input, with the CLI's file:line:col text, or a limit."

@@ -95,3 +95,10 @@ def test_check_failure_is_a_value():
     bad = s.check("phiR")
     assert bad["checks"][0]["observable_mode"] is False
     assert obsan.run("check", SYSTEMS / "localization.sys", "--mode", "phiR", "--json").code == 1
+
+
+def test_modes_of_localization_from_text():
+    # Section II: the observable modes are D and thetaR - phiR, proven.
+    m = obsan.loads((SYSTEMS / "localization.sys").read_text()).modes()
+    assert {x["expr"] for x in m["modes"]} == {"D", "thetaR - phiR"}
+    assert m["certificate"]["verified"] is True

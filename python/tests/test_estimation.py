@@ -5,6 +5,7 @@ import json
 import pytest
 
 import obsan
+from conftest import SYSTEMS
 
 
 @pytest.fixture(scope="module")
@@ -43,3 +44,13 @@ def test_crlb_is_below_the_estimated_sd(dataset):
     assert all(v > 0 for v in b["crlb_sd"].values())
     d = obsan.crlb(dataset)
     assert set(d["crlb_sd"]) == set(b["crlb_sd"])
+
+
+def test_diagnose_names_a_hidden_bearing_scale(tmp_path):
+    data = obsan.simulate(tmp_path / "eff", bearings=60, seed=2, effect={"bearing_scale": 0.05})
+    model = obsan.loads((SYSTEMS / "calib.sys").read_text())
+    d = obsan.diagnose(model, data, effects=SYSTEMS / "calib.eff")
+    named = {n["effect"]: n for n in d["named"]}
+    assert "bearing_scale" in named
+    (_, kb, sd), = named["bearing_scale"]["estimates"]
+    assert abs(kb - 0.05) < 5 * sd
