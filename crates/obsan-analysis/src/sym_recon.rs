@@ -186,9 +186,6 @@ pub(crate) fn reconstruct_basis(
             ))))
         }
     };
-    if std::env::var("OBSAN_PROF").is_ok() {
-        eprintln!("PROF recon stats {:?} coords {}", rec.stats, coords.len());
-    }
     let th = nf.ctx.tan_half();
     let angles = coords.iter().any(|c| matches!(c, Coord::Angle { .. }));
     let to_poly = |p: &obsan_recon::Poly| {

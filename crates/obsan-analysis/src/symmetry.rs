@@ -461,28 +461,14 @@ pub fn symmetries_with(
         Route::Reconstruct => true,
     };
     if recon {
-        let t0 = std::time::Instant::now();
         let free = choose_free_columns(nf, report)?;
-        let t1 = std::time::Instant::now();
         match reconstruct_basis(nf, report, &free, opts.deadline) {
             Ok(raw) => {
-                let t2 = std::time::Instant::now();
                 let vectors: Vec<Vec<RatFun>> = raw
                     .iter()
                     .map(|v| normalize_vector(&mut nf.ctx, v))
                     .collect();
-                let t3 = std::time::Instant::now();
-                let cc = certify_symmetries(nf, report, &vectors, opts.deadline)?;
-                if std::env::var("OBSAN_PROF").is_ok() {
-                    eprintln!(
-                        "PROF free {:?} recon {:?} norm {:?} cert {:?}",
-                        t1 - t0,
-                        t2 - t1,
-                        t3 - t2,
-                        t3.elapsed()
-                    );
-                }
-                return match cc {
+                return match certify_symmetries(nf, report, &vectors, opts.deadline)? {
                     Some(c) => Ok(SymmetryReport {
                         n,
                         rank: r,

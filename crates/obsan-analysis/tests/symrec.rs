@@ -228,3 +228,37 @@ fn prefix_rows_agree_with_rows() {
         }
     }
 }
+
+/// `height_bounds` (the content term of the certificate's bound) bounds the
+/// L1 norm of the coefficients: for a polynomial with non-negative
+/// coefficients that norm is its value at the all-ones point, computed here
+/// exactly and independently of the bound.
+#[test]
+fn height_bounds_cover_the_coefficient_norm() {
+    use obsan_expr::{height_bounds, Ctx, Q};
+    let cases = [
+        "(2*x + 3*y)^3*(x + 5)^2 + 7*x*y",
+        "(x + y + z)^6",
+        "11*x^2*(4 + y)^3 + (x*y + 2)^4*(3*z + 1)",
+    ];
+    for src in cases {
+        let mut ctx = Ctx::new();
+        let id = ctx.parse(src).unwrap();
+        let ones = ctx.eval_q(&[id], &|_| Some(Q::from_i64(1))).unwrap();
+        let norm = ones[0].to_f64();
+        let (hn, hd) = height_bounds(&ctx, &[id])[0];
+        assert!(
+            norm.log2() <= hn + 1e-9,
+            "{src}: |P|_1 = {norm}, bound 2^{hn}"
+        );
+        assert!(hd >= 0.0, "{src}: denominator bound {hd}");
+    }
+    // A quotient: (x + 2)/(3 y + 1) is 3 over 4 in L1 norm.
+    let mut ctx = Ctx::new();
+    let id = ctx.parse("(x + 2)/(3*y + 1)").unwrap();
+    let (hn, hd) = height_bounds(&ctx, &[id])[0];
+    assert!(
+        3f64.log2() <= hn + 1e-9 && 2.0 <= hd + 1e-9,
+        "bounds {hn}, {hd}"
+    );
+}
