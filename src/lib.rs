@@ -99,6 +99,18 @@ pub fn install_panic_hook() {
     });
 }
 
+/// How long past `--timeout` the watchdog waits before it ends a command. The
+/// stages that poll the engine's deadline (set to `--timeout` itself) stop on
+/// time and say how far they got; the watchdog is the backstop for work that
+/// cannot poll, and firing at the same instant raced them under load.
+const WATCHDOG_GRACE: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// The watchdog's wait for a `--timeout` of `secs`.
+fn watchdog(secs: f64) -> std::time::Duration {
+    // `seconds` in cli.rs bounds the value, so the Duration cannot overflow.
+    std::time::Duration::from_secs_f64(secs) + WATCHDOG_GRACE
+}
+
 /// The `obsan` program: arguments from the process, output to stdout and
 /// stderr, the exit code returned.
 pub fn main() -> ExitCode {
@@ -114,8 +126,7 @@ pub fn main() -> ExitCode {
     std::thread::spawn(move || {
         let _ = tx.send(run(command));
     });
-    // `seconds` in cli.rs bounds the value, so the Duration cannot overflow.
-    match rx.recv_timeout(std::time::Duration::from_secs_f64(secs)) {
+    match rx.recv_timeout(watchdog(secs)) {
         Ok(code) => code,
         Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
             eprintln!("error: timed out after {secs} s (--timeout)");
@@ -263,13 +274,9 @@ pub fn spawn_json(argv: &[String], overlay: Option<Overlay>) -> Result<Job, Fail
             Failure(text.strip_prefix("error: ").unwrap_or(text).to_string())
         })?;
     let command = args.command;
-    let deadline = command.timeout().map(|secs| {
-        // `seconds` in cli.rs bounds the value, so the Duration cannot overflow.
-        (
-            std::time::Instant::now() + std::time::Duration::from_secs_f64(secs),
-            secs,
-        )
-    });
+    let deadline = command
+        .timeout()
+        .map(|secs| (std::time::Instant::now() + watchdog(secs), secs));
     let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let flag = cancel.clone();
     let (tx, rx) = std::sync::mpsc::channel();
