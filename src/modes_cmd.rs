@@ -130,6 +130,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             if sym.exact { " (exact)" } else { " (the rank test's, exact only as a lower bound)" },
             match &checks {
                 Some(_) => "; reduced system: a decomposition check FAILED".to_string(),
+                None if d.reduced_timed_out => format!("; reduced system not closed within --timeout (the time limit stopped the search): no form yet for {}", d.missing().join(", ")),
                 None => format!("; reduced system not closed: no form in the modes found for {}", d.missing().join(", ")),
             }
         )

@@ -92,3 +92,33 @@ fn hiv_perelson_modes_span_the_scaling_invariants() {
         ],
     );
 }
+
+#[test]
+fn car_t_modes_are_the_translation_and_scaling_invariants() {
+    // The file's derivation: phi, rho only as phi - rho; CT -> l CT,
+    // CM -> l CM, gamma -> gamma/l.
+    assert_modes_span(
+        "systems/benchmarks/car_t.sys",
+        &[
+            "T",
+            "epsilon",
+            "theta",
+            "alpha",
+            "mu",
+            "r",
+            "b",
+            "CT*gamma",
+            "CM*gamma",
+            "phi - rho",
+        ],
+    );
+}
+
+#[test]
+fn sirs_forced_modes_see_the_forcing_through_b1() {
+    // The file's derivation: x1 -> l x1, x2 -> l x2, b1 -> b1/l; the rest seen.
+    assert_modes_span(
+        "systems/benchmarks/sirs_forced.sys",
+        &["s", "i", "r", "mu", "b0", "g", "nu", "M", "b1*x1", "b1*x2"],
+    );
+}

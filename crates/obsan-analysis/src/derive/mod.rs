@@ -127,6 +127,8 @@ pub struct Derivation {
     pub outputs: Vec<(String, Option<String>)>,
     /// Generic constants of the system the reduced system keeps.
     pub consts: Vec<String>,
+    /// The search for the reduced system stopped at the deadline.
+    pub reduced_timed_out: bool,
 }
 
 pub(super) fn check_deadline(
@@ -455,13 +457,28 @@ pub fn derive_modes(
             znames.push(name.clone());
         }
     }
+    // The deadline here is soft: the modes stand on their own checks, so a
+    // reduced system not closed in time is reported as such (forms not
+    // found), never as a failed run.
+    let mut timed_out = false;
+    let mut soft = |r: Result<Option<String>, AnalysisError>| match r {
+        Err(AnalysisError::Timeout(_)) => {
+            timed_out = true;
+            Ok(None)
+        }
+        r => r,
+    };
     let mut derivatives = Vec::new();
     for k in 0..modes.len() {
         let mut row = Vec::new();
         for f in &fields {
-            check_deadline(opts, "the reduced dynamics", modes.len())?;
-            let t = lie(nf, modes[k].expr, f);
-            row.push(in_modes(nf, t, &zb, &znames, &modes, &mut rng, opts)?);
+            let e = if check_deadline(opts, "the reduced dynamics", modes.len()).is_err() {
+                soft(Err(AnalysisError::Timeout(String::new())))?
+            } else {
+                let t = lie(nf, modes[k].expr, f);
+                soft(in_modes(nf, t, &zb, &znames, &modes, &mut rng, opts))?
+            };
+            row.push(e);
         }
         derivatives.push(row);
     }
@@ -470,7 +487,7 @@ pub fn derive_modes(
         let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
             Some(m.name.clone())
         } else {
-            in_modes(nf, h, &zb, &znames, &modes, &mut rng, opts)?
+            soft(in_modes(nf, h, &zb, &znames, &modes, &mut rng, opts))?
         };
         outputs.push((oname, e));
     }
@@ -483,6 +500,7 @@ pub fn derive_modes(
         derivatives,
         outputs,
         consts,
+        reduced_timed_out: timed_out,
     })
 }
 

@@ -156,8 +156,10 @@ fn monomial(
     (nf.ctx.mul(&factors), text)
 }
 
+/// A candidate: support size, negative exponents, total degree, columns, exponents.
+type Cand = (usize, usize, i64, Vec<usize>, Vec<i64>);
+
 /// Monomial invariants, accepted while they raise the rank.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn monomial_invariants(
     nf: &mut NormalForm,
     s: &Search,
@@ -201,7 +203,7 @@ pub(super) fn monomial_invariants(
     let live: Vec<usize> = (0..nb)
         .filter(|&k| rows.iter().any(|r| !r[k].is_zero()))
         .collect();
-    let mut cands: Vec<(usize, usize, i64, Vec<usize>, Vec<i64>)> = Vec::new();
+    let mut cands: Vec<Cand> = Vec::new();
     let mut budget = MAX_SUBSETS;
     for size in 2..=MAX_SUPPORT.min(live.len()) {
         check_deadline(s.opts, "the monomial invariants", modes.len())?;
