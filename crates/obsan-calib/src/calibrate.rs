@@ -133,6 +133,7 @@ impl CalibrateOptions {
 }
 
 /// One trajectory's observable modes (xi_q, L, c, k) and the DET curves.
+/// A plain result record (fields public): nothing reads it back as input.
 #[derive(Clone, Debug)]
 pub struct TrajectoryEstimate {
     pub name: String,
@@ -150,7 +151,8 @@ pub struct TrajectoryEstimate {
     pub period_from_others: bool,
 }
 
-/// The outcome of a calibration.
+/// The outcome of a calibration. A plain result record (fields public):
+/// the binary prints it and nothing checks it on the way back in.
 #[derive(Clone, Debug)]
 pub struct CalibrationReport {
     pub method: Method,

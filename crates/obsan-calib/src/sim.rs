@@ -115,7 +115,9 @@ impl Default for Robot {
     }
 }
 
-/// Simulation options (Table II defaults).
+/// Simulation options (Table II defaults). Fields public: every combination
+/// is checked where it matters, by [`simulate`], which refuses a bad one with
+/// its [`CalibError`] variant.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimOptions {
     pub robot: Robot,
@@ -177,6 +179,7 @@ impl Default for SimOptions {
 }
 
 /// What the estimators must recover (written to truth.json; never read by them).
+/// A plain result record (fields public).
 #[derive(Clone, Debug, Serialize)]
 pub struct Truth {
     pub phi: f64,

@@ -115,7 +115,7 @@ impl Ctx {
         let leaf = &self.leaves[v as usize];
         match leaf.kind {
             LeafKind::Sin(_) => leaf.partner.map(Relation::Sin),
-            LeafKind::Sqrt(_) => leaf.radicand.as_ref().map(Relation::Sqrt),
+            LeafKind::Sqrt(_) => self.radicand(v).map(Relation::Sqrt),
             _ => None,
         }
     }
@@ -374,7 +374,7 @@ impl Ctx {
     /// limits of docs/engine.md; no size or time limit applies. Use
     /// [`Ctx::try_canon`] for untrusted input.
     pub fn canon(&mut self, id: Id) -> RatFun {
-        if let Some(r) = self.canon_memo.get(&id) {
+        if let Some(r) = self.memo.canon.get(&id) {
             return r.clone();
         }
         // Nodes below `id` whose form is not known yet.
@@ -382,7 +382,7 @@ impl Ctx {
         let mut seen = FxHashSet::default();
         let mut stack = vec![id];
         while let Some(n) = stack.pop() {
-            if self.canon_memo.contains_key(&n) || !seen.insert(n) {
+            if self.memo.canon.contains_key(&n) || !seen.insert(n) {
                 continue;
             }
             todo.push(n);
@@ -400,7 +400,7 @@ impl Ctx {
                 Node::Add(cs) => self.canon_tree(&cs, false),
                 Node::Mul(cs) => self.canon_tree(&cs, true),
                 Node::Pow(b, e) => invariant(
-                    self.rf_pow(&self.canon_memo[&b], e as i64),
+                    self.rf_pow(&self.memo.canon[&b], e as i64),
                     "no division by zero in a canonical form (builders check divisors)",
                 ),
             };
@@ -409,16 +409,16 @@ impl Ctx {
             if !budget::check_degree(d as u64) || budget::tripped() {
                 return RatFun::zero();
             }
-            self.canon_memo.insert(n, r);
+            self.memo.canon.insert(n, r);
         }
-        self.canon_memo[&id].clone()
+        self.memo.canon[&id].clone()
     }
 
     /// The form of a sum or product of already canonical children, combined
     /// in a balanced tree: a long chain costs O(n log n) term copies instead
     /// of O(n^2).
     fn canon_tree(&self, cs: &[Id], product: bool) -> RatFun {
-        let mut level: Vec<RatFun> = cs.iter().map(|c| self.canon_memo[c].clone()).collect();
+        let mut level: Vec<RatFun> = cs.iter().map(|c| self.memo.canon[c].clone()).collect();
         // Short chains, and sums of fractions (pairing two large denominators
         // costs a large gcd), go left to right: each step meets a small operand.
         if level.len() <= BALANCE_MIN || (!product && level.iter().any(|r| !r.den.is_one())) {
@@ -483,7 +483,7 @@ impl Ctx {
             self.div(num, den)
         };
         if !budget::tripped() {
-            self.canon_memo.entry(id).or_insert_with(|| r.clone());
+            self.memo.canon.entry(id).or_insert_with(|| r.clone());
         }
         id
     }

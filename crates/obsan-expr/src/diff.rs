@@ -12,14 +12,14 @@ use rustc_hash::FxHashSet;
 impl Ctx {
     /// d `id` / d `x`, where `x` is a rational symbol.
     pub fn diff(&mut self, id: Id, x: Var) -> Id {
-        if let Some(&d) = self.diff_memo.get(&(id, x)) {
+        if let Some(&d) = self.memo.diff.get(&(id, x)) {
             return d;
         }
         let mut todo = Vec::new();
         let mut seen = FxHashSet::default();
         let mut stack = vec![id];
         while let Some(n) = stack.pop() {
-            if self.diff_memo.contains_key(&(n, x)) || !seen.insert(n) {
+            if self.memo.diff.contains_key(&(n, x)) || !seen.insert(n) {
                 continue;
             }
             todo.push(n);
@@ -32,13 +32,13 @@ impl Ctx {
                 // A placeholder: never memoise it (the budgeted caller discards it).
                 return d;
             }
-            self.diff_memo.insert((n, x), d);
+            self.memo.diff.insert((n, x), d);
         }
-        self.diff_memo[&(id, x)]
+        self.memo.diff[&(id, x)]
     }
 
     fn d(&self, n: Id, x: Var) -> Id {
-        self.diff_memo[&(n, x)]
+        self.memo.diff[&(n, x)]
     }
 
     fn diff_node(&mut self, n: Id, x: Var) -> Id {

@@ -310,7 +310,7 @@ impl Ctx {
                     done[p] = true;
                 }
                 LeafKind::Sqrt(_) => {
-                    let r = leaf.radicand.as_ref().ok_or(BadPoint)?;
+                    let r = self.radicand(v as Var).ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];
                     let n = r.num.eval_fp(&val);
                     let d = r.den.eval_fp(&val);
@@ -408,7 +408,7 @@ pub fn degree_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(u64, u64)> {
             Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
                 LeafKind::Sin(_) | LeafKind::Cos(_) => (2, 2),
                 LeafKind::Sqrt(_) => {
-                    let Some(r) = ctx.leaves[*v as usize].radicand.as_ref() else {
+                    let Some(r) = ctx.radicand(*v) else {
                         return vec![(u64::MAX, u64::MAX); roots.len()];
                     };
                     let leaf_deg = |p: &crate::poly::Poly| {

@@ -13,7 +13,7 @@
 //! exactly the variables of the canonical form's polynomials.
 
 use crate::budget::{self, Budget, Limit, NUM_BITS_MAX, POW_MAX};
-use crate::canon::RatFun;
+use crate::memo::Memo;
 use crate::num::Q;
 use crate::poly::Var;
 use dashu_int::ops::BitTest;
@@ -72,8 +72,6 @@ pub(crate) struct Leaf {
     pub node: Id,
     /// For `sin` leaves the matching `cos` leaf and vice versa.
     pub partner: Option<Var>,
-    /// For `sqrt` leaves: the canonical radicand.
-    pub radicand: Option<RatFun>,
 }
 
 /// The symbolic context: arena, leaves, and memo tables.
@@ -84,8 +82,8 @@ pub struct Ctx {
     pub(crate) leaves: Vec<Leaf>,
     leaf_dedup: FxHashMap<LeafKind, Var>,
     pub(crate) symbols: FxHashMap<String, Var>,
-    pub(crate) canon_memo: FxHashMap<Id, RatFun>,
-    pub(crate) diff_memo: FxHashMap<(Id, Var), Id>,
+    /// The passes' memo tables (memo.rs), opaque to the arena.
+    pub(crate) memo: Memo,
     /// Per-symbol unit denominators of angles and exponentials.
     pub(crate) angle_units: FxHashMap<(Var, bool), u32>,
     /// (sin leaf, cos leaf, half-angle symbol t) for every angle pair.
@@ -222,7 +220,6 @@ impl Ctx {
             kind: kind.clone(),
             node: Id(0),
             partner: None,
-            radicand: None,
         });
         let node = self.intern(Node::Leaf(v));
         self.leaves[v as usize].node = node;

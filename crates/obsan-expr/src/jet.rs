@@ -536,10 +536,7 @@ impl Compiler<'_> {
                         .max()
                         .unwrap_or(0)
                 };
-                let n = leaf
-                    .radicand
-                    .as_ref()
-                    .map_or(0, |r| count(&r.num) + count(&r.den));
+                let n = ctx.radicand(v).map_or(0, |r| count(&r.num) + count(&r.den));
                 let d = deg0[l(*u) as usize].clone();
                 (Op::Sqrt(v, l(*u), self.inverse(&d)), Deg::poly(n))
             }

@@ -37,6 +37,7 @@ mod gcd_modular;
 mod graph;
 mod jet;
 mod lower;
+mod memo;
 mod num;
 mod parse;
 mod poly;

@@ -14,7 +14,7 @@
 
 use crate::budget;
 use crate::canon::RatFun;
-use crate::graph::{Angle, Ctx, Id, Leaf, LeafKind};
+use crate::graph::{Angle, Ctx, Id, LeafKind};
 use crate::num::{int, int_exact_sqrt, Int, Q};
 use crate::poly::{Mono, Poly, Var};
 use dashu_int::Sign;
@@ -439,8 +439,7 @@ impl Ctx {
         stop()?;
         let id = self.from_canonical(&inner);
         let v = self.leaf(LeafKind::Sqrt(id));
-        let leaf: &mut Leaf = &mut self.leaves[v as usize];
-        leaf.radicand = Some(inner);
+        self.memo.radicands.insert(v, inner);
         let n = self.leaf_node(v);
         Ok(self.mul(&[out, n]))
     }

@@ -127,7 +127,7 @@ impl Ctx {
 
     fn arg(&self, id: Id, st: Style) -> String {
         let r = crate::budget::invariant(
-            self.canon_memo.get(&id).cloned(),
+            self.memo.canon.get(&id).cloned(),
             "atom arguments are canonical",
         );
         self.fmt_ratfun(&r, st, false)
