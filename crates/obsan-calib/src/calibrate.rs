@@ -8,9 +8,7 @@ use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Det};
 use crate::error::CalibError::{self, Degenerate};
 use nalgebra::{Matrix4, SMatrix};
 use obsan_data::{wrap, Dataset, Trajectory};
-use obsan_fit::{
-    crlb, estimate_noise, fit, FitOptions, FitResult, FitTrajectory, NoiseOptions, Predictor,
-};
+use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
 use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
@@ -96,12 +94,6 @@ pub struct CalibrateOptions {
     /// squares): standard deviations then include it, and the estimates
     /// come closer to the bound with encoder noise. Off: bearings only.
     pub ml_input_noise: bool,
-    /// ML without a stated encoder noise (`encoder_k` 0): estimate the
-    /// wheel speeds' noise intensities by restricted maximum likelihood at
-    /// the fit (`obsan_fit::estimate_noise`) and refit under them, so that
-    /// the standard deviations include it. Off: bearings only (the sds then
-    /// leave the encoder noise out).
-    pub ml_estimate_input_noise: bool,
     /// Column names: right-wheel speed and bearing.
     pub input: String,
     pub output: String,
@@ -125,7 +117,6 @@ impl CalibrateOptions {
             ml_step_tolerance: 1e-2,
             ml_max_step: 0.5,
             ml_input_noise: true,
-            ml_estimate_input_noise: true,
             input: "wR".into(),
             output: "beta".into(),
         }
@@ -163,10 +154,6 @@ pub struct CalibrationReport {
     pub calibration: Calibration,
     pub metric: Option<(Metric, Option<[f64; 4]>)>,
     pub ml: Option<FitResult>,
-    /// ML's wheel-speed noise intensities `(c_R, c_L)` when they were
-    /// estimated (no encoder noise stated), see
-    /// [`CalibrateOptions::ml_estimate_input_noise`].
-    pub input_noise_estimated: Option<[f64; 2]>,
 }
 
 /// LS on one trajectory from its DET (section V-B weights).
@@ -248,10 +235,6 @@ fn rms_of(c: &Closed, d: &ArcData) -> f64 {
     (ss / d.s.len().max(1) as f64).sqrt()
 }
 
-/// `-2 ln 0.001`: chi-square's critical value at p = 0.001 with two degrees
-/// of freedom (the two wheels' noise intensities).
-const INPUT_NOISE_LR: f64 = 13.815510557964274;
-
 /// Calibrate. `predictor` (calib.sys without restriction) is needed by `ml` only.
 pub fn calibrate(
     data: &Dataset,
@@ -332,7 +315,6 @@ pub fn calibrate(
         t.start = start_state(&calibration, &t.closed, t.q);
     }
     let mut ml = None;
-    let mut input_noise_estimated = None;
     if o.method == Method::Ml {
         let p = predictor.ok_or(CalibError::NoModel)?;
         let opts = FitOptions {
@@ -345,41 +327,7 @@ pub fn calibrate(
             // speeds drive the model, so their noise is in the residuals too.
             input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
         };
-        let (mut c, mut r) = ml_refine(data, p, &opts, &modes, &mut trajs, &calibration)?;
-        if o.ml_input_noise && o.ml_estimate_input_noise && enc_var == 0.0 {
-            // No encoder noise stated: its intensities (and the bearing
-            // level, when that was estimated too) at the fit, then the
-            // fit again under them.
-            let fts = FitTrajectory::all(p, data);
-            let no = NoiseOptions {
-                max_step: o.ml_max_step,
-                outputs: sigma_estimated,
-                ..NoiseOptions::default()
-            };
-            let e = estimate_noise(
-                p,
-                &fts,
-                &r.params,
-                &r.initial_states,
-                &[sigma],
-                &[true, true],
-                &no,
-            )
-            .map_err(|e| Degenerate(format!("the encoder-noise estimate failed: {e}")))?;
-            // Kept when the data show it: the likelihood-ratio statistic
-            // against bearing noise alone above chi-square's p = 0.001 with
-            // two degrees of freedom (a noiseless encoder changes nothing).
-            if e.m2ll_white - e.m2ll > INPUT_NOISE_LR && e.input_noise.iter().any(|c| *c > 0.0) {
-                let opts2 = FitOptions {
-                    sigma: e.sigma.clone(),
-                    input_noise: Some(e.input_noise.clone()),
-                    ..opts.clone()
-                };
-                (c, r) = ml_refine(data, p, &opts2, &modes, &mut trajs, &calibration)?;
-                sigma = e.sigma[0];
-                input_noise_estimated = Some([e.input_noise[0], e.input_noise[1]]);
-            }
-        }
+        let (c, r) = ml_refine(data, p, &opts, &modes, &mut trajs, &calibration)?;
         calibration = c;
         ml = Some(r);
     }
@@ -393,7 +341,6 @@ pub fn calibrate(
         calibration,
         metric,
         ml,
-        input_noise_estimated,
     })
 }
 

@@ -237,7 +237,7 @@ fn screened_states(
     sv: &[Vec<f64>],
     missing: &[usize],
     sigma: f64,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>, String), String> {
+) -> Result<Start, String> {
     let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
     let p = Predictor::new(&nf);
     let prepared = prepare(sys, data)?;
@@ -311,7 +311,7 @@ fn screened_states(
             "no start: none of the {tried} screened starts could be fitted"
         ));
     };
-    Ok((
+    Ok(Start(
         r.params,
         r.initial_states,
         format!(
@@ -465,7 +465,7 @@ pub fn start_values(
                 v
             })
             .collect();
-        let (pv2, sv2, note) = screened_states(sys, data, &pvs, &sv, &missing, sigma)?;
+        let Start(pv2, sv2, note) = screened_states(sys, data, &pvs, &sv, &missing, sigma)?;
         how.push(note);
         return Ok(Start(pv2, sv2, how.join("; ")));
     }
