@@ -63,12 +63,12 @@ impl Default for DiagnoseOptions {
             alpha: 0.01,
             max_rounds: usize::MAX,
             max_iterations: 60,
-            // 1e-6 let every fit that carries the lag's states creep for
-            // 14-60 iterations on MRCLAM (weakly determined initial states
-            // of windows where the robot stands still keep the Gauss-Newton
-            // distance from falling), gaining under 3 in -2 log L (of 720)
-            // and moving estimates by under 0.02 sd: 1e-5 is 0.13 there.
-            cost_tolerance: 1e-5,
+            // 1e-5 takes MRCLAM from 59 to 12-22 s CPU per robot (fits with
+            // the lag creep 14-60 iterations along near-null initial-state
+            // directions) but leaves a large wheel slip's fit on calib short
+            // (tests/hidden.rs, slip 1.34 seed 1): the stopping rule needs the
+            // fix (fit.rs), not this tolerance.
+            cost_tolerance: 1e-6,
             step_tolerance: 1e-2,
             max_step: 0.5,
             rank_trajectories: 4,
