@@ -63,6 +63,11 @@ impl Default for DiagnoseOptions {
             alpha: 0.01,
             max_rounds: usize::MAX,
             max_iterations: 60,
+            // 1e-5 takes MRCLAM from 59 to 12-22 s CPU per robot (fits with
+            // the lag creep 14-60 iterations along near-null initial-state
+            // directions) but leaves a large wheel slip's fit on calib short
+            // (tests/hidden.rs, slip 1.34 seed 1): the stopping rule needs the
+            // fix (fit.rs), not this tolerance.
             cost_tolerance: 1e-6,
             step_tolerance: 1e-2,
             max_step: 0.5,
