@@ -351,7 +351,7 @@ pub fn calibrate(
 pub fn circle_modes(
     data: &Dataset,
     o: &CalibrateOptions,
-) -> Vec<Result<(f64, f64, f64), Degenerate>> {
+) -> Vec<Result<(f64, f64, f64), CalibError>> {
     let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
     let sigma = o.sigma_beta.unwrap_or(1e-2);
     data.trajectories
