@@ -157,7 +157,14 @@ input_noise, lr_critical, ...}; --report writes report.md, SVG plots, extended.s
 diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
-    #[command(subcommand)]
+    #[command(
+        subcommand,
+        after_help = "Examples:
+  obsan import mrclam ../shared/data/mrclam --robot 1 --out data/mrclam1
+
+Each format is a subcommand (obsan import mrclam --help); none has --json: the dataset is
+written to --out and a one-line summary to stdout."
+    )]
     Import(ImportCommand),
 }
 

@@ -503,12 +503,17 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
     }
     let plan = plan(a)?;
     let shard = a.shard.as_deref().map(parse_shard).transpose()?;
-    if let Some(n) = a.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| Failure(format!("--threads {n}: {e}")))?;
-    }
+    // A pool of its own, not the global one: that can be set once per
+    // process, and the Python package runs many commands in one.
+    let pool = match a.threads {
+        Some(n) => Some(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| Failure(format!("--threads {n}: {e}")))?,
+        ),
+        None => None,
+    };
     let range = |runs: usize| match shard {
         Some((k, n)) => shard_runs(runs, k, n).unwrap_or(0..0),
         None => 0..runs,
@@ -521,27 +526,38 @@ pub fn montecarlo_cmd(a: &MontecarloArgs) -> Result<ExitCode, Failure> {
     let p = calib_predictor();
     let progress = Progress::new("montecarlo", total as u64, "runs");
     // Per table, per selected cell: the records of its runs in this shard.
-    let mut computed: Vec<Vec<Vec<RunRecord>>> = Vec::new();
-    for (t, cells, runs) in &plan.tables {
-        progress.set_message(&format!("table {}", t.number));
-        let start = std::time::Instant::now();
-        let recs = cells
-            .iter()
-            .map(|&c| {
-                run_runs(&t.cells[c], t.modes, range(*runs), a.seed, &p, &|| {
-                    progress.inc()
+    let compute = || -> Result<Vec<Vec<Vec<RunRecord>>>, Failure> {
+        let mut computed: Vec<Vec<Vec<RunRecord>>> = Vec::new();
+        for (t, cells, runs) in &plan.tables {
+            progress.set_message(&format!("table {}", t.number));
+            let start = std::time::Instant::now();
+            let recs = cells
+                .iter()
+                .map(|&c| {
+                    run_runs(&t.cells[c], t.modes, range(*runs), a.seed, &p, &|| {
+                        progress.inc()
+                    })
                 })
-            })
-            .collect();
-        computed.push(recs);
-        progress.println(&format!(
-            "montecarlo: table {}: {} cell{} in {:.1} s",
-            t.number,
-            cells.len(),
-            if cells.len() == 1 { "" } else { "s" },
-            start.elapsed().as_secs_f64()
-        ));
-    }
+                .collect::<Result<_, _>>()?;
+            computed.push(recs);
+            progress.println(&format!(
+                "montecarlo: table {}: {} cell{} in {:.1} s",
+                t.number,
+                cells.len(),
+                if cells.len() == 1 { "" } else { "s" },
+                start.elapsed().as_secs_f64()
+            ));
+        }
+        Ok(computed)
+    };
+    let computed = match &pool {
+        // The cancel flag is this thread's: hand it to the pool's.
+        Some(pool) => {
+            let flag = obsan_expr::cancel_flag();
+            pool.install(|| obsan_expr::with_cancel(flag, compute))?
+        }
+        None => compute()?,
+    };
     drop(progress);
     if let (Some(shard), true) = (shard, a.json) {
         let part = Partial {

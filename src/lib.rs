@@ -252,12 +252,23 @@ impl Job {
     }
 
     /// Ask the command to stop: the engine's exact work stops where it polls
-    /// its budget ([`obsan_expr::with_cancel`]); work that does not poll it
-    /// (estimation) runs to its end, and its result is dropped.
+    /// its budget ([`obsan_expr::with_cancel`]), and the loops outside it
+    /// (the F_p rank test, the estimators, Monte Carlo runs on every worker
+    /// thread) where they poll [`obsan_expr::cancel_requested`]; the command
+    /// then ends with the error "interrupted".
     pub fn cancel(&self) {
         self.cancel
             .store(true, std::sync::atomic::Ordering::Relaxed);
     }
+}
+
+/// Commands started by [`spawn_json`] whose thread has not ended yet.
+static RUNNING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// How many commands started by [`spawn_json`] are still running (a
+/// cancelled one counts until its thread has stopped).
+pub fn running_commands() -> usize {
+    RUNNING.load(std::sync::atomic::Ordering::SeqCst)
 }
 
 /// Start `obsan ARGV...` on a worker thread, its stdout held back as the
@@ -281,16 +292,33 @@ pub fn spawn_json(argv: &[String], overlay: Option<Overlay>) -> Result<Job, Fail
     let flag = cancel.clone();
     let (tx, rx) = std::sync::mpsc::channel();
     install_panic_hook();
+    /// Counts the command in [`RUNNING`] until its thread ends, however it ends.
+    struct Counted;
+    impl Drop for Counted {
+        fn drop(&mut self) {
+            RUNNING.fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+    RUNNING.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+    let counted = Counted;
     std::thread::Builder::new()
         .name("obsan".into())
         // As much stack as the binary's main thread has.
         .stack_size(8 << 20)
         .spawn(move || {
+            let _counted = counted;
             fsio::set_overlay(overlay);
+            let cancelled = flag.clone();
             let r = obsan_expr::with_cancel(flag, || {
                 std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| execute(command, true)))
             });
             fsio::set_overlay(None);
+            // Whatever a cancelled command returns was computed from work cut
+            // short (a fit stopped early, a candidate skipped): not an answer.
+            if cancelled.load(std::sync::atomic::Ordering::Relaxed) {
+                let _ = tx.send(Err(Failure("interrupted".into())));
+                return;
+            }
             let _ = tx.send(match r {
                 Ok(Ok((code, held))) => code.and_then(|code| outcome(code, held)),
                 Ok(Err(f)) => Err(f),
@@ -469,6 +497,35 @@ mod tests {
                 break r;
             }
             assert!(start.elapsed().as_secs() < 60, "the engine did not stop");
+        };
+        assert_eq!(r.unwrap_err().0, "interrupted");
+    }
+
+    #[test]
+    fn cancel_stops_monte_carlo_runs_on_their_worker_threads() {
+        // 400 runs of five estimators: minutes unless stopped.
+        let job = spawn_json(
+            &argv(&[
+                "montecarlo",
+                "--table",
+                "5",
+                "--cell",
+                "1",
+                "--runs",
+                "400",
+                "--json",
+            ]),
+            None,
+        )
+        .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        job.cancel();
+        let start = std::time::Instant::now();
+        let r = loop {
+            if let Some(r) = job.wait(std::time::Duration::from_secs(1)) {
+                break r;
+            }
+            assert!(start.elapsed().as_secs() < 60, "the runs did not stop");
         };
         assert_eq!(r.unwrap_err().0, "interrupted");
     }

@@ -31,6 +31,7 @@ __all__ = [
     "diagnose",
     "simulate",
     "montecarlo",
+    "montecarlo_merge",
     "verify",
     "run",
     "Run",
@@ -295,5 +296,37 @@ def simulate(out: PathLike, **options: Any) -> str:
 
 
 def montecarlo(**options: Any) -> Any:
-    """``obsan montecarlo``: the paper's Tables IV–VII (``table=5``, ``runs=100``, ...)."""
-    return _call(["montecarlo", *_flags(options), "--json"])
+    """``obsan montecarlo``: the paper's Tables IV–VII (``table=5``, ``runs=100``,
+    ``cell=3``, ``seed=1``, ``threads=2``, ...) as a list of tables (see docs/montecarlo.md).
+
+    With ``shard="K/N"`` (or ``shard=(K, N)``) it runs that fixed subset of the runs and
+    returns the partial result, a plain dict (never numpy: it is meant for
+    :func:`montecarlo_merge`, and ``json.dump`` writes it as ``obsan montecarlo merge``
+    reads it)."""
+    shard = options.get("shard")
+    if isinstance(shard, (tuple, list)):
+        options = dict(options, shard=f"{shard[0]}/{shard[1]}")
+    argv = ["montecarlo", *_flags(options), "--json"]
+    if shard is not None:
+        return run(*argv).value
+    return _call(argv)
+
+
+def montecarlo_merge(parts: Iterable[Any]) -> Any:
+    """``obsan montecarlo merge --json``: the partial results of every shard of one sweep
+    (the dicts :func:`montecarlo` returns with ``shard=``, or paths of the files the CLI's
+    ``--shard K/N --json`` wrote), in any order, as exactly the tables one run gives."""
+    import tempfile
+
+    parts = list(parts)
+    with tempfile.TemporaryDirectory(prefix="obsan-merge-") as d:
+        paths = []
+        for i, p in enumerate(parts, 1):
+            if isinstance(p, Mapping):
+                path = os.path.join(d, f"part{i}.json")
+                with open(path, "w", encoding="utf-8") as f:
+                    json.dump(p, f)
+                paths.append(path)
+            else:
+                paths.append(p)
+        return _call(["montecarlo", "merge", *paths, "--json"])

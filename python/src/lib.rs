@@ -52,8 +52,10 @@ fn run_json(
         }
         if let Err(interrupt) = py.check_signals() {
             job.cancel();
-            // Exact work stops at the engine's next poll; what does not poll
-            // (estimation) is left to finish on its thread, its result dropped.
+            // Every long loop polls the flag (the engine, the rank test, the
+            // estimators, Monte Carlo): the command ends with "interrupted",
+            // waited for (up to the grace) so that its threads are idle when
+            // KeyboardInterrupt is raised.
             py.detach(move || {
                 let _ = job.wait(CANCEL_GRACE);
             });
@@ -62,9 +64,17 @@ fn run_json(
     }
 }
 
+/// How many commands are still running on their threads (one interrupted
+/// by Ctrl-C counts until it has stopped).
+#[pyfunction]
+fn running_commands() -> usize {
+    obsan_cli::running_commands()
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_json, m)?)?;
+    m.add_function(wrap_pyfunction!(running_commands, m)?)?;
     m.add("ObsanError", m.py().get_type::<ObsanError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

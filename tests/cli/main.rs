@@ -12,6 +12,7 @@ mod simulate;
 mod suite;
 #[path = "../../benches/suite_entries.rs"]
 mod suite_entries;
+mod surface;
 mod trust;
 mod tutorial;
 mod util;

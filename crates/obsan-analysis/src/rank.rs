@@ -90,6 +90,8 @@ pub enum AnalysisError {
     NoPoint,
     /// Anything else, with a message for the user.
     Invalid(String),
+    /// The caller asked the computation to stop ([`obsan_expr::with_cancel`]).
+    Cancelled,
 }
 
 impl fmt::Display for AnalysisError {
@@ -98,6 +100,7 @@ impl fmt::Display for AnalysisError {
             AnalysisError::Timeout(s) => write!(f, "timed out: {s}"),
             AnalysisError::NoPoint => f.write_str("no random point avoided the poles of the system (is a denominator identically zero on the domain?)"),
             AnalysisError::Invalid(s) => f.write_str(s),
+            AnalysisError::Cancelled => f.write_str("interrupted"),
         }
     }
 }
@@ -346,6 +349,11 @@ fn grow<R: Rows>(
     loop {
         let mut kept = Vec::new();
         for (word, node) in level {
+            // The F_p rows never enter the engine's armed scope, which is
+            // where a cancel is otherwise noticed.
+            if obsan_expr::cancel_requested() {
+                return Err(AnalysisError::Cancelled);
+            }
             if let Some(d) = opts.deadline {
                 if Instant::now() > d {
                     return Err(AnalysisError::Timeout(format!(

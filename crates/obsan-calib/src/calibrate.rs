@@ -6,6 +6,7 @@ use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
 use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Det};
 use crate::error::CalibError::{self, Degenerate};
+use crate::error::{cancel_point, or_cancelled};
 use nalgebra::{Matrix4, SMatrix};
 use obsan_data::{wrap, Dataset, Trajectory};
 use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
@@ -245,6 +246,7 @@ pub fn calibrate(
     // Per trajectory: DET always (it initialises everything else).
     let mut trajs = Vec::new();
     for t in &data.trajectories {
+        cancel_point()?;
         trajs.push(det_trajectory(t, o)?);
     }
     let mut sigma = o.sigma_beta.unwrap_or(f64::NAN);
@@ -255,6 +257,7 @@ pub fn calibrate(
         for pass in 0..2 {
             let s_used = if sigma.is_nan() { 1e-2 } else { sigma };
             for tr in trajs.iter_mut() {
+                cancel_point()?;
                 ls_trajectory(tr, s_used, enc_var, o);
             }
             if pass == 0 {
@@ -293,7 +296,7 @@ pub fn calibrate(
                 cov: t.modes_cov,
             })
             .collect(),
-        Method::Cekf => cekf_modes(data, o, sigma, enc_var, &mut trajs)?,
+        Method::Cekf => cekf_modes(data, o, sigma, enc_var, &mut trajs).map_err(or_cancelled)?,
     };
     // ML starts from section V-C with the *measured* wheel-speed ratio of
     // each trajectory (integral of wL / integral of wR): a commanded-ratio
@@ -327,10 +330,13 @@ pub fn calibrate(
             // speeds drive the model, so their noise is in the residuals too.
             input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
         };
-        let (c, r) = ml_refine(data, p, &opts, &modes, &mut trajs, &calibration)?;
+        let (c, r) =
+            ml_refine(data, p, &opts, &modes, &mut trajs, &calibration).map_err(or_cancelled)?;
         calibration = c;
         ml = Some(r);
     }
+    // Work cut short by a cancel (an unconverged fit, say) is not an answer.
+    cancel_point()?;
     let metric =
         o.d0.map(|d0| metric_of(&calibration, &trajs, ml.as_ref(), d0));
     Ok(CalibrationReport {

@@ -5,7 +5,7 @@
 //! with the encoder error model of [10] as input noise (`var(ds) = K^2 |ds| / r`).
 
 use crate::circle::Closed;
-use crate::error::CalibError;
+use crate::error::{cancel_point, CalibError};
 use nalgebra::{Matrix4, Vector4};
 use obsan_data::{wrap, Trajectory};
 use std::f64::consts::PI;
@@ -59,6 +59,7 @@ pub fn cekf(
     let mut row = 0usize;
     let mut tcur = t.inputs.t().first().copied().unwrap_or(0.0);
     for (k, &tb) in t.outputs.t().iter().enumerate() {
+        cancel_point()?;
         // Propagate to the bearing's time, one encoder interval at a time.
         while tcur < tb - 1e-12 {
             while row + 1 < t.inputs.len() && t.inputs.t()[row + 1] <= tcur + 1e-12 {

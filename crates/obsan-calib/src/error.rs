@@ -63,6 +63,8 @@ pub enum CalibError {
         duration: f64,
         needed: usize,
     },
+    /// The caller asked the work to stop ([`obsan_expr::with_cancel`]).
+    Cancelled,
 }
 
 impl fmt::Display for CalibError {
@@ -122,6 +124,7 @@ impl fmt::Display for CalibError {
                 f,
                 "trajectory {trajectory}: only {bearings} bearings in its {duration:.1} s, and a dataset needs at least {needed} per trajectory: raise the bearing rate (or --bearings)"
             ),
+            Cancelled => f.write_str("interrupted"),
         }
     }
 }
@@ -133,6 +136,25 @@ impl std::error::Error for CalibError {
             CalibError::Ml(e) | CalibError::Crlb(e) => Some(e),
             _ => None,
         }
+    }
+}
+
+/// `Err(Cancelled)` once the caller asked the work to stop: the estimators
+/// poll it per trajectory (and the CEKF per bearing).
+pub(crate) fn cancel_point() -> Result<(), CalibError> {
+    if obsan_expr::cancel_requested() {
+        return Err(CalibError::Cancelled);
+    }
+    Ok(())
+}
+
+/// `e`, or `Cancelled` when a cancel caused it (a fit's own cancelled error,
+/// wrapped as `Ml`, is the caller's interrupt, not a failed fit).
+pub(crate) fn or_cancelled(e: CalibError) -> CalibError {
+    if obsan_expr::cancel_requested() {
+        CalibError::Cancelled
+    } else {
+        e
     }
 }
 

@@ -24,12 +24,15 @@ pub enum MontecarloError {
     /// 0, 1, ..., n-1 of the cell, each with one outcome per method and the
     /// table's columns: the message says where they differ.
     Records(String),
+    /// The caller asked the runs to stop ([`obsan_expr::with_cancel`]).
+    Cancelled,
 }
 
 impl std::fmt::Display for MontecarloError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             MontecarloError::Records(s) => f.write_str(s),
+            MontecarloError::Cancelled => f.write_str("interrupted"),
         }
     }
 }
@@ -417,7 +420,10 @@ pub fn crlb_sd(
 
 /// The runs `runs` of a cell (seeds by [`run_seed`]), each calibrated by
 /// every method of the cell, in parallel; the records in run order. `tick`
-/// is called after each run.
+/// is called after each run. The caller's cancel flag
+/// ([`obsan_expr::with_cancel`]) reaches the worker threads: once it is
+/// set, the runs not started are skipped, the running ones stop at their
+/// estimator's next poll, and the answer is `Cancelled`.
 pub fn run_runs(
     cell: &Cell,
     modes: bool,
@@ -425,25 +431,52 @@ pub fn run_runs(
     seed: u64,
     predictor: &Predictor,
     tick: &(dyn Fn() + Sync),
-) -> Vec<RunRecord> {
-    runs.into_par_iter()
+) -> Result<Vec<RunRecord>, MontecarloError> {
+    let flag = obsan_expr::cancel_flag();
+    let records: Option<Vec<RunRecord>> = runs
+        .into_par_iter()
         .map(|r| {
-            let sim = SimOptions {
-                seed: run_seed(seed, r),
-                ..cell.sim.clone()
-            };
-            let outcomes = match simulate(&sim) {
-                Ok((data, truth)) => cell
-                    .methods
-                    .iter()
-                    .map(|&m| one(m, &data, &truth, predictor, modes))
-                    .collect(),
-                Err(e) => cell.methods.iter().map(|_| Err(e.to_string())).collect(),
-            };
-            tick();
-            RunRecord { run: r, outcomes }
+            obsan_expr::with_cancel(flag.clone(), || {
+                run_one(cell, modes, r, seed, predictor, tick)
+            })
         })
-        .collect()
+        .collect();
+    match records {
+        Some(records) if !obsan_expr::cancel_requested() => Ok(records),
+        _ => Err(MontecarloError::Cancelled),
+    }
+}
+
+/// Run `r` of [`run_runs`], on a worker thread; `None` once cancelled.
+fn run_one(
+    cell: &Cell,
+    modes: bool,
+    r: usize,
+    seed: u64,
+    predictor: &Predictor,
+    tick: &(dyn Fn() + Sync),
+) -> Option<RunRecord> {
+    if obsan_expr::cancel_requested() {
+        return None;
+    }
+    let sim = SimOptions {
+        seed: run_seed(seed, r),
+        ..cell.sim.clone()
+    };
+    let outcomes = match simulate(&sim) {
+        Ok((data, truth)) => cell
+            .methods
+            .iter()
+            .map(|&m| one(m, &data, &truth, predictor, modes))
+            .collect(),
+        Err(e) => cell.methods.iter().map(|_| Err(e.to_string())).collect(),
+    };
+    if obsan_expr::cancel_requested() {
+        // Its outcomes may be "interrupted" failures, not answers.
+        return None;
+    }
+    tick();
+    Some(RunRecord { run: r, outcomes })
 }
 
 /// The Cramér–Rao bounds a cell reports (see [`CellResult`]): they depend on
@@ -577,7 +610,7 @@ pub fn run_cell(
     predictor: &Predictor,
     tick: &(dyn Fn() + Sync),
 ) -> Result<CellResult, MontecarloError> {
-    let records = run_runs(cell, modes, 0..runs, seed, predictor, tick);
+    let records = run_runs(cell, modes, 0..runs, seed, predictor, tick)?;
     summarize(cell, modes, &records, cell_bounds(cell, modes, predictor))
 }
 
@@ -627,7 +660,7 @@ mod tests {
         let cell = &t.cells[3];
         let one = run_cell(cell, t.modes, 5, 7, &p, &|| {}).unwrap();
         let parts: Vec<Vec<RunRecord>> = (1..=3)
-            .map(|k| run_runs(cell, t.modes, shard_runs(5, k, 3).unwrap(), 7, &p, &|| {}))
+            .map(|k| run_runs(cell, t.modes, shard_runs(5, k, 3).unwrap(), 7, &p, &|| {}).unwrap())
             .collect();
         let merged = merge_runs(parts.clone(), 5).unwrap();
         let m = summarize(cell, t.modes, &merged, cell_bounds(cell, t.modes, &p)).unwrap();

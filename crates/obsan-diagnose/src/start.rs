@@ -302,9 +302,13 @@ fn screened_states(
         input_noise: None,
     };
     let tried = combos.len();
+    // The caller's cancel flag is thread-local: hand it to the workers.
+    let cancel = obsan_expr::cancel_flag();
     let best = combos
         .par_iter()
-        .filter_map(|(_, pv, states)| fit(&p, &trajs, pv, states, &opts).ok())
+        .filter_map(|(_, pv, states)| {
+            obsan_expr::with_cancel(cancel.clone(), || fit(&p, &trajs, pv, states, &opts)).ok()
+        })
         .min_by(|a, b| a.cost.total_cmp(&b.cost));
     let Some(r) = best else {
         return Err(DiagnoseError::ScreenNoFit { tried });

@@ -289,20 +289,24 @@ pub fn diagnose(
             round + 1,
             remaining.len()
         ));
+        // The caller's cancel flag is thread-local: hand it to the workers.
+        let cancel = obsan_expr::cancel_flag();
         let results: Vec<(CandidateResult, Option<(System, ModelFit)>)> = remaining
             .par_iter()
             .map(|e| {
-                candidate(
-                    &current_sys,
-                    &current,
-                    e,
-                    data,
-                    &which,
-                    (&sigma, &noise),
-                    crit,
-                    o,
-                    lib,
-                )
+                obsan_expr::with_cancel(cancel.clone(), || {
+                    candidate(
+                        &current_sys,
+                        &current,
+                        e,
+                        data,
+                        &which,
+                        (&sigma, &noise),
+                        crit,
+                        o,
+                        lib,
+                    )
+                })
             })
             .collect();
         if round == 0 {

@@ -163,6 +163,21 @@ fn cancelled() -> bool {
     })
 }
 
+/// Whether the caller of [`with_cancel`] asked this thread's work to stop:
+/// long loops outside the engine (the F_p rank test, the estimators, Monte
+/// Carlo runs) poll this and return their crate's "cancelled" error. Cheap
+/// (a thread-local and an atomic load); `false` outside [`with_cancel`].
+pub fn cancel_requested() -> bool {
+    cancelled()
+}
+
+/// This thread's cancel flag, to hand to worker threads (the flag is
+/// thread-local): `with_cancel(cancel_flag(), ..)` on each worker. Outside
+/// [`with_cancel`], a fresh flag nobody sets.
+pub fn cancel_flag() -> Arc<AtomicBool> {
+    CANCEL.with(|c| c.borrow().clone()).unwrap_or_default()
+}
+
 /// Run `f` with `b` armed on this thread. A nested scope keeps the outer
 /// budget (the outermost caller's limits apply) and reports the outer trip.
 /// The value is a placeholder whenever the limit is `Some`.
@@ -334,5 +349,30 @@ mod tests {
         flag.store(false, Ordering::Relaxed);
         let r = with_cancel(flag, || ctx.try_canon(small)).unwrap();
         assert_eq!(r.numerator().len(), 3);
+    }
+
+    /// `cancel_requested` follows the scope's flag, and `cancel_flag` hands
+    /// the same flag to another thread (where it was not set before).
+    #[test]
+    fn the_cancel_flag_reaches_worker_threads() {
+        assert!(!cancel_requested());
+        assert!(!cancel_flag().load(Ordering::Relaxed));
+        let flag = Arc::new(AtomicBool::new(false));
+        with_cancel(flag.clone(), || {
+            assert!(!cancel_requested());
+            let handed = cancel_flag();
+            let worker = std::thread::spawn(move || {
+                assert!(!cancel_requested());
+                with_cancel(handed, || {
+                    while !cancel_requested() {
+                        std::thread::yield_now();
+                    }
+                })
+            });
+            flag.store(true, Ordering::Relaxed);
+            assert!(cancel_requested());
+            worker.join().unwrap();
+        });
+        assert!(!cancel_requested());
     }
 }

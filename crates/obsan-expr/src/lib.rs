@@ -47,8 +47,8 @@ mod tanhalf;
 pub mod tutorial;
 
 pub use budget::{
-    budget_tripped, with_cancel, within_thread_budget, Budget, Limit, EXP_MAX, NUM_BITS_MAX,
-    POW_MAX,
+    budget_tripped, cancel_flag, cancel_requested, with_cancel, within_thread_budget, Budget,
+    Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
 };
 pub use canon::RatFun;
 pub use eval::{

@@ -35,6 +35,8 @@ pub enum FitError {
     NoiseSizes,
     /// The input noise cannot be carried back to the trajectories' starts.
     NoiseNotCarried,
+    /// The caller asked the fit to stop ([`obsan_expr::with_cancel`]).
+    Cancelled,
 }
 
 impl fmt::Display for FitError {
@@ -89,6 +91,7 @@ impl fmt::Display for FitError {
                 "the input noise cannot be carried back to the trajectories' starts \
                     (a state decays too fast over them): no intensity can be estimated",
             ),
+            FitError::Cancelled => f.write_str("interrupted"),
         }
     }
 }

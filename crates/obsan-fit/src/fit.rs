@@ -313,6 +313,7 @@ impl Problem<'_> {
     fn cost(&self, theta: &[f64]) -> Result<f64, FitError> {
         let mut total = 0.0;
         for (k, t) in self.trajs.iter().enumerate() {
+            cancel_point()?;
             let x0 = self.lay.state_of(theta, k);
             let r = residuals(self.p, t, &x0, self.opts, &self.cols[k], false, false)?.0;
             total += self
@@ -340,6 +341,7 @@ impl Problem<'_> {
         let mut jac = Vec::with_capacity(self.trajs.len());
         let noise = refresh && self.opts.input_noise.is_some();
         for (k, t) in self.trajs.iter().enumerate() {
+            cancel_point()?;
             // Theta index of each column of the trajectory's Jacobian: its own
             // initial dynamic state, then the shared params.
             let idx: Vec<usize> = (0..lay.n_dyn)
@@ -495,6 +497,15 @@ fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     )
 }
 
+/// `Err(Cancelled)` once the caller asked the work to stop (polled per
+/// trajectory prediction: the fit's unit of work).
+fn cancel_point() -> Result<(), FitError> {
+    if obsan_expr::cancel_requested() {
+        return Err(FitError::Cancelled);
+    }
+    Ok(())
+}
+
 /// Fit `params` (the predictor's params) and each trajectory's initial dynamic state.
 pub fn fit(
     p: &Predictor,
@@ -607,6 +618,8 @@ pub fn fit(
             }
         }
     }
+    // A cancel makes every trial above fail, which reads as convergence.
+    cancel_point()?;
     // With input noise the last linearisation's weighting was placed at the
     // pass's start, not at the estimate: the covariance (and the cost and
     // log-determinant the likelihood ratios read) are those of the

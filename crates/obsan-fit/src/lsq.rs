@@ -59,7 +59,7 @@ pub struct LmResult {
     pub cost: f64,
     pub iterations: usize,
     /// The last accepted step met the relative cost tolerance (otherwise the
-    /// iteration or damping budget ended the loop).
+    /// iteration or damping budget, or a cancel, ended the loop).
     pub converged: bool,
 }
 
@@ -67,7 +67,9 @@ pub struct LmResult {
 /// with `J = -dr/dx` (so the step is `+ (J^T J)^-1 J^T r`), `cost(x)` the cost;
 /// a non-finite cost counts as higher. `chart` maps each candidate onto the
 /// parametrisation's canonical values (an angle wrapped, say) before it is
-/// costed; `|_| {}` where there is none.
+/// costed; `|_| {}` where there is none. A cancel
+/// ([`obsan_expr::cancel_requested`]) ends the loop at once, unconverged:
+/// the caller's entry point reports it as its cancelled error.
 pub fn minimise(
     x0: &[f64],
     mut cost: impl FnMut(&[f64]) -> f64,
@@ -81,6 +83,9 @@ pub fn minimise(
     let mut iterations = 0;
     let mut converged = false;
     while iterations < opts.max_iterations {
+        if obsan_expr::cancel_requested() {
+            break;
+        }
         iterations += 1;
         let (jtj, jtr) = normal(&x);
         let mut improved = false;

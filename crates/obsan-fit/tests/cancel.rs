@@ -1,0 +1,102 @@
+//! A set cancel flag (`obsan_expr::with_cancel`, what Ctrl-C sets in the
+//! Python package) stops the fitter with its typed error; the same fit
+//! without it succeeds, so the error is the flag's.
+
+use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
+use obsan_expr::with_cancel;
+use obsan_fit::{fit, minimise, FitError, FitOptions, FitTrajectory, LmOptions, Predictor};
+use obsan_model::System;
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+/// dx/dt = -k x + u observed directly; data from k = 0.5, x0 = 2.
+fn problem() -> (Predictor, Dataset) {
+    let src = "system decay\nstate x\nparam k\ninput u\nx' = -k*x + u\noutput y = x\n";
+    let sys = System::parse(src, "decay.sys").unwrap();
+    let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
+    let mut inputs = Series::new(vec!["u".into()]);
+    let mut outputs = Series::new(vec!["y".into()]);
+    for i in 0..=200 {
+        let t = i as f64 * 0.05;
+        inputs.push(t, &[Some(0.0)]);
+        if i > 0 {
+            outputs.push(t, &[Some(2.0 * (-0.5 * t).exp())]);
+        }
+    }
+    let data = Dataset {
+        meta: DatasetMeta::default(),
+        trajectories: vec![Trajectory {
+            name: "t1".into(),
+            inputs,
+            outputs,
+            meta: BTreeMap::new(),
+        }],
+    };
+    (p, data)
+}
+
+fn run_fit(p: &Predictor, data: &Dataset) -> Result<obsan_fit::FitResult, FitError> {
+    let trajs = FitTrajectory::all(p, data);
+    let opts = FitOptions {
+        max_iterations: 50,
+        cost_tolerance: 1e-14,
+        step_tolerance: 0.0,
+        sigma: vec![0.01],
+        max_step: 0.0,
+        input_noise: None,
+    };
+    fit(p, &trajs, &[0.8], &[vec![1.5]], &opts)
+}
+
+#[test]
+fn a_cancelled_fit_is_the_cancelled_error() {
+    let (p, data) = problem();
+    let free = run_fit(&p, &data).unwrap();
+    assert!((free.params[0] - 0.5).abs() < 1e-6, "{:?}", free.params);
+    let flag = Arc::new(AtomicBool::new(true));
+    let r = with_cancel(flag, || run_fit(&p, &data));
+    assert_eq!(r.unwrap_err(), FitError::Cancelled);
+    assert_eq!(FitError::Cancelled.to_string(), "interrupted");
+}
+
+/// The least-squares core stops at its next iteration once the flag is set
+/// (here by the cost itself, as another thread would), unconverged.
+#[test]
+fn the_least_squares_core_stops_at_a_cancel() {
+    use nalgebra::{DMatrix, DVector};
+    // Rosenbrock's valley: about 20 iterations from (-1.2, 1).
+    let r = |x: &[f64]| [10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]];
+    let normal = |x: &[f64]| {
+        let j = DMatrix::from_row_slice(2, 2, &[20.0 * x[0], -10.0, 1.0, 0.0]);
+        let rv = DVector::from_column_slice(&r(x));
+        (j.transpose() * &j, j.transpose() * rv)
+    };
+    let opts = LmOptions::default();
+    let free = minimise(
+        &[-1.2, 1.0],
+        |x| r(x).iter().map(|v| v * v).sum(),
+        normal,
+        |_| {},
+        &opts,
+    );
+    assert!(free.converged && free.iterations > 3);
+    let flag = Arc::new(AtomicBool::new(false));
+    let calls = std::cell::Cell::new(0);
+    let out = with_cancel(flag.clone(), || {
+        let cost = |x: &[f64]| {
+            calls.set(calls.get() + 1);
+            if calls.get() == 3 {
+                flag.store(true, Ordering::Relaxed);
+            }
+            r(x).iter().map(|v| v * v).sum()
+        };
+        minimise(&[-1.2, 1.0], cost, normal, |_| {}, &opts)
+    });
+    assert!(!out.converged);
+    assert!(
+        out.iterations < free.iterations,
+        "{} iterations",
+        out.iterations
+    );
+}
