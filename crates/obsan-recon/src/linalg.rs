@@ -182,6 +182,36 @@ pub(crate) fn poly_scale(a: &[u64], s: u64, p: u64) -> Vec<u64> {
     trim(a.iter().map(|&c| mul(c, s, p)).collect())
 }
 
+/// Solves the possibly overdetermined system `a x = b` (rows of `a`, `cols`
+/// unknowns, with `b` appended as the last column): `None` unless it has
+/// exactly one solution (full column rank, every extra row consistent).
+pub(crate) fn solve_over(mut a: Vec<Vec<u64>>, cols: usize, p: u64) -> Option<Vec<u64>> {
+    let m = a.len();
+    for col in 0..cols {
+        let piv = (col..m).find(|&r| a[r][col] != 0)?;
+        a.swap(col, piv);
+        let ip = inv(a[col][col], p)?;
+        for v in a[col].iter_mut().skip(col) {
+            *v = mul(*v, ip, p);
+        }
+        let (lo, hi) = a.split_at_mut(col);
+        let (pivot_row, hi) = hi.split_at_mut(1);
+        let pivot_row = &pivot_row[0];
+        for row in lo.iter_mut().chain(hi.iter_mut()) {
+            let f = row[col];
+            if f != 0 {
+                for k in col..=cols {
+                    row[k] = sub(row[k], mul(f, pivot_row[k], p), p);
+                }
+            }
+        }
+    }
+    if a[cols..].iter().any(|row| row[cols] != 0) {
+        return None;
+    }
+    Some(a.iter().take(cols).map(|row| row[cols]).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -210,6 +240,31 @@ mod tests {
         // Two equal rows: singular.
         let row = vec![1, 2, 3];
         assert_eq!(solve(vec![row.clone(), row], P), None);
+    }
+
+    #[test]
+    fn overdetermined_systems_need_consistency_and_full_rank() {
+        let mut rng = Rng::new(2);
+        let (m, n) = (9, 5);
+        let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
+        let mut rows: Vec<Vec<u64>> = (0..m)
+            .map(|_| {
+                let mut r: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
+                let b = r
+                    .iter()
+                    .zip(&x)
+                    .fold(0, |s, (&a, &xi)| add(s, mul(a, xi, P), P));
+                r.push(b);
+                r
+            })
+            .collect();
+        assert_eq!(solve_over(rows.clone(), n, P).unwrap(), x);
+        // One right-hand side off: no solution.
+        rows[7][n] = add(rows[7][n], 1, P);
+        assert_eq!(solve_over(rows.clone(), n, P), None);
+        // Fewer independent rows than unknowns: not determined.
+        let few: Vec<Vec<u64>> = (0..m).map(|_| rows[0].clone()).collect();
+        assert_eq!(solve_over(few, n, P), None);
     }
 
     #[test]

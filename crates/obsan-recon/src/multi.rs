@@ -16,8 +16,9 @@ use std::time::Instant;
 
 use rustc_hash::FxHashMap;
 
+use crate::field::inv;
 use crate::field::{add, mul, pow, sub};
-use crate::linalg::{eval, newton, poly_add, poly_mul, solve, vandermonde_t};
+use crate::linalg::{eval, newton, poly_add, poly_mul, solve, solve_over, vandermonde_t};
 use crate::rng::Rng;
 use crate::thiele::Thiele;
 use crate::{Limit, Progress, ReconError};
@@ -146,6 +147,12 @@ pub(crate) struct PrimeRun<'a, F> {
     /// Per component and part, the degree in each variable x_i, once probed
     /// ([`PrimeRun::var_degrees`]); empty when unknown.
     vdegs: Vec<[Vec<usize>; 2]>,
+    /// Per component, its denominator along the degree line (Thiele's
+    /// normalised form), from [`PrimeRun::degrees`].
+    den_line: Vec<Vec<u64>>,
+    /// Components taken to share one denominator (equal, of degree > 0, on
+    /// the degree line), two or more per group: see [`PrimeRun::line`].
+    groups: Vec<Vec<usize>>,
 }
 
 impl<'a, F, E> PrimeRun<'a, F>
@@ -172,6 +179,8 @@ where
             lam: FxHashMap::default(),
             known: Vec::new(),
             vdegs: Vec::new(),
+            den_line: Vec::new(),
+            groups: Vec::new(),
         }
     }
 
@@ -270,6 +279,7 @@ where
             }
         }
         let mut degs = Vec::with_capacity(self.m);
+        self.den_line.clear();
         for th in &th {
             let (num, den) = th.rational();
             if den.first().copied().unwrap_or(0) == 0 {
@@ -281,6 +291,7 @@ where
                 return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
             }
             degs.push((dn, dd));
+            self.den_line.push(den);
         }
         Ok(degs)
     }
@@ -300,29 +311,132 @@ where
             .iter()
             .map(|&(dn, dd)| [vec![None; dn + 1], vec![None; dd + 1]])
             .collect();
+        // Equal denominators along a random line: one shared denominator
+        // (the components of a null vector share the pivot minor). A
+        // coincidence has probability about deg/p and gives a wrong image,
+        // which the check rejects.
+        let mut groups: Vec<Vec<usize>> = Vec::new();
+        for c in 0..degs.len() {
+            if degs[c].1 == 0 || self.den_line.len() != degs.len() {
+                continue;
+            }
+            match groups
+                .iter_mut()
+                .find(|g| self.den_line[g[0]] == self.den_line[c])
+            {
+                Some(g) => g.push(c),
+                None => groups.push(vec![c]),
+            }
+        }
+        groups.retain(|g| g.len() > 1);
+        self.groups = groups;
         self.degs = degs;
     }
 
-    /// Coefficients in t of every component on the line through `s` in
-    /// direction `(1, y)`, by solving the rational interpolation system of
-    /// known degrees with `d_0 = 1`.
-    fn line(&mut self, y: &[u64], budget: &mut Budget) -> Result<Rc<Line>, Fail<E>> {
-        if let Some(l) = self.lines.get(y) {
-            return Ok(Rc::clone(l));
+    /// Points a line needs for a group sharing a denominator of degree dd:
+    /// the least `k > max dn` with `sum_c (k - dn_c - 1) >= dd` (each
+    /// component's values times the denominator lie on a polynomial of
+    /// degree dn_c, which is `k - dn_c - 1` linear conditions on it).
+    fn shared_points(&self, g: &[usize]) -> usize {
+        let dd = self.degs[g[0]].1;
+        let mut k = g.iter().map(|&c| self.degs[c].0 + 1).max().unwrap_or(1);
+        while g.iter().map(|&c| k - self.degs[c].0 - 1).sum::<usize>() < dd {
+            k += 1;
         }
+        k
+    }
+
+    /// The line coefficients of a group sharing one denominator D (`d_0 =
+    /// 1`), from the points `pts` (at least [`PrimeRun::shared_points`]):
+    /// for every window of `dn_c + 2` consecutive points, the divided
+    /// difference of order `dn_c + 1` of `y_c D` vanishes, which is linear
+    /// in D's coefficients; then each numerator is interpolated. `None`
+    /// when these conditions do not determine D or contradict each other
+    /// (the denominators are not shared after all).
+    #[allow(clippy::type_complexity)]
+    fn shared_line(
+        &self,
+        g: &[usize],
+        pts: &[(u64, Vec<u64>)],
+    ) -> Option<Vec<(Vec<u64>, Vec<u64>)>> {
         let p = self.p;
-        let mut z = Vec::with_capacity(self.n);
-        z.push(1);
-        z.extend_from_slice(y);
-        let k = self.degs.iter().map(|&(a, b)| a + b + 1).max().unwrap_or(1);
-        let mut pts: Vec<(u64, Vec<u64>)> = Vec::with_capacity(k);
+        let dd = self.degs[g[0]].1;
+        // Divided-difference weights of each window, by (start, length).
+        let mut weights: FxHashMap<(usize, usize), Vec<u64>> = FxHashMap::default();
+        let mut rows: Vec<Vec<u64>> = Vec::new();
+        for &c in g {
+            let len = self.degs[c].0 + 2;
+            for s in 0..=pts.len().saturating_sub(len) {
+                if s + len > pts.len() {
+                    break;
+                }
+                let win = &pts[s..s + len];
+                if let std::collections::hash_map::Entry::Vacant(e) = weights.entry((s, len)) {
+                    let mut w = Vec::with_capacity(len);
+                    for (i, (ti, _)) in win.iter().enumerate() {
+                        let prod = win
+                            .iter()
+                            .enumerate()
+                            .filter(|&(j, _)| j != i)
+                            .fold(1, |a, (_, (tj, _))| mul(a, sub(*ti, *tj, p), p));
+                        w.push(inv(prod, p)?);
+                    }
+                    e.insert(w);
+                }
+                let w = &weights[&(s, len)];
+                // sum_i w_i y_i (1 + sum_k d_k t_i^k) = 0.
+                let mut row = vec![0u64; dd + 1];
+                for ((t, v), &wi) in win.iter().zip(w) {
+                    let a = mul(wi, v[c], p);
+                    let mut tp = *t;
+                    for x in row.iter_mut().take(dd) {
+                        *x = add(*x, mul(a, tp, p), p);
+                        tp = mul(tp, *t, p);
+                    }
+                    row[dd] = sub(row[dd], a, p);
+                }
+                rows.push(row);
+            }
+        }
+        if rows.len() < dd {
+            return None;
+        }
+        let mut den = Vec::with_capacity(dd + 1);
+        den.push(1);
+        den.extend(solve_over(rows, dd, p)?);
+        let ts: Vec<u64> = pts.iter().map(|(t, _)| *t).collect();
+        let dvals: Vec<u64> = ts.iter().map(|&t| eval(&den, t, p)).collect();
+        let mut out = Vec::with_capacity(g.len());
+        for &c in g {
+            let dn = self.degs[c].0;
+            let us: Vec<u64> = pts[..=dn]
+                .iter()
+                .zip(&dvals)
+                .map(|((_, v), &d)| mul(v[c], d, p))
+                .collect();
+            let mut num = newton(&ts[..=dn], &us, p)?;
+            num.resize(dn + 1, 0);
+            out.push((num, den.clone()));
+        }
+        Some(out)
+    }
+
+    /// Adds black-box values at fresh points `s + t z` until `pts` has `k`.
+    fn gather(
+        &mut self,
+        z: &[u64],
+        pts: &mut Vec<(u64, Vec<u64>)>,
+        k: usize,
+        budget: &mut Budget,
+    ) -> Result<(), Fail<E>> {
+        let p = self.p;
         let mut bad = 0;
         while pts.len() < k {
             let t = self.rng.nonzero(p);
             if pts.iter().any(|(u, _)| *u == t) {
                 continue;
             }
-            let x = self.point(t, &z);
+            let x = self.point(t, z);
             match call(self.bb, budget, self.m, &x, p)? {
                 Some(v) => {
                     bad = 0;
@@ -338,8 +452,66 @@ where
                 }
             }
         }
-        let mut line = Vec::with_capacity(self.m);
+        Ok(())
+    }
+
+    /// Coefficients in t of every component on the line through `s` in
+    /// direction `(1, y)`, by solving the rational interpolation system of
+    /// known degrees with `d_0 = 1`.
+    fn line(&mut self, y: &[u64], budget: &mut Budget) -> Result<Rc<Line>, Fail<E>> {
+        if let Some(l) = self.lines.get(y) {
+            return Ok(Rc::clone(l));
+        }
+        let p = self.p;
+        let mut z = Vec::with_capacity(self.n);
+        z.push(1);
+        z.extend_from_slice(y);
+        // Components sharing a denominator need fewer points (`shared_line`);
+        // the others `dn + dd + 1` each, as does a group whose shared solve
+        // fails.
+        let mut solo: Vec<bool> = vec![true; self.m];
+        let mut k = 1;
+        for g in &self.groups {
+            k = k.max(self.shared_points(g));
+            for &c in g {
+                solo[c] = false;
+            }
+        }
         for (c, &(dn, dd)) in self.degs.iter().enumerate() {
+            if solo[c] {
+                k = k.max(dn + dd + 1);
+            }
+        }
+        let mut pts: Vec<(u64, Vec<u64>)> = Vec::with_capacity(k);
+        self.gather(&z, &mut pts, k, budget)?;
+        let mut line: Line = vec![(Vec::new(), Vec::new()); self.m];
+        for g in &self.groups {
+            match self.shared_line(g, &pts) {
+                Some(v) => {
+                    for (&c, nd) in g.iter().zip(v) {
+                        line[c] = nd;
+                    }
+                }
+                None => {
+                    for &c in g {
+                        solo[c] = true;
+                    }
+                }
+            }
+        }
+        let need = self
+            .degs
+            .iter()
+            .zip(&solo)
+            .filter(|(_, &s)| s)
+            .map(|(&(a, b), _)| a + b + 1)
+            .max()
+            .unwrap_or(0);
+        self.gather(&z, &mut pts, need, budget)?;
+        for (c, &(dn, dd)) in self.degs.iter().enumerate() {
+            if !solo[c] {
+                continue;
+            }
             let k = dn + dd + 1;
             let rows: Vec<Vec<u64>> = pts[..k]
                 .iter()
@@ -367,7 +539,7 @@ where
             let mut den = Vec::with_capacity(dd + 1);
             den.push(1);
             den.extend_from_slice(&sol[dn + 1..]);
-            line.push((num, den));
+            line[c] = (num, den);
         }
         let line = Rc::new(line);
         self.lines.insert(y.to_vec(), Rc::clone(&line));

@@ -553,3 +553,70 @@ fn the_callers_primes_give_an_uncertified_candidate() {
         ));
     }
 }
+
+/// Six functions of three variables, numerators of degree 5, denominators
+/// of degree 4: all over one denominator (`shared`), or each over its own.
+fn six_over(shared: bool) -> Vec<(Terms, Terms)> {
+    (0..6i64)
+        .map(|c| {
+            // Coefficients of independent powers of c: the numerators span
+            // five dimensions (numerators spanning fewer would give fewer
+            // conditions on a shared denominator).
+            let num = vec![
+                t(&[5, 0, 0], c + 1),
+                t(&[1, 2, 2], c * c - 3),
+                t(&[0, 3, 0], 7 - c * c * c),
+                t(&[1, 0, 1], c.pow(4) - 4),
+                t(&[0, 0, 0], 2),
+            ];
+            let k = if shared { 1 } else { c + 1 };
+            let den = vec![
+                t(&[4, 0, 0], 1),
+                t(&[2, 1, 1], -2),
+                t(&[0, 0, 3], 3 * k),
+                t(&[0, 1, 0], 5),
+                t(&[0, 0, 0], k + 10),
+            ];
+            (num, den)
+        })
+        .collect()
+}
+
+fn rec_vec(fs: &[(Terms, Terms)]) -> u64 {
+    let calls = Cell::new(0u64);
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+        calls.set(calls.get() + 1);
+        fs.iter()
+            .map(|(n, d)| eval(n, d, x, p))
+            .collect::<Option<Vec<u64>>>()
+            .map_or(Ok(None), |v| Ok(Some(v)))
+    };
+    let r = reconstruct_vec(3, fs.len(), &mut bb, &Options::default()).unwrap();
+    assert_eq!(r.stats.points, calls.get());
+    for (f, (n, d)) in r.functions.iter().zip(fs) {
+        assert!(same_function(f, n, d), "{f}");
+        assert!(is_canonical(f));
+    }
+    r.stats.points
+}
+
+#[test]
+fn a_shared_denominator_needs_fewer_points_per_line() {
+    // Same degrees and monomials; only the sharing differs. Shared, a line
+    // needs 7 points (6 x (7 - 6) >= 4 conditions on the denominator)
+    // instead of dn + dd + 1 = 10, and the result is still verified at
+    // fresh points modulo a fresh prime.
+    let shared = rec_vec(&six_over(true));
+    let separate = rec_vec(&six_over(false));
+    assert!(
+        (shared as f64) < 0.85 * separate as f64,
+        "{shared} vs {separate}"
+    );
+    // A mix: two groups of equal denominators and one function alone.
+    let mut mix = six_over(true);
+    let other = six_over(false);
+    mix[3] = other[3].clone();
+    mix[4] = other[3].clone();
+    mix[5] = other[5].clone();
+    rec_vec(&mix);
+}

@@ -1,0 +1,357 @@
+//! Lie derivatives and their gradients at a point of F_p, never built as
+//! expressions (issue 15; reconstruction.md section 1).
+//!
+//! For a word `(a_1, ..., a_k)` (`a_1` applied first) and the flows `Phi^a_t`
+//! of the fields,
+//!
+//! ```text
+//! L_{a_k} ... L_{a_1} h (x) = d^k / dt_1 ... dt_k  h(Phi^{a_1}_{t_1} o ... o Phi^{a_k}_{t_k}(x))  at t = 0
+//! ```
+//!
+//! (`L_b L_a h(x) = d/ds (L_a h)(Phi^b_s x)` and `L_a g(y) = d/dt g(Phi^a_t y)`).
+//! A run of one field merges (`Phi^a_s o Phi^a_t = Phi^a_{s+t}`), so a run of
+//! length m is one variable truncated at degree m, and the derivative is m!
+//! times a coefficient. Each flow is a truncated Taylor series computed by
+//! Picard iteration (one order per pass) on the expression DAG; every
+//! coefficient also carries its first-order part in each state variable
+//! (dual numbers), which is the gradient. Functions become series by their
+//! Taylor expansions at the point (`exp`, `sin`/`cos` from the point's
+//! values, `atan`, `atan2` by the angle-difference formulas, `log`, `sqrt` by
+//! the binomial series): the same derivative rules as `diff.rs`, so the values
+//! are those of the symbolic Lie derivatives at the point, exactly.
+//!
+//! ## Degree bound (Schwartz–Zippel)
+//! Every number computed is a rational function of the random coordinates of
+//! [`Ctx::random_fp_point`]. Alongside the values runs an abstract
+//! interpretation of the same arithmetic, per grade (total degree in the t's,
+//! plus one for a gradient part): a bound `Deg { n, e }` says the coefficient
+//! is `P / prod_b B_b^e_b` with `deg P <= n`, where the `B_b` are *bases*:
+//! the numerators of everything ever inverted (the value of a node raised to
+//! a negative power, the argument of `log` and `sqrt`, `1 + u^2` of `atan u`,
+//! `x^2 + y^2` of `atan2(y, x)`) and `1 + t^2` of each angle. Sums take the
+//! largest exponent of each base (a common denominator), products add; the
+//! inverse of a jet `a0 + N` is `sum_k (-N)^k / a0^(k+1)`, whose `1/a0` is
+//! `prod B^e / P` with `P` a new base. Leaves follow [`degree_bounds`]:
+//! symbols and atoms 1, sin/cos `2t/(1+t^2)`, a square root its radicand's
+//! count. A minor of rows `N_i / D_i` is a polynomial of degree at most
+//! `sum n_i` over the product of the `D_i`, which is non-zero at any point
+//! where the evaluation succeeded (every base was inverted there), so the
+//! minor vanishes at the point only where that numerator does.
+//!
+//! [`degree_bounds`]: crate::degree_bounds
+
+mod bound;
+mod compile;
+mod coords;
+mod series;
+
+pub use coords::{height_bounds, Coord};
+
+use crate::eval::{BadPoint, FpPoint};
+use crate::graph::{Ctx, Id, Node};
+use crate::num::Fp;
+use crate::poly::Var;
+use bound::{Bounds, DJet};
+use compile::{Bases, Compiler, Deg, Program};
+use rustc_hash::FxHashMap;
+use series::{Fl, Scratch, Shape, Vals};
+use std::cell::RefCell;
+
+/// Evaluates Lie derivatives of the outputs along words of fields, with
+/// their gradients, at points of F_p.
+#[derive(Clone, Debug)]
+pub struct LieJets {
+    n: usize,
+    states: Vec<Var>,
+    fields: Vec<Program>,
+    outputs: Vec<Program>,
+    bases: Bases,
+    /// Bounds of inverses, referred to by index from the ops.
+    inverses: Vec<Deg>,
+    /// State variables each field moves (a structurally non-zero component).
+    moves: Vec<Vec<bool>>,
+    /// State variables each output and each field component depends on.
+    out_support: Vec<Vec<bool>>,
+    field_support: Vec<Vec<Vec<bool>>>,
+    /// Buffers of the sweeps, kept across points and words.
+    scratch: RefCell<Sweep>,
+}
+
+/// The gradient of one Lie derivative at a point, its value, and the
+/// numerator degree bound of the row (see the module docs) when asked for.
+#[derive(Clone, Debug)]
+pub struct LieRow {
+    pub value: Fp,
+    pub gradient: Vec<Fp>,
+    pub degree: Option<u64>,
+}
+
+impl LieJets {
+    /// Compile the outputs `h` and the fields (one node per state variable
+    /// each) over the state variables `states`.
+    pub fn new(ctx: &Ctx, states: &[Var], fields: &[Vec<Id>], outputs: &[Id]) -> LieJets {
+        let mut c = Compiler {
+            ctx,
+            states,
+            bases: Bases::default(),
+            inverses: Vec::new(),
+            sin_base: FxHashMap::default(),
+        };
+        let fields_p: Vec<Program> = fields.iter().map(|f| c.compile(f)).collect();
+        let outputs_p: Vec<Program> = outputs.iter().map(|&h| c.compile(&[h])).collect();
+        let support = |id: Id| -> Vec<bool> {
+            let mut s = vec![false; states.len()];
+            for n in ctx.reachable(&[id]) {
+                if let Node::Leaf(v) = ctx.node(n) {
+                    if let Some(k) = states.iter().position(|x| x == v) {
+                        s[k] = true;
+                    }
+                }
+            }
+            s
+        };
+        let moves = fields
+            .iter()
+            .map(|f| f.iter().map(|&x| !ctx.is_zero(x)).collect())
+            .collect();
+        let out_support = outputs.iter().map(|&h| support(h)).collect();
+        let field_support = fields
+            .iter()
+            .map(|f| f.iter().map(|&x| support(x)).collect())
+            .collect();
+        LieJets {
+            n: states.len(),
+            states: states.to_vec(),
+            fields: fields_p,
+            outputs: outputs_p,
+            bases: c.bases,
+            inverses: c.inverses,
+            moves,
+            out_support,
+            field_support,
+            scratch: RefCell::new(Sweep::default()),
+        }
+    }
+
+    /// The state variables `L_word h_output` may depend on, or `None` if it
+    /// is structurally zero (some field of the word moves nothing it depends
+    /// on): `supp(L_f g)` lies in `supp(g)` and the supports of the
+    /// components `f_i`, `i` in `supp(g)`, that are not zero.
+    pub fn support(&self, output: usize, word: &[usize]) -> Option<Vec<bool>> {
+        let mut s = self.out_support[output].clone();
+        for &a in word {
+            let mut next = s.clone();
+            let mut any = false;
+            for (i, &si) in s.iter().enumerate() {
+                if si && self.moves[a][i] {
+                    any = true;
+                    for (x, &y) in next.iter_mut().zip(&self.field_support[a][i]) {
+                        *x |= y;
+                    }
+                }
+            }
+            if !any {
+                return None;
+            }
+            s = next;
+        }
+        Some(s)
+    }
+
+    /// `L_{word[k-1]} ... L_{word[0]} h_output` and its gradient at `point`,
+    /// with the degree bound of the row if `track` (it does not depend on
+    /// the point, and costs about as much as the values).
+    pub fn row(
+        &self,
+        output: usize,
+        word: &[usize],
+        point: &FpPoint,
+        track: bool,
+    ) -> Result<LieRow, BadPoint> {
+        let pos = self.sweep(output, word, point)?;
+        let sw = self.scratch.borrow();
+        let (sh, runs) = (&sw.shapes[pos].1, &sw.runs);
+        let w = self.n + 1;
+        let h = sw.h.as_slice();
+        let top = sh.size - 1;
+        let mut fact = Fp::ONE;
+        for &(_, m) in runs {
+            for i in 2..=m {
+                fact = fact * Fp::new(i as u64);
+            }
+        }
+        let degree = track.then(|| self.degree(output, runs, sh)).flatten();
+        Ok(LieRow {
+            value: h[top * w] * fact,
+            gradient: h[top * w + 1..top * w + w]
+                .iter()
+                .map(|&g| g * fact)
+                .collect(),
+            degree,
+        })
+    }
+
+    /// The rows of every prefix of `word` (lengths 0 to `word.len()`), from
+    /// one jet: with the flows of the later runs at time 0 (the identity),
+    /// the coefficient of `t_1^m_1 ... t_j^a` is the derivative along the
+    /// prefix (runs 1..j-1 whole, a steps of run j), times `m_1! ... a!`.
+    /// Same values as [`LieJets::row`] on each prefix; no degree bounds.
+    pub fn prefix_rows(
+        &self,
+        output: usize,
+        word: &[usize],
+        point: &FpPoint,
+    ) -> Result<Vec<LieRow>, BadPoint> {
+        let pos = self.sweep(output, word, point)?;
+        let sw = self.scratch.borrow();
+        let (sh, runs) = (&sw.shapes[pos].1, &sw.runs);
+        let h = sw.h.as_slice();
+        let w = self.n + 1;
+        let row_at = |idx: usize, fact: Fp| LieRow {
+            value: h[idx * w] * fact,
+            gradient: h[idx * w + 1..idx * w + w]
+                .iter()
+                .map(|&g| g * fact)
+                .collect(),
+            degree: None,
+        };
+        let mut out = vec![row_at(0, Fp::ONE)];
+        let (mut base, mut fact) = (0usize, Fp::ONE);
+        for (j, &(_, m)) in runs.iter().enumerate() {
+            for a in 1..=m {
+                fact = fact * Fp::new(a as u64);
+                out.push(row_at(base + a * sh.strides[j], fact));
+            }
+            base += m * sh.strides[j];
+        }
+        Ok(out)
+    }
+
+    /// The one forward sweep: the series of `h_output` along the flows of
+    /// `word`'s runs at `point`, left in the scratch (`h`, `runs`); returns
+    /// the index of the word's shape there.
+    fn sweep(&self, output: usize, word: &[usize], point: &FpPoint) -> Result<usize, BadPoint> {
+        let mut guard = self.scratch.borrow_mut();
+        let sw = &mut *guard;
+        // Runs of one field, first applied first: (field, length).
+        sw.runs.clear();
+        for &a in word {
+            match sw.runs.last_mut() {
+                Some((f, m)) if *f == a => *m += 1,
+                _ => sw.runs.push((a, 1)),
+            }
+        }
+        sw.caps.clear();
+        sw.caps.extend(sw.runs.iter().map(|r| r.1));
+        let pos = match sw.shapes.iter().position(|(c, _)| *c == sw.caps) {
+            Some(p) => p,
+            None => {
+                sw.shapes
+                    .push((sw.caps.clone(), Shape::new(self.n, &sw.caps)));
+                sw.shapes.len() - 1
+            }
+        };
+        let Sweep {
+            shapes,
+            runs,
+            x,
+            x0,
+            xf,
+            h,
+            vals,
+            ..
+        } = sw;
+        let sh = &shapes[pos].1;
+        let len = sh.size * sh.w;
+        // x + eps, then the flows from the last applied (innermost) outwards.
+        x.clear();
+        x.resize(self.n * len, Fp::ZERO);
+        xf.clear();
+        for (k, &v) in self.states.iter().enumerate() {
+            x[k * len] = point.value(v);
+            x[k * len + 1 + k] = Fp::ONE;
+            xf.push(Fl {
+                tconst: true,
+                eps: true,
+            });
+        }
+        for (j, &(field, m)) in runs.iter().enumerate().rev() {
+            x0.clear();
+            x0.extend_from_slice(x);
+            let x0f: Vec<Fl> = xf.clone();
+            let prog = &self.fields[field];
+            for pass in 0..m {
+                // Picard pass `pass` makes the flow exact to t_j-degree
+                // pass + 1; it needs the field to degree `pass` only.
+                let ar = Vals {
+                    sh,
+                    v: sh.view(j, pass),
+                    len,
+                    point,
+                };
+                ar.run(vals, prog, x, xf)?;
+                // x = x0 + int_0^{t_j} f(x).
+                for (k, &r) in prog.roots.iter().enumerate() {
+                    let (f, ff) = ar.root(vals, r);
+                    let out = &mut x[k * len..(k + 1) * len];
+                    let fi = ar.integrate(out, f, ff, j);
+                    for (a, &b) in out.iter_mut().zip(&x0[k * len..(k + 1) * len]) {
+                        *a = *a + b;
+                    }
+                    xf[k] = fi.join(x0f[k]);
+                }
+            }
+        }
+        let ar = Vals {
+            sh,
+            v: sh.full(),
+            len,
+            point,
+        };
+        let prog = &self.outputs[output];
+        ar.run(vals, prog, x, xf)?;
+        let (hv, _) = ar.root(vals, prog.roots[0]);
+        h.clear();
+        h.extend_from_slice(hv);
+        Ok(pos)
+    }
+
+    /// The numerator degree bound of the row of `h_output` along `runs`
+    /// (structural: the same sweep on bounds, [`bound`]).
+    fn degree(&self, output: usize, runs: &[(usize, usize)], sh: &Shape) -> Option<u64> {
+        let b = Bounds {
+            sh,
+            bases: &self.bases,
+            inverses: &self.inverses,
+        };
+        let mut x: Vec<DJet> = (0..self.n).map(|_| b.state()).collect();
+        for &(field, m) in runs.iter().rev() {
+            let x0 = x.clone();
+            for _ in 0..m {
+                let f = b.run(&self.fields[field], &x);
+                x = x0
+                    .iter()
+                    .zip(&f)
+                    .map(|(a, f)| b.add(a, &b.integrate(f)))
+                    .collect();
+            }
+        }
+        let h = b.run(&self.outputs[output], &x);
+        h[0].d.get(sh.grades).and_then(|d| d.as_ref()).map(|d| d.n)
+    }
+}
+
+/// The scratch of [`LieJets`]' sweeps.
+#[derive(Clone, Debug, Default)]
+struct Sweep {
+    /// Shapes met so far, by their caps.
+    shapes: Vec<(Vec<usize>, Shape)>,
+    caps: Vec<usize>,
+    runs: Vec<(usize, usize)>,
+    x: Vec<Fp>,
+    x0: Vec<Fp>,
+    xf: Vec<Fl>,
+    /// The series of the output after the last sweep.
+    h: Vec<Fp>,
+    vals: Scratch,
+}
