@@ -288,6 +288,7 @@ pub(super) fn in_modes(
         }
     }
     keep.extend(j..zb.len());
+    let (zb_all, znames_all) = (zb, znames);
     let zb: Vec<Id> = keep.iter().map(|&j| zb[j]).collect();
     let znames: Vec<String> = keep.iter().map(|&j| znames[j].clone()).collect();
     let nb = zb.len();
@@ -315,7 +316,154 @@ pub(super) fn in_modes(
             }
         }
     }
+    split_by_variable(nf, t, zb_all, znames_all, modes, &need, rng, opts)
+}
+
+/// `t = sum_e x^e c_e` for a mode `x` that is a plain variable no other mode
+/// involves, each `c_e` written in the modes on its own: fewer blocks and a
+/// lower degree (vins: the rotated velocity's drift is of degree 4 over 11
+/// blocks, its coefficients in the biases of degree 3 over 3).
+#[allow(clippy::too_many_arguments)]
+fn split_by_variable(
+    nf: &mut NormalForm,
+    t: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    need: &[bool],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    let c = nf.ctx.canon(t);
+    for (k, m) in modes.iter().enumerate() {
+        if !need[k] || m.kind != ModeKind::Variable || m.angle {
+            continue;
+        }
+        let Some(sym) = nf.ctx.lookup(&m.name) else {
+            continue;
+        };
+        let x = sym.var;
+        if c.denominator().contains_var(x) || !c.numerator().contains_var(x) {
+            continue;
+        }
+        let alone = modes.iter().enumerate().all(|(j, o)| {
+            j == k || {
+                let d = nf.ctx.diff(o.expr, x);
+                nf.ctx.is_identically_zero(d)
+            }
+        });
+        if !alone || c.numerator().degree(x) > 4 {
+            continue;
+        }
+        let den = c.denominator().clone();
+        let mut parts = Vec::new();
+        for (e, p) in c.numerator().coeffs_in(x) {
+            check_deadline(opts, "the reduced dynamics (split)", modes.len())?;
+            let q = RatFun::from_poly(p);
+            let dinv = nf.ctx.rf_inv(&RatFun::from_poly(den.clone()));
+            let Some(dinv) = dinv else { return Ok(None) };
+            let ce = nf.ctx.rf_mul(&q, &dinv);
+            let ce = nf.ctx.from_canonical(&ce);
+            let Some(text) = in_modes(nf, ce, zb, znames, modes, rng, opts)? else {
+                return Ok(None);
+            };
+            let xe = match e {
+                0 => String::new(),
+                1 => format!("{}*", m.name),
+                _ => format!("{}^{e}*", m.name),
+            };
+            parts.push(format!("{xe}({text})"));
+        }
+        return Ok(Some(parts.join(" + ")));
+    }
     Ok(None)
+}
+
+/// An output written in the modes: as itself; `sqrt(P(z))` when its square
+/// is `P(z)` (a range, `D = sqrt(x^2 + y^2)`); for an angle output
+/// `h = sum k_a atan2(y_a, x_a) + sum k_b atan(u_b) + sum k_c theta_c`
+/// (integer `k`), `h = arg Z` modulo 2 pi with
+/// `Z = prod (x_a + i y_a)^k_a (1 + i u_b)^k_b e^(i k_c theta_c)`, so
+/// `h = atan2(Im Z, Re Z)` when both are functions of the modes (the same
+/// branch, up to a multiple of 2 pi), else `atan(Im Z / Re Z)` (up to a
+/// multiple of pi). The decomposition checks prove each form up to a
+/// constant, which is what the closure certificate needs.
+pub(super) fn output_in_modes(
+    nf: &mut NormalForm,
+    h: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    if !nf.ctx.is_angle_valued(h) {
+        if let Some(s) = in_modes(nf, h, zb, znames, modes, rng, opts)? {
+            return Ok(Some(s));
+        }
+        let h2 = nf.ctx.mul(&[h, h]);
+        let c2 = nf.ctx.canon(h2);
+        if c2 == nf.ctx.canon(h) {
+            return Ok(None);
+        }
+        return Ok(in_modes(nf, h2, zb, znames, modes, rng, opts)?.map(|p| format!("sqrt({p})")));
+    }
+    let c = nf.ctx.canon(h);
+    let Some(d) = c.denominator().as_constant() else {
+        return Ok(None);
+    };
+    let one = nf.ctx.one();
+    let zero = nf.ctx.zero();
+    let mut z = (one, zero);
+    for v in c.numerator().vars() {
+        let cs = c.numerator().coeffs_in(v);
+        let Some((1, p)) = cs.iter().find(|e| e.0 > 0).cloned() else {
+            return Ok(None);
+        };
+        if cs.iter().any(|e| e.0 > 1) {
+            return Ok(None);
+        }
+        let Some(k) = p.as_constant() else {
+            return Ok(None);
+        };
+        let q = Q::new(k, d.clone());
+        let x = q.to_f64();
+        if !q.is_integer() || x.abs() > 16.0 {
+            return Ok(None);
+        }
+        let factor = if let Some((y, xa)) = nf.ctx.atan_args(v) {
+            (xa.unwrap_or(one), y)
+        } else if let Some(name) = nf.ctx.symbol_name(v).map(str::to_string) {
+            let (Ok(cs), Ok(sn)) = (
+                nf.parse_expr(&format!("cos({name})"), false),
+                nf.parse_expr(&format!("sin({name})"), false),
+            ) else {
+                return Ok(None);
+            };
+            (cs, sn)
+        } else {
+            return Ok(None);
+        };
+        let f = if x < 0.0 {
+            (factor.0, nf.ctx.neg(factor.1))
+        } else {
+            factor
+        };
+        for _ in 0..(x.abs() as usize) {
+            let rr = nf.ctx.mul(&[z.0, f.0]);
+            let ii = nf.ctx.mul(&[z.1, f.1]);
+            let ri = nf.ctx.mul(&[z.0, f.1]);
+            let ir = nf.ctx.mul(&[z.1, f.0]);
+            z = (nf.ctx.sub(rr, ii), nf.ctx.add(&[ri, ir]));
+        }
+    }
+    let re = in_modes(nf, z.0, zb, znames, modes, rng, opts)?;
+    let im = in_modes(nf, z.1, zb, znames, modes, rng, opts)?;
+    if let (Some(re), Some(im)) = (re, im) {
+        return Ok(Some(format!("atan2({im}, {re})")));
+    }
+    let t = nf.ctx.div(z.1, z.0);
+    Ok(in_modes(nf, t, zb, znames, modes, rng, opts)?.map(|r| format!("atan({r})")))
 }
 
 /// One ansatz `t = P/Q` (or `t = P` when not `quotient`) over `monos`.
