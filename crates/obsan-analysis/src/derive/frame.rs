@@ -299,6 +299,17 @@ pub(super) fn frame_invariants(
     if modes.len() >= s.rank || s.w_ids.is_empty() {
         return Ok(());
     }
+    // Translations, rotations and scalings are affine vector fields: any
+    // other symmetry (eq. 16's) is not one this frame normalises, and trying
+    // costs canonical forms of large rational functions.
+    for w in s.w_ids {
+        for &c in w {
+            let r = nf.ctx.canon(c);
+            if !r.denominator().is_constant() || r.numerator().total_degree() > 1 {
+                return Ok(());
+            }
+        }
+    }
     let names = nf.state.clone();
     let mut coords: Vec<Coord> = names
         .iter()

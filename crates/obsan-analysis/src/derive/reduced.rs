@@ -294,7 +294,14 @@ pub(super) fn in_modes(
     let nb = zb.len();
     let mut roots: Vec<Id> = zb.to_vec();
     roots.push(t);
-    for d in 0..=opts.max_closure_degree {
+    // One or two blocks keep the system small at any degree: go higher there
+    // (big: growth and death rates of degree 10 in G).
+    let top = if nb <= 2 {
+        opts.max_closure_degree.max(16)
+    } else {
+        opts.max_closure_degree
+    };
+    for d in 0..=top {
         check_deadline(
             opts,
             &format!("the reduced dynamics (degree {d})"),
@@ -501,15 +508,46 @@ fn solve_form(
         if v[nm..].iter().all(|x| x.is_zero()) {
             continue;
         }
-        // Normalise: the first non-zero denominator coefficient is 1.
-        let Some(lead) = v[nm..].iter().find(|x| !x.is_zero()).and_then(|x| x.inv()) else {
-            continue;
-        };
-        let Some(qs) = v
+        // Normalise so that the lifted coefficients are the shortest: one
+        // coefficient is set to 1 (of t when `t = P`; any of P/Q otherwise),
+        // as a single prime lifts only coefficients below sqrt(p/2) (big's
+        // rates: the constant term as 1 needs 1e12, the top one does not).
+        // The first non-zero denominator coefficient first, kept unless its
+        // lift looks like a wrong one (a coefficient near the bound).
+        let mut leads: Vec<Fp> = v[nm..]
             .iter()
-            .map(|&x| rat_recon(x * lead))
-            .collect::<Option<Vec<Q>>>()
-        else {
+            .copied()
+            .filter(|x| !x.is_zero())
+            .take(1)
+            .collect();
+        if quotient {
+            leads.extend(v.iter().copied().filter(|x| !x.is_zero()).take(48));
+        }
+        let mut best: Option<(usize, Vec<Q>)> = None;
+        for l in leads {
+            if let Some((_, b)) = &best {
+                if b.iter().all(|q| q.to_string().len() <= 12) {
+                    break;
+                }
+            }
+            let Some(inv) = l.inv() else { continue };
+            let Some(qs) = v
+                .iter()
+                .map(|&x| rat_recon(x * inv))
+                .collect::<Option<Vec<Q>>>()
+            else {
+                continue;
+            };
+            let h: usize = qs
+                .iter()
+                .filter(|q| !q.is_zero())
+                .map(|q| q.to_string().len())
+                .sum();
+            if best.as_ref().is_none_or(|b| h < b.0) {
+                best = Some((h, qs));
+            }
+        }
+        let Some((_, qs)) = best else {
             continue;
         };
         let (pc, qc) = qs.split_at(nm);
