@@ -288,7 +288,7 @@ fn reconstructed_symmetry_models_are_proven_by_closure() {
 
 /// Models whose reduced system closes through the cross-section (a moving
 /// frame: rotations normalised, so the modes generate the rational
-/// invariants) and the atan2/sqrt output forms: proven by closure, the
+/// invariants), the atan2/sqrt output forms and log blocks: proven by closure, the
 /// written .sys fully observable; where `obsan verify` is quick (its exact
 /// symmetries), the .dec passes it. Their span against the known symmetries
 /// is checked in crates/obsan-analysis/tests/modes_recon.rs.
@@ -299,6 +299,7 @@ fn cross_section_models_are_proven_by_closure() {
         ("systems/benchmarks/unicycle_bearing_scale.sys", 2, false),
         ("systems/localization_xy.sys", 2, true),
         ("systems/benchmarks/big.sys", 6, false),
+        ("systems/benchmarks/competition.sys", 5, false),
         ("systems/vins.sys", 15, false),
     ] {
         let v = modes_json(&[sys]);

@@ -236,3 +236,20 @@ fn big_modes_are_the_scaling_invariants() {
         ],
     );
 }
+
+#[test]
+fn competition_modes_are_the_log_linear_combinations() {
+    // The file's derivation: in z = log x the model is linear; y gives z1,
+    // z1' = a1 - b11 z1 - b12 z2 and the coefficients of
+    // z1'' + (b11 + b22) z1' + (b11 b22 - b12 b21) z1 = a1 b22 - a2 b12.
+    assert_modes_span(
+        "systems/benchmarks/competition.sys",
+        &[
+            "x1",
+            "a1 - b11*log(x1) - b12*log(x2)",
+            "b11 + b22",
+            "b11*b22 - b12*b21",
+            "a1*b22 - a2*b12",
+        ],
+    );
+}

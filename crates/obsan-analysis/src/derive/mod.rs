@@ -457,6 +457,17 @@ pub fn derive_modes(
         } else if !nf.ctx.is_angle_valued(m.expr) {
             zb.push(m.expr);
             znames.push(m.name.clone());
+            // A variable the system takes the log of: log(x) is a block too
+            // (competition: the model is linear in log x1, log x2).
+            if m.kind == ModeKind::Variable {
+                if let Ok(l) = nf.parse_expr(&format!("log({})", m.name), false) {
+                    let lv = nf.ctx.canon(l).vars();
+                    if !lv.is_empty() && lv.iter().all(|v| used_vars.contains(v)) {
+                        zb.push(l);
+                        znames.push(format!("log({})", m.name));
+                    }
+                }
+            }
         }
     }
     for name in &consts {

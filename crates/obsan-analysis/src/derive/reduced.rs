@@ -273,15 +273,15 @@ pub(super) fn in_modes(
     let mut keep: Vec<usize> = Vec::new();
     let mut j = 0;
     for (k, m) in modes.iter().enumerate() {
-        let w = if m.angle {
-            2
-        } else if nf.ctx.is_angle_valued(m.expr) {
-            0
-        } else {
-            1
-        };
-        for _ in 0..w {
-            if need[k] && j < zb.len() && znames[j].contains(m.name.as_str()) {
+        // A mode's blocks, in the order derive_modes lays them out.
+        let own = [
+            m.name.clone(),
+            format!("log({})", m.name),
+            format!("cos({})", m.name),
+            format!("sin({})", m.name),
+        ];
+        while j < zb.len() && own.contains(&znames[j]) {
+            if need[k] {
                 keep.push(j);
             }
             j += 1;
