@@ -405,15 +405,15 @@ pub(super) fn output_in_modes(
     opts: &DeriveOptions,
 ) -> Result<Option<String>, AnalysisError> {
     if !nf.ctx.is_angle_valued(h) {
-        if let Some(s) = in_modes(nf, h, zb, znames, modes, rng, opts)? {
-            return Ok(Some(s));
-        }
+        // A leaf of h gone from h^2 is a square root: the square first.
         let h2 = nf.ctx.mul(&[h, h]);
-        let c2 = nf.ctx.canon(h2);
-        if c2 == nf.ctx.canon(h) {
-            return Ok(None);
+        let v2 = nf.ctx.canon(h2).vars();
+        if nf.ctx.canon(h).vars().iter().any(|v| !v2.contains(v)) {
+            if let Some(p) = in_modes(nf, h2, zb, znames, modes, rng, opts)? {
+                return Ok(Some(format!("sqrt({p})")));
+            }
         }
-        return Ok(in_modes(nf, h2, zb, znames, modes, rng, opts)?.map(|p| format!("sqrt({p})")));
+        return in_modes(nf, h, zb, znames, modes, rng, opts);
     }
     let c = nf.ctx.canon(h);
     let Some(d) = c.denominator().as_constant() else {
