@@ -206,6 +206,14 @@ impl Ctx {
         }
     }
 
+    /// The radicand of a `sqrt` leaf; `None` for any other leaf.
+    pub fn sqrt_arg(&self, v: Var) -> Option<Id> {
+        match self.leaves.get(v as usize)?.kind {
+            LeafKind::Sqrt(u) => Some(u),
+            _ => None,
+        }
+    }
+
     /// Name of a symbol variable (`None` for atoms).
     pub fn symbol_name(&self, v: Var) -> Option<&str> {
         match &self.leaves.get(v as usize)?.kind {

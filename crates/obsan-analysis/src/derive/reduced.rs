@@ -405,10 +405,14 @@ pub(super) fn output_in_modes(
     opts: &DeriveOptions,
 ) -> Result<Option<String>, AnalysisError> {
     if !nf.ctx.is_angle_valued(h) {
-        // A leaf of h gone from h^2 is a square root: the square first.
+        // A square root of h gone from h^2: the square first.
         let h2 = nf.ctx.mul(&[h, h]);
         let v2 = nf.ctx.canon(h2).vars();
-        if nf.ctx.canon(h).vars().iter().any(|v| !v2.contains(v)) {
+        let vs = nf.ctx.canon(h).vars();
+        if vs
+            .iter()
+            .any(|&v| nf.ctx.sqrt_arg(v).is_some() && !v2.contains(&v))
+        {
             if let Some(p) = in_modes(nf, h2, zb, znames, modes, rng, opts)? {
                 return Ok(Some(format!("sqrt({p})")));
             }
