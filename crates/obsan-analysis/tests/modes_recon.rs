@@ -122,3 +122,134 @@ fn sirs_forced_modes_see_the_forcing_through_b1() {
         &["s", "i", "r", "mu", "b0", "g", "nu", "M", "b1*x1", "b1*x2"],
     );
 }
+
+/// The modes of a model whose symmetries are known in closed form (the model
+/// file's sources): the reduced system closes and proves them exactly; each
+/// mode satisfies eq. (11) for every known symmetry `w` (given as
+/// `(variable, component)` pairs), computed here from the derivative of its
+/// formula; their gradients have rank n minus the number of symmetries; and
+/// the reduced .sys is fully observable.
+fn assert_modes_of_known_symmetries(path: &str, known: &[&[(&str, &str)]]) {
+    let src = std::fs::read_to_string(format!("{ROOT}/{path}")).unwrap();
+    let sys = System::parse(&src, path).unwrap();
+    let mut nf = sys.normal_form(None, &[]).unwrap();
+    let r = rank(&mut nf, RankOptions::default()).unwrap();
+    let n = nf.state.len();
+    assert_eq!(r.rank, n - known.len(), "{path}");
+    let sym = symmetries_with(
+        &mut nf,
+        &r,
+        &SymmetryOptions {
+            deadline: None,
+            route: Route::Auto,
+        },
+    )
+    .unwrap();
+    let d = derive_modes(&mut nf, &r, &sym, &DeriveOptions::default()).unwrap();
+    assert!(d.closed(), "{path}: missing {:?}", d.missing());
+    let dec = d.decomposition_text(path, None, &[]).unwrap();
+    let checks = verify_derivation(&mut nf, &dec, path, 1, (&r, &sym)).unwrap();
+    assert!(checks.iter().all(|c| c.pass), "{path}: {checks:?}");
+    assert!(d.closure_proves(&checks), "{path}");
+    for m in &d.modes {
+        for w in known {
+            let mut terms = Vec::new();
+            for (x, c) in *w {
+                let v = nf.ctx.lookup(x).unwrap().var;
+                let dm = nf.ctx.diff(m.expr, v);
+                let wc = nf.parse_expr(c, false).unwrap();
+                terms.push(nf.ctx.mul(&[dm, wc]));
+            }
+            let s = nf.ctx.add(&terms);
+            assert!(
+                nf.ctx.is_identically_zero(s),
+                "{path}: {} = {} against {w:?}",
+                m.name,
+                m.text
+            );
+        }
+    }
+    let ids: Vec<_> = d.modes.iter().map(|m| m.expr).collect();
+    let e = check_modes(&mut nf, &sym, &ids, 7).unwrap();
+    assert_eq!(e.independent_count, n - known.len(), "{path}");
+    // The reduced system, read back as a .sys file: full rank.
+    let text = d.sys_text("reduced", "test").unwrap();
+    let red = System::parse(&text, "reduced.sys").unwrap();
+    let mut rnf = red.normal_form(None, &[]).unwrap();
+    let rr = rank(&mut rnf, RankOptions::default()).unwrap();
+    assert_eq!((rr.rank, rr.n), (r.rank, r.rank), "{path}: {text}");
+}
+
+#[test]
+fn vins_modes_are_the_invariants_of_global_position_and_yaw() {
+    // Martinelli 2012; Hesch et al. 2014: the global translation (r and pf
+    // together) and the rotation about gravity (yaw: r, v, pf rotate about z,
+    // q -> (cos(c/2), 0, 0, sin(c/2)) (x) q) are the unobservable directions.
+    let yaw: &[(&str, &str)] = &[
+        ("rx", "-ry"),
+        ("ry", "rx"),
+        ("vx", "-vy"),
+        ("vy", "vx"),
+        ("qw", "-qz/2"),
+        ("qx", "-qy/2"),
+        ("qy", "qx/2"),
+        ("qz", "qw/2"),
+        ("pfx", "-pfy"),
+        ("pfy", "pfx"),
+    ];
+    assert_modes_of_known_symmetries(
+        "systems/vins.sys",
+        &[
+            &[("rx", "1"), ("pfx", "1")],
+            &[("ry", "1"), ("pfy", "1")],
+            &[("rz", "1"), ("pfz", "1")],
+            yaw,
+        ],
+    );
+}
+
+#[test]
+fn unicycle_modes_are_the_rotation_invariants() {
+    // Martinelli & Siegwart 2005, Martinelli 2011 eqs. (1)-(2): the rotation
+    // about the feature, with the scale of the bearing-only case on top.
+    let rot: &[(&str, &str)] = &[("x", "-y"), ("y", "x"), ("theta", "1")];
+    assert_modes_of_known_symmetries("systems/benchmarks/unicycle_bearing.sys", &[rot]);
+    assert_modes_of_known_symmetries(
+        "systems/benchmarks/unicycle_bearing_scale.sys",
+        &[rot, &[("x", "x"), ("y", "y"), ("s", "s")]],
+    );
+    assert_modes_of_known_symmetries(
+        "systems/localization_xy.sys",
+        &[&[("xR", "-yR"), ("yR", "xR"), ("thetaR", "1")]],
+    );
+}
+
+#[test]
+fn big_modes_are_the_scaling_invariants() {
+    // The file's derivation: beta -> l beta, p1 -> p1/l; II -> m II,
+    // si -> si/m, p1 -> m p1 (Karin et al. 2016: si not identifiable).
+    assert_modes_of_known_symmetries(
+        "systems/benchmarks/big.sys",
+        &[
+            &[("beta", "beta"), ("p1", "-p1")],
+            &[("II", "II"), ("si", "-si"), ("p1", "p1")],
+        ],
+    );
+}
+
+#[test]
+fn competition_modes_are_the_log_linear_combinations() {
+    // The file's derivation: in z = log x the model is linear; y gives z1,
+    // z1' = a1 - b11 z1 - b12 z2 and the coefficients of
+    // z1'' + (b11 + b22) z1' + (b11 b22 - b12 b21) z1 = a1 b22 - a2 b12.
+    assert_modes_span(
+        "systems/benchmarks/competition.sys",
+        &[
+            "x1",
+            "a1 - b11*log(x1) - b12*log(x2)",
+            "b11 + b22",
+            "b11*b22 - b12*b21",
+            "a1*b22 - a2*b12",
+        ],
+    );
+}

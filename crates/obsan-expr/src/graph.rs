@@ -196,6 +196,24 @@ impl Ctx {
         })
     }
 
+    /// The arguments of an angle atom: `(u, None)` for `atan(u)`, `(y, Some(x))`
+    /// for `atan2(y, x)`; `None` for any other leaf.
+    pub fn atan_args(&self, v: Var) -> Option<(Id, Option<Id>)> {
+        match self.leaves.get(v as usize)?.kind {
+            LeafKind::Atan(u) => Some((u, None)),
+            LeafKind::Atan2(y, x) => Some((y, Some(x))),
+            _ => None,
+        }
+    }
+
+    /// The radicand of a `sqrt` leaf; `None` for any other leaf.
+    pub fn sqrt_arg(&self, v: Var) -> Option<Id> {
+        match self.leaves.get(v as usize)?.kind {
+            LeafKind::Sqrt(u) => Some(u),
+            _ => None,
+        }
+    }
+
     /// Name of a symbol variable (`None` for atoms).
     pub fn symbol_name(&self, v: Var) -> Option<&str> {
         match &self.leaves.get(v as usize)?.kind {

@@ -30,6 +30,7 @@
 
 mod ansatz;
 mod blocks;
+mod frame;
 mod monomial;
 
 mod reduced;
@@ -82,6 +83,8 @@ pub enum ModeKind {
     Rational,
     Output,
     LieDerivative,
+    /// A coordinate of a cross-section of the symmetry group (a moving frame).
+    CrossSection,
 }
 
 impl ModeKind {
@@ -93,6 +96,7 @@ impl ModeKind {
             ModeKind::Rational => "rational",
             ModeKind::Output => "output",
             ModeKind::LieDerivative => "Lie derivative",
+            ModeKind::CrossSection => "cross-section",
         }
     }
 }
@@ -286,12 +290,16 @@ pub fn derive_modes(
     }
     check_deadline(opts, "the angle differences", modes.len())?;
 
-    // 2b. Monomial invariants of scalings (k1 k2 x2, gamma x2 / x3).
     let search = Search {
         w_ids: &w_ids,
         rank,
         opts,
     };
+    // 2a. A cross-section of the group when it has a rotation: a generating
+    // set of the rational invariants, so the reduced system closes.
+    frame::frame_invariants(nf, &search, &angle, &mut modes, &mut indep, &mut fresh)?;
+
+    // 2b. Monomial invariants of scalings (k1 k2 x2, gamma x2 / x3).
     monomial::monomial_invariants(
         nf, &search, &fields, &mut modes, &mut indep, &mut fresh, &mut rng,
     )?;
@@ -449,6 +457,17 @@ pub fn derive_modes(
         } else if !nf.ctx.is_angle_valued(m.expr) {
             zb.push(m.expr);
             znames.push(m.name.clone());
+            // A variable the system takes the log of: log(x) is a block too
+            // (competition: the model is linear in log x1, log x2).
+            if m.kind == ModeKind::Variable {
+                if let Ok(l) = nf.parse_expr(&format!("log({})", m.name), false) {
+                    let lv = nf.ctx.canon(l).vars();
+                    if !lv.is_empty() && lv.iter().all(|v| used_vars.contains(v)) {
+                        zb.push(l);
+                        znames.push(format!("log({})", m.name));
+                    }
+                }
+            }
         }
     }
     for name in &consts {
@@ -487,7 +506,9 @@ pub fn derive_modes(
         let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
             Some(m.name.clone())
         } else {
-            soft(in_modes(nf, h, &zb, &znames, &modes, &mut rng, opts))?
+            soft(reduced::output_in_modes(
+                nf, h, &zb, &znames, &modes, &mut rng, opts,
+            ))?
         };
         outputs.push((oname, e));
     }

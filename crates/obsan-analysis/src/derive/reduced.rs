@@ -273,27 +273,35 @@ pub(super) fn in_modes(
     let mut keep: Vec<usize> = Vec::new();
     let mut j = 0;
     for (k, m) in modes.iter().enumerate() {
-        let w = if m.angle {
-            2
-        } else if nf.ctx.is_angle_valued(m.expr) {
-            0
-        } else {
-            1
-        };
-        for _ in 0..w {
-            if need[k] && j < zb.len() && znames[j].contains(m.name.as_str()) {
+        // A mode's blocks, in the order derive_modes lays them out.
+        let own = [
+            m.name.clone(),
+            format!("log({})", m.name),
+            format!("cos({})", m.name),
+            format!("sin({})", m.name),
+        ];
+        while j < zb.len() && own.contains(&znames[j]) {
+            if need[k] {
                 keep.push(j);
             }
             j += 1;
         }
     }
     keep.extend(j..zb.len());
+    let (zb_all, znames_all) = (zb, znames);
     let zb: Vec<Id> = keep.iter().map(|&j| zb[j]).collect();
     let znames: Vec<String> = keep.iter().map(|&j| znames[j].clone()).collect();
     let nb = zb.len();
     let mut roots: Vec<Id> = zb.to_vec();
     roots.push(t);
-    for d in 0..=opts.max_closure_degree {
+    // One or two blocks keep the system small at any degree: go higher there
+    // (big: growth and death rates of degree 10 in G).
+    let top = if nb <= 2 {
+        opts.max_closure_degree.max(16)
+    } else {
+        opts.max_closure_degree
+    };
+    for d in 0..=top {
         check_deadline(
             opts,
             &format!("the reduced dynamics (degree {d})"),
@@ -315,7 +323,158 @@ pub(super) fn in_modes(
             }
         }
     }
+    split_by_variable(nf, t, zb_all, znames_all, modes, &need, rng, opts)
+}
+
+/// `t = sum_e x^e c_e` for a mode `x` that is a plain variable no other mode
+/// involves, each `c_e` written in the modes on its own: fewer blocks and a
+/// lower degree (vins: the rotated velocity's drift is of degree 4 over 11
+/// blocks, its coefficients in the biases of degree 3 over 3).
+#[allow(clippy::too_many_arguments)]
+fn split_by_variable(
+    nf: &mut NormalForm,
+    t: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    need: &[bool],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    let c = nf.ctx.canon(t);
+    for (k, m) in modes.iter().enumerate() {
+        if !need[k] || m.kind != ModeKind::Variable || m.angle {
+            continue;
+        }
+        let Some(sym) = nf.ctx.lookup(&m.name) else {
+            continue;
+        };
+        let x = sym.var;
+        if c.denominator().contains_var(x) || !c.numerator().contains_var(x) {
+            continue;
+        }
+        let alone = modes.iter().enumerate().all(|(j, o)| {
+            j == k || {
+                let d = nf.ctx.diff(o.expr, x);
+                nf.ctx.is_identically_zero(d)
+            }
+        });
+        if !alone || c.numerator().degree(x) > 4 {
+            continue;
+        }
+        let den = c.denominator().clone();
+        let mut parts = Vec::new();
+        for (e, p) in c.numerator().coeffs_in(x) {
+            check_deadline(opts, "the reduced dynamics (split)", modes.len())?;
+            let q = RatFun::from_poly(p);
+            let dinv = nf.ctx.rf_inv(&RatFun::from_poly(den.clone()));
+            let Some(dinv) = dinv else { return Ok(None) };
+            let ce = nf.ctx.rf_mul(&q, &dinv);
+            let ce = nf.ctx.from_canonical(&ce);
+            let Some(text) = in_modes(nf, ce, zb, znames, modes, rng, opts)? else {
+                return Ok(None);
+            };
+            let xe = match e {
+                0 => String::new(),
+                1 => format!("{}*", m.name),
+                _ => format!("{}^{e}*", m.name),
+            };
+            parts.push(format!("{xe}({text})"));
+        }
+        return Ok(Some(parts.join(" + ")));
+    }
     Ok(None)
+}
+
+/// An output written in the modes: as itself; `sqrt(P(z))` when its square
+/// is `P(z)` (a range, `D = sqrt(x^2 + y^2)`); for an angle output
+/// `h = sum k_a atan2(y_a, x_a) + sum k_b atan(u_b) + sum k_c theta_c`
+/// (integer `k`), `h = arg Z` modulo 2 pi with
+/// `Z = prod (x_a + i y_a)^k_a (1 + i u_b)^k_b e^(i k_c theta_c)`, so
+/// `h = atan2(Im Z, Re Z)` when both are functions of the modes (the same
+/// branch, up to a multiple of 2 pi), else `atan(Im Z / Re Z)` (up to a
+/// multiple of pi). The decomposition checks prove each form up to a
+/// constant, which is what the closure certificate needs.
+pub(super) fn output_in_modes(
+    nf: &mut NormalForm,
+    h: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    if !nf.ctx.is_angle_valued(h) {
+        // A square root of h gone from h^2: the square first.
+        let h2 = nf.ctx.mul(&[h, h]);
+        let v2 = nf.ctx.canon(h2).vars();
+        let vs = nf.ctx.canon(h).vars();
+        if vs
+            .iter()
+            .any(|&v| nf.ctx.sqrt_arg(v).is_some() && !v2.contains(&v))
+        {
+            if let Some(p) = in_modes(nf, h2, zb, znames, modes, rng, opts)? {
+                return Ok(Some(format!("sqrt({p})")));
+            }
+        }
+        return in_modes(nf, h, zb, znames, modes, rng, opts);
+    }
+    let c = nf.ctx.canon(h);
+    let Some(d) = c.denominator().as_constant() else {
+        return Ok(None);
+    };
+    let one = nf.ctx.one();
+    let zero = nf.ctx.zero();
+    let mut z = (one, zero);
+    for v in c.numerator().vars() {
+        let cs = c.numerator().coeffs_in(v);
+        let Some((1, p)) = cs.iter().find(|e| e.0 > 0).cloned() else {
+            return Ok(None);
+        };
+        if cs.iter().any(|e| e.0 > 1) {
+            return Ok(None);
+        }
+        let Some(k) = p.as_constant() else {
+            return Ok(None);
+        };
+        let q = Q::new(k, d.clone());
+        let x = q.to_f64();
+        if !q.is_integer() || x.abs() > 16.0 {
+            return Ok(None);
+        }
+        let factor = if let Some((y, xa)) = nf.ctx.atan_args(v) {
+            (xa.unwrap_or(one), y)
+        } else if let Some(name) = nf.ctx.symbol_name(v).map(str::to_string) {
+            let (Ok(cs), Ok(sn)) = (
+                nf.parse_expr(&format!("cos({name})"), false),
+                nf.parse_expr(&format!("sin({name})"), false),
+            ) else {
+                return Ok(None);
+            };
+            (cs, sn)
+        } else {
+            return Ok(None);
+        };
+        let f = if x < 0.0 {
+            (factor.0, nf.ctx.neg(factor.1))
+        } else {
+            factor
+        };
+        for _ in 0..(x.abs() as usize) {
+            let rr = nf.ctx.mul(&[z.0, f.0]);
+            let ii = nf.ctx.mul(&[z.1, f.1]);
+            let ri = nf.ctx.mul(&[z.0, f.1]);
+            let ir = nf.ctx.mul(&[z.1, f.0]);
+            z = (nf.ctx.sub(rr, ii), nf.ctx.add(&[ri, ir]));
+        }
+    }
+    let re = in_modes(nf, z.0, zb, znames, modes, rng, opts)?;
+    let im = in_modes(nf, z.1, zb, znames, modes, rng, opts)?;
+    if let (Some(re), Some(im)) = (re, im) {
+        return Ok(Some(format!("atan2({im}, {re})")));
+    }
+    let t = nf.ctx.div(z.1, z.0);
+    Ok(in_modes(nf, t, zb, znames, modes, rng, opts)?.map(|r| format!("atan({r})")))
 }
 
 /// One ansatz `t = P/Q` (or `t = P` when not `quotient`) over `monos`.
@@ -353,15 +512,46 @@ fn solve_form(
         if v[nm..].iter().all(|x| x.is_zero()) {
             continue;
         }
-        // Normalise: the first non-zero denominator coefficient is 1.
-        let Some(lead) = v[nm..].iter().find(|x| !x.is_zero()).and_then(|x| x.inv()) else {
-            continue;
-        };
-        let Some(qs) = v
+        // Normalise so that the lifted coefficients are the shortest: one
+        // coefficient is set to 1 (of t when `t = P`; any of P/Q otherwise),
+        // as a single prime lifts only coefficients below sqrt(p/2) (big's
+        // rates: the constant term as 1 needs 1e12, the top one does not).
+        // The first non-zero denominator coefficient first, kept unless its
+        // lift looks like a wrong one (a coefficient near the bound).
+        let mut leads: Vec<Fp> = v[nm..]
             .iter()
-            .map(|&x| rat_recon(x * lead))
-            .collect::<Option<Vec<Q>>>()
-        else {
+            .copied()
+            .filter(|x| !x.is_zero())
+            .take(1)
+            .collect();
+        if quotient {
+            leads.extend(v.iter().copied().filter(|x| !x.is_zero()).take(48));
+        }
+        let mut best: Option<(usize, Vec<Q>)> = None;
+        for l in leads {
+            if let Some((_, b)) = &best {
+                if b.iter().all(|q| q.to_string().len() <= 12) {
+                    break;
+                }
+            }
+            let Some(inv) = l.inv() else { continue };
+            let Some(qs) = v
+                .iter()
+                .map(|&x| rat_recon(x * inv))
+                .collect::<Option<Vec<Q>>>()
+            else {
+                continue;
+            };
+            let h: usize = qs
+                .iter()
+                .filter(|q| !q.is_zero())
+                .map(|q| q.to_string().len())
+                .sum();
+            if best.as_ref().is_none_or(|b| h < b.0) {
+                best = Some((h, qs));
+            }
+        }
+        let Some((_, qs)) = best else {
             continue;
         };
         let (pc, qc) = qs.split_at(nm);
