@@ -54,7 +54,7 @@ pub struct Generation {
 /// The effects file's share of the per-round false-alarm probability when
 /// candidates are generated: half, whatever their number, so a file of 8
 /// effects is tested at alpha / 16 per candidate against, on mrclam.sys,
-/// alpha / 24 for each of 12 generated ones.
+/// alpha / 24 for each of the 12 generated ones.
 pub const FILE_SHARE: f64 = 0.5;
 
 /// Per-candidate significance levels (file, generated): a weighted
