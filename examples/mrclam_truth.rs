@@ -146,6 +146,60 @@ fn robot(dir: &str, r: u32) -> Result<(), Box<dyn Error>> {
         "  commanded v to Vicon speed: best correlation {:.3} at a lag of {:.2} s",
         best.1, best.0
     );
+    // 2b. Forward speed against the turn rate (issue 18.6): 1 s blocks of
+    //    commands, the Vicon forward distance over the same second 0.25 s
+    //    later (the lag above), binned by the block's mean |omega|; and the
+    //    least-squares c of v_true = v (1 + c |omega|) over the blocks.
+    let (mut bins, mut sxx, mut sxy) = ([(0.0f64, 0.0f64, 0usize); 6], 0.0, 0.0);
+    for b in (0..od.len().saturating_sub(63)).step_by(50) {
+        let (t0, t1) = (od[b][0], od[b + 50][0]);
+        let rows = &od[b..b + 50];
+        let dc: f64 = rows.iter().map(|r| r[1] * 0.02).sum();
+        let aw = rows.iter().map(|r| r[2].abs()).sum::<f64>() / 50.0;
+        let ga = gts.partition_point(|&x| x < t0 + 0.25);
+        let gb = gts.partition_point(|&x| x < t1 + 0.25);
+        if dc < 0.02 || gb >= gt.len() || ga == 0 {
+            continue;
+        }
+        let dv: f64 = (ga..gb)
+            .map(|j| {
+                let h = gt[j - 1][3];
+                (gt[j][1] - gt[j - 1][1]) * h.cos() + (gt[j][2] - gt[j - 1][2]) * h.sin()
+            })
+            .sum();
+        let k = ((aw / 0.1) as usize).min(5);
+        bins[k].0 += dv;
+        bins[k].1 += dc;
+        bins[k].2 += 1;
+        sxx += (dc * aw).powi(2);
+        sxy += dc * aw * (dv - dc);
+    }
+    let text: Vec<String> = bins
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.2 > 0)
+        .map(|(k, b)| {
+            let hi = if k == 5 {
+                "+".into()
+            } else {
+                format!("-{:.1}", 0.1 * (k + 1) as f64)
+            };
+            format!(
+                "|omega| {:.1}{hi}: {:.3} ({})",
+                0.1 * k as f64,
+                b.0 / b.1,
+                b.2
+            )
+        })
+        .collect();
+    println!(
+        "  Vicon / commanded distance per 1 s block by mean |omega| (rad/s): {}",
+        text.join(", ")
+    );
+    println!(
+        "  v_true = v (1 + c |omega|) over the blocks: c = {:.3} s/rad",
+        sxy / sxx
+    );
     // 3. Ranges against the Vicon geometry (pose at the measurement time,
     //    surveyed landmark): ratios beyond 20% of the median dropped.
     let lms = mrclam_landmarks(&lm_t, &lm_path)?;

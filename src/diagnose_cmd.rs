@@ -80,6 +80,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
                 )))
             }
         },
+        generate: a.generated,
         ..DiagnoseOptions::default()
     };
     let bar = crate::progress::Progress::new("diagnose", 0, "");
@@ -129,6 +130,15 @@ fn structure_text(f: &ModelFit, out: &mut String) {
     }
     for s in st {
         let _ = writeln!(out, "  {:<10} z = {:>6.2}  {}", s.test, s.z, s.description);
+    }
+}
+
+/// A candidate's name, with `*` when it was generated.
+fn mark(c: &CandidateResult) -> String {
+    if c.origin == obsan_diagnose::ORIGIN_GENERATED {
+        format!("{}*", c.effect)
+    } else {
+        c.effect.clone()
     }
 }
 
@@ -238,14 +248,21 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             i + 1,
             d.lr_critical
         );
+        if d.lr_critical_generated.is_finite() {
+            let _ = writeln!(
+                s,
+                "  (candidates marked * are generated from the model's structure: named when LR > {:.2}, their share of alpha split over them)",
+                d.lr_critical_generated
+            );
+        }
         for c in round {
             if let Some(e) = &c.error {
-                let _ = writeln!(s, "  {:<20} failed: {e}", c.effect);
+                let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
             } else if !c.identifiable {
                 let _ = writeln!(
                     s,
                     "  {:<20} not identifiable on these data: {}",
-                    c.effect,
+                    mark(c),
                     hidden_text(c)
                 );
             } else {
@@ -253,7 +270,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 let _ = writeln!(
                     s,
                     "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
-                    c.effect,
+                    mark(c),
                     est.join(", "),
                     c.lr,
                     c.p_value,
@@ -289,13 +306,23 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             .map(|r| format!("{:.4e}", r.1))
             .collect();
         let after: Vec<String> = n.rms_after.iter().map(|r| format!("{:.4e}", r.1)).collect();
-        let _ = writeln!(
-            s,
-            "named: {}: {} ({})",
-            n.effect,
-            est.join(", "),
-            n.description
-        );
+        if n.origin == obsan_diagnose::ORIGIN_GENERATED {
+            let _ = writeln!(
+                s,
+                "named: {} (generated from the model's structure, not in the effects file): {}, {}",
+                n.effect,
+                n.description,
+                est.join(", ")
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "named: {}: {} ({})",
+                n.effect,
+                est.join(", "),
+                n.description
+            );
+        }
         let _ = writeln!(
             s,
             "  residual RMS {} -> {} (LR {:.1}, p {:.1e})",
@@ -384,7 +411,13 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     if !d.hidden.is_empty() {
         let _ = writeln!(s, "\nthese data cannot reveal:");
         for c in &d.hidden {
-            let _ = writeln!(s, "  {}: {}", c.effect, hidden_text(c));
+            let _ = writeln!(s, "  {}: {}", mark(c), hidden_text(c));
+        }
+    }
+    if !d.generated_dropped.is_empty() {
+        let _ = writeln!(s, "\ngenerated candidates left out:");
+        for (n, why) in &d.generated_dropped {
+            let _ = writeln!(s, "  {n}: {why}");
         }
     }
     s
@@ -516,9 +549,9 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
                     COLORS[0]
                 };
                 let label = if c.identifiable {
-                    c.effect.clone()
+                    mark(c)
                 } else {
-                    format!("{} (hidden)", c.effect)
+                    format!("{} (hidden)", mark(c))
                 };
                 (label, c.lr, color)
             })

@@ -21,6 +21,7 @@
 )]
 
 mod error;
+mod generate;
 mod identify;
 mod model_fit;
 mod relation;
@@ -30,6 +31,7 @@ mod stats;
 mod workflow;
 
 pub use error::DiagnoseError;
+pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use relation::{InputCheck, TrajectoryCheck};

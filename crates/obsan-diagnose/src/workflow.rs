@@ -3,6 +3,7 @@
 //! significant ones greedily.
 
 use crate::error::DiagnoseError;
+use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::model_fit::{
     class_inputs, estimate_levels, fit_model, input_noise, prepare, without_outliers, ModelFit,
@@ -41,6 +42,9 @@ pub struct DiagnoseOptions {
     /// Where the measured inputs' noise comes from (it weighs the residuals
     /// by generalised least squares, see [`input_noise`]).
     pub input_noise: InputNoise,
+    /// Also try the candidates generated from the model's structure
+    /// ([`crate::generate`]), under their own share of `alpha`.
+    pub generate: bool,
 }
 
 /// The source of the measured inputs' noise levels.
@@ -75,6 +79,7 @@ impl Default for DiagnoseOptions {
             rank_trajectories: 4,
             sigma: None,
             input_noise: InputNoise::Stated,
+            generate: false,
         }
     }
 }
@@ -84,6 +89,8 @@ impl Default for DiagnoseOptions {
 pub struct CandidateResult {
     pub effect: String,
     pub description: String,
+    /// [`ORIGIN_FILE`] or [`ORIGIN_GENERATED`].
+    pub origin: String,
     /// The effect's new params.
     pub params: Vec<String>,
     /// Identifiable on these data (the rank test).
@@ -176,8 +183,15 @@ pub struct Diagnosis {
     pub hidden: Vec<CandidateResult>,
     /// The extended model (nominal plus the named effects) as .sys text.
     pub extended_sys: String,
-    /// Per-round critical value of the LR statistic.
+    /// Per-round critical value of the LR statistic (the effects file's
+    /// candidates).
     pub lr_critical: f64,
+    /// The same for the generated candidates (their share of alpha split
+    /// over more candidates; infinite when none are generated).
+    pub lr_critical_generated: f64,
+    /// Generated candidates left out before any fit, with the reason (the
+    /// same as a user effect, or not an extension of the model).
+    pub generated_dropped: Vec<(String, String)>,
 }
 
 /// Run the workflow. `progress` is told what is being done.
@@ -251,8 +265,24 @@ pub fn diagnose(
         .copied()
         .filter(|e| !e.is_input_side())
         .collect();
-    let k = model_effects.len().max(1);
-    let crit = normal_critical(o.alpha / k as f64).powi(2);
+    // Candidates generated from the model's structure join the file's,
+    // each side with its own share of alpha (generate.rs, `levels`).
+    let gen = if o.generate {
+        generate(sys, &model_effects)
+    } else {
+        Generation::default()
+    };
+    let (a_user, a_gen) = levels(o.alpha, model_effects.len(), gen.candidates.len());
+    let crit = normal_critical(a_user).powi(2);
+    let crit_gen = if gen.candidates.is_empty() {
+        f64::INFINITY
+    } else {
+        normal_critical(a_gen).powi(2)
+    };
+    let generated: Vec<&Effect> = gen.candidates.iter().map(|g| &g.effect).collect();
+    let file_effects = model_effects.clone();
+    let model_effects: Vec<&Effect> = model_effects.into_iter().chain(generated).collect();
+    let is_generated = |e: &str| !file_effects.iter().any(|f| f.name == e);
     // The relations are weighed by the encoder noise the fit uses (stated
     // or estimated), else by dataset.json's even under `--input-noise none`
     // (the fit may ignore it; the inputs' own test should not), else by one
@@ -265,7 +295,7 @@ pub fn diagnose(
     let input_checks: Vec<InputCheck> = effects
         .iter()
         .filter(|e| e.is_input_side())
-        .map(|e| input_check(e, data, &relation_noise, o.alpha / k as f64))
+        .map(|e| input_check(e, data, &relation_noise, a_user))
         .collect();
 
     let which: Vec<usize> = (0..data.trajectories.len().min(o.rank_trajectories)).collect();
@@ -294,6 +324,11 @@ pub fn diagnose(
         let results: Vec<(CandidateResult, Option<(System, ModelFit)>)> = remaining
             .par_iter()
             .map(|e| {
+                let (c, origin) = if is_generated(&e.name) {
+                    (crit_gen, ORIGIN_GENERATED)
+                } else {
+                    (crit, lib.map_or("effects", |l| l.origin.as_str()))
+                };
                 obsan_expr::with_cancel(cancel.clone(), || {
                     candidate(
                         &current_sys,
@@ -302,9 +337,9 @@ pub fn diagnose(
                         data,
                         &which,
                         (&sigma, &noise),
-                        crit,
+                        c,
                         o,
-                        lib,
+                        origin,
                     )
                 })
             })
@@ -354,10 +389,18 @@ pub fn diagnose(
         let Some(eff) = model_effects.iter().find(|e| e.name == res.effect) else {
             break;
         };
+        let (description, origin) = match gen.candidates.iter().find(|g| g.effect.name == eff.name)
+        {
+            Some(g) => (
+                g.words(res.estimates.first().map_or(0.0, |x| x.1)),
+                ORIGIN_GENERATED,
+            ),
+            None => (eff.description.clone(), ORIGIN_FILE),
+        };
         named.push(Named {
             effect: res.effect.clone(),
-            description: eff.description.clone(),
-            origin: ORIGIN_FILE.into(),
+            description,
+            origin: origin.into(),
             estimates: res.estimates.clone(),
             robust_sd: res.robust_sd.clone(),
             rms_before: current.rms.clone(),
@@ -436,11 +479,31 @@ pub fn diagnose(
             }
         }
     }
+    // A generated effect's words follow the sign of its refined estimate.
+    for n in &mut named {
+        if let Some(g) = gen.candidates.iter().find(|g| g.effect.name == n.effect) {
+            n.description = g.words(n.estimates.first().map_or(0.0, |x| x.1));
+        }
+    }
     // A relation the measured inputs contradict is a missing effect too:
     // the data were not taken under the declared restriction. Named after
     // the model's effects (it changes no fit: the fit uses the measured
     // inputs), and written into the extended model's restriction.
-    let mut extended_sys = current_sys.to_sys_text();
+    let mut extended_sys = String::new();
+    for n in named.iter().filter(|n| n.origin == ORIGIN_GENERATED) {
+        let est: Vec<String> = n
+            .estimates
+            .iter()
+            .map(|(p, v, sd)| format!("{p} = {v:e} ± {sd:.1e}"))
+            .collect();
+        extended_sys.push_str(&format!(
+            "# generated from the model's structure (not in the effects file): {}: {}, {}\n",
+            n.effect,
+            n.description,
+            est.join(", ")
+        ));
+    }
+    extended_sys.push_str(&current_sys.to_sys_text());
     for (c, e) in input_checks
         .iter()
         .zip(effects.iter().filter(|e| e.is_input_side()))
@@ -487,6 +550,8 @@ pub fn diagnose(
         hidden,
         extended_sys,
         lr_critical: crit,
+        lr_critical_generated: crit_gen,
+        generated_dropped: gen.dropped,
     })
 }
 
@@ -500,11 +565,17 @@ fn candidate(
     (sigma, noise): (&[f64], &[(String, f64)]),
     crit: f64,
     o: &DiagnoseOptions,
-    lib: Option<&EffectLibrary>,
+    origin: &str,
 ) -> (CandidateResult, Option<(System, ModelFit)>) {
     let mut res = CandidateResult {
         effect: e.name.clone(),
         description: e.description.clone(),
+        origin: if origin == ORIGIN_GENERATED {
+            ORIGIN_GENERATED
+        } else {
+            ORIGIN_FILE
+        }
+        .into(),
         params: e.params.clone(),
         identifiable: false,
         rank: None,
@@ -519,7 +590,6 @@ fn candidate(
         significant: false,
         error: None,
     };
-    let origin = lib.map_or("effects", |l| l.origin.as_str());
     let mut run = || -> Result<Option<(System, ModelFit)>, DiagnoseError> {
         let ext = base
             .extend(&[e], origin)
