@@ -33,7 +33,7 @@ fn main() {
                 truth.delta,
                 truth.xi,
             ];
-            p.predict(&x0, &[tt.q.unwrap_or(0.0)], &tr.inputs, &tr.outputs.t)
+            p.predict(&x0, &[tt.q.unwrap_or(0.0)], &tr.inputs, tr.outputs.t())
                 .expect("predicts");
         }
         pred.push(t.elapsed());

@@ -66,7 +66,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let outputs = sys.output_names();
     let data = read_dataset(&a.data, &inputs, &outputs)?;
     let init = parse_init(&a.init)?;
-    let start = start_values(&sys, &data, &init).map_err(Failure)?;
+    let start = start_values(&sys, &data, &init)?;
     let opts = DiagnoseOptions {
         alpha: a.alpha,
         max_rounds: a.max_effects.unwrap_or(usize::MAX),
@@ -85,7 +85,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     };
     let bar = crate::progress::Progress::new("diagnose", 0, "");
     let progress = |m: &str| bar.set_message(m);
-    let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress).map_err(Failure)?;
+    let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress)?;
     drop(bar);
     let text = render_text(&d, &a.data);
     if a.json {

@@ -120,7 +120,7 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
                 "{} ({} bearings, {:.1} s)",
                 t.name,
                 t.outputs.len(),
-                t.inputs.t.last().copied().unwrap_or(0.0)
+                t.inputs.t().last().copied().unwrap_or(0.0)
             )
         })
         .collect();

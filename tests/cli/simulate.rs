@@ -22,7 +22,7 @@ fn simulate_writes_the_data_format() {
     }
     let text = std::fs::read_to_string(format!("{out}/q0/inputs.csv")).unwrap();
     let s = obsan_data::Series::parse_csv(&text, "inputs.csv", &["wR", "wL"], false).unwrap();
-    assert_eq!(s.t[3], 0.06, "time stamps are k/50 exactly as printed");
+    assert_eq!(s.t()[3], 0.06, "time stamps are k/50 exactly as printed");
     let meta: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(format!("{out}/q-1/meta.json")).unwrap())
             .unwrap();

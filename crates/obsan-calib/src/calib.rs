@@ -304,21 +304,21 @@ pub fn arc_data(t: &Trajectory, input: &str, output: &str) -> Result<ArcData, Ca
     let mut b = Vec::new();
     let mut times = Vec::new();
     let (mut acc, mut row) = (0.0, 0usize);
-    let mut tcur = t.inputs.t.first().copied().unwrap_or(0.0);
-    for (k, &tb) in t.outputs.t.iter().enumerate() {
+    let mut tcur = t.inputs.t().first().copied().unwrap_or(0.0);
+    for (k, &tb) in t.outputs.t().iter().enumerate() {
         let Some(value) = beta[k] else { continue };
         if tb < tcur {
             continue; // before the first input
         }
         while tcur < tb {
             let next = if row + 1 < t.inputs.len() {
-                t.inputs.t[row + 1].min(tb)
+                t.inputs.t()[row + 1].min(tb)
             } else {
                 tb
             };
             acc += wr[row].unwrap_or(0.0) * (next - tcur);
             tcur = next;
-            if row + 1 < t.inputs.len() && t.inputs.t[row + 1] <= tcur {
+            if row + 1 < t.inputs.len() && t.inputs.t()[row + 1] <= tcur {
                 row += 1;
             }
         }

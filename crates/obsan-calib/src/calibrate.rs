@@ -616,7 +616,7 @@ fn integral(t: &Trajectory, c: &str) -> Option<f64> {
     let v = t.inputs.column(c)?;
     Some(
         (0..t.inputs.len().saturating_sub(1))
-            .map(|k| v[k].unwrap_or(0.0) * (t.inputs.t[k + 1] - t.inputs.t[k]))
+            .map(|k| v[k].unwrap_or(0.0) * (t.inputs.t()[k + 1] - t.inputs.t()[k]))
             .sum(),
     )
 }
@@ -626,7 +626,7 @@ fn measured_ratio(t: &Trajectory, right: &str, left: &str) -> Option<f64> {
     let (r, l) = (t.inputs.column(right)?, t.inputs.column(left)?);
     let (mut sr, mut sl) = (0.0, 0.0);
     for k in 0..t.inputs.len().saturating_sub(1) {
-        let dt = t.inputs.t[k + 1] - t.inputs.t[k];
+        let dt = t.inputs.t()[k + 1] - t.inputs.t()[k];
         sr += r[k].unwrap_or(0.0) * dt;
         sl += l[k].unwrap_or(0.0) * dt;
     }

@@ -57,15 +57,15 @@ pub fn cekf(
     let (mut x, mut p) = (x0, p0);
     let r = sigma_beta * sigma_beta;
     let mut row = 0usize;
-    let mut tcur = t.inputs.t.first().copied().unwrap_or(0.0);
-    for (k, &tb) in t.outputs.t.iter().enumerate() {
+    let mut tcur = t.inputs.t().first().copied().unwrap_or(0.0);
+    for (k, &tb) in t.outputs.t().iter().enumerate() {
         // Propagate to the bearing's time, one encoder interval at a time.
         while tcur < tb - 1e-12 {
-            while row + 1 < t.inputs.len() && t.inputs.t[row + 1] <= tcur + 1e-12 {
+            while row + 1 < t.inputs.len() && t.inputs.t()[row + 1] <= tcur + 1e-12 {
                 row += 1;
             }
             let next = if row + 1 < t.inputs.len() {
-                t.inputs.t[row + 1].min(tb)
+                t.inputs.t()[row + 1].min(tb)
             } else {
                 tb
             };

@@ -136,13 +136,6 @@ impl std::error::Error for CalibError {
     }
 }
 
-/// The bridge for callers whose errors are still text.
-impl From<CalibError> for String {
-    fn from(e: CalibError) -> String {
-        e.to_string()
-    }
-}
-
 impl CalibError {
     /// `self` in the named trajectory.
     pub fn in_trajectory(self, name: &str) -> CalibError {
@@ -258,7 +251,6 @@ mod tests {
                 data.trajectories[0].name
             )
         );
-        assert_eq!(String::from(e.clone()), e.to_string());
         assert!(std::error::Error::source(&e).is_some());
     }
 }

@@ -36,12 +36,6 @@ impl std::fmt::Display for MontecarloError {
 
 impl std::error::Error for MontecarloError {}
 
-impl From<MontecarloError> for String {
-    fn from(e: MontecarloError) -> String {
-        e.to_string()
-    }
-}
-
 /// A method as the tables name it (CEKF from a 30% off guess, CEKFd from DET).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum McMethod {
@@ -282,7 +276,9 @@ fn true_cal(t: &Truth) -> crate::Calibration {
 }
 
 /// One method's outcome on one run: (errors, estimates) per column, or why
-/// it failed (the text is data: it is reported, counted, never raised).
+/// it failed. The failure stays text on purpose: it is data (reported,
+/// counted, never raised) and round-trips through `--shard` record files,
+/// from which no typed [`CalibError`] could be rebuilt.
 pub type RunOutcome = Result<(Vec<f64>, Vec<f64>), String>;
 type Outcome = (Vec<f64>, Vec<f64>);
 

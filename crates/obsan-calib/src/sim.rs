@@ -313,8 +313,8 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
         loop {
             let (w_r, w_l) = match (&o.inputs, q) {
                 (Some(s), _) => {
-                    let k = s.t.partition_point(|&x| x <= t).saturating_sub(1);
-                    let get = |c: usize| s.values[c][k].unwrap_or(0.0);
+                    let k = s.t().partition_point(|&x| x <= t).saturating_sub(1);
+                    let get = |c: usize| s.values()[c][k].unwrap_or(0.0);
                     (get(0), get(1))
                 }
                 (None, Some(q)) => {
@@ -348,7 +348,7 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
             steps += 1;
             t = steps as f64 * dt; // not accumulated: clean time stamps
             let done = match (&o.inputs, q) {
-                (Some(s), _) => t >= *s.t.last().unwrap_or(&0.0),
+                (Some(s), _) => t >= *s.t().last().unwrap_or(&0.0),
                 _ => turned.abs() >= 2.0 * PI,
             };
             if done {

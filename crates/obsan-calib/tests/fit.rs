@@ -108,12 +108,12 @@ fn derived_inputs_rate_telescopes_and_abs_keeps_its_sign() {
     // The integral of rate(u) over rows 0..k is u[k] - u[0] (identity).
     let mut acc = 0.0;
     for (k, d) in du.iter().enumerate().take(49) {
-        acc += d.unwrap() * (s.t[k + 1] - s.t[k]);
+        acc += d.unwrap() * (s.t()[k + 1] - s.t()[k]);
         let want = s.column("u").unwrap()[k + 1].unwrap() - s.column("u").unwrap()[0].unwrap();
         assert!((acc - want).abs() < 1e-12);
     }
     for k in 0..50 {
-        let (u, w) = (s.values[0][k].unwrap(), s.values[1][k].unwrap());
+        let (u, w) = (s.values()[0][k].unwrap(), s.values()[1][k].unwrap());
         assert!((s.column("a").unwrap()[k].unwrap() - (u - w).abs() * w).abs() < 1e-12);
         // sqrt(w^2) is |w|, not w, for negative w.
         assert!((s.column("b").unwrap()[k].unwrap() - w.abs()).abs() < 1e-12);
@@ -150,12 +150,11 @@ fn a_delay_equals_shifted_inputs_exactly() {
     let times: Vec<f64> = (1..70).map(|k| k as f64 * 0.11).collect();
     let tau = 0.37;
     let a = p.predict(&[0.1, 0.2, tau], &[], &inputs, &times).unwrap();
-    let mut shifted = inputs.clone();
-    shifted.t = inputs.t.iter().map(|t| t + tau).collect();
-    shifted.t.insert(0, 0.0);
-    for c in 0..2 {
-        let first = shifted.values[c][0];
-        shifted.values[c].insert(0, first);
+    let row = |k: usize| [inputs.values()[0][k], inputs.values()[1][k]];
+    let mut shifted = obsan_data::Series::new(inputs.columns().to_vec());
+    shifted.push(0.0, &row(0));
+    for (k, t) in inputs.t().iter().enumerate() {
+        shifted.push(t + tau, &row(k));
     }
     let b = p.predict(&[0.1, 0.2, 0.0], &[], &shifted, &times).unwrap();
     for (x, y) in a.iter().zip(&b) {

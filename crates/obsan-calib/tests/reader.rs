@@ -345,7 +345,7 @@ proptest! {
         let tr = &r.dataset.trajectories[0];
         let got_wr: Vec<f64> = tr.inputs.column("wR").unwrap().iter().map(|v| v.unwrap()).collect();
         prop_assert_eq!(got_wr, wr);
-        prop_assert_eq!(&tr.outputs.t, &to);
+        prop_assert_eq!(tr.outputs.t(), &to);
         prop_assert!(r.warnings.is_empty());
     }
 
@@ -365,8 +365,8 @@ proptest! {
             Ok(r) => {
                 for tr in &r.dataset.trajectories {
                     for s in [&tr.inputs, &tr.outputs] {
-                        prop_assert!(s.t.windows(2).all(|w| w[0] <= w[1]));
-                        for v in s.values.iter().flatten().flatten() {
+                        prop_assert!(s.t().windows(2).all(|w| w[0] <= w[1]));
+                        for v in s.values().iter().flatten().flatten() {
                             prop_assert!(v.is_finite() && v.abs() <= MAX_ABS_VALUE);
                         }
                     }
@@ -395,7 +395,7 @@ fn extreme_values_do_not_hang_the_estimators() {
     let p = calib_predictor();
     for v in [1e308, MAX_ABS_VALUE, f64::NAN] {
         let (mut data, _) = simulate(&SimOptions::default()).unwrap();
-        data.trajectories[1].outputs.values[0][2] = Some(v);
+        data.trajectories[1].outputs.values_mut(0)[2] = Some(v);
         for m in [Method::Det, Method::Ls, Method::Ml] {
             let o = CalibrateOptions::for_dataset(&data, m);
             // Either answer is acceptable; returning is the point.

@@ -136,8 +136,8 @@ fn calib_sys_reproduces_the_simulated_bearings() {
             let mut worst: f64 = 0.0;
             for k in 0..=tr.inputs.len() {
                 let t = k as f64 * dt;
-                while k_out < tr.outputs.len() && (tr.outputs.t[k_out] - t).abs() < 1e-9 {
-                    let diff = wrap(beta_at(s) - tr.outputs.values[0][k_out].unwrap());
+                while k_out < tr.outputs.len() && (tr.outputs.t()[k_out] - t).abs() < 1e-9 {
+                    let diff = wrap(beta_at(s) - tr.outputs.values()[0][k_out].unwrap());
                     worst = worst.max(diff.abs());
                     k_out += 1;
                 }
@@ -176,8 +176,8 @@ fn effects_and_errors() {
     o.effects.set("bearing_scale", 0.01).unwrap();
     let scaled = simulate(&o).unwrap().0;
     let (a, b) = (
-        &base.trajectories[0].outputs.values[0],
-        &scaled.trajectories[0].outputs.values[0],
+        &base.trajectories[0].outputs.values()[0],
+        &scaled.trajectories[0].outputs.values()[0],
     );
     for (x, y) in a.iter().zip(b) {
         assert!((wrap(y.unwrap() - 1.01 * x.unwrap())).abs() < 1e-12);
@@ -237,8 +237,8 @@ fn encoder_and_bearing_noise_have_the_stated_variance() {
     })
     .unwrap();
     let (a, b) = (
-        &noisy.trajectories[0].outputs.values[0],
-        &clean.trajectories[0].outputs.values[0],
+        &noisy.trajectories[0].outputs.values()[0],
+        &clean.trajectories[0].outputs.values()[0],
     );
     let n = a.len() as f64;
     let var: f64 = a
@@ -339,11 +339,11 @@ fn predictor_reproduces_simulated_bearings() {
                 truth.xi,
             ];
             let y = p
-                .predict(&x0, &[tt.q.unwrap()], &tr.inputs, &tr.outputs.t)
+                .predict(&x0, &[tt.q.unwrap()], &tr.inputs, tr.outputs.t())
                 .unwrap();
             let worst = y
                 .iter()
-                .zip(&tr.outputs.values[0])
+                .zip(&tr.outputs.values()[0])
                 .map(|(a, b)| wrap(a[0] - b.unwrap()).abs())
                 .fold(0.0, f64::max);
             assert!(worst < 1e-7, "{}: {worst}", tr.name);
@@ -359,7 +359,7 @@ fn predictor_reproduces_simulated_bearings() {
             &[0.2, 1.0, 0.0, 1.5, 0.5, 1.0, 0.6],
             &[0.0],
             &tr.inputs,
-            &tr.outputs.t,
+            tr.outputs.t(),
         )
         .unwrap_err();
     // The typed error names the column, and its text says so too.

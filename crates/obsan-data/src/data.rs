@@ -9,15 +9,22 @@ use std::fmt;
 use crate::error::{DataError, DataErrorKind as K, DerivedInputError};
 
 /// A time series: a time column and named value columns (`None` = not measured).
+///
+/// Invariants (kept by every constructor and mutator): one value column per
+/// name, each as long as the time column; times finite and non-decreasing
+/// (equal times are two samples at one instant). Readers index
+/// `values()[c][k]` for every `k < len()` and the integrators walk the rows
+/// in time order, so neither is re-checked downstream.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    pub columns: Vec<String>,
-    pub t: Vec<f64>,
+    columns: Vec<String>,
+    t: Vec<f64>,
     /// `values[c][k]`: column c at row k.
-    pub values: Vec<Vec<Option<f64>>>,
+    values: Vec<Vec<Option<f64>>>,
 }
 
 impl Series {
+    /// An empty series with these value columns.
     pub fn new(columns: Vec<String>) -> Series {
         let n = columns.len();
         Series {
@@ -26,7 +33,19 @@ impl Series {
             values: vec![Vec::new(); n],
         }
     }
+    /// Append a row: `row[c]` for column c.
+    ///
+    /// # Panics
+    /// If `row` does not have one value per column, or `t` is not finite or
+    /// before the last row's time. Readers of user files check both first
+    /// (with the file's line); a violation here is a bug in the caller.
     pub fn push(&mut self, t: f64, row: &[Option<f64>]) {
+        assert_eq!(row.len(), self.columns.len(), "one value per column");
+        assert!(
+            t.is_finite() && self.t.last().is_none_or(|&l| l <= t),
+            "time {t} after {:?}: times must be finite and non-decreasing",
+            self.t.last()
+        );
         self.t.push(t);
         for (c, v) in self.values.iter_mut().zip(row) {
             c.push(*v);
@@ -38,11 +57,34 @@ impl Series {
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
+    /// The value columns' names.
+    pub fn columns(&self) -> &[String] {
+        &self.columns
+    }
+    /// The time column.
+    pub fn t(&self) -> &[f64] {
+        &self.t
+    }
+    /// `values()[c][k]`: column c at row k.
+    pub fn values(&self) -> &[Vec<Option<f64>>] {
+        &self.values
+    }
+    /// Column c's values, to change in place (its length is fixed).
+    pub fn values_mut(&mut self, c: usize) -> &mut [Option<f64>] {
+        &mut self.values[c]
+    }
     pub fn column(&self, name: &str) -> Option<&[Option<f64>]> {
         self.columns
             .iter()
             .position(|c| c == name)
             .map(|i| self.values[i].as_slice())
+    }
+    /// Keep the first `n` rows.
+    pub fn truncate(&mut self, n: usize) {
+        self.t.truncate(n);
+        for c in &mut self.values {
+            c.truncate(n);
+        }
     }
 
     /// CSV text: header `t,<columns>`, full precision, empty cells for `None`.
@@ -727,6 +769,7 @@ pub fn add_derived_inputs(
                 })
                 .collect()
         };
+        debug_assert_eq!(col.len(), series.t.len());
         series.columns.push(name.clone());
         series.values.push(col);
     }
@@ -737,6 +780,38 @@ pub fn add_derived_inputs(
 mod tests {
     use super::{add_derived_inputs, Series};
     use std::collections::BTreeMap;
+
+    #[test]
+    fn series_rows_keep_the_columns_aligned() {
+        let mut s = Series::new(vec!["a".into(), "b".into()]);
+        s.push(0.0, &[Some(1.0), None]);
+        s.push(0.0, &[Some(2.0), Some(3.0)]);
+        s.push(1.0, &[None, Some(4.0)]);
+        assert_eq!(s.t(), &[0.0, 0.0, 1.0]);
+        assert_eq!(s.values()[1], [None, Some(3.0), Some(4.0)]);
+        s.values_mut(0)[2] = Some(5.0);
+        assert_eq!(s.column("a").unwrap(), &[Some(1.0), Some(2.0), Some(5.0)]);
+        s.truncate(1);
+        assert_eq!(
+            (s.len(), s.values()[0].len(), s.values()[1].len()),
+            (1, 1, 1)
+        );
+    }
+
+    #[test]
+    #[should_panic(expected = "non-decreasing")]
+    fn a_series_refuses_a_time_going_back() {
+        let mut s = Series::new(vec!["a".into()]);
+        s.push(1.0, &[Some(1.0)]);
+        s.push(0.5, &[Some(1.0)]);
+    }
+
+    #[test]
+    #[should_panic(expected = "one value per column")]
+    fn a_series_refuses_a_short_row() {
+        let mut s = Series::new(vec!["a".into(), "b".into()]);
+        s.push(0.0, &[Some(1.0)]);
+    }
 
     #[test]
     fn derived_inputs_take_the_real_root_and_the_known_constants() {

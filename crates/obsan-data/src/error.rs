@@ -53,13 +53,6 @@ impl fmt::Display for DataError {
 
 impl std::error::Error for DataError {}
 
-/// The bridge for callers whose errors are still text.
-impl From<DataError> for String {
-    fn from(e: DataError) -> String {
-        e.to_string()
-    }
-}
-
 /// What is wrong at a [`DataError`]'s place.
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
@@ -257,12 +250,6 @@ impl fmt::Display for DerivedInputError {
 
 impl std::error::Error for DerivedInputError {}
 
-impl From<DerivedInputError> for String {
-    fn from(e: DerivedInputError) -> String {
-        e.to_string()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::{DataErrorKind as K, DerivedInputError};
@@ -334,7 +321,6 @@ mod tests {
             "a/in.csv:2 (column wR): '1e10' is outside the accepted range |value| <= 1e9"
         );
         assert_eq!(e.message(), e.kind.to_string());
-        assert_eq!(String::from(e.clone()), e.to_string());
         let e = Series::parse_csv("", "in.csv", &[], false).unwrap_err();
         assert_eq!(
             e.to_string(),

@@ -206,8 +206,8 @@ pub fn convert(
         if inputs.len() < 2 {
             continue;
         }
-        let start = inputs.t[0];
-        let end = inputs.t[inputs.len() - 1];
+        let start = inputs.t()[0];
+        let end = inputs.t()[inputs.len() - 1];
         let mut outputs = Series::new(cols.clone());
         let mut n_meas = 0;
         for &(t, code, r, brg) in meas.iter().filter(|m| m.0 >= start && m.0 <= end) {
@@ -261,12 +261,12 @@ pub fn convert(
                 let (mut cd, mut ct) = (0.0, 0.0);
                 for i in 0..inputs.len() {
                     let dt = if i + 1 < inputs.len() {
-                        inputs.t[i + 1] - inputs.t[i]
+                        inputs.t()[i + 1] - inputs.t()[i]
                     } else {
-                        end - inputs.t[i]
+                        end - inputs.t()[i]
                     };
-                    cd += inputs.values[0][i].unwrap_or(0.0).abs() * dt;
-                    ct += inputs.values[1][i].unwrap_or(0.0) * dt;
+                    cd += inputs.values()[0][i].unwrap_or(0.0).abs() * dt;
+                    ct += inputs.values()[1][i].unwrap_or(0.0) * dt;
                 }
                 truths.push(WindowTruth {
                     name: name.clone(),

@@ -40,7 +40,7 @@ fn windows_hold_measurements_landmarks_and_skip_other_robots() {
         15
     );
     assert!(w.outputs.column("r45").unwrap().iter().all(Option::is_none));
-    assert_eq!(w.inputs.columns, ["v", "omega"]);
+    assert_eq!(w.inputs.columns(), ["v", "omega"]);
 }
 
 #[test]
@@ -115,16 +115,16 @@ fn vicon_poses_replace_the_landmark_outputs_in_the_same_windows() {
     assert_eq!(names(&lm), names(&vp));
     assert_eq!(truth.len(), 2);
     let w = &vp.trajectories[1];
-    assert_eq!(w.outputs.columns, ["px", "py", "pth"]);
+    assert_eq!(w.outputs.columns(), ["px", "py", "pth"]);
     // One pose every POSE_INTERVAL s over the window's input span.
     let n = w.outputs.len() as f64;
-    let span = w.inputs.t.last().unwrap() - w.inputs.t[0];
+    let span = w.inputs.t().last().unwrap() - w.inputs.t()[0];
     assert!(
         (n - 1.0 - span / obsan_data::POSE_INTERVAL).abs() <= 1.0,
         "{n}"
     );
-    for (k, tk) in w.outputs.t.iter().enumerate() {
-        let row: Vec<f64> = (0..3).map(|c| w.outputs.values[c][k].unwrap()).collect();
+    for (k, tk) in w.outputs.t().iter().enumerate() {
+        let row: Vec<f64> = (0..3).map(|c| w.outputs.values()[c][k].unwrap()).collect();
         assert!((row[0] - tk).abs() < 1e-9 && (row[1] + tk).abs() < 1e-9);
         assert!((row[2] - 0.1 * tk).abs() < 1e-9);
     }

@@ -17,6 +17,7 @@
 //! system; what is approximate is only the reading of the class from noisy
 //! data (a derived input such as `rate(u)` counts as free when `u` varies).
 
+use crate::error::DiagnoseError;
 use obsan_data::Dataset;
 use obsan_model::{Kind, System};
 use serde::Serialize;
@@ -78,7 +79,7 @@ pub fn input_class(
     inputs: &[String],
     derived: &[Option<String>],
     data: &Dataset,
-) -> Result<InputClass, String> {
+) -> Result<InputClass, DiagnoseError> {
     let mut samples = Vec::new();
     let mut varying = Vec::new();
     for tr in &data.trajectories {
@@ -87,13 +88,18 @@ pub fn input_class(
             .map(|n| {
                 tr.inputs
                     .column(n)
-                    .map(|c| block_means(&tr.inputs.t, c, 1.0))
-                    .ok_or_else(|| format!("trajectory {}: no input column '{n}'", tr.name))
+                    .map(|c| block_means(tr.inputs.t(), c, 1.0))
+                    .ok_or_else(|| DiagnoseError::NoInputColumn {
+                        trajectory: tr.name.clone(),
+                        column: n.clone(),
+                    })
             })
             .collect::<Result<_, _>>()?;
         let nb = cols.iter().map(Vec::len).min().unwrap_or(0);
         if nb == 0 {
-            return Err(format!("trajectory {}: no input rows", tr.name));
+            return Err(DiagnoseError::NoInputRows {
+                trajectory: tr.name.clone(),
+            });
         }
         let mean: Vec<f64> = cols
             .iter()
@@ -137,12 +143,17 @@ pub fn input_class(
         let a =
             nalgebra::DMatrix::from_fn(nb, inputs.len(), |r, c| (cols[c][r] - mean[c]) / scale[c]);
         if a.iter().any(|x| !x.is_finite()) {
-            return Err(format!("trajectory {}: non-finite input values", tr.name));
+            return Err(DiagnoseError::NonFiniteInputs {
+                trajectory: tr.name.clone(),
+            });
         }
-        let svd = nalgebra::SVD::try_new(a, false, true, 1e-14, 10_000)
-            .ok_or_else(|| format!("trajectory {}: the input class did not converge", tr.name))?;
+        let svd = nalgebra::SVD::try_new(a, false, true, 1e-14, 10_000).ok_or_else(|| {
+            DiagnoseError::InputClassNotConverged {
+                trajectory: tr.name.clone(),
+            }
+        })?;
         let Some(vt) = svd.v_t else {
-            return Err("the SVD returned no right singular vectors".into());
+            return Err(DiagnoseError::NoSingularVectors);
         };
         let smax = svd.singular_values.max();
         let mut order: Vec<usize> = (0..svd.singular_values.len()).collect();
@@ -206,7 +217,7 @@ pub fn stacked_rank(
     outputs_seen: &[Vec<bool>],
     which: &[usize],
     point: (&[f64], &[Vec<f64>]),
-) -> Result<Identifiability, String> {
+) -> Result<Identifiability, DiagnoseError> {
     let states: Vec<String> = sys.decls_of(Kind::State).map(|d| d.name.clone()).collect();
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
     let inputs: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
@@ -237,7 +248,9 @@ pub fn stacked_rank(
             base.push((n.clone(), num(*v)));
         }
         for s in &states {
-            let rhs = sys.rhs_text(s).ok_or("state without equation")?;
+            let rhs = sys
+                .rhs_text(s)
+                .ok_or(DiagnoseError::Incomplete("state without equation"))?;
             let terms: Vec<String> = class.samples[k]
                 .iter()
                 .enumerate()
@@ -264,17 +277,21 @@ pub fn stacked_rank(
                 continue;
             }
             any_output = true;
-            let h = sys.rhs_text(y).ok_or("output without expression")?;
+            let h = sys
+                .rhs_text(y)
+                .ok_or(DiagnoseError::Incomplete("output without expression"))?;
             text.push_str(&format!("output {y}__t{c} = {}\n", substitute(h, &base)));
         }
     }
     if !any_output {
-        return Err("no output is measured on the chosen trajectories".into());
+        return Err(DiagnoseError::NoOutputMeasured);
     }
     let stacked =
-        System::parse(&text, "stacked").map_err(|e| format!("stacking the model: {e}"))?;
-    let mut nf = stacked.normal_form(None, &[]).map_err(|e| e.to_string())?;
-    let report = obsan_analysis::rank(&mut nf, Default::default()).map_err(|e| e.to_string())?;
+        System::parse(&text, "stacked").map_err(|e| DiagnoseError::Stacking(Box::new(e)))?;
+    let mut nf = stacked
+        .normal_form(None, &[])
+        .map_err(DiagnoseError::model)?;
+    let report = obsan_analysis::rank(&mut nf, Default::default()).map_err(DiagnoseError::Rank)?;
     let pretty = |n: &str| -> String {
         match n.rsplit_once("__t") {
             Some((s, c)) => {
@@ -314,8 +331,8 @@ pub fn stacked_rank(
                 grads.push(nf.ctx.diff(id, v));
             }
         }
-        let tape =
-            obsan_expr::Tape::compile(&nf.ctx, &grads, &vars).map_err(|_| "gradient tape")?;
+        let tape = obsan_expr::Tape::compile(&nf.ctx, &grads, &vars)
+            .map_err(|_| DiagnoseError::GradientTape)?;
         let g = tape.eval(&x);
         let n = vars.len();
         let r = report.basis.len();
@@ -342,7 +359,7 @@ pub fn stacked_rank(
             });
         };
         let Some(vt) = svd.v_t else {
-            return Err("the SVD returned no right singular vectors".into());
+            return Err(DiagnoseError::NoSingularVectors);
         };
         let smax = svd.singular_values.max().max(1e-300);
         let null: Vec<Vec<f64>> = (0..n)

@@ -20,6 +20,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod error;
 mod identify;
 mod model_fit;
 mod relation;
@@ -28,6 +29,7 @@ mod start;
 mod stats;
 mod workflow;
 
+pub use error::DiagnoseError;
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use relation::{InputCheck, TrajectoryCheck};

@@ -2,6 +2,7 @@
 //! inputs), its input-noise levels stated or estimated, and one maximum-
 //! likelihood fit with its residual tests.
 
+use crate::error::DiagnoseError;
 use crate::residual::{analyse, ResidualReport, ResidualSeries};
 use crate::workflow::DiagnoseOptions;
 use obsan_data::{add_derived_inputs, wrap, Dataset};
@@ -83,7 +84,7 @@ pub(crate) fn class_inputs(sys: &System) -> (Vec<String>, Vec<Option<String>>) {
 
 /// The dataset with the model's derived inputs and the workflow's
 /// constants (`later`: 0 on the first trajectory, 1 after; `index`).
-pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
+pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, DiagnoseError> {
     let mut d = data.clone();
     let mut derived: Vec<(String, String)> = sys
         .decls_of(Kind::Input)
@@ -99,8 +100,12 @@ pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, String> {
             .entry("later".into())
             .or_insert(if k == 0 { 0.0 } else { 1.0 });
         t.meta.entry("index".into()).or_insert(k as f64);
-        add_derived_inputs(&mut t.inputs, &derived, &t.meta)
-            .map_err(|e| format!("trajectory {}: {e}", t.name))?;
+        add_derived_inputs(&mut t.inputs, &derived, &t.meta).map_err(|source| {
+            DiagnoseError::DerivedInput {
+                trajectory: t.name.clone(),
+                source: Box::new(source),
+            }
+        })?;
     }
     Ok(d)
 }
@@ -158,8 +163,8 @@ pub(crate) fn estimate_levels(
     sigma: &[f64],
     outputs: bool,
     o: &DiagnoseOptions,
-) -> Result<Levels, String> {
-    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
+) -> Result<Levels, DiagnoseError> {
+    let nf = sys.normal_form(None, &[]).map_err(DiagnoseError::model)?;
     let p = Predictor::new(&nf);
     let trajs = FitTrajectory::all(&p, data);
     let mask: Vec<bool> = sys
@@ -197,13 +202,13 @@ pub(crate) fn without_outliers(data: &Dataset, f: &ModelFit, z: f64) -> Option<D
         let Some(tr) = out.trajectories.iter_mut().find(|t| t.name == s.trajectory) else {
             continue;
         };
-        let Some(c) = tr.outputs.columns.iter().position(|n| *n == s.output) else {
+        let Some(c) = tr.outputs.columns().iter().position(|n| *n == s.output) else {
             continue;
         };
         for (t, e) in s.t.iter().zip(&s.e) {
             if e.abs() > z {
-                if let Ok(j) = tr.outputs.t.binary_search_by(|x| x.total_cmp(t)) {
-                    tr.outputs.values[c][j] = None;
+                if let Ok(j) = tr.outputs.t().binary_search_by(|x| x.total_cmp(t)) {
+                    tr.outputs.values_mut(c)[j] = None;
                     removed += 1;
                 }
             }
@@ -223,8 +228,8 @@ pub fn fit_model(
     sigma: &[f64],
     noise: &[(String, f64)],
     o: &DiagnoseOptions,
-) -> Result<ModelFit, String> {
-    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
+) -> Result<ModelFit, DiagnoseError> {
+    let nf = sys.normal_form(None, &[]).map_err(DiagnoseError::model)?;
     let p = Predictor::new(&nf);
     let trajs = FitTrajectory::all(&p, data);
     let fo = FitOptions {
@@ -243,11 +248,9 @@ pub fn fit_model(
     // residuals cannot be weighed and no likelihood can be compared.
     if weighted {
         if let Some(k) = r.whitening.iter().position(Option::is_none) {
-            return Err(format!(
-                "the input-noise covariance cannot be formed on trajectory {}: a state decays \
-                 too fast over it for the linearised noise model (use --input-noise none)",
-                data.trajectories[k].name
-            ));
+            return Err(DiagnoseError::NoiseCovariance {
+                trajectory: data.trajectories[k].name.clone(),
+            });
         }
     }
     let names: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
@@ -278,8 +281,11 @@ pub fn fit_model(
             input_noise: None,
         };
         let pred = p
-            .predict_with(&x0, &ft.consts, &tr.inputs, &tr.outputs.t, &integ)
-            .map_err(|e| format!("trajectory '{}': {e}", tr.name))?;
+            .predict_with(&x0, &ft.consts, &tr.inputs, tr.outputs.t(), &integ)
+            .map_err(|source| DiagnoseError::Predict {
+                trajectory: tr.name.clone(),
+                source,
+            })?;
         // Held input values and their integrals at every output time, once
         // per trajectory (shared by its outputs).
         let in_cols: Vec<Option<&[Option<f64>]>> =
@@ -289,13 +295,13 @@ pub fn fit_model(
         {
             let mut row = 0usize;
             let mut integral = vec![0.0; measured.len()];
-            let mut t_int = tr.inputs.t.first().copied().unwrap_or(0.0);
-            for &t in &tr.outputs.t {
-                while row + 1 < tr.inputs.len() && tr.inputs.t[row + 1] <= t {
+            let mut t_int = tr.inputs.t().first().copied().unwrap_or(0.0);
+            for &t in tr.outputs.t() {
+                while row + 1 < tr.inputs.len() && tr.inputs.t()[row + 1] <= t {
                     for (m, c) in in_cols.iter().enumerate() {
-                        integral[m] += held(c, row) * (tr.inputs.t[row + 1] - t_int);
+                        integral[m] += held(c, row) * (tr.inputs.t()[row + 1] - t_int);
                     }
-                    t_int = tr.inputs.t[row + 1];
+                    t_int = tr.inputs.t()[row + 1];
                     row += 1;
                 }
                 let at: Vec<(f64, f64)> = in_cols
@@ -333,7 +339,7 @@ pub fn fit_model(
                     .collect();
                 s.whiten = w.subset(&idx).map(std::sync::Arc::new);
             }
-            for (j, &t) in tr.outputs.t.iter().enumerate() {
+            for (j, &t) in tr.outputs.t().iter().enumerate() {
                 let Some(m) = col[j] else { continue };
                 let y = pred.outputs[j][oi];
                 let d = if s.angular { wrap(m - y) } else { m - y };

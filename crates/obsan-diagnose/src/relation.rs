@@ -143,7 +143,7 @@ pub(crate) fn input_check(
             // d(u - EXPR)/d(input i) per row, by a forward difference on the
             // whole column (EXPR is evaluated row by row).
             let mut grads: Vec<(usize, Vec<f64>, f64)> = Vec::new(); // input, g per row, c_i
-            for (i, name) in s.columns.iter().enumerate() {
+            for (i, name) in s.columns().iter().enumerate() {
                 let ci = if stated {
                     noise.iter().find(|n| n.0 == *name).map_or(0.0, |n| n.1)
                 } else {
@@ -152,13 +152,13 @@ pub(crate) fn input_check(
                 if ci <= 0.0 {
                     continue;
                 }
-                let scale = s.values[i]
+                let scale = s.values()[i]
                     .iter()
                     .flatten()
                     .fold(0.0f64, |a, x| a.max(x.abs()));
                 let h = 1e-6 * (1.0 + scale);
                 let mut p = s.clone();
-                for x in p.values[i].iter_mut().flatten() {
+                for x in p.values_mut(i).iter_mut().flatten() {
                     *x += h;
                 }
                 let _ = add_derived_inputs(&mut p, &[("__cmp".into(), rhs.clone())], &consts);
@@ -176,21 +176,21 @@ pub(crate) fn input_check(
                     .collect();
                 grads.push((i, g, ci));
             }
-            let n_rows = s.t.len();
+            let n_rows = s.t().len();
             let dt = |j: usize| -> f64 {
                 if j + 1 < n_rows {
-                    s.t[j + 1] - s.t[j]
+                    s.t()[j + 1] - s.t()[j]
                 } else if j > 0 {
-                    s.t[j] - s.t[j - 1]
+                    s.t()[j] - s.t()[j - 1]
                 } else {
                     BLOCK
                 }
             };
             let mut start = 0usize;
             while start < n_rows {
-                let t0 = s.t[start];
+                let t0 = s.t()[start];
                 let mut end = start;
-                while end < n_rows && s.t[end] < t0 + BLOCK {
+                while end < n_rows && s.t()[end] < t0 + BLOCK {
                     end += 1;
                 }
                 let mut var = 0.0;
@@ -202,7 +202,7 @@ pub(crate) fn input_check(
                     n += 1;
                     let d = dt(j).max(1e-9);
                     for (col, g, ci) in &grads {
-                        let uj = s.values[*col][j].unwrap_or(0.0).abs();
+                        let uj = s.values()[*col][j].unwrap_or(0.0).abs();
                         var += g[j] * g[j] * ci * uj / d;
                     }
                 }

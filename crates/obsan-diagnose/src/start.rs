@@ -13,6 +13,7 @@
 //! briefly by maximum likelihood and the lowest cost is the start. The
 //! start says which route it took (the third field of [`Start`]).
 
+use crate::error::DiagnoseError;
 use crate::model_fit::{prepare, Start};
 use obsan_calib::{calibrate, circle_modes, CalibrateOptions, Method};
 use obsan_data::{add_derived_inputs, wrap, Dataset, Trajectory};
@@ -38,7 +39,7 @@ struct CalibStart {
 /// DET + LS + section V-C on `data`; when that fails, on the largest subsets
 /// of its trajectories where it succeeds (leaving out one, then two), the
 /// subset whose LS residuals are smallest.
-fn calib_start(data: &Dataset) -> Result<CalibStart, String> {
+fn calib_start(data: &Dataset) -> Result<CalibStart, DiagnoseError> {
     let run = |d: &Dataset| {
         let opts = CalibrateOptions::for_dataset(d, Method::Ls);
         calibrate(d, None, &opts)
@@ -52,7 +53,7 @@ fn calib_start(data: &Dataset) -> Result<CalibStart, String> {
                 how: "DET + LS per trajectory and section V-C (the paper's start)".into(),
             })
         }
-        Err(e) => e.to_string(),
+        Err(e) => e,
     };
     let k = data.trajectories.len();
     for drop in 1..=2usize.min(k.saturating_sub(2)) {
@@ -98,10 +99,9 @@ fn calib_start(data: &Dataset) -> Result<CalibStart, String> {
     let opts = CalibrateOptions::for_dataset(data, Method::Ls);
     let modes: Vec<(f64, f64, f64)> = circle_modes(data, &opts).into_iter().flatten().collect();
     let Some(&(q1, xq1, l1)) = modes.first() else {
-        return Err(format!(
-            "the calib start (DET + LS) failed: {first}, and no trajectory's modes can be \
-             read alone; give start values with --init NAME=VALUE"
-        ));
+        return Err(DiagnoseError::CalibStart {
+            first: Box::new(first),
+        });
     };
     // delta from the line when two q are read, and the nominal radii's
     // ratio (a wrong model, such as wheel slip, can bend the line).
@@ -198,7 +198,7 @@ fn screen_cost(p: &Predictor, t: &Trajectory, x0: &[f64], sigma: &[f64]) -> f64 
         .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
         .collect();
     let rows = t.outputs.len().min(SCREEN_OUTPUTS);
-    let Ok(y) = p.predict(x0, &consts, &t.inputs, &t.outputs.t[..rows]) else {
+    let Ok(y) = p.predict(x0, &consts, &t.inputs, &t.outputs.t()[..rows]) else {
         return f64::INFINITY;
     };
     let mut c = 0.0;
@@ -237,8 +237,8 @@ fn screened_states(
     sv: &[Vec<f64>],
     missing: &[usize],
     sigma: f64,
-) -> Result<Start, String> {
-    let nf = sys.normal_form(None, &[]).map_err(|e| e.to_string())?;
+) -> Result<Start, DiagnoseError> {
+    let nf = sys.normal_form(None, &[]).map_err(DiagnoseError::model)?;
     let p = Predictor::new(&nf);
     let prepared = prepare(sys, data)?;
     let sig = vec![sigma; p.outputs.len()];
@@ -247,7 +247,7 @@ fn screened_states(
         p.state.iter().position(|s| s == "gamma"),
     );
     let (Some(imu), Some(igamma)) = (imu, igamma) else {
-        return Err("the screened start needs the states mu and gamma".into());
+        return Err(DiagnoseError::ScreenNeedsMuGamma);
     };
     // (screen cost, params, states) of every combination.
     let mut combos: Vec<(f64, Vec<f64>, Vec<Vec<f64>>)> = pvs
@@ -288,7 +288,7 @@ fn screened_states(
         })
         .collect();
     if combos.is_empty() {
-        return Err("no start: the model diverges from every screened grid point".into());
+        return Err(DiagnoseError::ScreenDiverges);
     }
     combos.sort_by(|a, b| a.0.total_cmp(&b.0));
     combos.truncate(STARTS);
@@ -307,9 +307,7 @@ fn screened_states(
         .filter_map(|(_, pv, states)| fit(&p, &trajs, pv, states, &opts).ok())
         .min_by(|a, b| a.cost.total_cmp(&b.cost));
     let Some(r) = best else {
-        return Err(format!(
-            "no start: none of the {tried} screened starts could be fitted"
-        ));
+        return Err(DiagnoseError::ScreenNoFit { tried });
     };
     Ok(Start(
         r.params,
@@ -332,7 +330,7 @@ pub fn start_values(
     sys: &System,
     data: &Dataset,
     given: &BTreeMap<String, f64>,
-) -> Result<Start, String> {
+) -> Result<Start, DiagnoseError> {
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
     let states: Vec<String> = sys.decls_of(Kind::State).map(|d| d.name.clone()).collect();
     let mut p: BTreeMap<String, f64> = BTreeMap::new();
@@ -422,10 +420,10 @@ pub fn start_values(
                 sk.insert(n.clone(), *v);
             }
         } else {
-            return Err(format!(
-                "--init {n}: '{n}' is neither a param nor a state of {}",
-                sys.name
-            ));
+            return Err(DiagnoseError::UnknownInit {
+                name: n.clone(),
+                system: sys.name.clone(),
+            });
         }
     }
     let pv: Vec<f64> = params
@@ -439,10 +437,11 @@ pub fn start_values(
             match sk.get(n) {
                 Some(x) => v.push(*x),
                 None => {
-                    return Err(format!(
-                        "no start value for state '{n}' of {} on trajectory {}: give one with --init {n}=VALUE",
-                        sys.name, data.trajectories[k].name
-                    ))
+                    return Err(DiagnoseError::NoStartValue {
+                        state: n.clone(),
+                        system: sys.name.clone(),
+                        trajectory: data.trajectories[k].name.clone(),
+                    })
                 }
             }
         }
@@ -489,7 +488,7 @@ fn unicycle_start(t: &obsan_data::Trajectory) -> Option<[f64; 3]> {
     // Relative poses at the input rows.
     let mut pose = vec![(0.0f64, 0.0f64, 0.0f64)];
     for k in 0..t.inputs.len().saturating_sub(1) {
-        let dt = t.inputs.t[k + 1] - t.inputs.t[k];
+        let dt = t.inputs.t()[k + 1] - t.inputs.t()[k];
         let (x, y, th) = pose[k];
         let (vk, wk) = (v[k].unwrap_or(0.0), w[k].unwrap_or(0.0));
         let thm = th + 0.5 * wk * dt;
@@ -501,13 +500,13 @@ fn unicycle_start(t: &obsan_data::Trajectory) -> Option<[f64; 3]> {
     }
     let mut q = Vec::new();
     let mut l = Vec::new();
-    for (ci, name) in t.outputs.columns.iter().enumerate() {
+    for (ci, name) in t.outputs.columns().iter().enumerate() {
         let Some(code) = name.strip_prefix('r') else {
             continue;
         };
         let Some(bi) = t
             .outputs
-            .columns
+            .columns()
             .iter()
             .position(|c| c == &format!("b{code}"))
         else {
@@ -519,13 +518,13 @@ fn unicycle_start(t: &obsan_data::Trajectory) -> Option<[f64; 3]> {
         ) else {
             continue;
         };
-        for (j, &tj) in t.outputs.t.iter().enumerate() {
-            let (Some(r), Some(b)) = (t.outputs.values[ci][j], t.outputs.values[bi][j]) else {
+        for (j, &tj) in t.outputs.t().iter().enumerate() {
+            let (Some(r), Some(b)) = (t.outputs.values()[ci][j], t.outputs.values()[bi][j]) else {
                 continue;
             };
             let k = t
                 .inputs
-                .t
+                .t()
                 .partition_point(|&x| x <= tj)
                 .saturating_sub(1)
                 .min(pose.len() - 1);
@@ -569,23 +568,24 @@ fn declared_number(d: &Decl) -> Option<f64> {
 
 /// A state's declared start on one trajectory: `expr` evaluated at the
 /// inputs' first row (with the trajectory's constants).
-fn state_start(name: &str, expr: &str, t: &Trajectory) -> Result<f64, String> {
+fn state_start(name: &str, expr: &str, t: &Trajectory) -> Result<f64, DiagnoseError> {
     let mut head = t.inputs.clone();
-    head.t.truncate(2);
-    for c in &mut head.values {
-        c.truncate(2);
-    }
+    head.truncate(2);
     let key = format!("{name}__start");
-    add_derived_inputs(&mut head, &[(key.clone(), expr.to_string())], &t.meta)
-        .map_err(|e| format!("start of state {name} on trajectory {}: {e}", t.name))?;
+    add_derived_inputs(&mut head, &[(key.clone(), expr.to_string())], &t.meta).map_err(
+        |source| DiagnoseError::StateStart {
+            state: name.to_string(),
+            trajectory: t.name.clone(),
+            source: Box::new(source),
+        },
+    )?;
     head.column(&key)
         .and_then(|c| c.first().copied().flatten())
         .filter(|v| v.is_finite())
-        .ok_or_else(|| {
-            format!(
-                "start of state {name} = {expr} on trajectory {}: no value at the first input row",
-                t.name
-            )
+        .ok_or_else(|| DiagnoseError::StateStartNoValue {
+            state: name.to_string(),
+            expr: expr.to_string(),
+            trajectory: t.name.clone(),
         })
 }
 
@@ -597,7 +597,7 @@ pub fn extended_start(
     params: &[f64],
     states: &[Vec<f64>],
     data: &Dataset,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>), String> {
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
     let mut pv = params.to_vec();
     for d in ext.decls_of(Kind::Param).skip(params.len()) {
         pv.push(declared_number(d).unwrap_or(0.0));
@@ -609,10 +609,10 @@ pub fn extended_start(
             match &d.start {
                 Some(DeclStart::Inputs(e)) => x.push(state_start(&d.name, e, t)?),
                 _ => {
-                    return Err(format!(
-                        "the new state {} has no start value on trajectory {k} (declare it as state {} = EXPR)",
-                        d.name, d.name
-                    ))
+                    return Err(DiagnoseError::NewStateNoStart {
+                        state: d.name.clone(),
+                        trajectory: k,
+                    })
                 }
             }
         }

@@ -2,6 +2,7 @@
 //! residuals, try every candidate effect that the data can reveal, name the
 //! significant ones greedily.
 
+use crate::error::DiagnoseError;
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::model_fit::{
     class_inputs, estimate_levels, fit_model, input_noise, prepare, without_outliers, ModelFit,
@@ -203,7 +204,7 @@ pub fn diagnose(
     start: &Start,
     o: &DiagnoseOptions,
     progress: &(dyn Fn(&str) + Sync),
-) -> Result<Diagnosis, String> {
+) -> Result<Diagnosis, DiagnoseError> {
     let outputs: Vec<String> = sys.output_names().iter().map(|s| s.to_string()).collect();
     // Noise levels: given, from dataset.json, or estimated (then the chi-square
     // test of the level is void and the LR uses the fitted level).
@@ -550,8 +551,10 @@ fn candidate(
         error: None,
     };
     let origin = lib.map_or("effects", |l| l.origin.as_str());
-    let mut run = || -> Result<Option<(System, ModelFit)>, String> {
-        let ext = base.extend(&[e], origin).map_err(|x| x.to_string())?;
+    let mut run = || -> Result<Option<(System, ModelFit)>, DiagnoseError> {
+        let ext = base
+            .extend(&[e], origin)
+            .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
         let prepared = prepare(&ext, data)?;
         let (ins, der) = class_inputs(&ext);
         let class: InputClass = input_class(&ins, &der, &prepared)?;
@@ -657,8 +660,8 @@ fn candidate(
     };
     match run() {
         Ok(x) => (res, x),
-        Err(msg) => {
-            res.error = Some(msg);
+        Err(e) => {
+            res.error = Some(e.to_string());
             (res, None)
         }
     }

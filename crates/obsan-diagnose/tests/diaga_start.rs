@@ -35,12 +35,9 @@ fn cut(mut data: Dataset, name: &str, frac: f64) -> Dataset {
         .find(|t| t.name == name)
         .unwrap();
     for s in [&mut t.inputs, &mut t.outputs] {
-        let end = frac * s.t.last().unwrap();
-        let n = s.t.partition_point(|&x| x <= end);
-        s.t.truncate(n);
-        for c in &mut s.values {
-            c.truncate(n);
-        }
+        let end = frac * s.t().last().unwrap();
+        let n = s.t().partition_point(|&x| x <= end);
+        s.truncate(n);
     }
     data
 }

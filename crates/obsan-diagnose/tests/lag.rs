@@ -75,7 +75,7 @@ fn simulate_noisy(sys: &System, params: &[f64], seed: u64, c: [f64; 2]) -> Datas
         ];
         x0.extend(p.state[3..p.n_dynamic].iter().map(|s| {
             let c = if s == "va" { 0 } else { 1 };
-            inputs.values[c][0].unwrap()
+            inputs.values()[c][0].unwrap()
         }));
         x0.extend_from_slice(params);
         let times: Vec<f64> = (1..300).map(|k| k as f64 * 0.2).collect();

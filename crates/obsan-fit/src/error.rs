@@ -102,13 +102,6 @@ impl std::error::Error for FitError {
     }
 }
 
-/// Layers still returning `String` errors keep the exact message.
-impl From<FitError> for String {
-    fn from(e: FitError) -> String {
-        e.to_string()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

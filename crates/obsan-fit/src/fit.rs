@@ -142,7 +142,7 @@ fn residuals(
     };
     let jac = jac || noise;
     let pred = p
-        .predict_with(x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+        .predict_with(x0, &t.consts, t.inputs, t.outputs.t(), &integ)
         .map_err(|e| FitError::Trajectory {
             name: t.name.to_string(),
             source: Box::new(e),
@@ -153,7 +153,7 @@ fn residuals(
     let mut at = Vec::new();
     for (k, yk) in pred.outputs.iter().enumerate() {
         for (o, &c) in cols.iter().enumerate() {
-            if let Some(m) = t.outputs.values[c][k] {
+            if let Some(m) = t.outputs.values()[c][k] {
                 let d = m - yk[o];
                 let d = if p.angular[o] { wrap(d) } else { d };
                 r.push(d / opts.sigma[o]);
@@ -261,7 +261,7 @@ impl Problem<'_> {
                     .iter()
                     .map(|o| {
                         t.outputs
-                            .columns
+                            .columns()
                             .iter()
                             .position(|c| c == o)
                             .ok_or_else(|| FitError::MissingOutput(o.clone()))
@@ -651,7 +651,7 @@ pub fn fit(
         let mut it = raw[k].iter();
         for row in 0..t.outputs.len() {
             for (o, &c) in prob.cols[k].iter().enumerate() {
-                if t.outputs.values[c][row].is_some() {
+                if t.outputs.values()[c][row].is_some() {
                     let Some(r) = it.next() else { break };
                     let r = r * opts.sigma[o];
                     rms[o] += r * r;

@@ -129,7 +129,7 @@ pub fn estimate_noise(
             let cols: Vec<Option<usize>> = p
                 .outputs
                 .iter()
-                .map(|o| t.outputs.columns.iter().position(|c| c == o))
+                .map(|o| t.outputs.columns().iter().position(|c| c == o))
                 .collect();
             let mut ms: Vec<Vec<Vec<f64>>> = Vec::new();
             let mut pred = None;
@@ -142,7 +142,7 @@ pub fn estimate_noise(
                     input_noise: Some(c),
                 };
                 let pr = p
-                    .predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+                    .predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
                     .map_err(|e| named(t, e))?;
                 ms.push(pr.noise_m.clone());
                 pred = Some(pr);
@@ -155,7 +155,7 @@ pub fn estimate_noise(
                         sensitivities: true,
                         input_noise: None,
                     };
-                    p.predict_with(&x0, &t.consts, t.inputs, &t.outputs.t, &integ)
+                    p.predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
                         .map_err(|e| named(t, e))?
                 }
             };
@@ -167,7 +167,7 @@ pub fn estimate_noise(
             };
             for (k, yk) in pred.outputs.iter().enumerate() {
                 for (o, c) in cols.iter().enumerate() {
-                    let Some(v) = c.and_then(|c| t.outputs.values[c][k]) else {
+                    let Some(v) = c.and_then(|c| t.outputs.values()[c][k]) else {
                         continue;
                     };
                     let d = v - yk[o];

@@ -232,7 +232,7 @@ impl Predictor {
             .iter()
             .map(|n| {
                 inputs
-                    .columns
+                    .columns()
                     .iter()
                     .position(|c| c == n)
                     .ok_or_else(|| FitError::MissingInput(n.clone()))
@@ -280,14 +280,14 @@ impl Predictor {
         let mut noise_acc = vec![0.0; nd * nd];
         let mut noise_m = Vec::new();
         let no = self.outputs.len();
-        let t_start = inputs.t.first().copied().unwrap_or(0.0);
+        let t_start = inputs.t().first().copied().unwrap_or(0.0);
         // With a delay tau the rows act at t_k + tau (the first row also
         // before that): the state is the one seen from the output clock.
         let tau = self.delay.map_or(0.0, |d| x0[d]);
         if !tau.is_finite() {
             return Err(FitError::DelayNotFinite);
         }
-        let et = |k: usize| inputs.t[k] + tau;
+        let et = |k: usize| inputs.t()[k] + tau;
         let mut dudtau = vec![0.0; m];
         // A fast decaying state (a first-order lag `va' = (v - va)/T`) needs
         // steps shorter than its time constant: bound h by STIFF_STEP over
@@ -300,7 +300,7 @@ impl Predictor {
             let jv = &all[nv..];
             let u0: Vec<f64> = cols
                 .iter()
-                .map(|&c| inputs.values[c].first().copied().flatten().unwrap_or(0.0))
+                .map(|&c| inputs.values()[c].first().copied().flatten().unwrap_or(0.0))
                 .collect();
             let mut diag = vec![0.0f64; nd];
             for (&(k, f, j), d) in self.jac_entries.iter().zip(jv) {
@@ -323,9 +323,9 @@ impl Predictor {
             // from these data, and steps that short would cost without
             // bound: refuse it (a fit then rejects the trial, so a fitted
             // lag stops at the rows' spacing instead of running to 0).
-            let n_rows = inputs.t.len();
+            let n_rows = inputs.t().len();
             let spacing = if n_rows > 1 {
-                (inputs.t[n_rows - 1] - inputs.t[0]) / (n_rows - 1) as f64
+                (inputs.t()[n_rows - 1] - inputs.t()[0]) / (n_rows - 1) as f64
             } else {
                 0.0
             };
@@ -373,7 +373,7 @@ impl Predictor {
                 }
                 .min(t + max_step);
                 for (ui, &c) in u.iter_mut().zip(&cols) {
-                    *ui = inputs.values[c][row].unwrap_or(0.0) * (next - t);
+                    *ui = inputs.values()[c][row].unwrap_or(0.0) * (next - t);
                 }
                 while next < target - 1e-12 && row + 1 < inputs.len() {
                     let r = row + 1;
@@ -386,7 +386,7 @@ impl Predictor {
                         break;
                     }
                     for (ui, &c) in u.iter_mut().zip(&cols) {
-                        *ui += inputs.values[c][r].unwrap_or(0.0) * (end - next);
+                        *ui += inputs.values()[c][r].unwrap_or(0.0) * (end - next);
                     }
                     row = r;
                     next = end;
@@ -399,8 +399,8 @@ impl Predictor {
                 // later with tau; the sum telescopes to (before - last) / h.
                 let dd = if sens && self.delay.is_some() {
                     for (d, &c) in dudtau.iter_mut().zip(&cols) {
-                        let a = inputs.values[c][before].unwrap_or(0.0);
-                        let b = inputs.values[c][row].unwrap_or(0.0);
+                        let a = inputs.values()[c][before].unwrap_or(0.0);
+                        let b = inputs.values()[c][row].unwrap_or(0.0);
                         *d = (a - b) / h;
                     }
                     Some(dudtau.as_slice())
