@@ -255,7 +255,7 @@ pub fn diagnose(
     let mut noise_lr = Vec::new();
     if estimate {
         progress("estimating the noise levels");
-        let est = (|| -> Result<_, String> {
+        let est = (|| -> Result<_, DiagnoseError> {
             let (mut s2, mut c2, mut lr, mut nom) = (sigma.clone(), vec![], 0.0, nominal.clone());
             for _ in 0..2 {
                 let (s, c, l) = estimate_levels(sys, &prepared, &nom, &s2, sigma_estimated, o)?;

@@ -88,10 +88,10 @@ fn a_hidden_effect_is_named_without_stated_noise() {
                     .iter()
                     .all(|(_, x, sd)| (x - 0.06).abs() < 3.0 * sd);
             (!ok).then(|| {
-                let n: Vec<(&str, &Vec<(String, f64, f64)>)> = d
+                let n: Vec<String> = d
                     .named
                     .iter()
-                    .map(|n| (n.effect.as_str(), &n.estimates))
+                    .map(|n| format!("{} {:?}", n.effect, n.estimates))
                     .collect();
                 format!("seed {s}: {n:?}")
             })
