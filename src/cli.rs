@@ -242,8 +242,10 @@ pub struct DiagnoseArgs {
     #[arg(long)]
     pub max_effects: Option<usize>,
     /// The measured inputs' noise: stated (dataset.json's, if any),
-    /// estimate (restricted maximum likelihood, linearised about the fit)
-    /// or none (ordinary least squares).
+    /// estimate (restricted maximum likelihood, linearised about the fit),
+    /// none (ordinary least squares) or auto (dataset.json's if stated,
+    /// else estimated on fewer than 10 trajectories where white input
+    /// noise is rejected, else none).
     #[arg(long, default_value = "stated", value_name = "SOURCE")]
     pub input_noise: String,
     /// Also try candidates generated from the model's structure (scales,

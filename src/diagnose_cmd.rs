@@ -71,12 +71,13 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         alpha: a.alpha,
         max_rounds: a.max_effects.unwrap_or(usize::MAX),
         input_noise: match a.input_noise.as_str() {
+            "auto" => InputNoise::Auto,
             "stated" => InputNoise::Stated,
             "estimate" => InputNoise::Estimate,
             "none" => InputNoise::None,
             s => {
                 return Err(Failure(format!(
-                    "--input-noise {s}: expected stated, estimate or none"
+                    "--input-noise {s}: expected stated, estimate or none (or auto)"
                 )))
             }
         },

@@ -217,6 +217,11 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     if sd.is_none() {
         outln!("(det gives no standard deviations; use ls or ml)");
     }
+    // Issue 18.4: without encoder_k ML is ordinary least squares, and its
+    // sds are those of the bearings alone (delta's z-scores: sd 2.5).
+    if sd.is_some() && matches!(m, Method::Ml) && o.encoder_k <= 0.0 {
+        outln!("(no encoder noise stated in dataset.json, noise.encoder_k: these sds are the bearings' alone and leave the wheel-encoder noise out, so they are too small; see docs/accuracy.md)");
+    }
     match &r.metric {
         Some((mm, msd)) => {
             outln!();

@@ -39,6 +39,6 @@ pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTU
 pub use start::start_values;
 pub use stats::{chi2_1_p, chi2_z, normal_critical};
 pub use workflow::{
-    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival, ORIGIN_FILE,
-    ORIGIN_RELATION, RIVAL_BIC,
+    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival,
+    AUTO_ESTIMATE_BELOW, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
 };
