@@ -141,9 +141,15 @@ pub(crate) fn reconstruct_basis(
             (t, w.fields.len())
         })
         .collect();
+    const CANCELLED: &str = "interrupted";
     let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, String> {
         if p != P {
             return Err(format!("internal: the black box works modulo {P} only"));
+        }
+        // The caller's interrupt (Ctrl-C from Python): the error ends the run
+        // and is mapped to `Cancelled` below.
+        if obsan_expr::cancel_requested() {
+            return Err(CANCELLED.to_string());
         }
         let vals: Vec<Fp> = x.iter().map(|&v| Fp::new(v)).collect();
         let Ok(pt) = ctx.fp_point_at(&coords, &vals) else {
@@ -175,6 +181,9 @@ pub(crate) fn reconstruct_basis(
     };
     let rec = match reconstruct_vec(coords.len(), k * r, &mut bb, &opts) {
         Ok(x) => x,
+        Err(_) if obsan_expr::cancel_requested() => {
+            return Err(ReconFail::Error(AnalysisError::Cancelled))
+        }
         Err(e @ ReconError::Budget { .. }) => {
             return Err(ReconFail::Error(AnalysisError::Timeout(format!(
                 "reconstructing the symmetries: {e}"
@@ -387,6 +396,9 @@ pub fn certify_symmetries(
         let q = random_prime(&mut rng);
         let mut done = 0;
         while done < CHECK_POINTS {
+            if obsan_expr::cancel_requested() {
+                return Err(AnalysisError::Cancelled);
+            }
             if deadline.is_some_and(|d| Instant::now() > d) {
                 return Err(AnalysisError::Timeout(format!(
                     "certifying the symmetries: {} of {} points checked",

@@ -27,3 +27,33 @@ fn a_cancelled_rank_test_is_the_cancelled_error() {
     assert_eq!(r.unwrap_err(), AnalysisError::Cancelled);
     assert_eq!(AnalysisError::Cancelled.to_string(), "interrupted");
 }
+
+/// The reconstruction of the symmetries and the search for modes run F_p
+/// loops outside the engine too: a set flag stops them, and the result is an
+/// error, never a partial answer passed on as the symmetries.
+#[test]
+fn cancelled_symmetries_and_modes_are_errors() {
+    use obsan_analysis::{derive_modes, symmetries_with, DeriveOptions, Route, SymmetryOptions};
+    let path = format!("{ROOT}/systems/calib.sys");
+    let sys = System::parse(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let mut nf = sys.normal_form(Some("q"), &[]).unwrap();
+    let report = rank(&mut nf, RankOptions::default()).unwrap();
+    let opts = SymmetryOptions {
+        deadline: None,
+        route: Route::Reconstruct,
+    };
+    // Unset: the three symmetries of eq. (16) on circles (eq. 17; rank 4 of 7).
+    let free = with_cancel(Arc::new(AtomicBool::new(false)), || {
+        symmetries_with(&mut nf, &report, &opts)
+    })
+    .unwrap();
+    assert_eq!(free.vectors.len(), 3);
+    let r = with_cancel(Arc::new(AtomicBool::new(true)), || {
+        symmetries_with(&mut nf, &report, &opts)
+    });
+    assert_eq!(r.unwrap_err(), AnalysisError::Cancelled);
+    let m = with_cancel(Arc::new(AtomicBool::new(true)), || {
+        derive_modes(&mut nf, &report, &free, &DeriveOptions::default())
+    });
+    assert!(m.is_err(), "a cancelled search for modes gave an answer");
+}

@@ -140,6 +140,9 @@ pub(super) fn check_deadline(
     stage: &str,
     found: usize,
 ) -> Result<(), AnalysisError> {
+    if obsan_expr::cancel_requested() {
+        return Err(AnalysisError::Cancelled);
+    }
     match opts.deadline {
         Some(d) if Instant::now() > d => Err(AnalysisError::Timeout(format!(
             "{found} mode(s) found, stopped during {stage}"
