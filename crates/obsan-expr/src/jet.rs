@@ -41,7 +41,8 @@
 //! [`degree_bounds`]: crate::degree_bounds
 
 use crate::eval::{BadPoint, FpPoint};
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::{Fp, P};
 use crate::poly::Var;
 use rustc_hash::FxHashMap;
