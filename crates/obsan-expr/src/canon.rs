@@ -13,94 +13,15 @@
 
 use crate::budget::{self, invariant, Limit};
 use crate::gcd::gcd;
-use crate::graph::{Ctx, Id, LeafKind, Node};
+use crate::graph::{Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::{int, Q};
 use crate::poly::{Mono, Poly, Var};
+use crate::ratfun::RatFun;
 use rustc_hash::FxHashSet;
 
 /// Sums and products with more operands than this are combined pairwise.
 const BALANCE_MIN: usize = 64;
-
-/// A canonical rational function (see the module documentation).
-#[derive(Clone, PartialEq, Eq, Hash, Debug)]
-pub struct RatFun {
-    pub(crate) num: Poly,
-    pub(crate) den: Poly,
-}
-
-impl Default for RatFun {
-    /// Zero (`0/1`).
-    fn default() -> RatFun {
-        RatFun::zero()
-    }
-}
-
-impl RatFun {
-    pub fn zero() -> RatFun {
-        RatFun {
-            num: Poly::zero(),
-            den: Poly::one(),
-        }
-    }
-    pub fn one() -> RatFun {
-        RatFun {
-            num: Poly::one(),
-            den: Poly::one(),
-        }
-    }
-    pub fn from_q(q: &Q) -> RatFun {
-        RatFun {
-            num: Poly::constant(q.num().clone()),
-            den: Poly::constant(q.den().clone()),
-        }
-    }
-    pub fn from_poly(p: Poly) -> RatFun {
-        RatFun {
-            num: p,
-            den: Poly::one(),
-        }
-    }
-    pub fn var(v: Var) -> RatFun {
-        RatFun {
-            num: Poly::var(v),
-            den: Poly::one(),
-        }
-    }
-    pub fn is_zero(&self) -> bool {
-        self.num.is_zero()
-    }
-    pub fn is_one(&self) -> bool {
-        self.num.is_one() && self.den.is_one()
-    }
-    /// The rational value if the form is constant.
-    pub fn as_q(&self) -> Option<Q> {
-        Some(Q::new(self.num.as_constant()?, self.den.as_constant()?))
-    }
-    pub fn numerator(&self) -> &Poly {
-        &self.num
-    }
-    pub fn denominator(&self) -> &Poly {
-        &self.den
-    }
-    /// Leaves that occur.
-    pub fn vars(&self) -> Vec<Var> {
-        let mut v = self.num.vars();
-        v.extend(self.den.vars());
-        v.sort_unstable();
-        v.dedup();
-        v
-    }
-    pub fn neg(&self) -> RatFun {
-        RatFun {
-            num: self.num.neg(),
-            den: self.den.clone(),
-        }
-    }
-    /// Number of terms in numerator and denominator (a size measure).
-    pub fn term_count(&self) -> usize {
-        self.num.len() + self.den.len()
-    }
-}
 
 /// The algebraic relation a leaf satisfies, if any.
 enum Relation<'a> {
@@ -457,7 +378,7 @@ impl Ctx {
         level.pop().unwrap_or_else(RatFun::zero)
     }
 
-    /// [`Ctx::canon`] under the context's budget ([`Ctx::set_budget`]): the
+    /// [`Ctx::canon`] under the context's budget ([`Ctx::set_budget`](Ctx#method.set_budget)): the
     /// entry point for untrusted input.
     pub fn try_canon(&mut self, id: Id) -> Result<RatFun, Limit> {
         self.within_budget(|c| c.canon(id))
@@ -499,15 +420,5 @@ impl Ctx {
             terms.push(self.mul(&f));
         }
         self.add(&terms)
-    }
-}
-
-impl RatFun {
-    fn fix_zero(self) -> RatFun {
-        if self.num.is_zero() {
-            RatFun::zero()
-        } else {
-            self
-        }
     }
 }

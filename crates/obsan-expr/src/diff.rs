@@ -2,11 +2,12 @@
 //! every leaf (engine.md section 2). Memoised per (node, variable); children
 //! first in id order, so no recursion.
 
-use crate::canon::RatFun;
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::Q;
 use crate::poly::Poly;
 use crate::poly::Var;
+use crate::ratfun::RatFun;
 use rustc_hash::FxHashSet;
 
 impl Ctx {

@@ -2,7 +2,8 @@
 //! evaluate many times), exact rationals, and F_p at random points with the
 //! angle parametrisation of engine.md section 3.
 
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::{Fp, SplitMix, Q};
 use crate::poly::Var;
 use std::fmt;

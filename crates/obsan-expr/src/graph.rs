@@ -13,14 +13,13 @@
 //! exactly the variables of the canonical form's polynomials.
 
 use crate::budget::{self, Budget, Limit, NUM_BITS_MAX, POW_MAX};
-use crate::memo::Memo;
 use crate::num::Q;
 use crate::poly::Var;
 use dashu_int::ops::BitTest;
 use rustc_hash::FxHashMap;
 use std::fmt;
 
-/// Id of a node in a [`Ctx`].
+/// Id of a node in a [`crate::Ctx`].
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Debug)]
 pub struct Id(pub(crate) u32);
 
@@ -74,33 +73,32 @@ pub(crate) struct Leaf {
     pub partner: Option<Var>,
 }
 
-/// The symbolic context: arena, leaves, and memo tables.
+/// The arena: nodes, leaves and symbols, and the node budget. The memo
+/// tables of the passes live beside it in [`crate::Ctx`], which derefs to it.
 #[derive(Default, Clone)]
-pub struct Ctx {
+pub struct Arena {
     pub(crate) nodes: Vec<Node>,
     dedup: FxHashMap<Node, Id>,
     pub(crate) leaves: Vec<Leaf>,
     leaf_dedup: FxHashMap<LeafKind, Var>,
     pub(crate) symbols: FxHashMap<String, Var>,
-    /// The passes' memo tables (memo.rs), opaque to the arena.
-    pub(crate) memo: Memo,
     /// Per-symbol unit denominators of angles and exponentials.
     pub(crate) angle_units: FxHashMap<(Var, bool), u32>,
     /// (sin leaf, cos leaf, half-angle symbol t) for every angle pair.
     pub(crate) half_angles: Vec<(Var, Var, Var)>,
-    /// The limits of budgeted entry points ([`Ctx::within_budget`]).
-    budget: Budget,
+    /// The limits of budgeted entry points ([`crate::Ctx::within_budget`]).
+    pub(crate) budget: Budget,
     /// Arena size in cells (a node and its children).
     cells: usize,
     /// The node budget while a budgeted entry point runs.
-    cell_cap: Option<usize>,
+    pub(crate) cell_cap: Option<usize>,
 }
 
-impl fmt::Debug for Ctx {
+impl fmt::Debug for Arena {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "Ctx({} nodes, {} leaves)",
+            "Arena({} nodes, {} leaves)",
             self.nodes.len(),
             self.leaves.len()
         )
@@ -114,11 +112,7 @@ pub struct Symbol {
     pub id: Id,
 }
 
-impl Ctx {
-    pub fn new() -> Ctx {
-        Ctx::default()
-    }
-
+impl Arena {
     pub(crate) fn node(&self, id: Id) -> &Node {
         &self.nodes[id.index()]
     }
@@ -281,7 +275,7 @@ impl Ctx {
         self.reachable_with(roots, true)
     }
 
-    /// As [`Ctx::reachable`]; without leaf arguments when `leaf_args` is false
+    /// As [`Ctx::reachable`](crate::Ctx#method.reachable); without leaf arguments when `leaf_args` is false
     /// (for evaluations that are given the value of every leaf).
     pub(crate) fn reachable_with(&self, roots: &[Id], leaf_args: bool) -> Vec<Id> {
         let mut seen = vec![false; self.nodes.len()];
@@ -494,14 +488,14 @@ impl Ctx {
         let nb = self.neg(b);
         self.add(&[a, nb])
     }
-    /// Quotient. Panics if `b` is the number 0; use [`Ctx::checked_div`] for untrusted input.
+    /// Quotient. Panics if `b` is the number 0; use [`Ctx::checked_div`](crate::Ctx#method.checked_div) for untrusted input.
     pub fn div(&mut self, a: Id, b: Id) -> Id {
         let ib = self.pow(b, -1);
         self.mul(&[a, ib])
     }
 }
 
-impl Ctx {
+impl Arena {
     /// Whether an expression contains an `atan` or `atan2` leaf: its values
     /// are angles, and differences of them should be wrapped to (-pi, pi].
     pub fn is_angle_valued(&self, id: Id) -> bool {
@@ -511,40 +505,15 @@ impl Ctx {
     }
 }
 
-impl Ctx {
-    /// Set the limits that budgeted entry points ([`Ctx::within_budget`],
-    /// [`Ctx::try_canon`], parsing, building and substitution) enforce.
+impl Arena {
+    /// Set the limits that budgeted entry points ([`crate::Ctx::within_budget`],
+    /// [`crate::Ctx::try_canon`], parsing, building and substitution) enforce.
     pub fn set_budget(&mut self, b: Budget) {
         self.budget = b;
     }
 
-    /// The current limits (the defaults unless [`Ctx::set_budget`] was called).
+    /// The current limits (the defaults unless [`Ctx::set_budget`](crate::Ctx#method.set_budget) was called).
     pub fn budget(&self) -> Budget {
         self.budget
-    }
-
-    /// Run `f` under the context's budget. When a limit is hit, `f`'s value
-    /// (built from placeholders) is dropped and the limit is returned; the
-    /// context stays valid, since no placeholder reaches its memo tables or
-    /// leaves. Nested calls share the outermost budget.
-    pub fn within_budget<T>(&mut self, f: impl FnOnce(&mut Ctx) -> T) -> Result<T, Limit> {
-        match self.budgeted(f) {
-            (r, None) => Ok(r),
-            (_, Some(l)) => Err(l),
-        }
-    }
-
-    /// As [`Ctx::within_budget`], keeping `f`'s value (a placeholder when
-    /// the limit is `Some`, but it may hold a located error worth reporting).
-    pub(crate) fn budgeted<T>(&mut self, f: impl FnOnce(&mut Ctx) -> T) -> (T, Option<Limit>) {
-        let b = self.budget;
-        let outer_cap = self.cell_cap;
-        self.cell_cap = Some(outer_cap.map_or(b.max_nodes, |c| c.min(b.max_nodes)));
-        // Memo tables and leaves are only written while nothing has tripped
-        // (canon, diff, from_canonical and the lowering check), so nothing
-        // needs undoing here.
-        let (r, lim) = budget::scope(&b, || f(self));
-        self.cell_cap = outer_cap;
-        (r, lim)
     }
 }

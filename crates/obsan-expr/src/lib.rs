@@ -42,6 +42,7 @@ mod num;
 mod parse;
 mod poly;
 mod print;
+mod ratfun;
 mod subst;
 mod tanhalf;
 pub mod tutorial;
@@ -50,15 +51,15 @@ pub use budget::{
     budget_tripped, cancel_flag, cancel_requested, with_cancel, within_thread_budget, Budget,
     Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
 };
-pub use canon::RatFun;
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
 };
 pub use float_eval::FloatExpr;
 pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
-pub use graph::{Ctx, Id, Symbol};
+pub use graph::{Id, Symbol};
 pub use jet::{height_bounds, Coord, LieJets, LieRow};
 pub use lower::EngineError;
+pub use memo::Ctx;
 pub use num::{Fp, Int, SplitMix, P, Q};
 pub use parse::{
     line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS, MAX_DEPTH, MAX_DIGITS,
@@ -66,4 +67,5 @@ pub use parse::{
 };
 pub use poly::{Mono, Poly, Var};
 pub use print::latex_name;
+pub use ratfun::RatFun;
 pub use tanhalf::TanHalf;

@@ -13,10 +13,11 @@
 //! never silently treated as independent.
 
 use crate::budget;
-use crate::canon::RatFun;
-use crate::graph::{Angle, Ctx, Id, LeafKind};
+use crate::graph::{Angle, Id, LeafKind};
+use crate::memo::Ctx;
 use crate::num::{int, int_exact_sqrt, Int, Q};
 use crate::poly::{Mono, Poly, Var};
+use crate::ratfun::RatFun;
 use dashu_int::Sign;
 use std::fmt;
 

@@ -12,7 +12,8 @@
 //! balanced tree, so the tree is at most [`MAX_HEIGHT`] high and every
 //! recursive pass over it (building, dropping, evaluating) stays shallow.
 
-use crate::graph::{Ctx, Id};
+use crate::graph::Id;
+use crate::memo::Ctx;
 use crate::num::{int, Int, Q};
 use std::fmt;
 
@@ -605,7 +606,7 @@ pub fn parse_ast(src: &str) -> Result<Ast, ParseError> {
 
 impl Ctx {
     /// Build a syntax tree; `resolve` maps each identifier to a node. Runs
-    /// under the context's budget ([`Ctx::set_budget`]): a limit is reported
+    /// under the context's budget ([`Ctx::set_budget`](Ctx#method.set_budget)): a limit is reported
     /// at the innermost subexpression that reached it.
     pub fn build(
         &mut self,

@@ -1,10 +1,11 @@
 //! Printing canonical forms as plain text (which parses back to the same
 //! canonical form) and as LaTeX.
 
-use crate::canon::RatFun;
-use crate::graph::{Angle, Ctx, Id, LeafKind};
+use crate::graph::{Angle, Id, LeafKind};
+use crate::memo::Ctx;
 use crate::num::Int;
 use crate::poly::{Mono, Poly, Var};
+use crate::ratfun::RatFun;
 use dashu_int::Sign;
 
 #[derive(Clone, Copy, PartialEq)]

@@ -1,15 +1,16 @@
 //! Substitution of symbols by expressions, rebuilding every function whose
 //! argument changes (so the result is lowered exactly as if written out).
 
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
 use crate::lower::EngineError;
+use crate::memo::Ctx;
 use crate::num::Q;
 use crate::poly::Var;
 use rustc_hash::FxHashMap;
 
 impl Ctx {
     /// `id` with each symbol `map[i].0` replaced by the node `map[i].1`.
-    /// Runs under the context's budget ([`Ctx::set_budget`]).
+    /// Runs under the context's budget ([`Ctx::set_budget`](Ctx#method.set_budget)).
     pub fn substitute(&mut self, id: Id, map: &[(Var, Id)]) -> Result<Id, EngineError> {
         self.within_budget(|c| c.substitute_raw(id, map))?
     }

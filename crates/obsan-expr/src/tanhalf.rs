@@ -6,10 +6,11 @@
 //! algebra that must keep its results small (null spaces) runs here; results
 //! are mapped back with `t = s/(1 + c)`.
 
-use crate::canon::RatFun;
-use crate::graph::{Ctx, LeafKind};
+use crate::graph::LeafKind;
+use crate::memo::Ctx;
 use crate::num::int;
 use crate::poly::{Mono, Poly, Var};
+use crate::ratfun::RatFun;
 
 /// The angle pairs of a context and their half-angle symbols.
 #[derive(Clone, Debug)]

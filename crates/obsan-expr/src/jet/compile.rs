@@ -2,7 +2,8 @@
 //! the DAG, with the grade-0 degree bound of every op (module docs of
 //! [`super`]: bases and `Deg`).
 
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::Fp;
 use crate::poly::Var;
 use rustc_hash::FxHashMap;

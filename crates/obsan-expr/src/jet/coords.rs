@@ -3,7 +3,8 @@
 //! primes), and coefficient-height bounds.
 
 use crate::eval::{BadPoint, FpPoint};
-use crate::graph::{Angle, Ctx, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::memo::Ctx;
 use crate::num::Fp;
 use crate::poly::Var;
 

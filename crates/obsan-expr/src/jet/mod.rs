@@ -48,7 +48,8 @@ mod series;
 pub use coords::{height_bounds, Coord};
 
 use crate::eval::{BadPoint, FpPoint};
-use crate::graph::{Ctx, Id, Node};
+use crate::graph::{Id, Node};
+use crate::memo::Ctx;
 use crate::num::Fp;
 use crate::poly::Var;
 use bound::{Bounds, DJet};
