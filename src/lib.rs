@@ -28,8 +28,10 @@ mod cli;
 mod diagnose_cmd;
 mod estimate_cmds;
 mod expr_cmds;
+mod figures;
 mod fsio;
 mod modes_cmd;
+mod montecarlo_cmd;
 mod progress;
 mod show;
 mod simulate;
@@ -394,7 +396,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Simulate(a) => simulate::run(&a),
         cli::Command::Calibrate(a) => estimate_cmds::calibrate_cmd(&a),
         cli::Command::Crlb(a) => estimate_cmds::crlb_cmd(&a),
-        cli::Command::Montecarlo(a) => estimate_cmds::montecarlo_cmd(&a),
+        cli::Command::Montecarlo(a) => montecarlo_cmd::montecarlo_cmd(&a),
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
     }
