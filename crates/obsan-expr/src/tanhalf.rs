@@ -94,17 +94,42 @@ impl Ctx {
 
     /// Back from the half-angle view: `t = s/(1 + c)`; the result is canonical.
     pub fn from_tan_half(&self, th: &TanHalf, r: &RatFun) -> RatFun {
-        let (nn, nd) = self.poly_from_tan_half(th, &r.num);
-        let (dn, dd) = self.poly_from_tan_half(th, &r.den);
-        self.normalize(nn.mul(&dd), nd.mul(&dn))
+        let (mut nn, nd) = self.poly_from_tan_half(th, &r.num);
+        let (mut dn, dd) = self.poly_from_tan_half(th, &r.den);
+        // Reduce first (s^2 -> 1 - c^2): the images then carry the map's
+        // spurious powers of (1 + c) as plain factors, since 1 + t^2 = 2/(1 + c).
+        let (n, m) = self.reduce_poly(nn);
+        nn = n;
+        dn = dn.mul(&m);
+        let (d, m) = self.reduce_poly(dn);
+        dn = d;
+        nn = nn.mul(&m);
+        // Cancel those powers now: left in, they multiply the size of every
+        // conjugate product of the rationalisation in `normalize` (a 15-term
+        // denominator came back with 1472 terms and its norm never finished).
+        let mut num_pow = Poly::one();
+        let mut den_pow = Poly::one();
+        for (i, &(_, c, _)) in th.pairs.iter().enumerate() {
+            let one_plus_c = Poly::one().add(&Poly::var(c));
+            let en = strip_factor(&mut nn, &one_plus_c) + dd[i];
+            let ed = strip_factor(&mut dn, &one_plus_c) + nd[i];
+            if en > ed {
+                num_pow = num_pow.mul(&one_plus_c.pow(en - ed));
+            } else if ed > en {
+                den_pow = den_pow.mul(&one_plus_c.pow(ed - en));
+            }
+        }
+        self.normalize(nn.mul(&num_pow), dn.mul(&den_pow))
     }
 
-    /// `p(t)` with `t = s/(1+c)` for each pair: `(numerator, (1+c)^k)`.
-    fn poly_from_tan_half(&self, th: &TanHalf, p: &Poly) -> (Poly, Poly) {
+    /// `p(t)` with `t = s/(1+c)` for each pair: `(numerator, k)` with the
+    /// value `numerator / prod (1+c)^k`.
+    fn poly_from_tan_half(&self, th: &TanHalf, p: &Poly) -> (Poly, Vec<u32>) {
         let mut num = p.clone();
-        let mut den = Poly::one();
+        let mut pows = Vec::with_capacity(th.pairs.len());
         for &(s, c, t) in &th.pairs {
             let deg = num.degree(t);
+            pows.push(deg);
             if deg == 0 {
                 continue;
             }
@@ -114,9 +139,8 @@ impl Ctx {
                 acc = acc.add(&k.mul(&Poly::var(s).pow(e)).mul(&one_plus_c.pow(deg - e)));
             }
             num = acc;
-            den = den.mul(&one_plus_c.pow(deg));
         }
-        (num, den)
+        (num, pows)
     }
 
     /// Inverse through the half-angle view: cancel there (a UFD), then map
@@ -140,4 +164,19 @@ impl Ctx {
         };
         self.from_tan_half(&th, &inv)
     }
+}
+
+/// Divide `p` by `f` as often as it goes; returns how often.
+fn strip_factor(p: &mut Poly, f: &Poly) -> u32 {
+    let mut k = 0;
+    while !p.is_zero() && crate::budget::poll() {
+        match p.div_exact(f) {
+            Some(q) => {
+                *p = q;
+                k += 1;
+            }
+            None => break,
+        }
+    }
+    k
 }
