@@ -54,7 +54,7 @@ impl Ctx {
     }
 
     /// Reduce all relation leaves to degree <= 1: returns `(n, m)` with `p = n / m`.
-    fn reduce_poly(&self, p: Poly) -> (Poly, Poly) {
+    pub(crate) fn reduce_poly(&self, p: Poly) -> (Poly, Poly) {
         let mut num = p;
         let mut den = Poly::one();
         while budget::poll() {
