@@ -38,5 +38,3 @@ pub use symmetry::{
     SymmetryReport,
 };
 
-// Re-imported for the modules that name it `crate::field_names`.
-use fields::field_names;

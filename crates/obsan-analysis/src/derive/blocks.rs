@@ -113,7 +113,7 @@ mod tests {
         let src = std::fs::read_to_string(path).unwrap();
         let sys = obsan_model::System::parse(&src, "calib.sys").unwrap();
         let mut nf = sys.normal_form(Some("q"), &[]).unwrap();
-        let (_, fields) = crate::field_names(&mut nf);
+        let (_, fields) = crate::fields::field_names(&mut nf);
         let names = nf.state.clone();
         let vars = nf.state_vars.clone();
         let mut trig = Vec::new();

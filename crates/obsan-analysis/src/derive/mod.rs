@@ -182,7 +182,7 @@ pub fn derive_modes(
     };
 
     // Which variables enter through cos/sin (angles) and which polynomially.
-    let (fnames, fields) = crate::field_names(nf);
+    let (fnames, fields) = crate::fields::field_names(nf);
     let mut used_vars: Vec<u32> = Vec::new();
     let mut all: Vec<Id> = fields.iter().flatten().copied().collect();
     all.extend(nf.outputs.iter().map(|o| o.1));
