@@ -5,9 +5,9 @@ use crate::expr_cmds::parse_arg_in;
 use crate::show::{load_normal_form, load_system};
 use crate::Failure;
 use obsan_analysis::{
-    canonical_lie, check_modes, rank as rank_test, symmetries as sym_basis, symmetries_with,
-    verify_decomposition, Certificate, Decomposition, Fields, LieWord, RankOptions, RankReport,
-    Route, SymmetryOptions, SymmetryReport,
+    canonical_lie, check_modes, rank as rank_test, symmetries_with, verify_decomposition_with,
+    Certificate, Decomposition, Fields, LieWord, RankOptions, RankReport, Route, SymmetryOptions,
+    SymmetryReport,
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
@@ -197,13 +197,40 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
         "certificate": kind, "certification": detail })
 }
 
+/// The rank and the symmetries for `check`/`verify`: the default route
+/// (cheap structure, else reconstruction certified at random points) unless
+/// `exact`; the residuals of eq. (11) against them are exact either way.
 fn compute_symmetries(
     nf: &mut NormalForm,
     an: &AnalysisArgs,
+    exact: bool,
 ) -> Result<(RankReport, SymmetryReport), Failure> {
     let r = run_rank(nf, an)?;
-    let s = sym_basis(nf, &r).map_err(|e| Failure(e.to_string()))?;
+    let opts = SymmetryOptions {
+        deadline: an
+            .timeout
+            .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0))),
+        route: if exact { Route::Exact } else { Route::Auto },
+    };
+    let s = symmetries_with(nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
     Ok((r, s))
+}
+
+/// What certified the symmetries, for people; and its error bound (0 when exact).
+fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
+    let n = s.vectors.len();
+    match &s.certificate {
+        _ if n == 0 => ("none to find: the rank is full (exact)".into(), 0.0),
+        Certificate::Closure => ("exact Gauss-Jordan, proven by the exact closure check".into(), 0.0),
+        Certificate::Invariance(_) => ("cheap structure, proven exactly by invariance".into(), 0.0),
+        Certificate::Random(c) => (
+            format!(
+                "reconstructed, certified at {} random points over {} primes: wrong with probability <= {:.1e}",
+                c.points, c.primes, c.error_bound
+            ),
+            c.error_bound,
+        ),
+    }
 }
 
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
@@ -347,9 +374,10 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     for m in &a.modes {
         ids.push(parse_arg_in(&mut nf, m)?);
     }
-    let (_, s) = compute_symmetries(&mut nf, &a.an)?;
+    let (_, s) = compute_symmetries(&mut nf, &a.an, a.exact)?;
     let rep = check_modes(&mut nf, &s, &ids, a.an.seed).map_err(|e| Failure(e.to_string()))?;
     let all_pass = rep.checks.iter().all(|c| c.is_mode) && rep.independent;
+    let (cert, bound) = sym_certificate(&s);
     if a.out.json {
         let checks: Vec<Value> = a
             .modes
@@ -366,8 +394,13 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
         let v = json!({
             "system": nf.name, "restriction": nf.restriction, "symmetries": s.vectors.len(), "rank": rep.rank,
             "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
-            "complete": rep.complete, "exact": true,
+            "complete": rep.complete, "exact": bound == 0.0,
         });
+        let mut v = v;
+        if let (Some(m), Some(c)) = (v.as_object_mut(), symmetry_json(&nf, &s).as_object()) {
+            m.insert("certificate".into(), c["certificate"].clone());
+            m.insert("certification".into(), c["certification"].clone());
+        }
         outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let mut o = format!(
@@ -377,10 +410,16 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             s.vectors.len(),
             if s.vectors.len() == 1 { "y" } else { "ies" }
         );
+        o.push_str(&format!("symmetries: {cert}\n"));
         for (m, c) in a.modes.iter().zip(&rep.checks) {
             if c.is_mode {
                 o.push_str(&format!(
-                    "PASS {m}: satisfies eq. (11) for every symmetry (exact)\n"
+                    "PASS {m}: satisfies eq. (11) for every symmetry ({})\n",
+                    if bound == 0.0 {
+                        "exact"
+                    } else {
+                        "exact residuals; the symmetries as certified above"
+                    }
                 ));
             } else {
                 // A failed mode has a non-zero residual; 0 keeps the line well-formed regardless.
@@ -430,14 +469,29 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     let mut nf = sys
         .normal_form(d.restriction.as_deref(), &d.set)
         .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
-    let checks =
-        verify_decomposition(&mut nf, &d, a.an.seed).map_err(|e| Failure(e.to_string()))?;
+    let (r, s) = compute_symmetries(&mut nf, &a.an, a.exact)?;
+    let checks = verify_decomposition_with(&mut nf, &d, a.an.seed, Some((&r, &s)))
+        .map_err(|e| Failure(e.to_string()))?;
     let ok = checks.iter().all(|c| c.pass);
+    let closure = d.closure_proves(&nf, &checks);
+    let (cert, bound) = sym_certificate(&s);
+    // What the verdict rests on: closure needs no symmetry; otherwise the
+    // exact eq. (11) residuals are only as sure as the symmetries.
+    let verdict = if closure {
+        "exact by closure: every output and every field's dynamics written in the new state, as many independent new variables as the rank".to_string()
+    } else if bound == 0.0 {
+        "exact: eq. (11) residuals against exactly certified symmetries".to_string()
+    } else {
+        format!("eq. (11) residuals exact, the symmetries wrong with probability <= {bound:.1e}")
+    };
+    let exact = closure || bound == 0.0;
     if a.out.json {
+        let sj = symmetry_json(&nf, &s);
         let v = json!({
             "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
             "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
-            "pass": ok, "exact": true,
+            "pass": ok, "exact": ok && exact, "verdict": verdict, "symmetries": s.vectors.len(),
+            "certificate": sj["certificate"], "certification": sj["certification"],
         });
         outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -457,10 +511,13 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
                 o.push_str(&format!("     {}\n", c.detail));
             }
         }
-        o.push_str(if ok {
-            "decomposition verified (exact)\n"
+        o.push_str(&format!("symmetries: {} ({cert})\n", s.vectors.len()));
+        o.push_str(&if !ok {
+            "decomposition NOT verified\n".to_string()
+        } else if exact {
+            format!("decomposition verified (exact)\ncertificate: {verdict}\n")
         } else {
-            "decomposition NOT verified\n"
+            format!("decomposition verified (probabilistic)\ncertificate: {verdict}\n")
         });
         out!("{o}");
     }

@@ -78,14 +78,19 @@ The default --timeout is 60 s; a run past it stops with exit code 2 and says how
   obsan check systems/localization.sys --mode D --json
 
 --json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode,
-residuals}], independent, independent_count, complete, exact}. Exit 1 when a mode fails.")]
+residuals}], independent, independent_count, complete, exact, certificate (closure | invariance |
+random), certification}: the residuals are exact; the symmetries are certified as `certificate`
+says (random: error_bound in certification; --exact for the exact route). Exit 1 when a mode fails.")]
     Check(CheckArgs),
     /// Check a claimed local decomposition (new state, reduced dynamics, output) exactly.
     #[command(after_help = "Examples:
   obsan verify systems/decomp_localization.dec
   obsan verify systems/decomp_21_22.dec --json
 
---json prints {checks: [{check, pass, detail}], ...}. Exit 1 when a check fails.")]
+--json prints {checks: [{check, pass, detail}], pass, exact, verdict, certificate (closure |
+invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
+the exact one); a passing decomposition that writes every output is exact by closure whatever
+certified them. Exit 1 when a check fails.")]
     Verify(VerifyArgs),
     /// Derive observable modes and the reduced system, each proven exactly (eqs. 9-11).
     #[command(after_help = "Examples:
@@ -538,6 +543,10 @@ pub struct CheckArgs {
     pub an: AnalysisArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+    /// Compute the symmetries by the exact route (canonical forms and the
+    /// exact closure check), however long it takes, instead of the default.
+    #[arg(long)]
+    pub exact: bool,
 }
 
 #[derive(Args)]
@@ -572,6 +581,10 @@ pub struct VerifyArgs {
     pub an: AnalysisArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+    /// Compute the symmetries by the exact route (canonical forms and the
+    /// exact closure check), however long it takes, instead of the default.
+    #[arg(long)]
+    pub exact: bool,
 }
 
 /// Options shared by every command that reads a system.

@@ -181,6 +181,22 @@ impl Decomposition {
         Ok(d)
     }
 
+    /// Every check passed and every output of `nf` is written in the new
+    /// state: then the verdict is exact whatever certified the symmetries.
+    /// The span of the new gradients holds every output gradient and is
+    /// closed under every field (the dynamics checks), so it contains the
+    /// observable codistribution; the rank test's non-zero minor bounds that
+    /// from below by the same count (the completeness check); so the two are
+    /// equal and each new variable is a mode (eq. 11) with no probability.
+    pub fn closure_proves(&self, nf: &NormalForm, checks: &[Check]) -> bool {
+        !checks.is_empty()
+            && checks.iter().all(|c| c.pass)
+            && nf
+                .outputs
+                .iter()
+                .all(|(n, _)| self.outputs.iter().any(|o| &o.0 == n))
+    }
+
     fn at(&self, offset: usize, msg: impl Into<String>) -> AnalysisError {
         err(&self.origin, &self.src, offset, msg)
     }

@@ -25,7 +25,7 @@ pub mod structure;
 mod sym_recon;
 mod symmetry;
 
-pub use decomp::{verify_decomposition, Check, Decomposition};
+pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
 };
