@@ -37,4 +37,3 @@ pub use symmetry::{
     canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
     SymmetryReport,
 };
-
