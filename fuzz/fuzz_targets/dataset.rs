@@ -58,8 +58,8 @@ fuzz_target!(|data: &[u8]| {
         Ok(r) => {
             for t in &r.dataset.trajectories {
                 for s in [&t.inputs, &t.outputs] {
-                    assert!(s.t.windows(2).all(|w| w[0] <= w[1]), "time goes backwards");
-                    for v in s.values.iter().flatten().flatten() {
+                    assert!(s.t().windows(2).all(|w| w[0] <= w[1]), "time goes backwards");
+                    for v in s.values().iter().flatten().flatten() {
                         assert!(v.is_finite() && v.abs() <= MAX_ABS_VALUE, "value {v}");
                     }
                 }
