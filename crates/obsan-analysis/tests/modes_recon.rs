@@ -5,12 +5,34 @@
 //! gradient rank (stacked, the two sets still have rank r).
 
 use obsan_analysis::{
-    check_modes, derive_modes, rank, symmetries_with, verify_derivation, DeriveOptions,
-    RankOptions, Route, SymmetryOptions,
+    check_modes, derive_modes, rank, symmetries_with, verify_derivation, Derivation, DeriveOptions,
+    RankOptions, RankReport, Route, SymmetryOptions, SymmetryReport,
 };
-use obsan_model::System;
+use obsan_model::{NormalForm, System};
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
+
+/// The default-route symmetries and the derived modes, with the reduced
+/// system closed and every decomposition check passed, so the closure proves
+/// them (`Derivation::closure_proves`).
+fn derive_proven(nf: &mut NormalForm, r: &RankReport, path: &str) -> (SymmetryReport, Derivation) {
+    let sym = symmetries_with(
+        nf,
+        r,
+        &SymmetryOptions {
+            deadline: None,
+            route: Route::Auto,
+        },
+    )
+    .unwrap();
+    let d = derive_modes(nf, r, &sym, &DeriveOptions::default()).unwrap();
+    assert!(d.closed(), "{path}: missing {:?}", d.missing());
+    let dec = d.decomposition_text(path, None, &[]).unwrap();
+    let checks = verify_derivation(nf, &dec, path, 1, (r, &sym)).unwrap();
+    assert!(checks.iter().all(|c| c.pass), "{path}: {checks:?}");
+    assert!(d.closure_proves(&checks), "{path}");
+    (sym, d)
+}
 
 fn assert_modes_span(path: &str, expected: &[&str]) {
     let src = std::fs::read_to_string(format!("{ROOT}/{path}")).unwrap();
@@ -18,21 +40,7 @@ fn assert_modes_span(path: &str, expected: &[&str]) {
     let mut nf = sys.normal_form(None, &[]).unwrap();
     let r = rank(&mut nf, RankOptions::default()).unwrap();
     assert_eq!(r.rank, expected.len(), "{path}");
-    let sym = symmetries_with(
-        &mut nf,
-        &r,
-        &SymmetryOptions {
-            deadline: None,
-            route: Route::Auto,
-        },
-    )
-    .unwrap();
-    let d = derive_modes(&mut nf, &r, &sym, &DeriveOptions::default()).unwrap();
-    assert!(d.closed(), "{path}: missing {:?}", d.missing());
-    let dec = d.decomposition_text(path, None, &[]).unwrap();
-    let checks = verify_derivation(&mut nf, &dec, path, 1, (&r, &sym)).unwrap();
-    assert!(checks.iter().all(|c| c.pass), "{path}: {checks:?}");
-    assert!(d.closure_proves(&checks), "{path}");
+    let (sym, d) = derive_proven(&mut nf, &r, path);
     // The cited combinations: each an observable mode (exactly, against the
     // certified symmetries), together complete.
     let ids: Vec<_> = expected
@@ -136,21 +144,7 @@ fn assert_modes_of_known_symmetries(path: &str, known: &[&[(&str, &str)]]) {
     let r = rank(&mut nf, RankOptions::default()).unwrap();
     let n = nf.state.len();
     assert_eq!(r.rank, n - known.len(), "{path}");
-    let sym = symmetries_with(
-        &mut nf,
-        &r,
-        &SymmetryOptions {
-            deadline: None,
-            route: Route::Auto,
-        },
-    )
-    .unwrap();
-    let d = derive_modes(&mut nf, &r, &sym, &DeriveOptions::default()).unwrap();
-    assert!(d.closed(), "{path}: missing {:?}", d.missing());
-    let dec = d.decomposition_text(path, None, &[]).unwrap();
-    let checks = verify_derivation(&mut nf, &dec, path, 1, (&r, &sym)).unwrap();
-    assert!(checks.iter().all(|c| c.pass), "{path}: {checks:?}");
-    assert!(d.closure_proves(&checks), "{path}");
+    let (sym, d) = derive_proven(&mut nf, &r, path);
     for m in &d.modes {
         for w in known {
             let mut terms = Vec::new();
