@@ -6,8 +6,7 @@ use crate::figures::write_figures;
 use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_calib::{
-    calib_predictor, calibrate, crlb_sd, dataset_crlb, simulate, CalibrateOptions, Method, PARAMS,
-    PARAM_COLUMNS,
+    calib_predictor, calibrate, dataset_crlb, simulate, CalibrateOptions, Method, Table, PARAMS,
 };
 use obsan_data::{DataFile, Dataset, DatasetFiles, TrajectoryFiles};
 use serde_json::{json, Value};
@@ -271,9 +270,9 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
         }
         None => {
             let o = sim_options(&a.sim)?;
-            let b = crlb_sd(&o, &p, false)?;
+            let b = o.crlb_sd(&p, false)?;
             let f = (o.k_encoder > 0.0)
-                .then(|| crlb_sd(&o, &p, true))
+                .then(|| o.crlb_sd(&p, true))
                 .transpose()?;
             let (data, _) = simulate(&o)?;
             (
@@ -293,7 +292,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
     if a.json {
         let obj = |sd: &[f64]| {
             let mut m = serde_json::Map::new();
-            for (i, c) in PARAM_COLUMNS.iter().enumerate() {
+            for (i, c) in Table::PARAM_COLUMNS.iter().enumerate() {
                 m.insert(c.to_string(), json!(sd[i]));
             }
             Value::Object(m)
@@ -316,7 +315,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
         "bearing noise",
         "+ encoder noise"
     );
-    for (i, c) in PARAM_COLUMNS.iter().enumerate() {
+    for (i, c) in Table::PARAM_COLUMNS.iter().enumerate() {
         let f = full
             .as_ref()
             .map_or("-".to_string(), |f| format!("{:.4}", f[i]));

@@ -2,7 +2,7 @@
 
 use crate::fsio::write_folder_atomically;
 use crate::Failure;
-use obsan_calib::{figure_curves, CalibrateOptions};
+use obsan_calib::CalibrateOptions;
 use obsan_data::Dataset;
 use obsan_fit::Predictor;
 use obsan_plot::{self as plot, chart, Style, BLACK, COLORS};
@@ -18,7 +18,9 @@ pub(crate) fn write_figures(
     o: &CalibrateOptions,
     done: &obsan_calib::CalibrationReport,
 ) -> Result<usize, Failure> {
-    let curves = figure_curves(data, p, o, done).map_err(|e| Failure(format!("--plot: {e}")))?;
+    let curves = done
+        .figure_curves(data, p, o)
+        .map_err(|e| Failure(format!("--plot: {e}")))?;
     let mut files = Vec::new();
     let mut index = String::from("# Figures 5-7 (Martinelli 2011)\n\n");
     let xlabel = "s (rad of right-wheel rotation)";

@@ -5,8 +5,8 @@ use crate::cli::{MergeArgs, MontecarloArgs, MontecarloCommand};
 use crate::progress::Progress;
 use crate::Failure;
 use obsan_calib::{
-    calib_predictor, cell_bounds, merge_runs, run_runs, shard_runs, summarize, table, RunOutcome,
-    RunRecord, Table,
+    calib_predictor, merge_runs, run_runs, shard_runs, summarize, table, RunOutcome, RunRecord,
+    Table,
 };
 use obsan_fit::Predictor;
 use serde_json::{json, Value};
@@ -302,7 +302,7 @@ fn report_tables(
             .zip(&recs)
             .map(|(&c, r)| {
                 let cell = &t.cells[c];
-                summarize(cell, t.modes, r, cell_bounds(cell, t.modes, p))
+                summarize(cell, t.modes, r, cell.bounds(t.modes, p))
                     .map_err(|e| Failure(format!("table {} cell {}: {e}", t.number, c + 1)))
             })
             .collect::<Result<Vec<_>, _>>()?;

@@ -13,10 +13,11 @@ use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
 use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
-/// the estimators and `obsan rank` share one source of truth for the dynamics.
-pub const CALIB_SYS: &str = include_str!("../../../systems/calib.sys");
+/// the estimators and the shipped file share one source of truth.
+const CALIB_SYS: &str = include_str!("../../../systems/calib.sys");
 
-/// [`CALIB_SYS`] without restriction (inputs wR, wL), compiled for prediction.
+/// `systems/calib.sys` (eq. 16) without restriction (inputs wR, wL), compiled
+/// for prediction.
 #[allow(clippy::expect_used)] // the shipped calib.sys is tested to parse
 pub fn calib_predictor() -> Predictor {
     let sys = obsan_model::System::parse(CALIB_SYS, "systems/calib.sys")
@@ -662,81 +663,84 @@ pub struct FigureCurves {
     pub node: f64,
 }
 
-/// The curves of Figures 5-7 for every trajectory. Each figure compares DET,
-/// LS and ML: `done` (a calibration of `data` with options `o`) is reused
-/// when it is the LS or ML run, the other runs are made here.
-pub fn figure_curves(
-    data: &Dataset,
-    predictor: &Predictor,
-    o: &CalibrateOptions,
-    done: &CalibrationReport,
-) -> Result<Vec<FigureCurves>, CalibError> {
-    let with = |m: Method| CalibrateOptions {
-        method: m,
-        ..o.clone()
-    };
-    let ls_own;
-    let ls_run = if done.method == Method::Ls {
-        done
-    } else {
-        ls_own = calibrate(data, None, &with(Method::Ls))?;
-        &ls_own
-    };
-    // ML may fail where LS does not (e.g. a poor start); the figure then
-    // shows DET and LS only.
-    let ml_own;
-    let ml_run = if done.method == Method::Ml {
-        Some(done)
-    } else {
-        ml_own = calibrate(data, Some(predictor), &with(Method::Ml)).ok();
-        ml_own.as_ref()
-    };
-    let mut out = Vec::new();
-    for (k, (tr, t)) in ls_run
-        .trajectories
-        .iter()
-        .zip(&data.trajectories)
-        .enumerate()
-    {
-        let curve = |c: &Closed| tr.arc.s.iter().map(|&s| c.beta(s)).collect::<Vec<f64>>();
-        let ml = ml_run.and_then(|r| {
-            let f = r.ml.as_ref()?;
-            let consts: Vec<f64> = predictor
-                .consts
-                .iter()
-                .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
-                .collect();
-            let mut x0 = f.initial_states[k].clone();
-            x0.extend(&f.params);
-            let y = predictor.predict(&x0, &consts, &t.inputs, &tr.arc.t).ok()?;
-            let col = predictor.outputs.iter().position(|n| *n == o.output)?;
-            let v: Vec<f64> = y.iter().map(|r| wrap(r[col])).collect();
-            (v.len() == tr.arc.s.len()).then_some(v)
-        });
-        let d = &tr.det;
-        let (s_lo, s_hi) = (tr.arc.s[0], tr.arc.s[tr.arc.s.len() - 1]);
-        let half = d.period / 2.0;
-        let mut nodes = Vec::new();
-        let mut s = d.node - half * ((d.node - s_lo) / half).floor();
-        // A figure marks a few nodes: a degenerate period marks none.
-        while s <= s_hi && half > 0.0 && nodes.len() < 10_000 {
-            nodes.push((s, d.closed.beta(s)));
-            s += half;
+impl CalibrationReport {
+    /// The curves of Figures 5-7 for every trajectory. Each figure compares DET,
+    /// LS and ML: this report (a calibration of `data` with options `o`) is reused
+    /// when it is the LS or ML run, the other runs are made here.
+    pub fn figure_curves(
+        &self,
+        data: &Dataset,
+        predictor: &Predictor,
+        o: &CalibrateOptions,
+    ) -> Result<Vec<FigureCurves>, CalibError> {
+        let done = self;
+        let with = |m: Method| CalibrateOptions {
+            method: m,
+            ..o.clone()
+        };
+        let ls_own;
+        let ls_run = if done.method == Method::Ls {
+            done
+        } else {
+            ls_own = calibrate(data, None, &with(Method::Ls))?;
+            &ls_own
+        };
+        // ML may fail where LS does not (e.g. a poor start); the figure then
+        // shows DET and LS only.
+        let ml_own;
+        let ml_run = if done.method == Method::Ml {
+            Some(done)
+        } else {
+            ml_own = calibrate(data, Some(predictor), &with(Method::Ml)).ok();
+            ml_own.as_ref()
+        };
+        let mut out = Vec::new();
+        for (k, (tr, t)) in ls_run
+            .trajectories
+            .iter()
+            .zip(&data.trajectories)
+            .enumerate()
+        {
+            let curve = |c: &Closed| tr.arc.s.iter().map(|&s| c.beta(s)).collect::<Vec<f64>>();
+            let ml = ml_run.and_then(|r| {
+                let f = r.ml.as_ref()?;
+                let consts: Vec<f64> = predictor
+                    .consts
+                    .iter()
+                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+                    .collect();
+                let mut x0 = f.initial_states[k].clone();
+                x0.extend(&f.params);
+                let y = predictor.predict(&x0, &consts, &t.inputs, &tr.arc.t).ok()?;
+                let col = predictor.outputs.iter().position(|n| *n == o.output)?;
+                let v: Vec<f64> = y.iter().map(|r| wrap(r[col])).collect();
+                (v.len() == tr.arc.s.len()).then_some(v)
+            });
+            let d = &tr.det;
+            let (s_lo, s_hi) = (tr.arc.s[0], tr.arc.s[tr.arc.s.len() - 1]);
+            let half = d.period / 2.0;
+            let mut nodes = Vec::new();
+            let mut s = d.node - half * ((d.node - s_lo) / half).floor();
+            // A figure marks a few nodes: a degenerate period marks none.
+            while s <= s_hi && half > 0.0 && nodes.len() < 10_000 {
+                nodes.push((s, d.closed.beta(s)));
+                s += half;
+            }
+            out.push(FigureCurves {
+                name: tr.name.clone(),
+                q: tr.q,
+                s: tr.arc.s.clone(),
+                observed: tr.arc.beta.clone(),
+                det: curve(&d.closed),
+                ls: curve(&tr.closed),
+                ml,
+                nodes,
+                sigma_curve: d.sigma_curve.clone(),
+                node: d.node,
+            });
         }
-        out.push(FigureCurves {
-            name: tr.name.clone(),
-            q: tr.q,
-            s: tr.arc.s.clone(),
-            observed: tr.arc.beta.clone(),
-            det: curve(&d.closed),
-            ls: curve(&tr.closed),
-            ml,
-            nodes,
-            sigma_curve: d.sigma_curve.clone(),
-            node: d.node,
-        });
+        Ok(out)
     }
-    Ok(out)
 }
 
 /// [`dataset_crlb`]'s answer: the estimate, the bound's standard deviations

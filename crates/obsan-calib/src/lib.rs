@@ -28,16 +28,13 @@ mod sim;
 
 pub use calib::{Calibration, Metric, PARAMS};
 pub use calibrate::{
-    calib_predictor, calibrate, circle_modes, dataset_crlb, figure_curves, CalibrateOptions,
-    CalibrationReport, CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
+    calib_predictor, calibrate, circle_modes, dataset_crlb, CalibrateOptions, CalibrationReport,
+    CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate,
 };
 pub use circle::{ArcData, Closed, Det};
 pub use error::CalibError;
 pub use montecarlo::{
-    cell_bounds, crlb_sd, merge_runs, run_cell, run_runs, run_seed, shard_runs, summarize, table,
-    Cell, CellBounds, CellResult, McMethod, MethodStats, MontecarloError, RunOutcome, RunRecord,
-    Table, MODE_COLUMNS, PARAM_COLUMNS,
+    merge_runs, run_cell, run_runs, shard_runs, summarize, table, Cell, CellBounds, CellResult,
+    McMethod, MethodStats, MontecarloError, RunOutcome, RunRecord, Table,
 };
-pub use sim::{
-    bearing, simulate, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth,
-};
+pub use sim::{simulate, Effects, Robot, SimOptions, SpeedProfile, TrajectoryTruth, Truth};

@@ -1,7 +1,7 @@
 //! Monte Carlo runs laid out like the paper's Tables IV-VII, with the
 //! paper's figures beside ours, the Cramér–Rao bound and the efficiency
 //! (RMS error / CRLB standard deviation). Runs are independent and seeded by
-//! `seed + run` ([`run_seed`]), so a run's numbers depend only on the seed,
+//! `seed + run` (`run_seed`), so a run's numbers depend only on the seed,
 //! the cell and the run's index: any subset of the runs (a shard) can be
 //! computed anywhere, and [`summarize`] of all of them, in index order, is
 //! bit for bit the table one process gives.
@@ -84,8 +84,11 @@ pub struct Table {
     pub cells: Vec<Cell>,
 }
 
-pub const PARAM_COLUMNS: [&str; 5] = ["phi (deg)", "psi (deg)", "eta (%)", "delta (%)", "xi (%)"];
-pub const MODE_COLUMNS: [&str; 4] = ["xi_q (%)", "L (deg)", "c (deg)", "k (%)"];
+impl Table {
+    pub const PARAM_COLUMNS: [&str; 5] =
+        ["phi (deg)", "psi (deg)", "eta (%)", "delta (%)", "xi (%)"];
+    pub const MODE_COLUMNS: [&str; 4] = ["xi_q (%)", "L (deg)", "c (deg)", "k (%)"];
+}
 
 fn setup(sigma_deg: f64, iota: f64, dq: f64, bearings: usize) -> SimOptions {
     SimOptions {
@@ -125,7 +128,7 @@ pub fn table(number: u8) -> Option<Table> {
         5 => Table {
             number,
             title: "Table V: mean absolute errors over the runs, 100 bearings per trajectory".into(),
-            columns: PARAM_COLUMNS.to_vec(),
+            columns: Table::PARAM_COLUMNS.to_vec(),
             modes: false,
             estimates: false,
             cells: [
@@ -151,7 +154,7 @@ pub fn table(number: u8) -> Option<Table> {
         6 => Table {
             number,
             title: "Table VI: mean absolute errors of the modes (all trajectories), 100 bearings per trajectory".into(),
-            columns: MODE_COLUMNS.to_vec(),
+            columns: Table::MODE_COLUMNS.to_vec(),
             modes: true,
             estimates: false,
             cells: [
@@ -177,7 +180,7 @@ pub fn table(number: u8) -> Option<Table> {
         7 => Table {
             number,
             title: "Table VII: mean absolute errors under a systematic ratio error dq, sigma_beta = 1 deg, 100 bearings".into(),
-            columns: PARAM_COLUMNS.to_vec(),
+            columns: Table::PARAM_COLUMNS.to_vec(),
             modes: false,
             estimates: false,
             cells: [
@@ -294,7 +297,7 @@ pub struct RunRecord {
 
 /// The simulator's seed of run `run`: `seed + run` (wrapping), the same
 /// in every cell and table, so a run can be recomputed on its own.
-pub fn run_seed(seed: u64, run: usize) -> u64 {
+fn run_seed(seed: u64, run: usize) -> u64 {
     seed.wrapping_add(run as u64)
 }
 
@@ -371,54 +374,57 @@ fn one(
     Ok((acc.clone(), acc))
 }
 
-/// The CRLB standard deviations (table units) of the parameters for a set-up:
-/// the inverse Fisher information of the bearings at the truth, on the
-/// noise-free data of that set-up (circles: iota = 0); bearing noise only,
-/// or with the encoder noise too.
-pub fn crlb_sd(
-    sim: &SimOptions,
-    predictor: &Predictor,
-    with_encoder_noise: bool,
-) -> Result<Vec<f64>, CalibError> {
-    let clean = SimOptions {
-        sigma_beta: 0.0,
-        k_encoder: 0.0,
-        iota: 0.0,
-        ..sim.clone()
-    };
-    let (data, truth) = simulate(&clean)?;
-    let fts = FitTrajectory::all(predictor, &data);
-    let states: Vec<Vec<f64>> = truth
-        .trajectories
-        .iter()
-        .map(|t| vec![t.mu0, t.gamma0])
-        .collect();
-    // Encoder noise of [10] as the simulator draws it: white noise on each
-    // wheel's rotation with density K^2 / r_nominal per radian turned. The
-    // bound is then the linearised one of the errors-in-variables model
-    // (residual covariance I + A M A^T, see `Integration::input_noise`).
-    let c = sim.k_encoder * sim.k_encoder / sim.r_nominal;
-    let opts = FitOptions {
-        max_iterations: 0,
-        cost_tolerance: 0.0,
-        step_tolerance: 0.0,
-        sigma: vec![sim.sigma_beta],
-        max_step: 0.5,
-        input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),
-    };
-    let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
-    let cov = crlb(predictor, &fts, &params, &states, &opts).map_err(CalibError::Crlb)?;
-    let sd: Vec<f64> = (0..5).map(|i| cov[i][i].max(0.0).sqrt()).collect();
-    Ok(vec![
-        sd[0].to_degrees(),
-        sd[1].to_degrees(),
-        100.0 * sd[2] / truth.eta,
-        100.0 * sd[3] / truth.delta,
-        100.0 * sd[4] / truth.xi,
-    ])
+impl SimOptions {
+    /// The CRLB standard deviations (table units) of the parameters for this
+    /// set-up: the inverse Fisher information of the bearings at the truth, on
+    /// the noise-free data of the set-up (circles: iota = 0); bearing noise
+    /// only, or with the encoder noise too.
+    pub fn crlb_sd(
+        &self,
+        predictor: &Predictor,
+        with_encoder_noise: bool,
+    ) -> Result<Vec<f64>, CalibError> {
+        let sim = self;
+        let clean = SimOptions {
+            sigma_beta: 0.0,
+            k_encoder: 0.0,
+            iota: 0.0,
+            ..sim.clone()
+        };
+        let (data, truth) = simulate(&clean)?;
+        let fts = FitTrajectory::all(predictor, &data);
+        let states: Vec<Vec<f64>> = truth
+            .trajectories
+            .iter()
+            .map(|t| vec![t.mu0, t.gamma0])
+            .collect();
+        // Encoder noise of [10] as the simulator draws it: white noise on each
+        // wheel's rotation with density K^2 / r_nominal per radian turned. The
+        // bound is then the linearised one of the errors-in-variables model
+        // (residual covariance I + A M A^T, see `Integration::input_noise`).
+        let c = sim.k_encoder * sim.k_encoder / sim.r_nominal;
+        let opts = FitOptions {
+            max_iterations: 0,
+            cost_tolerance: 0.0,
+            step_tolerance: 0.0,
+            sigma: vec![sim.sigma_beta],
+            max_step: 0.5,
+            input_noise: (with_encoder_noise && c > 0.0).then(|| vec![c, c]),
+        };
+        let params = [truth.phi, truth.psi, truth.eta, truth.delta, truth.xi];
+        let cov = crlb(predictor, &fts, &params, &states, &opts).map_err(CalibError::Crlb)?;
+        let sd: Vec<f64> = (0..5).map(|i| cov[i][i].max(0.0).sqrt()).collect();
+        Ok(vec![
+            sd[0].to_degrees(),
+            sd[1].to_degrees(),
+            100.0 * sd[2] / truth.eta,
+            100.0 * sd[3] / truth.delta,
+            100.0 * sd[4] / truth.xi,
+        ])
+    }
 }
 
-/// The runs `runs` of a cell (seeds by [`run_seed`]), each calibrated by
+/// The runs `runs` of a cell (run `r` simulated with seed `seed + r`, wrapping), each calibrated by
 /// every method of the cell, in parallel; the records in run order. `tick`
 /// is called after each run. The caller's cancel flag
 /// ([`obsan_expr::with_cancel`]) reaches the worker threads: once it is
@@ -479,21 +485,23 @@ fn run_one(
     Some(RunRecord { run: r, outcomes })
 }
 
-/// The Cramér–Rao bounds a cell reports (see [`CellResult`]): they depend on
-/// the set-up only (noise-free data), not on any run. A bound that cannot be
-/// computed is left out of the table.
-pub fn cell_bounds(cell: &Cell, modes: bool, predictor: &Predictor) -> CellBounds {
-    CellBounds {
-        crlb_sd: if modes {
-            None
-        } else {
-            crlb_sd(&cell.sim, predictor, false).ok()
-        },
-        crlb_sd_encoders: if modes || cell.sim.k_encoder <= 0.0 {
-            None
-        } else {
-            crlb_sd(&cell.sim, predictor, true).ok()
-        },
+impl Cell {
+    /// The Cramér–Rao bounds this cell reports (see [`CellResult`]): they
+    /// depend on the set-up only (noise-free data), not on any run. A bound
+    /// that cannot be computed is left out of the table.
+    pub fn bounds(&self, modes: bool, predictor: &Predictor) -> CellBounds {
+        CellBounds {
+            crlb_sd: if modes {
+                None
+            } else {
+                self.sim.crlb_sd(predictor, false).ok()
+            },
+            crlb_sd_encoders: if modes || self.sim.k_encoder <= 0.0 {
+                None
+            } else {
+                self.sim.crlb_sd(predictor, true).ok()
+            },
+        }
     }
 }
 
@@ -611,7 +619,7 @@ pub fn run_cell(
     tick: &(dyn Fn() + Sync),
 ) -> Result<CellResult, MontecarloError> {
     let records = run_runs(cell, modes, 0..runs, seed, predictor, tick)?;
-    summarize(cell, modes, &records, cell_bounds(cell, modes, predictor))
+    summarize(cell, modes, &records, cell.bounds(modes, predictor))
 }
 
 #[cfg(test)]
@@ -663,7 +671,7 @@ mod tests {
             .map(|k| run_runs(cell, t.modes, shard_runs(5, k, 3).unwrap(), 7, &p, &|| {}).unwrap())
             .collect();
         let merged = merge_runs(parts.clone(), 5).unwrap();
-        let m = summarize(cell, t.modes, &merged, cell_bounds(cell, t.modes, &p)).unwrap();
+        let m = summarize(cell, t.modes, &merged, cell.bounds(t.modes, &p)).unwrap();
         assert_eq!(bits(&m), bits(&one));
         assert!(one.methods.iter().any(|m| m.mean_abs[0] != 0.0));
         // A missing shard, or shards out of order, is an error naming the run.
@@ -673,7 +681,7 @@ mod tests {
         assert!(e.to_string().contains("3 runs given, 5 expected"), "{e}");
         // Records of another table's cell (other column count) are refused.
         let v = table(5).unwrap();
-        let e = summarize(&v.cells[0], v.modes, &merged, cell_bounds(cell, true, &p)).unwrap_err();
+        let e = summarize(&v.cells[0], v.modes, &merged, cell.bounds(true, &p)).unwrap_err();
         assert!(matches!(e, MontecarloError::Records(_)), "{e}");
     }
 }

@@ -213,11 +213,13 @@ pub struct TrajectoryTruth {
     pub l: Option<f64>,
 }
 
-/// Bearing of the feature at the origin seen from pose (x, y, theta), in (-pi, pi].
-pub fn bearing(robot: &Robot, x: f64, y: f64, theta: f64) -> f64 {
-    let cx = x + robot.rho * (theta + robot.phi).cos();
-    let cy = y + robot.rho * (theta + robot.phi).sin();
-    wrap((-cy).atan2(-cx) - theta - robot.phi - robot.psi)
+impl Robot {
+    /// Bearing of the feature at the origin seen from pose (x, y, theta), in (-pi, pi].
+    pub fn bearing(&self, x: f64, y: f64, theta: f64) -> f64 {
+        let cx = x + self.rho * (theta + self.phi).cos();
+        let cy = y + self.rho * (theta + self.phi).sin();
+        wrap((-cy).atan2(-cx) - theta - self.phi - self.psi)
+    }
 }
 
 /// Advance a pose by wheel rotations (exact arc of constant v and omega).
@@ -390,7 +392,7 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
                 a.1 + f * (b.1 - a.1),
                 a.2 + f * (b.2 - a.2),
             );
-            let beta = bearing(rb, p.0, p.1, p.2);
+            let beta = rb.bearing(p.0, p.1, p.2);
             let e = &o.effects;
             let meas = (1.0 + e.bearing_scale) * beta
                 + e.bearing_distortion * (2.0 * beta).sin()

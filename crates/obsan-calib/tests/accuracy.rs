@@ -1,7 +1,7 @@
 //! Accuracy of `calibrate` on simulated data (fixed seeds), against the
 //! simulator's truth and the Cramér–Rao bound (docs/accuracy.md).
 
-use obsan_calib::{calibrate, crlb_sd, simulate, CalibrateOptions, Method, SimOptions, Truth};
+use obsan_calib::{calibrate, simulate, CalibrateOptions, Method, SimOptions, Truth};
 use obsan_data::wrap;
 use obsan_fit::Predictor;
 
@@ -97,8 +97,8 @@ fn ml_and_ls_reach_the_cramer_rao_bound_with_the_papers_noise() {
         bearings: Some(100),
         ..SimOptions::default()
     };
-    let bearing_only = crlb_sd(&o, &p, false).unwrap();
-    let with_encoders = crlb_sd(&o, &p, true).unwrap();
+    let bearing_only = o.crlb_sd(&p, false).unwrap();
+    let with_encoders = o.crlb_sd(&p, true).unwrap();
     let ml = rms_errors(&o, Method::Ml, 100, &p);
     let ls = rms_errors(&o, Method::Ls, 100, &p);
     for k in 0..5 {
@@ -171,7 +171,7 @@ fn figure_curves_lie_on_noise_free_data_and_nodes_are_mirror_centres() {
     let mut co = CalibrateOptions::for_dataset(&data, Method::Ml);
     co.sigma_beta = Some(1e-5);
     let done = obsan_calib::calibrate(&data, Some(&p), &co).unwrap();
-    let curves = obsan_calib::figure_curves(&data, &p, &co, &done).unwrap();
+    let curves = done.figure_curves(&data, &p, &co).unwrap();
     assert_eq!(curves.len(), 3);
     for c in &curves {
         let ml = c.ml.as_ref().expect("ML converges on noise-free data");

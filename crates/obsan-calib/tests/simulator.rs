@@ -1,7 +1,7 @@
 //! The simulator against independent identities: the closed-form bearing of
 //! ERRATA.md, circle geometry, and eq. (16) integrated from systems/calib.sys.
 
-use obsan_calib::{bearing, simulate, Robot, SimOptions};
+use obsan_calib::{simulate, Robot, SimOptions};
 use obsan_data::{wrap, Series};
 use obsan_fit::Rng;
 use std::f64::consts::PI;
@@ -48,7 +48,7 @@ fn bearing_matches_the_closed_form_of_errata() {
         let mu = robot.rho / d;
         let gamma = th - y.atan2(x) + robot.phi;
         let closed = gamma.sin().atan2(-mu - gamma.cos()) - robot.psi;
-        let diff = wrap(bearing(&robot, x, y, th) - closed);
+        let diff = wrap(robot.bearing(x, y, th) - closed);
         assert!(diff.abs() < 1e-12, "{diff}");
     }
 }
