@@ -32,6 +32,7 @@ mod canon;
 mod diff;
 mod eval;
 mod float_eval;
+mod gauss;
 mod gcd;
 mod gcd_modular;
 mod graph;

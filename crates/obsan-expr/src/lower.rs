@@ -13,9 +13,10 @@
 //! never silently treated as independent.
 
 use crate::budget;
-use crate::graph::{Angle, Id, LeafKind};
+use crate::gauss;
+use crate::graph::{Angle, Id, LeafKind, Node};
 use crate::memo::Ctx;
-use crate::num::{int, int_exact_sqrt, Int, Q};
+use crate::num::{int, int_exact_sqrt, trial_factor, Int, Q};
 use crate::poly::{Mono, Poly, Var};
 use crate::ratfun::RatFun;
 use dashu_int::Sign;
@@ -259,6 +260,13 @@ impl Ctx {
         stop()?;
         let (one, zero) = (self.one(), self.zero());
         let mut acc = (one, zero);
+        let (atans, rest) = self.split_const_atans(lin.rest)?;
+        let lin = Linear { rest, ..lin };
+        for (v, n) in atans {
+            let pair = self.atan_cos_sin(v)?;
+            let p = self.cpow(pair, n);
+            acc = self.cmul(acc, p);
+        }
         if !lin.rest.is_zero() {
             // sin(-r) = -sin(r): keep the atom's argument with a positive leading coefficient.
             let flip = lin.rest.num.lc_sign() == Sign::Negative;
@@ -282,6 +290,78 @@ impl Ctx {
             acc = self.cmul(acc, rot);
         }
         Ok(acc)
+    }
+
+    /// Split `n atan(u)` terms with a constant `u` and an integer `n` off an
+    /// angle's remainder: their cosine and sine are algebraic in `u`
+    /// ([`Ctx::atan_cos_sin`]), so they must not hide inside an angle atom
+    /// (`cos(atan(2))` is `sin(atan(1/2))`, and `tan(atan(u))` is `u`).
+    /// Fractional multiples stay in the atom (not detected: docs/engine.md).
+    fn split_const_atans(&mut self, rest: RatFun) -> R<(Vec<(Var, i64)>, RatFun)> {
+        let Some(d) = rest.den.as_constant() else {
+            return Ok((vec![], rest));
+        };
+        let mut atans = Vec::new();
+        let mut keep = Vec::new();
+        for (m, k) in rest.num.terms() {
+            let mut it = m.iter();
+            let single = match (it.next(), it.next()) {
+                (Some((v, 1)), None) => Some(v),
+                _ => None,
+            };
+            let coeff = Q::new(k.clone(), d.clone());
+            let arg = single.and_then(|v| match self.leaves[v as usize].kind {
+                LeafKind::Atan(u) => Some((v, u)),
+                _ => None,
+            });
+            match arg {
+                Some((v, u)) if coeff.is_integer() && self.is_constant(u) => {
+                    let n = i64::try_from(coeff.num()).ok().filter(|n| n.abs() <= 64);
+                    let Some(n) = n else {
+                        let a = self.leaf_text(v);
+                        return err(format!(
+                            "the multiple {coeff} of {a} inside sin/cos is too large"
+                        ));
+                    };
+                    atans.push((v, n));
+                }
+                _ => keep.push((m.clone(), k.clone())),
+            }
+        }
+        if atans.is_empty() {
+            return Ok((atans, rest));
+        }
+        let num = Poly::from_terms(keep);
+        let rest = if num.is_zero() {
+            RatFun::zero()
+        } else {
+            self.normalize(num, Poly::constant(d))
+        };
+        stop()?;
+        Ok((atans, rest))
+    }
+
+    /// Whether an expression has no symbol in it (a constant, possibly with atoms).
+    fn is_constant(&self, id: Id) -> bool {
+        !self.reachable(&[id]).iter().any(|&n| {
+            matches!(self.node(n), Node::Leaf(v)
+                if matches!(self.leaves[*v as usize].kind, LeafKind::Symbol(_)))
+        })
+    }
+
+    /// `(cos a, sin a)` for the leaf `a = atan(u)`: `(1, u)/sqrt(1 + u^2)`,
+    /// exact for every real `u` (cos of a principal atan is positive).
+    fn atan_cos_sin(&mut self, a: Var) -> R<(Id, Id)> {
+        let LeafKind::Atan(u) = self.leaves[a as usize].kind else {
+            return err("internal: not an atan leaf");
+        };
+        let one = self.one();
+        let u2 = self.mul(&[u, u]);
+        let rad = self.add(&[one, u2]);
+        let r = self.sqrt(rad)?;
+        let c = self.pow(r, -1);
+        let s = self.mul(&[u, c]);
+        Ok((c, s))
     }
 
     pub fn sin(&mut self, u: Id) -> R<Id> {
@@ -334,11 +414,8 @@ impl Ctx {
             return Ok(self.zero());
         }
         if let Some(q) = c.as_q() {
-            if q.is_one() || q.neg().is_one() {
-                let pi = self.pi();
-                let k = self.num(Q::new(if q.is_one() { int(1) } else { int(-1) }, int(4)));
-                return Ok(self.mul(&[k, pi]));
-            }
+            // atan(p/q) = arg(q + ip), q > 0 (gauss.rs).
+            return Ok(self.gaussian_arg(q.den(), q.num()));
         }
         let flip = c.num.lc_sign() == Sign::Negative;
         let r = if flip { c.neg() } else { c };
@@ -365,10 +442,36 @@ impl Ctx {
             if qx.is_zero() {
                 return Ok(frac(self, if qy.is_negative() { -1 } else { 1 }, 2));
             }
+            // arg(x + iy) with the denominators cleared by a positive factor.
+            let (x, y) = (qx.num() * qy.den(), qy.num() * qx.den());
+            return Ok(self.gaussian_arg(&x, &y));
         }
         let (iy, ix) = (self.from_canonical(&cy), self.from_canonical(&cx));
         let a = self.leaf(LeafKind::Atan2(iy, ix));
         Ok(self.leaf_node(a))
+    }
+
+    /// The principal argument of `x + iy` in the normal form of gauss.rs:
+    /// `k pi/4 + sum n atan(d/c)` over canonical atoms `atan(d/c)`, `c > d > 0`.
+    fn gaussian_arg(&mut self, x: &Int, y: &Int) -> Id {
+        let Some(form) = gauss::arg(x, y) else {
+            return self.zero();
+        };
+        let mut terms = Vec::with_capacity(form.atoms.len() + 1);
+        if form.quarters != 0 {
+            let pi = self.pi();
+            let k = self.num(Q::new(int(form.quarters), int(4)));
+            terms.push(self.mul(&[k, pi]));
+        }
+        for ((c, d), n) in form.atoms {
+            // Atom arguments are canonical nodes (printing reads their form).
+            let r = self.from_canonical(&RatFun::from_q(&Q::new(d, c)));
+            let a = self.leaf(LeafKind::Atan(r));
+            let an = self.leaf_node(a);
+            let k = self.int(n);
+            terms.push(self.mul(&[k, an]));
+        }
+        self.add(&terms)
     }
 
     pub fn log(&mut self, u: Id) -> R<Id> {
@@ -432,17 +535,35 @@ impl Ctx {
                 return Ok(self.mul(&[out, r, inv_b]));
             }
         }
+        if let Some(a) = inner.as_q().filter(|q| q.is_integer()) {
+            // A square-free integer: one atom per prime, so that sqrt(10) and
+            // sqrt(2) sqrt(5) have one form (square roots of distinct primes
+            // are independent, each a quadratic extension of the others).
+            let (factors, cofactor) = trial_factor(a.num());
+            let mut fs = vec![out];
+            for p in factors.into_iter().map(|(p, _)| p).chain([cofactor]) {
+                if !p.is_one() {
+                    fs.push(self.sqrt_leaf(RatFun::from_q(&Q::from_int(p))));
+                }
+            }
+            return Ok(self.mul(&fs));
+        }
         if is_square_poly(&inner.num.mul(&inner.den)) {
             return err(
                 "sqrt of a perfect square is not supported (it is |.|, not a polynomial): write the root without sqrt",
             );
         }
         stop()?;
+        let n = self.sqrt_leaf(inner);
+        Ok(self.mul(&[out, n]))
+    }
+
+    /// The leaf `sqrt(inner)` for a radicand with its square factors removed.
+    fn sqrt_leaf(&mut self, inner: RatFun) -> Id {
         let id = self.from_canonical(&inner);
         let v = self.leaf(LeafKind::Sqrt(id));
         self.memo.radicands.insert(v, inner);
-        let n = self.leaf_node(v);
-        Ok(self.mul(&[out, n]))
+        self.leaf_node(v)
     }
 
     /// `b^q` for a rational exponent: integers and halves.
@@ -502,25 +623,27 @@ impl Ctx {
     }
 }
 
-/// `n = s^2 t` with `s` as large as trial division by small primes finds.
+/// `n = s^2 t` with `s` as large as trial division finds ([`trial_factor`]):
+/// `t` is square-free unless its cofactor without small primes has a square
+/// factor and is not itself a square (it is then at least 2^48).
 fn square_part(n: &Int) -> (Int, Int) {
-    let mut s = int(1);
-    let mut t = n.clone();
-    if t.is_zero() {
-        return (int(1), t);
+    if n.is_zero() {
+        return (int(1), n.clone());
     }
-    if let Some(r) = int_exact_sqrt(&t) {
+    if let Some(r) = int_exact_sqrt(n) {
         return (r, int(1));
     }
-    let mut p = 2i64;
-    while p <= 1000 {
-        let pp = int(p * p);
-        while (&t % &pp).is_zero() {
-            t = &t / &pp;
-            s *= int(p);
+    let (factors, cofactor) = trial_factor(n);
+    let mut s = int(1);
+    for (p, e) in factors {
+        for _ in 0..e / 2 {
+            s *= &p;
         }
-        p += 1;
     }
+    if let Some(r) = int_exact_sqrt(&cofactor) {
+        s *= r;
+    }
+    let t = n / (&s * &s);
     (s, t)
 }
 

@@ -55,6 +55,40 @@ pub(crate) fn int_exact_sqrt(a: &Int) -> Option<Int> {
     }
 }
 
+/// Trial divisors go up to this bound (1000 for numbers above 4096 bits,
+/// whose every remainder is costly).
+pub(crate) fn trial_bound(n: &Int) -> i64 {
+    if n.bit_len() <= 4096 {
+        1 << 16
+    } else {
+        1000
+    }
+}
+
+/// Trial division of `|n|` (n != 0) by the integers up to [`trial_bound`],
+/// while their square is at most what is left: the prime powers found, and
+/// the cofactor, which has no prime factor up to the bound (so it is 1 or a
+/// prime when it is below the bound squared).
+pub(crate) fn trial_factor(n: &Int) -> (Vec<(Int, u32)>, Int) {
+    let bound = trial_bound(n);
+    let mut t = n.clone().abs();
+    let mut out = Vec::new();
+    let mut d = 2i64;
+    while d <= bound && int(d) * int(d) <= t {
+        let di = int(d);
+        if (&t % &di).is_zero() {
+            let mut e = 0;
+            while (&t % &di).is_zero() {
+                t = &t / &di;
+                e += 1;
+            }
+            out.push((di, e));
+        }
+        d += if d == 2 { 1 } else { 2 };
+    }
+    (out, t)
+}
+
 /// Exact rational number with positive denominator and gcd(num, den) = 1.
 #[derive(Clone, PartialEq, Eq, Hash, Debug)]
 pub struct Q {
