@@ -27,6 +27,7 @@ mod montecarlo;
 mod sim;
 
 pub use calib::{Calibration, Metric, PARAMS};
+pub use calibrate::EncoderNoise;
 pub use calibrate::{
     calib_predictor, calibrate, circle_modes, dataset_crlb, figure_curves, CalibrateOptions,
     CalibrationReport, CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate, CALIB_SYS,
