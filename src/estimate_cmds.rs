@@ -6,7 +6,7 @@ use crate::figures::write_figures;
 use crate::simulate::sim_options;
 use crate::Failure;
 use obsan_calib::{
-    calib_predictor, calibrate, dataset_crlb, simulate, CalibrateOptions, Method, Table, PARAMS,
+    calib_predictor, calibrate, simulate, CalibrateOptions, EncoderNoise, Method, Table, PARAMS,
 };
 use obsan_data::{DataFile, Dataset, DatasetFiles, TrajectoryFiles};
 use serde_json::{json, Value};
@@ -149,7 +149,15 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             }
             Value::Object(o)
         });
-        let out = json!({"method": m.name(), "exact": false,
+        // Which encoder noise ML's sds include (issue 18.4); null for the other methods.
+        let enc = (m == Method::Ml).then(|| match r.encoder_noise {
+            EncoderNoise::Stated { k, c } => json!({"route": "stated", "k": k, "c": c}),
+            EncoderNoise::Estimated { k, c, samples } => {
+                json!({"route": "estimated", "k": k, "c": c, "samples": samples})
+            }
+            EncoderNoise::BearingsOnly => json!({"route": "bearings_only"}),
+        });
+        let out = json!({"method": m.name(), "exact": false, "encoder_noise": enc,
             "sigma_beta": r.sigma_beta, "sigma_beta_estimated": r.sigma_estimated,
             "params": params, "metric": metric, "trajectories": trajs,
             "ml": r.ml.as_ref().map(|f| json!({"iterations": f.iterations, "cost": f.cost, "residuals": f.n_residuals}))});
@@ -213,10 +221,19 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     if sd.is_none() {
         outln!("(det gives no standard deviations; use ls or ml)");
     }
-    // Issue 18.4: without encoder_k ML is ordinary least squares, and its
-    // sds are those of the bearings alone (delta's z-scores: sd 2.5).
-    if sd.is_some() && matches!(m, Method::Ml) && o.encoder_k <= 0.0 {
-        outln!("(no encoder noise stated in dataset.json, noise.encoder_k: these sds are the bearings' alone and leave the wheel-encoder noise out, so they are too small; see docs/accuracy.md)");
+    // Issue 18.4: which encoder noise ML's sds include.
+    if sd.is_some() && matches!(m, Method::Ml) {
+        match r.encoder_noise {
+            EncoderNoise::Stated { k, .. } => outln!(
+                "(sds include the wheel-encoder noise stated in dataset.json: K = {k} m^1/2)"
+            ),
+            EncoderNoise::Estimated { k, c, samples } => outln!(
+                "(sds include the wheel-encoder noise estimated from the wheel speeds, as dataset.json states none: K = {k:.3e} m^1/2, c = K^2/r = {c:.3e}, from {samples} differences; see docs/accuracy.md)"
+            ),
+            EncoderNoise::BearingsOnly => outln!(
+                "(no wheel-encoder noise stated in dataset.json or read from the wheel speeds: these sds are the bearings' alone and leave it out, so they are too small if the encoders are noisy; see docs/accuracy.md)"
+            ),
+        }
     }
     match &r.metric {
         Some((mm, msd)) => {
@@ -241,9 +258,10 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
         Some(dir) => {
             let data = read_dataset(dir, &["wR", "wL"], &["beta"])?;
             let o = CalibrateOptions::for_dataset(&data, Method::Ml);
-            let (cal, b, f) =
-                dataset_crlb(&data, &p, &o).map_err(|e| Failure(format!("{dir}: {e}")))?;
-            let v = cal.values();
+            let fail = |e: obsan_calib::CalibError| Failure(format!("{dir}: {e}"));
+            let run = calibrate(&data, Some(&p), &o).map_err(fail)?;
+            let (b, f) = run.crlb(&data, &p, &o).map_err(fail)?;
+            let v = run.calibration.values();
             let units = |s: [f64; 5]| -> Vec<f64> {
                 vec![
                     s[0].to_degrees(),
@@ -253,10 +271,12 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
                     100.0 * s[4] / v[4].abs(),
                 ]
             };
-            let k = if o.encoder_k > 0.0 {
-                format!("encoder K {} m^1/2", o.encoder_k)
-            } else {
-                "no encoder noise stated in dataset.json".into()
+            let k = match run.encoder_noise {
+                EncoderNoise::Stated { k, .. } => format!("encoder K {k} m^1/2"),
+                EncoderNoise::Estimated { k, .. } => {
+                    format!("encoder K {k:.4e} m^1/2 read from the wheel speeds")
+                }
+                EncoderNoise::BearingsOnly => "no encoder noise stated or read".into(),
             };
             (
                 format!("dataset {dir}, at its ML estimate; {k}"),

@@ -9,7 +9,9 @@ use crate::error::CalibError::{self, Degenerate};
 use crate::error::{cancel_point, or_cancelled};
 use nalgebra::{Matrix4, SMatrix};
 use obsan_data::{wrap, Dataset, Trajectory};
-use obsan_fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, Predictor};
+use obsan_fit::{
+    crlb, fit, input_noise_from_samples, FitOptions, FitResult, FitTrajectory, Predictor,
+};
 use std::f64::consts::PI;
 
 /// The calibration model, eq. (16): `systems/calib.sys`, compiled in so that
@@ -96,6 +98,11 @@ pub struct CalibrateOptions {
     /// squares): standard deviations then include it, and the estimates
     /// come closer to the bound with encoder noise. Off: bearings only.
     pub ml_input_noise: bool,
+    /// When dataset.json states no `encoder_k`: ML estimates the encoder
+    /// intensity from the measured wheel speeds ([`EncoderNoise::Estimated`])
+    /// and weighs by it as if stated. Off (or `ml_input_noise` off): ML's
+    /// sds are the bearings' alone.
+    pub ml_estimate_encoder_noise: bool,
     /// Column names: right-wheel speed and bearing.
     pub input: String,
     pub output: String,
@@ -119,11 +126,41 @@ impl CalibrateOptions {
             ml_step_tolerance: 1e-2,
             ml_max_step: 0.5,
             ml_input_noise: true,
+            ml_estimate_encoder_noise: !m.noise.contains_key("encoder_k"),
             input: "wR".into(),
             output: "beta".into(),
         }
     }
 }
+
+/// The wheel-encoder noise behind ML's weighting and standard deviations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EncoderNoise {
+    /// dataset.json's `noise.encoder_k` = K (m^1/2): intensity `c = K^2 / r`.
+    Stated { k: f64, c: f64 },
+    /// Read from the measured wheel speeds (both wheels, every trajectory:
+    /// one intensity, `obsan_fit::input_noise_from_samples`), from `samples`
+    /// differences; `k = sqrt(c r)` with dataset.json's nominal r (1 if none).
+    Estimated { k: f64, c: f64, samples: usize },
+    /// None used: the sds are the bearings' alone (no noise stated and none
+    /// estimated, stated as 0, or GLS switched off; and every method but ML).
+    BearingsOnly,
+}
+
+impl EncoderNoise {
+    /// The intensity `c` used (0 for bearings only).
+    pub fn intensity(&self) -> f64 {
+        match *self {
+            EncoderNoise::Stated { c, .. } | EncoderNoise::Estimated { c, .. } => c,
+            EncoderNoise::BearingsOnly => 0.0,
+        }
+    }
+}
+
+/// Rows of wheel speed averaged per block by the encoder-noise estimate:
+/// 0.1 s at the paper's 50 Hz, so that noise correlated over a few rows
+/// (resampled or filtered speeds) still counts at its integrated level.
+const ENCODER_BLOCK: usize = 5;
 
 /// One trajectory's observable modes (xi_q, L, c, k) and the DET curves.
 /// A plain result record (fields public): nothing reads it back as input.
@@ -156,6 +193,8 @@ pub struct CalibrationReport {
     pub calibration: Calibration,
     pub metric: Option<(Metric, Option<[f64; 4]>)>,
     pub ml: Option<FitResult>,
+    /// ML's encoder noise and where it came from (`BearingsOnly` for the other methods).
+    pub encoder_noise: EncoderNoise,
 }
 
 /// LS on one trajectory from its DET (section V-B weights).
@@ -319,8 +358,10 @@ pub fn calibrate(
         t.start = start_state(&calibration, &t.closed, t.q);
     }
     let mut ml = None;
+    let mut encoder_noise = EncoderNoise::BearingsOnly;
     if o.method == Method::Ml {
         let p = predictor.ok_or(CalibError::NoModel)?;
+        encoder_noise = ml_encoder_noise(data, o, enc_var);
         let opts = FitOptions {
             max_iterations: o.ml_max_iterations,
             cost_tolerance: o.ml_tolerance,
@@ -329,7 +370,10 @@ pub fn calibrate(
             max_step: o.ml_max_step,
             // Generalised least squares with the encoder noise: the wheel
             // speeds drive the model, so their noise is in the residuals too.
-            input_noise: (o.ml_input_noise && enc_var > 0.0).then(|| vec![enc_var, enc_var]),
+            input_noise: {
+                let c = encoder_noise.intensity();
+                (c > 0.0).then(|| vec![c, c])
+            },
         };
         let (c, r) =
             ml_refine(data, p, &opts, &modes, &mut trajs, &calibration).map_err(or_cancelled)?;
@@ -348,7 +392,37 @@ pub fn calibrate(
         calibration,
         metric,
         ml,
+        encoder_noise,
     })
+}
+
+/// The encoder noise ML weighs by: stated, or (dataset.json silent) read
+/// from the wheel speeds, whose rows carry it directly (thousands of
+/// samples per circle, where the bearings see it only through the drift
+/// of three loops: restricted ML on the bearings gave 0 to 1.5 times the
+/// truth, docs/accuracy.md).
+fn ml_encoder_noise(data: &Dataset, o: &CalibrateOptions, enc_var: f64) -> EncoderNoise {
+    if !o.ml_input_noise {
+        return EncoderNoise::BearingsOnly;
+    }
+    if enc_var > 0.0 {
+        return EncoderNoise::Stated {
+            k: o.encoder_k,
+            c: enc_var,
+        };
+    }
+    if !o.ml_estimate_encoder_noise {
+        return EncoderNoise::BearingsOnly;
+    }
+    let series: Vec<_> = data.trajectories.iter().map(|t| &t.inputs).collect();
+    match input_noise_from_samples(&series, &[o.input.as_str(), "wL"], ENCODER_BLOCK) {
+        Some(e) if e.c > 0.0 => EncoderNoise::Estimated {
+            k: (e.c * o.r_nominal).sqrt(),
+            c: e.c,
+            samples: e.samples,
+        },
+        _ => EncoderNoise::BearingsOnly,
+    }
 }
 
 /// Each trajectory's observable modes `(q, xi_q, L)` by DET + LS on that
@@ -743,51 +817,45 @@ impl CalibrationReport {
     }
 }
 
-/// [`dataset_crlb`]'s answer: the estimate, the bound's standard deviations
-/// with bearing noise only, and with the encoder noise too (if stated).
-pub type DatasetCrlb = (Calibration, [f64; 5], Option<[f64; 5]>);
-
-/// The Cramér–Rao bound for a measured dataset, evaluated at its joint
-/// maximum-likelihood estimate (the truth is unknown): standard deviations
-/// of phi, psi (rad), eta, delta, xi, with bearing noise only and with the
-/// encoder noise of `o.encoder_k` too (`None` when it is 0). This is the
-/// bound of an estimator that uses the measured wheel speeds (ML); one that
-/// knows the circle exactly (LS with the commanded q) is bounded by the
-/// bearing-only figure.
-pub fn dataset_crlb(
-    data: &Dataset,
-    predictor: &Predictor,
-    o: &CalibrateOptions,
-) -> Result<DatasetCrlb, CalibError> {
-    let run = calibrate(
-        data,
-        Some(predictor),
-        &CalibrateOptions {
-            method: Method::Ml,
-            ..o.clone()
-        },
-    )?;
-    let f = run.ml.as_ref().ok_or(CalibError::NoMlEstimate)?;
-    let fts = FitTrajectory::all(predictor, data);
-    let enc_var = o.encoder_k * o.encoder_k / o.r_nominal;
-    let bound = |noise: Option<Vec<f64>>| -> Result<[f64; 5], CalibError> {
-        let opts = FitOptions {
-            max_iterations: 0,
-            cost_tolerance: 0.0,
-            step_tolerance: 0.0,
-            sigma: vec![run.sigma_beta],
-            max_step: o.ml_max_step,
-            input_noise: noise,
+impl CalibrationReport {
+    /// The Cramér–Rao bound for a measured dataset, evaluated at this
+    /// report's joint maximum-likelihood estimate (the truth is unknown):
+    /// standard deviations of phi, psi (rad), eta, delta, xi, with bearing
+    /// noise only, and with the encoder noise this report used (stated or
+    /// read from the wheel speeds, [`EncoderNoise`]; `None` when it used
+    /// none). This bounds an estimator that uses the measured wheel speeds
+    /// (ML); one that knows the circle exactly (LS with the commanded q) is
+    /// bounded by the bearing-only figure. `data` and `o` are the ones this
+    /// report was calibrated from; a report of another method than ML is
+    /// refused (`NoMlEstimate`).
+    pub fn crlb(
+        &self,
+        data: &Dataset,
+        predictor: &Predictor,
+        o: &CalibrateOptions,
+    ) -> Result<([f64; 5], Option<[f64; 5]>), CalibError> {
+        let f = self.ml.as_ref().ok_or(CalibError::NoMlEstimate)?;
+        let fts = FitTrajectory::all(predictor, data);
+        let enc_var = self.encoder_noise.intensity();
+        let bound = |noise: Option<Vec<f64>>| -> Result<[f64; 5], CalibError> {
+            let opts = FitOptions {
+                max_iterations: 0,
+                cost_tolerance: 0.0,
+                step_tolerance: 0.0,
+                sigma: vec![self.sigma_beta],
+                max_step: o.ml_max_step,
+                input_noise: noise,
+            };
+            let cov = crlb(predictor, &fts, &f.params, &f.initial_states, &opts)
+                .map_err(CalibError::Crlb)?;
+            Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
         };
-        let cov =
-            crlb(predictor, &fts, &f.params, &f.initial_states, &opts).map_err(CalibError::Crlb)?;
-        Ok(std::array::from_fn(|i| cov[i][i].max(0.0).sqrt()))
-    };
-    let bearing = bound(None)?;
-    let full = if enc_var > 0.0 {
-        Some(bound(Some(vec![enc_var, enc_var]))?)
-    } else {
-        None
-    };
-    Ok((run.calibration, bearing, full))
+        let bearing = bound(None)?;
+        let full = if enc_var > 0.0 {
+            Some(bound(Some(vec![enc_var, enc_var]))?)
+        } else {
+            None
+        };
+        Ok((bearing, full))
+    }
 }

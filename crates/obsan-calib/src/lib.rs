@@ -28,8 +28,8 @@ mod sim;
 
 pub use calib::{Calibration, Metric, PARAMS};
 pub use calibrate::{
-    calib_predictor, calibrate, circle_modes, dataset_crlb, CalibrateOptions, CalibrationReport,
-    CekfInit, DatasetCrlb, FigureCurves, Method, TrajectoryEstimate,
+    calib_predictor, calibrate, circle_modes, CalibrateOptions, CalibrationReport, CekfInit,
+    EncoderNoise, FigureCurves, Method, TrajectoryEstimate,
 };
 pub use circle::{ArcData, Closed, Det};
 pub use error::CalibError;

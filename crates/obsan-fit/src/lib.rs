@@ -20,7 +20,9 @@ mod whiten;
 pub use error::FitError;
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use lsq::{minimise, LmOptions, LmResult};
-pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};
+pub use noise::{
+    estimate_noise, input_noise_from_samples, NoiseEstimate, NoiseOptions, SampledNoise,
+};
 pub use predict::{Integration, Prediction, Predictor};
 pub use rng::Rng;
 pub use whiten::Whitener;

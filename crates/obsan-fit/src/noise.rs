@@ -353,6 +353,108 @@ pub fn estimate_noise(
     })
 }
 
+/// An input-noise intensity read from the measured inputs themselves
+/// ([`input_noise_from_samples`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledNoise {
+    /// `c` of [`Integration::input_noise`]: white noise of spectral density `c |u|`.
+    pub c: f64,
+    /// Second differences of block means it was read from (after trimming).
+    pub samples: usize,
+}
+
+/// The median of a chi-square variable with one degree of freedom.
+const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_7;
+/// Normalised squared differences above this many times the median-based
+/// level are taken for changes of the true input (a stop, a step), not
+/// noise: a chi-square(1) exceeds 25 with probability 6e-7.
+const TRIM: f64 = 25.0;
+/// Fewer usable differences than this give no estimate.
+const MIN_SAMPLES: usize = 30;
+
+/// One intensity `c` shared by the given input columns of every series,
+/// under the model of [`Integration::input_noise`]: each measured input
+/// carries white noise of spectral density `c |u|` (wheel encoders with the
+/// error model of [10]: `c = K^2 / r`), so the mean of a row held over `dt`
+/// has noise variance `c |u| / dt`, independent from row to row.
+///
+/// The rows are averaged in blocks of `block` (a block's mean over its
+/// duration `T` has noise variance `c |u| / T`: the same model at a coarser
+/// rate, so noise correlated over fewer rows than a block, as from
+/// resampling, is not lost), and the second divided differences of the
+/// block means (zero on any input linear in time) are normalised by their
+/// noise variance per unit `c`: each is then `c` times a chi-square(1)
+/// where the true input is smooth. Their median over `CHI2_1_MEDIAN` gives
+/// a robust level; differences above `TRIM` times it (a step of the true
+/// input, a stop) are dropped and the mean of the rest is the estimate.
+/// It errs high, never low, when the true input varies within a few blocks
+/// (that variation is read as noise). `None` with fewer than `MIN_SAMPLES`
+/// usable differences (missing cells break a block; rows with zero
+/// duration or blocks standing still carry nothing).
+pub fn input_noise_from_samples(
+    series: &[&obsan_data::Series],
+    columns: &[&str],
+    block: usize,
+) -> Option<SampledNoise> {
+    let block = block.max(1);
+    let mut z = Vec::new();
+    for s in series {
+        let t = s.t();
+        for name in columns {
+            let Some(v) = s.column(name) else { continue };
+            // Block means (time-weighted), their mid times and sum of |u| dt / T^2.
+            let mut means: Vec<Option<(f64, f64, f64)>> = Vec::new();
+            let rows = t.len().saturating_sub(1); // the last row has no duration
+            for b in 0..rows / block {
+                let (mut su, mut sa, mut dur) = (0.0, 0.0, 0.0);
+                let mut ok = true;
+                for k in b * block..(b + 1) * block {
+                    let dt = t[k + 1] - t[k];
+                    match v[k] {
+                        Some(u) if u.is_finite() && dt > 0.0 && dt.is_finite() => {
+                            su += u * dt;
+                            sa += u.abs() * dt;
+                            dur += dt;
+                        }
+                        _ => ok = false,
+                    }
+                }
+                means.push(ok.then(|| {
+                    let mid = 0.5 * (t[b * block] + t[(b + 1) * block]);
+                    (su / dur, mid, sa / (dur * dur))
+                }));
+            }
+            for w in means.windows(3) {
+                let (Some(a), Some(b), Some(c)) = (w[0], w[1], w[2]) else {
+                    continue;
+                };
+                // Weights annihilating constants and slopes at uneven spacing.
+                let (h1, h2) = (b.1 - a.1, c.1 - b.1);
+                let (wa, wb, wc) = (h2, -(h1 + h2), h1);
+                let d = wa * a.0 + wb * b.0 + wc * c.0;
+                let var = wa * wa * a.2 + wb * wb * b.2 + wc * wc * c.2;
+                if var > 0.0 && var.is_finite() && d.is_finite() {
+                    z.push(d * d / var);
+                }
+            }
+        }
+    }
+    if z.len() < MIN_SAMPLES {
+        return None;
+    }
+    let mut sorted = z.clone();
+    let mid = sorted.len() / 2;
+    let (_, median, _) = sorted.select_nth_unstable_by(mid, f64::total_cmp);
+    let level = *median / CHI2_1_MEDIAN;
+    let kept: Vec<f64> = z.into_iter().filter(|x| *x <= TRIM * level).collect();
+    // (A chi-square(1) truncated at 25 has mean 1 - 2e-5: no correction.)
+    let c = kept.iter().sum::<f64>() / kept.len().max(1) as f64;
+    (kept.len() >= MIN_SAMPLES && c.is_finite()).then_some(SampledNoise {
+        c,
+        samples: kept.len(),
+    })
+}
+
 /// Minimise `f` within the box `[lo, hi]` by BFGS (projected steps,
 /// backtracking line search, central-difference gradients). Returns the
 /// minimiser and the iterations used.
@@ -485,7 +587,50 @@ fn bfgs(
 
 #[cfg(test)]
 mod tests {
-    use super::bfgs;
+    use super::{bfgs, input_noise_from_samples};
+    use obsan_data::Series;
+
+    /// Encoder-like rows at 50 Hz: a sine speed profile with stops (steps
+    /// of the true input), each row's mean carrying noise of variance
+    /// `c |u| / dt` (the simulator's error model of [10]).
+    fn noisy(c: f64, seed: u64, rows: usize) -> Series {
+        let mut rng = crate::Rng::new(seed);
+        let dt = 0.02;
+        let mut s = Series::new(vec!["wR".into(), "wL".into()]);
+        for k in 0..rows {
+            let t = k as f64 * dt;
+            let run = t.rem_euclid(30.0) < 25.0;
+            let u = if run {
+                0.5 * (1.0 + 0.3 * (std::f64::consts::TAU * t / 20.0).sin())
+            } else {
+                0.0
+            };
+            let mut m = |u: f64| u + (c * u.abs() / dt).sqrt() * rng.normal();
+            let (r, l) = (m(u), m(-0.8 * u));
+            s.push(t, &[Some(r), Some(l)]);
+        }
+        s
+    }
+
+    #[test]
+    fn sampled_intensity_recovers_the_generating_one_through_steps_and_blocks() {
+        let c = 0.001f64.powi(2) / 0.3;
+        let (a, b) = (noisy(c, 1, 20_000), noisy(c, 2, 20_000));
+        for block in [1, 5] {
+            let e = input_noise_from_samples(&[&a, &b], &["wR", "wL"], block).unwrap();
+            // About 3% relative sd at block 5 (16,000 differences, MA(2)-correlated).
+            assert!((e.c / c - 1.0).abs() < 0.1, "block {block}: {} vs {c}", e.c);
+            // Only the stops (a sixth of the time) and their steps are left out.
+            assert!(e.samples > 2 * 2 * 20_000 / block * 7 / 10, "{e:?}");
+        }
+        // Noise-free inputs read as (almost) none; a dataset without the
+        // columns, or too short, gives no estimate.
+        let clean = noisy(0.0, 3, 2_000);
+        let e = input_noise_from_samples(&[&clean], &["wR", "wL"], 5).unwrap();
+        assert!(e.c < 1e-3 * c, "{e:?}");
+        assert!(input_noise_from_samples(&[&a], &["v"], 5).is_none());
+        assert!(input_noise_from_samples(&[&noisy(c, 4, 40)], &["wR"], 5).is_none());
+    }
 
     #[test]
     fn bfgs_finds_the_minimum_of_a_quadratic_and_respects_bounds() {
