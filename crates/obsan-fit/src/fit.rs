@@ -142,7 +142,7 @@ fn residuals(
     };
     let jac = jac || noise;
     let pred = p
-        .predict_with(x0, &t.consts, t.inputs, t.outputs.t(), &integ)
+        .predict_measured(x0, &t.consts, t.inputs, t.outputs, &integ)
         .map_err(|e| FitError::Trajectory {
             name: t.name.to_string(),
             source: Box::new(e),

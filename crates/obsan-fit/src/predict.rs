@@ -44,6 +44,18 @@ pub struct Predictor {
     /// The structurally non-zero d(output)/d(state_j), as (output, j).
     out_jac_tape: Tape,
     out_jac_entries: Vec<(usize, usize)>,
+    /// Per output alone: its value (`value`) and its value then its
+    /// structurally non-zero gradient entries (`with_grad`, over the states
+    /// `grad_of`), for [`Predictor::predict_measured`]: a row of MRCLAM's
+    /// outputs measures one or two of its 30 landmark outputs.
+    per_output: Vec<OutputTapes>,
+}
+
+#[derive(Clone, Debug)]
+struct OutputTapes {
+    value: Tape,
+    with_grad: Tape,
+    grad_of: Vec<usize>,
 }
 
 impl Predictor {
@@ -98,14 +110,25 @@ impl Predictor {
         }
         let mut out_jac_roots = Vec::new();
         let mut out_jac_entries = Vec::new();
+        let mut per_output = Vec::with_capacity(outs.len());
         for (o, &h) in outs.iter().enumerate() {
+            let mut one = vec![h];
+            let mut grad_of = Vec::new();
             for (j, &x) in nf.state_vars.iter().enumerate() {
                 let d = ctx.diff(h, x);
                 if !ctx.is_zero(d) {
                     out_jac_roots.push(d);
                     out_jac_entries.push((o, j));
+                    one.push(d);
+                    grad_of.push(j);
                 }
             }
+            per_output.push(OutputTapes {
+                value: Tape::compile(&ctx, &[h], &vars).expect("outputs use the same symbols"),
+                with_grad: Tape::compile(&ctx, &one, &vars)
+                    .expect("derivatives use the same symbols"),
+                grad_of,
+            });
         }
         let all: Vec<_> = roots.iter().chain(&jac_roots).copied().collect();
         let dyn_jac_tape =
@@ -127,6 +150,7 @@ impl Predictor {
             jac_dyn_cols,
             out_jac_tape,
             out_jac_entries,
+            per_output,
         }
     }
 
@@ -221,6 +245,39 @@ impl Predictor {
         times: &[f64],
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
+        self.integrate(x0, consts, inputs, times, opts, None)
+    }
+
+    /// [`Predictor::predict_with`] at the times of `measured`, computing
+    /// only the outputs measured there (a column of `measured` named after
+    /// the output, the cell present): the others are NaN in
+    /// [`Prediction::outputs`] and their [`Prediction::jacobians`] rows are
+    /// zero. The measured values and rows equal `predict_with`'s exactly.
+    pub fn predict_measured(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        measured: &Series,
+        opts: &Integration,
+    ) -> Result<Prediction, FitError> {
+        let cols: Vec<Option<&[Option<f64>]>> =
+            self.outputs.iter().map(|o| measured.column(o)).collect();
+        let needed = |k: usize, o: usize| cols[o].is_some_and(|c| c[k].is_some());
+        self.integrate(x0, consts, inputs, measured.t(), opts, Some(&needed))
+    }
+
+    /// The integration of `predict_with`; with `needed`, only the outputs
+    /// `needed(time index, output)` are evaluated.
+    fn integrate(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        times: &[f64],
+        opts: &Integration,
+        needed: Option<&dyn Fn(usize, usize) -> bool>,
+    ) -> Result<Prediction, FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
                 states: self.state.len(),
@@ -255,11 +312,15 @@ impl Predictor {
         let x: Vec<f64> = x0.iter().chain(consts).copied().collect();
         let varying: Vec<bool> = (0..x.len()).map(|i| i < nd).collect();
         let nv = self.dyn_tape.n_outputs();
+        // The whole output tapes, or (with `needed`) each output's own,
+        // frozen when first needed.
+        let whole = needed.is_none();
         let mut w = Work {
             dyn_only: self.dyn_tape.freeze(&x, &varying),
             dyn_jac: self.dyn_jac_tape.freeze(&x, &varying),
-            out: self.out_tape.freeze(&x, &varying),
-            out_jac: self.out_jac_tape.freeze(&x, &varying),
+            out: whole.then(|| self.out_tape.freeze(&x, &varying)),
+            out_jac: (whole && opts.sensitivities).then(|| self.out_jac_tape.freeze(&x, &varying)),
+            one: (0..self.outputs.len()).map(|_| None).collect(),
             x,
             vals: vec![0.0; nv],
             jvals: vec![0.0; self.dyn_jac_tape.n_outputs() - nv],
@@ -348,7 +409,7 @@ impl Predictor {
         let mut tmp = z.clone();
         let mut u = vec![0.0; m];
         let sens = opts.sensitivities;
-        for &target in times {
+        for (ti, &target) in times.iter().enumerate() {
             if target < t - 1e-12 {
                 return Err(FitError::TimeBeforeStart { target, t });
             }
@@ -440,12 +501,22 @@ impl Predictor {
                 t = next;
             }
             w.x[..nd].copy_from_slice(&z[..nd]);
-            outputs.push(w.out.eval(&w.x).to_vec());
             if noise.is_some() {
                 noise_m.push(noise_acc.clone());
             }
-            if sens {
-                let gy = w.out_jac.eval(&w.x);
+            if let Some(needed) = needed {
+                let (y, jrow) = self.measured_outputs(&z, ti, needed, sens, &varying, &mut w);
+                outputs.push(y);
+                if sens {
+                    jacobians.push(jrow);
+                }
+                continue;
+            }
+            if let Some(out) = &mut w.out {
+                outputs.push(out.eval(&w.x).to_vec());
+            }
+            if let (true, Some(out_jac)) = (sens, &mut w.out_jac) {
+                let gy = out_jac.eval(&w.x);
                 // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
                 let phi = &z[nd..];
                 let mut jrow = vec![0.0; no * n];
@@ -467,6 +538,47 @@ impl Predictor {
             jacobians,
             noise_m,
         })
+    }
+
+    /// The outputs `needed(ti, o)` at the state in `w.x` (NaN for the
+    /// others) and, with `sens`, their rows `grad h * Phi_full` (zero for
+    /// the others), each output's tape frozen at its first use.
+    fn measured_outputs<'a>(
+        &'a self,
+        z: &[f64],
+        ti: usize,
+        needed: &dyn Fn(usize, usize) -> bool,
+        sens: bool,
+        varying: &[bool],
+        w: &mut Work<'a>,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (nd, n, no) = (self.n_dynamic, self.state.len(), self.outputs.len());
+        let mut y = vec![f64::NAN; no];
+        let mut jrow = if sens { vec![0.0; no * n] } else { vec![] };
+        for (o, tapes) in self.per_output.iter().enumerate() {
+            if !needed(ti, o) {
+                continue;
+            }
+            let tape = if sens { &tapes.with_grad } else { &tapes.value };
+            let frozen = w.one[o].get_or_insert_with(|| tape.freeze(&w.x, varying));
+            let v = frozen.eval(&w.x);
+            y[o] = v[0];
+            if !sens {
+                continue;
+            }
+            let phi = &z[nd..];
+            let row = &mut jrow[o * n..(o + 1) * n];
+            for (&j, g) in tapes.grad_of.iter().zip(&v[1..]) {
+                if j < nd {
+                    for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
+                        *r += g * p;
+                    }
+                } else {
+                    row[j] += g;
+                }
+            }
+        }
+        (y, jrow)
     }
 
     /// `acc += h * sum_i c_i |u_i| (Phi^-1 f_i)(Phi^-1 f_i)^T` (left point).
@@ -539,8 +651,10 @@ struct Work<'a> {
     x: Vec<f64>,
     dyn_only: FrozenTape<'a>,
     dyn_jac: FrozenTape<'a>,
-    out: FrozenTape<'a>,
-    out_jac: FrozenTape<'a>,
+    out: Option<FrozenTape<'a>>,
+    out_jac: Option<FrozenTape<'a>>,
+    /// Per output, its own tape (see `Predictor::measured_outputs`).
+    one: Vec<Option<FrozenTape<'a>>>,
     vals: Vec<f64>,
     jvals: Vec<f64>,
     jac: Vec<f64>,
