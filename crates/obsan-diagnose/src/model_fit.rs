@@ -281,7 +281,7 @@ pub fn fit_model(
             input_noise: None,
         };
         let pred = p
-            .predict_measured(&x0, &ft.consts, &tr.inputs, &tr.outputs, &integ)
+            .predict_with(&x0, &ft.consts, &tr.inputs, tr.outputs.t(), &integ)
             .map_err(|source| DiagnoseError::Predict {
                 trajectory: tr.name.clone(),
                 source,

@@ -21,6 +21,6 @@ pub use error::FitError;
 pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
 pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{estimate_noise, NoiseEstimate, NoiseOptions};
-pub use predict::{Integration, Prediction, Predictor};
+pub use predict::{Integration, Measured, Prediction, Predictor};
 pub use rng::Rng;
 pub use whiten::Whitener;

@@ -248,27 +248,24 @@ impl Predictor {
         self.integrate(x0, consts, inputs, times, opts, None)
     }
 
-    /// [`Predictor::predict_with`] at the times of `measured`, computing
-    /// only the outputs measured there (a column of `measured` named after
-    /// the output, the cell present): the others are NaN in
-    /// [`Prediction::outputs`] and their [`Prediction::jacobians`] rows are
-    /// zero. The measured values and rows equal `predict_with`'s exactly.
+    /// [`Predictor::predict_with`] at the times of `cells`, computing only
+    /// the measured cells: `outputs[k]` holds the values of the outputs
+    /// [`Measured::at`]`(k)` lists, in that order, and `jacobians[k]` their
+    /// rows (so `at(k).len()` x state). Values and rows equal
+    /// `predict_with`'s exactly.
     pub fn predict_measured(
         &self,
         x0: &[f64],
         consts: &[f64],
         inputs: &Series,
-        measured: &Series,
+        cells: &Measured,
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        let cols: Vec<Option<&[Option<f64>]>> =
-            self.outputs.iter().map(|o| measured.column(o)).collect();
-        let needed = |k: usize, o: usize| cols[o].is_some_and(|c| c[k].is_some());
-        self.integrate(x0, consts, inputs, measured.t(), opts, Some(&needed))
+        self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells))
     }
 
-    /// The integration of `predict_with`; with `needed`, only the outputs
-    /// `needed(time index, output)` are evaluated.
+    /// The integration of `predict_with`; with `needed`, only its cells
+    /// are evaluated.
     fn integrate(
         &self,
         x0: &[f64],
@@ -276,7 +273,7 @@ impl Predictor {
         inputs: &Series,
         times: &[f64],
         opts: &Integration,
-        needed: Option<&dyn Fn(usize, usize) -> bool>,
+        needed: Option<&Measured>,
     ) -> Result<Prediction, FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
@@ -505,7 +502,7 @@ impl Predictor {
                 noise_m.push(noise_acc.clone());
             }
             if let Some(needed) = needed {
-                let (y, jrow) = self.measured_outputs(&z, ti, needed, sens, &varying, &mut w);
+                let (y, jrow) = self.measured_outputs(&z, needed.at(ti).0, sens, &varying, &mut w);
                 outputs.push(y);
                 if sens {
                     jacobians.push(jrow);
@@ -540,34 +537,34 @@ impl Predictor {
         })
     }
 
-    /// The outputs `needed(ti, o)` at the state in `w.x` (NaN for the
-    /// others) and, with `sens`, their rows `grad h * Phi_full` (zero for
-    /// the others), each output's tape frozen at its first use.
+    /// The outputs `which` at the state in `w.x` and, with `sens`, their
+    /// rows `grad h * Phi_full`, each output's tape frozen at its first use.
     fn measured_outputs<'a>(
         &'a self,
         z: &[f64],
-        ti: usize,
-        needed: &dyn Fn(usize, usize) -> bool,
+        which: &[usize],
         sens: bool,
         varying: &[bool],
         w: &mut Work<'a>,
     ) -> (Vec<f64>, Vec<f64>) {
-        let (nd, n, no) = (self.n_dynamic, self.state.len(), self.outputs.len());
-        let mut y = vec![f64::NAN; no];
-        let mut jrow = if sens { vec![0.0; no * n] } else { vec![] };
-        for (o, tapes) in self.per_output.iter().enumerate() {
-            if !needed(ti, o) {
-                continue;
-            }
+        let (nd, n) = (self.n_dynamic, self.state.len());
+        let mut y = vec![0.0; which.len()];
+        let mut jrow = if sens {
+            vec![0.0; which.len() * n]
+        } else {
+            vec![]
+        };
+        for (i, &o) in which.iter().enumerate() {
+            let tapes = &self.per_output[o];
             let tape = if sens { &tapes.with_grad } else { &tapes.value };
             let frozen = w.one[o].get_or_insert_with(|| tape.freeze(&w.x, varying));
             let v = frozen.eval(&w.x);
-            y[o] = v[0];
+            y[i] = v[0];
             if !sens {
                 continue;
             }
             let phi = &z[nd..];
-            let row = &mut jrow[o * n..(o + 1) * n];
+            let row = &mut jrow[i * n..(i + 1) * n];
             for (&j, g) in tapes.grad_of.iter().zip(&v[1..]) {
                 if j < nd {
                     for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
@@ -611,6 +608,67 @@ impl Predictor {
                 }
             }
         }
+    }
+}
+
+/// The measured cells of one trajectory's outputs, in time order: per
+/// output time, which of a predictor's outputs are measured (in model
+/// order) and their values. Built once per fit, so that the predictions
+/// and residuals visit only these (a MRCLAM row measures one or two of 30
+/// outputs, and scanning the empty cells cost a cache miss each).
+#[derive(Clone, Debug)]
+pub struct Measured {
+    t: Vec<f64>,
+    /// The cells of time k are `start[k]..start[k + 1]`.
+    start: Vec<usize>,
+    output: Vec<usize>,
+    value: Vec<f64>,
+}
+
+impl Measured {
+    /// The cells of `outputs` present in the column named after each of
+    /// `p`'s outputs (an output without a column is never measured).
+    pub fn new(p: &Predictor, outputs: &Series) -> Measured {
+        let cols: Vec<Option<&[Option<f64>]>> =
+            p.outputs.iter().map(|o| outputs.column(o)).collect();
+        let mut start = Vec::with_capacity(outputs.len() + 1);
+        let (mut output, mut value) = (Vec::new(), Vec::new());
+        for k in 0..outputs.len() {
+            start.push(output.len());
+            for (o, c) in cols.iter().enumerate() {
+                if let Some(v) = c.and_then(|c| c[k]) {
+                    output.push(o);
+                    value.push(v);
+                }
+            }
+        }
+        start.push(output.len());
+        Measured {
+            t: outputs.t().to_vec(),
+            start,
+            output,
+            value,
+        }
+    }
+
+    /// At output time `k`: the measured outputs and their values.
+    pub fn at(&self, k: usize) -> (&[usize], &[f64]) {
+        let r = self.start[k]..self.start[k + 1];
+        (&self.output[r.clone()], &self.value[r])
+    }
+
+    /// Number of output times.
+    pub fn n_times(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Number of measured cells.
+    pub fn len(&self) -> usize {
+        self.value.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.value.is_empty()
     }
 }
 
