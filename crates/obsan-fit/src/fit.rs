@@ -9,7 +9,7 @@
 //! own residuals.
 
 use crate::lsq::{solve_symmetric, LmOptions};
-use crate::predict::{Integration, Predictor};
+use crate::predict::{Integration, Measured, Predictor};
 use crate::whiten::Whitener;
 use crate::FitError;
 use obsan_data::{wrap, Dataset, Series};
@@ -127,7 +127,7 @@ fn residuals(
     t: &FitTrajectory,
     x0: &[f64],
     opts: &FitOptions,
-    cols: &[usize],
+    cells: &Measured,
     jac: bool,
     noise: bool,
 ) -> Result<(Vec<f64>, Vec<Vec<f64>>, Vec<usize>, Vec<Vec<f64>>), FitError> {
@@ -142,30 +142,30 @@ fn residuals(
     };
     let jac = jac || noise;
     let pred = p
-        .predict_with(x0, &t.consts, t.inputs, t.outputs.t(), &integ)
+        .predict_measured(x0, &t.consts, t.inputs, cells, &integ)
         .map_err(|e| FitError::Trajectory {
             name: t.name.to_string(),
             source: Box::new(e),
         })?;
     let n = p.state.len();
-    let mut r = Vec::new();
-    let mut rows = Vec::new();
-    let mut at = Vec::new();
+    let mut r = Vec::with_capacity(cells.len());
+    let mut rows = Vec::with_capacity(if jac { cells.len() } else { 0 });
+    let mut at = Vec::with_capacity(cells.len());
+    // The cells of each time in model order, as the residuals are stored.
     for (k, yk) in pred.outputs.iter().enumerate() {
-        for (o, &c) in cols.iter().enumerate() {
-            if let Some(m) = t.outputs.values()[c][k] {
-                let d = m - yk[o];
-                let d = if p.angular[o] { wrap(d) } else { d };
-                r.push(d / opts.sigma[o]);
-                at.push(k);
-                if jac {
-                    rows.push(
-                        pred.jacobians[k][o * n..(o + 1) * n]
-                            .iter()
-                            .map(|v| v / opts.sigma[o])
-                            .collect(),
-                    );
-                }
+        let (outs, values) = cells.at(k);
+        for (i, (&o, &m)) in outs.iter().zip(values).enumerate() {
+            let d = m - yk[i];
+            let d = if p.angular[o] { wrap(d) } else { d };
+            r.push(d / opts.sigma[o]);
+            at.push(k);
+            if jac {
+                rows.push(
+                    pred.jacobians[k][i * n..(i + 1) * n]
+                        .iter()
+                        .map(|v| v / opts.sigma[o])
+                        .collect(),
+                );
             }
         }
     }
@@ -231,6 +231,8 @@ struct Problem<'a> {
     opts: &'a FitOptions,
     lay: Layout,
     cols: Vec<Vec<usize>>,
+    /// Per trajectory, its measured cells.
+    cells: Vec<Measured>,
     /// Per trajectory, the whitening factor L (residuals become L^-1 r).
     whiten: std::cell::RefCell<Vec<Option<Whitener>>>,
 }
@@ -279,6 +281,7 @@ impl Problem<'_> {
                 n_traj: trajs.len(),
             },
             whiten: std::cell::RefCell::new(vec![None; trajs.len()]),
+            cells: trajs.iter().map(|t| Measured::new(p, t.outputs)).collect(),
             cols,
         })
     }
@@ -315,7 +318,7 @@ impl Problem<'_> {
         for (k, t) in self.trajs.iter().enumerate() {
             cancel_point()?;
             let x0 = self.lay.state_of(theta, k);
-            let r = residuals(self.p, t, &x0, self.opts, &self.cols[k], false, false)?.0;
+            let r = residuals(self.p, t, &x0, self.opts, &self.cells[k], false, false)?.0;
             total += self
                 .apply(k, r, vec![])
                 .0
@@ -353,7 +356,7 @@ impl Problem<'_> {
                 t,
                 &lay.state_of(theta, k),
                 self.opts,
-                &self.cols[k],
+                &self.cells[k],
                 true,
                 noise,
             )?;
@@ -548,6 +551,9 @@ pub fn fit(
     // or without it) that predicted the last reduction better.
     let mut s_mat = vec![vec![0.0; n]; n];
     let mut augmented = false;
+    // Whether the last iteration's first trial failed: then this one's
+    // first trial is costed before it is linearised too.
+    let mut retried = false;
     // With input noise: a second pass with the covariance at the first
     // estimate (the curvature model carries over: the residuals barely change).
     let passes = if opts.input_noise.is_some() { 2 } else { 1 };
@@ -591,8 +597,12 @@ pub fn fit(
                 let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
                 // The first trial point of an iteration is linearised at once:
                 // accepted steps (most, near the optimum) then need no second
-                // prediction. After a rejection, trials are costed first.
-                if attempt > 0 && !prob.cost(&cand).is_ok_and(|c| c < cur.cost) {
+                // prediction. After a rejection, trials are costed first, and
+                // so is the first trial after an iteration that needed one:
+                // a fit whose damping cycles (MRCLAM's lag fits rejected the
+                // first trial of 15-18 of 22-26 iterations) would otherwise
+                // pay for sensitivities it discards.
+                if (attempt > 0 || retried) && !prob.cost(&cand).is_ok_and(|c| c < cur.cost) {
                     lambda *= lm.damping_up;
                     continue;
                 }
@@ -621,6 +631,7 @@ pub fn fit(
                 secant_update(&mut s_mat, &step, &y, &ys);
                 theta = cand;
                 cur = next;
+                retried = attempt > 0;
                 lambda = (lambda / lm.damping_down).max(lm.min_damping);
                 // Stalled: a larger step was just rejected (the quadratic
                 // model fails beyond this trust region), and within it both

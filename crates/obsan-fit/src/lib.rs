@@ -23,6 +23,6 @@ pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{
     estimate_noise, input_noise_from_samples, NoiseEstimate, NoiseOptions, SampledNoise,
 };
-pub use predict::{Integration, Prediction, Predictor};
+pub use predict::{Integration, Measured, Prediction, Predictor};
 pub use rng::Rng;
 pub use whiten::Whitener;

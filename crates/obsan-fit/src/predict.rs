@@ -44,6 +44,18 @@ pub struct Predictor {
     /// The structurally non-zero d(output)/d(state_j), as (output, j).
     out_jac_tape: Tape,
     out_jac_entries: Vec<(usize, usize)>,
+    /// Per output alone: its value (`value`) and its value then its
+    /// structurally non-zero gradient entries (`with_grad`, over the states
+    /// `grad_of`), for [`Predictor::predict_measured`]: a row of MRCLAM's
+    /// outputs measures one or two of its 30 landmark outputs.
+    per_output: Vec<OutputTapes>,
+}
+
+#[derive(Clone, Debug)]
+struct OutputTapes {
+    value: Tape,
+    with_grad: Tape,
+    grad_of: Vec<usize>,
 }
 
 impl Predictor {
@@ -98,14 +110,25 @@ impl Predictor {
         }
         let mut out_jac_roots = Vec::new();
         let mut out_jac_entries = Vec::new();
+        let mut per_output = Vec::with_capacity(outs.len());
         for (o, &h) in outs.iter().enumerate() {
+            let mut one = vec![h];
+            let mut grad_of = Vec::new();
             for (j, &x) in nf.state_vars.iter().enumerate() {
                 let d = ctx.diff(h, x);
                 if !ctx.is_zero(d) {
                     out_jac_roots.push(d);
                     out_jac_entries.push((o, j));
+                    one.push(d);
+                    grad_of.push(j);
                 }
             }
+            per_output.push(OutputTapes {
+                value: Tape::compile(&ctx, &[h], &vars).expect("outputs use the same symbols"),
+                with_grad: Tape::compile(&ctx, &one, &vars)
+                    .expect("derivatives use the same symbols"),
+                grad_of,
+            });
         }
         let all: Vec<_> = roots.iter().chain(&jac_roots).copied().collect();
         let dyn_jac_tape =
@@ -127,6 +150,7 @@ impl Predictor {
             jac_dyn_cols,
             out_jac_tape,
             out_jac_entries,
+            per_output,
         }
     }
 
@@ -221,6 +245,36 @@ impl Predictor {
         times: &[f64],
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
+        self.integrate(x0, consts, inputs, times, opts, None)
+    }
+
+    /// [`Predictor::predict_with`] at the times of `cells`, computing only
+    /// the measured cells: `outputs[k]` holds the values of the outputs
+    /// [`Measured::at`]`(k)` lists, in that order, and `jacobians[k]` their
+    /// rows (so `at(k).len()` x state). Values and rows equal
+    /// `predict_with`'s exactly.
+    pub fn predict_measured(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        cells: &Measured,
+        opts: &Integration,
+    ) -> Result<Prediction, FitError> {
+        self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells))
+    }
+
+    /// The integration of `predict_with`; with `needed`, only its cells
+    /// are evaluated.
+    fn integrate(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        times: &[f64],
+        opts: &Integration,
+        needed: Option<&Measured>,
+    ) -> Result<Prediction, FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
                 states: self.state.len(),
@@ -255,11 +309,15 @@ impl Predictor {
         let x: Vec<f64> = x0.iter().chain(consts).copied().collect();
         let varying: Vec<bool> = (0..x.len()).map(|i| i < nd).collect();
         let nv = self.dyn_tape.n_outputs();
+        // The whole output tapes, or (with `needed`) each output's own,
+        // frozen when first needed.
+        let whole = needed.is_none();
         let mut w = Work {
             dyn_only: self.dyn_tape.freeze(&x, &varying),
             dyn_jac: self.dyn_jac_tape.freeze(&x, &varying),
-            out: self.out_tape.freeze(&x, &varying),
-            out_jac: self.out_jac_tape.freeze(&x, &varying),
+            out: whole.then(|| self.out_tape.freeze(&x, &varying)),
+            out_jac: (whole && opts.sensitivities).then(|| self.out_jac_tape.freeze(&x, &varying)),
+            one: (0..self.outputs.len()).map(|_| None).collect(),
             x,
             vals: vec![0.0; nv],
             jvals: vec![0.0; self.dyn_jac_tape.n_outputs() - nv],
@@ -348,7 +406,7 @@ impl Predictor {
         let mut tmp = z.clone();
         let mut u = vec![0.0; m];
         let sens = opts.sensitivities;
-        for &target in times {
+        for (ti, &target) in times.iter().enumerate() {
             if target < t - 1e-12 {
                 return Err(FitError::TimeBeforeStart { target, t });
             }
@@ -440,12 +498,22 @@ impl Predictor {
                 t = next;
             }
             w.x[..nd].copy_from_slice(&z[..nd]);
-            outputs.push(w.out.eval(&w.x).to_vec());
             if noise.is_some() {
                 noise_m.push(noise_acc.clone());
             }
-            if sens {
-                let gy = w.out_jac.eval(&w.x);
+            if let Some(needed) = needed {
+                let (y, jrow) = self.measured_outputs(&z, needed.at(ti).0, sens, &varying, &mut w);
+                outputs.push(y);
+                if sens {
+                    jacobians.push(jrow);
+                }
+                continue;
+            }
+            if let Some(out) = &mut w.out {
+                outputs.push(out.eval(&w.x).to_vec());
+            }
+            if let (true, Some(out_jac)) = (sens, &mut w.out_jac) {
+                let gy = out_jac.eval(&w.x);
                 // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
                 let phi = &z[nd..];
                 let mut jrow = vec![0.0; no * n];
@@ -467,6 +535,47 @@ impl Predictor {
             jacobians,
             noise_m,
         })
+    }
+
+    /// The outputs `which` at the state in `w.x` and, with `sens`, their
+    /// rows `grad h * Phi_full`, each output's tape frozen at its first use.
+    fn measured_outputs<'a>(
+        &'a self,
+        z: &[f64],
+        which: &[usize],
+        sens: bool,
+        varying: &[bool],
+        w: &mut Work<'a>,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let (nd, n) = (self.n_dynamic, self.state.len());
+        let mut y = vec![0.0; which.len()];
+        let mut jrow = if sens {
+            vec![0.0; which.len() * n]
+        } else {
+            vec![]
+        };
+        for (i, &o) in which.iter().enumerate() {
+            let tapes = &self.per_output[o];
+            let tape = if sens { &tapes.with_grad } else { &tapes.value };
+            let frozen = w.one[o].get_or_insert_with(|| tape.freeze(&w.x, varying));
+            let v = frozen.eval(&w.x);
+            y[i] = v[0];
+            if !sens {
+                continue;
+            }
+            let phi = &z[nd..];
+            let row = &mut jrow[i * n..(i + 1) * n];
+            for (&j, g) in tapes.grad_of.iter().zip(&v[1..]) {
+                if j < nd {
+                    for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
+                        *r += g * p;
+                    }
+                } else {
+                    row[j] += g;
+                }
+            }
+        }
+        (y, jrow)
     }
 
     /// `acc += h * sum_i c_i |u_i| (Phi^-1 f_i)(Phi^-1 f_i)^T` (left point).
@@ -499,6 +608,67 @@ impl Predictor {
                 }
             }
         }
+    }
+}
+
+/// The measured cells of one trajectory's outputs, in time order: per
+/// output time, which of a predictor's outputs are measured (in model
+/// order) and their values. Built once per fit, so that the predictions
+/// and residuals visit only these (a MRCLAM row measures one or two of 30
+/// outputs, and scanning the empty cells cost a cache miss each).
+#[derive(Clone, Debug)]
+pub struct Measured {
+    t: Vec<f64>,
+    /// The cells of time k are `start[k]..start[k + 1]`.
+    start: Vec<usize>,
+    output: Vec<usize>,
+    value: Vec<f64>,
+}
+
+impl Measured {
+    /// The cells of `outputs` present in the column named after each of
+    /// `p`'s outputs (an output without a column is never measured).
+    pub fn new(p: &Predictor, outputs: &Series) -> Measured {
+        let cols: Vec<Option<&[Option<f64>]>> =
+            p.outputs.iter().map(|o| outputs.column(o)).collect();
+        let mut start = Vec::with_capacity(outputs.len() + 1);
+        let (mut output, mut value) = (Vec::new(), Vec::new());
+        for k in 0..outputs.len() {
+            start.push(output.len());
+            for (o, c) in cols.iter().enumerate() {
+                if let Some(v) = c.and_then(|c| c[k]) {
+                    output.push(o);
+                    value.push(v);
+                }
+            }
+        }
+        start.push(output.len());
+        Measured {
+            t: outputs.t().to_vec(),
+            start,
+            output,
+            value,
+        }
+    }
+
+    /// At output time `k`: the measured outputs and their values.
+    pub fn at(&self, k: usize) -> (&[usize], &[f64]) {
+        let r = self.start[k]..self.start[k + 1];
+        (&self.output[r.clone()], &self.value[r])
+    }
+
+    /// Number of output times.
+    pub fn n_times(&self) -> usize {
+        self.t.len()
+    }
+
+    /// Number of measured cells.
+    pub fn len(&self) -> usize {
+        self.value.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.value.is_empty()
     }
 }
 
@@ -539,8 +709,10 @@ struct Work<'a> {
     x: Vec<f64>,
     dyn_only: FrozenTape<'a>,
     dyn_jac: FrozenTape<'a>,
-    out: FrozenTape<'a>,
-    out_jac: FrozenTape<'a>,
+    out: Option<FrozenTape<'a>>,
+    out_jac: Option<FrozenTape<'a>>,
+    /// Per output, its own tape (see `Predictor::measured_outputs`).
+    one: Vec<Option<FrozenTape<'a>>>,
     vals: Vec<f64>,
     jvals: Vec<f64>,
     jac: Vec<f64>,
