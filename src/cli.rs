@@ -158,9 +158,10 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
   obsan diagnose --model systems/mrclam.sys --data data/mrclam1 --json
 
 --json prints {model, nominal, rounds, named, input_checks, final_fit, extended_sys, sigma,
-input_noise, lr_critical, lr_critical_generated, generated_dropped, ...}; candidates and named
-effects carry origin (\"effects file\", \"generated\", \"input relation\"); --generated also
-tries candidates generated from the model's structure; --report writes report.md, SVG plots,
+input_noise, lr_critical, lr_critical_generated, generated_dropped, screen_threshold, ...};
+candidates and named effects carry origin (\"effects file\", \"generated\", \"input
+relation\"), generated candidates their score and screened_out; candidates generated from the
+model's structure are tried with --generated; --report writes report.md, SVG plots,
 extended.sys and diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
@@ -255,11 +256,16 @@ pub struct DiagnoseArgs {
     pub input_noise: String,
     /// Also try candidates generated from the model's structure (scales,
     /// biases, couplings with |another input|, lags, delays of the inputs;
-    /// scales, biases, harmonics of the outputs), marked as generated. Off
-    /// by default: on clean data without stated noise they add false alarms,
-    /// and they cost 10-50 times the CPU (docs/diagnose.md).
-    #[arg(long)]
+    /// scales, biases, harmonics of the outputs), marked as generated, each
+    /// screened by its score statistic before it is fitted (docs/diagnose.md).
+    /// Off by default (on clean data without stated noise they still add
+    /// false alarms); `--generated=false` or `--no-generated` is the default.
+    #[arg(long, value_name = "BOOL", default_value_t = false, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
     pub generated: bool,
+    /// Only the effects file's candidates (the same as `--generated=false`).
+    #[arg(long, overrides_with = "generated")]
+    pub no_generated: bool,
 }
 
 #[derive(Args)]

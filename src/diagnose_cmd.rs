@@ -81,7 +81,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
                 )))
             }
         },
-        generate: a.generated,
+        generate: a.generated && !a.no_generated,
         ..DiagnoseOptions::default()
     };
     let bar = crate::progress::Progress::new("diagnose", 0, "");
@@ -259,6 +259,17 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         for c in round {
             if let Some(e) = &c.error {
                 let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
+            } else if c.screened_out {
+                let sc = c.score.unwrap_or(0.0);
+                let why = if sc < d.screen_threshold {
+                    format!("below the screen's {:.2}", d.screen_threshold)
+                } else {
+                    format!(
+                        "x {} below this round's best LR: it cannot win the round",
+                        obsan_diagnose::SCREEN_SAFETY
+                    )
+                };
+                let _ = writeln!(s, "  {:<20} not fitted: score {sc:.2} {why}", mark(c));
             } else if !c.identifiable {
                 let _ = writeln!(
                     s,
@@ -541,6 +552,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
     if let Some(r) = d.rounds.first() {
         let items: Vec<(String, f64, obsan_plot::Rgb)> = r
             .iter()
+            .filter(|c| !c.screened_out)
             .map(|c| {
                 let color = if !c.identifiable {
                     PALE

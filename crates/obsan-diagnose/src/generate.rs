@@ -29,6 +29,13 @@ pub struct Generated {
     /// `v rises with |omega|`, `v falls with |omega|`.
     pub positive: String,
     pub negative: String,
+    /// The effect whose score statistic at zero new params screens this
+    /// candidate before its fit (`crate::screen`): the effect itself, or
+    /// for a lag its limit as T -> 0, `u - T rate(u)` (a lag at T = 0 is
+    /// singular, and its state is held at the first input: no transient).
+    /// `None`: always fitted (an exact `delay`, whose sensitivity the
+    /// screen does not take).
+    pub screen: Option<Effect>,
 }
 
 impl Generated {
@@ -79,6 +86,9 @@ struct Draft {
     formula: String,
     positive: String,
     negative: String,
+    /// The screen's stand-in (see [`Generated::screen`]): `None` the effect
+    /// itself, `Some(None)` no screen, `Some(Some(body))` this body.
+    screen: Option<Option<String>>,
 }
 
 /// Candidates generated from `sys`'s structure, without those that
@@ -115,6 +125,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("{u}_eff = (1 + {k}) {u}"),
             positive: format!("{u} acts larger than measured"),
             negative: format!("{u} acts smaller than measured"),
+            screen: None,
         });
         let b = fresh(&format!("gb_{u}"));
         drafts.push(Draft {
@@ -123,6 +134,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("{u}_eff = {u} + {b}"),
             positive: format!("{u} acts with a positive offset"),
             negative: format!("{u} acts with a negative offset"),
+            screen: None,
         });
         for w in inputs.iter().filter(|w| *w != u) {
             let c = fresh(&format!("gc_{u}_{w}"));
@@ -137,10 +149,12 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
                 formula: format!("{u}_eff = {u} (1 + {c} |{w}|)"),
                 positive: format!("{u} rises with |{w}|"),
                 negative: format!("{u} falls with |{w}|"),
+                screen: None,
             });
         }
         let t = fresh(&format!("gT_{u}"));
         let s = fresh(&format!("g_{u}_lagged"));
+        let r0 = fresh(&format!("g_lagrate_{u}"));
         drafts.push(Draft {
             name: fresh(&format!("{u}_lag")),
             body: format!(
@@ -149,6 +163,11 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("{u}_eff' = ({u} - {u}_eff)/{t}"),
             positive: format!("{u} acts through a first-order lag"),
             negative: format!("{u} acts through a first-order lead (negative time constant)"),
+            // s = u - T du/dt + O(T^2) with s(0) = u(0): the lag's
+            // sensitivity to T at T = 0, its initial state held.
+            screen: Some(Some(format!(
+                "param {t}\ninput {r0} = rate({u})\nsubst {u} = {u} - {t}*{r0}\n"
+            ))),
         });
         let tau = fresh(&format!("gtau_{u}"));
         if inputs.len() == 1 {
@@ -158,6 +177,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
                 formula: format!("{u}_eff(t) = {u}(t - {tau})"),
                 positive: format!("{u} acts late"),
                 negative: format!("{u} acts early"),
+                screen: Some(None),
             });
         } else {
             // One input of several: `delay` shifts them all, so this one is
@@ -170,6 +190,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
                 formula: format!("{u}_eff(t) = {u}(t - {tau}), to first order in {tau}"),
                 positive: format!("{u} acts late"),
                 negative: format!("{u} acts early"),
+                screen: None,
             });
         }
     }
@@ -181,6 +202,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("every input acts at t - {tau}"),
             positive: "the inputs act late (or the outputs' clock is ahead)".into(),
             negative: "the inputs act early (or the outputs' clock is behind)".into(),
+            screen: Some(None),
         });
     }
     for (label, members, angle) in output_groups(sys) {
@@ -212,6 +234,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("{label}_meas = (1 + {k}) {label}, {which}"),
             positive: format!("{label} reads large"),
             negative: format!("{label} reads small"),
+            screen: None,
         });
         let b = fresh(&format!("gb_{label}"));
         drafts.push(Draft {
@@ -220,6 +243,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
             formula: format!("{label}_meas = {label} + {b}, {which}"),
             positive: format!("{label} reads high"),
             negative: format!("{label} reads low"),
+            screen: None,
         });
         if !angle {
             continue;
@@ -247,6 +271,7 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
                 formula: format!("{label}_meas = {label} + {a} {shown}, {which}"),
                 positive: format!("{label} is distorted by a harmonic"),
                 negative: format!("{label} is distorted by a harmonic"),
+                screen: None,
             });
         }
     }
@@ -292,12 +317,24 @@ pub fn generate(sys: &System, user: &[&Effect]) -> Generation {
                 .push((d.name, "the same as another generated candidate".into()));
             continue;
         }
+        let screen = match &d.screen {
+            None => Some(effect.clone()),
+            Some(None) => None,
+            Some(Some(body)) => {
+                let text = format!("effect {}\n{body}", d.name);
+                match EffectLibrary::parse(&text, ORIGIN_GENERATED) {
+                    Ok(l) => l.effects.into_iter().next(),
+                    Err(_) => None,
+                }
+            }
+        };
         kept.push(sig);
         out.candidates.push(Generated {
             effect,
             formula: d.formula,
             positive: d.positive,
             negative: d.negative,
+            screen,
         });
     }
     out

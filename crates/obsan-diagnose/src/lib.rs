@@ -26,6 +26,7 @@ mod identify;
 mod model_fit;
 mod relation;
 mod residual;
+mod screen;
 mod start;
 mod stats;
 mod workflow;
@@ -36,8 +37,9 @@ pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIREC
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
+pub use screen::SCREEN_SAFETY;
 pub use start::start_values;
-pub use stats::{chi2_1_p, chi2_z, normal_critical};
+pub use stats::{chi2_1_p, chi2_critical, chi2_z, normal_critical};
 pub use workflow::{
     diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival,
     AUTO_ESTIMATE_BELOW, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,

@@ -66,6 +66,23 @@ pub fn chi2_z(q: f64, k: f64) -> f64 {
     ((q / k).max(0.0).cbrt() - (1.0 - a)) / a.sqrt()
 }
 
+/// The upper `alpha` point of chi-square with `k` degrees of freedom
+/// (bisection on [`chi2_z`]'s one-sided tail: exact for k = 1, 2,
+/// Wilson–Hilferty above).
+pub fn chi2_critical(alpha: f64, k: f64) -> f64 {
+    let z = normal_critical(2.0 * alpha);
+    let (mut lo, mut hi) = (0.0, 10.0 * k + 1000.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if chi2_z(mid, k) < z {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// Upper-tail p-value of chi-square with 1 degree of freedom.
 pub fn chi2_1_p(q: f64) -> f64 {
     normal_two_sided(q.max(0.0).sqrt())
@@ -83,5 +100,11 @@ mod tests {
         assert!((chi2_1_p(10.8276) - 1e-3).abs() < 1e-6);
         // Wilson-Hilferty: the chi2_10 upper 5% point 18.307 is z ~ 1.645.
         assert!((chi2_z(18.307, 10.0) - 1.645).abs() < 0.02);
+        // Tabulated upper points: chi2_1 1% 6.635, chi2_2 1% 9.210,
+        // chi2_10 5% 18.307, chi2_30 1% 50.892.
+        assert!((chi2_critical(0.01, 1.0) - 6.635).abs() < 1e-3);
+        assert!((chi2_critical(0.01, 2.0) - 9.210).abs() < 1e-3);
+        assert!((chi2_critical(0.05, 10.0) - 18.307).abs() < 0.05);
+        assert!((chi2_critical(0.01, 30.0) - 50.892).abs() < 0.1);
     }
 }

@@ -10,11 +10,11 @@ use crate::model_fit::{
     Start, OUTLIER_Z,
 };
 use crate::relation::{input_check, InputCheck};
+use crate::screen::{score, SCREEN_SAFETY};
 use crate::start::extended_start;
-use crate::stats::{chi2_1_p, normal_critical};
+use crate::stats::{chi2_1_p, chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, Kind, System};
-use rayon::prelude::*;
 use serde::Serialize;
 
 /// Outputs per trajectory used by the rank test (the most measured ones).
@@ -45,6 +45,9 @@ pub struct DiagnoseOptions {
     /// Also try the candidates generated from the model's structure
     /// ([`crate::generate`]), under their own share of `alpha`.
     pub generate: bool,
+    /// Screen the generated candidates by their score statistic before
+    /// fitting them ([`crate::screen`]); off: fit every one (to compare).
+    pub screen: bool,
 }
 
 /// The source of the measured inputs' noise levels.
@@ -95,7 +98,10 @@ impl Default for DiagnoseOptions {
             rank_trajectories: 4,
             sigma: None,
             input_noise: InputNoise::Stated,
+            // Not yet the default: without stated noise the white-noise LR
+            // names generated harmonics on clean calib data (docs/diagnose.md).
             generate: false,
+            screen: true,
         }
     }
 }
@@ -128,6 +134,11 @@ pub struct CandidateResult {
     pub whiteness_z: f64,
     pub significant: bool,
     pub error: Option<String>,
+    /// A generated candidate's score statistic at the current fit (see
+    /// [`crate::screen`]), when computed.
+    pub score: Option<f64>,
+    /// Left unfitted: its score is below [`Diagnosis::screen_threshold`].
+    pub screened_out: bool,
 }
 
 /// One named effect.
@@ -208,6 +219,10 @@ pub struct Diagnosis {
     /// Generated candidates left out before any fit, with the reason (the
     /// same as a user effect, or not an extension of the model).
     pub generated_dropped: Vec<(String, String)>,
+    /// Generated candidates whose score statistic is below this are not
+    /// fitted (`lr_critical_generated / SCREEN_SAFETY`; infinite: no screen,
+    /// as under input noise, which the score does not weigh).
+    pub screen_threshold: f64,
 }
 
 /// Run the workflow. `progress` is told what is being done.
@@ -315,9 +330,7 @@ pub fn diagnose(
         normal_critical(a_gen).powi(2)
     };
     let generated: Vec<&Effect> = gen.candidates.iter().map(|g| &g.effect).collect();
-    let file_effects = model_effects.clone();
     let model_effects: Vec<&Effect> = model_effects.into_iter().chain(generated).collect();
-    let is_generated = |e: &str| !file_effects.iter().any(|f| f.name == e);
     // The relations are weighed by the encoder noise the fit uses (stated
     // or estimated), else by dataset.json's even under `--input-noise none`
     // (the fit may ignore it; the inputs' own test should not), else by one
@@ -356,29 +369,51 @@ pub fn diagnose(
         ));
         // The caller's cancel flag is thread-local: hand it to the workers.
         let cancel = obsan_expr::cancel_flag();
-        let results: Vec<(CandidateResult, Option<(System, ModelFit)>)> = remaining
-            .par_iter()
-            .map(|e| {
-                let (c, origin) = if is_generated(&e.name) {
-                    (crit_gen, ORIGIN_GENERATED)
-                } else {
-                    (crit, lib.map_or("effects", |l| l.origin.as_str()))
-                };
-                obsan_expr::with_cancel(cancel.clone(), || {
-                    candidate(
-                        &current_sys,
-                        &current,
-                        e,
-                        data,
-                        &which,
-                        (&sigma, &noise),
-                        c,
-                        o,
-                        origin,
-                    )
-                })
+        // The score weighs residuals as ordinary least squares; it is
+        // computed with the screen off too (to compare it with the LR).
+        let scoring = noise.is_empty();
+        let screen_at = (o.screen && scoring).then_some(crit_gen / SCREEN_SAFETY);
+        let gen_of = |e: &Effect| gen.candidates.iter().find(|g| g.effect.name == e.name);
+        let scorer = |e: &Effect| {
+            let se = gen_of(e)
+                .and_then(|g| g.screen.as_ref())
+                .filter(|_| scoring)?;
+            obsan_expr::with_cancel(cancel.clone(), || {
+                score(&current_sys, &current, se, data, &sigma, o.max_step).ok()
             })
-            .collect();
+        };
+        let fit = |e: &Effect, score: Option<f64>| {
+            let g = gen_of(e);
+            // A generated candidate must also clear the critical value in
+            // cluster-robust sds; one that adds states is tested with a
+            // degree of freedom per free initial value (K per state).
+            let (c, origin) = match g {
+                Some(g) if !g.effect.states.is_empty() => {
+                    let df = 1 + g.effect.states.len() * data.trajectories.len();
+                    (chi2_critical(a_gen, df as f64), ORIGIN_GENERATED)
+                }
+                Some(_) => (crit_gen, ORIGIN_GENERATED),
+                None => (crit, lib.map_or("effects", |l| l.origin.as_str())),
+            };
+            let robust = g.map(|_| crit_gen.sqrt());
+            let (mut r, x) = obsan_expr::with_cancel(cancel.clone(), || {
+                let n = (&sigma[..], &noise[..]);
+                candidate(
+                    &current_sys,
+                    &current,
+                    e,
+                    data,
+                    &which,
+                    n,
+                    (c, robust),
+                    o,
+                    origin,
+                )
+            });
+            r.score = score;
+            (r, x)
+        };
+        let results = crate::screen::round(&remaining, scorer, fit, screen_at);
         if round == 0 {
             if let Ok(ext) = current_sys.extend(&[], "") {
                 let prepared = prepare(&ext, data)?;
@@ -389,7 +424,7 @@ pub fn diagnose(
             }
             hidden = results
                 .iter()
-                .filter(|r| !r.0.identifiable && r.0.error.is_none())
+                .filter(|r| !r.0.identifiable && r.0.error.is_none() && !r.0.screened_out)
                 .map(|r| r.0.clone())
                 .collect();
         }
@@ -561,6 +596,10 @@ pub fn diagnose(
         });
         extended_sys = with_relation(&extended_sys, e, &c.estimates);
     }
+    let screen_threshold = match o.screen && noise.is_empty() {
+        true => crit_gen / SCREEN_SAFETY,
+        false => f64::INFINITY,
+    };
     Ok(Diagnosis {
         model: sys.name.clone(),
         start: start.2.clone(),
@@ -587,6 +626,7 @@ pub fn diagnose(
         lr_critical: crit,
         lr_critical_generated: crit_gen,
         generated_dropped: gen.dropped,
+        screen_threshold,
     })
 }
 
@@ -598,7 +638,7 @@ fn candidate(
     data: &Dataset,
     which: &[usize],
     (sigma, noise): (&[f64], &[(String, f64)]),
-    crit: f64,
+    (crit, robust_z): (f64, Option<f64>),
     o: &DiagnoseOptions,
     origin: &str,
 ) -> (CandidateResult, Option<(System, ModelFit)>) {
@@ -624,6 +664,8 @@ fn candidate(
         whiteness_z: 0.0,
         significant: false,
         error: None,
+        score: None,
+        screened_out: false,
     };
     let mut run = || -> Result<Option<(System, ModelFit)>, DiagnoseError> {
         let ext = base
@@ -716,13 +758,23 @@ fn candidate(
         res.lr = (base_fit.m2ll() - f.m2ll()).max(0.0) / inflate;
         res.p_value = chi2_1_p(res.lr);
         res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
-        res.significant = res.lr > crit && res.delta_bic < 0.0;
         res.estimates = e
             .params
             .iter()
             .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
             .collect();
         res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
+        // `robust_z`: every new param also this many cluster-robust sds from
+        // 0 (the spread across trajectories does not read the within-
+        // trajectory drift as evidence); an sd that is not finite (one
+        // trajectory) does not veto.
+        let robust_ok = robust_z.is_none_or(|z| {
+            res.estimates
+                .iter()
+                .zip(&res.robust_sd)
+                .all(|((_, v, _), r)| !(r.is_finite() && *r > 0.0) || (v / r).abs() > z)
+        });
+        res.significant = res.lr > crit && res.delta_bic < 0.0 && robust_ok;
         res.rms = f.rms.clone();
         res.whiteness_z = f
             .residuals

@@ -1,0 +1,276 @@
+//! A cheap screen for the generated candidates (issue 18.6): the score
+//! (Lagrange-multiplier) statistic of each candidate at the current fit,
+//! from one pass of the extended model's sensitivities, no refit. Only the
+//! candidates whose statistic clears `LR critical / SCREEN_SAFETY` are
+//! rank-tested and fitted.
+//!
+//! At the current fit `theta` (the candidate's new params at zero), with
+//! whitened residuals `r` and Jacobian `J` over every free quantity of the
+//! extended model (old and new params, each trajectory's initial state),
+//! `S = g^T (J^T J)^-1 g` with `g = J^T r` is the decrease of the cost that
+//! a Gauss–Newton step of the extended model predicts. At a converged base
+//! fit the old components of `g` vanish and `S` is the classical score
+//! statistic (Rao 1948), asymptotically the LR's chi-square under the null;
+//! a base fit short of its optimum only makes `S` larger (the screen keeps
+//! more). A candidate's new states are held at their start (a lag's state
+//! at the first input), so an initial transient gives no score.
+
+use crate::error::DiagnoseError;
+use crate::model_fit::{prepare, ModelFit};
+use crate::start::extended_start;
+use crate::workflow::CandidateResult;
+use obsan_data::{wrap, Dataset};
+use obsan_fit::{FitTrajectory, Integration, Predictor};
+use obsan_model::{Effect, System};
+
+/// The screen's threshold is the LR's critical value divided by this. The
+/// score and the fitted LR of a candidate agree to first order; they part
+/// where the effect is large or the model nonlinear in it, the score then
+/// usually lower (a Gauss–Newton step predicts the decrease of a quadratic
+/// model). On the tests' data the ratio LR / score stays within
+/// [`SCREEN_SAFETY`] wherever the LR is above the threshold
+/// (docs/diagnose.md, "Generated candidates": tests/diagb_generated.rs
+/// prints both for every candidate).
+pub const SCREEN_SAFETY: f64 = 4.0;
+
+/// The score statistic of extending `base` (fitted as `f` to `data`, output
+/// levels `sigma`) by `e`, divided by `f`'s inflation as the LR is. Ordinary
+/// least squares only: the caller fits every candidate when the residuals
+/// are weighed by input noise.
+pub(crate) fn score(
+    base: &System,
+    f: &ModelFit,
+    e: &Effect,
+    data: &Dataset,
+    sigma: &[f64],
+    max_step: f64,
+) -> Result<f64, DiagnoseError> {
+    let ext = base
+        .extend(&[e], crate::generate::ORIGIN_GENERATED)
+        .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
+    let prepared = prepare(&ext, data)?;
+    let base_pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
+    let (pv, sv) = extended_start(&ext, &base_pv, &f.initial_states, &prepared)?;
+    let nf = ext.normal_form(None, &[]).map_err(DiagnoseError::model)?;
+    let p = Predictor::new(&nf);
+    let trajs = FitTrajectory::all(&p, &prepared);
+    let (np, nd) = (pv.len(), p.n_dynamic);
+    // The base model's dynamic states are free per trajectory; the new
+    // ones (the first `nd_old` are the base's) are held.
+    let nd_old = f.initial_states.first().map_or(0, Vec::len).min(nd);
+    let local = np + nd_old;
+    let k = trajs.len();
+    let dim = np + k * nd_old;
+    let mut a = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+    let mut g = nalgebra::DVector::<f64>::zeros(dim);
+    let integ = Integration {
+        max_step,
+        sensitivities: true,
+        input_noise: None,
+    };
+    let n = p.state.len();
+    for (ti, (t, x)) in trajs.iter().zip(&sv).enumerate() {
+        let mut x0 = x.clone();
+        x0.extend_from_slice(&pv);
+        let pred = p
+            .predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
+            .map_err(|source| DiagnoseError::Predict {
+                trajectory: t.name.to_string(),
+                source,
+            })?;
+        let cols: Vec<Option<&[Option<f64>]>> =
+            p.outputs.iter().map(|o| t.outputs.column(o)).collect();
+        // Local columns: the params, then this trajectory's own states.
+        let mut al = nalgebra::DMatrix::<f64>::zeros(local, local);
+        let mut gl = vec![0.0; local];
+        let mut row = vec![0.0; local];
+        for (j, yj) in pred.outputs.iter().enumerate() {
+            for (o, c) in cols.iter().enumerate() {
+                let Some(m) = c.and_then(|c| c[j]) else {
+                    continue;
+                };
+                let d = m - yj[o];
+                let r = if p.angular[o] { wrap(d) } else { d } / sigma[o];
+                let jac = &pred.jacobians[j][o * n..(o + 1) * n];
+                for (i, v) in row.iter_mut().enumerate() {
+                    *v = if i < np { jac[nd + i] } else { jac[i - np] } / sigma[o];
+                }
+                for i in 0..local {
+                    gl[i] += row[i] * r;
+                    for l in 0..=i {
+                        al[(i, l)] += row[i] * row[l];
+                    }
+                }
+            }
+        }
+        let at = |i: usize| {
+            if i < np {
+                i
+            } else {
+                np + ti * nd_old + (i - np)
+            }
+        };
+        for i in 0..local {
+            g[at(i)] += gl[i];
+            for l in 0..=i {
+                a[(at(i), at(l))] += al[(i, l)];
+                if l != i {
+                    a[(at(l), at(i))] += al[(i, l)];
+                }
+            }
+        }
+    }
+    Ok(quadratic_form(a, g) / f.inflation())
+}
+
+/// One candidate's outcome: its round entry and, when fitted, the extended
+/// model and fit.
+pub(crate) type Outcome = (CandidateResult, Option<(System, ModelFit)>);
+
+/// One round: every candidate that `score` gives no statistic for (the
+/// file's, an exact delay, a failed score) is fitted; the scored ones
+/// below `threshold` are not; the others are fitted in decreasing order of
+/// score, a batch per thread, while a score times [`SCREEN_SAFETY`] exceeds
+/// the largest significant LR found so far: below that the candidate
+/// cannot win the round, and only the winner is named. `threshold` `None`:
+/// fit every one. The outcomes are in the order of `cands`.
+pub(crate) fn round<S, F>(
+    cands: &[&Effect],
+    score: S,
+    fit: F,
+    threshold: Option<f64>,
+) -> Vec<Outcome>
+where
+    S: Fn(&Effect) -> Option<f64> + Sync,
+    F: Fn(&Effect, Option<f64>) -> Outcome + Sync,
+{
+    use rayon::prelude::*;
+    let scores: Vec<Option<f64>> = cands.par_iter().map(|e| score(e)).collect();
+    let mut out: Vec<Option<Outcome>> = cands
+        .par_iter()
+        .zip(&scores)
+        .map(|(e, s)| match (s, threshold) {
+            (Some(_), Some(_)) => None,
+            _ => Some(fit(e, *s)),
+        })
+        .collect();
+    let Some(th) = threshold else {
+        return out.into_iter().flatten().collect();
+    };
+    let best = |out: &[Option<Outcome>]| {
+        out.iter()
+            .flatten()
+            .filter(|o| o.0.significant)
+            .fold(0.0f64, |m, o| m.max(o.0.lr))
+    };
+    let mut order: Vec<(usize, f64)> = (0..cands.len())
+        .filter(|&i| out[i].is_none())
+        .filter_map(|i| scores[i].map(|s| (i, s)))
+        .collect();
+    order.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let batch = rayon::current_num_threads().max(1);
+    let mut at = 0;
+    while at < order.len() {
+        let b = best(&out);
+        let next: Vec<(usize, f64)> = order[at..]
+            .iter()
+            .take(batch)
+            .copied()
+            .filter(|&(_, s)| s >= th && s * SCREEN_SAFETY > b)
+            .collect();
+        if next.is_empty() {
+            break;
+        }
+        at += next.len();
+        let done: Vec<(usize, Outcome)> = next
+            .par_iter()
+            .map(|&(i, s)| (i, fit(cands[i], Some(s))))
+            .collect();
+        for (i, o) in done {
+            out[i] = Some(o);
+        }
+    }
+    cands
+        .iter()
+        .zip(out)
+        .zip(&scores)
+        .map(|((e, o), s)| o.unwrap_or_else(|| (screened(e, s.unwrap_or(0.0)), None)))
+        .collect()
+}
+
+/// The round's entry for a generated candidate left unfitted by its score.
+pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
+    CandidateResult {
+        effect: e.name.clone(),
+        description: e.description.clone(),
+        origin: crate::generate::ORIGIN_GENERATED.into(),
+        params: e.params.clone(),
+        identifiable: false,
+        rank: None,
+        symmetry: vec![],
+        estimates: vec![],
+        robust_sd: vec![],
+        lr: 0.0,
+        p_value: 1.0,
+        delta_bic: 0.0,
+        rms: vec![],
+        whiteness_z: 0.0,
+        significant: false,
+        error: None,
+        score: Some(score),
+        screened_out: true,
+    }
+}
+
+/// `g^T A^+ g` for a symmetric positive semidefinite `A`: Jacobi-scaled, the
+/// pseudo-inverse over eigenvalues above 1e-10 of the largest (directions
+/// the data do not determine carry no score). 0 when not finite.
+fn quadratic_form(mut a: nalgebra::DMatrix<f64>, mut g: nalgebra::DVector<f64>) -> f64 {
+    let n = g.len();
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            let x = a[(i, i)];
+            if x > 0.0 && x.is_finite() {
+                1.0 / x.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    for i in 0..n {
+        g[i] *= d[i];
+        for j in 0..n {
+            a[(i, j)] *= d[i] * d[j];
+        }
+    }
+    if !a.iter().chain(g.iter()).all(|x| x.is_finite()) {
+        return 0.0;
+    }
+    let eig = nalgebra::SymmetricEigen::new(a);
+    let top = eig.eigenvalues.iter().fold(0.0f64, |m, x| m.max(*x));
+    let mut s = 0.0;
+    for (i, &l) in eig.eigenvalues.iter().enumerate() {
+        if l > 1e-10 * top {
+            let c = eig.eigenvectors.column(i).dot(&g);
+            s += c * c / l;
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quadratic_form_is_the_least_squares_decrease() {
+        // r = (1, 2, 2), one column (1, 1, 0): the fitted decrease is
+        // (1 + 2)^2 / 2 = 4.5; a second column equal to the first adds none.
+        let a = nalgebra::DMatrix::from_row_slice(2, 2, &[2.0, 2.0, 2.0, 2.0]);
+        let g = nalgebra::DVector::from_vec(vec![3.0, 3.0]);
+        assert!((quadratic_form(a, g) - 4.5).abs() < 1e-9);
+        let a = nalgebra::DMatrix::from_row_slice(1, 1, &[2.0]);
+        let g = nalgebra::DVector::from_vec(vec![3.0]);
+        assert!((quadratic_form(a, g) - 4.5).abs() < 1e-12);
+    }
+}
