@@ -249,10 +249,11 @@ pub struct DiagnoseArgs {
     pub max_effects: Option<usize>,
     /// The measured inputs' noise: stated (dataset.json's, if any),
     /// estimate (restricted maximum likelihood, linearised about the fit),
-    /// none (ordinary least squares) or auto (dataset.json's if stated,
-    /// else estimated on fewer than 10 trajectories where white input
-    /// noise is rejected, else none).
-    #[arg(long, default_value = "stated", value_name = "SOURCE")]
+    /// none (ordinary least squares) or auto, the default (dataset.json's
+    /// if stated, else estimated on fewer than 10 trajectories where white
+    /// input noise is rejected, each candidate then also weighed at white
+    /// input noise; else none).
+    #[arg(long, default_value = "auto", value_name = "SOURCE")]
     pub input_noise: String,
     /// Also try candidates generated from the model's structure (scales,
     /// biases, couplings with |another input|, lags, delays of the inputs;

@@ -54,6 +54,36 @@ impl ModelFit {
     pub fn m2ll(&self) -> f64 {
         self.cost + self.log_det
     }
+    /// `-2 log L` with the output levels' own term (`2 ln sigma` per
+    /// residual; `sigma` indexed as the fit's outputs): fits under
+    /// different levels (white input noise against estimated) compare by it.
+    pub fn m2ll_at(&self, sigma: &[f64]) -> f64 {
+        let levels: f64 = self
+            .series
+            .iter()
+            .filter_map(|s| {
+                let i = self.rms.iter().position(|r| r.0 == s.output)?;
+                Some(2.0 * s.e.len() as f64 * sigma.get(i)?.ln())
+            })
+            .sum();
+        self.m2ll() + levels
+    }
+    /// [`Self::m2ll_at`] at the output levels that minimise it for this
+    /// fit's residuals, each its output's RMS (white input noise only: the
+    /// levels the data would give a white-noise model).
+    pub fn m2ll_profiled(&self) -> f64 {
+        let mut n = vec![0usize; self.rms.len()];
+        for s in &self.series {
+            if let Some(i) = self.rms.iter().position(|r| r.0 == s.output) {
+                n[i] += s.e.len();
+            }
+        }
+        let rms: Vec<f64> = self.rms.iter().map(|r| r.1.max(1e-300)).collect();
+        n.iter()
+            .zip(&rms)
+            .map(|(&k, r)| k as f64 * (1.0 + 2.0 * r.ln()))
+            .sum()
+    }
     fn reduced_chi2(&self) -> f64 {
         self.cost / (self.n as f64 - self.n_fitted as f64).max(1.0)
     }

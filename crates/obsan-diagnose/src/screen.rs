@@ -124,8 +124,8 @@ pub(crate) fn score(
 }
 
 /// One candidate's outcome: its round entry and, when fitted, the extended
-/// model and fit.
-pub(crate) type Outcome = (CandidateResult, Option<(System, ModelFit)>);
+/// model and its fit (`T`, the workflow's record of it).
+pub(crate) type Outcome<T> = (CandidateResult, Option<T>);
 
 /// One round: every candidate that `score` gives no statistic for (the
 /// file's, an exact delay, a failed score) is fitted; the scored ones
@@ -134,19 +134,20 @@ pub(crate) type Outcome = (CandidateResult, Option<(System, ModelFit)>);
 /// the largest significant LR found so far: below that the candidate
 /// cannot win the round, and only the winner is named. `threshold` `None`:
 /// fit every one. The outcomes are in the order of `cands`.
-pub(crate) fn round<S, F>(
+pub(crate) fn round<T, S, F>(
     cands: &[&Effect],
     score: S,
     fit: F,
     threshold: Option<f64>,
-) -> Vec<Outcome>
+) -> Vec<Outcome<T>>
 where
+    T: Send,
     S: Fn(&Effect) -> Option<f64> + Sync,
-    F: Fn(&Effect, Option<f64>) -> Outcome + Sync,
+    F: Fn(&Effect, Option<f64>) -> Outcome<T> + Sync,
 {
     use rayon::prelude::*;
     let scores: Vec<Option<f64>> = cands.par_iter().map(|e| score(e)).collect();
-    let mut out: Vec<Option<Outcome>> = cands
+    let mut out: Vec<Option<Outcome<T>>> = cands
         .par_iter()
         .zip(&scores)
         .map(|(e, s)| match (s, threshold) {
@@ -157,7 +158,7 @@ where
     let Some(th) = threshold else {
         return out.into_iter().flatten().collect();
     };
-    let best = |out: &[Option<Outcome>]| {
+    let best = |out: &[Option<Outcome<T>>]| {
         out.iter()
             .flatten()
             .filter(|o| o.0.significant)
@@ -182,7 +183,7 @@ where
             break;
         }
         at += next.len();
-        let done: Vec<(usize, Outcome)> = next
+        let done: Vec<(usize, Outcome<T>)> = next
             .par_iter()
             .map(|&(i, s)| (i, fit(cands[i], Some(s))))
             .collect();
@@ -216,6 +217,7 @@ pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
         rms: vec![],
         whiteness_z: 0.0,
         significant: false,
+        white_input_noise: false,
         error: None,
         score: Some(score),
         screened_out: true,

@@ -67,9 +67,9 @@ pub enum InputNoise {
     /// `Estimate` on data of fewer than [`AUTO_ESTIMATE_BELOW`]
     /// trajectories where the estimate rejects white noise, otherwise
     /// `None` (on many trajectories the cluster-robust sds are the honest
-    /// evidence). Not the default yet: a hidden lag on few noiseless-input
-    /// windows is read as input noise, and the lag then cannot be weighed
-    /// (tests/lag.rs; docs/diagnose.md).
+    /// evidence). With the estimate kept, each candidate is also weighed at
+    /// white input noise (see `candidate`): a hidden lag that the estimate
+    /// reads as input noise is still named (tests/lag.rs). The default.
     Auto,
 }
 
@@ -97,9 +97,7 @@ impl Default for DiagnoseOptions {
             max_step: 0.5,
             rank_trajectories: 4,
             sigma: None,
-            input_noise: InputNoise::Stated,
-            // Not yet the default: without stated noise the white-noise LR
-            // names generated harmonics on clean calib data (docs/diagnose.md).
+            input_noise: InputNoise::Auto,
             generate: false,
             screen: true,
         }
@@ -133,6 +131,9 @@ pub struct CandidateResult {
     pub rms: Vec<(String, f64)>,
     pub whiteness_z: f64,
     pub significant: bool,
+    /// Weighed at white input noise: under `auto` with estimated input
+    /// noise, the candidate fitted better there than at the estimated levels.
+    pub white_input_noise: bool,
     pub error: Option<String>,
     /// A generated candidate's score statistic at the current fit (see
     /// [`crate::screen`]), when computed.
@@ -282,6 +283,12 @@ pub fn diagnose(
     };
     let mut nominal = fit_model(sys, &prepared, &start.0, &start.1, &sigma, &noise, o)?;
     let mut noise_lr = Vec::new();
+    // Under `auto` the white-noise levels and the current model's fit under
+    // them are kept as the other end of the noise family: every candidate
+    // is weighed at both (see `candidate`).
+    let white_nominal = (sigma.clone(), nominal.clone());
+    let mut white_sigma: Option<Vec<f64>> = None;
+    let mut white_fit: Option<ModelFit> = None;
     if estimate {
         progress("estimating the noise levels");
         let est = (|| -> Result<_, DiagnoseError> {
@@ -304,6 +311,9 @@ pub fn diagnose(
             Ok((s, c, lr, nom)) if forced || lr > normal_critical(o.alpha).powi(2) => {
                 (sigma, noise, nominal) = (s, c, nom);
                 noise_lr.push(lr);
+                if !forced {
+                    (white_sigma, white_fit) = (Some(white_nominal.0), Some(white_nominal.1));
+                }
             }
             Err(e) if forced => return Err(e),
             _ => estimate = false,
@@ -397,14 +407,19 @@ pub fn diagnose(
             };
             let robust = g.map(|_| crit_gen.sqrt());
             let (mut r, x) = obsan_expr::with_cancel(cancel.clone(), || {
-                let n = (&sigma[..], &noise[..]);
+                let levels = Noise {
+                    sigma: &sigma,
+                    noise: &noise,
+                    white: white_sigma.as_deref().zip(white_fit.as_ref()),
+                    profile: sigma_estimated,
+                };
                 candidate(
                     &current_sys,
                     &current,
                     e,
                     data,
                     &which,
-                    n,
+                    levels,
                     (c, robust),
                     o,
                     origin,
@@ -452,7 +467,7 @@ pub fn diagnose(
             })
             .unwrap_or_default();
         rounds.push(results.into_iter().map(|r| r.0).collect());
-        let Some((res, Some((ext_sys, ext_fit)))) = best else {
+        let Some((res, Some(fitted))) = best else {
             break;
         };
         // `best` is one of the candidates, each from `model_effects`.
@@ -474,28 +489,50 @@ pub fn diagnose(
             estimates: res.estimates.clone(),
             robust_sd: res.robust_sd.clone(),
             rms_before: current.rms.clone(),
-            rms_after: ext_fit.rms.clone(),
+            rms_after: fitted.fit.rms.clone(),
             lr: res.lr,
             p_value: res.p_value,
             rivals,
         });
-        current_sys = ext_sys;
-        current = ext_fit;
-        // The named effect takes its share of the drift: the levels again,
-        // and the extended model refitted under them (the next round's
-        // candidates are compared with that fit).
+        current_sys = fitted.sys;
+        current = fitted.fit;
         if estimate {
+            // An effect that won at white input noise explains what the
+            // estimated noise had absorbed: the rounds go on at white noise
+            // unless the levels, estimated again under the extended model,
+            // reject it (the rule of the nominal fit).
+            if fitted.white_won {
+                (sigma, noise) = (white_sigma.clone().unwrap_or(sigma), vec![]);
+            }
+            white_fit = if noise.is_empty() {
+                Some(current.clone())
+            } else {
+                fitted.white
+            };
+            // The named effect takes its share of the drift: the levels
+            // again, and the extended model refitted under them (the next
+            // round's candidates are compared with that fit).
             progress("estimating the noise levels");
             let prep = prepare(&current_sys, data)?;
             let est = estimate_levels(&current_sys, &prep, &current, &sigma, sigma_estimated, o);
             if let Ok((s, c, l)) = est {
+                let keep = o.input_noise == InputNoise::Estimate
+                    || !noise.is_empty()
+                    || l > normal_critical(o.alpha).powi(2);
                 let pv: Vec<f64> = current.params.iter().map(|p| p.1).collect();
                 let states = current.initial_states.clone();
-                if let Ok(f) = fit_model(&current_sys, &prep, &pv, &states, &s, &c, o) {
+                if let Some(f) = keep
+                    .then(|| fit_model(&current_sys, &prep, &pv, &states, &s, &c, o).ok())
+                    .flatten()
+                {
                     (sigma, noise) = (s, c);
                     noise_lr.push(l);
                     current = f;
                 }
+            }
+            // The white side follows the model (none where its fit failed).
+            if noise.is_empty() {
+                white_fit = None;
             }
         }
     }
@@ -605,10 +642,10 @@ pub fn diagnose(
         start: start.2.clone(),
         sigma: outputs.into_iter().zip(sigma).collect(),
         sigma_estimated,
-        input_noise_source: if estimate {
-            "estimated"
-        } else if noise.is_empty() {
+        input_noise_source: if noise.is_empty() {
             "none"
+        } else if estimate {
+            "estimated"
         } else {
             "stated"
         }
@@ -630,6 +667,37 @@ pub fn diagnose(
     })
 }
 
+/// The noise models a candidate is weighed under: the levels in use and,
+/// under `auto` with estimated input noise, the white-input-noise end of
+/// the same family (its output levels and the current model's fit there).
+struct Noise<'a> {
+    sigma: &'a [f64],
+    noise: &'a [(String, f64)],
+    white: Option<(&'a [f64], &'a ModelFit)>,
+    /// The output levels are estimated: the white side's are then profiled
+    /// (each output's RMS at that fit), not held at the nominal fit's.
+    profile: bool,
+}
+
+/// A candidate's fit: the extended model, its fit under the noise model
+/// that won, its fit at white input noise when that lost (the next round's
+/// white side), and which won.
+#[derive(Clone)]
+struct Fitted {
+    sys: System,
+    fit: ModelFit,
+    white: Option<ModelFit>,
+    white_won: bool,
+}
+
+/// Under `auto` with estimated input noise, each side of the likelihood
+/// ratio takes the better of its fits at the estimated levels and at white
+/// input noise (`c = 0`, the boundary of the same family). That is the
+/// profile over a two-point set of the levels: it never exceeds the profile
+/// over all levels, so the test is no more liberal than the profile
+/// likelihood ratio, while an effect that explains the residual drift the
+/// estimate absorbed (a lag, whose fast states the linearised noise model
+/// cannot even carry) is weighed where it lives, at white noise.
 #[allow(clippy::too_many_arguments)]
 fn candidate(
     base: &System,
@@ -637,11 +705,26 @@ fn candidate(
     e: &Effect,
     data: &Dataset,
     which: &[usize],
-    (sigma, noise): (&[f64], &[(String, f64)]),
+    levels: Noise,
     (crit, robust_z): (f64, Option<f64>),
     o: &DiagnoseOptions,
     origin: &str,
-) -> (CandidateResult, Option<(System, ModelFit)>) {
+) -> (CandidateResult, Option<Fitted>) {
+    let Noise {
+        sigma,
+        noise,
+        white,
+        profile,
+    } = levels;
+    // -2 log L at white input noise, the output levels profiled when they
+    // are estimated (a lag's misfit inflates the nominal fit's levels).
+    let white_m2ll = |f: &ModelFit, sw: &[f64]| {
+        if profile {
+            f.m2ll_profiled()
+        } else {
+            f.m2ll_at(sw)
+        }
+    };
     let mut res = CandidateResult {
         effect: e.name.clone(),
         description: e.description.clone(),
@@ -663,11 +746,12 @@ fn candidate(
         rms: vec![],
         whiteness_z: 0.0,
         significant: false,
+        white_input_noise: false,
         error: None,
         score: None,
         screened_out: false,
     };
-    let mut run = || -> Result<Option<(System, ModelFit)>, DiagnoseError> {
+    let mut run = || -> Result<Option<Fitted>, DiagnoseError> {
         let ext = base
             .extend(&[e], origin)
             .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
@@ -722,40 +806,72 @@ fn candidate(
         // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners for
         // every candidate was tried: with large estimated drift the
         // candidate fits did not leave their start.)
-        let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, noise, o)?;
-        // A second start for a candidate that improves the fit, from a fit
-        // without the gross outliers (|e| > OUTLIER_Z sigma). Outputs that
-        // wrap make the cost discontinuous: a scaled bearing jumps at +-pi,
-        // and one bearing left on the wrong side of the jump by the nominal
-        // model's biased params is a 40-sigma residual that holds the fit
-        // short of the effect's size. Without it the fit finds the right
-        // side; the full data then polish that start, and the lower cost wins.
-        // Only an effect that replaces an angle output can make such a jump
-        // (the wrapped residual of a continuous prediction is continuous), so
-        // only those pay for the two extra fits (on MRCLAM a third of the
-        // fits that carry the lag's states).
         let rewrites_angle = e
             .outputs
             .iter()
             .any(|(y, _)| base_fit.series.iter().any(|s| s.output == *y && s.angular));
-        if rewrites_angle && base_fit.m2ll() - f.m2ll() > crit * f.inflation() {
-            if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
-                let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
-                let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o).and_then(
-                    |t| {
-                        let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
-                        fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, noise, o)
-                    },
-                );
-                if let Ok(f2) = f2 {
-                    if f2.m2ll() < f.m2ll() {
-                        f = f2;
+        let fit_under = |sigma: &[f64], noise: &[(String, f64)], base_m2ll: f64| {
+            let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, noise, o)?;
+            // A second start for a candidate that improves the fit, from a
+            // fit without the gross outliers (|e| > OUTLIER_Z sigma).
+            // Outputs that wrap make the cost discontinuous: a scaled bearing
+            // jumps at +-pi, and one bearing left on the wrong side of the
+            // jump by the nominal model's biased params is a 40-sigma
+            // residual that holds the fit short of the effect's size.
+            // Without it the fit finds the right side; the full data then
+            // polish that start, and the lower cost wins. Only an effect that
+            // replaces an angle output can make such a jump (the wrapped
+            // residual of a continuous prediction is continuous), so only
+            // those pay for the two extra fits (on MRCLAM a third of the fits
+            // that carry the lag's states).
+            if rewrites_angle && base_m2ll - f.m2ll() > crit * f.inflation() {
+                if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
+                    let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
+                    let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o)
+                        .and_then(|t| {
+                            let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
+                            fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, noise, o)
+                        });
+                    if let Ok(f2) = f2 {
+                        if f2.m2ll() < f.m2ll() {
+                            f = f2;
+                        }
                     }
                 }
             }
-        }
+            Ok::<_, DiagnoseError>(f)
+        };
+        let held = fit_under(sigma, noise, base_fit.m2ll());
+        // Both sides of the ratio at their better noise model (see above);
+        // without a white side, the levels held and the fit's own m2ll.
+        let (f, white_fit, white_won, base_m2ll, f_m2ll) = match white {
+            None => {
+                let f = held?;
+                let m = f.m2ll();
+                (f, None, false, base_fit.m2ll(), m)
+            }
+            Some((sw, bw)) => {
+                let base_m2ll = base_fit.m2ll_at(sigma).min(white_m2ll(bw, sw));
+                match (held, fit_under(sw, &[], bw.m2ll())) {
+                    (Ok(h), Ok(w)) if h.m2ll_at(sigma) <= white_m2ll(&w, sw) => {
+                        let m = h.m2ll_at(sigma);
+                        (h, Some(w), false, base_m2ll, m)
+                    }
+                    (_, Ok(w)) => {
+                        let m = white_m2ll(&w, sw);
+                        (w, None, true, base_m2ll, m)
+                    }
+                    (Ok(h), Err(_)) => {
+                        let m = h.m2ll_at(sigma);
+                        (h, None, false, base_m2ll, m)
+                    }
+                    (Err(e), Err(_)) => return Err(e),
+                }
+            }
+        };
         let inflate = f.inflation();
-        res.lr = (base_fit.m2ll() - f.m2ll()).max(0.0) / inflate;
+        res.lr = (base_m2ll - f_m2ll).max(0.0) / inflate;
+        res.white_input_noise = white_won;
         res.p_value = chi2_1_p(res.lr);
         res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
         res.estimates = e
@@ -782,7 +898,12 @@ fn candidate(
             .iter()
             .find(|t| t.test == "whiteness")
             .map_or(0.0, |t| t.z);
-        Ok(Some((ext, f)))
+        Ok(Some(Fitted {
+            sys: ext,
+            fit: f,
+            white: white_fit,
+            white_won,
+        }))
     };
     match run() {
         Ok(x) => (res, x),

@@ -1,7 +1,7 @@
 //! Issue 18.2: evidence without stated noise. When `dataset.json` states no
-//! noise at all, `InputNoise::Auto` (`--input-noise auto`, not yet the
-//! default) estimates the input noise on few trajectories, so the likelihood ratios weigh the integrated encoder
-//! noise: clean data name nothing (the white-noise ratios named an effect on
+//! noise at all, `InputNoise::Auto` (`--input-noise auto`, the default)
+//! estimates the input noise on few trajectories, so the likelihood ratios
+//! weigh the integrated encoder noise: clean data name nothing (the white-noise ratios named an effect on
 //! 11 of 60 such sets, docs/diagnose.md), while a hidden effect is still
 //! named with its magnitude.
 
