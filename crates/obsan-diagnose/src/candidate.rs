@@ -1,0 +1,261 @@
+//! One candidate effect weighed against the current model (a round of
+//! [`crate::workflow`]): the exact rank test on these data, then the fits
+//! under the noise models in use and the likelihood ratio, moved out of
+//! workflow.rs whole.
+
+use crate::error::DiagnoseError;
+use crate::generate::ORIGIN_GENERATED;
+use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
+use crate::model_fit::{class_inputs, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z};
+use crate::start::extended_start;
+use crate::stats::chi2_1_p;
+use crate::workflow::{CandidateResult, DiagnoseOptions, MAX_RANK_OUTPUTS, ORIGIN_FILE};
+use obsan_data::Dataset;
+use obsan_model::{Effect, Kind, System};
+
+/// The noise models a candidate is weighed under: the levels in use and,
+/// under `auto` with estimated input noise, the white-input-noise end of
+/// the same family (its output levels and the current model's fit there).
+pub(crate) struct Noise<'a> {
+    pub(crate) sigma: &'a [f64],
+    pub(crate) noise: &'a [(String, f64)],
+    pub(crate) white: Option<(&'a [f64], &'a ModelFit)>,
+    /// The output levels are estimated: the white side's are then profiled
+    /// (each output's RMS at that fit), not held at the nominal fit's.
+    pub(crate) profile: bool,
+}
+
+/// A candidate's fit: the extended model, its fit under the noise model
+/// that won, its fit at white input noise when that lost (the next round's
+/// white side), and which won.
+#[derive(Clone)]
+pub(crate) struct Fitted {
+    pub(crate) sys: System,
+    pub(crate) fit: ModelFit,
+    pub(crate) white: Option<ModelFit>,
+    pub(crate) white_won: bool,
+}
+
+/// Under `auto` with estimated input noise, each side of the likelihood
+/// ratio takes the better of its fits at the estimated levels and at white
+/// input noise (`c = 0`, the boundary of the same family). That is the
+/// profile over a two-point set of the levels: it never exceeds the profile
+/// over all levels, so the test is no more liberal than the profile
+/// likelihood ratio, while an effect that explains the residual drift the
+/// estimate absorbed (a lag, whose fast states the linearised noise model
+/// cannot even carry) is weighed where it lives, at white noise.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn candidate(
+    base: &System,
+    base_fit: &ModelFit,
+    e: &Effect,
+    data: &Dataset,
+    which: &[usize],
+    levels: Noise,
+    (crit, robust_z): (f64, Option<f64>),
+    o: &DiagnoseOptions,
+    origin: &str,
+) -> (CandidateResult, Option<Fitted>) {
+    let Noise {
+        sigma,
+        noise,
+        white,
+        profile,
+    } = levels;
+    // -2 log L at white input noise, the output levels profiled when they
+    // are estimated (a lag's misfit inflates the nominal fit's levels).
+    let white_m2ll = |f: &ModelFit, sw: &[f64]| {
+        if profile {
+            f.m2ll_profiled()
+        } else {
+            f.m2ll_at(sw)
+        }
+    };
+    let mut res = CandidateResult {
+        effect: e.name.clone(),
+        description: e.description.clone(),
+        origin: if origin == ORIGIN_GENERATED {
+            ORIGIN_GENERATED
+        } else {
+            ORIGIN_FILE
+        }
+        .into(),
+        params: e.params.clone(),
+        identifiable: false,
+        rank: None,
+        symmetry: vec![],
+        estimates: vec![],
+        robust_sd: vec![],
+        lr: 0.0,
+        p_value: 1.0,
+        delta_bic: 0.0,
+        rms: vec![],
+        whiteness_z: 0.0,
+        significant: false,
+        white_input_noise: false,
+        error: None,
+        score: None,
+        screened_out: false,
+    };
+    let mut run = || -> Result<Option<Fitted>, DiagnoseError> {
+        let ext = base
+            .extend(&[e], origin)
+            .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
+        let prepared = prepare(&ext, data)?;
+        let (ins, der) = class_inputs(&ext);
+        let class: InputClass = input_class(&ins, &der, &prepared)?;
+        let consts: Vec<Vec<(String, f64)>> = prepared
+            .trajectories
+            .iter()
+            .map(|t| {
+                ext.decls_of(Kind::Const)
+                    .filter(|c| c.value.is_none())
+                    .map(|c| (c.name.clone(), t.meta.get(&c.name).copied().unwrap_or(0.0)))
+                    .collect()
+            })
+            .collect();
+        let outs = ext.output_names();
+        // Per trajectory, the most measured outputs (at most
+        // MAX_RANK_OUTPUTS): enough for the test, and every square-root
+        // output (a range) halves the density of usable random points.
+        let seen: Vec<Vec<bool>> = prepared
+            .trajectories
+            .iter()
+            .map(|t| {
+                let counts: Vec<usize> = outs
+                    .iter()
+                    .map(|o| {
+                        t.outputs
+                            .column(o)
+                            .map_or(0, |c| c.iter().filter(|v| v.is_some()).count())
+                    })
+                    .collect();
+                let mut order: Vec<usize> = (0..outs.len()).filter(|&i| counts[i] > 0).collect();
+                order.sort_by(|&a, &b| counts[b].cmp(&counts[a]).then(a.cmp(&b)));
+                order.truncate(MAX_RANK_OUTPUTS);
+                (0..outs.len()).map(|i| order.contains(&i)).collect()
+            })
+            .collect();
+        let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
+        let (pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
+        res.rank = Some((id.rank, id.n));
+        res.identifiable = e.params.iter().all(|p| id.param_observable(p));
+        if !res.identifiable {
+            if let Some((_, terms)) = id.symmetries.iter().find(|s| e.params.contains(&s.0)) {
+                res.symmetry = terms.clone();
+            }
+            return Ok(None);
+        }
+        // Each fit weighs its residuals by the covariance at its own
+        // estimate; their likelihoods then differ by cost and log-determinant
+        // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners for
+        // every candidate was tried: with large estimated drift the
+        // candidate fits did not leave their start.)
+        let rewrites_angle = e
+            .outputs
+            .iter()
+            .any(|(y, _)| base_fit.series.iter().any(|s| s.output == *y && s.angular));
+        let fit_under = |sigma: &[f64], noise: &[(String, f64)], base_m2ll: f64| {
+            let mut f = fit_model(&ext, &prepared, &pv, &sv, sigma, noise, o)?;
+            // A second start for a candidate that improves the fit, from a
+            // fit without the gross outliers (|e| > OUTLIER_Z sigma).
+            // Outputs that wrap make the cost discontinuous: a scaled bearing
+            // jumps at +-pi, and one bearing left on the wrong side of the
+            // jump by the nominal model's biased params is a 40-sigma
+            // residual that holds the fit short of the effect's size.
+            // Without it the fit finds the right side; the full data then
+            // polish that start, and the lower cost wins. Only an effect that
+            // replaces an angle output can make such a jump (the wrapped
+            // residual of a continuous prediction is continuous), so only
+            // those pay for the two extra fits (on MRCLAM a third of the fits
+            // that carry the lag's states).
+            if rewrites_angle && base_m2ll - f.m2ll() > crit * f.inflation() {
+                if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
+                    let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
+                    let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o)
+                        .and_then(|t| {
+                            let pv: Vec<f64> = t.params.iter().map(|p| p.1).collect();
+                            fit_model(&ext, &prepared, &pv, &t.initial_states, sigma, noise, o)
+                        });
+                    if let Ok(f2) = f2 {
+                        if f2.m2ll() < f.m2ll() {
+                            f = f2;
+                        }
+                    }
+                }
+            }
+            Ok::<_, DiagnoseError>(f)
+        };
+        let held = fit_under(sigma, noise, base_fit.m2ll());
+        // Both sides of the ratio at their better noise model (see above);
+        // without a white side, the levels held and the fit's own m2ll.
+        let (f, white_fit, white_won, base_m2ll, f_m2ll) = match white {
+            None => {
+                let f = held?;
+                let m = f.m2ll();
+                (f, None, false, base_fit.m2ll(), m)
+            }
+            Some((sw, bw)) => {
+                let base_m2ll = base_fit.m2ll_at(sigma).min(white_m2ll(bw, sw));
+                match (held, fit_under(sw, &[], bw.m2ll())) {
+                    (Ok(h), Ok(w)) if h.m2ll_at(sigma) <= white_m2ll(&w, sw) => {
+                        let m = h.m2ll_at(sigma);
+                        (h, Some(w), false, base_m2ll, m)
+                    }
+                    (_, Ok(w)) => {
+                        let m = white_m2ll(&w, sw);
+                        (w, None, true, base_m2ll, m)
+                    }
+                    (Ok(h), Err(_)) => {
+                        let m = h.m2ll_at(sigma);
+                        (h, None, false, base_m2ll, m)
+                    }
+                    (Err(e), Err(_)) => return Err(e),
+                }
+            }
+        };
+        let inflate = f.inflation();
+        res.lr = (base_m2ll - f_m2ll).max(0.0) / inflate;
+        res.white_input_noise = white_won;
+        res.p_value = chi2_1_p(res.lr);
+        res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
+        res.estimates = e
+            .params
+            .iter()
+            .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
+            .collect();
+        res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
+        // `robust_z`: every new param also this many cluster-robust sds from
+        // 0 (the spread across trajectories does not read the within-
+        // trajectory drift as evidence); an sd that is not finite (one
+        // trajectory) does not veto.
+        let robust_ok = robust_z.is_none_or(|z| {
+            res.estimates
+                .iter()
+                .zip(&res.robust_sd)
+                .all(|((_, v, _), r)| !(r.is_finite() && *r > 0.0) || (v / r).abs() > z)
+        });
+        res.significant = res.lr > crit && res.delta_bic < 0.0 && robust_ok;
+        res.rms = f.rms.clone();
+        res.whiteness_z = f
+            .residuals
+            .tests
+            .iter()
+            .find(|t| t.test == "whiteness")
+            .map_or(0.0, |t| t.z);
+        Ok(Some(Fitted {
+            sys: ext,
+            fit: f,
+            white: white_fit,
+            white_won,
+        }))
+    };
+    match run() {
+        Ok(x) => (res, x),
+        Err(e) => {
+            res.error = Some(e.to_string());
+            (res, None)
+        }
+    }
+}
