@@ -40,7 +40,6 @@ pub use relation::{InputCheck, TrajectoryCheck};
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;
 pub use start::start_values;
-pub use stats::{chi2_1_p, chi2_critical, chi2_z, normal_critical};
 pub use workflow::{
     diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival,
     AUTO_ESTIMATE_BELOW, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
