@@ -4,12 +4,11 @@
 //! workflow.rs whole.
 
 use crate::error::DiagnoseError;
-use crate::generate::ORIGIN_GENERATED;
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::model_fit::{class_inputs, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z};
 use crate::start::extended_start;
 use crate::stats::chi2_1_p;
-use crate::workflow::{CandidateResult, DiagnoseOptions, MAX_RANK_OUTPUTS, ORIGIN_FILE};
+use crate::workflow::{CandidateResult, DiagnoseOptions, MAX_RANK_OUTPUTS};
 use obsan_data::Dataset;
 use obsan_model::{Effect, Kind, System};
 
@@ -71,32 +70,7 @@ pub(crate) fn candidate(
             f.m2ll_at(sw)
         }
     };
-    let mut res = CandidateResult {
-        effect: e.name.clone(),
-        description: e.description.clone(),
-        origin: if origin == ORIGIN_GENERATED {
-            ORIGIN_GENERATED
-        } else {
-            ORIGIN_FILE
-        }
-        .into(),
-        params: e.params.clone(),
-        identifiable: false,
-        rank: None,
-        symmetry: vec![],
-        estimates: vec![],
-        robust_sd: vec![],
-        lr: 0.0,
-        p_value: 1.0,
-        delta_bic: 0.0,
-        rms: vec![],
-        whiteness_z: 0.0,
-        significant: false,
-        white_input_noise: false,
-        error: None,
-        score: None,
-        screened_out: false,
-    };
+    let mut res = CandidateResult::untried(e, origin);
     let mut run = || -> Result<Option<Fitted>, DiagnoseError> {
         let ext = base
             .extend(&[e], origin)

@@ -202,25 +202,9 @@ where
 /// The round's entry for a generated candidate left unfitted by its score.
 pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
     CandidateResult {
-        effect: e.name.clone(),
-        description: e.description.clone(),
-        origin: crate::generate::ORIGIN_GENERATED.into(),
-        params: e.params.clone(),
-        identifiable: false,
-        rank: None,
-        symmetry: vec![],
-        estimates: vec![],
-        robust_sd: vec![],
-        lr: 0.0,
-        p_value: 1.0,
-        delta_bic: 0.0,
-        rms: vec![],
-        whiteness_z: 0.0,
-        significant: false,
-        white_input_noise: false,
-        error: None,
         score: Some(score),
         screened_out: true,
+        ..CandidateResult::untried(e, crate::generate::ORIGIN_GENERATED)
     }
 }
 

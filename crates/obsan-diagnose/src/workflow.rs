@@ -141,6 +141,40 @@ pub struct CandidateResult {
     pub screened_out: bool,
 }
 
+impl CandidateResult {
+    /// A candidate's entry before anything is known of it: not identifiable,
+    /// not fitted. `origin` is the generated marker or anything else (the
+    /// effects file).
+    pub(crate) fn untried(e: &Effect, origin: &str) -> CandidateResult {
+        CandidateResult {
+            effect: e.name.clone(),
+            description: e.description.clone(),
+            origin: if origin == ORIGIN_GENERATED {
+                ORIGIN_GENERATED
+            } else {
+                ORIGIN_FILE
+            }
+            .into(),
+            params: e.params.clone(),
+            identifiable: false,
+            rank: None,
+            symmetry: vec![],
+            estimates: vec![],
+            robust_sd: vec![],
+            lr: 0.0,
+            p_value: 1.0,
+            delta_bic: 0.0,
+            rms: vec![],
+            whiteness_z: 0.0,
+            significant: false,
+            white_input_noise: false,
+            error: None,
+            score: None,
+            screened_out: false,
+        }
+    }
+}
+
 /// One named effect.
 #[derive(Clone, Debug, Serialize)]
 pub struct Named {
