@@ -45,12 +45,17 @@ seed() {
   esac
 }
 
+# FUZZ_SEED fixes libFuzzer's seed (CI sets it, so a failure there reproduces
+# with the same command); unset, every run explores afresh.
+seed_arg=()
+[ -n "${FUZZ_SEED:-}" ] && seed_arg=(-seed="$FUZZ_SEED")
+
 status=0
 for t in "${targets[@]}"; do
   seed "$t"
   echo "== fuzz $t for ${secs}s"
   if ! cargo fuzz run --sanitizer none "$t" "fuzz/corpus/$t" -- \
-      -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+      -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${seed_arg[@]}" \
       >"fuzz/$t.log" 2>&1; then
     echo "   FAILED: see fuzz/$t.log and fuzz/artifacts/$t/"
     tail -30 "fuzz/$t.log"

@@ -12,6 +12,7 @@
 //! balanced tree, so the tree is at most [`MAX_HEIGHT`] high and every
 //! recursive pass over it (building, dropping, evaluating) stays shallow.
 
+use crate::budget::Limit;
 use crate::graph::Id;
 use crate::memo::Ctx;
 use crate::num::{int, Int, Q};
@@ -47,6 +48,10 @@ impl Span {
 pub struct ParseError {
     pub message: String,
     pub span: Span,
+    /// Set when the text is well formed but building it reached a limit of
+    /// the budget (size, degree, deadline): the input is not wrong, only
+    /// larger than the engine was allowed to go.
+    pub limit: Option<Limit>,
 }
 
 impl ParseError {
@@ -54,6 +59,16 @@ impl ParseError {
         ParseError {
             message: message.into(),
             span,
+            limit: None,
+        }
+    }
+
+    /// A budget limit reached while building well-formed text.
+    pub fn from_limit(limit: Limit, span: Span) -> ParseError {
+        ParseError {
+            message: limit.to_string(),
+            span,
+            limit: Some(limit),
         }
     }
 }
@@ -615,7 +630,7 @@ impl Ctx {
     ) -> Result<Id, ParseError> {
         match self.budgeted(|ctx| ctx.build_node(ast, resolve)) {
             (Err(e), _) => Err(e),
-            (Ok(_), Some(l)) => Err(ParseError::new(l.to_string(), ast.span)),
+            (Ok(_), Some(l)) => Err(ParseError::from_limit(l, ast.span)),
             (Ok(id), None) => Ok(id),
         }
     }
@@ -629,8 +644,10 @@ impl Ctx {
     ) -> Result<Id, ParseError> {
         let id = self.build_one(ast, resolve)?;
         if crate::budget::tripped() {
-            let why = crate::budget::reason().map_or_else(String::new, |l| l.to_string());
-            return Err(ParseError::new(why, ast.span));
+            return Err(match crate::budget::reason() {
+                Some(l) => ParseError::from_limit(l, ast.span),
+                None => ParseError::new("", ast.span),
+            });
         }
         Ok(id)
     }
@@ -640,7 +657,14 @@ impl Ctx {
         ast: &Ast,
         resolve: &mut dyn FnMut(&mut Ctx, &str, Span) -> Result<Id, ParseError>,
     ) -> Result<Id, ParseError> {
-        let at = |e: crate::lower::EngineError, s: Span| ParseError::new(e.0, s);
+        // An engine error after the budget tripped is that limit.
+        let at = |e: crate::lower::EngineError, s: Span| match crate::budget::tripped() {
+            true => match crate::budget::reason() {
+                Some(l) => ParseError::from_limit(l, s),
+                None => ParseError::new(e.0, s),
+            },
+            false => ParseError::new(e.0, s),
+        };
         Ok(match &ast.kind {
             AstKind::Num(q) => self.num(q.clone()),
             AstKind::Pi => self.pi(),

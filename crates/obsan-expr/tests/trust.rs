@@ -235,6 +235,37 @@ fn a_passed_deadline_stops_the_engine() {
         .unwrap_err();
     assert!(e.message.contains("expression too large"), "{}", e.message);
     assert!(e.span.start >= 4, "{:?}", e.span);
+    // ... and say so, so a caller can tell a limit from a syntax error.
+    assert!(
+        matches!(e.limit, Some(Limit::Terms { .. })),
+        "{:?}",
+        e.limit
+    );
+    assert_eq!(ctx.parse("1 + * x").unwrap_err().limit, None);
+}
+
+#[test]
+fn a_printed_form_past_the_budget_is_a_limit_not_a_syntax_error() {
+    // CI fuzz artifact crash-927dba8e (stop 24): the expanded printed form of
+    // this input hit the deadline while being re-read, and the fuzz target
+    // took that for a printed form that does not parse.
+    let src = " sqrt(( - pRKKKKKKKlx63 - x63 - x)^40- (KKKKKKK7i2yx - y)^2)";
+    let mut ctx = Ctx::new();
+    let r = {
+        let id = ctx.parse(src).unwrap();
+        ctx.try_canon(id).unwrap()
+    };
+    let text = ctx.ratfun_text(&r);
+    // Without a budget it reads back to the same form (an identity) ...
+    let back = ctx.parse(&text).unwrap();
+    assert_eq!(ctx.try_canon(back).unwrap(), r);
+    // ... and with a passed deadline the refusal is a limit, located.
+    ctx.set_budget(Budget {
+        deadline: Some(Instant::now()),
+        ..Budget::default()
+    });
+    let e = ctx.parse(&text).unwrap_err();
+    assert_eq!(e.limit, Some(Limit::Timeout), "{}", e.message);
 }
 
 #[test]
