@@ -37,7 +37,9 @@ fuzz_target!(|data: &[u8]| {
     // The printed form re-reads to the same canonical form. It is expanded,
     // so it can be far larger than the input: it gets a budget of its own,
     // and reaching that budget is not a bug; a syntax error is.
-    let text = ctx.ratfun_text(&r);
+    let Ok(text) = ctx.try_ratfun_text(&r, 1 << 20) else {
+        return;
+    };
     ctx.set_budget(budget());
     let reread = match ctx.parse(&text) {
         Ok(t) => ctx.try_canon(t),

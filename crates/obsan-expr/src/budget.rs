@@ -88,6 +88,8 @@ pub enum Limit {
     Degree { degree: u128, max: u128 },
     /// A numeric power would have more bits than the engine stores.
     Number { bits: u128, max: u128 },
+    /// A printed form would pass this many bytes.
+    Text { max: usize },
     /// The deadline passed.
     Timeout,
     /// The caller asked the computation to stop (see [`with_cancel`]).
@@ -113,6 +115,7 @@ impl fmt::Display for Limit {
             Limit::Number { bits, max } => {
                 write!(f, "number too large: about {bits} bits, the limit is {max}")
             }
+            Limit::Text { max } => write!(f, "printed form longer than {max} bytes"),
             Limit::Timeout => f.write_str("time limit reached; raise it with --timeout"),
             Limit::Cancelled => f.write_str("interrupted"),
             Limit::Internal(what) => write!(f, "internal error in the symbolic engine: {what}"),

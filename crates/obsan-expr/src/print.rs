@@ -1,12 +1,35 @@
 //! Printing canonical forms as plain text (which parses back to the same
 //! canonical form) and as LaTeX.
 
+use crate::budget::Limit;
 use crate::graph::{Angle, Id, LeafKind};
 use crate::memo::Ctx;
 use crate::num::Int;
 use crate::poly::{Mono, Poly, Var};
 use crate::ratfun::RatFun;
 use dashu_int::Sign;
+use std::cell::Cell;
+
+// The printed form is a tree over the canonical form's DAG: a leaf is written
+// out wherever it occurs, so text can grow exponentially with nesting (fuzz
+// timeout-5952913f: 77 characters print as 19.7 MB). `try_ratfun_text` caps
+// it; once over, every printer returns at once, so the work stays bounded too.
+thread_local! {
+    static TEXT_CAP: Cell<usize> = const { Cell::new(usize::MAX) };
+    static TEXT_OVER: Cell<bool> = const { Cell::new(false) };
+}
+
+fn text_over() -> bool {
+    TEXT_OVER.with(|o| o.get())
+}
+
+/// Record that `len` bytes were written; `true` once past the cap.
+fn text_check(len: usize) -> bool {
+    if len > TEXT_CAP.with(|c| c.get()) {
+        TEXT_OVER.with(|o| o.set(true));
+    }
+    text_over()
+}
 
 #[derive(Clone, Copy, PartialEq)]
 enum Style {
@@ -29,6 +52,21 @@ impl Ctx {
 
     pub fn ratfun_text(&self, r: &RatFun) -> String {
         self.fmt_ratfun(r, Style::Text, false)
+    }
+
+    /// [`Ctx::ratfun_text`], refused with [`Limit::Text`] once the text would
+    /// pass `max_bytes` (it may be far larger than the form it prints).
+    pub fn try_ratfun_text(&self, r: &RatFun, max_bytes: usize) -> Result<String, Limit> {
+        let prev = TEXT_CAP.with(|c| c.replace(max_bytes));
+        let prev_over = TEXT_OVER.with(|o| o.replace(false));
+        let s = self.fmt_ratfun(r, Style::Text, false);
+        let over = text_check(s.len());
+        TEXT_CAP.with(|c| c.set(prev));
+        TEXT_OVER.with(|o| o.set(prev_over));
+        if over {
+            return Err(Limit::Text { max: max_bytes });
+        }
+        Ok(s)
     }
 
     pub fn ratfun_latex(&self, r: &RatFun) -> String {
@@ -77,6 +115,9 @@ impl Ctx {
         }
         let mut out = String::new();
         for (i, (m, c)) in p.terms().iter().enumerate() {
+            if text_check(out.len()) {
+                return out;
+            }
             let neg = c.sign() == Sign::Negative;
             let a: Int = if neg { -c.clone() } else { c.clone() };
             if i == 0 {
@@ -135,6 +176,9 @@ impl Ctx {
     }
 
     fn fmt_leaf(&self, v: Var, st: Style) -> String {
+        if text_over() {
+            return String::new();
+        }
         let kind = &self.leaves[v as usize].kind;
         let angle = |a: &Angle| -> String {
             match a {

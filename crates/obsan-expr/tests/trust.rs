@@ -402,3 +402,30 @@ fn huge_rational_powers_are_refused_at_once() {
         "{digits} vs {expected}"
     );
 }
+
+#[test]
+fn building_a_long_printed_form_polls_the_deadline() {
+    // Fuzz timeout-5952913f: this 77-character input prints as 19.7 MB (the
+    // inner square root's radicand is written out in every term that holds
+    // it), and re-reading that ran for 30 s past a 2 s deadline: building is
+    // hash-consing, which polled nothing.
+    let src = " sqrt((lx45 - x)^2 + sqrt(( - c*(V - V*(V - V^4/ x)^2 / y)^27 )+ r)^3/3 + R)";
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    let text = ctx.ratfun_text(&r);
+    assert!(text.len() > 1_000_000, "{} bytes", text.len());
+    // The capped printer refuses it, and gives the same text under a cap it fits.
+    assert_eq!(
+        ctx.try_ratfun_text(&r, 1 << 20),
+        Err(Limit::Text { max: 1 << 20 })
+    );
+    assert_eq!(ctx.try_ratfun_text(&r, text.len()).as_ref(), Ok(&text));
+    assert_eq!(ctx.ratfun_text(&r), text, "the cap is restored");
+    ctx.set_budget(Budget {
+        deadline: Some(Instant::now()),
+        ..Budget::default()
+    });
+    let e = ctx.parse(&text).unwrap_err();
+    assert_eq!(e.limit, Some(Limit::Timeout), "{}", e.message);
+}
