@@ -1,6 +1,9 @@
 //! Cheap symmetries (free variables, translations, scalings) against known
 //! symmetries, compared by span.
 
+mod common;
+
+use common::rank_fp;
 use obsan_analysis::{rank, symmetries, Certificate, RankOptions, SymmetryKind};
 use obsan_expr::SplitMix;
 use obsan_model::{NormalForm, System};
@@ -40,27 +43,6 @@ fn check(src: &str, input: Option<&str>, known: &[&[&str]]) -> Vec<SymmetryKind>
 
 fn parse(nf: &mut NormalForm, e: &str) -> obsan_expr::Id {
     nf.parse_expr(e, false).unwrap()
-}
-
-fn rank_fp(mut m: Vec<Vec<obsan_expr::Fp>>) -> usize {
-    let mut r = 0;
-    let cols = m.first().map_or(0, |x| x.len());
-    for c in 0..cols {
-        let Some(i) = (r..m.len()).find(|&i| !m[i][c].is_zero()) else {
-            continue;
-        };
-        m.swap(r, i);
-        let inv = m[r][c].inv().unwrap();
-        let pr: Vec<_> = m[r].iter().map(|&x| x * inv).collect();
-        for row in m.iter_mut().skip(r + 1) {
-            let f = row[c];
-            for (x, y) in row.iter_mut().zip(&pr) {
-                *x = *x - f * *y;
-            }
-        }
-        r += 1;
-    }
-    r
 }
 
 #[test]

@@ -1,6 +1,9 @@
 //! Symmetries by reconstruction (sym_recon.rs), compared by span with known
 //! symmetries and with the exact route, and the certificate's teeth.
 
+mod common;
+
+use common::rank_fp;
 use obsan_analysis::{
     certify_symmetries, rank, symmetries_with, Certificate, RankOptions, RankReport, Route,
     SymmetryOptions, SymmetryReport,
@@ -47,27 +50,6 @@ fn recon(path: &str, input: Option<&str>) -> (NormalForm, RankReport, SymmetryRe
         other => panic!("{path}: expected the random certificate, got {other:?}"),
     }
     (nf, r, s)
-}
-
-fn rank_fp(mut m: Vec<Vec<Fp>>) -> usize {
-    let mut r = 0;
-    let cols = m.first().map_or(0, |x| x.len());
-    for c in 0..cols {
-        let Some(i) = (r..m.len()).find(|&i| !m[i][c].is_zero()) else {
-            continue;
-        };
-        m.swap(r, i);
-        let inv = m[r][c].inv().unwrap();
-        let pr: Vec<_> = m[r].iter().map(|&x| x * inv).collect();
-        for row in m.iter_mut().skip(r + 1) {
-            let f = row[c];
-            for (x, y) in row.iter_mut().zip(&pr) {
-                *x = *x - f * *y;
-            }
-        }
-        r += 1;
-    }
-    r
 }
 
 fn values(nf: &mut NormalForm, v: &[RatFun], pt: &obsan_expr::FpPoint) -> Vec<Fp> {
