@@ -220,12 +220,10 @@ mod tests {
 
     const P: u64 = PRIMES[3];
 
-    #[test]
-    fn gauss_solves_a_random_system() {
-        let mut rng = Rng::new(1);
-        let n = 7;
+    /// A random solution x and `m` augmented rows `[a | a.x]` in `n` unknowns.
+    fn random_system(rng: &mut Rng, m: usize, n: usize) -> (Vec<u64>, Vec<Vec<u64>>) {
         let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
-        let rows: Vec<Vec<u64>> = (0..n)
+        let rows = (0..m)
             .map(|_| {
                 let mut r: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
                 let b = r
@@ -236,6 +234,14 @@ mod tests {
                 r
             })
             .collect();
+        (x, rows)
+    }
+
+    #[test]
+    fn gauss_solves_a_random_system() {
+        let mut rng = Rng::new(1);
+        let n = 7;
+        let (x, rows) = random_system(&mut rng, n, n);
         assert_eq!(solve(rows, P).unwrap(), x);
         // Two equal rows: singular.
         let row = vec![1, 2, 3];
@@ -246,18 +252,7 @@ mod tests {
     fn overdetermined_systems_need_consistency_and_full_rank() {
         let mut rng = Rng::new(2);
         let (m, n) = (9, 5);
-        let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
-        let mut rows: Vec<Vec<u64>> = (0..m)
-            .map(|_| {
-                let mut r: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
-                let b = r
-                    .iter()
-                    .zip(&x)
-                    .fold(0, |s, (&a, &xi)| add(s, mul(a, xi, P), P));
-                r.push(b);
-                r
-            })
-            .collect();
+        let (x, mut rows) = random_system(&mut rng, m, n);
         assert_eq!(solve_over(rows.clone(), n, P).unwrap(), x);
         // One right-hand side off: no solution.
         rows[7][n] = add(rows[7][n], 1, P);
