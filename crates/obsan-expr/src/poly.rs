@@ -315,6 +315,13 @@ impl Poly {
         if budget::tripped() {
             return Poly::zero();
         }
+        if let Some(p) = self.mul_packed(o) {
+            return p;
+        }
+        self.mul_generic(o)
+    }
+    /// The product with a map keyed by word lists (any variables and degrees).
+    fn mul_generic(&self, o: &Poly) -> Poly {
         // At most len(a) len(b) terms, usually far fewer: cap the reservation.
         let mut map: HashMap<Mono, Int> = HashMap::with_capacity_and_hasher(
             self.len().saturating_mul(o.len()).min(1 << 16),
@@ -339,6 +346,98 @@ impl Poly {
         budget::check_terms(terms.len());
         terms.sort_unstable_by(|a, b| b.0.cmp(&a.0));
         Poly { terms }
+    }
+    /// The product with every monomial packed into one `u64` (a field per
+    /// variable, wide enough for the sum of the operands' degrees, so exponents
+    /// never carry into each other); `None` when the fields do not fit. The
+    /// map then holds 8-byte keys instead of word lists: the large products of
+    /// a rationalisation are bound by memory traffic (issue: proptest seed 29).
+    fn mul_packed(&self, o: &Poly) -> Option<Poly> {
+        // Per variable, the largest exponent in each operand.
+        let mut vars: Vec<(Var, u64)> = Vec::new();
+        for p in [self, o] {
+            let mut mine: BTreeMap<Var, u64> = BTreeMap::new();
+            for (m, _) in &p.terms {
+                for (v, e) in m.iter() {
+                    let d = mine.entry(v).or_insert(0);
+                    *d = (*d).max(e as u64);
+                }
+            }
+            for (v, d) in mine {
+                match vars.iter_mut().find(|(w, _)| *w == v) {
+                    Some(x) => x.1 += d,
+                    None => vars.push((v, d)),
+                }
+            }
+        }
+        vars.sort_unstable();
+        // (variable, shift, width) per field; the exponent sums must stay in u32.
+        let mut fields = Vec::with_capacity(vars.len());
+        let mut shift = 0u32;
+        for &(v, top) in &vars {
+            if top > u32::MAX as u64 {
+                return None;
+            }
+            let width = 64 - top.leading_zeros();
+            fields.push((v, shift, width));
+            shift += width;
+            if shift > 64 {
+                return None;
+            }
+        }
+        let key = |m: &Mono| -> u64 {
+            let mut k = 0u64;
+            let mut f = 0;
+            for (v, e) in m.iter() {
+                while fields[f].0 != v {
+                    f += 1;
+                }
+                k |= (e as u64) << fields[f].1;
+            }
+            k
+        };
+        let ka: Vec<u64> = self.terms.iter().map(|(m, _)| key(m)).collect();
+        let kb: Vec<u64> = o.terms.iter().map(|(m, _)| key(m)).collect();
+        let mut map: HashMap<u64, Int> = HashMap::with_capacity_and_hasher(
+            self.len().saturating_mul(o.len()).min(1 << 16),
+            Default::default(),
+        );
+        for (i, (_, ca)) in self.terms.iter().enumerate() {
+            if !budget::poll() || !budget::check_terms(map.len()) {
+                return Some(Poly::zero());
+            }
+            for (j, (_, cb)) in o.terms.iter().enumerate() {
+                // Fields are wide enough for the sum: adding keys adds exponents.
+                let c = ca * cb;
+                match map.entry(ka[i] + kb[j]) {
+                    std::collections::hash_map::Entry::Occupied(mut e) => *e.get_mut() += c,
+                    std::collections::hash_map::Entry::Vacant(e) => {
+                        e.insert(c);
+                    }
+                }
+            }
+        }
+        let mut terms: Vec<(Mono, Int)> = map
+            .into_iter()
+            .filter(|(_, c)| !c.is_zero())
+            .map(|(k, c)| {
+                let mut w: SmallVec<[u64; 8]> = SmallVec::new();
+                for &(v, sh, width) in &fields {
+                    let e = if width == 64 {
+                        k >> sh
+                    } else {
+                        (k >> sh) & ((1u64 << width) - 1)
+                    };
+                    if e > 0 {
+                        w.push(pack(v, e as u32));
+                    }
+                }
+                (Mono(w), c)
+            })
+            .collect();
+        budget::check_terms(terms.len());
+        terms.sort_unstable_by(|a, b| b.0.cmp(&a.0));
+        Some(Poly { terms })
     }
     pub fn mul_term(&self, m: &Mono, c: &Int) -> Poly {
         if c.is_zero() {
@@ -668,5 +767,35 @@ mod tests {
         let direct = x(0).add(&q.scale(&int(3))).sub(&Poly::constant(int(2)));
         assert_eq!(s, direct);
         assert_eq!(Poly::from_coeffs(1, &q.coeffs_in(1)), q);
+    }
+
+    /// The packed product equals the generic one: exponent fields at their
+    /// width limit (a sum needing exactly the field), a single variable with a
+    /// 33-bit field, and operands whose fields do not fit (the fallback).
+    #[test]
+    fn packed_product_agrees_with_the_generic_one() {
+        let seeds = [
+            x(0).add(&x(1).pow(3)).sub(&x(2).scale(&int(-7))),
+            x(3).pow(7).add(&x(0).mul(&x(3))).add(&Poly::one()),
+            x(1).pow(15).sub(&x(2).pow(16).scale(&int(1 << 40))),
+        ];
+        for a in &seeds {
+            for b in &seeds {
+                let p = a.mul(b).add(&x(4));
+                let q = b.pow(2).sub(&a.scale(&int(3)));
+                let packed = p.mul_packed(&q).expect("small degrees fit one word");
+                assert_eq!(packed, p.mul_generic(&q));
+            }
+        }
+        let big = Poly::monomial(Mono::var(5, u32::MAX / 2), int(3)).add(&Poly::one());
+        let packed = big.mul_packed(&big).expect("one 32-bit field fits");
+        assert_eq!(packed, big.mul_generic(&big));
+        assert_eq!(packed.degree(5), u32::MAX - 1);
+        // Three variables of degree 2^30 need 93 bits: the generic path.
+        let wide: Poly = (0..3)
+            .map(|v| Poly::monomial(Mono::var(v, 1 << 30), int(1)))
+            .fold(Poly::one(), |acc, t| acc.add(&t));
+        assert!(wide.mul_packed(&wide).is_none());
+        assert_eq!(wide.mul(&wide), wide.mul_generic(&wide));
     }
 }
