@@ -1,7 +1,7 @@
 //! The ground-truth figures of docs/diagnose.md ("Against the ground truth"),
 //! computed from the raw MRCLAM files: what the Vicon poses say about the
 //! odometry and the range sensor, independently of obsan's fits; and the
-//! checks of the cascade `--generated` names (/work/wt/briefs13/vicon-section.md,
+//! checks of the cascade `--generated` names (docs/diagnose.md, generated candidates;
 //! issue 18.6): the bearings against the Vicon pose, the turn rate by speed,
 //! the heading drift of the commanded odometry, and the bearing scale that
 //! drift alone produces in a deterministic fit of a window.
