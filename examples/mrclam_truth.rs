@@ -254,9 +254,13 @@ fn robot(dir: &str, r: u32) -> Result<(), Box<dyn Error>> {
     let cum_v = Integral::new(&od, |v, w| w * v.abs());
     let bs = bearings(&track, &read_rows(&file("Measurement"))?, &lms, &windows);
     turn_by_speed(&track, &od, &windows);
-    turn_by_window_fit(&track, &cum, &cum_v, &windows);
+    for sub in [60.0, 20.0, 10.0] {
+        turn_by_window_fit(&track, &cum, &cum_v, &windows, sub);
+    }
     heading_drift(&track, &cum, &windows, (a, b / 60.0));
-    drift_as_scale(&bs, &track, &cum, &windows);
+    for sub in [60.0, 20.0, 10.0] {
+        drift_as_scale(&bs, &track, &cum, &windows, sub);
+    }
     pairwise_scale(&bs);
     Ok(())
 }
@@ -634,14 +638,24 @@ fn heading_drift(track: &Track, cum: &Integral, windows: &[(f64, f64)], ab: (f64
 /// positions, each window's initial heading free: the bearing scale the
 /// drift alone would produce (synthetic: measured := Vicon bearing) and the
 /// one the real bearings give, against the Vicon heading's.
-fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64, f64)]) {
+fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64, f64)], sub: f64) {
+    // Each window cut into pieces of `sub` s, each piece its own initial
+    // heading; clusters stay the windows.
+    let start = |b: &Bearing| {
+        let a = windows[b.w].0;
+        a + ((b.t - a) / sub).floor() * sub
+    };
     let g: Vec<usize> = bs.iter().map(|b| b.w).collect();
+    let gs: Vec<usize> = bs
+        .iter()
+        .map(|b| b.w * 1000 + ((b.t - windows[b.w].0) / sub) as usize)
+        .collect();
     let odo: Vec<f64> = bs
         .iter()
         .map(|b| {
-            let w = windows[b.w];
-            let th0 = track.at(w.0 + LAG).map_or(0.0, |p| p[2]);
-            th0 + cum.at(b.t - LAG) - cum.at(w.0)
+            let a = start(b);
+            let th0 = track.at(a + LAG).map_or(0.0, |p| p[2]);
+            th0 + cum.at(b.t - LAG) - cum.at(a)
         })
         .collect();
     // Bearing predicted with the odometry heading.
@@ -653,8 +667,8 @@ fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64
     let since: Vec<(f64, f64)> = bs
         .iter()
         .map(|b| {
-            let w = windows[b.w];
-            (cum.at(b.t - LAG) - cum.at(w.0), b.t - w.0)
+            let w = start(b);
+            (cum.at(b.t - LAG) - cum.at(w), b.t - w)
         })
         .collect();
     let fit = |target: &dyn Fn(&Bearing) -> f64, heading: bool, turn: bool| {
@@ -675,7 +689,7 @@ fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64
             .zip(&pred)
             .map(|(b, p)| target(b) - if heading { *p } else { b.truth })
             .collect();
-        demean(&mut x, &mut y, &g);
+        demean(&mut x, &mut y, &gs);
         ols(&x, &y, &g)
     };
     let measured = |b: &Bearing| b.meas;
@@ -688,11 +702,22 @@ fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64
     // per window) in the regressor shrinks the slope by var d / (var b + var d).
     let mut d: Vec<Vec<f64>> = bs.iter().map(|b| vec![b.truth]).collect();
     let mut e: Vec<f64> = bs.iter().zip(&pred).map(|(b, p)| b.truth - p).collect();
-    demean(&mut d, &mut e, &g);
+    demean(&mut d, &mut e, &gs);
     let (vb, vd) = (
         d.iter().map(|r| r[0] * r[0]).sum::<f64>() / d.len() as f64,
         e.iter().map(|v| v * v).sum::<f64>() / e.len() as f64,
     );
+    if sub < 60.0 {
+        println!(
+            "    pieces of {sub:.0} s: {}, {}",
+            show(
+                "synthetic, turn scale and bias free",
+                fit(&synthetic, true, true)
+            ),
+            show("measured", fit(&measured, true, true)),
+        );
+        return;
+    }
     println!(
         "  bearing scale per window (initial heading free) with the odometry heading: {}, {}; with a turn scale and bias free too: {}, {}; with the Vicon heading: {}",
         show("synthetic (no camera error)", fit(&synthetic, true, false)),
@@ -714,30 +739,35 @@ fn drift_as_scale(bs: &[Bearing], track: &Track, cum: &Integral, windows: &[(f64
 /// bw (t - t0) + const, C the commanded turn, D the integral of omega |v|
 /// (inputs `LAG` late), every 0.5 s; c = q / p. The drift of the commanded
 /// heading is the residual here, not white noise.
-fn turn_by_window_fit(track: &Track, cum: &Integral, cum_v: &Integral, w: &[(f64, f64)]) {
-    let (mut x, mut y, mut g) = (vec![], vec![], vec![]);
-    for (k, &(a, b)) in w.iter().enumerate() {
-        let Some(p0) = track.at(a + LAG) else {
-            continue;
-        };
-        let mut t = a;
-        while t <= b {
-            if let Some(p) = track.at(t + LAG) {
-                x.push(vec![
-                    cum.at(t) - cum.at(a),
-                    cum_v.at(t) - cum_v.at(a),
-                    t - a,
-                ]);
-                y.push(p[2] - p0[2]);
-                g.push(k);
+fn turn_by_window_fit(track: &Track, cum: &Integral, cum_v: &Integral, w: &[(f64, f64)], sub: f64) {
+    let (mut x, mut y, mut g, mut gs) = (vec![], vec![], vec![], vec![]);
+    for (k, &(a0, b)) in w.iter().enumerate() {
+        // Pieces of `sub` s, each with its own initial heading.
+        for piece in 0..((b - a0) / sub).ceil() as usize {
+            let a = a0 + piece as f64 * sub;
+            let Some(p0) = track.at(a + LAG) else {
+                continue;
+            };
+            let mut t = a;
+            while t <= b && t < a + sub {
+                if let Some(p) = track.at(t + LAG) {
+                    x.push(vec![
+                        cum.at(t) - cum.at(a),
+                        cum_v.at(t) - cum_v.at(a),
+                        t - a,
+                    ]);
+                    y.push(p[2] - p0[2]);
+                    g.push(k);
+                    gs.push(k * 1000 + piece);
+                }
+                t += 0.5;
             }
-            t += 0.5;
         }
     }
     let mut xs: Vec<Vec<f64>> = x.iter().map(|r| vec![r[0], r[1]]).collect();
     let mut ys = y.clone();
-    demean(&mut x, &mut y, &g);
-    demean(&mut xs, &mut ys, &g);
+    demean(&mut x, &mut y, &gs);
+    demean(&mut xs, &mut ys, &gs);
     for (label, f) in [
         ("with a turn bias", ols(&x, &y, &g)),
         ("without", ols(&xs, &ys, &g)),
@@ -748,7 +778,7 @@ fn turn_by_window_fit(track: &Track, cum: &Integral, cum_v: &Integral, w: &[(f64
         let v = &f.vcr;
         let sc = (dp * dp * v[0][0] + 2.0 * dp * dq * v[0][1] + dq * dq * v[1][1]).sqrt();
         println!(
-            "    window fit of the Vicon heading ({label}): a = {:.3} [{:.3}], c = {:.2} [{:.2}] s/m",
+            "    window fit of the Vicon heading, pieces of {sub:.0} s ({label}): a = {:.3} [{:.3}], c = {:.2} [{:.2}] s/m",
             p - 1.0,
             f.cr(0),
             q / p,
