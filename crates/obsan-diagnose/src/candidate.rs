@@ -54,6 +54,7 @@ pub(crate) fn candidate(
     (crit, robust_z): (f64, Option<f64>),
     o: &DiagnoseOptions,
     origin: &str,
+    warm: Option<&[f64]>,
 ) -> (CandidateResult, Option<Fitted>) {
     let Noise {
         sigma,
@@ -111,7 +112,11 @@ pub(crate) fn candidate(
             })
             .collect();
         let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
-        let (pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        let (mut pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        // A warm start: the new params at the candidate's previous estimate.
+        if let Some(w) = warm.filter(|w| w.len() == pv.len() - base_pv.len()) {
+            pv[base_pv.len()..].copy_from_slice(w);
+        }
         let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
         res.rank = Some((id.rank, id.n));
         res.identifiable = e.params.iter().all(|p| id.param_observable(p));

@@ -123,6 +123,65 @@ pub(crate) fn score(
     Ok(quadratic_form(a, g) / f.inflation())
 }
 
+/// The screen's stand-in for an effect of the user's file (the generated
+/// ones carry theirs, [`crate::Generated::screen`]): the effect itself when
+/// it adds no state and no delay; for a first-order lag written as
+/// `state s = u`, `s' = (u - s)/T`, `subst x = s` (mrclam.eff's
+/// actuator_lag) its limit as T -> 0, `x = u - T rate(u)`, the state held at
+/// the first input as the generated lag's; for a bare `delay tau`, every
+/// measured input `u - tau rate(u)` (the delay to first order). `None`:
+/// any other form, always fitted. `inputs` are the model's measured inputs.
+pub(crate) fn file_stand_in(e: &Effect, inputs: &[String]) -> Option<Effect> {
+    let bare = e.inputs.is_empty() && e.consts.is_empty() && e.compares.is_empty();
+    if e.states.is_empty() && e.delay.is_none() {
+        return Some(e.clone());
+    }
+    if !bare || e.params.len() != 1 || !e.outputs.is_empty() {
+        return None;
+    }
+    let t = &e.params[0];
+    let rate = |u: &str| format!("s_rate_{}_{u}", e.name);
+    let mut body = format!("effect {}\nparam {t}\n", e.name);
+    if let Some(tau) = &e.delay {
+        if tau != t || !e.states.is_empty() || !e.substs.is_empty() || !e.dynamics.is_empty() {
+            return None;
+        }
+        for u in inputs {
+            let r = rate(u);
+            body.push_str(&format!(
+                "input {r} = rate({u})\nsubst {u} = {u} - {t}*{r}\n"
+            ));
+        }
+    } else {
+        let squash = |x: &str| x.chars().filter(|c| !c.is_whitespace()).collect::<String>();
+        if e.substs.len() != e.states.len() || e.dynamics.len() != e.states.len() {
+            return None;
+        }
+        for (x, s) in &e.substs {
+            let s = squash(s);
+            let u = e
+                .starts
+                .iter()
+                .find(|(n, _)| *n == s)
+                .map(|(_, u)| squash(u))?;
+            let d = e
+                .dynamics
+                .iter()
+                .find(|(n, _)| *n == s)
+                .map(|(_, d)| squash(d))?;
+            if !inputs.contains(&u) || d != format!("({u}-{s})/{t}") {
+                return None;
+            }
+            let r = rate(&u);
+            body.push_str(&format!(
+                "input {r} = rate({u})\nsubst {x} = {u} - {t}*{r}\n"
+            ));
+        }
+    }
+    let lib = obsan_model::EffectLibrary::parse(&body, crate::generate::ORIGIN_GENERATED).ok()?;
+    lib.effects.into_iter().next()
+}
+
 /// One candidate's outcome: its round entry and, when fitted, the extended
 /// model and its fit (`T`, the workflow's record of it).
 pub(crate) type Outcome<T> = (CandidateResult, Option<T>);
@@ -199,7 +258,8 @@ where
         .collect()
 }
 
-/// The round's entry for a generated candidate left unfitted by its score.
+/// The round's entry for a candidate left unfitted by its score (marked
+/// generated; the workflow marks the file's).
 pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
     CandidateResult {
         score: Some(score),
