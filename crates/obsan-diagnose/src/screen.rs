@@ -309,6 +309,47 @@ mod tests {
     use super::*;
 
     #[test]
+    fn file_lags_and_delays_get_their_first_order_stand_ins() {
+        let lib = obsan_model::EffectLibrary::parse(
+            "effect lag\nparam T = 0.2\nstate va = v, wa = omega\nva' = (v - va)/T\n\
+             wa' = (omega - wa)/T\nsubst v = va, omega = wa\n\
+             effect late\nparam tau\ndelay tau\n\
+             effect odd\nparam T\nstate s = v\ns' = (v - 2*s)/T\nsubst v = s\n\
+             effect scale\nparam k\nsubst v = (1 + k)*v\n",
+            "test",
+        )
+        .unwrap();
+        let inputs = ["v".to_string(), "omega".to_string()];
+        let st: Vec<Option<Effect>> = lib
+            .effects
+            .iter()
+            .map(|e| file_stand_in(e, &inputs))
+            .collect();
+        // u - T rate(u) per lagged input, no state; the delay on each input.
+        for (i, par) in [(0, "T"), (1, "tau")] {
+            let e = st[i].as_ref().unwrap();
+            assert!(e.states.is_empty() && e.delay.is_none());
+            assert_eq!(e.params, vec![par.to_string()]);
+            let substs: Vec<(&str, String)> = e
+                .substs
+                .iter()
+                .map(|(u, x)| (u.as_str(), x.replace(' ', "")))
+                .collect();
+            let n = &lib.effects[i].name;
+            assert_eq!(
+                substs,
+                vec![
+                    ("v", format!("v-{par}*s_rate_{n}_v")),
+                    ("omega", format!("omega-{par}*s_rate_{n}_omega"))
+                ]
+            );
+        }
+        // Another form of state is not guessed at; a plain effect is itself.
+        assert!(st[2].is_none());
+        assert_eq!(st[3].as_ref(), Some(&lib.effects[3]));
+    }
+
+    #[test]
     fn quadratic_form_is_the_least_squares_decrease() {
         // r = (1, 2, 2), one column (1, 1, 0): the fitted decrease is
         // (1 + 2)^2 / 2 = 4.5; a second column equal to the first adds none.
