@@ -27,7 +27,7 @@ const DT: f64 = 0.02;
 /// `v (1 + c |omega|)` (c = 0: the nominal model).
 fn simulate(sys: &System, c: f64, seed: u64) -> Dataset {
     let mut rng = Rng(SplitMix(seed));
-    let (codes, marks, meta) = ring(sys);
+    let common::Ring { codes, marks, meta } = ring(sys);
     let outs = sys.output_names();
     let mut trajectories = Vec::new();
     for w in 0..6 {

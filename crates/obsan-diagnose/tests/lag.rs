@@ -26,7 +26,7 @@ fn simulate(sys: &System, params: &[f64], seed: u64) -> Dataset {
 fn simulate_noisy(sys: &System, params: &[f64], seed: u64, c: [f64; 2]) -> Dataset {
     let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
     let mut rng = Rng(SplitMix(seed));
-    let (codes, _, meta) = ring(sys);
+    let common::Ring { codes, meta, .. } = ring(sys);
     let consts: Vec<f64> = p.consts.iter().map(|c| meta[c]).collect();
     let mut trajectories = Vec::new();
     for w in 0..6 {

@@ -23,10 +23,20 @@ impl Rng {
     }
 }
 
-/// The landmark codes of `sys` (its `lxNN` constants), their positions
-/// evenly on a ring of radius 4 m, and the trajectories' meta (`lxNN`,
-/// `lyNN`).
-pub fn ring(sys: &System) -> (Vec<String>, Vec<(f64, f64)>, BTreeMap<String, f64>) {
+/// The landmarks of a [`ring`].
+pub struct Ring {
+    /// The codes of `sys`'s `lxNN` constants.
+    pub codes: Vec<String>,
+    /// Their positions, evenly on a ring of radius 4 m (read by
+    /// diagb_generated.rs, whose simulator is not obsan's predictor).
+    #[allow(dead_code)]
+    pub marks: Vec<(f64, f64)>,
+    /// The trajectories' meta (`lxNN`, `lyNN`).
+    pub meta: BTreeMap<String, f64>,
+}
+
+/// `sys`'s landmarks on a ring.
+pub fn ring(sys: &System) -> Ring {
     let codes: Vec<String> = sys
         .decls_of(Kind::Const)
         .filter_map(|d| d.name.strip_prefix("lx").map(str::to_string))
@@ -39,5 +49,5 @@ pub fn ring(sys: &System) -> (Vec<String>, Vec<(f64, f64)>, BTreeMap<String, f64
         meta.insert(format!("ly{code}"), 4.0 * a.sin());
         marks.push((4.0 * a.cos(), 4.0 * a.sin()));
     }
-    (codes, marks, meta)
+    Ring { codes, marks, meta }
 }
