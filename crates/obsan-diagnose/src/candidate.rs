@@ -54,6 +54,7 @@ pub(crate) fn candidate(
     (crit, robust_z): (f64, Option<f64>),
     o: &DiagnoseOptions,
     origin: &str,
+    warm: Option<&[f64]>,
 ) -> (CandidateResult, Option<Fitted>) {
     let Noise {
         sigma,
@@ -111,7 +112,13 @@ pub(crate) fn candidate(
             })
             .collect();
         let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
-        let (pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        let (mut pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+        // A warm start: the new params at the candidate's previous estimate.
+        let warm = warm.filter(|w| w.len() == pv.len() - base_pv.len());
+        let warmed = warm.is_some();
+        if let Some(w) = warm {
+            pv[base_pv.len()..].copy_from_slice(w);
+        }
         let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
         res.rank = Some((id.rank, id.n));
         res.identifiable = e.params.iter().all(|p| id.param_observable(p));
@@ -144,7 +151,8 @@ pub(crate) fn candidate(
             // residual of a continuous prediction is continuous), so only
             // those pay for the two extra fits (on MRCLAM a third of the fits
             // that carry the lag's states).
-            if rewrites_angle && base_m2ll - f.m2ll() > crit * f.inflation() {
+            // A warm start is the previous round's result, restart included.
+            if rewrites_angle && !warmed && base_m2ll - f.m2ll() > crit * f.inflation() {
                 if let Some(trimmed) = without_outliers(&prepared, &f, OUTLIER_Z) {
                     let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
                     let f2 = fit_model(&ext, &trimmed, &pv, &f.initial_states, sigma, &[], o)

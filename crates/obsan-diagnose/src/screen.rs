@@ -123,6 +123,65 @@ pub(crate) fn score(
     Ok(quadratic_form(a, g) / f.inflation())
 }
 
+/// The screen's stand-in for an effect of the user's file (the generated
+/// ones carry theirs, [`crate::Generated::screen`]): the effect itself when
+/// it adds no state and no delay; for a first-order lag written as
+/// `state s = u`, `s' = (u - s)/T`, `subst x = s` (mrclam.eff's
+/// actuator_lag) its limit as T -> 0, `x = u - T rate(u)`, the state held at
+/// the first input as the generated lag's; for a bare `delay tau`, every
+/// measured input `u - tau rate(u)` (the delay to first order). `None`:
+/// any other form, always fitted. `inputs` are the model's measured inputs.
+pub(crate) fn file_stand_in(e: &Effect, inputs: &[String]) -> Option<Effect> {
+    let bare = e.inputs.is_empty() && e.consts.is_empty() && e.compares.is_empty();
+    if e.states.is_empty() && e.delay.is_none() {
+        return Some(e.clone());
+    }
+    if !bare || e.params.len() != 1 || !e.outputs.is_empty() {
+        return None;
+    }
+    let t = &e.params[0];
+    let rate = |u: &str| format!("s_rate_{}_{u}", e.name);
+    let mut body = format!("effect {}\nparam {t}\n", e.name);
+    if let Some(tau) = &e.delay {
+        if tau != t || !e.states.is_empty() || !e.substs.is_empty() || !e.dynamics.is_empty() {
+            return None;
+        }
+        for u in inputs {
+            let r = rate(u);
+            body.push_str(&format!(
+                "input {r} = rate({u})\nsubst {u} = {u} - {t}*{r}\n"
+            ));
+        }
+    } else {
+        let squash = |x: &str| x.chars().filter(|c| !c.is_whitespace()).collect::<String>();
+        if e.substs.len() != e.states.len() || e.dynamics.len() != e.states.len() {
+            return None;
+        }
+        for (x, s) in &e.substs {
+            let s = squash(s);
+            let u = e
+                .starts
+                .iter()
+                .find(|(n, _)| *n == s)
+                .map(|(_, u)| squash(u))?;
+            let d = e
+                .dynamics
+                .iter()
+                .find(|(n, _)| *n == s)
+                .map(|(_, d)| squash(d))?;
+            if !inputs.contains(&u) || d != format!("({u}-{s})/{t}") {
+                return None;
+            }
+            let r = rate(&u);
+            body.push_str(&format!(
+                "input {r} = rate({u})\nsubst {x} = {u} - {t}*{r}\n"
+            ));
+        }
+    }
+    let lib = obsan_model::EffectLibrary::parse(&body, crate::generate::ORIGIN_GENERATED).ok()?;
+    lib.effects.into_iter().next()
+}
+
 /// One candidate's outcome: its round entry and, when fitted, the extended
 /// model and its fit (`T`, the workflow's record of it).
 pub(crate) type Outcome<T> = (CandidateResult, Option<T>);
@@ -199,7 +258,8 @@ where
         .collect()
 }
 
-/// The round's entry for a generated candidate left unfitted by its score.
+/// The round's entry for a candidate left unfitted by its score (marked
+/// generated; the workflow marks the file's).
 pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
     CandidateResult {
         score: Some(score),
@@ -247,6 +307,47 @@ fn quadratic_form(mut a: nalgebra::DMatrix<f64>, mut g: nalgebra::DVector<f64>) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn file_lags_and_delays_get_their_first_order_stand_ins() {
+        let lib = obsan_model::EffectLibrary::parse(
+            "effect lag\nparam T = 0.2\nstate va = v, wa = omega\nva' = (v - va)/T\n\
+             wa' = (omega - wa)/T\nsubst v = va, omega = wa\n\
+             effect late\nparam tau\ndelay tau\n\
+             effect odd\nparam T\nstate s = v\ns' = (v - 2*s)/T\nsubst v = s\n\
+             effect scale\nparam k\nsubst v = (1 + k)*v\n",
+            "test",
+        )
+        .unwrap();
+        let inputs = ["v".to_string(), "omega".to_string()];
+        let st: Vec<Option<Effect>> = lib
+            .effects
+            .iter()
+            .map(|e| file_stand_in(e, &inputs))
+            .collect();
+        // u - T rate(u) per lagged input, no state; the delay on each input.
+        for (i, par) in [(0, "T"), (1, "tau")] {
+            let e = st[i].as_ref().unwrap();
+            assert!(e.states.is_empty() && e.delay.is_none());
+            assert_eq!(e.params, vec![par.to_string()]);
+            let substs: Vec<(&str, String)> = e
+                .substs
+                .iter()
+                .map(|(u, x)| (u.as_str(), x.replace(' ', "")))
+                .collect();
+            let n = &lib.effects[i].name;
+            assert_eq!(
+                substs,
+                vec![
+                    ("v", format!("v-{par}*s_rate_{n}_v")),
+                    ("omega", format!("omega-{par}*s_rate_{n}_omega"))
+                ]
+            );
+        }
+        // Another form of state is not guessed at; a plain effect is itself.
+        assert!(st[2].is_none());
+        assert_eq!(st[3].as_ref(), Some(&lib.effects[3]));
+    }
 
     #[test]
     fn quadratic_form_is_the_least_squares_decrease() {

@@ -10,7 +10,7 @@ use crate::model_fit::{
     class_inputs, estimate_levels, fit_model, input_noise, prepare, ModelFit, Start,
 };
 use crate::relation::{input_check, InputCheck};
-use crate::screen::{score, SCREEN_SAFETY};
+use crate::screen::{file_stand_in, score, SCREEN_SAFETY};
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -134,8 +134,9 @@ pub struct CandidateResult {
     /// noise, the candidate fitted better there than at the estimated levels.
     pub white_input_noise: bool,
     pub error: Option<String>,
-    /// A generated candidate's score statistic at the current fit (see
-    /// [`crate::screen`]), when computed.
+    /// The candidate's score statistic at the current fit (see
+    /// [`crate::screen`]), when computed: generated candidates in every
+    /// round, the file's from the second round on.
     pub score: Option<f64>,
     /// Left unfitted: its score is below [`Diagnosis::screen_threshold`].
     pub screened_out: bool,
@@ -372,6 +373,12 @@ pub fn diagnose(
     } else {
         normal_critical(a_gen).powi(2)
     };
+    let screen_threshold = crit.min(crit_gen) / SCREEN_SAFETY;
+    let measured: Vec<String> = sys
+        .decls_of(obsan_model::Kind::Input)
+        .filter(|d| d.derived.is_none())
+        .map(|d| d.name.clone())
+        .collect();
     let generated: Vec<&Effect> = gen.candidates.iter().map(|g| &g.effect).collect();
     let model_effects: Vec<&Effect> = model_effects.into_iter().chain(generated).collect();
     // The relations are weighed by the encoder noise the fit uses (stated
@@ -396,6 +403,10 @@ pub fn diagnose(
     let mut rounds: Vec<Vec<CandidateResult>> = Vec::new();
     let mut hidden = Vec::new();
     let mut class_text = String::new();
+    // Each candidate's last estimate of its new params: the next round's
+    // fit starts there (the same optimum, fewer iterations; on MRCLAM
+    // robot 1 the named list and its printed estimates are unchanged).
+    let mut warm: std::collections::HashMap<String, Vec<f64>> = Default::default();
     for round in 0..o.max_rounds {
         let remaining: Vec<&Effect> = model_effects
             .iter()
@@ -414,13 +425,26 @@ pub fn diagnose(
         let cancel = obsan_expr::cancel_flag();
         // The score weighs residuals as ordinary least squares; it is
         // computed with the screen off too (to compare it with the LR).
+        // The file's candidates are scored too once a round has been fitted
+        // in full (the first round's rank tests give the hidden effects);
+        // one threshold for both sides, the lower critical value's.
         let scoring = noise.is_empty();
-        let screen_at = (o.screen && scoring).then_some(crit_gen / SCREEN_SAFETY);
-        let gen_of = |e: &Effect| gen.candidates.iter().find(|g| g.effect.name == e.name);
+        let screen_at = (o.screen && scoring).then_some(screen_threshold);
+        let gen_of_name = |n: &str| gen.candidates.iter().find(|g| g.effect.name == n);
+        let gen_of = |e: &Effect| gen_of_name(&e.name);
         let scorer = |e: &Effect| {
-            let se = gen_of(e)
-                .and_then(|g| g.screen.as_ref())
-                .filter(|_| scoring)?;
+            if !scoring {
+                return None;
+            }
+            let own;
+            let se = match gen_of(e) {
+                Some(g) => g.screen.as_ref()?,
+                None if round > 0 => {
+                    own = file_stand_in(e, &measured)?;
+                    &own
+                }
+                None => return None,
+            };
             obsan_expr::with_cancel(cancel.clone(), || {
                 score(&current_sys, &current, se, data, &sigma, o.max_step).ok()
             })
@@ -456,12 +480,18 @@ pub fn diagnose(
                     (c, robust),
                     o,
                     origin,
+                    warm.get(&e.name).map(Vec::as_slice),
                 )
             });
             r.score = score;
             (r, x)
         };
-        let results = crate::screen::round(&remaining, scorer, fit, screen_at);
+        let mut results = crate::screen::round(&remaining, scorer, fit, screen_at);
+        for r in results.iter_mut().filter(|r| r.0.screened_out) {
+            if gen_of_name(&r.0.effect).is_none() {
+                r.0.origin = ORIGIN_FILE.into();
+            }
+        }
         if round == 0 {
             if let Ok(ext) = current_sys.extend(&[], "") {
                 let prepared = prepare(&ext, data)?;
@@ -499,6 +529,15 @@ pub fn diagnose(
                     .collect()
             })
             .unwrap_or_default();
+        for r in results
+            .iter()
+            .filter(|r| r.1.is_some() && r.0.error.is_none())
+        {
+            let v: Vec<f64> = r.0.estimates.iter().map(|e| e.1).collect();
+            if v.len() == r.0.params.len() && v.iter().all(|x| x.is_finite()) {
+                warm.insert(r.0.effect.clone(), v);
+            }
+        }
         rounds.push(results.into_iter().map(|r| r.0).collect());
         let Some((res, Some(fitted))) = best else {
             break;
@@ -584,9 +623,9 @@ pub fn diagnose(
             .iter()
             .filter(|c| c.significant && c.effect != n.effect)
         {
-            let confounded = next
-                .iter()
-                .any(|x| x.effect == c.effect && x.error.is_none() && !x.identifiable);
+            let confounded = next.iter().any(|x| {
+                x.effect == c.effect && x.error.is_none() && !x.screened_out && !x.identifiable
+            });
             if confounded && !n.rivals.iter().any(|r| r.effect == c.effect) {
                 n.rivals.push(Rival {
                     effect: c.effect.clone(),
@@ -603,7 +642,7 @@ pub fn diagnose(
             rv.jointly_identifiable = rounds
                 .get(i + 1)
                 .and_then(|r| r.iter().find(|c| c.effect == rv.effect))
-                .filter(|c| c.error.is_none())
+                .filter(|c| c.error.is_none() && !c.screened_out)
                 .map(|c| c.identifiable);
         }
     }
@@ -667,7 +706,7 @@ pub fn diagnose(
         extended_sys = with_relation(&extended_sys, e, &c.estimates);
     }
     let screen_threshold = match o.screen && noise.is_empty() {
-        true => crit_gen / SCREEN_SAFETY,
+        true => screen_threshold,
         false => f64::INFINITY,
     };
     Ok(Diagnosis {

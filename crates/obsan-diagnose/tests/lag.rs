@@ -2,27 +2,14 @@
 //! simulated range-bearing data of a unicycle (systems/mrclam.sys with the
 //! landmarks on a ring), found by the workflow with its time constant.
 
+mod common;
+
+use common::{read, ring, Rng};
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis, InputNoise};
 use obsan_expr::SplitMix;
 use obsan_fit::Predictor;
-use obsan_model::{EffectLibrary, Kind, System};
-use std::collections::BTreeMap;
-
-fn read(p: &str) -> String {
-    std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
-}
-
-struct Rng(SplitMix);
-impl Rng {
-    fn uniform(&mut self) -> f64 {
-        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (a, b) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
+use obsan_model::{EffectLibrary, System};
 
 const SIGMA_RANGE: f64 = 0.05;
 const SIGMA_BEARING: f64 = 0.02;
@@ -39,16 +26,7 @@ fn simulate(sys: &System, params: &[f64], seed: u64) -> Dataset {
 fn simulate_noisy(sys: &System, params: &[f64], seed: u64, c: [f64; 2]) -> Dataset {
     let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
     let mut rng = Rng(SplitMix(seed));
-    let codes: Vec<String> = sys
-        .decls_of(Kind::Const)
-        .filter_map(|d| d.name.strip_prefix("lx").map(str::to_string))
-        .collect();
-    let mut meta = BTreeMap::new();
-    for (i, c) in codes.iter().enumerate() {
-        let a = std::f64::consts::TAU * i as f64 / codes.len() as f64;
-        meta.insert(format!("lx{c}"), 4.0 * a.cos());
-        meta.insert(format!("ly{c}"), 4.0 * a.sin());
-    }
+    let common::Ring { codes, meta, .. } = ring(sys);
     let consts: Vec<f64> = p.consts.iter().map(|c| meta[c]).collect();
     let mut trajectories = Vec::new();
     for w in 0..6 {
