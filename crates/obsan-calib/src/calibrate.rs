@@ -4,7 +4,7 @@
 
 use crate::calib::{arc_data, combine, start_state, Calibration, Metric, Modes};
 use crate::cekf::{cekf, cekf_start};
-use crate::circle::{det, det_at, ls, weights, ArcData, Closed, Det};
+use crate::circle::{det, det_at, ls, rms, weights, ArcData, Closed, Det};
 use crate::error::CalibError::{self, Degenerate};
 use crate::error::{cancel_point, or_cancelled};
 use nalgebra::{Matrix4, SMatrix};
@@ -267,15 +267,6 @@ fn repair_periods(
     }
 }
 
-fn rms_of(c: &Closed, d: &ArcData) -> f64 {
-    let ss: f64 =
-        d.s.iter()
-            .zip(&d.beta)
-            .map(|(&s, &b)| wrap(b - c.beta(s)).powi(2))
-            .sum();
-    (ss / d.s.len().max(1) as f64).sqrt()
-}
-
 /// Calibrate. `predictor` (calib.sys without restriction) is needed by `ml` only.
 pub fn calibrate(
     data: &Dataset,
@@ -486,7 +477,7 @@ fn det_trajectory(t: &Trajectory, o: &CalibrateOptions) -> Result<TrajectoryEsti
         q,
         closed: d.closed,
         modes_cov: None,
-        rms: rms_of(&d.closed, &arc),
+        rms: rms(&d.closed, &arc),
         det: d,
         arc,
         start: (f64::NAN, f64::NAN),

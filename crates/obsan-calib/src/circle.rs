@@ -418,7 +418,7 @@ fn subsample(d: &ArcData, max: usize) -> ArcData {
 }
 
 /// Root-mean-square wrapped residual of `c` on the data.
-fn rms(c: &Closed, d: &ArcData) -> f64 {
+pub(crate) fn rms(c: &Closed, d: &ArcData) -> f64 {
     let ss: f64 =
         d.s.iter()
             .zip(&d.beta)

@@ -476,30 +476,46 @@ pub const MIN_OUTPUT_SAMPLES: usize = 10;
 impl Trajectory {
     /// Check a trajectory read from files named in `origin`.
     pub fn check(&self, origin: &str) -> Result<(), DataError> {
-        let measured = self
-            .outputs
-            .values
-            .iter()
-            .map(|c| c.iter().filter(|v| v.is_some()).count())
-            .sum::<usize>();
-        if measured < MIN_OUTPUT_SAMPLES {
-            return Err(DataError {
-                file: format!("{origin}/outputs.csv"),
-                row: None,
-                column: None,
-                kind: K::TooFewOutputs { measured },
-            });
-        }
-        if self.inputs.len() < 2 {
-            return Err(DataError {
-                file: format!("{origin}/inputs.csv"),
-                row: None,
-                column: None,
-                kind: K::TooFewInputs,
-            });
-        }
+        check_counts(
+            &self.outputs,
+            &self.inputs,
+            || format!("{origin}/outputs.csv"),
+            || format!("{origin}/inputs.csv"),
+        )?;
         Ok(())
     }
+}
+
+/// The minimum sizes of one trajectory: enough measured output samples,
+/// and two input rows (one interval). The file names are for the message.
+fn check_counts(
+    outputs: &Series,
+    inputs: &Series,
+    outputs_file: impl FnOnce() -> String,
+    inputs_file: impl FnOnce() -> String,
+) -> Result<(), DataError> {
+    let measured = outputs
+        .values
+        .iter()
+        .map(|c| c.iter().filter(|v| v.is_some()).count())
+        .sum::<usize>();
+    if measured < MIN_OUTPUT_SAMPLES {
+        return Err(DataError {
+            file: outputs_file(),
+            row: None,
+            column: None,
+            kind: K::TooFewOutputs { measured },
+        });
+    }
+    if inputs.len() < 2 {
+        return Err(DataError {
+            file: inputs_file(),
+            row: None,
+            column: None,
+            kind: K::TooFewInputs,
+        });
+    }
+    Ok(())
 }
 
 /// A dataset: metadata and trajectories (in name order).
@@ -602,27 +618,7 @@ pub fn read_dataset(
             }
             None => BTreeMap::new(),
         };
-        let measured = outs
-            .values
-            .iter()
-            .map(|c| c.iter().filter(|v| v.is_some()).count())
-            .sum::<usize>();
-        if measured < MIN_OUTPUT_SAMPLES {
-            return Err(DataError {
-                file: fo.path.clone(),
-                row: None,
-                column: None,
-                kind: K::TooFewOutputs { measured },
-            });
-        }
-        if ins.len() < 2 {
-            return Err(DataError {
-                file: fi.path.clone(),
-                row: None,
-                column: None,
-                kind: K::TooFewInputs,
-            });
-        }
+        check_counts(&outs, &ins, || fo.path.clone(), || fi.path.clone())?;
         // Outputs are predicted from the inputs on: none may come before
         // them, nor after their end by more than their span (which bounds
         // the integration's work by the data's own size).

@@ -120,6 +120,57 @@ where
     }
 }
 
+/// `x = t z + s`, the point at `t` on the line through the shift `s`.
+fn line_point(t: u64, z: &[u64], shift: &[u64], p: u64) -> Vec<u64> {
+    z.iter()
+        .zip(shift)
+        .map(|(&zi, &si)| add(mul(t, zi, p), si, p))
+        .collect()
+}
+
+/// Thiele interpolation with early termination of every component along a
+/// one-parameter family of points `at(t)`, t drawn at random: the degree
+/// probe of both [`PrimeRun::var_degrees`] and [`PrimeRun::degrees`].
+fn thiele_along<F, E>(
+    bb: &mut F,
+    rng: &mut Rng,
+    budget: &mut Budget,
+    m: usize,
+    p: u64,
+    cap: usize,
+    at: impl Fn(u64) -> Vec<u64>,
+) -> Result<Vec<Thiele>, Fail<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, budget.agree)).collect();
+    let mut bad = 0;
+    while th.iter().any(|t| !t.done()) {
+        let t = rng.nonzero(p);
+        let x = at(t);
+        let Some(y) = call(bb, budget, m, &x, p)? else {
+            bad += 1;
+            if bad > MAX_BAD_STREAK {
+                return Err(Fail::Hard(ReconError::NoGoodPoints {
+                    progress: budget.progress(),
+                }));
+            }
+            continue;
+        };
+        bad = 0;
+        for (c, th) in th.iter_mut().enumerate() {
+            if !th.done() {
+                // A repeated abscissa is not a new value: no step.
+                th.add(t, y[c]);
+                if th.len() > cap {
+                    return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
+                }
+            }
+        }
+    }
+    Ok(th)
+}
+
 /// True when the interpolant of all but the last point passes through the
 /// last one (early termination of Newton interpolation).
 fn predicted(xs: &[u64], ys: &[u64], p: u64) -> bool {
@@ -197,31 +248,11 @@ where
         let mut out: Vec<[Vec<usize>; 2]> = vec![[Vec::new(), Vec::new()]; self.m];
         for i in 0..self.n {
             let base: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
-            let mut th: Vec<Thiele> = (0..self.m).map(|_| Thiele::new(p, budget.agree)).collect();
-            let mut bad = 0;
-            while th.iter().any(|t| !t.done()) {
+            let th = thiele_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
                 let mut x = base.clone();
-                x[i] = self.rng.nonzero(p);
-                let Some(y) = call(self.bb, budget, self.m, &x, p)? else {
-                    bad += 1;
-                    if bad > MAX_BAD_STREAK {
-                        return Err(Fail::Hard(ReconError::NoGoodPoints {
-                            progress: budget.progress(),
-                        }));
-                    }
-                    continue;
-                };
-                bad = 0;
-                for (c, th) in th.iter_mut().enumerate() {
-                    if !th.done() {
-                        // A repeated abscissa is not a new value: no step.
-                        th.add(x[i], y[c]);
-                        if th.len() > cap {
-                            return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
-                        }
-                    }
-                }
-            }
+                x[i] = t;
+                x
+            })?;
             for (o, th) in out.iter_mut().zip(&th) {
                 let (num, den) = th.rational();
                 o[0].push(num.len().saturating_sub(1));
@@ -242,10 +273,7 @@ where
     }
 
     fn point(&self, t: u64, z: &[u64]) -> Vec<u64> {
-        z.iter()
-            .zip(&self.shift)
-            .map(|(&zi, &si)| add(mul(t, zi, self.p), si, self.p))
-            .collect()
+        line_point(t, z, &self.shift, self.p)
     }
 
     /// Degrees of every component along one random line, by Thiele with
@@ -253,31 +281,11 @@ where
     pub(crate) fn degrees(&mut self, budget: &mut Budget) -> Result<Vec<(usize, usize)>, Fail<E>> {
         let p = self.p;
         let z: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
-        let mut th: Vec<Thiele> = (0..self.m).map(|_| Thiele::new(p, budget.agree)).collect();
         let cap = 2 * budget.max_degree as usize + 2;
-        let mut bad = 0;
-        while th.iter().any(|t| !t.done()) {
-            let t = self.rng.nonzero(p);
-            let x = self.point(t, &z);
-            let Some(y) = call(self.bb, budget, self.m, &x, p)? else {
-                bad += 1;
-                if bad > MAX_BAD_STREAK {
-                    return Err(Fail::Hard(ReconError::NoGoodPoints {
-                        progress: budget.progress(),
-                    }));
-                }
-                continue;
-            };
-            bad = 0;
-            for (c, th) in th.iter_mut().enumerate() {
-                if !th.done() {
-                    th.add(t, y[c]);
-                    if th.len() > cap {
-                        return Err(Fail::Hard(budget.limit(Limit::Degree(budget.max_degree))));
-                    }
-                }
-            }
-        }
+        let shift = &self.shift;
+        let th = thiele_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
+            line_point(t, &z, shift, p)
+        })?;
         let mut degs = Vec::with_capacity(self.m);
         self.den_line.clear();
         for th in &th {
