@@ -385,7 +385,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     }
     // A candidate the heading-free check vetoed, once (its last round).
     let mut vetoed: Vec<&CandidateResult> = Vec::new();
-    for c in d.rounds.iter().rev().flatten() {
+    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
         if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
             && !vetoed.iter().any(|x| x.effect == c.effect)
         {

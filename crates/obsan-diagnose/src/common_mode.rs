@@ -344,7 +344,7 @@ pub(crate) fn check(
     if d.instants == 0 {
         return Ok(na("no two members of the group measured at the same time"));
     }
-    if !(d.within > COMMON_SHIFT * d.total) {
+    if d.within.is_nan() || d.within <= COMMON_SHIFT * d.total {
         return Ok(na(
             "the param shifts every member alike (a common-mode shift): \
              simultaneous differences carry no information about it",

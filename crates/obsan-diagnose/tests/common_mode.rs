@@ -267,8 +267,8 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
         a.swap(c, p);
         b.swap(c, p);
         let d = a[c][c];
-        for j in 0..n {
-            a[c][j] /= d;
+        for x in a[c].iter_mut() {
+            *x /= d;
         }
         for row in b[c].iter_mut() {
             *row /= d;
@@ -276,8 +276,9 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
         for i in 0..n {
             if i != c {
                 let f = a[i][c];
-                for j in 0..n {
-                    a[i][j] -= f * a[c][j];
+                let ac = a[c].clone();
+                for (x, y) in a[i].iter_mut().zip(ac) {
+                    *x -= f * y;
                 }
                 let bc = b[c].clone();
                 for (x, y) in b[i].iter_mut().zip(bc) {
