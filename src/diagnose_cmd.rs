@@ -289,6 +289,19 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                     c.delta_bic,
                     if c.significant { "  significant" } else { "" }
                 );
+                match c.common_mode.as_ref().filter(|v| v.applies) {
+                    Some(v) if v.vetoed => {
+                        let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
+                    }
+                    Some(v) => {
+                        let _ = writeln!(
+                            s,
+                            "    supported by simultaneous differences: {} = {:.4} ± {:.4} ({:.1} combined robust sds from the full fit, limit {:.2})",
+                            v.param, v.differences, v.differences_robust_sd, v.z, v.limit
+                        );
+                    }
+                    None => {}
+                }
             }
         }
     }
@@ -368,6 +381,20 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 "  caution: {} fits almost as well (BIC {:+.1} against it): {why}",
                 rv.effect, rv.delta_bic
             );
+        }
+    }
+    // A candidate the heading-free check vetoed, once (its last round).
+    let mut vetoed: Vec<&CandidateResult> = Vec::new();
+    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
+        if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
+            && !vetoed.iter().any(|x| x.effect == c.effect)
+        {
+            vetoed.push(c);
+        }
+    }
+    for c in vetoed.iter().rev() {
+        if let Some(v) = &c.common_mode {
+            let _ = writeln!(s, "caution: {}", v.veto_text(&mark(c)));
         }
     }
     for c in &d.input_checks {

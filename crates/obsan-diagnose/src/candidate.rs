@@ -3,6 +3,7 @@
 //! under the noise models in use and the likelihood ratio, moved out of
 //! workflow.rs whole.
 
+use crate::common_mode;
 use crate::error::DiagnoseError;
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::model_fit::{class_inputs, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z};
@@ -219,6 +220,20 @@ pub(crate) fn candidate(
                 .all(|((_, v, _), r)| !(r.is_finite() && *r > 0.0) || (v / r).abs() > z)
         });
         res.significant = res.lr > crit && res.delta_bic < 0.0 && robust_ok;
+        // A candidate that rewrites angle outputs must also be supported by
+        // the simultaneous differences of its members, which cancel any
+        // common-mode error (heading drift) it could be absorbing
+        // (common_mode.rs). A failed check does not veto; it is reported.
+        if rewrites_angle {
+            let c = common_mode::check(e, &ext, &prepared, &f, (crit, res.significant), o);
+            res.common_mode =
+                Some(c.unwrap_or_else(|err| {
+                    common_mode::CommonModeCheck::failed(e, &err.to_string())
+                }));
+            if res.common_mode.as_ref().is_some_and(|c| c.vetoed) {
+                res.significant = false;
+            }
+        }
         res.rms = f.rms.clone();
         res.whiteness_z = f
             .residuals

@@ -21,6 +21,7 @@
 )]
 
 mod candidate;
+mod common_mode;
 mod error;
 mod generate;
 mod identify;
@@ -32,6 +33,7 @@ mod start;
 mod stats;
 mod workflow;
 
+pub use common_mode::{difference_estimate, CommonModeCheck, DifferenceEstimate, Member};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};

@@ -3,6 +3,7 @@
 //! significant ones greedily.
 
 use crate::candidate::{candidate, Noise};
+use crate::common_mode::CommonModeCheck;
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
@@ -140,6 +141,9 @@ pub struct CandidateResult {
     pub score: Option<f64>,
     /// Left unfitted: its score is below [`Diagnosis::screen_threshold`].
     pub screened_out: bool,
+    /// The heading-free check of a candidate that rewrites angle outputs
+    /// ([`CommonModeCheck`]); a veto makes it not significant.
+    pub common_mode: Option<CommonModeCheck>,
 }
 
 impl CandidateResult {
@@ -172,6 +176,7 @@ impl CandidateResult {
             error: None,
             score: None,
             screened_out: false,
+            common_mode: None,
         }
     }
 }
