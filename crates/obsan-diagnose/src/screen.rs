@@ -20,7 +20,7 @@ use crate::model_fit::{prepare, ModelFit};
 use crate::start::extended_start;
 use crate::workflow::CandidateResult;
 use obsan_data::{wrap, Dataset};
-use obsan_fit::{FitTrajectory, Integration, Predictor};
+use obsan_fit::{FitTrajectory, Integration, Measured, Predictor};
 use obsan_model::{Effect, System};
 
 /// The screen's threshold is the LR's critical value divided by this. The
@@ -72,26 +72,25 @@ pub(crate) fn score(
     for (ti, (t, x)) in trajs.iter().zip(&sv).enumerate() {
         let mut x0 = x.clone();
         x0.extend_from_slice(&pv);
+        // Only the measured cells (a MRCLAM row measures one or two of 30
+        // outputs): the same values and rows as the whole prediction's.
+        let cells = Measured::new(&p, t.outputs);
         let pred = p
-            .predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
+            .predict_measured(&x0, &t.consts, t.inputs, &cells, &integ)
             .map_err(|source| DiagnoseError::Predict {
                 trajectory: t.name.to_string(),
                 source,
             })?;
-        let cols: Vec<Option<&[Option<f64>]>> =
-            p.outputs.iter().map(|o| t.outputs.column(o)).collect();
         // Local columns: the params, then this trajectory's own states.
         let mut al = nalgebra::DMatrix::<f64>::zeros(local, local);
         let mut gl = vec![0.0; local];
         let mut row = vec![0.0; local];
         for (j, yj) in pred.outputs.iter().enumerate() {
-            for (o, c) in cols.iter().enumerate() {
-                let Some(m) = c.and_then(|c| c[j]) else {
-                    continue;
-                };
-                let d = m - yj[o];
+            let (outs, values) = cells.at(j);
+            for (i, (&o, &m)) in outs.iter().zip(values).enumerate() {
+                let d = m - yj[i];
                 let r = if p.angular[o] { wrap(d) } else { d } / sigma[o];
-                let jac = &pred.jacobians[j][o * n..(o + 1) * n];
+                let jac = &pred.jacobians[j][i * n..(i + 1) * n];
                 for (i, v) in row.iter_mut().enumerate() {
                     *v = if i < np { jac[nd + i] } else { jac[i - np] } / sigma[o];
                 }

@@ -12,6 +12,14 @@ use obsan_model::NormalForm;
 /// the dynamics' Jacobian (see `predict_with`).
 const STIFF_STEP: f64 = 0.5;
 
+/// For a state whose own rate is linear in itself with a coefficient set by
+/// the params and inputs alone (a first-order lag `s' = (u - s)/T`), the
+/// linear part is integrated exactly (exponential time differencing, Cox and
+/// Matthews 2002, ETDRK4) once `h |lambda|` exceeds [`STIFF_STEP`]; its step
+/// bound is then this over `|lambda|`, for the states it drives (their RK4
+/// stages sample the lag's transient).
+const EXP_STEP: f64 = 1.0;
+
 /// A compiled model: `S' = f0 + sum_i f_i u_i`, `y = h(S)`.
 #[derive(Clone, Debug)]
 pub struct Predictor {
@@ -41,6 +49,10 @@ pub struct Predictor {
     /// Per dynamic state k, the dynamic states j < n_dynamic with a
     /// non-zero d f[k] / d x_j (the columns `J Phi` needs).
     jac_dyn_cols: Vec<Vec<usize>>,
+    /// Per dynamic state k: d f[k] / d x_k (drift and every field) depends
+    /// on no dynamic state, so `x_k' = lambda x_k + rest` with `lambda`
+    /// constant over a step (see [`EXP_STEP`]).
+    self_linear: Vec<bool>,
     /// The structurally non-zero d(output)/d(state_j), as (output, j).
     out_jac_tape: Tape,
     out_jac_entries: Vec<(usize, usize)>,
@@ -102,6 +114,25 @@ impl Predictor {
                 }
             }
         }
+        // A state is self-linear when it has a diagonal entry and none of
+        // its diagonal entries depends on a dynamic state.
+        let mut has_diag = vec![false; n_dynamic];
+        let mut state_dependent = vec![false; n_dynamic];
+        for (&(k, _, j), &d) in jac_entries.iter().zip(&jac_roots) {
+            if j != k {
+                continue;
+            }
+            has_diag[k] = true;
+            for &x in &nf.state_vars[..n_dynamic] {
+                let dd = ctx.diff(d, x);
+                if !ctx.is_zero(dd) {
+                    state_dependent[k] = true;
+                }
+            }
+        }
+        let self_linear: Vec<bool> = (0..n_dynamic)
+            .map(|k| has_diag[k] && !state_dependent[k])
+            .collect();
         let mut jac_dyn_cols = vec![Vec::new(); n_dynamic];
         for &(k, _, j) in &jac_entries {
             if j < n_dynamic && !jac_dyn_cols[k].contains(&j) {
@@ -148,6 +179,7 @@ impl Predictor {
             dyn_jac_tape,
             jac_entries,
             jac_dyn_cols,
+            self_linear,
             out_jac_tape,
             out_jac_entries,
             per_output,
@@ -353,6 +385,9 @@ impl Predictor {
         // keeps RK4's decay factor per step within 2.5e-4 of exp). One bound per
         // prediction, so the steps do not depend on whether sensitivities
         // are computed.
+        // Per self-linear state k and term f (drift, then each input's
+        // field): d f[k] / d x_k, constant along the prediction.
+        let mut lambda_of = vec![0.0; nd * (m + 1)];
         let max_step = {
             let all = w.dyn_jac.eval(&w.x);
             let jv = &all[nv..];
@@ -368,9 +403,28 @@ impl Predictor {
                     } else {
                         (d * u0[f - 1]).abs()
                     };
+                    if self.self_linear[k] {
+                        lambda_of[k * (m + 1) + f] = *d;
+                    }
                 }
             }
             let stiff = diag.iter().copied().fold(0.0f64, f64::max);
+            // A self-linear state's linear part is integrated exactly: its
+            // bound is the looser EXP_STEP.
+            let bound = (0..nd)
+                .map(|k| {
+                    let c = if self.self_linear[k] {
+                        EXP_STEP
+                    } else {
+                        STIFF_STEP
+                    };
+                    if diag[k] > 0.0 {
+                        c / diag[k]
+                    } else {
+                        f64::INFINITY
+                    }
+                })
+                .fold(f64::INFINITY, f64::min);
             // max_step 0 means row by row (no merging), not no bound.
             let cap = if opts.max_step > 0.0 {
                 opts.max_step
@@ -393,11 +447,7 @@ impl Predictor {
                     spacing,
                 });
             }
-            if stiff > 0.0 {
-                cap.min(STIFF_STEP / stiff)
-            } else {
-                cap
-            }
+            cap.min(bound)
         };
         let mut t = t_start;
         let mut row = 0usize;
@@ -405,6 +455,8 @@ impl Predictor {
             (vec![0.0; nz], vec![0.0; nz], vec![0.0; nz], vec![0.0; nz]);
         let mut tmp = z.clone();
         let mut u = vec![0.0; m];
+        let mut lam = vec![0.0; nd];
+        let mut stages = Stages::new(nd, nz);
         let sens = opts.sensitivities;
         for (ti, &target) in times.iter().enumerate() {
             if target < t - 1e-12 {
@@ -470,20 +522,39 @@ impl Predictor {
                     // w.vals now holds f0 and the fields at the step start.
                     self.accumulate_noise(&z, &w.vals, &u, c, h, &mut noise_acc);
                 }
-                for i in 0..nz {
-                    tmp[i] = z[i] + h / 2.0 * k1[i];
+                // Each self-linear state's lambda over this step; 0 (plain
+                // RK4, bit for bit as before) where h |lambda| is within
+                // STIFF_STEP.
+                let mut stiff_here = false;
+                for (k, l) in lam.iter_mut().enumerate() {
+                    *l = 0.0;
+                    if self.self_linear[k] {
+                        let row = &lambda_of[k * (m + 1)..(k + 1) * (m + 1)];
+                        let v = row[0] + row[1..].iter().zip(&u).map(|(a, b)| a * b).sum::<f64>();
+                        if (v * h).abs() > STIFF_STEP * (1.0 + 1e-9) {
+                            *l = v;
+                            stiff_here = true;
+                        }
+                    }
                 }
-                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k2);
-                for i in 0..nz {
-                    tmp[i] = z[i] + h / 2.0 * k2[i];
-                }
-                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k3);
-                for i in 0..nz {
-                    tmp[i] = z[i] + h * k3[i];
-                }
-                self.derivative(&tmp, &u, sens, dd, &mut w, &mut k4);
-                for i in 0..nz {
-                    z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+                if stiff_here {
+                    self.etd_step(&mut z, &k1, &u, (sens, dd), &mut w, h, &lam, &mut stages);
+                } else {
+                    for i in 0..nz {
+                        tmp[i] = z[i] + h / 2.0 * k1[i];
+                    }
+                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k2);
+                    for i in 0..nz {
+                        tmp[i] = z[i] + h / 2.0 * k2[i];
+                    }
+                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k3);
+                    for i in 0..nz {
+                        tmp[i] = z[i] + h * k3[i];
+                    }
+                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k4);
+                    for i in 0..nz {
+                        z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+                    }
                 }
                 if z[..nd].iter().any(|v| !v.is_finite()) {
                     return Err(FitError::Diverged {
@@ -518,14 +589,7 @@ impl Predictor {
                 let phi = &z[nd..];
                 let mut jrow = vec![0.0; no * n];
                 for (&(o, j), g) in self.out_jac_entries.iter().zip(gy) {
-                    let row = &mut jrow[o * n..(o + 1) * n];
-                    if j < nd {
-                        for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
-                            *r += g * p;
-                        }
-                    } else {
-                        row[j] += g;
-                    }
+                    add_grad(&mut jrow[o * n..(o + 1) * n], j, *g, phi, nd);
                 }
                 jacobians.push(jrow);
             }
@@ -535,6 +599,85 @@ impl Predictor {
             jacobians,
             noise_m,
         })
+    }
+
+    /// One step of exponential time differencing RK4 (ETDRK4, Cox and
+    /// Matthews 2002) from `z`, whose derivative is `k1`: each component
+    /// of dynamic state k (its value and its sensitivity row) takes
+    /// `lam[k]` as its linear part, integrated exactly; a component with
+    /// `lam` 0 takes the classical RK4 stages (the method's limit).
+    #[allow(clippy::too_many_arguments)]
+    fn etd_step(
+        &self,
+        z: &mut [f64],
+        k1: &[f64],
+        u: &[f64],
+        (sens, dd): (bool, Option<&[f64]>),
+        w: &mut Work,
+        h: f64,
+        lam: &[f64],
+        st: &mut Stages,
+    ) {
+        let (nd, n) = (self.n_dynamic, self.state.len());
+        let row = |i: usize| if i < nd { i } else { (i - nd) / n };
+        for (c, &l) in st.co.iter_mut().zip(lam) {
+            if l == 0.0 {
+                continue;
+            }
+            let x = l * h;
+            let (e2, e) = ((x / 2.0).exp(), x.exp());
+            let d = h * h * l * l * l;
+            *c = [
+                e2,
+                e,
+                (e2 - 1.0) / l,
+                (-4.0 - x + e * (4.0 - 3.0 * x + x * x)) / d,
+                (2.0 + x + e * (-2.0 + x)) / d,
+                (-4.0 - 3.0 * x - x * x + e * (4.0 - x)) / d,
+            ];
+        }
+        let co = &st.co;
+        let nz = z.len();
+        for i in 0..nz {
+            let (l, c) = (lam[row(i)], &co[row(i)]);
+            st.a[i] = if l == 0.0 {
+                z[i] + h / 2.0 * k1[i]
+            } else {
+                c[0] * z[i] + c[2] * (k1[i] - l * z[i])
+            };
+        }
+        self.derivative(&st.a, u, sens, dd, w, &mut st.k2);
+        for i in 0..nz {
+            let (l, c) = (lam[row(i)], &co[row(i)]);
+            st.b[i] = if l == 0.0 {
+                z[i] + h / 2.0 * st.k2[i]
+            } else {
+                c[0] * z[i] + c[2] * (st.k2[i] - l * st.a[i])
+            };
+        }
+        self.derivative(&st.b, u, sens, dd, w, &mut st.k3);
+        for i in 0..nz {
+            let (l, c) = (lam[row(i)], &co[row(i)]);
+            st.c[i] = if l == 0.0 {
+                z[i] + h * st.k3[i]
+            } else {
+                let (n1, n3) = (k1[i] - l * z[i], st.k3[i] - l * st.b[i]);
+                c[0] * st.a[i] + c[2] * (2.0 * n3 - n1)
+            };
+        }
+        self.derivative(&st.c, u, sens, dd, w, &mut st.k4);
+        for i in 0..nz {
+            let (l, c) = (lam[row(i)], &co[row(i)]);
+            if l == 0.0 {
+                z[i] += h / 6.0 * (k1[i] + 2.0 * st.k2[i] + 2.0 * st.k3[i] + st.k4[i]);
+            } else {
+                let n1 = k1[i] - l * z[i];
+                let n2 = st.k2[i] - l * st.a[i];
+                let n3 = st.k3[i] - l * st.b[i];
+                let n4 = st.k4[i] - l * st.c[i];
+                z[i] = c[1] * z[i] + c[3] * n1 + 2.0 * c[4] * (n2 + n3) + c[5] * n4;
+            }
+        }
     }
 
     /// The outputs `which` at the state in `w.x` and, with `sens`, their
@@ -566,13 +709,7 @@ impl Predictor {
             let phi = &z[nd..];
             let row = &mut jrow[i * n..(i + 1) * n];
             for (&j, g) in tapes.grad_of.iter().zip(&v[1..]) {
-                if j < nd {
-                    for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
-                        *r += g * p;
-                    }
-                } else {
-                    row[j] += g;
-                }
+                add_grad(row, j, *g, phi, nd);
             }
         }
         (y, jrow)
@@ -608,6 +745,19 @@ impl Predictor {
                 }
             }
         }
+    }
+}
+
+/// `row += g d(x_j)/d(x0)`: the sensitivity row `Phi[j]` for a dynamic
+/// state j, the unit row for a param (params are constant).
+fn add_grad(row: &mut [f64], j: usize, g: f64, phi: &[f64], nd: usize) {
+    let n = row.len();
+    if j < nd {
+        for (r, p) in row.iter_mut().zip(&phi[j * n..(j + 1) * n]) {
+            *r += g * p;
+        }
+    } else {
+        row[j] += g;
     }
 }
 
@@ -702,6 +852,33 @@ pub struct Prediction {
     /// Per output time, `M(t)` (n_dynamic x n_dynamic, row-major) when
     /// [`Integration::input_noise`] is given.
     pub noise_m: Vec<Vec<f64>>,
+}
+
+/// The stages of [`Predictor::etd_step`].
+struct Stages {
+    /// Per dynamic state: e^{lh/2}, e^{lh}, (e^{lh/2} - 1)/l, f1, f2, f3.
+    co: Vec<[f64; 6]>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    c: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+}
+
+impl Stages {
+    fn new(nd: usize, nz: usize) -> Stages {
+        let v = || vec![0.0; nz];
+        Stages {
+            co: vec![[0.0; 6]; nd],
+            a: v(),
+            b: v(),
+            c: v(),
+            k2: v(),
+            k3: v(),
+            k4: v(),
+        }
+    }
 }
 
 struct Work<'a> {
