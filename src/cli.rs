@@ -160,8 +160,9 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
 --json prints {model, nominal, rounds, named, input_checks, final_fit, extended_sys, sigma,
 input_noise, lr_critical, lr_critical_generated, generated_dropped, screen_threshold, ...};
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
-relation\"), generated candidates their score and screened_out; candidates generated from the
-model's structure are tried with --generated; --report writes report.md, SVG plots,
+relation\"), generated candidates their score and screened_out, candidates that rewrite angle
+outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
+vetoed, ...}; candidates generated from the model's structure are tried with --generated; --report writes report.md, SVG plots,
 extended.sys and diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
