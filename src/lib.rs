@@ -160,6 +160,13 @@ fn run(command: cli::Command) -> ExitCode {
     }
 }
 
+/// The longest canonical form the exact commands print (text, factored or
+/// LaTeX, one form at a time). Printed text can be exponentially longer than
+/// the form (a leaf is written out wherever it occurs: 77 characters of input
+/// print as 19.7 MB), and such text is of no use to a reader, so past this it
+/// is an error, exit code 2, as the engine's other limits are.
+const MAX_FORM_BYTES: usize = 1 << 20;
+
 /// The command's result, and its stdout if it was held back. The exact
 /// commands run under the engine's budget on this thread, for every context
 /// they make (normal forms too), with their stdout held back: on a limit
@@ -190,13 +197,22 @@ fn execute(
             // A check of a library's on a placeholder may panic once the
             // budget has tripped; that panic is the limit's, caught inside
             // the scope so the limit is still known.
+            // Every form printed is capped too: a form past MAX_FORM_BYTES
+            // trips the budget like any other limit (never a cut-short form).
             let r = obsan_expr::within_thread_budget(&budget, || {
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(command)))
-            });
+                obsan_expr::within_text_cap(MAX_FORM_BYTES, || {
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(command)))
+                })
+            })
+            .and_then(|r| r);
             let held = take();
             match r {
                 Ok(Ok(r)) => Ok((r, held)),
                 Ok(Err(panic)) => std::panic::resume_unwind(panic),
+                Err(limit @ obsan_expr::Limit::Text { .. }) => Err(Failure(format!(
+                    "a canonical form is too long to print: {limit} (obsan's output limit, {} MiB)",
+                    MAX_FORM_BYTES >> 20
+                ))),
                 Err(limit) => Err(Failure(limit.to_string())),
             }
         }

@@ -239,6 +239,11 @@ const WRITTEN_BY: &str = "# written by obsan modes (--force may replace this fil
 /// Write PREFIX.sys and PREFIX.dec: each to a temporary sibling, then renamed;
 /// an existing file is replaced only with --force, and only if obsan wrote it.
 fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
+    // After a limit (terms, time, a form too long to print) the texts are
+    // placeholders or cut short: write nothing; the caller reports the limit.
+    if obsan_expr::budget_tripped() {
+        return Err(Failure("an engine limit was reached".into()));
+    }
     let (sys, dec) = (
         format!("{WRITTEN_BY}\n{sys}"),
         format!("{WRITTEN_BY}\n{dec}"),

@@ -50,3 +50,27 @@ fn bad_expressions_exit_2_with_a_caret() {
     bad(&["diff", "x", "2x"], "not a symbol name");
     bad(&["diff", "x", "pi"], "not a symbol name");
 }
+
+/// Fuzz timeout-5952913f: 77 characters whose canonical form prints as
+/// 19.7 MB (crates/obsan-expr/tests/trust.rs measures it). Every output
+/// style is refused with the size, exit 2, and nothing cut short is printed.
+#[test]
+fn a_form_too_long_to_print_is_an_error_naming_the_size() {
+    let src = " sqrt((lx45 - x)^2 + sqrt(( - c*(V - V*(V - V^4/ x)^2 / y)^27 )+ r)^3/3 + R)";
+    for style in [None, Some("--latex"), Some("--json")] {
+        let mut args = vec!["simplify", src];
+        args.extend(style);
+        let r = obsan(&args);
+        assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+        assert!(
+            r.stderr.contains("too long to print")
+                && r.stderr.contains("1048576 bytes")
+                && r.stderr.contains("1 MiB"),
+            "{args:?}: {}",
+            r.stderr
+        );
+        assert!(r.stdout.is_empty(), "{args:?}: {} bytes", r.stdout.len());
+    }
+    // Its derivative by a symbol it does not hold is 0, which prints.
+    assert_eq!(ok(&["diff", src, "q"]).trim(), "0");
+}

@@ -242,6 +242,11 @@ pub(crate) fn tripped() -> bool {
 
 /// Record that `l` was hit. Outside a scope this is a broken hard limit or
 /// invariant of the infallible API, and panics rather than go on wrongly.
+/// Whether a budget is armed on this thread.
+pub(crate) fn armed() -> bool {
+    ARMED.with(|a| a.get()).is_some()
+}
+
 #[cold]
 pub(crate) fn trip(l: Limit) {
     if ARMED.with(|a| a.get()).is_none() {

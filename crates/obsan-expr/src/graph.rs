@@ -334,15 +334,20 @@ impl Arena {
         let mut c = Q::zero();
         let mut terms: Vec<(Id, Q)> = Vec::new();
         let mut stack: Vec<Id> = xs.to_vec();
+        let mut others: Vec<Id> = Vec::new();
+        // Read the nodes in place: cloning each one copied every nested sum's
+        // child list and every number (a long printed form re-read as a
+        // balanced tree of sums flattens each level again).
         while let Some(x) = stack.pop() {
-            match self.node(x).clone() {
-                Node::Num(q) => c = c.add(&q),
+            match self.node(x) {
+                Node::Num(q) => c = c.add(q),
                 Node::Add(cs) => stack.extend(cs.iter().copied()),
-                _ => {
-                    let (k, rest) = self.split_coeff(x);
-                    terms.push((rest, k));
-                }
+                _ => others.push(x),
             }
+        }
+        for x in others {
+            let (k, rest) = self.split_coeff(x);
+            terms.push((rest, k));
         }
         terms.sort_unstable_by_key(|t| t.0);
         let mut merged: Vec<Id> = Vec::new();

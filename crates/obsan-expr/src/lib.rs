@@ -67,6 +67,6 @@ pub use parse::{
     MAX_HEIGHT,
 };
 pub use poly::{Mono, Poly, Var};
-pub use print::latex_name;
+pub use print::{latex_name, within_text_cap};
 pub use ratfun::RatFun;
 pub use tanhalf::TanHalf;

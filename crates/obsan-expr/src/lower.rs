@@ -574,20 +574,9 @@ impl Ctx {
         } else {
             false
         };
-        if q.is_integer() {
-            let e = i64::try_from(q.num())
-                .ok()
-                .filter(|e| e.abs() <= budget::POW_MAX);
-            let Some(e) = e else {
-                return err(format!("exponent {q} is too large"));
-            };
-            if zero && e < 0 {
-                return err("division by zero: 0 raised to a negative power");
-            }
-            return Ok(self.pow(b, e));
-        }
-        if q.den() == &int(2) {
-            let r = self.sqrt(b)?;
+        // b^n, or sqrt(b)^n for a half-integer n/2.
+        if q.is_integer() || q.den() == &int(2) {
+            let r = if q.is_integer() { b } else { self.sqrt(b)? };
             let e = i64::try_from(q.num())
                 .ok()
                 .filter(|e| e.abs() <= budget::POW_MAX);

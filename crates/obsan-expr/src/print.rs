@@ -13,10 +13,14 @@ use std::cell::Cell;
 // The printed form is a tree over the canonical form's DAG: a leaf is written
 // out wherever it occurs, so text can grow exponentially with nesting (fuzz
 // timeout-5952913f: 77 characters print as 19.7 MB). `try_ratfun_text` caps
-// it; once over, every printer returns at once, so the work stays bounded too.
+// it, and `within_text_cap` caps every form printed in a scope; once over,
+// every printer returns at once, so the work stays bounded too.
 thread_local! {
     static TEXT_CAP: Cell<usize> = const { Cell::new(usize::MAX) };
     static TEXT_OVER: Cell<bool> = const { Cell::new(false) };
+    /// Passing the cap trips an armed budget (`within_text_cap`), rather than
+    /// being reported by the one printer that set it (`try_ratfun_text`).
+    static TEXT_TRIPS: Cell<bool> = const { Cell::new(false) };
 }
 
 fn text_over() -> bool {
@@ -25,10 +29,46 @@ fn text_over() -> bool {
 
 /// Record that `len` bytes were written; `true` once past the cap.
 fn text_check(len: usize) -> bool {
-    if len > TEXT_CAP.with(|c| c.get()) {
+    let cap = TEXT_CAP.with(|c| c.get());
+    if len > cap && !text_over() {
         TEXT_OVER.with(|o| o.set(true));
+        if TEXT_TRIPS.with(|t| t.get()) && crate::budget::armed() {
+            crate::budget::trip(Limit::Text { max: cap });
+        }
     }
     text_over()
+}
+
+/// A whole printed form, checked against the cap (the parts check as they grow).
+fn checked(s: String) -> String {
+    text_check(s.len());
+    s
+}
+
+/// Run `f` with every form printed on this thread (text, factored, LaTeX,
+/// leaves) capped at `max_bytes`. A form past the cap is cut short and the
+/// result is [`Limit::Text`]; inside an armed budget
+/// ([`within_thread_budget`](crate::within_thread_budget)) it also trips the
+/// budget, so that caller gets the limit and drops all `f` printed.
+pub fn within_text_cap<T>(max_bytes: usize, f: impl FnOnce() -> T) -> Result<T, Limit> {
+    struct Restore(usize, bool, bool);
+    impl Drop for Restore {
+        fn drop(&mut self) {
+            TEXT_CAP.with(|c| c.set(self.0));
+            TEXT_OVER.with(|o| o.set(self.1));
+            TEXT_TRIPS.with(|t| t.set(self.2));
+        }
+    }
+    let _restore = Restore(
+        TEXT_CAP.with(|c| c.replace(max_bytes)),
+        TEXT_OVER.with(|o| o.replace(false)),
+        TEXT_TRIPS.with(|t| t.replace(true)),
+    );
+    let r = f();
+    if text_over() {
+        return Err(Limit::Text { max: max_bytes });
+    }
+    Ok(r)
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -51,7 +91,7 @@ impl Ctx {
     }
 
     pub fn ratfun_text(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Text, false)
+        checked(self.fmt_ratfun(r, Style::Text, false))
     }
 
     /// [`Ctx::ratfun_text`], refused with [`Limit::Text`] once the text would
@@ -59,10 +99,12 @@ impl Ctx {
     pub fn try_ratfun_text(&self, r: &RatFun, max_bytes: usize) -> Result<String, Limit> {
         let prev = TEXT_CAP.with(|c| c.replace(max_bytes));
         let prev_over = TEXT_OVER.with(|o| o.replace(false));
+        let prev_trips = TEXT_TRIPS.with(|t| t.replace(false));
         let s = self.fmt_ratfun(r, Style::Text, false);
         let over = text_check(s.len());
         TEXT_CAP.with(|c| c.set(prev));
         TEXT_OVER.with(|o| o.set(prev_over));
+        TEXT_TRIPS.with(|t| t.set(prev_trips));
         if over {
             return Err(Limit::Text { max: max_bytes });
         }
@@ -70,12 +112,12 @@ impl Ctx {
     }
 
     pub fn ratfun_latex(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Latex, false)
+        checked(self.fmt_ratfun(r, Style::Latex, false))
     }
 
     /// Plain text of a polynomial over the leaves.
     pub fn poly_text(&self, p: &Poly) -> String {
-        self.fmt_poly(p, Style::Text)
+        checked(self.fmt_poly(p, Style::Text))
     }
 
     /// A fraction, expanded or partially factored. In text, a top-level sum
@@ -230,7 +272,7 @@ impl Ctx {
 
     /// Plain text of a leaf (a symbol's name, or `sin(gamma)`, ...).
     pub fn leaf_text(&self, v: Var) -> String {
-        self.fmt_leaf(v, Style::Text)
+        checked(self.fmt_leaf(v, Style::Text))
     }
 }
 
@@ -309,12 +351,12 @@ impl Ctx {
     /// and integer content, then the content with respect to each leaf,
     /// recursively. Parses back to the same canonical form.
     pub fn ratfun_text_factored(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Text, true)
+        checked(self.fmt_ratfun(r, Style::Text, true))
     }
 
     /// LaTeX, partially factored as [`Ctx::ratfun_text_factored`].
     pub fn ratfun_latex_factored(&self, r: &RatFun) -> String {
-        self.fmt_ratfun(r, Style::Latex, true)
+        checked(self.fmt_ratfun(r, Style::Latex, true))
     }
 
     fn fmt_product(&self, p: &Poly, st: Style) -> String {

@@ -1,9 +1,12 @@
 //! Identities the engine must satisfy, checked on random expressions.
 //! Case counts are capped so CI stays fast; raise PROPTEST_CASES to search harder.
 
-use obsan_expr::{gcd, parse_ast, Ctx, Id, Poly, PolyGcd, PrsGcd, RatFun, SplitMix, Tape, Var};
+use obsan_expr::{
+    gcd, parse_ast, Budget, Ctx, Id, Poly, PolyGcd, PrsGcd, RatFun, SplitMix, Tape, Var,
+};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
+use std::time::{Duration, Instant};
 
 const SYMS: [&str; 3] = ["x", "y", "z"];
 
@@ -37,19 +40,71 @@ fn expr_text() -> impl Strategy<Value = String> {
     })
 }
 
-/// Parse generated text. The errors allowed are the documented refusals to
-/// mix angle units of a symbol (`sin(y)` with `sin(4*y/9)`) and to expand a
-/// multiple above 64 of a symbol inside sin/cos/exp (`sin(144*x)`, seed 54);
-/// such cases are skipped.
-fn setup(text: &str) -> Result<(Ctx, Id, Vec<Var>), TestCaseError> {
-    let mut ctx = Ctx::new();
-    let vars: Vec<Var> = SYMS.iter().map(|s| ctx.symbol(s).var).collect();
-    match ctx.parse(text) {
-        Ok(id) => Ok((ctx, id, vars)),
+/// The budget of one case: the engine's default term and node limits, and a
+/// deadline as a backstop. Every property runs its engine work under it (see
+/// `engine`), so a case past the budget is rejected, never passed: seed 29 of
+/// `canonical_derivative_agrees_with_graph_derivative` draws an atan2 whose
+/// d/dy has about 280,000 terms (docs/performance.md), and the infallible API
+/// ran on for minutes.
+fn case_budget() -> Budget {
+    Budget {
+        deadline: Some(Instant::now() + CASE_DEADLINE),
+        ..Budget::default()
+    }
+}
+
+/// Wall-clock backstop per case; the term limit is what seed 29 meets (~3 s).
+const CASE_DEADLINE: Duration = Duration::from_secs(20);
+
+/// How many cases one property may reject (refusals and limits together)
+/// before it fails: a regression that made most cases hit a limit must fail,
+/// not pass on the few that still answer. Seeds 1-60 at 128 cases reject at
+/// most a few per property (docs/performance.md).
+const MAX_REJECTS: u32 = 32;
+
+/// Run engine work under the context's budget. A `Limit` rejects the case
+/// (counted against `MAX_REJECTS`): an engine limit is an error, never a
+/// result, so neither side of an identity may come from a tripped scope.
+fn engine<T>(ctx: &mut Ctx, f: impl FnOnce(&mut Ctx) -> T) -> Result<T, TestCaseError> {
+    ctx.within_budget(f).map_err(|l| {
+        eprintln!("rejected on an engine limit: {l:?}");
+        TestCaseError::reject(format!("engine limit: {l}"))
+    })
+}
+
+/// Parse under the case budget: a limit met while building rejects the
+/// case; the errors allowed are the documented refusals to mix angle units
+/// of a symbol (`sin(y)` with `sin(4*y/9)`) and to expand a multiple above
+/// 64 of a symbol inside sin/cos/exp (`sin(144*x)`, seed 54), also rejected.
+fn parse_case(ctx: &mut Ctx, text: &str) -> Result<Id, TestCaseError> {
+    match engine(ctx, |c| c.parse(text))? {
+        Ok(id) => Ok(id),
+        Err(e) if e.limit.is_some() => Err(TestCaseError::reject(format!("engine limit: {e}"))),
         Err(e) => match refusal(&e.message) {
-            Some(why) => Err(TestCaseError::reject(why)),
+            Some(why) => {
+                eprintln!("rejected as a refusal: {why}");
+                Err(TestCaseError::reject(why))
+            }
             None => Err(TestCaseError::fail(format!("{text}: {e}"))),
         },
+    }
+}
+
+/// A context with x, y, z and the case budget, and the parsed text.
+fn setup(text: &str) -> Result<(Ctx, Id, Vec<Var>), TestCaseError> {
+    let mut ctx = Ctx::new();
+    ctx.set_budget(case_budget());
+    let vars: Vec<Var> = SYMS.iter().map(|s| ctx.symbol(s).var).collect();
+    let id = parse_case(&mut ctx, text)?;
+    Ok((ctx, id, vars))
+}
+
+/// Parse a printed form back: it is well formed, so only a limit may stop it.
+fn reparse(ctx: &mut Ctx, printed: &str) -> Result<Id, TestCaseError> {
+    match engine(ctx, |c| c.parse(printed))? {
+        Ok(id) => Ok(id),
+        Err(e) if e.limit.is_some() => Err(TestCaseError::reject(format!("engine limit: {e}"))),
+        Err(e) => Err(TestCaseError::fail(format!("{printed}: {e}"))),
     }
 }
 
@@ -101,14 +156,16 @@ fn points(seed: u64, n: usize) -> Vec<[f64; 3]> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), max_global_rejects: MAX_REJECTS, ..ProptestConfig::default() })]
 
     /// The canonical form has the value of the expression it came from.
     #[test]
     fn canonical_form_keeps_value(text in expr_text(), seed in any::<u64>()) {
         let (mut ctx, id, vars) = setup(&text)?;
-        let c = ctx.canon(id);
-        let back = ctx.from_canonical(&c);
+        let back = engine(&mut ctx, |c| {
+            let r = c.canon(id);
+            c.from_canonical(&r)
+        })?;
         let tape = Tape::compile(&ctx, &[id, back], &vars).unwrap();
         for p in points(seed, 4) {
             let v = tape.eval(&p);
@@ -121,7 +178,7 @@ proptest! {
     #[test]
     fn frozen_tape_equals_full_evaluation(text in expr_text(), seed in any::<u64>(), mask in 0usize..8) {
         let (mut ctx, id, vars) = setup(&text)?;
-        let d = ctx.diff(id, vars[0]);
+        let d = engine(&mut ctx, |c| c.diff(id, vars[0]))?;
         let tape = Tape::compile(&ctx, &[id, d], &vars).unwrap();
         let varying: Vec<bool> = (0..3).map(|i| mask & (1 << i) != 0).collect();
         let pts = points(seed, 4);
@@ -139,7 +196,7 @@ proptest! {
     #[test]
     fn derivative_matches_finite_differences(text in expr_text(), seed in any::<u64>(), k in 0usize..3) {
         let (mut ctx, id, vars) = setup(&text)?;
-        let d = ctx.diff(id, vars[k]);
+        let d = engine(&mut ctx, |c| c.diff(id, vars[k]))?;
         let tape = Tape::compile(&ctx, &[id, d], &vars).unwrap();
         for p in points(seed, 3) {
             let h = 1e-5;
@@ -156,28 +213,24 @@ proptest! {
     #[test]
     fn print_parse_roundtrip(text in expr_text()) {
         let (mut ctx, id, _) = setup(&text)?;
-        let c = ctx.canon(id);
+        let c = engine(&mut ctx, |c| c.canon(id))?;
         let printed = ctx.ratfun_text(&c);
-        let again = ctx.parse(&printed).map_err(|e| TestCaseError::fail(format!("{printed}: {e}")))?;
-        prop_assert_eq!(ctx.canon(again), c.clone(), "printed: {}", printed);
-        let factored = ctx.ratfun_text_factored(&c);
-        let again = ctx.parse(&factored).map_err(|e| TestCaseError::fail(format!("{factored}: {e}")))?;
-        prop_assert_eq!(ctx.canon(again), c, "factored: {}", factored);
+        let again = reparse(&mut ctx, &printed)?;
+        prop_assert_eq!(engine(&mut ctx, |c| c.canon(again))?, c.clone(), "printed: {}", printed);
+        let factored = engine(&mut ctx, |x| x.ratfun_text_factored(&c))?;
+        let again = reparse(&mut ctx, &factored)?;
+        prop_assert_eq!(engine(&mut ctx, |c| c.canon(again))?, c, "factored: {}", factored);
     }
 
     /// Zero-testing agrees with evaluation: e - e is zero, e - (e + tiny change) is not.
     #[test]
     fn zero_test_agrees_with_evaluation(text in expr_text(), other in expr_text(), seed in any::<u64>()) {
         let (mut ctx, a, vars) = setup(&text)?;
-        let b = match ctx.parse(&other) {
-            Ok(b) => b,
-            Err(e) => match refusal(&e.message) {
-                Some(why) => return Err(TestCaseError::reject(why)),
-                None => return Err(TestCaseError::fail(e.message)),
-            },
-        };
-        let diff = ctx.sub(a, b);
-        let zero = ctx.is_identically_zero(diff);
+        let b = parse_case(&mut ctx, &other)?;
+        let (diff, zero) = engine(&mut ctx, |c| {
+            let d = c.sub(a, b);
+            (d, c.is_identically_zero(d))
+        })?;
         let tape = Tape::compile(&ctx, &[diff], &vars).unwrap();
         let vals: Vec<f64> = points(seed, 4).iter().map(|p| tape.eval(p)[0]).collect();
         let scale = {
@@ -190,9 +243,12 @@ proptest! {
             prop_assert!(vals.iter().any(|v| v.abs() > 1e-12 * scale), "{text} != {other} but all values ~0: {vals:?}");
         }
         // And an expression minus itself, rebuilt from text, is zero.
-        let a2 = ctx.parse(&text).unwrap();
-        let d2 = ctx.sub(a, a2);
-        prop_assert!(ctx.is_identically_zero(d2));
+        let a2 = parse_case(&mut ctx, &text)?;
+        let zero2 = engine(&mut ctx, |c| {
+            let d2 = c.sub(a, a2);
+            c.is_identically_zero(d2)
+        })?;
+        prop_assert!(zero2, "{} minus itself is not zero", text);
     }
 
     /// The parser returns an error, never panics, on arbitrary input.
@@ -410,51 +466,62 @@ fn substitution_relowers_functions() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 48, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), max_global_rejects: MAX_REJECTS, ..ProptestConfig::default() })]
 
     /// Differentiating the canonical form directly agrees with canonicalising
     /// the differentiated graph (two independent routes to the same form).
     #[test]
     fn canonical_derivative_agrees_with_graph_derivative(text in expr_text(), k in 0usize..3) {
         let (mut ctx, id, vars) = setup(&text)?;
-        let c = ctx.canon(id);
-        let d1 = ctx.rf_diff(&c, vars[k]);
-        let dg = ctx.diff(id, vars[k]);
-        let d2 = ctx.canon(dg);
+        // Each route under the budget on its own: a limit on either side
+        // rejects the case, so a placeholder is never compared.
+        let d1 = engine(&mut ctx, |c| {
+            let r = c.canon(id);
+            c.rf_diff(&r, vars[k])
+        })?;
+        let d2 = engine(&mut ctx, |c| {
+            let dg = c.diff(id, vars[k]);
+            c.canon(dg)
+        })?;
         prop_assert_eq!(d1, d2, "{}", text);
     }
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 32, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), max_global_rejects: MAX_REJECTS, ..ProptestConfig::default() })]
 
     /// The half-angle view and back is the identity on canonical forms.
     #[test]
     fn tan_half_roundtrip(text in expr_text()) {
         let (mut ctx, id, _) = setup(&text)?;
-        let c = ctx.canon(id);
-        let th = ctx.tan_half();
-        let t = ctx.to_tan_half(&th, &c);
-        let back = ctx.from_tan_half(&th, &t);
+        let c = engine(&mut ctx, |x| x.canon(id))?;
+        let back = engine(&mut ctx, |x| {
+            let th = x.tan_half();
+            let t = x.to_tan_half(&th, &c);
+            x.from_tan_half(&th, &t)
+        })?;
         prop_assert_eq!(back, c, "{}", text);
     }
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 16, failure_persistence: Some(Box::new(FileFailurePersistence::SourceParallel("proptest-regressions"))), max_global_rejects: MAX_REJECTS, ..ProptestConfig::default() })]
 
     /// Inversion (through the half-angle view when sines are present) gives
     /// the canonical inverse: a * (1/a) = 1, and the same form as dividing.
     #[test]
     fn inverse_is_canonical(text in expr_text()) {
         let (mut ctx, id, _) = setup(&text)?;
-        let c = ctx.canon(id);
+        let c = engine(&mut ctx, |x| x.canon(id))?;
         prop_assume!(!c.is_zero());
-        let inv = ctx.rf_inv(&c).unwrap();
-        prop_assert!(ctx.rf_mul(&c, &inv).is_one(), "{}", text);
-        let one = ctx.one();
-        let q = ctx.div(one, id);
-        prop_assert_eq!(ctx.canon(q), inv);
+        let inv = engine(&mut ctx, |x| x.rf_inv(&c))?.unwrap();
+        prop_assert!(engine(&mut ctx, |x| x.rf_mul(&c, &inv).is_one())?, "{}", text);
+        let q = engine(&mut ctx, |x| {
+            let one = x.one();
+            let q = x.div(one, id);
+            x.canon(q)
+        })?;
+        prop_assert_eq!(q, inv);
     }
 }
 

@@ -429,3 +429,29 @@ fn building_a_long_printed_form_polls_the_deadline() {
     let e = ctx.parse(&text).unwrap_err();
     assert_eq!(e.limit, Some(Limit::Timeout), "{}", e.message);
 }
+
+#[test]
+fn a_text_cap_scope_refuses_every_long_form_and_trips_an_armed_budget() {
+    // The same 19.7 MB form: under `within_text_cap` every printer stops at
+    // the cap and the scope answers Limit::Text; under an armed budget the
+    // budget trips too, so the armed caller drops what was printed.
+    let src = " sqrt((lx45 - x)^2 + sqrt(( - c*(V - V*(V - V^4/ x)^2 / y)^27 )+ r)^3/3 + R)";
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(src).unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    let cap = 1 << 20;
+    let text = obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&r));
+    assert_eq!(text, Err(Limit::Text { max: cap }));
+    let latex = obsan_expr::within_text_cap(cap, || ctx.ratfun_latex_factored(&r));
+    assert_eq!(latex, Err(Limit::Text { max: cap }));
+    let armed = obsan_expr::within_thread_budget(&Budget::default(), || {
+        obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&r).len())
+    });
+    assert_eq!(armed, Err(Limit::Text { max: cap }));
+    // A short form is untouched, and the cap ends with its scope.
+    let x = ctx.parse("x^2 - 1").unwrap();
+    let small = ctx.canon(x);
+    let capped = obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&small));
+    assert_eq!(capped.as_deref(), Ok("x^2 - 1"));
+    assert!(ctx.ratfun_text(&r).len() > cap);
+}

@@ -11,6 +11,28 @@ use super::*;
 /// cross-section of the symmetry group would also give. `None` when a
 /// coefficient holds anything but constant variables (an atom of a moving one).
 #[allow(clippy::type_complexity)]
+/// The block coordinates of one state: the symbol itself unless it is an
+/// angle seen only through its cosine and sine, then `cos` and `sin` if any.
+pub(super) fn push_state_blocks(
+    blocks: &mut Vec<Id>,
+    bnames: &mut Vec<String>,
+    name: &str,
+    sym: Id,
+    as_symbol: bool,
+    trig: Option<(Id, Id)>,
+) {
+    if as_symbol {
+        blocks.push(sym);
+        bnames.push(name.to_string());
+    }
+    if let Some((c, s)) = trig {
+        blocks.push(c);
+        bnames.push(format!("cos({name})"));
+        blocks.push(s);
+        bnames.push(format!("sin({name})"));
+    }
+}
+
 pub(super) fn coefficient_blocks(
     nf: &mut NormalForm,
     fields: &[Vec<Id>],
@@ -37,16 +59,15 @@ pub(super) fn coefficient_blocks(
             continue;
         }
         moving.extend(vs);
-        if !angle[i] || used_vars.contains(&vars[i]) {
-            blocks.push(sym_var);
-            bnames.push(names[i].clone());
-        }
-        if let Some((c, s)) = trig[i] {
-            blocks.push(c);
-            bnames.push(format!("cos({})", names[i]));
-            blocks.push(s);
-            bnames.push(format!("sin({})", names[i]));
-        }
+        let as_symbol = !angle[i] || used_vars.contains(&vars[i]);
+        push_state_blocks(
+            &mut blocks,
+            &mut bnames,
+            &names[i],
+            sym_var,
+            as_symbol,
+            trig[i],
+        );
     }
     let mut const_vars: Vec<u32> = Vec::new();
     for (name, val) in nf.consts.clone() {

@@ -37,7 +37,7 @@ mod reduced;
 
 use crate::fp_linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon};
 use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
-use blocks::coefficient_blocks;
+use blocks::{coefficient_blocks, push_state_blocks};
 use reduced::in_modes;
 pub use reduced::verify_derivation;
 
@@ -312,16 +312,15 @@ pub fn derive_modes(
     let mut bnames: Vec<String> = Vec::new();
     for i in 0..n {
         let sym_var = nf.ctx.symbol(&names[i]).id;
-        if !angle[i] || used_vars.contains(&vars[i]) {
-            blocks.push(sym_var);
-            bnames.push(names[i].clone());
-        }
-        if let Some((c, s)) = trig[i] {
-            blocks.push(c);
-            bnames.push(format!("cos({})", names[i]));
-            blocks.push(s);
-            bnames.push(format!("sin({})", names[i]));
-        }
+        let as_symbol = !angle[i] || used_vars.contains(&vars[i]);
+        push_state_blocks(
+            &mut blocks,
+            &mut bnames,
+            &names[i],
+            sym_var,
+            as_symbol,
+            trig[i],
+        );
     }
     let mut consts = Vec::new();
     for (name, val) in nf.consts.clone() {

@@ -127,7 +127,14 @@ impl Derivation {
         }
         let names: Vec<&str> = self.modes.iter().map(|m| m.name.as_str()).collect();
         o.push_str(&format!("state {}\n", names.join(", ")));
-        for k in 0..self.modes.len() {
+        self.push_equations(&mut o, |_| true)?;
+        Some(o)
+    }
+
+    /// The dynamics of the modes `keep` selects, then the outputs, as `.sys`
+    /// lines (shared by the decomposition and the reduced system).
+    fn push_equations(&self, o: &mut String, keep: impl Fn(usize) -> bool) -> Option<()> {
+        for k in (0..self.modes.len()).filter(|&k| keep(k)) {
             o.push_str(&format!(
                 "{}' = {}\n",
                 self.modes[k].name,
@@ -137,7 +144,7 @@ impl Derivation {
         for (name, e) in &self.outputs {
             o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
         }
-        Some(o)
+        Some(())
     }
 
     /// A `.sys` file of the reduced system.
@@ -171,18 +178,7 @@ impl Derivation {
         if !inputs.is_empty() {
             o.push_str(&format!("input {}\n", inputs.join(", ")));
         }
-        for k in 0..self.modes.len() {
-            if !self.is_constant(k) {
-                o.push_str(&format!(
-                    "{}' = {}\n",
-                    self.modes[k].name,
-                    self.dynamics(k)?
-                ));
-            }
-        }
-        for (name, e) in &self.outputs {
-            o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
-        }
+        self.push_equations(&mut o, |k| !self.is_constant(k))?;
         Some(o)
     }
 }
