@@ -277,7 +277,10 @@ impl Ctx {
             };
             let id = self.from_canonical(&r);
             let (c, s) = self.angle_pair(Angle::Generic(id));
-            acc = if flip { (c, self.neg(s)) } else { (c, s) };
+            let pair = if flip { (c, self.neg(s)) } else { (c, s) };
+            // Multiply in: the constant atans above are already in `acc`
+            // (assigning here dropped them: sin(1 + atan(pi)) read as sin(1)).
+            acc = self.cmul(acc, pair);
         }
         for (sym, coeff) in lin.syms {
             let (den, n) = self.unit_multiple(sym, &coeff, false)?;

@@ -187,3 +187,38 @@ fn constant_square_roots_split_into_primes() {
         "sqrt(2*2305843009213693951) - sqrt(2)*sqrt(2305843009213693951)"
     ));
 }
+
+/// Regression (h/engine, float_eval's `agrees_with_the_engine_without_branches`):
+/// an angle with a constant atan and a number besides, `sin(1 - atan(pi))`,
+/// was read as `sin(1)`: the number's angle atom replaced the atan's factor
+/// instead of multiplying it. The reference is f64 evaluation of the text.
+#[test]
+fn a_number_beside_a_constant_arctangent_keeps_both() {
+    let cases: [(&str, f64); 6] = [
+        (
+            "sin(1 - atan(pi))",
+            (1.0 - std::f64::consts::PI.atan()).sin(),
+        ),
+        (
+            "cos(1 + atan(pi))",
+            (1.0 + std::f64::consts::PI.atan()).cos(),
+        ),
+        ("sin(1 + atan(1/2))", (1.0 + 0.5f64.atan()).sin()),
+        ("sin(1 - atan(2))", (1.0 - 2f64.atan()).sin()),
+        (
+            "cos(3/2 + 2*atan(1/3))",
+            (1.5 + 2.0 * (1.0f64 / 3.0).atan()).cos(),
+        ),
+        ("tan(1 + atan(5))", (1.0 + 5f64.atan()).tan()),
+    ];
+    for (text, want) in cases {
+        let mut ctx = Ctx::new();
+        let id = ctx.parse(text).unwrap();
+        let c = ctx.canon(id);
+        let back = ctx.from_canonical(&c);
+        let got = value(&ctx, back);
+        assert!((got - want).abs() < 1e-12, "{text}: {got} vs {want}");
+    }
+    assert!(!is_zero("sin(1 - atan(pi)) - sin(1)"));
+    assert!(is_zero("sin(1 + atan(2)) - (sin(1) + 2*cos(1))/sqrt(5)"));
+}
