@@ -224,6 +224,31 @@ fn clustered_sd(
     var.iter().map(|v| (v * f).sqrt()).collect()
 }
 
+/// Whiten one trajectory's residuals and Jacobian rows by `w` (`L^-1 r`,
+/// `L^-1 J`, column by column); `None` leaves them as they are.
+fn apply(w: Option<&Whitener>, mut r: Vec<f64>, rows: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let Some(l) = w else {
+        return (r, rows);
+    };
+    l.whiten_in_place(&mut r);
+    if rows.is_empty() {
+        return (r, rows);
+    }
+    let (nr, nc) = (rows.len(), rows[0].len());
+    let mut col = vec![0.0; nr];
+    let mut out = vec![vec![0.0; nc]; nr];
+    for j in 0..nc {
+        for (c, row) in col.iter_mut().zip(&rows) {
+            *c = row[j];
+        }
+        l.whiten_in_place(&mut col);
+        for (o, c) in out.iter_mut().zip(&col) {
+            o[j] = *c;
+        }
+    }
+    (r, out)
+}
+
 /// The problem's fixed parts: model, data, options, column indices.
 struct Problem<'a> {
     p: &'a Predictor,
@@ -234,7 +259,8 @@ struct Problem<'a> {
     /// Per trajectory, its measured cells.
     cells: Vec<Measured>,
     /// Per trajectory, the whitening factor L (residuals become L^-1 r).
-    whiten: std::cell::RefCell<Vec<Option<Whitener>>>,
+    /// A lock, not a cell: the trajectories are predicted in parallel.
+    whiten: std::sync::RwLock<Vec<Option<Whitener>>>,
 }
 
 impl Problem<'_> {
@@ -280,53 +306,47 @@ impl Problem<'_> {
                 n_dyn: p.n_dynamic,
                 n_traj: trajs.len(),
             },
-            whiten: std::cell::RefCell::new(vec![None; trajs.len()]),
+            whiten: std::sync::RwLock::new(vec![None; trajs.len()]),
             cells: trajs.iter().map(|t| Measured::new(p, t.outputs)).collect(),
             cols,
         })
     }
 
-    fn apply(&self, k: usize, mut r: Vec<f64>, rows: Vec<Vec<f64>>) -> (Vec<f64>, Vec<Vec<f64>>) {
-        let w = self.whiten.borrow();
-        let Some(l) = &w[k] else {
-            return (r, rows);
-        };
-        l.whiten_in_place(&mut r);
-        if rows.is_empty() {
-            return (r, rows);
-        }
-        // Column by column: L^-1 J.
-        let (nr, nc) = (rows.len(), rows[0].len());
-        let mut col = vec![0.0; nr];
-        let mut out = vec![vec![0.0; nc]; nr];
-        for j in 0..nc {
-            for (c, row) in col.iter_mut().zip(&rows) {
-                *c = row[j];
-            }
-            l.whiten_in_place(&mut col);
-            for (o, c) in out.iter_mut().zip(&col) {
-                o[j] = *c;
-            }
-        }
-        (r, out)
+    /// Run `f` on every trajectory index in parallel (a trajectory's
+    /// prediction is independent of the others'), the results in trajectory
+    /// order so that every sum over them is the serial one, bit for bit;
+    /// the first failing trajectory's error. The caller's cancel flag is
+    /// thread-local: it is handed to the workers.
+    fn per_trajectory<T: Send>(
+        &self,
+        f: impl Fn(usize) -> Result<T, FitError> + Sync,
+    ) -> Result<Vec<T>, FitError> {
+        use rayon::prelude::*;
+        let cancel = obsan_expr::cancel_flag();
+        let out: Vec<Result<T, FitError>> = (0..self.trajs.len())
+            .into_par_iter()
+            .map(|k| {
+                obsan_expr::with_cancel(cancel.clone(), || {
+                    cancel_point()?;
+                    f(k)
+                })
+            })
+            .collect();
+        out.into_iter().collect()
     }
 
     /// The cost (sum of squared whitened residuals) at `theta`, without
     /// sensitivities.
     fn cost(&self, theta: &[f64]) -> Result<f64, FitError> {
-        let mut total = 0.0;
-        for (k, t) in self.trajs.iter().enumerate() {
-            cancel_point()?;
+        let parts = self.per_trajectory(|k| {
             let x0 = self.lay.state_of(theta, k);
+            let t = &self.trajs[k];
             let r = residuals(self.p, t, &x0, self.opts, &self.cells[k], false, false)?.0;
-            total += self
-                .apply(k, r, vec![])
-                .0
-                .iter()
-                .map(|x| x * x)
-                .sum::<f64>();
-        }
-        Ok(total)
+            let held = self.whiten.read().ok();
+            let w = held.as_ref().and_then(|w| w[k].as_ref());
+            Ok(apply(w, r, vec![]).0.iter().map(|x| x * x).sum::<f64>())
+        })?;
+        Ok(parts.iter().sum())
     }
 
     /// Residuals and the normal equations `J^T J`, `J^T r`, trajectory by
@@ -343,28 +363,41 @@ impl Problem<'_> {
         let mut raw = Vec::with_capacity(self.trajs.len());
         let mut jac = Vec::with_capacity(self.trajs.len());
         let noise = refresh && self.opts.input_noise.is_some();
-        for (k, t) in self.trajs.iter().enumerate() {
-            cancel_point()?;
+        // Per trajectory in parallel: its residuals, its whitener (new with
+        // `noise`), its whitened residuals and rows; then the sums in order.
+        #[allow(clippy::type_complexity)]
+        let parts: Vec<(Vec<f64>, Option<Option<Whitener>>, Vec<f64>, Vec<Vec<f64>>)> = self
+            .per_trajectory(|k| {
+                let (r0, rows, at, m) = residuals(
+                    self.p,
+                    &self.trajs[k],
+                    &lay.state_of(theta, k),
+                    self.opts,
+                    &self.cells[k],
+                    true,
+                    noise,
+                )?;
+                let raw = r0.clone();
+                if noise {
+                    let w = whitening(self.p, &rows, &at, &m);
+                    let (r0, rows) = apply(w.as_ref(), r0, rows);
+                    return Ok((raw, Some(w), r0, rows));
+                }
+                let held = self.whiten.read().ok();
+                let w = held.as_ref().and_then(|w| w[k].as_ref());
+                let (r0, rows) = apply(w, r0, rows);
+                Ok((raw, None, r0, rows))
+            })?;
+        for (k, (r_raw, fresh, r0, rows)) in parts.into_iter().enumerate() {
+            if let (Some(fresh), Ok(mut w)) = (fresh, self.whiten.write()) {
+                w[k] = fresh;
+            }
             // Theta index of each column of the trajectory's Jacobian: its own
             // initial dynamic state, then the shared params.
             let idx: Vec<usize> = (0..lay.n_dyn)
                 .map(|i| n_params + k * lay.n_dyn + i)
                 .chain(0..n_params)
                 .collect();
-            let (r0, rows, at, m) = residuals(
-                self.p,
-                t,
-                &lay.state_of(theta, k),
-                self.opts,
-                &self.cells[k],
-                true,
-                noise,
-            )?;
-            if noise {
-                self.whiten.borrow_mut()[k] = whitening(self.p, &rows, &at, &m);
-            }
-            raw.push(r0.clone());
-            let (r0, rows) = self.apply(k, r0, rows);
             for (row, r) in rows.iter().zip(&r0) {
                 for (a, &ja) in idx.iter().enumerate() {
                     jtr[ja] += row[a] * r;
@@ -373,6 +406,7 @@ impl Problem<'_> {
                     }
                 }
             }
+            raw.push(r_raw);
             res.push(r0);
             jac.push((idx, rows));
         }
@@ -689,7 +723,7 @@ pub fn fit(
         .zip(&counts)
         .map(|(s, c)| (s / (*c).max(1) as f64).sqrt())
         .collect();
-    let whitening = prob.whiten.borrow().clone();
+    let whitening = prob.whiten.read().map(|w| w.clone()).unwrap_or_default();
     Ok(FitResult {
         params: theta[..n_params].to_vec(),
         initial_states: (0..trajs.len())

@@ -1,6 +1,8 @@
 //! A set cancel flag (`obsan_expr::with_cancel`, what Ctrl-C sets in the
 //! Python package) stops the fitter with its typed error; the same fit
-//! without it succeeds, so the error is the flag's.
+//! without it succeeds, so the error is the flag's. The fitter predicts the
+//! trajectories in parallel: the flag reaches its workers, and the result
+//! does not depend on the number of threads.
 
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_expr::with_cancel;
@@ -10,28 +12,41 @@ use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-/// dx/dt = -k x + u observed directly; data from k = 0.5, x0 = 2.
+/// dx/dt = -k x + u observed directly; data from k = 0.5, x0 = 2 (and
+/// 2.5, 3, ... for the further trajectories of [`problem_of`]).
 fn problem() -> (Predictor, Dataset) {
+    problem_of(1)
+}
+
+fn problem_of(n: usize) -> (Predictor, Dataset) {
     let src = "system decay\nstate x\nparam k\ninput u\nx' = -k*x + u\noutput y = x\n";
     let sys = System::parse(src, "decay.sys").unwrap();
     let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
-    let mut inputs = Series::new(vec!["u".into()]);
-    let mut outputs = Series::new(vec!["y".into()]);
-    for i in 0..=200 {
-        let t = i as f64 * 0.05;
-        inputs.push(t, &[Some(0.0)]);
-        if i > 0 {
-            outputs.push(t, &[Some(2.0 * (-0.5 * t).exp())]);
-        }
-    }
+    let trajectories = (0..n)
+        .map(|k| {
+            let x0 = 2.0 + 0.5 * k as f64;
+            let mut inputs = Series::new(vec!["u".into()]);
+            let mut outputs = Series::new(vec!["y".into()]);
+            for i in 0..=200 {
+                let t = i as f64 * 0.05;
+                inputs.push(t, &[Some(0.0)]);
+                // A deterministic wobble, so that the residuals are not zero.
+                let wobble = 1e-3 * ((i * (k + 3)) as f64).sin();
+                if i > 0 {
+                    outputs.push(t, &[Some(x0 * (-0.5 * t).exp() + wobble)]);
+                }
+            }
+            Trajectory {
+                name: format!("t{}", k + 1),
+                inputs,
+                outputs,
+                meta: BTreeMap::new(),
+            }
+        })
+        .collect();
     let data = Dataset {
         meta: DatasetMeta::default(),
-        trajectories: vec![Trajectory {
-            name: "t1".into(),
-            inputs,
-            outputs,
-            meta: BTreeMap::new(),
-        }],
+        trajectories,
     };
     (p, data)
 }
@@ -46,7 +61,38 @@ fn run_fit(p: &Predictor, data: &Dataset) -> Result<obsan_fit::FitResult, FitErr
         max_step: 0.0,
         input_noise: None,
     };
-    fit(p, &trajs, &[0.8], &[vec![1.5]], &opts)
+    let states: Vec<Vec<f64>> = trajs.iter().map(|_| vec![1.5]).collect();
+    fit(p, &trajs, &[0.8], &states, &opts)
+}
+
+/// Run `f` on a pool of `n` threads.
+fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+#[test]
+fn a_fit_over_many_trajectories_is_the_same_on_one_thread_and_on_three() {
+    let (p, data) = problem_of(7);
+    let one = on_threads(1, || run_fit(&p, &data)).unwrap();
+    let three = on_threads(3, || run_fit(&p, &data)).unwrap();
+    // The sums run in trajectory order whatever the threads: bit for bit.
+    assert_eq!(one.params, three.params);
+    assert_eq!(one.initial_states, three.initial_states);
+    assert_eq!(one.cost.to_bits(), three.cost.to_bits());
+    assert_eq!(one.iterations, three.iterations);
+    // And the fit is right: k = 0.5, each x0 its own (to the wobble).
+    assert!((one.params[0] - 0.5).abs() < 1e-3, "{:?}", one.params);
+    for (k, s) in one.initial_states.iter().enumerate() {
+        assert!((s[0] - (2.0 + 0.5 * k as f64)).abs() < 1e-2, "{k}: {s:?}");
+    }
+    // A set flag still stops the parallel fit with its typed error.
+    let flag = Arc::new(AtomicBool::new(true));
+    let r = on_threads(3, || with_cancel(flag, || run_fit(&p, &data)));
+    assert_eq!(r.unwrap_err(), FitError::Cancelled);
 }
 
 #[test]
