@@ -36,6 +36,118 @@ pub(crate) struct Fitted {
     pub(crate) white_won: bool,
 }
 
+/// The extended model, its data, its start and its exact rank test on
+/// these data: what every candidate needs before it is fitted.
+struct Ranked {
+    ext: System,
+    prepared: Dataset,
+    pv: Vec<f64>,
+    sv: Vec<Vec<f64>>,
+    warmed: bool,
+}
+
+/// Extend `base` by `e`, start it from `base_fit` (the new params at
+/// `warm` when given) and rank-test it on `data`'s input class; `res`
+/// gets the rank, the identifiability and, if not identifiable, the null
+/// vector. `None`: not identifiable (nothing to fit).
+#[allow(clippy::too_many_arguments)]
+fn rank_test(
+    base: &System,
+    base_fit: &ModelFit,
+    e: &Effect,
+    data: &Dataset,
+    which: &[usize],
+    origin: &str,
+    warm: Option<&[f64]>,
+    res: &mut CandidateResult,
+) -> Result<Option<Ranked>, DiagnoseError> {
+    let ext = base
+        .extend(&[e], origin)
+        .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
+    let prepared = prepare(&ext, data)?;
+    let (ins, der) = class_inputs(&ext);
+    let class: InputClass = input_class(&ins, &der, &prepared)?;
+    let consts: Vec<Vec<(String, f64)>> = prepared
+        .trajectories
+        .iter()
+        .map(|t| {
+            ext.decls_of(Kind::Const)
+                .filter(|c| c.value.is_none())
+                .map(|c| (c.name.clone(), t.meta.get(&c.name).copied().unwrap_or(0.0)))
+                .collect()
+        })
+        .collect();
+    let outs = ext.output_names();
+    // Per trajectory, the most measured outputs (at most
+    // MAX_RANK_OUTPUTS): enough for the test, and every square-root
+    // output (a range) halves the density of usable random points.
+    let seen: Vec<Vec<bool>> = prepared
+        .trajectories
+        .iter()
+        .map(|t| {
+            let counts: Vec<usize> = outs
+                .iter()
+                .map(|o| {
+                    t.outputs
+                        .column(o)
+                        .map_or(0, |c| c.iter().filter(|v| v.is_some()).count())
+                })
+                .collect();
+            let mut order: Vec<usize> = (0..outs.len()).filter(|&i| counts[i] > 0).collect();
+            order.sort_by(|&a, &b| counts[b].cmp(&counts[a]).then(a.cmp(&b)));
+            order.truncate(MAX_RANK_OUTPUTS);
+            (0..outs.len()).map(|i| order.contains(&i)).collect()
+        })
+        .collect();
+    let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
+    let (mut pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
+    // A warm start: the new params at the candidate's previous estimate.
+    let warm = warm.filter(|w| w.len() == pv.len() - base_pv.len());
+    let warmed = warm.is_some();
+    if let Some(w) = warm {
+        pv[base_pv.len()..].copy_from_slice(w);
+    }
+    let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
+    res.rank = Some((id.rank, id.n));
+    res.identifiable = e.params.iter().all(|p| id.param_observable(p));
+    if !res.identifiable {
+        if let Some((_, terms)) = id.symmetries.iter().find(|s| e.params.contains(&s.0)) {
+            res.symmetry = terms.clone();
+        }
+        return Ok(None);
+    }
+    Ok(Some(Ranked {
+        ext,
+        prepared,
+        pv,
+        sv,
+        warmed,
+    }))
+}
+
+/// A candidate's round entry from its rank test alone (the first round's
+/// file candidates that the score screen leaves unfitted: the "cannot
+/// reveal" report needs every one's rank). Not identifiable: the entry the
+/// full route gives, not marked screened out; identifiable: `screened`
+/// with the rank filled in.
+pub(crate) fn rank_only(
+    base: &System,
+    base_fit: &ModelFit,
+    e: &Effect,
+    data: &Dataset,
+    which: &[usize],
+    origin: &str,
+    screened: CandidateResult,
+) -> CandidateResult {
+    let mut res = screened;
+    match rank_test(base, base_fit, e, data, which, origin, None, &mut res) {
+        Ok(None) if res.rank.is_some() => res.screened_out = false,
+        Ok(_) => {}
+        Err(err) => res.error = Some(err.to_string()),
+    }
+    res
+}
+
 /// Under `auto` with estimated input noise, each side of the likelihood
 /// ratio takes the better of its fits at the estimated levels and at white
 /// input noise (`c = 0`, the boundary of the same family). That is the
@@ -74,61 +186,16 @@ pub(crate) fn candidate(
     };
     let mut res = CandidateResult::untried(e, origin);
     let mut run = || -> Result<Option<Fitted>, DiagnoseError> {
-        let ext = base
-            .extend(&[e], origin)
-            .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
-        let prepared = prepare(&ext, data)?;
-        let (ins, der) = class_inputs(&ext);
-        let class: InputClass = input_class(&ins, &der, &prepared)?;
-        let consts: Vec<Vec<(String, f64)>> = prepared
-            .trajectories
-            .iter()
-            .map(|t| {
-                ext.decls_of(Kind::Const)
-                    .filter(|c| c.value.is_none())
-                    .map(|c| (c.name.clone(), t.meta.get(&c.name).copied().unwrap_or(0.0)))
-                    .collect()
-            })
-            .collect();
-        let outs = ext.output_names();
-        // Per trajectory, the most measured outputs (at most
-        // MAX_RANK_OUTPUTS): enough for the test, and every square-root
-        // output (a range) halves the density of usable random points.
-        let seen: Vec<Vec<bool>> = prepared
-            .trajectories
-            .iter()
-            .map(|t| {
-                let counts: Vec<usize> = outs
-                    .iter()
-                    .map(|o| {
-                        t.outputs
-                            .column(o)
-                            .map_or(0, |c| c.iter().filter(|v| v.is_some()).count())
-                    })
-                    .collect();
-                let mut order: Vec<usize> = (0..outs.len()).filter(|&i| counts[i] > 0).collect();
-                order.sort_by(|&a, &b| counts[b].cmp(&counts[a]).then(a.cmp(&b)));
-                order.truncate(MAX_RANK_OUTPUTS);
-                (0..outs.len()).map(|i| order.contains(&i)).collect()
-            })
-            .collect();
-        let base_pv: Vec<f64> = base_fit.params.iter().map(|p| p.1).collect();
-        let (mut pv, sv) = extended_start(&ext, &base_pv, &base_fit.initial_states, &prepared)?;
-        // A warm start: the new params at the candidate's previous estimate.
-        let warm = warm.filter(|w| w.len() == pv.len() - base_pv.len());
-        let warmed = warm.is_some();
-        if let Some(w) = warm {
-            pv[base_pv.len()..].copy_from_slice(w);
-        }
-        let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
-        res.rank = Some((id.rank, id.n));
-        res.identifiable = e.params.iter().all(|p| id.param_observable(p));
-        if !res.identifiable {
-            if let Some((_, terms)) = id.symmetries.iter().find(|s| e.params.contains(&s.0)) {
-                res.symmetry = terms.clone();
-            }
+        let Some(Ranked {
+            ext,
+            prepared,
+            pv,
+            sv,
+            warmed,
+        }) = rank_test(base, base_fit, e, data, which, origin, warm, &mut res)?
+        else {
             return Ok(None);
-        }
+        };
         // Each fit weighs its residuals by the covariance at its own
         // estimate; their likelihoods then differ by cost and log-determinant
         // ([`ModelFit::m2ll`]). (Holding the current fit's whiteners for

@@ -2,7 +2,7 @@
 //! residuals, try every candidate effect that the data can reveal, name the
 //! significant ones greedily.
 
-use crate::candidate::{candidate, Noise};
+use crate::candidate::{candidate, rank_only, Noise};
 use crate::common_mode::CommonModeCheck;
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
@@ -444,7 +444,9 @@ pub fn diagnose(
             let own;
             let se = match gen_of(e) {
                 Some(g) => g.screen.as_ref()?,
-                None if round > 0 => {
+                // In the first round only with generation, where the
+                // candidates are many; their rank tests are run below.
+                None if round > 0 || o.generate => {
                     own = file_stand_in(e, &measured)?;
                     &own
                 }
@@ -498,6 +500,22 @@ pub fn diagnose(
             }
         }
         if round == 0 {
+            // Every file candidate's rank, for the "cannot reveal" report:
+            // the screened ones are rank-tested alone (no fit).
+            use rayon::prelude::*;
+            results
+                .par_iter_mut()
+                .filter(|r| r.0.screened_out && r.0.origin == ORIGIN_FILE)
+                .for_each(|r| {
+                    let Some(e) = remaining.iter().find(|e| e.name == r.0.effect) else {
+                        return;
+                    };
+                    let entry = std::mem::replace(&mut r.0, CandidateResult::untried(e, ""));
+                    r.0 = obsan_expr::with_cancel(cancel.clone(), || {
+                        let origin = lib.map_or("effects", |l| l.origin.as_str());
+                        rank_only(&current_sys, &current, e, data, &which, origin, entry)
+                    });
+                });
             if let Ok(ext) = current_sys.extend(&[], "") {
                 let prepared = prepare(&ext, data)?;
                 let (ins, der) = class_inputs(&ext);

@@ -9,7 +9,7 @@
 //! by its `--speed-profile` (`constant`, `sine:0.9:60`, ...).
 
 use obsan_calib::{simulate, SimOptions, Truth};
-use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis};
+use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis, InputNoise, ORIGIN_FILE};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 
@@ -18,6 +18,15 @@ fn read(p: &str) -> String {
 }
 
 pub fn run(design: &str, effects: &[(&str, f64)], seed: u64) -> (Diagnosis, Truth) {
+    run_opts(design, effects, seed, DiagnoseOptions::default())
+}
+
+fn run_opts(
+    design: &str,
+    effects: &[(&str, f64)],
+    seed: u64,
+    opts: DiagnoseOptions,
+) -> (Diagnosis, Truth) {
     let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
     let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
     let mut o = SimOptions {
@@ -34,15 +43,7 @@ pub fn run(design: &str, effects: &[(&str, f64)], seed: u64) -> (Diagnosis, Trut
     }
     let (data, truth) = simulate(&o).unwrap();
     let start = start_values(&sys, &data, &Default::default()).unwrap();
-    let d = diagnose(
-        &sys,
-        Some(&lib),
-        &data,
-        &start,
-        &DiagnoseOptions::default(),
-        &|_| {},
-    )
-    .unwrap();
+    let d = diagnose(&sys, Some(&lib), &data, &start, &opts, &|_| {}).unwrap();
     (d, truth)
 }
 
@@ -158,6 +159,62 @@ fn what_constant_speed_circles_cannot_reveal() {
         .find(|c| c.effect == "time_offset")
         .unwrap();
     assert!(c.identifiable);
+}
+
+/// With generation and ordinary least squares the first round scores the
+/// file's candidates too and fits only those the screen keeps; the ones it
+/// leaves are rank-tested alone, so the hidden report is the one every
+/// candidate's full route gives: the bias hidden, psi in its null vector,
+/// the same file effects as without generation.
+#[test]
+fn the_screened_first_round_still_reports_what_the_data_cannot_reveal() {
+    let ols = |generate| DiagnoseOptions {
+        generate,
+        input_noise: InputNoise::None,
+        ..DiagnoseOptions::default()
+    };
+    let (with, _) = run_opts("constant", &[("bearing_bias", 0.05)], 1, ols(true));
+    let (without, _) = run_opts("constant", &[("bearing_bias", 0.05)], 1, ols(false));
+    let file_hidden = |d: &Diagnosis| {
+        let mut h: Vec<String> = d
+            .hidden
+            .iter()
+            .filter(|c| c.origin == ORIGIN_FILE)
+            .map(|c| c.effect.clone())
+            .collect();
+        h.sort();
+        h
+    };
+    assert_eq!(file_hidden(&with), file_hidden(&without));
+    let h = with
+        .hidden
+        .iter()
+        .find(|c| c.effect == "bearing_bias")
+        .expect("reported hidden");
+    assert!(!h.identifiable && !h.screened_out && h.rank.is_some());
+    let psi = h
+        .symmetry
+        .iter()
+        .find(|t| t.0 == "psi")
+        .expect("psi absorbs it");
+    assert!((psi.1 - 1.0).abs() < 1e-6, "{:?}", h.symmetry);
+    // The first round did score the file's candidates and left some unfitted,
+    // each with its rank.
+    let first = &with.rounds[0];
+    assert!(first
+        .iter()
+        .any(|c| c.origin == ORIGIN_FILE && c.score.is_some()));
+    for c in first
+        .iter()
+        .filter(|c| c.screened_out && c.origin == ORIGIN_FILE)
+    {
+        assert!(
+            c.rank.is_some() && c.identifiable,
+            "{}: {:?}",
+            c.effect,
+            c.rank
+        );
+    }
 }
 
 #[test]
