@@ -125,11 +125,11 @@ fn rank_test(
     }))
 }
 
-/// A candidate's round entry from its rank test alone (the first round's
-/// file candidates that the score screen leaves unfitted: the "cannot
-/// reveal" report needs every one's rank). Not identifiable: the entry the
-/// full route gives, not marked screened out; identifiable: `screened`
-/// with the rank filled in.
+/// Fill in a screened candidate's round entry `res` from its rank test
+/// alone (the first round's file candidates that the score screen leaves
+/// unfitted: the "cannot reveal" report needs every one's rank). Not
+/// identifiable: the entry the full route gives, no longer marked screened
+/// out; identifiable: still screened out, with its rank.
 pub(crate) fn rank_only(
     base: &System,
     base_fit: &ModelFit,
@@ -137,15 +137,13 @@ pub(crate) fn rank_only(
     data: &Dataset,
     which: &[usize],
     origin: &str,
-    screened: CandidateResult,
-) -> CandidateResult {
-    let mut res = screened;
-    match rank_test(base, base_fit, e, data, which, origin, None, &mut res) {
-        Ok(None) if res.rank.is_some() => res.screened_out = false,
-        Ok(_) => {}
+    res: &mut CandidateResult,
+) {
+    match rank_test(base, base_fit, e, data, which, origin, None, res) {
+        Ok(None) => res.screened_out = false,
+        Ok(Some(_)) => {}
         Err(err) => res.error = Some(err.to_string()),
     }
-    res
 }
 
 /// Under `auto` with estimated input noise, each side of the likelihood

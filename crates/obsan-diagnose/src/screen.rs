@@ -13,8 +13,9 @@
 //! (`effective_score`). At a converged base fit the old components of `g`
 //! vanish and it is the classical score statistic (Rao 1948), asymptotically
 //! the LR's chi-square under the null; at a base fit short of its optimum it
-//! is Neyman's C(alpha) statistic. A candidate's new states are held at their start (a lag's state
-//! at the first input), so an initial transient gives no score.
+//! is Neyman's C(alpha) statistic. A candidate's new states are held at
+//! their start (a lag's state at the first input), so an initial transient
+//! gives no score.
 
 use crate::error::DiagnoseError;
 use crate::model_fit::{prepare, ModelFit};

@@ -503,18 +503,16 @@ pub fn diagnose(
             // Every file candidate's rank, for the "cannot reveal" report:
             // the screened ones are rank-tested alone (no fit).
             use rayon::prelude::*;
+            let origin = lib.map_or("effects", |l| l.origin.as_str());
             results
                 .par_iter_mut()
                 .filter(|r| r.0.screened_out && r.0.origin == ORIGIN_FILE)
                 .for_each(|r| {
-                    let Some(e) = remaining.iter().find(|e| e.name == r.0.effect) else {
-                        return;
-                    };
-                    let entry = std::mem::replace(&mut r.0, CandidateResult::untried(e, ""));
-                    r.0 = obsan_expr::with_cancel(cancel.clone(), || {
-                        let origin = lib.map_or("effects", |l| l.origin.as_str());
-                        rank_only(&current_sys, &current, e, data, &which, origin, entry)
-                    });
+                    if let Some(e) = remaining.iter().find(|e| e.name == r.0.effect) {
+                        obsan_expr::with_cancel(cancel.clone(), || {
+                            rank_only(&current_sys, &current, e, data, &which, origin, &mut r.0)
+                        });
+                    }
                 });
             if let Ok(ext) = current_sys.extend(&[], "") {
                 let prepared = prepare(&ext, data)?;

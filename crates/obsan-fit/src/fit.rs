@@ -312,6 +312,17 @@ impl Problem<'_> {
         })
     }
 
+    /// The whiteners. A panic elsewhere while they were written (the lock
+    /// poisoned) leaves each entry whole, old or new: they are read as they
+    /// are, never taken for white noise.
+    fn whiteners(&self) -> std::sync::RwLockReadGuard<'_, Vec<Option<Whitener>>> {
+        self.whiten.read().unwrap_or_else(|e| e.into_inner())
+    }
+
+    fn whiteners_mut(&self) -> std::sync::RwLockWriteGuard<'_, Vec<Option<Whitener>>> {
+        self.whiten.write().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Run `f` on every trajectory index in parallel (a trajectory's
     /// prediction is independent of the others'), the results in trajectory
     /// order so that every sum over them is the serial one, bit for bit;
@@ -342,9 +353,8 @@ impl Problem<'_> {
             let x0 = self.lay.state_of(theta, k);
             let t = &self.trajs[k];
             let r = residuals(self.p, t, &x0, self.opts, &self.cells[k], false, false)?.0;
-            let held = self.whiten.read().ok();
-            let w = held.as_ref().and_then(|w| w[k].as_ref());
-            Ok(apply(w, r, vec![]).0.iter().map(|x| x * x).sum::<f64>())
+            let r = apply(self.whiteners()[k].as_ref(), r, vec![]).0;
+            Ok(r.iter().map(|x| x * x).sum::<f64>())
         })?;
         Ok(parts.iter().sum())
     }
@@ -383,14 +393,12 @@ impl Problem<'_> {
                     let (r0, rows) = apply(w.as_ref(), r0, rows);
                     return Ok((raw, Some(w), r0, rows));
                 }
-                let held = self.whiten.read().ok();
-                let w = held.as_ref().and_then(|w| w[k].as_ref());
-                let (r0, rows) = apply(w, r0, rows);
+                let (r0, rows) = apply(self.whiteners()[k].as_ref(), r0, rows);
                 Ok((raw, None, r0, rows))
             })?;
         for (k, (r_raw, fresh, r0, rows)) in parts.into_iter().enumerate() {
-            if let (Some(fresh), Ok(mut w)) = (fresh, self.whiten.write()) {
-                w[k] = fresh;
+            if let Some(fresh) = fresh {
+                self.whiteners_mut()[k] = fresh;
             }
             // Theta index of each column of the trajectory's Jacobian: its own
             // initial dynamic state, then the shared params.
@@ -723,7 +731,7 @@ pub fn fit(
         .zip(&counts)
         .map(|(s, c)| (s / (*c).max(1) as f64).sqrt())
         .collect();
-    let whitening = prob.whiten.read().map(|w| w.clone()).unwrap_or_default();
+    let whitening = prob.whiteners().clone();
     Ok(FitResult {
         params: theta[..n_params].to_vec(),
         initial_states: (0..trajs.len())
