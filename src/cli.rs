@@ -162,8 +162,8 @@ input_noise, lr_critical, lr_critical_generated, generated_dropped, screen_thres
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
 relation\"), generated candidates their score and screened_out, candidates that rewrite angle
 outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
-vetoed, ...}; candidates generated from the model's structure are tried with --generated; --report writes report.md, SVG plots,
-extended.sys and diagnosis.json.")]
+vetoed, ...}; candidates generated from the model's structure are tried too (--no-generated:
+the effects file's alone); --report writes report.md, SVG plots, extended.sys and diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
     #[command(
@@ -259,10 +259,10 @@ pub struct DiagnoseArgs {
     /// Also try candidates generated from the model's structure (scales,
     /// biases, couplings with |another input|, lags, delays of the inputs;
     /// scales, biases, harmonics of the outputs), marked as generated, each
-    /// screened by its score statistic before it is fitted (docs/diagnose.md).
-    /// Off by default (on clean data without stated noise they still add
-    /// false alarms); `--generated=false` or `--no-generated` is the default.
-    #[arg(long, value_name = "BOOL", default_value_t = false, num_args = 0..=1,
+    /// screened by its score statistic before it is fitted, under its own
+    /// share of alpha (docs/diagnose.md). On by default; `--generated=false`
+    /// or `--no-generated` tries the effects file's candidates alone.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
           default_missing_value = "true", action = clap::ArgAction::Set)]
     pub generated: bool,
     /// Only the effects file's candidates (the same as `--generated=false`).

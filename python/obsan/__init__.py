@@ -281,6 +281,9 @@ def diagnose(
     if isinstance(model, System):
         source, model = model._source, model.path
     argv = ["diagnose", "--model", model, "--data", data]
+    # Generated candidates are on by default: ``generated=False`` must say so.
+    if options.get("generated") is False:
+        options = dict(options, generated=None, no_generated=True)
     argv += _flags(dict(effects=effects, **options))
     return _call([*argv, "--json"], source)
 

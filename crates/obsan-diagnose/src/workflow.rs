@@ -43,7 +43,8 @@ pub struct DiagnoseOptions {
     /// by generalised least squares, see [`input_noise`]).
     pub input_noise: InputNoise,
     /// Also try the candidates generated from the model's structure
-    /// ([`crate::generate`]), under their own share of `alpha`.
+    /// ([`crate::generate`]), under their own share of `alpha`. On by
+    /// default: a user's model misses effects nobody wrote (issue 18.6).
     pub generate: bool,
     /// Screen the generated candidates by their score statistic before
     /// fitting them ([`crate::screen`]); off: fit every one (to compare).
@@ -98,7 +99,7 @@ impl Default for DiagnoseOptions {
             rank_trajectories: 4,
             sigma: None,
             input_noise: InputNoise::Auto,
-            generate: false,
+            generate: true,
             screen: true,
         }
     }

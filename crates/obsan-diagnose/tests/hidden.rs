@@ -11,6 +11,7 @@
 use obsan_calib::{simulate, SimOptions, Truth};
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ORIGIN_FILE,
+    ORIGIN_GENERATED,
 };
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
@@ -72,34 +73,48 @@ pub const CASES: [(&str, &str, f64, f64); 5] = [
 
 const SEEDS: [u64; 3] = [1, 2, 3];
 
-/// Named exactly the hidden effect, with its magnitude within 3 sd, on
-/// every seed, at both magnitudes.
+/// Named the hidden effect first, with its magnitude within 3 sd, on every
+/// seed, at both magnitudes, and nothing else from the effects file. The
+/// generated candidates (on by default) have their own share of alpha per
+/// round, so over the six runs one may add one generated effect after the
+/// hidden one, never more: measured, wheel_slip 1.34 on seed 3 names
+/// beta_cos1* in round 2 (LR 14.4 against 12.61), where the simulator's
+/// slip, driven by the true wheel rotations, differs at second order from
+/// the effect's, driven by the noisy measured ones.
 fn named_with_magnitude(effect: &str) {
     let c = CASES.iter().find(|c| c.0 == effect).unwrap();
     let jobs: Vec<(f64, u64)> = [c.2, c.3]
         .iter()
         .flat_map(|v| SEEDS.iter().map(move |s| (*v, *s)))
         .collect();
-    let bad: Vec<String> = jobs
+    let runs: Vec<(bool, usize, String)> = jobs
         .par_iter()
-        .filter_map(|&(v, seed)| {
+        .map(|&(v, seed)| {
             let (d, t) = run(c.1, &[(effect, v)], seed);
             let want = true_param(effect, v, &t);
-            let ok = named(&d) == [effect]
-                && d.named[0]
-                    .estimates
-                    .iter()
-                    .all(|(_, x, sd)| (x - want).abs() < 3.0 * sd);
-            (!ok).then(|| {
-                format!(
-                    "{effect}={v} seed {seed}: named {:?} {:?} (truth {want})",
-                    named(&d),
-                    d.named.first().map(|n| &n.estimates)
-                )
-            })
+            let first = d.named.first().is_some_and(|n| {
+                n.effect == effect
+                    && n.estimates
+                        .iter()
+                        .all(|(_, x, sd)| (x - want).abs() < 3.0 * sd)
+            });
+            let extras = &d.named[d.named.len().min(1)..];
+            let ok = first && extras.iter().all(|n| n.origin == ORIGIN_GENERATED);
+            let say = format!(
+                "{effect}={v} seed {seed}: named {:?} {:?} (truth {want})",
+                named(&d),
+                d.named.first().map(|n| &n.estimates)
+            );
+            (ok, extras.len(), say)
         })
         .collect();
+    let bad: Vec<&String> = runs.iter().filter(|r| !r.0).map(|r| &r.2).collect();
     assert!(bad.is_empty(), "{bad:#?}");
+    let extra: Vec<&String> = runs.iter().filter(|r| r.1 > 0).map(|r| &r.2).collect();
+    assert!(
+        extra.len() <= 1 && runs.iter().all(|r| r.1 <= 1),
+        "generated extras beyond one in six runs: {extra:#?}"
+    );
 }
 
 #[test]
