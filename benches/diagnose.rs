@@ -5,7 +5,7 @@
 //! named effect per data design, the table in docs/diagnose.md).
 
 use obsan_calib::{simulate, SimOptions};
-use obsan_diagnose::{diagnose, start_values, DiagnoseOptions};
+use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, ORIGIN_GENERATED};
 use obsan_model::{EffectLibrary, System};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -94,12 +94,15 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
         "bearing_bias",
     ];
     println!(
-        "| hidden | design | value | runs | {} | magnitude within 3 sd | named with a confounded rival |",
+        "| hidden | design | value | runs | {} | generated | magnitude within 3 sd | named with a confounded rival |",
         cols.join(" | ")
     );
-    println!("|{}", "---|".repeat(cols.len() + 6));
+    println!("|{}", "---|".repeat(cols.len() + 7));
     for (hidden, design, v) in rows {
-        let res: Vec<(Vec<String>, bool, bool)> = (1..=seeds)
+        // Per run: the named effects, whether the hidden one is within 3 sd,
+        // whether it came with a confounded rival, whether a generated
+        // effect was named (the default tries them).
+        let res: Vec<(Vec<String>, bool, bool, bool)> = (1..=seeds)
             .into_par_iter()
             .map(|seed| {
                 let eff: Vec<(&str, f64)> = if hidden == "none" {
@@ -109,7 +112,7 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
                 };
                 let (data, truth) = simulate(&options(design, &eff, seed)).expect("simulates");
                 let Ok(start) = start_values(sys, &data, &Default::default()) else {
-                    return (vec!["start failed".into()], false, false);
+                    return (vec!["start failed".into()], false, false, false);
                 };
                 let d = diagnose(
                     sys,
@@ -140,12 +143,13 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
                         .iter()
                         .any(|r| r.jointly_identifiable == Some(false))
                 });
-                (names, within, confounded)
+                let generated = d.named.iter().any(|n| n.origin == ORIGIN_GENERATED);
+                (names, within, confounded, generated)
             })
             .collect();
         let count = |c: &str| {
             res.iter()
-                .filter(|(n, _, _)| {
+                .filter(|(n, ..)| {
                     if c == "none" {
                         n.is_empty()
                     } else {
@@ -157,8 +161,9 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
         let cells: Vec<String> = cols.iter().map(|c| count(c).to_string()).collect();
         let within = res.iter().filter(|r| r.1).count();
         let confounded = res.iter().filter(|r| r.2).count();
+        let generated = res.iter().filter(|r| r.3).count();
         println!(
-            "| {hidden} | {design} | {v} | {} | {} | {} | {confounded} |",
+            "| {hidden} | {design} | {v} | {} | {} | {generated} | {} | {confounded} |",
             res.len(),
             cells.join(" | "),
             if hidden == "none" {

@@ -54,3 +54,14 @@ def test_diagnose_names_a_hidden_bearing_scale(tmp_path):
     assert "bearing_scale" in named
     (_, kb, sd), = named["bearing_scale"]["estimates"]
     assert abs(kb - 0.05) < 5 * sd
+
+
+def test_diagnose_tries_generated_candidates_unless_told_not_to(tmp_path):
+    # Generated candidates are on by default (as in the CLI); generated=False
+    # must reach the CLI as --no-generated, not vanish as a False flag would.
+    data = obsan.simulate(tmp_path / "clean", bearings=60, seed=4)
+    model = SYSTEMS / "calib.sys"
+    origins = lambda d: {c["origin"] for r in d["rounds"] for c in r}
+    assert "generated" in origins(obsan.diagnose(model, data))
+    assert "generated" not in origins(obsan.diagnose(model, data, generated=False))
+    assert "generated" in origins(obsan.diagnose(model, data, generated=True))
