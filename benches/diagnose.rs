@@ -1,8 +1,9 @@
 //! Discrepancy-workflow benchmark and confusion matrix.
 //! Run: `cargo bench --bench diagnose` (timing of one full run on a
 //! three-trajectory calib dataset, all candidates) and
-//! `cargo bench --bench diagnose -- confusion [SEEDS]` (hidden effect x
-//! named effect per data design, the table in docs/diagnose.md).
+//! `cargo bench --bench diagnose -- confusion [SEEDS] [no-generated]` (hidden
+//! effect x named effect per data design, the table in docs/diagnose.md;
+//! `no-generated`: the effects file's candidates alone).
 
 use obsan_calib::{simulate, SimOptions};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, ORIGIN_GENERATED};
@@ -32,7 +33,11 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     if let Some(i) = args.iter().position(|a| a == "confusion") {
         let seeds: u64 = args.get(i + 1).and_then(|s| s.parse().ok()).unwrap_or(5);
-        confusion(&sys, &lib, seeds);
+        let opts = DiagnoseOptions {
+            generate: !args.iter().any(|a| a == "no-generated"),
+            ..DiagnoseOptions::default()
+        };
+        confusion(&sys, &lib, seeds, &opts);
         return;
     }
     let mut times = Vec::new();
@@ -63,7 +68,7 @@ fn main() {
     );
 }
 
-fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
+fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64, opts: &DiagnoseOptions) {
     // (hidden, design, value): small and large magnitudes of tests/hidden.rs.
     let rows: Vec<(&str, &str, f64)> = vec![
         ("none", "constant", 0.0),
@@ -114,15 +119,7 @@ fn confusion(sys: &System, lib: &EffectLibrary, seeds: u64) {
                 let Ok(start) = start_values(sys, &data, &Default::default()) else {
                     return (vec!["start failed".into()], false, false, false);
                 };
-                let d = diagnose(
-                    sys,
-                    Some(lib),
-                    &data,
-                    &start,
-                    &DiagnoseOptions::default(),
-                    &|_| {},
-                )
-                .expect("runs");
+                let d = diagnose(sys, Some(lib), &data, &start, opts, &|_| {}).expect("runs");
                 let names: Vec<String> = d.named.iter().map(|n| n.effect.clone()).collect();
                 let want = if hidden == "radius_change" {
                     v / truth.r_right
