@@ -16,9 +16,10 @@ use serde::Serialize;
 /// (docs/diagnose.md, "Correlated named effects"): MRCLAM's turn scale with
 /// the turn rate's coupling with |v| -0.99, -0.94, -0.98 on robots 1-3 (the
 /// VIF limit of 10, 0.95, would miss robot 2); its speed scale with v's
-/// coupling with |omega| -0.79 to -0.86 (below); any two named effects on
-/// simulated data at most 0.22; nearly proportional effects by construction
-/// (tests/correlated.rs) -0.99.
+/// coupling with |omega| -0.79 to -0.86 (below); two named effects on
+/// simulated data at most 0.22 unless nearly proportional by construction
+/// (tests/correlated.rs -0.99; bearing scale and sin 2b within ±1.1 rad
+/// -0.86 to -0.93).
 pub const CORRELATION_CAUTION: f64 = 0.9;
 
 /// One param's correlation with another in the final fit's covariance.
