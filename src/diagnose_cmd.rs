@@ -8,6 +8,7 @@ use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
     diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
+    Named,
 };
 use obsan_model::{EffectLibrary, Kind};
 use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
@@ -140,6 +141,15 @@ fn mark(c: &CandidateResult) -> String {
         format!("{}*", c.effect)
     } else {
         c.effect.clone()
+    }
+}
+
+/// A named effect's name, with `*` when it was generated.
+fn named_mark(n: &Named) -> String {
+    if n.origin == obsan_diagnose::ORIGIN_GENERATED {
+        format!("{}*", n.effect)
+    } else {
+        n.effect.clone()
     }
 }
 
@@ -309,7 +319,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     if d.named.is_empty() {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
     }
-    for n in &d.named {
+    for (k, n) in d.named.iter().enumerate() {
         let est = with_robust(&n.estimates, &n.robust_sd);
         if n.origin == obsan_diagnose::ORIGIN_RELATION {
             let _ = writeln!(
@@ -381,6 +391,12 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 "  caution: {} fits almost as well (BIC {:+.1} against it): {why}",
                 rv.effect, rv.delta_bic
             );
+        }
+        // Once per pair, under the later of the two named effects; the
+        // user's model's params are in --json only.
+        for (c, other) in d.correlated_with_earlier(k) {
+            let text = c.caution_text(&named_mark(n), &named_mark(other));
+            let _ = writeln!(s, "  caution: {text}");
         }
     }
     // A candidate the heading-free check vetoed, once (its last round).

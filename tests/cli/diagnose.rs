@@ -78,6 +78,11 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
     let est = &j["named"][0]["estimates"][0];
     let (v, sd) = (est[1].as_f64().unwrap(), est[2].as_f64().unwrap());
     assert!((v - 0.06).abs() < 3.0 * sd, "{v} ± {sd}");
+    // One effect named: no other named effect to be confounded with, so no
+    // correlation caution; --json carries the (here empty of named) list.
+    assert!(!out.contains("correlate at r"), "{out}");
+    let corr = j["named"][0]["correlated"].as_array().expect("a list");
+    assert!(corr.iter().all(|c| c["with_effect"].is_null()), "{corr:?}");
     // The report folder is not overwritten without --force.
     bad(
         &refs(&diag(&data, &["--report", &report])),

@@ -22,6 +22,7 @@
 
 mod candidate;
 mod common_mode;
+mod correlation;
 mod error;
 mod generate;
 mod identify;
@@ -34,6 +35,7 @@ mod stats;
 mod workflow;
 
 pub use common_mode::{difference_estimate, CommonModeCheck, DifferenceEstimate, Member};
+pub use correlation::{correlated, correlation, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};

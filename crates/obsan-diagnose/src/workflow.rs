@@ -4,6 +4,7 @@
 
 use crate::candidate::{candidate, rank_only, Noise};
 use crate::common_mode::CommonModeCheck;
+use crate::correlation::{correlated, Correlation, CORRELATION_CAUTION};
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
@@ -201,6 +202,13 @@ pub struct Named {
     /// Other significant candidates of the same round that fit almost as
     /// well (BIC within [`RIVAL_BIC`]): the data hardly tell them apart.
     pub rivals: Vec<Rival>,
+    /// Its params' correlations with the final model's other params with
+    /// `|r| >=` [`CORRELATION_CAUTION`]: with another named effect's, the
+    /// data fix a combination of the two rather than each. Those with the
+    /// user's model's own params are informative only (a correct radius
+    /// change correlates with calib.sys's delta at 0.999). Empty for an
+    /// input relation, which is not in the fit.
+    pub correlated: Vec<Correlation>,
 }
 
 /// A candidate that explains the data about as well as a named effect.
@@ -264,6 +272,23 @@ pub struct Diagnosis {
     /// fitted (`lr_critical_generated / SCREEN_SAFETY`; infinite: no screen,
     /// as under input noise, which the score does not weigh).
     pub screen_threshold: f64,
+}
+
+impl Diagnosis {
+    /// The `k`-th named effect's correlations with the effects named before
+    /// it, each with that effect: a pair once, under the later of the two.
+    pub fn correlated_with_earlier(&self, k: usize) -> Vec<(&Correlation, &Named)> {
+        let (Some(n), Some(earlier)) = (self.named.get(k), self.named.get(..k)) else {
+            return vec![];
+        };
+        n.correlated
+            .iter()
+            .filter_map(|c| {
+                let w = c.with_effect.as_ref()?;
+                Some((c, earlier.iter().find(|m| m.effect == *w)?))
+            })
+            .collect()
+    }
 }
 
 /// Run the workflow. `progress` is told what is being done.
@@ -587,6 +612,7 @@ pub fn diagnose(
             lr: res.lr,
             p_value: res.p_value,
             rivals,
+            correlated: vec![],
         });
         current_sys = fitted.sys;
         current = fitted.fit;
@@ -680,6 +706,24 @@ pub fn diagnose(
             }
         }
     }
+    // Correlations in the final fit: two named effects whose regressors are
+    // nearly proportional on these data are fixed only in combination.
+    let names: Vec<String> = current.params.iter().map(|p| p.0.clone()).collect();
+    let owners: Vec<(String, String)> = named
+        .iter()
+        .flat_map(|n| n.estimates.iter().map(|e| (e.0.clone(), n.effect.clone())))
+        .collect();
+    let owner = |p: &str| owners.iter().find(|o| o.0 == p).map(|o| o.1.clone());
+    for n in &mut named {
+        let of: Vec<String> = n.estimates.iter().map(|e| e.0.clone()).collect();
+        n.correlated = correlated(
+            &names,
+            &current.covariance,
+            &of,
+            &owner,
+            CORRELATION_CAUTION,
+        );
+    }
     // A generated effect's words follow the sign of its refined estimate.
     for n in &mut named {
         if let Some(g) = gen.candidates.iter().find(|g| g.effect.name == n.effect) {
@@ -724,6 +768,7 @@ pub fn diagnose(
             lr,
             p_value: p,
             rivals: vec![],
+            correlated: vec![],
         });
         extended_sys = with_relation(&extended_sys, e, &c.estimates);
     }

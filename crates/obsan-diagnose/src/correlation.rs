@@ -1,0 +1,176 @@
+//! Correlations between the final fit's params: whether the named effects'
+//! estimates are determined separately, or only in a combination.
+//!
+//! Two regressors that are nearly proportional on these data (MRCLAM's
+//! `∫omega` and `∫omega |v|`: |v| sits at 0.06–0.08 m/s most of the time)
+//! let the LR name both effects while the data fix only their combination;
+//! each estimate alone is then an extrapolation. The correlation of the two
+//! estimates in the fit's covariance says so.
+
+use serde::Serialize;
+
+/// A named effect's param is reported as correlated with another param when
+/// `|r|` reaches this: `r^2 >= 0.81`, a variance inflation `1/(1 - r^2)` of
+/// 5.3 or more (the lower of the usual VIF limits, 5 and 10): either sd is
+/// at least 2.3 times what it would be were the other known. Measured
+/// (docs/diagnose.md, "Correlated named effects"): MRCLAM's turn scale with
+/// the turn rate's coupling with |v| -0.99, -0.94, -0.98 on robots 1-3 (the
+/// VIF limit of 10, 0.95, would miss robot 2); its speed scale with v's
+/// coupling with |omega| -0.79 to -0.86 (below); two named effects on
+/// simulated data at most 0.22 unless nearly proportional by construction
+/// (tests/correlated.rs -0.99; bearing scale and sin 2b within ±1.1 rad
+/// -0.86 to -0.93).
+pub const CORRELATION_CAUTION: f64 = 0.9;
+
+/// One param's correlation with another in the final fit's covariance.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Correlation {
+    /// The named effect's param.
+    pub param: String,
+    /// The other param of the final model.
+    pub with: String,
+    /// The named effect that owns `with`; `None`: a param of the user's model.
+    pub with_effect: Option<String>,
+    /// The correlation coefficient of the two estimates.
+    pub r: f64,
+}
+
+impl Correlation {
+    /// `1 / (1 - r^2)`: how much the two estimates' variances exceed what
+    /// either would have were the other known (infinite at |r| = 1).
+    pub fn variance_inflation(&self) -> f64 {
+        1.0 / (1.0 - self.r * self.r).max(0.0)
+    }
+
+    /// The caution for a correlation between two named effects, `this`
+    /// owning `param` and `other` owning `with` (as printed: a generated
+    /// effect marked `*`).
+    pub fn caution_text(&self, this: &str, other: &str) -> String {
+        format!(
+            "{} ({this}) and {} ({other}) correlate at r = {:+.2} in the final fit: the data fix \
+             a combination of the two, not each alone (variance inflation {:.0})",
+            self.param,
+            self.with,
+            self.r,
+            self.variance_inflation()
+        )
+    }
+}
+
+/// The correlation of entries `i` and `j` of covariance `cov`; `None` when
+/// either variance is not positive and finite (a singular fit's NaN).
+pub fn correlation(cov: &[Vec<f64>], i: usize, j: usize) -> Option<f64> {
+    let v = |a: usize, b: usize| cov.get(a).and_then(|row| row.get(b)).copied();
+    let (vi, vj, c) = (v(i, i)?, v(j, j)?, v(i, j)?);
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    if !(ok(vi) && ok(vj) && c.is_finite()) {
+        return None;
+    }
+    // Rounding may push a correlation of 1 just past it.
+    Some((c / (vi.sqrt() * vj.sqrt())).clamp(-1.0, 1.0))
+}
+
+/// Each param of `of` against every other param of `names` (the fit's
+/// params, indexed as `cov`'s first rows) with `|r| >= threshold`, in
+/// `names` order; `owner` names the named effect of a param, if any.
+pub fn correlated(
+    names: &[String],
+    cov: &[Vec<f64>],
+    of: &[String],
+    owner: &dyn Fn(&str) -> Option<String>,
+    threshold: f64,
+) -> Vec<Correlation> {
+    let mut out = Vec::new();
+    for p in of {
+        let Some(i) = names.iter().position(|n| n == p) else {
+            continue;
+        };
+        for (j, w) in names.iter().enumerate() {
+            if j == i {
+                continue;
+            }
+            if let Some(r) = correlation(cov, i, j).filter(|r| r.abs() >= threshold) {
+                out.push(Correlation {
+                    param: p.clone(),
+                    with: w.clone(),
+                    with_effect: owner(w),
+                    r,
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn s(v: &[&str]) -> Vec<String> {
+        v.iter().map(|x| x.to_string()).collect()
+    }
+
+    #[test]
+    fn correlation_of_a_two_by_two_covariance() {
+        // sd 2 and 3, covariance -3: r = -3 / (2 * 3) = -1/2.
+        let cov = vec![vec![4.0, -3.0], vec![-3.0, 9.0]];
+        assert_eq!(correlation(&cov, 0, 1), Some(-0.5));
+        assert_eq!(correlation(&cov, 1, 0), Some(-0.5));
+        let c = Correlation {
+            param: "a".into(),
+            with: "b".into(),
+            with_effect: None,
+            r: -0.5,
+        };
+        // 1 / (1 - 1/4) = 4/3.
+        assert!((c.variance_inflation() - 4.0 / 3.0).abs() < 1e-12);
+        assert_eq!(
+            c.caution_text("e1", "e2*"),
+            "a (e1) and b (e2*) correlate at r = -0.50 in the final fit: the data fix a \
+             combination of the two, not each alone (variance inflation 1)"
+        );
+    }
+
+    #[test]
+    fn correlated_pairs_of_a_three_by_three_covariance_above_the_threshold() {
+        // sds 1, 2, 3; r01 = 1.2 / 2 = 0.6, r02 = 0, r12 = -4.2 / 6 = -0.7
+        // (positive definite: det of the correlations 1 - 0.36 - 0.49 > 0).
+        // A fourth row (an initial state) is not a param and never named.
+        let cov = vec![
+            vec![1.0, 1.2, 0.0, 0.5],
+            vec![1.2, 4.0, -4.2, 0.5],
+            vec![0.0, -4.2, 9.0, 0.5],
+            vec![0.5, 0.5, 0.5, 1.0],
+        ];
+        let names = s(&["a", "b", "c"]);
+        let owner = |p: &str| (p == "c").then(|| "effect_c".to_string());
+        let got = correlated(&names, &cov, &s(&["b"]), &owner, 0.65);
+        assert_eq!(got.len(), 1, "{got:?}");
+        assert_eq!((got[0].param.as_str(), got[0].with.as_str()), ("b", "c"));
+        assert_eq!(got[0].with_effect.as_deref(), Some("effect_c"));
+        assert!((got[0].r + 0.7).abs() < 1e-12, "{}", got[0].r);
+        // Below the threshold: both of b's pairs, a param of the model
+        // (owner None) first.
+        let all = correlated(&names, &cov, &s(&["b"]), &owner, 0.5);
+        let r: Vec<(&str, Option<&str>, f64)> = all
+            .iter()
+            .map(|c| (c.with.as_str(), c.with_effect.as_deref(), c.r))
+            .collect();
+        assert_eq!(r.len(), 2);
+        assert_eq!((r[0].0, r[0].1), ("a", None));
+        assert!((r[0].2 - 0.6).abs() < 1e-12);
+        // a and c are uncorrelated: nothing at any positive threshold.
+        assert!(correlated(&names, &cov, &s(&["a"]), &owner, 0.65).is_empty());
+    }
+
+    #[test]
+    fn a_singular_fit_has_no_correlations() {
+        let nan = vec![vec![f64::NAN; 2]; 2];
+        assert_eq!(correlation(&nan, 0, 1), None);
+        let zero = vec![vec![0.0, 0.0], vec![0.0, 1.0]];
+        assert_eq!(correlation(&zero, 0, 1), None);
+        assert_eq!(correlation(&zero, 0, 5), None);
+        let names = s(&["a", "b"]);
+        assert!(correlated(&names, &nan, &s(&["a", "missing"]), &|_| None, 0.0).is_empty());
+    }
+}
