@@ -38,7 +38,8 @@ struct CalibStart {
 
 /// Whether the model can be integrated from a start (params, per
 /// trajectory its (mu0, gamma0) where known): `Err` names the trajectory.
-type Usable<'a> = &'a dyn Fn(&[f64; 5], &[Option<(f64, f64)>]) -> Result<(), String>;
+type Usable<'a> = &'a Check<'a>;
+type Check<'a> = dyn Fn(&[f64; 5], &[Option<(f64, f64)>]) -> Result<(), String> + 'a;
 
 /// How the paper's start on all trajectories went, when it is not the start.
 enum First {
@@ -367,7 +368,7 @@ fn integrable<'a>(
     sys: &System,
     data: &'a Dataset,
     given: &'a BTreeMap<String, f64>,
-) -> Result<impl Fn(&[f64; 5], &[Option<(f64, f64)>]) -> Result<(), String> + 'a, DiagnoseError> {
+) -> Result<Box<Check<'a>>, DiagnoseError> {
     let nf = sys.normal_form(None, &[]).map_err(DiagnoseError::model)?;
     let p = Predictor::new(&nf);
     let prepared = prepare(sys, data)?;
@@ -375,35 +376,37 @@ fn integrable<'a>(
         .decls_of(Kind::Param)
         .filter_map(|d| Some((d.name.clone(), declared_number(d)?)))
         .collect();
-    Ok(move |pv: &[f64; 5], states: &[Option<(f64, f64)>]| {
-        for (t, st) in prepared.trajectories.iter().zip(states) {
-            let Some((mu, gamma)) = st else { continue };
-            let x0: Vec<f64> = p
-                .state
-                .iter()
-                .map(|n| match n.as_str() {
-                    "mu" => *mu,
-                    "gamma" => *gamma,
-                    _ => given
-                        .get(n)
-                        .or_else(|| CALIB.iter().position(|c| c == n).map(|i| &pv[i]))
-                        .or_else(|| declared.get(n))
-                        .copied()
-                        .unwrap_or(0.0),
-                })
-                .collect();
-            let consts: Vec<f64> = p
-                .consts
-                .iter()
-                .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
-                .collect();
-            let rows = t.outputs.len().min(SCREEN_OUTPUTS);
-            if let Err(e) = p.predict(&x0, &consts, &t.inputs, &t.outputs.t()[..rows]) {
-                return Err(format!("trajectory '{}': {e}", t.name));
+    Ok(Box::new(
+        move |pv: &[f64; 5], states: &[Option<(f64, f64)>]| {
+            for (t, st) in prepared.trajectories.iter().zip(states) {
+                let Some((mu, gamma)) = st else { continue };
+                let x0: Vec<f64> = p
+                    .state
+                    .iter()
+                    .map(|n| match n.as_str() {
+                        "mu" => *mu,
+                        "gamma" => *gamma,
+                        _ => given
+                            .get(n)
+                            .or_else(|| CALIB.iter().position(|c| c == n).map(|i| &pv[i]))
+                            .or_else(|| declared.get(n))
+                            .copied()
+                            .unwrap_or(0.0),
+                    })
+                    .collect();
+                let consts: Vec<f64> = p
+                    .consts
+                    .iter()
+                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+                    .collect();
+                let rows = t.outputs.len().min(SCREEN_OUTPUTS);
+                if let Err(e) = p.predict(&x0, &consts, &t.inputs, &t.outputs.t()[..rows]) {
+                    return Err(format!("trajectory '{}': {e}", t.name));
+                }
             }
-        }
-        Ok(())
-    })
+            Ok(())
+        },
+    ))
 }
 
 /// Start values (params, per trajectory the dynamic state) for `sys` on
