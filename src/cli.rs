@@ -162,8 +162,10 @@ input_noise, lr_critical, lr_critical_generated, generated_dropped, screen_thres
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
 relation\"), generated candidates their score and screened_out, candidates that rewrite angle
 outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
-vetoed, ...}; candidates generated from the model's structure are tried too (--no-generated:
-the effects file's alone); --report writes report.md, SVG plots, extended.sys and diagnosis.json.")]
+vetoed, ...}, named effects their correlations with the final fit's other params at |r| >= 0.9
+correlated [{param, with, with_effect, r}]. Candidates generated from the model's structure are
+tried too (--no-generated: the effects file's alone). --report writes report.md, SVG plots,
+extended.sys and diagnosis.json.")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
     #[command(
