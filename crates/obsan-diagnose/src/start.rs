@@ -17,7 +17,7 @@ use crate::error::DiagnoseError;
 use crate::model_fit::{prepare, Start};
 use obsan_calib::{calibrate, circle_modes, CalibrateOptions, Method};
 use obsan_data::{add_derived_inputs, wrap, Dataset, Trajectory};
-use obsan_fit::{fit, FitOptions, FitTrajectory, Predictor};
+use obsan_fit::{fit, FitError, FitOptions, FitTrajectory, Predictor};
 use obsan_model::{Decl, Kind, Start as DeclStart, System};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -225,13 +225,7 @@ const START_ITERATIONS: usize = 10;
 /// first [`SCREEN_OUTPUTS`] output rows from `x0`; infinite when the state
 /// diverges.
 fn screen_cost(p: &Predictor, t: &Trajectory, x0: &[f64], sigma: &[f64]) -> f64 {
-    let consts: Vec<f64> = p
-        .consts
-        .iter()
-        .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
-        .collect();
-    let rows = t.outputs.len().min(SCREEN_OUTPUTS);
-    let Ok(y) = p.predict(x0, &consts, &t.inputs, &t.outputs.t()[..rows]) else {
+    let Ok(y) = first_rows(p, t, x0) else {
         return f64::INFINITY;
     };
     let mut c = 0.0;
@@ -255,6 +249,18 @@ fn screen_cost(p: &Predictor, t: &Trajectory, x0: &[f64], sigma: &[f64]) -> f64 
     } else {
         f64::INFINITY
     }
+}
+
+/// The model's outputs at trajectory `t`'s first [`SCREEN_OUTPUTS`] output
+/// times from `x0`.
+fn first_rows(p: &Predictor, t: &Trajectory, x0: &[f64]) -> Result<Vec<Vec<f64>>, FitError> {
+    let consts: Vec<f64> = p
+        .consts
+        .iter()
+        .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
+        .collect();
+    let rows = t.outputs.len().min(SCREEN_OUTPUTS);
+    p.predict(x0, &consts, &t.inputs, &t.outputs.t()[..rows])
 }
 
 /// Initial states of calib.sys trajectories the paper's start could not
@@ -394,13 +400,7 @@ fn integrable<'a>(
                             .unwrap_or(0.0),
                     })
                     .collect();
-                let consts: Vec<f64> = p
-                    .consts
-                    .iter()
-                    .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
-                    .collect();
-                let rows = t.outputs.len().min(SCREEN_OUTPUTS);
-                if let Err(e) = p.predict(&x0, &consts, &t.inputs, &t.outputs.t()[..rows]) {
+                if let Err(e) = first_rows(&p, t, &x0) {
                     return Err(format!("trajectory '{}': {e}", t.name));
                 }
             }
