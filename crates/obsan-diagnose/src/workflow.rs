@@ -427,6 +427,12 @@ pub fn diagnose(
             round + 1,
             remaining.len()
         ));
+        // The current model's derived inputs, once for the round: every
+        // candidate's extension computes only its own (prepare skips the
+        // columns present; on MRCLAM they were 9 % of the run once the
+        // couplings were named).
+        let round_data = prepare(&current_sys, data)?;
+        let data = &round_data;
         // The caller's cancel flag is thread-local: hand it to the workers.
         let cancel = obsan_expr::cancel_flag();
         // The score weighs residuals as ordinary least squares; it is
