@@ -38,7 +38,7 @@ use crate::error::DiagnoseError;
 use crate::model_fit::{ModelFit, OUTLIER_Z};
 use crate::workflow::DiagnoseOptions;
 use obsan_data::{wrap, Dataset};
-use obsan_fit::{FitTrajectory, Integration, Predictor};
+use obsan_fit::{FitTrajectory, Integration, Measured, Predictor};
 use obsan_model::{Effect, System};
 use serde::Serialize;
 
@@ -326,8 +326,10 @@ pub(crate) fn check(
         };
         let mut x0 = x0s.clone();
         x0.extend_from_slice(&pv);
+        // Only the measured cells (values and rows equal predict_with's).
+        let cells = Measured::new(&p, tr.outputs);
         let pred = p
-            .predict_with(&x0, &tr.consts, tr.inputs, tr.outputs.t(), &integ)
+            .predict_measured(&x0, &tr.consts, tr.inputs, &cells, &integ)
             .map_err(|source| DiagnoseError::Predict {
                 trajectory: tr.name.to_string(),
                 source,
@@ -348,7 +350,10 @@ pub(crate) fn check(
                 .map_or(0.0, |r| r.1);
             for (j, (&t, m)) in tr.outputs.t().iter().zip(col).enumerate() {
                 let Some(m) = m else { continue };
-                let y = pred.outputs[j][c];
+                let Some(i) = cells.at(j).0.iter().position(|&o| o == c) else {
+                    continue;
+                };
+                let y = pred.outputs[j][i];
                 let e = wrap(m - y);
                 if rms > 0.0 && e.abs() > OUTLIER_Z * rms {
                     continue;
@@ -356,7 +361,7 @@ pub(crate) fn check(
                 members.push(Member {
                     t,
                     residual: e,
-                    sensitivity: pred.jacobians[j][c * n + pi],
+                    sensitivity: pred.jacobians[j][i * n + pi],
                 });
             }
         }
