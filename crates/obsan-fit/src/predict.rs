@@ -648,8 +648,7 @@ impl Predictor {
             };
             std::iter::once(k).chain(r)
         };
-        for k in 0..nd {
-            let (l, c) = (lam[k], st.co[k]);
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
             if l == 0.0 {
                 for i in comps(k) {
                     st.a[i] = z[i] + h / 2.0 * k1[i];
@@ -661,8 +660,7 @@ impl Predictor {
             }
         }
         self.derivative(&st.a, u, sens, dd, w, &mut st.k2);
-        for k in 0..nd {
-            let (l, c) = (lam[k], st.co[k]);
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
             if l == 0.0 {
                 for i in comps(k) {
                     st.b[i] = z[i] + h / 2.0 * st.k2[i];
@@ -674,8 +672,7 @@ impl Predictor {
             }
         }
         self.derivative(&st.b, u, sens, dd, w, &mut st.k3);
-        for k in 0..nd {
-            let (l, c) = (lam[k], st.co[k]);
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
             if l == 0.0 {
                 for i in comps(k) {
                     st.c[i] = z[i] + h * st.k3[i];
@@ -688,8 +685,7 @@ impl Predictor {
             }
         }
         self.derivative(&st.c, u, sens, dd, w, &mut st.k4);
-        for k in 0..nd {
-            let (l, c) = (lam[k], st.co[k]);
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
             if l == 0.0 {
                 for i in comps(k) {
                     z[i] += h / 6.0 * (k1[i] + 2.0 * st.k2[i] + 2.0 * st.k3[i] + st.k4[i]);
