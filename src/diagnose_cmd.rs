@@ -269,6 +269,18 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         for c in round {
             if let Some(e) = &c.error {
                 let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
+            } else if let Some(v) = c
+                .common_mode
+                .as_ref()
+                .filter(|v| c.screened_out && v.predicted && v.vetoed)
+            {
+                let sc = c.score.unwrap_or(0.0);
+                let _ = writeln!(
+                    s,
+                    "  {:<20} not fitted: score {sc:.2}; the heading-free check, predicted, vetoes it",
+                    mark(c)
+                );
+                let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
             } else if c.screened_out {
                 let sc = c.score.unwrap_or(0.0);
                 let why = if sc < d.screen_threshold {

@@ -34,7 +34,9 @@ mod start;
 mod stats;
 mod workflow;
 
-pub use common_mode::{difference_estimate, CommonModeCheck, DifferenceEstimate, Member};
+pub use common_mode::{
+    difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
+};
 pub use correlation::{correlated, correlation, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};

@@ -7,7 +7,7 @@ use crate::residual::{analyse, ResidualReport, ResidualSeries};
 use crate::workflow::DiagnoseOptions;
 use obsan_data::{add_derived_inputs, wrap, Dataset};
 use obsan_fit::{
-    estimate_noise, fit, FitOptions, FitTrajectory, Integration, NoiseOptions, Predictor,
+    estimate_noise, fit, FitOptions, FitTrajectory, Integration, Measured, NoiseOptions, Predictor,
 };
 use obsan_model::{Kind, System};
 use serde::Serialize;
@@ -310,8 +310,11 @@ pub fn fit_model(
             sensitivities: false,
             input_noise: None,
         };
+        // Only the measured cells (values equal predict_with's exactly): a
+        // MRCLAM row measures one or two of its 30 outputs.
+        let cells = Measured::new(&p, &tr.outputs);
         let pred = p
-            .predict_with(&x0, &ft.consts, &tr.inputs, tr.outputs.t(), &integ)
+            .predict_measured(&x0, &ft.consts, &tr.inputs, &cells, &integ)
             .map_err(|source| DiagnoseError::Predict {
                 trajectory: tr.name.clone(),
                 source,
@@ -371,7 +374,10 @@ pub fn fit_model(
             }
             for (j, &t) in tr.outputs.t().iter().enumerate() {
                 let Some(m) = col[j] else { continue };
-                let y = pred.outputs[j][oi];
+                let Some(i) = cells.at(j).0.iter().position(|&c| c == oi) else {
+                    continue;
+                };
+                let y = pred.outputs[j][i];
                 let d = if s.angular { wrap(m - y) } else { m - y };
                 s.t.push(t);
                 s.e.push(d / sigma[oi]);

@@ -17,8 +17,9 @@
 //! their start (a lag's state at the first input), so an initial transient
 //! gives no score.
 
+use crate::common_mode::{self, difference_estimate, CommonModeCheck, Member};
 use crate::error::DiagnoseError;
-use crate::model_fit::{prepare, ModelFit};
+use crate::model_fit::{prepare, ModelFit, OUTLIER_Z};
 use crate::start::extended_start;
 use crate::workflow::CandidateResult;
 use obsan_data::{wrap, Dataset};
@@ -35,18 +36,34 @@ use obsan_model::{Effect, System};
 /// prints both for every candidate).
 pub const SCREEN_SAFETY: f64 = 4.0;
 
+/// A candidate's score statistic and, where the heading-free check applies,
+/// that check predicted at the current fit ([`common_mode::predicted`]).
+#[derive(Clone, Debug)]
+pub(crate) struct Scored {
+    pub(crate) score: f64,
+    pub(crate) check: Option<CommonModeCheck>,
+}
+
+impl Scored {
+    /// The prediction vetoes the candidate: it is not fitted.
+    fn vetoed(&self) -> bool {
+        self.check.as_ref().is_some_and(|c| c.predicted && c.vetoed)
+    }
+}
+
 /// The score statistic of extending `base` (fitted as `f` to `data`, output
 /// levels `sigma`) by `e`, divided by `f`'s inflation as the LR is. Ordinary
 /// least squares only: the caller fits every candidate when the residuals
-/// are weighed by input noise.
+/// are weighed by input noise. `crit`: the candidate's critical LR value,
+/// for the heading-free check's prediction when it applies to `e`.
 pub(crate) fn score(
     base: &System,
     f: &ModelFit,
     e: &Effect,
     data: &Dataset,
     sigma: &[f64],
-    max_step: f64,
-) -> Result<f64, DiagnoseError> {
+    (max_step, crit): (f64, Option<f64>),
+) -> Result<Scored, DiagnoseError> {
     let ext = base
         .extend(&[e], crate::generate::ORIGIN_GENERATED)
         .map_err(|e| DiagnoseError::Extend(Box::new(e)))?;
@@ -71,6 +88,25 @@ pub(crate) fn score(
         input_noise: None,
     };
     let n = p.state.len();
+    // The heading-free check's inputs (common_mode.rs): the group's
+    // outputs with the current fit's RMS (for its outlier rule) and the
+    // param's column.
+    let angular = |y: &str| f.series.iter().any(|s| s.output == y && s.angular);
+    let target = crit.and_then(|crit| {
+        let (group, param) = common_mode::eligible(e, &angular).ok()?;
+        let pi = p.state.iter().position(|s| *s == param)?;
+        let cols: Vec<(usize, f64)> = group
+            .iter()
+            .filter_map(|y| {
+                let o = p.outputs.iter().position(|x| x == y)?;
+                let rms = f.rms.iter().find(|r| r.0 == *y).map_or(0.0, |r| r.1);
+                Some((o, rms))
+            })
+            .collect();
+        Some((crit, group, param, pi, cols))
+    });
+    let mut locals = Vec::new();
+    let mut clusters = Vec::new();
     for (ti, (t, x)) in trajs.iter().zip(&sv).enumerate() {
         let mut x0 = x.clone();
         x0.extend_from_slice(&pv);
@@ -87,12 +123,30 @@ pub(crate) fn score(
         let mut al = nalgebra::DMatrix::<f64>::zeros(local, local);
         let mut gl = vec![0.0; local];
         let mut row = vec![0.0; local];
+        let mut members = Vec::new();
         for (j, yj) in pred.outputs.iter().enumerate() {
             let (outs, values) = cells.at(j);
             for (i, (&o, &m)) in outs.iter().zip(values).enumerate() {
                 let d = m - yj[i];
                 let r = if p.angular[o] { wrap(d) } else { d } / sigma[o];
                 let jac = &pred.jacobians[j][i * n..(i + 1) * n];
+                if let Some((.., pi, cols)) = &target {
+                    // As the check: gross outliers left out.
+                    if let Some(&(_, rms)) = cols.iter().find(|c| c.0 == o) {
+                        let e = wrap(d);
+                        if !(rms > 0.0 && e.abs() > OUTLIER_Z * rms) {
+                            let m = Member {
+                                t: t.outputs.t()[j],
+                                residual: e,
+                                sensitivity: jac[*pi],
+                            };
+                            let raw: Vec<f64> = (0..local)
+                                .map(|i| if i < np { jac[nd + i] } else { jac[i - np] })
+                                .collect();
+                            members.push((m, raw));
+                        }
+                    }
+                }
                 for (i, v) in row.iter_mut().enumerate() {
                     *v = if i < np { jac[nd + i] } else { jac[i - np] } / sigma[o];
                 }
@@ -120,6 +174,11 @@ pub(crate) fn score(
                 }
             }
         }
+        if target.is_some() {
+            let cols: Vec<usize> = (0..local).map(at).collect();
+            locals.push((cols, al, gl));
+            clusters.push(members);
+        }
     }
     // The new params' own share: the decrease with every column less the
     // decrease the base's columns alone predict.
@@ -129,11 +188,73 @@ pub(crate) fn score(
         a.select_rows(&old).select_columns(&old),
         g.select_rows(&old),
     );
-    Ok(effective_score(a, g, a_old, g_old) / f.inflation())
+    // One eigen-decomposition gives the score's form and, for the
+    // heading-free prediction, the step.
+    let (all, ainv) = spectral(a, g.clone(), target.is_some());
+    let score = effective_score(all, a_old, g_old) / f.inflation();
+    let check = target.zip(ainv).map(|((crit, group, param, _, _), ainv)| {
+        let step = &ainv * &g;
+        let robust_sd = robust_sd(&ainv, &step, &locals, np_old);
+        // The members' residuals at the step, to first order: the check
+        // reads them at the candidate's fit, whose states move with the
+        // param (at the current states the predicted z was 0.1-0.35 too
+        // high on MRCLAM robot 2).
+        let moved: Vec<Vec<Member>> = clusters
+            .iter()
+            .zip(&locals)
+            .map(|(ms, (cols, _, _))| {
+                ms.iter()
+                    .map(|(m, raw)| {
+                        let shift: f64 = raw.iter().zip(cols).map(|(x, &c)| x * step[c]).sum();
+                        Member {
+                            residual: m.residual - shift,
+                            ..*m
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let d = difference_estimate(&moved);
+        let at = pv[np_old] + step[np_old];
+        common_mode::predicted((group, param), (at, robust_sd), &d, (crit, score))
+    });
+    Ok(Scored { score, check })
+}
+
+/// The cluster-robust sd of component `i` of the Gauss-Newton step `step`
+/// (`ainv` = `A^+`) as the fit would give it there (`obsan_fit`'s
+/// sandwich, trajectories as clusters): each trajectory's score at the
+/// step linearised, `g_k - A_k step`. `locals`: per trajectory, its
+/// columns' places in `A`, its own `A_k` (lower triangle) and `g_k`.
+fn robust_sd(
+    ainv: &nalgebra::DMatrix<f64>,
+    step: &nalgebra::DVector<f64>,
+    locals: &[(Vec<usize>, nalgebra::DMatrix<f64>, Vec<f64>)],
+    i: usize,
+) -> f64 {
+    let k = locals.len();
+    if k < 2 {
+        return f64::NAN;
+    }
+    let mut var = 0.0;
+    for (cols, al, gl) in locals {
+        let mut c = 0.0;
+        for (r, &ar) in cols.iter().enumerate() {
+            let mut u = gl[r];
+            for (l, &cl) in cols.iter().enumerate() {
+                let x = if l <= r { al[(r, l)] } else { al[(l, r)] };
+                u -= x * step[cl];
+            }
+            c += ainv[(i, ar)] * u;
+        }
+        var += c * c;
+    }
+    (var * k as f64 / (k as f64 - 1.0)).sqrt()
 }
 
 /// Neyman's C(alpha) statistic (1959) by block inversion: `S(all) -
-/// S(old)`, `S = g^T A^+ g` over the named columns. At a converged base fit
+/// S(old)`, `S = g^T A^+ g` over the named columns (`all`: `S` over every
+/// column). At a converged base fit
 /// `g_old = 0` and it is the classical score statistic; at a base fit short
 /// of its optimum (a fit stops where the decrease left is below
 /// `STALL_DECREASE` per step, in directions the model cannot reach) the
@@ -142,13 +263,8 @@ pub(crate) fn score(
 /// either: on MRCLAM robot 1, from the third round on, 7-11 for every
 /// candidate whose fitted LR was 0-8. The difference is the decrease the
 /// new params add, the quantity their LR estimates.
-fn effective_score(
-    a: nalgebra::DMatrix<f64>,
-    g: nalgebra::DVector<f64>,
-    a_old: nalgebra::DMatrix<f64>,
-    g_old: nalgebra::DVector<f64>,
-) -> f64 {
-    (quadratic_form(a, g) - quadratic_form(a_old, g_old)).max(0.0)
+fn effective_score(all: f64, a_old: nalgebra::DMatrix<f64>, g_old: nalgebra::DVector<f64>) -> f64 {
+    (all - quadratic_form(a_old, g_old)).max(0.0)
 }
 
 /// The screen's stand-in for an effect of the user's file (the generated
@@ -216,11 +332,13 @@ pub(crate) type Outcome<T> = (CandidateResult, Option<T>);
 
 /// One round: every candidate that `score` gives no statistic for (the
 /// file's, an exact delay, a failed score) is fitted; the scored ones
-/// below `threshold` are not; the others are fitted in decreasing order of
-/// score, a batch per thread, while a score times [`SCREEN_SAFETY`] exceeds
-/// the largest significant LR found so far: below that the candidate
-/// cannot win the round, and only the winner is named. `threshold` `None`:
-/// fit every one. The outcomes are in the order of `cands`.
+/// below `threshold` are not, nor those whose heading-free check is
+/// predicted to veto them ([`common_mode::predicted`]: they cannot be
+/// named); the others are fitted in decreasing order of score, a batch per
+/// thread, while a score times [`SCREEN_SAFETY`] exceeds the largest
+/// significant LR found so far: below that the candidate cannot win the
+/// round, and only the winner is named. `threshold` `None`: fit every one.
+/// The outcomes are in the order of `cands`.
 pub(crate) fn round<T, S, F>(
     cands: &[&Effect],
     score: S,
@@ -229,22 +347,27 @@ pub(crate) fn round<T, S, F>(
 ) -> Vec<Outcome<T>>
 where
     T: Send,
-    S: Fn(&Effect) -> Option<f64> + Sync,
-    F: Fn(&Effect, Option<f64>) -> Outcome<T> + Sync,
+    S: Fn(&Effect) -> Option<Scored> + Sync,
+    F: Fn(&Effect, Option<&Scored>) -> Outcome<T> + Sync,
 {
     use rayon::prelude::*;
-    let scores: Vec<Option<f64>> = cands.par_iter().map(|e| score(e)).collect();
+    let scores: Vec<Option<Scored>> = cands.par_iter().map(|e| score(e)).collect();
     let mut out: Vec<Option<Outcome<T>>> = cands
         .par_iter()
         .zip(&scores)
         .map(|(e, s)| match (s, threshold) {
             (Some(_), Some(_)) => None,
-            _ => Some(fit(e, *s)),
+            _ => Some(fit(e, s.as_ref())),
         })
         .collect();
     let Some(th) = threshold else {
         return out.into_iter().flatten().collect();
     };
+    for ((e, s), o) in cands.iter().zip(&scores).zip(out.iter_mut()) {
+        if let Some(s) = s.as_ref().filter(|s| s.vetoed()) {
+            *o = Some((predicted_veto(e, s), None));
+        }
+    }
     let best = |out: &[Option<Outcome<T>>]| {
         out.iter()
             .flatten()
@@ -253,7 +376,7 @@ where
     };
     let mut order: Vec<(usize, f64)> = (0..cands.len())
         .filter(|&i| out[i].is_none())
-        .filter_map(|i| scores[i].map(|s| (i, s)))
+        .filter_map(|i| scores[i].as_ref().map(|s| (i, s.score)))
         .collect();
     order.sort_by(|a, b| b.1.total_cmp(&a.1));
     let batch = rayon::current_num_threads().max(1);
@@ -272,7 +395,7 @@ where
         at += next.len();
         let done: Vec<(usize, Outcome<T>)> = next
             .par_iter()
-            .map(|&(i, s)| (i, fit(cands[i], Some(s))))
+            .map(|&(i, _)| (i, fit(cands[i], scores[i].as_ref())))
             .collect();
         for (i, o) in done {
             out[i] = Some(o);
@@ -282,7 +405,9 @@ where
         .iter()
         .zip(out)
         .zip(&scores)
-        .map(|((e, o), s)| o.unwrap_or_else(|| (screened(e, s.unwrap_or(0.0)), None)))
+        .map(|((e, o), s)| {
+            o.unwrap_or_else(|| (screened(e, s.as_ref().map_or(0.0, |s| s.score)), None))
+        })
         .collect()
 }
 
@@ -296,10 +421,29 @@ pub(crate) fn screened(e: &Effect, score: f64) -> CandidateResult {
     }
 }
 
+/// The entry of a candidate left unfitted because its heading-free check,
+/// predicted, vetoes it: screened out, the prediction as its check.
+fn predicted_veto(e: &Effect, s: &Scored) -> CandidateResult {
+    CandidateResult {
+        common_mode: s.check.clone(),
+        ..screened(e, s.score)
+    }
+}
+
 /// `g^T A^+ g` for a symmetric positive semidefinite `A`: Jacobi-scaled, the
 /// pseudo-inverse over eigenvalues above 1e-10 of the largest (directions
 /// the data do not determine carry no score). 0 when not finite.
-fn quadratic_form(mut a: nalgebra::DMatrix<f64>, mut g: nalgebra::DVector<f64>) -> f64 {
+fn quadratic_form(a: nalgebra::DMatrix<f64>, g: nalgebra::DVector<f64>) -> f64 {
+    spectral(a, g, false).0
+}
+
+/// [`quadratic_form`] and, when `inverse`, the pseudo-inverse `A^+` it
+/// used (unscaled; NaN when not finite): one eigen-decomposition for both.
+fn spectral(
+    mut a: nalgebra::DMatrix<f64>,
+    mut g: nalgebra::DVector<f64>,
+    inverse: bool,
+) -> (f64, Option<nalgebra::DMatrix<f64>>) {
     let n = g.len();
     let d: Vec<f64> = (0..n)
         .map(|i| {
@@ -318,18 +462,31 @@ fn quadratic_form(mut a: nalgebra::DMatrix<f64>, mut g: nalgebra::DVector<f64>) 
         }
     }
     if !a.iter().chain(g.iter()).all(|x| x.is_finite()) {
-        return 0.0;
+        let nan = inverse.then(|| nalgebra::DMatrix::from_element(n, n, f64::NAN));
+        return (0.0, nan);
     }
     let eig = nalgebra::SymmetricEigen::new(a);
     let top = eig.eigenvalues.iter().fold(0.0f64, |m, x| m.max(*x));
     let mut s = 0.0;
+    let mut inv = inverse.then(|| nalgebra::DMatrix::<f64>::zeros(n, n));
     for (i, &l) in eig.eigenvalues.iter().enumerate() {
         if l > 1e-10 * top {
-            let c = eig.eigenvectors.column(i).dot(&g);
+            let v = eig.eigenvectors.column(i);
+            let c = v.dot(&g);
             s += c * c / l;
+            if let Some(m) = inv.as_mut() {
+                m.ger(1.0 / l, &v, &v, 1.0);
+            }
         }
     }
-    s
+    if let Some(m) = inv.as_mut() {
+        for i in 0..n {
+            for j in 0..n {
+                m[(i, j)] *= d[i] * d[j];
+            }
+        }
+    }
+    (s, inv)
 }
 
 #[cfg(test)]
@@ -404,7 +561,11 @@ mod tests {
             let adj = g.select_rows(&new) - &a_no * &a_oo_inv * g.select_rows(&old);
             let eff = a_nn - &a_no * &a_oo_inv * a_no.transpose();
             let want = (adj.transpose() * eff.try_inverse().unwrap() * &adj)[(0, 0)];
-            let got = effective_score(a.clone(), g.clone(), a_oo, g.select_rows(&old));
+            let got = effective_score(
+                quadratic_form(a.clone(), g.clone()),
+                a_oo,
+                g.select_rows(&old),
+            );
             assert!(
                 (got - want).abs() < 1e-8 * (1.0 + want),
                 "case {case}: {got} vs {want}"
@@ -415,8 +576,7 @@ mod tests {
         let r = DVector::from_vec(vec![1.0, -1.0, 3.0]);
         let (a, g) = (j.transpose() * &j, j.transpose() * &r);
         let s = effective_score(
-            a.clone(),
-            g.clone(),
+            quadratic_form(a.clone(), g.clone()),
             a.select_rows(&[0]).select_columns(&[0]),
             g.select_rows(&[0]),
         );

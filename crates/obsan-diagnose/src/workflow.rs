@@ -12,7 +12,7 @@ use crate::model_fit::{
     class_inputs, estimate_levels, fit_model, input_noise, prepare, ModelFit, Start,
 };
 use crate::relation::{input_check, InputCheck};
-use crate::screen::{file_stand_in, score, SCREEN_SAFETY};
+use crate::screen::{file_stand_in, score, Scored, SCREEN_SAFETY};
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -452,6 +452,12 @@ pub fn diagnose(
             round + 1,
             remaining.len()
         ));
+        // The current model's derived inputs, once for the round: every
+        // candidate's extension computes only its own (prepare skips the
+        // columns present; on MRCLAM they were 9 % of the run once the
+        // couplings were named).
+        let round_data = prepare(&current_sys, data)?;
+        let data = &round_data;
         // The caller's cancel flag is thread-local: hand it to the workers.
         let cancel = obsan_expr::cancel_flag();
         // The score weighs residuals as ordinary least squares; it is
@@ -478,11 +484,21 @@ pub fn diagnose(
                 }
                 None => return None,
             };
+            // The heading-free check is predicted at the candidate's limit.
+            let c = if gen_of(e).is_some() { crit_gen } else { crit };
             obsan_expr::with_cancel(cancel.clone(), || {
-                score(&current_sys, &current, se, data, &sigma, o.max_step).ok()
+                score(
+                    &current_sys,
+                    &current,
+                    se,
+                    data,
+                    &sigma,
+                    (o.max_step, Some(c)),
+                )
+                .ok()
             })
         };
-        let fit = |e: &Effect, score: Option<f64>| {
+        let fit = |e: &Effect, scored: Option<&Scored>| {
             let g = gen_of(e);
             // A generated candidate must also clear the critical value in
             // cluster-robust sds; one that adds states is tested with a
@@ -516,7 +532,12 @@ pub fn diagnose(
                     warm.get(&e.name).map(Vec::as_slice),
                 )
             });
-            r.score = score;
+            r.score = scored.map(|s| s.score);
+            // Beside the check, the z its prediction gave.
+            let pz = scored.and_then(|s| s.check.as_ref()).map(|c| c.predicted_z);
+            if let (Some(c), Some(z)) = (r.common_mode.as_mut(), pz) {
+                c.predicted_z = z;
+            }
             (r, x)
         };
         let mut results = crate::screen::round(&remaining, scorer, fit, screen_at);

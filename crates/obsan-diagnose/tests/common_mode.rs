@@ -4,8 +4,10 @@
 //!
 //! (a) The odometry heading drifts (a random walk the model lacks) and the
 //!     bearings have no scale: the generated bearing scale, which absorbs the
-//!     drift, is not named, and its veto says why.
-//! (b) A true bearing scale of 1.05 and no drift: it is named, within 3 sd.
+//!     drift, is not named, and its veto says why; once its veto is
+//!     predicted beyond the margin it is not fitted.
+//! (b) A true bearing scale of 1.05 and no drift: it is never left unfitted
+//!     by a predicted veto, and it is named, within 3 sd.
 //! (c) The difference estimator against a direct least-squares computation
 //!     with a free offset per instant.
 //!
@@ -17,7 +19,8 @@ mod common;
 use common::{read, ring, Rng};
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{
-    diagnose, difference_estimate, start_values, DiagnoseOptions, Diagnosis, Member,
+    diagnose, difference_estimate, start_values, CandidateResult, DiagnoseOptions, Diagnosis,
+    Member, PREDICTED_MARGIN,
 };
 use obsan_expr::SplitMix;
 use obsan_model::{EffectLibrary, System};
@@ -135,8 +138,10 @@ fn show(d: &Diagnosis) {
                     m.differences,
                     m.differences_robust_sd,
                     m.z,
+                    m.predicted_z,
                     m.limit,
                     m.vetoed,
+                    m.predicted,
                     &m.note
                 ))
             );
@@ -185,6 +190,39 @@ fn heading_drift_is_not_named_as_a_bearing_scale() {
     let text = v.veto_text("b_scale*");
     assert!(text.contains("not supported by simultaneous differences"));
     assert!(text.contains("common-mode error such as heading drift"));
+    // In later rounds the veto is predicted before any fit, beyond the
+    // margin, and the scale is not fitted: its entry says so, with the
+    // heading-free estimate (the truth: no scale) within 3 robust sds of 0.
+    let skipped: Vec<&CandidateResult> = b_scales(&d)
+        .filter(|c| c.common_mode.as_ref().is_some_and(|m| m.predicted))
+        .collect();
+    assert!(!skipped.is_empty(), "b_scale never skipped");
+    for c in &skipped {
+        let m = c.common_mode.as_ref().unwrap();
+        assert!(
+            c.screened_out && !c.significant && c.estimates.is_empty(),
+            "{c:?}"
+        );
+        assert!(
+            m.applies && m.vetoed && m.z > m.limit + PREDICTED_MARGIN,
+            "{m:?}"
+        );
+        assert!(m.differences.abs() < 3.0 * m.differences_robust_sd, "{m:?}");
+        assert!(m
+            .veto_text("b_scale*")
+            .contains("predicted at the current fit"));
+    }
+    // Where it was fitted, the prediction held within the margin.
+    for m in b_scales(&d).filter_map(|c| c.common_mode.as_ref()) {
+        if m.applies && !m.predicted {
+            assert!((m.predicted_z - m.z).abs() < PREDICTED_MARGIN, "{m:?}");
+        }
+    }
+}
+
+/// Every round's entry of the generated bearing scale.
+fn b_scales(d: &Diagnosis) -> impl Iterator<Item = &CandidateResult> {
+    d.rounds.iter().flatten().filter(|c| c.effect == "b_scale")
 }
 
 #[test]
@@ -210,6 +248,13 @@ fn a_true_bearing_scale_is_named_and_supported() {
     assert!(
         (c.differences - kb).abs() < 3.0 * c.differences_robust_sd,
         "{c:?}"
+    );
+    // A real scale is never left unfitted by a predicted veto: its
+    // prediction before the fit said it is supported.
+    assert!(c.predicted_z < c.limit, "{c:?}");
+    assert!(
+        !b_scales(&d).any(|c| c.common_mode.as_ref().is_some_and(|m| m.predicted)),
+        "a true scale skipped"
     );
     // The bias of the same group is a common-mode shift: not applicable.
     let bias = d

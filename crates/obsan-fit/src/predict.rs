@@ -619,7 +619,6 @@ impl Predictor {
         st: &mut Stages,
     ) {
         let (nd, n) = (self.n_dynamic, self.state.len());
-        let row = |i: usize| if i < nd { i } else { (i - nd) / n };
         for (c, &l) in st.co.iter_mut().zip(lam) {
             if l == 0.0 {
                 continue;
@@ -636,46 +635,69 @@ impl Predictor {
                 (-4.0 - 3.0 * x - x * x + e * (4.0 - x)) / d,
             ];
         }
-        let co = &st.co;
-        let nz = z.len();
-        for i in 0..nz {
-            let (l, c) = (lam[row(i)], &co[row(i)]);
-            st.a[i] = if l == 0.0 {
-                z[i] + h / 2.0 * k1[i]
+        // Each dynamic state's components (its value, then its sensitivity
+        // row when carried) share its lambda and coefficients: visited by
+        // state, the per-component row lookup (a division) and branch are
+        // hoisted; the arithmetic per component is unchanged.
+        let sens_rows = z.len() > nd;
+        let comps = |k: usize| {
+            let r = if sens_rows {
+                nd + k * n..nd + (k + 1) * n
             } else {
-                c[0] * z[i] + c[2] * (k1[i] - l * z[i])
+                0..0
             };
+            std::iter::once(k).chain(r)
+        };
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
+            if l == 0.0 {
+                for i in comps(k) {
+                    st.a[i] = z[i] + h / 2.0 * k1[i];
+                }
+            } else {
+                for i in comps(k) {
+                    st.a[i] = c[0] * z[i] + c[2] * (k1[i] - l * z[i]);
+                }
+            }
         }
         self.derivative(&st.a, u, sens, dd, w, &mut st.k2);
-        for i in 0..nz {
-            let (l, c) = (lam[row(i)], &co[row(i)]);
-            st.b[i] = if l == 0.0 {
-                z[i] + h / 2.0 * st.k2[i]
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
+            if l == 0.0 {
+                for i in comps(k) {
+                    st.b[i] = z[i] + h / 2.0 * st.k2[i];
+                }
             } else {
-                c[0] * z[i] + c[2] * (st.k2[i] - l * st.a[i])
-            };
+                for i in comps(k) {
+                    st.b[i] = c[0] * z[i] + c[2] * (st.k2[i] - l * st.a[i]);
+                }
+            }
         }
         self.derivative(&st.b, u, sens, dd, w, &mut st.k3);
-        for i in 0..nz {
-            let (l, c) = (lam[row(i)], &co[row(i)]);
-            st.c[i] = if l == 0.0 {
-                z[i] + h * st.k3[i]
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
+            if l == 0.0 {
+                for i in comps(k) {
+                    st.c[i] = z[i] + h * st.k3[i];
+                }
             } else {
-                let (n1, n3) = (k1[i] - l * z[i], st.k3[i] - l * st.b[i]);
-                c[0] * st.a[i] + c[2] * (2.0 * n3 - n1)
-            };
+                for i in comps(k) {
+                    let (n1, n3) = (k1[i] - l * z[i], st.k3[i] - l * st.b[i]);
+                    st.c[i] = c[0] * st.a[i] + c[2] * (2.0 * n3 - n1);
+                }
+            }
         }
         self.derivative(&st.c, u, sens, dd, w, &mut st.k4);
-        for i in 0..nz {
-            let (l, c) = (lam[row(i)], &co[row(i)]);
+        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
             if l == 0.0 {
-                z[i] += h / 6.0 * (k1[i] + 2.0 * st.k2[i] + 2.0 * st.k3[i] + st.k4[i]);
+                for i in comps(k) {
+                    z[i] += h / 6.0 * (k1[i] + 2.0 * st.k2[i] + 2.0 * st.k3[i] + st.k4[i]);
+                }
             } else {
-                let n1 = k1[i] - l * z[i];
-                let n2 = st.k2[i] - l * st.a[i];
-                let n3 = st.k3[i] - l * st.b[i];
-                let n4 = st.k4[i] - l * st.c[i];
-                z[i] = c[1] * z[i] + c[3] * n1 + 2.0 * c[4] * (n2 + n3) + c[5] * n4;
+                for i in comps(k) {
+                    let n1 = k1[i] - l * z[i];
+                    let n2 = st.k2[i] - l * st.a[i];
+                    let n3 = st.k3[i] - l * st.b[i];
+                    let n4 = st.k4[i] - l * st.c[i];
+                    z[i] = c[1] * z[i] + c[3] * n1 + 2.0 * c[4] * (n2 + n3) + c[5] * n4;
+                }
             }
         }
     }
