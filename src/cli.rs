@@ -8,7 +8,14 @@ use clap::{Args, Parser, Subcommand};
     version,
     about = "Exact nonlinear observability analysis and sensor self-calibration"
 )]
-#[command(after_help = "Exit codes: 0 success, 1 a check failed, 2 bad input or error.")]
+#[command(after_help = "Examples:
+  obsan rank systems/calib.sys                  # rank 7 of 7: weakly locally observable (exact)
+  obsan symmetries systems/calib.sys --input q  # what circles cannot tell apart
+  obsan modes systems/calib_q_nopsi.sys         # observable modes and the reduced system
+  obsan simulate --out data/sim && obsan calibrate data/sim
+
+Every command has --help with examples; the tutorial is docs/tutorial.md.
+Exit codes: 0 success, 1 a check failed, 2 bad input or error.")]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -184,9 +191,12 @@ pub enum ImportCommand {
     /// One robot of the UTIAS MRCLAM data set (Leung et al., IJRR 2011), cut
     /// into windows for systems/mrclam.sys; ground truth goes to truth.json.
     #[command(after_help = "Examples:
-  obsan import mrclam ../shared/data/mrclam --robot 1 --out data/mrclam1
-  obsan import mrclam ../shared/data/mrclam --robot 1 --out data/vicon1 --vicon-poses
+  obsan import mrclam MRCLAM_DIR --robot 1 --out data/mrclam1
+  obsan import mrclam MRCLAM_DIR --robot 1 --out data/vicon1 --vicon-poses
 
+MRCLAM_DIR is one unpacked data set of the UTIAS MRCLAM collection (e.g. MRCLAM_Dataset1,
+from http://asrl.utias.utoronto.ca/datasets/mrclam/): Landmark_Groundtruth.dat and, for robot
+N, robotN_Odometry.txt, robotN_Measurement.txt and robotN_Groundtruth.txt.
 Writes a dataset (docs/data-format.md) with the Vicon ground truth in truth.json.")]
     Mrclam(MrclamArgs),
 }
