@@ -30,8 +30,8 @@ pub enum Command {
   obsan show systems/calib.sys --input q --set q=0.9
   obsan show systems/calib.sys --json
 
---json prints {system, description, state, params, consts, inputs, f0, fields, outputs}, each
-formula as {text, latex}; \"exact\": true.")]
+--json prints {system, file, description, restriction, states, params, consts, inputs, f0,
+fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
     Show(ShowArgs),
     /// Print the exact canonical form of an expression.
     #[command(after_help = "Examples:
@@ -55,8 +55,9 @@ formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys --input q            # on circles (eq. 17): rank 4
   obsan rank systems/calib.sys --input q --set q=0.9 --json
 
---json prints {system, restriction, n, rank, exact, error_bound, degree_bound, basis (Lie
-words with their order), observable (per variable), max_order, evaluated}.")]
+--json prints {system, restriction, state (the analysed variables), n, rank,
+weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
+degree_bound, seed, basis (Lie words with their order), max_order, evaluated}.")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), each certified before it is printed: cheap structure and
@@ -68,7 +69,7 @@ words with their order), observable (per variable), max_order, evaluated}.")]
   obsan symmetries systems/psi.sys --exact      # the exact route and closure check
 
 The default --timeout is 60 s; a run past it stops with exit code 2 and says how far it got.
---json prints {system, restriction, n, rank, symmetries (one object per vector: variable ->
+--json prints {system, restriction, state, n, rank, symmetries (one object per vector: variable ->
 {text, latex}), rows_checked, exact, certificate (closure | invariance | random), certification
 (for random: {points, primes, identities, degree, error_bound}, else null)}.")]
     Symmetries(SymArgs),
@@ -77,7 +78,8 @@ The default --timeout is 60 s; a run past it stops with exit code 2 and says how
   obsan lie systems/localization.sys --order 2
   obsan lie systems/calib.sys --order 1 --latex
 
---json prints {lie_derivatives: [{lie_derivative, order, text, latex}], exact}.")]
+--json prints {system, restriction, lie_derivatives: [{lie_derivative, order, text, latex}],
+exact}.")]
     Lie(LieArgs),
     /// Check candidate observable modes against the symmetry PDE (eq. 11).
     #[command(after_help = "Examples:
@@ -94,7 +96,8 @@ says (random: error_bound in certification; --exact for the exact route). Exit 1
   obsan verify systems/decomp_localization.dec
   obsan verify systems/decomp_21_22.dec --json
 
---json prints {checks: [{check, pass, detail}], pass, exact, verdict, certificate (closure |
+--json prints {system, restriction, decomposition, checks: [{check, pass, detail}], pass,
+exact, verdict, certificate (closure |
 invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
 the exact one); a passing decomposition that writes every output is exact by closure whatever
 certified them. Exit 1 when a check fails.")]
@@ -129,7 +132,8 @@ truth.json; --force replaces only a folder obsan wrote.")]
   obsan calibrate data/sim --plot figs             # Figures 5-7 per trajectory (PNG, SVG)
 
 --json prints {method, params (name -> {value, sd}), metric, trajectories, sigma_beta,
-sigma_beta_estimated, ml, exact}.")]
+sigma_beta_estimated, encoder_noise ({route: stated | estimated | bearings_only, k, c,
+samples}, or null for methods other than ml), ml, exact}.")]
     Calibrate(CalibrateArgs),
     /// The Cramér–Rao lower bound of phi, psi, eta, delta, xi for a simulated
     /// set-up (the simulate flags) or a measured dataset (at its ML estimate).

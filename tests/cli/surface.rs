@@ -100,3 +100,75 @@ fn import_prints_progress_lines_when_stderr_is_not_a_terminal() {
     assert!(!String::from_utf8_lossy(&out.stdout).contains("import mrclam: "));
     let _ = std::fs::remove_dir_all(&out_dir);
 }
+
+/// The top-level keys a `--json prints {...}` sentence names: the items at depth 0 of its first
+/// brace group, each item's first identifier ("basis (Lie words ...)" -> "basis").
+fn promised_keys(help: &str) -> Vec<String> {
+    let text = &help[help.find("--json prints {").expect("no --json sentence") + 14..];
+    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
+    for ch in text.chars() {
+        match ch {
+            '{' | '(' | '[' => depth += 1,
+            '}' | ')' | ']' => depth -= 1,
+            _ => {}
+        }
+        if depth == 0 {
+            items.push(std::mem::take(&mut item));
+            break;
+        }
+        if depth == 1 && ch == ',' {
+            items.push(std::mem::take(&mut item));
+        } else if depth >= 1 && !(depth == 1 && ch == '{') {
+            item.push(ch);
+        }
+    }
+    items
+        .iter()
+        .filter_map(|i| {
+            let w: String = i
+                .trim()
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            (!w.is_empty()).then_some(w)
+        })
+        .collect()
+}
+
+/// Issue 34.6: a user reads `--help` to find a JSON field; every top-level key the help names
+/// must be in the output, and every key of the output must be named.
+#[test]
+fn each_json_help_names_exactly_the_keys_the_command_prints() {
+    let runs: [&[&str]; 9] = [
+        &["show", "systems/calib.sys"],
+        &["simplify", "x + 1"],
+        &["diff", "x^2", "x"],
+        &["rank", "systems/localization.sys"],
+        &["symmetries", "systems/localization.sys"],
+        &["lie", "systems/localization.sys", "--order", "1"],
+        &["check", "systems/localization.sys", "--mode", "D"],
+        &["verify", "systems/decomp_21_22.dec"],
+        &["modes", "systems/calib_q_nopsi.sys"],
+    ];
+    let dir = crate::util::fresh_dir("json-keys");
+    let sim = format!("{dir}/sim");
+    ok(&["simulate", "--out", &sim, "--bearings", "40"]);
+    let with_data: [&[&str]; 2] = [&["calibrate", &sim], &["crlb", "--bearings", "40"]];
+    for args in runs.iter().chain(&with_data) {
+        let help = ok(&[args[0], "--help"]);
+        let mut promised = promised_keys(&help);
+        promised.sort();
+        let mut a = args.to_vec();
+        a.push("--json");
+        let out = Command::new(env!("CARGO_BIN_EXE_obsan"))
+            .args(&a)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+            .unwrap_or_else(|e| panic!("obsan {}: not JSON: {e}", a.join(" ")));
+        let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        got.sort();
+        assert_eq!(promised, got, "obsan {} --help against its --json", args[0]);
+    }
+}
