@@ -70,6 +70,20 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
     Ok(r.dataset)
 }
 
+/// `calibrate` is the paper's estimator: a dataset of another model lacks its columns, and the
+/// user needs to hear which command fits any model, not only which column is missing.
+fn calib_only(f: Failure) -> Failure {
+    if f.0.contains("missing column") {
+        Failure(format!(
+            "{}\n(calibrate is the paper's estimator, for data of systems/calib.sys: inputs wR, \
+             wL and output beta; for another model use `obsan diagnose --model M.sys --data DIR`)",
+            f.0
+        ))
+    } else {
+        f
+    }
+}
+
 fn method(s: &str) -> Result<Method, Failure> {
     Ok(match s {
         "det" => Method::Det,
@@ -95,7 +109,7 @@ fn shown(i: usize, v: f64) -> f64 {
 
 pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     let m = method(&a.method)?;
-    let data = read_dataset(&a.dataset, &["wR", "wL"], &["beta"])?;
+    let data = read_dataset(&a.dataset, &["wR", "wL"], &["beta"]).map_err(calib_only)?;
     let mut o = CalibrateOptions::for_dataset(&data, m);
     if let Some(d0) = a.d0 {
         if !(d0.is_finite() && d0 > 0.0) {

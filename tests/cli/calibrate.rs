@@ -188,3 +188,20 @@ fn crlb_of_a_dataset_at_its_estimate_matches_the_bound_at_the_truth() {
     assert!(d("crlb_sd_with_encoder_noise") > 1.5 * d("crlb_sd"));
     bad(&["crlb", &data, "--seed", "3"], "cannot be used with");
 }
+
+/// Issue 34.9: a unicycle dataset (inputs v, omega) given to calibrate gets the missing column
+/// and the command that fits any model, with exit 2.
+#[test]
+fn calibrate_on_another_models_data_points_to_diagnose() {
+    let d = tmp_dir("other-model");
+    let w = format!("{d}/w000");
+    std::fs::create_dir_all(&w).unwrap();
+    std::fs::write(
+        format!("{w}/inputs.csv"),
+        "t,v,omega\n0,1,0\n1,1,0\n2,1,0\n",
+    )
+    .unwrap();
+    std::fs::write(format!("{w}/outputs.csv"), "t,b\n0,0.1\n1,0.2\n2,0.3\n").unwrap();
+    let e = bad(&["calibrate", &d], "missing column 'wR'");
+    assert!(e.contains("obsan diagnose --model"), "{e}");
+}
