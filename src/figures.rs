@@ -31,24 +31,29 @@ pub(crate) fn write_figures(
                 .zip(y.iter().copied())
                 .collect::<Vec<_>>()
         };
+        // Angles are drawn in degrees, as the CLI prints them (curves.json keeps radians);
+        // wrapping (plot::wrapped_angles) works in radians, so convert after it.
+        let deg = |xy: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+            xy.into_iter().map(|(x, y)| (x, y.to_degrees())).collect()
+        };
         let observed = plot::Series {
             name: "observed",
             color: COLORS[0],
             style: Style::Points,
-            xy: zip(&c.observed),
+            xy: deg(zip(&c.observed)),
         };
         let stem = |kind: &str| format!("{}_{kind}", c.name.replace(['/', '\\', ' '], "_"));
         let fig = chart(
             &format!("{} (q = {}): observation function and nodes", c.name, c.q),
             xlabel,
-            "beta (rad)",
+            "beta (deg)",
             &[
                 observed,
                 plot::Series {
                     name: "nodes",
                     color: COLORS[1],
                     style: Style::Stars,
-                    xy: c.nodes.clone(),
+                    xy: deg(c.nodes.clone()),
                 },
             ],
         );
@@ -63,19 +68,19 @@ pub(crate) fn write_figures(
         let fig = chart(
             &format!("{} (q = {}): sigma(s_c) of Algorithm 1", c.name, c.q),
             "s_c (rad of right-wheel rotation)",
-            "sigma (rad)",
+            "sigma (deg)",
             &[
                 plot::Series {
                     name: "sigma(s_c)",
                     color: COLORS[0],
                     style: Style::Line,
-                    xy: c.sigma_curve.clone(),
+                    xy: deg(c.sigma_curve.clone()),
                 },
                 plot::Series {
                     name: "minimum",
                     color: COLORS[1],
                     style: Style::Stars,
-                    xy: best,
+                    xy: deg(best),
                 },
             ],
         );
@@ -85,19 +90,19 @@ pub(crate) fn write_figures(
                 name: "observed",
                 color: COLORS[0],
                 style: Style::Points,
-                xy: zip(&c.observed),
+                xy: deg(zip(&c.observed)),
             },
             plot::Series {
                 name: "DET",
                 color: COLORS[1],
                 style: Style::Line,
-                xy: plot::wrapped_angles(&zip(&c.det)),
+                xy: deg(plot::wrapped_angles(&zip(&c.det))),
             },
             plot::Series {
                 name: "LS",
                 color: BLACK,
                 style: Style::Line,
-                xy: plot::wrapped_angles(&zip(&c.ls)),
+                xy: deg(plot::wrapped_angles(&zip(&c.ls))),
             },
         ];
         if let Some(ml) = &c.ml {
@@ -105,13 +110,13 @@ pub(crate) fn write_figures(
                 name: "ML",
                 color: COLORS[2],
                 style: Style::Line,
-                xy: plot::wrapped_angles(&zip(ml)),
+                xy: deg(plot::wrapped_angles(&zip(ml))),
             });
         }
         let fig = chart(
             &format!("{} (q = {}): observed, DET, LS, ML", c.name, c.q),
             xlabel,
-            "beta (rad)",
+            "beta (deg)",
             &series,
         );
         files.extend(plot::figure_files(&stem("fits"), &fig));

@@ -146,6 +146,23 @@ fn plot_writes_figures_5_to_7_as_png_and_svg_and_never_overwrites() {
         for m in [">DET<", ">LS<", ">ML<", ">observed<"] {
             assert!(svg.contains(m), "{m} in {traj}_fits.svg");
         }
+        // Angles drawn in degrees, as the CLI prints them (issue 34.9): a bearing spans more
+        // than the +-pi of radians, so some tick label lies beyond 4 in magnitude.
+        assert!(svg.contains(">beta (deg)<"), "{traj}_fits.svg axis label");
+        let ticks: Vec<f64> = svg
+            .split('>')
+            .filter_map(|t| t.split('<').next()?.trim().parse::<f64>().ok())
+            .collect();
+        assert!(ticks.iter().any(|t| t.abs() > 4.0), "{traj}: {ticks:?}");
+    }
+    // curves.json keeps radians for other tools: every observed bearing within [-pi, pi].
+    let curves: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{figs}/curves.json")).unwrap())
+            .unwrap();
+    for c in curves.as_array().unwrap() {
+        for b in c["observed"].as_array().unwrap() {
+            assert!(b.as_f64().unwrap().abs() <= std::f64::consts::PI);
+        }
     }
     assert!(std::fs::read_to_string(format!("{figs}/index.md"))
         .unwrap()
