@@ -119,6 +119,9 @@ struct Extended {
     w_cols: Vec<usize>,
     /// First column of the unknown-input jets.
     first_w: usize,
+    /// Columns before this one are unknowns (state and unknown-input jets);
+    /// the known inputs' jets follow, known, so never part of a row.
+    unknown_cols: usize,
 }
 
 fn extend(nf: &NormalForm, order: usize) -> Extended {
@@ -126,53 +129,61 @@ fn extend(nf: &NormalForm, order: usize) -> Extended {
     let n = nf.state.len();
     let nw = nf.unknown_inputs.len();
     let mut vars = nf.state_vars.clone();
-    // jets[l][j] = w_j^(l); names with a quote cannot clash with a user name.
-    let mut jets: Vec<Vec<Id>> = Vec::new();
-    for l in 0..=order + 1 {
-        let mut lev = Vec::new();
-        for (j, w) in nf.unknown_inputs.iter().enumerate() {
-            // Order 0 is the model's own symbol (`symbol` returns it).
-            let s = ctx.symbol(&format!("{w}{}", "'".repeat(l)));
-            debug_assert!(l > 0 || s.var == nf.unknown_input_vars[j]);
-            if l <= order {
-                vars.push(s.var);
+    // jets(names)[l][j] = the l-th derivative of input j; names with a quote
+    // cannot clash with a user name, and order 0 is the model's own symbol
+    // (`symbol` returns it).
+    let jets = |ctx: &mut Ctx, names: &[String], vars: &mut Vec<Var>| {
+        let mut all: Vec<Vec<Id>> = Vec::new();
+        for l in 0..=order + 1 {
+            let mut lev = Vec::new();
+            for w in names {
+                let s = ctx.symbol(&format!("{w}{}", "'".repeat(l)));
+                if l <= order {
+                    vars.push(s.var);
+                }
+                lev.push(s.id);
             }
-            lev.push(s.id);
+            all.push(lev);
         }
-        jets.push(lev);
-    }
+        all
+    };
+    let wj = jets(&mut ctx, &nf.unknown_inputs, &mut vars);
+    let first_u = vars.len();
+    let uj = jets(&mut ctx, &nf.inputs, &mut vars);
     let zero = ctx.int(0);
     let mut f0 = Vec::with_capacity(vars.len());
     for k in 0..n {
         let mut terms = vec![nf.f0[k]];
+        for (i, f) in nf.fields.iter().enumerate() {
+            let t = ctx.mul(&[f[k], uj[0][i]]);
+            terms.push(t);
+        }
         for j in 0..nw {
-            let t = ctx.mul(&[nf.unknown_fields[j][k], jets[0][j]]);
+            let t = ctx.mul(&[nf.unknown_fields[j][k], wj[0][j]]);
             terms.push(t);
         }
         f0.push(ctx.add(&terms));
     }
-    // w^(l)' = w^(l+1); the last one's derivative is never reached at orders
-    // <= `order` (module docs), so it is set to 0.
-    for l in 0..=order {
-        for j in 0..nw {
-            f0.push(if l < order { jets[l + 1][j] } else { zero });
+    // Input jets: x^(l)' = x^(l+1); the last one's derivative is never
+    // reached at orders <= `order` (module docs), so it is set to 0.
+    for j in [&wj, &uj] {
+        for l in 0..=order {
+            for c in 0..j[l].len() {
+                f0.push(if l < order { j[l + 1][c] } else { zero });
+            }
         }
-    }
-    let mut names = vec!["f0".to_string()];
-    let mut vectors = vec![f0];
-    for (i, f) in nf.fields.iter().enumerate() {
-        let mut v = f.clone();
-        v.resize(vars.len(), zero);
-        names.push(nf.inputs[i].clone());
-        vectors.push(v);
     }
     Extended {
         ctx,
         vars,
-        fields: Fields { names, vectors },
+        fields: Fields {
+            names: vec!["f0".to_string()],
+            vectors: vec![f0],
+        },
         outputs: nf.outputs.iter().map(|o| o.1).collect(),
         w_cols: (0..nw).map(|j| n + j).collect(),
         first_w: n,
+        unknown_cols: first_u,
     }
 }
 
@@ -204,7 +215,7 @@ fn grow(
     max_order: usize,
     opts: &UnknownInputOptions,
 ) -> Result<Run, AnalysisError> {
-    let len = ext.vars.len();
+    let len = ext.unknown_cols;
     let nw = ext.w_cols.len();
     let mut run = Run {
         steps: vec![],
@@ -247,8 +258,10 @@ fn grow(
             let degree = known.or(row.degree).unwrap_or(0);
             degrees.insert(key, degree);
             run.evaluated += 1;
-            let wp: Vec<Fp> = row.gradient[ext.first_w..].to_vec();
-            if echelon.insert(row.gradient) {
+            let mut g = row.gradient;
+            g.truncate(len);
+            let wp: Vec<Fp> = g[ext.first_w..].to_vec();
+            if echelon.insert(g) {
                 w_part.insert(wp);
                 run.degree = run.degree.saturating_add(degree);
                 kept.push(word.clone());
