@@ -4,17 +4,20 @@
 //! with the `u_i` known and the `w_j` unmeasured.
 //!
 //! Route (docs/engine.md, "Unknown inputs"): the state is extended by the
-//! unknown inputs and their derivatives, `Z = (S, w, w', ..., w^(M))`, with the
-//! drift `F = (f0 + sum g_j w_j, w', ..., w^(M), 0)` and the known input
-//! fields padded with zeros. The time derivative `y^(m)` of an output is a
-//! function of `S`, `w, ..., w^(m)` (one order less when `h` does not contain
-//! `w`) and the known inputs' jets, so for `m <= M` it never meets the
-//! truncation `w^(M+1) = 0`: the Lie derivatives of order `<= M` along
-//! `F` and the `f_i` are exact, and their gradients span the observable
-//! codistribution `O_m` of the true system in the jet space (the known
-//! inputs are generic and known, so their coefficients separate as in
-//! Hermann–Krener). This is the extended-state route of FISPO / ORC-DF and of
-//! Martinelli (IEEE TAC 2019, section 3) before his reduction.
+//! jets of the unknown inputs and of the known inputs, `Z = (S, w, ..., w^(M),
+//! u, ..., u^(M))`, with the one drift `F = (f0 + sum f_i u_i + sum g_j w_j,
+//! w', ..., w^(M), 0, u', ..., u^(M), 0)`. Its Lie derivative `L_F^m h` is the
+//! time derivative `y^(m)`, a function of `S`, `w, ..., w^(m)` and `u, ...,
+//! u^(m-1)`, so for `m <= M` it never meets the truncation `w^(M+1) = 0`: the
+//! rows are exact. The observable codistribution `O_m` is the span of the
+//! gradients of `y^(0..m)` with respect to the unknowns (`S` and the `w`
+//! jets); the known inputs' jets are given numbers at the random point, never
+//! columns. (Hermann–Krener's separation by the coefficients of each known
+//! input is not valid here: the unknown input may depend on the known one,
+//! and `y' = a(S, w') + b(S) u` says nothing of `b` when `w'` is free. The
+//! 2DOF model of the suite shows it: splitting claims its `m2`.) This is the
+//! extended-state route of FISPO / ORC-DF and of Martinelli (IEEE TAC 2019,
+//! section 3) before his reduction.
 //!
 //! A state `x_i` is observable from derivatives up to order `m` iff
 //! `dx_i` is in `O_m`; an unknown input `w_j` is reconstructable from order
