@@ -44,10 +44,15 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     )
     .map_err(|e| Failure(e.to_string()))?;
     let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
+    // Every basis function is a time derivative y^(m) of an output (the
+    // words have the one drift field).
     let words: Vec<String> = r
         .basis
         .iter()
-        .map(|w| w.display(&r.fields, &outs))
+        .map(|w| match w.order() {
+            0..=3 => format!("{}{}", outs[w.output], "'".repeat(w.order())),
+            m => format!("{}^({m})", outs[w.output]),
+        })
         .collect();
     let split = |names: &[String], v: &[Option<usize>]| {
         let yes: Vec<(String, usize)> = names
@@ -83,7 +88,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
             "max_order": r.max_order,
             "converged": r.converged,
             "complete": complete,
-            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
+            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"derivative": t, "output": outs[w.output], "order": w.order()})).collect::<Vec<_>>(),
             "evaluated": r.evaluated,
             "error_bound": r.error_bound,
             "degree_bound": r.degree_bound,
@@ -140,9 +145,9 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         o.push_str(&format!(" {}: {}/{}", s.order, s.rank, s.state_rank));
     }
     o.push('\n');
-    o.push_str(&format!(
-        "basis of the codistribution in the extended state (f0 includes sum g_j w_j and w^(l)' = w^(l+1)):\n"
-    ));
+    o.push_str(
+        "basis of the codistribution (gradients in the state and the unknown inputs' derivatives):\n",
+    );
     for w in &words {
         o.push_str(&format!("  d {w}\n"));
     }
