@@ -4,12 +4,13 @@
 //! with the `u_i` known and the `w_j` unmeasured.
 //!
 //! Route (docs/engine.md, "Unknown inputs"): the state is extended by the
-//! jets of the unknown inputs and of the known inputs, `Z = (S, w, ..., w^(M),
-//! u, ..., u^(M))`, with the one drift `F = (f0 + sum f_i u_i + sum g_j w_j,
-//! w', ..., w^(M), 0, u', ..., u^(M), 0)`. Its Lie derivative `L_F^m h` is the
-//! time derivative `y^(m)`, a function of `S`, `w, ..., w^(m)` and `u, ...,
-//! u^(m-1)`, so for `m <= M` it never meets the truncation `w^(M+1) = 0`: the
-//! rows are exact. The observable codistribution `O_m` is the span of the
+//! jets of the unknown inputs and a clock `t` for the known inputs, `Z = (S,
+//! w, ..., w^(M), t)`, each known input a polynomial in `t` of degree `M`
+//! with random coefficients (its jets at the point are then random), and the
+//! one drift `F = (f0 + sum f_i u_i(t) + sum g_j w_j, w', ..., w^(M), 0, 1)`.
+//! Its Lie derivative `L_F^m h` is the time derivative `y^(m)`, a function of
+//! `S`, `w, ..., w^(m)` and the known inputs' jets, so for `m <= M` it never
+//! meets the truncation `w^(M+1) = 0`: the rows are exact. The observable codistribution `O_m` is the span of the
 //! gradients of `y^(0..m)` with respect to the unknowns (`S` and the `w`
 //! jets); the known inputs' jets are given numbers at the random point, never
 //! columns. (Hermann–Krener's separation by the coefficients of each known
@@ -123,7 +124,7 @@ struct Extended {
     /// First column of the unknown-input jets.
     first_w: usize,
     /// Columns before this one are unknowns (state and unknown-input jets);
-    /// the known inputs' jets follow, known, so never part of a row.
+    /// the clock of the known inputs follows, known, so never part of a row.
     unknown_cols: usize,
 }
 
@@ -152,13 +153,32 @@ fn extend(nf: &NormalForm, order: usize) -> Extended {
     };
     let wj = jets(&mut ctx, &nf.unknown_inputs, &mut vars);
     let first_u = vars.len();
-    let uj = jets(&mut ctx, &nf.inputs, &mut vars);
+    // The known inputs: u_i = sum_l c_il t^l (l <= order) along a clock
+    // t' = 1, the c_il random at the point. At a point t0 their jets
+    // u_i^(l)(t0) are an invertible (triangular, diagonal l!) linear image of
+    // the c_il, so they are as random as independent jets, for one extra
+    // column instead of one per input and order.
     let zero = ctx.int(0);
+    let one = ctx.int(1);
+    let mut u_of_t = Vec::new();
+    if !nf.inputs.is_empty() {
+        let t = ctx.symbol("'t");
+        vars.push(t.var);
+        for u in &nf.inputs {
+            let mut terms = Vec::new();
+            for l in 0..=order {
+                let c = ctx.symbol(&format!("'{u}_c{l}")).id;
+                let tl = ctx.pow(t.id, l as i64);
+                terms.push(ctx.mul(&[c, tl]));
+            }
+            u_of_t.push(ctx.add(&terms));
+        }
+    }
     let mut f0 = Vec::with_capacity(vars.len());
     for k in 0..n {
         let mut terms = vec![nf.f0[k]];
         for (i, f) in nf.fields.iter().enumerate() {
-            let t = ctx.mul(&[f[k], uj[0][i]]);
+            let t = ctx.mul(&[f[k], u_of_t[i]]);
             terms.push(t);
         }
         for j in 0..nw {
@@ -167,14 +187,15 @@ fn extend(nf: &NormalForm, order: usize) -> Extended {
         }
         f0.push(ctx.add(&terms));
     }
-    // Input jets: x^(l)' = x^(l+1); the last one's derivative is never
-    // reached at orders <= `order` (module docs), so it is set to 0.
-    for j in [&wj, &uj] {
-        for l in 0..=order {
-            for c in 0..j[l].len() {
-                f0.push(if l < order { j[l + 1][c] } else { zero });
-            }
+    // Unknown-input jets: w^(l)' = w^(l+1); the last one's derivative is
+    // never reached at orders <= `order` (module docs), so it is set to 0.
+    for l in 0..=order {
+        for c in 0..nw {
+            f0.push(if l < order { wj[l + 1][c] } else { zero });
         }
+    }
+    if !nf.inputs.is_empty() {
+        f0.push(one);
     }
     Extended {
         ctx,

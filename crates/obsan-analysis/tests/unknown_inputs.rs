@@ -154,3 +154,20 @@ fn without_unknown_inputs_the_rank_is_the_ordinary_one() {
     let obs: Vec<bool> = r.observable.iter().map(Option::is_some).collect();
     assert_eq!(obs, ordinary.observable);
 }
+
+/// vins.sys with amz unmeasured (file comments): amz enters only as
+/// amz - baz, so baz is unobservable and amz not reconstructable at every
+/// order; the translation and yaw symmetries of vins.sys stay, so the rank
+/// is at most 19 - 5 = 14.
+#[test]
+fn vins_with_an_unknown_vertical_acceleration() {
+    let (s, w, r) = run(&file("vins_unknown_amz.sys"), Some(12));
+    let baz = s.iter().position(|n| n == "baz").unwrap();
+    assert_eq!(r.observable[baz], None);
+    expect(&w, &r.reconstructable, &[("amz", None)]);
+    assert!(r.rank <= 14, "{}", r.rank);
+    for n in ["rx", "ry", "rz", "pfx", "pfy", "pfz"] {
+        let i = s.iter().position(|x| x == n).unwrap();
+        assert_eq!(r.observable[i], None, "{n} moves with the translation");
+    }
+}
