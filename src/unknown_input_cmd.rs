@@ -30,10 +30,9 @@ fn order_text(o: Option<usize>) -> String {
 }
 
 pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
-    let deadline = a
-        .an
-        .timeout
-        .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let deadline =
+        a.an.timeout
+            .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
     let r = unknown_input_rank(
         nf,
         UnknownInputOptions {

@@ -49,7 +49,10 @@ fn a_negative_verdict_says_how_far_it_holds() {
         "3",
         "systems/benchmarks/unknown-inputs/c2m_known_b.sys",
     ]);
-    assert!(out.contains("hold up to output derivative order 3 only"), "{out}");
+    assert!(
+        out.contains("hold up to output derivative order 3 only"),
+        "{out}"
+    );
 }
 
 #[test]

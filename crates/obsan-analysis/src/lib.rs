@@ -38,6 +38,4 @@ pub use symmetry::{
     canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
     SymmetryReport,
 };
-pub use unknown_input::{
-    unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
-};
+pub use unknown_input::{unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport};

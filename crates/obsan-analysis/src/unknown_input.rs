@@ -181,8 +181,8 @@ fn extend(nf: &NormalForm, order: usize) -> Extended {
             let t = ctx.mul(&[f[k], u_of_t[i]]);
             terms.push(t);
         }
-        for j in 0..nw {
-            let t = ctx.mul(&[nf.unknown_fields[j][k], wj[0][j]]);
+        for (g, &w) in nf.unknown_fields.iter().zip(&wj[0]) {
+            let t = ctx.mul(&[g[k], w]);
             terms.push(t);
         }
         f0.push(ctx.add(&terms));
@@ -190,8 +190,10 @@ fn extend(nf: &NormalForm, order: usize) -> Extended {
     // Unknown-input jets: w^(l)' = w^(l+1); the last one's derivative is
     // never reached at orders <= `order` (module docs), so it is set to 0.
     for l in 0..=order {
-        for c in 0..nw {
-            f0.push(if l < order { wj[l + 1][c] } else { zero });
+        if l < order {
+            f0.extend_from_slice(&wj[l + 1]);
+        } else {
+            f0.extend(std::iter::repeat_n(zero, nw));
         }
     }
     if !nf.inputs.is_empty() {

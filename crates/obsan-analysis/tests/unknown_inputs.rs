@@ -95,8 +95,7 @@ fn a_varying_parameter_is_reconstructed() {
 /// Direct feedthrough: y1 = x, y2 = x w gives w = y2/y1 at order 0.
 #[test]
 fn an_output_containing_the_unknown_input() {
-    let src =
-        "system s\nstate x\nunknown input w\nx' = -x + w\noutput y1 = x\noutput y2 = x*w\n";
+    let src = "system s\nstate x\nunknown input w\nx' = -x + w\noutput y1 = x\noutput y2 = x*w\n";
     let (s, w, r) = run(src, None);
     expect(&s, &r.observable, &[("x", Some(0))]);
     expect(&w, &r.reconstructable, &[("w", Some(0))]);
@@ -118,7 +117,11 @@ fn unicycle_with_unknown_speed() {
     expect(&w, &r.reconstructable, &[("v", Some(1))]);
     assert!(r.converged);
     let (s, w, r) = run(&file("unicycle_one_landmark.sys"), Some(5));
-    expect(&s, &r.observable, &[("x", None), ("y", None), ("theta", None)]);
+    expect(
+        &s,
+        &r.observable,
+        &[("x", None), ("y", None), ("theta", None)],
+    );
     expect(&w, &r.reconstructable, &[("v", None)]);
     assert!(r.steps.iter().all(|st| st.state_rank == 1));
 }

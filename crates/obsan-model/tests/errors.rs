@@ -381,8 +381,18 @@ fn unknown_inputs() {
     // Not affine in w, or a product of a known and an unknown input.
     let base = "system s\nstate x\ninput u\nunknown input w\nx' = -x + w\noutput h = x\n";
     let e = |from: &str, to: &str| base.replacen(from, to, 1);
-    check(&e("x' = -x + w", "x' = -x + w^2"), 5, 11, "the term 'w^2' is not");
-    check(&e("x' = -x + w", "x' = -x + u*w"), 5, 11, "the term 'u*w' is not");
+    check(
+        &e("x' = -x + w", "x' = -x + w^2"),
+        5,
+        11,
+        "the term 'w^2' is not",
+    );
+    check(
+        &e("x' = -x + w", "x' = -x + u*w"),
+        5,
+        11,
+        "the term 'u*w' is not",
+    );
     check(
         &e("x' = -x + w", "x' = sin(w) - x"),
         5,
