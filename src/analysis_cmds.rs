@@ -81,6 +81,9 @@ fn system_title(nf: &NormalForm) -> String {
 
 pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    if !nf.unknown_inputs.is_empty() {
+        return crate::unknown_input_cmd::rank(a, &nf);
+    }
     let r = run_rank(&mut nf, &a.an)?;
     let words: Vec<String> = r
         .basis
@@ -235,6 +238,7 @@ fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
 
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    crate::unknown_input_cmd::refuse(&nf, "symmetries")?;
     // A little before the watchdog of main.rs, so that the message says how far it got.
     let secs = (a.timeout() * 0.8 - 0.05).max(0.0);
     let deadline = Instant::now() + Duration::from_secs_f64(secs);
@@ -318,6 +322,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
         )));
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    crate::unknown_input_cmd::refuse(&nf, "lie")?;
     let fields = obsan_analysis::Fields::of(&mut nf);
     let mut words: Vec<LieWord> = (0..nf.outputs.len())
         .map(|o| LieWord {
@@ -370,6 +375,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
 
 pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    crate::unknown_input_cmd::refuse(&nf, "check")?;
     let mut ids = Vec::new();
     for m in &a.modes {
         ids.push(parse_arg_in(&mut nf, m)?);
@@ -469,6 +475,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     let mut nf = sys
         .normal_form(d.restriction.as_deref(), &d.set)
         .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
+    crate::unknown_input_cmd::refuse(&nf, "verify")?;
     let (r, s) = compute_symmetries(&mut nf, &a.an, a.exact)?;
     let checks = verify_decomposition_with(&mut nf, &d, a.an.seed, Some((&r, &s)))
         .map_err(|e| Failure(e.to_string()))?;

@@ -515,6 +515,10 @@ pub struct RankArgs {
     pub an: AnalysisArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+    /// With unknown inputs: the highest output derivative order examined
+    /// (default: the state dimension + 1).
+    #[arg(long, value_name = "M")]
+    pub order: Option<usize>,
 }
 
 #[derive(Args)]

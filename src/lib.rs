@@ -35,6 +35,7 @@ mod montecarlo_cmd;
 mod progress;
 mod show;
 mod simulate;
+mod unknown_input_cmd;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 
 pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    crate::unknown_input_cmd::refuse(&nf, "modes")?;
     if nf.outputs.is_empty() {
         return Err(Failure(format!(
             "{}: the system has no output, so nothing is observable",

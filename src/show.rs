@@ -133,6 +133,9 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
         .collect();
     out.push_str(&format!("consts: {}\n", list(&consts)));
     out.push_str(&format!("inputs: {}\n", list(&nf.inputs)));
+    if !nf.unknown_inputs.is_empty() {
+        out.push_str(&format!("unknown inputs: {}\n", list(&nf.unknown_inputs)));
+    }
     out.push_str(&format!("analysed state S = [{}]\n", nf.state.join(", ")));
     let mut fields: Vec<(String, Vec<Id>)> = vec![("f0".to_string(), nf.f0.clone())];
     for (i, f) in nf.fields.iter().enumerate() {
@@ -140,6 +143,10 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
             format!("f_{} (coefficient of {})", nf.inputs[i], nf.inputs[i]),
             f.clone(),
         ));
+    }
+    for (j, g) in nf.unknown_fields.iter().enumerate() {
+        let w = &nf.unknown_inputs[j];
+        fields.push((format!("g_{w} (coefficient of the unknown {w})"), g.clone()));
     }
     for (name, f) in fields {
         let nonzero: Vec<(usize, Id)> = f

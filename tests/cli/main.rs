@@ -15,4 +15,5 @@ mod suite_entries;
 mod surface;
 mod trust;
 mod tutorial;
+mod unknown_inputs;
 mod util;

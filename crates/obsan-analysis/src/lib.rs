@@ -24,6 +24,7 @@ mod rank;
 pub mod structure;
 mod sym_recon;
 mod symmetry;
+mod unknown_input;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
@@ -37,3 +38,4 @@ pub use symmetry::{
     canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
     SymmetryReport,
 };
+pub use unknown_input::{unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport};

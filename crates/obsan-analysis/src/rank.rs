@@ -135,13 +135,14 @@ pub struct RankReport {
 }
 
 /// Row echelon basis over F_p.
-struct Echelon {
+#[derive(Default)]
+pub(crate) struct Echelon {
     rows: Vec<(usize, Vec<Fp>)>, // (pivot column, normalised row)
 }
 
 impl Echelon {
     /// Reduce `v` against the basis; returns the reduced vector.
-    fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
+    pub(crate) fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
         for (p, r) in &self.rows {
             let c = v[*p];
             if !c.is_zero() {
@@ -153,7 +154,7 @@ impl Echelon {
         v
     }
     /// Add `v` if independent; returns whether it was.
-    fn insert(&mut self, v: Vec<Fp>) -> bool {
+    pub(crate) fn insert(&mut self, v: Vec<Fp>) -> bool {
         let mut v = self.reduce(v);
         let Some(p) = v.iter().position(|x| !x.is_zero()) else {
             return false;
@@ -175,7 +176,7 @@ impl Echelon {
         self.rows.push((p, v));
         true
     }
-    fn rank(&self) -> usize {
+    pub(crate) fn rank(&self) -> usize {
         self.rows.len()
     }
 }

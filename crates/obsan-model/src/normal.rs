@@ -36,6 +36,14 @@ pub struct NormalForm {
     /// `u(t - tau)`. The predictor applies it exactly; the analysis to first
     /// order (`u - tau du/dt`, with `du/dt` as further free inputs).
     pub delay: Option<usize>,
+    /// Unknown inputs `w_j` (`unknown input w`, `varying k`): unmeasured
+    /// functions of time, `S' = f0 + sum f_i u_i + sum g_j w_j`. Empty for a
+    /// model whose inputs are all known.
+    pub unknown_inputs: Vec<String>,
+    pub unknown_input_vars: Vec<Var>,
+    /// `unknown_fields[j]` is the field `g_j` multiplying unknown input `j`.
+    /// The outputs may contain the `w_j` (direct feedthrough).
+    pub unknown_fields: Vec<Vec<Id>>,
 }
 
 impl NormalForm {
@@ -136,13 +144,19 @@ impl System {
             .chain(self.decls_of(Kind::Param))
             .collect();
         let n_dynamic = self.dynamics.len();
+        let unknown_inputs: Vec<String> = self
+            .decls_of(Kind::Unknown)
+            .map(|d| d.name.clone())
+            .collect();
+        let unknown_syms: Vec<Symbol> = self.decls_of(Kind::Unknown).map(|d| d.sym).collect();
+        let mut unknown_fields = vec![Vec::new(); unknown_syms.len()];
         let mut f0 = Vec::new();
         let mut fields = vec![Vec::new(); inputs.len()];
         let zero = ctx.int(0);
         for (k, _) in state_decls.iter().enumerate() {
             if k >= n_dynamic {
                 f0.push(zero);
-                for f in fields.iter_mut() {
+                for f in fields.iter_mut().chain(unknown_fields.iter_mut()) {
                     f.push(zero);
                 }
                 continue;
@@ -167,6 +181,16 @@ impl System {
                 let term = ctx.mul(&[fi, input_syms[i].id]);
                 rest = ctx.sub(rest, term);
                 fields[i].push(fi);
+            }
+            // g_j = d rhs / d w_j (affine in the inputs and the w_j jointly,
+            // checked when read).
+            for (j, w) in unknown_syms.iter().enumerate() {
+                let gj = ctx.diff(e, w.var);
+                let c = ctx.canon(gj);
+                let gj = ctx.from_canonical(&c);
+                let term = ctx.mul(&[gj, w.id]);
+                rest = ctx.sub(rest, term);
+                unknown_fields[j].push(gj);
             }
             let c = ctx.canon(rest);
             f0.push(ctx.from_canonical(&c));
@@ -196,6 +220,9 @@ impl System {
                 .delay
                 .as_ref()
                 .and_then(|d| state_decls.iter().position(|s| &s.name == d)),
+            unknown_inputs,
+            unknown_input_vars: unknown_syms.iter().map(|s| s.var).collect(),
+            unknown_fields,
         })
     }
 

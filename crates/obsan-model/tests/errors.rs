@@ -346,3 +346,83 @@ fn restrictions_and_constants_give_the_right_fields() {
     let nf = s.normal_form(Some("straight"), &[]).unwrap();
     assert_eq!(nf.inputs, vec!["u"]);
 }
+
+/// Unknown inputs (issue 33): declared with `unknown input` or `varying`,
+/// affine together with the known inputs, allowed in outputs, with their
+/// fields g_j in the normal form.
+#[test]
+fn unknown_inputs() {
+    let src = "system s\nstate x, y\nparam a\ninput u\nunknown input w\nvarying k\nx' = a*y + u + x*w\ny' = -k*x\noutput h = x + w\n";
+    let s = System::parse(src, "t.sys").unwrap();
+    let mut nf = s.normal_form(None, &[]).unwrap();
+    assert_eq!(nf.inputs, vec!["u"]);
+    assert_eq!(nf.unknown_inputs, vec!["w", "k"]);
+    // g_w = (x, 0, 0), g_k = (0, -x, 0); f0 keeps a*y only.
+    let x = nf.parse_expr("x", false).unwrap();
+    let mx = nf.parse_expr("-x", false).unwrap();
+    let ay = nf.parse_expr("a*y", false).unwrap();
+    let eq = |nf: &mut obsan_model::NormalForm, a, b| {
+        let d = nf.ctx.sub(a, b);
+        nf.ctx.is_identically_zero(d)
+    };
+    let (gw, gk, f0) = (
+        nf.unknown_fields[0].clone(),
+        nf.unknown_fields[1].clone(),
+        nf.f0.clone(),
+    );
+    assert!(eq(&mut nf, gw[0], x) && nf.ctx.is_identically_zero(gw[1]));
+    assert!(eq(&mut nf, gk[1], mx) && nf.ctx.is_identically_zero(gk[0]));
+    assert!(eq(&mut nf, f0[0], ay));
+    // Printed back and read again: the same declarations.
+    let again = System::parse(&s.to_sys_text(), "t.sys").unwrap();
+    let nf2 = again.normal_form(None, &[]).unwrap();
+    assert_eq!(nf2.unknown_inputs, vec!["w", "k"]);
+
+    // Not affine in w, or a product of a known and an unknown input.
+    let base = "system s\nstate x\ninput u\nunknown input w\nx' = -x + w\noutput h = x\n";
+    let e = |from: &str, to: &str| base.replacen(from, to, 1);
+    check(
+        &e("x' = -x + w", "x' = -x + w^2"),
+        5,
+        11,
+        "the term 'w^2' is not",
+    );
+    check(
+        &e("x' = -x + w", "x' = -x + u*w"),
+        5,
+        11,
+        "the term 'u*w' is not",
+    );
+    check(
+        &e("x' = -x + w", "x' = sin(w) - x"),
+        5,
+        6,
+        "the term 'sin(w)' is not",
+    );
+    // Declarations.
+    check(
+        &e("unknown input w", "unknown w"),
+        4,
+        1,
+        "'unknown' must be followed by 'input'",
+    );
+    check(
+        &e("unknown input w", "unknown input w = 3"),
+        4,
+        15,
+        "'w' is an unknown input: it takes no value",
+    );
+    check(
+        &e("unknown input w", "unknown input w\nparam w"),
+        5,
+        7,
+        "'w' is declared twice",
+    );
+    // A restriction may not use an unknown input on its right side.
+    check(
+        &format!("{base}restrict r: u = w\n"),
+        7,
+        17,
+        "not the unknown input 'w'",
+    );
+}

@@ -53,6 +53,7 @@ impl Reader<'_> {
             Kind::Param => 1,
             Kind::Const => 2,
             Kind::Input => 3,
+            Kind::Unknown => 4,
         });
         let mut decls: Vec<Decl> = Vec::new();
         for p in order {
@@ -86,6 +87,16 @@ impl Reader<'_> {
             });
         }
         for p in pending {
+            if let (Some(_), Kind::Unknown) = (&p.value, p.kind) {
+                return Err(self.err_src(
+                    p.at,
+                    p.at + p.name.len(),
+                    format!(
+                        "'{}' is an unknown input: it takes no value (nobody measures it)",
+                        p.name
+                    ),
+                ));
+            }
             if let (Some((text, map)), Kind::Input | Kind::State) = (&p.value, p.kind) {
                 check_derived(self, text, map, &decls, p.kind)?;
             }
@@ -195,7 +206,13 @@ impl Reader<'_> {
                 &eqn.map,
                 self,
                 decls,
-                &[Kind::State, Kind::Param, Kind::Const, Kind::Input],
+                &[
+                    Kind::State,
+                    Kind::Param,
+                    Kind::Const,
+                    Kind::Input,
+                    Kind::Unknown,
+                ],
                 &format!("the dynamics of {nm}"),
             )?;
             let loc = Located {
@@ -264,7 +281,7 @@ impl Reader<'_> {
                 map,
                 self,
                 decls,
-                &[Kind::State, Kind::Param, Kind::Const],
+                &[Kind::State, Kind::Param, Kind::Const, Kind::Unknown],
                 &format!("output {nm}"),
             )?;
             outputs.push((
@@ -552,11 +569,10 @@ fn check_affine(
     rd: &Reader,
     state: &str,
 ) -> Result<(), ModelError> {
-    let inputs: Vec<_> = decls
-        .iter()
-        .filter(|d| d.kind == Kind::Input)
-        .map(|d| d.sym.var)
-        .collect();
+    // Known and unknown inputs together: x' = f0 + sum f_i u_i + sum g_j w_j
+    // (no products u*w, no powers of w: Martinelli's input-affine form).
+    let is_input = |d: &&Decl| matches!(d.kind, Kind::Input | Kind::Unknown);
+    let inputs: Vec<_> = decls.iter().filter(is_input).map(|d| d.sym.var).collect();
     let affine = |ctx: &mut Ctx, id: Id| -> bool {
         for &u in &inputs {
             let d = ctx.diff(id, u);
@@ -574,7 +590,7 @@ fn check_affine(
     }
     let names: Vec<&str> = decls
         .iter()
-        .filter(|d| d.kind == Kind::Input)
+        .filter(is_input)
         .map(|d| d.name.as_str())
         .collect();
     for (_, term) in loc.ast.additive_terms() {

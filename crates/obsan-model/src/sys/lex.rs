@@ -158,7 +158,7 @@ pub(super) fn edit_distance(a: &str, b: &str) -> usize {
     prev[b.len()]
 }
 
-pub(super) const KEYWORDS: [&str; 13] = [
+pub(super) const KEYWORDS: [&str; 15] = [
     "system",
     "delay",
     "description",
@@ -172,6 +172,8 @@ pub(super) const KEYWORDS: [&str; 13] = [
     "inputs",
     "output",
     "restrict",
+    "unknown",
+    "varying",
 ];
 
 /// Source range of `span` of an expression whose text has the source map `map`.

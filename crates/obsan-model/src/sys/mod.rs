@@ -25,6 +25,9 @@ pub enum Kind {
     /// A known constant (such as `q`): neither state nor input.
     Const,
     Input,
+    /// An unknown input (`unknown input w`, or `varying k` for a time-varying
+    /// parameter): an unmeasured function of time entering like an input.
+    Unknown,
 }
 
 impl Kind {
@@ -34,6 +37,7 @@ impl Kind {
             Kind::Param => "param",
             Kind::Const => "const",
             Kind::Input => "input",
+            Kind::Unknown => "unknown input",
         }
     }
 }
@@ -202,7 +206,13 @@ impl System {
         if !self.description.is_empty() {
             out.push_str(&format!("description {}\n", self.description));
         }
-        for kind in [Kind::State, Kind::Param, Kind::Const, Kind::Input] {
+        for kind in [
+            Kind::State,
+            Kind::Param,
+            Kind::Const,
+            Kind::Input,
+            Kind::Unknown,
+        ] {
             let items: Vec<String> = self
                 .decls_of(kind)
                 .map(|d| match (&d.value, &d.derived, &d.start) {

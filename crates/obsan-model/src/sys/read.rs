@@ -120,10 +120,30 @@ impl Reader<'_> {
             "param" | "params" => Some(Kind::Param),
             "const" | "consts" => Some(Kind::Const),
             "input" | "inputs" => Some(Kind::Input),
+            "varying" => Some(Kind::Unknown),
             _ => None,
         };
         if let Some(kind) = kind {
             return self.declaration_list(raw, st, kind, (lead, word_end));
+        }
+        if word == "unknown" {
+            // `unknown input w, v`: the list starts after the second word.
+            let rest = &t[word_end..];
+            let gap = rest.len() - rest.trim_start().len();
+            let second = rest[gap..]
+                .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                .next()
+                .unwrap_or("");
+            if second != "input" && second != "inputs" {
+                return Err(self.err(
+                    st,
+                    lead,
+                    word_end,
+                    "'unknown' must be followed by 'input': unknown input w1, w2",
+                ));
+            }
+            let end = word_end + gap + second.len();
+            return self.declaration_list(raw, st, Kind::Unknown, (lead, end));
         }
         match word {
             "system" => {
@@ -211,7 +231,7 @@ impl Reader<'_> {
                     st,
                     lead,
                     word_end.max(lead + first.len_utf8()),
-                    format!("expected a declaration (system, description, state, param, const, input, output, restrict) or an equation x' = ...{hint}"),
+                    format!("expected a declaration (system, description, state, param, const, input, unknown input, varying, output, restrict) or an equation x' = ...{hint}"),
                 ));
             }
         }

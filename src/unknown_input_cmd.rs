@@ -1,0 +1,167 @@
+//! `obsan rank` on a model with unknown inputs (issue 33), and the refusal of
+//! the commands that do not handle them yet.
+
+use crate::cli::RankArgs;
+use crate::Failure;
+use obsan_analysis::{unknown_input_rank, UnknownInputOptions};
+use obsan_model::NormalForm;
+use serde_json::json;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+/// Commands other than `rank` would treat the unknown inputs as absent.
+pub fn refuse(nf: &NormalForm, command: &str) -> Result<(), Failure> {
+    if nf.unknown_inputs.is_empty() {
+        return Ok(());
+    }
+    Err(Failure(format!(
+        "{} has unknown inputs ({}): `obsan {command}` does not handle them yet; `obsan rank` does",
+        nf.name,
+        nf.unknown_inputs.join(", ")
+    )))
+}
+
+fn order_text(o: Option<usize>) -> String {
+    match o {
+        Some(0) => "from the outputs".to_string(),
+        Some(m) => format!("from output derivatives of order {m}"),
+        None => String::new(),
+    }
+}
+
+pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
+    let deadline =
+        a.an.timeout
+            .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let r = unknown_input_rank(
+        nf,
+        UnknownInputOptions {
+            seed: a.an.seed,
+            deadline,
+            max_order: a.order,
+        },
+    )
+    .map_err(|e| Failure(e.to_string()))?;
+    let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
+    // Every basis function is a time derivative y^(m) of an output (the
+    // words have the one drift field).
+    let words: Vec<String> = r
+        .basis
+        .iter()
+        .map(|w| match w.order() {
+            0..=3 => format!("{}{}", outs[w.output], "'".repeat(w.order())),
+            m => format!("{}^({m})", outs[w.output]),
+        })
+        .collect();
+    let split = |names: &[String], v: &[Option<usize>]| {
+        let yes: Vec<(String, usize)> = names
+            .iter()
+            .zip(v)
+            .filter_map(|(s, o)| o.map(|m| (s.clone(), m)))
+            .collect();
+        let no: Vec<String> = names
+            .iter()
+            .zip(v)
+            .filter(|(_, o)| o.is_none())
+            .map(|(s, _)| s.clone())
+            .collect();
+        (yes, no)
+    };
+    let (obs, unobs) = split(&nf.state, &r.observable);
+    let (rec, unrec) = split(&nf.unknown_inputs, &r.reconstructable);
+    let complete = r.complete();
+    if a.out.json {
+        let v = json!({
+            "system": nf.name,
+            "restriction": nf.restriction,
+            "state": nf.state,
+            "unknown_inputs": nf.unknown_inputs,
+            "n": r.n,
+            "rank": r.rank,
+            "weakly_locally_observable": r.rank == r.n,
+            "observable_variables": obs.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
+            "unobservable_variables": unobs,
+            "reconstructable_inputs": rec.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
+            "unreconstructable_inputs": unrec,
+            "steps": r.steps.iter().map(|s| json!({"order": s.order, "extended_rank": s.rank, "state_rank": s.state_rank})).collect::<Vec<_>>(),
+            "max_order": r.max_order,
+            "converged": r.converged,
+            "complete": complete,
+            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"derivative": t, "output": outs[w.output], "order": w.order()})).collect::<Vec<_>>(),
+            "evaluated": r.evaluated,
+            "error_bound": r.error_bound,
+            "degree_bound": r.degree_bound,
+            "seed": r.seed,
+        });
+        outln!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "(none)".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    let with_order = |v: &[(String, usize)]| {
+        if v.is_empty() {
+            "(none)".to_string()
+        } else {
+            v.iter()
+                .map(|(s, m)| format!("{s} ({})", order_text(Some(*m))))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    };
+    let mut o = String::new();
+    o.push_str(&format!(
+        "system {}: state [{}], unknown inputs [{}]\n",
+        nf.name,
+        nf.state.join(", "),
+        nf.unknown_inputs.join(", ")
+    ));
+    let verdict = if r.rank == r.n {
+        "weakly locally observable with unknown inputs"
+    } else {
+        "not weakly locally observable with unknown inputs"
+    };
+    o.push_str(&format!(
+        "rank {} of {} (output derivatives up to order {}): {verdict}\n",
+        r.rank, r.n, r.max_order
+    ));
+    o.push_str(&format!("observable: {}\n", with_order(&obs)));
+    o.push_str(&format!("not observable: {}\n", list(&unobs)));
+    o.push_str(&format!(
+        "unknown inputs reconstructable: {}\n",
+        with_order(&rec)
+    ));
+    o.push_str(&format!(
+        "unknown inputs not reconstructable: {}\n",
+        list(&unrec)
+    ));
+    o.push_str("order by order (rank in the extended space / of the state part):");
+    for s in &r.steps {
+        o.push_str(&format!(" {}: {}/{}", s.order, s.rank, s.state_rank));
+    }
+    o.push('\n');
+    o.push_str(
+        "basis of the codistribution (gradients in the state and the unknown inputs' derivatives):\n",
+    );
+    for w in &words {
+        o.push_str(&format!("  d {w}\n"));
+    }
+    if r.converged {
+        o.push_str("converged: no higher derivative order can change these verdicts\n");
+    } else {
+        o.push_str(&format!(
+            "not converged: the negative verdicts hold up to output derivative order {} only (raise it with --order)\n",
+            r.max_order
+        ));
+    }
+    o.push_str(&format!(
+        "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
+        r.seed, r.error_bound, r.degree_bound
+    ));
+    out!("{o}");
+    Ok(ExitCode::SUCCESS)
+}

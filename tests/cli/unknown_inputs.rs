@@ -1,0 +1,67 @@
+//! `obsan rank` with unknown inputs (issue 33), as a user runs it; verdicts
+//! derived by hand in the model files (systems/benchmarks/unknown-inputs/).
+
+use crate::util::*;
+use serde_json::Value;
+
+#[test]
+fn rank_names_the_reconstructable_input_and_its_order() {
+    // y = x1, y' = x2, y'' = w (chain.sys).
+    let out = ok(&["rank", "systems/benchmarks/unknown-inputs/chain.sys"]);
+    assert!(out.contains("rank 2 of 2"), "{out}");
+    assert!(
+        out.contains("w (from output derivatives of order 2)"),
+        "{out}"
+    );
+    assert!(out.contains("converged"), "{out}");
+    let v: Value = serde_json::from_str(&ok(&[
+        "rank",
+        "--json",
+        "systems/benchmarks/unknown-inputs/chain.sys",
+    ]))
+    .unwrap();
+    assert_eq!(v["unknown_inputs"][0], "w");
+    assert_eq!(v["reconstructable_inputs"][0]["name"], "w");
+    assert_eq!(v["reconstructable_inputs"][0]["order"], 2);
+    assert_eq!(v["observable_variables"][1]["name"], "x2");
+    assert_eq!(v["observable_variables"][1]["order"], 1);
+    assert_eq!(v["converged"], true);
+}
+
+#[test]
+fn a_negative_verdict_says_how_far_it_holds() {
+    // c2m_known_b.sys: only x1 observable (derived in the file).
+    let v: Value = serde_json::from_str(&ok(&[
+        "rank",
+        "--json",
+        "--order",
+        "3",
+        "systems/benchmarks/unknown-inputs/c2m_known_b.sys",
+    ]))
+    .unwrap();
+    assert_eq!(v["rank"], 1);
+    assert_eq!(v["max_order"], 3);
+    assert_eq!(v["converged"], false);
+    assert_eq!(v["unreconstructable_inputs"][0], "w");
+    let out = ok(&[
+        "rank",
+        "--order",
+        "3",
+        "systems/benchmarks/unknown-inputs/c2m_known_b.sys",
+    ]);
+    assert!(
+        out.contains("hold up to output derivative order 3 only"),
+        "{out}"
+    );
+}
+
+#[test]
+fn other_commands_refuse_unknown_inputs() {
+    for cmd in ["symmetries", "modes", "check"] {
+        let mut args = vec![cmd, "systems/benchmarks/unknown-inputs/chain.sys"];
+        if cmd == "check" {
+            args.extend(["--mode", "x1"]);
+        }
+        bad(&args, "has unknown inputs (w)");
+    }
+}
