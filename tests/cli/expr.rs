@@ -33,7 +33,7 @@ fn json_and_latex_output() {
     assert!(same_function(v["canonical"].as_str().unwrap(), "(x + y)/y"));
     assert!(v["latex"].as_str().unwrap().contains("\\frac"));
     let out = ok(&["diff", "sin(theta)", "theta", "--latex"]);
-    assert_eq!(out.trim(), "\\cos \\theta");
+    assert_eq!(out.trim(), "\\cos(\\theta)");
     let v: serde_json::Value = serde_json::from_str(&ok(&["diff", "x^2", "x", "--json"])).unwrap();
     assert_eq!(v["variable"], "x");
 }

@@ -18,7 +18,9 @@
 //! computation for the tests.
 
 use crate::fields::field_names;
-use obsan_expr::{degree_bounds, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, P};
+use obsan_expr::{
+    degree_bounds, reached_states, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, Var, P,
+};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
 use std::fmt;
@@ -252,7 +254,9 @@ trait Rows {
 /// Every Lie derivative built on the expression graph, its gradient
 /// differentiated there and evaluated at the point.
 struct SymbolicRows<'a> {
-    fields: &'a Fields,
+    /// The reached state variables and the fields' components along them.
+    vars: &'a [Var],
+    vectors: &'a [Vec<Id>],
 }
 
 impl Rows for SymbolicRows<'_> {
@@ -264,7 +268,7 @@ impl Rows for SymbolicRows<'_> {
         f: &Id,
         point: &FpPoint,
     ) -> Result<(Vec<Fp>, u64), AnalysisError> {
-        let grad = gradient(nf, *f);
+        let grad: Vec<Id> = self.vars.iter().map(|&x| nf.ctx.diff(*f, x)).collect();
         let vals = nf
             .ctx
             .eval_fp(&grad, point)
@@ -272,8 +276,7 @@ impl Rows for SymbolicRows<'_> {
         Ok((vals, row_degree(&nf.ctx, &grad)))
     }
     fn extend(&mut self, nf: &mut NormalForm, _: &LieWord, f: &Id, k: usize) -> Option<Id> {
-        let vars = nf.state_vars.clone();
-        let g = nf.ctx.lie_derivative(*f, &vars, &self.fields.vectors[k]);
+        let g = nf.ctx.lie_derivative(*f, self.vars, &self.vectors[k]);
         (!nf.ctx.is_zero(g)).then_some(g)
     }
 }
@@ -296,6 +299,11 @@ impl Rows for JetRows<'_> {
     ) -> Result<(Vec<Fp>, u64), AnalysisError> {
         let key = (word.output, word.fields.clone());
         let known = self.degrees.get(&key).copied();
+        obsan_expr::check_memory(
+            self.jets.sweep_bytes(&word.fields),
+            "the jets of the rank test",
+        )
+        .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
         let row = self
             .jets
             .row(word.output, &word.fields, point, known.is_none())
@@ -322,8 +330,10 @@ fn grow<R: Rows>(
     fields: &Fields,
     point: FpPoint,
     opts: &mut RankOptions,
+    m: usize,
 ) -> Result<Run, AnalysisError> {
-    let n = nf.state.len();
+    // The rows have one column per reached variable; the full rank is m.
+    let n = m;
     let mut run = Run {
         basis: vec![],
         echelon: Echelon { rows: vec![] },
@@ -462,7 +472,35 @@ fn rank_with(
     let n = nf.state.len();
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
     let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
-    let jets = (!symbolic).then(|| lie_jets(nf, &fields));
+    // Only the variables the outputs reach through the fields get columns:
+    // every other column is zero in every row, exactly (reached_states), so
+    // an unused parameter costs nothing (issue 31 item 2: 12,000 of them
+    // made the dense (n + 1)-wide jets take gigabytes).
+    let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+    // The symbolic route keeps every column: an independent check of this
+    // restriction in the tests (tests/jets.rs).
+    let reach = if symbolic {
+        (0..n).collect()
+    } else {
+        reached_states(&nf.ctx, &nf.state_vars, &fields.vectors, &outputs)
+    };
+    let m = reach.len();
+    let r_vars: Vec<Var> = reach.iter().map(|&i| nf.state_vars[i]).collect();
+    let r_vectors: Vec<Vec<Id>> = fields
+        .vectors
+        .iter()
+        .map(|v| reach.iter().map(|&i| v[i]).collect())
+        .collect();
+    if !symbolic {
+        // Compiling the jets keeps a support set per component (m^2 per
+        // field), and the first sweep m (m + 1) coefficients.
+        let mu = m as u128;
+        let k = (fields.vectors.len() + outputs.len()) as u128;
+        let bytes = k * mu * mu + 8 * (mu + 1) * (3 * mu + 1);
+        obsan_expr::check_memory(bytes, "the jets of the rank test")
+            .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
+    }
+    let jets = (!symbolic).then(|| LieJets::new(&nf.ctx, &r_vars, &r_vectors, &outputs));
     let mut degrees = HashMap::new();
     let mut grow_at = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
         Some(jets) => {
@@ -470,17 +508,29 @@ fn rank_with(
                 jets,
                 degrees: &mut degrees,
             };
-            grow(nf, &mut rows, vec![(); nf.outputs.len()], &fields, p, opts)
+            grow(
+                nf,
+                &mut rows,
+                vec![(); nf.outputs.len()],
+                &fields,
+                p,
+                opts,
+                m,
+            )
         }
         None => {
             let roots = nf.outputs.iter().map(|o| o.1).collect();
             grow(
                 nf,
-                &mut SymbolicRows { fields: &fields },
+                &mut SymbolicRows {
+                    vars: &r_vars,
+                    vectors: &r_vectors,
+                },
                 roots,
                 &fields,
                 p,
                 opts,
+                m,
             )
         }
     };
@@ -495,15 +545,15 @@ fn rank_with(
         r1
     };
     let rank = best.echelon.rank();
-    // Single variables: e_i in the span at the point.
-    let observable = (0..n)
-        .map(|i| {
-            let mut e = vec![Fp::ZERO; n];
-            e[i] = Fp::ONE;
-            best.echelon.reduce(e).iter().all(|x| x.is_zero())
-        })
-        .collect();
-    let mut pivots: Vec<usize> = best.echelon.rows.iter().map(|(p, _)| *p).collect();
+    // Single variables: e_i in the span at the point (never for a variable
+    // the outputs do not reach: its column is zero).
+    let mut observable = vec![false; n];
+    for (j, &i) in reach.iter().enumerate() {
+        let mut e = vec![Fp::ZERO; m];
+        e[j] = Fp::ONE;
+        observable[i] = best.echelon.reduce(e).iter().all(|x| x.is_zero());
+    }
+    let mut pivots: Vec<usize> = best.echelon.rows.iter().map(|(p, _)| reach[*p]).collect();
     pivots.sort_unstable();
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);

@@ -342,3 +342,62 @@ fn row_degree_bounds_cover_the_true_degrees() {
         }
     }
 }
+
+/// Issue 31 item 2: parameters no output reaches cost nothing. calib.sys
+/// (rank 7 of 7, eq. 16 of the paper) with 3,000 unused params declared
+/// after its states: the rank stays 7, exactly the 7 original variables are
+/// observable and hold the pivots, and the test runs under the default
+/// budget, whose memory limit the dense jets over all 3,007 variables
+/// (3 x 3007^2 support bits + 8 x 3008 x 9022 bytes, about 240 MB) would
+/// trip. The symbolic route, which keeps every column, agrees.
+#[test]
+fn unused_params_cost_nothing() {
+    let src = std::fs::read_to_string(format!("{ROOT}/systems/calib.sys")).unwrap();
+    let names: Vec<String> = (0..3000).map(|i| format!("unused{i}")).collect();
+    let src = format!("{src}\nparam {}\n", names.join(", "));
+    let sys = System::parse(&src, "calib+unused.sys").unwrap();
+    let mut nf = sys.normal_form(None, &[]).unwrap();
+    let r = obsan_expr::within_thread_budget(&obsan_expr::Budget::default(), || {
+        rank(&mut nf, RankOptions::default())
+    })
+    .expect("no budget limit")
+    .expect("no analysis error");
+    assert_eq!((r.rank, r.n), (7, 3007));
+    let state: Vec<&str> = nf.state.iter().map(|s| s.as_str()).collect();
+    for (i, name) in state.iter().enumerate() {
+        assert_eq!(r.observable[i], !name.starts_with("unused"), "{name}");
+    }
+    assert!(r.pivots.iter().all(|&p| !state[p].starts_with("unused")));
+    // Independent: every column kept, Lie derivatives on the graph.
+    let (a, b) = both(&sys, None, 1);
+    assert_same("calib + 3000 unused params", &a, &b);
+}
+
+/// The memory budget bounds the dense jets: an output that reaches 6,000
+/// params needs 8 x 6001 x 18001 bytes (about 820 MiB) for its first sweep,
+/// past the default 200 MiB, so the rank test stops before allocating with
+/// a "too large" error naming the flag that raises the limit.
+#[test]
+fn dense_jets_past_the_memory_budget_are_refused() {
+    let names: Vec<String> = (0..6000).map(|i| format!("p{i}")).collect();
+    let src = format!(
+        "system wide\nstate x\ninput u\nparam {}\nx' = u\noutput y = x + {}\n",
+        names.join(", "),
+        names.join(" + ")
+    );
+    let sys = System::parse(&src, "wide.sys").unwrap();
+    let mut nf = sys.normal_form(None, &[]).unwrap();
+    let r = obsan_expr::within_thread_budget(&obsan_expr::Budget::default(), || {
+        rank(&mut nf, RankOptions::default())
+    })
+    .expect("no engine limit");
+    match r {
+        Err(obsan_analysis::AnalysisError::Invalid(msg)) => {
+            assert!(
+                msg.contains("too large") && msg.contains("--max-terms"),
+                "{msg}"
+            )
+        }
+        other => panic!("expected the memory limit, got {other:?}"),
+    }
+}

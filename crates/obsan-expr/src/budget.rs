@@ -53,6 +53,10 @@ impl Budget {
     pub const DEFAULT_MAX_NODES: usize = 50_000_000;
     /// Default degree limit: dense univariate images stay below 8 MB.
     pub const DEFAULT_MAX_DEGREE: u32 = 1_000_000;
+    /// Dense buffers outside the polynomials (the rank test's jets, which
+    /// hold a gradient per coefficient) may use this many bytes per unit of
+    /// `max_terms`: about 200 MiB under the default budget.
+    pub const BYTES_PER_TERM: u128 = 2048;
 
     /// No limit beyond the hard ones.
     pub fn unlimited() -> Budget {
@@ -90,6 +94,12 @@ pub enum Limit {
     Number { bits: u128, max: u128 },
     /// A printed form would pass this many bytes.
     Text { max: usize },
+    /// A dense buffer (the jets of the rank test) would need this many bytes.
+    Memory {
+        bytes: u128,
+        max: u128,
+        what: &'static str,
+    },
     /// The deadline passed.
     Timeout,
     /// The caller asked the computation to stop (see [`with_cancel`]).
@@ -116,6 +126,13 @@ impl fmt::Display for Limit {
                 write!(f, "number too large: about {bits} bits, the limit is {max}")
             }
             Limit::Text { max } => write!(f, "printed form longer than {max} bytes"),
+            Limit::Memory { bytes, max, what } => write!(
+                f,
+                "too large: {what} would need {} MiB, the memory budget is {} MiB ({} bytes per --max-terms); raise it with --max-terms",
+                bytes.div_ceil(1 << 20),
+                max >> 20,
+                Budget::BYTES_PER_TERM
+            ),
             Limit::Timeout => f.write_str("time limit reached; raise it with --timeout"),
             Limit::Cancelled => f.write_str("interrupted"),
             Limit::Internal(what) => write!(f, "internal error in the symbolic engine: {what}"),
@@ -264,6 +281,19 @@ pub(crate) fn trip(l: Limit) {
             *r = Some(l);
         }
     });
+}
+
+/// Check that a dense buffer of `bytes` bytes fits the memory budget of the
+/// armed scope (`max_terms * BYTES_PER_TERM`); outside a scope there is none.
+pub fn check_memory(bytes: u128, what: &'static str) -> Result<(), Limit> {
+    let Some(a) = ARMED.with(|a| a.get()) else {
+        return Ok(());
+    };
+    let max = (a.max_terms as u128).saturating_mul(Budget::BYTES_PER_TERM);
+    if bytes > max {
+        return Err(Limit::Memory { bytes, max, what });
+    }
+    Ok(())
 }
 
 /// Check a polynomial's size against the armed term budget.

@@ -49,8 +49,8 @@ mod tanhalf;
 pub mod tutorial;
 
 pub use budget::{
-    budget_tripped, cancel_flag, cancel_requested, with_cancel, within_thread_budget, Budget,
-    Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
+    budget_tripped, cancel_flag, cancel_requested, check_memory, with_cancel, within_thread_budget,
+    Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
 };
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
@@ -58,7 +58,7 @@ pub use eval::{
 pub use float_eval::FloatExpr;
 pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
 pub use graph::{Id, Symbol};
-pub use jet::{height_bounds, Coord, LieJets, LieRow};
+pub use jet::{height_bounds, reached_states, Coord, LieJets, LieRow};
 pub use lower::EngineError;
 pub use memo::Ctx;
 pub use num::{Fp, Int, SplitMix, P, Q};

@@ -19,7 +19,6 @@ use crate::memo::Ctx;
 use crate::num::{int, int_exact_sqrt, trial_factor, Int, Q};
 use crate::poly::{Mono, Poly, Var};
 use crate::ratfun::RatFun;
-use dashu_int::Sign;
 use std::fmt;
 
 /// An error from building an expression (the parser adds the position).
@@ -269,7 +268,8 @@ impl Ctx {
         }
         if !lin.rest.is_zero() {
             // sin(-r) = -sin(r): keep the atom's argument with a positive leading coefficient.
-            let flip = lin.rest.num.lc_sign() == Sign::Negative;
+            // The sign by the printing order, so the atom is the same in any context.
+            let flip = self.frac_sign_negative(&lin.rest);
             let r = if flip {
                 lin.rest.neg()
             } else {
@@ -342,6 +342,14 @@ impl Ctx {
         };
         stop()?;
         Ok((atans, rest))
+    }
+
+    /// Whether `r` has a negative leading coefficient in the printing order
+    /// (numerator and denominator together): `atan(-u) = -atan(u)` and
+    /// `sin(-u) = -sin(u)` keep the atom with the positive one, chosen by
+    /// symbol names rather than creation order so it is one atom everywhere.
+    fn frac_sign_negative(&self, r: &RatFun) -> bool {
+        self.name_lc_negative(&r.num) != (!r.den.is_one() && self.name_lc_negative(&r.den))
     }
 
     /// Whether an expression has no symbol in it (a constant, possibly with atoms).
@@ -420,7 +428,7 @@ impl Ctx {
             // atan(p/q) = arg(q + ip), q > 0 (gauss.rs).
             return Ok(self.gaussian_arg(q.den(), q.num()));
         }
-        let flip = c.num.lc_sign() == Sign::Negative;
+        let flip = self.frac_sign_negative(&c);
         let r = if flip { c.neg() } else { c };
         let id = self.from_canonical(&r);
         let a = self.leaf(LeafKind::Atan(id));

@@ -8,7 +8,8 @@ use crate::num::Int;
 use crate::poly::{Mono, Poly, Var};
 use crate::ratfun::RatFun;
 use dashu_int::Sign;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
+use std::cmp::Reverse;
 
 // The printed form is a tree over the canonical form's DAG: a leaf is written
 // out wherever it occurs, so text can grow exponentially with nesting (fuzz
@@ -21,6 +22,36 @@ thread_local! {
     /// Passing the cap trips an armed budget (`within_text_cap`), rather than
     /// being reported by the one printer that set it (`try_ratfun_text`).
     static TEXT_TRIPS: Cell<bool> = const { Cell::new(false) };
+}
+
+thread_local! {
+    /// Printing keys of the leaves met in the current top-level print.
+    static KEYS: RefCell<Option<rustc_hash::FxHashMap<Var, LeafKey>>> = const { RefCell::new(None) };
+}
+
+/// Where a leaf goes in printed text: by the name of its symbol (the symbol,
+/// then its sin, cos and exp), other atoms by their own text. Never by the
+/// order leaves were created in, so equal forms print identically in any
+/// context and a printed form re-read prints the same (issue 31 item 7).
+type LeafKey = (String, u8, u32, String);
+
+/// Run a top-level printer with a cache of leaf keys (a nested call reuses
+/// the outer cache).
+fn with_keys<T>(f: impl FnOnce() -> T) -> T {
+    let outer = KEYS.with(|k| k.borrow().is_some());
+    if !outer {
+        KEYS.with(|k| *k.borrow_mut() = Some(Default::default()));
+    }
+    struct Clear(bool);
+    impl Drop for Clear {
+        fn drop(&mut self) {
+            if !self.0 {
+                KEYS.with(|k| k.borrow_mut().take());
+            }
+        }
+    }
+    let _clear = Clear(outer);
+    f()
 }
 
 fn text_over() -> bool {
@@ -91,7 +122,7 @@ impl Ctx {
     }
 
     pub fn ratfun_text(&self, r: &RatFun) -> String {
-        checked(self.fmt_ratfun(r, Style::Text, false))
+        with_keys(|| checked(self.fmt_ratfun(r, Style::Text, false)))
     }
 
     /// [`Ctx::ratfun_text`], refused with [`Limit::Text`] once the text would
@@ -100,7 +131,7 @@ impl Ctx {
         let prev = TEXT_CAP.with(|c| c.replace(max_bytes));
         let prev_over = TEXT_OVER.with(|o| o.replace(false));
         let prev_trips = TEXT_TRIPS.with(|t| t.replace(false));
-        let s = self.fmt_ratfun(r, Style::Text, false);
+        let s = with_keys(|| self.fmt_ratfun(r, Style::Text, false));
         let over = text_check(s.len());
         TEXT_CAP.with(|c| c.set(prev));
         TEXT_OVER.with(|o| o.set(prev_over));
@@ -112,18 +143,30 @@ impl Ctx {
     }
 
     pub fn ratfun_latex(&self, r: &RatFun) -> String {
-        checked(self.fmt_ratfun(r, Style::Latex, false))
+        with_keys(|| checked(self.fmt_ratfun(r, Style::Latex, false)))
     }
 
     /// Plain text of a polynomial over the leaves.
     pub fn poly_text(&self, p: &Poly) -> String {
-        checked(self.fmt_poly(p, Style::Text))
+        with_keys(|| checked(self.fmt_poly(p, Style::Text)))
     }
 
     /// A fraction, expanded or partially factored. In text, a top-level sum
     /// needs parentheses, and so does any denominator but a single leaf or a
     /// positive constant (a/b*c is (a/b)*c).
     fn fmt_ratfun(&self, r: &RatFun, st: Style, factored: bool) -> String {
+        // The canonical form makes the denominator's leading coefficient
+        // positive in creation order; printed, it is positive in name order.
+        let flipped;
+        let r = if !r.den.is_one() && self.name_lc_negative(&r.den) {
+            flipped = RatFun {
+                num: r.num.neg(),
+                den: r.den.neg(),
+            };
+            &flipped
+        } else {
+            r
+        };
         let part = |p: &Poly| {
             if factored {
                 self.fmt_product(p, st)
@@ -143,7 +186,8 @@ impl Ctx {
                 let n = if sum { format!("({num})") } else { num };
                 let simple = r.den.len() == 1 && {
                     let (m, c) = &r.den.terms()[0];
-                    (m.is_one() && !r.den.lc_is_negative()) || (c.is_one() && m.iter().count() == 1)
+                    (m.is_one() && c.sign() != Sign::Negative)
+                        || (c.is_one() && m.iter().count() == 1)
                 };
                 let d = if simple { den } else { format!("({den})") };
                 format!("{n}/{d}")
@@ -156,7 +200,7 @@ impl Ctx {
             return "0".into();
         }
         let mut out = String::new();
-        for (i, (m, c)) in p.terms().iter().enumerate() {
+        for (i, (m, c)) in self.print_order(p).into_iter().enumerate() {
             if text_check(out.len()) {
                 return out;
             }
@@ -184,20 +228,27 @@ impl Ctx {
     }
 
     fn fmt_mono(&self, m: &Mono, st: Style) -> String {
-        let parts: Vec<String> = m
-            .iter()
+        let mut vars: Vec<(Var, u32)> = m.iter().collect();
+        if vars.len() > 1 {
+            let ranks = self.ranks(vars.iter().map(|x| x.0));
+            vars.sort_by_key(|(v, _)| ranks.get(v).copied());
+        }
+        let parts: Vec<String> = vars
+            .into_iter()
             .map(|(v, e)| {
                 let base = self.fmt_leaf(v, st);
                 match (e, st) {
                     (1, _) => base,
                     (_, Style::Text) => format!("{base}^{e}"),
                     (_, Style::Latex) => {
-                        // \sin^{2}\gamma reads better than (\sin\gamma)^{2}.
+                        // \sin^{2}(\gamma) reads better than (\sin(\gamma))^{2}.
                         if let Some(rest) = base.strip_prefix("\\sin") {
                             format!("\\sin^{{{e}}}{rest}")
                         } else if let Some(rest) = base.strip_prefix("\\cos") {
                             format!("\\cos^{{{e}}}{rest}")
-                        } else if base.starts_with('\\') && base.contains("\\left(") {
+                        } else if base.starts_with("e^")
+                            || (base.starts_with('\\') && base.contains("\\left("))
+                        {
                             format!("\\left({base}\\right)^{{{e}}}")
                         } else {
                             format!("{base}^{{{e}}}")
@@ -207,6 +258,70 @@ impl Ctx {
             })
             .collect();
         parts.join(if st == Style::Text { "*" } else { " " })
+    }
+
+    /// The printing key of a leaf (cached for the current print).
+    fn leaf_key(&self, v: Var) -> LeafKey {
+        if let Some(k) = KEYS.with(|k| k.borrow().as_ref().and_then(|m| m.get(&v).cloned())) {
+            return k;
+        }
+        let name = |sym: Var| self.symbol_name(sym).unwrap_or("").to_string();
+        let key = match &self.leaves[v as usize].kind {
+            LeafKind::Symbol(n) => (n.clone(), 0, 0, String::new()),
+            LeafKind::Sin(Angle::Symbol { sym, den }) => (name(*sym), 1, *den, String::new()),
+            LeafKind::Cos(Angle::Symbol { sym, den }) => (name(*sym), 2, *den, String::new()),
+            LeafKind::Exp(Angle::Symbol { sym, den }) => (name(*sym), 3, *den, String::new()),
+            _ => (self.fmt_leaf(v, Style::Text), 4, 0, String::new()),
+        };
+        KEYS.with(|k| {
+            if let Some(m) = k.borrow_mut().as_mut() {
+                m.insert(v, key.clone());
+            }
+        });
+        key
+    }
+
+    /// Rank of each of `vars` in the printing order.
+    fn ranks(&self, vars: impl Iterator<Item = Var>) -> rustc_hash::FxHashMap<Var, u32> {
+        let mut keyed: Vec<(LeafKey, Var)> = vars.map(|v| (self.leaf_key(v), v)).collect();
+        keyed.sort();
+        keyed
+            .into_iter()
+            .enumerate()
+            .map(|(i, (_, v))| (v, i as u32))
+            .collect()
+    }
+
+    /// The terms of `p` in lex order over the printing order of the leaves
+    /// (the first leaf highest), as the canonical order is over creation order.
+    fn print_order<'a>(&self, p: &'a Poly) -> Vec<&'a (Mono, Int)> {
+        let ranks = self.ranks(p.vars().into_iter());
+        let mut keyed: Vec<(Vec<u64>, &(Mono, Int))> = p
+            .terms()
+            .iter()
+            .map(|t| {
+                let mut k: Vec<u64> =
+                    t.0.iter()
+                        .map(|(v, e)| {
+                            let r = ranks.get(&v).copied().unwrap_or(u32::MAX);
+                            (((u32::MAX - r) as u64) << 32) | e as u64
+                        })
+                        .collect();
+                k.sort_unstable_by(|a, b| b.cmp(a));
+                (k, t)
+            })
+            .collect();
+        keyed.sort_by(|a, b| Reverse(&a.0).cmp(&Reverse(&b.0)));
+        keyed.into_iter().map(|x| x.1).collect()
+    }
+
+    /// Whether the leading coefficient of `p` in the printing order is negative.
+    pub(crate) fn name_lc_negative(&self, p: &Poly) -> bool {
+        with_keys(|| {
+            self.print_order(p)
+                .first()
+                .is_some_and(|(_, c)| c.sign() == Sign::Negative)
+        })
     }
 
     fn arg(&self, id: Id, st: Style) -> String {
@@ -244,8 +359,10 @@ impl Ctx {
             (LeafKind::Sin(a), Style::Text) => format!("sin({})", angle(a)),
             (LeafKind::Cos(a), Style::Text) => format!("cos({})", angle(a)),
             (LeafKind::Exp(a), Style::Text) => format!("exp({})", angle(a)),
-            (LeafKind::Sin(a), Style::Latex) if simple_angle(a) => format!("\\sin {}", angle(a)),
-            (LeafKind::Cos(a), Style::Latex) if simple_angle(a) => format!("\\cos {}", angle(a)),
+            // Arguments always in parentheses: `\cos g \mu` reads as cos(g mu)
+            // (issue 34 item 5).
+            (LeafKind::Sin(a), Style::Latex) if simple_angle(a) => format!("\\sin({})", angle(a)),
+            (LeafKind::Cos(a), Style::Latex) if simple_angle(a) => format!("\\cos({})", angle(a)),
             (LeafKind::Sin(a), Style::Latex) => format!("\\sin\\left({}\\right)", angle(a)),
             (LeafKind::Cos(a), Style::Latex) => format!("\\cos\\left({}\\right)", angle(a)),
             (LeafKind::Exp(a), Style::Latex) => format!("e^{{{}}}", angle(a)),
@@ -272,7 +389,7 @@ impl Ctx {
 
     /// Plain text of a leaf (a symbol's name, or `sin(gamma)`, ...).
     pub fn leaf_text(&self, v: Var) -> String {
-        checked(self.fmt_leaf(v, Style::Text))
+        with_keys(|| checked(self.fmt_leaf(v, Style::Text)))
     }
 }
 
@@ -351,12 +468,12 @@ impl Ctx {
     /// and integer content, then the content with respect to each leaf,
     /// recursively. Parses back to the same canonical form.
     pub fn ratfun_text_factored(&self, r: &RatFun) -> String {
-        checked(self.fmt_ratfun(r, Style::Text, true))
+        with_keys(|| checked(self.fmt_ratfun(r, Style::Text, true)))
     }
 
     /// LaTeX, partially factored as [`Ctx::ratfun_text_factored`].
     pub fn ratfun_latex_factored(&self, r: &RatFun) -> String {
-        checked(self.fmt_ratfun(r, Style::Latex, true))
+        with_keys(|| checked(self.fmt_ratfun(r, Style::Latex, true)))
     }
 
     fn fmt_product(&self, p: &Poly, st: Style) -> String {
@@ -366,6 +483,23 @@ impl Ctx {
         }
         let mut sign = String::new();
         let mut parts = Vec::new();
+        // Factors in a context-free order: the constant, single leaves, then
+        // sums, each by their text.
+        let mut facs: Vec<(u8, String, Poly)> = facs
+            .into_iter()
+            .map(|f| {
+                let kind = if f.as_constant().is_some() {
+                    0
+                } else if f.len() == 1 {
+                    1
+                } else {
+                    2
+                };
+                (kind, self.fmt_poly(&f, Style::Text), f)
+            })
+            .collect();
+        facs.sort_by(|a, b| (a.0, &a.1).cmp(&(b.0, &b.1)));
+        let facs: Vec<Poly> = facs.into_iter().map(|x| x.2).collect();
         for f in facs {
             if let Some(c) = f.as_constant() {
                 if c == crate::num::int(-1) {

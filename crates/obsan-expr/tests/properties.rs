@@ -222,6 +222,27 @@ proptest! {
         prop_assert_eq!(engine(&mut ctx, |c| c.canon(again))?, c, "factored: {}", factored);
     }
 
+    /// Printing orders by symbol name, not creation order (issue 31 item 7):
+    /// the printed canonical form read in a fresh context prints the same,
+    /// and a context that created the symbols in the reverse order prints
+    /// the expression identically.
+    #[test]
+    fn printed_form_does_not_depend_on_the_context(text in expr_text()) {
+        let (mut ctx, id, _) = setup(&text)?;
+        let printed = engine(&mut ctx, |c| c.to_text(id))?;
+        let mut fresh = Ctx::new();
+        fresh.set_budget(case_budget());
+        let again = reparse(&mut fresh, &printed)?;
+        prop_assert_eq!(engine(&mut fresh, |c| c.to_text(again))?, printed.clone(), "re-read");
+        let mut rev = Ctx::new();
+        rev.set_budget(case_budget());
+        for s in SYMS.iter().rev() {
+            rev.symbol(s);
+        }
+        let id2 = parse_case(&mut rev, &text)?;
+        prop_assert_eq!(engine(&mut rev, |c| c.to_text(id2))?, printed, "reverse order");
+    }
+
     /// Zero-testing agrees with evaluation: e - e is zero, e - (e + tiny change) is not.
     #[test]
     fn zero_test_agrees_with_evaluation(text in expr_text(), other in expr_text(), seed in any::<u64>()) {
@@ -363,7 +384,8 @@ fn atan_sqrt_exp_log_identities() {
     let c = ctx.canon(e);
     assert_eq!(
         ctx.ratfun_text_factored(&c),
-        "mu*eta*(delta*q + 1)*(mu*cos(g) + 1)"
+        // Factors by name (issue 31 item 7): leaves, then sums.
+        "eta*mu*(cos(g)*mu + 1)*(delta*q + 1)"
     );
     let e = ctx.parse("-(x^2 - 1)/(2*y*(x + 3))").unwrap();
     let c = ctx.canon(e);
@@ -598,4 +620,23 @@ fn half_angle_roundtrip_of_a_high_multiple() {
     let th = ctx.tan_half();
     let t = ctx.to_tan_half(&th, &c);
     assert_eq!(ctx.from_tan_half(&th, &t), c);
+}
+
+/// The issue's example: `z*y + x*y` and `x*y + z*y` print identically, and
+/// a denominator prints with a positive leading coefficient by name
+/// whichever symbol was created first.
+#[test]
+fn equal_expressions_print_identically() {
+    let mut a = Ctx::new();
+    let ea = a.parse("z*y + x*y").unwrap();
+    let mut b = Ctx::new();
+    let eb = b.parse("x*y + z*y").unwrap();
+    assert_eq!(a.to_text(ea), b.to_text(eb));
+    assert_eq!(a.to_text(ea), "x*y + y*z");
+    let mut a = Ctx::new();
+    let ea = a.parse("1/(y - x)").unwrap();
+    let mut b = Ctx::new();
+    let eb = b.parse("-1/(x - y)").unwrap();
+    assert_eq!(a.to_text(ea), b.to_text(eb));
+    assert_eq!(a.to_text(ea), "-1/(x - y)");
 }

@@ -159,6 +159,32 @@ impl LieJets {
         Some(s)
     }
 
+    /// Bytes the sweep of `word` holds: the state series, their copy and the
+    /// output's (`n` coefficients by `(n + 1)` gradient entries each, dense),
+    /// and one slot per op of the largest program. Checked against the
+    /// memory budget before a sweep ([`crate::check_memory`]).
+    pub fn sweep_bytes(&self, word: &[usize]) -> u128 {
+        let mut size: u128 = 1;
+        let mut run = 0u128;
+        for (i, a) in word.iter().enumerate() {
+            run += 1;
+            if word.get(i + 1) != Some(a) {
+                size = size.saturating_mul(run + 1);
+                run = 0;
+            }
+        }
+        let len = size.saturating_mul(self.n as u128 + 1);
+        let ops = self
+            .fields
+            .iter()
+            .chain(&self.outputs)
+            .map(|p| p.ops.len())
+            .max()
+            .unwrap_or(0) as u128;
+        len.saturating_mul(3 * self.n as u128 + 1 + ops)
+            .saturating_mul(8)
+    }
+
     /// `L_{word[k-1]} ... L_{word[0]} h_output` and its gradient at `point`,
     /// with the degree bound of the row if `track` (it does not depend on
     /// the point, and costs about as much as the values).
@@ -340,6 +366,39 @@ impl LieJets {
         let h = b.run(&self.outputs[output], &x);
         h[0].d.get(sh.grades).and_then(|d| d.as_ref()).map(|d| d.n)
     }
+}
+
+/// The state variables (indices into `states`) that some Lie derivative of
+/// the `outputs` along the `fields` may depend on: those the outputs depend
+/// on, closed under "component `i` of a field, for `i` reached, depends on
+/// `j`". Every other variable has a zero column in every row of the
+/// observability codistribution, exactly (the Lie derivative of a function
+/// of the reached variables along a field only reads the field's reached
+/// components), so it is unobservable with the symmetry `d/dx_j`. One
+/// traversal of the graph with a shared visited set: the cost is the size of
+/// what the outputs reach, not the number of variables (issue 31 item 2).
+pub fn reached_states(ctx: &Ctx, states: &[Var], fields: &[Vec<Id>], outputs: &[Id]) -> Vec<usize> {
+    let index: FxHashMap<Var, usize> = states.iter().enumerate().map(|(k, &v)| (v, k)).collect();
+    let mut seen: rustc_hash::FxHashSet<Id> = Default::default();
+    let mut reached = vec![];
+    let mut is_reached: FxHashMap<usize, ()> = FxHashMap::default();
+    let mut stack: Vec<Id> = outputs.to_vec();
+    while let Some(id) = stack.pop() {
+        if !seen.insert(id) {
+            continue;
+        }
+        if let Node::Leaf(v) = ctx.node(id) {
+            if let Some(&k) = index.get(v) {
+                if is_reached.insert(k, ()).is_none() {
+                    reached.push(k);
+                    stack.extend(fields.iter().filter_map(|f| f.get(k).copied()));
+                }
+            }
+        }
+        stack.extend(ctx.deps(id));
+    }
+    reached.sort_unstable();
+    reached
 }
 
 /// The scratch of [`LieJets`]' sweeps.
