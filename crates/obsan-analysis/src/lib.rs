@@ -22,6 +22,7 @@ mod fp_linalg;
 mod modes;
 mod rank;
 pub mod structure;
+mod sym_blocks;
 mod sym_recon;
 mod symmetry;
 
