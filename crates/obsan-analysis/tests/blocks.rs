@@ -267,3 +267,36 @@ fn shared_param_stack_symmetries_are_invariances() {
         assert_eq!(rank_q(all), k, "[w, f] leaves the span of the symmetries");
     }
 }
+
+/// An injected deadline that has passed stops every block route at once
+/// with a timeout (not a partial answer): the stack's rank by blocks and
+/// its symmetries.
+#[test]
+fn a_passed_deadline_stops_the_blocks() {
+    use obsan_analysis::{rank_by_blocks, symmetries_with, AnalysisError, SymmetryOptions};
+    let mut nf = normal_form(&stack(&[1, 2], false));
+    let past = std::time::Instant::now();
+    let r = rank_by_blocks(
+        &mut nf,
+        RankOptions {
+            deadline: Some(past),
+            ..RankOptions::default()
+        },
+    );
+    assert!(matches!(r, Err(AnalysisError::Timeout(_))), "{r:?}");
+    let r = rank_by_blocks(&mut nf, RankOptions::default()).unwrap();
+    assert_eq!((r.n, r.rank), (14, 8));
+    let s = symmetries_with(
+        &mut nf,
+        &r,
+        &SymmetryOptions {
+            deadline: Some(past),
+            ..SymmetryOptions::default()
+        },
+    );
+    assert!(
+        matches!(s, Err(AnalysisError::Timeout(_))),
+        "{:?}",
+        s.map(|s| s.vectors.len())
+    );
+}
