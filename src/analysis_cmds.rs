@@ -207,7 +207,7 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
                 "degree": c.degree, "error_bound": c.error_bound}),
         ),
     };
-    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked,
+    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked, "blocks": s.blocks,
         "certificate": kind, "certification": detail })
 }
 
@@ -316,6 +316,12 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         ));
     } else {
         o.push_str("warning: a one-step Lie derivative is not annihilated: the rank test was unlucky; run again with another --seed\n");
+    }
+    if s.blocks > 1 {
+        o.push_str(&format!(
+            "solved as {} blocks (parts that share only common variables, or none), each certified on its own; the counts and bounds above are their sums\n",
+            s.blocks
+        ));
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)

@@ -3,10 +3,11 @@
 //! restriction (17), `--input q`), stacked into one system with renamed
 //! states and params (independent copies, n = 7k) or with the five params
 //! shared (several experiments of one robot, n = 2k + 5). Prints the time of
-//! the rank test and of the symmetries, and the peak resident memory.
+//! the rank test (by blocks, as `obsan symmetries` runs it) and of the
+//! symmetries, their ratio per doubling, and the peak resident memory.
 //! Run: `cargo bench -p obsan-analysis --bench symscale` (`-- quick`: up to n = 56).
 
-use obsan_analysis::{rank, symmetries_with, Certificate, RankOptions, SymmetryOptions};
+use obsan_analysis::{rank_by_blocks, symmetries_with, Certificate, RankOptions, SymmetryOptions};
 use obsan_model::System;
 use std::time::Instant;
 
@@ -73,16 +74,33 @@ fn peak_mb() -> f64 {
         .map_or(0.0, |kb| kb / 1024.0)
 }
 
-fn run(k: usize, shared: bool) -> (usize, usize, usize, f64, f64, String) {
+/// CPU time of this process (user + system) in seconds, from /proc/self/stat
+/// in clock ticks (USER_HZ, 100 on Linux); 0 where /proc is absent. On a
+/// loaded machine this is the figure to compare, not the wall time.
+fn cpu_secs() -> f64 {
+    std::fs::read_to_string("/proc/self/stat")
+        .ok()
+        .and_then(|s| {
+            // Fields after the parenthesised command name; utime, stime are 14, 15.
+            let rest = s.rsplit_once(')')?.1;
+            let f: Vec<&str> = rest.split_whitespace().collect();
+            Some((f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?) / 100.0)
+        })
+        .unwrap_or(0.0)
+}
+
+fn run(k: usize, shared: bool) -> (usize, usize, usize, f64, f64, f64, String) {
     let src = stack(k, shared);
     let sys = System::parse(&src, "stack.sys").expect("parses");
     let mut nf = sys.normal_form(Some("q"), &[]).expect("normal form");
     let t = Instant::now();
-    let r = rank(&mut nf, RankOptions::default()).expect("rank");
+    let r = rank_by_blocks(&mut nf, RankOptions::default()).expect("rank");
     let t_rank = t.elapsed().as_secs_f64();
     let t = Instant::now();
+    let c = cpu_secs();
     let s = symmetries_with(&mut nf, &r, &SymmetryOptions::default()).expect("symmetries");
     let t_sym = t.elapsed().as_secs_f64();
+    let c_sym = cpu_secs() - c;
     let cert = match &s.certificate {
         Certificate::Random(c) => format!("random, error <= {:.0e}", c.error_bound),
         Certificate::Invariance(_) => "invariance".into(),
@@ -94,6 +112,7 @@ fn run(k: usize, shared: bool) -> (usize, usize, usize, f64, f64, String) {
         s.vectors.len(),
         t_rank,
         t_sym,
+        c_sym,
         format!("{cert}; {} blocks", s.blocks),
     )
 }
@@ -114,13 +133,13 @@ fn main() {
                 "independent"
             }
         );
-        println!("copies     n  rank  syms   rank s    syms s  ratio  certificate");
+        println!("copies     n  rank  syms   rank s    syms s  syms cpu s  cpu ratio  certificate");
         let mut prev: Option<f64> = None;
         for &k in ks {
-            let (n, rank, syms, tr, ts, cert) = run(k, shared);
-            let ratio = prev.map_or("     -".to_string(), |p| format!("{:6.2}", ts / p));
-            println!("{k:6} {n:5} {rank:5} {syms:5} {tr:8.3} {ts:9.3} {ratio}  {cert}");
-            prev = Some(ts);
+            let (n, rank, syms, tr, ts, cs, cert) = run(k, shared);
+            let ratio = prev.map_or("        -".to_string(), |p| format!("{:9.2}", cs / p));
+            println!("{k:6} {n:5} {rank:5} {syms:5} {tr:8.3} {ts:9.3} {cs:11.2} {ratio}  {cert}");
+            prev = Some(cs);
         }
     }
     println!(
