@@ -347,8 +347,7 @@ pub(crate) fn symmetries_by_blocks(
         }
         w
     };
-    let rank;
-    if sp.shared.is_empty() {
+    let rank = if sp.shared.is_empty() {
         for ((vars, _), s) in sp.blocks.iter().zip(&solved) {
             for v in &s.vectors {
                 vectors.push(embed(vars, v));
@@ -360,7 +359,7 @@ pub(crate) fn symmetries_by_blocks(
                 }));
             }
         }
-        rank = solved.iter().map(|s| s.rank).sum();
+        solved.iter().map(|s| s.rank).sum()
     } else {
         // Cheap structure in every block: the whole system's cheap route
         // proves its vectors by invariance (glued vectors may have lost it).
@@ -377,8 +376,8 @@ pub(crate) fn symmetries_by_blocks(
             return Ok(None);
         }
         vectors.extend(glued);
-        rank = report.rank;
-    }
+        report.rank
+    };
     let rows: usize = solved.iter().map(|s| s.rows).sum();
     let exact = solved.iter().all(|s| s.exact);
     let certificate = combine(&solved, kinds, sp.unreached_free && sp.shared.is_empty());
