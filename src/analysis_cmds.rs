@@ -5,9 +5,9 @@ use crate::expr_cmds::parse_arg_in;
 use crate::show::{load_normal_form, load_system};
 use crate::Failure;
 use obsan_analysis::{
-    canonical_lie, check_modes, rank as rank_test, symmetries_with, verify_decomposition_with,
-    Certificate, Decomposition, Fields, LieWord, RankOptions, RankReport, Route, SymmetryOptions,
-    SymmetryReport,
+    canonical_lie, check_modes, rank as rank_test, rank_by_blocks, symmetries_with,
+    verify_decomposition_with, Certificate, Decomposition, Fields, LieWord, RankOptions,
+    RankReport, Route, SymmetryOptions, SymmetryReport,
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
@@ -25,11 +25,22 @@ fn fmt_rf(nf: &NormalForm, r: &RatFun, out: &OutputArgs) -> String {
     }
 }
 
-/// Run the rank test with a progress bar on a terminal and the timeout.
-fn run_rank(nf: &mut NormalForm, an: &AnalysisArgs) -> Result<RankReport, Failure> {
-    let deadline = an
-        .timeout
-        .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+/// The one deadline of a command given `--timeout secs`, from the instant it
+/// started: every stage (rank test, symmetries, modes) polls this same
+/// instant, so the whole command stops at `--timeout`, not each stage at its
+/// own; the watchdog of lib.rs waits one more second for the message.
+pub(crate) fn deadline_after(start: Instant, secs: Option<f64>) -> Option<Instant> {
+    secs.map(|s| start + Duration::from_secs_f64(s.max(0.0)))
+}
+
+/// Run the rank test with a progress bar on a terminal and the deadline;
+/// `blocks`: independent blocks ranked apart ([`rank_by_blocks`]).
+fn run_rank(
+    nf: &mut NormalForm,
+    an: &AnalysisArgs,
+    deadline: Option<Instant>,
+    blocks: bool,
+) -> Result<RankReport, Failure> {
     let bar = std::io::stderr().is_terminal().then(|| {
         let b = indicatif::ProgressBar::new(nf.state.len() as u64);
         b.set_style(
@@ -44,14 +55,16 @@ fn run_rank(nf: &mut NormalForm, an: &AnalysisArgs) -> Result<RankReport, Failur
             b.set_message(format!("(Lie derivative order {level})"));
         }
     };
-    let report = rank_test(
-        nf,
-        RankOptions {
-            seed: an.seed,
-            deadline,
-            progress: Some(&mut progress),
-        },
-    );
+    let opts = RankOptions {
+        seed: an.seed,
+        deadline,
+        progress: Some(&mut progress),
+    };
+    let report = if blocks {
+        rank_by_blocks(nf, opts)
+    } else {
+        rank_test(nf, opts)
+    };
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -84,7 +97,8 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     if !nf.unknown_inputs.is_empty() {
         return crate::unknown_input_cmd::rank(a, &nf);
     }
-    let r = run_rank(&mut nf, &a.an)?;
+    let deadline = deadline_after(Instant::now(), a.an.timeout);
+    let r = run_rank(&mut nf, &a.an, deadline, false)?;
     let words: Vec<String> = r
         .basis
         .iter()
@@ -196,7 +210,7 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
                 "degree": c.degree, "error_bound": c.error_bound}),
         ),
     };
-    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked,
+    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked, "blocks": s.blocks,
         "certificate": kind, "certification": detail })
 }
 
@@ -208,11 +222,10 @@ fn compute_symmetries(
     an: &AnalysisArgs,
     exact: bool,
 ) -> Result<(RankReport, SymmetryReport), Failure> {
-    let r = run_rank(nf, an)?;
+    let deadline = deadline_after(Instant::now(), an.timeout);
+    let r = run_rank(nf, an, deadline, true)?;
     let opts = SymmetryOptions {
-        deadline: an
-            .timeout
-            .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0))),
+        deadline,
         route: if exact { Route::Exact } else { Route::Auto },
     };
     let s = symmetries_with(nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
@@ -239,14 +252,12 @@ fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
     crate::unknown_input_cmd::refuse(&nf, "symmetries")?;
-    // A little before the watchdog of main.rs, so that the message says how far it got.
-    let secs = (a.timeout() * 0.8 - 0.05).max(0.0);
-    let deadline = Instant::now() + Duration::from_secs_f64(secs);
-    let mut an = a.an.clone();
-    an.timeout = Some(secs);
-    let r = run_rank(&mut nf, &an)?;
+    // The whole --timeout: the stages poll this deadline and stop on it with
+    // a message saying how far they got (the watchdog waits a second more).
+    let deadline = deadline_after(Instant::now(), Some(a.timeout()));
+    let r = run_rank(&mut nf, &a.an, deadline, true)?;
     let opts = SymmetryOptions {
-        deadline: Some(deadline),
+        deadline,
         route: if a.exact { Route::Exact } else { Route::Auto },
     };
     let s = symmetries_with(&mut nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
@@ -309,6 +320,12 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         ));
     } else {
         o.push_str("warning: a one-step Lie derivative is not annihilated: the rank test was unlucky; run again with another --seed\n");
+    }
+    if s.blocks > 1 {
+        o.push_str(&format!(
+            "solved as {} blocks (parts that share only common variables, or none), each certified on its own; the counts and bounds above are their sums\n",
+            s.blocks
+        ));
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)
@@ -533,4 +550,24 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     } else {
         ExitCode::from(1)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::deadline_after;
+    use std::time::{Duration, Instant};
+
+    /// The command's deadline is its start plus the whole --timeout (no
+    /// reserve, no undershoot), from an injected start instant; every stage
+    /// receives this one instant.
+    #[test]
+    fn the_deadline_is_the_whole_timeout() {
+        let t0 = Instant::now();
+        for secs in [0.0, 0.25, 10.0, 30.0, 118.0] {
+            let d = deadline_after(t0, Some(secs)).unwrap();
+            assert_eq!(d - t0, Duration::from_secs_f64(secs));
+        }
+        assert_eq!(deadline_after(t0, None), None);
+        assert_eq!(deadline_after(t0, Some(-1.0)), Some(t0));
+    }
 }

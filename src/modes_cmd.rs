@@ -10,7 +10,7 @@ use obsan_analysis::{
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
@@ -21,11 +21,10 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             a.sys.system
         )));
     }
-    // A little before the binary's own --timeout watchdog, so that a run
-    // stopped inside the derivation says how far it got (modes found, stage).
-    let deadline = a
-        .timeout
-        .map(|s| Instant::now() + Duration::from_secs_f64(0.9 * s.max(0.0)));
+    // The whole --timeout, shared by every stage (rank, symmetries,
+    // derivation): a run stopped inside the derivation says how far it got
+    // (modes found, stage); the watchdog waits a second more.
+    let deadline = crate::analysis_cmds::deadline_after(Instant::now(), a.timeout);
     let r = rank_test(
         &mut nf,
         RankOptions {

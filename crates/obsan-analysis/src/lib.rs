@@ -22,6 +22,7 @@ mod fp_linalg;
 mod modes;
 mod rank;
 pub mod structure;
+mod sym_blocks;
 mod sym_recon;
 mod symmetry;
 mod unknown_input;
@@ -33,6 +34,7 @@ pub use derive::{
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use structure::SymmetryKind;
+pub use sym_blocks::rank_by_blocks;
 pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
 pub use symmetry::{
     canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,

@@ -14,6 +14,7 @@
 
 use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
 use crate::structure::{cheap_symmetries, SymmetryKind};
+use crate::sym_blocks::symmetries_by_blocks;
 use crate::sym_recon::{certify_symmetries, reconstruct_basis, RandomCheck, ReconFail};
 use obsan_expr::{Ctx, Fp, Poly, RatFun, SplitMix};
 use obsan_model::NormalForm;
@@ -34,6 +35,9 @@ pub struct SymmetryReport {
     pub rows_checked: usize,
     /// Which exact certificate proved the vectors.
     pub certificate: Certificate,
+    /// Independent blocks solved apart ([`crate::sym_blocks`]); 1 when the
+    /// system was solved whole.
+    pub blocks: usize,
 }
 
 /// How a symmetry basis was proved.
@@ -254,7 +258,7 @@ fn eliminate(
 
 /// `v` times the lcm of its denominators, divided by the gcd of the numerators.
 #[allow(clippy::expect_used)] // a gcd divides its arguments exactly
-fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
+pub(crate) fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut lcm = Poly::one();
     for e in v.iter().filter(|e| !e.is_zero()) {
         let g = obsan_expr::gcd(&lcm, e.denominator());
@@ -424,6 +428,17 @@ pub fn symmetries_with(
     report: &RankReport,
     opts: &SymmetryOptions,
 ) -> Result<SymmetryReport, AnalysisError> {
+    symmetries_inner(nf, report, opts, true)
+}
+
+/// [`symmetries_with`]; `by_blocks`: first try solving independent blocks
+/// apart (off for a block itself).
+pub(crate) fn symmetries_inner(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    opts: &SymmetryOptions,
+    by_blocks: bool,
+) -> Result<SymmetryReport, AnalysisError> {
     let n = report.n;
     let r = report.rank;
     // A full rank is proven by the rank test itself (a non-zero minor at a
@@ -436,7 +451,15 @@ pub fn symmetries_with(
             exact: true,
             rows_checked: 0,
             certificate: Certificate::Closure,
+            blocks: 1,
         });
+    }
+    // Parts that see each other only through shared variables (or not at
+    // all) are solved one by one, so the cost grows with the number of parts.
+    if by_blocks {
+        if let Some(s) = symmetries_by_blocks(nf, report, opts)? {
+            return Ok(s);
+        }
     }
     // Free variables, translations and scalings first: when they account
     // for the whole deficiency, their certificate proves everything. (No
@@ -453,6 +476,7 @@ pub fn symmetries_with(
             exact: true,
             rows_checked: c.identities,
             certificate: Certificate::Invariance(c.kinds),
+            blocks: 1,
         });
     }
     let recon = match opts.route {
@@ -476,6 +500,7 @@ pub fn symmetries_with(
                         exact: false,
                         rows_checked: c.identities * c.points as usize,
                         certificate: Certificate::Random(c),
+                        blocks: 1,
                     }),
                     None => Err(AnalysisError::Invalid(
                         "the reconstructed symmetries failed certification (a coefficient too large for one prime, or an unlucky rank test); try --exact or another --seed".into(),
@@ -579,6 +604,7 @@ fn exact_route(nf: &mut NormalForm, report: &RankReport) -> Result<SymmetryRepor
         exact,
         rows_checked: checked,
         certificate: Certificate::Closure,
+        blocks: 1,
     })
 }
 
