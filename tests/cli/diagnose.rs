@@ -141,7 +141,6 @@ fn diagnose_rejects_bad_input_with_positions() {
     bad(&["diagnose", "--model", &sys, "--data", &data], "--init x=");
 }
 
-
 /// A param's estimate and cluster-robust sd in a `--json` diagnosis: from
 /// the named effects, else from the last round that fitted it.
 fn estimate(j: &serde_json::Value, param: &str) -> Option<(f64, f64)> {

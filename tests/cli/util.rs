@@ -94,7 +94,10 @@ pub fn mrclam_dir() -> Option<String> {
         return Some(d);
     }
     let ci = std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "false" && v != "0");
-    assert!(!ci, "CI is set and the MRCLAM data are not at {d} (robot1_Odometry.txt)");
+    assert!(
+        !ci,
+        "CI is set and the MRCLAM data are not at {d} (robot1_Odometry.txt)"
+    );
     eprintln!("skipped: the MRCLAM data are not at {d}");
     None
 }
