@@ -31,6 +31,12 @@ def cli():
     exe = obsan_binary()
     if exe is None:
         pytest.skip("no obsan binary to compare with (cargo build --release, or set OBSAN_BIN)")
+    # Comparing with another release's binary (an old `obsan` on PATH) would test nothing.
+    import obsan
+
+    version = subprocess.run([exe, "--version"], capture_output=True, text=True).stdout.split()
+    if version[-1:] != [obsan.__version__]:
+        pytest.fail(f"{exe} is {' '.join(version)!r}, the package is obsan {obsan.__version__}")
 
     def run(*args):
         p = subprocess.run([exe, *map(str, args)], capture_output=True, text=True, cwd=ROOT)

@@ -1,6 +1,7 @@
 """simulate, calibrate, crlb on a small simulated dataset."""
 
 import json
+import math
 
 import pytest
 
@@ -38,12 +39,34 @@ def test_calibrate_recovers_the_truth(dataset):
     assert abs(m["rho"]["value"] - truth["rho"]) < 5 * m["rho"]["sd"]
 
 
+def _absolute(key, value, params):
+    """A bound as printed ('phi (deg)', 'eta (%)' of the estimate) in the params' units."""
+    name, unit = key.split(" ")
+    if unit == "(deg)":
+        return name, math.radians(value)
+    assert unit == "(%)", key
+    return name, value / 100 * abs(params[name]["value"])
+
+
 def test_crlb_is_below_the_estimated_sd(dataset):
     b = obsan.crlb(bearings=40, seed=3)
     assert b["bearings"] == ["q0.9 40", "q0 40", "q-1 40"]
     assert all(v > 0 for v in b["crlb_sd"].values())
     d = obsan.crlb(dataset)
     assert set(d["crlb_sd"]) == set(b["crlb_sd"])
+    ml = obsan.calibrate(dataset, method="ml")["params"]
+    for key, bound in d["crlb_sd_with_encoder_noise"].items():
+        name, bound = _absolute(key, bound, ml)
+        sd = ml[name]["sd"]
+        # At the ML estimate the bound is the inverse Fisher information of the same
+        # likelihood (bearing and encoder noise) whose inverse gives the ML's sd: no
+        # unbiased estimator does better, and the efficient ML reaches it. A bound above
+        # the sd, or one of another likelihood, fails here.
+        assert bound <= sd * (1 + 1e-6), (key, bound, sd)
+        assert bound >= sd * (1 - 1e-6), (key, bound, sd)
+        # Encoder noise only removes information: the bearing-only bound is lower.
+        _, bearing_only = _absolute(key, d["crlb_sd"][key], ml)
+        assert 0 < bearing_only <= bound * (1 + 1e-12), (key, bearing_only, bound)
 
 
 def test_diagnose_names_a_hidden_bearing_scale(tmp_path):

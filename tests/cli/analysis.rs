@@ -121,6 +121,9 @@ fn localization_cartesian_eqs_1_2() {
     let s = json(&["symmetries", "systems/localization_xy.sys"]);
     let state = ["xR", "yR", "thetaR"];
     let mut w = symmetry_vectors(&s, &state);
+    // 3 states, rank 2: exactly one symmetry (with none, the span test below would pass
+    // on the paper's vector alone).
+    assert_eq!(w.len(), 1, "{s}");
     // A rotation about the feature: [-yR, xR, 1].
     w.push(strs(&["-yR", "xR", "1"]));
     assert_eq!(span_rank(&state, &w), 1);
@@ -213,6 +216,8 @@ fn psi_system_symmetry_matches_the_paper() {
     let s = json(&["symmetries", "systems/psi.sys"]);
     let state = ["Psi1", "Psi2", "Psi3", "xi_q", "psi"];
     let mut w = symmetry_vectors(&s, &state);
+    // 5 states, rank 4: exactly one symmetry.
+    assert_eq!(w.len(), 1, "{s}");
     w.push(strs(&[
         "Psi1^2 + 1",
         "Psi2*(Psi3 - Psi1)",

@@ -141,16 +141,6 @@ fn diagnose_rejects_bad_input_with_positions() {
     bad(&["diagnose", "--model", &sys, "--data", &data], "--init x=");
 }
 
-fn mrclam_dir() -> Option<String> {
-    let d = format!("{}/../shared/data/mrclam", env!("CARGO_MANIFEST_DIR"));
-    if std::path::Path::new(&format!("{d}/robot1_Odometry.txt")).exists() {
-        Some(d)
-    } else {
-        eprintln!("skipped: the MRCLAM data are not at {d}");
-        None
-    }
-}
-
 /// A param's estimate and cluster-robust sd in a `--json` diagnosis: from
 /// the named effects, else from the last round that fitted it.
 fn estimate(j: &serde_json::Value, param: &str) -> Option<(f64, f64)> {

@@ -65,11 +65,9 @@ fn every_subcommand_help_ends_with_examples_and_says_what_json_prints() {
 
 #[test]
 fn import_prints_progress_lines_when_stderr_is_not_a_terminal() {
-    let src = format!("{}/../shared/data/mrclam", env!("CARGO_MANIFEST_DIR"));
-    if !std::path::Path::new(&format!("{src}/robot1_Odometry.txt")).exists() {
-        eprintln!("skipped: the MRCLAM data are not at {src}");
+    let Some(src) = crate::util::mrclam_dir() else {
         return;
-    }
+    };
     let out_dir = std::env::temp_dir().join(format!("obsan-surface-{}-import", std::process::id()));
     let _ = std::fs::remove_dir_all(&out_dir);
     let out_dir = out_dir.to_string_lossy().into_owned();

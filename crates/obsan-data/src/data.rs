@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use std::fmt;
 
 use crate::error::{DataError, DataErrorKind as K, DerivedInputError};
+use crate::limits::{MAX_ABS_TIME, MAX_ABS_VALUE, MIN_OUTPUT_SAMPLES};
 
 /// A time series: a time column and named value columns (`None` = not measured).
 ///
@@ -324,13 +325,6 @@ fn parse_rows(
     }
 }
 
-/// The largest magnitude of a value in a CSV file (docs/data-format.md):
-/// far outside any physical range of the models' inputs and outputs (SI
-/// units), and small enough that sums of squares stay far from overflow.
-pub const MAX_ABS_VALUE: f64 = 1e9;
-/// The largest magnitude of a time (s): room for Unix timestamps.
-pub const MAX_ABS_TIME: f64 = 1e10;
-
 /// Something accepted but worth saying once (e.g. an ignored column).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DataWarning {
@@ -469,9 +463,6 @@ pub struct Trajectory {
     pub outputs: Series,
     pub meta: BTreeMap<String, f64>,
 }
-
-/// The fewest output samples a trajectory may have.
-pub const MIN_OUTPUT_SAMPLES: usize = 10;
 
 impl Trajectory {
     /// Check a trajectory read from files named in `origin`.

@@ -1,7 +1,7 @@
 //! The dataset readers' typed errors. `Display` is the exact text the CLI
 //! prints (its tests compare the texts): `file[:row][ (column c)]: message`.
 
-use crate::data::{MAX_ABS_VALUE, MIN_OUTPUT_SAMPLES};
+use crate::limits::{MAX_ABS_VALUE, MIN_OUTPUT_SAMPLES};
 use std::fmt;
 
 /// A rejected file, with the place. A plain record: any combination of

@@ -11,15 +11,16 @@
 mod angle;
 mod data;
 mod error;
+mod limits;
 mod mrclam;
 
 pub use angle::wrap;
 pub use data::{
     add_derived_inputs, read_dataset, DataFile, DataWarning, Dataset, DatasetFiles, DatasetMeta,
-    ReadDataset, Series, Trajectory, TrajectoryFiles, MAX_ABS_TIME, MAX_ABS_VALUE,
-    MIN_OUTPUT_SAMPLES,
+    ReadDataset, Series, Trajectory, TrajectoryFiles,
 };
 pub use error::{DataError, DataErrorKind, DerivedInputError};
+pub use limits::{MAX_ABS_TIME, MAX_ABS_VALUE, MIN_OUTPUT_SAMPLES};
 pub use mrclam::{
     convert as mrclam_convert, landmarks as mrclam_landmarks, model_text as mrclam_model_text,
     MrclamOutputs, MrclamText, WindowTruth, POSE_INTERVAL,

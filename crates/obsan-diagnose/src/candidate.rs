@@ -7,11 +7,15 @@ use crate::common_mode;
 use crate::error::DiagnoseError;
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
 use crate::model_fit::{class_inputs, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z};
+use crate::options::DiagnoseOptions;
+use crate::report::CandidateResult;
 use crate::start::extended_start;
 use crate::stats::chi2_1_p;
-use crate::workflow::{CandidateResult, DiagnoseOptions, MAX_RANK_OUTPUTS};
 use obsan_data::Dataset;
 use obsan_model::{Effect, Kind, System};
+
+/// Outputs per trajectory used by the rank test (the most measured ones).
+pub(crate) const MAX_RANK_OUTPUTS: usize = 4;
 
 /// The noise models a candidate is weighed under: the levels in use and,
 /// under `auto` with estimated input noise, the white-input-noise end of

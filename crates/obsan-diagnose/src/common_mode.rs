@@ -36,7 +36,7 @@
 
 use crate::error::DiagnoseError;
 use crate::model_fit::{ModelFit, OUTLIER_Z};
-use crate::workflow::DiagnoseOptions;
+use crate::options::DiagnoseOptions;
 use obsan_data::{wrap, Dataset};
 use obsan_fit::{FitTrajectory, Integration, Measured, Predictor};
 use obsan_model::{Effect, System};

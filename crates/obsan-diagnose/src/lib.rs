@@ -27,7 +27,9 @@ mod error;
 mod generate;
 mod identify;
 mod model_fit;
+mod options;
 mod relation;
+mod report;
 mod residual;
 mod screen;
 mod start;
@@ -42,11 +44,12 @@ pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
+pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
+pub use report::{
+    CandidateResult, Diagnosis, Named, Rival, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
+};
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;
 pub use start::start_values;
-pub use workflow::{
-    diagnose, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, Named, Rival,
-    AUTO_ESTIMATE_BELOW, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
-};
+pub use workflow::diagnose;

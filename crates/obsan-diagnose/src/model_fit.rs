@@ -3,8 +3,8 @@
 //! likelihood fit with its residual tests.
 
 use crate::error::DiagnoseError;
+use crate::options::DiagnoseOptions;
 use crate::residual::{analyse, ResidualReport, ResidualSeries};
-use crate::workflow::DiagnoseOptions;
 use obsan_data::{add_derived_inputs, wrap, Dataset};
 use obsan_fit::{
     estimate_noise, fit, FitOptions, FitTrajectory, Integration, Measured, NoiseOptions, Predictor,

@@ -355,3 +355,112 @@ pub(crate) fn input_check(
     );
     out
 }
+
+/// `text` (a .sys file) with a contradicted input relation written in: its
+/// params as known constants at their estimates, and in every restriction
+/// that sets the compared input, that input's right side replaced by the
+/// relation (its other inputs replaced by the restriction's expressions for
+/// them), e.g. `restrict q: wR = nu, wL = q*nu` with `compare wL = (q +
+/// dq)*wR` becomes `restrict q: wR = nu, wL = ((q + dq)*(nu))`.
+pub(crate) fn with_relation(text: &str, e: &Effect, estimates: &[(String, f64, f64)]) -> String {
+    let mut out = String::new();
+    let mut declared = false;
+    for line in text.lines() {
+        let trimmed = line.trim_start();
+        if !declared && trimmed.starts_with("restrict ") {
+            out.push_str(&relation_consts(e, estimates));
+            declared = true;
+        }
+        let Some(body) = trimmed.strip_prefix("restrict ") else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        let Some((name, rhs)) = body.split_once(':') else {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        };
+        let parts: Vec<(String, String)> = split_assignments(rhs);
+        let mut changed = parts.clone();
+        for (u, expr) in &e.compares {
+            if let Some(slot) = changed.iter_mut().find(|p| p.0 == *u) {
+                let mut x = expr.clone();
+                for (v, ve) in &parts {
+                    if v != u {
+                        x = replace_ident(&x, v, &format!("({ve})"));
+                    }
+                }
+                slot.1 = format!("({x})");
+            }
+        }
+        let joined: Vec<String> = changed.iter().map(|(a, b)| format!("{a} = {b}")).collect();
+        out.push_str(&format!(
+            "restrict {}: {}\n",
+            name.trim(),
+            joined.join(", ")
+        ));
+    }
+    if !declared {
+        out.push_str(&relation_consts(e, estimates));
+    }
+    out
+}
+
+fn relation_consts(e: &Effect, estimates: &[(String, f64, f64)]) -> String {
+    let mut s = format!(
+        "# named input relation {} (fitted on the measured inputs): {}\n",
+        e.name, e.description
+    );
+    for (p, v, sd) in estimates {
+        s.push_str(&format!("const {p} = {v:e}   # ± {sd:.1e}\n"));
+    }
+    s
+}
+
+/// `a = x, b = f(y, z)` as (name, expression) pairs, split at top-level commas.
+fn split_assignments(s: &str) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let (mut depth, mut start) = (0i32, 0usize);
+    let bytes: Vec<char> = s.chars().collect();
+    let mut push = |part: String| {
+        if let Some((a, b)) = part.split_once('=') {
+            out.push((a.trim().to_string(), b.trim().to_string()));
+        }
+    };
+    for (i, c) in bytes.iter().enumerate() {
+        match c {
+            '(' => depth += 1,
+            ')' => depth -= 1,
+            ',' if depth == 0 => {
+                push(bytes[start..i].iter().collect());
+                start = i + 1;
+            }
+            _ => {}
+        }
+    }
+    push(bytes[start..].iter().collect());
+    out
+}
+
+/// `expr` with every whole-word occurrence of the identifier `name` replaced.
+fn replace_ident(expr: &str, name: &str, by: &str) -> String {
+    let is_id = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let chars: Vec<char> = expr.chars().collect();
+    let target: Vec<char> = name.chars().collect();
+    let mut out = String::new();
+    let mut i = 0;
+    while i < chars.len() {
+        let fits = chars[i..].starts_with(&target)
+            && (i == 0 || !is_id(chars[i - 1]))
+            && chars.get(i + target.len()).is_none_or(|c| !is_id(*c));
+        if fits {
+            out.push_str(by);
+            i += target.len();
+        } else {
+            out.push(chars[i]);
+            i += 1;
+        }
+    }
+    out
+}

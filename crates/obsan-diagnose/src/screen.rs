@@ -20,8 +20,8 @@
 use crate::common_mode::{self, difference_estimate, CommonModeCheck, Member};
 use crate::error::DiagnoseError;
 use crate::model_fit::{prepare, ModelFit, OUTLIER_Z};
+use crate::report::CandidateResult;
 use crate::start::extended_start;
-use crate::workflow::CandidateResult;
 use obsan_data::{wrap, Dataset};
 use obsan_fit::{FitTrajectory, Integration, Measured, Predictor};
 use obsan_model::{Effect, System};

@@ -245,11 +245,11 @@ fn summary(d: &Diagnosis) -> String {
 }
 
 /// The figures of docs/diagnose.md ("Generated candidates"): what is named
-/// with and without generation, over `DIAGB_SEEDS` seeds (default 4).
-/// `cargo test --release -p obsan-diagnose --test diagb_generated -- --ignored --nocapture`
-#[test]
-#[ignore]
-fn naming_with_and_without_generation() {
+/// with and without generation, over `DIAGB_SEEDS` seeds (default 4). A
+/// measurement, not a test: run by the example of the same name,
+/// `cargo run --release -p obsan-diagnose --example diagb_generated`.
+#[allow(dead_code)] // used by examples/diagb_generated.rs, not by the tests
+pub fn naming_with_and_without_generation() {
     let seeds: u64 = std::env::var("DIAGB_SEEDS")
         .ok()
         .and_then(|s| s.parse().ok())

@@ -7,6 +7,9 @@ use crate::FitError;
 use obsan_data::Series;
 use obsan_expr::{FrozenTape, Tape, Var};
 use obsan_model::NormalForm;
+use step::{Rk4, Stages};
+
+mod step;
 
 /// Integration steps are at most this over the largest diagonal entry of
 /// the dynamics' Jacobian (see `predict_with`).
@@ -313,17 +316,7 @@ impl Predictor {
                 consts: self.consts.len(),
             });
         }
-        let cols: Vec<usize> = self
-            .inputs
-            .iter()
-            .map(|n| {
-                inputs
-                    .columns()
-                    .iter()
-                    .position(|c| c == n)
-                    .ok_or_else(|| FitError::MissingInput(n.clone()))
-            })
-            .collect::<Result<_, _>>()?;
+        let cols = self.input_columns(inputs)?;
         let nd = self.n_dynamic;
         let n = self.state.len();
         let m = self.inputs.len();
@@ -357,19 +350,9 @@ impl Predictor {
         };
         let mut outputs = Vec::with_capacity(times.len());
         let mut jacobians = Vec::new();
-        let noise = match &opts.input_noise {
-            Some(c) if opts.sensitivities => {
-                if c.len() != m {
-                    return Err(FitError::InputNoiseSize(m));
-                }
-                Some(c.clone())
-            }
-            Some(_) => return Err(FitError::InputNoiseNeedsSensitivities),
-            None => None,
-        };
+        let noise = input_noise(opts, m)?;
         let mut noise_acc = vec![0.0; nd * nd];
         let mut noise_m = Vec::new();
-        let no = self.outputs.len();
         let t_start = inputs.t().first().copied().unwrap_or(0.0);
         // With a delay tau the rows act at t_k + tau (the first row also
         // before that): the state is the one seen from the output clock.
@@ -377,7 +360,6 @@ impl Predictor {
         if !tau.is_finite() {
             return Err(FitError::DelayNotFinite);
         }
-        let et = |k: usize| inputs.t()[k] + tau;
         let mut dudtau = vec![0.0; m];
         // A fast decaying state (a first-order lag `va' = (v - va)/T`) needs
         // steps shorter than its time constant: bound h by STIFF_STEP over
@@ -388,72 +370,16 @@ impl Predictor {
         // Per self-linear state k and term f (drift, then each input's
         // field): d f[k] / d x_k, constant along the prediction.
         let mut lambda_of = vec![0.0; nd * (m + 1)];
-        let max_step = {
-            let all = w.dyn_jac.eval(&w.x);
-            let jv = &all[nv..];
-            let u0: Vec<f64> = cols
-                .iter()
-                .map(|&c| inputs.values()[c].first().copied().flatten().unwrap_or(0.0))
-                .collect();
-            let mut diag = vec![0.0f64; nd];
-            for (&(k, f, j), d) in self.jac_entries.iter().zip(jv) {
-                if j == k {
-                    diag[k] += if f == 0 {
-                        d.abs()
-                    } else {
-                        (d * u0[f - 1]).abs()
-                    };
-                    if self.self_linear[k] {
-                        lambda_of[k * (m + 1) + f] = *d;
-                    }
-                }
-            }
-            let stiff = diag.iter().copied().fold(0.0f64, f64::max);
-            // A self-linear state's linear part is integrated exactly: its
-            // bound is the looser EXP_STEP.
-            let bound = (0..nd)
-                .map(|k| {
-                    let c = if self.self_linear[k] {
-                        EXP_STEP
-                    } else {
-                        STIFF_STEP
-                    };
-                    if diag[k] > 0.0 {
-                        c / diag[k]
-                    } else {
-                        f64::INFINITY
-                    }
-                })
-                .fold(f64::INFINITY, f64::min);
-            // max_step 0 means row by row (no merging), not no bound.
-            let cap = if opts.max_step > 0.0 {
-                opts.max_step
-            } else {
-                f64::INFINITY
-            };
-            // A time scale below the input rows' spacing cannot be resolved
-            // from these data, and steps that short would cost without
-            // bound: refuse it (a fit then rejects the trial, so a fitted
-            // lag stops at the rows' spacing instead of running to 0).
-            let n_rows = inputs.t().len();
-            let spacing = if n_rows > 1 {
-                (inputs.t()[n_rows - 1] - inputs.t()[0]) / (n_rows - 1) as f64
-            } else {
-                0.0
-            };
-            if !stiff.is_finite() || stiff * spacing > 1.0 {
-                return Err(FitError::TooStiff {
-                    time_scale: 1.0 / stiff,
-                    spacing,
-                });
-            }
-            cap.min(bound)
-        };
+        let max_step = self.step_bound(&mut w, inputs, &cols, opts, &mut lambda_of)?;
         let mut t = t_start;
         let mut row = 0usize;
-        let (mut k1, mut k2, mut k3, mut k4) =
-            (vec![0.0; nz], vec![0.0; nz], vec![0.0; nz], vec![0.0; nz]);
-        let mut tmp = z.clone();
+        let mut k1 = vec![0.0; nz];
+        let mut rk = Rk4 {
+            k2: vec![0.0; nz],
+            k3: vec![0.0; nz],
+            k4: vec![0.0; nz],
+            tmp: z.clone(),
+        };
         let mut u = vec![0.0; m];
         let mut lam = vec![0.0; nd];
         let mut stages = Stages::new(nd, nz);
@@ -463,48 +389,16 @@ impl Predictor {
                 return Err(FitError::TimeBeforeStart { target, t });
             }
             while t < target - 1e-12 {
-                while row + 1 < inputs.len() && et(row + 1) <= t + 1e-12 {
-                    row += 1;
-                }
-                // The row in force just before the step (a row change at the
-                // step's start belongs to this step, for d/dtau).
-                let before = if row > 0 && (et(row) - t).abs() <= 1e-12 {
-                    row - 1
-                } else {
-                    row
-                };
-                // One step: this row's interval, merged with the next rows while
-                // the step stays within max_step (inputs averaged over time).
-                // (A row longer than max_step is split.)
-                let mut next = if row + 1 < inputs.len() {
-                    et(row + 1).min(target)
-                } else {
-                    target
-                }
-                .min(t + max_step);
-                for (ui, &c) in u.iter_mut().zip(&cols) {
-                    *ui = inputs.values()[c][row].unwrap_or(0.0) * (next - t);
-                }
-                while next < target - 1e-12 && row + 1 < inputs.len() {
-                    let r = row + 1;
-                    let end = if r + 1 < inputs.len() {
-                        et(r + 1).min(target)
-                    } else {
-                        target
-                    };
-                    if end - t > max_step.min(opts.max_step) {
-                        break;
-                    }
-                    for (ui, &c) in u.iter_mut().zip(&cols) {
-                        *ui += inputs.values()[c][r].unwrap_or(0.0) * (end - next);
-                    }
-                    row = r;
-                    next = end;
-                }
+                let (before, next) = merge_rows(
+                    inputs,
+                    &cols,
+                    tau,
+                    (t, target),
+                    (max_step, opts.max_step),
+                    &mut row,
+                    &mut u,
+                );
                 let h = next - t;
-                for ui in u.iter_mut() {
-                    *ui /= h;
-                }
                 // d(mean input)/dtau: each row change inside the step moves
                 // later with tau; the sum telescopes to (before - last) / h.
                 let dd = if sens && self.delay.is_some() {
@@ -540,21 +434,7 @@ impl Predictor {
                 if stiff_here {
                     self.etd_step(&mut z, &k1, &u, (sens, dd), &mut w, h, &lam, &mut stages);
                 } else {
-                    for i in 0..nz {
-                        tmp[i] = z[i] + h / 2.0 * k1[i];
-                    }
-                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k2);
-                    for i in 0..nz {
-                        tmp[i] = z[i] + h / 2.0 * k2[i];
-                    }
-                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k3);
-                    for i in 0..nz {
-                        tmp[i] = z[i] + h * k3[i];
-                    }
-                    self.derivative(&tmp, &u, sens, dd, &mut w, &mut k4);
-                    for i in 0..nz {
-                        z[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-                    }
+                    self.rk4_step(&mut z, &k1, &u, (sens, dd), &mut w, h, &mut rk);
                 }
                 if z[..nd].iter().any(|v| !v.is_finite()) {
                     return Err(FitError::Diverged {
@@ -580,19 +460,7 @@ impl Predictor {
                 }
                 continue;
             }
-            if let Some(out) = &mut w.out {
-                outputs.push(out.eval(&w.x).to_vec());
-            }
-            if let (true, Some(out_jac)) = (sens, &mut w.out_jac) {
-                let gy = out_jac.eval(&w.x);
-                // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
-                let phi = &z[nd..];
-                let mut jrow = vec![0.0; no * n];
-                for (&(o, j), g) in self.out_jac_entries.iter().zip(gy) {
-                    add_grad(&mut jrow[o * n..(o + 1) * n], j, *g, phi, nd);
-                }
-                jacobians.push(jrow);
-            }
+            self.all_outputs(&z, sens, &mut w, &mut outputs, &mut jacobians);
         }
         Ok(Prediction {
             outputs,
@@ -601,105 +469,120 @@ impl Predictor {
         })
     }
 
-    /// One step of exponential time differencing RK4 (ETDRK4, Cox and
-    /// Matthews 2002) from `z`, whose derivative is `k1`: each component
-    /// of dynamic state k (its value and its sensitivity row) takes
-    /// `lam[k]` as its linear part, integrated exactly; a component with
-    /// `lam` 0 takes the classical RK4 stages (the method's limit).
-    #[allow(clippy::too_many_arguments)]
-    fn etd_step(
+    /// Every output at state `z` (set into `w.x`) from the whole output tapes,
+    /// with (`sens`) its row of dy/dx0.
+    fn all_outputs(
         &self,
-        z: &mut [f64],
-        k1: &[f64],
-        u: &[f64],
-        (sens, dd): (bool, Option<&[f64]>),
+        z: &[f64],
+        sens: bool,
         w: &mut Work,
-        h: f64,
-        lam: &[f64],
-        st: &mut Stages,
+        outputs: &mut Vec<Vec<f64>>,
+        jacobians: &mut Vec<Vec<f64>>,
     ) {
-        let (nd, n) = (self.n_dynamic, self.state.len());
-        for (c, &l) in st.co.iter_mut().zip(lam) {
-            if l == 0.0 {
-                continue;
-            }
-            let x = l * h;
-            let (e2, e) = ((x / 2.0).exp(), x.exp());
-            let d = h * h * l * l * l;
-            *c = [
-                e2,
-                e,
-                (e2 - 1.0) / l,
-                (-4.0 - x + e * (4.0 - 3.0 * x + x * x)) / d,
-                (2.0 + x + e * (-2.0 + x)) / d,
-                (-4.0 - 3.0 * x - x * x + e * (4.0 - x)) / d,
-            ];
+        let (nd, n, no) = (self.n_dynamic, self.state.len(), self.outputs.len());
+        if let Some(out) = &mut w.out {
+            outputs.push(out.eval(&w.x).to_vec());
         }
-        // Each dynamic state's components (its value, then its sensitivity
-        // row when carried) share its lambda and coefficients: visited by
-        // state, the per-component row lookup (a division) and branch are
-        // hoisted; the arithmetic per component is unchanged.
-        let sens_rows = z.len() > nd;
-        let comps = |k: usize| {
-            let r = if sens_rows {
-                nd + k * n..nd + (k + 1) * n
-            } else {
-                0..0
-            };
-            std::iter::once(k).chain(r)
+        if let (true, Some(out_jac)) = (sens, &mut w.out_jac) {
+            let gy = out_jac.eval(&w.x);
+            // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
+            let phi = &z[nd..];
+            let mut jrow = vec![0.0; no * n];
+            for (&(o, j), g) in self.out_jac_entries.iter().zip(gy) {
+                add_grad(&mut jrow[o * n..(o + 1) * n], j, *g, phi, nd);
+            }
+            jacobians.push(jrow);
+        }
+    }
+
+    /// The longest step of a prediction: `max_step`, and STIFF_STEP (EXP_STEP
+    /// for a self-linear state, integrated exactly) over each dynamic state's
+    /// diagonal Jacobian entry at the start; fills `lambda_of` (per self-linear
+    /// state k and term f, drift then each input's field, d f[k] / d x_k,
+    /// constant along the prediction). A time scale below the input rows'
+    /// spacing is an error.
+    fn step_bound(
+        &self,
+        w: &mut Work,
+        inputs: &Series,
+        cols: &[usize],
+        opts: &Integration,
+        lambda_of: &mut [f64],
+    ) -> Result<f64, FitError> {
+        let (nd, m, nv) = (self.n_dynamic, self.inputs.len(), self.dyn_tape.n_outputs());
+        let all = w.dyn_jac.eval(&w.x);
+        let jv = &all[nv..];
+        let u0: Vec<f64> = cols
+            .iter()
+            .map(|&c| inputs.values()[c].first().copied().flatten().unwrap_or(0.0))
+            .collect();
+        let mut diag = vec![0.0f64; nd];
+        for (&(k, f, j), d) in self.jac_entries.iter().zip(jv) {
+            if j == k {
+                diag[k] += if f == 0 {
+                    d.abs()
+                } else {
+                    (d * u0[f - 1]).abs()
+                };
+                if self.self_linear[k] {
+                    lambda_of[k * (m + 1) + f] = *d;
+                }
+            }
+        }
+        let stiff = diag.iter().copied().fold(0.0f64, f64::max);
+        // A self-linear state's linear part is integrated exactly: its
+        // bound is the looser EXP_STEP.
+        let bound = (0..nd)
+            .map(|k| {
+                let c = if self.self_linear[k] {
+                    EXP_STEP
+                } else {
+                    STIFF_STEP
+                };
+                if diag[k] > 0.0 {
+                    c / diag[k]
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .fold(f64::INFINITY, f64::min);
+        // max_step 0 means row by row (no merging), not no bound.
+        let cap = if opts.max_step > 0.0 {
+            opts.max_step
+        } else {
+            f64::INFINITY
         };
-        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
-            if l == 0.0 {
-                for i in comps(k) {
-                    st.a[i] = z[i] + h / 2.0 * k1[i];
-                }
-            } else {
-                for i in comps(k) {
-                    st.a[i] = c[0] * z[i] + c[2] * (k1[i] - l * z[i]);
-                }
-            }
+        // A time scale below the input rows' spacing cannot be resolved
+        // from these data, and steps that short would cost without
+        // bound: refuse it (a fit then rejects the trial, so a fitted
+        // lag stops at the rows' spacing instead of running to 0).
+        let n_rows = inputs.t().len();
+        let spacing = if n_rows > 1 {
+            (inputs.t()[n_rows - 1] - inputs.t()[0]) / (n_rows - 1) as f64
+        } else {
+            0.0
+        };
+        if !stiff.is_finite() || stiff * spacing > 1.0 {
+            return Err(FitError::TooStiff {
+                time_scale: 1.0 / stiff,
+                spacing,
+            });
         }
-        self.derivative(&st.a, u, sens, dd, w, &mut st.k2);
-        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
-            if l == 0.0 {
-                for i in comps(k) {
-                    st.b[i] = z[i] + h / 2.0 * st.k2[i];
-                }
-            } else {
-                for i in comps(k) {
-                    st.b[i] = c[0] * z[i] + c[2] * (st.k2[i] - l * st.a[i]);
-                }
-            }
-        }
-        self.derivative(&st.b, u, sens, dd, w, &mut st.k3);
-        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
-            if l == 0.0 {
-                for i in comps(k) {
-                    st.c[i] = z[i] + h * st.k3[i];
-                }
-            } else {
-                for i in comps(k) {
-                    let (n1, n3) = (k1[i] - l * z[i], st.k3[i] - l * st.b[i]);
-                    st.c[i] = c[0] * st.a[i] + c[2] * (2.0 * n3 - n1);
-                }
-            }
-        }
-        self.derivative(&st.c, u, sens, dd, w, &mut st.k4);
-        for (k, (&l, &c)) in lam.iter().zip(&st.co).enumerate() {
-            if l == 0.0 {
-                for i in comps(k) {
-                    z[i] += h / 6.0 * (k1[i] + 2.0 * st.k2[i] + 2.0 * st.k3[i] + st.k4[i]);
-                }
-            } else {
-                for i in comps(k) {
-                    let n1 = k1[i] - l * z[i];
-                    let n2 = st.k2[i] - l * st.a[i];
-                    let n3 = st.k3[i] - l * st.b[i];
-                    let n4 = st.k4[i] - l * st.c[i];
-                    z[i] = c[1] * z[i] + c[3] * n1 + 2.0 * c[4] * (n2 + n3) + c[5] * n4;
-                }
-            }
-        }
+        Ok(cap.min(bound))
+    }
+
+    /// The state's columns in `inputs`, in the model's input order.
+    fn input_columns(&self, inputs: &Series) -> Result<Vec<usize>, FitError> {
+        self.inputs
+            .iter()
+            .map(|n| {
+                inputs
+                    .columns()
+                    .iter()
+                    .position(|c| c == n)
+                    .ok_or_else(|| FitError::MissingInput(n.clone()))
+            })
+            .collect()
     }
 
     /// The outputs `which` at the state in `w.x` and, with `sens`, their
@@ -876,33 +759,6 @@ pub struct Prediction {
     pub noise_m: Vec<Vec<f64>>,
 }
 
-/// The stages of [`Predictor::etd_step`].
-struct Stages {
-    /// Per dynamic state: e^{lh/2}, e^{lh}, (e^{lh/2} - 1)/l, f1, f2, f3.
-    co: Vec<[f64; 6]>,
-    a: Vec<f64>,
-    b: Vec<f64>,
-    c: Vec<f64>,
-    k2: Vec<f64>,
-    k3: Vec<f64>,
-    k4: Vec<f64>,
-}
-
-impl Stages {
-    fn new(nd: usize, nz: usize) -> Stages {
-        let v = || vec![0.0; nz];
-        Stages {
-            co: vec![[0.0; 6]; nd],
-            a: v(),
-            b: v(),
-            c: v(),
-            k2: v(),
-            k3: v(),
-            k4: v(),
-        }
-    }
-}
-
 struct Work<'a> {
     /// Tape inputs: dynamic state (updated per evaluation), params, constants.
     x: Vec<f64>,
@@ -915,4 +771,79 @@ struct Work<'a> {
     vals: Vec<f64>,
     jvals: Vec<f64>,
     jac: Vec<f64>,
+}
+
+/// The input noise intensities of a prediction (one per input), which need
+/// the sensitivities.
+fn input_noise(opts: &Integration, m: usize) -> Result<Option<Vec<f64>>, FitError> {
+    match &opts.input_noise {
+        Some(c) if opts.sensitivities => {
+            if c.len() != m {
+                return Err(FitError::InputNoiseSize(m));
+            }
+            Ok(Some(c.clone()))
+        }
+        Some(_) => Err(FitError::InputNoiseNeedsSensitivities),
+        None => Ok(None),
+    }
+}
+
+/// One step's inputs from `t` towards `target`: the row in force at `t`
+/// (`row` moves to it), merged with the next rows while the step stays within
+/// `max_step` and `limit` (the caller's `Integration::max_step`; a row longer
+/// than `max_step` is split), the inputs averaged over time into `u`. Rows act
+/// at their time plus `tau`. Returns the row in force just before the step (a
+/// row change at the step's start belongs to this step, for d/dtau) and the
+/// step's end.
+fn merge_rows(
+    inputs: &Series,
+    cols: &[usize],
+    tau: f64,
+    (t, target): (f64, f64),
+    (max_step, limit): (f64, f64),
+    row: &mut usize,
+    u: &mut [f64],
+) -> (usize, f64) {
+    let et = |k: usize| inputs.t()[k] + tau;
+    let mut r0 = *row;
+    while r0 + 1 < inputs.len() && et(r0 + 1) <= t + 1e-12 {
+        r0 += 1;
+    }
+    let before = if r0 > 0 && (et(r0) - t).abs() <= 1e-12 {
+        r0 - 1
+    } else {
+        r0
+    };
+    // This row's interval, merged with the next rows below.
+    let mut next = if r0 + 1 < inputs.len() {
+        et(r0 + 1).min(target)
+    } else {
+        target
+    }
+    .min(t + max_step);
+    for (ui, &c) in u.iter_mut().zip(cols) {
+        *ui = inputs.values()[c][r0].unwrap_or(0.0) * (next - t);
+    }
+    while next < target - 1e-12 && r0 + 1 < inputs.len() {
+        let r = r0 + 1;
+        let end = if r + 1 < inputs.len() {
+            et(r + 1).min(target)
+        } else {
+            target
+        };
+        if end - t > max_step.min(limit) {
+            break;
+        }
+        for (ui, &c) in u.iter_mut().zip(cols) {
+            *ui += inputs.values()[c][r].unwrap_or(0.0) * (end - next);
+        }
+        r0 = r;
+        next = end;
+    }
+    let h = next - t;
+    for ui in u.iter_mut() {
+        *ui /= h;
+    }
+    *row = r0;
+    (before, next)
 }

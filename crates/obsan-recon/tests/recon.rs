@@ -620,3 +620,29 @@ fn a_shared_denominator_needs_fewer_points_per_line() {
     mix[5] = other[5].clone();
     rec_vec(&mix);
 }
+
+/// Numerator and denominator forms whose coefficients sum to zero vanish along the
+/// direction (1, ..., 1): sampling the known monomials there (as the lift to a second
+/// prime once did) dropped the degree along the line and failed on every prime
+/// (`vectors_agree_with_their_components`, PROPTEST_RNG_SEED=121, shrunk to this).
+/// The expected function is the one built here; `same_function` compares exactly.
+#[test]
+fn forms_vanishing_at_all_ones_reconstruct() {
+    // 32 x1 (x0^2 x1 - x2^3) / (50 x3^2 (x2 - x3))
+    let num: Terms = vec![t(&[0, 1, 3, 0], -32), t(&[2, 2, 0, 0], 32)];
+    let den: Terms = vec![t(&[0, 0, 1, 2], 50), t(&[0, 0, 0, 3], -50)];
+    for seed in [0, 1, 2] {
+        let opts = Options {
+            seed,
+            ..Options::default()
+        };
+        let mut bb = |x: &[u64], p: u64| -> Result<Option<u64>, ()> { Ok(eval(&num, &den, x, p)) };
+        let r = reconstruct(4, &mut bb, &opts).unwrap();
+        assert!(
+            same_function(&r.functions[0], &num, &den),
+            "{}",
+            r.functions[0]
+        );
+        assert!(is_canonical(&r.functions[0]));
+    }
+}

@@ -1,0 +1,196 @@
+//! The workflow's result types: what happened to each candidate, what was named,
+//! and the whole [`Diagnosis`]. Near the bottom of the module graph: they name the
+//! fit, check and correlation types and no step of the workflow.
+
+use crate::common_mode::CommonModeCheck;
+use crate::correlation::Correlation;
+use crate::generate::ORIGIN_GENERATED;
+use crate::model_fit::ModelFit;
+use crate::relation::InputCheck;
+use obsan_model::Effect;
+use serde::Serialize;
+
+/// What happened to one candidate in one round.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidateResult {
+    pub effect: String,
+    pub description: String,
+    /// [`ORIGIN_FILE`] or [`ORIGIN_GENERATED`].
+    pub origin: String,
+    /// The effect's new params.
+    pub params: Vec<String>,
+    /// Identifiable on these data (the rank test).
+    pub identifiable: bool,
+    pub rank: Option<(usize, usize)>,
+    /// When not identifiable: what absorbs it (a null vector at the fit).
+    pub symmetry: Vec<(String, f64)>,
+    /// Fitted new params with standard deviations.
+    pub estimates: Vec<(String, f64, f64)>,
+    /// Their cluster-robust sds (trajectories as clusters).
+    pub robust_sd: Vec<f64>,
+    /// Likelihood-ratio statistic (quasi-likelihood: divided by the larger
+    /// model's reduced chi-square when above 1), its p-value, BIC change
+    /// (negative is better), residual RMS per output, whiteness z.
+    pub lr: f64,
+    pub p_value: f64,
+    pub delta_bic: f64,
+    pub rms: Vec<(String, f64)>,
+    pub whiteness_z: f64,
+    pub significant: bool,
+    /// Weighed at white input noise: under `auto` with estimated input
+    /// noise, the candidate fitted better there than at the estimated levels.
+    pub white_input_noise: bool,
+    pub error: Option<String>,
+    /// The candidate's score statistic at the current fit (see
+    /// [`crate::screen`]), when computed: generated candidates in every
+    /// round, the file's from the second round on.
+    pub score: Option<f64>,
+    /// Left unfitted: its score is below [`Diagnosis::screen_threshold`].
+    pub screened_out: bool,
+    /// The heading-free check of a candidate that rewrites angle outputs
+    /// ([`CommonModeCheck`]); a veto makes it not significant.
+    pub common_mode: Option<CommonModeCheck>,
+}
+
+impl CandidateResult {
+    /// A candidate's entry before anything is known of it: not identifiable,
+    /// not fitted. `origin` is the generated marker or anything else (the
+    /// effects file).
+    pub(crate) fn untried(e: &Effect, origin: &str) -> CandidateResult {
+        CandidateResult {
+            effect: e.name.clone(),
+            description: e.description.clone(),
+            origin: if origin == ORIGIN_GENERATED {
+                ORIGIN_GENERATED
+            } else {
+                ORIGIN_FILE
+            }
+            .into(),
+            params: e.params.clone(),
+            identifiable: false,
+            rank: None,
+            symmetry: vec![],
+            estimates: vec![],
+            robust_sd: vec![],
+            lr: 0.0,
+            p_value: 1.0,
+            delta_bic: 0.0,
+            rms: vec![],
+            whiteness_z: 0.0,
+            significant: false,
+            white_input_noise: false,
+            error: None,
+            score: None,
+            screened_out: false,
+            common_mode: None,
+        }
+    }
+}
+
+/// One named effect.
+#[derive(Clone, Debug, Serialize)]
+pub struct Named {
+    pub effect: String,
+    pub description: String,
+    /// Where the effect comes from: [`ORIGIN_FILE`] (the user's effects
+    /// file, fitted in the model) or [`ORIGIN_RELATION`] (a `compare`
+    /// relation the measured inputs contradict, fitted on the inputs).
+    pub origin: String,
+    pub estimates: Vec<(String, f64, f64)>,
+    /// Cluster-robust sds of the estimates (trajectories as clusters).
+    pub robust_sd: Vec<f64>,
+    pub rms_before: Vec<(String, f64)>,
+    pub rms_after: Vec<(String, f64)>,
+    pub lr: f64,
+    pub p_value: f64,
+    /// Other significant candidates of the same round that fit almost as
+    /// well (BIC within [`RIVAL_BIC`]): the data hardly tell them apart.
+    pub rivals: Vec<Rival>,
+    /// Its params' correlations with the final model's other params with
+    /// `|r| >=` [`crate::CORRELATION_CAUTION`]: with another named effect's, the
+    /// data fix a combination of the two rather than each. Those with the
+    /// user's model's own params are informative only (a correct radius
+    /// change correlates with calib.sys's delta at 0.999). Empty for an
+    /// input relation, which is not in the fit.
+    pub correlated: Vec<Correlation>,
+}
+
+/// A candidate that explains the data about as well as a named effect.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rival {
+    pub effect: String,
+    /// Its BIC change minus the named effect's (>= 0).
+    pub delta_bic: f64,
+    /// Whether it stays identifiable once the named effect is in the model
+    /// (the next round's rank test); `false`: on these data the two are
+    /// confounded, so naming one rather than the other is arbitrary.
+    pub jointly_identifiable: Option<bool>,
+}
+
+/// [`Named::origin`] of an effect from the effects file.
+pub const ORIGIN_FILE: &str = "effects file";
+/// [`Named::origin`] of an input relation the measured inputs contradict.
+pub const ORIGIN_RELATION: &str = "input relation";
+
+/// Candidates whose BIC is within this of the best one's are reported as
+/// rivals ("strong evidence" starts at 6 on Kass and Raftery's scale).
+pub const RIVAL_BIC: f64 = 6.0;
+
+/// The whole outcome.
+#[derive(Clone, Debug, Serialize)]
+pub struct Diagnosis {
+    pub model: String,
+    /// How the nominal fit's start was found (see [`crate::start_values`]).
+    pub start: String,
+    pub sigma: Vec<(String, f64)>,
+    pub sigma_estimated: bool,
+    /// Per measured input, the noise intensity `c` (spectral density
+    /// `c |u|`) used in the final fit; empty: none.
+    pub input_noise: Vec<(String, f64)>,
+    /// "stated", "estimated" or "none".
+    pub input_noise_source: String,
+    /// When estimated: per estimate (at the nominal fit, then after each
+    /// named effect), the likelihood-ratio statistic of the input noise
+    /// against white output noise alone.
+    pub input_noise_lr: Vec<f64>,
+    pub input_class: String,
+    pub nominal: ModelFit,
+    pub rounds: Vec<Vec<CandidateResult>>,
+    pub named: Vec<Named>,
+    pub input_checks: Vec<InputCheck>,
+    pub final_fit: ModelFit,
+    /// Effects these data cannot reveal, with what absorbs them.
+    pub hidden: Vec<CandidateResult>,
+    /// The extended model (nominal plus the named effects) as .sys text.
+    pub extended_sys: String,
+    /// Per-round critical value of the LR statistic (the effects file's
+    /// candidates).
+    pub lr_critical: f64,
+    /// The same for the generated candidates (their share of alpha split
+    /// over more candidates; infinite when none are generated).
+    pub lr_critical_generated: f64,
+    /// Generated candidates left out before any fit, with the reason (the
+    /// same as a user effect, or not an extension of the model).
+    pub generated_dropped: Vec<(String, String)>,
+    /// Generated candidates whose score statistic is below this are not
+    /// fitted (`lr_critical_generated / SCREEN_SAFETY`; infinite: no screen,
+    /// as under input noise, which the score does not weigh).
+    pub screen_threshold: f64,
+}
+
+impl Diagnosis {
+    /// The `k`-th named effect's correlations with the effects named before
+    /// it, each with that effect: a pair once, under the later of the two.
+    pub fn correlated_with_earlier(&self, k: usize) -> Vec<(&Correlation, &Named)> {
+        let (Some(n), Some(earlier)) = (self.named.get(k), self.named.get(..k)) else {
+            return vec![];
+        };
+        n.correlated
+            .iter()
+            .filter_map(|c| {
+                let w = c.with_effect.as_ref()?;
+                Some((c, earlier.iter().find(|m| m.effect == *w)?))
+            })
+            .collect()
+    }
+}
