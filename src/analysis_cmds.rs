@@ -80,7 +80,15 @@ fn system_title(nf: &NormalForm) -> String {
 }
 
 pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
+    if a.sys.experiments.as_deref() == Some("auto") {
+        return crate::experiments_cmd::auto_cmd(a);
+    }
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    if !a.known.is_empty() || !a.known_generic.is_empty() {
+        return crate::experiments_cmd::rank_known_cmd(a, nf);
+    }
+    let experiments = crate::experiments_cmd::experiments_of(&a.sys)?
+        .map(|e| crate::experiments_cmd::describe(&e));
     let r = run_rank(&mut nf, &a.an)?;
     let words: Vec<String> = r
         .basis
@@ -106,6 +114,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         let v = json!({
             "system": nf.name,
             "restriction": nf.restriction,
+            "experiments": experiments.as_ref().map(|e| e.0.clone()),
             "state": nf.state,
             "n": r.n,
             "rank": r.rank,
@@ -129,6 +138,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         system_title(&nf),
         nf.state.join(", ")
     ));
+    if let Some((_, t)) = &experiments {
+        o.push_str(&format!("experiments (params shared, states x@k per experiment): {t}\n"));
+    }
     let verdict = if exact {
         "weakly locally observable"
     } else {

@@ -501,6 +501,18 @@ pub struct RankArgs {
     pub an: AnalysisArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+    /// A state whose initial value is known, e.g. `--known S=0`: the rank in
+    /// the other unknowns with every Lie derivative evaluated at that value
+    /// (docs/experiments.md). In several experiments `S` means every copy,
+    /// `S@2` one.
+    #[arg(long = "known", value_name = "NAME=VALUE")]
+    pub known: Vec<String>,
+    /// A state whose initial value is known but generic (comma-separated or repeated).
+    #[arg(long = "known-generic", value_name = "NAME", value_delimiter = ',')]
+    pub known_generic: Vec<String>,
+    /// With --known: evaluate every Lie derivative up to this order at the point.
+    #[arg(long = "known-order", value_name = "K", default_value_t = 12)]
+    pub known_order: usize,
 }
 
 #[derive(Args)]
@@ -608,6 +620,16 @@ pub struct SystemArgs {
     /// Give a known constant a value, e.g. `--set q=0.9` (others stay generic).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// One of several experiments (repeat): `RESTRICTION: c=VALUE, ...`, e.g.
+    /// `--experiment 'q: q=0.9'`; an empty restriction is none. Each has its own
+    /// states (`x@1`, `x@2` ...); params are shared (docs/experiments.md).
+    #[arg(long = "experiment", value_name = "SPEC", conflicts_with = "restriction")]
+    pub experiment: Vec<String>,
+    /// Experiments from a file, one SPEC a line (`#` comments); or `auto`
+    /// (obsan rank): the smallest number of generic experiments that identifies
+    /// all it can, under --input's restriction or none.
+    #[arg(long = "experiments", value_name = "FILE|auto")]
+    pub experiments: Option<String>,
 }
 
 #[derive(Args)]
