@@ -47,9 +47,14 @@ formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys                      # rank 7 of 7, proven
   obsan rank systems/calib.sys --input q            # on circles (eq. 17): rank 4
   obsan rank systems/calib.sys --input q --set q=0.9 --json
+  obsan rank systems/calib.sys --experiment 'q: q=0.9' --experiment 'q: q=0' --experiment 'q: q=-1'
+  obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
+  obsan rank model.sys --known S=0 --known-generic x2         # known initial conditions
 
 --json prints {system, restriction, n, rank, exact, error_bound, degree_bound, basis (Lie
-words with their order), observable (per variable), max_order, evaluated}.")]
+words with their order), observable (per variable), max_order, evaluated}; with experiments
+also {experiments}. --known/--known-generic and --experiments auto print their own objects
+(docs/experiments.md).")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), each certified before it is printed: cheap structure and
@@ -505,7 +510,7 @@ pub struct RankArgs {
     /// the other unknowns with every Lie derivative evaluated at that value
     /// (docs/experiments.md). In several experiments `S` means every copy,
     /// `S@2` one.
-    #[arg(long = "known", value_name = "NAME=VALUE")]
+    #[arg(long = "known", value_name = "NAME=VALUE", value_delimiter = ',')]
     pub known: Vec<String>,
     /// A state whose initial value is known but generic (comma-separated or repeated).
     #[arg(long = "known-generic", value_name = "NAME", value_delimiter = ',')]

@@ -303,8 +303,13 @@ fn certificate_text(r: &KnownReport) -> String {
             }
         }
         Some(p) => {
+            let found = if p == 0 {
+                "every gradient was zero in the unknown columns there".to_string()
+            } else {
+                format!("a non-zero minor of size {p} there proves rank >= {p} at these values (certified)")
+            };
             let mut t = format!(
-                "at the known values: every Lie derivative up to order {} evaluated there ({} words), the other coordinates random mod 2^61-1; a non-zero minor of size {p} there proves rank >= {p} at these values (certified)",
+                "at the known values: every Lie derivative up to order {} evaluated there ({} in all), the other coordinates random mod 2^61-1; {found}",
                 r.order_checked, r.words_evaluated
             );
             if r.full() {
