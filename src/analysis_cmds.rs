@@ -139,7 +139,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         nf.state.join(", ")
     ));
     if let Some((_, t)) = &experiments {
-        o.push_str(&format!("experiments (params shared, states x@k per experiment): {t}\n"));
+        o.push_str(&format!(
+            "experiments (params shared, states x@k per experiment): {t}\n"
+        ));
     }
     let verdict = if exact {
         "weakly locally observable"

@@ -628,7 +628,11 @@ pub struct SystemArgs {
     /// One of several experiments (repeat): `RESTRICTION: c=VALUE, ...`, e.g.
     /// `--experiment 'q: q=0.9'`; an empty restriction is none. Each has its own
     /// states (`x@1`, `x@2` ...); params are shared (docs/experiments.md).
-    #[arg(long = "experiment", value_name = "SPEC", conflicts_with = "restriction")]
+    #[arg(
+        long = "experiment",
+        value_name = "SPEC",
+        conflicts_with = "restriction"
+    )]
     pub experiment: Vec<String>,
     /// Experiments from a file, one SPEC a line (`#` comments); or `auto`
     /// (obsan rank): the smallest number of generic experiments that identifies

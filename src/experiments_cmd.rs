@@ -161,8 +161,7 @@ fn resolve_known(nf: &NormalForm, a: &RankArgs) -> Result<Vec<Known>, Failure> {
 }
 
 fn deadline(a: &RankArgs) -> Option<Instant> {
-    a.an
-        .timeout
+    a.an.timeout
         .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)))
 }
 
@@ -282,7 +281,10 @@ pub fn rank_known_cmd(a: &RankArgs, mut nf: NormalForm) -> Result<ExitCode, Fail
         }
     };
     o.push_str(&format!("identifiable on their own: {}\n", list(&obs)));
-    o.push_str(&format!("not identifiable on their own: {}\n", list(&unobs)));
+    o.push_str(&format!(
+        "not identifiable on their own: {}\n",
+        list(&unobs)
+    ));
     o.push_str(&certificate);
     o.push('\n');
     out!("{o}");
@@ -423,11 +425,7 @@ fn print_auto(name: &str, a: &RankArgs, r: &AutoReport) -> Result<ExitCode, Fail
                 )
             })
             .collect();
-        let tried: Vec<String> = r
-            .special
-            .iter()
-            .map(|s| format!("{}", s.value))
-            .collect();
+        let tried: Vec<String> = r.special.iter().map(|s| format!("{}", s.value)).collect();
         o.push_str(&format!(
             "special values of {} tried: {}; degenerate: {}\n",
             r.constants.join(", "),
@@ -439,7 +437,9 @@ fn print_auto(name: &str, a: &RankArgs, r: &AutoReport) -> Result<ExitCode, Fail
             }
         ));
         for (c, q) in &r.poles {
-            o.push_str(&format!("  {c} = {q}: a denominator of the system is zero there\n"));
+            o.push_str(&format!(
+                "  {c} = {q}: a denominator of the system is zero there\n"
+            ));
         }
     }
     if r.error_bound > 0.0 {

@@ -45,7 +45,10 @@ fn three_circles_from_flags_and_from_a_file() {
         "--experiment",
         "q: q=0",
     ]);
-    assert_eq!((two["rank"].as_u64(), two["n"].as_u64()), (Some(8), Some(9)));
+    assert_eq!(
+        (two["rank"].as_u64(), two["n"].as_u64()),
+        (Some(8), Some(9))
+    );
     // Two distinct xi_q = xi - q (xi delta) give xi and delta themselves.
     let obs: Vec<&str> = two["observable_variables"]
         .as_array()
@@ -58,7 +61,14 @@ fn three_circles_from_flags_and_from_a_file() {
 
 #[test]
 fn auto_designs_the_papers_experiment() {
-    let v = json(&["rank", "systems/calib.sys", "--input", "q", "--experiments", "auto"]);
+    let v = json(&[
+        "rank",
+        "systems/calib.sys",
+        "--input",
+        "q",
+        "--experiments",
+        "auto",
+    ]);
     assert_eq!(v["experiments"], 3);
     assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(11), Some(11)));
     let ranks: Vec<u64> = v["ranks"]
@@ -143,7 +153,10 @@ fn bad_experiment_input_is_a_clear_error() {
         "no restriction named 'nope'",
     );
     let f = temp_file("bad.exp", "q: q=0.9\nq: q=zz\n");
-    bad(&["rank", "systems/calib.sys", "--experiments", &f], "bad.exp:2");
+    bad(
+        &["rank", "systems/calib.sys", "--experiments", &f],
+        "bad.exp:2",
+    );
     bad(
         &["symmetries", "systems/calib.sys", "--experiments", "auto"],
         "obsan rank",
@@ -157,7 +170,14 @@ fn bad_experiment_input_is_a_clear_error() {
         "--known-generic gamma",
     );
     bad(
-        &["rank", "systems/calib.sys", "--input", "q", "--experiment", "q: q=1"],
+        &[
+            "rank",
+            "systems/calib.sys",
+            "--input",
+            "q",
+            "--experiment",
+            "q: q=1",
+        ],
         "cannot be used with",
     );
 }

@@ -197,7 +197,10 @@ pub fn rank_in_columns(
     for _ in 0..2 {
         let p = random_point(&mut nf.ctx, &mut rng)?;
         let b = restricted_basis(&jets, &r.basis, &p, cols)?;
-        if best.as_ref().is_none_or(|x| b.0.rows.len() > x.0.rows.len()) {
+        if best
+            .as_ref()
+            .is_none_or(|x| b.0.rows.len() > x.0.rows.len())
+        {
             best = Some(b);
         }
     }
@@ -229,11 +232,7 @@ pub fn rank_known(
         rank_in_columns(nf, &unknown, opts.seed, opts.deadline)?;
     let specific: Vec<(Var, Fp, String)> = known
         .iter()
-        .filter_map(|k| {
-            k.value
-                .as_ref()
-                .map(|q| (k.index, q))
-        })
+        .filter_map(|k| k.value.as_ref().map(|q| (k.index, q)))
         .map(|(i, q)| {
             q.to_fp()
                 .map(|f| (nf.state_vars[i], f, nf.state[i].clone()))
@@ -336,7 +335,10 @@ pub fn rank_known(
             let row = jets.row(w.output, &w.fields, &point, false).map_err(|_| {
                 AnalysisError::Invalid(format!(
                     "a Lie derivative has a pole at the known values ({})",
-                    w.display(&fields.names, &nf.outputs.iter().map(|o| o.0.clone()).collect::<Vec<_>>())
+                    w.display(
+                        &fields.names,
+                        &nf.outputs.iter().map(|o| o.0.clone()).collect::<Vec<_>>()
+                    )
                 ))
             })?;
             evaluated += 1;
@@ -386,7 +388,9 @@ pub fn rank_known(
     Ok(KnownReport {
         rank,
         invariant: invariant.is_some(),
-        determined: invariant.is_some() || point_rank == unknown.len() || point_rank == generic_rank,
+        determined: invariant.is_some()
+            || point_rank == unknown.len()
+            || point_rank == generic_rank,
         point_rank: Some(point_rank),
         order_checked,
         words_evaluated: evaluated,
@@ -467,15 +471,16 @@ pub struct AutoReport {
     pub error_bound: f64,
 }
 
-fn stack(
-    sys: &System,
-    exps: &[Experiment],
-) -> Result<NormalForm, AnalysisError> {
+fn stack(sys: &System, exps: &[Experiment]) -> Result<NormalForm, AnalysisError> {
     sys.stacked_normal_form(exps)
         .map_err(|e| AnalysisError::Invalid(e.to_string()))
 }
 
-fn rank_of(nf: &mut NormalForm, seed: u64, deadline: Option<Instant>) -> Result<(usize, f64), AnalysisError> {
+fn rank_of(
+    nf: &mut NormalForm,
+    seed: u64,
+    deadline: Option<Instant>,
+) -> Result<(usize, f64), AnalysisError> {
     let r = rank(
         nf,
         RankOptions {
@@ -489,17 +494,22 @@ fn rank_of(nf: &mut NormalForm, seed: u64, deadline: Option<Instant>) -> Result<
 }
 
 /// The constants a restriction mentions (they vary between experiments).
-fn restriction_consts(sys: &System, restriction: Option<&str>) -> Result<Vec<String>, AnalysisError> {
-    let probe = [
-        Experiment {
-            restriction: restriction.map(str::to_string),
-            set: vec![],
-        },
-    ];
+fn restriction_consts(
+    sys: &System,
+    restriction: Option<&str>,
+) -> Result<Vec<String>, AnalysisError> {
+    let probe = [Experiment {
+        restriction: restriction.map(str::to_string),
+        set: vec![],
+    }];
     let nf = stack(sys, &probe)?;
     Ok(sys
         .decls_of(Kind::Const)
-        .filter(|d| nf.consts.iter().any(|(c, _)| c == &obsan_model::experiment_name(&d.name, 1)))
+        .filter(|d| {
+            nf.consts
+                .iter()
+                .any(|(c, _)| c == &obsan_model::experiment_name(&d.name, 1))
+        })
         .map(|d| d.name.clone())
         .collect())
 }

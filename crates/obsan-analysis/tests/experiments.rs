@@ -110,7 +110,10 @@ fn equal_wheels_straight_line_is_degenerate() {
         "/../../systems/calib.sys"
     ))
     .unwrap()
-    .replace("param phi, psi, eta, delta, xi", "param phi, psi, eta, xi\nconst delta = 1");
+    .replace(
+        "param phi, psi, eta, delta, xi",
+        "param phi, psi, eta, xi\nconst delta = 1",
+    );
     let sys = System::parse(&src, "calib_equal.sys").unwrap();
     let r = experiments_auto(&sys, Some("q"), &[], AutoOptions::default()).unwrap();
     assert_eq!(r.ranks[0].1, 4);

@@ -72,9 +72,9 @@ impl System {
                     .as_deref()
                     .and_then(|r| self.restriction(r))
                     .is_some_and(|r| {
-                        r.subs.iter().any(|(_, loc)| {
-                            self.ctx.reachable(&[loc.id]).contains(&d.sym.id)
-                        })
+                        r.subs
+                            .iter()
+                            .any(|(_, loc)| self.ctx.reachable(&[loc.id]).contains(&d.sym.id))
                     })
             });
             if set || in_restriction {
@@ -139,7 +139,12 @@ impl System {
                     continue;
                 }
                 let name = experiment_name(&d.name, tag);
-                let v = x.set.iter().rev().find(|(m, _)| m == &d.name).map(|s| s.1.clone());
+                let v = x
+                    .set
+                    .iter()
+                    .rev()
+                    .find(|(m, _)| m == &d.name)
+                    .map(|s| s.1.clone());
                 let id = match &v {
                     Some(q) => ctx.num(q.clone()),
                     None => ctx.symbol(&name).id,
@@ -301,7 +306,13 @@ mod tests {
         assert!(nf.ctx.is_zero(nf.fields[1][0]));
         assert_eq!(nf.ctx.to_text(nf.fields[1][1]), "2");
         assert_eq!(nf.outputs[1].0, "y@2");
-        assert_eq!(nf.consts, vec![("c@1".to_string(), None), ("c@2".to_string(), Some(Q::from_i64(2)))]);
+        assert_eq!(
+            nf.consts,
+            vec![
+                ("c@1".to_string(), None),
+                ("c@2".to_string(), Some(Q::from_i64(2)))
+            ]
+        );
     }
 
     #[test]
