@@ -177,12 +177,16 @@ fn restricted_basis(
 
 /// The generic rank in the columns `cols` (the other coordinates known but
 /// generic), from the rank test's basis at two fresh random points.
-pub fn rank_in_columns(
+/// Rank in the columns, per-column verdicts, the basis words kept, the rank
+/// test's error bound and its fields.
+type ColumnRank = (usize, Vec<bool>, Vec<LieWord>, f64, Fields);
+
+pub(crate) fn rank_in_columns(
     nf: &mut NormalForm,
     cols: &[usize],
     seed: u64,
     deadline: Option<Instant>,
-) -> Result<(usize, Vec<bool>, Vec<LieWord>, f64, Fields), AnalysisError> {
+) -> Result<ColumnRank, AnalysisError> {
     let r = rank(
         nf,
         RankOptions {
@@ -643,9 +647,9 @@ fn reduce_on_invariant(
         .map(|i| known.iter().any(|k| k.index == i && k.value.is_some()))
         .collect();
     let mut f0 = Vec::new();
-    for i in 0..n {
+    for (i, &fx) in fixed.iter().enumerate() {
         let f = sub(&mut m, nf.f0[i])?;
-        if fixed[i] {
+        if fx {
             if !m.ctx.is_identically_zero(f) {
                 return Ok(None);
             }
@@ -656,9 +660,9 @@ fn reduce_on_invariant(
     let mut fields = Vec::new();
     for fi in &nf.fields {
         let mut v = Vec::new();
-        for i in 0..n {
-            let f = sub(&mut m, fi[i])?;
-            if fixed[i] {
+        for (&g, &fx) in fi.iter().zip(&fixed) {
+            let f = sub(&mut m, g)?;
+            if fx {
                 if !m.ctx.is_identically_zero(f) {
                     return Ok(None);
                 }

@@ -31,8 +31,8 @@ pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
 };
 pub use experiments::{
-    experiments_auto, rank_in_columns, rank_known, AutoOptions, AutoReport, Known, KnownOptions,
-    KnownReport, SpecialValue,
+    experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
+    SpecialValue,
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
