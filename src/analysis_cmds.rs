@@ -93,10 +93,18 @@ fn system_title(nf: &NormalForm) -> String {
 }
 
 pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
+    if a.sys.experiments.as_deref() == Some("auto") {
+        return crate::experiments_cmd::auto_cmd(a);
+    }
     let (_, mut nf) = load_normal_form(&a.sys)?;
     if !nf.unknown_inputs.is_empty() {
         return crate::unknown_input_cmd::rank(a, &nf);
     }
+    if !a.known.is_empty() || !a.known_generic.is_empty() {
+        return crate::experiments_cmd::rank_known_cmd(a, nf);
+    }
+    let experiments = crate::experiments_cmd::experiments_of(&a.sys)?
+        .map(|e| crate::experiments_cmd::describe(&e));
     let deadline = deadline_after(Instant::now(), a.an.timeout);
     let r = run_rank(&mut nf, &a.an, deadline, false)?;
     let words: Vec<String> = r
@@ -123,6 +131,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         let v = json!({
             "system": nf.name,
             "restriction": nf.restriction,
+            "experiments": experiments.as_ref().map(|e| e.0.clone()),
             "state": nf.state,
             "n": r.n,
             "rank": r.rank,
@@ -146,6 +155,11 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         system_title(&nf),
         nf.state.join(", ")
     ));
+    if let Some((_, t)) = &experiments {
+        o.push_str(&format!(
+            "experiments (params shared, states x@k per experiment): {t}\n"
+        ));
+    }
     let verdict = if exact {
         "weakly locally observable"
     } else {

@@ -54,10 +54,15 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys                      # rank 7 of 7, proven
   obsan rank systems/calib.sys --input q            # on circles (eq. 17): rank 4
   obsan rank systems/calib.sys --input q --set q=0.9 --json
+  obsan rank systems/calib.sys --experiment 'q: q=0.9' --experiment 'q: q=0' --experiment 'q: q=-1'
+  obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
+  obsan rank model.sys --known S=0 --known-generic x2         # known initial conditions
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
 weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
-degree_bound, seed, basis (Lie words with their order), max_order, evaluated}.")]
+degree_bound, seed, basis (Lie words with their order), max_order, evaluated}; with experiments
+also {experiments}. --known/--known-generic and --experiments auto print their own objects
+(docs/experiments.md).")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), each certified before it is printed: cheap structure and
@@ -519,6 +524,18 @@ pub struct RankArgs {
     /// (default: the state dimension + 1).
     #[arg(long, value_name = "M")]
     pub order: Option<usize>,
+    /// A state whose initial value is known, e.g. `--known S=0`: the rank in
+    /// the other unknowns with every Lie derivative evaluated at that value
+    /// (docs/experiments.md). In several experiments `S` means every copy,
+    /// `S@2` one.
+    #[arg(long = "known", value_name = "NAME=VALUE", value_delimiter = ',')]
+    pub known: Vec<String>,
+    /// A state whose initial value is known but generic (comma-separated or repeated).
+    #[arg(long = "known-generic", value_name = "NAME", value_delimiter = ',')]
+    pub known_generic: Vec<String>,
+    /// With --known: evaluate every Lie derivative up to this order at the point.
+    #[arg(long = "known-order", value_name = "K", default_value_t = 12)]
+    pub known_order: usize,
 }
 
 #[derive(Args)]
@@ -626,6 +643,20 @@ pub struct SystemArgs {
     /// Give a known constant a value, e.g. `--set q=0.9` (others stay generic).
     #[arg(long = "set", value_name = "NAME=VALUE")]
     pub set: Vec<String>,
+    /// One of several experiments (repeat): `RESTRICTION: c=VALUE, ...`, e.g.
+    /// `--experiment 'q: q=0.9'`; an empty restriction is none. Each has its own
+    /// states (`x@1`, `x@2` ...); params are shared (docs/experiments.md).
+    #[arg(
+        long = "experiment",
+        value_name = "SPEC",
+        conflicts_with = "restriction"
+    )]
+    pub experiment: Vec<String>,
+    /// Experiments from a file, one SPEC a line (`#` comments); or `auto`
+    /// (obsan rank): the smallest number of generic experiments that identifies
+    /// all it can, under --input's restriction or none.
+    #[arg(long = "experiments", value_name = "FILE|auto")]
+    pub experiments: Option<String>,
 }
 
 #[derive(Args)]

@@ -27,6 +27,7 @@ mod analysis_cmds;
 mod cli;
 mod diagnose_cmd;
 mod estimate_cmds;
+mod experiments_cmd;
 mod expr_cmds;
 mod figures;
 mod fsio;

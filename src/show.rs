@@ -40,6 +40,12 @@ pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Q)>, Failure> {
 /// Load a system and bring it to normal form as the flags say.
 pub fn load_normal_form(a: &SystemArgs) -> Result<(System, NormalForm), Failure> {
     let sys = load_system(&a.system)?;
+    if let Some(exps) = crate::experiments_cmd::experiments_of(a)? {
+        let nf = sys
+            .stacked_normal_form(&exps)
+            .map_err(|e| Failure(e.to_string()))?;
+        return Ok((sys, nf));
+    }
     let sets = parse_sets(&a.set)?;
     let nf = sys
         .normal_form(a.restriction.as_deref(), &sets)

@@ -190,6 +190,49 @@ class System:
         lower bound with ``error_bound``)."""
         return self._run("rank", dict(input=input, set=set, seed=seed, **options))
 
+    def experiments(
+        self,
+        experiments: Union[str, Iterable[str]] = "auto",
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan rank`` over several experiments (docs/experiments.md).
+
+        ``"auto"`` (default): the smallest number of generic experiments (under the
+        restriction ``input``, or with free inputs) after which the rank stops growing,
+        and which special constant values are degenerate. A list of specs, e.g.
+        ``["q: q=0.9", "q: q=0", "q: q=-1"]``: the rank of those experiments stacked
+        (params shared, states ``x@k`` per experiment). A path: the experiments file."""
+        if isinstance(experiments, str):
+            if experiments == "auto" or os.path.exists(experiments):
+                opts = dict(experiments=experiments, input=input, set=set, seed=seed)
+            else:
+                opts = dict(experiment=[experiments], set=set, seed=seed)
+        else:
+            opts = dict(experiment=list(experiments), set=set, seed=seed)
+        return self._run("rank", dict(opts, **options))
+
+    def rank_known(
+        self,
+        known: Optional[Mapping] = None,
+        generic: Union[str, Iterable[str], None] = None,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan rank --known``: the rank test with known initial conditions, e.g.
+        ``known={"S": 0}`` (exact values, evaluated at that point: a certified lower
+        bound, with the generic rank as upper bound) and ``generic=["x2"]`` (known but
+        generic). See docs/experiments.md for what is certified."""
+        generic = [generic] if isinstance(generic, str) else (list(generic) if generic else None)
+        return self._run(
+            "rank",
+            dict(known=known, known_generic=generic, input=input, set=set, seed=seed, **options),
+        )
+
     def symmetries(
         self,
         input: Optional[str] = None,

@@ -4,6 +4,7 @@ mod analysis;
 mod calibrate;
 mod classic;
 mod diagnose;
+mod experiments;
 mod expr;
 mod modes;
 mod montecarlo;

@@ -17,6 +17,7 @@
 
 mod decomp;
 mod derive;
+mod experiments;
 mod fields;
 mod fp_linalg;
 mod modes;
@@ -30,6 +31,10 @@ mod unknown_input;
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
+pub use experiments::{
+    experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
+    SpecialValue,
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};

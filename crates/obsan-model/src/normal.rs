@@ -226,7 +226,7 @@ impl System {
         })
     }
 
-    fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {
+    pub(crate) fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {
         let (a, b) = loc.src_span(loc.ast.span);
         ModelError::at(&self.origin, &self.src, a, b, msg.to_string())
     }
