@@ -19,6 +19,7 @@ mod decomp;
 mod derive;
 mod fields;
 mod fp_linalg;
+mod global;
 mod modes;
 mod rank;
 pub mod structure;
@@ -28,6 +29,10 @@ mod symmetry;
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
+pub use global::{
+    global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
+    Identifiability,
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};

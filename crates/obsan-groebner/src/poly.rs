@@ -161,7 +161,7 @@ impl Order {
 }
 
 /// A polynomial: terms with non-zero coefficients, largest monomial first.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Poly {
     pub(crate) terms: Vec<(Mono, u64)>,
 }
