@@ -15,7 +15,7 @@
 use crate::rank::AnalysisError;
 use obsan_expr::{Int, Poly as ZPoly, Var};
 use obsan_groebner::{
-    distinct_roots, eliminate_to, groebner, Field, GbBudget, GbError, Mono, Order, Poly, Ring,
+    distinct_roots, groebner, Field, GbBudget, GbError, Mono, Order, Poly, Ring,
 };
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -275,8 +275,9 @@ impl Run {
         let nu = m.input_vars.len();
         // Distinct non-constant denominators, each with its z state.
         let mut dens: Vec<ZPoly> = Vec::new();
+        let const_only = |d: &ZPoly| d.vars().iter().all(|v| m.const_vars.contains(v));
         let den_index = |dens: &mut Vec<ZPoly>, d: &ZPoly| -> Option<usize> {
-            if d.is_constant() {
+            if const_only(d) {
                 return None;
             }
             match dens.iter().position(|e| e == d) {
@@ -352,10 +353,9 @@ impl Run {
                     .mul(&nump, &run.ring.var(run.sv(nx + i, 0)))
                     .map_err(gb_err),
                 None => {
-                    let c = den
-                        .as_constant()
-                        .map(|c| int_mod(&run.field, &c))
-                        .unwrap_or(0);
+                    // A number, or known constants at their random values.
+                    let dp = conv(run, den)?;
+                    let c = run.ring.eval(&dp, &run.point);
                     let ci = run
                         .field
                         .inv(c)
@@ -622,6 +622,7 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
     // once it repeats, the output's codistribution is closed.
     let mut prev: Option<usize> = None;
     let mut rank_order = None;
+    let mut fibre_dim = 0;
     let mut local = vec![false; targets.len()];
     for k in 0..opts.max_order {
         let (eqs, unk) = run.equations(k)?;
@@ -630,6 +631,7 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
         let fibre = unk.len() - rk;
         if prev == Some(fibre) {
             rank_order = Some(k - 1);
+            fibre_dim = fibre;
             for (t, &v) in targets.iter().enumerate() {
                 let c = unk.iter().position(|&u| u == v).unwrap_or(0);
                 local[t] = rank(&f, j.clone(), Some(c)) + 1 == rk;
@@ -666,7 +668,7 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
                 opts.max_order
             )));
         }
-        let c = count_at(run, order, &targets, &local, budget, opts, rank_order)?;
+        let c = count_at(run, order, &targets, &local, fibre_dim, budget, opts, rank_order)?;
         if let Some(l) = &last {
             if l.per_var == c.per_var && l.joint == c.joint {
                 return Ok(last.unwrap_or(c));
@@ -677,17 +679,49 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
     }
 }
 
+/// The counts at one Taylor order. A fibre of positive dimension `d` (some
+/// variables not locally identifiable) is first cut by `d` random affine
+/// hyperplanes through the point in the coordinates of those variables: a
+/// generic fibre of the output map is equidimensional (every component has
+/// dimension `d`, the fibre-dimension theorem for the dominant map from the
+/// irreducible space of (params, initial states)), and the locally
+/// identifiable variables are constant on each component, so a generic
+/// codimension-`d` slice meets every component and keeps every value they take.
+#[allow(clippy::too_many_arguments)]
 fn count_at(
     run: &mut Run,
     order: usize,
     targets: &[usize],
     local: &[bool],
+    fibre_dim: usize,
     budget: GbBudget,
     opts: &GlobalOptions,
     rank_order: usize,
 ) -> Result<Counts, AnalysisError> {
     let f = run.field;
-    let (eqs, unk) = run.equations(order)?;
+    let (mut eqs, unk) = run.equations(order)?;
+    let free: Vec<usize> = targets
+        .iter()
+        .zip(local)
+        .filter(|(_, &l)| !l)
+        .map(|(&t, _)| t)
+        .collect();
+    if fibre_dim > free.len() {
+        return Err(err(
+            "global: the fibre is larger than the non-identifiable variables span (a non-generic point); try another --seed",
+        ));
+    }
+    for _ in 0..fibre_dim {
+        let r = &run.ring;
+        let mut h = Poly::zero();
+        let mut c0 = 0u64;
+        for &v in &free {
+            let c = run.rng.elem(&f);
+            h = r.add(&h, &r.scale(&r.var(v), c));
+            c0 = f.add(c0, f.mul(c, run.point[v]));
+        }
+        eqs.push(r.sub(&h, &r.constant(c0)));
+    }
     let (ring, gens) = run.to_unknown_ring(&eqs, &unk, 0)?;
     let tpos: Vec<usize> = targets
         .iter()
@@ -696,53 +730,39 @@ fn count_at(
     let b = groebner(&ring, &gens, budget).map_err(gb_err)?;
     if b.is_unit() {
         return Err(err(
-            "global: the system at the random point has no solution (a bug or a degenerate point); try another --seed",
+            "global: the system at the random point has no solution (a degenerate point); try another --seed",
         ));
     }
-    let coeffs: Vec<u64> = tpos.iter().map(|_| run.rng.elem(&f)).collect();
-    let mut per_var = Vec::with_capacity(targets.len());
-    let joint;
-    if b.is_zero_dimensional() {
-        for &t in &tpos {
-            let m = b
-                .minimal_polynomial(&ring.var(t), opts.max_solutions)
-                .map_err(gb_err)?;
-            per_var.push(Some(distinct_roots(f, &m)));
-        }
-        // A random linear form separates the solutions (with probability
-        // at least 1 - C(s, 2)/p), so its distinct values count them.
-        let lf = ring.from_terms(
-            tpos.iter()
-                .zip(&coeffs)
-                .map(|(&t, &c)| (Mono::var(ring.n, t, 1), c))
-                .collect::<Vec<_>>(),
-        );
-        let m = b
-            .minimal_polynomial(&lf, opts.max_solutions)
-            .map_err(gb_err)?;
-        joint = Some(distinct_roots(f, &m));
-    } else {
-        for (i, &t) in tpos.iter().enumerate() {
-            if !local[i] {
-                per_var.push(None);
-                continue;
-            }
-            let e = eliminate_to(f, ring.n, &gens, t, budget).map_err(gb_err)?;
-            per_var.push(e.map(|m| distinct_roots(f, &m)));
-        }
-        // Joint values of the locally identifiable targets: w = sum c_i t_i.
-        let (ring1, mut gens1) = run.to_unknown_ring(&eqs, &unk, 1)?;
-        let w = ring1.n - 1;
-        let mut terms = vec![(Mono::var(ring1.n, w, 1), f.neg(1))];
-        for (i, &t) in tpos.iter().enumerate() {
-            if local[i] {
-                terms.push((Mono::var(ring1.n, t, 1), coeffs[i]));
-            }
-        }
-        gens1.push(ring1.from_terms(terms));
-        let e = eliminate_to(f, ring1.n, &gens1, w, budget).map_err(gb_err)?;
-        joint = e.map(|m| distinct_roots(f, &m));
+    if !b.is_zero_dimensional() {
+        return Err(err(
+            "global: the sliced system still has infinitely many solutions (a non-generic point); try another --seed",
+        ));
     }
+    let mut per_var = Vec::with_capacity(targets.len());
+    for (i, &t) in tpos.iter().enumerate() {
+        if !local[i] {
+            per_var.push(None);
+            continue;
+        }
+        let m = b
+            .minimal_polynomial(&ring.var(t), opts.max_solutions)
+            .map_err(gb_err)?;
+        per_var.push(Some(distinct_roots(f, &m)));
+    }
+    // A random linear form in the locally identifiable variables separates
+    // their joint values (with probability at least 1 - C(s, 2)/p), so its
+    // distinct values count them.
+    let mut terms = Vec::new();
+    for (i, &t) in tpos.iter().enumerate() {
+        if local[i] {
+            terms.push((Mono::var(ring.n, t, 1), run.rng.elem(&f)));
+        }
+    }
+    let lf = ring.from_terms(terms);
+    let m = b
+        .minimal_polynomial(&lf, opts.max_solutions)
+        .map_err(gb_err)?;
+    let joint = Some(distinct_roots(f, &m));
     Ok(Counts {
         per_var,
         joint,

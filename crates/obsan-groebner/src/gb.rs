@@ -70,23 +70,40 @@ impl Work<'_> {
         Ok(())
     }
 
+    fn check_deadline(&self) -> Result<(), GbError> {
+        if let Some(d) = self.budget.deadline {
+            if Instant::now() > d {
+                return Err(GbError::Budget("deadline"));
+            }
+        }
+        Ok(())
+    }
+
     /// Full reduction of `f` by the active elements.
     fn reduce(&self, f: Poly) -> Result<Poly, GbError> {
         let r = self.ring;
-        let mut rest = f;
+        // `rest[start..]` is still to reduce; `done` the irreducible terms.
+        let mut rest = f.terms;
+        let mut start = 0;
         let mut done: Vec<(Mono, u64)> = Vec::new();
-        while let Some((m, c)) = rest.terms.first().cloned() {
-            let g = (0..self.polys.len()).find(|&k| self.active[k] && self.lm[k].divides(&m));
+        while start < rest.len() {
+            let (m, c) = &rest[start];
+            let g = (0..self.polys.len()).find(|&k| self.active[k] && self.lm[k].divides(m));
             match g {
                 Some(k) => {
-                    let q = self.lm[k].quotient(&m);
+                    let q = self.lm[k].quotient(m);
                     // the active elements are monic
-                    rest = r.axpy(&rest, r.field.neg(c), &q, &self.polys[k])?;
-                    self.check(&rest)?;
+                    let neg = r.field.neg(*c);
+                    rest = r.axpy_terms(&rest[start..], neg, &q, &self.polys[k].terms)?;
+                    start = 0;
+                    if rest.len() > self.budget.max_terms {
+                        return Err(GbError::Budget("terms of a polynomial"));
+                    }
+                    self.check_deadline()?;
                 }
                 None => {
-                    done.push((m, c));
-                    rest.terms.remove(0);
+                    done.push((m.clone(), *c));
+                    start += 1;
                 }
             }
         }
@@ -263,17 +280,21 @@ impl Basis {
     /// The normal form of `f` (its remainder on division by the basis).
     pub fn reduce(&self, f: &Poly) -> Result<Poly, GbError> {
         let r = &self.ring;
-        let mut rest = r.resort(f);
+        let mut rest = r.resort(f).terms;
+        let mut start = 0;
         let mut done: Vec<(Mono, u64)> = Vec::new();
-        while let Some((m, c)) = rest.terms.first().cloned() {
-            match self.polys.iter().find(|g| g.terms[0].0.divides(&m)) {
+        while start < rest.len() {
+            let (m, c) = &rest[start];
+            match self.polys.iter().find(|g| g.terms[0].0.divides(m)) {
                 Some(g) => {
-                    let q = g.terms[0].0.quotient(&m);
-                    rest = r.axpy(&rest, r.field.neg(c), &q, g)?;
+                    let q = g.terms[0].0.quotient(m);
+                    let neg = r.field.neg(*c);
+                    rest = r.axpy_terms(&rest[start..], neg, &q, &g.terms)?;
+                    start = 0;
                 }
                 None => {
-                    done.push((m, c));
-                    rest.terms.remove(0);
+                    done.push((m.clone(), *c));
+                    start += 1;
                 }
             }
         }

@@ -281,18 +281,31 @@ impl Ring {
     /// `a + c * m * b` by one merge (a monomial order is compatible with
     /// multiplication, so `m * b` stays sorted).
     pub fn axpy(&self, a: &Poly, c: u64, m: &Mono, b: &Poly) -> Result<Poly, GbError> {
+        Ok(Poly {
+            terms: self.axpy_terms(&a.terms, c, m, &b.terms)?,
+        })
+    }
+
+    /// [`Ring::axpy`] on sorted term slices.
+    pub(crate) fn axpy_terms(
+        &self,
+        a: &[(Mono, u64)],
+        c: u64,
+        m: &Mono,
+        b: &[(Mono, u64)],
+    ) -> Result<Vec<(Mono, u64)>, GbError> {
         let f = &self.field;
-        let mut out = Vec::with_capacity(a.terms.len() + b.terms.len());
+        let mut out = Vec::with_capacity(a.len() + b.len());
         let mut i = 0;
         let mut j = 0;
         let mut bj: Option<(Mono, u64)> = None;
         loop {
-            if bj.is_none() && j < b.terms.len() {
-                let (bm, bc) = &b.terms[j];
+            if bj.is_none() && j < b.len() {
+                let (bm, bc) = &b[j];
                 bj = Some((m.mul(bm)?, f.mul(c, *bc)));
                 j += 1;
             }
-            match (a.terms.get(i), bj.take()) {
+            match (a.get(i), bj.take()) {
                 (None, None) => break,
                 (Some(t), None) => {
                     out.push(t.clone());
@@ -324,7 +337,7 @@ impl Ring {
                 },
             }
         }
-        Ok(Poly { terms: out })
+        Ok(out)
     }
 
     pub fn mul(&self, a: &Poly, b: &Poly) -> Result<Poly, GbError> {
