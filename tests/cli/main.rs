@@ -5,6 +5,7 @@ mod calibrate;
 mod classic;
 mod diagnose;
 mod expr;
+mod global;
 mod modes;
 mod montecarlo;
 mod show;

@@ -1067,6 +1067,47 @@ mod tests {
         assert_eq!(r.solutions, Some(1));
     }
 
+    fn file_report(rel: &str) -> GlobalReport {
+        let path = format!("{}/../../systems/{rel}", env!("CARGO_MANIFEST_DIR"));
+        let src = std::fs::read_to_string(path).unwrap();
+        let sys = System::parse(&src, rel).unwrap();
+        let mut nf = sys.normal_form(None, &[]).unwrap();
+        global_identifiability(&mut nf, &GlobalOptions::default()).unwrap()
+    }
+
+    #[test]
+    fn hiv_xia_moog_swaps_delta_and_c() {
+        // Derived by hand: T' = s - d T - beta T V gives s, d, beta; with
+        // V' = p I - c V and I' = beta T V - delta I,
+        // V'' + (delta + c) V' + delta c V = p beta T V: the outputs see p and
+        // only delta + c and delta c, so (delta, c) is an unordered pair (2
+        // values each) and I = (V' + c V)/p takes 2 values; the rest is global.
+        let r = file_report("classic/hiv.sys");
+        for v in ["delta", "c", "I"] {
+            assert_eq!(verdict(&r, v), Identifiability::Local(2), "{v}");
+        }
+        for v in ["s", "d", "beta", "p", "T", "V"] {
+            assert_eq!(verdict(&r, v), Identifiability::Global, "{v}");
+        }
+        assert_eq!(r.solutions, Some(2));
+        // Not a signed permutation (I moves by an affine map): none is claimed.
+        assert!(r.maps.is_empty());
+    }
+
+    #[test]
+    fn llw1987_published_pair() {
+        // Published (SI.jl tutorial "Globally identifiable functions"): the
+        // identifiable functions are p1 + p3, p2 p4, p1 p3: p1 and p3 are an
+        // unordered pair (2 values each), p2, p4, x1, x2 not identifiable.
+        let r = file_report("benchmarks/llw1987.sys");
+        assert_eq!(verdict(&r, "p1"), Identifiability::Local(2));
+        assert_eq!(verdict(&r, "p3"), Identifiability::Local(2));
+        for v in ["p2", "p4", "x1", "x2"] {
+            assert_eq!(verdict(&r, v), Identifiability::NotIdentifiable, "{v}");
+        }
+        assert_eq!(r.solutions, Some(2));
+    }
+
     #[test]
     fn rational_model_clears_denominators() {
         // x' = -x/(a + x)... y = x: y' = -y/(a + y) gives a = -y - y/y'
