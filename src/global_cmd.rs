@@ -71,9 +71,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         "values of the locally identifiable variables"
     };
     match r.solutions {
-        Some(k) => o.push_str(&format!(
-            "{k} {scope} give the output of a generic one\n"
-        )),
+        Some(k) => o.push_str(&format!("{k} {scope} give the output of a generic one\n")),
         None => o.push_str(&format!("infinitely many {scope} give the same output\n")),
     }
     if !maps.is_empty() {

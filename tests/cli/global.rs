@@ -16,7 +16,10 @@ fn var(v: &Value, name: &str) -> (String, Option<u64>) {
         .iter()
         .find(|x| x["name"] == name)
         .unwrap_or_else(|| panic!("no variable {name}"));
-    (x["verdict"].as_str().unwrap().to_string(), x["values"].as_u64())
+    (
+        x["verdict"].as_str().unwrap().to_string(),
+        x["values"].as_u64(),
+    )
 }
 
 #[test]

@@ -14,9 +14,7 @@
 
 use crate::rank::AnalysisError;
 use obsan_expr::{Int, Poly as ZPoly, Var};
-use obsan_groebner::{
-    distinct_roots, groebner, Field, GbBudget, GbError, Mono, Order, Poly, Ring,
-};
+use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, GbError, Mono, Order, Poly, Ring};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
 use std::time::Instant;
@@ -314,7 +312,11 @@ impl Run {
             rng: Rng(0),
         };
         // Known constants: random values (they are known, hence fixed).
-        let consts: Vec<(Var, u64)> = m.const_vars.iter().map(|&v| (v, rng.elem(&field))).collect();
+        let consts: Vec<(Var, u64)> = m
+            .const_vars
+            .iter()
+            .map(|&v| (v, rng.elem(&field)))
+            .collect();
         let mut vmap: HashMap<Var, Result<usize, u64>> = HashMap::new();
         for (i, &v) in m.param_vars.iter().enumerate() {
             vmap.insert(v, Ok(i));
@@ -668,7 +670,9 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
                 opts.max_order
             )));
         }
-        let c = count_at(run, order, &targets, &local, fibre_dim, budget, opts, rank_order)?;
+        let c = count_at(
+            run, order, &targets, &local, fibre_dim, budget, opts, rank_order,
+        )?;
         if let Some(l) = &last {
             if l.per_var == c.per_var && l.joint == c.joint {
                 return Ok(last.unwrap_or(c));
@@ -820,9 +824,7 @@ fn is_symmetry(m: &ZModel, sigma: &Signed) -> bool {
             lhs.sub(&rhs).is_zero()
         }
     };
-    let nx = m.dyn_vars.len();
-    for s in 0..nx {
-        let (ps, es) = sigma[s];
+    for (s, &(ps, es)) in sigma.iter().enumerate().take(m.dyn_vars.len()) {
         let (n, d) = &m.rhs[ps];
         let (sn, sd) = (subst(n), subst(d));
         if !same((&sn, &sd), (&m.rhs[s].0, &m.rhs[s].1), es) {
@@ -847,6 +849,7 @@ fn find_maps(m: &ZModel, multi: &[bool], cap: usize) -> Vec<Signed> {
     let mut tried = 0usize;
     // Depth-first over images: each movable variable to a movable variable
     // of its kind not yet used, with a sign.
+    #[allow(clippy::too_many_arguments)]
     fn rec(
         i: usize,
         movable: &[usize],
@@ -1042,9 +1045,7 @@ mod tests {
         // y = x1 e^{-a t} + x2 e^{-b t}: the exponents and amplitudes are
         // known as an unordered pair {(a, x1), (b, x2)}: 2 values each, and
         // the swap maps one to the other.
-        let r = report(
-            "state x1, x2\nparam a, b\nx1' = -a*x1\nx2' = -b*x2\noutput y = x1 + x2\n",
-        );
+        let r = report("state x1, x2\nparam a, b\nx1' = -a*x1\nx2' = -b*x2\noutput y = x1 + x2\n");
         for v in ["a", "b", "x1", "x2"] {
             assert_eq!(verdict(&r, v), Identifiability::Local(2), "{v}");
         }

@@ -62,7 +62,12 @@ impl Basis {
         let std = self.standard_monomials(cap)?;
         let r = &self.ring;
         let fld = r.field;
-        let col: HashMap<Mono, usize> = std.iter().cloned().enumerate().map(|(i, m)| (m, i)).collect();
+        let col: HashMap<Mono, usize> = std
+            .iter()
+            .cloned()
+            .enumerate()
+            .map(|(i, m)| (m, i))
+            .collect();
         let dim = std.len();
         // Echelon rows: (vector, combination of powers it represents).
         let mut rows: Vec<(Vec<u64>, Vec<u64>, usize)> = Vec::new(); // (vec, combo, pivot)
@@ -71,7 +76,9 @@ impl Basis {
         for k in 0..=dim {
             let mut v = vec![0u64; dim];
             for (m, c) in pw.terms() {
-                let i = *col.get(m).ok_or(GbError::Budget("normal form outside the quotient"))?;
+                let i = *col
+                    .get(m)
+                    .ok_or(GbError::Budget("normal form outside the quotient"))?;
                 v[i] = *c;
             }
             let mut combo = vec![0u64; dim + 1];
@@ -92,7 +99,9 @@ impl Basis {
                 None => {
                     // sum combo[i] f^i = 0: the first dependency is minimal.
                     combo.truncate(k + 1);
-                    let inv = fld.inv(combo[k]).ok_or(GbError::Budget("zero leading coefficient"))?;
+                    let inv = fld
+                        .inv(combo[k])
+                        .ok_or(GbError::Budget("zero leading coefficient"))?;
                     return Ok(combo.iter().map(|&c| fld.mul(c, inv)).collect());
                 }
                 Some(piv) => {

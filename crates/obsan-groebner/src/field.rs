@@ -10,7 +10,7 @@ impl Field {
     /// The field of the odd prime `p < 2^63`; `None` otherwise. Primality is
     /// checked (deterministic Miller–Rabin for 64-bit integers).
     pub fn new(p: u64) -> Option<Field> {
-        if p < 3 || p >= 1 << 63 || !is_prime(p) {
+        if !(3..1 << 63).contains(&p) || !is_prime(p) {
             return None;
         }
         Some(Field { p })

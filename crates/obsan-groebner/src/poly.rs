@@ -95,7 +95,10 @@ impl Mono {
     }
 
     pub fn coprime(&self, o: &Mono) -> bool {
-        self.e.iter().zip(o.e.iter()).all(|(a, b)| *a == 0 || *b == 0)
+        self.e
+            .iter()
+            .zip(o.e.iter())
+            .all(|(a, b)| *a == 0 || *b == 0)
     }
 
     /// The only variable with a non-zero exponent, if exactly one has.
@@ -397,10 +400,7 @@ impl Ring {
             let k = m.e[v];
             let mut e = m.e.clone();
             e[v] -= 1;
-            (
-                Mono { deg: m.deg - 1, e },
-                f.mul(*c, f.reduce(k as u64)),
-            )
+            (Mono { deg: m.deg - 1, e }, f.mul(*c, f.reduce(k as u64)))
         });
         self.from_terms(terms.collect::<Vec<_>>())
     }

@@ -1,6 +1,8 @@
 //! Solution counts of classical systems, with the counts from the literature.
 
-use obsan_groebner::{distinct_roots, eliminate_to, groebner, Field, GbBudget, Mono, Order, Poly, Ring};
+use obsan_groebner::{
+    distinct_roots, eliminate_to, groebner, Field, GbBudget, Mono, Order, Poly, Ring,
+};
 
 const P: u64 = (1 << 61) - 1;
 
@@ -70,7 +72,10 @@ fn cyclic_5_has_70_solutions() {
         poly(&r, "x0 + x1 + x2 + x3 + x4"),
         poly(&r, "x0*x1 + x1*x2 + x2*x3 + x3*x4 + x4*x0"),
         poly(&r, "x0*x1*x2 + x1*x2*x3 + x2*x3*x4 + x3*x4*x0 + x4*x0*x1"),
-        poly(&r, "x0*x1*x2*x3 + x1*x2*x3*x4 + x2*x3*x4*x0 + x3*x4*x0*x1 + x4*x0*x1*x2"),
+        poly(
+            &r,
+            "x0*x1*x2*x3 + x1*x2*x3*x4 + x2*x3*x4*x0 + x3*x4*x0*x1 + x4*x0*x1*x2",
+        ),
         poly(&r, "x0*x1*x2*x3*x4 - 1"),
     ];
     let b = groebner(&r, &g, GbBudget::default()).unwrap();
@@ -82,15 +87,14 @@ fn multiple_roots_and_elimination() {
     // (x - 1)^2 (x + 2) = 0, y = x^2: x has 2 distinct values, y too (1 and 4);
     // the quotient has dimension 3 (a double root).
     let r = ring(2);
-    let g = [
-        poly(&r, "x0^3 - 3*x0 + 2"),
-        poly(&r, "x1 - x0^2"),
-    ];
+    let g = [poly(&r, "x0^3 - 3*x0 + 2"), poly(&r, "x1 - x0^2")];
     let b = groebner(&r, &g, GbBudget::default()).unwrap();
     assert_eq!(b.standard_monomials(100).unwrap().len(), 3);
     let m = b.minimal_polynomial(&r.var(0), 100).unwrap();
     assert_eq!(distinct_roots(r.field, &m), 2);
-    let e = eliminate_to(r.field, 2, &g, 1, GbBudget::default()).unwrap().unwrap();
+    let e = eliminate_to(r.field, 2, &g, 1, GbBudget::default())
+        .unwrap()
+        .unwrap();
     assert_eq!(distinct_roots(r.field, &e), 2);
     // y ∈ {1, 4}: the radical of the elimination ideal is (y - 1)(y - 4).
     assert_eq!(r.eval(&poly(&r, "x1 - 1"), &[0, 1]), 0);
@@ -103,9 +107,17 @@ fn positive_dimension_and_unit_ideal() {
     let g = [poly(&r, "x0*x1 - 1")];
     let b = groebner(&r, &g, GbBudget::default()).unwrap();
     assert!(!b.is_zero_dimensional());
-    assert_eq!(eliminate_to(r.field, 2, &g, 0, GbBudget::default()).unwrap(), None);
+    assert_eq!(
+        eliminate_to(r.field, 2, &g, 0, GbBudget::default()).unwrap(),
+        None
+    );
     // x = 1 and x = 2: no common zero.
-    let u = groebner(&r, &[poly(&r, "x0 - 1"), poly(&r, "x0 - 2")], GbBudget::default()).unwrap();
+    let u = groebner(
+        &r,
+        &[poly(&r, "x0 - 1"), poly(&r, "x0 - 2")],
+        GbBudget::default(),
+    )
+    .unwrap();
     assert!(u.is_unit());
 }
 
@@ -116,7 +128,10 @@ fn budget_is_an_error() {
         poly(&r, "x0 + x1 + x2 + x3 + x4"),
         poly(&r, "x0*x1 + x1*x2 + x2*x3 + x3*x4 + x4*x0"),
         poly(&r, "x0*x1*x2 + x1*x2*x3 + x2*x3*x4 + x3*x4*x0 + x4*x0*x1"),
-        poly(&r, "x0*x1*x2*x3 + x1*x2*x3*x4 + x2*x3*x4*x0 + x3*x4*x0*x1 + x4*x0*x1*x2"),
+        poly(
+            &r,
+            "x0*x1*x2*x3 + x1*x2*x3*x4 + x2*x3*x4*x0 + x3*x4*x0*x1 + x4*x0*x1*x2",
+        ),
         poly(&r, "x0*x1*x2*x3*x4 - 1"),
     ];
     let tight = GbBudget {
