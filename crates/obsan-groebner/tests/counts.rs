@@ -140,3 +140,57 @@ fn budget_is_an_error() {
     };
     assert!(groebner(&r, &g, tight).is_err());
 }
+
+/// Buchberger's criterion checked from outside: every S-polynomial of the
+/// basis reduces to zero and every generator lies in the ideal, under each order.
+#[test]
+fn bases_of_random_systems_satisfy_buchbergers_criterion() {
+    let mut seed: u64 = 0x1234_5678;
+    let mut next = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        seed
+    };
+    for order in [Order::Grevlex, Order::Lex, Order::Block(2)] {
+        for _ in 0..6 {
+            let r = Ring::new(Field::new(P).unwrap(), 3, order);
+            // Three random dense quadrics in 3 variables.
+            let gens: Vec<Poly> = (0..3)
+                .map(|_| {
+                    let mut terms = Vec::new();
+                    for a in 0..3u32 {
+                        for b in 0..(3 - a) {
+                            for c in 0..(3 - a - b) {
+                                terms.push((
+                                    Mono::from_exponents(vec![a, b, c]).unwrap(),
+                                    next() % 7,
+                                ));
+                            }
+                        }
+                    }
+                    r.from_terms(terms)
+                })
+                .collect();
+            let b = groebner(&r, &gens, GbBudget::default()).unwrap();
+            for g in &gens {
+                assert!(b.contains(g).unwrap());
+            }
+            for i in 0..b.polys.len() {
+                for j in i + 1..b.polys.len() {
+                    let (mi, mj) = (&b.polys[i].terms()[0].0, &b.polys[j].terms()[0].0);
+                    let l = mi.lcm(mj);
+                    let s = r
+                        .axpy(&Poly::zero(), 1, &mi.quotient(&l), &b.polys[i])
+                        .unwrap();
+                    let s = r
+                        .axpy(&s, r.field.neg(1), &mj.quotient(&l), &b.polys[j])
+                        .unwrap();
+                    assert!(b.reduce(&s).unwrap().is_zero(), "{order:?}");
+                }
+            }
+            // Three generic quadrics in 3 variables: 2^3 = 8 solutions (Bézout).
+            assert_eq!(b.standard_monomials(100).unwrap().len(), 8, "{order:?}");
+        }
+    }
+}
