@@ -193,6 +193,33 @@ Each format is a subcommand (obsan import mrclam --help); none has --json: the d
 written to --out and a one-line summary to stdout."
     )]
     Import(ImportCommand),
+    /// Global identifiability: for each param and initial state, globally
+    /// identifiable, locally with k values, or not identifiable; the number of
+    /// (params, initial states) giving the output of a generic one; the
+    /// discrete symmetries (signed permutations) between them, each checked
+    /// exactly. SIAN's route: Taylor coefficients of the outputs, a Gröbner
+    /// basis over F_p at a random point (docs/engine.md).
+    #[command(after_help = "Examples:
+  obsan global systems/global/squared_rate.sys    # a: 2 values (a -> -a); x global
+  obsan global systems/global/two_decays.sys      # every variable 2 values: the swap
+  obsan global systems/classic/hiv.sys --json
+
+Counts are over the complex numbers, as SIAN and StructuralIdentifiability.jl count; two
+independent random points modulo two primes must agree. Rational models only (no
+sin/cos/atan/exp/log/sqrt yet). --json prints {system, variables: [{name, kind (param |
+state), verdict (global | local | not identifiable), values}], solutions, all_local, maps,
+group_order, order, rank_order, unknowns, equations, primes, exact: false, method}.")]
+    Global(GlobalArgs),
+}
+
+#[derive(Args)]
+pub struct GlobalArgs {
+    #[command(flatten)]
+    pub sys: SystemArgs,
+    #[command(flatten)]
+    pub an: AnalysisArgs,
+    #[command(flatten)]
+    pub out: OutputArgs,
 }
 
 #[derive(Subcommand)]
@@ -454,6 +481,7 @@ impl Command {
             Command::Show(a) => Some(a.limit.max_terms),
             Command::Lie(a) => Some(a.limit.max_terms),
             Command::Modes(a) => Some(a.max_terms),
+            Command::Global(a) => Some(a.an.max_terms),
             _ => None,
         }
     }
@@ -470,6 +498,7 @@ impl Command {
             Command::Diff(a) => a.limit.timeout,
             Command::Show(a) => a.limit.timeout,
             Command::Lie(a) => a.limit.timeout,
+            Command::Global(a) => a.an.timeout,
             _ => None,
         }
     }

@@ -31,6 +31,7 @@ mod experiments_cmd;
 mod expr_cmds;
 mod figures;
 mod fsio;
+mod global_cmd;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
@@ -417,6 +418,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Montecarlo(a) => montecarlo_cmd::montecarlo_cmd(&a),
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
+        cli::Command::Global(a) => global_cmd::run(&a),
     }
 }
 

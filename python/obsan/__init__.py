@@ -255,6 +255,17 @@ class System:
         ``out="prefix"`` also writes prefix.sys and prefix.dec."""
         return self._run("modes", dict(input=input, set=set, seed=seed, **options))
 
+    def global_identifiability(
+        self,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan global``: per param and initial state, global / local with k values /
+        not identifiable; the joint count and the exact discrete symmetries."""
+        return self._run("global", dict(input=input, set=set, seed=seed, **options))
+
     def lie(self, order: int, input: Optional[str] = None, set: Optional[Mapping] = None, **options: Any) -> dict:
         """``obsan lie``: the Lie derivatives of the outputs up to ``order``."""
         return self._run("lie", dict(order=order, input=input, set=set, **options))

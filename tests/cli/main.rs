@@ -6,6 +6,7 @@ mod classic;
 mod diagnose;
 mod experiments;
 mod expr;
+mod global;
 mod modes;
 mod montecarlo;
 mod show;

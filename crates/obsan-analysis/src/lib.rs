@@ -20,6 +20,7 @@ mod derive;
 mod experiments;
 mod fields;
 mod fp_linalg;
+mod global;
 mod modes;
 mod rank;
 pub mod structure;
@@ -35,6 +36,10 @@ pub use derive::{
 pub use experiments::{
     experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
     SpecialValue,
+};
+pub use global::{
+    global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
+    Identifiability,
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};

@@ -1,0 +1,223 @@
+//! Counting solutions: the dimension of the quotient of a zero-dimensional
+//! ideal, minimal polynomials of elements of the quotient (by linear algebra
+//! on normal forms of their powers, as in FGLM), elimination, and the number
+//! of distinct roots of a univariate polynomial.
+
+use crate::field::Field;
+use crate::gb::{groebner, Basis, GbBudget};
+use crate::poly::{Mono, Order, Poly, Ring};
+use crate::GbError;
+use std::collections::HashMap;
+
+impl Basis {
+    /// Whether the ideal is zero-dimensional (finitely many common zeros over
+    /// the algebraic closure): every variable has a pure power among the
+    /// leading monomials. The unit ideal counts as zero-dimensional.
+    pub fn is_zero_dimensional(&self) -> bool {
+        if self.is_unit() {
+            return true;
+        }
+        let mut seen = vec![false; self.ring.n];
+        for p in &self.polys {
+            if let Some(v) = p.terms[0].0.pure_power() {
+                seen[v] = true;
+            }
+        }
+        seen.iter().all(|&s| s)
+    }
+
+    /// The standard monomials (a basis of the quotient), if the ideal is
+    /// zero-dimensional and there are at most `cap` of them.
+    pub fn standard_monomials(&self, cap: usize) -> Result<Vec<Mono>, GbError> {
+        if !self.is_zero_dimensional() {
+            return Err(GbError::NotZeroDimensional);
+        }
+        if self.is_unit() {
+            return Ok(Vec::new());
+        }
+        let n = self.ring.n;
+        let lms = self.leading_monomials();
+        let mut out: Vec<Mono> = Vec::new();
+        let mut stack = vec![Mono::one(n)];
+        let mut seen: std::collections::HashSet<Mono> = std::collections::HashSet::new();
+        while let Some(m) = stack.pop() {
+            if !seen.insert(m.clone()) || lms.iter().any(|l| l.divides(&m)) {
+                continue;
+            }
+            out.push(m.clone());
+            if out.len() > cap {
+                return Err(GbError::Budget("dimension of the quotient"));
+            }
+            for v in 0..n {
+                stack.push(m.mul(&Mono::var(n, v, 1))?);
+            }
+        }
+        Ok(out)
+    }
+
+    /// The monic minimal polynomial of `f` in the quotient ring (dense
+    /// coefficients, constant term first), for a zero-dimensional ideal.
+    /// Its distinct roots are the distinct values `f` takes on the zeros.
+    pub fn minimal_polynomial(&self, f: &Poly, cap: usize) -> Result<Vec<u64>, GbError> {
+        let std = self.standard_monomials(cap)?;
+        let r = &self.ring;
+        let fld = r.field;
+        let col: HashMap<Mono, usize> = std
+            .iter()
+            .cloned()
+            .enumerate()
+            .map(|(i, m)| (m, i))
+            .collect();
+        let dim = std.len();
+        // Echelon rows: (vector, combination of powers it represents).
+        let mut rows: Vec<(Vec<u64>, Vec<u64>, usize)> = Vec::new(); // (vec, combo, pivot)
+        let f = self.reduce(f)?;
+        let mut pw = self.reduce(&r.constant(1))?;
+        for k in 0..=dim {
+            let mut v = vec![0u64; dim];
+            for (m, c) in pw.terms() {
+                let i = *col
+                    .get(m)
+                    .ok_or(GbError::Budget("normal form outside the quotient"))?;
+                v[i] = *c;
+            }
+            let mut combo = vec![0u64; dim + 1];
+            combo[k] = 1;
+            for (rv, rc, piv) in &rows {
+                let c = v[*piv];
+                if c != 0 {
+                    let nc = fld.neg(c);
+                    for (a, b) in v.iter_mut().zip(rv.iter()) {
+                        *a = fld.add(*a, fld.mul(nc, *b));
+                    }
+                    for (a, b) in combo.iter_mut().zip(rc.iter()) {
+                        *a = fld.add(*a, fld.mul(nc, *b));
+                    }
+                }
+            }
+            match v.iter().position(|&x| x != 0) {
+                None => {
+                    // sum combo[i] f^i = 0: the first dependency is minimal.
+                    combo.truncate(k + 1);
+                    let inv = fld
+                        .inv(combo[k])
+                        .ok_or(GbError::Budget("zero leading coefficient"))?;
+                    return Ok(combo.iter().map(|&c| fld.mul(c, inv)).collect());
+                }
+                Some(piv) => {
+                    let inv = fld.inv(v[piv]).ok_or(GbError::Budget("zero pivot"))?;
+                    for a in v.iter_mut() {
+                        *a = fld.mul(*a, inv);
+                    }
+                    for a in combo.iter_mut() {
+                        *a = fld.mul(*a, inv);
+                    }
+                    rows.push((v, combo, piv));
+                }
+            }
+            if k < dim {
+                pw = self.reduce(&r.mul(&pw, &f)?)?;
+            }
+        }
+        // dim + 1 vectors in a space of dimension dim are dependent.
+        Err(GbError::Budget("minimal polynomial"))
+    }
+}
+
+/// The generator of the elimination ideal `I ∩ F_p[x_v]` as dense
+/// coefficients (constant first), or `None` if it is zero (x_v takes
+/// infinitely many values on the zeros). One Gröbner basis under a block order
+/// with `x_v` alone in the last block.
+pub fn eliminate_to(
+    field: Field,
+    n: usize,
+    gens: &[Poly],
+    v: usize,
+    budget: GbBudget,
+) -> Result<Option<Vec<u64>>, GbError> {
+    // Move x_v to the last position.
+    let perm = |m: &Mono| -> Result<Mono, GbError> {
+        let mut e = m.exponents().to_vec();
+        let x = e.remove(v);
+        e.push(x);
+        Mono::from_exponents(e)
+    };
+    let ring = Ring::new(field, n, Order::Block(n - 1));
+    let mut g2 = Vec::with_capacity(gens.len());
+    for p in gens {
+        let t: Result<Vec<_>, _> = p.terms().iter().map(|(m, c)| Ok((perm(m)?, *c))).collect();
+        g2.push(ring.from_terms(t?));
+    }
+    let b = groebner(&ring, &g2, budget)?;
+    if b.is_unit() {
+        return Ok(Some(vec![1]));
+    }
+    for p in &b.polys {
+        if ring.only_in(p, &[n - 1]) {
+            let d = p.degree() as usize;
+            let mut c = vec![0u64; d + 1];
+            for (m, x) in p.terms() {
+                c[m.exponents()[n - 1] as usize] = *x;
+            }
+            return Ok(Some(c));
+        }
+    }
+    Ok(None)
+}
+
+/// The number of distinct roots in the algebraic closure of F_p of a
+/// univariate polynomial (dense, constant first) of degree below p: the degree
+/// of `f / gcd(f, f')`.
+pub fn distinct_roots(field: Field, f: &[u64]) -> usize {
+    let f = trim(f.to_vec());
+    if f.len() <= 1 {
+        return 0;
+    }
+    let df: Vec<u64> = (1..f.len())
+        .map(|i| field.mul(f[i], field.reduce(i as u64)))
+        .collect();
+    let g = upoly_gcd(field, f.clone(), trim(df));
+    (f.len() - 1) - (g.len() - 1)
+}
+
+fn trim(mut a: Vec<u64>) -> Vec<u64> {
+    while a.len() > 1 && *a.last().unwrap_or(&1) == 0 {
+        a.pop();
+    }
+    if a.is_empty() {
+        a.push(0);
+    }
+    a
+}
+
+/// Monic gcd of two univariate polynomials (dense, constant first).
+pub fn upoly_gcd(field: Field, mut a: Vec<u64>, mut b: Vec<u64>) -> Vec<u64> {
+    a = trim(a);
+    b = trim(b);
+    while !(b.len() == 1 && b[0] == 0) {
+        // a mod b
+        let lb = b[b.len() - 1];
+        let inv = match field.inv(lb) {
+            Some(i) => i,
+            None => break,
+        };
+        while a.len() >= b.len() && !(a.len() == 1 && a[0] == 0) {
+            let c = field.mul(a[a.len() - 1], inv);
+            let shift = a.len() - b.len();
+            for (i, &x) in b.iter().enumerate() {
+                a[i + shift] = field.sub(a[i + shift], field.mul(c, x));
+            }
+            a.pop();
+            a = trim(a);
+            if a.len() < b.len() {
+                break;
+            }
+        }
+        std::mem::swap(&mut a, &mut b);
+    }
+    let l = a[a.len() - 1];
+    match field.inv(l) {
+        Some(i) => a.iter().map(|&x| field.mul(x, i)).collect(),
+        None => a,
+    }
+}

@@ -1,0 +1,60 @@
+//! Gröbner bases over prime fields F_p, p < 2^63, on this crate's own sparse
+//! polynomials: Buchberger's algorithm with the sugar strategy and the
+//! Gebauer–Möller criteria, under grevlex, lex or a block elimination order;
+//! and the counts a zero-dimensional ideal gives (dimension of the quotient,
+//! minimal polynomials of elements of the quotient, distinct roots of an
+//! elimination polynomial).
+//!
+//! ```
+//! use obsan_groebner::{groebner, Field, GbBudget, Mono, Order, Ring};
+//! // x^2 - 4 = 0, y - x = 0 over F_p: two solutions, y takes two values.
+//! let f = Field::new((1 << 61) - 1).unwrap();
+//! let r = Ring::new(f, 2, Order::Grevlex);
+//! let x2 = r.from_terms([(Mono::var(2, 0, 2), 1), (Mono::one(2), f.from_i64(-4))]);
+//! let yx = r.sub(&r.var(1), &r.var(0));
+//! let b = groebner(&r, &[x2, yx], GbBudget::default()).unwrap();
+//! assert_eq!(b.standard_monomials(100).unwrap().len(), 2);
+//! let m = b.minimal_polynomial(&r.var(1), 100).unwrap();
+//! assert_eq!(obsan_groebner::distinct_roots(f, &m), 2);
+//! ```
+//!
+//! Depends on no other obsan crate. Every limit (degree, terms, basis size,
+//! deadline) is an error, never a truncated basis.
+
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+mod count;
+mod field;
+mod gb;
+mod poly;
+
+pub use count::{distinct_roots, eliminate_to, upoly_gcd};
+pub use field::{is_prime, Field};
+pub use gb::{groebner, Basis, GbBudget};
+pub use poly::{Mono, Order, Poly, Ring, MAX_DEGREE};
+
+/// Why a computation stopped.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum GbError {
+    /// A monomial's degree passed `MAX_DEGREE`.
+    Degree,
+    /// A budget was exhausted (which one).
+    Budget(&'static str),
+    /// A count was asked of an ideal with infinitely many zeros.
+    NotZeroDimensional,
+}
+
+impl std::fmt::Display for GbError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GbError::Degree => write!(f, "a monomial degree passed {MAX_DEGREE}"),
+            GbError::Budget(what) => write!(f, "Gröbner basis budget exhausted: {what}"),
+            GbError::NotZeroDimensional => write!(f, "the ideal is not zero-dimensional"),
+        }
+    }
+}
+
+impl std::error::Error for GbError {}

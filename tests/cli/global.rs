@@ -1,0 +1,75 @@
+//! `obsan global`: counts derived by hand in systems/global/*.sys, published
+//! verdicts (StructuralIdentifiability.jl) and the errors a user meets.
+
+use crate::util::*;
+use serde_json::Value;
+
+fn global_json(file: &str) -> Value {
+    serde_json::from_str(&ok(&["global", file, "--json"])).unwrap()
+}
+
+/// (verdict, values) of a variable.
+fn var(v: &Value, name: &str) -> (String, Option<u64>) {
+    let x = v["variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["name"] == name)
+        .unwrap_or_else(|| panic!("no variable {name}"));
+    (
+        x["verdict"].as_str().unwrap().to_string(),
+        x["values"].as_u64(),
+    )
+}
+
+#[test]
+fn squared_rate_sign_ambiguity() {
+    // Hand derivation in the file: y'/y = -a^2, so a = ±sqrt(-y'/y); x(0) = y(0).
+    let v = global_json("systems/global/squared_rate.sys");
+    assert_eq!(var(&v, "a"), ("local".into(), Some(2)));
+    assert_eq!(var(&v, "x"), ("global".into(), Some(1)));
+    assert_eq!(v["solutions"], 2);
+    assert_eq!(v["maps"][0], "a -> -a");
+    // Text output names the map too.
+    let t = ok(&["global", "systems/global/squared_rate.sys"]);
+    assert!(t.contains("a -> -a"), "{t}");
+    assert!(t.contains("locally identifiable, 2 values"), "{t}");
+}
+
+#[test]
+fn two_decays_swap_and_single_decay() {
+    let v = global_json("systems/global/two_decays.sys");
+    for n in ["a", "b", "x1", "x2"] {
+        assert_eq!(var(&v, n), ("local".into(), Some(2)), "{n}");
+    }
+    assert_eq!(v["maps"][0], "(x1, x2, a, b) -> (x2, x1, b, a)");
+    assert_eq!(v["group_order"], 2);
+    let s = global_json("systems/global/single_decay.sys");
+    assert_eq!(s["solutions"], 1);
+    assert_eq!(var(&s, "a"), ("global".into(), Some(1)));
+}
+
+#[test]
+fn structural_identifiability_jl_readme() {
+    // Published (SI.jl README): a01, a12, x1 locally; a21, x2 globally;
+    // b, x3 not identifiable. (a01 and a12 come as a pair: 2 values each.)
+    let v = global_json("systems/benchmarks/si_readme.sys");
+    for n in ["a01", "a12", "x1"] {
+        assert_eq!(var(&v, n), ("local".into(), Some(2)), "{n}");
+    }
+    for n in ["a21", "x2"] {
+        assert_eq!(var(&v, n), ("global".into(), Some(1)), "{n}");
+    }
+    for n in ["b", "x3"] {
+        assert_eq!(var(&v, n).0, "not identifiable", "{n}");
+    }
+}
+
+#[test]
+fn global_refuses_what_it_cannot_count() {
+    bad(
+        &["global", "systems/benchmarks/pendulum.sys"],
+        "not a plain symbol",
+    );
+    bad(&["global", "systems/global/missing.sys"], "missing.sys");
+}
