@@ -30,6 +30,7 @@ mod estimate_cmds;
 mod expr_cmds;
 mod figures;
 mod fsio;
+mod import_cmd;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
@@ -415,6 +416,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Montecarlo(a) => montecarlo_cmd::montecarlo_cmd(&a),
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
+        cli::Command::Import(cli::ImportCommand::SiJl(a)) => import_cmd::si_jl(&a),
     }
 }
 
