@@ -5,6 +5,7 @@ mod calibrate;
 mod classic;
 mod diagnose;
 mod expr;
+mod import;
 mod modes;
 mod montecarlo;
 mod show;

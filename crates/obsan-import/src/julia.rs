@@ -518,8 +518,9 @@ impl P<'_> {
             None
         }
     }
+    /// The token at the cursor (the delimiter after the expression when it ran out).
     fn here(&self) -> &Token {
-        let k = self.i.min(self.end.saturating_sub(1)).min(self.toks.len() - 1);
+        let k = self.i.min(self.toks.len().saturating_sub(1));
         &self.toks[k]
     }
     fn eat(&mut self, p: &str) -> bool {
