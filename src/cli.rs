@@ -204,6 +204,33 @@ read back before it is written: a model outside obsan's class (not affine in its
 refused at its equation's line in the source, exit 2. --all writes every model that converts
 and exits 2 if any was refused.")]
     SiJl(SiJlArgs),
+    /// An SBML model (Level 2 or 3 core) to .sys: species changed by reactions as states,
+    /// rate laws as their equations, compartments folded in, parameters unknown
+    /// (docs/import.md).
+    #[command(after_help = "Examples:
+  obsan import sbml model.xml                        (.sys text to stdout; every state measured)
+  obsan import sbml model.xml --observe S1,S2 --out model.sys
+
+Assignment rules are substituted and function definitions inlined; events, algebraic rules,
+delays, time, piecewise and varying compartments are refused naming the element and its line,
+exit 2.")]
+    Sbml(SbmlArgs),
+}
+
+#[derive(Args)]
+pub struct SbmlArgs {
+    /// The SBML file.
+    pub source: String,
+    /// The measured ids (species, parameters or assignment-rule variables), comma-separated:
+    /// each becomes an output y_ID. Default: every state.
+    #[arg(long, value_delimiter = ',')]
+    pub observe: Vec<String>,
+    /// Write the .sys here instead of stdout.
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Replace an existing file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Args)]

@@ -1,9 +1,9 @@
-//! `obsan import si-jl`: foreign model text to .sys (docs/import.md). The
+//! `obsan import si-jl` and `obsan import sbml`: foreign model text to .sys (docs/import.md). The
 //! translation is obsan-import's; this reads the file, checks the produced
 //! .sys with obsan-model (so a model outside obsan's class is refused at its
 //! line in the source) and writes the result.
 
-use crate::cli::SiJlArgs;
+use crate::cli::{SbmlArgs, SiJlArgs};
 use crate::Failure;
 use obsan_import::{Converted, ImportError};
 use std::path::Path;
@@ -125,6 +125,31 @@ pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
         Some(out) => {
             write_whole(out, &c.sys_text, a.force)?;
             println!("model :{} written to {out}", m.key);
+        }
+        None => print!("{}", c.sys_text),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
+    let path = a.source.as_str();
+    let text = crate::fsio::read_text(path)?;
+    let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
+        .map_err(|e| Failure(located(path, &e)))?;
+    let origin = format!("{}.sys", c.name);
+    obsan_model::System::parse(&c.sys_text, &origin)
+        .and_then(|s| s.normal_form(None, &[]).map(|_| ()))
+        .map_err(|e| {
+            let (l, col) = e.line.and_then(|l| c.source_of(l)).unwrap_or((1, 1));
+            Failure(format!(
+                "{path}:{l}:{col}: the model is outside obsan's .sys class: {}",
+                e.message
+            ))
+        })?;
+    match &a.out {
+        Some(out) => {
+            write_whole(out, &c.sys_text, a.force)?;
+            println!("{path} written to {out}");
         }
         None => print!("{}", c.sys_text),
     }

@@ -417,6 +417,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
         cli::Command::Import(cli::ImportCommand::SiJl(a)) => import_cmd::si_jl(&a),
+        cli::Command::Import(cli::ImportCommand::Sbml(a)) => import_cmd::sbml(&a),
     }
 }
 

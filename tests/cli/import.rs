@@ -73,3 +73,45 @@ fn si_jl_bad_julia_is_refused_with_a_place() {
     let src = temp_file("none.jl", "x = 1\n");
     bad(&["import", "si-jl", &src], "no @ODEmodel");
 }
+
+/// S1 -> S2 at rate k1*S1 (compartment size 1), S2 measured: y = S2, y' = k1 S1,
+/// y'' = -k1^2 S1, so k1 = -y''/y' and S1 = y'/k1: all three variables observable, rank 3.
+const SBML: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+  <model id="conv">
+    <listOfCompartments><compartment id="cell" size="1" constant="true"/></listOfCompartments>
+    <listOfSpecies>
+      <species id="S1" compartment="cell" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+      <species id="S2" compartment="cell" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+    </listOfSpecies>
+    <listOfParameters><parameter id="k1" value="1" constant="true"/></listOfParameters>
+    <listOfReactions>
+      <reaction id="r1" reversible="false">
+        <listOfReactants><speciesReference species="S1" stoichiometry="1" constant="true"/></listOfReactants>
+        <listOfProducts><speciesReference species="S2" stoichiometry="1" constant="true"/></listOfProducts>
+        <kineticLaw><math xmlns="http://www.w3.org/1998/Math/MathML">
+          <apply><times/><ci>k1</ci><ci>S1</ci></apply>
+        </math></kineticLaw>
+      </reaction>
+    </listOfReactions>
+  </model>
+</sbml>
+"#;
+
+#[test]
+fn sbml_import_then_rank_gives_the_derived_verdict() {
+    let src = temp_file("conv.xml", SBML);
+    let dir = fresh_dir("sbml");
+    let out = format!("{dir}/conv.sys");
+    ok(&["import", "sbml", &src, "--observe", "S2", "--out", &out]);
+    let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
+    assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(3), Some(3)));
+    bad(&["import", "sbml", &src, "--observe", "S9"], "'S9' is not an id");
+    let ev = temp_file(
+        "ev.xml",
+        &SBML.replace("  </model>", "    <listOfEvents><event id=\"e1\"/></listOfEvents>\n  </model>"),
+    );
+    bad(&["import", "sbml", &ev], "ev.xml:19:19: <event> 'e1'");
+    let broken = temp_file("broken.xml", "<sbml>\n<model>\n</sbml>\n");
+    bad(&["import", "sbml", &broken], "broken.xml:3:");
+}

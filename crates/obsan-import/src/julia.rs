@@ -487,7 +487,7 @@ pub fn si_jl_models(text: &str) -> Result<Vec<SiJlModel>, ImportError> {
 // ---- expressions ----
 
 #[derive(Clone, Debug)]
-enum Ex {
+pub(crate) enum Ex {
     Num(String),
     /// A name; `timed` when written `name(t)`.
     Name {
@@ -721,7 +721,7 @@ fn prec(e: &Ex) -> u8 {
 }
 
 /// `.sys` text of `e`; names mapped by `name`, values substituted by `value`.
-fn show(e: &Ex, out: &mut String, map: &dyn Fn(&str) -> String) {
+pub(crate) fn show(e: &Ex, out: &mut String, map: &dyn Fn(&str) -> String) {
     let wrap = |x: &Ex, min: u8, out: &mut String| {
         if prec(x) < min {
             out.push('(');
@@ -774,7 +774,7 @@ fn show(e: &Ex, out: &mut String, map: &dyn Fn(&str) -> String) {
 }
 
 /// Names a `.sys` file cannot use: its keywords, functions and constants.
-const RESERVED: [&str; 23] = [
+pub(crate) const RESERVED: [&str; 23] = [
     "system",
     "delay",
     "description",

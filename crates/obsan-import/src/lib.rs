@@ -1,4 +1,5 @@
-//! obsan's importers: foreign model text in, `.sys` text out (docs/import.md).
+//! obsan's importers: foreign model text in, `.sys` text out (docs/import.md):
+//! StructuralIdentifiability.jl's `@ODEmodel` and SBML.
 //!
 //! The crate does no file I/O and depends on no other obsan crate: it only
 //! translates. The `obsan import` commands read the file, call a translator
@@ -19,9 +20,11 @@
 
 mod error;
 mod julia;
+mod sbml;
 
 pub use error::ImportError;
 pub use julia::{si_jl_convert, si_jl_models, SiJlModel};
+pub use sbml::sbml_to_sys;
 
 /// A translated model: its `.sys` text and, for each `.sys` line that came
 /// from the foreign file, that place (1-based line and column there).
