@@ -181,7 +181,12 @@ pub fn si_jl_published(root: &Path) -> Result<Vec<(String, String, String)>, Str
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
         match cells.as_slice() {
             [k, l, g] => out.push((k.to_string(), l.to_string(), g.to_string())),
-            _ => return Err(format!("published_times.list:{}: expected 'KEY | loc | glob'", i + 1)),
+            _ => {
+                return Err(format!(
+                    "published_times.list:{}: expected 'KEY | loc | glob'",
+                    i + 1
+                ))
+            }
         }
     }
     Ok(out)

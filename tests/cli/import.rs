@@ -25,14 +25,23 @@ const TWO: &str = r#"benchmarks = Dict(
 fn si_jl_import_lists_converts_and_the_verdict_is_the_published_one() {
     let src = temp_file("two.jl", TWO);
     let list = ok(&["import", "si-jl", &src, "--list"]);
-    let keys: Vec<&str> = list.lines().map(|l| l.split('\t').next().unwrap()).collect();
+    let keys: Vec<&str> = list
+        .lines()
+        .map(|l| l.split('\t').next().unwrap())
+        .collect();
     assert_eq!(keys, ["Readme", "Lin"]);
     bad(&["import", "si-jl", &src], "holds 2 models");
-    bad(&["import", "si-jl", &src, "--model", "Nope"], "no model 'Nope'");
+    bad(
+        &["import", "si-jl", &src, "--model", "Nope"],
+        "no model 'Nope'",
+    );
     let dir = fresh_dir("sijl-one");
     let out = format!("{dir}/readme.sys");
     ok(&["import", "si-jl", &src, "--model", "Readme", "--out", &out]);
-    bad(&["import", "si-jl", &src, "--model", "Readme", "--out", &out], "--force");
+    bad(
+        &["import", "si-jl", &src, "--model", "Readme", "--out", &out],
+        "--force",
+    );
     let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
     assert_eq!(v["n"], 7);
     assert_eq!(v["rank"], 6);
@@ -66,10 +75,16 @@ fn si_jl_model_outside_the_class_is_refused_at_its_line_and_all_writes_the_rest(
 
 #[test]
 fn si_jl_bad_julia_is_refused_with_a_place() {
-    let src = temp_file("bad.jl", "ode = @ODEmodel(\n  x'(t) = -x(t) +,\n  y(t) = x(t))\n");
+    let src = temp_file(
+        "bad.jl",
+        "ode = @ODEmodel(\n  x'(t) = -x(t) +,\n  y(t) = x(t))\n",
+    );
     bad(&["import", "si-jl", &src], "bad.jl:2:18");
     let src = temp_file("open.jl", "ode = @ODEmodel(x'(t) = -x(t), y(t) = x(t)\n");
-    bad(&["import", "si-jl", &src], "open.jl:1:16: this bracket is never closed");
+    bad(
+        &["import", "si-jl", &src],
+        "open.jl:1:16: this bracket is never closed",
+    );
     let src = temp_file("none.jl", "x = 1\n");
     bad(&["import", "si-jl", &src], "no @ODEmodel");
 }
@@ -106,10 +121,16 @@ fn sbml_import_then_rank_gives_the_derived_verdict() {
     ok(&["import", "sbml", &src, "--observe", "S2", "--out", &out]);
     let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
     assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(3), Some(3)));
-    bad(&["import", "sbml", &src, "--observe", "S9"], "'S9' is not an id");
+    bad(
+        &["import", "sbml", &src, "--observe", "S9"],
+        "'S9' is not an id",
+    );
     let ev = temp_file(
         "ev.xml",
-        &SBML.replace("  </model>", "    <listOfEvents><event id=\"e1\"/></listOfEvents>\n  </model>"),
+        &SBML.replace(
+            "  </model>",
+            "    <listOfEvents><event id=\"e1\"/></listOfEvents>\n  </model>",
+        ),
     );
     bad(&["import", "sbml", &ev], "ev.xml:19:19: <event> 'e1'");
     let broken = temp_file("broken.xml", "<sbml>\n<model>\n</sbml>\n");

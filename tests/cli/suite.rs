@@ -123,7 +123,10 @@ fn si_jl_verdicts_match_the_cited_ones() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     for (key, _, _) in si_jl_published(root).unwrap_or_else(|e| panic!("{e}")) {
         let p = format!("systems/benchmarks/si-jl/{key}.sys");
-        assert!(all.iter().any(|e| e.path == p), "published time for unknown {key}");
+        assert!(
+            all.iter().any(|e| e.path == p),
+            "published time for unknown {key}"
+        );
     }
     let mut failures = Vec::new();
     let mut checked = 0;
@@ -137,10 +140,16 @@ fn si_jl_verdicts_match_the_cited_ones() {
             .map(|x| x.as_str().unwrap().to_string())
             .collect();
         if e.verdict.rank.is_some_and(|r| r != rank) {
-            failures.push(format!("{}: cited {:?}, obsan rank {rank} of {n}", e.path, e.verdict));
+            failures.push(format!(
+                "{}: cited {:?}, obsan rank {rank} of {n}",
+                e.path, e.verdict
+            ));
         }
         if e.verdict.unobservable.as_ref().is_some_and(|w| *w != un) {
-            failures.push(format!("{}: cited {:?}, obsan {un:?}", e.path, e.verdict.unobservable));
+            failures.push(format!(
+                "{}: cited {:?}, obsan {un:?}",
+                e.path, e.verdict.unobservable
+            ));
         }
         checked += 1;
     }

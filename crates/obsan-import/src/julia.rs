@@ -104,13 +104,15 @@ fn tokenize(text: &str) -> Result<Vec<Token>, ImportError> {
             }
             // Julia names may go on with `!` or Unicode letters: keep them in
             // the token so that the name is refused whole, not misread.
-            while j < chars.len() && (chars[j] == '!' && chars.get(j + 1) != Some(&'=')
-                || !chars[j].is_ascii() && chars[j].is_alphanumeric())
+            while j < chars.len()
+                && (chars[j] == '!' && chars.get(j + 1) != Some(&'=')
+                    || !chars[j].is_ascii() && chars[j].is_alphanumeric())
             {
                 j += 1;
             }
             Tok::Ident(chars[i..j].iter().collect())
-        } else if c.is_ascii_digit() || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
+        } else if c.is_ascii_digit()
+            || (c == '.' && chars.get(i + 1).is_some_and(char::is_ascii_digit))
         {
             j = i;
             while j < chars.len() && chars[j].is_ascii_digit() {
@@ -227,8 +229,7 @@ fn int_list(toks: &[Token], open: usize, close: usize) -> Result<Vec<usize>, Imp
 }
 
 fn lincomp_at(toks: &[Token], k: usize) -> Result<Option<(Lincomp, usize)>, ImportError> {
-    if !(ident(toks.get(k)) == Some("linear_compartment_model") && is_punct(toks.get(k + 1), "("))
-    {
+    if !(ident(toks.get(k)) == Some("linear_compartment_model") && is_punct(toks.get(k + 1), "(")) {
         return Ok(None);
     }
     let close = closing(toks, k + 1)?;
@@ -248,7 +249,10 @@ fn lincomp_at(toks: &[Token], k: usize) -> Result<Option<(Lincomp, usize)>, Impo
         }
         let key = ident(toks.get(a));
         if !(is_punct(toks.get(a + 1), "=") && is_punct(toks.get(a + 2), "[")) {
-            return Err(err(&toks[a], "expected 'inputs = [...]', 'outputs = [...]' or 'leaks = [...]'"));
+            return Err(err(
+                &toks[a],
+                "expected 'inputs = [...]', 'outputs = [...]' or 'leaks = [...]'",
+            ));
         }
         let l = int_list(toks, a + 2, b.saturating_sub(1))?;
         match key {
@@ -259,7 +263,15 @@ fn lincomp_at(toks: &[Token], k: usize) -> Result<Option<(Lincomp, usize)>, Impo
         }
     }
     let n = lc.graph.len();
-    for (i, t) in lc.graph.iter().flatten().chain(&lc.inputs).chain(&lc.outputs).chain(&lc.leaks).map(|i| (*i, &toks[k])) {
+    for (i, t) in lc
+        .graph
+        .iter()
+        .flatten()
+        .chain(&lc.inputs)
+        .chain(&lc.outputs)
+        .chain(&lc.leaks)
+        .map(|i| (*i, &toks[k]))
+    {
         if i == 0 || i > n {
             return Err(err(t, format!("compartment {i} is not among 1..{n}")));
         }
@@ -363,7 +375,10 @@ pub fn si_jl_models(text: &str) -> Result<Vec<SiJlModel>, ImportError> {
             && ident(toks.get(i + 3)) == Some("Dict")
             && is_punct(toks.get(i + 4), "(")
         {
-            Some((ident(toks.get(i + 1)).unwrap_or_default().to_string(), i + 4))
+            Some((
+                ident(toks.get(i + 1)).unwrap_or_default().to_string(),
+                i + 4,
+            ))
         } else if ident(toks.get(i)).is_some()
             && is_punct(toks.get(i + 1), "[")
             && is_punct(toks.get(i + 2), ":")
@@ -373,7 +388,10 @@ pub fn si_jl_models(text: &str) -> Result<Vec<SiJlModel>, ImportError> {
             && ident(toks.get(i + 6)) == Some("Dict")
             && is_punct(toks.get(i + 7), "(")
         {
-            Some((ident(toks.get(i + 3)).unwrap_or_default().to_string(), i + 7))
+            Some((
+                ident(toks.get(i + 3)).unwrap_or_default().to_string(),
+                i + 7,
+            ))
         } else {
             None
         };
@@ -449,11 +467,8 @@ pub fn si_jl_models(text: &str) -> Result<Vec<SiJlModel>, ImportError> {
                             if !is_punct(toks.get(a + 1), "=>") || a + 2 >= b {
                                 return Err(err(&toks[a], "expected 'parameter => value'"));
                             }
-                            m.values.push((
-                                p.to_string(),
-                                (toks[a].line, toks[a].col),
-                                (a + 2, b),
-                            ));
+                            m.values
+                                .push((p.to_string(), (toks[a].line, toks[a].col), (a + 2, b)));
                         }
                         m.key = var.to_string();
                         bound.insert(var.to_string(), m);
@@ -691,8 +706,7 @@ impl P<'_> {
         };
         // Julia's juxtaposition `2x`, `2(x + 1)`: a number followed directly by a name or '('.
         if let (Ex::Num(_), Some(n)) = (&a, self.peek()) {
-            if !n.spaced && matches!(&n.tok, Tok::Ident(_)) || !n.spaced && is_punct(Some(n), "(")
-            {
+            if !n.spaced && matches!(&n.tok, Tok::Ident(_)) || !n.spaced && is_punct(Some(n), "(") {
                 let b = self.power()?;
                 return Ok(Ex::Bin('*', Box::new(a), Box::new(b)));
             }
@@ -858,14 +872,21 @@ pub fn si_jl_convert(
     let toks = tokenize(text)?;
     let (a, b) = model.args;
     if b > toks.len() || a > b || a == 0 {
-        return Err(ImportError::at(model.line, model.col, "model not found in this text"));
+        return Err(ImportError::at(
+            model.line,
+            model.col,
+            "model not found in this text",
+        ));
     }
     // Equations: (lhs name, is state, lhs token, rhs).
     let mut eqs: Vec<(String, bool, Token, Ex)> = Vec::new();
     for (s, e) in items(&toks, a - 1, b) {
         let t0 = &toks[s];
         let Some(name) = ident(Some(t0)) else {
-            return Err(err(t0, "expected an equation 'x'(t) = ...' or 'y(t) = ...'"));
+            return Err(err(
+                t0,
+                "expected an equation 'x'(t) = ...' or 'y(t) = ...'",
+            ));
         };
         let mut k = s + 1;
         let state = is_punct(toks.get(k), "'");
@@ -896,10 +917,18 @@ pub fn si_jl_convert(
         eqs.push((name.to_string(), state, t0.clone(), rhs));
     }
     if !eqs.iter().any(|q| q.1) {
-        return Err(ImportError::at(model.line, model.col, "the model has no state equation"));
+        return Err(ImportError::at(
+            model.line,
+            model.col,
+            "the model has no state equation",
+        ));
     }
     if !eqs.iter().any(|q| !q.1) {
-        return Err(ImportError::at(model.line, model.col, "the model has no output"));
+        return Err(ImportError::at(
+            model.line,
+            model.col,
+            "the model has no output",
+        ));
     }
     // SI.jl reads `q(t)` (a state or an input) and a bare `q` (a parameter)
     // as two variables: the bare one is renamed `q_p` here.
@@ -945,10 +974,18 @@ pub fn si_jl_convert(
             }
         });
         if let Some((n, (l2, c2))) = bad {
-            return Err(ImportError::at(l2, c2, format!("the value of '{p}' uses '{n}': values must be numbers")));
+            return Err(ImportError::at(
+                l2,
+                c2,
+                format!("the value of '{p}' uses '{n}': values must be numbers"),
+            ));
         }
         if states.contains(&p.as_str()) || outputs.contains(&p.as_str()) {
-            return Err(ImportError::at(*l, *c, format!("'{p}' is a state or an output, not a parameter")));
+            return Err(ImportError::at(
+                *l,
+                *c,
+                format!("'{p}' is a state or an output, not a parameter"),
+            ));
         }
         values.insert(p.clone(), v);
     }
@@ -962,7 +999,11 @@ pub fn si_jl_convert(
             }
             let is_state = states.contains(&n);
             if outputs.contains(&n) {
-                bad = Some(ImportError::at(l, c, format!("the output '{n}' is used in an equation")));
+                bad = Some(ImportError::at(
+                    l,
+                    c,
+                    format!("the output '{n}' is used in an equation"),
+                ));
             } else if timed && !is_state {
                 if !inputs.iter().any(|x| x == n) {
                     inputs.push(n.to_string());
@@ -1024,11 +1065,20 @@ pub fn si_jl_convert(
     let mut line_map = Vec::new();
     if !renamed.is_empty() {
         let r: Vec<String> = renamed.iter().map(|(a, b)| format!("{a} -> {b}")).collect();
-        lines.push(format!("# renamed (reserved in .sys, or one name used both with and without (t)): {}", r.join(", ")));
+        lines.push(format!(
+            "# renamed (reserved in .sys, or one name used both with and without (t)): {}",
+            r.join(", ")
+        ));
     }
     if !value_text.is_empty() {
-        let r: Vec<String> = value_text.iter().map(|(a, b)| format!("{a} = {b}")).collect();
-        lines.push(format!("# parameter values set in the source (substituted): {}", r.join(", ")));
+        let r: Vec<String> = value_text
+            .iter()
+            .map(|(a, b)| format!("{a} = {b}"))
+            .collect();
+        lines.push(format!(
+            "# parameter values set in the source (substituted): {}",
+            r.join(", ")
+        ));
     }
     lines.push(format!("system {sysname}"));
     if let Some(n) = &model.name {
@@ -1038,12 +1088,21 @@ pub fn si_jl_convert(
         }
     }
     let list = |v: Vec<String>| v.join(", ");
-    lines.push(format!("state {}", list(states.iter().map(|s| map(s)).collect())));
+    lines.push(format!(
+        "state {}",
+        list(states.iter().map(|s| map(s)).collect())
+    ));
     if !params.is_empty() {
-        lines.push(format!("param {}", list(params.iter().map(|s| map(s)).collect())));
+        lines.push(format!(
+            "param {}",
+            list(params.iter().map(|s| map(s)).collect())
+        ));
     }
     if !inputs.is_empty() {
-        lines.push(format!("input {}", list(inputs.iter().map(|s| map(s)).collect())));
+        lines.push(format!(
+            "input {}",
+            list(inputs.iter().map(|s| map(s)).collect())
+        ));
     }
     for (name, state, t0, rhs) in &eqs {
         let mut s = String::new();
@@ -1088,7 +1147,13 @@ fn header(model: &SiJlModel, origin: &str, what: &str) -> Vec<String> {
 fn sys_name(key: &str) -> String {
     let mut s: String = key
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if !s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
         s.insert(0, '_');
@@ -1109,7 +1174,10 @@ fn lincomp_sys(lc: &Lincomp, model: &SiJlModel, origin: &str) -> Converted {
     let name = sys_name(&model.key);
     lines.push(format!("system {name}"));
     if let Some(d) = &model.name {
-        lines.push(format!("description {}", d.split_whitespace().collect::<Vec<_>>().join(" ")));
+        lines.push(format!(
+            "description {}",
+            d.split_whitespace().collect::<Vec<_>>().join(" ")
+        ));
     }
     let mut rhs: Vec<Vec<String>> = vec![Vec::new(); n];
     let mut params = Vec::new();

@@ -283,7 +283,11 @@ fn math_of(cx: &Ctx, n: Node) -> Result<Ex, ImportError> {
 pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Converted, ImportError> {
     let doc = Document::parse(text).map_err(|e| {
         let p = e.pos();
-        ImportError::at(p.row as usize, p.col as usize, format!("not well-formed XML: {e}"))
+        ImportError::at(
+            p.row as usize,
+            p.col as usize,
+            format!("not well-formed XML: {e}"),
+        )
     })?;
     let mut cx = Ctx {
         doc: &doc,
@@ -296,12 +300,18 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
     let model = child(root, "model").ok_or_else(|| cx.err(root, "no <model>"))?;
     if let Some(e) = list(model, "listOfEvents", "event").first() {
         let id = e.attribute("id").unwrap_or("?");
-        return Err(cx.err(*e, format!("<event> '{id}': events are not supported (discontinuous dynamics)")));
+        return Err(cx.err(
+            *e,
+            format!("<event> '{id}': events are not supported (discontinuous dynamics)"),
+        ));
     }
     for f in list(model, "listOfFunctionDefinitions", "functionDefinition") {
         let id = id_of(&cx, f, "id")?;
         let lambda = child(f, "math")
-            .and_then(|m| child(m, "lambda").or_else(|| child(m, "semantics").and_then(|s| child(s, "lambda"))))
+            .and_then(|m| {
+                child(m, "lambda")
+                    .or_else(|| child(m, "semantics").and_then(|s| child(s, "lambda")))
+            })
             .ok_or_else(|| cx.err(f, format!("function '{id}' has no <lambda>")))?;
         let mut params = Vec::new();
         let mut body = None;
@@ -331,7 +341,10 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
                     rate.insert(v, (math_of(&cx, r)?, cx.pos(r)));
                 }
                 "algebraicRule" => {
-                    return Err(cx.err(r, "<algebraicRule>: algebraic rules (DAEs) are not supported"))
+                    return Err(cx.err(
+                        r,
+                        "<algebraicRule>: algebraic rules (DAEs) are not supported",
+                    ))
                 }
                 // SBML Level 1 rule names and anything else.
                 other => return Err(cx.err(r, format!("<{other}> is not supported"))),
@@ -343,8 +356,14 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
     let mut value: BTreeMap<String, Ex> = BTreeMap::new();
     for c in list(model, "listOfCompartments", "compartment") {
         let id = id_of(&cx, c, "id")?;
-        if rate.contains_key(&id) || assign.contains_key(&id) || c.attribute("constant") == Some("false") {
-            return Err(cx.err(c, format!("compartment '{id}' varies: only constant compartments are supported")));
+        if rate.contains_key(&id)
+            || assign.contains_key(&id)
+            || c.attribute("constant") == Some("false")
+        {
+            return Err(cx.err(
+                c,
+                format!("compartment '{id}' varies: only constant compartments are supported"),
+            ));
         }
         match c.attribute("size").or(c.attribute("volume")) {
             Some(s) => {
@@ -369,7 +388,8 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             id,
             comp,
             amount: s.attribute("hasOnlySubstanceUnits") == Some("true"),
-            fixed: s.attribute("boundaryCondition") == Some("true") || s.attribute("constant") == Some("true"),
+            fixed: s.attribute("boundaryCondition") == Some("true")
+                || s.attribute("constant") == Some("true"),
             at: cx.pos(s),
         });
     }
@@ -390,7 +410,8 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
     let mut flux: BTreeMap<String, Vec<Ex>> = BTreeMap::new();
     for r in list(model, "listOfReactions", "reaction") {
         let rid = id_of(&cx, r, "id")?;
-        let law = child(r, "kineticLaw").ok_or_else(|| cx.err(r, format!("reaction '{rid}' has no <kineticLaw>")))?;
+        let law = child(r, "kineticLaw")
+            .ok_or_else(|| cx.err(r, format!("reaction '{rid}' has no <kineticLaw>")))?;
         let mut local: BTreeMap<String, Ex> = BTreeMap::new();
         for lp in list(law, "listOfParameters", "parameter")
             .into_iter()
@@ -416,7 +437,11 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
                     Ex::Num(s) if s == "1" => v.clone(),
                     _ => bin('*', st, v.clone()),
                 };
-                flux.entry(sid).or_default().push(if sign < 0 { Ex::Neg(Box::new(term)) } else { term });
+                flux.entry(sid).or_default().push(if sign < 0 {
+                    Ex::Neg(Box::new(term))
+                } else {
+                    term
+                });
             }
         }
     }
@@ -455,12 +480,20 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
     for v in rate.keys() {
         if !eqs.iter().any(|(n, _, _)| n == v) {
             let at = rate.get(v).map_or((1, 1), |r| r.1);
-            return Err(ImportError::at(at.0, at.1, format!("rate rule for '{v}', which is not a species or parameter")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("rate rule for '{v}', which is not a species or parameter"),
+            ));
         }
     }
     if eqs.is_empty() {
         let (l, c) = cx.pos(model);
-        return Err(ImportError::at(l, c, "the model has no dynamics (no species changed by a reaction or rate rule)"));
+        return Err(ImportError::at(
+            l,
+            c,
+            "the model has no dynamics (no species changed by a reaction or rate rule)",
+        ));
     }
     // Substitute assignment rules (they may use each other) and compartment sizes.
     let resolve = |e: &Ex| -> Result<Ex, ImportError> {
@@ -469,16 +502,25 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
         for _ in 0..assign.len() + 2 {
             let mut hit = false;
             let next = subst(&cur, &|n| {
-                assign.get(n).map(|(x, _)| x.clone()).or_else(|| value.get(n).cloned())
+                assign
+                    .get(n)
+                    .map(|(x, _)| x.clone())
+                    .or_else(|| value.get(n).cloned())
             });
-            walk_names(&cur, &mut |n| hit |= assign.contains_key(n) || value.contains_key(n));
+            walk_names(&cur, &mut |n| {
+                hit |= assign.contains_key(n) || value.contains_key(n)
+            });
             if !hit {
                 return Ok(cur);
             }
             cur = next;
         }
         let at = assign.values().next().map_or((1, 1), |a| a.1);
-        Err(ImportError::at(at.0, at.1, "assignment rules refer to each other in a cycle"))
+        Err(ImportError::at(
+            at.0,
+            at.1,
+            "assignment rules refer to each other in a cycle",
+        ))
     };
     let known: Vec<&str> = eqs
         .iter()
@@ -496,7 +538,11 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             }
         });
         if let Some((n, p)) = bad {
-            return Err(ImportError::at(p.0, p.1, format!("'{n}' is not a species, parameter or compartment of the model")));
+            return Err(ImportError::at(
+                p.0,
+                p.1,
+                format!("'{n}' is not a species, parameter or compartment of the model"),
+            ));
         }
         body.push((v.clone(), r, *at));
     }
@@ -514,14 +560,22 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
                 name(o, (1, 1))
             } else {
                 let (l, c) = cx.pos(model);
-                return Err(ImportError::at(l, c, format!("--observe '{o}' is not an id of this model")));
+                return Err(ImportError::at(
+                    l,
+                    c,
+                    format!("--observe '{o}' is not an id of this model"),
+                ));
             };
             outputs.push((format!("y_{o}"), e));
         }
     }
     // Only the params the equations and outputs use; keep declaration order.
     let mut used: Vec<String> = Vec::new();
-    for e in body.iter().map(|b| &b.1).chain(outputs.iter().map(|o| &o.1)) {
+    for e in body
+        .iter()
+        .map(|b| &b.1)
+        .chain(outputs.iter().map(|o| &o.1))
+    {
         walk_names(e, &mut |n| {
             if !used.iter().any(|u| u == n) {
                 used.push(n.to_string());
@@ -538,8 +592,20 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             n.to_string()
         }
     };
-    let mid = model.attribute("id").or(model.attribute("name")).unwrap_or("sbml_model");
-    let mut sysname: String = mid.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
+    let mid = model
+        .attribute("id")
+        .or(model.attribute("name"))
+        .unwrap_or("sbml_model");
+    let mut sysname: String = mid
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
     if !sysname.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
         sysname.insert(0, '_');
     }
@@ -547,9 +613,14 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
         sysname.push('_');
     }
     let one_line = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
-    let mut lines = vec![format!("# Imported by `obsan import sbml` from {}.", one_line(origin))];
+    let mut lines = vec![format!(
+        "# Imported by `obsan import sbml` from {}.",
+        one_line(origin)
+    )];
     if observe.is_empty() {
-        lines.push("# SBML has no outputs: every state is measured here (choose with --observe).".into());
+        lines.push(
+            "# SBML has no outputs: every state is measured here (choose with --observe).".into(),
+        );
     }
     if !value.is_empty() {
         let v: Vec<String> = value
@@ -569,8 +640,16 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             lines.push(format!("description {n}"));
         }
     }
-    let names = |v: Vec<&String>| v.into_iter().map(|s| rename(s)).collect::<Vec<_>>().join(", ");
-    lines.push(format!("state {}", names(body.iter().map(|b| &b.0).collect())));
+    let names = |v: Vec<&String>| {
+        v.into_iter()
+            .map(|s| rename(s))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    lines.push(format!(
+        "state {}",
+        names(body.iter().map(|b| &b.0).collect())
+    ));
     if !params.is_empty() {
         lines.push(format!("param {}", names(params.iter().collect())));
     }

@@ -60,9 +60,18 @@ fn one_reaction_gives_mass_action_equations() {
     equation_is(&c.sys_text, "S1", "-k1*S1");
     equation_is(&c.sys_text, "S2", "k1*S1");
     assert!(c.sys_text.contains("\nparam k1\n"), "{}", c.sys_text);
-    assert!(c.sys_text.contains("output y_S1 = S1\noutput y_S2 = S2\n"), "{}", c.sys_text);
+    assert!(
+        c.sys_text.contains("output y_S1 = S1\noutput y_S2 = S2\n"),
+        "{}",
+        c.sys_text
+    );
     // The S1 equation maps back to the <species id="S1"> element, line 8 column 7.
-    let line = c.sys_text.lines().position(|l| l.starts_with("S1'")).unwrap() + 1;
+    let line = c
+        .sys_text
+        .lines()
+        .position(|l| l.starts_with("S1'"))
+        .unwrap()
+        + 1;
     assert_eq!(c.source_of(line), Some((8, 7)));
 }
 
@@ -143,7 +152,9 @@ fn refused(src: &str) -> ImportError {
 #[test]
 fn unsupported_elements_are_refused_at_their_line() {
     let with = |extra: &str| CASE1.replace("  </model>", &format!("{extra}\n  </model>"));
-    let e = refused(&with("    <listOfEvents>\n      <event id=\"ev\"/>\n    </listOfEvents>"));
+    let e = refused(&with(
+        "    <listOfEvents>\n      <event id=\"ev\"/>\n    </listOfEvents>",
+    ));
     assert_eq!((e.line, e.col), (26, 7), "{e}");
     assert!(e.message.contains("'ev'"), "{e}");
     let e = refused(&with(
@@ -170,7 +181,10 @@ fn unsupported_elements_are_refused_at_their_line() {
     assert!(refused(&cycle).message.contains("cycle"));
     let e = refused("<sbml><model>\n<listOfSpecies>\n</model></sbml>");
     assert_eq!(e.line, 3, "{e}");
-    let e = refused(&CASE1.replace("initialAmount=\"0\" ", "initialAmount=\"0\" x=\"1\" x=\"2\" "));
+    let e = refused(&CASE1.replace(
+        "initialAmount=\"0\" ",
+        "initialAmount=\"0\" x=\"1\" x=\"2\" ",
+    ));
     assert_eq!(e.line, 9, "{e}");
 }
 

@@ -76,10 +76,19 @@ benchmarks[:Second] = Dict(:name => "Second", :ode => ode)
     assert_eq!(models[0].cite.as_deref(), Some("\\cite{x}"));
     assert_eq!(models[0].line, 6);
     let c = si_jl_convert(src, &models[1], "b.jl").unwrap();
-    assert!(c.sys_text.contains("z' = -3*z + (1/2)*w\n"), "{}", c.sys_text);
+    assert!(
+        c.sys_text.contains("z' = -3*z + (1/2)*w\n"),
+        "{}",
+        c.sys_text
+    );
     assert!(!c.sys_text.contains("\nparam "), "{}", c.sys_text);
     // The z' line maps back to line 9 of the Julia text, column 17.
-    let zline = c.sys_text.lines().position(|l| l.starts_with("z'")).unwrap() + 1;
+    let zline = c
+        .sys_text
+        .lines()
+        .position(|l| l.starts_with("z'"))
+        .unwrap()
+        + 1;
     assert_eq!(c.source_of(zline), Some((9, 17)));
 }
 
@@ -89,7 +98,10 @@ fn reserved_names_and_bare_twins_are_renamed() {
     let src = "@ODEmodel(x'(t) = -exp * x(t) + q * q(t), y(t) = x(t))";
     let sys = one(src).unwrap();
     assert!(sys.contains("x' = -exp_*x + q_p*q\n"), "{sys}");
-    assert!(sys.contains("param exp_, q_p\n") && sys.contains("input q\n"), "{sys}");
+    assert!(
+        sys.contains("param exp_, q_p\n") && sys.contains("input q\n"),
+        "{sys}"
+    );
     System::parse(&sys, "t.sys").unwrap();
 }
 
