@@ -307,11 +307,11 @@ fn main() {
         let (max, at) = si_rank_secs[si_rank_secs.len() - 1].clone();
         println!(
             "SI.jl models: {} ranks, median {med:.2} s, max {max:.2} s ({at}); {} of {} rank-deficient \
-             ones have symmetries (SI.jl local times: {}; machine in published_times.list)",
+             ones have symmetries (SI.jl local times: its benchmarking/benchmark_result.md, machine \
+             in published_times.list)",
             si_rank_secs.len(),
             si_sym.1,
             si_sym.0,
-            "benchmarking/benchmark_result.md"
         );
     }
 }

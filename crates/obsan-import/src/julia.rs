@@ -197,10 +197,13 @@ pub struct SiJlModel {
     /// Token range of the macro's arguments (inside its parentheses).
     args: (usize, usize),
     /// `set_parameter_values`: name -> value tokens range.
-    values: Vec<(String, (usize, usize), (usize, usize))>,
+    values: Vec<SetValue>,
     /// A `linear_compartment_model(graph; inputs, outputs, leaks)` call.
     lincomp: Option<Lincomp>,
 }
+
+/// One `p => VALUE` of `set_parameter_values`: the name, its place, the value's token range.
+type SetValue = (String, (usize, usize), (usize, usize));
 
 /// SI.jl's `linear_compartment_model`: `graph[i]` lists the compartments
 /// that compartment i flows into (rate `a_j_i`); leaks `a_0_i`, inputs `u_i`
@@ -316,8 +319,8 @@ fn closing(toks: &[Token], open: usize) -> Result<usize, ImportError> {
 fn items(toks: &[Token], open: usize, close: usize) -> Vec<(usize, usize)> {
     let mut out = Vec::new();
     let (mut depth, mut start) = (0usize, open + 1);
-    for k in open + 1..close {
-        if let Tok::Punct(p) = &toks[k].tok {
+    for (k, t) in toks.iter().enumerate().take(close).skip(open + 1) {
+        if let Tok::Punct(p) = &t.tok {
             match p.as_str() {
                 "(" | "[" | "{" => depth += 1,
                 ")" | "]" | "}" => depth = depth.saturating_sub(1),
@@ -706,7 +709,7 @@ impl P<'_> {
         };
         // Julia's juxtaposition `2x`, `2(x + 1)`: a number followed directly by a name or '('.
         if let (Ex::Num(_), Some(n)) = (&a, self.peek()) {
-            if !n.spaced && matches!(&n.tok, Tok::Ident(_)) || !n.spaced && is_punct(Some(n), "(") {
+            if !n.spaced && (matches!(&n.tok, Tok::Ident(_)) || is_punct(Some(n), "(")) {
                 let b = self.power()?;
                 return Ok(Ex::Bin('*', Box::new(a), Box::new(b)));
             }
