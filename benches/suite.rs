@@ -1,6 +1,9 @@
 //! The public benchmark suite (docs/benchmarks.md): `obsan rank` and `obsan symmetries` on
-//! every model of systems/benchmarks/, on systems/vins.sys and on the systems listed in
-//! systems/benchmarks/paper.list, through the built binary, one child process per run.
+//! every model of systems/benchmarks/, on systems/vins.sys, on the systems listed in
+//! systems/benchmarks/paper.list and on StructuralIdentifiability.jl's models
+//! (systems/benchmarks/si-jl/, beside SI.jl's published local times where it gives them), through
+//! the built binary, one child process per run. `cargo bench --bench suite -- si-jl` runs those
+//! alone and ends with their median and max rank time.
 //!
 //! `cargo bench --bench suite [-- FILTER]` prints one Markdown table: n (states + params), rank,
 //! the verdict against the cited one, the symmetries found and their certificate, wall time and
@@ -25,7 +28,7 @@ const GNU_TIME: &str = "/usr/bin/time";
 
 #[path = "suite_entries.rs"]
 mod suite_entries;
-use suite_entries::{entries, Verdict};
+use suite_entries::{entries, si_jl_entries, si_jl_published, Verdict};
 
 /// One child run: exit code, stdout, wall time, peak resident memory in KiB.
 struct Run {
@@ -117,6 +120,9 @@ fn env_secs(name: &str, default: u64) -> u64 {
 
 /// The rank run against the cited verdict: "agrees" or what differs.
 fn judge(v: &Value, cited: &Verdict) -> String {
+    if *cited == Verdict::default() {
+        return "none cited".into();
+    }
     let (Some(rank), Some(n)) = (v["rank"].as_u64(), v["n"].as_u64()) else {
         return "no answer".into();
     };
@@ -157,13 +163,19 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
-    let entries = match entries(root) {
-        Ok(e) => e,
-        Err(e) => {
+    let (entries, published) = match (entries(root), si_jl_entries(root), si_jl_published(root)) {
+        (Ok(mut e), Ok(s), Ok(p)) => {
+            e.extend(s);
+            (e, p)
+        }
+        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
             eprintln!("suite: {e}");
             std::process::exit(2);
         }
     };
+    // Rank times of the SI.jl models, for the summary (median, max).
+    let mut si_rank_secs: Vec<(f64, String)> = Vec::new();
+    let mut si_sym: (usize, usize) = (0, 0);
     let sym_timeout = env_secs("OBSAN_SUITE_SYM_TIMEOUT", 10).to_string();
     let rank_timeout = env_secs("OBSAN_SUITE_RANK_TIMEOUT", 60).to_string();
     let modes_timeout = env_secs("OBSAN_SUITE_MODES_TIMEOUT", 10).to_string();
@@ -174,10 +186,10 @@ fn main() {
         "VmHWM polled"
     };
     println!(
-        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB | modes | modes s |"
+        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB | modes | modes s | SI.jl local s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
-    let (mut agree, mut differ, mut total) = (0, 0, 0);
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let (mut agree, mut differ, mut total, mut uncited) = (0, 0, 0, 0);
     for e in &entries {
         if !filter.is_empty() && !filter.iter().any(|f| e.path.contains(f.as_str())) {
             continue;
@@ -214,6 +226,8 @@ fn main() {
             agree += 1;
         } else if verdict.starts_with("DIFFERS") {
             differ += 1;
+        } else if verdict == "none cited" {
+            uncited += 1;
         }
         let mut args = vec![
             "symmetries",
@@ -253,8 +267,26 @@ fn main() {
             (1, _) => format!("{count} open"),
             (c, _) => format!("none (exit {c})"),
         };
+        let key = e
+            .path
+            .strip_prefix("systems/benchmarks/si-jl/")
+            .and_then(|k| k.strip_suffix(".sys"));
+        let sijl = key
+            .and_then(|k| published.iter().find(|p| p.0 == k))
+            .map_or("-".to_string(), |p| p.1.clone());
+        if let Some(k) = key {
+            if r.code == 0 {
+                si_rank_secs.push((r.secs, k.to_string()));
+            }
+            if rv["rank"].as_u64().is_some() && rv["rank"] != rv["n"] {
+                si_sym.0 += 1;
+                if s.code == 0 && found != "0" {
+                    si_sym.1 += 1;
+                }
+            }
+        }
         println!(
-            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} | {modes} | {:.2} |",
+            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} | {modes} | {:.2} | {sijl} |",
             r.secs,
             mem(r.peak_kib),
             s.secs,
@@ -264,9 +296,22 @@ fn main() {
     }
     println!();
     println!(
-        "{total} runs: {agree} verdicts agree with the cited ones, {differ} differ, {} gave no \
-         answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s; \
+        "{total} runs: {agree} verdicts agree with the cited ones, {differ} differ, {uncited} cite \
+         none, {} gave no answer; memory: {how}; symmetries --timeout {sym_timeout} s; rank --timeout {rank_timeout} s; \
          modes --timeout {modes_timeout} s",
-        total - agree - differ
+        total - agree - differ - uncited
     );
+    if !si_rank_secs.is_empty() {
+        si_rank_secs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let med = si_rank_secs[si_rank_secs.len() / 2].0;
+        let (max, at) = si_rank_secs[si_rank_secs.len() - 1].clone();
+        println!(
+            "SI.jl models: {} ranks, median {med:.2} s, max {max:.2} s ({at}); {} of {} rank-deficient \
+             ones have symmetries (SI.jl local times: its benchmarking/benchmark_result.md, machine \
+             in published_times.list)",
+            si_rank_secs.len(),
+            si_sym.1,
+            si_sym.0,
+        );
+    }
 }

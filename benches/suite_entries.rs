@@ -131,3 +131,63 @@ pub fn entries(root: &Path) -> Result<Vec<Entry>, String> {
     }
     Ok(out)
 }
+
+/// The StructuralIdentifiability.jl models, systems/benchmarks/si-jl/*.sys (issue 32). Each must
+/// name its source (`# Source:`) and carry a `# verdict-source:` line; the verdict itself is
+/// optional (`verdict-source: none`): such an entry has `Verdict::default()` (neither rank nor
+/// variables cited) and is timed but not judged.
+pub fn si_jl_entries(root: &Path) -> Result<Vec<Entry>, String> {
+    let dir = root.join("systems/benchmarks/si-jl");
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".sys"))
+        .map(|n| format!("systems/benchmarks/si-jl/{n}"))
+        .collect();
+    files.sort();
+    let mut out = Vec::new();
+    for path in &files {
+        let text = std::fs::read_to_string(root.join(path)).map_err(|e| format!("{path}: {e}"))?;
+        if !text.lines().any(|l| l.starts_with("# Source: ")) {
+            return Err(format!("{path}: no '# Source:' line"));
+        }
+        if !text.lines().any(|l| l.starts_with("# verdict-source: ")) {
+            return Err(format!("{path}: no '# verdict-source:' line"));
+        }
+        let e = file_entries(path, &text)?;
+        if e.is_empty() {
+            out.push(Entry {
+                path: path.clone(),
+                input: None,
+                verdict: Verdict::default(),
+            });
+        }
+        out.extend(e);
+    }
+    Ok(out)
+}
+
+/// SI.jl's published local and global times (s) by model key, from
+/// systems/benchmarks/si-jl/published_times.list (`KEY | loc | glob`).
+pub fn si_jl_published(root: &Path) -> Result<Vec<(String, String, String)>, String> {
+    let p = root.join("systems/benchmarks/si-jl/published_times.list");
+    let text = std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<&str> = line.split('|').map(str::trim).collect();
+        match cells.as_slice() {
+            [k, l, g] => out.push((k.to_string(), l.to_string(), g.to_string())),
+            _ => {
+                return Err(format!(
+                    "published_times.list:{}: expected 'KEY | loc | glob'",
+                    i + 1
+                ))
+            }
+        }
+    }
+    Ok(out)
+}

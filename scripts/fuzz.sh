@@ -38,6 +38,8 @@ seed() {
       ;;
     sys) cp systems/*.sys systems/classic/*.sys "$dir/" 2>/dev/null || true ;;
     eff) cp systems/*.eff "$dir/" 2>/dev/null || true ;;
+    sbml) [ -d fuzz/seeds/sbml ] && cp fuzz/seeds/sbml/* "$dir/" 2>/dev/null || true ;;
+    si_jl) [ -d fuzz/seeds/si_jl ] && cp fuzz/seeds/si_jl/* "$dir/" 2>/dev/null || true ;;
     dataset)
       # A dataset's files framed as the target reads them (see fuzz_targets/dataset.rs).
       [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true

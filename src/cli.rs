@@ -235,6 +235,70 @@ from http://asrl.utias.utoronto.ca/datasets/mrclam/): Landmark_Groundtruth.dat a
 N, robotN_Odometry.txt, robotN_Measurement.txt and robotN_Groundtruth.txt.
 Writes a dataset (docs/data-format.md) with the Vicon ground truth in truth.json.")]
     Mrclam(MrclamArgs),
+    /// StructuralIdentifiability.jl's `@ODEmodel` text (a Julia file with one
+    /// or more models, e.g. its benchmarking/benchmarks.jl) to .sys
+    /// (docs/import.md).
+    #[command(after_help = "Examples:
+  obsan import si-jl model.jl                       (one model: .sys text to stdout)
+  obsan import si-jl benchmarks.jl --list
+  obsan import si-jl benchmarks.jl --model Goodwin --out goodwin.sys
+  obsan import si-jl benchmarks.jl --all systems/benchmarks/si-jl
+
+x'(t) = EXPR makes x a state, y(t) = EXPR an output, another u(t) an input, a bare name a
+parameter; set_parameter_values(ode, Dict(p => QQ(1, 2))) values are substituted. The .sys is
+read back before it is written: a model outside obsan's class (not affine in its inputs) is
+refused at its equation's line in the source, exit 2. --all writes every model that converts
+and exits 2 if any was refused.")]
+    SiJl(SiJlArgs),
+    /// An SBML model (Level 2 or 3 core) to .sys: species changed by reactions as states,
+    /// rate laws as their equations, compartments folded in, parameters unknown
+    /// (docs/import.md).
+    #[command(after_help = "Examples:
+  obsan import sbml model.xml                        (.sys text to stdout; every state measured)
+  obsan import sbml model.xml --observe S1,S2 --out model.sys
+
+Assignment rules are substituted and function definitions inlined; events, algebraic rules,
+delays, time, piecewise and varying compartments are refused naming the element and its line,
+exit 2.")]
+    Sbml(SbmlArgs),
+}
+
+#[derive(Args)]
+pub struct SbmlArgs {
+    /// The SBML file.
+    pub source: String,
+    /// The measured ids (species, parameters or assignment-rule variables), comma-separated:
+    /// each becomes an output y_ID. Default: every state.
+    #[arg(long, value_delimiter = ',')]
+    pub observe: Vec<String>,
+    /// Write the .sys here instead of stdout.
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Replace an existing file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args)]
+pub struct SiJlArgs {
+    /// The Julia file.
+    pub source: String,
+    /// The model to convert: its Dict key (`Goodwin` for `:Goodwin => Dict(...)`) or the
+    /// variable it is bound to. Needed when the file holds more than one.
+    #[arg(long)]
+    pub model: Option<String>,
+    /// Write the .sys here instead of stdout.
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Convert every model into this folder, as KEY.sys.
+    #[arg(long, conflicts_with_all = ["model", "out"])]
+    pub all: Option<String>,
+    /// List the models found (key, line, name) and exit.
+    #[arg(long)]
+    pub list: bool,
+    /// Replace existing .sys files.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Args)]

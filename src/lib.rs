@@ -32,6 +32,7 @@ mod expr_cmds;
 mod figures;
 mod fsio;
 mod global_cmd;
+mod import_cmd;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
@@ -419,6 +420,8 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
         cli::Command::Global(a) => global_cmd::run(&a),
+        cli::Command::Import(cli::ImportCommand::SiJl(a)) => import_cmd::si_jl(&a),
+        cli::Command::Import(cli::ImportCommand::Sbml(a)) => import_cmd::sbml(&a),
     }
 }
 

@@ -7,6 +7,7 @@ mod diagnose;
 mod experiments;
 mod expr;
 mod global;
+mod import;
 mod modes;
 mod montecarlo;
 mod show;

@@ -3,7 +3,10 @@
 //! checked against the verdict each file cites. The expectation is read from the file's
 //! `# verdict:` line, which quotes its source; it is never obsan's own output.
 
-use crate::suite_entries::{entries as entries_in, file_entries, parse_verdict, Entry};
+use crate::suite_entries::{
+    entries as entries_in, file_entries, parse_verdict, si_jl_entries, si_jl_published, Entry,
+    Verdict,
+};
 use crate::util::*;
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -104,5 +107,52 @@ fn suite_verdicts_match_the_cited_ones() {
         checked += 1;
     }
     assert!(checked >= 50, "only {checked} entries checked");
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The StructuralIdentifiability.jl models (systems/benchmarks/si-jl/, issue 32): every one that
+/// cites a verdict (derived from SI.jl's published identifiable functions, never from obsan) is
+/// checked; the others are only required to name their source. All are fast (the slowest cited
+/// one, QY, takes seconds, not minutes), so none is skipped.
+#[test]
+fn si_jl_verdicts_match_the_cited_ones() {
+    let all = si_jl_entries(std::path::Path::new(env!("CARGO_MANIFEST_DIR")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(all.len() >= 64, "{} SI.jl models", all.len());
+    // Every published SI.jl time quoted by the bench belongs to a model of the folder.
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (key, _, _) in si_jl_published(root).unwrap_or_else(|e| panic!("{e}")) {
+        let p = format!("systems/benchmarks/si-jl/{key}.sys");
+        assert!(
+            all.iter().any(|e| e.path == p),
+            "published time for unknown {key}"
+        );
+    }
+    let mut failures = Vec::new();
+    let mut checked = 0;
+    for e in all.iter().filter(|e| e.verdict != Verdict::default()) {
+        let v: Value = serde_json::from_str(&ok(&["rank", e.path.as_str(), "--json"])).unwrap();
+        let (rank, n) = (v["rank"].as_u64().unwrap(), v["n"].as_u64().unwrap());
+        let un: BTreeSet<String> = v["unobservable_variables"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect();
+        if e.verdict.rank.is_some_and(|r| r != rank) {
+            failures.push(format!(
+                "{}: cited {:?}, obsan rank {rank} of {n}",
+                e.path, e.verdict
+            ));
+        }
+        if e.verdict.unobservable.as_ref().is_some_and(|w| *w != un) {
+            failures.push(format!(
+                "{}: cited {:?}, obsan {un:?}",
+                e.path, e.verdict.unobservable
+            ));
+        }
+        checked += 1;
+    }
+    assert!(checked >= 31, "only {checked} SI.jl verdicts checked");
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

@@ -1,0 +1,695 @@
+//! SBML (Level 2 and 3 core) to `.sys`: species changed by reactions become
+//! states with `d[S]/dt = sum(stoichiometry * rate) / compartment size` (the
+//! kinetic law is in substance per time; a species with
+//! `hasOnlySubstanceUnits` is an amount and is not divided), rate rules give
+//! their variable's equation, assignment rules are substituted, function
+//! definitions inlined, compartments with a size folded in as numbers, global
+//! and kinetic-law parameters become unknown params (local ones prefixed with
+//! their reaction id). SBML has no outputs: `observe` names them (species or
+//! parameter ids), or every state is measured. Refused with the element and its
+//! line: events, algebraic rules, delays, `time`, piecewise, stoichiometry
+//! math, compartments that vary.
+
+use crate::julia::{show, Ex, RESERVED};
+use crate::{Converted, ImportError};
+use roxmltree::{Document, Node};
+use std::collections::BTreeMap;
+
+struct Ctx<'a> {
+    doc: &'a Document<'a>,
+    funcs: BTreeMap<String, (Vec<String>, Ex)>,
+}
+
+impl Ctx<'_> {
+    fn pos(&self, n: Node) -> (usize, usize) {
+        let p = self.doc.text_pos_at(n.range().start);
+        (p.row as usize, p.col as usize)
+    }
+    fn err(&self, n: Node, msg: impl Into<String>) -> ImportError {
+        let (l, c) = self.pos(n);
+        ImportError::at(l, c, msg)
+    }
+}
+
+fn elems<'a, 'i>(n: Node<'a, 'i>) -> impl Iterator<Item = Node<'a, 'i>> {
+    n.children().filter(|c| c.is_element())
+}
+
+fn child<'a, 'i>(n: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    elems(n).find(|c| c.tag_name().name() == name)
+}
+
+fn list<'a, 'i>(n: Node<'a, 'i>, list: &str, item: &str) -> Vec<Node<'a, 'i>> {
+    child(n, list).map_or(Vec::new(), |l| {
+        elems(l).filter(|c| c.tag_name().name() == item).collect()
+    })
+}
+
+fn id_of(cx: &Ctx, n: Node, attr: &str) -> Result<String, ImportError> {
+    let id = n
+        .attribute(attr)
+        .ok_or_else(|| cx.err(n, format!("<{}> has no '{attr}'", n.tag_name().name())))?;
+    if id.is_empty()
+        || !id.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+        || !id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    {
+        return Err(cx.err(n, format!("'{id}' is not a valid SBML id")));
+    }
+    Ok(id.to_string())
+}
+
+/// A number as `.sys` reads it (exact decimal), from SBML text.
+fn number(cx: &Ctx, n: Node, text: &str) -> Result<Ex, ImportError> {
+    let t = text.trim().to_ascii_lowercase();
+    let (neg, body) = match t.strip_prefix('-') {
+        Some(b) => (true, b.to_string()),
+        None => (false, t.trim_start_matches('+').to_string()),
+    };
+    let mut parts = body.splitn(2, 'e');
+    let mant = parts.next().unwrap_or("");
+    let exp = parts.next();
+    let mant_ok = !mant.is_empty()
+        && mant.chars().all(|c| c.is_ascii_digit() || c == '.')
+        && mant.chars().filter(|&c| c == '.').count() <= 1
+        && mant.chars().any(|c| c.is_ascii_digit());
+    let exp_ok = exp.is_none_or(|e| {
+        let d = e.trim_start_matches(['+', '-']);
+        !d.is_empty() && d.len() <= 4 && d.chars().all(|c| c.is_ascii_digit())
+    });
+    if !mant_ok || !exp_ok {
+        return Err(cx.err(n, format!("'{}' is not a finite number", text.trim())));
+    }
+    let mut s = mant.to_string();
+    if s.starts_with('.') {
+        s.insert(0, '0');
+    }
+    if s.ends_with('.') {
+        s.push('0');
+    }
+    if let Some(e) = exp {
+        s = format!("{s}e{e}");
+    }
+    let e = Ex::Num(s);
+    Ok(if neg { Ex::Neg(Box::new(e)) } else { e })
+}
+
+fn name(s: &str, n: (usize, usize)) -> Ex {
+    Ex::Name {
+        name: s.to_string(),
+        timed: false,
+        at: n,
+    }
+}
+
+fn bin(op: char, a: Ex, b: Ex) -> Ex {
+    Ex::Bin(op, Box::new(a), Box::new(b))
+}
+
+/// Replace names by expressions.
+fn subst(e: &Ex, f: &dyn Fn(&str) -> Option<Ex>) -> Ex {
+    match e {
+        Ex::Name { name, .. } => f(name).unwrap_or_else(|| e.clone()),
+        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, f))),
+        Ex::Bin(op, a, b) => bin(*op, subst(a, f), subst(b, f)),
+        Ex::Call(g, args) => Ex::Call(g.clone(), args.iter().map(|a| subst(a, f)).collect()),
+        Ex::Num(_) => e.clone(),
+    }
+}
+
+const MAX_DEPTH: usize = 200;
+
+/// A MathML content element as an expression.
+fn mathml(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
+    if depth > MAX_DEPTH {
+        return Err(cx.err(n, "MathML nested too deeply"));
+    }
+    let tag = n.tag_name().name();
+    match tag {
+        "math" | "semantics" => {
+            let first = elems(n)
+                .next()
+                .ok_or_else(|| cx.err(n, format!("empty <{tag}>")))?;
+            mathml(cx, first, depth + 1)
+        }
+        "cn" => {
+            let kind = n.attribute("type").unwrap_or("real");
+            let texts: Vec<&str> = n
+                .children()
+                .filter(|c| c.is_text())
+                .filter_map(|c| c.text())
+                .map(str::trim)
+                .filter(|t| !t.is_empty())
+                .collect();
+            match (kind, texts.as_slice()) {
+                ("integer" | "real" | "double", [t]) => number(cx, n, t),
+                ("e-notation", [m, e]) => number(cx, n, &format!("{m}e{e}")),
+                ("rational", [a, b]) => Ok(bin('/', number(cx, n, a)?, number(cx, n, b)?)),
+                _ => Err(cx.err(n, format!("cannot read this <cn type=\"{kind}\">"))),
+            }
+        }
+        "ci" => {
+            let t = n.text().unwrap_or("").trim();
+            Ok(name(t, cx.pos(n)))
+        }
+        "pi" => Ok(Ex::Num("pi".into())),
+        "exponentiale" => Ok(Ex::Call("exp".into(), vec![Ex::Num("1".into())])),
+        "csymbol" => {
+            let url = n.attribute("definitionURL").unwrap_or("");
+            let what = url.rsplit('/').next().unwrap_or(url);
+            Err(cx.err(
+                n,
+                format!(
+                    "<csymbol> '{what}' is not supported (time, delay and avogadro: the model \
+                     must be autonomous and without delays)"
+                ),
+            ))
+        }
+        "apply" => {
+            let mut it = elems(n);
+            let op = it.next().ok_or_else(|| cx.err(n, "empty <apply>"))?;
+            let rest: Vec<Node> = it.collect();
+            let qual = |q: &str| rest.iter().find(|c| c.tag_name().name() == q).copied();
+            let args: Vec<Ex> = rest
+                .iter()
+                .filter(|c| !matches!(c.tag_name().name(), "degree" | "logbase"))
+                .map(|c| mathml(cx, *c, depth + 1))
+                .collect::<Result<_, _>>()?;
+            let opname = op.tag_name().name();
+            let arity = |k: usize| -> Result<(), ImportError> {
+                if args.len() == k {
+                    Ok(())
+                } else {
+                    Err(cx.err(op, format!("<{opname}> takes {k} argument(s), not {}", args.len())))
+                }
+            };
+            let call = |f: &str, a: Ex| Ex::Call(f.to_string(), vec![a]);
+            match opname {
+                "plus" => Ok(args
+                    .into_iter()
+                    .reduce(|a, b| bin('+', a, b))
+                    .unwrap_or(Ex::Num("0".into()))),
+                "times" => Ok(args
+                    .into_iter()
+                    .reduce(|a, b| bin('*', a, b))
+                    .unwrap_or(Ex::Num("1".into()))),
+                "minus" => {
+                    let mut a = args.into_iter();
+                    match (a.next(), a.next(), a.next()) {
+                        (Some(x), None, None) => Ok(Ex::Neg(Box::new(x))),
+                        (Some(x), Some(y), None) => Ok(bin('-', x, y)),
+                        _ => Err(cx.err(op, "<minus> takes one or two arguments")),
+                    }
+                }
+                "divide" | "power" => {
+                    arity(2)?;
+                    let mut a = args.into_iter();
+                    let (x, y) = (a.next(), a.next());
+                    match (x, y) {
+                        (Some(x), Some(y)) => Ok(bin(if opname == "divide" { '/' } else { '^' }, x, y)),
+                        _ => Err(cx.err(op, "missing argument")),
+                    }
+                }
+                "root" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    match qual("degree") {
+                        None => Ok(call("sqrt", x)),
+                        Some(d) => {
+                            let dn = elems(d).next().ok_or_else(|| cx.err(d, "empty <degree>"))?;
+                            let deg = mathml(cx, dn, depth + 1)?;
+                            Ok(bin('^', x, bin('/', Ex::Num("1".into()), deg)))
+                        }
+                    }
+                }
+                "exp" | "ln" | "sin" | "cos" | "tan" | "arctan" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    let f = match opname {
+                        "ln" => "log",
+                        "arctan" => "atan",
+                        f => f,
+                    };
+                    Ok(call(f, x))
+                }
+                "log" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    let base = match qual("logbase") {
+                        Some(b) => {
+                            let bn = elems(b).next().ok_or_else(|| cx.err(b, "empty <logbase>"))?;
+                            mathml(cx, bn, depth + 1)?
+                        }
+                        None => Ex::Num("10".into()),
+                    };
+                    Ok(bin('/', call("log", x), call("log", base)))
+                }
+                "ci" => {
+                    let f = op.text().unwrap_or("").trim();
+                    let (params, body) = cx.funcs.get(f).ok_or_else(|| {
+                        cx.err(op, format!("'{f}' is called but is not a function definition"))
+                    })?;
+                    if params.len() != args.len() {
+                        return Err(cx.err(
+                            op,
+                            format!("'{f}' takes {} argument(s), not {}", params.len(), args.len()),
+                        ));
+                    }
+                    let map: BTreeMap<&str, &Ex> =
+                        params.iter().map(String::as_str).zip(args.iter()).collect();
+                    Ok(subst(body, &|nm| map.get(nm).map(|e| (*e).clone())))
+                }
+                "csymbol" => mathml(cx, op, depth + 1),
+                other => Err(cx.err(
+                    op,
+                    format!("MathML <{other}> is not supported (obsan reads + - * / ^, root, exp, ln, log, sin, cos, tan, arctan)"),
+                )),
+            }
+        }
+        other => Err(cx.err(
+            n,
+            format!("MathML <{other}> is not supported (piecewise, relations and logic have no .sys form)"),
+        )),
+    }
+}
+
+fn math_of(cx: &Ctx, n: Node) -> Result<Ex, ImportError> {
+    let m = child(n, "math")
+        .ok_or_else(|| cx.err(n, format!("<{}> has no <math>", n.tag_name().name())))?;
+    mathml(cx, m, 0)
+}
+
+/// Translate an SBML document into `.sys` text. `observe`: the ids measured
+/// (each an output `y_ID = ID`); empty: every state.
+pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Converted, ImportError> {
+    let doc = Document::parse(text).map_err(|e| {
+        let p = e.pos();
+        ImportError::at(
+            p.row as usize,
+            p.col as usize,
+            format!("not well-formed XML: {e}"),
+        )
+    })?;
+    let mut cx = Ctx {
+        doc: &doc,
+        funcs: BTreeMap::new(),
+    };
+    let root = doc.root_element();
+    if root.tag_name().name() != "sbml" {
+        return Err(cx.err(root, "the root element is not <sbml>"));
+    }
+    let model = child(root, "model").ok_or_else(|| cx.err(root, "no <model>"))?;
+    if let Some(e) = list(model, "listOfEvents", "event").first() {
+        let id = e.attribute("id").unwrap_or("?");
+        return Err(cx.err(
+            *e,
+            format!("<event> '{id}': events are not supported (discontinuous dynamics)"),
+        ));
+    }
+    for f in list(model, "listOfFunctionDefinitions", "functionDefinition") {
+        let id = id_of(&cx, f, "id")?;
+        let lambda = child(f, "math")
+            .and_then(|m| {
+                child(m, "lambda")
+                    .or_else(|| child(m, "semantics").and_then(|s| child(s, "lambda")))
+            })
+            .ok_or_else(|| cx.err(f, format!("function '{id}' has no <lambda>")))?;
+        let mut params = Vec::new();
+        let mut body = None;
+        for c in elems(lambda) {
+            if c.tag_name().name() == "bvar" {
+                let ci = child(c, "ci").ok_or_else(|| cx.err(c, "<bvar> without <ci>"))?;
+                params.push(ci.text().unwrap_or("").trim().to_string());
+            } else {
+                body = Some(mathml(&cx, c, 0)?);
+            }
+        }
+        let body = body.ok_or_else(|| cx.err(lambda, format!("function '{id}' has no body")))?;
+        cx.funcs.insert(id, (params, body));
+    }
+    // Rules.
+    let mut assign: BTreeMap<String, (Ex, (usize, usize))> = BTreeMap::new();
+    let mut rate: BTreeMap<String, (Ex, (usize, usize))> = BTreeMap::new();
+    if let Some(rules) = child(model, "listOfRules") {
+        for r in elems(rules) {
+            match r.tag_name().name() {
+                "assignmentRule" => {
+                    let v = id_of(&cx, r, "variable")?;
+                    assign.insert(v, (math_of(&cx, r)?, cx.pos(r)));
+                }
+                "rateRule" => {
+                    let v = id_of(&cx, r, "variable")?;
+                    rate.insert(v, (math_of(&cx, r)?, cx.pos(r)));
+                }
+                "algebraicRule" => {
+                    return Err(cx.err(
+                        r,
+                        "<algebraicRule>: algebraic rules (DAEs) are not supported",
+                    ))
+                }
+                // SBML Level 1 rule names and anything else.
+                other => return Err(cx.err(r, format!("<{other}> is not supported"))),
+            }
+        }
+    }
+    // Compartments: sizes folded in as numbers; without a size, a known constant.
+    let mut consts: Vec<String> = Vec::new();
+    let mut value: BTreeMap<String, Ex> = BTreeMap::new();
+    for c in list(model, "listOfCompartments", "compartment") {
+        let id = id_of(&cx, c, "id")?;
+        if rate.contains_key(&id)
+            || assign.contains_key(&id)
+            || c.attribute("constant") == Some("false")
+        {
+            return Err(cx.err(
+                c,
+                format!("compartment '{id}' varies: only constant compartments are supported"),
+            ));
+        }
+        match c.attribute("size").or(c.attribute("volume")) {
+            Some(s) => {
+                value.insert(id, number(&cx, c, s)?);
+            }
+            None => consts.push(id),
+        }
+    }
+    // Species.
+    struct Sp {
+        id: String,
+        comp: String,
+        amount: bool,
+        fixed: bool,
+        at: (usize, usize),
+    }
+    let mut species: Vec<Sp> = Vec::new();
+    for s in list(model, "listOfSpecies", "species") {
+        let id = id_of(&cx, s, "id")?;
+        let comp = id_of(&cx, s, "compartment")?;
+        species.push(Sp {
+            id,
+            comp,
+            amount: s.attribute("hasOnlySubstanceUnits") == Some("true"),
+            fixed: s.attribute("boundaryCondition") == Some("true")
+                || s.attribute("constant") == Some("true"),
+            at: cx.pos(s),
+        });
+    }
+    let mut params: Vec<String> = Vec::new();
+    let mut param_states: Vec<(String, (usize, usize))> = Vec::new();
+    for p in list(model, "listOfParameters", "parameter") {
+        let id = id_of(&cx, p, "id")?;
+        if assign.contains_key(&id) {
+            continue;
+        }
+        if rate.contains_key(&id) {
+            param_states.push((id, cx.pos(p)));
+        } else {
+            params.push(id);
+        }
+    }
+    // Reactions: sum of stoichiometry * rate per species.
+    let mut flux: BTreeMap<String, Vec<Ex>> = BTreeMap::new();
+    for r in list(model, "listOfReactions", "reaction") {
+        let rid = id_of(&cx, r, "id")?;
+        let law = child(r, "kineticLaw")
+            .ok_or_else(|| cx.err(r, format!("reaction '{rid}' has no <kineticLaw>")))?;
+        let mut local: BTreeMap<String, Ex> = BTreeMap::new();
+        for lp in list(law, "listOfParameters", "parameter")
+            .into_iter()
+            .chain(list(law, "listOfLocalParameters", "localParameter"))
+        {
+            let id = id_of(&cx, lp, "id")?;
+            let g = format!("{rid}_{id}");
+            local.insert(id, name(&g, cx.pos(lp)));
+            params.push(g);
+        }
+        let v = subst(&math_of(&cx, law)?, &|n| local.get(n).cloned());
+        for (listname, sign) in [("listOfReactants", -1), ("listOfProducts", 1)] {
+            for sr in list(r, listname, "speciesReference") {
+                let sid = id_of(&cx, sr, "species")?;
+                if child(sr, "stoichiometryMath").is_some() {
+                    return Err(cx.err(sr, "<stoichiometryMath> is not supported"));
+                }
+                let st = match sr.attribute("stoichiometry") {
+                    Some(s) => number(&cx, sr, s)?,
+                    None => Ex::Num("1".into()),
+                };
+                let term = match &st {
+                    Ex::Num(s) if s == "1" => v.clone(),
+                    _ => bin('*', st, v.clone()),
+                };
+                flux.entry(sid).or_default().push(if sign < 0 {
+                    Ex::Neg(Box::new(term))
+                } else {
+                    term
+                });
+            }
+        }
+    }
+    // States and their equations.
+    let mut eqs: Vec<(String, Ex, (usize, usize))> = Vec::new();
+    for s in &species {
+        if assign.contains_key(&s.id) {
+            continue;
+        }
+        if let Some((e, at)) = rate.get(&s.id) {
+            eqs.push((s.id.clone(), e.clone(), *at));
+        } else if s.fixed || !flux.contains_key(&s.id) {
+            params.push(s.id.clone());
+        } else {
+            let terms = flux.get(&s.id).cloned().unwrap_or_default();
+            let sum = terms
+                .into_iter()
+                .reduce(|a, b| match b {
+                    Ex::Neg(x) => bin('-', a, *x),
+                    b => bin('+', a, b),
+                })
+                .unwrap_or(Ex::Num("0".into()));
+            let rhs = if s.amount {
+                sum
+            } else {
+                bin('/', sum, name(&s.comp, s.at))
+            };
+            eqs.push((s.id.clone(), rhs, s.at));
+        }
+    }
+    for (p, at) in &param_states {
+        if let Some((e, _)) = rate.get(p) {
+            eqs.push((p.clone(), e.clone(), *at));
+        }
+    }
+    for v in rate.keys() {
+        if !eqs.iter().any(|(n, _, _)| n == v) {
+            let at = rate.get(v).map_or((1, 1), |r| r.1);
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("rate rule for '{v}', which is not a species or parameter"),
+            ));
+        }
+    }
+    if eqs.is_empty() {
+        let (l, c) = cx.pos(model);
+        return Err(ImportError::at(
+            l,
+            c,
+            "the model has no dynamics (no species changed by a reaction or rate rule)",
+        ));
+    }
+    // Substitute assignment rules (they may use each other) and compartment sizes.
+    let resolve = |e: &Ex| -> Result<Ex, ImportError> {
+        let mut cur = e.clone();
+        // Each round removes one level of rule nesting; more rounds than rules means a cycle.
+        for _ in 0..assign.len() + 2 {
+            let mut hit = false;
+            let next = subst(&cur, &|n| {
+                assign
+                    .get(n)
+                    .map(|(x, _)| x.clone())
+                    .or_else(|| value.get(n).cloned())
+            });
+            walk_names(&cur, &mut |n| {
+                hit |= assign.contains_key(n) || value.contains_key(n)
+            });
+            if !hit {
+                return Ok(cur);
+            }
+            cur = next;
+        }
+        let at = assign.values().next().map_or((1, 1), |a| a.1);
+        Err(ImportError::at(
+            at.0,
+            at.1,
+            "assignment rules refer to each other in a cycle",
+        ))
+    };
+    let known: Vec<&str> = eqs
+        .iter()
+        .map(|e| e.0.as_str())
+        .chain(params.iter().map(String::as_str))
+        .chain(consts.iter().map(String::as_str))
+        .collect();
+    let mut body: Vec<(String, Ex, (usize, usize))> = Vec::new();
+    for (v, e, at) in &eqs {
+        let r = resolve(e)?;
+        let mut bad = None;
+        walk_names_at(&r, &mut |n, p| {
+            if bad.is_none() && !known.contains(&n) {
+                bad = Some((n.to_string(), p));
+            }
+        });
+        if let Some((n, p)) = bad {
+            return Err(ImportError::at(
+                p.0,
+                p.1,
+                format!("'{n}' is not a species, parameter or compartment of the model"),
+            ));
+        }
+        body.push((v.clone(), r, *at));
+    }
+    // Outputs.
+    let mut outputs: Vec<(String, Ex)> = Vec::new();
+    if observe.is_empty() {
+        for (v, _, at) in &body {
+            outputs.push((format!("y_{v}"), name(v, *at)));
+        }
+    } else {
+        for o in observe {
+            let e = if let Some((x, _)) = assign.get(o) {
+                resolve(x)?
+            } else if known.contains(&o.as_str()) {
+                name(o, (1, 1))
+            } else {
+                let (l, c) = cx.pos(model);
+                return Err(ImportError::at(
+                    l,
+                    c,
+                    format!("--observe '{o}' is not an id of this model"),
+                ));
+            };
+            outputs.push((format!("y_{o}"), e));
+        }
+    }
+    // Only the params the equations and outputs use; keep declaration order.
+    let mut used: Vec<String> = Vec::new();
+    for e in body
+        .iter()
+        .map(|b| &b.1)
+        .chain(outputs.iter().map(|o| &o.1))
+    {
+        walk_names(e, &mut |n| {
+            if !used.iter().any(|u| u == n) {
+                used.push(n.to_string());
+            }
+        });
+    }
+    params.retain(|p| used.contains(p) && !eqs.iter().any(|e| &e.0 == p));
+    params.dedup();
+    consts.retain(|c| used.contains(c));
+    let rename = |n: &str| -> String {
+        if RESERVED.contains(&n) {
+            format!("{n}_")
+        } else {
+            n.to_string()
+        }
+    };
+    let mid = model
+        .attribute("id")
+        .or(model.attribute("name"))
+        .unwrap_or("sbml_model");
+    let mut sysname: String = mid
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if !sysname.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
+        sysname.insert(0, '_');
+    }
+    if RESERVED.contains(&sysname.as_str()) {
+        sysname.push('_');
+    }
+    let one_line = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
+    let mut lines = vec![format!(
+        "# Imported by `obsan import sbml` from {}.",
+        one_line(origin)
+    )];
+    if observe.is_empty() {
+        lines.push(
+            "# SBML has no outputs: every state is measured here (choose with --observe).".into(),
+        );
+    }
+    if !value.is_empty() {
+        let v: Vec<String> = value
+            .iter()
+            .map(|(k, e)| {
+                let mut s = String::new();
+                show(e, &mut s, &|n| n.to_string());
+                format!("{k} = {s}")
+            })
+            .collect();
+        lines.push(format!("# compartment sizes folded in: {}", v.join(", ")));
+    }
+    lines.push(format!("system {sysname}"));
+    if let Some(n) = model.attribute("name") {
+        let n = one_line(n);
+        if !n.is_empty() {
+            lines.push(format!("description {n}"));
+        }
+    }
+    let names = |v: Vec<&String>| {
+        v.into_iter()
+            .map(|s| rename(s))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    lines.push(format!(
+        "state {}",
+        names(body.iter().map(|b| &b.0).collect())
+    ));
+    if !params.is_empty() {
+        lines.push(format!("param {}", names(params.iter().collect())));
+    }
+    if !consts.is_empty() {
+        lines.push(format!("const {}", names(consts.iter().collect())));
+    }
+    let mut line_map = Vec::new();
+    for (v, e, at) in &body {
+        let mut s = String::new();
+        show(e, &mut s, &rename);
+        lines.push(format!("{}' = {s}", rename(v)));
+        line_map.push((lines.len(), at.0, at.1));
+    }
+    for (o, e) in &outputs {
+        let mut s = String::new();
+        show(e, &mut s, &rename);
+        lines.push(format!("output {o} = {s}"));
+    }
+    let mut sys_text = lines.join("\n");
+    sys_text.push('\n');
+    Ok(Converted {
+        name: sysname,
+        sys_text,
+        line_map,
+    })
+}
+
+fn walk_names(e: &Ex, f: &mut dyn FnMut(&str)) {
+    walk_names_at(e, &mut |n, _| f(n));
+}
+
+fn walk_names_at(e: &Ex, f: &mut dyn FnMut(&str, (usize, usize))) {
+    match e {
+        Ex::Name { name, at, .. } => f(name, *at),
+        Ex::Neg(a) => walk_names_at(a, f),
+        Ex::Bin(_, a, b) => {
+            walk_names_at(a, f);
+            walk_names_at(b, f);
+        }
+        Ex::Call(_, args) => args.iter().for_each(|a| walk_names_at(a, f)),
+        Ex::Num(_) => {}
+    }
+}

@@ -1,0 +1,209 @@
+//! The SBML reader on small models written here (after the SBML semantic test suite's first case
+//! and the SBML specification's constructs); expected equations are derived by hand beside each
+//! test from SBML's semantics: d[S]/dt = sum(stoichiometry * rate) / compartment size.
+
+use obsan_import::{sbml_to_sys, ImportError};
+use obsan_model::System;
+use proptest::prelude::*;
+
+/// `d/dt of state` in the imported system equals `want` exactly.
+fn equation_is(sys: &str, state: &str, want: &str) {
+    let s = System::parse(sys, "t.sys").unwrap_or_else(|e| panic!("{e}\n{sys}"));
+    let mut nf = s.normal_form(None, &[]).unwrap();
+    let k = nf
+        .state
+        .iter()
+        .position(|n| n == state)
+        .unwrap_or_else(|| panic!("no state {state}:\n{sys}"));
+    let got = nf.f0[k];
+    let w = nf.parse_expr(want, true).unwrap();
+    let d = nf.ctx.sub(got, w);
+    assert!(
+        nf.ctx.is_identically_zero(d),
+        "{state}' = {} , wanted {want}\n{sys}",
+        nf.ctx.to_text(got)
+    );
+}
+
+const CASE1: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+  <model id="case00001" name="S1 to S2">
+    <listOfCompartments>
+      <compartment id="compartment" size="1" constant="true"/>
+    </listOfCompartments>
+    <listOfSpecies>
+      <species id="S1" compartment="compartment" initialAmount="0.00015" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+      <species id="S2" compartment="compartment" initialAmount="0" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+    </listOfSpecies>
+    <listOfParameters>
+      <parameter id="k1" value="1" constant="true"/>
+    </listOfParameters>
+    <listOfReactions>
+      <reaction id="reaction1" reversible="false">
+        <listOfReactants><speciesReference species="S1" stoichiometry="1" constant="true"/></listOfReactants>
+        <listOfProducts><speciesReference species="S2" stoichiometry="1" constant="true"/></listOfProducts>
+        <kineticLaw>
+          <math xmlns="http://www.w3.org/1998/Math/MathML">
+            <apply><times/><ci> compartment </ci><ci> k1 </ci><ci> S1 </ci></apply>
+          </math>
+        </kineticLaw>
+      </reaction>
+    </listOfReactions>
+  </model>
+</sbml>
+"#;
+
+#[test]
+fn one_reaction_gives_mass_action_equations() {
+    // rate = compartment*k1*S1 with compartment = 1: S1' = -k1 S1 / 1, S2' = +k1 S1 / 1.
+    let c = sbml_to_sys(CASE1, "case.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S1", "-k1*S1");
+    equation_is(&c.sys_text, "S2", "k1*S1");
+    assert!(c.sys_text.contains("\nparam k1\n"), "{}", c.sys_text);
+    assert!(
+        c.sys_text.contains("output y_S1 = S1\noutput y_S2 = S2\n"),
+        "{}",
+        c.sys_text
+    );
+    // The S1 equation maps back to the <species id="S1"> element, line 8 column 7.
+    let line = c
+        .sys_text
+        .lines()
+        .position(|l| l.starts_with("S1'"))
+        .unwrap()
+        + 1;
+    assert_eq!(c.source_of(line), Some((8, 7)));
+}
+
+const RICH: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level2/version4" level="2" version="4">
+  <model id="rich" name="Rich model">
+    <listOfFunctionDefinitions>
+      <functionDefinition id="mm">
+        <math xmlns="http://www.w3.org/1998/Math/MathML">
+          <lambda><bvar><ci>v</ci></bvar><bvar><ci>s</ci></bvar><bvar><ci>km</ci></bvar>
+            <apply><divide/><apply><times/><ci>v</ci><ci>s</ci></apply><apply><plus/><ci>km</ci><ci>s</ci></apply></apply>
+          </lambda>
+        </math>
+      </functionDefinition>
+    </listOfFunctionDefinitions>
+    <listOfCompartments><compartment id="c" size="2"/></listOfCompartments>
+    <listOfSpecies>
+      <species id="A" compartment="c" initialConcentration="1"/>
+      <species id="B" compartment="c" initialConcentration="1" boundaryCondition="true"/>
+      <species id="C" compartment="c" initialConcentration="0"/>
+    </listOfSpecies>
+    <listOfParameters>
+      <parameter id="vf" value="1"/><parameter id="E" value="1" constant="false"/>
+      <parameter id="kd" value="0.1"/><parameter id="Vmax" constant="false"/>
+    </listOfParameters>
+    <listOfRules>
+      <assignmentRule variable="Vmax">
+        <math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><ci>vf</ci><ci>E</ci></apply></math>
+      </assignmentRule>
+      <rateRule variable="E">
+        <math xmlns="http://www.w3.org/1998/Math/MathML"><apply><minus/><apply><times/><ci>kd</ci><ci>E</ci></apply></apply></math>
+      </rateRule>
+    </listOfRules>
+    <listOfReactions>
+      <reaction id="R1">
+        <listOfReactants><speciesReference species="A"/><speciesReference species="B"/></listOfReactants>
+        <listOfProducts><speciesReference species="C" stoichiometry="2"/></listOfProducts>
+        <kineticLaw>
+          <math xmlns="http://www.w3.org/1998/Math/MathML">
+            <apply><times/><ci>c</ci><apply><ci>mm</ci><ci>Vmax</ci><ci>A</ci><ci>Km</ci></apply><ci>B</ci></apply>
+          </math>
+          <listOfParameters><parameter id="Km" value="0.5"/></listOfParameters>
+        </kineticLaw>
+      </reaction>
+    </listOfReactions>
+  </model>
+</sbml>
+"#;
+
+#[test]
+fn rules_functions_local_parameters_and_compartments_are_folded() {
+    // rate = c * mm(Vmax, A, Km) * B = 2 * (vf E) A / (R1_Km + A) * B (Vmax by its rule, Km
+    // local to R1). A' = -rate / 2; C' = 2 rate / 2; B is a boundary species (a param);
+    // E' = -kd E by its rate rule.
+    let c = sbml_to_sys(RICH, "rich.xml", &["A".into(), "Vmax".into()]).unwrap();
+    let t = &c.sys_text;
+    equation_is(t, "A", "-vf*E*A*B/(R1_Km + A)");
+    equation_is(t, "C", "2*vf*E*A*B/(R1_Km + A)");
+    equation_is(t, "E", "-kd*E");
+    assert!(t.contains("output y_A = A\noutput y_Vmax = vf*E\n"), "{t}");
+    let s = System::parse(t, "r.sys").unwrap();
+    let params: Vec<&str> = s
+        .decls
+        .iter()
+        .filter(|d| d.kind == obsan_model::Kind::Param)
+        .map(|d| d.name.as_str())
+        .collect();
+    assert_eq!(params, ["vf", "kd", "R1_Km", "B"], "{t}");
+}
+
+fn refused(src: &str) -> ImportError {
+    match sbml_to_sys(src, "x.xml", &[]) {
+        Ok(c) => panic!("accepted:\n{}", c.sys_text),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn unsupported_elements_are_refused_at_their_line() {
+    let with = |extra: &str| CASE1.replace("  </model>", &format!("{extra}\n  </model>"));
+    let e = refused(&with(
+        "    <listOfEvents>\n      <event id=\"ev\"/>\n    </listOfEvents>",
+    ));
+    assert_eq!((e.line, e.col), (26, 7), "{e}");
+    assert!(e.message.contains("'ev'"), "{e}");
+    let e = refused(&with(
+        "    <listOfRules><algebraicRule><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><ci>S1</ci></math></algebraicRule></listOfRules>",
+    ));
+    assert_eq!((e.line, e.col), (25, 18), "{e}");
+    let time = CASE1.replace(
+        "<ci> S1 </ci></apply>",
+        "<csymbol encoding=\"text\" definitionURL=\"http://www.sbml.org/sbml/symbols/time\">t</csymbol></apply>",
+    );
+    let e = refused(&time);
+    assert_eq!(e.line, 20, "{e}");
+    assert!(e.message.contains("time"), "{e}");
+    let pw = CASE1.replace("<ci> S1 </ci></apply>", "<piecewise/></apply>");
+    assert!(refused(&pw).message.contains("piecewise"));
+    let unknown = CASE1.replace("<ci> S1 </ci></apply>", "<ci> S9 </ci></apply>");
+    let e = refused(&unknown);
+    assert_eq!(e.line, 20, "{e}");
+    assert!(e.message.contains("'S9'"), "{e}");
+    let cycle = CASE1.replace(
+        "  </model>",
+        "    <listOfRules>\n      <assignmentRule variable=\"k1\"><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><ci>k2</ci></math></assignmentRule>\n      <assignmentRule variable=\"k2\"><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><ci>k1</ci></math></assignmentRule>\n    </listOfRules>\n  </model>",
+    );
+    assert!(refused(&cycle).message.contains("cycle"));
+    let e = refused("<sbml><model>\n<listOfSpecies>\n</model></sbml>");
+    assert_eq!(e.line, 3, "{e}");
+    let e = refused(&CASE1.replace(
+        "initialAmount=\"0\" ",
+        "initialAmount=\"0\" x=\"1\" x=\"2\" ",
+    ));
+    assert_eq!(e.line, 9, "{e}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Cut or insert anywhere in a valid file: never a panic; a refusal lies inside the text.
+    #[test]
+    fn never_panics(cut in 0usize..4000, len in 0usize..40, ins in "[ -~\n]{0,8}") {
+        let base = RICH;
+        let n = base.len();
+        let a = (cut % n).min(n);
+        let b = (a + len).min(n);
+        if base.is_char_boundary(a) && base.is_char_boundary(b) {
+            let src = format!("{}{}{}", &base[..a], ins, &base[b..]);
+            let lines = src.split('\n').count();
+            match sbml_to_sys(&src, "p.xml", &[]) {
+                Err(e) => prop_assert!(e.line >= 1 && e.line <= lines, "{e}"),
+                Ok(c) => { let _ = System::parse(&c.sys_text, "p.sys"); }
+            }
+        }
+    }
+}

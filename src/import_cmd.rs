@@ -1,0 +1,157 @@
+//! `obsan import si-jl` and `obsan import sbml`: foreign model text to .sys (docs/import.md). The
+//! translation is obsan-import's; this reads the file, checks the produced
+//! .sys with obsan-model (so a model outside obsan's class is refused at its
+//! line in the source) and writes the result.
+
+use crate::cli::{SbmlArgs, SiJlArgs};
+use crate::Failure;
+use obsan_import::{Converted, ImportError};
+use std::path::Path;
+use std::process::ExitCode;
+
+fn located(path: &str, e: &ImportError) -> String {
+    format!("{path}:{e}")
+}
+
+/// Read the produced .sys back (parse and normal form): an error is reported
+/// at the source line its equation came from.
+fn check(path: &str, c: &Converted, at: (usize, usize), key: &str) -> Result<(), String> {
+    let origin = format!("{}.sys", c.name);
+    let res = obsan_model::System::parse(&c.sys_text, &origin)
+        .and_then(|s| s.normal_form(None, &[]).map(|_| ()));
+    match res {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            let (l, col) = e.line.and_then(|l| c.source_of(l)).unwrap_or(at);
+            Err(format!(
+                "{path}:{l}:{col}: model :{key} is outside obsan's .sys class: {}",
+                e.message
+            ))
+        }
+    }
+}
+
+/// Write `text` to `out` whole (a sibling temporary file renamed into place).
+fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
+    let p = Path::new(out);
+    if p.exists() && !force {
+        return Err(Failure(format!("{out} exists (--force replaces it)")));
+    }
+    if p.is_dir() {
+        return Err(Failure(format!("{out} is a folder")));
+    }
+    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| Failure(format!("cannot create {}: {e}", dir.display())))?;
+    }
+    let tmp = format!("{out}.tmp-{}", std::process::id());
+    std::fs::write(&tmp, text).map_err(|e| Failure(format!("cannot write {tmp}: {e}")))?;
+    std::fs::rename(&tmp, out).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Failure(format!("cannot write {out}: {e}"))
+    })
+}
+
+pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
+    let path = a.source.as_str();
+    let text = crate::fsio::read_text(path)?;
+    let models = obsan_import::si_jl_models(&text).map_err(|e| Failure(located(path, &e)))?;
+    if models.is_empty() {
+        return Err(Failure(format!("{path}: no @ODEmodel(...) found")));
+    }
+    if a.list {
+        for m in &models {
+            println!(
+                "{}\t{}:{}\t{}",
+                m.key,
+                path,
+                m.line,
+                m.name.as_deref().unwrap_or("")
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let convert = |m: &obsan_import::SiJlModel| -> Result<Converted, String> {
+        let c = obsan_import::si_jl_convert(&text, m, path).map_err(|e| located(path, &e))?;
+        check(path, &c, (m.line, m.col), &m.key)?;
+        Ok(c)
+    };
+    if let Some(dir) = &a.all {
+        let (mut done, mut refused) = (0usize, 0usize);
+        for m in &models {
+            match convert(m) {
+                Ok(c) => {
+                    let out = Path::new(dir).join(format!("{}.sys", c.name));
+                    write_whole(&out.to_string_lossy(), &c.sys_text, a.force)?;
+                    done += 1;
+                }
+                Err(msg) => {
+                    eprintln!("{msg}");
+                    refused += 1;
+                }
+            }
+        }
+        println!(
+            "{done} of {} models written to {dir}, {refused} refused",
+            models.len()
+        );
+        if refused > 0 {
+            return Err(Failure(format!(
+                "{refused} model(s) of {path} refused (messages above)"
+            )));
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let m = match &a.model {
+        Some(k) => models.iter().find(|m| &m.key == k).ok_or_else(|| {
+            let keys: Vec<&str> = models.iter().map(|m| m.key.as_str()).collect();
+            Failure(format!(
+                "{path}: no model '{k}' (models: {})",
+                keys.join(", ")
+            ))
+        })?,
+        None if models.len() == 1 => &models[0],
+        None => {
+            let keys: Vec<&str> = models.iter().map(|m| m.key.as_str()).collect();
+            return Err(Failure(format!(
+                "{path} holds {} models: choose one with --model ({}) or use --all DIR",
+                models.len(),
+                keys.join(", ")
+            )));
+        }
+    };
+    let c = convert(m).map_err(Failure)?;
+    match &a.out {
+        Some(out) => {
+            write_whole(out, &c.sys_text, a.force)?;
+            println!("model :{} written to {out}", m.key);
+        }
+        None => print!("{}", c.sys_text),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
+    let path = a.source.as_str();
+    let text = crate::fsio::read_text(path)?;
+    let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
+        .map_err(|e| Failure(located(path, &e)))?;
+    let origin = format!("{}.sys", c.name);
+    obsan_model::System::parse(&c.sys_text, &origin)
+        .and_then(|s| s.normal_form(None, &[]).map(|_| ()))
+        .map_err(|e| {
+            let (l, col) = e.line.and_then(|l| c.source_of(l)).unwrap_or((1, 1));
+            Failure(format!(
+                "{path}:{l}:{col}: the model is outside obsan's .sys class: {}",
+                e.message
+            ))
+        })?;
+    match &a.out {
+        Some(out) => {
+            write_whole(out, &c.sys_text, a.force)?;
+            println!("{path} written to {out}");
+        }
+        None => print!("{}", c.sys_text),
+    }
+    Ok(ExitCode::SUCCESS)
+}
