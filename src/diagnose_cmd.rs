@@ -17,16 +17,20 @@ use std::fmt::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
-    let path = match &a.effects {
-        Some(p) => p.clone(),
+/// The effects file diagnose reads: --effects, else the model's `.eff` if there is one.
+fn effects_path(a: &DiagnoseArgs) -> Option<String> {
+    match &a.effects {
+        Some(p) => Some(p.clone()),
         None => {
             let p = PathBuf::from(&a.model).with_extension("eff");
-            if !p.exists() {
-                return Ok(None);
-            }
-            p.display().to_string()
+            p.exists().then(|| p.display().to_string())
         }
+    }
+}
+
+fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
+    let Some(path) = effects_path(a) else {
+        return Ok(None);
     };
     let src = crate::fsio::read_text(&path)?;
     Ok(Some(EffectLibrary::parse(&src, &path)?))
@@ -53,6 +57,12 @@ fn parse_init(v: &[String]) -> Result<BTreeMap<String, f64>, Failure> {
 pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     if !(a.alpha > 0.0 && a.alpha < 1.0) {
         return Err(Failure(format!("--alpha {}: must be in (0, 1)", a.alpha)));
+    }
+    let eff = effects_path(a);
+    let mut reads = vec![a.model.as_str(), a.data.as_str()];
+    reads.extend(eff.as_deref());
+    if let Some(dir) = &a.report {
+        crate::fsio::check_outside(dir, &reads)?;
     }
     let sys = load_system(&a.model)?;
     let lib = load_effects(a)?;
@@ -96,7 +106,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         out!("{text}");
     }
     if let Some(dir) = &a.report {
-        write_folder_atomically(dir, a.force, &report_files(&d, &text))?;
+        write_folder_atomically(dir, a.force, &reads, &report_files(&d, &text))?;
         if !a.json {
             outln!("report written to {dir}/report.md");
         }
@@ -659,6 +669,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
 
 /// `obsan import mrclam`: read one robot's files, write a dataset folder.
 pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
+    crate::fsio::check_outside(&a.out, &[&a.source])?;
     let dir = std::path::Path::new(&a.source);
     let read = |name: &str| -> Result<(String, String), Failure> {
         let p = dir.join(name);
@@ -699,7 +710,7 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
         &data,
         &[("truth.json", serde_json::to_string_pretty(&truth_json)?)],
     )?;
-    write_folder_atomically(&a.out, a.force, &files)?;
+    write_folder_atomically(&a.out, a.force, &[&a.source], &files)?;
     let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
     outln!(
         "wrote {}: robot {}, {} windows of {} s, {} {}",

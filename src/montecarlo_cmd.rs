@@ -12,6 +12,13 @@ use obsan_fit::Predictor;
 use serde_json::{json, Value};
 use std::process::ExitCode;
 
+
+/// The most runs per cell (`--runs`): each run's values are kept for the
+/// summary, so memory grows with it (issue 31).
+pub const MAX_RUNS: usize = 100_000;
+/// The most worker threads (`--threads`).
+pub const MAX_THREADS: usize = 1024;
+
 /// A selection of `obsan montecarlo`: per table, its cells (indices) and
 /// runs per cell (Table IV reports single runs).
 struct Plan {
@@ -29,6 +36,17 @@ fn plan(a: &MontecarloArgs) -> Result<Plan, Failure> {
     };
     if a.runs == 0 {
         return Err(Failure("--runs must be at least 1".into()));
+    }
+    if a.runs > MAX_RUNS {
+        return Err(Failure(format!(
+            "--runs {}: at most {MAX_RUNS} per cell (obsan's limit)",
+            a.runs
+        )));
+    }
+    if let Some(n) = a.threads.filter(|n| *n > MAX_THREADS) {
+        return Err(Failure(format!(
+            "--threads {n}: at most {MAX_THREADS} (obsan's limit)"
+        )));
     }
     if a.cell.is_some() && numbers.len() != 1 {
         return Err(Failure(
