@@ -369,7 +369,9 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
     for path in &m.parts {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
-        let v: Value = serde_json::from_str(&text)
+        // A BOM (an editor's, PowerShell's `>`) is accepted, as by every other reader.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        let v: Value = serde_json::from_str(text)
             .map_err(|e| Failure(format!("{path}:{}:{}: not JSON: {e}", e.line(), e.column())))?;
         if v.get("partial").and_then(Value::as_str) != Some(PARTIAL) {
             return Err(Failure(format!(
@@ -381,7 +383,7 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
                 "{path}: partial result of another version (this obsan reads version {PARTIAL_VERSION})"
             )));
         }
-        let p: Partial = serde_json::from_str(&text)
+        let p: Partial = serde_json::from_str(text)
             .map_err(|e| Failure(format!("{path}:{}:{}: {e}", e.line(), e.column())))?;
         parts.push((path.clone(), p));
     }
@@ -507,6 +509,32 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
                         })
                     })
                     .collect::<Result<Vec<_>, _>>()?;
+                // The runs of this part in order, each once: checked here so
+                // that the error names the part (merge_runs cannot).
+                if let Some((i, rec)) = r
+                    .iter()
+                    .enumerate()
+                    .find(|(i, rec)| rec.run != want.start + i)
+                {
+                    return Err(Failure(format!(
+                        "{path}: table {} cell {}: run {} expected, run {} found in its place",
+                        t.number,
+                        pc.cell,
+                        want.start + i,
+                        rec.run
+                    )));
+                }
+                if r.len() != want.len() {
+                    return Err(Failure(format!(
+                        "{path}: table {} cell {}: {} runs given, shard {}/{n} has {}",
+                        t.number,
+                        pc.cell,
+                        r.len(),
+                        p.shard.0,
+                        want.len()
+                    )));
+                }
+                report_odd_values(path, t.number, pc.cell, &r);
                 shards.push(r);
             }
             let all = merge_runs(shards, pt.runs)
@@ -519,6 +547,30 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
     }
     let p = calib_predictor();
     report_tables(&plan, computed, first.seed, m.json, None, &p)
+}
+
+/// Say on stderr which values of a part are infinite or a NaN other than the
+/// quiet NaN a shard writes for a value a method does not estimate (an
+/// edited or damaged part, or a diverged estimate). They are merged as
+/// they are (the summary shows what they do), but never without a word.
+fn report_odd_values(path: &str, table: u8, cell: usize, runs: &[RunRecord]) {
+    let quiet = f64::NAN.to_bits();
+    let odd = |x: &f64| x.is_infinite() || (x.is_nan() && x.to_bits() & !(1 << 63) != quiet);
+    let hits: Vec<usize> = runs
+        .iter()
+        .filter(|r| {
+            r.outcomes
+                .iter()
+                .any(|o| o.as_ref().is_ok_and(|(e, v)| e.iter().chain(v).any(odd)))
+        })
+        .map(|r| r.run)
+        .collect();
+    if let Some(first) = hits.first() {
+        eprintln!(
+            "warning: {path}: table {table} cell {cell}: {} run(s) hold an infinite value or an unusual NaN bit pattern (first: run {first}); merged as given",
+            hits.len()
+        );
+    }
 }
 
 fn print_table(
