@@ -84,7 +84,9 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
             .decls_of(Kind::Const)
             .find(|c| c.value.is_none() && !t.meta.contains_key(&c.name))
         {
-            let file = std::path::Path::new(&a.data).join(&t.name).join("meta.json");
+            let file = std::path::Path::new(&a.data)
+                .join(&t.name)
+                .join("meta.json");
             return Err(Failure(format!(
                 "{}: no value for the constant {} that {} declares (each trajectory's meta.json gives the model's constants)",
                 file.display(),

@@ -243,10 +243,7 @@ fn remove_stale(parent: &Path) {
             continue;
         };
         let path = e.path();
-        let ours_now = WRITING
-            .lock()
-            .map(|w| w.contains(&path))
-            .unwrap_or(true);
+        let ours_now = WRITING.lock().map(|w| w.contains(&path)).unwrap_or(true);
         if ours_now || !e.file_type().is_ok_and(|t| t.is_dir()) {
             continue;
         }

@@ -12,7 +12,6 @@ use obsan_fit::Predictor;
 use serde_json::{json, Value};
 use std::process::ExitCode;
 
-
 /// The most runs per cell (`--runs`): each run's values are kept for the
 /// summary, so memory grows with it (issue 31).
 pub const MAX_RUNS: usize = 100_000;
