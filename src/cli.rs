@@ -426,7 +426,7 @@ pub struct SimFlags {
     #[arg(long, default_value_t = 1.0)]
     pub bearing_rate: f64,
     /// Instead of --bearing-rate: this many bearings per trajectory, evenly
-    /// spread (at most 1000000).
+    /// spread (at most 1000000, and 3000000 over all trajectories).
     #[arg(long)]
     pub bearings: Option<usize>,
     /// Initial distance to the feature (m).

@@ -38,6 +38,9 @@ pub fn dataset_files(
 pub const MAX_BEARINGS: usize = 1_000_000;
 /// The most trajectories (`--q` ratios) of one simulation.
 pub const MAX_TRAJECTORIES: usize = 8;
+/// The most bearings of all trajectories together (`--bearings` x ratios):
+/// 3 x 10^6 is the 97 MB dataset of issue 31 (crlb on it peaks at 704 MB).
+pub const MAX_TOTAL_BEARINGS: usize = 3_000_000;
 
 /// The simulator's options from the command line, checked.
 pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
@@ -84,6 +87,12 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
     if let Some(n) = a.bearings.filter(|n| *n > MAX_BEARINGS) {
         return Err(Failure(format!(
             "--bearings {n}: at most {MAX_BEARINGS} per trajectory (obsan's limit)"
+        )));
+    }
+    if let Some(n) = a.bearings.filter(|n| n * a.q.len() > MAX_TOTAL_BEARINGS) {
+        return Err(Failure(format!(
+            "--bearings {n} on {} trajectories: at most {MAX_TOTAL_BEARINGS} bearings in all (obsan's limit)",
+            a.q.len()
         )));
     }
     for e in &a.effects {
