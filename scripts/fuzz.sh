@@ -44,6 +44,11 @@ seed() {
       # A dataset's files framed as the target reads them (see fuzz_targets/dataset.rs).
       [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true
       ;;
+    dec) cp systems/*.dec "$dir/" 2>/dev/null || true ;;
+    mrclam | mcpart)
+      # Framed seeds (see fuzz_targets/$t.rs).
+      [ -d "fuzz/seeds/$t" ] && cp "fuzz/seeds/$t"/* "$dir/" 2>/dev/null || true
+      ;;
   esac
 }
 
@@ -57,7 +62,7 @@ for t in "${targets[@]}"; do
   seed "$t"
   echo "== fuzz $t for ${secs}s"
   if ! cargo fuzz run --sanitizer none "$t" "fuzz/corpus/$t" -- \
-      -max_total_time="$secs" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 "${seed_arg[@]}" \
+      -max_total_time="$secs" -timeout=10 -rss_limit_mb=1024 -print_final_stats=1 "${seed_arg[@]}" \
       >"fuzz/$t.log" 2>&1; then
     echo "   FAILED: see fuzz/$t.log and fuzz/artifacts/$t/"
     tail -30 "fuzz/$t.log"

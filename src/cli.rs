@@ -328,6 +328,9 @@ pub struct MrclamArgs {
     pub vicon_poses: bool,
     #[arg(long)]
     pub force: bool,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 #[derive(Args)]
@@ -380,6 +383,9 @@ pub struct DiagnoseArgs {
     /// Only the effects file's candidates (the same as `--generated=false`).
     #[arg(long, overrides_with = "generated")]
     pub no_generated: bool,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 #[derive(Args)]
@@ -404,6 +410,9 @@ pub struct CalibrateArgs {
     pub force: bool,
     #[arg(long)]
     pub json: bool,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 #[derive(Args)]
@@ -416,6 +425,9 @@ pub struct CrlbArgs {
     pub sim: SimFlags,
     #[arg(long)]
     pub json: bool,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 #[derive(Args)]
@@ -423,6 +435,7 @@ pub struct CrlbArgs {
 pub struct MontecarloArgs {
     #[command(subcommand)]
     pub merge: Option<MontecarloCommand>,
+    /// Runs per cell (at most 100000).
     #[arg(long, default_value_t = 100)]
     pub runs: usize,
     /// 4, 5, 6, 7 or all.
@@ -436,7 +449,7 @@ pub struct MontecarloArgs {
     /// with --json, a partial result for `obsan montecarlo merge`.
     #[arg(long, value_name = "K/N")]
     pub shard: Option<String>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default: all cores; at most 1024).
     #[arg(long)]
     pub threads: Option<usize>,
     #[arg(long)]
@@ -444,6 +457,9 @@ pub struct MontecarloArgs {
     /// Run r uses seed + r.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 #[derive(Subcommand)]
@@ -481,12 +497,15 @@ pub struct SimulateArgs {
     pub force: bool,
     #[command(flatten)]
     pub sim: SimFlags,
+    /// Give up after this many seconds (exit code 2; nothing is left behind).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
 }
 
 /// The simulated set-up (section VI-A; Tables II and III by default).
 #[derive(Args, Clone)]
 pub struct SimFlags {
-    /// Wheel-speed ratios, one circular trajectory each (eq. 17).
+    /// Wheel-speed ratios, one circular trajectory each (eq. 17); at most 8.
     #[arg(
         long,
         value_delimiter = ',',
@@ -512,10 +531,12 @@ pub struct SimFlags {
     /// constant, sine:AMPLITUDE:PERIOD or stopgo:RUN:PAUSE (seconds).
     #[arg(long, default_value = "constant")]
     pub speed_profile: String,
-    /// Bearings per second.
+    /// Bearings per second (at most the encoder rate, 50; a trajectory lasts
+    /// at most 14400 s).
     #[arg(long, default_value_t = 1.0)]
     pub bearing_rate: f64,
-    /// Instead of --bearing-rate: this many bearings per trajectory, evenly spread.
+    /// Instead of --bearing-rate: this many bearings per trajectory, evenly
+    /// spread (at most 1000000, and 3000000 over all trajectories).
     #[arg(long)]
     pub bearings: Option<usize>,
     /// Initial distance to the feature (m).
@@ -562,6 +583,12 @@ impl Command {
             Command::Diff(a) => a.limit.timeout,
             Command::Show(a) => a.limit.timeout,
             Command::Lie(a) => a.limit.timeout,
+            Command::Simulate(a) => a.timeout,
+            Command::Calibrate(a) => a.timeout,
+            Command::Crlb(a) => a.timeout,
+            Command::Montecarlo(a) => a.timeout,
+            Command::Diagnose(a) => a.timeout,
+            Command::Import(ImportCommand::Mrclam(a)) => a.timeout,
             Command::Global(a) => a.an.timeout,
             _ => None,
         }

@@ -17,16 +17,20 @@ use std::fmt::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
-    let path = match &a.effects {
-        Some(p) => p.clone(),
+/// The effects file diagnose reads: --effects, else the model's `.eff` if there is one.
+fn effects_path(a: &DiagnoseArgs) -> Option<String> {
+    match &a.effects {
+        Some(p) => Some(p.clone()),
         None => {
             let p = PathBuf::from(&a.model).with_extension("eff");
-            if !p.exists() {
-                return Ok(None);
-            }
-            p.display().to_string()
+            p.exists().then(|| p.display().to_string())
         }
+    }
+}
+
+fn load_effects(a: &DiagnoseArgs) -> Result<Option<EffectLibrary>, Failure> {
+    let Some(path) = effects_path(a) else {
+        return Ok(None);
     };
     let src = crate::fsio::read_text(&path)?;
     Ok(Some(EffectLibrary::parse(&src, &path)?))
@@ -54,6 +58,12 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     if !(a.alpha > 0.0 && a.alpha < 1.0) {
         return Err(Failure(format!("--alpha {}: must be in (0, 1)", a.alpha)));
     }
+    let eff = effects_path(a);
+    let mut reads = vec![a.model.as_str(), a.data.as_str()];
+    reads.extend(eff.as_deref());
+    if let Some(dir) = &a.report {
+        crate::fsio::check_outside(dir, &reads)?;
+    }
     let sys = load_system(&a.model)?;
     let lib = load_effects(a)?;
     if let Some(l) = &lib {
@@ -66,6 +76,25 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         .collect();
     let outputs = sys.output_names();
     let data = read_dataset(&a.data, &inputs, &outputs)?;
+    // A constant the model declares without a value comes from each
+    // trajectory's meta.json: a missing one is an error, never a silent 0
+    // (issue 31: a window without lx9 named other effects).
+    for t in &data.trajectories {
+        if let Some(c) = sys
+            .decls_of(Kind::Const)
+            .find(|c| c.value.is_none() && !t.meta.contains_key(&c.name))
+        {
+            let file = std::path::Path::new(&a.data)
+                .join(&t.name)
+                .join("meta.json");
+            return Err(Failure(format!(
+                "{}: no value for the constant {} that {} declares (each trajectory's meta.json gives the model's constants)",
+                file.display(),
+                c.name,
+                a.model
+            )));
+        }
+    }
     let init = parse_init(&a.init)?;
     let start = start_values(&sys, &data, &init)?;
     let opts = DiagnoseOptions {
@@ -96,7 +125,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         out!("{text}");
     }
     if let Some(dir) = &a.report {
-        write_folder_atomically(dir, a.force, &report_files(&d, &text))?;
+        write_folder_atomically(dir, a.force, &reads, &report_files(&d, &text))?;
         if !a.json {
             outln!("report written to {dir}/report.md");
         }
@@ -659,17 +688,30 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
 
 /// `obsan import mrclam`: read one robot's files, write a dataset folder.
 pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
+    crate::fsio::check_outside(&a.out, &[&a.source])?;
     let dir = std::path::Path::new(&a.source);
+    // Invalid UTF-8 is an error at its line and column (read_text).
     let read = |name: &str| -> Result<(String, String), Failure> {
-        let p = dir.join(name);
-        let s = std::fs::read_to_string(&p)
-            .map_err(|e| Failure(format!("cannot read {}: {e}", p.display())))?;
-        Ok((s, p.display().to_string()))
+        let p = dir.join(name).display().to_string();
+        Ok((crate::fsio::read_text(&p)?, p))
     };
     let odo = read(&format!("robot{}_Odometry.txt", a.robot))?;
     let meas = read(&format!("robot{}_Measurement.txt", a.robot))?;
     let lms = read("Landmark_Groundtruth.dat")?;
-    let gt = read(&format!("robot{}_Groundtruth.txt", a.robot)).ok();
+    // The ground truth only fills truth.json (and the outputs of
+    // --vicon-poses): a missing file is said, an unreadable one an error.
+    let gt_path = dir.join(format!("robot{}_Groundtruth.txt", a.robot));
+    let gt = if gt_path.exists() {
+        Some(read(&format!("robot{}_Groundtruth.txt", a.robot))?)
+    } else {
+        if !a.vicon_poses {
+            eprintln!(
+                "warning: no {}: truth.json will list no window's ground truth",
+                gt_path.display()
+            );
+        }
+        None
+    };
     let text = obsan_data::MrclamText {
         odometry: (&odo.0, &odo.1),
         measurements: (&meas.0, &meas.1),
@@ -699,7 +741,7 @@ pub fn import_mrclam(a: &MrclamArgs) -> Result<ExitCode, Failure> {
         &data,
         &[("truth.json", serde_json::to_string_pretty(&truth_json)?)],
     )?;
-    write_folder_atomically(&a.out, a.force, &files)?;
+    write_folder_atomically(&a.out, a.force, &[&a.source], &files)?;
     let n: usize = data.trajectories.iter().map(|t| t.outputs.len()).sum();
     outln!(
         "wrote {}: robot {}, {} windows of {} s, {} {}",

@@ -109,6 +109,9 @@ fn shown(i: usize, v: f64) -> f64 {
 
 pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     let m = method(&a.method)?;
+    if let Some(dir) = &a.plot {
+        crate::fsio::check_outside(dir, &[&a.dataset])?;
+    }
     let data = read_dataset(&a.dataset, &["wR", "wL"], &["beta"]).map_err(calib_only)?;
     let mut o = CalibrateOptions::for_dataset(&data, m);
     if let Some(d0) = a.d0 {
@@ -130,7 +133,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     let p = calib_predictor();
     let r = calibrate(&data, Some(&p), &o).map_err(|e| Failure(format!("{}: {e}", a.dataset)))?;
     if let Some(dir) = &a.plot {
-        let n = write_figures(dir, a.force, &data, &p, &o, &r)?;
+        let n = write_figures(dir, a.force, &[&a.dataset], &data, &p, &o, &r)?;
         eprintln!("wrote {n} figures (PNG and SVG) to {dir}");
     }
     let sd = r.calibration.sd();

@@ -13,6 +13,7 @@ use obsan_plot::{self as plot, chart, Style, BLACK, COLORS};
 pub(crate) fn write_figures(
     dir: &str,
     force: bool,
+    reads: &[&str],
     data: &Dataset,
     p: &Predictor,
     o: &CalibrateOptions,
@@ -152,6 +153,6 @@ pub(crate) fn write_figures(
         std::path::PathBuf::from("curves.json"),
         (serde_json::to_string(&data)? + "\n").into_bytes(),
     ));
-    write_folder_atomically(dir, force, &files)?;
+    write_folder_atomically(dir, force, reads, &files)?;
     Ok(n)
 }

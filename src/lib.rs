@@ -121,6 +121,7 @@ fn watchdog(secs: f64) -> std::time::Duration {
 /// stderr, the exit code returned.
 pub fn main() -> ExitCode {
     install_panic_hook();
+    end_on_signals();
     let args = cli::Cli::parse();
     let Some(secs) = args.command.timeout() else {
         return run(args.command);
@@ -135,12 +136,33 @@ pub fn main() -> ExitCode {
     match rx.recv_timeout(watchdog(secs)) {
         Ok(code) => code,
         Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            // The worker is still running: remove what it was writing.
+            fsio::abandon_writes();
             eprintln!("error: timed out after {secs} s (--timeout)");
             ExitCode::from(2)
         }
         // The worker ended without an answer: it panicked, and said so on stderr.
         Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => ExitCode::from(101),
     }
+}
+
+/// On SIGINT or SIGTERM, remove the temporary folders being written (a
+/// large `simulate` writes 100 MB) and exit with 128 + the signal's number,
+/// as a shell reports a process ended by it. Only the binary does this: the
+/// Python package keeps Python's own Ctrl-C handling (it cancels the job).
+fn end_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        return; // the default handling (the process ends) stays
+    };
+    std::thread::spawn(move || {
+        if let Some(sig) = signals.forever().next() {
+            fsio::abandon_writes();
+            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            eprintln!("error: interrupted ({name})");
+            std::process::exit(128 + sig);
+        }
+    });
 }
 
 fn run(command: cli::Command) -> ExitCode {

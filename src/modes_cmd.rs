@@ -13,6 +13,11 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
+    if let Some(prefix) = &a.out_prefix {
+        for ext in ["sys", "dec"] {
+            crate::fsio::check_outside(&format!("{prefix}.{ext}"), &[&a.sys.system])?;
+        }
+    }
     let (_, mut nf) = load_normal_form(&a.sys)?;
     crate::unknown_input_cmd::refuse(&nf, "modes")?;
     if nf.outputs.is_empty() {
@@ -53,6 +58,13 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
                 "{title}: rank {} of {}: every variable is observable; the modes are the variables",
                 r.rank,
                 r.n
+            );
+        }
+        // Nothing to reduce: the reduced system would be the system itself.
+        if let Some(prefix) = &a.out_prefix {
+            eprintln!(
+                "note: nothing written to {prefix}.sys or {prefix}.dec: the system has full rank, so its reduced system is {} itself",
+                a.sys.system
             );
         }
         return Ok(ExitCode::SUCCESS);
@@ -277,26 +289,31 @@ fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Fai
                 .map_err(|e| Failure(format!("cannot create {}: {e}", parent.display())))?;
         }
     }
-    let mut temps = Vec::new();
-    let remove = |temps: &[(PathBuf, &PathBuf)]| {
-        for (t, _) in temps {
+    let temps: Vec<PathBuf> = targets
+        .iter()
+        .map(|(p, _)| PathBuf::from(format!("{}.tmp-{}", p.display(), std::process::id())))
+        .collect();
+    let remove = || {
+        for t in &temps {
             let _ = std::fs::remove_file(t);
         }
     };
-    for (p, text) in &targets {
-        let tmp = PathBuf::from(format!("{}.tmp-{}", p.display(), std::process::id()));
-        if let Err(e) = std::fs::write(&tmp, text) {
-            let _ = std::fs::remove_file(&tmp);
-            remove(&temps);
-            return Err(Failure(format!("cannot write {}: {e}", tmp.display())));
-        }
-        temps.push((tmp, p));
+    let r = crate::fsio::write_files_then(
+        &temps
+            .iter()
+            .zip(&targets)
+            .map(|(t, (_, text))| (t.clone(), text.as_bytes()))
+            .collect::<Vec<_>>(),
+        || {
+            for (tmp, (p, _)) in temps.iter().zip(&targets) {
+                std::fs::rename(tmp, p)
+                    .map_err(|e| Failure(format!("cannot write {}: {e}", p.display())))?;
+            }
+            Ok(())
+        },
+    );
+    if r.is_err() {
+        remove();
     }
-    for (tmp, p) in &temps {
-        if let Err(e) = std::fs::rename(tmp, p) {
-            remove(&temps);
-            return Err(Failure(format!("cannot write {}: {e}", p.display())));
-        }
-    }
-    Ok(())
+    r
 }

@@ -12,6 +12,12 @@ use obsan_fit::Predictor;
 use serde_json::{json, Value};
 use std::process::ExitCode;
 
+/// The most runs per cell (`--runs`): each run's values are kept for the
+/// summary, so memory grows with it (issue 31).
+pub const MAX_RUNS: usize = 100_000;
+/// The most worker threads (`--threads`).
+pub const MAX_THREADS: usize = 1024;
+
 /// A selection of `obsan montecarlo`: per table, its cells (indices) and
 /// runs per cell (Table IV reports single runs).
 struct Plan {
@@ -29,6 +35,17 @@ fn plan(a: &MontecarloArgs) -> Result<Plan, Failure> {
     };
     if a.runs == 0 {
         return Err(Failure("--runs must be at least 1".into()));
+    }
+    if a.runs > MAX_RUNS {
+        return Err(Failure(format!(
+            "--runs {}: at most {MAX_RUNS} per cell (obsan's limit)",
+            a.runs
+        )));
+    }
+    if let Some(n) = a.threads.filter(|n| *n > MAX_THREADS) {
+        return Err(Failure(format!(
+            "--threads {n}: at most {MAX_THREADS} (obsan's limit)"
+        )));
     }
     if a.cell.is_some() && numbers.len() != 1 {
         return Err(Failure(
@@ -351,7 +368,9 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
     for path in &m.parts {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Failure(format!("cannot read {path}: {e}")))?;
-        let v: Value = serde_json::from_str(&text)
+        // A BOM (an editor's, PowerShell's `>`) is accepted, as by every other reader.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        let v: Value = serde_json::from_str(text)
             .map_err(|e| Failure(format!("{path}:{}:{}: not JSON: {e}", e.line(), e.column())))?;
         if v.get("partial").and_then(Value::as_str) != Some(PARTIAL) {
             return Err(Failure(format!(
@@ -363,7 +382,7 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
                 "{path}: partial result of another version (this obsan reads version {PARTIAL_VERSION})"
             )));
         }
-        let p: Partial = serde_json::from_str(&text)
+        let p: Partial = serde_json::from_str(text)
             .map_err(|e| Failure(format!("{path}:{}:{}: {e}", e.line(), e.column())))?;
         parts.push((path.clone(), p));
     }
@@ -489,6 +508,32 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
                         })
                     })
                     .collect::<Result<Vec<_>, _>>()?;
+                // The runs of this part in order, each once: checked here so
+                // that the error names the part (merge_runs cannot).
+                if let Some((i, rec)) = r
+                    .iter()
+                    .enumerate()
+                    .find(|(i, rec)| rec.run != want.start + i)
+                {
+                    return Err(Failure(format!(
+                        "{path}: table {} cell {}: run {} expected, run {} found in its place",
+                        t.number,
+                        pc.cell,
+                        want.start + i,
+                        rec.run
+                    )));
+                }
+                if r.len() != want.len() {
+                    return Err(Failure(format!(
+                        "{path}: table {} cell {}: {} runs given, shard {}/{n} has {}",
+                        t.number,
+                        pc.cell,
+                        r.len(),
+                        p.shard.0,
+                        want.len()
+                    )));
+                }
+                report_odd_values(path, t.number, pc.cell, &r);
                 shards.push(r);
             }
             let all = merge_runs(shards, pt.runs)
@@ -501,6 +546,30 @@ fn merge_cmd(m: &MergeArgs) -> Result<ExitCode, Failure> {
     }
     let p = calib_predictor();
     report_tables(&plan, computed, first.seed, m.json, None, &p)
+}
+
+/// Say on stderr which values of a part are infinite or a NaN other than the
+/// quiet NaN a shard writes for a value a method does not estimate (an
+/// edited or damaged part, or a diverged estimate). They are merged as
+/// they are (the summary shows what they do), but never without a word.
+fn report_odd_values(path: &str, table: u8, cell: usize, runs: &[RunRecord]) {
+    let quiet = f64::NAN.to_bits();
+    let odd = |x: &f64| x.is_infinite() || (x.is_nan() && x.to_bits() & !(1 << 63) != quiet);
+    let hits: Vec<usize> = runs
+        .iter()
+        .filter(|r| {
+            r.outcomes
+                .iter()
+                .any(|o| o.as_ref().is_ok_and(|(e, v)| e.iter().chain(v).any(odd)))
+        })
+        .map(|r| r.run)
+        .collect();
+    if let Some(first) = hits.first() {
+        eprintln!(
+            "warning: {path}: table {table} cell {cell}: {} run(s) hold an infinite value or an unusual NaN bit pattern (first: run {first}); merged as given",
+            hits.len()
+        );
+    }
 }
 
 fn print_table(

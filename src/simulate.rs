@@ -32,6 +32,16 @@ pub fn dataset_files(
     Ok(files)
 }
 
+/// The most bearings per trajectory `--bearings` may ask for (the paper's
+/// tables use at most a few hundred). Refused before anything is allocated:
+/// memory grows with bearings x trajectories (issue 31).
+pub const MAX_BEARINGS: usize = 1_000_000;
+/// The most trajectories (`--q` ratios) of one simulation.
+pub const MAX_TRAJECTORIES: usize = 8;
+/// The most bearings of all trajectories together (`--bearings` x ratios):
+/// 3 x 10^6 is the 97 MB dataset of issue 31 (crlb on it peaks at 704 MB).
+pub const MAX_TOTAL_BEARINGS: usize = 3_000_000;
+
 /// The simulator's options from the command line, checked.
 pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
     let mut o = SimOptions {
@@ -67,6 +77,23 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
         return Err(Failure(
             "--q needs one or more finite ratios, e.g. --q 0.9,0,-1".into(),
         ));
+    }
+    if a.q.len() > MAX_TRAJECTORIES {
+        return Err(Failure(format!(
+            "--q gives {} ratios: at most {MAX_TRAJECTORIES} trajectories (obsan's limit)",
+            a.q.len()
+        )));
+    }
+    if let Some(n) = a.bearings.filter(|n| *n > MAX_BEARINGS) {
+        return Err(Failure(format!(
+            "--bearings {n}: at most {MAX_BEARINGS} per trajectory (obsan's limit)"
+        )));
+    }
+    if let Some(n) = a.bearings.filter(|n| n * a.q.len() > MAX_TOTAL_BEARINGS) {
+        return Err(Failure(format!(
+            "--bearings {n} on {} trajectories: at most {MAX_TOTAL_BEARINGS} bearings in all (obsan's limit)",
+            a.q.len()
+        )));
     }
     for e in &a.effects {
         let Some((n, v)) = e.split_once('=') else {
@@ -107,11 +134,13 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
 }
 
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
+    let reads: Vec<&str> = a.sim.inputs.iter().map(String::as_str).collect();
+    crate::fsio::check_outside(&a.out, &reads)?;
     let o = sim_options(&a.sim)?;
     let (data, truth) = simulate(&o).map_err(Failure::from)?;
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;
-    write_folder_atomically(&a.out, a.force, &files)?;
+    write_folder_atomically(&a.out, a.force, &reads, &files)?;
     let summary: Vec<String> = data
         .trajectories
         .iter()

@@ -13,6 +13,7 @@ exception: the returned dict says what failed, and :func:`run` also gives the co
 from __future__ import annotations
 
 import json
+import numbers
 import os
 from typing import Any, Iterable, Mapping, NamedTuple, Optional, Union
 
@@ -67,9 +68,33 @@ def run(*argv: Any, source: Optional[tuple] = None) -> Run:
 
 
 def _arg(a: Any) -> str:
+    """An argument as text: a str, a path or a number; anything else (None, bytes,
+    a list) is a TypeError before anything runs (``str(None)`` would be the
+    folder ``./None``)."""
+    if isinstance(a, str):
+        return a
     if isinstance(a, os.PathLike):
-        return os.fspath(a)
-    return str(a)
+        p = os.fspath(a)
+        if not isinstance(p, str):
+            raise TypeError(f"expected a str path, not {type(p).__name__}")
+        return p
+    if isinstance(a, numbers.Real):
+        return _value(a)
+    raise TypeError(f"expected a str, a path or a number, not {type(a).__name__}")
+
+
+def _text(what: str, a: Any) -> str:
+    """A text argument (an expression, a symbol, a method): a str, else TypeError."""
+    if not isinstance(a, str):
+        raise TypeError(f"{what} must be a str, not {type(a).__name__}")
+    return a
+
+
+def _path(what: str, a: Any) -> str:
+    """A path argument: a str or os.PathLike, else TypeError."""
+    if not isinstance(a, (str, os.PathLike)):
+        raise TypeError(f"{what} must be a path (str or os.PathLike), not {type(a).__name__}")
+    return _arg(a)
 
 
 def _value(x: Any) -> str:
@@ -78,6 +103,12 @@ def _value(x: Any) -> str:
         return "true" if x else "false"
     if isinstance(x, float):
         return repr(x)
+    if isinstance(x, numbers.Integral):
+        return str(int(x))
+    if isinstance(x, numbers.Rational):
+        return str(x)  # a Fraction stays exact: 9/10
+    if isinstance(x, numbers.Real):
+        return repr(float(x))
     return _arg(x)
 
 
@@ -279,27 +310,28 @@ class System:
 
 def load(path: PathLike) -> System:
     """Read a ``.sys`` file. Errors name the path, line and column."""
-    return System(os.fspath(path))
+    return System(_path("load: path", path))
 
 
 def loads(text: str) -> System:
     """A system from ``.sys`` text; errors read ``<string>:LINE:COL: ...``."""
-    return System(STRING_NAME, text)
+    return System(STRING_NAME, _text("loads: text", text))
 
 
 def simplify(expr: str, **options: Any) -> dict:
     """``obsan simplify``: the exact canonical form of ``expr``."""
-    return _call(["simplify", expr, *_flags(options), "--json"])
+    return _call(["simplify", _text("simplify: expr", expr), *_flags(options), "--json"])
 
 
 def diff(expr: str, var: str, **options: Any) -> dict:
     """``obsan diff``: d expr / d var, in canonical form."""
+    expr, var = _text("diff: expr", expr), _text("diff: var", var)
     return _call(["diff", expr, var, *_flags(options), "--json"])
 
 
 def verify(path: PathLike, **options: Any) -> dict:
     """``obsan verify``: a decomposition file's exact checks (a failed check is a value)."""
-    return _call(["verify", path, *_flags(options), "--json"])
+    return _call(["verify", _path("verify: path", path), *_flags(options), "--json"])
 
 
 def calibrate(
@@ -310,6 +342,7 @@ def calibrate(
 ) -> dict:
     """``obsan calibrate``: phi, psi, eta, delta, xi (and with ``d0`` rho, rR, rL, B)
     with standard deviations. ``method`` is det, ls, cekf or ml."""
+    dataset, method = _path("calibrate: dataset", dataset), _text("calibrate: method", method)
     return _call(["calibrate", dataset, *_flags(dict(method=method, d0=d0, **options)), "--json"])
 
 
@@ -319,7 +352,7 @@ _SIM_JOIN = ("q",)
 def crlb(dataset: Optional[PathLike] = None, **options: Any) -> dict:
     """``obsan crlb``: the Cramér–Rao bound for a dataset (at its ML estimate) or for
     a simulated set-up given by the :func:`simulate` options."""
-    head = [dataset] if dataset is not None else []
+    head = [_path("crlb: dataset", dataset)] if dataset is not None else []
     return _call(["crlb", *head, *_flags(options, join=_SIM_JOIN), "--json"])
 
 
@@ -334,6 +367,9 @@ def diagnose(
     source = None
     if isinstance(model, System):
         source, model = model._source, model.path
+    model, data = _path("diagnose: model", model), _path("diagnose: data", data)
+    if effects is not None:
+        effects = _path("diagnose: effects", effects)
     argv = ["diagnose", "--model", model, "--data", data]
     # Generated candidates are on by default: ``generated=False`` must say so.
     if options.get("generated") is False:
@@ -348,6 +384,7 @@ def simulate(out: PathLike, **options: Any) -> str:
     path; the truth is in ``out/truth.json``. Options are the CLI's flags:
     ``q=[0.9, 0, -1]``, ``sigma_beta_deg``, ``bearings``, ``seed``,
     ``effect={"bearing_scale": 0.04}``, ..."""
+    out = _path("simulate: out", out)
     run("simulate", "--out", out, *_flags(options, join=_SIM_JOIN))
     return os.fspath(out)
 
@@ -385,5 +422,5 @@ def montecarlo_merge(parts: Iterable[Any]) -> Any:
                     json.dump(p, f)
                 paths.append(path)
             else:
-                paths.append(p)
+                paths.append(_path("montecarlo_merge: a part", p))
         return _call(["montecarlo", "merge", *paths, "--json"])

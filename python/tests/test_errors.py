@@ -83,3 +83,31 @@ def test_timeout_is_the_cli_error():
     product = "*".join(f"(a{i} + b{i})" for i in range(20))
     with pytest.raises(obsan.ObsanError, match=r"timed out after 0.2 s \(--timeout\)"):
         obsan.simplify(product, max_terms=100_000_000, timeout=0.2)
+
+
+def test_wrong_types_are_type_errors_before_anything_runs(tmp_path, monkeypatch):
+    # Issue 31: simulate(None) wrote ./None, diff('x^2', None) returned 0,
+    # simplify(float('inf')) returned the symbol inf.
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(TypeError):
+        obsan.simulate(None)
+    with pytest.raises(TypeError):
+        obsan.diff("x^2", None)
+    with pytest.raises(TypeError):
+        obsan.simplify(float("inf"))
+    with pytest.raises(TypeError):
+        obsan.load(3)
+    with pytest.raises(TypeError):
+        obsan.calibrate(None)
+    with pytest.raises(TypeError):
+        obsan.diagnose(SYSTEMS / "calib.sys", None)
+    with pytest.raises(TypeError):
+        obsan.run("simulate", "--out", None)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sizes_past_the_limit_are_refused_before_allocating():
+    # Issue 31: crlb(bearings=2**63) grew to 11 GB.
+    with pytest.raises(obsan.ObsanError) as e:
+        obsan.crlb(bearings=2**63)
+    assert "at most 1000000" in str(e.value)

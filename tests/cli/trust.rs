@@ -497,3 +497,479 @@ fn modes_force_keeps_the_users_files() {
     ]);
     ok(&["rank", &format!("{prefix}.sys")]);
 }
+
+// ---------------------------------------------------------------------------
+// Issue 31 (trust, second round).
+
+/// Every entry of `dir`, hidden ones included (a temp folder is hidden).
+fn entries(dir: &str) -> Vec<String> {
+    files_in(dir)
+}
+
+/// Byte-for-byte contents of every file under `dir` (sorted by path).
+fn snapshot(dir: &str) -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![std::path::PathBuf::from(dir)];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.display().to_string(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// A small MRCLAM-like source folder (robot 1): 40 s of odometry at 50 Hz,
+/// a landmark seen every 0.5 s, two landmarks.
+fn mrclam_source(dir: &str) {
+    std::fs::create_dir_all(dir).unwrap();
+    let odo: String = (0..2000)
+        .map(|k| format!("{:.2} 0.1 0.05\n", k as f64 * 0.02))
+        .collect();
+    let meas: String = (0..80)
+        .map(|k| format!("{:.1} 18 1.5 0.1\n", k as f64 * 0.5))
+        .collect();
+    std::fs::write(format!("{dir}/robot1_Odometry.txt"), odo).unwrap();
+    std::fs::write(format!("{dir}/robot1_Measurement.txt"), meas).unwrap();
+    std::fs::write(
+        format!("{dir}/Landmark_Groundtruth.dat"),
+        "18 0.5 -1.0 0.0001 0.001\n45 2.0 1.0 0.0001 0.001\n",
+    )
+    .unwrap();
+}
+
+/// Issue 31.1: `calibrate ds --plot ds --force` replaced the dataset by its
+/// figures; the same for diagnose --report and an imported folder. An output
+/// that is, holds or lies inside an input is refused (exit 2) before any
+/// work, and the input is left byte for byte as it was.
+#[test]
+fn force_never_replaces_the_commands_own_input() {
+    let root = fresh_dir("own-input");
+    let ds = format!("{root}/ds");
+    ok(&["simulate", "--out", &ds]);
+    let before = snapshot(&ds);
+    let model_dir = format!("{root}/model");
+    std::fs::create_dir_all(&model_dir).unwrap();
+    std::fs::copy("systems/calib.sys", format!("{model_dir}/calib.sys")).unwrap();
+    let model = format!("{model_dir}/calib.sys");
+    let dotted = format!("{root}/./ds/../ds");
+    // calibrate --plot: the dataset itself (two spellings), its parent, a folder inside it.
+    for out in [&ds, &dotted, &root, &format!("{ds}/figs")] {
+        let e = bad(
+            &[
+                "calibrate",
+                &ds,
+                "--method",
+                "det",
+                "--plot",
+                out,
+                "--force",
+            ],
+            "which this command reads",
+        );
+        assert!(e.contains("refusing to write"), "{e}");
+    }
+    // diagnose --report: the data, the model's folder, the root holding both.
+    for out in [&ds, &model_dir, &root] {
+        bad(
+            &[
+                "diagnose", "--model", &model, "--data", &ds, "--report", out, "--force",
+            ],
+            "which this command reads",
+        );
+    }
+    assert_eq!(snapshot(&ds), before);
+    // import mrclam --out its own source, or a folder inside it.
+    let src = format!("{root}/mr");
+    mrclam_source(&src);
+    let src_before = snapshot(&src);
+    for out in [&src, &format!("{src}/out")] {
+        bad(
+            &[
+                "import",
+                "mrclam",
+                &src,
+                "--out",
+                out,
+                "--force",
+                "--min-measurements",
+                "5",
+            ],
+            "which this command reads",
+        );
+    }
+    assert_eq!(snapshot(&src), src_before);
+    // An imported dataset is not replaced by diagnosing it either.
+    let imported = format!("{root}/imported");
+    ok(&[
+        "import",
+        "mrclam",
+        &src,
+        "--out",
+        &imported,
+        "--min-measurements",
+        "5",
+    ]);
+    let imported_before = snapshot(&imported);
+    bad(
+        &[
+            "diagnose",
+            "--model",
+            "systems/mrclam.sys",
+            "--data",
+            &imported,
+            "--report",
+            &imported,
+            "--force",
+        ],
+        "which this command reads",
+    );
+    assert_eq!(snapshot(&imported), imported_before);
+    // simulate --inputs: the output may not hold the wheel-speed file.
+    let speeds = format!("{root}/speeds/w.csv");
+    std::fs::create_dir_all(format!("{root}/speeds")).unwrap();
+    std::fs::write(&speeds, "t,wR,wL\n0,0.1,0.1\n100,0.1,0.1\n").unwrap();
+    bad(
+        &[
+            "simulate",
+            "--out",
+            &format!("{root}/speeds"),
+            "--inputs",
+            &speeds,
+            "--force",
+        ],
+        "which this command reads",
+    );
+    assert!(Path::new(&speeds).exists());
+    // modes --out PREFIX where PREFIX.sys is the system read.
+    let loc = format!("{root}/loc.sys");
+    std::fs::copy("systems/localization.sys", &loc).unwrap();
+    let loc_before = std::fs::read(&loc).unwrap();
+    bad(
+        &["modes", &loc, "--out", &format!("{root}/loc"), "--force"],
+        "which this command reads",
+    );
+    assert_eq!(std::fs::read(&loc).unwrap(), loc_before);
+}
+
+/// Issue 31.5: SIGTERM while a large `simulate` writes its folder (100 MB)
+/// left `.NAME.obsan-tmp-PID/` behind. Now the temp folder is removed and
+/// the exit code is 128 + 15. Waits for the temp folder to appear before
+/// signalling, so the test does not depend on the machine's speed.
+#[cfg(unix)]
+#[test]
+fn sigterm_while_writing_leaves_nothing() {
+    let d = fresh_dir("sigterm");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_obsan"))
+        .args(["simulate", "--out", "big", "--bearings", "1000000"])
+        .current_dir(&d)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    loop {
+        if entries(&d).iter().any(|e| e.starts_with(".big.obsan-tmp-")) {
+            break;
+        }
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "simulate ended before its temp folder was seen"
+        );
+        assert!(start.elapsed().as_secs() < 600, "no temp folder appeared");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // Either the signal came while writing (143, cleaned up) or the write
+    // had just been committed (0, a complete folder): never a leftover.
+    match out.status.code() {
+        Some(143) => {
+            assert!(stderr.contains("interrupted (SIGTERM)"), "{stderr}");
+            assert_eq!(entries(&d), Vec::<String>::new());
+        }
+        Some(0) => assert_eq!(entries(&d), ["big"]),
+        c => panic!("exit {c:?}: {stderr}"),
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Issue 31.5: a later run removes a stale temp folder of a process that is
+/// no longer running, and says so; a temp folder of a live process stays.
+#[cfg(unix)]
+#[test]
+fn a_stale_temp_folder_of_a_dead_run_is_removed() {
+    let d = fresh_dir("stale");
+    // A pid that is surely dead: a child that has exited and been reaped.
+    let mut c = std::process::Command::new("true").spawn().unwrap();
+    let dead = c.id();
+    c.wait().unwrap();
+    let stale = format!("{d}/.old.obsan-tmp-{dead}");
+    std::fs::create_dir_all(format!("{stale}/q0")).unwrap();
+    std::fs::write(format!("{stale}/q0/outputs.csv"), "t,beta\n").unwrap();
+    // This test process is alive: its (pretend) temp folder stays.
+    let live = format!("{d}/.other.obsan-tmp-{}", std::process::id());
+    std::fs::create_dir_all(&live).unwrap();
+    let r = obsan_in(&d, &["simulate", "--out", "fresh"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(!Path::new(&stale).exists());
+    assert!(
+        r.stderr.contains("removed") && r.stderr.contains(&dead.to_string()),
+        "{}",
+        r.stderr
+    );
+    assert!(Path::new(&live).exists());
+}
+
+/// Issue 31.4: each long command takes --timeout with the analysis
+/// commands' meaning: exit code 2, "timed out", and no output or temp
+/// folder left. Each input is far beyond what a machine does in the second
+/// of grace (calibrate, crlb, diagnose: minutes here; simulate: seconds),
+/// or a FIFO nobody writes (import).
+#[cfg(unix)]
+#[test]
+fn long_commands_stop_at_their_timeout_and_leave_nothing() {
+    let root = fresh_dir("timeouts");
+    // 3 trajectories of 10^6 bearings: 97 MB, the issue's large dataset.
+    let big = format!("{root}/big");
+    ok(&["simulate", "--out", &big, "--bearings", "1000000"]);
+    let work = format!("{root}/work");
+    std::fs::create_dir_all(&work).unwrap();
+    let runs: Vec<Vec<String>> = vec![
+        // Seconds of simulating, then 97 MB to write.
+        vec!["simulate", "--out", "out", "--bearings", "1000000"],
+        vec!["calibrate", &big, "--plot", "out"],
+        vec!["crlb", "--bearings", "1000000"],
+        vec!["montecarlo", "--table", "5", "--runs", "100000"],
+        vec![
+            "diagnose",
+            "--model",
+            "systems/calib.sys",
+            "--data",
+            &big,
+            "--report",
+            "out",
+        ],
+    ]
+    .into_iter()
+    .map(|v| v.into_iter().map(String::from).collect())
+    .collect();
+    let sys = format!("{}/systems/calib.sys", env!("CARGO_MANIFEST_DIR"));
+    for mut args in runs {
+        if args[0] == "diagnose" {
+            args[2] = sys.clone();
+        }
+        args.extend(["--timeout".to_string(), "1".to_string()]);
+        let a: Vec<&str> = args.iter().map(String::as_str).collect();
+        let r = obsan_in(&work, &a);
+        assert_eq!(r.code, 2, "{a:?}: {}{}", r.stdout, r.stderr);
+        assert!(
+            r.stderr.contains("timed out after 1 s (--timeout)"),
+            "{a:?}: {}",
+            r.stderr
+        );
+        assert_eq!(entries(&work), Vec::<String>::new(), "{a:?} left files");
+    }
+    // import: the odometry log is a FIFO nobody writes, so reading it never ends.
+    let src = format!("{root}/mr");
+    mrclam_source(&src);
+    let fifo = format!("{src}/robot1_Odometry.txt");
+    std::fs::remove_file(&fifo).unwrap();
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let r = obsan_in(
+        &work,
+        &["import", "mrclam", &src, "--out", "out", "--timeout", "1"],
+    );
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("timed out after 1 s"), "{}", r.stderr);
+    assert_eq!(entries(&work), Vec::<String>::new());
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// Issue 31.3: sizes given by flags are bounded before anything is
+/// allocated (`--bearings 4294967296` aborted in the allocator), and each
+/// limit is in --help.
+#[test]
+fn size_flags_have_stated_limits() {
+    let d = fresh_dir("limits");
+    for args in [
+        vec!["simulate", "--out", "big", "--bearings", "4294967296"],
+        vec!["crlb", "--bearings", "100000000"],
+    ] {
+        let mut a = args.clone();
+        let out = format!("{d}/big");
+        if a[0] == "simulate" {
+            a[2] = &out;
+        }
+        let e = bad(&a, "at most 1000000 per trajectory");
+        assert!(e.contains("--bearings"), "{e}");
+    }
+    assert!(!Path::new(&format!("{d}/big")).exists());
+    let many: Vec<String> = (0..9).map(|k| format!("0.{k}")).collect();
+    bad(&["crlb", "--q", &many.join(",")], "at most 8 trajectories");
+    // 4 x 10^6 bearings in all: past the total of 3 x 10^6.
+    bad(
+        &["crlb", "--bearings", "1000000", "--q", "0.9,0,-1,0.5"],
+        "at most 3000000 bearings in all",
+    );
+    bad(&["montecarlo", "--runs", "1000000"], "at most 100000");
+    bad(
+        &["montecarlo", "--threads", "100000", "--runs", "1"],
+        "at most 1024",
+    );
+    for (cmd, want) in [
+        (vec!["simulate", "--help"], "at most 1000000"),
+        (vec!["crlb", "--help"], "at most 8"),
+        (vec!["montecarlo", "--help"], "at most 100000"),
+    ] {
+        let out = ok(&cmd);
+        assert!(out.contains(want), "{cmd:?}: {out}");
+        assert!(out.contains("--timeout"), "{cmd:?}: {out}");
+    }
+}
+
+/// Issue 31.8: removing a constant the model needs from one trajectory's
+/// meta.json made diagnose use 0 in silence. calib.sys declares `const q`
+/// (eq. 17), which simulate writes into each meta.json.
+#[test]
+fn a_missing_model_constant_is_named_with_its_file() {
+    let d = fresh_dir("missing-const");
+    let ds = format!("{d}/ds");
+    ok(&["simulate", "--out", &ds]);
+    std::fs::write(format!("{ds}/q0/meta.json"), "{}\n").unwrap();
+    let e = bad(
+        &["diagnose", "--model", "systems/calib.sys", "--data", &ds],
+        "no value for the constant q",
+    );
+    assert!(e.contains("q0/meta.json"), "{e}");
+}
+
+/// Issue 31.9: `modes --out P` on a full-rank system exited 0 in silence.
+/// calib.sys has rank 7 of 7 (the paper's section V): nothing to reduce, said.
+#[test]
+fn modes_out_on_a_full_rank_system_says_why_nothing_is_written() {
+    let d = fresh_dir("modes-full");
+    let prefix = format!("{d}/p");
+    let r = obsan(&["modes", "systems/calib.sys", "--out", &prefix]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("nothing written") && r.stderr.contains("full rank"),
+        "{}",
+        r.stderr
+    );
+    assert_eq!(entries(&d), Vec::<String>::new());
+}
+
+/// Issue 31.9: montecarlo merge accepts a BOM, names the part in a run-order
+/// error and reports an infinite value.
+#[test]
+fn montecarlo_merge_names_its_parts() {
+    let d = fresh_dir("merge31");
+    let part = |k: usize| {
+        let shard = format!("{k}/2");
+        let out = ok(&[
+            "montecarlo",
+            "--table",
+            "5",
+            "--cell",
+            "3",
+            "--runs",
+            "2",
+            "--shard",
+            &shard,
+            "--json",
+        ]);
+        let p = format!("{d}/part{k}.json");
+        std::fs::write(&p, &out).unwrap();
+        (p, out)
+    };
+    let ((p1, t1), (p2, t2)) = (part(1), part(2));
+    let plain = ok(&["montecarlo", "merge", &p1, &p2]);
+    std::fs::write(&p1, format!("\u{feff}{t1}")).unwrap();
+    assert_eq!(ok(&["montecarlo", "merge", &p1, &p2]), plain);
+    // Shard 2/2 holds run 1; call it run 5.
+    assert!(t2.contains("\"run\": 1,"));
+    std::fs::write(&p2, t2.replacen("\"run\": 1,", "\"run\": 5,", 1)).unwrap();
+    let e = bad(
+        &["montecarlo", "merge", &p1, &p2],
+        "run 1 expected, run 5 found",
+    );
+    assert!(e.contains(&p2), "{e}");
+    std::fs::write(&p2, &t2).unwrap();
+    // An error value set to +infinity (IEEE-754 bits 7ff0000000000000).
+    let hex = t1
+        .split("\"errors\": [")
+        .nth(1)
+        .unwrap()
+        .split('"')
+        .nth(1)
+        .unwrap()
+        .to_string();
+    std::fs::write(&p1, t1.replacen(&hex, "7ff0000000000000", 1)).unwrap();
+    let r = obsan(&["montecarlo", "merge", &p1, &p2]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        r.stderr.contains("infinite") && r.stderr.contains(&p1),
+        "{}",
+        r.stderr
+    );
+}
+
+/// Issue 31.9: import mrclam said nothing without the ground truth, blamed
+/// an empty landmark file on the measurements, and gave no line for bad UTF-8.
+#[test]
+fn import_mrclam_names_what_is_wrong() {
+    let d = fresh_dir("import31");
+    let src = format!("{d}/mr");
+    mrclam_source(&src);
+    let r = obsan(&[
+        "import",
+        "mrclam",
+        &src,
+        "--out",
+        &format!("{d}/a"),
+        "--min-measurements",
+        "5",
+    ]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(r.stderr.contains("robot1_Groundtruth.txt"), "{}", r.stderr);
+    // Invalid UTF-8 on line 3 of the odometry log.
+    let odo = format!("{src}/robot1_Odometry.txt");
+    let mut bytes = std::fs::read(&odo).unwrap();
+    let third = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| **b == b'\n')
+        .nth(1)
+        .unwrap()
+        .0
+        + 1;
+    bytes[third] = 0xff;
+    std::fs::write(&odo, bytes).unwrap();
+    let e = bad(
+        &["import", "mrclam", &src, "--out", &format!("{d}/b")],
+        "invalid UTF-8",
+    );
+    assert!(e.contains("robot1_Odometry.txt:3:1"), "{e}");
+    mrclam_source(&src);
+    std::fs::write(format!("{src}/Landmark_Groundtruth.dat"), "").unwrap();
+    let e = bad(
+        &["import", "mrclam", &src, "--out", &format!("{d}/c")],
+        "no landmark",
+    );
+    assert!(e.contains("Landmark_Groundtruth.dat"), "{e}");
+    assert_eq!(entries(&d), ["a", "mr"]);
+}

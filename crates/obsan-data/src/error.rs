@@ -122,6 +122,8 @@ pub enum DataErrorKind {
     TooManyWindows { window: f64, span: f64, max: f64 },
     /// Vicon poses as outputs without the ground-truth file.
     NeedsGroundTruth,
+    /// `Landmark_Groundtruth.dat` lists no landmark.
+    NoLandmarks,
     /// No window holds enough landmark measurements.
     NoWindow {
         window: f64,
@@ -129,16 +131,36 @@ pub enum DataErrorKind {
     },
 }
 
+/// The most characters of a cell (or header) a message echoes: a 10 MB
+/// cell must not make a 10 MB message (issue 31).
+pub const MAX_ECHO_CHARS: usize = 80;
+
+/// `text` as echoed in a message: whole if short, else its start and its
+/// length.
+fn cut(text: &str) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(MAX_ECHO_CHARS) {
+        None => text.into(),
+        Some((end, _)) => format!("{}... ({} bytes in all)", &text[..end], text.len()).into(),
+    }
+}
+
 impl fmt::Display for DataErrorKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         use DataErrorKind::*;
         match self {
             EmptyFile => f.write_str("the file is empty: expected a header line t,..."),
-            FirstColumn { found } => write!(f, "the first column must be 't', found '{found}'"),
+            FirstColumn { found } => {
+                write!(f, "the first column must be 't', found '{}'", cut(found))
+            }
             UnnamedColumn { index } => write!(f, "column {index} of the header has no name"),
             DuplicateColumn => f.write_str("this column appears twice"),
             MissingColumn { name, header } => {
-                write!(f, "missing column '{name}' (the header is '{header}')")
+                write!(
+                    f,
+                    "missing column '{}' (the header is '{}')",
+                    cut(name),
+                    cut(header)
+                )
             }
             UnclosedQuote => f.write_str("a quoted field is not closed on its line"),
             AfterQuote(c) => write!(f, "'{c}' after the closing quote of a field"),
@@ -146,13 +168,14 @@ impl fmt::Display for DataErrorKind {
                 write!(f, "{found} fields, the header has {expected}")
             }
             EmptyValue => f.write_str("empty value"),
-            NotFinite(cell) => write!(f, "'{cell}' is not a finite number"),
+            NotFinite(cell) => write!(f, "'{}' is not a finite number", cut(cell)),
             OutOfRange { cell, time, bound } => write!(
                 f,
-                "'{cell}' is outside the accepted range |{}| <= {bound:e}",
+                "'{}' is outside the accepted range |{}| <= {bound:e}",
+                cut(cell),
                 if *time { "t" } else { "value" }
             ),
-            NotANumber(cell) => write!(f, "'{cell}' is not a number"),
+            NotANumber(cell) => write!(f, "'{}' is not a number", cut(cell)),
             TimeBackwards { t, prev } => write!(f, "time goes backwards: {t} after {prev}"),
             InvalidUtf8 { byte } => write!(f, "invalid UTF-8 (byte {byte} of the file)"),
             Json(m) => f.write_str(m),
@@ -195,6 +218,7 @@ impl fmt::Display for DataErrorKind {
             NeedsGroundTruth => {
                 f.write_str("Vicon poses as outputs need the robot's ground-truth file")
             }
+            NoLandmarks => f.write_str("no landmark (expected rows: barcode x y ...)"),
             NoWindow {
                 window,
                 min_measurements,
@@ -259,6 +283,28 @@ mod tests {
     fn kind(text: &str) -> (Option<usize>, Option<String>, K) {
         let e = Series::parse_csv(text, "in.csv", &["wR"], false).unwrap_err();
         (e.row, e.column, e.kind)
+    }
+
+    /// Issue 31: a 10 MB cell made a 10 MB message. The echo is cut to
+    /// MAX_ECHO_CHARS characters plus the cell's length in bytes.
+    #[test]
+    fn a_huge_cell_is_cut_in_the_message() {
+        let cell = "x".repeat(10 << 20);
+        for text in [
+            format!("t,wR\n0,{cell}\n"),
+            format!("{cell},wR\n"),
+            format!("t,{cell}\n"),
+        ] {
+            let e = Series::parse_csv(&text, "in.csv", &["wR"], false).unwrap_err();
+            let m = e.to_string();
+            assert!(m.len() < 400, "{} bytes: {}", m.len(), &m[..400]);
+            // The whole cell is 10 MiB (the third case's header 2 more).
+            assert!(m.contains(" bytes in all)"), "{m}");
+            assert!(m.contains(&format!("{}", 10 << 20)[..6]), "{m}");
+        }
+        // A short cell is echoed whole.
+        let e = Series::parse_csv("t,wR\n0,abc\n", "in.csv", &["wR"], false).unwrap_err();
+        assert!(e.to_string().contains("'abc' is not a number"), "{e}");
     }
 
     #[test]

@@ -81,6 +81,22 @@ fn rows<'a>(
     })
 }
 
+/// The ground-truth rows with start <= t <= end, in file order.
+fn in_window(
+    gt: &[(f64, f64, f64, f64)],
+    sorted: bool,
+    start: f64,
+    end: f64,
+) -> Box<dyn Iterator<Item = &(f64, f64, f64, f64)> + '_> {
+    if sorted {
+        let lo = gt.partition_point(|g| g.0 < start);
+        let hi = gt.partition_point(|g| g.0 <= end);
+        Box::new(gt[lo..hi].iter())
+    } else {
+        Box::new(gt.iter().filter(move |g| g.0 >= start && g.0 <= end))
+    }
+}
+
 /// Landmarks (barcode, x, y) of `Landmark_Groundtruth.dat`.
 pub fn landmarks(text: &str, file: &str) -> Result<Vec<(u32, f64, f64)>, DataError> {
     rows(text, file, 3)
@@ -124,6 +140,14 @@ pub fn convert(
         });
     }
     let lms = landmarks(t.landmarks.0, t.landmarks.1)?;
+    if lms.is_empty() {
+        return Err(DataError {
+            file: t.landmarks.1.into(),
+            row: None,
+            column: None,
+            kind: K::NoLandmarks,
+        });
+    }
     let mut odo: Vec<(f64, f64, f64)> = Vec::new();
     for r in rows(t.odometry.0, t.odometry.1, 3) {
         let (line, v) = r?;
@@ -166,6 +190,9 @@ pub fn convert(
             .collect::<Result<_, _>>()?,
         None => vec![],
     };
+    // Ground truth in time order (as shipped) is cut by bisection too;
+    // otherwise each window scans it, in file order, as before.
+    let gt_sorted = gt.windows(2).all(|w| w[0].0 <= w[1].0);
     let mut cols = Vec::new();
     for (code, _, _) in &lms {
         cols.push(format!("r{code}"));
@@ -200,7 +227,14 @@ pub fn convert(
         k += 1;
         let b = b.min(t1);
         let mut inputs = Series::new(vec!["v".into(), "omega".into()]);
-        for &(t, v, w) in odo.iter().filter(|o| o.0 >= a && o.0 < b) {
+        // The logs are in time order (odometry checked, measurements
+        // sorted): a window is a slice, found by bisection, so the import
+        // is linear in the log's size, not windows x rows.
+        let (lo, hi) = (
+            odo.partition_point(|o| o.0 < a),
+            odo.partition_point(|o| o.0 < b),
+        );
+        for &(t, v, w) in &odo[lo..hi] {
             inputs.push(t, &[Some(v), Some(w)]);
         }
         if inputs.len() < 2 {
@@ -210,7 +244,11 @@ pub fn convert(
         let end = inputs.t()[inputs.len() - 1];
         let mut outputs = Series::new(cols.clone());
         let mut n_meas = 0;
-        for &(t, code, r, brg) in meas.iter().filter(|m| m.0 >= start && m.0 <= end) {
+        let (lo, hi) = (
+            meas.partition_point(|m| m.0 < start),
+            meas.partition_point(|m| m.0 <= end),
+        );
+        for &(t, code, r, brg) in &meas[lo..hi] {
             // Only landmarks' codes were kept in `meas`.
             let Some(i) = lms.iter().position(|l| l.0 == code) else {
                 continue;
@@ -228,7 +266,7 @@ pub fn convert(
         if what == MrclamOutputs::ViconPoses {
             outputs = Series::new(vec!["px".into(), "py".into(), "pth".into()]);
             let mut last = f64::NEG_INFINITY;
-            for g in gt.iter().filter(|g| g.0 >= start && g.0 <= end) {
+            for g in in_window(&gt, gt_sorted, start, end) {
                 if g.0 >= last + POSE_INTERVAL - 1e-9 {
                     outputs.push(g.0, &[Some(g.1), Some(g.2), Some(g.3)]);
                     last = g.0;
@@ -247,7 +285,7 @@ pub fn convert(
         if !gt.is_empty() {
             // Vicon poses every 0.5 s: summing 100 Hz jitter would inflate the distance.
             let mut seg: Vec<&(f64, f64, f64, f64)> = Vec::new();
-            for g in gt.iter().filter(|g| g.0 >= start && g.0 <= end) {
+            for g in in_window(&gt, gt_sorted, start, end) {
                 if seg.last().is_none_or(|l| g.0 >= l.0 + 0.5) {
                     seg.push(g);
                 }

@@ -136,3 +136,22 @@ fn vicon_poses_replace_the_landmark_outputs_in_the_same_windows() {
     let e = mrclam_convert(&t, 10.0, 5, MrclamOutputs::ViconPoses).unwrap_err();
     assert!(e.to_string().contains("ground-truth"), "{e}");
 }
+
+/// Issue 31: an empty landmark file was blamed on the measurement file (no
+/// measurement could match a landmark); the error now names the landmark file.
+#[test]
+fn an_empty_landmark_file_is_named() {
+    let odo = odometry(100);
+    let meas = "0.5 18 1.5 0.1\n";
+    for lms in ["", "# only a comment\n"] {
+        let t = MrclamText {
+            odometry: (&odo, "o.txt"),
+            measurements: (meas, "m.txt"),
+            landmarks: (lms, "l.dat"),
+            groundtruth: None,
+        };
+        let e = mrclam_convert(&t, 10.0, 1, MrclamOutputs::Landmarks).unwrap_err();
+        assert_eq!(e.file, "l.dat", "{e}");
+        assert!(e.to_string().contains("no landmark"), "{e}");
+    }
+}
