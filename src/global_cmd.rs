@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
+    crate::unknown_input_cmd::refuse(&nf, "global")?;
     let opts = GlobalOptions {
         seed: a.an.seed,
         deadline: a

@@ -57,7 +57,20 @@ fn a_negative_verdict_says_how_far_it_holds() {
 
 #[test]
 fn other_commands_refuse_unknown_inputs() {
-    for cmd in ["symmetries", "modes", "check"] {
+    // global would otherwise count values as if w were absent (a wrong answer, not a refusal);
+    // several experiments would stack the model without its unknown input.
+    bad(
+        &[
+            "rank",
+            "systems/benchmarks/unknown-inputs/chain.sys",
+            "--experiment",
+            "",
+            "--experiment",
+            "",
+        ],
+        "is an unknown input",
+    );
+    for cmd in ["symmetries", "modes", "check", "global", "lie"] {
         let mut args = vec![cmd, "systems/benchmarks/unknown-inputs/chain.sys"];
         if cmd == "check" {
             args.extend(["--mode", "x1"]);

@@ -206,6 +206,11 @@ fn sub_system(
         input_vars: Vec::new(),
         f0: vec![zero; vars.len()],
         fields: f,
+        // Symmetries and block ranks are for known inputs only (the commands refuse
+        // unknown inputs before they get here).
+        unknown_inputs: Vec::new(),
+        unknown_input_vars: Vec::new(),
+        unknown_fields: Vec::new(),
         outputs: outs.iter().map(|&o| nf.outputs[o].clone()).collect(),
         restriction: nf.restriction.clone(),
         delay: None,

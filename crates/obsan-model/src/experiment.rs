@@ -97,6 +97,18 @@ impl System {
                 "no experiments given".to_string(),
             ));
         }
+        // Unknown inputs of several experiments (each its own unmeasured signal) are not
+        // stacked yet: refuse rather than analyse them as if they were absent.
+        if let Some(w) = self.decls_of(Kind::Unknown).next() {
+            return Err(ModelError::general(
+                "--experiment",
+                format!(
+                    "'{}' is an unknown input: several experiments of a model with unknown \
+                     inputs are not supported yet",
+                    w.name
+                ),
+            ));
+        }
         // Validate names as normal_form does (same messages).
         for x in exps {
             self.normal_form(x.restriction.as_deref(), &x.set)?;
@@ -252,6 +264,9 @@ impl System {
             input_vars,
             f0,
             fields,
+            unknown_inputs: Vec::new(),
+            unknown_input_vars: Vec::new(),
+            unknown_fields: Vec::new(),
             outputs,
             restriction: None,
             delay,
