@@ -73,9 +73,11 @@ also {experiments}. --known/--known-generic and --experiments auto print their o
   obsan symmetries systems/calib.sys --input q
   obsan symmetries systems/psi.sys --exact      # the exact route and closure check
 
-The default --timeout is 60 s; a run past it stops with exit code 2 and says how far it got.
+The default --timeout is 60 s, all of it for the work; a run past it stops with exit code 2
+and says how far it got. Parts of the system that share only common variables (or none) are
+solved as separate blocks.
 --json prints {system, restriction, state, n, rank, symmetries (one object per vector: variable ->
-{text, latex}), rows_checked, exact, certificate (closure | invariance | random), certification
+{text, latex}), rows_checked, blocks, exact, certificate (closure | invariance | random), certification
 (for random: {points, primes, identities, degree, error_bound}, else null)}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.

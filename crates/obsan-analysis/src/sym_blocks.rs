@@ -108,7 +108,10 @@ pub(crate) fn split(nf: &NormalForm, fields: &[Vec<Id>]) -> Option<Split> {
             r
         })
         .collect();
-    let shared: Vec<usize> = (0..n).filter(|&v| reach.iter().all(|r| r[v])).collect();
+    // Shared: reached by every output that depends on something.
+    let shared: Vec<usize> = (0..n)
+        .filter(|&v| reach.iter().all(|r| r[v] || r.iter().all(|x| !x)))
+        .collect();
     // Union-find of the outputs over their non-shared variables.
     let mut parent: Vec<usize> = (0..m).collect();
     fn find(p: &mut [usize], mut x: usize) -> usize {
@@ -148,18 +151,20 @@ pub(crate) fn split(nf: &NormalForm, fields: &[Vec<Id>]) -> Option<Split> {
             None => groups.push((root, vec![o])),
         }
     }
-    if groups.len() < 2 {
-        return None;
-    }
-    let blocks = groups
+    // Outputs that depend on no variable (constants) enter no block.
+    let blocks: Vec<(Vec<usize>, Vec<usize>)> = groups
         .into_iter()
         .map(|(_, outs)| {
-            let vars = (0..n)
+            let vars: Vec<usize> = (0..n)
                 .filter(|&v| outs.iter().any(|&o| reach[o][v]))
                 .collect();
             (vars, outs)
         })
+        .filter(|(vars, _)| !vars.is_empty())
         .collect();
+    if blocks.len() < 2 {
+        return None;
+    }
     let unreached: Vec<usize> = (0..n).filter(|&v| reach.iter().all(|r| !r[v])).collect();
     let unreached_free = unreached.iter().all(|&v| !used[v]);
     Some(Split {
@@ -529,4 +534,58 @@ fn glue(nf: &mut NormalForm, sp: &Split, solved: &[Solved]) -> Option<Vec<Vec<Ra
             })
             .collect(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{split, Split};
+    use crate::rank::Fields;
+    use obsan_model::System;
+
+    fn split_of(src: &str) -> Option<Split> {
+        let mut nf = System::parse(src, "t.sys")
+            .unwrap()
+            .normal_form(None, &[])
+            .unwrap();
+        let f = Fields::of(&mut nf);
+        split(&nf, &f.vectors)
+    }
+
+    /// State x1, x2, z, p, a: y1 = x1 reaches x1 and, through x1' = a u, a;
+    /// y2 = x2 + p reaches x2 and p; z (z' = x1 u) is reached by no output and
+    /// nothing depends on it; no variable is in both closures.
+    #[test]
+    fn independent_blocks_and_an_unreached_variable() {
+        let s = split_of(
+            "system t\nstate x1, x2, z\nparam p, a\ninput u\nx1' = a*u\nx2' = u\nz' = x1*u\n\
+             output y1 = x1\noutput y2 = x2 + p\n",
+        )
+        .unwrap();
+        assert!(s.shared.is_empty());
+        assert_eq!(s.blocks, vec![(vec![0, 4], vec![0]), (vec![1, 3], vec![1])]);
+        assert_eq!(s.unreached, vec![2]);
+        assert!(s.unreached_free);
+    }
+
+    /// Two experiments sharing the param k (index 2): blocks over their own
+    /// state and k; a constant output enters no block.
+    #[test]
+    fn shared_params_and_a_constant_output() {
+        let s = split_of(
+            "system t\nstate x1, x2\nparam k\ninput u\nx1' = k*u\nx2' = k*x2*u\n\
+             output y1 = x1\noutput y2 = x2\noutput c = 3\n",
+        )
+        .unwrap();
+        assert_eq!(s.shared, vec![2], "the constant output reaches nothing");
+        assert_eq!(s.blocks, vec![(vec![0, 2], vec![0]), (vec![1, 2], vec![1])]);
+        let s = split_of(
+            "system t\nstate x1, x2\nparam k\ninput u\nx1' = k*u\nx2' = k*x2*u\n\
+             output y1 = x1\noutput y2 = x2\n",
+        )
+        .unwrap();
+        assert_eq!(s.shared, vec![2]);
+        assert_eq!(s.blocks, vec![(vec![0, 2], vec![0]), (vec![1, 2], vec![1])]);
+        // One output: nothing to split.
+        assert!(split_of("system t\nstate x\ninput u\nx' = u\noutput y = x\n").is_none());
+    }
 }
