@@ -49,7 +49,7 @@ formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys --input q --set q=0.9 --json
   obsan rank systems/calib.sys --experiment 'q: q=0.9' --experiment 'q: q=0' --experiment 'q: q=-1'
   obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
-  obsan rank model.sys --known S=0 --known-generic x2         # known initial conditions
+  obsan rank systems/classic/two_compartment.sys --known-generic x1,x2   # known initial conditions
 
 --json prints {system, restriction, n, rank, exact, error_bound, degree_bound, basis (Lie
 words with their order), observable (per variable), max_order, evaluated}; with experiments
