@@ -56,7 +56,7 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys --input q --set q=0.9 --json
   obsan rank systems/calib.sys --experiment 'q: q=0.9' --experiment 'q: q=0' --experiment 'q: q=-1'
   obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
-  obsan rank model.sys --known S=0 --known-generic x2         # known initial conditions
+  obsan rank systems/classic/two_compartment.sys --known-generic x1,x2   # known initial conditions
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
 weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,

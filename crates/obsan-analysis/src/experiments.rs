@@ -104,7 +104,7 @@ impl Default for KnownOptions {
             seed: 1,
             deadline: None,
             max_order: 12,
-            max_words: 20_000,
+            max_words: 1_000,
         }
     }
 }
