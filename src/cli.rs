@@ -60,9 +60,9 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
 weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
-degree_bound, seed, basis (Lie words with their order), max_order, evaluated}; with experiments
-also {experiments}. --known/--known-generic and --experiments auto print their own objects
-(docs/experiments.md).")]
+degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
+stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
+unknown inputs print their own objects (docs/experiments.md, docs/engine.md).")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), each certified before it is printed: cheap structure and
