@@ -14,7 +14,7 @@
 
 use crate::budget;
 use crate::gauss;
-use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind};
 use crate::memo::Ctx;
 use crate::num::{int, int_exact_sqrt, trial_factor, Int, Q};
 use crate::poly::{Mono, Poly, Var};
