@@ -14,7 +14,7 @@
 
 use crate::budget;
 use crate::gauss;
-use crate::graph::{Angle, Id, LeafKind, Node};
+use crate::graph::{Angle, Id, LeafKind};
 use crate::memo::Ctx;
 use crate::num::{int, int_exact_sqrt, trial_factor, Int, Q};
 use crate::poly::{Mono, Poly, Var};
@@ -261,8 +261,7 @@ impl Ctx {
         let mut acc = (one, zero);
         let (atans, rest) = self.split_const_atans(lin.rest)?;
         let lin = Linear { rest, ..lin };
-        for (v, n) in atans {
-            let pair = self.atan_cos_sin(v)?;
+        for (pair, n) in atans {
             let p = self.cpow(pair, n);
             acc = self.cmul(acc, p);
         }
@@ -300,7 +299,15 @@ impl Ctx {
     /// ([`Ctx::atan_cos_sin`]), so they must not hide inside an angle atom
     /// (`cos(atan(2))` is `sin(atan(1/2))`, and `tan(atan(u))` is `u`).
     /// Fractional multiples stay in the atom (not detected: docs/engine.md).
-    fn split_const_atans(&mut self, rest: RatFun) -> R<(Vec<(Var, i64)>, RatFun)> {
+    ///
+    /// Non-constant arguments too (issue 31 item 6): `cos(atan u) =
+    /// 1/sqrt(1 + u^2)`, `sin(atan u) = u/sqrt(1 + u^2)` for every real `u`,
+    /// and `cos(atan2(y, x)) = x/r`, `sin(atan2(y, x)) = y/r` with
+    /// `r = sqrt(x^2 + y^2)` wherever atan2 is defined (`(x, y) != (0, 0)`);
+    /// so `tan(atan2(y, x)) = y/x`. When the root would be of a perfect
+    /// square (refused by `sqrt`), the term stays in the angle atom.
+    #[allow(clippy::type_complexity)]
+    fn split_const_atans(&mut self, rest: RatFun) -> R<(Vec<((Id, Id), i64)>, RatFun)> {
         let Some(d) = rest.den.as_constant() else {
             return Ok((vec![], rest));
         };
@@ -314,11 +321,11 @@ impl Ctx {
             };
             let coeff = Q::new(k.clone(), d.clone());
             let arg = single.and_then(|v| match self.leaves[v as usize].kind {
-                LeafKind::Atan(u) => Some((v, u)),
+                LeafKind::Atan(_) | LeafKind::Atan2(..) => Some(v),
                 _ => None,
             });
             match arg {
-                Some((v, u)) if coeff.is_integer() && self.is_constant(u) => {
+                Some(v) if coeff.is_integer() => {
                     let n = i64::try_from(coeff.num()).ok().filter(|n| n.abs() <= 64);
                     let Some(n) = n else {
                         let a = self.leaf_text(v);
@@ -326,7 +333,10 @@ impl Ctx {
                             "the multiple {coeff} of {a} inside sin/cos is too large"
                         ));
                     };
-                    atans.push((v, n));
+                    match self.atan_cos_sin(v)? {
+                        Some(pair) => atans.push((pair, n)),
+                        None => keep.push((m.clone(), k.clone())),
+                    }
                 }
                 _ => keep.push((m.clone(), k.clone())),
             }
@@ -352,27 +362,89 @@ impl Ctx {
         self.name_lc_negative(&r.num) != (!r.den.is_one() && self.name_lc_negative(&r.den))
     }
 
-    /// Whether an expression has no symbol in it (a constant, possibly with atoms).
-    fn is_constant(&self, id: Id) -> bool {
-        !self.reachable(&[id]).iter().any(|&n| {
-            matches!(self.node(n), Node::Leaf(v)
-                if matches!(self.leaves[*v as usize].kind, LeafKind::Symbol(_)))
-        })
+    /// `(cos a, sin a)` for the leaf `a = atan(u)`: `(1, u)/sqrt(1 + u^2)`,
+    /// exact for every real `u` (cos of a principal atan is positive); for
+    /// `a = atan2(y, x)`: `(x, y)/sqrt(x^2 + y^2)`, exact for `(x, y) != 0`.
+    /// `None` when that root is of a perfect square (`sqrt` refuses it).
+    fn atan_cos_sin(&mut self, a: Var) -> R<Option<(Id, Id)>> {
+        let (x, y) = match self.leaves[a as usize].kind {
+            LeafKind::Atan(u) => (self.one(), u),
+            LeafKind::Atan2(y, x) => (x, y),
+            _ => return err("internal: not an atan leaf"),
+        };
+        let x2 = self.mul(&[x, x]);
+        let y2 = self.mul(&[y, y]);
+        let rad = self.add(&[x2, y2]);
+        let r = match self.sqrt(rad) {
+            Ok(r) => r,
+            Err(e) if budget::tripped() => return Err(e),
+            Err(_) => return Ok(None),
+        };
+        let inv = self.pow(r, -1);
+        let c = self.mul(&[x, inv]);
+        let s = self.mul(&[y, inv]);
+        Ok(Some((c, s)))
     }
 
-    /// `(cos a, sin a)` for the leaf `a = atan(u)`: `(1, u)/sqrt(1 + u^2)`,
-    /// exact for every real `u` (cos of a principal atan is positive).
-    fn atan_cos_sin(&mut self, a: Var) -> R<(Id, Id)> {
-        let LeafKind::Atan(u) = self.leaves[a as usize].kind else {
-            return err("internal: not an atan leaf");
+    /// Split `n log(u)` terms (`n` an integer or a half) off an exponent:
+    /// `exp(n log u) = u^n`, exact where `log u` is real (`u > 0`). Left in
+    /// the exponent when `u^n` is refused (a root of a perfect square).
+    fn split_logs(&mut self, rest: RatFun) -> R<(Vec<Id>, RatFun)> {
+        let Some(d) = rest.den.as_constant() else {
+            return Ok((vec![], rest));
         };
-        let one = self.one();
-        let u2 = self.mul(&[u, u]);
-        let rad = self.add(&[one, u2]);
-        let r = self.sqrt(rad)?;
-        let c = self.pow(r, -1);
-        let s = self.mul(&[u, c]);
-        Ok((c, s))
+        let mut factors = Vec::new();
+        let mut keep = Vec::new();
+        for (m, k) in rest.num.terms() {
+            let mut it = m.iter();
+            let single = match (it.next(), it.next()) {
+                (Some((v, 1)), None) => Some(v),
+                _ => None,
+            };
+            let coeff = Q::new(k.clone(), d.clone());
+            let arg = single.and_then(|v| match self.leaves[v as usize].kind {
+                LeafKind::Log(u) => Some(u),
+                _ => None,
+            });
+            let pow = match arg {
+                Some(u) if coeff.is_integer() || coeff.den() == &int(2) => {
+                    match self.pow_q(u, &coeff) {
+                        Ok(p) => Some(p),
+                        Err(e) if budget::tripped() => return Err(e),
+                        Err(_) => None,
+                    }
+                }
+                _ => None,
+            };
+            match pow {
+                Some(p) => factors.push(p),
+                None => keep.push((m.clone(), k.clone())),
+            }
+        }
+        if factors.is_empty() {
+            return Ok((factors, rest));
+        }
+        let num = Poly::from_terms(keep);
+        let rest = if num.is_zero() {
+            RatFun::zero()
+        } else {
+            self.normalize(num, Poly::constant(d))
+        };
+        stop()?;
+        Ok((factors, rest))
+    }
+
+    /// The exponent of an `exp` leaf, as a node.
+    fn exp_arg(&mut self, v: Var) -> Option<Id> {
+        match self.leaves[v as usize].kind {
+            LeafKind::Exp(Angle::Symbol { sym, den }) => {
+                let s = self.leaf_node(sym);
+                let k = self.num(Q::new(int(1), int(den as i64)));
+                Some(self.mul(&[k, s]))
+            }
+            LeafKind::Exp(Angle::Generic(id)) => Some(id),
+            _ => None,
+        }
     }
 
     pub fn sin(&mut self, u: Id) -> R<Id> {
@@ -393,8 +465,7 @@ impl Ctx {
         let c = self.canon_ok(u)?;
         let lin = self.split_linear(&c);
         stop()?;
-        let mut factors = Vec::new();
-        let mut rest = lin.rest.clone();
+        let (mut factors, mut rest) = self.split_logs(lin.rest.clone())?;
         if !lin.pi.is_zero() {
             let pv = self.pi_var();
             let pi_part = self.rf_mul(&RatFun::from_q(&lin.pi), &RatFun::var(pv));
@@ -494,6 +565,38 @@ impl Ctx {
             if q.is_zero() || q.is_negative() {
                 return err(format!("log of the constant {q} is undefined"));
             }
+        }
+        // log(exp(a)^k w) = k a + log(w), exact where the log is real
+        // (w > 0 there): the exp leaves of the monomial content of the
+        // numerator and the denominator come out (issue 31 item 6).
+        let (mn, md) = (c.num.mono_content(), c.den.mono_content());
+        let pulled = |m: &Mono| -> Vec<(Var, u32)> {
+            m.iter()
+                .filter(|(v, _)| matches!(self.leaves[*v as usize].kind, LeafKind::Exp(_)))
+                .collect()
+        };
+        let (en, ed) = (pulled(&mn), pulled(&md));
+        if !en.is_empty() || !ed.is_empty() {
+            let mut terms = Vec::new();
+            for (v, e, sign) in en
+                .iter()
+                .map(|&(v, e)| (v, e, 1))
+                .chain(ed.iter().map(|&(v, e)| (v, e, -1)))
+            {
+                if let Some(a) = self.exp_arg(v) {
+                    let k = self.int(sign * e as i64);
+                    terms.push(self.mul(&[k, a]));
+                }
+            }
+            let w = RatFun {
+                num: c.num.div_mono(&Mono::from_pairs(en.iter().copied())),
+                den: c.den.div_mono(&Mono::from_pairs(ed.iter().copied())),
+            };
+            let w = self.normalize(w.num, w.den);
+            stop()?;
+            let wid = self.from_canonical(&w);
+            terms.push(self.log(wid)?);
+            return Ok(self.add(&terms));
         }
         let id = self.from_canonical(&c);
         let l = self.leaf(LeafKind::Log(id));

@@ -640,3 +640,23 @@ fn equal_expressions_print_identically() {
     assert_eq!(a.to_text(ea), b.to_text(eb));
     assert_eq!(a.to_text(ea), "-1/(x - y)");
 }
+
+/// Issue 31 item 6: compositions that are identically zero on their real
+/// domains (exp(log x) = x for x > 0; cos(atan x) = 1/sqrt(1 + x^2); the
+/// atan2 ones with r = sqrt(x^2 + y^2), (x, y) != 0) are decided as zero.
+#[test]
+fn inverse_compositions_are_zero() {
+    for text in [
+        "exp(log(x)) - x",
+        "log(exp(x)) - x",
+        "cos(atan(x)) - 1/sqrt(1+x^2)",
+        "sin(atan(x)) - x/sqrt(1+x^2)",
+        "sin(atan2(y,x)) - y/sqrt(x^2+y^2)",
+        "cos(atan2(y,x)) - x/sqrt(x^2+y^2)",
+        "tan(atan2(y,x)) - y/x",
+    ] {
+        let mut ctx = Ctx::new();
+        let e = ctx.parse(text).unwrap();
+        assert!(ctx.is_identically_zero(e), "{text}");
+    }
+}
