@@ -75,6 +75,9 @@ fn other_commands_refuse_unknown_inputs() {
         if cmd == "check" {
             args.extend(["--mode", "x1"]);
         }
+        if cmd == "lie" {
+            args.extend(["--order", "1"]);
+        }
         bad(&args, "has unknown inputs (w)");
     }
 }

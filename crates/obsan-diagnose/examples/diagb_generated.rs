@@ -6,7 +6,7 @@
 //! `cargo run --release -p obsan-diagnose --example diagb_generated`
 
 #[path = "../tests/diagb_generated.rs"]
-#[allow(dead_code)] // the tests' helpers the figures do not use
+#[allow(dead_code, unused_imports)] // the tests' helpers and imports the figures do not use
 mod diagb;
 
 fn main() {

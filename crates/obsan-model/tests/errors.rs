@@ -339,7 +339,7 @@ fn restrictions_and_constants_give_the_right_fields() {
         .collect();
     assert_eq!(t, vec!["1", "6", "0"]);
     let f0: Vec<String> = nf.f0.clone().iter().map(|&i| nf.ctx.to_text(i)).collect();
-    assert_eq!(f0, vec!["y*a", "-x", "0"]);
+    assert_eq!(f0, vec!["a*y", "-x", "0"]);
     // A restriction that keeps an original input.
     let src = GOOD.replace("restrict r: u = v, w = 2*v", "restrict straight: w = u");
     let s = System::parse(&src, "t.sys").unwrap();
