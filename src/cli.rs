@@ -507,7 +507,7 @@ pub struct SimulateArgs {
 /// The simulated set-up (section VI-A; Tables II and III by default).
 #[derive(Args, Clone)]
 pub struct SimFlags {
-    /// Wheel-speed ratios, one circular trajectory each (eq. 17); at most 8.
+    /// Wheel-speed ratios, one circular trajectory each (eq. 17); at most 100.
     #[arg(
         long,
         value_delimiter = ',',

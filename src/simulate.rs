@@ -37,7 +37,7 @@ pub fn dataset_files(
 /// memory grows with bearings x trajectories (issue 31).
 pub const MAX_BEARINGS: usize = 1_000_000;
 /// The most trajectories (`--q` ratios) of one simulation.
-pub const MAX_TRAJECTORIES: usize = 8;
+pub const MAX_TRAJECTORIES: usize = 100;
 /// The most bearings of all trajectories together (`--bearings` x ratios):
 /// 3 x 10^6 is the 97 MB dataset of issue 31 (crlb on it peaks at 704 MB).
 pub const MAX_TOTAL_BEARINGS: usize = 3_000_000;

@@ -823,8 +823,11 @@ fn size_flags_have_stated_limits() {
         assert!(e.contains("--bearings"), "{e}");
     }
     assert!(!Path::new(&format!("{d}/big")).exists());
-    let many: Vec<String> = (0..9).map(|k| format!("0.{k}")).collect();
-    bad(&["crlb", "--q", &many.join(",")], "at most 8 trajectories");
+    let many: Vec<String> = (0..101).map(|k| format!("0.{k:03}")).collect();
+    bad(
+        &["crlb", "--q", &many.join(",")],
+        "at most 100 trajectories",
+    );
     // 4 x 10^6 bearings in all: past the total of 3 x 10^6.
     bad(
         &["crlb", "--bearings", "1000000", "--q", "0.9,0,-1,0.5"],
@@ -837,7 +840,7 @@ fn size_flags_have_stated_limits() {
     );
     for (cmd, want) in [
         (vec!["simulate", "--help"], "at most 1000000"),
-        (vec!["crlb", "--help"], "at most 8"),
+        (vec!["crlb", "--help"], "at most 100"),
         (vec!["montecarlo", "--help"], "at most 100000"),
     ] {
         let out = ok(&cmd);
