@@ -315,6 +315,12 @@ pub fn running_commands() -> usize {
     RUNNING.load(std::sync::atomic::Ordering::SeqCst)
 }
 
+/// Show or hide the progress of long commands started afterwards (the Python
+/// package hides it by default).
+pub fn set_progress(on: bool) {
+    progress::set_enabled(on);
+}
+
 /// Start `obsan ARGV...` on a worker thread, its stdout held back as the
 /// result: the same command code as the binary, so the Python package's
 /// values are the CLI's `--json` (ARGV must ask for it where the command

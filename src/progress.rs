@@ -7,12 +7,22 @@
 //! prints a line at every step, `off` none). stdout is never touched.
 
 use std::io::{IsTerminal, Write};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 const DEFAULT_PERIOD: Duration = Duration::from_secs(5);
+
+/// Whether long commands show progress at all. The CLI leaves it on; the
+/// Python package turns it off by default (its stderr is a notebook cell or a
+/// log, where a line every few seconds is noise) through [`set_enabled`].
+static ENABLED: AtomicBool = AtomicBool::new(true);
+
+/// Turn progress display on or off for every command started afterwards.
+pub fn set_enabled(on: bool) {
+    ENABLED.store(on, Ordering::Relaxed);
+}
 
 struct State {
     label: String,
@@ -94,7 +104,9 @@ impl Progress {
             msg: Mutex::new(String::new()),
             start: Instant::now(),
         });
-        let mode = if std::io::stderr().is_terminal() {
+        let mode = if !ENABLED.load(Ordering::Relaxed) {
+            Mode::Off
+        } else if std::io::stderr().is_terminal() {
             Mode::Bar(bar(label, total, unit))
         } else {
             match period() {
@@ -152,9 +164,11 @@ impl Progress {
 }
 
 impl Progress {
-    /// A line on stderr that does not tear the bar.
+    /// A line on stderr that does not tear the bar (none while progress is
+    /// turned off by [`set_enabled`]: such lines report progress too).
     pub fn println(&self, line: &str) {
         match &self.mode {
+            _ if !ENABLED.load(Ordering::Relaxed) => {}
             Mode::Bar(b) => b.println(line),
             _ => {
                 let _ = writeln!(std::io::stderr().lock(), "{line}");

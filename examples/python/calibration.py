@@ -15,6 +15,7 @@ import math
 import pathlib
 import sys
 import tempfile
+from typing import Any, Dict, List, Tuple
 
 import obsan
 
@@ -22,25 +23,25 @@ ROOT = pathlib.Path(__file__).resolve().parents[2]
 CALIB = ROOT / "systems" / "calib.sys"
 
 
-def analysis():
+def analysis() -> None:
     s = obsan.load(CALIB)
     r = s.rank()
-    print(f"{s.name}: rank {r['rank']} of {r['n']} (exact: {r['exact']})")
+    print(f"{s.name}: rank {r.rank} of {r.n} (exact: {r.exact})")
     r = s.rank(input="q")
-    print(f"on circles (eq. 17): rank {r['rank']} of {r['n']}, error bound {r['error_bound']:.1e}")
+    print(f"on circles (eq. 17): rank {r.rank} of {r.n}, error bound {r.error_bound or 0:.1e}")
     sym = s.symmetries(input="q")
-    print(f"{len(sym['symmetries'])} symmetries, certified {sym['certificate']}")
-    for i, w in enumerate(sym["symmetries"], 1):
-        print(f"  w{i} = [" + ", ".join(w[x]["text"] for x in r["state"]) + "]")
+    print(f"{len(sym.vectors)} symmetries, certified {sym.certificate}")
+    for i, w in enumerate(sym.vectors, 1):
+        print(f"  w{i} = [" + ", ".join(w.get(x, "0") for x in r.variables) + "]")
 
 
-def path_xy(dataset, name, truth):
+def path_xy(dataset: pathlib.Path, name: str, truth: Dict[str, Any]) -> Tuple[List[float], List[float]]:
     """The robot's path from the wheel speeds and the true odometry (for panels a, b)."""
     t = next(t for t in truth["trajectories"] if t["name"] == name)
     rows = (dataset / name / "inputs.csv").read_text().split("\n")
     head = rows[0].split(",")
     cols = [dict(zip(head, map(float, r.split(",")))) for r in rows[1:] if r.strip()]
-    x, y, th = t["x0"], t["y0"], t["theta0"]
+    x, y, th = float(t["x0"]), float(t["y0"]), float(t["theta0"])
     xs, ys = [x], [y]
     for a, b in zip(cols, cols[1:]):
         dt = b["t"] - a["t"]
@@ -59,16 +60,17 @@ def path_xy(dataset, name, truth):
     return xs, ys
 
 
-def figure5(out):
-    cases = []
+def figure5(out: pathlib.Path) -> None:
+    cases: List[Tuple[str, pathlib.Path, Dict[str, Any], Dict[str, Any]]] = []
     for label, d0 in (("inside", 1.2), ("outside", 5.0)):
-        data = obsan.simulate(out / f"ideal_{label}", q=[0.8, 0, -1], sigma_beta_deg=0, k=0,
-                              d0=d0, force=True)
-        data = pathlib.Path(data)
+        data = pathlib.Path(
+            obsan.simulate(out / f"ideal_{label}", q=[0.8, 0, -1], sigma_beta_deg=0, k=0, d0=d0, force=True)
+        )
         figs = out / f"figures_{label}"
         c = obsan.calibrate(data, method="ls", plot=figs, force=True)
-        print(f"feature {label} (d0 = {d0} m): eta = {c['params']['eta']['value']:.6f}, "
-              f"delta = {c['params']['delta']['value']:.6f}, xi = {c['params']['xi']['value']:.6f}")
+        p = c.params
+        print(f"feature {label} (d0 = {d0} m): eta = {p['eta'].value:.6f}, "
+              f"delta = {p['delta'].value:.6f}, xi = {p['xi'].value:.6f}")
         curves = json.loads((figs / "curves.json").read_text())
         truth = json.loads((data / "truth.json").read_text())
         cases.append((label, data, truth, next(k for k in curves if k["q"] == 0.8)))

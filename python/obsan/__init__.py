@@ -1,30 +1,57 @@
 """obsan from Python: exact nonlinear observability analysis and sensor self-calibration.
 
-Every function runs the ``obsan`` command line's own code in-process and returns what
-``obsan ... --json`` prints, as plain dicts and lists; numeric lists become numpy arrays
-when numpy is installed (set ``obsan.NUMPY = False`` to keep lists). See docs/python.md.
+Every function runs the ``obsan`` command line's own code in-process and returns a typed
+result (:class:`Rank`, :class:`Symmetries`, :class:`Calibration`, ...): a frozen dataclass
+whose fields are what programs usually need, and which is also a read-only mapping of
+exactly what ``obsan ... --json`` prints (``result["key"]``, ``result.to_dict()``).
+Numeric lists become numpy arrays when numpy is installed (``obsan.NUMPY = False`` keeps
+lists). In Jupyter, results show as tables and formulas as LaTeX. See docs/python.md.
 
-Errors (the CLI's exit code 2: bad input, a limit) raise :class:`ObsanError`, a
-``ValueError`` carrying the CLI's text (``file:line:col: ...``). A check that ran and
-failed (the CLI's exit code 1: ``check``, ``verify``, ``modes``) is a value, not an
-exception: the returned dict says what failed, and :func:`run` also gives the code.
+Errors: a wrong argument type is a ``TypeError`` and a missing input file a
+``FileNotFoundError``, both before anything runs; what the CLI refuses (exit code 2: bad
+input, a limit, a timeout) raises :class:`ObsanError`, a ``ValueError`` carrying the CLI's
+``file:line:col: ...`` text. A check that ran and failed (exit code 1: ``check``,
+``verify``, ``modes``) is a value, not an exception.
 """
 
 from __future__ import annotations
 
 import json
-import numbers
 import os
-from typing import Any, Iterable, Mapping, NamedTuple, Optional, Union
+from typing import Any, Dict, Iterable, List, Mapping, NamedTuple, Optional, Sequence, Tuple, Union
 
+from . import _native
+from . import _args as A
+from ._args import Flags, Number, PathLike, existing, integer
 from ._native import ObsanError, __version__
-from ._native import run_json as _run_json
+from ._results import (
+    Calibration,
+    Check,
+    CramerRao,
+    Diagnosis,
+    Estimate,
+    Expression,
+    Global,
+    Identifiability,
+    LieDerivative,
+    LieDerivatives,
+    Modes,
+    MonteCarloTable,
+    NamedEffect,
+    Rank,
+    Result,
+    Symmetries,
+    SystemInfo,
+    Verification,
+    arrays,
+)
 
 __all__ = [
     "ObsanError",
     "System",
     "load",
     "loads",
+    "system",
     "simplify",
     "diff",
     "calibrate",
@@ -36,17 +63,41 @@ __all__ = [
     "verify",
     "run",
     "Run",
+    "Result",
+    "SystemInfo",
+    "Rank",
+    "Symmetries",
+    "Modes",
+    "Global",
+    "Identifiability",
+    "LieDerivatives",
+    "LieDerivative",
+    "Check",
+    "Expression",
+    "Verification",
+    "Calibration",
+    "CramerRao",
+    "Diagnosis",
+    "NamedEffect",
+    "MonteCarloTable",
+    "Estimate",
     "NUMPY",
+    "PROGRESS",
     "__version__",
 ]
 
 #: Convert numeric lists to numpy arrays (when numpy is importable).
 NUMPY = True
 
+#: Show the progress of long commands (diagnose, montecarlo) on stderr. Off by default
+#: in Python, where stderr is a notebook cell or a log, not a terminal.
+PROGRESS = False
+
 #: The name ``loads`` gives its text in messages: ``<string>:3:7: ...``.
 STRING_NAME = "<string>"
 
-PathLike = Union[str, "os.PathLike[str]"]
+Settings = Optional[Mapping[str, Number]]
+Names = Union[str, Iterable[str], None]
 
 
 class Run(NamedTuple):
@@ -57,178 +108,109 @@ class Run(NamedTuple):
     value: Any
 
 
-def run(*argv: Any, source: Optional[tuple] = None) -> Run:
+def run(*argv: Union[str, PathLike, Number], source: Optional[Tuple[str, str]] = None) -> Run:
     """Run ``obsan ARGV...`` in-process and return its exit code and parsed stdout.
 
-    ARGV must ask for ``--json`` where the command has it. ``source`` is an optional
-    ``(name, text)`` file held in memory. Raises :class:`ObsanError` on exit code 2.
+    The escape hatch for any flag the typed functions do not name. ARGV must ask for
+    ``--json`` where the command has it. ``source`` is an optional ``(name, text)`` file
+    held in memory. Raises :class:`ObsanError` on exit code 2.
     """
-    code, text = _run_json([_arg(a) for a in argv], source)
-    return Run(code, json.loads(text))
+    from ._args import arg
+
+    argv_text = [arg(a) for a in argv]
+    if hasattr(_native, "set_progress"):
+        _native.set_progress(bool(PROGRESS))
+    code, out = _native.run_json(argv_text, source)
+    return Run(code, json.loads(out))
 
 
-def _arg(a: Any) -> str:
-    """An argument as text: a str, a path or a number; anything else (None, bytes,
-    a list) is a TypeError before anything runs (``str(None)`` would be the
-    folder ``./None``)."""
-    if isinstance(a, str):
-        return a
-    if isinstance(a, os.PathLike):
-        p = os.fspath(a)
-        if not isinstance(p, str):
-            raise TypeError(f"expected a str path, not {type(p).__name__}")
-        return p
-    if isinstance(a, numbers.Real):
-        return _value(a)
-    raise TypeError(f"expected a str, a path or a number, not {type(a).__name__}")
-
-
-def _text(what: str, a: Any) -> str:
-    """A text argument (an expression, a symbol, a method): a str, else TypeError."""
-    if not isinstance(a, str):
-        raise TypeError(f"{what} must be a str, not {type(a).__name__}")
-    return a
-
-
-def _path(what: str, a: Any) -> str:
-    """A path argument: a str or os.PathLike, else TypeError."""
-    if not isinstance(a, (str, os.PathLike)):
-        raise TypeError(f"{what} must be a path (str or os.PathLike), not {type(a).__name__}")
-    return _arg(a)
-
-
-def _value(x: Any) -> str:
-    """A value as the CLI reads it; a float keeps its shortest repr (0.9 is 9/10)."""
-    if isinstance(x, bool):
-        return "true" if x else "false"
-    if isinstance(x, float):
-        return repr(x)
-    if isinstance(x, numbers.Integral):
-        return str(int(x))
-    if isinstance(x, numbers.Rational):
-        return str(x)  # a Fraction stays exact: 9/10
-    if isinstance(x, numbers.Real):
-        return repr(float(x))
-    return _arg(x)
-
-
-def _flags(options: Mapping[str, Any], join: Iterable[str] = ()) -> list:
-    """Keyword options as flags: ``max_terms=5`` is ``--max-terms 5``, ``True`` a bare
-    flag, ``None``/``False`` nothing; a dict is repeated ``NAME=VALUE`` flags; a list is
-    a repeated flag, or one comma-joined value for the names in ``join``."""
-    join = set(join)
-    out: list = []
-    for name, v in options.items():
-        flag = "--" + name.replace("_", "-")
-        if v is None or v is False:
-            continue
-        if v is True:
-            out.append(flag)
-        elif isinstance(v, Mapping):
-            for k, x in v.items():
-                out += [flag, f"{k}={_value(x)}"]
-        elif isinstance(v, (list, tuple)) or _is_array(v):
-            items = [_value(x) for x in v]
-            if name in join:
-                out += [flag, ",".join(items)]
-            else:
-                for x in items:
-                    out += [flag, x]
-        else:
-            out += [flag, _value(v)]
-    return out
-
-
-def _is_array(v: Any) -> bool:
-    return hasattr(v, "tolist") and hasattr(v, "shape")
-
-
-def _arrays(v: Any) -> Any:
-    """Numeric lists (and rectangular lists of them) as numpy arrays."""
-    if not NUMPY:
-        return v
-    try:
-        import numpy as np
-    except ImportError:
-        return v
-    return _convert(v, np)
-
-
-def _convert(v: Any, np: Any) -> Any:
-    if isinstance(v, dict):
-        return {k: _convert(x, np) for k, x in v.items()}
-    if isinstance(v, list):
-        if v and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
-            a = np.asarray(v)
-            # Integers past int64 stay exact Python ints.
-            return a if a.dtype != object else v
-        items = [_convert(x, np) for x in v]
-        if items and all(isinstance(x, np.ndarray) for x in items):
-            if len({x.shape for x in items}) == 1 and len({x.dtype.kind for x in items}) == 1:
-                return np.stack(items)
-        return items
+def _value(f: Flags, source: Optional[Tuple[str, str]] = None) -> Dict[str, Any]:
+    v = run(*f.argv, "--json", source=source).value
+    if not isinstance(v, dict):
+        raise ObsanError(f"obsan {f.argv[0]} printed no JSON object")
     return v
 
 
-def _call(argv: list, source: Optional[tuple] = None) -> Any:
-    return _arrays(run(*argv, source=source).value)
+def _experiments(f: Flags, experiments: Union[str, Iterable[str], None]) -> Flags:
+    """``"auto"``, a file of experiments, or specs like ``"q: q=0.9"`` (one or a list)."""
+    if experiments is None:
+        return f
+    if isinstance(experiments, (str, os.PathLike)):
+        e = A.path("experiments", experiments)
+        if e == "auto" or os.path.exists(e):
+            return f.text("--experiments", e)
+        return f.texts("--experiment", [e])
+    return f.texts("--experiment", experiments)
 
 
-_SYSTEM_OPTIONS = ("input", "set", "seed", "timeout", "max_terms")
+def _limits(f: Flags, timeout: Optional[float], max_terms: Optional[int]) -> Flags:
+    return f.number("--timeout", timeout).integer("--max-terms", max_terms)
 
 
 class System:
-    """A ``.sys`` system, read from a file (:func:`load`) or text (:func:`loads`).
+    """A ``.sys`` system, read from a file (:func:`load`), text (:func:`loads`) or Python
+    values (:func:`system`). Each method runs the CLI command of the same name on it.
 
-    Each method runs the CLI command of the same name on it, with ``--json``;
-    keyword options are the command's flags (``input="q"`` is ``--input q``,
-    ``set={"q": 0.9}`` is ``--set q=0.9``).
+    Common keywords: ``input`` a restriction declared in the file (``input="q"`` is the
+    paper's circles, eq. 17); ``set`` values of known constants (``{"q": 0.9}``, read
+    exactly: a float by its shortest repr, a ``Fraction`` as p/q); ``seed`` of the random
+    evaluation points; ``timeout`` in seconds; ``max_terms`` the engine's size budget.
     """
 
-    def __init__(self, path: str, text: Optional[str] = None):
+    def __init__(self, path: str, text: Optional[str] = None) -> None:
         self.path = path
         self.text = text
         self._source = (path, text) if text is not None else None
         # Read and checked now, so a bad file is an error here.
-        self.info = self.show()
+        self.info: SystemInfo = self.show()
 
     @property
     def name(self) -> str:
-        return self.info["system"]
+        return self.info.system
 
     def __repr__(self) -> str:
         where = "text" if self.text is not None else repr(self.path)
         return f"<obsan.System {self.name} from {where}>"
 
-    def _run(self, command: str, options: Mapping[str, Any], *extra: Any) -> Any:
-        return _call(
-            [command, self.path, *extra, *_flags(options), "--json"],
-            self._source,
-        )
+    def _repr_latex_(self) -> str:
+        return self.info._repr_latex_()
 
-    def show(self, input: Optional[str] = None, set: Optional[Mapping] = None, **options: Any) -> dict:
+    def _flags(self, command: str, input: Optional[str], set: Settings) -> Flags:
+        return Flags(command, self.path).text("--input", input).pairs("--set", set)
+
+    def _get(self, f: Flags) -> Dict[str, Any]:
+        return _value(f, self._source)
+
+    def show(self, *, input: Optional[str] = None, set: Settings = None) -> SystemInfo:
         """``obsan show``: the input-affine normal form."""
-        return self._run("show", dict(input=input, set=set, **options))
+        return SystemInfo.of(self._get(self._flags("show", input, set)))
 
     def rank(
         self,
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
         seed: Optional[int] = None,
-        **options: Any,
-    ) -> dict:
-        """``obsan rank``: the Hermann–Krener rank test (exact at full rank, else a
-        lower bound with ``error_bound``)."""
-        return self._run("rank", dict(input=input, set=set, seed=seed, **options))
+        order: Optional[int] = None,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Rank:
+        """``obsan rank``: the observability rank condition (exact at full rank, else a
+        lower bound with ``error_bound``). With unknown inputs in the model, ``order`` is
+        the highest output derivative examined."""
+        f = self._flags("rank", input, set).integer("--seed", seed).integer("--order", order)
+        return Rank.of(self._get(_limits(f, timeout, max_terms)))
 
     def experiments(
         self,
         experiments: Union[str, Iterable[str]] = "auto",
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
         seed: Optional[int] = None,
-        **options: Any,
-    ) -> dict:
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Rank:
         """``obsan rank`` over several experiments (docs/experiments.md).
 
         ``"auto"`` (default): the smallest number of generic experiments (under the
@@ -236,191 +218,401 @@ class System:
         and which special constant values are degenerate. A list of specs, e.g.
         ``["q: q=0.9", "q: q=0", "q: q=-1"]``: the rank of those experiments stacked
         (params shared, states ``x@k`` per experiment). A path: the experiments file."""
-        if isinstance(experiments, str):
-            if experiments == "auto" or os.path.exists(experiments):
-                opts = dict(experiments=experiments, input=input, set=set, seed=seed)
-            else:
-                opts = dict(experiment=[experiments], set=set, seed=seed)
-        else:
-            opts = dict(experiment=list(experiments), set=set, seed=seed)
-        return self._run("rank", dict(opts, **options))
+        f = self._flags("rank", input, set).integer("--seed", seed)
+        return Rank.of(self._get(_limits(_experiments(f, experiments), timeout, max_terms)))
 
     def rank_known(
         self,
-        known: Optional[Mapping] = None,
-        generic: Union[str, Iterable[str], None] = None,
+        known: Settings = None,
+        generic: Names = None,
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
         seed: Optional[int] = None,
-        **options: Any,
-    ) -> dict:
+        known_order: Optional[int] = None,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Rank:
         """``obsan rank --known``: the rank test with known initial conditions, e.g.
         ``known={"S": 0}`` (exact values, evaluated at that point: a certified lower
         bound, with the generic rank as upper bound) and ``generic=["x2"]`` (known but
         generic). See docs/experiments.md for what is certified."""
-        generic = [generic] if isinstance(generic, str) else (list(generic) if generic else None)
-        return self._run(
-            "rank",
-            dict(known=known, known_generic=generic, input=input, set=set, seed=seed, **options),
-        )
+        f = self._flags("rank", input, set).pairs("--known", known).texts("--known-generic", generic)
+        f = f.integer("--seed", seed).integer("--known-order", known_order)
+        return Rank.of(self._get(_limits(f, timeout, max_terms)))
 
     def symmetries(
         self,
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
+        experiments: Union[str, Iterable[str], None] = None,
         seed: Optional[int] = None,
         exact: bool = False,
-        **options: Any,
-    ) -> dict:
-        """``obsan symmetries``: a certified basis of the continuous symmetries."""
-        return self._run("symmetries", dict(input=input, set=set, seed=seed, exact=exact, **options))
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Symmetries:
+        """``obsan symmetries``: a certified basis of the continuous symmetries
+        (``exact=True`` takes the exact route however long it takes)."""
+        f = _experiments(self._flags("symmetries", input, set), experiments)
+        f = f.integer("--seed", seed).switch("--exact", exact)
+        return Symmetries.of(self._get(_limits(f, timeout, max_terms)))
 
     def modes(
         self,
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
+        experiments: Union[str, Iterable[str], None] = None,
         seed: Optional[int] = None,
-        **options: Any,
-    ) -> dict:
+        out: Optional[PathLike] = None,
+        force: bool = False,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Modes:
         """``obsan modes``: observable modes and the reduced system, proven exactly.
-        ``out="prefix"`` also writes prefix.sys and prefix.dec."""
-        return self._run("modes", dict(input=input, set=set, seed=seed, **options))
+        ``out="prefix"`` also writes prefix.sys and prefix.dec (``force=True`` replaces
+        them)."""
+        f = _experiments(self._flags("modes", input, set), experiments)
+        f = f.integer("--seed", seed).path("--out", out).switch("--force", force)
+        return Modes.of(self._get(_limits(f, timeout, max_terms)))
 
     def global_identifiability(
         self,
+        *,
         input: Optional[str] = None,
-        set: Optional[Mapping] = None,
+        set: Settings = None,
         seed: Optional[int] = None,
-        **options: Any,
-    ) -> dict:
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Global:
         """``obsan global``: per param and initial state, global / local with k values /
         not identifiable; the joint count and the exact discrete symmetries."""
-        return self._run("global", dict(input=input, set=set, seed=seed, **options))
+        f = self._flags("global", input, set).integer("--seed", seed)
+        return Global.of(self._get(_limits(f, timeout, max_terms)))
 
-    def lie(self, order: int, input: Optional[str] = None, set: Optional[Mapping] = None, **options: Any) -> dict:
+    def lie(
+        self,
+        order: int,
+        *,
+        input: Optional[str] = None,
+        set: Settings = None,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> LieDerivatives:
         """``obsan lie``: the Lie derivatives of the outputs up to ``order``."""
-        return self._run("lie", dict(order=order, input=input, set=set, **options))
+        f = self._flags("lie", input, set).text("--order", integer("order", order))
+        return LieDerivatives.of(self._get(_limits(f, timeout, max_terms)))
 
-    def check(self, modes: Union[str, Iterable[str]], input: Optional[str] = None, **options: Any) -> dict:
+    def check(
+        self,
+        modes: Union[str, Iterable[str]],
+        *,
+        input: Optional[str] = None,
+        set: Settings = None,
+        seed: Optional[int] = None,
+        exact: bool = False,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Check:
         """``obsan check``: candidate observable modes against eq. (11). A failed mode
-        is a value (``checks[i]["observable_mode"]`` false), not an exception."""
-        modes = [modes] if isinstance(modes, str) else list(modes)
-        return self._run("check", dict(mode=modes, input=input, **options))
+        is a value (``result.modes[m]`` false), not an exception."""
+        f = self._flags("check", input, set).texts("--mode", modes)
+        f = f.integer("--seed", seed).switch("--exact", exact)
+        return Check.of(self._get(_limits(f, timeout, max_terms)))
 
 
 def load(path: PathLike) -> System:
     """Read a ``.sys`` file. Errors name the path, line and column."""
-    return System(_path("load: path", path))
+    return System(existing("load: path", path))
 
 
 def loads(text: str) -> System:
     """A system from ``.sys`` text; errors read ``<string>:LINE:COL: ...``."""
-    return System(STRING_NAME, _text("loads: text", text))
+    return System(STRING_NAME, A.text("loads: text", text))
 
 
-def simplify(expr: str, **options: Any) -> dict:
+def system(
+    name: str,
+    *,
+    states: Sequence[str],
+    dynamics: Mapping[str, str],
+    outputs: Mapping[str, str],
+    params: Sequence[str] = (),
+    consts: Sequence[str] = (),
+    inputs: Sequence[str] = (),
+    restrictions: Optional[Mapping[str, str]] = None,
+    description: Optional[str] = None,
+) -> System:
+    """A system from Python values, without a file::
+
+        s = obsan.system(
+            "decay",
+            states=["x"], params=["a"],
+            dynamics={"x": "-a*x"},
+            outputs={"y": "x"},
+        )
+
+    ``dynamics`` maps each state to its right-hand side (input-affine in ``inputs``);
+    ``restrictions`` maps a restriction's name to its text after the colon (``{"q":
+    "wR = nu, wL = q*nu"}``). Errors point into the generated ``.sys`` text, which is
+    ``System.text``."""
+    lines = [f"system {A.text('system: name', name)}"]
+    if description is not None:
+        lines += [f"description {d}" for d in A.text("description", description).splitlines()]
+
+    def names(kind: str, xs: Sequence[str]) -> None:
+        xs = [xs] if isinstance(xs, str) else list(xs)
+        if xs:
+            lines.append(f"{kind} " + ", ".join(A.text(f"system: {kind}", x) for x in xs))
+
+    names("state", states)
+    names("param", params)
+    names("const", consts)
+    names("input", inputs)
+    for s, rhs in dynamics.items():
+        lines.append(f"{A.text('system: state', s)}' = {A.text('system: dynamics', rhs)}")
+    for y, h in outputs.items():
+        lines.append(f"output {A.text('system: output', y)} = {A.text('system: outputs', h)}")
+    for r, body in (restrictions or {}).items():
+        lines.append(f"restrict {A.text('system: restriction', r)}: {A.text('system: restrictions', body)}")
+    return System(STRING_NAME, "\n".join(lines) + "\n")
+
+
+def simplify(expr: str, *, timeout: Optional[float] = None, max_terms: Optional[int] = None) -> Expression:
     """``obsan simplify``: the exact canonical form of ``expr``."""
-    return _call(["simplify", _text("simplify: expr", expr), *_flags(options), "--json"])
+    f = Flags("simplify", A.text("simplify: expr", expr))
+    return Expression.of(_value(_limits(f, timeout, max_terms)))
 
 
-def diff(expr: str, var: str, **options: Any) -> dict:
+def diff(
+    expr: str, var: str, *, timeout: Optional[float] = None, max_terms: Optional[int] = None
+) -> Expression:
     """``obsan diff``: d expr / d var, in canonical form."""
-    expr, var = _text("diff: expr", expr), _text("diff: var", var)
-    return _call(["diff", expr, var, *_flags(options), "--json"])
+    f = Flags("diff", A.text("diff: expr", expr), A.text("diff: var", var))
+    return Expression.of(_value(_limits(f, timeout, max_terms)))
 
 
-def verify(path: PathLike, **options: Any) -> dict:
+def verify(
+    path: PathLike,
+    *,
+    seed: Optional[int] = None,
+    exact: bool = False,
+    timeout: Optional[float] = None,
+    max_terms: Optional[int] = None,
+) -> Verification:
     """``obsan verify``: a decomposition file's exact checks (a failed check is a value)."""
-    return _call(["verify", _path("verify: path", path), *_flags(options), "--json"])
+    f = Flags("verify", existing("verify: path", path)).integer("--seed", seed).switch("--exact", exact)
+    return Verification.of(_value(_limits(f, timeout, max_terms)))
+
+
+def _sim(
+    f: Flags,
+    q: Union[Number, Sequence[Number], None],
+    sigma_beta_deg: Optional[float],
+    k: Optional[float],
+    iota: Optional[float],
+    dq: Optional[float],
+    nu: Optional[float],
+    speed_profile: Optional[str],
+    bearing_rate: Optional[float],
+    bearings: Optional[int],
+    d0: Optional[float],
+    effect: Optional[Mapping[str, Number]],
+    inputs: Optional[PathLike],
+    seed: Optional[int],
+) -> Flags:
+    f = f.numbers("--q", q).number("--sigma-beta-deg", sigma_beta_deg).number("--k", k)
+    f = f.number("--iota", iota).number("--dq", dq).number("--nu", nu)
+    f = f.text("--speed-profile", speed_profile).number("--bearing-rate", bearing_rate)
+    f = f.integer("--bearings", bearings).number("--d0", d0).pairs("--effect", effect)
+    if inputs is not None:
+        f = f.text("--inputs", existing("inputs", inputs))
+    return f.integer("--seed", seed)
+
+
+def simulate(
+    out: PathLike,
+    *,
+    force: bool = False,
+    q: Union[Number, Sequence[Number], None] = None,
+    sigma_beta_deg: Optional[float] = None,
+    k: Optional[float] = None,
+    iota: Optional[float] = None,
+    dq: Optional[float] = None,
+    nu: Optional[float] = None,
+    speed_profile: Optional[str] = None,
+    bearing_rate: Optional[float] = None,
+    bearings: Optional[int] = None,
+    d0: Optional[float] = None,
+    effect: Optional[Mapping[str, Number]] = None,
+    inputs: Optional[PathLike] = None,
+    seed: Optional[int] = None,
+    timeout: Optional[float] = None,
+) -> str:
+    """``obsan simulate``: write the paper's simulated dataset (section VI-A) to the
+    new folder ``out`` and return its path; the truth is in ``out/truth.json``.
+
+    ``q`` wheel-speed ratios, one circle each (default 0.9, 0, -1); ``sigma_beta_deg``
+    bearing noise (deg, default 1); ``k`` encoder noise K; ``iota`` non-circular paths;
+    ``dq`` executed-ratio error; ``nu`` right wheel speed (rad/s); ``speed_profile``
+    ``constant``, ``sine:A:T`` or ``stopgo:RUN:PAUSE``; ``bearing_rate`` per second or
+    ``bearings`` per trajectory; ``d0`` initial distance (m); ``effect`` hidden effects
+    (``{"bearing_scale": 0.04}``); ``inputs`` a CSV wheel-speed history; ``force=True``
+    replaces a folder obsan wrote."""
+    o = A.path("simulate: out", out)
+    f = Flags("simulate", "--out", o).switch("--force", force)
+    f = _sim(f, q, sigma_beta_deg, k, iota, dq, nu, speed_profile, bearing_rate, bearings, d0, effect, inputs, seed)
+    run(*f.number("--timeout", timeout).argv)
+    return o
 
 
 def calibrate(
     dataset: PathLike,
     method: str = "ml",
+    *,
     d0: Optional[float] = None,
-    **options: Any,
-) -> dict:
-    """``obsan calibrate``: phi, psi, eta, delta, xi (and with ``d0`` rho, rR, rL, B)
-    with standard deviations. ``method`` is det, ls, cekf or ml."""
-    dataset, method = _path("calibrate: dataset", dataset), _text("calibrate: method", method)
-    return _call(["calibrate", dataset, *_flags(dict(method=method, d0=d0, **options)), "--json"])
+    sigma_beta_deg: Optional[float] = None,
+    plot: Optional[PathLike] = None,
+    force: bool = False,
+    timeout: Optional[float] = None,
+) -> Calibration:
+    """``obsan calibrate``: the paper's estimator (section V) on a dataset of circles;
+    phi, psi, eta, delta, xi (and with ``d0`` rho, r_right, r_left, B) with standard
+    deviations. ``method`` is ``det``, ``ls``, ``cekf`` or ``ml``; ``plot`` a folder for
+    Figures 5–7 and ``curves.json``."""
+    m = A.text("calibrate: method", method)
+    if m not in ("det", "ls", "cekf", "ml"):
+        raise ValueError(f"calibrate: method must be det, ls, cekf or ml, not {m!r}")
+    f = Flags("calibrate", existing("calibrate: dataset", dataset), "--method", m)
+    f = f.number("--d0", d0).number("--sigma-beta-deg", sigma_beta_deg)
+    f = f.path("--plot", plot).switch("--force", force).number("--timeout", timeout)
+    return Calibration.of(_value(f))
 
 
-_SIM_JOIN = ("q",)
-
-
-def crlb(dataset: Optional[PathLike] = None, **options: Any) -> dict:
-    """``obsan crlb``: the Cramér–Rao bound for a dataset (at its ML estimate) or for
-    a simulated set-up given by the :func:`simulate` options."""
-    head = [_path("crlb: dataset", dataset)] if dataset is not None else []
-    return _call(["crlb", *head, *_flags(options, join=_SIM_JOIN), "--json"])
+def crlb(
+    dataset: Optional[PathLike] = None,
+    *,
+    q: Union[Number, Sequence[Number], None] = None,
+    sigma_beta_deg: Optional[float] = None,
+    k: Optional[float] = None,
+    iota: Optional[float] = None,
+    dq: Optional[float] = None,
+    nu: Optional[float] = None,
+    speed_profile: Optional[str] = None,
+    bearing_rate: Optional[float] = None,
+    bearings: Optional[int] = None,
+    d0: Optional[float] = None,
+    effect: Optional[Mapping[str, Number]] = None,
+    inputs: Optional[PathLike] = None,
+    seed: Optional[int] = None,
+    timeout: Optional[float] = None,
+) -> CramerRao:
+    """``obsan crlb``: the Cramér–Rao bound for a dataset (at its ML estimate) or for a
+    simulated set-up given by :func:`simulate`'s keywords."""
+    f = Flags("crlb")
+    if dataset is not None:
+        f.argv.append(existing("crlb: dataset", dataset))
+    f = _sim(f, q, sigma_beta_deg, k, iota, dq, nu, speed_profile, bearing_rate, bearings, d0, effect, inputs, seed)
+    return CramerRao.of(_value(f.number("--timeout", timeout)))
 
 
 def diagnose(
     model: Union[PathLike, System],
     data: PathLike,
     effects: Optional[PathLike] = None,
-    **options: Any,
-) -> dict:
-    """``obsan diagnose``: fit ``model`` to ``data``, test the residuals, name the
-    significant effects. ``model`` is a path or a :class:`System`."""
+    *,
+    report: Optional[PathLike] = None,
+    force: bool = False,
+    init: Optional[Mapping[str, Number]] = None,
+    alpha: Optional[float] = None,
+    max_effects: Optional[int] = None,
+    input_noise: Optional[str] = None,
+    generated: bool = True,
+    timeout: Optional[float] = None,
+) -> Diagnosis:
+    """``obsan diagnose``: fit ``model`` (a path or a :class:`System`) to ``data``, test
+    the residuals, name the significant effects (from ``effects``, default the model's
+    ``.eff``, and generated from the model's structure unless ``generated=False``).
+    ``report`` writes a report folder (all or nothing; ``force=True`` replaces one);
+    ``input_noise`` is ``auto``, ``stated``, ``estimate`` or ``none``."""
     source = None
     if isinstance(model, System):
-        source, model = model._source, model.path
-    model, data = _path("diagnose: model", model), _path("diagnose: data", data)
+        source, m = model._source, model.path
+        if source is None:
+            m = existing("diagnose: model", m)
+    else:
+        m = existing("diagnose: model", model)
+    f = Flags("diagnose", "--model", m, "--data", existing("diagnose: data", data))
     if effects is not None:
-        effects = _path("diagnose: effects", effects)
-    argv = ["diagnose", "--model", model, "--data", data]
-    # Generated candidates are on by default: ``generated=False`` must say so.
-    if options.get("generated") is False:
-        options = dict(options, generated=None, no_generated=True)
-    argv += _flags(dict(effects=effects, **options))
-    return _call([*argv, "--json"], source)
+        f.argv += ["--effects", existing("diagnose: effects", effects)]
+    f = f.path("--report", report).switch("--force", force).pairs("--init", init)
+    f = f.number("--alpha", alpha).integer("--max-effects", max_effects)
+    if input_noise is not None and A.text("input_noise", input_noise) not in ("auto", "stated", "estimate", "none"):
+        raise ValueError(f"diagnose: input_noise must be auto, stated, estimate or none, not {input_noise!r}")
+    f = f.text("--input-noise", input_noise).switch("--no-generated", not generated)
+    return Diagnosis.of(_value(f.number("--timeout", timeout), source))
 
 
-def simulate(out: PathLike, **options: Any) -> str:
-    """``obsan simulate``: write the paper's simulated dataset (section VI-A) to the
-    new folder ``out`` (``force=True`` replaces a folder obsan wrote) and return its
-    path; the truth is in ``out/truth.json``. Options are the CLI's flags:
-    ``q=[0.9, 0, -1]``, ``sigma_beta_deg``, ``bearings``, ``seed``,
-    ``effect={"bearing_scale": 0.04}``, ..."""
-    out = _path("simulate: out", out)
-    run("simulate", "--out", out, *_flags(options, join=_SIM_JOIN))
-    return os.fspath(out)
+def montecarlo(
+    *,
+    table: Union[int, str, None] = None,
+    runs: Optional[int] = None,
+    cell: Optional[int] = None,
+    shard: Union[str, Tuple[int, int], None] = None,
+    threads: Optional[int] = None,
+    seed: Optional[int] = None,
+    timeout: Optional[float] = None,
+) -> Any:
+    """``obsan montecarlo``: the paper's Tables IV–VII (``table`` 4–7, default all;
+    ``runs`` per cell; ``cell`` one row of set-ups) as a list of
+    :class:`MonteCarloTable` (docs/montecarlo.md).
 
-
-def montecarlo(**options: Any) -> Any:
-    """``obsan montecarlo``: the paper's Tables IV–VII (``table=5``, ``runs=100``,
-    ``cell=3``, ``seed=1``, ``threads=2``, ...) as a list of tables (see docs/montecarlo.md).
-
-    With ``shard="K/N"`` (or ``shard=(K, N)``) it runs that fixed subset of the runs and
-    returns the partial result, a plain dict (never numpy: it is meant for
-    :func:`montecarlo_merge`, and ``json.dump`` writes it as ``obsan montecarlo merge``
-    reads it)."""
-    shard = options.get("shard")
-    if isinstance(shard, (tuple, list)):
-        options = dict(options, shard=f"{shard[0]}/{shard[1]}")
-    argv = ["montecarlo", *_flags(options), "--json"]
+    With ``shard="K/N"`` (or ``(K, N)``) it runs that fixed subset of the runs and
+    returns the partial result, a plain dict (meant for :func:`montecarlo_merge`;
+    ``json.dump`` writes it as ``obsan montecarlo merge`` reads it)."""
+    f = Flags("montecarlo")
+    if table is not None:
+        f.argv += ["--table", table if isinstance(table, str) else integer("table", table)]
+    f = f.integer("--runs", runs).integer("--cell", cell)
     if shard is not None:
-        return run(*argv).value
-    return _call(argv)
+        if isinstance(shard, tuple):
+            shard = f"{integer('shard', shard[0])}/{integer('shard', shard[1])}"
+        f = f.text("--shard", shard)
+    f = f.integer("--threads", threads).integer("--seed", seed).number("--timeout", timeout)
+    value = run(*f.argv, "--json").value
+    if shard is not None:
+        return value
+    return _tables(value)
+
+
+def _tables(value: Any) -> Any:
+    if isinstance(value, list):
+        return [MonteCarloTable.of(t) for t in value]
+    if isinstance(value, dict) and "table" in value:
+        return MonteCarloTable.of(value)
+    return arrays(value)
 
 
 def montecarlo_merge(parts: Iterable[Any]) -> Any:
-    """``obsan montecarlo merge --json``: the partial results of every shard of one sweep
-    (the dicts :func:`montecarlo` returns with ``shard=``, or paths of the files the CLI's
+    """``obsan montecarlo merge``: the partial results of every shard of one sweep (the
+    dicts :func:`montecarlo` returns with ``shard=``, or paths of the files the CLI's
     ``--shard K/N --json`` wrote), in any order, as exactly the tables one run gives."""
     import tempfile
 
-    parts = list(parts)
+    items = list(parts)
     with tempfile.TemporaryDirectory(prefix="obsan-merge-") as d:
-        paths = []
-        for i, p in enumerate(parts, 1):
+        paths: List[str] = []
+        for i, p in enumerate(items, 1):
             if isinstance(p, Mapping):
-                path = os.path.join(d, f"part{i}.json")
-                with open(path, "w", encoding="utf-8") as f:
-                    json.dump(p, f)
-                paths.append(path)
+                name = os.path.join(d, f"part{i}.json")
+                with open(name, "w", encoding="utf-8") as fh:
+                    json.dump(p, fh)
+                paths.append(name)
             else:
-                paths.append(_path("montecarlo_merge: a part", p))
-        return _call(["montecarlo", "merge", *paths, "--json"])
+                paths.append(existing("montecarlo_merge: a part", p))
+        return _tables(run("montecarlo", "merge", *paths, "--json").value)
+
+
+# Kept for code written against 0.1's module layout.
+_arrays = arrays

@@ -71,10 +71,17 @@ fn running_commands() -> usize {
     obsan_cli::running_commands()
 }
 
+/// Show (true) or hide (false) the progress lines of long commands.
+#[pyfunction]
+fn set_progress(enabled: bool) {
+    obsan_cli::set_progress(enabled);
+}
+
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_json, m)?)?;
     m.add_function(wrap_pyfunction!(running_commands, m)?)?;
+    m.add_function(wrap_pyfunction!(set_progress, m)?)?;
     m.add("ObsanError", m.py().get_type::<ObsanError>())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -78,9 +78,11 @@ def test_diagnose_writes_its_report_folder_and_nothing_partial_on_error(tmp_path
     with pytest.raises(obsan.ObsanError, match="exists"):
         obsan.diagnose(SYSTEMS / "calib.sys", data, report=report)
     assert {n: (report / n).read_bytes() for n in os.listdir(report)} == before
-    # An error in the diagnosis itself leaves no folder at all.
+    # An error in the diagnosis itself (a dataset folder without a dataset) leaves no
+    # folder at all.
+    (tmp_path / "empty").mkdir()
     with pytest.raises(obsan.ObsanError):
-        obsan.diagnose(SYSTEMS / "calib.sys", tmp_path / "no-such-data", report=tmp_path / "r2")
+        obsan.diagnose(SYSTEMS / "calib.sys", tmp_path / "empty", report=tmp_path / "r2")
     assert not (tmp_path / "r2").exists()
 
 
