@@ -44,3 +44,12 @@ def test_the_dask_example_runs_as_a_script_and_merges_to_the_one_run_table():
         ls = next(m for m in cell["methods"] if m["method"] == "LS")
         want.append(f"{cell['label']} {ls['mean_abs_error']}")
     assert p.stdout.splitlines() == want
+
+
+def test_the_readme_python_snippet_runs(monkeypatch):
+    # The README's Python lines are what a newcomer pastes first: each block runs as written.
+    monkeypatch.chdir(ROOT)
+    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    assert blocks
+    for block in blocks:
+        exec(compile(block, "README.md", "exec"), {})
