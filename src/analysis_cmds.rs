@@ -12,7 +12,6 @@ use obsan_analysis::{
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
 use serde_json::{json, Value};
-use std::io::IsTerminal;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -33,7 +32,7 @@ pub(crate) fn deadline_after(start: Instant, secs: Option<f64>) -> Option<Instan
     secs.map(|s| start + Duration::from_secs_f64(s.max(0.0)))
 }
 
-/// Run the rank test with a progress bar on a terminal and the deadline;
+/// Run the rank test with progress (src/progress.rs) and the deadline;
 /// `blocks`: independent blocks ranked apart ([`rank_by_blocks`]).
 fn run_rank(
     nf: &mut NormalForm,
@@ -41,19 +40,12 @@ fn run_rank(
     deadline: Option<Instant>,
     blocks: bool,
 ) -> Result<RankReport, Failure> {
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let b = indicatif::ProgressBar::new(nf.state.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template("{spinner} rank {pos}/{len} {msg}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
+    // The shared progress display: a bar on a terminal, plain lines in a log
+    // (a long rank test in a batch job shows it is alive), none from Python.
+    let bar = crate::progress::Progress::new("rank", nf.state.len() as u64, "directions");
     let mut progress = |level: usize, r: usize, _n: usize| {
-        if let Some(b) = &bar {
-            b.set_position(r as u64);
-            b.set_message(format!("(Lie derivative order {level})"));
-        }
+        bar.set_position(r as u64);
+        bar.set_message(&format!("Lie derivative order {level}"));
     };
     let opts = RankOptions {
         seed: an.seed,
@@ -65,9 +57,7 @@ fn run_rank(
     } else {
         rank_test(nf, opts)
     };
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    drop(bar);
     report.map_err(|e| Failure(e.to_string()))
 }
 

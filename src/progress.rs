@@ -148,6 +148,15 @@ impl Progress {
         }
     }
 
+    /// Steps done so far, for a task that reports its position (the rank
+    /// reached) rather than single steps.
+    pub fn set_position(&self, pos: u64) {
+        self.state.pos.store(pos, Ordering::Relaxed);
+        if let Mode::Bar(b) = &self.mode {
+            b.set_position(pos);
+        }
+    }
+
     /// What is being done now (a stage, a table).
     pub fn set_message(&self, m: &str) {
         if let Ok(mut g) = self.state.msg.lock() {
