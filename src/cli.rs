@@ -337,12 +337,19 @@ pub struct MrclamArgs {
 
 #[derive(Args)]
 pub struct DiagnoseArgs {
-    /// The model (.sys).
-    #[arg(long)]
-    pub model: String,
+    /// The model (.sys), as every other command takes its input:
+    /// `obsan diagnose MODEL DATA` (or `--model MODEL --data DATA`).
+    #[arg(value_name = "MODEL", required_unless_present = "model_flag")]
+    pub model_pos: Option<String>,
     /// The dataset folder (docs/data-format.md).
-    #[arg(long)]
-    pub data: String,
+    #[arg(value_name = "DATA", required_unless_present = "data_flag")]
+    pub data_pos: Option<String>,
+    /// The model (.sys); the same as the first positional argument.
+    #[arg(long = "model", value_name = "MODEL", conflicts_with = "model_pos")]
+    pub model_flag: Option<String>,
+    /// The dataset folder; the same as the second positional argument.
+    #[arg(long = "data", value_name = "DATA", conflicts_with = "data_pos")]
+    pub data_flag: Option<String>,
     /// Candidate effects (docs/effects-format.md); default: the model's file
     /// with the extension .eff, if there is one.
     #[arg(long)]
@@ -552,6 +559,24 @@ pub struct SimFlags {
     pub inputs: Option<String>,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+}
+
+impl DiagnoseArgs {
+    /// The model file, given by position or by `--model` (clap requires one).
+    pub fn model(&self) -> &str {
+        self.model_flag
+            .as_deref()
+            .or(self.model_pos.as_deref())
+            .unwrap_or_default()
+    }
+
+    /// The dataset folder, given by position or by `--data`.
+    pub fn data(&self) -> &str {
+        self.data_flag
+            .as_deref()
+            .or(self.data_pos.as_deref())
+            .unwrap_or_default()
+    }
 }
 
 impl Command {

@@ -22,7 +22,7 @@ fn effects_path(a: &DiagnoseArgs) -> Option<String> {
     match &a.effects {
         Some(p) => Some(p.clone()),
         None => {
-            let p = PathBuf::from(&a.model).with_extension("eff");
+            let p = PathBuf::from(a.model()).with_extension("eff");
             p.exists().then(|| p.display().to_string())
         }
     }
@@ -59,12 +59,12 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         return Err(Failure(format!("--alpha {}: must be in (0, 1)", a.alpha)));
     }
     let eff = effects_path(a);
-    let mut reads = vec![a.model.as_str(), a.data.as_str()];
+    let mut reads = vec![a.model(), a.data()];
     reads.extend(eff.as_deref());
     if let Some(dir) = &a.report {
         crate::fsio::check_outside(dir, &reads)?;
     }
-    let sys = load_system(&a.model)?;
+    let sys = load_system(a.model())?;
     let lib = load_effects(a)?;
     if let Some(l) = &lib {
         l.check(&sys)?;
@@ -75,7 +75,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         .map(|d| d.name.as_str())
         .collect();
     let outputs = sys.output_names();
-    let data = read_dataset(&a.data, &inputs, &outputs)?;
+    let data = read_dataset(a.data(), &inputs, &outputs)?;
     // A constant the model declares without a value comes from each
     // trajectory's meta.json: a missing one is an error, never a silent 0
     // (issue 31: a window without lx9 named other effects).
@@ -84,14 +84,14 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
             .decls_of(Kind::Const)
             .find(|c| c.value.is_none() && !t.meta.contains_key(&c.name))
         {
-            let file = std::path::Path::new(&a.data)
+            let file = std::path::Path::new(a.data())
                 .join(&t.name)
                 .join("meta.json");
             return Err(Failure(format!(
                 "{}: no value for the constant {} that {} declares (each trajectory's meta.json gives the model's constants)",
                 file.display(),
                 c.name,
-                a.model
+                a.model()
             )));
         }
     }
@@ -118,7 +118,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let progress = |m: &str| bar.set_message(m);
     let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress)?;
     drop(bar);
-    let text = render_text(&d, &a.data);
+    let text = render_text(&d, a.data());
     if a.json {
         outln!("{}", serde_json::to_string_pretty(&d)?);
     } else {

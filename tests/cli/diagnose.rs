@@ -282,3 +282,40 @@ fn import_mrclam_rejects_bad_input() {
     );
     assert!(!std::path::Path::new(&out).exists());
 }
+
+/// Issue 34.9: `diagnose` takes its model and data by position as every other
+/// command takes its input; `--model`/`--data` stay, and give the same answer.
+#[test]
+fn diagnose_takes_model_and_data_by_position_or_by_flag_alike() {
+    let data = tmp_dir("positional");
+    ok(&[
+        "simulate",
+        "--out",
+        &data,
+        "--seed",
+        "2",
+        "--bearings",
+        "60",
+    ]);
+    let flags = ok(&refs(&diag(&data, &["--no-generated", "--json"])));
+    let pos = ok(&[
+        "diagnose",
+        "systems/calib.sys",
+        &data,
+        "--no-generated",
+        "--json",
+    ]);
+    assert_eq!(flags, pos);
+    bad(&["diagnose", "systems/calib.sys"], "<DATA>");
+    bad(
+        &[
+            "diagnose",
+            "systems/calib.sys",
+            &data,
+            "--model",
+            "systems/calib.sys",
+        ],
+        "cannot be used with",
+    );
+    let _ = std::fs::remove_dir_all(&data);
+}
