@@ -1061,7 +1061,7 @@ fn unused_params_are_free_directions() {
     let unreached: Vec<String> = serde_json::from_value(m["unreached"].clone()).unwrap();
     assert_eq!(unreached, names);
     // check: D passes, p7 fails against its own direction d/dp7.
-    let out = obsan(&["check", &path, "D", "p7"]);
+    let out = obsan(&["check", &path, "--mode", "D", "--mode", "p7"]);
     assert_eq!(out.code, 1, "{}", out.stderr);
     assert!(
         out.stdout.contains("PASS D") && out.stdout.contains("FAIL p7: grad(p7) . d/dp7 = 1"),
