@@ -214,7 +214,10 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
                 "degree": c.degree, "error_bound": c.error_bound}),
         ),
     };
-    json!({ "symmetries": vecs, "exact": s.exact, "rows_checked": s.rows_checked, "blocks": s.blocks,
+    // Unreached variables: each d/dx is a symmetry, listed by name (a unit
+    // vector each would make the output quadratic in the state).
+    let free: Vec<&String> = s.free.iter().map(|&j| &nf.state[j]).collect();
+    json!({ "symmetries": vecs, "free_directions": free, "exact": s.exact, "rows_checked": s.rows_checked, "blocks": s.blocks,
         "certificate": kind, "certification": detail })
 }
 
@@ -238,7 +241,7 @@ fn compute_symmetries(
 
 /// What certified the symmetries, for people; and its error bound (0 when exact).
 fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
-    let n = s.vectors.len();
+    let n = s.count();
     match &s.certificate {
         _ if n == 0 => ("none to find: the rank is full (exact)".into(), 0.0),
         Certificate::Closure => ("exact Gauss-Jordan, proven by the exact closure check".into(), 0.0),
@@ -251,6 +254,28 @@ fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
             c.error_bound,
         ),
     }
+}
+
+/// The free directions of a symmetry report, one line (empty when none):
+/// `w_{k+1} .. w_{k+f}` are `d/dx` for the variables no output reaches.
+pub(crate) fn free_line(nf: &NormalForm, s: &SymmetryReport) -> String {
+    if s.free.is_empty() {
+        return String::new();
+    }
+    let k = s.vectors.len();
+    let names: Vec<&str> = s.free.iter().map(|&j| nf.state[j].as_str()).collect();
+    let which = if names.len() == 1 {
+        format!("w{} = d/d{}", k + 1, names[0])
+    } else {
+        format!("w{} .. w{} = d/dx", k + 1, k + names.len())
+    };
+    format!(
+        "{which} for the {} variable{} no output reaches (unobservable, exact: {} in no Lie derivative): {}\n",
+        names.len(),
+        if names.len() == 1 { "" } else { "s" },
+        if names.len() == 1 { "it is" } else { "each is" },
+        names.join(", ")
+    )
 }
 
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
@@ -285,15 +310,16 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         system_title(&nf),
         r.rank,
         r.n,
-        s.vectors.len(),
-        if s.vectors.len() == 1 { "y" } else { "ies" }
+        s.count(),
+        if s.count() == 1 { "y" } else { "ies" }
     );
     o.push_str(&format!("state order: [{}]\n", nf.state.join(", ")));
     for (k, v) in s.vectors.iter().enumerate() {
         let comps: Vec<String> = v.iter().map(|e| fmt_rf(&nf, e, &a.out)).collect();
         o.push_str(&format!("w{} = [{}]\n", k + 1, comps.join(", ")));
     }
-    if s.vectors.is_empty() {
+    o.push_str(&free_line(&nf, &s));
+    if s.count() == 0 {
         o.push_str("no continuous symmetry: the state is weakly locally observable (exact)\n");
     } else if let obsan_analysis::Certificate::Invariance(kinds) = &s.certificate {
         let names: Vec<String> = kinds
@@ -307,8 +333,13 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
             })
             .collect();
         o.push_str(&format!(
-            "exact: cheap structure ({}); each symmetry leaves every output invariant and commutes with every field ({} identities checked in canonical form), so it annihilates every Lie derivative, which proves the rank {} exactly\n",
+            "exact: cheap structure ({}); each symmetry {}leaves every output invariant and commutes with every field ({} identities checked in canonical form), so it annihilates every Lie derivative, which proves the rank {} exactly\n",
             names.join(", "),
+            if s.free.is_empty() {
+                ""
+            } else {
+                "on the reached variables "
+            },
             s.rows_checked,
             r.rank
         ));
@@ -419,7 +450,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             })
             .collect();
         let v = json!({
-            "system": nf.name, "restriction": nf.restriction, "symmetries": s.vectors.len(), "rank": rep.rank,
+            "system": nf.name, "restriction": nf.restriction, "symmetries": s.count(), "rank": rep.rank,
             "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
             "complete": rep.complete, "exact": bound == 0.0,
         });
@@ -434,8 +465,8 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             "{}: rank {}, {} symmetr{}\n",
             system_title(&nf),
             rep.rank,
-            s.vectors.len(),
-            if s.vectors.len() == 1 { "y" } else { "ies" }
+            s.count(),
+            if s.count() == 1 { "y" } else { "ies" }
         );
         o.push_str(&format!("symmetries: {cert}\n"));
         for (m, c) in a.modes.iter().zip(&rep.checks) {
@@ -451,9 +482,13 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             } else {
                 // A failed mode has a non-zero residual; 0 keeps the line well-formed regardless.
                 let k = c.residuals.iter().position(|r| !r.is_zero()).unwrap_or(0);
+                // Past the vectors, the residuals are against the free d/dx.
+                let w = match k.checked_sub(s.vectors.len()) {
+                    Some(f) => format!("d/d{}", nf.state[s.free[f]]),
+                    None => format!("w{}", k + 1),
+                };
                 o.push_str(&format!(
-                    "FAIL {m}: grad({m}) . w{} = {}\n",
-                    k + 1,
+                    "FAIL {m}: grad({m}) . {w} = {}\n",
                     fmt_rf(&nf, &c.residuals[k], &a.out)
                 ));
             }
@@ -518,7 +553,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
         let v = json!({
             "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
             "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
-            "pass": ok, "exact": ok && exact, "verdict": verdict, "symmetries": s.vectors.len(),
+            "pass": ok, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
             "certificate": sj["certificate"], "certification": sj["certification"],
         });
         outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -539,7 +574,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
                 o.push_str(&format!("     {}\n", c.detail));
             }
         }
-        o.push_str(&format!("symmetries: {} ({cert})\n", s.vectors.len()));
+        o.push_str(&format!("symmetries: {} ({cert})\n", s.count()));
         o.push_str(&if !ok {
             "decomposition NOT verified\n".to_string()
         } else if exact {

@@ -77,7 +77,8 @@ The default --timeout is 60 s, all of it for the work; a run past it stops with 
 and says how far it got. Parts of the system that share only common variables (or none) are
 solved as separate blocks.
 --json prints {system, restriction, state, n, rank, symmetries (one object per vector: variable ->
-{text, latex}), rows_checked, blocks, exact, certificate (closure | invariance | random), certification
+{text, latex}), free_directions (the variables no output reaches: each d/dx is a symmetry too,
+listed by name), rows_checked, blocks, exact, certificate (closure | invariance | random), certification
 (for random: {points, primes, identities, degree, error_bound}, else null)}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
@@ -115,7 +116,8 @@ certified them. Exit 1 when a check fails.")]
   obsan modes systems/calib_q_nopsi.sys --json
   obsan modes systems/classic/two_compartment.sys --out data/two_compartment_modes
 
---json prints {system, restriction, n, rank, full_rank, symmetries, modes: [{name, expr, kind,
+--json prints {system, restriction, n, rank, full_rank, symmetries, unreached (variables no
+output reaches: unobservable, in no mode), modes: [{name, expr, kind,
 angle, domain}], reduced: {inputs, dynamics: [{name, rhs}], outputs: [{name, expr}], closed,
 missing}, certificate: {text, modes_exact, independent, complete, verified, checks}, sys, dec}.
 --out PREFIX writes PREFIX.sys (the reduced system) and PREFIX.dec (for obsan verify).

@@ -225,12 +225,23 @@ fn execute(
             // the scope so the limit is still known.
             // Every form printed is capped too: a form past MAX_FORM_BYTES
             // trips the budget like any other limit (never a cut-short form).
-            let r = obsan_expr::within_thread_budget(&budget, || {
+            let (r, tripped) = obsan_expr::within_thread_budget_keep(&budget, || {
                 obsan_expr::within_text_cap(MAX_FORM_BYTES, || {
                     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(command)))
                 })
-            })
-            .and_then(|r| r);
+            });
+            let r = match (r, tripped) {
+                (r, None) => r,
+                // An error that names the limit and where in the input it
+                // was reached (file:line:col, the argument's column) says
+                // more than the limit alone (issue 31, item 9).
+                (Ok(Ok(Err(f))), Some(l))
+                    if f.0.contains(&l.to_string()) && f.0.len() > l.to_string().len() =>
+                {
+                    Ok(Ok(Err(f)))
+                }
+                (_, Some(l)) => Err(l),
+            };
             let held = take();
             match r {
                 Ok(Ok(r)) => Ok((r, held)),

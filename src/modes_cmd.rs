@@ -69,6 +69,29 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         }
         return Ok(ExitCode::SUCCESS);
     }
+    // Variables no output reaches are unobservable, each its own symmetry
+    // d/dx, and in no mode: the modes are derived on the subsystem of the
+    // reached ones (same rank, same modes), so that unused params cost
+    // nothing (issue 31, item 2).
+    let n_full = r.n;
+    let mut unreached: Vec<String> = Vec::new();
+    let (mut nf, r) = match obsan_analysis::restrict_to_reached(&mut nf) {
+        Some(red) => {
+            unreached = red.unreached.iter().map(|&j| nf.state[j].clone()).collect();
+            let mut sub = red.nf;
+            let r = rank_test(
+                &mut sub,
+                RankOptions {
+                    seed: a.seed,
+                    deadline,
+                    progress: None,
+                },
+            )
+            .map_err(|e| Failure(e.to_string()))?;
+            (sub, r)
+        }
+        None => (nf, r),
+    };
     // The symmetries only guide the search (and give the PDE (11) check):
     // cheap structure, or reconstruction certified at random points. The
     // exact certificate of the modes is the closure of the reduced system.
@@ -115,7 +138,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         && d.mode_report.independent
         && d.mode_report.complete;
     let plural = |k: usize| if k == 1 { "y" } else { "ies" };
-    let nsym = sym.vectors.len();
+    let nsym = sym.count() + unreached.len();
     let sym_cert = match &sym.certificate {
         Certificate::Random(c) => format!(
             "reconstructed, certified at {} random points with error below {:.0e}",
@@ -166,8 +189,8 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             .map(|k| json!({"name": d.modes[k].name, "rhs": d.dynamics(k)}))
             .collect();
         let v = json!({
-            "system": nf.name, "restriction": nf.restriction, "n": d.n, "rank": d.rank,
-            "full_rank": false, "symmetries": sym.vectors.len(),
+            "system": nf.name, "restriction": nf.restriction, "n": n_full, "rank": d.rank,
+            "full_rank": false, "symmetries": nsym, "unreached": unreached,
             "modes": modes,
             "reduced": {
                 "inputs": d.inputs(),
@@ -194,11 +217,19 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         let mut o = format!(
             "{title}: rank {} of {}, {} symmetr{}; {} observable modes:\n",
             d.rank,
-            d.n,
-            sym.vectors.len(),
-            if sym.vectors.len() == 1 { "y" } else { "ies" },
+            n_full,
+            nsym,
+            plural(nsym),
             d.modes.len()
         );
+        if !unreached.is_empty() {
+            o.push_str(&format!(
+                "  ({} variable{} no output reaches, unobservable, each its own symmetry d/dx and in no mode: {})\n",
+                unreached.len(),
+                if unreached.len() == 1 { "" } else { "s" },
+                unreached.join(", ")
+            ));
+        }
         for m in &d.modes {
             let e = if a.out.latex {
                 nf.ctx.to_latex(m.expr)

@@ -179,13 +179,15 @@ class Rank(Result):
 @dataclass(frozen=True, repr=False, eq=False)
 class Symmetries(Result):
     """``obsan symmetries``: a basis of the continuous symmetries, each a vector
-    (variable -> component as text); ``certificate`` is what it rests on
+    (variable -> component as text), plus ``free``: the variables no output reaches,
+    each direction d/dx a symmetry too; ``certificate`` is what it rests on
     (``closure`` exact, ``random`` with ``certification["error_bound"]``)."""
 
     system: str
     rank: int
     variables: List[str]
     vectors: List[Dict[str, str]]
+    free: List[str]
     exact: bool
     certificate: str
 
@@ -197,6 +199,7 @@ class Symmetries(Result):
             rank=int(raw.get("rank", 0)),
             variables=list(raw.get("state") or []),
             vectors=[{k: c["text"] for k, c in w.items()} for w in raw.get("symmetries") or []],
+            free=list(raw.get("free_directions") or []),
             exact=bool(raw.get("exact", False)),
             certificate=str(raw.get("certificate", "")),
         )

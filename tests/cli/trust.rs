@@ -981,3 +981,113 @@ fn import_mrclam_names_what_is_wrong() {
     assert!(e.contains("Landmark_Groundtruth.dat"), "{e}");
     assert_eq!(entries(&d), ["a", "mr"]);
 }
+
+/// Issue 31.9: "number too large" names where it is: 2^2^2^2^2^2 is
+/// 2^(2^65536) (right-associative), past the engine's 65,536 bits; on line 4
+/// of the file the tower spans columns 10 to 20. 10^100000 has about
+/// 332,000 bits; in `x+10^100000` it starts at column 3. The same in a
+/// `.dec` file (line 6 of the decomposition below, column 23 on).
+#[test]
+fn number_too_large_is_located() {
+    let sys = temp_file(
+        "tower.sys",
+        "system t\nstate x\ninput u\nx' = cos(2^2^2^2^2^2)*u\noutput y = x\n",
+    );
+    for cmd in ["show", "rank", "symmetries", "modes"] {
+        let e = bad(&[cmd, &sys], "number too large");
+        let at = e.split("tower.sys:4:").nth(1).expect("file:line:col");
+        let col: usize = at.split(':').next().unwrap().parse().unwrap();
+        assert!((10..=20).contains(&col), "{cmd}: {e}");
+    }
+    let e = bad(&["simplify", "10^100000"], "number too large");
+    assert!(e.contains("<expression>:1:1:"), "{e}");
+    let e = bad(&["simplify", "x+10^100000"], "number too large");
+    assert!(e.contains("<expression>:1:3:"), "{e}");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dec = temp_file(
+        "tower.dec",
+        &format!(
+            "# the paper's decomposition (5), with a huge zero term\nsystem {root}/systems/localization.sys\n\
+             let theta = thetaR - phiR\nstate D, theta\n\
+             # D' below\nD' = v*cos(theta) + 0*10^100000\ntheta' = omega - v*sin(theta)/D\noutput y = D\n"
+        ),
+    );
+    let e = bad(&["verify", &dec], "number too large");
+    assert!(e.contains("tower.dec:6:"), "{e}");
+}
+
+/// localization.sys (Martinelli 2011, eq. 3: rank 2, symmetry [0, 1, 1],
+/// modes D and thetaR - phiR) with 3,000 params no output reaches.
+fn localization_with_unused(count: usize) -> (String, Vec<String>) {
+    let src = std::fs::read_to_string(format!(
+        "{}/systems/localization.sys",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let names: Vec<String> = (0..count).map(|i| format!("p{i}")).collect();
+    let path = temp_file(
+        &format!("unused{count}.sys"),
+        &format!("{src}\nparam {}\n", names.join(", ")),
+    );
+    (path, names)
+}
+
+/// Issue 31.2: unused params cost nothing in symmetries and modes; the
+/// answer is the plain system's plus one free direction d/dp per param.
+#[test]
+fn unused_params_are_free_directions() {
+    let (path, names) = localization_with_unused(3000);
+    let json = |args: &[&str]| -> serde_json::Value { serde_json::from_str(&ok(args)).unwrap() };
+    let s = json(&["symmetries", &path, "--json"]);
+    assert_eq!((s["rank"].as_u64(), s["n"].as_u64()), (Some(2), Some(3003)));
+    let free: Vec<String> = serde_json::from_value(s["free_directions"].clone()).unwrap();
+    assert_eq!(free, names);
+    let w = s["symmetries"].as_array().unwrap();
+    assert_eq!(w.len(), 1);
+    let comp = |k: &str| w[0][k]["text"].as_str().unwrap().to_string();
+    assert_eq!(
+        (comp("D"), comp("phiR"), comp("thetaR")),
+        ("0".into(), "1".into(), "1".into())
+    );
+    assert!(names.iter().all(|p| comp(p) == "0"));
+    // modes: the plain system's modes, and the params listed as unreached.
+    let plain = json(&["modes", "systems/localization.sys", "--json"]);
+    let m = json(&["modes", &path, "--json"]);
+    assert_eq!(m["modes"], plain["modes"]);
+    assert_eq!(m["reduced"], plain["reduced"]);
+    assert_eq!(m["rank"], plain["rank"]);
+    assert_eq!(m["n"].as_u64(), Some(3003));
+    assert_eq!(m["symmetries"].as_u64(), Some(3001));
+    let unreached: Vec<String> = serde_json::from_value(m["unreached"].clone()).unwrap();
+    assert_eq!(unreached, names);
+    // check: D passes, p7 fails against its own direction d/dp7.
+    let out = obsan(&["check", &path, "--mode", "D", "--mode", "p7"]);
+    assert_eq!(out.code, 1, "{}", out.stderr);
+    assert!(
+        out.stdout.contains("PASS D") && out.stdout.contains("FAIL p7: grad(p7) . d/dp7 = 1"),
+        "{}",
+        out.stdout
+    );
+}
+
+/// Issue 31.2: the memory budget bounds the symmetry routes' dense work: an
+/// output reaching 400 params (rank 1, 399 symmetries over 400 variables:
+/// 32 x 404 x 400 bytes of F_p rows and 399 x 400 canonical forms, over the
+/// 5,000 x 2,048 bytes of --max-terms 5000) is refused, located by the limit
+/// and the flag, exit 2.
+#[test]
+fn symmetries_past_the_memory_budget_are_refused() {
+    let names: Vec<String> = (0..400).map(|i| format!("p{i}")).collect();
+    let sys = temp_file(
+        "wide400.sys",
+        &format!(
+            "system wide\nparam {}\noutput y = {}\n",
+            names.join(", "),
+            names.join(" + ")
+        ),
+    );
+    for cmd in ["symmetries", "modes"] {
+        let e = bad(&[cmd, &sys, "--max-terms", "5000"], "too large");
+        assert!(e.contains("--max-terms") && e.contains("symmetries"), "{e}");
+    }
+}

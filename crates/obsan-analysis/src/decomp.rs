@@ -290,7 +290,7 @@ pub fn verify_decomposition_with(
         checks.push(Check {
             name: format!(
                 "{s} is an observable mode (eq. 11, {} symmetries)",
-                sym.vectors.len()
+                sym.count()
             ),
             pass: c.is_mode,
             detail,

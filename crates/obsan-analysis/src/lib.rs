@@ -23,6 +23,7 @@ mod fp_linalg;
 mod global;
 mod modes;
 mod rank;
+mod reach;
 pub mod structure;
 mod sym_blocks;
 mod sym_recon;
@@ -30,9 +31,7 @@ mod symmetry;
 mod unknown_input;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
-pub use derive::{
-    derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
-};
+pub use derive::{verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind};
 pub use experiments::{
     experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
     SpecialValue,
@@ -43,6 +42,7 @@ pub use global::{
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
+pub use reach::{derive_modes, reached_variables, restrict_to_reached, Reached};
 pub use structure::SymmetryKind;
 pub use sym_blocks::rank_by_blocks;
 pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};

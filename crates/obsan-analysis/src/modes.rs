@@ -10,7 +10,8 @@ use obsan_model::NormalForm;
 #[derive(Clone, Debug)]
 pub struct ModeCheck {
     pub mode: Id,
-    /// Per symmetry, the residual `grad(g) . w` (zero when the PDE holds).
+    /// Per symmetry (`vectors`, then `free`), the residual `grad(g) . w`
+    /// (zero when the PDE holds).
     pub residuals: Vec<RatFun>,
     pub is_mode: bool,
 }
@@ -105,6 +106,11 @@ pub fn check_modes(
                 acc = nf.ctx.rf_add(&acc, &t);
             }
             residuals.push(acc);
+        }
+        // The free directions d/dx_j (unreached variables): the residual is
+        // dg/dx_j (through leaves too: sin(x_j) is a leaf of its own).
+        for &j in &sym.free {
+            residuals.push(nf.ctx.rf_diff(&c, vars[j]));
         }
         let is_mode = residuals.iter().all(|r| r.is_zero());
         checks.push(ModeCheck {

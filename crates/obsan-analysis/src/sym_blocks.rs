@@ -78,14 +78,15 @@ pub(crate) fn split(nf: &NormalForm, fields: &[Vec<Id>]) -> Option<Split> {
     }
     let jets = LieJets::new(&nf.ctx, &nf.state_vars, &[], &roots);
     let supp = |i: usize| jets.support(i, &[]).unwrap_or_else(|| vec![false; n]);
-    // deps[v]: variables some field component f_v depends on.
-    let mut deps: Vec<Vec<bool>> = vec![vec![false; n]; n];
+    // deps[v]: variables some field component f_v depends on (lists, not
+    // an n x n table: unused params must cost nothing, issue 31 item 2).
+    let mut deps: Vec<Vec<usize>> = vec![Vec::new(); n];
     let mut used = vec![false; n];
     for (k, &(_, j)) in comp_of.iter().enumerate() {
         let s = supp(m + k);
         for u in 0..n {
             if s[u] {
-                deps[j][u] = true;
+                deps[j].push(u);
                 used[u] = true;
             }
         }
@@ -98,8 +99,8 @@ pub(crate) fn split(nf: &NormalForm, fields: &[Vec<Id>]) -> Option<Split> {
             }
             let mut stack: Vec<usize> = (0..n).filter(|&v| r[v]).collect();
             while let Some(v) = stack.pop() {
-                for u in 0..n {
-                    if deps[v][u] && !r[u] {
+                for &u in &deps[v] {
+                    if !r[u] {
                         r[u] = true;
                         stack.push(u);
                     }
@@ -399,6 +400,7 @@ pub(crate) fn symmetries_by_blocks(
         rows_checked: rows,
         certificate,
         blocks: sp.blocks.len(),
+        free: Vec::new(),
     }))
 }
 

@@ -12,7 +12,10 @@
 //! basis rows: if d(phi_k) span it and every d(L_f phi_k) lies in that span,
 //! then d(L_f psi) does for every psi in it (d L_f = L_f d), by induction.
 
-use crate::rank::{lie_jets, random_point, AnalysisError, Fields, LieWord, RankReport};
+use crate::rank::{
+    lie_jets, random_point, rank, AnalysisError, Fields, LieWord, RankOptions, RankReport,
+};
+use crate::reach::{check_symmetry_memory, restrict_to_reached, Reached};
 use crate::structure::{cheap_symmetries, SymmetryKind};
 use crate::sym_blocks::symmetries_by_blocks;
 use crate::sym_recon::{certify_symmetries, reconstruct_basis, RandomCheck, ReconFail};
@@ -26,8 +29,15 @@ use std::time::Instant;
 pub struct SymmetryReport {
     pub n: usize,
     pub rank: usize,
-    /// A basis of the symmetries, each a vector field over the analysed state.
+    /// The symmetries that move reached variables, each a vector field over
+    /// the analysed state; with the `d/dx` of `free`, a basis.
     pub vectors: Vec<Vec<RatFun>>,
+    /// Variables no output reaches (state indices, increasing): each `d/dx`
+    /// is a symmetry, exactly (its column of the codistribution is zero), kept
+    /// apart from `vectors` so that n unused params cost n indices, not n^2
+    /// canonical forms (issue 31, item 2). [`crate::derive_modes`] wants a
+    /// report without them: run it on [`crate::restrict_to_reached`]'s subsystem.
+    pub free: Vec<usize>,
     /// The exact closure check passed: the rank and the symmetries are exact.
     pub exact: bool,
     /// Number of exact identities checked (gradient rows times vectors for
@@ -82,6 +92,13 @@ pub enum Route {
 pub struct LieCache {
     fields: Vec<Vec<RatFun>>,
     memo: HashMap<(usize, Vec<usize>), RatFun>,
+}
+
+impl SymmetryReport {
+    /// The number of independent symmetries: `vectors` and `free`.
+    pub fn count(&self) -> usize {
+        self.vectors.len() + self.free.len()
+    }
 }
 
 impl LieCache {
@@ -452,8 +469,16 @@ pub(crate) fn symmetries_inner(
             rows_checked: 0,
             certificate: Certificate::Closure,
             blocks: 1,
+            free: Vec::new(),
         });
     }
+    // Variables no output reaches: each is its own symmetry d/dx; the rest
+    // is solved on the subsystem of the reached ones (crate::reach), so the
+    // dense work below grows with what the outputs reach, not with n.
+    if let Some(red) = restrict_to_reached(nf) {
+        return symmetries_reached(nf, report, opts, by_blocks, red);
+    }
+    check_symmetry_memory(n, n - r)?;
     // Parts that see each other only through shared variables (or not at
     // all) are solved one by one, so the cost grows with the number of parts.
     if by_blocks {
@@ -477,6 +502,7 @@ pub(crate) fn symmetries_inner(
             rows_checked: c.identities,
             certificate: Certificate::Invariance(c.kinds),
             blocks: 1,
+            free: Vec::new(),
         });
     }
     let recon = match opts.route {
@@ -501,6 +527,7 @@ pub(crate) fn symmetries_inner(
                         rows_checked: c.identities * c.points as usize,
                         certificate: Certificate::Random(c),
                         blocks: 1,
+                        free: Vec::new(),
                     }),
                     None => Err(AnalysisError::Invalid(
                         "the reconstructed symmetries failed certification (a coefficient too large for one prime, or an unlucky rank test); try --exact or another --seed".into(),
@@ -512,6 +539,122 @@ pub(crate) fn symmetries_inner(
         }
     }
     exact_route(nf, report)
+}
+
+/// The symmetries of `nf` from those of its reached subsystem `red` (which
+/// holds `nf`'s context until it is given back): its vectors extended by
+/// zeros, and `d/dx` for each unreached variable (module docs of
+/// [`crate::reach`]). The subsystem's rank test is the rank test of `nf`
+/// on the reached columns (the others are zero).
+fn symmetries_reached(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    opts: &SymmetryOptions,
+    by_blocks: bool,
+    red: Reached,
+) -> Result<SymmetryReport, AnalysisError> {
+    let Reached {
+        nf: mut sub,
+        keep,
+        unreached,
+    } = red;
+    let res = (|| {
+        let r = rank(
+            &mut sub,
+            RankOptions {
+                seed: report.seed,
+                deadline: opts.deadline,
+                progress: None,
+            },
+        )?;
+        symmetries_inner(&mut sub, &r, opts, by_blocks)
+    })();
+    nf.ctx = std::mem::replace(&mut sub.ctx, Ctx::new());
+    let s = res?;
+    let n = report.n;
+    let vectors: Vec<Vec<RatFun>> = s
+        .vectors
+        .iter()
+        .map(|v| {
+            let mut w = vec![RatFun::zero(); n];
+            for (k, &j) in keep.iter().enumerate() {
+                w[j] = v[k].clone();
+            }
+            w
+        })
+        .collect();
+    // Invariance (`[w, f] = 0`) was checked on the reached components. On
+    // an unreached component j, [w, f]_j = L_w f_j (w_j = 0): checked here
+    // in canonical form where f_j is not zero (unused params have none).
+    // If one fails, the vectors still annihilate every Lie derivative (they
+    // live on the reached variables): the closure certificate says that.
+    let mut rows_checked = s.rows_checked;
+    let certificate = match s.certificate {
+        Certificate::Invariance(kinds) => {
+            let vars = nf.state_vars.clone();
+            let mut still = true;
+            'check: for f in &report.fields.vectors {
+                for &j in &unreached {
+                    if nf.ctx.is_zero(f[j]) {
+                        continue;
+                    }
+                    let g = nf.ctx.canon(f[j]);
+                    for w in &vectors {
+                        let lw = dot_grad(&mut nf.ctx, &g, w, &keep, &vars);
+                        if !lw.is_zero() {
+                            still = false;
+                            break 'check;
+                        }
+                        rows_checked += 1;
+                    }
+                }
+            }
+            if still {
+                Certificate::Invariance(
+                    kinds
+                        .into_iter()
+                        .map(|k| match k {
+                            SymmetryKind::Free(i) => SymmetryKind::Free(keep[i]),
+                            k => k,
+                        })
+                        .collect(),
+                )
+            } else {
+                Certificate::Closure
+            }
+        }
+        c => c,
+    };
+    Ok(SymmetryReport {
+        n,
+        rank: s.rank,
+        vectors,
+        exact: s.exact,
+        rows_checked,
+        certificate,
+        blocks: s.blocks,
+        free: unreached,
+    })
+}
+
+/// `L_w g = sum_k w_k dg/dx_k` over the state indices `on`.
+fn dot_grad(
+    ctx: &mut Ctx,
+    g: &RatFun,
+    w: &[RatFun],
+    on: &[usize],
+    vars: &[obsan_expr::Var],
+) -> RatFun {
+    let mut acc = RatFun::zero();
+    for &k in on {
+        if w[k].is_zero() {
+            continue;
+        }
+        let d = ctx.rf_diff(g, vars[k]);
+        let t = ctx.rf_mul(&d, &w[k]);
+        acc = ctx.rf_add(&acc, &t);
+    }
+    acc
 }
 
 /// Exact Gauss–Jordan over canonical rows, then the exact closure check.
@@ -605,6 +748,7 @@ fn exact_route(nf: &mut NormalForm, report: &RankReport) -> Result<SymmetryRepor
         rows_checked: checked,
         certificate: Certificate::Closure,
         blocks: 1,
+        free: Vec::new(),
     })
 }
 

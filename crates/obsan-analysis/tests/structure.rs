@@ -19,9 +19,11 @@ fn check(src: &str, input: Option<&str>, known: &[&[&str]]) -> Vec<SymmetryKind>
     assert_eq!(r.n - r.rank, known.len(), "deficiency");
     let s = symmetries(&mut nf, &r).unwrap();
     assert!(s.exact);
-    assert_eq!(s.vectors.len(), known.len());
-    let kinds = match &s.certificate {
-        Certificate::Invariance(k) => k.clone(),
+    assert_eq!(s.count(), known.len());
+    // Variables no output reaches come as free directions d/dx, first.
+    let mut kinds: Vec<SymmetryKind> = s.free.iter().map(|&j| SymmetryKind::Free(j)).collect();
+    match &s.certificate {
+        Certificate::Invariance(k) => kinds.extend(k.iter().copied()),
         _ => panic!("expected the cheap structure"),
     };
     // Span: found and known together have rank k at a random point.
@@ -31,6 +33,11 @@ fn check(src: &str, input: Option<&str>, known: &[&[&str]]) -> Vec<SymmetryKind>
     for v in &s.vectors {
         let ids: Vec<_> = v.iter().map(|e| nf.ctx.from_canonical(e)).collect();
         rows.push(nf.ctx.eval_fp(&ids, &pt).unwrap());
+    }
+    for &j in &s.free {
+        let mut e = vec![obsan_expr::Fp::ZERO; s.n];
+        e[j] = obsan_expr::Fp::ONE;
+        rows.push(e);
     }
     for k in known {
         let ids: Vec<_> = k.iter().map(|e| parse(&mut nf, e)).collect();

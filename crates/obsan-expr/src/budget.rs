@@ -239,6 +239,16 @@ pub fn within_thread_budget<T>(b: &Budget, f: impl FnOnce() -> T) -> Result<T, L
     }
 }
 
+/// [`within_thread_budget`] that also hands back `f`'s value on a limit,
+/// for a caller that can tell a value which already reports the limit (an
+/// error located in the input, built by [`ParseError::from_limit`]) from a
+/// placeholder; anything else in it must be discarded as there.
+///
+/// [`ParseError::from_limit`]: crate::ParseError::from_limit
+pub fn within_thread_budget_keep<T>(b: &Budget, f: impl FnOnce() -> T) -> (T, Option<Limit>) {
+    scope(b, f)
+}
+
 /// Whether a budget armed on this thread has been exceeded: from then on,
 /// what the engine returns inside the scope is placeholders, and a caller's
 /// invariant checks on them may fail (the binary reports the limit instead).

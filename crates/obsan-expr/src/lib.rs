@@ -50,7 +50,7 @@ pub mod tutorial;
 
 pub use budget::{
     budget_tripped, cancel_flag, cancel_requested, check_memory, with_cancel, within_thread_budget,
-    Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
+    within_thread_budget_keep, Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
 };
 pub use eval::{
     degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
