@@ -297,7 +297,7 @@ fn random_poly(rng: &mut SplitMix, vars: &[String]) -> String {
     let k = vars.len();
     for _ in 0..3 {
         let c = (rng.next_u64() % 5) as i64 + 1;
-        let c = if rng.next_u64() % 2 == 0 { c } else { -c };
+        let c = if rng.next_u64().is_multiple_of(2) { c } else { -c };
         let a = &vars[(rng.next_u64() as usize) % k];
         let t = match rng.next_u64() % 3 {
             0 => format!("{c}*{a}"),
@@ -395,7 +395,7 @@ fn random_model(rng: &mut SplitMix) -> (Model, usize) {
             let a = random_poly(rng, &xy);
             let b = random_poly(rng, &xy);
             let (ox, oy) = (small_q(rng), small_q(rng));
-            let out = if rng.next_u64() % 2 == 0 {
+            let out = if rng.next_u64().is_multiple_of(2) {
                 format!("atan2(ly - y - ({oy}), lx - x - ({ox})) - psi")
             } else {
                 format!("{big_x}^2 + {big_y}^2")

@@ -188,25 +188,25 @@ fn saturated(rows: &[Vec<i64>]) -> bool {
             }
             let p = a[t][t];
             let mut clean = true;
-            for i in t + 1..m {
-                let q = a[i][t] / p;
-                for j in t..n {
-                    let Some(x) = a[t][j].checked_mul(q).and_then(|x| a[i][j].checked_sub(x))
-                    else {
+            let (top, rest) = a.split_at_mut(t + 1);
+            let pivot_row = &top[t];
+            for row in rest.iter_mut() {
+                let q = row[t] / p;
+                for (x, &y) in row.iter_mut().zip(pivot_row).skip(t) {
+                    let Some(v) = y.checked_mul(q).and_then(|y| x.checked_sub(y)) else {
                         return true;
                     };
-                    a[i][j] = x;
+                    *x = v;
                 }
-                clean &= a[i][t] == 0;
+                clean &= row[t] == 0;
             }
             for j in t + 1..n {
                 let q = a[t][j] / p;
-                for i in t..m {
-                    let Some(x) = a[i][t].checked_mul(q).and_then(|x| a[i][j].checked_sub(x))
-                    else {
+                for row in a.iter_mut().skip(t) {
+                    let Some(v) = row[t].checked_mul(q).and_then(|y| row[j].checked_sub(y)) else {
                         return true;
                     };
-                    a[i][j] = x;
+                    row[j] = v;
                 }
                 clean &= a[t][j] == 0;
             }
