@@ -297,7 +297,11 @@ fn random_poly(rng: &mut SplitMix, vars: &[String]) -> String {
     let k = vars.len();
     for _ in 0..3 {
         let c = (rng.next_u64() % 5) as i64 + 1;
-        let c = if rng.next_u64().is_multiple_of(2) { c } else { -c };
+        let c = if rng.next_u64().is_multiple_of(2) {
+            c
+        } else {
+            -c
+        };
         let a = &vars[(rng.next_u64() as usize) % k];
         let t = match rng.next_u64() % 3 {
             0 => format!("{c}*{a}"),

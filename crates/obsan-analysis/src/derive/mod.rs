@@ -663,7 +663,12 @@ fn exchange(
             if tries >= MAX_EXCHANGES {
                 return Ok(None);
             }
-            check_deadline(opts, "the mode exchange", modes.len())?;
+            // Soft, like the reduced system's own deadline: the modes found
+            // stand, reported as not closed.
+            match check_deadline(opts, "the mode exchange", modes.len()) {
+                Err(AnalysisError::Timeout(_)) => return Ok(None),
+                r => r?,
+            }
             let mut indep = Indep {
                 grads: Vec::new(),
                 seed: opts.seed ^ 0x6578_6368,
@@ -696,7 +701,61 @@ fn exchange(
             if r2.closed() {
                 return Ok(Some((m2, r2)));
             }
+            if r2.timed_out {
+                return Ok(None);
+            }
         }
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obsan_model::System;
+
+    /// `x^2 c` and `y^2 c` are independent invariants of the scaling
+    /// `(x, y, c) -> (l x, l y, c / l^2)`, but `L_u (x^2 c) = 2 c x y` is
+    /// `±2 sqrt(z1 z2)` in them: no rational form. Exchanging `z2` for that
+    /// derivative without its content (`c x y`) closes the system, by hand:
+    /// `z1' = 2 u z2`, `z2' = u c (y^2 - x^2) = u (z2^2/z1 - z1)`, `h = z1`.
+    #[test]
+    fn exchange_replaces_a_mode_the_dynamics_cannot_use() {
+        let src = "system t\nstate x, y\nparam c\ninput u\nx' = u*y\ny' = -u*x\noutput h = c*x^2\n";
+        let sys = System::parse(src, "t.sys").unwrap();
+        let mut nf = sys.normal_form(None, &[]).unwrap();
+        let (_, fields) = crate::fields::field_names(&mut nf);
+        let w: Vec<Vec<Id>> = vec![["x", "y", "-2*c"]
+            .iter()
+            .map(|t| nf.parse_expr(t, false).unwrap())
+            .collect()];
+        let modes: Vec<DerivedMode> = [("z1", "x^2*c"), ("z2", "y^2*c")]
+            .iter()
+            .map(|(n, t)| DerivedMode {
+                name: n.to_string(),
+                expr: nf.parse_expr(t, false).unwrap(),
+                text: t.to_string(),
+                kind: ModeKind::Polynomial,
+                angle: false,
+                domain: "everywhere".into(),
+            })
+            .collect();
+        let sp = ModeSpace {
+            fields: &fields,
+            consts: &[],
+            used_vars: &[],
+            w_ids: &w,
+        };
+        let opts = DeriveOptions::default();
+        let mut rng = SplitMix(5);
+        let red = reduce(&mut nf, &sp, &modes, &mut rng, &opts).unwrap();
+        assert!(red.derivatives[0][0].is_none() && !red.closed());
+        let (m2, r2) = exchange(&mut nf, &sp, &modes, &red, &mut rng, &opts)
+            .unwrap()
+            .expect("an exchange closes");
+        assert!(r2.closed(), "{:?}", r2.derivatives);
+        let want = nf.parse_expr("c*x*y", false).unwrap();
+        assert_eq!(nf.ctx.canon(m2[1].expr), nf.ctx.canon(want));
+        assert_eq!(m2[0].expr, modes[0].expr);
+    }
 }
