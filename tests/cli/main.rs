@@ -9,6 +9,7 @@ mod expr;
 mod global;
 mod import;
 mod modes;
+mod modes_closure;
 mod montecarlo;
 mod show;
 mod simulate;

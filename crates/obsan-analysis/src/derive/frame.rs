@@ -41,10 +41,14 @@ struct Coord {
 enum Action {
     None,
     Translation(Vec<(usize, Q)>),
-    /// Pairs `(i, j, rate)` and angles `(i, rate)`, rates relative to one another.
-    Rotation(Vec<(usize, usize, Q)>, Vec<(usize, Q)>),
+    /// Pairs `(i, j, rate)` and angles `(i, rate)`, rates relative to one
+    /// another; a pair may turn about a centre `(b_i, b_j)` the symmetry fixes.
+    Rotation(Vec<(usize, usize, Q, Centre)>, Vec<(usize, Q)>),
     Scaling(Vec<(usize, Q)>),
 }
+
+/// The centre of a pair's rotation (`None`: the origin).
+type Centre = Option<(Id, Id)>;
 
 /// `q` as a small integer (the exponents and rate multiples of a frame).
 fn small_int(q: &Q) -> Option<i64> {
@@ -57,7 +61,39 @@ fn const_ratio(nf: &mut NormalForm, a: &RatFun, b: &RatFun) -> Option<Q> {
     nf.ctx.rf_mul(a, &inv).as_q()
 }
 
-fn classify(nf: &mut NormalForm, coords: &[Coord], a: &[RatFun]) -> Option<Action> {
+/// A pair turned about a centre, `w(c_i) = -R (c_j - b_j)`, `w(c_j) = R (c_i - b_i)`
+/// with `w(b) = 0` (a bearing from an offset sensor: `lx - x - dx`): then
+/// `w(a_i) = -R a_j` gives `R`, and `b` follows. `None` when `a` is not such a pair.
+fn affine_pair(
+    nf: &mut NormalForm,
+    w: &[Id],
+    cs: &[RatFun],
+    a: &[RatFun],
+    (i, j): (usize, usize),
+) -> Option<(RatFun, (Id, Id))> {
+    let ai = nf.ctx.from_canonical(&a[i]);
+    let wai = lie(nf, ai, w);
+    let wai = nf.ctx.canon(wai);
+    let inv_aj = nf.ctx.rf_inv(&a[j])?;
+    let r = nf.ctx.rf_mul(&wai, &inv_aj);
+    let r = r.neg();
+    let inv_r = nf.ctx.rf_inv(&r)?;
+    // b_i = c_i - a_j / R, b_j = c_j + a_i / R.
+    let q_j = nf.ctx.rf_mul(&a[j], &inv_r);
+    let q_i = nf.ctx.rf_mul(&a[i], &inv_r);
+    let bi = nf.ctx.rf_sub(&cs[i], &q_j);
+    let bj = nf.ctx.rf_add(&cs[j], &q_i);
+    let (bi, bj) = (nf.ctx.from_canonical(&bi), nf.ctx.from_canonical(&bj));
+    for b in [bi, bj] {
+        let wb = lie(nf, b, w);
+        if !nf.ctx.canon(wb).is_zero() {
+            return None;
+        }
+    }
+    Some((r, (bi, bj)))
+}
+
+fn classify(nf: &mut NormalForm, coords: &[Coord], a: &[RatFun], w: &[Id]) -> Option<Action> {
     let s: Vec<usize> = (0..a.len()).filter(|&i| !a[i].is_zero()).collect();
     let Some(&k) = s.first() else {
         return Some(Action::None);
@@ -74,14 +110,14 @@ fn classify(nf: &mut NormalForm, coords: &[Coord], a: &[RatFun]) -> Option<Actio
     }
     // Rotation: angles and pairs, every rate a constant multiple of one.
     let cs: Vec<RatFun> = coords.iter().map(|c| nf.ctx.canon(c.expr)).collect();
-    let mut rates: Vec<(usize, Option<usize>, RatFun)> = Vec::new();
+    let mut rates: Vec<(usize, Option<usize>, RatFun, Centre)> = Vec::new();
     let mut used = vec![false; a.len()];
     for &i in &s {
         if used[i] {
             continue;
         }
         if coords[i].angle {
-            rates.push((i, None, a[i].clone()));
+            rates.push((i, None, a[i].clone(), None));
             used[i] = true;
             continue;
         }
@@ -96,7 +132,14 @@ fn classify(nf: &mut NormalForm, coords: &[Coord], a: &[RatFun]) -> Option<Actio
             let r1 = nf.ctx.rf_mul(&a[i], &ij);
             let r2 = nf.ctx.rf_mul(&a[j], &ji);
             if nf.ctx.rf_add(&r1, &r2).is_zero() {
-                rates.push((i, Some(j), r2));
+                rates.push((i, Some(j), r2, None));
+                used[i] = true;
+                used[j] = true;
+                found = true;
+                break;
+            }
+            if let Some((r, centre)) = affine_pair(nf, w, &cs, a, (i, j)) {
+                rates.push((i, Some(j), r, Some(centre)));
                 used[i] = true;
                 used[j] = true;
                 found = true;
@@ -112,10 +155,10 @@ fn classify(nf: &mut NormalForm, coords: &[Coord], a: &[RatFun]) -> Option<Actio
         let mut pairs = Vec::new();
         let mut angles = Vec::new();
         let mut ok = true;
-        for (i, j, r) in &rates {
+        for (i, j, r, centre) in &rates {
             match const_ratio(nf, r, &base) {
                 Some(q) => match j {
-                    Some(j) => pairs.push((*i, *j, q)),
+                    Some(j) => pairs.push((*i, *j, q, *centre)),
                     None => angles.push((*i, q)),
                 },
                 None => ok = false,
@@ -169,6 +212,17 @@ fn cpow(nf: &mut NormalForm, z: (Id, Id), m: u32) -> (Id, Id) {
     acc
 }
 
+/// A pair's coordinates relative to its centre of rotation.
+fn about(nf: &mut NormalForm, coords: &[Coord], (i, j): (usize, usize), c: &Centre) -> (Id, Id) {
+    match c {
+        None => (coords[i].expr, coords[j].expr),
+        Some((bi, bj)) => (
+            nf.ctx.sub(coords[i].expr, *bi),
+            nf.ctx.sub(coords[j].expr, *bj),
+        ),
+    }
+}
+
 /// Apply one recognised action; `None` when a ratio is not an integer.
 fn normalise(nf: &mut NormalForm, coords: &[Coord], act: &Action) -> Option<Vec<Coord>> {
     let mut out: Vec<Coord> = Vec::new();
@@ -220,7 +274,7 @@ fn normalise(nf: &mut NormalForm, coords: &[Coord], act: &Action) -> Option<Vec<
         Action::Rotation(ps, an) => {
             if let Some((t, kt)) = an.first().cloned() {
                 // The angle theta is set to 0: pairs rotated by -m theta.
-                for (i, j, k) in ps {
+                for (i, j, k, centre) in ps {
                     let m = small_int(&k.div(&kt)?)?;
                     let th = &coords[t].text;
                     let arg = if m == 1 {
@@ -231,7 +285,8 @@ fn normalise(nf: &mut NormalForm, coords: &[Coord], act: &Action) -> Option<Vec<
                     let c = nf.parse_expr(&format!("cos{arg}"), false).ok()?;
                     let s = nf.parse_expr(&format!("sin{arg}"), false).ok()?;
                     let ns = nf.ctx.neg(s);
-                    let (re, im) = cmul(nf, (coords[*i].expr, coords[*j].expr), (c, ns));
+                    let z = about(nf, coords, (*i, *j), centre);
+                    let (re, im) = cmul(nf, z, (c, ns));
                     out.push(coord_from(nf, re, false));
                     out.push(coord_from(nf, im, false));
                 }
@@ -248,23 +303,20 @@ fn normalise(nf: &mut NormalForm, coords: &[Coord], act: &Action) -> Option<Vec<
                     .enumerate()
                     .min_by(|a, b| a.1 .2.to_f64().abs().total_cmp(&b.1 .2.to_f64().abs()))
                     .map(|p| p.0)?;
-                let (i0, j0, k0) = ps[r0].clone();
-                let (x0, y0) = (coords[i0].expr, coords[j0].expr);
+                let (i0, j0, k0, c0) = ps[r0].clone();
+                let (x0, y0) = about(nf, coords, (i0, j0), &c0);
                 let ny0 = nf.ctx.neg(y0);
                 let x2 = nf.ctx.pow(x0, 2);
                 let y2 = nf.ctx.pow(y0, 2);
                 let n0 = nf.ctx.add(&[x2, y2]);
                 out.push(coord_from(nf, n0, false));
-                for (p, (i, j, k)) in ps.iter().enumerate() {
+                for (p, (i, j, k, centre)) in ps.iter().enumerate() {
                     if p == r0 {
                         continue;
                     }
                     let mi = small_int(&k.div(&k0)?)?;
-                    let z = if mi < 0 {
-                        (coords[*j].expr, coords[*i].expr)
-                    } else {
-                        (coords[*i].expr, coords[*j].expr)
-                    };
+                    let (zi, zj) = about(nf, coords, (*i, *j), centre);
+                    let z = if mi < 0 { (zj, zi) } else { (zi, zj) };
                     let mu = mi.unsigned_abs() as u32;
                     let zb = cpow(nf, (x0, ny0), mu);
                     let (re, im) = cmul(nf, z, zb);
@@ -336,7 +388,7 @@ pub(super) fn frame_invariants(
                     nf.ctx.canon(e)
                 })
                 .collect();
-            acts.push((p, classify(nf, &coords, &a)));
+            acts.push((p, classify(nf, &coords, &a, &s.w_ids[p])));
         }
         for want in 0..4 {
             for (p, act) in &acts {

@@ -440,80 +440,28 @@ pub fn derive_modes(
             });
         }
     }
+    let space = ModeSpace {
+        fields: &fields,
+        consts: &consts,
+        used_vars: &used_vars,
+        w_ids: &w_ids,
+    };
+    let mut red = reduce(nf, &space, &modes, &mut rng, opts)?;
+    // Modes whose dynamics have no rational form (x^2 c and y^2 c, where the
+    // fields need x y c = sqrt(z1 z2)): exchange one for a missing derivative.
+    if !red.closed() && !red.timed_out && modes.len() == rank {
+        if let Some((m2, r2)) = exchange(nf, &space, &modes, &red, &mut rng, opts)? {
+            modes = m2;
+            red = r2;
+        }
+    }
     let ids: Vec<Id> = modes.iter().map(|m| m.expr).collect();
     let mode_report = check_modes(nf, sym, &ids, opts.seed)?;
-
-    // The reduced system: each L_f g_k and each output in the modes.
-    let mut zb: Vec<Id> = Vec::new();
-    let mut znames: Vec<String> = Vec::new();
-    for m in &modes {
-        if m.angle {
-            let c = nf.parse_expr(&format!("cos({})", m.text), false);
-            let s = nf.parse_expr(&format!("sin({})", m.text), false);
-            if let (Ok(c), Ok(s)) = (c, s) {
-                zb.push(c);
-                znames.push(format!("cos({})", m.name));
-                zb.push(s);
-                znames.push(format!("sin({})", m.name));
-            }
-        } else if !nf.ctx.is_angle_valued(m.expr) {
-            zb.push(m.expr);
-            znames.push(m.name.clone());
-            // A variable the system takes the log of: log(x) is a block too
-            // (competition: the model is linear in log x1, log x2).
-            if m.kind == ModeKind::Variable {
-                if let Ok(l) = nf.parse_expr(&format!("log({})", m.name), false) {
-                    let lv = nf.ctx.canon(l).vars();
-                    if !lv.is_empty() && lv.iter().all(|v| used_vars.contains(v)) {
-                        zb.push(l);
-                        znames.push(format!("log({})", m.name));
-                    }
-                }
-            }
-        }
-    }
-    for name in &consts {
-        if let Some(s) = nf.ctx.lookup(name) {
-            zb.push(s.id);
-            znames.push(name.clone());
-        }
-    }
-    // The deadline here is soft: the modes stand on their own checks, so a
-    // reduced system not closed in time is reported as such (forms not
-    // found), never as a failed run.
-    let mut timed_out = false;
-    let mut soft = |r: Result<Option<String>, AnalysisError>| match r {
-        Err(AnalysisError::Timeout(_)) => {
-            timed_out = true;
-            Ok(None)
-        }
-        r => r,
-    };
-    let mut derivatives = Vec::new();
-    for k in 0..modes.len() {
-        let mut row = Vec::new();
-        for f in &fields {
-            let e = if check_deadline(opts, "the reduced dynamics", modes.len()).is_err() {
-                soft(Err(AnalysisError::Timeout(String::new())))?
-            } else {
-                let t = lie(nf, modes[k].expr, f);
-                soft(in_modes(nf, t, &zb, &znames, &modes, &mut rng, opts))?
-            };
-            row.push(e);
-        }
-        derivatives.push(row);
-    }
-    let mut outputs = Vec::new();
-    for (oname, h) in nf.outputs.clone() {
-        let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
-            Some(m.name.clone())
-        } else {
-            soft(reduced::output_in_modes(
-                nf, h, &zb, &znames, &modes, &mut rng, opts,
-            ))?
-        };
-        outputs.push((oname, e));
-    }
+    let Reduced {
+        derivatives,
+        outputs,
+        timed_out,
+    } = red;
     Ok(Derivation {
         n,
         rank,
@@ -555,4 +503,259 @@ pub(super) struct Search<'a> {
 
 pub(super) fn vars_id(nf: &mut NormalForm, name: &str) -> Id {
     nf.ctx.symbol(name).id
+}
+
+/// What the reduced system is written over.
+struct ModeSpace<'a> {
+    fields: &'a [Vec<Id>],
+    consts: &'a [String],
+    used_vars: &'a [u32],
+    w_ids: &'a [Vec<Id>],
+}
+
+/// The reduced system of one choice of modes (`None`: no form found).
+struct Reduced {
+    derivatives: Vec<Vec<Option<String>>>,
+    outputs: Vec<(String, Option<String>)>,
+    timed_out: bool,
+}
+
+impl Reduced {
+    fn closed(&self) -> bool {
+        self.derivatives.iter().flatten().all(|d| d.is_some())
+            && self.outputs.iter().all(|o| o.1.is_some())
+    }
+}
+
+/// Each `L_f g_k` and each output written in the modes (and cos/sin of the
+/// angle-valued ones, log of the variables the system takes the log of, and
+/// the generic constants).
+fn reduce(
+    nf: &mut NormalForm,
+    sp: &ModeSpace,
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Reduced, AnalysisError> {
+    let mut zb: Vec<Id> = Vec::new();
+    let mut znames: Vec<String> = Vec::new();
+    for m in modes {
+        if m.angle {
+            let c = nf.parse_expr(&format!("cos({})", m.text), false);
+            let s = nf.parse_expr(&format!("sin({})", m.text), false);
+            if let (Ok(c), Ok(s)) = (c, s) {
+                zb.push(c);
+                znames.push(format!("cos({})", m.name));
+                zb.push(s);
+                znames.push(format!("sin({})", m.name));
+            }
+        } else if !nf.ctx.is_angle_valued(m.expr) {
+            zb.push(m.expr);
+            znames.push(m.name.clone());
+            // A variable the system takes the log of: log(x) is a block too
+            // (competition: the model is linear in log x1, log x2).
+            if m.kind == ModeKind::Variable {
+                if let Ok(l) = nf.parse_expr(&format!("log({})", m.name), false) {
+                    let lv = nf.ctx.canon(l).vars();
+                    if !lv.is_empty() && lv.iter().all(|v| sp.used_vars.contains(v)) {
+                        zb.push(l);
+                        znames.push(format!("log({})", m.name));
+                    }
+                }
+            }
+        }
+    }
+    for name in sp.consts {
+        if let Some(s) = nf.ctx.lookup(name) {
+            zb.push(s.id);
+            znames.push(name.clone());
+        }
+    }
+    // The deadline here is soft: the modes stand on their own checks, so a
+    // reduced system not closed in time is reported as such (forms not
+    // found), never as a failed run.
+    let mut timed_out = false;
+    let mut soft = |r: Result<Option<String>, AnalysisError>| match r {
+        Err(AnalysisError::Timeout(_)) => {
+            timed_out = true;
+            Ok(None)
+        }
+        r => r,
+    };
+    let mut derivatives = Vec::new();
+    for m in modes {
+        let mut row = Vec::new();
+        for f in sp.fields {
+            let e = if check_deadline(opts, "the reduced dynamics", modes.len()).is_err() {
+                soft(Err(AnalysisError::Timeout(String::new())))?
+            } else {
+                let t = lie(nf, m.expr, f);
+                soft(in_modes(nf, t, &zb, &znames, modes, rng, opts))?
+            };
+            row.push(e);
+        }
+        derivatives.push(row);
+    }
+    let mut outputs = Vec::new();
+    for (oname, h) in nf.outputs.clone() {
+        let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
+            Some(m.name.clone())
+        } else {
+            soft(reduced::output_in_modes(
+                nf, h, &zb, &znames, modes, rng, opts,
+            ))?
+        };
+        outputs.push((oname, e));
+    }
+    Ok(Reduced {
+        derivatives,
+        outputs,
+        timed_out,
+    })
+}
+
+/// Most exchanges tried (each one a whole reduced system).
+const MAX_EXCHANGES: usize = 8;
+
+/// Independent invariants need not generate the rational invariants the
+/// dynamics need (`x^2 c`, `y^2 c` leave `x y c` only as `sqrt(z1 z2)`). A
+/// derivative `L_f g_k` with no form is itself an invariant (the fields
+/// commute with the symmetries): one mode (the last non-variable first) is
+/// exchanged for it, its rational content stripped, when the set stays
+/// independent, and the exchange is kept when the reduced system then closes.
+fn exchange(
+    nf: &mut NormalForm,
+    sp: &ModeSpace,
+    modes: &[DerivedMode],
+    red: &Reduced,
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<(Vec<DerivedMode>, Reduced)>, AnalysisError> {
+    let mut cands: Vec<Id> = Vec::new();
+    for (k, row) in red.derivatives.iter().enumerate() {
+        for (i, d) in row.iter().enumerate() {
+            if d.is_none() && cands.len() < 3 {
+                cands.push(lie(nf, modes[k].expr, &sp.fields[i]));
+            }
+        }
+    }
+    let mut tries = 0;
+    for t in cands {
+        let c = nf.ctx.canon(t);
+        if c.is_zero() || c.as_q().is_some() || nf.ctx.is_angle_valued(t) {
+            continue;
+        }
+        // Without its rational content: 2 x y c becomes x y c.
+        let (pn, pd) = (c.numerator().content(), c.denominator().content());
+        let q = Q::new(pd, pn);
+        let qn = nf.ctx.num(q);
+        let g0 = nf.ctx.from_canonical(&c);
+        let g = nf.ctx.mul(&[qn, g0]);
+        let gc = nf.ctx.canon(g);
+        let g = nf.ctx.from_canonical(&gc);
+        if !screen_mode(nf, sp.w_ids, g, opts.seed)? {
+            continue;
+        }
+        for j in (0..modes.len()).rev() {
+            if modes[j].kind == ModeKind::Variable || modes[j].angle {
+                continue;
+            }
+            if tries >= MAX_EXCHANGES {
+                return Ok(None);
+            }
+            // Soft, like the reduced system's own deadline: the modes found
+            // stand, reported as not closed.
+            match check_deadline(opts, "the mode exchange", modes.len()) {
+                Err(AnalysisError::Timeout(_)) => return Ok(None),
+                r => r?,
+            }
+            let mut indep = Indep {
+                grads: Vec::new(),
+                seed: opts.seed ^ 0x6578_6368,
+            };
+            let mut ok = true;
+            for (l, m) in modes.iter().enumerate() {
+                if l != j {
+                    ok &= indep.raises_rank(nf, m.expr)?;
+                }
+            }
+            if !ok || !indep.raises_rank(nf, g)? {
+                continue;
+            }
+            tries += 1;
+            let den = gc.denominator().clone();
+            let mut m2 = modes.to_vec();
+            m2[j] = DerivedMode {
+                name: modes[j].name.clone(),
+                expr: g,
+                text: nf.ctx.ratfun_text_factored(&gc),
+                kind: ModeKind::LieDerivative,
+                angle: false,
+                domain: if den.is_constant() {
+                    "everywhere".into()
+                } else {
+                    format!("where {} != 0", nf.ctx.poly_text(&den))
+                },
+            };
+            let r2 = reduce(nf, sp, &m2, rng, opts)?;
+            if r2.closed() {
+                return Ok(Some((m2, r2)));
+            }
+            if r2.timed_out {
+                return Ok(None);
+            }
+        }
+    }
+    Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obsan_model::System;
+
+    /// `x^2 c` and `y^2 c` are independent invariants of the scaling
+    /// `(x, y, c) -> (l x, l y, c / l^2)`, but `L_u (x^2 c) = 2 c x y` is
+    /// `±2 sqrt(z1 z2)` in them: no rational form. Exchanging `z2` for that
+    /// derivative without its content (`c x y`) closes the system, by hand:
+    /// `z1' = 2 u z2`, `z2' = u c (y^2 - x^2) = u (z2^2/z1 - z1)`, `h = z1`.
+    #[test]
+    fn exchange_replaces_a_mode_the_dynamics_cannot_use() {
+        let src = "system t\nstate x, y\nparam c\ninput u\nx' = u*y\ny' = -u*x\noutput h = c*x^2\n";
+        let sys = System::parse(src, "t.sys").unwrap();
+        let mut nf = sys.normal_form(None, &[]).unwrap();
+        let (_, fields) = crate::fields::field_names(&mut nf);
+        let w: Vec<Vec<Id>> = vec![["x", "y", "-2*c"]
+            .iter()
+            .map(|t| nf.parse_expr(t, false).unwrap())
+            .collect()];
+        let modes: Vec<DerivedMode> = [("z1", "x^2*c"), ("z2", "y^2*c")]
+            .iter()
+            .map(|(n, t)| DerivedMode {
+                name: n.to_string(),
+                expr: nf.parse_expr(t, false).unwrap(),
+                text: t.to_string(),
+                kind: ModeKind::Polynomial,
+                angle: false,
+                domain: "everywhere".into(),
+            })
+            .collect();
+        let sp = ModeSpace {
+            fields: &fields,
+            consts: &[],
+            used_vars: &[],
+            w_ids: &w,
+        };
+        let opts = DeriveOptions::default();
+        let mut rng = SplitMix(5);
+        let red = reduce(&mut nf, &sp, &modes, &mut rng, &opts).unwrap();
+        assert!(red.derivatives[0][0].is_none() && !red.closed());
+        let (m2, r2) = exchange(&mut nf, &sp, &modes, &red, &mut rng, &opts)
+            .unwrap()
+            .expect("an exchange closes");
+        assert!(r2.closed(), "{:?}", r2.derivatives);
+        let want = nf.parse_expr("c*x*y", false).unwrap();
+        assert_eq!(nf.ctx.canon(m2[1].expr), nf.ctx.canon(want));
+        assert_eq!(m2[0].expr, modes[0].expr);
+    }
 }

@@ -156,6 +156,71 @@ fn monomial(
     (nf.ctx.mul(&factors), text)
 }
 
+/// Whether the rows generate a saturated lattice (`(span_Q rows) ∩ Z^n`):
+/// the gcd of their maximal minors is 1, i.e. every pivot of a unimodular
+/// diagonalisation (row and column operations) is ±1. Then every monomial
+/// invariant over these blocks is a Laurent monomial in the rows' monomials
+/// (`x^2 c`, `y^2 c` generate index 2: `x y c` is only a square root; with
+/// `y/x` instead, `x y c = x^2 c (y/x)`). `true` when dependent or past i128.
+fn saturated(rows: &[Vec<i64>]) -> bool {
+    let mut a: Vec<Vec<i128>> = rows
+        .iter()
+        .map(|r| r.iter().map(|&x| i128::from(x)).collect())
+        .collect();
+    let (m, n) = (a.len(), a.first().map_or(0, |r| r.len()));
+    for t in 0..m {
+        loop {
+            // The smallest non-zero entry of the remaining block as pivot.
+            let mut best: Option<(usize, usize)> = None;
+            for i in t..m {
+                for j in t..n {
+                    if a[i][j] != 0 && best.is_none_or(|(bi, bj)| a[i][j].abs() < a[bi][bj].abs()) {
+                        best = Some((i, j));
+                    }
+                }
+            }
+            let Some((bi, bj)) = best else {
+                return true; // dependent rows: not this test's question
+            };
+            a.swap(t, bi);
+            for r in a.iter_mut() {
+                r.swap(t, bj);
+            }
+            let p = a[t][t];
+            let mut clean = true;
+            let (top, rest) = a.split_at_mut(t + 1);
+            let pivot_row = &top[t];
+            for row in rest.iter_mut() {
+                let q = row[t] / p;
+                for (x, &y) in row.iter_mut().zip(pivot_row).skip(t) {
+                    let Some(v) = y.checked_mul(q).and_then(|y| x.checked_sub(y)) else {
+                        return true;
+                    };
+                    *x = v;
+                }
+                clean &= row[t] == 0;
+            }
+            for j in t + 1..n {
+                let q = a[t][j] / p;
+                for row in a.iter_mut().skip(t) {
+                    let Some(v) = row[t].checked_mul(q).and_then(|y| row[j].checked_sub(y)) else {
+                        return true;
+                    };
+                    row[j] = v;
+                }
+                clean &= a[t][j] == 0;
+            }
+            if clean {
+                break;
+            }
+        }
+        if a[t][t].abs() != 1 {
+            return false;
+        }
+    }
+    true
+}
+
 /// A candidate: support size, negative exponents, total degree, columns, exponents.
 type Cand = (usize, usize, i64, Vec<usize>, Vec<i64>);
 
@@ -205,6 +270,15 @@ pub(super) fn monomial_invariants(
         .collect();
     let mut cands: Vec<Cand> = Vec::new();
     let mut budget = MAX_SUBSETS;
+    // Exponent vectors of the modes over the blocks (the variables already
+    // modes as unit vectors): a candidate that would leave them unsaturated
+    // waits until every other one was tried.
+    let mut lattice: Vec<Vec<i64>> = modes
+        .iter()
+        .filter_map(|m| blocks.iter().position(|b| b.0 == m.expr))
+        .map(|k| (0..nb).map(|j| i64::from(j == k)).collect())
+        .collect();
+    let mut deferred: Vec<Cand> = Vec::new();
     for size in 2..=MAX_SUPPORT.min(live.len()) {
         check_deadline(s.opts, "the monomial invariants", modes.len())?;
         subsets(live.len(), size, |sub| {
@@ -229,37 +303,70 @@ pub(super) fn monomial_invariants(
         });
         // Smaller supports first; within one, fewer denominators, lower degree.
         cands.sort_by_key(|c| (c.0, c.1, c.2));
-        for (_, _, _, cols, e) in std::mem::take(&mut cands) {
+        for c in std::mem::take(&mut cands) {
             if modes.len() >= s.rank {
                 return Ok(());
             }
-            let (g, text) = monomial(nf, &blocks, &cols, &e);
-            if !indep.raises_rank(nf, g)? || !screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+            let mut row = vec![0i64; nb];
+            for (&k, &x) in c.3.iter().zip(&c.4) {
+                row[k] = x;
+            }
+            lattice.push(row);
+            if !saturated(&lattice) {
+                lattice.pop();
+                deferred.push(c);
                 continue;
             }
-            let dens: Vec<&str> = cols
-                .iter()
-                .zip(&e)
-                .filter(|(_, &x)| x < 0)
-                .map(|(&c, _)| blocks[c].1.as_str())
-                .collect();
-            modes.push(DerivedMode {
-                name: fresh.next(),
-                expr: g,
-                text,
-                kind: if dens.is_empty() {
-                    ModeKind::Polynomial
-                } else {
-                    ModeKind::Rational
-                },
-                angle: false,
-                domain: if dens.is_empty() {
-                    "everywhere".into()
-                } else {
-                    format!("where {} != 0", dens.join(", "))
-                },
-            });
+            if !accept(nf, s, &blocks, &c, modes, indep, fresh)? {
+                lattice.pop();
+            }
         }
     }
+    for c in deferred {
+        if modes.len() >= s.rank {
+            break;
+        }
+        accept(nf, s, &blocks, &c, modes, indep, fresh)?;
+    }
     Ok(())
+}
+
+/// One candidate monomial taken as a mode when it raises the rank and passes
+/// the PDE screen.
+fn accept(
+    nf: &mut NormalForm,
+    s: &Search,
+    blocks: &[(Id, String)],
+    (_, _, _, cols, e): &Cand,
+    modes: &mut Vec<DerivedMode>,
+    indep: &mut Indep,
+    fresh: &mut Names,
+) -> Result<bool, AnalysisError> {
+    let (g, text) = monomial(nf, blocks, cols, e);
+    if !indep.raises_rank(nf, g)? || !screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+        return Ok(false);
+    }
+    let dens: Vec<&str> = cols
+        .iter()
+        .zip(e.iter())
+        .filter(|(_, &x)| x < 0)
+        .map(|(&c, _)| blocks[c].1.as_str())
+        .collect();
+    modes.push(DerivedMode {
+        name: fresh.next(),
+        expr: g,
+        text,
+        kind: if dens.is_empty() {
+            ModeKind::Polynomial
+        } else {
+            ModeKind::Rational
+        },
+        angle: false,
+        domain: if dens.is_empty() {
+            "everywhere".into()
+        } else {
+            format!("where {} != 0", dens.join(", "))
+        },
+    });
+    Ok(true)
 }

@@ -319,7 +319,109 @@ pub(super) fn in_modes(
             }
         }
     }
+    if let Some(s) = peel_monomial(nf, t, zb_all, znames_all, modes, rng, opts)? {
+        return Ok(Some(s));
+    }
     split_by_variable(nf, t, zb_all, znames_all, modes, &need, rng, opts)
+}
+
+/// `t = prod z_k^{e_k} R` with `R` free of those modes (`z3 z1 T'(x)/T(x)^2`
+/// with `T` of degree 4: too high a degree over all the blocks at once):
+/// `e_k = z_k (dt/dz_k) / t` is then the integer `e_k` at every point, read
+/// at three random points (a screen; the form is proven exactly with the rest),
+/// and `R = t / prod z_k^{e_k}` is written over the remaining blocks alone,
+/// where fewer blocks allow a higher degree.
+fn peel_monomial(
+    nf: &mut NormalForm,
+    t: Id,
+    zb: &[Id],
+    znames: &[String],
+    modes: &[DerivedMode],
+    rng: &mut SplitMix,
+    opts: &DeriveOptions,
+) -> Result<Option<String>, AnalysisError> {
+    let vars = nf.state_vars.clone();
+    let n = vars.len();
+    let r = modes.len();
+    let mut roots: Vec<Id> = Vec::with_capacity((r + 1) * (n + 1));
+    for m in modes {
+        for &x in &vars {
+            roots.push(nf.ctx.diff(m.expr, x));
+        }
+    }
+    for &x in &vars {
+        roots.push(nf.ctx.diff(t, x));
+    }
+    roots.extend(modes.iter().map(|m| m.expr));
+    roots.push(t);
+    let mut exps: Vec<Option<Fp>> = vec![None; r];
+    for round in 0..3 {
+        let (_, v) = point_for(nf, rng, &roots)?;
+        let rows: Vec<Vec<Fp>> = (0..n)
+            .map(|i| (0..=r).map(|k| v[k * n + i]).collect())
+            .collect();
+        let ns = null_space(rows, r + 1);
+        if ns.len() != 1 || ns[0][r].is_zero() {
+            return Ok(None);
+        }
+        let c = &ns[0];
+        let off = (r + 1) * n;
+        let Some(inv) = (c[r] * v[off + r]).inv() else {
+            return Ok(None);
+        };
+        for k in 0..r {
+            // dt/dz_k = -c_k / c_r, so e_k = -z_k c_k / (c_r t).
+            let e = Fp::ZERO - v[off + k] * c[k] * inv;
+            exps[k] = match (round, exps[k]) {
+                (0, _) => Some(e),
+                (_, Some(x)) if x == e => Some(e),
+                _ => None,
+            };
+        }
+    }
+    let mut factors = Vec::new();
+    let (mut num, mut den): (Vec<String>, Vec<String>) = (Vec::new(), Vec::new());
+    for (k, m) in modes.iter().enumerate() {
+        if m.angle || nf.ctx.is_angle_valued(m.expr) || !znames.contains(&m.name) {
+            continue;
+        }
+        let Some(e) = exps[k].and_then(rat_recon) else {
+            continue;
+        };
+        let x = e.to_f64();
+        if !e.is_integer() || e.is_zero() || x.abs() > 8.0 {
+            continue;
+        }
+        let x = x as i64;
+        factors.push(nf.ctx.pow(m.expr, -x));
+        let p = if x.abs() == 1 {
+            m.name.clone()
+        } else {
+            format!("{}^{}", m.name, x.abs())
+        };
+        if x > 0 {
+            num.push(p);
+        } else {
+            den.push(p);
+        }
+    }
+    if factors.is_empty() {
+        return Ok(None);
+    }
+    factors.push(t);
+    let rest = nf.ctx.mul(&factors);
+    let Some(rt) = in_modes(nf, rest, zb, znames, modes, rng, opts)? else {
+        return Ok(None);
+    };
+    let mut s = if num.is_empty() {
+        format!("({rt})")
+    } else {
+        format!("{}*({rt})", num.join("*"))
+    };
+    if !den.is_empty() {
+        s = format!("{s}/({})", den.join("*"));
+    }
+    Ok(Some(s))
 }
 
 /// `t = sum_e x^e c_e` for a mode `x` that is a plain variable no other mode
