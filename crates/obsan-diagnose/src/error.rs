@@ -33,6 +33,13 @@ pub enum DiagnoseError {
         limit: usize,
         at: String,
     },
+    /// An effect's expressions use more new params than diagnose takes
+    /// (`at`: FILE:LINE: effect 'NAME').
+    EffectTooLarge {
+        params: usize,
+        limit: usize,
+        at: String,
+    },
     /// A model state has no equation, or an output no expression.
     Incomplete(&'static str),
     /// A fit or a noise estimate failed.
@@ -100,6 +107,12 @@ impl fmt::Display for DiagnoseError {
             Rank(e) => write!(f, "{e}"),
             GradientTape => f.write_str("gradient tape"),
             NoSingularVectors => f.write_str("the SVD returned no right singular vectors"),
+            EffectTooLarge { params, limit, at } => write!(
+                f,
+                "{at}: too large: its expressions use {params} new params, more than the {limit} \
+                 diagnose fits (dense in their number squared; a param declared but never used \
+                 costs nothing)"
+            ),
             TooManyReached { reached, limit, at } => write!(
                 f,
                 "{at}{}too large: the outputs reach {reached} variables, more than the {limit} \

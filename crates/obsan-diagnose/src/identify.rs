@@ -19,7 +19,7 @@
 
 use crate::error::DiagnoseError;
 use obsan_data::Dataset;
-use obsan_model::{Kind, System};
+use obsan_model::{EffectLibrary, Kind, System};
 use serde::Serialize;
 
 /// A measured input varies when the standard deviation of its 1 s block
@@ -210,6 +210,36 @@ fn num(v: f64) -> String {
 /// vectors of the hidden params: their SVD is dense in this number squared
 /// (1,000: 8 MB, about a second).
 pub const MAX_NULL_COLUMNS: usize = 1_000;
+
+/// Refuse, before anything is built, an effect of `lib` whose expressions
+/// use more than [`MAX_NULL_COLUMNS`] of its new params (the screen, the
+/// rank test and the fits are dense in their number squared). Params it
+/// declares and never uses are not counted: they cost nothing.
+pub fn check_effect_sizes(lib: &EffectLibrary) -> Result<(), DiagnoseError> {
+    for e in &lib.effects {
+        let mut used = std::collections::HashSet::new();
+        let texts = e
+            .outputs
+            .iter()
+            .chain(&e.dynamics)
+            .chain(&e.substs)
+            .chain(&e.compares)
+            .map(|(_, x)| x.as_str())
+            .chain(e.delay.as_deref());
+        for text in texts {
+            used.extend(text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')));
+        }
+        let params = e.params.iter().filter(|p| used.contains(p.as_str())).count();
+        if params > MAX_NULL_COLUMNS {
+            return Err(DiagnoseError::EffectTooLarge {
+                params,
+                limit: MAX_NULL_COLUMNS,
+                at: format!("{}:{}: effect '{}'", lib.origin, e.line, e.name),
+            });
+        }
+    }
+    Ok(())
+}
 
 /// The rank test of `sys` on the class of `data` over the trajectories
 /// `which` (at most a few: each adds a copy of the state). `consts[k]` are

@@ -73,3 +73,31 @@ fn more_reached_variables_than_the_limit_is_refused() {
     );
     assert!(e.to_string().contains("too large"), "{e}");
 }
+
+/// The issue's reproducer, generated: an effect declaring 6,000 params.
+/// Used by its output in 1,001 of them, it is refused before anything is
+/// built, with its file, line and name; declaring them and using one
+/// passes (an unused param costs nothing).
+#[test]
+fn an_effect_using_more_params_than_the_limit_is_refused_where_it_is() {
+    let limit = obsan_diagnose::MAX_NULL_COLUMNS;
+    let names: Vec<String> = (0..6000).map(|i| format!("p{i}")).collect();
+    let eff = |used: usize| {
+        let terms: String = (0..used).map(|i| format!(" + p{i}*sin(beta)")).collect();
+        format!(
+            "model calib\n\neffect ok\nparam a2\noutput beta = beta + a2*sin(2*beta)\n\n\
+             effect many\ndescription many params\nparam {}\noutput beta = beta{terms}\n",
+            names.join(", ")
+        )
+    };
+    let lib = obsan_model::EffectLibrary::parse(&eff(1), "many.eff").unwrap();
+    obsan_diagnose::check_effect_sizes(&lib).unwrap();
+    let lib = obsan_model::EffectLibrary::parse(&eff(limit + 1), "many.eff").unwrap();
+    let e = obsan_diagnose::check_effect_sizes(&lib).unwrap_err();
+    assert!(
+        matches!(&e, DiagnoseError::EffectTooLarge { params, limit: l, at }
+            if *params == limit + 1 && *l == limit && at == "many.eff:7: effect 'many'"),
+        "{e:?}"
+    );
+    assert!(e.to_string().starts_with("many.eff:7: effect 'many': too large"), "{e}");
+}

@@ -238,6 +238,11 @@ fn apply(w: Option<&Whitener>, r: &mut [f64], rows: &mut [f64], nc: usize) {
     }
 }
 
+/// Most shared params a fit or a CRLB takes, refused before anything is
+/// allocated: the normal equations, their secant model and the covariance
+/// are dense in the number of unknowns squared (1,000 params: 8 MB each).
+pub const MAX_FIT_PARAMS: usize = 1_000;
+
 /// The problem's fixed parts: model, data, options, column indices.
 struct Problem<'a> {
     p: &'a Predictor,
@@ -261,6 +266,12 @@ impl Problem<'_> {
         init_states: &[Vec<f64>],
     ) -> Result<Problem<'a>, FitError> {
         let n_params = p.state.len() - p.n_dynamic;
+        if n_params > MAX_FIT_PARAMS {
+            return Err(FitError::TooManyParams {
+                params: n_params,
+                limit: MAX_FIT_PARAMS,
+            });
+        }
         if init_params.len() != n_params
             || init_states.len() != trajs.len()
             || init_states.iter().any(|s| s.len() != p.n_dynamic)
@@ -352,8 +363,10 @@ impl Problem<'_> {
     /// trajectory (a trajectory's initial state touches only its residuals),
     /// from one prediction with sensitivities per trajectory. With `refresh`
     /// (and input noise), the whitening is first recomputed at `theta`
-    /// from the same prediction.
-    fn normal(&self, theta: &[f64], refresh: bool) -> Result<Normal, FitError> {
+    /// from the same prediction. With `keep_raw` the residuals before
+    /// whitening are kept too (the final linearisation's, for their root
+    /// mean square; without input noise they are `res`).
+    fn normal(&self, theta: &[f64], refresh: bool, keep_raw: bool) -> Result<Normal, FitError> {
         let lay = &self.lay;
         let n = lay.len();
         let nc = self.p.state.len();
@@ -378,7 +391,7 @@ impl Problem<'_> {
                     true,
                     noise,
                 )?;
-                let mut r0 = r.clone();
+                let (mut r0, r) = if keep_raw { (r.clone(), r) } else { (r, vec![]) };
                 if noise {
                     let w = Whitener::new(self.p.n_dynamic, a, m);
                     apply(w.as_ref(), &mut r0, &mut rows, nc);
@@ -536,7 +549,7 @@ pub fn crlb(
     opts: &FitOptions,
 ) -> Result<Vec<Vec<f64>>, FitError> {
     let prob = Problem::new(p, trajs, opts, params, states)?;
-    let jtj = prob.normal(&theta_of(params, states), true)?.jtj;
+    let jtj = prob.normal(&theta_of(params, states), true, false)?.jtj;
     inverse(&jtj).ok_or(FitError::SingularFisher)
 }
 
@@ -582,7 +595,7 @@ pub fn fit(
     };
     let mut lambda = lm.initial_damping;
     let mut iterations = 0;
-    let mut cur = prob.normal(&theta, true)?;
+    let mut cur = prob.normal(&theta, true, false)?;
     // Gauss-Newton leaves out the residuals' curvature; where it matters
     // (a weakly determined direction whose noise-driven curvature is
     // comparable to J^T J) plain steps zig-zag or creep. `s_mat`
@@ -598,7 +611,7 @@ pub fn fit(
     let passes = if opts.input_noise.is_some() { 2 } else { 1 };
     for pass in 0..passes {
         if pass > 0 {
-            cur = prob.normal(&theta, true)?;
+            cur = prob.normal(&theta, true, false)?;
             lambda = lm.initial_damping;
         }
         // A pass that only places the whitening for the next one needs the
@@ -645,7 +658,7 @@ pub fn fit(
                     lambda *= lm.damping_up;
                     continue;
                 }
-                let next = match prob.normal(&cand, false) {
+                let next = match prob.normal(&cand, false, false) {
                     Ok(next) if next.cost < cur.cost => next,
                     _ => {
                         lambda *= lm.damping_up;
@@ -693,7 +706,7 @@ pub fn fit(
     // log-determinant the likelihood ratios read) are those of the
     // weighting at the estimate itself.
     if opts.input_noise.is_some() {
-        cur = prob.normal(&theta, true)?;
+        cur = prob.normal(&theta, true, true)?;
     }
     let Normal {
         res,
@@ -703,6 +716,8 @@ pub fn fit(
         score,
         ..
     } = cur;
+    // Without input noise nothing was whitened: the raw residuals are `res`.
+    let raw = if opts.input_noise.is_some() { &raw } else { &res };
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
@@ -816,7 +831,7 @@ mod tests {
             let (params, states) = (vec![1.7, 0.4], vec![vec![1.0, 0.2], vec![1.2, -0.1]]);
             let prob = Problem::new(&p, &trajs, &opts, &params, &states).unwrap();
             let theta = theta_of(&params, &states);
-            let lin = prob.normal(&theta, true).unwrap();
+            let lin = prob.normal(&theta, true, false).unwrap();
             let (lay, ns, nd) = (&prob.lay, p.state.len(), p.n_dynamic);
             let n = lay.len();
             let (mut rows, mut res) = (Vec::<f64>::new(), Vec::<f64>::new());
