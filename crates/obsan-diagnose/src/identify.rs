@@ -229,7 +229,11 @@ pub fn check_effect_sizes(lib: &EffectLibrary) -> Result<(), DiagnoseError> {
         for text in texts {
             used.extend(text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')));
         }
-        let params = e.params.iter().filter(|p| used.contains(p.as_str())).count();
+        let params = e
+            .params
+            .iter()
+            .filter(|p| used.contains(p.as_str()))
+            .count();
         if params > MAX_NULL_COLUMNS {
             return Err(DiagnoseError::EffectTooLarge {
                 params,

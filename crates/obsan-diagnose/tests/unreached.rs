@@ -26,7 +26,14 @@ fn rank(sys: &System, n_params: usize) -> Result<obsan_diagnose::Identifiability
         varying: vec![true],
     };
     let pv: Vec<f64> = (0..n_params).map(|i| 0.5 + 0.001 * i as f64).collect();
-    stacked_rank(sys, &class, &[vec![]], &[vec![true]], &[0], (&pv, &[vec![0.3]]))
+    stacked_rank(
+        sys,
+        &class,
+        &[vec![]],
+        &[vec![true]],
+        &[0],
+        (&pv, &[vec![0.3]]),
+    )
 }
 
 #[test]
@@ -99,5 +106,9 @@ fn an_effect_using_more_params_than_the_limit_is_refused_where_it_is() {
             if *params == limit + 1 && *l == limit && at == "many.eff:7: effect 'many'"),
         "{e:?}"
     );
-    assert!(e.to_string().starts_with("many.eff:7: effect 'many': too large"), "{e}");
+    assert!(
+        e.to_string()
+            .starts_with("many.eff:7: effect 'many': too large"),
+        "{e}"
+    );
 }

@@ -166,23 +166,30 @@ fn residuals(
         m: Vec::with_capacity(if noise { cells.len() * nd * nd } else { 0 }),
     };
     // The cells of each time in model order, as the residuals are stored.
-    p.predict_measured_each(x0, &t.consts, t.inputs, cells, &integ, &mut |k, yk, jk, mk| {
-        let (outs, values) = cells.at(k);
-        for (i, (&o, &m)) in outs.iter().zip(values).enumerate() {
-            let d = m - yk[i];
-            let d = if p.angular[o] { wrap(d) } else { d };
-            out.r.push(d / opts.sigma[o]);
-            if jac {
-                let start = out.rows.len();
-                out.rows
-                    .extend(jk[i * n..(i + 1) * n].iter().map(|v| v / opts.sigma[o]));
-                if noise {
-                    out.a.extend_from_slice(&out.rows[start..start + nd]);
-                    out.m.extend_from_slice(mk);
+    p.predict_measured_each(
+        x0,
+        &t.consts,
+        t.inputs,
+        cells,
+        &integ,
+        &mut |k, yk, jk, mk| {
+            let (outs, values) = cells.at(k);
+            for (i, (&o, &m)) in outs.iter().zip(values).enumerate() {
+                let d = m - yk[i];
+                let d = if p.angular[o] { wrap(d) } else { d };
+                out.r.push(d / opts.sigma[o]);
+                if jac {
+                    let start = out.rows.len();
+                    out.rows
+                        .extend(jk[i * n..(i + 1) * n].iter().map(|v| v / opts.sigma[o]));
+                    if noise {
+                        out.a.extend_from_slice(&out.rows[start..start + nd]);
+                        out.m.extend_from_slice(mk);
+                    }
                 }
             }
-        }
-    })
+        },
+    )
     .map_err(|e| FitError::Trajectory {
         name: t.name.to_string(),
         source: Box::new(e),
@@ -391,7 +398,11 @@ impl Problem<'_> {
                     true,
                     noise,
                 )?;
-                let (mut r0, r) = if keep_raw { (r.clone(), r) } else { (r, vec![]) };
+                let (mut r0, r) = if keep_raw {
+                    (r.clone(), r)
+                } else {
+                    (r, vec![])
+                };
                 if noise {
                     let w = Whitener::new(self.p.n_dynamic, a, m);
                     apply(w.as_ref(), &mut r0, &mut rows, nc);
@@ -717,7 +728,11 @@ pub fn fit(
         ..
     } = cur;
     // Without input noise nothing was whitened: the raw residuals are `res`.
-    let raw = if opts.input_noise.is_some() { &raw } else { &res };
+    let raw = if opts.input_noise.is_some() {
+        &raw
+    } else {
+        &res
+    };
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
@@ -842,7 +857,13 @@ mod tests {
                     input_noise: noise.clone(),
                 };
                 let pred = p
-                    .predict_with(&lay.state_of(&theta, k), &[], t.inputs, t.outputs.t(), &integ)
+                    .predict_with(
+                        &lay.state_of(&theta, k),
+                        &[],
+                        t.inputs,
+                        t.outputs.t(),
+                        &integ,
+                    )
                     .unwrap();
                 let (mut rk, mut jk, mut a, mut m) = (vec![], vec![], vec![], vec![]);
                 for j in 0..t.outputs.len() {

@@ -331,15 +331,23 @@ impl Predictor {
             noise_m: Vec::new(),
         };
         let (sens, noise) = (opts.sensitivities, opts.input_noise.is_some());
-        self.integrate(x0, consts, inputs, times, opts, needed, &mut |_, y, j, m| {
-            out.outputs.push(y.to_vec());
-            if sens {
-                out.jacobians.push(j.to_vec());
-            }
-            if noise {
-                out.noise_m.push(m.to_vec());
-            }
-        })?;
+        self.integrate(
+            x0,
+            consts,
+            inputs,
+            times,
+            opts,
+            needed,
+            &mut |_, y, j, m| {
+                out.outputs.push(y.to_vec());
+                if sens {
+                    out.jacobians.push(j.to_vec());
+                }
+                if noise {
+                    out.noise_m.push(m.to_vec());
+                }
+            },
+        )?;
         Ok(out)
     }
 
@@ -498,7 +506,15 @@ impl Predictor {
             }
             w.x[..nd].copy_from_slice(&z[..nd]);
             if let Some(needed) = needed {
-                self.measured_outputs(&z, needed.at(ti).0, sens, &varying, &mut w, &mut y, &mut jrow);
+                self.measured_outputs(
+                    &z,
+                    needed.at(ti).0,
+                    sens,
+                    &varying,
+                    &mut w,
+                    &mut y,
+                    &mut jrow,
+                );
             } else {
                 self.all_outputs(&z, sens, &mut w, &mut y, &mut jrow);
             }
