@@ -310,7 +310,7 @@ impl Predictor {
         inputs: &Series,
         cells: &Measured,
         opts: &Integration,
-        sink: &mut dyn FnMut(usize, &[f64], &[f64], &[f64]),
+        sink: &mut Sink,
     ) -> Result<(), FitError> {
         self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells), sink)
     }
@@ -364,7 +364,7 @@ impl Predictor {
         times: &[f64],
         opts: &Integration,
         needed: Option<&Measured>,
-        sink: &mut dyn FnMut(usize, &[f64], &[f64], &[f64]),
+        sink: &mut Sink,
     ) -> Result<(), FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
@@ -784,6 +784,11 @@ impl Measured {
         self.value.is_empty()
     }
 }
+
+/// What a prediction hands on at each output time: its index, the outputs,
+/// their rows of dy/dx0 (empty without sensitivities) and `M(t)` (empty
+/// without input noise).
+pub(crate) type Sink<'a> = dyn FnMut(usize, &[f64], &[f64], &[f64]) + 'a;
 
 /// Integration options of [`Predictor::predict_with`].
 #[derive(Clone, Debug, Default)]
