@@ -376,6 +376,32 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
     crate::unknown_input_cmd::refuse(&nf, "lie")?;
     let fields = obsan_analysis::Fields::of(&mut nf);
+    // outputs x (1 + F + ... + F^order) derivatives, each at least one
+    // printed term: past the term budget the answer cannot fit in it, so it
+    // is refused before any word is built (issue 31.4: vins at order 8 is
+    // 13 million words).
+    let n_words = (0..=a.order)
+        .try_fold(0usize, |acc, k| {
+            let fk = fields.names.len().checked_pow(k as u32)?;
+            acc.checked_add(nf.outputs.len().checked_mul(fk)?)
+        })
+        .unwrap_or(usize::MAX);
+    if n_words > a.limit.max_terms {
+        return Err(Failure(format!(
+            "{}: too large: {} Lie derivatives up to order {} ({} outputs x {} fields^k), more \
+             than the term budget {} (raise it with --max-terms, or lower --order)",
+            a.sys.system,
+            if n_words == usize::MAX {
+                "more than 2^64".to_string()
+            } else {
+                n_words.to_string()
+            },
+            a.order,
+            nf.outputs.len(),
+            fields.names.len(),
+            a.limit.max_terms
+        )));
+    }
     let mut words: Vec<LieWord> = (0..nf.outputs.len())
         .map(|o| LieWord {
             output: o,

@@ -563,7 +563,7 @@ fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
         .nominal
         .series
         .iter()
-        .zip(&d.final_fit.series)
+        .zip(d.final_fit.series.iter())
         .enumerate()
         .take(MAX_FIT_CHARTS)
     {

@@ -1090,4 +1090,17 @@ fn symmetries_past_the_memory_budget_are_refused() {
         let e = bad(&[cmd, &sys, "--max-terms", "5000"], "too large");
         assert!(e.contains("--max-terms") && e.contains("symmetries"), "{e}");
     }
+
+/// Issue 31.4: `lie systems/vins.sys --order 8` (the documented maximum)
+/// grew past 3.5 GB. Its answer is 2 outputs x (1 + 7 + ... + 7^8) words
+/// (drift and six inputs: 7 fields) = 2 (7^9 - 1) / 6 = 2 x 6,725,601 = 13,451,202 Lie
+/// derivatives of at least one term each, past the default term budget
+/// (100,000): refused before any word is built, naming the flag.
+#[test]
+fn lie_past_the_term_budget_is_refused_before_building() {
+    let err = bad(
+        &["lie", "systems/vins.sys", "--order", "8"],
+        "systems/vins.sys: too large: 13451202 Lie derivatives up to order 8",
+    );
+    assert!(err.contains("--max-terms"), "{err}");
 }

@@ -111,7 +111,15 @@ fn rank_test(
     if let Some(w) = warm {
         pv[base_pv.len()..].copy_from_slice(w);
     }
-    let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))?;
+    let id: Identifiability = stacked_rank(&ext, &class, &consts, &seen, which, (&pv, &sv))
+        .map_err(|err| match err {
+            DiagnoseError::TooManyReached { reached, limit, .. } => DiagnoseError::TooManyReached {
+                reached,
+                limit,
+                at: format!("{origin}:{}: effect '{}'", e.line, e.name),
+            },
+            other => other,
+        })?;
     res.rank = Some((id.rank, id.n));
     res.identifiable = e.params.iter().all(|p| id.param_observable(p));
     if !res.identifiable {

@@ -26,6 +26,20 @@ pub enum DiagnoseError {
     GradientTape,
     /// The SVD gave no right singular vectors (it was asked for them).
     NoSingularVectors,
+    /// The rank test's basis reaches more variables than the null vectors
+    /// are computed for (`at`: the effect, located, or empty for the model).
+    TooManyReached {
+        reached: usize,
+        limit: usize,
+        at: String,
+    },
+    /// An effect's expressions use more new params than diagnose takes
+    /// (`at`: FILE:LINE: effect 'NAME').
+    EffectTooLarge {
+        params: usize,
+        limit: usize,
+        at: String,
+    },
     /// A model state has no equation, or an output no expression.
     Incomplete(&'static str),
     /// A fit or a noise estimate failed.
@@ -93,6 +107,19 @@ impl fmt::Display for DiagnoseError {
             Rank(e) => write!(f, "{e}"),
             GradientTape => f.write_str("gradient tape"),
             NoSingularVectors => f.write_str("the SVD returned no right singular vectors"),
+            EffectTooLarge { params, limit, at } => write!(
+                f,
+                "{at}: too large: its expressions use {params} new params, more than the {limit} \
+                 diagnose fits (dense in their number squared; a param declared but never used \
+                 costs nothing)"
+            ),
+            TooManyReached { reached, limit, at } => write!(
+                f,
+                "{at}{}too large: the outputs reach {reached} variables, more than the {limit} \
+                 whose null vectors diagnose computes (a dense SVD in their number squared; \
+                 params the outputs do not reach cost nothing)",
+                if at.is_empty() { "" } else { ": " }
+            ),
             Incomplete(what) => f.write_str(what),
             Fit(e) => write!(f, "{e}"),
             Predict { trajectory, source } => write!(f, "trajectory '{trajectory}': {source}"),

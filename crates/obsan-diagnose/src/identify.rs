@@ -19,7 +19,7 @@
 
 use crate::error::DiagnoseError;
 use obsan_data::Dataset;
-use obsan_model::{Kind, System};
+use obsan_model::{EffectLibrary, Kind, System};
 use serde::Serialize;
 
 /// A measured input varies when the standard deviation of its 1 s block
@@ -206,6 +206,45 @@ fn num(v: f64) -> String {
     }
 }
 
+/// Most variables the rank test's basis functions may reach for the null
+/// vectors of the hidden params: their SVD is dense in this number squared
+/// (1,000: 8 MB, about a second).
+pub const MAX_NULL_COLUMNS: usize = 1_000;
+
+/// Refuse, before anything is built, an effect of `lib` whose expressions
+/// use more than [`MAX_NULL_COLUMNS`] of its new params (the screen, the
+/// rank test and the fits are dense in their number squared). Params it
+/// declares and never uses are not counted: they cost nothing.
+pub fn check_effect_sizes(lib: &EffectLibrary) -> Result<(), DiagnoseError> {
+    for e in &lib.effects {
+        let mut used = std::collections::HashSet::new();
+        let texts = e
+            .outputs
+            .iter()
+            .chain(&e.dynamics)
+            .chain(&e.substs)
+            .chain(&e.compares)
+            .map(|(_, x)| x.as_str())
+            .chain(e.delay.as_deref());
+        for text in texts {
+            used.extend(text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_')));
+        }
+        let params = e
+            .params
+            .iter()
+            .filter(|p| used.contains(p.as_str()))
+            .count();
+        if params > MAX_NULL_COLUMNS {
+            return Err(DiagnoseError::EffectTooLarge {
+                params,
+                limit: MAX_NULL_COLUMNS,
+                at: format!("{}:{}: effect '{}'", lib.origin, e.line, e.name),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The rank test of `sys` on the class of `data` over the trajectories
 /// `which` (at most a few: each adds a copy of the state). `consts[k]` are
 /// trajectory k's constant values; `point` (params, then per chosen
@@ -324,9 +363,24 @@ pub fn stacked_rank(
         }
         x.extend(pv.iter().copied());
         x.resize(nf.state.len(), 0.0);
-        let vars = nf.state_vars.clone();
+        // Only the variables the basis functions reach have a non-zero
+        // gradient column: each other one is a null direction on its own
+        // (d/dx_j, exactly), so the gradients and the SVD are sized by what
+        // the outputs reach, not by the number of params (issue 31.2: an
+        // effect with 6,000 params made a 6,000^2 SVD).
+        let ids = report.basis_functions(&mut nf);
+        let reached = obsan_expr::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
+        if reached.len() > MAX_NULL_COLUMNS {
+            return Err(DiagnoseError::TooManyReached {
+                reached: reached.len(),
+                limit: MAX_NULL_COLUMNS,
+                at: String::new(),
+            });
+        }
+        let vars: Vec<_> = reached.iter().map(|&j| nf.state_vars[j]).collect();
+        let x: Vec<f64> = reached.iter().map(|&j| x[j]).collect();
         let mut grads = Vec::new();
-        for id in report.basis_functions(&mut nf) {
+        for &id in &ids {
             for &v in &vars {
                 grads.push(nf.ctx.diff(id, v));
             }
@@ -366,7 +420,12 @@ pub fn stacked_rank(
             .filter(|&i| svd.singular_values[i] < 1e-8 * smax)
             .map(|i| (0..n).map(|j| vt[(i, j)]).collect())
             .collect();
-        for &h in &hidden {
+        for &hv in &hidden {
+            let Ok(h) = reached.binary_search(&hv) else {
+                // Not reached: its own symmetry.
+                symmetries.push((nf.state[hv].clone(), vec![(pretty(&nf.state[hv]), 1.0)]));
+                continue;
+            };
             // The null vector (in the span) with the largest weight on h.
             let mut best: Option<Vec<f64>> = None;
             for v in &null {
@@ -379,9 +438,9 @@ pub fn stacked_rank(
             };
             let terms: Vec<(String, f64)> = (0..n)
                 .filter(|&j| (v[j] / v[h]).abs() > 1e-6)
-                .map(|j| (pretty(&nf.state[j]), v[j] / v[h]))
+                .map(|j| (pretty(&nf.state[reached[j]]), v[j] / v[h]))
                 .collect();
-            symmetries.push((nf.state[h].clone(), terms));
+            symmetries.push((nf.state[hv].clone(), terms));
         }
     }
     Ok(Identifiability {

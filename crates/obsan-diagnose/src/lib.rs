@@ -42,7 +42,10 @@ pub use common_mode::{
 pub use correlation::{correlated, correlation, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
-pub use identify::{input_class, stacked_rank, Identifiability, InputClass, DIRECTION, VARYING};
+pub use identify::{
+    check_effect_sizes, input_class, stacked_rank, Identifiability, InputClass, DIRECTION,
+    MAX_NULL_COLUMNS, VARYING,
+};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};

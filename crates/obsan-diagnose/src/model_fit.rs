@@ -34,8 +34,10 @@ pub struct ModelFit {
     /// Per output: residual RMS (in the output's units).
     pub rms: Vec<(String, f64)>,
     pub residuals: ResidualReport,
+    /// Shared: the workflow keeps and clones fits, and the series are the
+    /// bulk of one (seven numbers per residual).
     #[serde(skip)]
-    pub series: Vec<ResidualSeries>,
+    pub series: std::sync::Arc<Vec<ResidualSeries>>,
     #[serde(skip)]
     pub covariance: Vec<Vec<f64>>,
 }
@@ -73,7 +75,7 @@ impl ModelFit {
     /// levels the data would give a white-noise model).
     pub fn m2ll_profiled(&self) -> f64 {
         let mut n = vec![0usize; self.rms.len()];
-        for s in &self.series {
+        for s in self.series.iter() {
             if let Some(i) = self.rms.iter().position(|r| r.0 == s.output) {
                 n[i] += s.e.len();
             }
@@ -228,7 +230,7 @@ pub(crate) const OUTLIER_Z: f64 = 5.0;
 pub(crate) fn without_outliers(data: &Dataset, f: &ModelFit, z: f64) -> Option<Dataset> {
     let mut out = data.clone();
     let mut removed = 0usize;
-    for s in &f.series {
+    for s in f.series.iter() {
         let Some(tr) = out.trajectories.iter_mut().find(|t| t.name == s.trajectory) else {
             continue;
         };
@@ -271,7 +273,8 @@ pub fn fit_model(
         input_noise: noise_vector(sys, noise),
     };
     let weighted = fo.input_noise.is_some();
-    let r = fit(&p, &trajs, params0, states0, &fo)?;
+    let mut r = fit(&p, &trajs, params0, states0, &fo)?;
+    let log_det = r.whitening.iter().flatten().map(|w| w.log_det()).sum();
     // The noise is mapped back to each trajectory's start through the
     // inverse transition matrix, which a fast decaying state (a lag of time
     // constant T over a trajectory of many T) makes overflow: then the
@@ -302,7 +305,12 @@ pub fn fit_model(
                 }
             }
         }
-        let whitener = r.whitening.get(k).cloned().flatten();
+        // Taken, not copied (it holds five numbers per residual).
+        let whitener = r
+            .whitening
+            .get_mut(k)
+            .and_then(Option::take)
+            .map(std::sync::Arc::new);
         let mut x0 = r.initial_states[k].clone();
         x0.extend_from_slice(&r.params);
         let integ = Integration {
@@ -324,7 +332,9 @@ pub fn fit_model(
         let in_cols: Vec<Option<&[Option<f64>]>> =
             measured.iter().map(|n| tr.inputs.column(n)).collect();
         let held = |c: &Option<&[Option<f64>]>, row: usize| c.and_then(|c| c[row]).unwrap_or(0.0);
-        let mut held_at = Vec::with_capacity(tr.outputs.len());
+        // Flat: per output time, per measured input, (held value, integral).
+        let nm = measured.len();
+        let mut held_at: Vec<(f64, f64)> = Vec::with_capacity(tr.outputs.len() * nm);
         {
             let mut row = 0usize;
             let mut integral = vec![0.0; measured.len()];
@@ -337,40 +347,50 @@ pub fn fit_model(
                     t_int = tr.inputs.t()[row + 1];
                     row += 1;
                 }
-                let at: Vec<(f64, f64)> = in_cols
-                    .iter()
-                    .enumerate()
-                    .map(|(m, c)| {
-                        let u = held(c, row);
-                        (u, integral[m] + u * (t - t_int))
-                    })
-                    .collect();
-                held_at.push(at);
+                held_at.extend(in_cols.iter().enumerate().map(|(m, c)| {
+                    let u = held(c, row);
+                    (u, integral[m] + u * (t - t_int))
+                }));
             }
         }
         for (oi, oname) in p.outputs.iter().enumerate() {
             let Some(col) = tr.outputs.column(oname) else {
                 continue;
             };
+            // Sized exactly: grown by doubling, the seven series of a
+            // million residuals would hold up to twice their size.
+            let len = row_of.iter().filter(|x| x.1 == oi).count();
             let mut s = ResidualSeries {
                 trajectory: tr.name.clone(),
                 output: oname.clone(),
-                t: vec![],
-                e: vec![],
-                predicted: vec![],
+                t: Vec::with_capacity(len),
+                e: Vec::with_capacity(len),
+                predicted: Vec::with_capacity(len),
                 angular: p.angular[oi],
-                inputs: measured.iter().map(|n| (n.clone(), vec![])).collect(),
-                input_integrals: measured.iter().map(|n| (n.clone(), vec![])).collect(),
+                inputs: measured
+                    .iter()
+                    .map(|n| (n.clone(), Vec::with_capacity(len)))
+                    .collect(),
+                input_integrals: measured
+                    .iter()
+                    .map(|n| (n.clone(), Vec::with_capacity(len)))
+                    .collect(),
                 whiten: None,
             };
             if let Some(w) = &whitener {
-                let idx: Vec<usize> = row_of
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, x)| x.1 == oi)
-                    .map(|(i, _)| i)
-                    .collect();
-                s.whiten = w.subset(&idx).map(std::sync::Arc::new);
+                if len == row_of.len() {
+                    // Every residual is this output's: the whitener itself
+                    // (its subset would be a copy of it, number for number).
+                    s.whiten = Some(w.clone());
+                } else {
+                    let idx: Vec<usize> = row_of
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, x)| x.1 == oi)
+                        .map(|(i, _)| i)
+                        .collect();
+                    s.whiten = w.subset(&idx).map(std::sync::Arc::new);
+                }
             }
             for (j, &t) in tr.outputs.t().iter().enumerate() {
                 let Some(m) = col[j] else { continue };
@@ -382,7 +402,7 @@ pub fn fit_model(
                 s.t.push(t);
                 s.e.push(d / sigma[oi]);
                 s.predicted.push(y);
-                for (mi, &(u, integral)) in held_at[j].iter().enumerate() {
+                for (mi, &(u, integral)) in held_at[j * nm..(j + 1) * nm].iter().enumerate() {
                     s.inputs[mi].1.push(u);
                     s.input_integrals[mi].1.push(integral);
                 }
@@ -392,6 +412,7 @@ pub fn fit_model(
             }
         }
     }
+    drop(r.whitening);
     let n_fitted = r.params.len() + r.initial_states.iter().map(Vec::len).sum::<usize>();
     let residuals = analyse(&series, n_fitted);
     Ok(ModelFit {
@@ -404,7 +425,7 @@ pub fn fit_model(
         params_robust_sd: r.params_sd_robust.clone(),
         initial_states: r.initial_states.clone(),
         cost: r.cost,
-        log_det: r.whitening.iter().flatten().map(|w| w.log_det()).sum(),
+        log_det,
         n: r.n_residuals,
         n_fitted,
         iterations: r.iterations,
@@ -415,7 +436,7 @@ pub fn fit_model(
             .zip(r.residual_rms.iter().copied())
             .collect(),
         residuals,
-        series,
+        series: std::sync::Arc::new(series),
         covariance: r.covariance,
     })
 }

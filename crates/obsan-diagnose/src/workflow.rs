@@ -41,6 +41,9 @@ pub fn diagnose(
     o: &DiagnoseOptions,
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Diagnosis, DiagnoseError> {
+    if let Some(l) = lib {
+        crate::identify::check_effect_sizes(l)?;
+    }
     let outputs: Vec<String> = sys.output_names().iter().map(|s| s.to_string()).collect();
     let sigma = given_levels(&outputs, data, o);
     let prepared = prepare(sys, data)?;

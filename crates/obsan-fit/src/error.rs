@@ -37,6 +37,8 @@ pub enum FitError {
     NoiseNotCarried,
     /// The caller asked the fit to stop ([`obsan_expr::with_cancel`]).
     Cancelled,
+    /// More shared params than the fitter takes ([`crate::MAX_FIT_PARAMS`]).
+    TooManyParams { params: usize, limit: usize },
 }
 
 impl fmt::Display for FitError {
@@ -46,6 +48,11 @@ impl fmt::Display for FitError {
                 write!(f, "expected {states} state values and {consts} constants")
             }
             FitError::MissingInput(n) => write!(f, "the inputs have no column '{n}'"),
+            FitError::TooManyParams { params, limit } => write!(
+                f,
+                "too large: {params} params to fit, more than the {limit} the fitter takes \
+                 (its normal equations are dense in their number squared)"
+            ),
             FitError::MissingOutput(o) => write!(f, "the outputs have no column '{o}'"),
             FitError::InputNoiseSize(m) => {
                 write!(f, "input noise: expected {m} values, one per input")

@@ -18,7 +18,7 @@ mod rng;
 mod whiten;
 
 pub use error::FitError;
-pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory};
+pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, MAX_FIT_PARAMS};
 pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{
     estimate_noise, input_noise_from_samples, NoiseEstimate, NoiseOptions, SampledNoise,

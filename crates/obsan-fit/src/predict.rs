@@ -280,7 +280,7 @@ impl Predictor {
         times: &[f64],
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.integrate(x0, consts, inputs, times, opts, None)
+        self.collect(x0, consts, inputs, times, opts, None)
     }
 
     /// [`Predictor::predict_with`] at the times of `cells`, computing only
@@ -296,12 +296,27 @@ impl Predictor {
         cells: &Measured,
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells))
+        self.collect(x0, consts, inputs, &cells.t, opts, Some(cells))
     }
 
-    /// The integration of `predict_with`; with `needed`, only its cells
-    /// are evaluated.
-    fn integrate(
+    /// [`Predictor::predict_measured`] handing each output time's values,
+    /// rows and (with input noise) `M(t)` to `sink` as they are computed
+    /// instead of keeping them: a fit accumulates its normal equations from
+    /// them, so a prediction's memory does not grow with its length.
+    pub(crate) fn predict_measured_each(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        cells: &Measured,
+        opts: &Integration,
+        sink: &mut Sink,
+    ) -> Result<(), FitError> {
+        self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells), sink)
+    }
+
+    /// [`Predictor::integrate`] kept whole, as a [`Prediction`].
+    fn collect(
         &self,
         x0: &[f64],
         consts: &[f64],
@@ -310,6 +325,47 @@ impl Predictor {
         opts: &Integration,
         needed: Option<&Measured>,
     ) -> Result<Prediction, FitError> {
+        let mut out = Prediction {
+            outputs: Vec::with_capacity(times.len()),
+            jacobians: Vec::new(),
+            noise_m: Vec::new(),
+        };
+        let (sens, noise) = (opts.sensitivities, opts.input_noise.is_some());
+        self.integrate(
+            x0,
+            consts,
+            inputs,
+            times,
+            opts,
+            needed,
+            &mut |_, y, j, m| {
+                out.outputs.push(y.to_vec());
+                if sens {
+                    out.jacobians.push(j.to_vec());
+                }
+                if noise {
+                    out.noise_m.push(m.to_vec());
+                }
+            },
+        )?;
+        Ok(out)
+    }
+
+    /// The integration of `predict_with`; with `needed`, only its cells
+    /// are evaluated. At each output time `sink` gets its index, the
+    /// outputs, their rows of dy/dx0 (empty without sensitivities) and
+    /// `M(t)` (empty without input noise).
+    #[allow(clippy::too_many_arguments)]
+    fn integrate(
+        &self,
+        x0: &[f64],
+        consts: &[f64],
+        inputs: &Series,
+        times: &[f64],
+        opts: &Integration,
+        needed: Option<&Measured>,
+        sink: &mut Sink,
+    ) -> Result<(), FitError> {
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
                 states: self.state.len(),
@@ -348,11 +404,11 @@ impl Predictor {
             jvals: vec![0.0; self.dyn_jac_tape.n_outputs() - nv],
             jac: vec![0.0; nd * n],
         };
-        let mut outputs = Vec::with_capacity(times.len());
-        let mut jacobians = Vec::new();
         let noise = input_noise(opts, m)?;
         let mut noise_acc = vec![0.0; nd * nd];
-        let mut noise_m = Vec::new();
+        // Reused at every output time (a row each, never kept here).
+        let mut y = Vec::new();
+        let mut jrow = Vec::new();
         let t_start = inputs.t().first().copied().unwrap_or(0.0);
         // With a delay tau the rows act at t_k + tau (the first row also
         // before that): the state is the one seen from the output clock.
@@ -449,24 +505,23 @@ impl Predictor {
                 t = next;
             }
             w.x[..nd].copy_from_slice(&z[..nd]);
-            if noise.is_some() {
-                noise_m.push(noise_acc.clone());
-            }
             if let Some(needed) = needed {
-                let (y, jrow) = self.measured_outputs(&z, needed.at(ti).0, sens, &varying, &mut w);
-                outputs.push(y);
-                if sens {
-                    jacobians.push(jrow);
-                }
-                continue;
+                self.measured_outputs(
+                    &z,
+                    needed.at(ti).0,
+                    sens,
+                    &varying,
+                    &mut w,
+                    &mut y,
+                    &mut jrow,
+                );
+            } else {
+                self.all_outputs(&z, sens, &mut w, &mut y, &mut jrow);
             }
-            self.all_outputs(&z, sens, &mut w, &mut outputs, &mut jacobians);
+            let m_now: &[f64] = if noise.is_some() { &noise_acc } else { &[] };
+            sink(ti, &y, &jrow, m_now);
         }
-        Ok(Prediction {
-            outputs,
-            jacobians,
-            noise_m,
-        })
+        Ok(())
     }
 
     /// Every output at state `z` (set into `w.x`) from the whole output tapes,
@@ -476,22 +531,23 @@ impl Predictor {
         z: &[f64],
         sens: bool,
         w: &mut Work,
-        outputs: &mut Vec<Vec<f64>>,
-        jacobians: &mut Vec<Vec<f64>>,
+        y: &mut Vec<f64>,
+        jrow: &mut Vec<f64>,
     ) {
         let (nd, n, no) = (self.n_dynamic, self.state.len(), self.outputs.len());
+        y.clear();
+        jrow.clear();
         if let Some(out) = &mut w.out {
-            outputs.push(out.eval(&w.x).to_vec());
+            y.extend_from_slice(out.eval(&w.x));
         }
         if let (true, Some(out_jac)) = (sens, &mut w.out_jac) {
             let gy = out_jac.eval(&w.x);
             // dy/dx0 = grad h * Phi_full, over the non-zero grad h entries.
             let phi = &z[nd..];
-            let mut jrow = vec![0.0; no * n];
+            jrow.resize(no * n, 0.0);
             for (&(o, j), g) in self.out_jac_entries.iter().zip(gy) {
                 add_grad(&mut jrow[o * n..(o + 1) * n], j, *g, phi, nd);
             }
-            jacobians.push(jrow);
         }
     }
 
@@ -587,6 +643,7 @@ impl Predictor {
 
     /// The outputs `which` at the state in `w.x` and, with `sens`, their
     /// rows `grad h * Phi_full`, each output's tape frozen at its first use.
+    #[allow(clippy::too_many_arguments)]
     fn measured_outputs<'a>(
         &'a self,
         z: &[f64],
@@ -594,14 +651,16 @@ impl Predictor {
         sens: bool,
         varying: &[bool],
         w: &mut Work<'a>,
-    ) -> (Vec<f64>, Vec<f64>) {
+        y: &mut Vec<f64>,
+        jrow: &mut Vec<f64>,
+    ) {
         let (nd, n) = (self.n_dynamic, self.state.len());
-        let mut y = vec![0.0; which.len()];
-        let mut jrow = if sens {
-            vec![0.0; which.len() * n]
-        } else {
-            vec![]
-        };
+        y.clear();
+        y.resize(which.len(), 0.0);
+        jrow.clear();
+        if sens {
+            jrow.resize(which.len() * n, 0.0);
+        }
         for (i, &o) in which.iter().enumerate() {
             let tapes = &self.per_output[o];
             let tape = if sens { &tapes.with_grad } else { &tapes.value };
@@ -617,7 +676,6 @@ impl Predictor {
                 add_grad(row, j, *g, phi, nd);
             }
         }
-        (y, jrow)
     }
 
     /// `acc += h * sum_i c_i |u_i| (Phi^-1 f_i)(Phi^-1 f_i)^T` (left point).
@@ -726,6 +784,11 @@ impl Measured {
         self.value.is_empty()
     }
 }
+
+/// What a prediction hands on at each output time: its index, the outputs,
+/// their rows of dy/dx0 (empty without sensitivities) and `M(t)` (empty
+/// without input noise).
+pub(crate) type Sink<'a> = dyn FnMut(usize, &[f64], &[f64], &[f64]) + 'a;
 
 /// Integration options of [`Predictor::predict_with`].
 #[derive(Clone, Debug, Default)]

@@ -146,3 +146,37 @@ fn the_least_squares_core_stops_at_a_cancel() {
         out.iterations
     );
 }
+
+/// More shared params than MAX_FIT_PARAMS is refused by its error before
+/// the dense normal equations are allocated (issue 31.2); at the limit the
+/// problem is accepted (it fails later only on its own start values here).
+#[test]
+fn more_params_than_the_limit_is_refused() {
+    let limit = obsan_fit::MAX_FIT_PARAMS;
+    let names: Vec<String> = (0..limit).map(|i| format!("p{i}")).collect();
+    let src = format!(
+        "system decay\nstate x\nparam k, {}\ninput u\nx' = -k*x + u\noutput y = x\n",
+        names.join(", ")
+    );
+    let sys = System::parse(&src, "decay.sys").unwrap();
+    let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
+    let (_, data) = problem();
+    let trajs = FitTrajectory::all(&p, &data);
+    let opts = FitOptions {
+        max_iterations: 5,
+        cost_tolerance: 1e-14,
+        step_tolerance: 0.0,
+        sigma: vec![0.01],
+        max_step: 0.0,
+        input_noise: None,
+    };
+    let e = fit(&p, &trajs, &vec![0.5; limit + 1], &[vec![1.5]], &opts).unwrap_err();
+    assert_eq!(
+        e,
+        FitError::TooManyParams {
+            params: limit + 1,
+            limit
+        }
+    );
+    assert!(e.to_string().starts_with("too large: 1001 params"), "{e}");
+}
