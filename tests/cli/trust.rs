@@ -1090,6 +1090,7 @@ fn symmetries_past_the_memory_budget_are_refused() {
         let e = bad(&[cmd, &sys, "--max-terms", "5000"], "too large");
         assert!(e.contains("--max-terms") && e.contains("symmetries"), "{e}");
     }
+}
 
 /// Issue 31.4: `lie systems/vins.sys --order 8` (the documented maximum)
 /// grew past 3.5 GB. Its answer is 2 outputs x (1 + 7 + ... + 7^8) words
