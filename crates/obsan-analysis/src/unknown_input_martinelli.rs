@@ -108,6 +108,8 @@ struct St {
     /// Sum of the degree bounds of every "zero" decision.
     err_deg: f64,
     built: Vec<Id>,
+    /// Longest word of Lie derivatives evaluated by jets.
+    max_word: usize,
     deadline: Option<Instant>,
 }
 
@@ -194,21 +196,30 @@ impl St {
 struct Cod {
     ech: Echelon,
     funcs: Vec<Id>,
+    rows: Vec<Vec<Fp>>,
     deg_sum: u64,
 }
 
 impl Cod {
+    /// Insert a row if independent (a rejection is wrong only at a root of
+    /// a minor: its degree joins the error bound).
+    fn insert(&mut self, st: &mut St, g: Vec<Fp>, d: u64) -> bool {
+        if self.ech.insert(g.clone()) {
+            self.rows.push(g);
+            self.deg_sum = self.deg_sum.saturating_add(d);
+            true
+        } else {
+            st.err_deg += self.deg_sum.saturating_add(d) as f64;
+            false
+        }
+    }
     fn try_add(&mut self, st: &mut St, f: Id) -> Result<bool, AnalysisError> {
         let (g, d) = st.grad(f)?;
-        if self.ech.insert(g) {
+        let added = self.insert(st, g, d);
+        if added {
             self.funcs.push(f);
-            self.deg_sum = self.deg_sum.saturating_add(d);
-            Ok(true)
-        } else {
-            // Dependent at the point: wrong only at a root of a minor.
-            st.err_deg += self.deg_sum.saturating_add(d) as f64;
-            Ok(false)
         }
+        Ok(added)
     }
 }
 
@@ -226,11 +237,15 @@ struct Growth {
     /// The root observable function and the round of the first generator
     /// moved by a residual field (mode `Stop`).
     found: Option<(Id, usize)>,
+    /// The generators kept, as (index in `hobs`, word of fields).
+    gens: Vec<(usize, Vec<usize>)>,
 }
 
 /// The smallest codistribution containing `d hobs`, grown along `fields`
 /// (the first is the drift: its Lie derivative is the time derivative),
-/// with the residual-field test of `mode`.
+/// with the residual-field test of `mode`. Lie derivatives along words are
+/// evaluated with their gradients by `obsan-expr`'s F_p Taylor jets, never
+/// built (the fields carry `nu`, and built derivatives of them swell).
 fn grow(
     st: &mut St,
     fields: &[Vec<Id>],
@@ -238,13 +253,34 @@ fn grow(
     mode: Mode,
 ) -> Result<Growth, AnalysisError> {
     let full = st.unknown.len();
+    let nf_ = fields.len();
+    let mut all_fields: Vec<Vec<Id>> = fields.to_vec();
+    all_fields.extend(residual.iter().cloned());
+    // The known coordinates' own components (`u^(l)' = u^(l+1)`) are the
+    // jets' dynamics, counted by the word lengths instead.
+    for f in &all_fields {
+        st.built.extend_from_slice(&f[..full]);
+    }
+    st.built.extend_from_slice(&st.hobs.clone());
+    let all = st.all();
+    let jets = obsan_expr::LieJets::new(&st.ctx, &all, &all_fields, &st.hobs);
     let mut cod = Cod::default();
-    // (function, index of its root in cod.funcs)
-    let mut gens: Vec<(Id, usize)> = Vec::new();
-    for h in st.hobs.clone() {
-        if cod.try_add(st, h)? {
-            let i = gens.len();
-            gens.push((h, i));
+    // (output, word, root output)
+    let mut gens: Vec<(usize, Vec<usize>, usize)> = Vec::new();
+    let row = |st: &mut St, out: usize, word: &[usize]| -> Result<(Fp, Vec<Fp>, u64), AnalysisError> {
+        st.max_word = st.max_word.max(word.len());
+        let r = jets
+            .row(out, word, &st.point, true)
+            .map_err(|_| AnalysisError::NoPoint)?;
+        let mut g = r.gradient;
+        g.truncate(full);
+        // No bound: the top coefficient is structurally zero.
+        Ok((r.value, g, r.degree.unwrap_or(0)))
+    };
+    for o in 0..st.hobs.len() {
+        let (_, g, d) = row(st, o, &[])?;
+        if cod.insert(st, g, d) {
+            gens.push((o, vec![], o));
         }
     }
     let mut old = 0;
@@ -256,11 +292,18 @@ fn grow(
         let new = gens.len();
         for i in old..new {
             st.check()?;
-            let (phi, root) = gens[i];
+            let (out, word, root) = gens[i].clone();
             let mut moved = false;
-            for r in residual {
-                let z = st.lie(phi, r);
-                if !st.is_zero_fn(z)? {
+            for k in 0..residual.len() {
+                let mut w = word.clone();
+                w.push(nf_ + k);
+                if jets.support(out, &w).is_none() {
+                    continue;
+                }
+                let (v, _, d) = row(st, out, &w)?;
+                if v.is_zero() {
+                    st.err_deg += d as f64;
+                } else {
                     moved = true;
                     break;
                 }
@@ -271,19 +314,25 @@ fn grow(
                         return Ok(Growth {
                             cod,
                             rounds,
-                            found: Some((gens[root].0, rounds)),
+                            found: Some((st.hobs[root], rounds)),
+                            gens: vec![],
                         })
                     }
                     Mode::Skip => continue,
                 }
             }
-            for f in fields {
+            for f in 0..nf_ {
                 if cod.ech.rank() == full {
                     break;
                 }
-                let d = st.lie(phi, f);
-                if cod.try_add(st, d)? {
-                    gens.push((d, root));
+                let mut w = word.clone();
+                w.push(f);
+                if jets.support(out, &w).is_none() {
+                    continue;
+                }
+                let (_, g, d) = row(st, out, &w)?;
+                if cod.insert(st, g, d) {
+                    gens.push((out, w, root));
                 }
             }
         }
@@ -294,6 +343,7 @@ fn grow(
         cod,
         rounds,
         found: None,
+        gens: gens.into_iter().map(|(o, w, _)| (o, w)).collect(),
     })
 }
 
@@ -409,7 +459,7 @@ fn setup(
     jets: usize,
     seed: u64,
     deadline: Option<Instant>,
-) -> Result<(St, Option<Id>), AnalysisError> {
+) -> Result<(St, Option<Vec<(Id, usize)>>), AnalysisError> {
     let mut ctx = nf.ctx.clone();
     let n = nf.state.len();
     let mw = nf.unknown_inputs.len();
@@ -424,7 +474,7 @@ fn setup(
     // Known-input jets u^(0..=D); order 0 is the model's own symbol.
     let mut known = Vec::new();
     let mut kdrift = Vec::new();
-    let mut top = None;
+    let mut top: Option<Vec<(Id, usize)>> = None;
     for (u, &uv) in nf.inputs.iter().zip(&nf.input_vars) {
         let mut ids = vec![];
         for l in 0..=jets {
@@ -436,9 +486,7 @@ fn setup(
             debug_assert!(l > 0 || s.var == uv);
             known.push(s.var);
             ids.push(s.id);
-            if l == jets {
-                top = Some(s.id);
-            }
+            top.get_or_insert_with(Vec::new).push((s.id, l));
         }
         for l in 0..=jets {
             kdrift.push(if l < jets { ids[l + 1] } else { zero });
@@ -490,6 +538,7 @@ fn setup(
         draws,
         err_deg: 0.0,
         built: Vec::new(),
+        max_word: 0,
         deadline,
     };
     Ok((st, top))
@@ -646,7 +695,15 @@ fn run(
             // Grow along the drift, not deriving the moved generators: the
             // first moved one (theta's order-ord derivative) joins hobs.
             let g2 = grow(&mut st, &fields[..1], &residual, Mode::Skip)?;
-            st.hobs = g2.cod.funcs;
+            let mut hobs = Vec::new();
+            for (o, w) in g2.gens {
+                let mut f = st.hobs[o];
+                for _ in &w {
+                    f = st.lie(f, &fields[0]);
+                }
+                hobs.push(f);
+            }
+            st.hobs = hobs;
             steps.push(MartinelliStep {
                 degree: m,
                 action: "growth along the drift".into(),
@@ -776,17 +833,23 @@ fn run(
     }
     // The state part: rank minus the rank of the projection on the others.
     let mut proj = Echelon::default();
-    let mut g_rows = Vec::new();
-    for &f in &cod.funcs {
-        g_rows.push(st.grad(f)?.0);
-    }
-    for r in g_rows {
+    for r in &cod.rows {
         proj.insert(r[n..].to_vec());
     }
     st.err_deg += cod.deg_sum as f64;
     let rank = cod.ech.rank() - proj.rank();
-    // The truncated jet `u^(D)` in any expression built: the run is not valid.
-    let used_top = top.is_some_and(|t| st.ctx.reachable(&st.built).contains(&t));
+    // The highest known-input jet in any expression built, plus the longest
+    // word derived from them, reaches `u^(D)`: the run is not valid (each
+    // Lie derivative raises the jet order by at most one).
+    let reach = st.ctx.reachable(&st.built);
+    let highest = top
+        .iter()
+        .flat_map(|t| t.iter())
+        .filter(|(id, _)| reach.binary_search(id).is_ok())
+        .map(|&(_, l)| l)
+        .max()
+        .unwrap_or(0);
+    let used_top = top.is_some() && highest + st.max_word + 1 >= jets;
     let error_bound = (st.err_deg * st.draws as f64 / P as f64).min(1.0);
     Ok((
         MartinelliReport {
