@@ -163,11 +163,46 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     for w in &words {
         o.push_str(&format!("  d {w}\n"));
     }
-    if r.converged {
-        o.push_str("converged: no higher derivative order can change these verdicts\n");
+    let m = &r.martinelli;
+    let steps: Vec<String> = m
+        .steps
+        .iter()
+        .map(|s| format!("degree {}: {}", s.degree, s.action))
+        .collect();
+    o.push_str(&format!(
+        "Martinelli's algorithm (arXiv 2201.07610, Alg. 5.1): {}; stopped after {} rounds of Lie derivatives, the last adding nothing: rank {} of {} is final\n",
+        steps.join(", "),
+        m.rounds,
+        m.rank,
+        m.n
+    ));
+    let undecided: Vec<String> = nf
+        .unknown_inputs
+        .iter()
+        .zip(&m.reconstructable)
+        .filter(|p| p.1.is_none())
+        .map(|p| p.0.clone())
+        .collect();
+    if r.agree {
+        o.push_str("both routes agree: every verdict is final at every derivative order");
+        if !undecided.is_empty() {
+            o.push_str(&format!(
+                " (except: {} not reconstructable up to order {} only, the state not being observable)",
+                undecided.join(", "),
+                r.max_order
+            ));
+        }
+        o.push('\n');
     } else {
         o.push_str(&format!(
-            "not converged: the negative verdicts hold up to output derivative order {} only (raise it with --order)\n",
+            "the two routes DISAGREE (Martinelli: observable [{}]); the orders above are those of the extended-state route up to order {}\n",
+            nf.state
+                .iter()
+                .zip(&m.observable)
+                .filter(|p| *p.1)
+                .map(|p| p.0.clone())
+                .collect::<Vec<_>>()
+                .join(", "),
             r.max_order
         ));
     }

@@ -267,16 +267,17 @@ fn grow(
     let mut cod = Cod::default();
     // (output, word, root output)
     let mut gens: Vec<(usize, Vec<usize>, usize)> = Vec::new();
-    let row = |st: &mut St, out: usize, word: &[usize]| -> Result<(Fp, Vec<Fp>, u64), AnalysisError> {
-        st.max_word = st.max_word.max(word.len());
-        let r = jets
-            .row(out, word, &st.point, true)
-            .map_err(|_| AnalysisError::NoPoint)?;
-        let mut g = r.gradient;
-        g.truncate(full);
-        // No bound: the top coefficient is structurally zero.
-        Ok((r.value, g, r.degree.unwrap_or(0)))
-    };
+    let row =
+        |st: &mut St, out: usize, word: &[usize]| -> Result<(Fp, Vec<Fp>, u64), AnalysisError> {
+            st.max_word = st.max_word.max(word.len());
+            let r = jets
+                .row(out, word, &st.point, true)
+                .map_err(|_| AnalysisError::NoPoint)?;
+            let mut g = r.gradient;
+            g.truncate(full);
+            // No bound: the top coefficient is structurally zero.
+            Ok((r.value, g, r.degree.unwrap_or(0)))
+        };
     for o in 0..st.hobs.len() {
         let (_, g, d) = row(st, o, &[])?;
         if cod.insert(st, g, d) {
