@@ -455,12 +455,15 @@ fn combine(ctx: &mut Ctx, fields: &[&Vec<Id>], coefs: &[Id]) -> Vec<Id> {
         .collect()
 }
 
+/// The known-input jet symbols and their orders.
+type KnownJets = Vec<(Id, usize)>;
+
 fn setup(
     nf: &NormalForm,
     jets: usize,
     seed: u64,
     deadline: Option<Instant>,
-) -> Result<(St, Option<Vec<(Id, usize)>>), AnalysisError> {
+) -> Result<(St, Option<KnownJets>), AnalysisError> {
     let mut ctx = nf.ctx.clone();
     let n = nf.state.len();
     let mw = nf.unknown_inputs.len();
@@ -475,7 +478,7 @@ fn setup(
     // Known-input jets u^(0..=D); order 0 is the model's own symbol.
     let mut known = Vec::new();
     let mut kdrift = Vec::new();
-    let mut top: Option<Vec<(Id, usize)>> = None;
+    let mut top: Option<KnownJets> = None;
     for (u, &uv) in nf.inputs.iter().zip(&nf.input_vars) {
         let mut ids = vec![];
         for l in 0..=jets {
