@@ -207,7 +207,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         ));
     }
     o.push_str(&format!(
-        "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
+        "probabilistic: exact arithmetic mod 2^61-1 at random points (2 for the orders, 1 plus 1 per extension in Martinelli's algorithm; seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
         r.seed, r.error_bound, r.degree_bound
     ));
     out!("{o}");
