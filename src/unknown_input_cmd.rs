@@ -86,6 +86,19 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
             "steps": r.steps.iter().map(|s| json!({"order": s.order, "extended_rank": s.rank, "state_rank": s.state_rank})).collect::<Vec<_>>(),
             "max_order": r.max_order,
             "converged": r.converged,
+            "agree": r.agree,
+            "martinelli": {
+                "rank": r.martinelli.rank,
+                "observable": nf.state.iter().zip(&r.martinelli.observable).filter(|p| *p.1).map(|p| p.0.clone()).collect::<Vec<_>>(),
+                "reconstructable": nf.unknown_inputs.iter().zip(&r.martinelli.reconstructable).filter(|p| *p.1 == Some(true)).map(|p| p.0.clone()).collect::<Vec<_>>(),
+                "not_reconstructable": nf.unknown_inputs.iter().zip(&r.martinelli.reconstructable).filter(|p| *p.1 == Some(false)).map(|p| p.0.clone()).collect::<Vec<_>>(),
+                "steps": r.martinelli.steps.iter().map(|s| json!({"degree": s.degree, "action": s.action})).collect::<Vec<_>>(),
+                "rounds": r.martinelli.rounds,
+                "dimension": r.martinelli.dimension,
+                "codistribution_rank": r.martinelli.codistribution_rank,
+                "input_jets": r.martinelli.input_jets,
+                "error_bound": r.martinelli.error_bound,
+            },
             "complete": complete,
             "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"derivative": t, "output": outs[w.output], "order": w.order()})).collect::<Vec<_>>(),
             "evaluated": r.evaluated,
@@ -150,16 +163,51 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     for w in &words {
         o.push_str(&format!("  d {w}\n"));
     }
-    if r.converged {
-        o.push_str("converged: no higher derivative order can change these verdicts\n");
+    let m = &r.martinelli;
+    let steps: Vec<String> = m
+        .steps
+        .iter()
+        .map(|s| format!("degree {}: {}", s.degree, s.action))
+        .collect();
+    o.push_str(&format!(
+        "Martinelli's algorithm (arXiv 2201.07610, Alg. 5.1): {}; stopped after {} rounds of Lie derivatives, the last adding nothing: rank {} of {} is final\n",
+        steps.join(", "),
+        m.rounds,
+        m.rank,
+        m.n
+    ));
+    let undecided: Vec<String> = nf
+        .unknown_inputs
+        .iter()
+        .zip(&m.reconstructable)
+        .filter(|p| p.1.is_none())
+        .map(|p| p.0.clone())
+        .collect();
+    if r.agree {
+        o.push_str("both routes agree: every verdict is final at every derivative order");
+        if !undecided.is_empty() {
+            o.push_str(&format!(
+                " (except: {} not reconstructable up to order {} only, the state not being observable)",
+                undecided.join(", "),
+                r.max_order
+            ));
+        }
+        o.push('\n');
     } else {
         o.push_str(&format!(
-            "not converged: the negative verdicts hold up to output derivative order {} only (raise it with --order)\n",
+            "the two routes DISAGREE (Martinelli: observable [{}]); the orders above are those of the extended-state route up to order {}\n",
+            nf.state
+                .iter()
+                .zip(&m.observable)
+                .filter(|p| *p.1)
+                .map(|p| p.0.clone())
+                .collect::<Vec<_>>()
+                .join(", "),
             r.max_order
         ));
     }
     o.push_str(&format!(
-        "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
+        "probabilistic: exact arithmetic mod 2^61-1 at random points (2 for the orders, 1 plus 1 per extension in Martinelli's algorithm; seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
         r.seed, r.error_bound, r.degree_bound
     ));
     out!("{o}");

@@ -13,7 +13,7 @@ fn rank_names_the_reconstructable_input_and_its_order() {
         out.contains("w (from output derivatives of order 2)"),
         "{out}"
     );
-    assert!(out.contains("converged"), "{out}");
+    assert!(out.contains("both routes agree"), "{out}");
     let v: Value = serde_json::from_str(&ok(&[
         "rank",
         "--json",
@@ -26,11 +26,15 @@ fn rank_names_the_reconstructable_input_and_its_order() {
     assert_eq!(v["observable_variables"][1]["name"], "x2");
     assert_eq!(v["observable_variables"][1]["order"], 1);
     assert_eq!(v["converged"], true);
+    assert_eq!(v["agree"], true);
+    assert_eq!(v["martinelli"]["reconstructable"][0], "w");
 }
 
 #[test]
-fn a_negative_verdict_says_how_far_it_holds() {
-    // c2m_known_b.sys: only x1 observable (derived in the file).
+fn a_negative_verdict_is_proven_and_says_what_is_not() {
+    // c2m_known_b.sys: only x1 observable, at every order (derived in the
+    // file): Martinelli's algorithm proves it whatever --order; w's verdict
+    // (the state not observable) holds up to the order examined.
     let v: Value = serde_json::from_str(&ok(&[
         "rank",
         "--json",
@@ -42,6 +46,9 @@ fn a_negative_verdict_says_how_far_it_holds() {
     assert_eq!(v["rank"], 1);
     assert_eq!(v["max_order"], 3);
     assert_eq!(v["converged"], false);
+    assert_eq!(v["agree"], true);
+    assert_eq!(v["martinelli"]["rank"], 1);
+    assert_eq!(v["martinelli"]["observable"][0], "x1");
     assert_eq!(v["unreconstructable_inputs"][0], "w");
     let out = ok(&[
         "rank",
@@ -49,8 +56,9 @@ fn a_negative_verdict_says_how_far_it_holds() {
         "3",
         "systems/benchmarks/unknown-inputs/c2m_known_b.sys",
     ]);
+    assert!(out.contains("rank 1 of 5 is final"), "{out}");
     assert!(
-        out.contains("hold up to output derivative order 3 only"),
+        out.contains("w not reconstructable up to order 3 only"),
         "{out}"
     );
 }

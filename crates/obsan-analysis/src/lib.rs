@@ -29,6 +29,7 @@ mod sym_blocks;
 mod sym_recon;
 mod symmetry;
 mod unknown_input;
+mod unknown_input_martinelli;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind};
@@ -51,3 +52,4 @@ pub use symmetry::{
     SymmetryReport,
 };
 pub use unknown_input::{unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport};
+pub use unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
