@@ -237,7 +237,8 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "obsan diagnose: model {} on {data} ({n_traj} trajectories, {} output samples)",
         d.model, d.nominal.n
     );
-    let _ = writeln!(s, "start: {}", d.start);
+    verdict(d, &mut s);
+    let _ = writeln!(s, "\nstart: {}", d.start);
     let sig: Vec<String> = d
         .sigma
         .iter()
@@ -281,6 +282,23 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         white_rms(&d.nominal)
     );
     structure_text(&d.nominal, &mut s);
+    for r in &d.refits {
+        let _ = writeln!(
+            s,
+            "  note: {} fit had not converged: refitted from {}'s point with its params at 0, \
+             -2 log L {:.1} -> {:.1}; round {}'s candidates are compared with the refit{}",
+            if r.round == 1 {
+                "the nominal"
+            } else {
+                "the current"
+            },
+            r.from,
+            r.m2ll_before,
+            r.m2ll_after,
+            r.round,
+            if r.round == 1 { " (shown above)" } else { "" }
+        );
+    }
     for (i, round) in d.rounds.iter().enumerate() {
         let _ = writeln!(
             s,
@@ -295,6 +313,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 d.lr_critical_generated
             );
         }
+        let mut hidden: Vec<String> = Vec::new();
         for c in round {
             if let Some(e) = &c.error {
                 let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
@@ -322,12 +341,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 };
                 let _ = writeln!(s, "  {:<20} not fitted: score {sc:.2} {why}", mark(c));
             } else if !c.identifiable {
-                let _ = writeln!(
-                    s,
-                    "  {:<20} not identifiable on these data: {}",
-                    mark(c),
-                    hidden_text(c)
-                );
+                hidden.push(mark(c));
             } else {
                 let est = with_robust(&c.estimates, &c.robust_sd);
                 let _ = writeln!(
@@ -338,7 +352,13 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                     c.lr,
                     c.p_value,
                     c.delta_bic,
-                    if c.significant { "  significant" } else { "" }
+                    if c.significant {
+                        "  significant"
+                    } else if c.suggested {
+                        "  suggested (Wald z below critical)"
+                    } else {
+                        ""
+                    }
                 );
                 match c.common_mode.as_ref().filter(|v| v.applies) {
                     Some(v) if v.vetoed => {
@@ -354,6 +374,13 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                     None => {}
                 }
             }
+        }
+        if !hidden.is_empty() {
+            let _ = writeln!(
+                s,
+                "  not identifiable on these data: {} (see \"these data cannot reveal\")",
+                hidden.join(", ")
+            );
         }
     }
     let _ = writeln!(s);
@@ -440,6 +467,17 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             let _ = writeln!(s, "  caution: {text}");
         }
     }
+    for c in &d.suggested {
+        let _ = writeln!(
+            s,
+            "suggested, not established: {}: {} (LR {:.1} above its critical value, but {:.1} sds \
+             from 0 with the larger of the model's and the cluster-robust sd: not named)",
+            mark(c),
+            with_robust(&c.estimates, &c.robust_sd).join(", "),
+            c.lr,
+            c.wald_z
+        );
+    }
     // A candidate the heading-free check vetoed, once (its last round).
     let mut vetoed: Vec<&CandidateResult> = Vec::new();
     for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
@@ -502,7 +540,18 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     );
     structure_text(&d.final_fit, &mut s);
     if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
-        let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+        let unfitted = unfitted_file_candidates(d);
+        if unfitted.is_empty() {
+            let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+        } else {
+            let _ = writeln!(
+                s,
+                "  no candidate explains this structure; not really fitted in the last round: {} \
+                 (failed, not fitted, or LR 0 with the estimate at its start), so the effects \
+                 file is not ruled out",
+                unfitted.join(", ")
+            );
+        }
     }
     if !d.hidden.is_empty() {
         let _ = writeln!(s, "\nthese data cannot reveal:");
@@ -517,6 +566,70 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         }
     }
     s
+}
+
+/// The effects file's candidates of the last round that were identifiable
+/// but not really fitted: failed, screened out, or LR exactly 0.
+fn unfitted_file_candidates(d: &Diagnosis) -> Vec<String> {
+    d.rounds
+        .last()
+        .map(|r| {
+            r.iter()
+                .filter(|c| c.origin != obsan_diagnose::ORIGIN_GENERATED)
+                .filter(|c| c.error.is_some() || c.screened_out || (c.identifiable && c.lr == 0.0))
+                .map(|c| c.effect.clone())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The one-paragraph verdict that leads the text: what is named with its
+/// magnitude, what is only suggested, whether the nominal fit had to be
+/// refitted, and what remains unexplained (issue 37.8).
+fn verdict(d: &Diagnosis, s: &mut String) {
+    let mut parts: Vec<String> = Vec::new();
+    if d.named.is_empty() {
+        parts.push("nothing named".into());
+    } else {
+        let named: Vec<String> = d
+            .named
+            .iter()
+            .map(|n| {
+                format!(
+                    "{} ({})",
+                    named_mark(n),
+                    with_robust(&n.estimates, &n.robust_sd).join(", ")
+                )
+            })
+            .collect();
+        parts.push(format!("named {}", named.join("; ")));
+    }
+    if !d.suggested.is_empty() {
+        let sug: Vec<String> = d
+            .suggested
+            .iter()
+            .map(|c| format!("{} (Wald z {:.1})", mark(c), c.wald_z))
+            .collect();
+        parts.push(format!("suggested, not established: {}", sug.join(", ")));
+    }
+    if !d.nominal_converged {
+        parts.push("the nominal fit from the start had not converged and was refitted".into());
+    }
+    let st = d.final_fit.residuals.structure();
+    if st.is_empty() {
+        parts.push("the final fit is consistent with noise".into());
+    } else {
+        let what: Vec<String> = st
+            .iter()
+            .map(|x| format!("{} (z {:.1})", x.test, x.z))
+            .collect();
+        parts.push(format!("unexplained: {}", what.join(", ")));
+    }
+    if !d.hidden.is_empty() {
+        let h: Vec<String> = d.hidden.iter().map(mark).collect();
+        parts.push(format!("these data cannot reveal {}", h.join(", ")));
+    }
+    let _ = writeln!(s, "verdict: {}.", parts.join("; "));
 }
 
 fn residual_chart(title: &str, f: &ModelFit) -> Figure {
