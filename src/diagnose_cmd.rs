@@ -282,6 +282,199 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         white_rms(&d.nominal)
     );
     structure_text(&d.nominal, &mut s);
+    rounds_text(d, &mut s);
+    let _ = writeln!(s);
+    if d.named.is_empty() {
+        let _ = writeln!(s, "named: none: no candidate effect is significant");
+    }
+    named_text(d, &mut s);
+    for c in &d.suggested {
+        let _ = writeln!(
+            s,
+            "suggested, not established: {}: {} (LR {:.1} above its critical value, but {:.1} sds \
+             from 0 with the larger of the model's and the cluster-robust sd: not named)",
+            mark(c),
+            with_robust(&c.estimates, &c.robust_sd).join(", "),
+            c.lr,
+            c.wald_z
+        );
+    }
+    // A candidate the heading-free check vetoed, once (its last round).
+    let mut vetoed: Vec<&CandidateResult> = Vec::new();
+    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
+        if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
+            && !vetoed.iter().any(|x| x.effect == c.effect)
+        {
+            vetoed.push(c);
+        }
+    }
+    for c in vetoed.iter().rev() {
+        if let Some(v) = &c.common_mode {
+            let _ = writeln!(s, "caution: {}", v.veto_text(&mark(c)));
+        }
+    }
+    for c in &d.input_checks {
+        let est: Vec<String> = c
+            .estimates
+            .iter()
+            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "input check {}: {} (z {:.1}, {}): {}",
+            c.effect,
+            if est.is_empty() {
+                c.note.clone()
+            } else {
+                est.join(", ")
+            },
+            c.z,
+            c.note,
+            if c.significant {
+                "the measured inputs disagree with the commanded relation"
+            } else {
+                "consistent"
+            }
+        );
+        if c.significant {
+            for t in &c.per_trajectory {
+                let est: Vec<String> = t
+                    .estimates
+                    .iter()
+                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "  trajectory {}: {} (z {:.1})",
+                    t.trajectory,
+                    est.join(", "),
+                    t.z
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nfinal fit: residual RMS {}; whitened RMS {:.3}",
+        rms_text(&d.final_fit, d),
+        white_rms(&d.final_fit)
+    );
+    structure_text(&d.final_fit, &mut s);
+    if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
+        let unfitted = unfitted_file_candidates(d);
+        if unfitted.is_empty() {
+            let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+        } else {
+            let _ = writeln!(
+                s,
+                "  no candidate explains this structure; not really fitted in the last round: {} \
+                 (failed, not fitted, or LR 0 with the estimate at its start), so the effects \
+                 file is not ruled out",
+                unfitted.join(", ")
+            );
+        }
+    }
+    if !d.hidden.is_empty() {
+        let _ = writeln!(s, "\nthese data cannot reveal:");
+        for c in &d.hidden {
+            let _ = writeln!(s, "  {}: {}", mark(c), hidden_text(c));
+        }
+    }
+    if !d.generated_dropped.is_empty() {
+        let _ = writeln!(s, "\ngenerated candidates left out:");
+        for (n, why) in &d.generated_dropped {
+            let _ = writeln!(s, "  {n}: {why}");
+        }
+    }
+    s
+}
+
+/// Every named effect with its residuals and cautions.
+fn named_text(d: &Diagnosis, s: &mut String) {
+    for (k, n) in d.named.iter().enumerate() {
+        let est = with_robust(&n.estimates, &n.robust_sd);
+        if n.origin == obsan_diagnose::ORIGIN_RELATION {
+            let _ = writeln!(
+                s,
+                "named: {}: {} ({}; an input relation: the measured inputs contradict the \
+                 declared restriction, z {:.1}, p {:.1e}; the fit uses the measured inputs, so \
+                 the extended model carries it in its restriction)",
+                n.effect,
+                est.join(", "),
+                n.description,
+                n.lr.sqrt(),
+                n.p_value
+            );
+            continue;
+        }
+        let before: Vec<String> = n
+            .rms_before
+            .iter()
+            .map(|r| format!("{:.4e}", r.1))
+            .collect();
+        let after: Vec<String> = n.rms_after.iter().map(|r| format!("{:.4e}", r.1)).collect();
+        if n.origin == obsan_diagnose::ORIGIN_GENERATED {
+            let _ = writeln!(
+                s,
+                "named: {} (generated from the model's structure, not in the effects file): {}, {}",
+                n.effect,
+                n.description,
+                est.join(", ")
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "named: {}: {} ({})",
+                n.effect,
+                est.join(", "),
+                n.description
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  residual RMS {} -> {} (LR {:.1}, p {:.1e})",
+            before.join(", "),
+            after.join(", "),
+            n.lr,
+            n.p_value
+        );
+        // The LR test reads the residuals as independent within a
+        // trajectory (up to the inflation); the spread across trajectories
+        // does not need that.
+        let crit = d.lr_critical.sqrt();
+        for ((p, v, _), r) in n.estimates.iter().zip(&n.robust_sd) {
+            if r.is_finite() && *r > 0.0 && (v / r).abs() < crit {
+                let _ = writeln!(
+                    s,
+                    "  caution: across trajectories {p} is only {:.1} sd from 0 (critical {crit:.1}): \
+                     the residuals are correlated within trajectories and the LR overstates the evidence",
+                    (v / r).abs()
+                );
+            }
+        }
+        for rv in &n.rivals {
+            let why = match rv.jointly_identifiable {
+                Some(false) => "together they are not identifiable on these data, so which one acts cannot be told from them",
+                Some(true) => "both stay identifiable together, but these data favour neither strongly",
+                None => "not tested together",
+            };
+            let _ = writeln!(
+                s,
+                "  caution: {} fits almost as well (BIC {:+.1} against it): {why}",
+                rv.effect, rv.delta_bic
+            );
+        }
+        // Once per pair, under the later of the two named effects; the
+        // user's model's params are in --json only.
+        for (c, other) in d.correlated_with_earlier(k) {
+            let text = c.caution_text(&named_mark(n), &named_mark(other));
+            let _ = writeln!(s, "  caution: {text}");
+        }
+    }
+}
+
+/// The refit notes and every round's table of candidates.
+fn rounds_text(d: &Diagnosis, s: &mut String) {
     for r in &d.refits {
         let _ = writeln!(
             s,
@@ -383,189 +576,6 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             );
         }
     }
-    let _ = writeln!(s);
-    if d.named.is_empty() {
-        let _ = writeln!(s, "named: none: no candidate effect is significant");
-    }
-    for (k, n) in d.named.iter().enumerate() {
-        let est = with_robust(&n.estimates, &n.robust_sd);
-        if n.origin == obsan_diagnose::ORIGIN_RELATION {
-            let _ = writeln!(
-                s,
-                "named: {}: {} ({}; an input relation: the measured inputs contradict the \
-                 declared restriction, z {:.1}, p {:.1e}; the fit uses the measured inputs, so \
-                 the extended model carries it in its restriction)",
-                n.effect,
-                est.join(", "),
-                n.description,
-                n.lr.sqrt(),
-                n.p_value
-            );
-            continue;
-        }
-        let before: Vec<String> = n
-            .rms_before
-            .iter()
-            .map(|r| format!("{:.4e}", r.1))
-            .collect();
-        let after: Vec<String> = n.rms_after.iter().map(|r| format!("{:.4e}", r.1)).collect();
-        if n.origin == obsan_diagnose::ORIGIN_GENERATED {
-            let _ = writeln!(
-                s,
-                "named: {} (generated from the model's structure, not in the effects file): {}, {}",
-                n.effect,
-                n.description,
-                est.join(", ")
-            );
-        } else {
-            let _ = writeln!(
-                s,
-                "named: {}: {} ({})",
-                n.effect,
-                est.join(", "),
-                n.description
-            );
-        }
-        let _ = writeln!(
-            s,
-            "  residual RMS {} -> {} (LR {:.1}, p {:.1e})",
-            before.join(", "),
-            after.join(", "),
-            n.lr,
-            n.p_value
-        );
-        // The LR test reads the residuals as independent within a
-        // trajectory (up to the inflation); the spread across trajectories
-        // does not need that.
-        let crit = d.lr_critical.sqrt();
-        for ((p, v, _), r) in n.estimates.iter().zip(&n.robust_sd) {
-            if r.is_finite() && *r > 0.0 && (v / r).abs() < crit {
-                let _ = writeln!(
-                    s,
-                    "  caution: across trajectories {p} is only {:.1} sd from 0 (critical {crit:.1}): \
-                     the residuals are correlated within trajectories and the LR overstates the evidence",
-                    (v / r).abs()
-                );
-            }
-        }
-        for rv in &n.rivals {
-            let why = match rv.jointly_identifiable {
-                Some(false) => "together they are not identifiable on these data, so which one acts cannot be told from them",
-                Some(true) => "both stay identifiable together, but these data favour neither strongly",
-                None => "not tested together",
-            };
-            let _ = writeln!(
-                s,
-                "  caution: {} fits almost as well (BIC {:+.1} against it): {why}",
-                rv.effect, rv.delta_bic
-            );
-        }
-        // Once per pair, under the later of the two named effects; the
-        // user's model's params are in --json only.
-        for (c, other) in d.correlated_with_earlier(k) {
-            let text = c.caution_text(&named_mark(n), &named_mark(other));
-            let _ = writeln!(s, "  caution: {text}");
-        }
-    }
-    for c in &d.suggested {
-        let _ = writeln!(
-            s,
-            "suggested, not established: {}: {} (LR {:.1} above its critical value, but {:.1} sds \
-             from 0 with the larger of the model's and the cluster-robust sd: not named)",
-            mark(c),
-            with_robust(&c.estimates, &c.robust_sd).join(", "),
-            c.lr,
-            c.wald_z
-        );
-    }
-    // A candidate the heading-free check vetoed, once (its last round).
-    let mut vetoed: Vec<&CandidateResult> = Vec::new();
-    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
-        if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
-            && !vetoed.iter().any(|x| x.effect == c.effect)
-        {
-            vetoed.push(c);
-        }
-    }
-    for c in vetoed.iter().rev() {
-        if let Some(v) = &c.common_mode {
-            let _ = writeln!(s, "caution: {}", v.veto_text(&mark(c)));
-        }
-    }
-    for c in &d.input_checks {
-        let est: Vec<String> = c
-            .estimates
-            .iter()
-            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
-            .collect();
-        let _ = writeln!(
-            s,
-            "input check {}: {} (z {:.1}, {}): {}",
-            c.effect,
-            if est.is_empty() {
-                c.note.clone()
-            } else {
-                est.join(", ")
-            },
-            c.z,
-            c.note,
-            if c.significant {
-                "the measured inputs disagree with the commanded relation"
-            } else {
-                "consistent"
-            }
-        );
-        if c.significant {
-            for t in &c.per_trajectory {
-                let est: Vec<String> = t
-                    .estimates
-                    .iter()
-                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
-                    .collect();
-                let _ = writeln!(
-                    s,
-                    "  trajectory {}: {} (z {:.1})",
-                    t.trajectory,
-                    est.join(", "),
-                    t.z
-                );
-            }
-        }
-    }
-    let _ = writeln!(
-        s,
-        "\nfinal fit: residual RMS {}; whitened RMS {:.3}",
-        rms_text(&d.final_fit, d),
-        white_rms(&d.final_fit)
-    );
-    structure_text(&d.final_fit, &mut s);
-    if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
-        let unfitted = unfitted_file_candidates(d);
-        if unfitted.is_empty() {
-            let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
-        } else {
-            let _ = writeln!(
-                s,
-                "  no candidate explains this structure; not really fitted in the last round: {} \
-                 (failed, not fitted, or LR 0 with the estimate at its start), so the effects \
-                 file is not ruled out",
-                unfitted.join(", ")
-            );
-        }
-    }
-    if !d.hidden.is_empty() {
-        let _ = writeln!(s, "\nthese data cannot reveal:");
-        for c in &d.hidden {
-            let _ = writeln!(s, "  {}: {}", mark(c), hidden_text(c));
-        }
-    }
-    if !d.generated_dropped.is_empty() {
-        let _ = writeln!(s, "\ngenerated candidates left out:");
-        for (n, why) in &d.generated_dropped {
-            let _ = writeln!(s, "  {n}: {why}");
-        }
-    }
-    s
 }
 
 /// The effects file's candidates of the last round that were identifiable

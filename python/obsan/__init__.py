@@ -363,7 +363,10 @@ def diagnose(
     **options: Any,
 ) -> dict:
     """``obsan diagnose``: fit ``model`` to ``data``, test the residuals, name the
-    significant effects. ``model`` is a path or a :class:`System`."""
+    significant effects. ``model`` is a path or a :class:`System`. The dict's
+    ``named`` holds only established effects; ``suggested`` those whose LR clears
+    its critical value but whose Wald z does not; ``nominal_converged`` is false
+    when the fit from the start had stopped short (``refits`` says where from)."""
     source = None
     if isinstance(model, System):
         source, model = model._source, model.path

@@ -321,6 +321,9 @@ fn first_fit(
         Ok(f) => return Ok((f, None)),
         Err(e) => e,
     };
+    // Every route that gives a fit; the lowest -2 log L is kept (a route
+    // can end in another basin).
+    let mut routes: Vec<(ModelFit, String)> = Vec::new();
     let (mut pv, mut sv) = (start.0.clone(), start.1.clone());
     let mut done = Vec::new();
     for (frac, what) in [(0.125, "eighth"), (0.25, "quarter"), (0.5, "half")] {
@@ -333,11 +336,10 @@ fn first_fit(
     if !done.is_empty() {
         if let Ok(f) = fit_model(sys, prepared, &pv, &sv, sigma, noise, o) {
             let how = format!(
-                "the fit from this start failed ({err}); replaced by fits on each trajectory's \
-                 first {} of its outputs, each started from the last",
+                "fits on each trajectory's first {} of its outputs, each started from the last",
                 done.join(", ")
             );
-            return Ok((f, Some(how)));
+            routes.push((f, how));
         }
     }
     // A trajectory the start cannot follow left out of a first fit, whose
@@ -355,14 +357,21 @@ fn first_fit(
         sv.insert(k, start.1[k].clone());
         if let Ok(f) = fit_model(sys, prepared, &pv, &sv, sigma, noise, o) {
             let how = format!(
-                "the fit from this start failed ({err}); replaced by a fit without trajectory \
-                 '{}', whose params started the whole data",
+                "a fit without trajectory '{}', whose params started the whole data",
                 prepared.trajectories[k].name
             );
-            return Ok((f, Some(how)));
+            routes.push((f, how));
         }
     }
-    Err(err)
+    let n = routes.len();
+    let (f, how) = routes
+        .into_iter()
+        .min_by(|a, b| a.0.m2ll().total_cmp(&b.0.m2ll()))
+        .ok_or(err.clone())?;
+    let note = format!(
+        "the fit from this start failed ({err}); replaced by {how} (the best of {n} routes)"
+    );
+    Ok((f, Some(note)))
 }
 
 /// `data` with each trajectory's outputs cut to the first `frac` of its
