@@ -387,7 +387,7 @@ fn out_of_range(e: &Effect, f: &ModelFit, data: &Dataset) -> Result<(), Diagnose
         .fold(0.0, f64::max);
     for p in time_params(e) {
         if let Some((v, _)) = f.param(p) {
-            if !(v.abs() <= longest) {
+            if v.is_nan() || v.abs() > longest {
                 return Err(DiagnoseError::OutOfRange {
                     param: p.to_string(),
                     value: v,
