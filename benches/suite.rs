@@ -17,6 +17,9 @@
 //! `modes --timeout`, default 10). The modes column: the number of modes, `proven` when the
 //! reduced system closed and every exact check passed, `open` when it did not close (exit 1),
 //! `all` for a full-rank model (the modes are the variables), `none` without an answer.
+//! The global column (`obsan global --timeout`, OBSAN_SUITE_GLOBAL_TIMEOUT, default 10):
+//! counts of globally / locally (k values) / not identifiable variables, `none in T s` when it
+//! did not finish within the budget, `refused` for models it does not count (trig leaves, delay).
 
 use serde_json::Value;
 use std::collections::BTreeSet;
@@ -179,6 +182,7 @@ fn main() {
     let sym_timeout = env_secs("OBSAN_SUITE_SYM_TIMEOUT", 10).to_string();
     let rank_timeout = env_secs("OBSAN_SUITE_RANK_TIMEOUT", 60).to_string();
     let modes_timeout = env_secs("OBSAN_SUITE_MODES_TIMEOUT", 10).to_string();
+    let global_timeout = env_secs("OBSAN_SUITE_GLOBAL_TIMEOUT", 10);
     let gnu_time = Path::new(GNU_TIME).exists();
     let how = if gnu_time {
         "GNU time %M"
@@ -186,9 +190,9 @@ fn main() {
         "VmHWM polled"
     };
     println!(
-        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB | modes | modes s | SI.jl local s |"
+        "| model | n | rank | verdict vs cited | rank s | rank MB | symmetries | certificate | sym s | sym MB | modes | modes s | SI.jl local s | global | global s | SI.jl global s |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let (mut agree, mut differ, mut total, mut uncited) = (0, 0, 0, 0);
     for e in &entries {
         if !filter.is_empty() && !filter.iter().any(|f| e.path.contains(f.as_str())) {
@@ -267,6 +271,29 @@ fn main() {
             (1, _) => format!("{count} open"),
             (c, _) => format!("none (exit {c})"),
         };
+        let gt = global_timeout.to_string();
+        let mut args = vec!["global", e.path.as_str(), "--json", "--timeout", &gt];
+        args.extend(&extra);
+        let g = run(root, &args, gnu_time);
+        let gv: Value = serde_json::from_str(&g.stdout).unwrap_or(Value::Null);
+        let global = match (g.code, gv["variables"].as_array()) {
+            (0, Some(vars)) => {
+                let n = |t: &str| vars.iter().filter(|v| v["verdict"] == t).count();
+                let ks: BTreeSet<u64> = vars
+                    .iter()
+                    .filter_map(|v| v["values"].as_u64())
+                    .filter(|&k| k > 1)
+                    .collect();
+                format!(
+                    "{} global, {} local {ks:?}, {} not",
+                    n("global"),
+                    n("local"),
+                    n("not identifiable")
+                )
+            }
+            _ if g.secs >= global_timeout as f64 => format!("none in {global_timeout} s"),
+            (c, _) => format!("refused (exit {c})"),
+        };
         let key = e
             .path
             .strip_prefix("systems/benchmarks/si-jl/")
@@ -274,6 +301,9 @@ fn main() {
         let sijl = key
             .and_then(|k| published.iter().find(|p| p.0 == k))
             .map_or("-".to_string(), |p| p.1.clone());
+        let sijl_glob = key
+            .and_then(|k| published.iter().find(|p| p.0 == k))
+            .map_or("-".to_string(), |p| p.2.clone());
         if let Some(k) = key {
             if r.code == 0 {
                 si_rank_secs.push((r.secs, k.to_string()));
@@ -286,12 +316,13 @@ fn main() {
             }
         }
         println!(
-            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} | {modes} | {:.2} | {sijl} |",
+            "| {label} | {n} | {rank} | {verdict} | {:.2} | {} | {found} | {cert} | {:.2} | {} | {modes} | {:.2} | {sijl} | {global} | {:.2} | {sijl_glob} |",
             r.secs,
             mem(r.peak_kib),
             s.secs,
             mem(s.peak_kib),
-            m.secs
+            m.secs,
+            g.secs
         );
     }
     println!();

@@ -41,6 +41,10 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             "group_order": r.group_order,
             "order": r.order,
             "rank_order": r.rank_order,
+            "output_orders": r.output_orders.iter().map(|(n, k)| json!({"output": n, "order": k})).collect::<Vec<_>>(),
+            "error_bound": r.error_bound,
+            "degree_bound_local": r.delta_local,
+            "log10_degree_bound_global": r.log10_delta_global,
             "unknowns": r.unknowns,
             "equations": r.equations,
             "primes": r.primes,
@@ -52,9 +56,16 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     }
     let mut o = String::new();
     o.push_str(&format!("system {}: global identifiability\n", nf.name));
+    let orders: Vec<String> = r
+        .output_orders
+        .iter()
+        .map(|(n, k)| format!("{n} to order {k}"))
+        .collect();
     o.push_str(&format!(
-        "Taylor order {} of the outputs (the Jacobian's rank settles at order {}; the counts agree at orders {} and {}), {} unknowns, {} equations\n",
-        r.order, r.rank_order, r.order, r.order + 1, r.unknowns, r.equations
+        "Taylor orders {} (each the first whose row of the Jacobian is dependent: proven sufficient, docs/engine.md), {} unknowns, {} equations\n",
+        orders.join(", "),
+        r.unknowns,
+        r.equations
     ));
     let w = r.variables.iter().map(|v| v.name.len()).max().unwrap_or(0);
     for v in &r.variables {
@@ -94,6 +105,16 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     o.push_str(&format!(
         "counted over the complex numbers at two independent random points modulo {} and {}, which agree\n",
         r.primes[0], r.primes[1]
+    ));
+    let bound = if r.error_bound < 1.0 {
+        format!("wrong with probability <= {:.1e}", r.error_bound)
+    } else {
+        "without a useful bound (SIAN's degree bound exceeds the prime)".to_string()
+    };
+    o.push_str(&format!(
+        "probabilistic: the verdicts (global / local / not identifiable) are {bound} (SIAN's degree bounds {:.1e} and 10^{:.1} at each point, Schwartz-Zippel; both runs would have to err); a count k > 1 is the agreement of the two runs\n",
+        r.delta_local,
+        if r.log10_delta_global.is_finite() { r.log10_delta_global } else { 0.0 }
     ));
     outln!("{}", o.trim_end());
     Ok(ExitCode::SUCCESS)

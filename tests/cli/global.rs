@@ -73,3 +73,41 @@ fn global_refuses_what_it_cannot_count() {
     );
     bad(&["global", "systems/global/missing.sys"], "missing.sys");
 }
+
+#[test]
+fn per_output_orders_and_bounds() {
+    // x' = -a^2 x, y = x with theta = (a, x0): rows y (0, 1) and
+    // y' = -a^2 x0 (-2 a x0, -a^2) are independent (rank 2 = full), so y'' is
+    // the first dependent row: order 2.
+    let v = global_json("systems/global/squared_rate.sys");
+    assert_eq!(v["output_orders"][0]["output"], "y");
+    assert_eq!(v["output_orders"][0]["order"], 2);
+    // SIAN's D1 = (s + 1) 2 d0 s (n + 1)(1 + 2 d0 s) with n = 1, s = 2 and
+    // d0 = deg(-a^2 x) = 3: 3 * 2 * 3 * 2 * 2 * 13 = 936.
+    assert_eq!(v["degree_bound_local"], 936.0);
+    let e = v["error_bound"].as_f64().unwrap();
+    assert!(e > 0.0 && e < 1e-20, "{e}");
+    let t = ok(&["global", "systems/global/squared_rate.sys"]);
+    assert!(t.contains("y to order 2"), "{t}");
+    assert!(t.contains("wrong with probability <="), "{t}");
+    // angle_mod_pi: order 0 gives x0 (y1) and t (y2); order 1 gives k from
+    // y1' = -k x while y2' = 0 is dependent: y2 stops at 1, y1 at 2.
+    let a = global_json("systems/global/angle_mod_pi.sys");
+    assert_eq!(a["output_orders"][0]["order"], 2);
+    assert_eq!(a["output_orders"][1]["order"], 1);
+}
+
+#[test]
+fn angle_known_modulo_pi_against_atan2() {
+    // Derived by hand in the files: tan(theta) = 2t/(1 - t^2) is the same at
+    // t and -1/t (theta and theta + pi): 2 values; cos and sin together give
+    // t = sin/(1 + cos): 1 value.
+    let v = global_json("systems/global/angle_mod_pi.sys");
+    assert_eq!(var(&v, "t"), ("local".into(), Some(2)));
+    assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "x"), ("global".into(), Some(1)));
+    assert_eq!(v["solutions"], 2);
+    let w = global_json("systems/global/angle_atan2.sys");
+    assert_eq!(var(&w, "t"), ("global".into(), Some(1)));
+    assert_eq!(w["solutions"], 1);
+}

@@ -103,10 +103,24 @@ pub struct GlobalReport {
     pub maps: Vec<DiscreteMap>,
     /// Size of the group the maps generate (an orbit of a generic point).
     pub group_order: usize,
-    /// Taylor order of the outputs used for the count, and the order at
-    /// which the Jacobian's rank stopped growing.
+    /// Highest Taylor order used, and the highest order of a row that
+    /// raised the Jacobian's rank.
     pub order: usize,
     pub rank_order: usize,
+    /// Per output, the Taylor order used (inclusive): the proven truncation
+    /// of docs/engine.md, "Taylor orders".
+    pub output_orders: Vec<(String, usize)>,
+    /// SIAN's degree bounds for one run (Hong, Ovchinnikov, Pogudin, Yap
+    /// 2020, Algorithm 1): `delta_local` for the orders and local verdicts,
+    /// `log10_delta_global` (log10 of the Bezout bound, which can pass any
+    /// float) for the global verdicts.
+    pub delta_local: f64,
+    pub log10_delta_global: f64,
+    /// Probability that a verdict (global / local / not identifiable) is
+    /// wrong: both independent runs would have to be wrong,
+    /// `min(1, D/p1) * min(1, D/p2)` with `D = delta_local + delta_global`.
+    /// 1 means no bound.
+    pub error_bound: f64,
     /// Unknowns and equations of the polynomial system at `order`.
     pub unknowns: usize,
     pub equations: usize,
@@ -493,33 +507,58 @@ impl Run {
         Ok(())
     }
 
-    /// The equations at Taylor order `order` and the unknowns they use:
-    /// `(equations in the derivation ring, unknown variables)`. The unknowns
-    /// are the params, and each state's orders `0..=order`; the targets
-    /// (params and model states at order 0) come first in `targets`.
-    fn equations(&mut self, order: usize) -> Result<(Vec<Poly>, Vec<usize>), AnalysisError> {
-        self.prepare(order)?;
+    /// The system of the proven truncation: output `y` up to order
+    /// `orders[y]` (inclusive), and the state equations `x^(k) = D^(k-1) f`
+    /// for exactly the derivatives those rows use (a closure: each added row
+    /// uses only lower orders). Returns `(equations in the derivation ring,
+    /// unknowns)`, the unknowns highest derivatives first (grevlex then treats
+    /// them as the largest variables), params last.
+    fn equations(&mut self, orders: &[usize]) -> Result<(Vec<Poly>, Vec<usize>), AnalysisError> {
+        let top = orders.iter().copied().max().unwrap_or(0);
+        self.prepare(top)?;
         let r = &self.ring;
+        let mut used = vec![false; r.n];
+        let mark = |p: &Poly, used: &mut Vec<bool>| {
+            for (m, _) in p.terms() {
+                for (v, &e) in m.exponents().iter().enumerate() {
+                    if e > 0 {
+                        used[v] = true;
+                    }
+                }
+            }
+        };
         let mut eqs = self.inits.clone();
-        for s in 0..self.ns {
-            for j in 0..order {
-                let e = r.sub(&r.var(self.sv(s, j + 1)), &self.rhs_d[s][j]);
+        for e in &eqs {
+            mark(e, &mut used);
+        }
+        for (y, &d) in orders.iter().enumerate() {
+            for j in 0..=d {
+                let c = r.eval(&self.out_d[y][j], &self.point);
+                let e = r.sub(&self.out_d[y][j], &r.constant(c));
+                mark(&e, &mut used);
                 eqs.push(e);
             }
         }
-        for y in 0..self.out_d.len() {
-            for j in 0..=order {
-                let c = r.eval(&self.out_d[y][j], &self.point);
-                eqs.push(r.sub(&self.out_d[y][j], &r.constant(c)));
+        for k in (1..=top).rev() {
+            for s in 0..self.ns {
+                let v = self.sv(s, k);
+                if used[v] {
+                    let e = r.sub(&r.var(v), &self.rhs_d[s][k - 1]);
+                    mark(&e, &mut used);
+                    eqs.push(e);
+                }
             }
         }
-        // Unknowns, highest derivatives first (grevlex then treats them as
-        // the largest variables), params last.
         let mut unknowns = Vec::new();
-        for j in (0..=order).rev() {
+        for k in (1..=top).rev() {
             for s in 0..self.ns {
-                unknowns.push(self.sv(s, j));
+                if used[self.sv(s, k)] {
+                    unknowns.push(self.sv(s, k));
+                }
             }
+        }
+        for s in 0..self.ns {
+            unknowns.push(self.sv(s, 0));
         }
         unknowns.extend(0..self.np);
         Ok((eqs, unknowns))
@@ -561,46 +600,72 @@ impl Run {
         Ok((ring, out))
     }
 
-    /// The Jacobian of the equations with respect to the unknowns at the point.
-    fn jacobian(&self, eqs: &[Poly], unknowns: &[usize]) -> Vec<Vec<u64>> {
-        eqs.iter()
-            .map(|e| {
-                unknowns
-                    .iter()
-                    .map(|&v| self.ring.eval(&self.ring.derivative(e, v), &self.point))
-                    .collect()
-            })
-            .collect()
+    /// The gradient of `p` at the point: `(variable, d p / d variable)` for
+    /// the variables `p` uses.
+    fn grad_at(&self, p: &Poly) -> Vec<(usize, u64)> {
+        let f = &self.field;
+        let mut out: HashMap<usize, u64> = HashMap::new();
+        for (m, c) in p.terms() {
+            let occ: Vec<(usize, u32)> = m
+                .exponents()
+                .iter()
+                .enumerate()
+                .filter(|(_, &e)| e > 0)
+                .map(|(v, &e)| (v, e))
+                .collect();
+            for (i, &(v, e)) in occ.iter().enumerate() {
+                // c * e * x_v^(e-1) * prod of the other factors
+                let mut t = f.mul(*c, f.reduce(e as u64));
+                t = f.mul(t, f.pow(self.point[v], e as u64 - 1));
+                for (k, &(w, ew)) in occ.iter().enumerate() {
+                    if k != i {
+                        t = f.mul(t, f.pow(self.point[w], ew as u64));
+                    }
+                }
+                let acc = out.entry(v).or_insert(0);
+                *acc = f.add(*acc, t);
+            }
+        }
+        out.into_iter().filter(|&(_, x)| x != 0).collect()
     }
 }
 
-fn rank(f: &Field, mut m: Vec<Vec<u64>>, skip: Option<usize>) -> usize {
-    if let Some(c) = skip {
-        for row in m.iter_mut() {
-            row[c] = 0;
-        }
-    }
-    let cols = m.first().map_or(0, |r| r.len());
-    let mut r = 0;
-    for c in 0..cols {
-        let Some(piv) = (r..m.len()).find(|&i| m[i][c] != 0) else {
-            continue;
-        };
-        m.swap(r, piv);
-        let inv = f.inv(m[r][c]).unwrap_or(0);
-        let prow: Vec<u64> = m[r].iter().map(|&x| f.mul(x, inv)).collect();
-        for (i, row) in m.iter_mut().enumerate() {
-            if i != r && row[c] != 0 {
-                let k = row[c];
-                for (a, b) in row.iter_mut().zip(&prow) {
-                    *a = f.sub(*a, f.mul(k, *b));
+/// Rows in echelon form over F_p (each row reduced by the earlier ones at
+/// insertion, so reducing in insertion order is a full reduction).
+struct Echelon {
+    field: Field,
+    rows: Vec<(Vec<u64>, usize)>,
+}
+
+impl Echelon {
+    fn reduce(&self, mut v: Vec<u64>) -> Vec<u64> {
+        let f = &self.field;
+        for (row, piv) in &self.rows {
+            let c = v[*piv];
+            if c != 0 {
+                for (a, b) in v.iter_mut().zip(row) {
+                    *a = f.sub(*a, f.mul(c, *b));
                 }
             }
         }
-        m[r] = prow;
-        r += 1;
+        v
     }
-    r
+
+    /// Adds `v` if it is independent of the rows; whether it was.
+    fn insert(&mut self, v: Vec<u64>) -> bool {
+        let v = self.reduce(v);
+        let Some(piv) = v.iter().position(|&x| x != 0) else {
+            return false;
+        };
+        let inv = self.field.inv(v[piv]).unwrap_or(0);
+        let v: Vec<u64> = v.iter().map(|&x| self.field.mul(x, inv)).collect();
+        self.rows.push((v, piv));
+        true
+    }
+
+    fn contains(&self, v: Vec<u64>) -> bool {
+        self.reduce(v).iter().all(|&x| x == 0)
+    }
 }
 
 /// One run's answer: per target (params then model states) the number of
@@ -608,82 +673,125 @@ fn rank(f: &Field, mut m: Vec<Vec<u64>>, skip: Option<usize>) -> usize {
 struct Counts {
     per_var: Vec<Option<usize>>,
     joint: Option<usize>,
-    order: usize,
+    /// Per output, the Taylor order used (inclusive): the first order at
+    /// which its row of the Jacobian is dependent on the rows kept before.
+    orders: Vec<usize>,
+    /// Highest order of an independent (kept) row.
     rank_order: usize,
     unknowns: usize,
     equations: usize,
+    /// Total degrees of the equations in the unknowns (SIAN's Bezout product).
+    degrees: Vec<u32>,
+    /// Number of locally identifiable targets (SIAN's |theta_l|).
+    n_local: usize,
 }
 
+/// One run: the per-output orders by SIAN's greedy rank test on the total
+/// gradients of the output coefficients (docs/engine.md, "Taylor orders"),
+/// local identifiability from the same Jacobian, then the counts.
 fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisError> {
     let f = run.field;
     let targets: Vec<usize> = (0..run.np)
         .chain((0..run.nx).map(|s| run.sv(s, 0)))
         .collect();
-    // 1. The order where the Jacobian's rank (hence the local verdicts)
-    // stops changing: the fibre dimension N - rank is non-increasing, and
-    // once it repeats, the output's codistribution is closed.
-    let mut prev: Option<usize> = None;
-    let mut rank_order = None;
-    let mut fibre_dim = 0;
-    let mut local = vec![false; targets.len()];
-    for k in 0..opts.max_order {
-        let (eqs, unk) = run.equations(k)?;
-        let j = run.jacobian(&eqs, &unk);
-        let rk = rank(&f, j.clone(), None);
-        let fibre = unk.len() - rk;
-        if prev == Some(fibre) {
-            rank_order = Some(k - 1);
-            fibre_dim = fibre;
-            for (t, &v) in targets.iter().enumerate() {
-                let c = unk.iter().position(|&u| u == v).unwrap_or(0);
-                local[t] = rank(&f, j.clone(), Some(c)) + 1 == rk;
+    let nt = targets.len();
+    // Total gradients d v / d (params, x(0)) of the derivation variables at
+    // the point, built order by order (inputs are known: gradient 0).
+    let mut grads: Vec<Option<Vec<u64>>> = vec![None; run.ring.n];
+    for (t, &v) in targets.iter().enumerate() {
+        let mut e = vec![0u64; nt];
+        e[t] = 1;
+        grads[v] = Some(e);
+    }
+    let combine = |g: &[(usize, u64)], grads: &[Option<Vec<u64>>]| -> Vec<u64> {
+        let mut out = vec![0u64; nt];
+        for &(v, c) in g {
+            if let Some(gv) = &grads[v] {
+                for (a, b) in out.iter_mut().zip(gv) {
+                    *a = f.add(*a, f.mul(c, *b));
+                }
             }
-            break;
         }
-        prev = Some(fibre);
+        out
+    };
+    // z = 1/den at order 0: from z den - 1 = 0, grad z = -(sum_{v != z}
+    // q_v grad v) / q_z.
+    for (i, q) in run.inits.clone().iter().enumerate() {
+        let zv = run.sv(run.nx + i, 0);
+        let g = run.grad_at(q);
+        let qz = g.iter().find(|(v, _)| *v == zv).map_or(0, |x| x.1);
+        let rest: Vec<(usize, u64)> = g.into_iter().filter(|(v, _)| *v != zv).collect();
+        let num = combine(&rest, &grads);
+        let inv = f
+            .inv(qz)
+            .ok_or_else(|| err("global: a denominator's auxiliary state is degenerate"))?;
+        let k = f.neg(inv);
+        grads[zv] = Some(num.iter().map(|&x| f.mul(x, k)).collect());
+    }
+    let m = run.out_d.len();
+    let mut open = vec![true; m];
+    let mut orders = vec![0usize; m];
+    let mut ech = Echelon {
+        field: f,
+        rows: Vec::new(),
+    };
+    let mut rank_order = 0;
+    let mut j = 0;
+    while open.iter().any(|&o| o) {
+        if j >= opts.max_order {
+            return Err(err(format!(
+                "global: the outputs' Jacobian still gained rank at Taylor order {}",
+                opts.max_order
+            )));
+        }
+        run.prepare(j)?;
+        if j >= 1 {
+            for s in 0..run.ns {
+                let g = run.grad_at(&run.rhs_d[s][j - 1]);
+                let v = run.sv(s, j);
+                grads[v] = Some(combine(&g, &grads));
+            }
+        }
+        for i in 0..m {
+            if !open[i] {
+                continue;
+            }
+            let g = run.grad_at(&run.out_d[i][j]);
+            if ech.insert(combine(&g, &grads)) {
+                rank_order = j;
+            } else {
+                open[i] = false;
+                orders[i] = j;
+            }
+        }
         if let Some(d) = opts.deadline {
             if Instant::now() > d {
-                return Err(AnalysisError::Timeout("choosing the Taylor order".into()));
+                return Err(AnalysisError::Timeout("choosing the Taylor orders".into()));
             }
         }
+        j += 1;
     }
-    let rank_order = rank_order.ok_or_else(|| {
-        err(format!(
-            "global: the Jacobian's rank still grew at Taylor order {}",
-            opts.max_order
-        ))
-    })?;
-    // 2. Counts at one order past it, then again one further: the counts
-    // can only fall with the order; equal counts at two orders are taken as
-    // stable (see docs/engine.md).
+    let rank = ech.rows.len();
+    let fibre_dim = nt - rank;
+    // theta_t is locally identifiable iff e_t lies in the row space.
+    let local: Vec<bool> = (0..nt)
+        .map(|t| {
+            let mut e = vec![0u64; nt];
+            e[t] = 1;
+            ech.contains(e)
+        })
+        .collect();
     let budget = GbBudget {
         max_basis: opts.max_basis,
         deadline: opts.deadline,
         ..GbBudget::default()
     };
-    let mut last: Option<Counts> = None;
-    let mut order = rank_order + 1;
-    loop {
-        if order + 1 >= opts.max_order {
-            return Err(err(format!(
-                "global: the counts did not settle below Taylor order {}",
-                opts.max_order
-            )));
-        }
-        let c = count_at(
-            run, order, &targets, &local, fibre_dim, budget, opts, rank_order,
-        )?;
-        if let Some(l) = &last {
-            if l.per_var == c.per_var && l.joint == c.joint {
-                return Ok(last.unwrap_or(c));
-            }
-        }
-        last = Some(c);
-        order += 1;
-    }
+    count_at(
+        run, &orders, &targets, &local, fibre_dim, budget, opts, rank_order,
+    )
 }
 
-/// The counts at one Taylor order. A fibre of positive dimension `d` (some
+/// The counts on the truncated system. A fibre of positive dimension `d` (some
 /// variables not locally identifiable) is first cut by `d` random affine
 /// hyperplanes through the point in the coordinates of those variables: a
 /// generic fibre of the output map is equidimensional (every component has
@@ -694,7 +802,7 @@ fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisErr
 #[allow(clippy::too_many_arguments)]
 fn count_at(
     run: &mut Run,
-    order: usize,
+    orders: &[usize],
     targets: &[usize],
     local: &[bool],
     fibre_dim: usize,
@@ -703,7 +811,7 @@ fn count_at(
     rank_order: usize,
 ) -> Result<Counts, AnalysisError> {
     let f = run.field;
-    let (mut eqs, unk) = run.equations(order)?;
+    let (mut eqs, unk) = run.equations(orders)?;
     let free: Vec<usize> = targets
         .iter()
         .zip(local)
@@ -770,11 +878,58 @@ fn count_at(
     Ok(Counts {
         per_var,
         joint,
-        order,
+        orders: orders.to_vec(),
         rank_order,
         unknowns: unk.len(),
         equations: eqs.len(),
+        degrees: gens.iter().map(|g| g.degree()).collect(),
+        n_local: local.iter().filter(|&&l| l).count(),
     })
+}
+
+/// SIAN's bounds (Hong, Ovchinnikov, Pogudin, Yap 2020, Algorithm 1, steps
+/// 2(b) and 3(a); docs/engine.md): with `n` states, `l` params, `s = n + l`,
+/// `d0` the largest degree of `Q f`, `Q h` and `Q` (`Q` the lcm of the
+/// denominators, here bounded by their product), the orders and local
+/// verdicts are wrong only on a hypersurface of degree
+/// `D1 = (s + 1) 2 d0 s (n + 1)(1 + 2 d0 s)` in the point, the global ones on
+/// one of degree `D2 = 6 |theta_l| prod(deg E_t) (1 + 2 d0 max beta)`.
+/// Schwartz–Zippel over F_p: one run errs with probability at most
+/// `(D1 + D2)/p`; the two runs are independent and must agree.
+fn error_bounds(m: &ZModel, runs: &[Counts], primes: &[u64; 2]) -> (f64, f64, f64) {
+    let n = m.dyn_vars.len() as f64;
+    let s = n + m.param_vars.len() as f64;
+    let mut dens: Vec<&ZPoly> = Vec::new();
+    for (_, d) in m.rhs.iter().chain(&m.outputs) {
+        if d.total_degree() > 0 && !dens.contains(&d) {
+            dens.push(d);
+        }
+    }
+    let deg_q: u64 = dens.iter().map(|d| d.total_degree()).sum();
+    let mut d0 = deg_q;
+    for (num, den) in m.rhs.iter().chain(&m.outputs) {
+        d0 = d0.max(num.total_degree() + deg_q - den.total_degree().min(deg_q));
+    }
+    let d0 = d0.max(1) as f64;
+    let d1 = (s + 1.0) * 2.0 * d0 * s * (n + 1.0) * (1.0 + 2.0 * d0 * s);
+    let mut worst_log = f64::NEG_INFINITY;
+    let mut probs = Vec::new();
+    for (c, &p) in runs.iter().zip(primes) {
+        let max_beta = c.orders.iter().copied().max().unwrap_or(0) as f64;
+        let log_d2 = if c.n_local == 0 {
+            f64::NEG_INFINITY
+        } else {
+            (6.0 * c.n_local as f64 * (1.0 + 2.0 * d0 * max_beta)).log10()
+                + c.degrees
+                    .iter()
+                    .map(|&d| (d.max(1) as f64).log10())
+                    .sum::<f64>()
+        };
+        worst_log = worst_log.max(log_d2);
+        let total = d1 + 10f64.powf(log_d2);
+        probs.push((total / p as f64).min(1.0));
+    }
+    (d1, worst_log, probs.iter().product())
 }
 
 /// A signed permutation of the model's variables (dynamic states, then params):
@@ -938,13 +1093,14 @@ pub fn global_identifiability(
         results.push(count_once(&mut run, opts)?);
     }
     let (a, b) = (&results[0], &results[1]);
-    if a.per_var != b.per_var || a.joint != b.joint {
+    if a.per_var != b.per_var || a.joint != b.joint || a.orders != b.orders {
         return Err(err(
             "global: two independent random points disagree on the counts (a non-generic point); try another --seed",
         ));
     }
     let nx = m.dyn_vars.len();
     let np = m.param_vars.len();
+    let bounds = error_bounds(&m, &results, &primes);
     // Names: params then states, as the counts are ordered.
     let names: Vec<(String, bool)> = nf.state[nx..]
         .iter()
@@ -995,8 +1151,17 @@ pub fn global_identifiability(
         all_local,
         maps: maps_out,
         group_order: group,
-        order: a.order,
+        order: a.orders.iter().copied().max().unwrap_or(0),
         rank_order: a.rank_order,
+        output_orders: nf
+            .outputs
+            .iter()
+            .zip(&a.orders)
+            .map(|(o, &k)| (o.0.clone(), k))
+            .collect(),
+        delta_local: bounds.0,
+        log10_delta_global: bounds.1,
+        error_bound: bounds.2,
         unknowns: a.unknowns,
         equations: a.equations,
         primes,

@@ -1,6 +1,11 @@
 //! The prime field F_p, p < 2^63 (products in u128, never wrapping).
 
-/// A prime field given by its modulus. Elements are `u64` in `0..p`.
+use obsan_recon::fp;
+pub use obsan_recon::is_prime;
+
+/// A prime field given by its modulus. Elements are `u64` in `0..p`. The
+/// arithmetic is obsan-recon's (`obsan_recon::fp`), the workspace's one
+/// implementation; this type only carries the modulus.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Field {
     p: u64,
@@ -22,55 +27,31 @@ impl Field {
 
     #[inline]
     pub fn add(&self, a: u64, b: u64) -> u64 {
-        let s = a + b; // a, b < 2^63: no overflow
-        if s >= self.p {
-            s - self.p
-        } else {
-            s
-        }
+        fp::add(a, b, self.p)
     }
 
     #[inline]
     pub fn sub(&self, a: u64, b: u64) -> u64 {
-        if a >= b {
-            a - b
-        } else {
-            a + self.p - b
-        }
+        fp::sub(a, b, self.p)
     }
 
     #[inline]
     pub fn neg(&self, a: u64) -> u64 {
-        if a == 0 {
-            0
-        } else {
-            self.p - a
-        }
+        fp::sub(0, a, self.p)
     }
 
     #[inline]
     pub fn mul(&self, a: u64, b: u64) -> u64 {
-        ((a as u128 * b as u128) % self.p as u128) as u64
+        fp::mul(a, b, self.p)
     }
 
-    pub fn pow(&self, mut a: u64, mut e: u64) -> u64 {
-        let mut r = 1;
-        while e > 0 {
-            if e & 1 == 1 {
-                r = self.mul(r, a);
-            }
-            a = self.mul(a, a);
-            e >>= 1;
-        }
-        r
+    pub fn pow(&self, a: u64, e: u64) -> u64 {
+        fp::pow(a % self.p, e, self.p)
     }
 
     /// The inverse of a non-zero element (`None` for 0).
     pub fn inv(&self, a: u64) -> Option<u64> {
-        if a % self.p == 0 {
-            return None;
-        }
-        Some(self.pow(a % self.p, self.p - 2))
+        fp::inv(a % self.p, self.p)
     }
 
     /// The residue of a signed integer.
@@ -83,57 +64,6 @@ impl Field {
     pub fn reduce(&self, x: u64) -> u64 {
         x % self.p
     }
-}
-
-fn mul_mod(a: u64, b: u64, m: u64) -> u64 {
-    ((a as u128 * b as u128) % m as u128) as u64
-}
-
-fn pow_mod(mut a: u64, mut e: u64, m: u64) -> u64 {
-    let mut r = 1 % m;
-    a %= m;
-    while e > 0 {
-        if e & 1 == 1 {
-            r = mul_mod(r, a, m);
-        }
-        a = mul_mod(a, a, m);
-        e >>= 1;
-    }
-    r
-}
-
-/// Deterministic Miller–Rabin for all 64-bit integers (the first 12 primes
-/// as bases suffice below 3.3e24).
-pub fn is_prime(n: u64) -> bool {
-    if n < 2 {
-        return false;
-    }
-    const BASES: [u64; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
-    for &b in &BASES {
-        if n % b == 0 {
-            return n == b;
-        }
-    }
-    let mut d = n - 1;
-    let mut s = 0;
-    while d % 2 == 0 {
-        d /= 2;
-        s += 1;
-    }
-    'outer: for &a in &BASES {
-        let mut x = pow_mod(a, d, n);
-        if x == 1 || x == n - 1 {
-            continue;
-        }
-        for _ in 1..s {
-            x = mul_mod(x, x, n);
-            if x == n - 1 {
-                continue 'outer;
-            }
-        }
-        return false;
-    }
-    true
 }
 
 #[cfg(test)]

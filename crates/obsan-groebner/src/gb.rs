@@ -3,9 +3,10 @@
 //! Möller 1988, in the form of Becker and Weispfenning, "Gröbner Bases",
 //! algorithm UPDATE).
 
-use crate::poly::{Mono, Poly, Ring};
+use crate::poly::{Mono, Order, Poly, Ring};
 use crate::GbError;
 use std::cmp::Ordering;
+use std::collections::BinaryHeap;
 use std::time::Instant;
 
 /// Limits of one computation: past any of them it stops with an error.
@@ -49,8 +50,9 @@ struct Work<'a> {
     ring: &'a Ring,
     polys: Vec<Poly>,
     sugar: Vec<u32>,
-    /// Leading monomials of `polys`.
+    /// Leading monomials of `polys` and their masks ([`Mono::mask`]).
     lm: Vec<Mono>,
+    masks: Vec<u64>,
     /// Members of the current basis (not superseded by a later element).
     active: Vec<bool>,
     pairs: Vec<Pair>,
@@ -70,44 +72,20 @@ impl Work<'_> {
         Ok(())
     }
 
-    fn check_deadline(&self) -> Result<(), GbError> {
-        if let Some(d) = self.budget.deadline {
-            if Instant::now() > d {
-                return Err(GbError::Budget("deadline"));
-            }
-        }
-        Ok(())
-    }
-
     /// Full reduction of `f` by the active elements.
     fn reduce(&self, f: Poly) -> Result<Poly, GbError> {
-        let r = self.ring;
-        // `rest[start..]` is still to reduce; `done` the irreducible terms.
-        let mut rest = f.terms;
-        let mut start = 0;
-        let mut done: Vec<(Mono, u64)> = Vec::new();
-        while start < rest.len() {
-            let (m, c) = &rest[start];
-            let g = (0..self.polys.len()).find(|&k| self.active[k] && self.lm[k].divides(m));
-            match g {
-                Some(k) => {
-                    let q = self.lm[k].quotient(m);
-                    // the active elements are monic
-                    let neg = r.field.neg(*c);
-                    rest = r.axpy_terms(&rest[start..], neg, &q, &self.polys[k].terms)?;
-                    start = 0;
-                    if rest.len() > self.budget.max_terms {
-                        return Err(GbError::Budget("terms of a polynomial"));
-                    }
-                    self.check_deadline()?;
-                }
-                None => {
-                    done.push((m.clone(), *c));
-                    start += 1;
-                }
-            }
-        }
-        Ok(Poly { terms: done })
+        reduce_by(
+            self.ring,
+            f.terms,
+            &self.polys,
+            |m| {
+                let mm = m.mask();
+                (0..self.polys.len())
+                    .find(|&k| self.active[k] && self.masks[k] & !mm == 0 && self.lm[k].divides(m))
+            },
+            self.budget.max_terms,
+            self.budget.deadline,
+        )
     }
 
     fn spoly(&self, p: &Pair) -> Result<Poly, GbError> {
@@ -179,6 +157,7 @@ impl Work<'_> {
         }
         self.polys.push(h);
         self.sugar.push(sugar);
+        self.masks.push(lh.mask());
         self.lm.push(lh);
         self.active.push(true);
         Ok(())
@@ -192,6 +171,7 @@ pub fn groebner(ring: &Ring, gens: &[Poly], budget: GbBudget) -> Result<Basis, G
         polys: Vec::new(),
         sugar: Vec::new(),
         lm: Vec::new(),
+        masks: Vec::new(),
         active: Vec::new(),
         pairs: Vec::new(),
         budget,
@@ -264,6 +244,143 @@ pub fn groebner(ring: &Ring, gens: &[Poly], budget: GbBudget) -> Result<Basis, G
     })
 }
 
+/// One term of the heap of [`reduce_by`]: the next term of stream `s`.
+struct Head {
+    mono: Mono,
+    coef: u64,
+    s: usize,
+    order: Order,
+}
+
+impl PartialEq for Head {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Head {}
+impl PartialOrd for Head {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Head {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.order
+            .cmp(&self.mono, &o.mono)
+            .then_with(|| self.s.cmp(&o.s))
+    }
+}
+
+/// A summand of the polynomial being reduced: `c * q * terms[pos..]` of
+/// `src` (`None`: the input itself).
+struct Stream {
+    c: u64,
+    q: Mono,
+    src: Option<usize>,
+    pos: usize,
+}
+
+/// Full reduction of `f` by the monic `polys` (`find` names a reducer of a
+/// monomial): the pending polynomial is kept as a sum of streams merged by a
+/// heap (Johnson; Monagan and Pearce, "Sparse polynomial division using a
+/// heap", 2011), so each step costs a logarithm, not a pass over the rest.
+fn reduce_by(
+    ring: &Ring,
+    f: Vec<(Mono, u64)>,
+    polys: &[Poly],
+    find: impl Fn(&Mono) -> Option<usize>,
+    max_terms: usize,
+    deadline: Option<Instant>,
+) -> Result<Poly, GbError> {
+    let fld = ring.field;
+    let order = ring.order;
+    let mut streams: Vec<Stream> = vec![Stream {
+        c: 1,
+        q: Mono::one(ring.n),
+        src: None,
+        pos: 0,
+    }];
+    let mut heap: BinaryHeap<Head> = BinaryHeap::new();
+    let next = |st: &mut Stream, s: usize, f: &[(Mono, u64)]| -> Result<Option<Head>, GbError> {
+        let terms: &[(Mono, u64)] = match st.src {
+            None => f,
+            Some(k) => &polys[k].terms,
+        };
+        let Some((m, c)) = terms.get(st.pos) else {
+            return Ok(None);
+        };
+        st.pos += 1;
+        let mono = if st.src.is_none() {
+            m.clone()
+        } else {
+            st.q.mul(m)?
+        };
+        Ok(Some(Head {
+            mono,
+            coef: fld.mul(st.c, *c),
+            s,
+            order,
+        }))
+    };
+    if let Some(h) = next(&mut streams[0], 0, &f)? {
+        heap.push(h);
+    }
+    let mut done: Vec<(Mono, u64)> = Vec::new();
+    let mut steps = 0usize;
+    while let Some(top) = heap.pop() {
+        let mono = top.mono;
+        let mut coef = top.coef;
+        if let Some(h) = next(&mut streams[top.s], top.s, &f)? {
+            heap.push(h);
+        }
+        while heap.peek().is_some_and(|h| h.mono == mono) {
+            if let Some(h) = heap.pop() {
+                coef = fld.add(coef, h.coef);
+                if let Some(n) = next(&mut streams[h.s], h.s, &f)? {
+                    heap.push(n);
+                }
+            }
+        }
+        if coef == 0 {
+            continue;
+        }
+        match find(&mono) {
+            Some(k) => {
+                // the reducer is monic: its leading term cancels this one
+                let q = polys[k].terms[0].0.quotient(&mono);
+                let s = streams.len();
+                streams.push(Stream {
+                    c: fld.neg(coef),
+                    q,
+                    src: Some(k),
+                    pos: 1,
+                });
+                if let Some(h) = next(&mut streams[s], s, &f)? {
+                    heap.push(h);
+                }
+                steps += 1;
+                if streams.len() > max_terms {
+                    return Err(GbError::Budget("terms of a polynomial"));
+                }
+                if steps % 1024 == 0 {
+                    if let Some(d) = deadline {
+                        if Instant::now() > d {
+                            return Err(GbError::Budget("deadline"));
+                        }
+                    }
+                }
+            }
+            None => {
+                done.push((mono, coef));
+                if done.len() > max_terms {
+                    return Err(GbError::Budget("terms of a polynomial"));
+                }
+            }
+        }
+    }
+    Ok(Poly { terms: done })
+}
+
 fn unit(ring: &Ring) -> Basis {
     Basis {
         ring: ring.clone(),
@@ -279,26 +396,19 @@ impl Basis {
 
     /// The normal form of `f` (its remainder on division by the basis).
     pub fn reduce(&self, f: &Poly) -> Result<Poly, GbError> {
-        let r = &self.ring;
-        let mut rest = r.resort(f).terms;
-        let mut start = 0;
-        let mut done: Vec<(Mono, u64)> = Vec::new();
-        while start < rest.len() {
-            let (m, c) = &rest[start];
-            match self.polys.iter().find(|g| g.terms[0].0.divides(m)) {
-                Some(g) => {
-                    let q = g.terms[0].0.quotient(m);
-                    let neg = r.field.neg(*c);
-                    rest = r.axpy_terms(&rest[start..], neg, &q, &g.terms)?;
-                    start = 0;
-                }
-                None => {
-                    done.push((m.clone(), *c));
-                    start += 1;
-                }
-            }
-        }
-        Ok(Poly { terms: done })
+        let masks: Vec<u64> = self.polys.iter().map(|g| g.terms[0].0.mask()).collect();
+        reduce_by(
+            &self.ring,
+            self.ring.resort(f).terms,
+            &self.polys,
+            |m| {
+                let mm = m.mask();
+                (0..self.polys.len())
+                    .find(|&k| masks[k] & !mm == 0 && self.polys[k].terms[0].0.divides(m))
+            },
+            usize::MAX,
+            None,
+        )
     }
 
     pub fn contains(&self, f: &Poly) -> Result<bool, GbError> {

@@ -18,7 +18,7 @@
 //! assert_eq!(obsan_groebner::distinct_roots(f, &m), 2);
 //! ```
 //!
-//! Depends on no other obsan crate. Every limit (degree, terms, basis size,
+//! Depends only on obsan-recon (its prime-field arithmetic). Every limit (degree, terms, basis size,
 //! deadline) is an error, never a truncated basis.
 
 #![cfg_attr(

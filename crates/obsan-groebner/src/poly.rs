@@ -94,6 +94,19 @@ impl Mono {
         }
     }
 
+    /// A 64-bit summary of the variables present (variable `v` sets bit
+    /// `v mod 64`): `a | b` needs `mask(a) & !mask(b) == 0`, a cheap
+    /// rejection before [`Mono::divides`].
+    pub fn mask(&self) -> u64 {
+        let mut m = 0u64;
+        for (v, &x) in self.e.iter().enumerate() {
+            if x > 0 {
+                m |= 1 << (v % 64);
+            }
+        }
+        m
+    }
+
     pub fn coprime(&self, o: &Mono) -> bool {
         self.e
             .iter()

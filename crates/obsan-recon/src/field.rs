@@ -41,7 +41,7 @@ pub const VERIFY_PRIMES: usize = 4;
 pub const MAX_RECON_PRIMES: usize = PRIMES.len() - VERIFY_PRIMES;
 
 #[inline]
-pub(crate) fn add(a: u64, b: u64, p: u64) -> u64 {
+pub fn add(a: u64, b: u64, p: u64) -> u64 {
     let s = a + b;
     if s >= p {
         s - p
@@ -51,7 +51,7 @@ pub(crate) fn add(a: u64, b: u64, p: u64) -> u64 {
 }
 
 #[inline]
-pub(crate) fn sub(a: u64, b: u64, p: u64) -> u64 {
+pub fn sub(a: u64, b: u64, p: u64) -> u64 {
     if a >= b {
         a - b
     } else {
@@ -69,11 +69,11 @@ pub(crate) fn neg(a: u64, p: u64) -> u64 {
 }
 
 #[inline]
-pub(crate) fn mul(a: u64, b: u64, p: u64) -> u64 {
+pub fn mul(a: u64, b: u64, p: u64) -> u64 {
     ((a as u128 * b as u128) % p as u128) as u64
 }
 
-pub(crate) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
+pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     let mut r = 1 % p;
     while e > 0 {
         if e & 1 == 1 {
@@ -86,7 +86,7 @@ pub(crate) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
 }
 
 /// Inverse modulo p (extended Euclid); `None` for zero.
-pub(crate) fn inv(a: u64, p: u64) -> Option<u64> {
+pub fn inv(a: u64, p: u64) -> Option<u64> {
     if a == 0 {
         return None;
     }

@@ -59,6 +59,12 @@ use dashu_int::ops::{Gcd, UnsignedAbs};
 use dashu_int::{IBig, UBig};
 
 pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
+
+/// Arithmetic modulo a prime `p < 2^63` on residues in `0..p` (products in
+/// u128): the workspace's one implementation; obsan-groebner's `Field` wraps it.
+pub mod fp {
+    pub use crate::field::{add, inv, mul, pow, sub};
+}
 pub use rational::{Poly, Rational, Term};
 pub use thiele::{Thiele, ThieleStep};
 
