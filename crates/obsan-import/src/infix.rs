@@ -29,21 +29,34 @@ struct Tok {
 
 const MAX_DEPTH: usize = 200;
 
-fn tokenize(text: &str, at: (usize, usize), d: Dialect) -> Result<Vec<Tok>, ImportError> {
-    let c: Vec<char> = text.chars().collect();
+/// Each character with its place in the file.
+pub(crate) type Placed = Vec<(char, (usize, usize))>;
+
+/// `text` placed from `at` on (a newline starts column 1 of the next line).
+pub(crate) fn placed(text: &str, at: (usize, usize)) -> Placed {
     let (mut line, mut col) = at;
-    let mut i = 0;
-    let mut out = Vec::new();
-    while i < c.len() {
-        let here = (line, col);
-        let ch = c[i];
-        let mut take = 1;
+    let mut out = Vec::with_capacity(text.len());
+    for ch in text.chars() {
+        out.push((ch, (line, col)));
         if ch == '\n' {
             line += 1;
             col = 1;
-            i += 1;
-            continue;
-        } else if ch.is_whitespace() {
+        } else {
+            col += 1;
+        }
+    }
+    out
+}
+
+fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, ImportError> {
+    let c: Vec<char> = src.iter().map(|x| x.0).collect();
+    let mut i = 0;
+    let mut out = Vec::new();
+    while i < c.len() {
+        let here = src[i].1;
+        let ch = c[i];
+        let mut take = 1;
+        if ch.is_whitespace() {
         } else if d == Dialect::Matlab && c[i..].starts_with(&['.', '.', '.']) {
             // A continuation: the rest of the line is a comment.
             while i + take < c.len() && c[i + take] != '\n' {
@@ -110,7 +123,6 @@ fn tokenize(text: &str, at: (usize, usize), d: Dialect) -> Result<Vec<Tok>, Impo
             take = len;
             out.push(Tok { t: T::Op(op), at: here });
         }
-        col += take;
         i += take;
     }
     Ok(out)
@@ -339,14 +351,13 @@ impl P<'_> {
 
 /// Read one formula placed at `at` in its file.
 pub(crate) fn parse(text: &str, at: (usize, usize), d: Dialect) -> Result<Ex, ImportError> {
-    let toks = tokenize(text, at, d)?;
-    let lines = text.split('\n').count();
-    let last = text.rsplit('\n').next().unwrap_or("");
-    let end = if lines > 1 {
-        (at.0 + lines - 1, last.chars().count() + 1)
-    } else {
-        (at.0, at.1 + last.chars().count())
-    };
+    parse_placed(&placed(text, at), d)
+}
+
+/// Read one formula whose characters carry their own places.
+pub(crate) fn parse_placed(src: &[(char, (usize, usize))], d: Dialect) -> Result<Ex, ImportError> {
+    let toks = tokenize(src, d)?;
+    let end = src.last().map_or((1, 1), |&(_, (l, c))| (l, c + 1));
     let mut p = P {
         toks: &toks,
         i: 0,
@@ -388,5 +399,7 @@ mod tests {
         assert_eq!((e.line, e.col), (3, 10));
         let e = parse("a +\n  #", (3, 5), Dialect::Matlab).unwrap_err();
         assert_eq!((e.line, e.col), (4, 3));
+        let e = parse("a +", (3, 5), Dialect::Petab).unwrap_err();
+        assert_eq!((e.line, e.col), (3, 8));
     }
 }

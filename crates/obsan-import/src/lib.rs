@@ -1,5 +1,6 @@
 //! obsan's importers: foreign model text in, `.sys` text out (docs/import.md):
-//! StructuralIdentifiability.jl's `@ODEmodel`, SBML and PEtab.
+//! StructuralIdentifiability.jl's `@ODEmodel`, SBML, PEtab and STRIKE-GOLDD's
+//! MATLAB model files.
 //!
 //! The crate does no file I/O and depends on no other obsan crate: it only
 //! translates. The `obsan import` commands read the file, call a translator
@@ -21,12 +22,14 @@
 mod error;
 mod infix;
 mod julia;
+mod matlab;
 mod petab;
 mod sbml;
 mod yaml;
 
 pub use error::ImportError;
 pub use julia::{si_jl_convert, si_jl_models, SiJlModel};
+pub use matlab::strike_goldd_to_sys;
 pub use petab::{petab_files, petab_to_sys, PetabError, PetabFile, PetabFiles, PetabTexts};
 pub use sbml::sbml_to_sys;
 

@@ -27,7 +27,8 @@ pub struct PetabFiles {
     pub parameters: String,
     pub observables: String,
     pub conditions: String,
-    pub measurements: Option<String>,
+    /// Zero or more measurement tables (their rows are read together).
+    pub measurements: Vec<String>,
 }
 
 /// Which file of the problem an error is in.
@@ -38,7 +39,8 @@ pub enum PetabFile {
     Parameters,
     Observables,
     Conditions,
-    Measurements,
+    /// The k-th measurement table (0-based).
+    Measurements(usize),
 }
 
 /// An error at a line and column of one of the problem's files.
@@ -54,7 +56,7 @@ pub struct PetabTexts<'a> {
     pub parameters: &'a str,
     pub observables: &'a str,
     pub conditions: &'a str,
-    pub measurements: Option<&'a str>,
+    pub measurements: Vec<&'a str>,
 }
 
 /// Read a PEtab v1 problem file: the one problem's file names.
@@ -122,11 +124,24 @@ pub fn petab_files(text: &str) -> Result<PetabFiles, ImportError> {
         parameters,
         observables: need("observable_files")?,
         conditions: need("condition_files")?,
-        measurements: one(
-            problem.get("measurement_files"),
-            "measurement_files",
-            key_at("measurement_files"),
-        )?,
+        measurements: match problem.get("measurement_files") {
+            None => Vec::new(),
+            Some(Y::Str(s, _)) => vec![s.clone()],
+            Some(Y::List(v)) => v
+                .iter()
+                .map(|x| match x {
+                    Y::Str(s, _) => Ok(s.clone()),
+                    _ => {
+                        let at = key_at("measurement_files");
+                        Err(ImportError::at(at.0, at.1, "'measurement_files' lists a non-name"))
+                    }
+                })
+                .collect::<Result<_, _>>()?,
+            Some(_) => {
+                let at = key_at("measurement_files");
+                return Err(ImportError::at(at.0, at.1, "'measurement_files' is not a list"));
+            }
+        },
     })
 }
 
@@ -309,19 +324,36 @@ fn read_conditions(text: &str) -> Result<Conditions, ImportError> {
     Ok(out)
 }
 
-/// Measurements: the conditions used in order, and per (condition,
-/// observable) the distinct override lists with the line of their first row.
-#[allow(clippy::type_complexity)]
+/// Overrides: per (condition, observable) the distinct override lists, each
+/// with its table and the line of its first row.
+type Overrides = BTreeMap<(String, String), Vec<(Vec<String>, usize, usize)>>;
+
+/// Measurements: the conditions used in order, the overrides, and whether
+/// some row asks for preequilibration.
 fn read_measurements(
+    texts: &[&str],
+) -> Result<(Vec<String>, Overrides, bool), PetabError> {
+    let mut conds: Vec<String> = Vec::new();
+    let mut over = Overrides::new();
+    let mut preeq = false;
+    for (k, text) in texts.iter().enumerate() {
+        read_measurement_table(text, k, &mut conds, &mut over, &mut preeq)
+            .map_err(in_file(PetabFile::Measurements(k)))?;
+    }
+    Ok((conds, over, preeq))
+}
+
+fn read_measurement_table(
     text: &str,
-) -> Result<(Vec<String>, BTreeMap<(String, String), Vec<(Vec<String>, usize)>>, bool), ImportError> {
+    file: usize,
+    conds: &mut Vec<String>,
+    over: &mut Overrides,
+    preeq: &mut bool,
+) -> Result<(), ImportError> {
     let t = Table::read(text)?;
     let (co, cc) = (t.need("observableId")?, t.need("simulationConditionId")?);
     let cp = t.col("observableParameters");
     let cpre = t.col("preequilibrationConditionId");
-    let mut conds: Vec<String> = Vec::new();
-    let mut over: BTreeMap<(String, String), Vec<(Vec<String>, usize)>> = BTreeMap::new();
-    let mut preeq = false;
     for row in &t.rows {
         let (o, oat) = t.cell(row, co);
         let (c, cat) = t.cell(row, cc);
@@ -330,7 +362,7 @@ fn read_measurements(
                 return Err(ImportError::at(at.0, at.1, format!("'{s}' is not a valid id")));
             }
         }
-        preeq |= cpre.is_some_and(|k| !nan(t.cell(row, k).0));
+        *preeq |= cpre.is_some_and(|k| !nan(t.cell(row, k).0));
         if !conds.iter().any(|x| x == c) {
             conds.push(c.to_string());
         }
@@ -340,10 +372,10 @@ fn read_measurements(
         };
         let e = over.entry((c.to_string(), o.to_string())).or_default();
         if !e.iter().any(|x| x.0 == ps) {
-            e.push((ps, row.0));
+            e.push((ps, file, row.0));
         }
     }
-    Ok((conds, over, preeq))
+    Ok(())
 }
 
 fn in_file(file: PetabFile) -> impl Fn(ImportError) -> PetabError {
@@ -362,9 +394,9 @@ pub fn petab_to_sys(
     let table = read_parameters(t.parameters).map_err(in_file(F::Parameters))?;
     let observables = read_observables(t.observables).map_err(in_file(F::Observables))?;
     let conditions = read_conditions(t.conditions).map_err(in_file(F::Conditions))?;
-    let (mut used, over, preeq) = match t.measurements {
-        Some(text) => read_measurements(text).map_err(in_file(F::Measurements))?,
-        None => (
+    let (mut used, over, preeq) = match t.measurements.is_empty() {
+        false => read_measurements(&t.measurements)?,
+        true => (
             conditions.iter().map(|c| c.0.clone()).collect(),
             BTreeMap::new(),
             false,
@@ -382,7 +414,7 @@ pub fn petab_to_sys(
             used.push(c.to_string());
         }
     }
-    let measured_all = t.measurements.is_none();
+    let measured_all = t.measurements.is_empty();
     if used.is_empty() {
         used.push(String::new());
     }
@@ -474,15 +506,15 @@ pub fn petab_to_sys(
         }
         for (o, f, at) in &formulas {
             let lists = over.get(&(c.clone(), o.clone()));
-            let lists: Vec<(Vec<String>, usize)> = match lists {
+            let lists: Vec<(Vec<String>, usize, usize)> = match lists {
                 Some(l) => l.clone(),
-                None if measured_all => vec![(Vec::new(), 0)],
+                None if measured_all => vec![(Vec::new(), 0, 0)],
                 None => continue,
             };
-            for (j, (ps, line)) in lists.iter().enumerate() {
+            for (j, (ps, file, line)) in lists.iter().enumerate() {
                 let mut vals: BTreeMap<String, Ex> = BTreeMap::new();
                 for (n, p) in ps.iter().enumerate() {
-                    let x = value(p, (*line, 1)).map_err(in_file(F::Measurements))?;
+                    let x = value(p, (*line, 1)).map_err(in_file(F::Measurements(*file)))?;
                     vals.insert(format!("observableParameter{}_{o}", n + 1), x);
                 }
                 let g = subst_names(f, &|n| vals.get(n).cloned());
@@ -494,7 +526,7 @@ pub fn petab_to_sys(
                 });
                 if let Some(n) = missing {
                     return Err(PetabError {
-                        file: F::Measurements,
+                        file: F::Measurements(*file),
                         error: ImportError::at(
                             *line,
                             1,
@@ -513,7 +545,7 @@ pub fn petab_to_sys(
     }
     if outputs.is_empty() {
         return Err(PetabError {
-            file: F::Measurements,
+            file: F::Measurements(0),
             error: ImportError::at(1, 1, "no observable is measured in the conditions read"),
         });
     }

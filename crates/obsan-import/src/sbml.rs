@@ -371,7 +371,11 @@ impl Sbml {
         }
         read_functions(&mut cx, model)?;
         let (assign, rate) = read_rules(&cx, model)?;
-        let (consts, sizes) = read_compartments(&cx, model, &assign, &rate)?;
+        let (mut consts, mut sizes) = read_compartments(&cx, model, &assign, &rate)?;
+        let mut assign = assign;
+        constant_initial_assignments(&cx, model, &rate, &mut assign)?;
+        consts.retain(|c| !assign.contains_key(c));
+        sizes.retain(|c, _| !assign.contains_key(c));
         let species = read_species(&cx, model)?;
         let (mut params, param_states, mut values) = read_parameters(&cx, model, &assign, &rate)?;
         let flux = read_reactions(&cx, model, &mut params, &mut values)?;
@@ -674,6 +678,30 @@ fn read_compartments(
     Ok((consts, sizes))
 }
 
+/// An initial assignment to a constant parameter or compartment holds at all
+/// times: it is substituted like an assignment rule. (One to a species is an
+/// initial value, which the analysis does not use.)
+fn constant_initial_assignments(
+    cx: &Ctx,
+    model: Node,
+    rate: &Rules,
+    assign: &mut Rules,
+) -> Result<(), ImportError> {
+    let constant: Vec<String> = list(model, "listOfParameters", "parameter")
+        .into_iter()
+        .chain(list(model, "listOfCompartments", "compartment"))
+        .filter(|p| p.attribute("constant") != Some("false"))
+        .filter_map(|p| p.attribute("id").map(str::to_string))
+        .collect();
+    for ia in list(model, "listOfInitialAssignments", "initialAssignment") {
+        let v = id_of(cx, ia, "symbol")?;
+        if constant.contains(&v) && !rate.contains_key(&v) && !assign.contains_key(&v) {
+            assign.insert(v, (math_of(cx, ia)?, cx.pos(ia)));
+        }
+    }
+    Ok(())
+}
+
 struct Sp {
     id: String,
     comp: String,
@@ -839,7 +867,7 @@ pub(crate) fn walk_names(e: &Ex, f: &mut dyn FnMut(&str)) {
     walk_names_at(e, &mut |n, _| f(n));
 }
 
-fn walk_names_at(e: &Ex, f: &mut dyn FnMut(&str, (usize, usize))) {
+pub(crate) fn walk_names_at(e: &Ex, f: &mut dyn FnMut(&str, (usize, usize))) {
     match e {
         Ex::Name { name, at, .. } => f(name, *at),
         Ex::Neg(a) => walk_names_at(a, f),
