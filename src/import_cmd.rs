@@ -141,7 +141,14 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
 
 pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {
     let path = a.source.as_str();
-    let text = crate::fsio::read_text(path)?;
+    // MATLAB files are often Latin-1 (accents in comments): read as such when not UTF-8.
+    let text = match crate::fsio::read_text(path) {
+        Ok(t) => t,
+        Err(e) => match std::fs::read(path) {
+            Ok(b) if std::str::from_utf8(&b).is_err() => b.iter().map(|&c| c as char).collect(),
+            _ => return Err(e),
+        },
+    };
     let c = obsan_import::strike_goldd_to_sys(&text, path)
         .map_err(|e| Failure(located(path, &e)))?;
     check_and_write(path, &c, a.out.as_deref(), a.force)

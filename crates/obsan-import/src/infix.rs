@@ -29,6 +29,9 @@ struct Tok {
 
 const MAX_DEPTH: usize = 200;
 
+/// The prefix of a call that is MATLAB indexing (`[]u` for `u(k)`).
+pub(crate) const INDEX: &str = "[]";
+
 /// Each character with its place in the file.
 pub(crate) type Placed = Vec<(char, (usize, usize))>;
 
@@ -338,6 +341,10 @@ impl P<'_> {
                     (Some(b), Some(e)) => bin('^', b, e),
                     _ => return Err(err(format!("{f} takes two arguments"))),
                 }
+            }
+            // MATLAB indexing `u(2)`: resolved by the caller, which knows the vectors.
+            _ if self.d == Dialect::Matlab && args.len() == 1 => {
+                Ex::Call(format!("{INDEX}{f}"), args)
             }
             _ => {
                 return Err(err(format!(

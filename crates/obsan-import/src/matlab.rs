@@ -181,32 +181,80 @@ fn is_name(s: &str) -> bool {
         && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
-fn subst(e: &Ex, vars: &BTreeMap<String, Vec<Ex>>) -> Ex {
-    match e {
-        Ex::Name { name, .. } => match vars.get(name).map(Vec::as_slice) {
-            Some([x]) => x.clone(),
+/// Substitute the single-valued assignments made so far, and indexing
+/// `v(k)` into an assigned vector.
+fn subst(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result<Ex, ImportError> {
+    Ok(match e {
+        Ex::Call(g, args) if g.starts_with(infix::INDEX) => {
+            let v = &g[infix::INDEX.len()..];
+            let k = match args.as_slice() {
+                [Ex::Num(k)] => k.parse::<usize>().ok(),
+                _ => None,
+            };
+            match (vars.get(v), k) {
+                (Some((items, _)), Some(k)) if k >= 1 && k <= items.len() => items[k - 1].0.clone(),
+                (Some((items, _)), _) => {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("'{v}(...)': the index must be a number from 1 to {}", items.len()),
+                    ))
+                }
+                (None, _) => {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!(
+                            "'{v}(...)' is neither a function obsan reads (exp, log, log10, sqrt, \
+                             sin, cos, tan, atan) nor a vector assigned before"
+                        ),
+                    ))
+                }
+            }
+        }
+        e => subst_plain(e, vars, at)?,
+    })
+}
+
+fn subst_plain(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result<Ex, ImportError> {
+    Ok(match e {
+        Ex::Name { name, .. } => match vars.get(name).map(|v| v.0.as_slice()) {
+            Some([x]) => x.0.clone(),
             _ => e.clone(),
         },
-        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, vars))),
-        Ex::Bin(op, a, b) => Ex::Bin(*op, Box::new(subst(a, vars)), Box::new(subst(b, vars))),
-        Ex::Call(g, args) => Ex::Call(g.clone(), args.iter().map(|a| subst(a, vars)).collect()),
+        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, vars, at)?)),
+        Ex::Bin(op, a, b) => Ex::Bin(
+            *op,
+            Box::new(subst(a, vars, at)?),
+            Box::new(subst(b, vars, at)?),
+        ),
+        Ex::Call(g, args) => Ex::Call(
+            g.clone(),
+            args.iter()
+                .map(|a| subst(a, vars, at))
+                .collect::<Result<_, _>>()?,
+        ),
         Ex::Num(_) => e.clone(),
-    }
+    })
 }
 
 /// Translate a STRIKE-GOLDD model file into `.sys` text. `origin` names the
 /// file (its stem, less `z_create_`, names the system unless the file saves
 /// under another name with `save('NAME', ...)`).
 pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, ImportError> {
-    let mut vars: BTreeMap<String, Vec<Ex>> = BTreeMap::new();
-    let mut roles: BTreeMap<&str, (Vec<(Ex, At)>, At)> = BTreeMap::new();
+    // Every assignment, in order; a later one replaces an earlier one.
+    let mut vars: BTreeMap<String, (Vec<(Ex, At)>, At)> = BTreeMap::new();
+    let mut syms: Vec<(String, At)> = Vec::new();
     let mut saved: Option<String> = None;
     for st in statements(text)? {
         let st = trim(&st);
         let t = string(st);
-        // `syms a b real`: the roles come from x, p, u, w, so declarations are not needed.
-        if t.strip_prefix("syms").is_some_and(|r| r.is_empty() || r.starts_with(char::is_whitespace)) {
-            continue;
+        // `syms a b real`: a role (x, u, ...) declared and never assigned is that one symbol.
+        if let Some(rest) = t.strip_prefix("syms") {
+            if rest.is_empty() || rest.starts_with(char::is_whitespace) {
+                syms.extend(rest.split_whitespace().map(|w| (w.to_string(), st[0].1)));
+                continue;
+            }
         }
         if let Some(rest) = t.strip_prefix("save(") {
             let name = rest.trim_start().strip_prefix('\'').and_then(|r| r.split('\'').next());
@@ -223,38 +271,38 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
             continue;
         }
         let lhs = string(trim(&st[..eq]));
-        if !is_name(&lhs) {
+        if !is_name(&lhs) || matches!(lhs.as_str(), "ics" | "known_ics") {
             continue;
         }
-        let at = st[0].1;
-        let role = match lhs.as_str() {
-            "x" | "p" | "u" | "w" | "f" | "h" => Some(lhs.clone()),
-            "ics" | "known_ics" => continue,
-            _ => None,
-        };
         let mut items = Vec::new();
         for el in elements(&st[eq + 1..]) {
             let e = infix::parse_placed(el, Dialect::Matlab)?;
-            items.push((subst(&e, &vars), el[0].1));
+            // A name standing for a whole vector (`h = x`) is that vector.
+            if let Ex::Name { name, .. } = &e {
+                if let Some((v, _)) = vars.get(name).filter(|v| v.0.len() != 1) {
+                    items.extend(v.iter().cloned());
+                    continue;
+                }
+            }
+            items.push((subst(&e, &vars, el[0].1)?, el[0].1));
         }
-        match role {
-            Some(r) => {
-                let key: &str = match r.as_str() {
-                    "x" => "x",
-                    "p" => "p",
-                    "u" => "u",
-                    "w" => "w",
-                    "f" => "f",
-                    _ => "h",
-                };
-                roles.insert(key, (items, at));
-            }
-            None => {
-                vars.insert(lhs, items.into_iter().map(|i| i.0).collect());
-            }
+        vars.insert(lhs, (items, st[0].1));
+    }
+    let mut roles: BTreeMap<&str, (Vec<(Ex, At)>, At)> = BTreeMap::new();
+    for r in ["x", "p", "u", "w", "f", "h"] {
+        if let Some(v) = vars.get(r) {
+            roles.insert(r, v.clone());
+        } else if let Some((_, at)) = syms.iter().find(|s| s.0 == r) {
+            let e = Ex::Name {
+                name: r.to_string(),
+                timed: false,
+                at: *at,
+            };
+            roles.insert(r, (vec![(e, *at)], *at));
         }
     }
-    convert(roles, saved, origin)
+    let syms: Vec<String> = syms.into_iter().map(|s| s.0).collect();
+    convert(roles, &syms, saved, origin)
 }
 
 fn names_of(
@@ -282,6 +330,7 @@ fn names_of(
 
 fn convert(
     roles: BTreeMap<&str, (Vec<(Ex, At)>, At)>,
+    syms: &[String],
     saved: Option<String>,
     origin: &str,
 ) -> Result<Converted, ImportError> {
@@ -315,10 +364,16 @@ fn convert(
         all.push(n);
     }
     let (h, _) = roles.get("h").cloned().unwrap_or_default();
+    // A symbol declared with `syms` but in none of x, p, u, w is a known
+    // constant, as STRIKE-GOLDD reads it.
+    let mut consts: Vec<String> = Vec::new();
     for (e, _) in f.iter().chain(&h) {
         let mut bad = None;
         walk_names_at(e, &mut |n, p| {
-            if bad.is_none() && !all.contains(&n) {
+            if all.contains(&n) || consts.iter().any(|c| c == n) {
+            } else if syms.iter().any(|s| s == n) {
+                consts.push(n.to_string());
+            } else if bad.is_none() {
                 bad = Some((n.to_string(), p));
             }
         });
@@ -331,7 +386,10 @@ fn convert(
             return Err(ImportError::at(
                 p.0,
                 p.1,
-                format!("'{n}' is not a state, parameter or input of the model (x, p, u, w){why}"),
+                format!(
+                    "'{n}' is not a state, parameter or input of the model (x, p, u, w) nor \
+                     declared with syms{why}"
+                ),
             ));
         }
     }
@@ -375,6 +433,10 @@ fn convert(
     }
     if !unknown.is_empty() {
         lines.push(format!("unknown input {}", list(&unknown)));
+    }
+    if !consts.is_empty() {
+        let c: Vec<String> = consts.iter().map(|c| rename(c)).collect();
+        lines.push(format!("const {}", c.join(", ")));
     }
     let mut line_map = Vec::new();
     for ((s, _), (e, at)) in states.iter().zip(&f) {
