@@ -196,3 +196,43 @@ fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
         "z_create_bad.m:4:5: this '[' is never closed",
     );
 }
+
+/// systems/benchmarks/strike-goldd/ (issue 32): each NAME.sys is `obsan import strike-goldd` of
+/// its src/z_create_NAME.m (written for obsan from the model's equations) under a header, and
+/// obsan's rank agrees with the verdict the file cites (SymPy, benches/peers/sg_verdicts.py).
+#[test]
+fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
+    let dir = "systems/benchmarks/strike-goldd";
+    let mut names: Vec<String> = std::fs::read_dir(format!("{dir}/src"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("z_create_") && n.ends_with(".m"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 6, "{names:?}");
+    for m in &names {
+        let name = &m["z_create_".len()..m.len() - 2];
+        let path = format!("{dir}/{name}.sys");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let run = obsan_in(dir, &["import", "strike-goldd", &format!("src/{m}")]);
+        assert_eq!(run.code, 0, "{m}: {}", run.stderr);
+        let body: String = text
+            .lines()
+            .filter(|l| !l.starts_with("# Source:") && !l.starts_with("# verdict"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_eq!(body, run.stdout, "{path} is not the import of src/{m}");
+        let entries = crate::suite_entries::file_entries(&path, &text).unwrap();
+        assert_eq!(entries.len(), 1, "{path}");
+        let v: Value = serde_json::from_str(&ok(&["rank", &path, "--json"])).unwrap();
+        let want = &entries[0].verdict;
+        assert_eq!(want.rank, v["rank"].as_u64(), "{path}");
+        let un: std::collections::BTreeSet<String> = v["unobservable_variables"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect();
+        assert_eq!(want.unobservable.as_ref(), Some(&un), "{path}");
+    }
+}
