@@ -149,8 +149,8 @@ pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {
             _ => return Err(e),
         },
     };
-    let c = obsan_import::strike_goldd_to_sys(&text, path)
-        .map_err(|e| Failure(located(path, &e)))?;
+    let c =
+        obsan_import::strike_goldd_to_sys(&text, path).map_err(|e| Failure(located(path, &e)))?;
     check_and_write(path, &c, a.out.as_deref(), a.force)
 }
 
@@ -230,7 +230,11 @@ pub fn petab(a: &PetabArgs) -> Result<ExitCode, Failure> {
         .map_err(|e| {
             let line = e.line.unwrap_or(0);
             let (l, col) = c.source_of(line).unwrap_or((1, 1));
-            let f = if c.table_lines.contains(&line) { &obs } else { &sbml };
+            let f = if c.table_lines.contains(&line) {
+                &obs
+            } else {
+                &sbml
+            };
             Failure(format!(
                 "{f}:{l}:{col}: the problem is outside obsan's .sys class: {}",
                 e.message

@@ -148,7 +148,15 @@ fn petab_import_then_rank_gives_the_derived_verdict() {
     let yaml = "crates/obsan-import/tests/petab/Bertozzi_PNAS2020/problem.yaml";
     let dir = fresh_dir("petab");
     let one = format!("{dir}/ny.sys");
-    ok(&["import", "petab", yaml, "--condition", "u_NY", "--out", &one]);
+    ok(&[
+        "import",
+        "petab",
+        yaml,
+        "--condition",
+        "u_NY",
+        "--out",
+        &one,
+    ]);
     let v: Value = serde_json::from_str(&ok(&["rank", &one, "--json"])).unwrap();
     assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(5), Some(4)));
     let both = format!("{dir}/both.sys");
@@ -159,11 +167,21 @@ fn petab_import_then_rank_gives_the_derived_verdict() {
     // cell of u_CA under it: "u_CA", 39560000, I0_CA, then R0_CA at column 21).
     let src = std::path::Path::new(yaml).parent().unwrap();
     let bad_dir = fresh_dir("petab_bad");
-    for f in ["problem.yaml", "model.xml", "parameters.tsv", "observables.tsv", "measurements.tsv"] {
+    for f in [
+        "problem.yaml",
+        "model.xml",
+        "parameters.tsv",
+        "observables.tsv",
+        "measurements.tsv",
+    ] {
         std::fs::copy(src.join(f), format!("{bad_dir}/{f}")).unwrap();
     }
     let conds = std::fs::read_to_string(src.join("conditions.tsv")).unwrap();
-    std::fs::write(format!("{bad_dir}/conditions.tsv"), conds.replace("R0_\t", "R9_\t")).unwrap();
+    std::fs::write(
+        format!("{bad_dir}/conditions.tsv"),
+        conds.replace("R0_\t", "R9_\t"),
+    )
+    .unwrap();
     bad(
         &["import", "petab", &format!("{bad_dir}/problem.yaml")],
         "conditions.tsv:2:21: column 'R9_' is not a parameter",
@@ -190,7 +208,10 @@ fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
     ok(&["import", "strike-goldd", &src, "--out", &out]);
     let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
     assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(5), Some(5)));
-    let bad_src = temp_file("z_create_bad.m", "syms x1 k\nx = x1;\np = k;\nf = [-k*x1;\nh = x1;\n");
+    let bad_src = temp_file(
+        "z_create_bad.m",
+        "syms x1 k\nx = x1;\np = k;\nf = [-k*x1;\nh = x1;\n",
+    );
     bad(
         &["import", "strike-goldd", &bad_src],
         "z_create_bad.m:4:5: this '[' is never closed",

@@ -65,7 +65,9 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
             while i + take < c.len() && c[i + take] != '\n' {
                 take += 1;
             }
-        } else if ch.is_ascii_digit() || (ch == '.' && c.get(i + 1).is_some_and(char::is_ascii_digit)) {
+        } else if ch.is_ascii_digit()
+            || (ch == '.' && c.get(i + 1).is_some_and(char::is_ascii_digit))
+        {
             let digits = |mut j: usize| {
                 while j < c.len() && c[j].is_ascii_digit() {
                     j += 1;
@@ -79,7 +81,11 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
                 j = digits(j + 1);
             }
             if matches!(c.get(j), Some('e' | 'E')) {
-                let k = if matches!(c.get(j + 1), Some('+' | '-')) { j + 2 } else { j + 1 };
+                let k = if matches!(c.get(j + 1), Some('+' | '-')) {
+                    j + 2
+                } else {
+                    j + 1
+                };
                 if c.get(k).is_some_and(char::is_ascii_digit) {
                     j = digits(k);
                 }
@@ -93,7 +99,8 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
                 at: here,
             });
         } else if ch.is_ascii_alphabetic() || ch == '_' {
-            while i + take < c.len() && (c[i + take].is_ascii_alphanumeric() || c[i + take] == '_') {
+            while i + take < c.len() && (c[i + take].is_ascii_alphanumeric() || c[i + take] == '_')
+            {
                 take += 1;
             }
             out.push(Tok {
@@ -124,7 +131,10 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
                 }
             };
             take = len;
-            out.push(Tok { t: T::Op(op), at: here });
+            out.push(Tok {
+                t: T::Op(op),
+                at: here,
+            });
         }
         i += take;
     }
@@ -281,7 +291,11 @@ impl P<'_> {
                 }
                 Ok(e)
             }
-            T::Op(o) => Err(ImportError::at(at.0, at.1, format!("expected an expression, found '{o}'"))),
+            T::Op(o) => Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("expected an expression, found '{o}'"),
+            )),
             T::Id(name) => {
                 if !self.eat("(") {
                     return Ok(match name.as_str() {
@@ -320,7 +334,9 @@ impl P<'_> {
         let log = |x: Ex| Ex::Call("log".into(), vec![x]);
         let num = |s: &str| Ex::Num(s.into());
         Ok(match f {
-            "exp" | "sin" | "cos" | "tan" | "atan" | "sqrt" => Ex::Call(f.into(), vec![one(&mut args)?]),
+            "exp" | "sin" | "cos" | "tan" | "atan" | "sqrt" => {
+                Ex::Call(f.into(), vec![one(&mut args)?])
+            }
             "arctan" if self.d == Dialect::Petab => Ex::Call("atan".into(), vec![one(&mut args)?]),
             "ln" if self.d == Dialect::Petab => log(one(&mut args)?),
             "log" if args.len() == 2 && self.d == Dialect::Petab => {
@@ -398,7 +414,10 @@ mod tests {
         // MATLAB: 2^3^2 = (2^3)^2 = 64.
         assert_eq!(text("2^3^2", Dialect::Matlab), "(2^3)^2");
         assert_eq!(text("x.^2./y.*z", Dialect::Matlab), "x^2/y*z");
-        assert_eq!(text("-x^2 + 1.E+05*.5", Dialect::Petab), "-x^2 + 1.0e05*0.5");
+        assert_eq!(
+            text("-x^2 + 1.E+05*.5", Dialect::Petab),
+            "-x^2 + 1.0e05*0.5"
+        );
         assert_eq!(text("a*(b - ...\n c)", Dialect::Matlab), "a*(b - c)");
         assert_eq!(text("log10(x)", Dialect::Petab), "log(x)/log(10)");
         assert_eq!(text("x^-1", Dialect::Matlab), "x^(-1)");

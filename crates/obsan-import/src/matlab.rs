@@ -48,8 +48,9 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
         }
         if ch == '\'' {
             // A transpose after a value; otherwise a string, kept whole.
-            let transpose = prev_sig(&cur).is_some_and(|p| p.is_ascii_alphanumeric() || matches!(p, '_' | ']' | ')' | '\'' | '.'))
-                && cur.last().is_some_and(|c| !c.0.is_whitespace());
+            let transpose = prev_sig(&cur).is_some_and(|p| {
+                p.is_ascii_alphanumeric() || matches!(p, '_' | ']' | ')' | '\'' | '.')
+            }) && cur.last().is_some_and(|c| !c.0.is_whitespace());
             if !transpose {
                 cur.push(src[i]);
                 i += 1;
@@ -58,7 +59,11 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
                     i += 1;
                 }
                 if src.get(i).map(|c| c.0) != Some('\'') {
-                    return Err(ImportError::at(at.0, at.1, "this string is not closed on its line"));
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        "this string is not closed on its line",
+                    ));
                 }
             }
             cur.push(src[i]);
@@ -93,7 +98,11 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
         i += 1;
     }
     if let Some((o, at)) = depth.pop() {
-        return Err(ImportError::at(at.0, at.1, format!("this '{o}' is never closed")));
+        return Err(ImportError::at(
+            at.0,
+            at.1,
+            format!("this '{o}' is never closed"),
+        ));
     }
     if cur.iter().any(|c| !c.0.is_whitespace()) {
         out.push(cur);
@@ -102,8 +111,14 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
 }
 
 fn trim(s: &[(char, At)]) -> &[(char, At)] {
-    let a = s.iter().position(|c| !c.0.is_whitespace()).unwrap_or(s.len());
-    let b = s.iter().rposition(|c| !c.0.is_whitespace()).map_or(a, |k| k + 1);
+    let a = s
+        .iter()
+        .position(|c| !c.0.is_whitespace())
+        .unwrap_or(s.len());
+    let b = s
+        .iter()
+        .rposition(|c| !c.0.is_whitespace())
+        .map_or(a, |k| k + 1);
     &s[a..b.max(a)]
 }
 
@@ -164,9 +179,10 @@ fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
             .filter(|w| !w.is_empty())
             .collect();
         if words.len() > 1
-            && words
-                .iter()
-                .all(|w| w.iter().all(|c| c.0.is_ascii_alphanumeric() || matches!(c.0, '_' | '.')))
+            && words.iter().all(|w| {
+                w.iter()
+                    .all(|c| c.0.is_ascii_alphanumeric() || matches!(c.0, '_' | '.'))
+            })
         {
             out.extend(words);
         } else {
@@ -197,7 +213,10 @@ fn subst(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result
                     return Err(ImportError::at(
                         at.0,
                         at.1,
-                        format!("'{v}(...)': the index must be a number from 1 to {}", items.len()),
+                        format!(
+                            "'{v}(...)': the index must be a number from 1 to {}",
+                            items.len()
+                        ),
                     ))
                 }
                 (None, _) => {
@@ -216,7 +235,11 @@ fn subst(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result
     })
 }
 
-fn subst_plain(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result<Ex, ImportError> {
+fn subst_plain(
+    e: &Ex,
+    vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>,
+    at: At,
+) -> Result<Ex, ImportError> {
     Ok(match e {
         Ex::Name { name, .. } => match vars.get(name).map(|v| v.0.as_slice()) {
             Some([x]) => x.0.clone(),
@@ -257,7 +280,10 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
             }
         }
         if let Some(rest) = t.strip_prefix("save(") {
-            let name = rest.trim_start().strip_prefix('\'').and_then(|r| r.split('\'').next());
+            let name = rest
+                .trim_start()
+                .strip_prefix('\'')
+                .and_then(|r| r.split('\'').next());
             if let Some(n) = name.filter(|n| is_name(n)) {
                 saved = Some(n.to_string());
             }
@@ -338,7 +364,11 @@ fn convert(
         if roles.contains_key(k) {
             Ok(())
         } else {
-            Err(ImportError::at(1, 1, format!("no '{k} = [...]' ({what}) in the file")))
+            Err(ImportError::at(
+                1,
+                1,
+                format!("no '{k} = [...]' ({what}) in the file"),
+            ))
         }
     };
     need("x", "the states")?;
@@ -359,7 +389,11 @@ fn convert(
     let mut all: Vec<&str> = Vec::new();
     for (n, at) in states.iter().chain(&params).chain(&inputs).chain(&unknown) {
         if all.contains(&n.as_str()) {
-            return Err(ImportError::at(at.0, at.1, format!("'{n}' is declared twice (x, p, u, w)")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{n}' is declared twice (x, p, u, w)"),
+            ));
         }
         all.push(n);
     }
@@ -405,10 +439,17 @@ fn convert(
         .next()
         .unwrap_or(origin)
         .trim_end_matches(".m");
-    let mut name = saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
+    let mut name =
+        saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
     name = name
         .chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect();
     if !name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
         name.insert(0, '_');
@@ -416,7 +457,12 @@ fn convert(
     if RESERVED.contains(&name.as_str()) {
         name.push('_');
     }
-    let list = |v: &[(String, At)]| v.iter().map(|x| rename(&x.0)).collect::<Vec<_>>().join(", ");
+    let list = |v: &[(String, At)]| {
+        v.iter()
+            .map(|x| rename(&x.0))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let mut lines = vec![
         format!(
             "# Imported by `obsan import strike-goldd` from {}.",

@@ -64,7 +64,13 @@ pub fn petab_files(text: &str) -> Result<PetabFiles, ImportError> {
     let y = yaml::parse(text)?;
     let top = match &y {
         Y::Map(_) => &y,
-        _ => return Err(ImportError::at(1, 1, "a PEtab problem file is a YAML mapping")),
+        _ => {
+            return Err(ImportError::at(
+                1,
+                1,
+                "a PEtab problem file is a YAML mapping",
+            ))
+        }
     };
     let at_of = |k: &str| match top {
         Y::Map(m) => m.iter().find(|e| e.0 == k).map_or((1, 1), |e| e.2),
@@ -79,26 +85,33 @@ pub fn petab_files(text: &str) -> Result<PetabFiles, ImportError> {
             ));
         }
     }
-    let one = |y: Option<&Y>, key: &str, at: (usize, usize)| -> Result<Option<String>, ImportError> {
-        match y {
-            None => Ok(None),
-            Some(Y::Str(s, _)) if !s.is_empty() => Ok(Some(s.clone())),
-            Some(Y::List(v)) if v.is_empty() => Ok(None),
-            Some(Y::List(v)) => match v.as_slice() {
-                [Y::Str(s, _)] => Ok(Some(s.clone())),
-                _ => Err(ImportError::at(
+    let one =
+        |y: Option<&Y>, key: &str, at: (usize, usize)| -> Result<Option<String>, ImportError> {
+            match y {
+                None => Ok(None),
+                Some(Y::Str(s, _)) if !s.is_empty() => Ok(Some(s.clone())),
+                Some(Y::List(v)) if v.is_empty() => Ok(None),
+                Some(Y::List(v)) => match v.as_slice() {
+                    [Y::Str(s, _)] => Ok(Some(s.clone())),
+                    _ => Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("'{key}' names {} files: obsan reads one", v.len()),
+                    )),
+                },
+                Some(_) => Err(ImportError::at(
                     at.0,
                     at.1,
-                    format!("'{key}' names {} files: obsan reads one", v.len()),
+                    format!("'{key}' is not a file name"),
                 )),
-            },
-            Some(_) => Err(ImportError::at(at.0, at.1, format!("'{key}' is not a file name"))),
-        }
-    };
-    let parameters = one(top.get("parameter_file"), "parameter_file", at_of("parameter_file"))?
-        .ok_or_else(|| {
-            ImportError::at(1, 1, "no 'parameter_file' (a PEtab v1 problem names one)")
-        })?;
+            }
+        };
+    let parameters = one(
+        top.get("parameter_file"),
+        "parameter_file",
+        at_of("parameter_file"),
+    )?
+    .ok_or_else(|| ImportError::at(1, 1, "no 'parameter_file' (a PEtab v1 problem names one)"))?;
     let pat = at_of("problems");
     let problem = match top.get("problems") {
         Some(Y::List(v)) if v.len() == 1 => &v[0],
@@ -133,13 +146,21 @@ pub fn petab_files(text: &str) -> Result<PetabFiles, ImportError> {
                     Y::Str(s, _) => Ok(s.clone()),
                     _ => {
                         let at = key_at("measurement_files");
-                        Err(ImportError::at(at.0, at.1, "'measurement_files' lists a non-name"))
+                        Err(ImportError::at(
+                            at.0,
+                            at.1,
+                            "'measurement_files' lists a non-name",
+                        ))
                     }
                 })
                 .collect::<Result<_, _>>()?,
             Some(_) => {
                 let at = key_at("measurement_files");
-                return Err(ImportError::at(at.0, at.1, "'measurement_files' is not a list"));
+                return Err(ImportError::at(
+                    at.0,
+                    at.1,
+                    "'measurement_files' is not a list",
+                ));
             }
         },
     })
@@ -201,10 +222,7 @@ fn value(s: &str, at: (usize, usize)) -> Result<Ex, ImportError> {
     if let Some(n) = infix::normal_number(s.trim_start_matches('+')) {
         return Ok(Ex::Num(n));
     }
-    if let Some(n) = s
-        .strip_prefix('-')
-        .and_then(infix::normal_number)
-    {
+    if let Some(n) = s.strip_prefix('-').and_then(infix::normal_number) {
         return Ok(Ex::Neg(Box::new(Ex::Num(n))));
     }
     if is_id(s) {
@@ -225,7 +243,11 @@ fn subst_names(e: &Ex, f: &dyn Fn(&str) -> Option<Ex>) -> Ex {
     match e {
         Ex::Name { name, .. } => f(name).unwrap_or_else(|| e.clone()),
         Ex::Neg(a) => Ex::Neg(Box::new(subst_names(a, f))),
-        Ex::Bin(op, a, b) => Ex::Bin(*op, Box::new(subst_names(a, f)), Box::new(subst_names(b, f))),
+        Ex::Bin(op, a, b) => Ex::Bin(
+            *op,
+            Box::new(subst_names(a, f)),
+            Box::new(subst_names(b, f)),
+        ),
         Ex::Call(g, args) => Ex::Call(g.clone(), args.iter().map(|a| subst_names(a, f)).collect()),
         Ex::Num(_) => e.clone(),
     }
@@ -242,10 +264,18 @@ fn read_parameters(text: &str) -> Result<ParamTable, ImportError> {
     for row in &t.rows {
         let (id, at) = t.cell(row, ci);
         if !is_id(id) {
-            return Err(ImportError::at(at.0, at.1, format!("'{id}' is not a valid parameter id")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{id}' is not a valid parameter id"),
+            ));
         }
         if out.iter().any(|p| p.0 == id) {
-            return Err(ImportError::at(at.0, at.1, format!("parameter '{id}' is listed twice")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("parameter '{id}' is listed twice"),
+            ));
         }
         let (est, eat) = t.cell(row, ce);
         let fixed = match est {
@@ -285,14 +315,26 @@ fn read_observables(text: &str) -> Result<Vec<(String, Ex, (usize, usize))>, Imp
     for row in &t.rows {
         let (id, at) = t.cell(row, ci);
         if !is_id(id) {
-            return Err(ImportError::at(at.0, at.1, format!("'{id}' is not a valid observable id")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{id}' is not a valid observable id"),
+            ));
         }
         if out.iter().any(|o| o.0 == id) {
-            return Err(ImportError::at(at.0, at.1, format!("observable '{id}' is listed twice")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("observable '{id}' is listed twice"),
+            ));
         }
         let (f, fat) = t.cell(row, cf);
         if f.is_empty() {
-            return Err(ImportError::at(fat.0, fat.1, format!("observable '{id}' has no formula")));
+            return Err(ImportError::at(
+                fat.0,
+                fat.1,
+                format!("observable '{id}' has no formula"),
+            ));
         }
         out.push((id.to_string(), infix::parse(f, fat, Dialect::Petab)?, fat));
     }
@@ -309,7 +351,11 @@ fn read_conditions(text: &str) -> Result<Conditions, ImportError> {
     for row in &t.rows {
         let (id, at) = t.cell(row, ci);
         if !is_id(id) {
-            return Err(ImportError::at(at.0, at.1, format!("'{id}' is not a valid condition id")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{id}' is not a valid condition id"),
+            ));
         }
         let mut vals = Vec::new();
         for (k, h) in t.header.iter().enumerate() {
@@ -330,9 +376,7 @@ type Overrides = BTreeMap<(String, String), Vec<(Vec<String>, usize, usize)>>;
 
 /// Measurements: the conditions used in order, the overrides, and whether
 /// some row asks for preequilibration.
-fn read_measurements(
-    texts: &[&str],
-) -> Result<(Vec<String>, Overrides, bool), PetabError> {
+fn read_measurements(texts: &[&str]) -> Result<(Vec<String>, Overrides, bool), PetabError> {
     let mut conds: Vec<String> = Vec::new();
     let mut over = Overrides::new();
     let mut preeq = false;
@@ -359,7 +403,11 @@ fn read_measurement_table(
         let (c, cat) = t.cell(row, cc);
         for (s, at) in [(o, oat), (c, cat)] {
             if !is_id(s) {
-                return Err(ImportError::at(at.0, at.1, format!("'{s}' is not a valid id")));
+                return Err(ImportError::at(
+                    at.0,
+                    at.1,
+                    format!("'{s}' is not a valid id"),
+                ));
             }
         }
         *preeq |= cpre.is_some_and(|k| !nan(t.cell(row, k).0));
@@ -436,8 +484,12 @@ pub fn petab_to_sys(
         // Names are checked before the rules are substituted, at their place.
         let rules: Vec<String> = m.assign.keys().cloned().collect();
         k.extend(rules);
-        check_names(f, &k, "an id of the model, the parameter table or this observable's parameters")
-            .map_err(in_file(F::Observables))?;
+        check_names(
+            f,
+            &k,
+            "an id of the model, the parameter table or this observable's parameters",
+        )
+        .map_err(in_file(F::Observables))?;
         let r = m.resolve(f).map_err(|e| PetabError {
             file: F::Observables,
             error: ImportError::at(at.0, at.1, e.message),

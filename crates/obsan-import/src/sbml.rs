@@ -379,7 +379,13 @@ impl Sbml {
         let species = read_species(&cx, model)?;
         let (mut params, param_states, mut values) = read_parameters(&cx, model, &assign, &rate)?;
         let flux = read_reactions(&cx, model, &mut params, &mut values)?;
-        let eqs = equations(&species, &param_states, (&assign, &rate), &flux, &mut params)?;
+        let eqs = equations(
+            &species,
+            &param_states,
+            (&assign, &rate),
+            &flux,
+            &mut params,
+        )?;
         if eqs.is_empty() {
             return Err(cx.err(
                 model,
@@ -388,7 +394,10 @@ impl Sbml {
         }
         let mut m = Sbml {
             name: sys_name(model),
-            description: model.attribute("name").map(one_line).filter(|n| !n.is_empty()),
+            description: model
+                .attribute("name")
+                .map(one_line)
+                .filter(|n| !n.is_empty()),
             eqs: Vec::new(),
             params,
             values,
@@ -407,7 +416,11 @@ impl Sbml {
             .collect();
         for (v, e, at) in &eqs {
             let r = m.resolve(e)?;
-            check_names(&r, &known, "a species, parameter or compartment of the model")?;
+            check_names(
+                &r,
+                &known,
+                "a species, parameter or compartment of the model",
+            )?;
             body.push((v.clone(), r, *at));
         }
         m.eqs = body;

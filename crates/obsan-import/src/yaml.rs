@@ -42,14 +42,24 @@ pub(crate) fn parse(text: &str) -> Result<Y, ImportError> {
             continue;
         }
         if raw.starts_with('\t') {
-            return Err(ImportError::at(no, 1, "a tab indents this line (YAML indents with spaces)"));
+            return Err(ImportError::at(
+                no,
+                1,
+                "a tab indents this line (YAML indents with spaces)",
+            ));
         }
         let t = body.trim();
         if t == "---" && lines.is_empty() {
             continue;
         }
         if t == "---" || t == "..." || t.starts_with(['&', '*', '!', '|', '>', '{', '%']) {
-            return Err(ImportError::at(no, 1, format!("YAML '{t}' is not read (PEtab problem files need only mappings and lists)")));
+            return Err(ImportError::at(
+                no,
+                1,
+                format!(
+                    "YAML '{t}' is not read (PEtab problem files need only mappings and lists)"
+                ),
+            ));
         }
         let indent = body.len() - body.trim_start().len();
         lines.push(Line {
@@ -65,7 +75,11 @@ pub(crate) fn parse(text: &str) -> Result<Y, ImportError> {
     let ind = lines[0].indent;
     let y = block(&mut lines, &mut i, ind, 0)?;
     if let Some(l) = lines.get(i) {
-        return Err(ImportError::at(l.no, l.indent + 1, "unexpected indentation"));
+        return Err(ImportError::at(
+            l.no,
+            l.indent + 1,
+            "unexpected indentation",
+        ));
     }
     Ok(y)
 }
@@ -126,7 +140,11 @@ fn block(lines: &mut [Line], i: &mut usize, indent: usize, depth: usize) -> Resu
     while let Some(l) = lines.get(*i) {
         if l.indent != indent {
             if l.indent > indent {
-                return Err(ImportError::at(l.no, l.indent + 1, "unexpected indentation"));
+                return Err(ImportError::at(
+                    l.no,
+                    l.indent + 1,
+                    "unexpected indentation",
+                ));
             }
             break;
         }
@@ -136,7 +154,11 @@ fn block(lines: &mut [Line], i: &mut usize, indent: usize, depth: usize) -> Resu
         };
         let (k, v) = (k.to_string(), v.to_string());
         if map.iter().any(|e: &(String, Y, _)| e.0 == k) {
-            return Err(ImportError::at(at.0, at.1, format!("key '{k}' is given twice")));
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("key '{k}' is given twice"),
+            ));
         }
         *i += 1;
         let val = if v.is_empty() {
@@ -162,7 +184,9 @@ fn l_text_offset(k: &str) -> usize {
 
 /// `key: value` (or `key:`), the key plain or quoted.
 fn key_value(t: &str) -> Option<(&str, &str)> {
-    let k = t.find(": ").or_else(|| t.ends_with(':').then(|| t.len() - 1))?;
+    let k = t
+        .find(": ")
+        .or_else(|| t.ends_with(':').then(|| t.len() - 1))?;
     let key = t[..k].trim().trim_matches(['"', '\'']);
     if key.is_empty() || t.starts_with('[') {
         return None;
@@ -173,7 +197,10 @@ fn key_value(t: &str) -> Option<(&str, &str)> {
 fn scalar(v: &str, at: (usize, usize)) -> Result<Y, ImportError> {
     let unq = |s: &str| -> String {
         let s = s.trim();
-        if s.len() >= 2 && ((s.starts_with('"') && s.ends_with('"')) || (s.starts_with('\'') && s.ends_with('\''))) {
+        if s.len() >= 2
+            && ((s.starts_with('"') && s.ends_with('"'))
+                || (s.starts_with('\'') && s.ends_with('\'')))
+        {
             s[1..s.len() - 1].to_string()
         } else {
             s.to_string()
@@ -186,7 +213,9 @@ fn scalar(v: &str, at: (usize, usize)) -> Result<Y, ImportError> {
         if inner.trim().is_empty() {
             return Ok(Y::List(Vec::new()));
         }
-        return Ok(Y::List(inner.split(',').map(|s| Y::Str(unq(s), at)).collect()));
+        return Ok(Y::List(
+            inner.split(',').map(|s| Y::Str(unq(s), at)).collect(),
+        ));
     }
     Ok(Y::Str(unq(v), at))
 }
@@ -215,14 +244,20 @@ mod tests {
             "format_version: 1\nparameter_file: p.tsv  # comment\nproblems:\n- condition_files:\n  - c.tsv\n  sbml_files: [m.xml, 'n.xml']\n",
         )
         .unwrap();
-        let Some(Y::List(ps)) = y.get("problems") else { panic!("{y:?}") };
+        let Some(Y::List(ps)) = y.get("problems") else {
+            panic!("{y:?}")
+        };
         assert_eq!(strs(ps[0].get("condition_files")), ["c.tsv"]);
         assert_eq!(strs(ps[0].get("sbml_files")), ["m.xml", "n.xml"]);
-        let Some(Y::Str(p, at)) = y.get("parameter_file") else { panic!() };
+        let Some(Y::Str(p, at)) = y.get("parameter_file") else {
+            panic!()
+        };
         assert_eq!((p.as_str(), *at), ("p.tsv", (2, 17)));
         // Indented list items.
         let y = parse("problems:\n  - sbml_files:\n      - m.xml\n").unwrap();
-        let Some(Y::List(ps)) = y.get("problems") else { panic!("{y:?}") };
+        let Some(Y::List(ps)) = y.get("problems") else {
+            panic!("{y:?}")
+        };
         assert_eq!(strs(ps[0].get("sbml_files")), ["m.xml"]);
         let e = parse("a: 1\n  b: 2\n").unwrap_err();
         assert_eq!(e.line, 2);

@@ -85,7 +85,11 @@ fn bertozzi_two_conditions_share_nothing_but_the_model() {
         "I_",
         "R0_NY*gamma_NY/19540000*I_*S_ - gamma_NY*I_",
     );
-    assert!(c.sys_text.contains("output y_I_NY = I_\n"), "{}", c.sys_text);
+    assert!(
+        c.sys_text.contains("output y_I_NY = I_\n"),
+        "{}",
+        c.sys_text
+    );
 }
 
 const SBML: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
@@ -172,14 +176,21 @@ fn estimated_fixed_conditions_and_overrides() {
     p.sort();
     assert_eq!(p, ["k1", "scale"]);
     // obsB is measured in c1 with two overrides (scale, 1.5): two outputs; obsA in c2 only.
-    assert!(s.contains("output obsB_c1_1 = scale*B_c1 + offset\n"), "{s}");
+    assert!(
+        s.contains("output obsB_c1_1 = scale*B_c1 + offset\n"),
+        "{s}"
+    );
     assert!(s.contains("output obsB_c1_2 = 1.5*B_c1 + offset\n"), "{s}");
     assert!(s.contains("output obsA_c2 = A_c2^2\n"), "{s}");
     assert!(!s.contains("obsA_c1") && !s.contains("obsB_c2"), "{s}");
     // The initial value the conditions give A is not read, and said so.
     assert!(s.contains("initial values set by conditions"), "{s}");
     // An output line maps back to its observable's formula: line 2, column 6.
-    let line = s.lines().position(|l| l.starts_with("output obsB_c1_1")).unwrap() + 1;
+    let line = s
+        .lines()
+        .position(|l| l.starts_with("output obsB_c1_1"))
+        .unwrap()
+        + 1;
     assert!(c.table_lines.contains(&line));
     assert_eq!(c.source_of(line), Some((2, 6)));
 }
@@ -208,10 +219,17 @@ fn mistakes_are_located_in_their_file() {
     let (f, l, _, m) = at(petab_to_sys(&mini(&p, OBS, CONDS, MEAS), "m", None));
     assert_eq!((f, l), (PetabFile::Parameters, 5), "{m}");
     // A missing column.
-    let (f, l, _, m) = at(petab_to_sys(&mini(PARAMS, "id\tformula\n", CONDS, MEAS), "m", None));
+    let (f, l, _, m) = at(petab_to_sys(
+        &mini(PARAMS, "id\tformula\n", CONDS, MEAS),
+        "m",
+        None,
+    ));
     assert_eq!((f, l), (PetabFile::Observables, 1), "{m}");
     // Problem files: two models, PEtab v2.
-    let e = petab_files("format_version: 1\nparameter_file: p.tsv\nproblems:\n- sbml_files: [a.xml, b.xml]\n").unwrap_err();
+    let e = petab_files(
+        "format_version: 1\nparameter_file: p.tsv\nproblems:\n- sbml_files: [a.xml, b.xml]\n",
+    )
+    .unwrap_err();
     assert_eq!(e.line, 4, "{e}");
     let e = petab_files("format_version: 2.0.0\n").unwrap_err();
     assert_eq!((e.line, e.col), (1, 17), "{e}");
