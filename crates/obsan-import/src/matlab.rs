@@ -17,6 +17,8 @@ use crate::{Converted, ImportError};
 use std::collections::BTreeMap;
 
 type At = (usize, usize);
+/// A vector's entries with their places, and the place of its assignment.
+type Vector = (Vec<(Ex, At)>, At);
 
 /// Split the text into statements (comments and continuations blanked,
 /// newlines inside brackets kept as row separators).
@@ -199,7 +201,7 @@ fn is_name(s: &str) -> bool {
 
 /// Substitute the single-valued assignments made so far, and indexing
 /// `v(k)` into an assigned vector.
-fn subst(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result<Ex, ImportError> {
+fn subst(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
     Ok(match e {
         Ex::Call(g, args) if g.starts_with(infix::INDEX) => {
             let v = &g[infix::INDEX.len()..];
@@ -235,11 +237,7 @@ fn subst(e: &Ex, vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>, at: At) -> Result
     })
 }
 
-fn subst_plain(
-    e: &Ex,
-    vars: &BTreeMap<String, (Vec<(Ex, At)>, At)>,
-    at: At,
-) -> Result<Ex, ImportError> {
+fn subst_plain(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
     Ok(match e {
         Ex::Name { name, .. } => match vars.get(name).map(|v| v.0.as_slice()) {
             Some([x]) => x.0.clone(),
@@ -266,7 +264,7 @@ fn subst_plain(
 /// under another name with `save('NAME', ...)`).
 pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, ImportError> {
     // Every assignment, in order; a later one replaces an earlier one.
-    let mut vars: BTreeMap<String, (Vec<(Ex, At)>, At)> = BTreeMap::new();
+    let mut vars: BTreeMap<String, Vector> = BTreeMap::new();
     let mut syms: Vec<(String, At)> = Vec::new();
     let mut saved: Option<String> = None;
     for st in statements(text)? {
@@ -314,7 +312,7 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
         }
         vars.insert(lhs, (items, st[0].1));
     }
-    let mut roles: BTreeMap<&str, (Vec<(Ex, At)>, At)> = BTreeMap::new();
+    let mut roles: BTreeMap<&str, Vector> = BTreeMap::new();
     for r in ["x", "p", "u", "w", "f", "h"] {
         if let Some(v) = vars.get(r) {
             roles.insert(r, v.clone());
@@ -332,7 +330,7 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
 }
 
 fn names_of(
-    roles: &BTreeMap<&str, (Vec<(Ex, At)>, At)>,
+    roles: &BTreeMap<&str, Vector>,
     key: &str,
     what: &str,
 ) -> Result<Vec<(String, At)>, ImportError> {
@@ -355,7 +353,7 @@ fn names_of(
 }
 
 fn convert(
-    roles: BTreeMap<&str, (Vec<(Ex, At)>, At)>,
+    roles: BTreeMap<&str, Vector>,
     syms: &[String],
     saved: Option<String>,
     origin: &str,

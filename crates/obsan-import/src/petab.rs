@@ -307,11 +307,14 @@ fn read_parameters(text: &str) -> Result<ParamTable, ImportError> {
     Ok(out)
 }
 
+/// An id, an expression and its place (if any).
+type Placed<A> = (String, Ex, A);
+
 /// Observables: id, formula and the formula's place.
-fn read_observables(text: &str) -> Result<Vec<(String, Ex, (usize, usize))>, ImportError> {
+fn read_observables(text: &str) -> Result<Vec<Placed<(usize, usize)>>, ImportError> {
     let t = Table::read(text)?;
     let (ci, cf) = (t.need("observableId")?, t.need("observableFormula")?);
-    let mut out: Vec<(String, Ex, (usize, usize))> = Vec::new();
+    let mut out: Vec<Placed<(usize, usize)>> = Vec::new();
     for row in &t.rows {
         let (id, at) = t.cell(row, ci);
         if !is_id(id) {
@@ -498,7 +501,7 @@ pub fn petab_to_sys(
     }
     let many = used.len() > 1;
     let mut eqs = Vec::new();
-    let mut outputs: Vec<(String, Ex, Option<(usize, usize)>)> = Vec::new();
+    let mut outputs: Vec<Placed<Option<(usize, usize)>>> = Vec::new();
     let mut ignored_init: Vec<String> = Vec::new();
     for c in &used {
         let suffix = if many { format!("_{c}") } else { String::new() };
