@@ -265,6 +265,52 @@ Assignment rules are substituted and function definitions inlined; events, algeb
 delays, time, piecewise and varying compartments are refused naming the element and its line,
 exit 2.")]
     Sbml(SbmlArgs),
+    /// A PEtab v1 problem (YAML, SBML model, tables) to .sys: observables as outputs,
+    /// estimated parameters as params, fixed ones as consts, one model copy per condition
+    /// (docs/import.md).
+    #[command(after_help = "Examples:
+  obsan import petab problem.yaml                    (.sys text to stdout)
+  obsan import petab problem.yaml --condition c1 --out model.sys
+
+Errors name the file (YAML, SBML or table), line and column, exit 2.")]
+    Petab(PetabArgs),
+    /// A STRIKE-GOLDD model file (z_create_NAME.m: MATLAB syms with x, p, u, w, f, h) to .sys
+    /// (docs/import.md).
+    #[command(after_help = "Examples:
+  obsan import strike-goldd z_create_model.m                (.sys text to stdout)
+  obsan import strike-goldd z_create_model.m --out model.sys
+
+x are the states, p the unknown parameters, u the known inputs, w the unknown inputs, f the
+dynamics and h the outputs (y1, y2, ...); other assignments are substituted where used.")]
+    StrikeGoldd(StrikeGolddArgs),
+}
+
+#[derive(Args)]
+pub struct StrikeGolddArgs {
+    /// The MATLAB model file.
+    pub source: String,
+    /// Write the .sys here instead of stdout.
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Replace an existing file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args)]
+pub struct PetabArgs {
+    /// The PEtab problem file (YAML).
+    pub source: String,
+    /// Only this simulation condition (default: every condition the measurements use, each a
+    /// copy of the model).
+    #[arg(long)]
+    pub condition: Option<String>,
+    /// Write the .sys here instead of stdout.
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Replace an existing file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Args)]

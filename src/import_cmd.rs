@@ -1,9 +1,9 @@
-//! `obsan import si-jl` and `obsan import sbml`: foreign model text to .sys (docs/import.md). The
+//! `obsan import si-jl`, `sbml`, `petab` and `strike-goldd`: foreign model text to .sys (docs/import.md). The
 //! translation is obsan-import's; this reads the file, checks the produced
 //! .sys with obsan-model (so a model outside obsan's class is refused at its
 //! line in the source) and writes the result.
 
-use crate::cli::{SbmlArgs, SiJlArgs};
+use crate::cli::{PetabArgs, SbmlArgs, SiJlArgs, StrikeGolddArgs};
 use crate::Failure;
 use obsan_import::{Converted, ImportError};
 use std::path::Path;
@@ -136,6 +136,31 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
     let text = crate::fsio::read_text(path)?;
     let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
         .map_err(|e| Failure(located(path, &e)))?;
+    check_and_write(path, &c, a.out.as_deref(), a.force)
+}
+
+pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {
+    let path = a.source.as_str();
+    // MATLAB files are often Latin-1 (accents in comments): read as such when not UTF-8.
+    let text = match crate::fsio::read_text(path) {
+        Ok(t) => t,
+        Err(e) => match std::fs::read(path) {
+            Ok(b) if std::str::from_utf8(&b).is_err() => b.iter().map(|&c| c as char).collect(),
+            _ => return Err(e),
+        },
+    };
+    let c =
+        obsan_import::strike_goldd_to_sys(&text, path).map_err(|e| Failure(located(path, &e)))?;
+    check_and_write(path, &c, a.out.as_deref(), a.force)
+}
+
+/// Read the produced .sys back (an error at its source line) and write it.
+fn check_and_write(
+    path: &str,
+    c: &Converted,
+    out: Option<&str>,
+    force: bool,
+) -> Result<ExitCode, Failure> {
     let origin = format!("{}.sys", c.name);
     obsan_model::System::parse(&c.sys_text, &origin)
         .and_then(|s| s.normal_form(None, &[]).map(|_| ()))
@@ -146,10 +171,79 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
                 e.message
             ))
         })?;
+    match out {
+        Some(out) => {
+            write_whole(out, &c.sys_text, force)?;
+            println!("{path} written to {out}");
+        }
+        None => print!("{}", c.sys_text),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn petab(a: &PetabArgs) -> Result<ExitCode, Failure> {
+    use obsan_import::PetabFile as F;
+    let yaml = a.source.as_str();
+    let files = obsan_import::petab_files(&crate::fsio::read_text(yaml)?)
+        .map_err(|e| Failure(located(yaml, &e)))?;
+    // The tables and the model are named relative to the problem file's folder.
+    let dir = Path::new(yaml).parent().unwrap_or(Path::new(""));
+    let path_of = |f: &str| dir.join(f).to_string_lossy().into_owned();
+    let (sbml, params, obs, conds) = (
+        path_of(&files.sbml),
+        path_of(&files.parameters),
+        path_of(&files.observables),
+        path_of(&files.conditions),
+    );
+    let meas: Vec<String> = files.measurements.iter().map(|m| path_of(m)).collect();
+    let texts = (
+        crate::fsio::read_text(&sbml)?,
+        crate::fsio::read_text(&params)?,
+        crate::fsio::read_text(&obs)?,
+        crate::fsio::read_text(&conds)?,
+        meas.iter()
+            .map(|m| crate::fsio::read_text(m))
+            .collect::<Result<Vec<String>, Failure>>()?,
+    );
+    let t = obsan_import::PetabTexts {
+        sbml: &texts.0,
+        parameters: &texts.1,
+        observables: &texts.2,
+        conditions: &texts.3,
+        measurements: texts.4.iter().map(String::as_str).collect(),
+    };
+    let file = |f: F| -> &str {
+        match f {
+            F::Yaml => yaml,
+            F::Sbml => &sbml,
+            F::Parameters => &params,
+            F::Observables => &obs,
+            F::Conditions => &conds,
+            F::Measurements(k) => meas.get(k).map_or(yaml, String::as_str),
+        }
+    };
+    let c = obsan_import::petab_to_sys(&t, yaml, a.condition.as_deref())
+        .map_err(|e| Failure(located(file(e.file), &e.error)))?;
+    let origin = format!("{}.sys", c.name);
+    obsan_model::System::parse(&c.sys_text, &origin)
+        .and_then(|s| s.normal_form(None, &[]).map(|_| ()))
+        .map_err(|e| {
+            let line = e.line.unwrap_or(0);
+            let (l, col) = c.source_of(line).unwrap_or((1, 1));
+            let f = if c.table_lines.contains(&line) {
+                &obs
+            } else {
+                &sbml
+            };
+            Failure(format!(
+                "{f}:{l}:{col}: the problem is outside obsan's .sys class: {}",
+                e.message
+            ))
+        })?;
     match &a.out {
         Some(out) => {
             write_whole(out, &c.sys_text, a.force)?;
-            println!("{path} written to {out}");
+            println!("{yaml} written to {out}");
         }
         None => print!("{}", c.sys_text),
     }

@@ -461,6 +461,8 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Global(a) => global_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::SiJl(a)) => import_cmd::si_jl(&a),
         cli::Command::Import(cli::ImportCommand::Sbml(a)) => import_cmd::sbml(&a),
+        cli::Command::Import(cli::ImportCommand::Petab(a)) => import_cmd::petab(&a),
+        cli::Command::Import(cli::ImportCommand::StrikeGoldd(a)) => import_cmd::strike_goldd(&a),
     }
 }
 

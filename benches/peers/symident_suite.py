@@ -3,7 +3,11 @@
 
 Usage, from the repository root after `cargo build --release`:
 
-    python3 benches/peers/symident_suite.py [--timeout S] [--obsan PATH] [FILTER ...]
+    python3 benches/peers/symident_suite.py [--timeout S] [--obsan PATH] [--si-jl] [FILTER ...]
+
+--si-jl runs the StructuralIdentifiability.jl models (systems/benchmarks/si-jl/) instead of the
+suite; models without a cited verdict are compared by rank only. The last column is the CPU
+ratio: symident's detect() CPU time over the obsan process's CPU time (user + system).
 
 Each suite entry (systems/benchmarks/*.sys, systems/vins.sys, systems/benchmarks/paper.list) is
 translated mechanically from .sys: states get ODEs, params stay free symbols (symident's
@@ -121,7 +125,7 @@ def run_one(path, restriction):
     m = read_sys(os.path.join(ROOT, path))
     kw, back = translate(m, restriction)
     model = symident.Model(**kw)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     try:
         r = symident.detect(model)
     except ValueError as e:
@@ -133,14 +137,14 @@ def run_one(path, restriction):
         print(json.dumps({"error": f"its modular engine refuses {', '.join(funcs) or 'a term'} "
                                    f"in {', '.join(where)}; symbolic engine not run"}))
         return
-    secs = time.perf_counter() - t
+    secs, cpu = time.perf_counter() - t, time.process_time() - c
     un = set()
     for s in r.symmetries:
         for z in s.get("support") or []:
             un.add(back.get(z, z))
     status = (r.info or {}).get("rank_status") or {}
     print(json.dumps({"rank": r.rank, "dim": r.dim, "unobservable": sorted(un), "secs": secs,
-                      "status": status.get("status")}))
+                      "cpu": cpu, "status": status.get("status")}))
 
 
 def parse_verdict(spec):
@@ -156,6 +160,23 @@ def parse_verdict(spec):
         elif w[0] == "rank":
             v["rank"] = int(w[1])
     return v
+
+
+def si_jl_entries():
+    """The StructuralIdentifiability.jl models (systems/benchmarks/si-jl/, issue 32), each with
+    its cited verdict when it has one (otherwise none: the row is not judged)."""
+    d = os.path.join(ROOT, "systems", "benchmarks", "si-jl")
+    out = []
+    for f in sorted(x for x in os.listdir(d) if x.endswith(".sys")):
+        path = f"systems/benchmarks/si-jl/{f}"
+        cited = {"rank": None, "unobservable": None}
+        with open(os.path.join(ROOT, path)) as fh:
+            for line in fh:
+                mm = re.match(r"^# verdict: (.*)$", line.rstrip())
+                if mm:
+                    cited = parse_verdict(mm.group(1))
+        out.append((path, None, cited))
+    return out
 
 
 def entries():
@@ -201,9 +222,13 @@ def main():
         run_one(args[1], args[2] if len(args) > 2 and args[2] else None)
         return
     timeout, obsan, filt = 120.0, os.path.join(ROOT, "target", "release", "obsan"), []
+    suite = entries
     i = 0
     while i < len(args):
-        if args[i] == "--timeout":
+        if args[i] == "--si-jl":
+            suite = si_jl_entries
+            i += 1
+        elif args[i] == "--timeout":
             timeout = float(args[i + 1])
             i += 2
         elif args[i] == "--obsan":
@@ -214,25 +239,33 @@ def main():
             i += 1
     import symident
 
-    print("| model | n | obsan rank | obsan verdict | obsan s | symident rank | symident verdict | symident s |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| model | n | obsan rank | obsan verdict | obsan s | symident rank | symident verdict "
+          "| symident s | CPU ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
     score = {"obsan": 0, "symident": 0, "total": 0, "faster": 0, "both": 0}
-    for path, restriction, cited in entries():
+    ratios = []
+    for path, restriction, cited in suite():
         if filt and not any(f in path for f in filt):
             continue
         label = path + (f" --input {restriction}" if restriction else "")
         cmd = [obsan, "rank", path, "--json", "--timeout", str(int(timeout))]
         if restriction:
             cmd += ["--input", restriction]
-        t = time.perf_counter()
+        t, ru = time.perf_counter(), os.times()
         p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
         osecs = time.perf_counter() - t
+        rv = os.times()
+        # obsan's CPU time (user + system of the child), the machine's load left out.
+        ocpu = (rv.children_user - ru.children_user) + (rv.children_system - ru.children_system)
         if p.returncode == 0:
             v = json.loads(p.stdout)
             n, orank = v["n"], v["rank"]
             overdict = judge(orank, n, v["unobservable_variables"], cited)
+            if cited["rank"] is None and cited["unobservable"] is None:
+                overdict = "no cited verdict"
         else:
             n, orank, overdict = "-", "-", f"exit {p.returncode}"
+        ratio = "-"
         try:
             q = subprocess.run([sys.executable, __file__, "--one", path, restriction or ""],
                                cwd=ROOT, capture_output=True, text=True, timeout=timeout)
@@ -245,9 +278,15 @@ def main():
             elif s is not None:
                 srank = s["rank"]
                 sverdict = judge(srank, s["dim"], s["unobservable"], cited)
+                if cited["rank"] is None and cited["unobservable"] is None:
+                    sverdict = "same rank as obsan" if srank == orank else "RANK DIFFERS from obsan"
                 if s.get("status") and s["status"] != "proven":
                     sverdict += f" ({s['status']})"
                 ssecs = f"{s['secs']:.2f}"
+                if p.returncode == 0 and "cpu" in s:
+                    r = s["cpu"] / max(ocpu, 0.005)
+                    ratios.append(r)
+                    ratio = f"{r:.0f}x"
             else:
                 lines = q.stderr.strip().splitlines() or ["no output"]
                 err = next((ln for ln in lines if re.match(r"^\w+(Error|Exception):", ln)), lines[-1])
@@ -263,9 +302,15 @@ def main():
         elif ssecs.startswith(">") and p.returncode == 0:
             score["both"] += 1
             score["faster"] += osecs < timeout
-        print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} |",
-              flush=True)
+        print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} "
+              f"| {ratio} |", flush=True)
     print()
+    if ratios:
+        ratios.sort()
+        k = len(ratios)
+        med = ratios[k // 2] if k % 2 else (ratios[k // 2 - 1] + ratios[k // 2]) / 2
+        print(f"CPU ratio (symident detect() CPU / obsan process CPU, obsan's floored at 5 ms) on the "
+              f"{k} models both answered: median {med:.0f}x, min {ratios[0]:.1f}x, max {ratios[-1]:.0f}x")
     print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, "
           f"symident {score['symident']}; obsan faster on {score['faster']} of the {score['both']} "
           f"that both answered or symident timed out; symident "

@@ -136,3 +136,124 @@ fn sbml_import_then_rank_gives_the_derived_verdict() {
     let broken = temp_file("broken.xml", "<sbml>\n<model>\n</sbml>\n");
     bad(&["import", "sbml", &broken], "broken.xml:3:");
 }
+
+/// Bertozzi_PNAS2020 (PEtab collection, BSD-3, in crates/obsan-import/tests/petab/): SIR,
+/// beta = R0 gamma / N (N known per condition), y = I. Derivation: I' = (beta S - gamma) I, so
+/// z = beta S - gamma is known from y; z' = beta S' = -beta I (z + gamma) gives beta and
+/// beta gamma, hence gamma, R0 = beta N / gamma and S = (z + gamma) / beta; R enters nothing
+/// measured. One condition: 3 states + R0, gamma: rank 4 of 5. Both: 6 states + 4 params, each
+/// condition's own R lost: rank 8 of 10.
+#[test]
+fn petab_import_then_rank_gives_the_derived_verdict() {
+    let yaml = "crates/obsan-import/tests/petab/Bertozzi_PNAS2020/problem.yaml";
+    let dir = fresh_dir("petab");
+    let one = format!("{dir}/ny.sys");
+    ok(&[
+        "import",
+        "petab",
+        yaml,
+        "--condition",
+        "u_NY",
+        "--out",
+        &one,
+    ]);
+    let v: Value = serde_json::from_str(&ok(&["rank", &one, "--json"])).unwrap();
+    assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(5), Some(4)));
+    let both = format!("{dir}/both.sys");
+    ok(&["import", "petab", yaml, "--out", &both]);
+    let v: Value = serde_json::from_str(&ok(&["rank", &both, "--json"])).unwrap();
+    assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(10), Some(8)));
+    // A condition column that is not an id of the model: the table, line and column (the
+    // cell of u_CA under it: "u_CA", 39560000, I0_CA, then R0_CA at column 21).
+    let src = std::path::Path::new(yaml).parent().unwrap();
+    let bad_dir = fresh_dir("petab_bad");
+    for f in [
+        "problem.yaml",
+        "model.xml",
+        "parameters.tsv",
+        "observables.tsv",
+        "measurements.tsv",
+    ] {
+        std::fs::copy(src.join(f), format!("{bad_dir}/{f}")).unwrap();
+    }
+    let conds = std::fs::read_to_string(src.join("conditions.tsv")).unwrap();
+    std::fs::write(
+        format!("{bad_dir}/conditions.tsv"),
+        conds.replace("R0_\t", "R9_\t"),
+    )
+    .unwrap();
+    bad(
+        &["import", "petab", &format!("{bad_dir}/problem.yaml")],
+        "conditions.tsv:2:21: column 'R9_' is not a parameter",
+    );
+    bad(
+        &["import", "petab", yaml, "--condition", "u_XX"],
+        "no condition 'u_XX'",
+    );
+}
+
+/// A STRIKE-GOLDD file written here: x1' = -(k12 + ke) x1 + k21 x2 + u, x2' = k12 x1 - k21 x2,
+/// y = x1 / V with V known. The transfer function (s + k21) / (s^2 + (k12 + ke + k21) s +
+/// ke k21) gives k21, k12 + ke and ke k21: every parameter, and both states (x2 through
+/// x1'): rank 5 of 5.
+#[test]
+fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
+    let src = temp_file(
+        "z_create_two.m",
+        "syms x1 x2 V k12 k21 ke u1\nx = [x1; x2];\np = [k12; k21; ke];\nu = u1;\n\
+         f = [-(k12 + ke)*x1 + k21*x2 + u1; k12*x1 - k21*x2];\nh = x1/V;\n",
+    );
+    let dir = fresh_dir("sg");
+    let out = format!("{dir}/two.sys");
+    ok(&["import", "strike-goldd", &src, "--out", &out]);
+    let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
+    assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(5), Some(5)));
+    let bad_src = temp_file(
+        "z_create_bad.m",
+        "syms x1 k\nx = x1;\np = k;\nf = [-k*x1;\nh = x1;\n",
+    );
+    bad(
+        &["import", "strike-goldd", &bad_src],
+        "z_create_bad.m:4:5: this '[' is never closed",
+    );
+}
+
+/// systems/benchmarks/strike-goldd/ (issue 32): each NAME.sys is `obsan import strike-goldd` of
+/// its src/z_create_NAME.m (written for obsan from the model's equations) under a header, and
+/// obsan's rank agrees with the verdict the file cites (SymPy, benches/peers/sg_verdicts.py).
+#[test]
+fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
+    let dir = "systems/benchmarks/strike-goldd";
+    let mut names: Vec<String> = std::fs::read_dir(format!("{dir}/src"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("z_create_") && n.ends_with(".m"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 6, "{names:?}");
+    for m in &names {
+        let name = &m["z_create_".len()..m.len() - 2];
+        let path = format!("{dir}/{name}.sys");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let run = obsan_in(dir, &["import", "strike-goldd", &format!("src/{m}")]);
+        assert_eq!(run.code, 0, "{m}: {}", run.stderr);
+        let body: String = text
+            .lines()
+            .filter(|l| !l.starts_with("# Source:") && !l.starts_with("# verdict"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        assert_eq!(body, run.stdout, "{path} is not the import of src/{m}");
+        let entries = crate::suite_entries::file_entries(&path, &text).unwrap();
+        assert_eq!(entries.len(), 1, "{path}");
+        let v: Value = serde_json::from_str(&ok(&["rank", &path, "--json"])).unwrap();
+        let want = &entries[0].verdict;
+        assert_eq!(want.rank, v["rank"].as_u64(), "{path}");
+        let un: std::collections::BTreeSet<String> = v["unobservable_variables"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect();
+        assert_eq!(want.unobservable.as_ref(), Some(&un), "{path}");
+    }
+}

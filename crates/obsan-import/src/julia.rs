@@ -1123,6 +1123,7 @@ pub fn si_jl_convert(
         name: sysname,
         sys_text,
         line_map,
+        table_lines: Vec::new(),
     })
 }
 
@@ -1233,5 +1234,6 @@ fn lincomp_sys(lc: &Lincomp, model: &SiJlModel, origin: &str) -> Converted {
         name,
         sys_text,
         line_map,
+        table_lines: Vec::new(),
     }
 }

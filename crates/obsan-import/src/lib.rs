@@ -1,5 +1,6 @@
 //! obsan's importers: foreign model text in, `.sys` text out (docs/import.md):
-//! StructuralIdentifiability.jl's `@ODEmodel` and SBML.
+//! StructuralIdentifiability.jl's `@ODEmodel`, SBML, PEtab and STRIKE-GOLDD's
+//! MATLAB model files.
 //!
 //! The crate does no file I/O and depends on no other obsan crate: it only
 //! translates. The `obsan import` commands read the file, call a translator
@@ -19,11 +20,17 @@
 )]
 
 mod error;
+mod infix;
 mod julia;
+mod matlab;
+mod petab;
 mod sbml;
+mod yaml;
 
 pub use error::ImportError;
 pub use julia::{si_jl_convert, si_jl_models, SiJlModel};
+pub use matlab::strike_goldd_to_sys;
+pub use petab::{petab_files, petab_to_sys, PetabError, PetabFile, PetabFiles, PetabTexts};
 pub use sbml::sbml_to_sys;
 
 /// A translated model: its `.sys` text and, for each `.sys` line that came
@@ -35,6 +42,9 @@ pub struct Converted {
     pub sys_text: String,
     /// `(sys line, source line, source column)`, sorted by sys line.
     pub line_map: Vec<(usize, usize, usize)>,
+    /// The `.sys` lines whose place in `line_map` is in a second source file
+    /// (PEtab's observable table) rather than the main one (the SBML model).
+    pub table_lines: Vec<usize>,
 }
 
 impl Converted {

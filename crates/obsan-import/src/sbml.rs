@@ -278,35 +278,339 @@ fn math_of(cx: &Ctx, n: Node) -> Result<Ex, ImportError> {
     mathml(cx, m, 0)
 }
 
+type At = (usize, usize);
+type Rules = BTreeMap<String, (Ex, At)>;
+
+/// An SBML model read into equations (assignment rules and sizes already
+/// substituted, every name checked), before outputs are chosen: shared by
+/// `sbml_to_sys` and the PEtab importer, which adds its own outputs and fixes
+/// some parameters.
+pub(crate) struct Sbml {
+    pub name: String,
+    pub description: Option<String>,
+    /// `(state, rhs, place of its species or rule)`, resolved.
+    pub eqs: Vec<(String, Ex, At)>,
+    /// Unknown constants in declaration order (global and local parameters,
+    /// fixed species); may hold unused ones, which `emit` drops.
+    pub params: Vec<String>,
+    /// The `value` attribute of each global parameter that has one.
+    pub values: BTreeMap<String, Ex>,
+    /// Compartments without a size (known constants).
+    pub consts: Vec<String>,
+    /// Compartment sizes folded in.
+    pub sizes: BTreeMap<String, Ex>,
+    pub assign: Rules,
+    pub model_at: At,
+}
+
 /// Translate an SBML document into `.sys` text. `observe`: the ids measured
 /// (each an output `y_ID = ID`); empty: every state.
 pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Converted, ImportError> {
-    let doc = Document::parse(text).map_err(|e| {
-        let p = e.pos();
-        ImportError::at(
-            p.row as usize,
-            p.col as usize,
-            format!("not well-formed XML: {e}"),
-        )
-    })?;
-    let mut cx = Ctx {
-        doc: &doc,
-        funcs: BTreeMap::new(),
-    };
-    let root = doc.root_element();
-    if root.tag_name().name() != "sbml" {
-        return Err(cx.err(root, "the root element is not <sbml>"));
+    let m = Sbml::read(text)?;
+    let mut outputs: Vec<(String, Ex, Option<At>)> = Vec::new();
+    if observe.is_empty() {
+        for (v, _, at) in &m.eqs {
+            outputs.push((format!("y_{v}"), name(v, *at), None));
+        }
+    } else {
+        for o in observe {
+            let e = if let Some((x, _)) = m.assign.get(o) {
+                m.resolve(x)?
+            } else if m.known().contains(&o.as_str()) {
+                name(o, (1, 1))
+            } else {
+                return Err(ImportError::at(
+                    m.model_at.0,
+                    m.model_at.1,
+                    format!("--observe '{o}' is not an id of this model"),
+                ));
+            };
+            outputs.push((format!("y_{o}"), e, None));
+        }
     }
-    let model = child(root, "model").ok_or_else(|| cx.err(root, "no <model>"))?;
-    if let Some(e) = list(model, "listOfEvents", "event").first() {
-        let id = e.attribute("id").unwrap_or("?");
-        return Err(cx.err(
-            *e,
-            format!("<event> '{id}': events are not supported (discontinuous dynamics)"),
+    let mut header = vec![format!(
+        "# Imported by `obsan import sbml` from {}.",
+        one_line(origin)
+    )];
+    if observe.is_empty() {
+        header.push(
+            "# SBML has no outputs: every state is measured here (choose with --observe).".into(),
+        );
+    }
+    let consts: Vec<(String, Option<Ex>)> = m.consts.iter().map(|c| (c.clone(), None)).collect();
+    Ok(m.emit(header, &m.params, &consts, &outputs))
+}
+
+impl Sbml {
+    /// Read the document: functions, rules, compartments, species,
+    /// parameters, reactions, then the equations (resolved and checked).
+    pub fn read(text: &str) -> Result<Sbml, ImportError> {
+        let doc = Document::parse(text).map_err(|e| {
+            let p = e.pos();
+            ImportError::at(
+                p.row as usize,
+                p.col as usize,
+                format!("not well-formed XML: {e}"),
+            )
+        })?;
+        let mut cx = Ctx {
+            doc: &doc,
+            funcs: BTreeMap::new(),
+        };
+        let root = doc.root_element();
+        if root.tag_name().name() != "sbml" {
+            return Err(cx.err(root, "the root element is not <sbml>"));
+        }
+        let model = child(root, "model").ok_or_else(|| cx.err(root, "no <model>"))?;
+        if let Some(e) = list(model, "listOfEvents", "event").first() {
+            let id = e.attribute("id").unwrap_or("?");
+            return Err(cx.err(
+                *e,
+                format!("<event> '{id}': events are not supported (discontinuous dynamics)"),
+            ));
+        }
+        read_functions(&mut cx, model)?;
+        let (assign, rate) = read_rules(&cx, model)?;
+        let (mut consts, mut sizes) = read_compartments(&cx, model, &assign, &rate)?;
+        let mut assign = assign;
+        constant_initial_assignments(&cx, model, &rate, &mut assign)?;
+        consts.retain(|c| !assign.contains_key(c));
+        sizes.retain(|c, _| !assign.contains_key(c));
+        let species = read_species(&cx, model)?;
+        let (mut params, param_states, mut values) = read_parameters(&cx, model, &assign, &rate)?;
+        let flux = read_reactions(&cx, model, &mut params, &mut values)?;
+        let eqs = equations(
+            &species,
+            &param_states,
+            (&assign, &rate),
+            &flux,
+            &mut params,
+        )?;
+        if eqs.is_empty() {
+            return Err(cx.err(
+                model,
+                "the model has no dynamics (no species changed by a reaction or rate rule)",
+            ));
+        }
+        let mut m = Sbml {
+            name: sys_name(model),
+            description: model
+                .attribute("name")
+                .map(one_line)
+                .filter(|n| !n.is_empty()),
+            eqs: Vec::new(),
+            params,
+            values,
+            consts,
+            sizes,
+            assign,
+            model_at: cx.pos(model),
+        };
+        m.params.retain(|p| !eqs.iter().any(|e| &e.0 == p));
+        let mut body = Vec::new();
+        let known: Vec<String> = eqs
+            .iter()
+            .map(|e| e.0.clone())
+            .chain(m.params.iter().cloned())
+            .chain(m.consts.iter().cloned())
+            .collect();
+        for (v, e, at) in &eqs {
+            let r = m.resolve(e)?;
+            check_names(
+                &r,
+                &known,
+                "a species, parameter or compartment of the model",
+            )?;
+            body.push((v.clone(), r, *at));
+        }
+        m.eqs = body;
+        Ok(m)
+    }
+
+    /// The ids an output may use: states, parameters, known constants.
+    pub fn known(&self) -> Vec<&str> {
+        self.eqs
+            .iter()
+            .map(|e| e.0.as_str())
+            .chain(self.params.iter().map(String::as_str))
+            .chain(self.consts.iter().map(String::as_str))
+            .collect()
+    }
+
+    /// Substitute assignment rules (they may use each other) and compartment sizes.
+    pub fn resolve(&self, e: &Ex) -> Result<Ex, ImportError> {
+        let mut cur = e.clone();
+        // Each round removes one level of rule nesting; more rounds than rules means a cycle.
+        for _ in 0..self.assign.len() + 2 {
+            let mut hit = false;
+            walk_names(&cur, &mut |n| {
+                hit |= self.assign.contains_key(n) || self.sizes.contains_key(n)
+            });
+            if !hit {
+                return Ok(cur);
+            }
+            cur = subst(&cur, &|n| {
+                self.assign
+                    .get(n)
+                    .map(|(x, _)| x.clone())
+                    .or_else(|| self.sizes.get(n).cloned())
+            });
+        }
+        let at = self.assign.values().next().map_or((1, 1), |a| a.1);
+        Err(ImportError::at(
+            at.0,
+            at.1,
+            "assignment rules refer to each other in a cycle",
+        ))
+    }
+
+    /// The `.sys` text: `header` comment lines, then the declarations (only
+    /// the `params` and `consts` the equations and outputs use, in their
+    /// order; a const with a value is written `const k = VALUE`), equations
+    /// and outputs. An output's place, when given, goes in the line map.
+    pub fn emit(
+        &self,
+        mut lines: Vec<String>,
+        params: &[String],
+        consts: &[(String, Option<Ex>)],
+        outputs: &[(String, Ex, Option<At>)],
+    ) -> Converted {
+        let mut used: Vec<String> = Vec::new();
+        for e in self
+            .eqs
+            .iter()
+            .map(|b| &b.1)
+            .chain(outputs.iter().map(|o| &o.1))
+        {
+            walk_names(e, &mut |n| {
+                if !used.iter().any(|u| u == n) {
+                    used.push(n.to_string());
+                }
+            });
+        }
+        let mut params: Vec<&String> = params.iter().filter(|p| used.contains(p)).collect();
+        params.dedup();
+        let rename = |n: &str| -> String {
+            if RESERVED.contains(&n) {
+                format!("{n}_")
+            } else {
+                n.to_string()
+            }
+        };
+        let text = |e: &Ex| {
+            let mut s = String::new();
+            show(e, &mut s, &rename);
+            s
+        };
+        if !self.sizes.is_empty() {
+            let v: Vec<String> = self
+                .sizes
+                .iter()
+                .map(|(k, e)| format!("{k} = {}", text(e)))
+                .collect();
+            lines.push(format!("# compartment sizes folded in: {}", v.join(", ")));
+        }
+        lines.push(format!("system {}", self.name));
+        if let Some(d) = &self.description {
+            lines.push(format!("description {d}"));
+        }
+        let names = |v: Vec<&String>| {
+            v.into_iter()
+                .map(|s| rename(s))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        lines.push(format!(
+            "state {}",
+            names(self.eqs.iter().map(|b| &b.0).collect())
         ));
+        if !params.is_empty() {
+            lines.push(format!("param {}", names(params)));
+        }
+        let generic: Vec<&String> = consts
+            .iter()
+            .filter(|c| c.1.is_none() && used.contains(&c.0))
+            .map(|c| &c.0)
+            .collect();
+        if !generic.is_empty() {
+            lines.push(format!("const {}", names(generic)));
+        }
+        for (c, v) in consts {
+            if let (Some(v), true) = (v, used.contains(c)) {
+                lines.push(format!("const {} = {}", rename(c), text(v)));
+            }
+        }
+        let mut line_map = Vec::new();
+        for (v, e, at) in &self.eqs {
+            lines.push(format!("{}' = {}", rename(v), text(e)));
+            line_map.push((lines.len(), at.0, at.1));
+        }
+        let mut line_file = Vec::new();
+        for (o, e, at) in outputs {
+            lines.push(format!("output {} = {}", rename(o), text(e)));
+            if let Some(at) = at {
+                line_map.push((lines.len(), at.0, at.1));
+                line_file.push(lines.len());
+            }
+        }
+        let mut sys_text = lines.join("\n");
+        sys_text.push('\n');
+        Converted {
+            name: self.name.clone(),
+            sys_text,
+            line_map,
+            table_lines: line_file,
+        }
     }
+}
+
+pub(crate) fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Every name of `e` must be in `known`, else an error at the name.
+pub(crate) fn check_names(e: &Ex, known: &[String], what: &str) -> Result<(), ImportError> {
+    let mut bad = None;
+    walk_names_at(e, &mut |n, p| {
+        if bad.is_none() && !known.iter().any(|k| k == n) {
+            bad = Some((n.to_string(), p));
+        }
+    });
+    match bad {
+        Some((n, p)) => Err(ImportError::at(p.0, p.1, format!("'{n}' is not {what}"))),
+        None => Ok(()),
+    }
+}
+
+/// The model's id (or name) as a `.sys` system name.
+fn sys_name(model: Node) -> String {
+    let mid = model
+        .attribute("id")
+        .or(model.attribute("name"))
+        .unwrap_or("sbml_model");
+    let mut s: String = mid
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if !s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
+        s.insert(0, '_');
+    }
+    if RESERVED.contains(&s.as_str()) {
+        s.push('_');
+    }
+    s
+}
+
+/// Function definitions, each body read with the ones defined before it.
+fn read_functions(cx: &mut Ctx, model: Node) -> Result<(), ImportError> {
     for f in list(model, "listOfFunctionDefinitions", "functionDefinition") {
-        let id = id_of(&cx, f, "id")?;
+        let id = id_of(cx, f, "id")?;
         let lambda = child(f, "math")
             .and_then(|m| {
                 child(m, "lambda")
@@ -320,25 +624,28 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
                 let ci = child(c, "ci").ok_or_else(|| cx.err(c, "<bvar> without <ci>"))?;
                 params.push(ci.text().unwrap_or("").trim().to_string());
             } else {
-                body = Some(mathml(&cx, c, 0)?);
+                body = Some(mathml(cx, c, 0)?);
             }
         }
         let body = body.ok_or_else(|| cx.err(lambda, format!("function '{id}' has no body")))?;
         cx.funcs.insert(id, (params, body));
     }
-    // Rules.
-    let mut assign: BTreeMap<String, (Ex, (usize, usize))> = BTreeMap::new();
-    let mut rate: BTreeMap<String, (Ex, (usize, usize))> = BTreeMap::new();
+    Ok(())
+}
+
+fn read_rules(cx: &Ctx, model: Node) -> Result<(Rules, Rules), ImportError> {
+    let mut assign = Rules::new();
+    let mut rate = Rules::new();
     if let Some(rules) = child(model, "listOfRules") {
         for r in elems(rules) {
             match r.tag_name().name() {
                 "assignmentRule" => {
-                    let v = id_of(&cx, r, "variable")?;
-                    assign.insert(v, (math_of(&cx, r)?, cx.pos(r)));
+                    let v = id_of(cx, r, "variable")?;
+                    assign.insert(v, (math_of(cx, r)?, cx.pos(r)));
                 }
                 "rateRule" => {
-                    let v = id_of(&cx, r, "variable")?;
-                    rate.insert(v, (math_of(&cx, r)?, cx.pos(r)));
+                    let v = id_of(cx, r, "variable")?;
+                    rate.insert(v, (math_of(cx, r)?, cx.pos(r)));
                 }
                 "algebraicRule" => {
                     return Err(cx.err(
@@ -351,11 +658,20 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             }
         }
     }
-    // Compartments: sizes folded in as numbers; without a size, a known constant.
-    let mut consts: Vec<String> = Vec::new();
-    let mut value: BTreeMap<String, Ex> = BTreeMap::new();
+    Ok((assign, rate))
+}
+
+/// Compartments: sizes folded in as numbers; without a size, a known constant.
+fn read_compartments(
+    cx: &Ctx,
+    model: Node,
+    assign: &Rules,
+    rate: &Rules,
+) -> Result<(Vec<String>, BTreeMap<String, Ex>), ImportError> {
+    let mut consts = Vec::new();
+    let mut sizes = BTreeMap::new();
     for c in list(model, "listOfCompartments", "compartment") {
-        let id = id_of(&cx, c, "id")?;
+        let id = id_of(cx, c, "id")?;
         if rate.contains_key(&id)
             || assign.contains_key(&id)
             || c.attribute("constant") == Some("false")
@@ -367,38 +683,84 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
         }
         match c.attribute("size").or(c.attribute("volume")) {
             Some(s) => {
-                value.insert(id, number(&cx, c, s)?);
+                sizes.insert(id, number(cx, c, s)?);
             }
             None => consts.push(id),
         }
     }
-    // Species.
-    struct Sp {
-        id: String,
-        comp: String,
-        amount: bool,
-        fixed: bool,
-        at: (usize, usize),
+    Ok((consts, sizes))
+}
+
+/// An initial assignment to a constant parameter or compartment holds at all
+/// times: it is substituted like an assignment rule. (One to a species is an
+/// initial value, which the analysis does not use.)
+fn constant_initial_assignments(
+    cx: &Ctx,
+    model: Node,
+    rate: &Rules,
+    assign: &mut Rules,
+) -> Result<(), ImportError> {
+    let constant: Vec<String> = list(model, "listOfParameters", "parameter")
+        .into_iter()
+        .chain(list(model, "listOfCompartments", "compartment"))
+        .filter(|p| p.attribute("constant") != Some("false"))
+        .filter_map(|p| p.attribute("id").map(str::to_string))
+        .collect();
+    for ia in list(model, "listOfInitialAssignments", "initialAssignment") {
+        let v = id_of(cx, ia, "symbol")?;
+        if constant.contains(&v) && !rate.contains_key(&v) && !assign.contains_key(&v) {
+            assign.insert(v, (math_of(cx, ia)?, cx.pos(ia)));
+        }
     }
-    let mut species: Vec<Sp> = Vec::new();
+    Ok(())
+}
+
+struct Sp {
+    id: String,
+    comp: String,
+    amount: bool,
+    fixed: bool,
+    at: At,
+}
+
+fn read_species(cx: &Ctx, model: Node) -> Result<Vec<Sp>, ImportError> {
+    let mut species = Vec::new();
     for s in list(model, "listOfSpecies", "species") {
-        let id = id_of(&cx, s, "id")?;
-        let comp = id_of(&cx, s, "compartment")?;
         species.push(Sp {
-            id,
-            comp,
+            id: id_of(cx, s, "id")?,
+            comp: id_of(cx, s, "compartment")?,
             amount: s.attribute("hasOnlySubstanceUnits") == Some("true"),
             fixed: s.attribute("boundaryCondition") == Some("true")
                 || s.attribute("constant") == Some("true"),
             at: cx.pos(s),
         });
     }
-    let mut params: Vec<String> = Vec::new();
-    let mut param_states: Vec<(String, (usize, usize))> = Vec::new();
+    Ok(species)
+}
+
+/// Global parameters: unknown constants, or states when a rate rule drives
+/// them (those with an assignment rule are substituted). Values are kept for
+/// the PEtab importer.
+#[allow(clippy::type_complexity)]
+fn read_parameters(
+    cx: &Ctx,
+    model: Node,
+    assign: &Rules,
+    rate: &Rules,
+) -> Result<(Vec<String>, Vec<(String, At)>, BTreeMap<String, Ex>), ImportError> {
+    let mut params = Vec::new();
+    let mut param_states = Vec::new();
+    let mut values = BTreeMap::new();
     for p in list(model, "listOfParameters", "parameter") {
-        let id = id_of(&cx, p, "id")?;
+        let id = id_of(cx, p, "id")?;
         if assign.contains_key(&id) {
             continue;
+        }
+        if let Some(v) = p.attribute("value") {
+            // A value that is not a finite number (NaN, INF) is left out.
+            if let Ok(x) = number(cx, p, v) {
+                values.insert(id.clone(), x);
+            }
         }
         if rate.contains_key(&id) {
             param_states.push((id, cx.pos(p)));
@@ -406,10 +768,20 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             params.push(id);
         }
     }
-    // Reactions: sum of stoichiometry * rate per species.
+    Ok((params, param_states, values))
+}
+
+/// Reactions: for each species, the terms `±stoichiometry * rate`; local
+/// parameters become params `REACTION_ID` (their values kept).
+fn read_reactions(
+    cx: &Ctx,
+    model: Node,
+    params: &mut Vec<String>,
+    values: &mut BTreeMap<String, Ex>,
+) -> Result<BTreeMap<String, Vec<Ex>>, ImportError> {
     let mut flux: BTreeMap<String, Vec<Ex>> = BTreeMap::new();
     for r in list(model, "listOfReactions", "reaction") {
-        let rid = id_of(&cx, r, "id")?;
+        let rid = id_of(cx, r, "id")?;
         let law = child(r, "kineticLaw")
             .ok_or_else(|| cx.err(r, format!("reaction '{rid}' has no <kineticLaw>")))?;
         let mut local: BTreeMap<String, Ex> = BTreeMap::new();
@@ -417,20 +789,23 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             .into_iter()
             .chain(list(law, "listOfLocalParameters", "localParameter"))
         {
-            let id = id_of(&cx, lp, "id")?;
+            let id = id_of(cx, lp, "id")?;
             let g = format!("{rid}_{id}");
             local.insert(id, name(&g, cx.pos(lp)));
+            if let Some(x) = lp.attribute("value").and_then(|v| number(cx, lp, v).ok()) {
+                values.insert(g.clone(), x);
+            }
             params.push(g);
         }
-        let v = subst(&math_of(&cx, law)?, &|n| local.get(n).cloned());
+        let v = subst(&math_of(cx, law)?, &|n| local.get(n).cloned());
         for (listname, sign) in [("listOfReactants", -1), ("listOfProducts", 1)] {
             for sr in list(r, listname, "speciesReference") {
-                let sid = id_of(&cx, sr, "species")?;
+                let sid = id_of(cx, sr, "species")?;
                 if child(sr, "stoichiometryMath").is_some() {
                     return Err(cx.err(sr, "<stoichiometryMath> is not supported"));
                 }
                 let st = match sr.attribute("stoichiometry") {
-                    Some(s) => number(&cx, sr, s)?,
+                    Some(s) => number(cx, sr, s)?,
                     None => Ex::Num("1".into()),
                 };
                 let term = match &st {
@@ -445,9 +820,21 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             }
         }
     }
-    // States and their equations.
-    let mut eqs: Vec<(String, Ex, (usize, usize))> = Vec::new();
-    for s in &species {
+    Ok(flux)
+}
+
+/// States and their equations: a rate rule, or the reactions' sum over the
+/// compartment size (not for amounts); a species no reaction changes, or a
+/// boundary or constant one, is a param.
+fn equations(
+    species: &[Sp],
+    param_states: &[(String, At)],
+    (assign, rate): (&Rules, &Rules),
+    flux: &BTreeMap<String, Vec<Ex>>,
+    params: &mut Vec<String>,
+) -> Result<Vec<(String, Ex, At)>, ImportError> {
+    let mut eqs: Vec<(String, Ex, At)> = Vec::new();
+    for s in species {
         if assign.contains_key(&s.id) {
             continue;
         }
@@ -472,14 +859,13 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             eqs.push((s.id.clone(), rhs, s.at));
         }
     }
-    for (p, at) in &param_states {
+    for (p, at) in param_states {
         if let Some((e, _)) = rate.get(p) {
             eqs.push((p.clone(), e.clone(), *at));
         }
     }
-    for v in rate.keys() {
+    for (v, (_, at)) in rate {
         if !eqs.iter().any(|(n, _, _)| n == v) {
-            let at = rate.get(v).map_or((1, 1), |r| r.1);
             return Err(ImportError::at(
                 at.0,
                 at.1,
@@ -487,201 +873,14 @@ pub fn sbml_to_sys(text: &str, origin: &str, observe: &[String]) -> Result<Conve
             ));
         }
     }
-    if eqs.is_empty() {
-        let (l, c) = cx.pos(model);
-        return Err(ImportError::at(
-            l,
-            c,
-            "the model has no dynamics (no species changed by a reaction or rate rule)",
-        ));
-    }
-    // Substitute assignment rules (they may use each other) and compartment sizes.
-    let resolve = |e: &Ex| -> Result<Ex, ImportError> {
-        let mut cur = e.clone();
-        // Each round removes one level of rule nesting; more rounds than rules means a cycle.
-        for _ in 0..assign.len() + 2 {
-            let mut hit = false;
-            let next = subst(&cur, &|n| {
-                assign
-                    .get(n)
-                    .map(|(x, _)| x.clone())
-                    .or_else(|| value.get(n).cloned())
-            });
-            walk_names(&cur, &mut |n| {
-                hit |= assign.contains_key(n) || value.contains_key(n)
-            });
-            if !hit {
-                return Ok(cur);
-            }
-            cur = next;
-        }
-        let at = assign.values().next().map_or((1, 1), |a| a.1);
-        Err(ImportError::at(
-            at.0,
-            at.1,
-            "assignment rules refer to each other in a cycle",
-        ))
-    };
-    let known: Vec<&str> = eqs
-        .iter()
-        .map(|e| e.0.as_str())
-        .chain(params.iter().map(String::as_str))
-        .chain(consts.iter().map(String::as_str))
-        .collect();
-    let mut body: Vec<(String, Ex, (usize, usize))> = Vec::new();
-    for (v, e, at) in &eqs {
-        let r = resolve(e)?;
-        let mut bad = None;
-        walk_names_at(&r, &mut |n, p| {
-            if bad.is_none() && !known.contains(&n) {
-                bad = Some((n.to_string(), p));
-            }
-        });
-        if let Some((n, p)) = bad {
-            return Err(ImportError::at(
-                p.0,
-                p.1,
-                format!("'{n}' is not a species, parameter or compartment of the model"),
-            ));
-        }
-        body.push((v.clone(), r, *at));
-    }
-    // Outputs.
-    let mut outputs: Vec<(String, Ex)> = Vec::new();
-    if observe.is_empty() {
-        for (v, _, at) in &body {
-            outputs.push((format!("y_{v}"), name(v, *at)));
-        }
-    } else {
-        for o in observe {
-            let e = if let Some((x, _)) = assign.get(o) {
-                resolve(x)?
-            } else if known.contains(&o.as_str()) {
-                name(o, (1, 1))
-            } else {
-                let (l, c) = cx.pos(model);
-                return Err(ImportError::at(
-                    l,
-                    c,
-                    format!("--observe '{o}' is not an id of this model"),
-                ));
-            };
-            outputs.push((format!("y_{o}"), e));
-        }
-    }
-    // Only the params the equations and outputs use; keep declaration order.
-    let mut used: Vec<String> = Vec::new();
-    for e in body
-        .iter()
-        .map(|b| &b.1)
-        .chain(outputs.iter().map(|o| &o.1))
-    {
-        walk_names(e, &mut |n| {
-            if !used.iter().any(|u| u == n) {
-                used.push(n.to_string());
-            }
-        });
-    }
-    params.retain(|p| used.contains(p) && !eqs.iter().any(|e| &e.0 == p));
-    params.dedup();
-    consts.retain(|c| used.contains(c));
-    let rename = |n: &str| -> String {
-        if RESERVED.contains(&n) {
-            format!("{n}_")
-        } else {
-            n.to_string()
-        }
-    };
-    let mid = model
-        .attribute("id")
-        .or(model.attribute("name"))
-        .unwrap_or("sbml_model");
-    let mut sysname: String = mid
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if !sysname.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
-        sysname.insert(0, '_');
-    }
-    if RESERVED.contains(&sysname.as_str()) {
-        sysname.push('_');
-    }
-    let one_line = |s: &str| s.split_whitespace().collect::<Vec<_>>().join(" ");
-    let mut lines = vec![format!(
-        "# Imported by `obsan import sbml` from {}.",
-        one_line(origin)
-    )];
-    if observe.is_empty() {
-        lines.push(
-            "# SBML has no outputs: every state is measured here (choose with --observe).".into(),
-        );
-    }
-    if !value.is_empty() {
-        let v: Vec<String> = value
-            .iter()
-            .map(|(k, e)| {
-                let mut s = String::new();
-                show(e, &mut s, &|n| n.to_string());
-                format!("{k} = {s}")
-            })
-            .collect();
-        lines.push(format!("# compartment sizes folded in: {}", v.join(", ")));
-    }
-    lines.push(format!("system {sysname}"));
-    if let Some(n) = model.attribute("name") {
-        let n = one_line(n);
-        if !n.is_empty() {
-            lines.push(format!("description {n}"));
-        }
-    }
-    let names = |v: Vec<&String>| {
-        v.into_iter()
-            .map(|s| rename(s))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    lines.push(format!(
-        "state {}",
-        names(body.iter().map(|b| &b.0).collect())
-    ));
-    if !params.is_empty() {
-        lines.push(format!("param {}", names(params.iter().collect())));
-    }
-    if !consts.is_empty() {
-        lines.push(format!("const {}", names(consts.iter().collect())));
-    }
-    let mut line_map = Vec::new();
-    for (v, e, at) in &body {
-        let mut s = String::new();
-        show(e, &mut s, &rename);
-        lines.push(format!("{}' = {s}", rename(v)));
-        line_map.push((lines.len(), at.0, at.1));
-    }
-    for (o, e) in &outputs {
-        let mut s = String::new();
-        show(e, &mut s, &rename);
-        lines.push(format!("output {o} = {s}"));
-    }
-    let mut sys_text = lines.join("\n");
-    sys_text.push('\n');
-    Ok(Converted {
-        name: sysname,
-        sys_text,
-        line_map,
-    })
+    Ok(eqs)
 }
 
-fn walk_names(e: &Ex, f: &mut dyn FnMut(&str)) {
+pub(crate) fn walk_names(e: &Ex, f: &mut dyn FnMut(&str)) {
     walk_names_at(e, &mut |n, _| f(n));
 }
 
-fn walk_names_at(e: &Ex, f: &mut dyn FnMut(&str, (usize, usize))) {
+pub(crate) fn walk_names_at(e: &Ex, f: &mut dyn FnMut(&str, (usize, usize))) {
     match e {
         Ex::Name { name, at, .. } => f(name, *at),
         Ex::Neg(a) => walk_names_at(a, f),

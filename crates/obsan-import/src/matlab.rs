@@ -1,0 +1,512 @@
+//! STRIKE-GOLDD's model files (`z_create_NAME.m`, MATLAB symbolic text):
+//! `syms` declarations and the assignments `x = [..]` (states), `p = [..]`
+//! (unknown parameters), `u = [..]` (known inputs), `w = [..]` (unknown
+//! inputs), `f = [..]` (the dynamics, one entry per state), `h = [..]` (the
+//! outputs). Other assignments are intermediate quantities, substituted where
+//! later used; `ics`, `known_ics` and every other statement (`clear`, `save`)
+//! are skipped. Vectors are `[a; b]`, `[a, b]` or `[a b]` (elements split at
+//! blanks only when every element is a name or number), a trailing `'`
+//! (transpose) is ignored. `%` starts a comment, `...` continues a line.
+//! The format is read from its description in STRIKE-GOLDD's documentation;
+//! no STRIKE-GOLDD text (GPL-3) is used.
+
+use crate::infix::{self, Dialect, Placed};
+use crate::julia::{show, Ex, RESERVED};
+use crate::sbml::{one_line, walk_names_at};
+use crate::{Converted, ImportError};
+use std::collections::BTreeMap;
+
+type At = (usize, usize);
+/// A vector's entries with their places, and the place of its assignment.
+type Vector = (Vec<(Ex, At)>, At);
+
+/// Split the text into statements (comments and continuations blanked,
+/// newlines inside brackets kept as row separators).
+fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
+    let src = infix::placed(text.strip_prefix('\u{feff}').unwrap_or(text), (1, 1));
+    let mut out = Vec::new();
+    let mut cur: Placed = Vec::new();
+    let mut depth: Vec<(char, At)> = Vec::new();
+    let mut i = 0;
+    let prev_sig = |cur: &Placed| cur.iter().rev().find(|c| !c.0.is_whitespace()).map(|c| c.0);
+    while i < src.len() {
+        let (ch, at) = src[i];
+        if ch == '%' {
+            while i < src.len() && src[i].0 != '\n' {
+                i += 1;
+            }
+            continue;
+        }
+        if ch == '.' && src[i..].iter().take(3).all(|c| c.0 == '.') && src.len() >= i + 3 {
+            // A continuation: skip to the end of the line and join the next one.
+            while i < src.len() && src[i].0 != '\n' {
+                i += 1;
+            }
+            if let Some(&(_, nat)) = src.get(i) {
+                cur.push((' ', nat));
+            }
+            i += 1;
+            continue;
+        }
+        if ch == '\'' {
+            // A transpose after a value; otherwise a string, kept whole.
+            let transpose = prev_sig(&cur).is_some_and(|p| {
+                p.is_ascii_alphanumeric() || matches!(p, '_' | ']' | ')' | '\'' | '.')
+            }) && cur.last().is_some_and(|c| !c.0.is_whitespace());
+            if !transpose {
+                cur.push(src[i]);
+                i += 1;
+                while i < src.len() && src[i].0 != '\'' && src[i].0 != '\n' {
+                    cur.push(src[i]);
+                    i += 1;
+                }
+                if src.get(i).map(|c| c.0) != Some('\'') {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        "this string is not closed on its line",
+                    ));
+                }
+            }
+            cur.push(src[i]);
+            i += 1;
+            continue;
+        }
+        match ch {
+            '[' | '(' | '{' => depth.push((ch, at)),
+            ']' | ')' | '}' => {
+                let want = match ch {
+                    ']' => '[',
+                    ')' => '(',
+                    _ => '{',
+                };
+                match depth.pop() {
+                    Some((o, _)) if o == want => {}
+                    _ => return Err(ImportError::at(at.0, at.1, format!("unmatched '{ch}'"))),
+                }
+            }
+            _ => {}
+        }
+        let ends = depth.is_empty() && matches!(ch, ';' | ',' | '\n');
+        if ends {
+            if cur.iter().any(|c| !c.0.is_whitespace()) {
+                out.push(std::mem::take(&mut cur));
+            } else {
+                cur.clear();
+            }
+        } else {
+            cur.push(src[i]);
+        }
+        i += 1;
+    }
+    if let Some((o, at)) = depth.pop() {
+        return Err(ImportError::at(
+            at.0,
+            at.1,
+            format!("this '{o}' is never closed"),
+        ));
+    }
+    if cur.iter().any(|c| !c.0.is_whitespace()) {
+        out.push(cur);
+    }
+    Ok(out)
+}
+
+fn trim(s: &[(char, At)]) -> &[(char, At)] {
+    let a = s
+        .iter()
+        .position(|c| !c.0.is_whitespace())
+        .unwrap_or(s.len());
+    let b = s
+        .iter()
+        .rposition(|c| !c.0.is_whitespace())
+        .map_or(a, |k| k + 1);
+    &s[a..b.max(a)]
+}
+
+fn string(s: &[(char, At)]) -> String {
+    s.iter().map(|c| c.0).collect()
+}
+
+/// The elements of a right-hand side: `[a; b]` as a list, otherwise one.
+fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
+    let mut r = trim(rhs);
+    // A trailing transpose.
+    while let Some(((c, _), rest)) = r.split_last() {
+        if *c == '\'' || (*c == '.' && rest.last().is_some_and(|x| x.0 == ']')) {
+            r = trim(rest);
+        } else {
+            break;
+        }
+    }
+    if r.first().map(|c| c.0) != Some('[') || r.last().map(|c| c.0) != Some(']') {
+        return vec![r];
+    }
+    // The brackets must enclose the whole: `[a] * [b]` is not a vector.
+    let mut d = 0i32;
+    for (k, c) in r.iter().enumerate() {
+        match c.0 {
+            '[' | '(' => d += 1,
+            ']' | ')' => d -= 1,
+            _ => {}
+        }
+        if d == 0 && k + 1 < r.len() {
+            return vec![r];
+        }
+    }
+    let inner = &r[1..r.len() - 1];
+    let mut parts = Vec::new();
+    let (mut d, mut start) = (0i32, 0usize);
+    for (k, c) in inner.iter().enumerate() {
+        match c.0 {
+            '[' | '(' => d += 1,
+            ']' | ')' => d -= 1,
+            ';' | ',' | '\n' if d == 0 => {
+                parts.push(&inner[start..k]);
+                start = k + 1;
+            }
+            _ => {}
+        }
+    }
+    parts.push(&inner[start..]);
+    let mut out = Vec::new();
+    for p in parts {
+        let p = trim(p);
+        if p.is_empty() {
+            continue;
+        }
+        // `[x1 x2 x3]`: blanks separate elements when each is a name or number.
+        let words: Vec<&[(char, At)]> = p
+            .split(|c| c.0.is_whitespace())
+            .filter(|w| !w.is_empty())
+            .collect();
+        if words.len() > 1
+            && words.iter().all(|w| {
+                w.iter()
+                    .all(|c| c.0.is_ascii_alphanumeric() || matches!(c.0, '_' | '.'))
+            })
+        {
+            out.extend(words);
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+fn is_name(s: &str) -> bool {
+    s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+        && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Substitute the single-valued assignments made so far, and indexing
+/// `v(k)` into an assigned vector.
+fn subst(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
+    Ok(match e {
+        Ex::Call(g, args) if g.starts_with(infix::INDEX) => {
+            let v = &g[infix::INDEX.len()..];
+            let k = match args.as_slice() {
+                [Ex::Num(k)] => k.parse::<usize>().ok(),
+                _ => None,
+            };
+            match (vars.get(v), k) {
+                (Some((items, _)), Some(k)) if k >= 1 && k <= items.len() => items[k - 1].0.clone(),
+                (Some((items, _)), _) => {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!(
+                            "'{v}(...)': the index must be a number from 1 to {}",
+                            items.len()
+                        ),
+                    ))
+                }
+                (None, _) => {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!(
+                            "'{v}(...)' is neither a function obsan reads (exp, log, log10, sqrt, \
+                             sin, cos, tan, atan) nor a vector assigned before"
+                        ),
+                    ))
+                }
+            }
+        }
+        e => subst_plain(e, vars, at)?,
+    })
+}
+
+fn subst_plain(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
+    Ok(match e {
+        Ex::Name { name, .. } => match vars.get(name).map(|v| v.0.as_slice()) {
+            Some([x]) => x.0.clone(),
+            _ => e.clone(),
+        },
+        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, vars, at)?)),
+        Ex::Bin(op, a, b) => Ex::Bin(
+            *op,
+            Box::new(subst(a, vars, at)?),
+            Box::new(subst(b, vars, at)?),
+        ),
+        Ex::Call(g, args) => Ex::Call(
+            g.clone(),
+            args.iter()
+                .map(|a| subst(a, vars, at))
+                .collect::<Result<_, _>>()?,
+        ),
+        Ex::Num(_) => e.clone(),
+    })
+}
+
+/// Translate a STRIKE-GOLDD model file into `.sys` text. `origin` names the
+/// file (its stem, less `z_create_`, names the system unless the file saves
+/// under another name with `save('NAME', ...)`).
+pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, ImportError> {
+    // Every assignment, in order; a later one replaces an earlier one.
+    let mut vars: BTreeMap<String, Vector> = BTreeMap::new();
+    let mut syms: Vec<(String, At)> = Vec::new();
+    let mut saved: Option<String> = None;
+    for st in statements(text)? {
+        let st = trim(&st);
+        let t = string(st);
+        // `syms a b real`: a role (x, u, ...) declared and never assigned is that one symbol.
+        if let Some(rest) = t.strip_prefix("syms") {
+            if rest.is_empty() || rest.starts_with(char::is_whitespace) {
+                syms.extend(rest.split_whitespace().map(|w| (w.to_string(), st[0].1)));
+                continue;
+            }
+        }
+        if let Some(rest) = t.strip_prefix("save(") {
+            let name = rest
+                .trim_start()
+                .strip_prefix('\'')
+                .and_then(|r| r.split('\'').next());
+            if let Some(n) = name.filter(|n| is_name(n)) {
+                saved = Some(n.to_string());
+            }
+            continue;
+        }
+        // An assignment NAME = RHS (not ==).
+        let Some(eq) = st.iter().position(|c| c.0 == '=') else {
+            continue;
+        };
+        if st.get(eq + 1).map(|c| c.0) == Some('=') {
+            continue;
+        }
+        let lhs = string(trim(&st[..eq]));
+        if !is_name(&lhs) || matches!(lhs.as_str(), "ics" | "known_ics") {
+            continue;
+        }
+        let mut items = Vec::new();
+        for el in elements(&st[eq + 1..]) {
+            let e = infix::parse_placed(el, Dialect::Matlab)?;
+            // A name standing for a whole vector (`h = x`) is that vector.
+            if let Ex::Name { name, .. } = &e {
+                if let Some((v, _)) = vars.get(name).filter(|v| v.0.len() != 1) {
+                    items.extend(v.iter().cloned());
+                    continue;
+                }
+            }
+            items.push((subst(&e, &vars, el[0].1)?, el[0].1));
+        }
+        vars.insert(lhs, (items, st[0].1));
+    }
+    let mut roles: BTreeMap<&str, Vector> = BTreeMap::new();
+    for r in ["x", "p", "u", "w", "f", "h"] {
+        if let Some(v) = vars.get(r) {
+            roles.insert(r, v.clone());
+        } else if let Some((_, at)) = syms.iter().find(|s| s.0 == r) {
+            let e = Ex::Name {
+                name: r.to_string(),
+                timed: false,
+                at: *at,
+            };
+            roles.insert(r, (vec![(e, *at)], *at));
+        }
+    }
+    let syms: Vec<String> = syms.into_iter().map(|s| s.0).collect();
+    convert(roles, &syms, saved, origin)
+}
+
+fn names_of(
+    roles: &BTreeMap<&str, Vector>,
+    key: &str,
+    what: &str,
+) -> Result<Vec<(String, At)>, ImportError> {
+    let mut out = Vec::new();
+    if let Some((items, _)) = roles.get(key) {
+        for (e, at) in items {
+            match e {
+                Ex::Name { name, .. } => out.push((name.clone(), *at)),
+                _ => {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("each entry of '{key}' ({what}) must be a name"),
+                    ))
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+fn convert(
+    roles: BTreeMap<&str, Vector>,
+    syms: &[String],
+    saved: Option<String>,
+    origin: &str,
+) -> Result<Converted, ImportError> {
+    let need = |k: &str, what: &str| -> Result<(), ImportError> {
+        if roles.contains_key(k) {
+            Ok(())
+        } else {
+            Err(ImportError::at(
+                1,
+                1,
+                format!("no '{k} = [...]' ({what}) in the file"),
+            ))
+        }
+    };
+    need("x", "the states")?;
+    need("f", "the dynamics")?;
+    need("h", "the outputs")?;
+    let states = names_of(&roles, "x", "the states")?;
+    let params = names_of(&roles, "p", "the parameters")?;
+    let inputs = names_of(&roles, "u", "the known inputs")?;
+    let unknown = names_of(&roles, "w", "the unknown inputs")?;
+    let (f, fat) = roles.get("f").cloned().unwrap_or_default();
+    if f.len() != states.len() {
+        return Err(ImportError::at(
+            fat.0,
+            fat.1,
+            format!("f has {} entries for {} states", f.len(), states.len()),
+        ));
+    }
+    let mut all: Vec<&str> = Vec::new();
+    for (n, at) in states.iter().chain(&params).chain(&inputs).chain(&unknown) {
+        if all.contains(&n.as_str()) {
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{n}' is declared twice (x, p, u, w)"),
+            ));
+        }
+        all.push(n);
+    }
+    let (h, _) = roles.get("h").cloned().unwrap_or_default();
+    // A symbol declared with `syms` but in none of x, p, u, w is a known
+    // constant, as STRIKE-GOLDD reads it.
+    let mut consts: Vec<String> = Vec::new();
+    for (e, _) in f.iter().chain(&h) {
+        let mut bad = None;
+        walk_names_at(e, &mut |n, p| {
+            if all.contains(&n) || consts.iter().any(|c| c == n) {
+            } else if syms.iter().any(|s| s == n) {
+                consts.push(n.to_string());
+            } else if bad.is_none() {
+                bad = Some((n.to_string(), p));
+            }
+        });
+        if let Some((n, p)) = bad {
+            let why = if n == "t" {
+                " (time: the model must be autonomous)"
+            } else {
+                ""
+            };
+            return Err(ImportError::at(
+                p.0,
+                p.1,
+                format!(
+                    "'{n}' is not a state, parameter or input of the model (x, p, u, w) nor \
+                     declared with syms{why}"
+                ),
+            ));
+        }
+    }
+    let rename = |n: &str| -> String {
+        if RESERVED.contains(&n) {
+            format!("{n}_")
+        } else {
+            n.to_string()
+        }
+    };
+    let stem = origin
+        .rsplit(['/', '\\'])
+        .next()
+        .unwrap_or(origin)
+        .trim_end_matches(".m");
+    let mut name =
+        saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
+    name = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if !name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
+        name.insert(0, '_');
+    }
+    if RESERVED.contains(&name.as_str()) {
+        name.push('_');
+    }
+    let list = |v: &[(String, At)]| {
+        v.iter()
+            .map(|x| rename(&x.0))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut lines = vec![
+        format!(
+            "# Imported by `obsan import strike-goldd` from {}.",
+            one_line(origin)
+        ),
+        format!("system {name}"),
+        format!("state {}", list(&states)),
+    ];
+    if !params.is_empty() {
+        lines.push(format!("param {}", list(&params)));
+    }
+    if !inputs.is_empty() {
+        lines.push(format!("input {}", list(&inputs)));
+    }
+    if !unknown.is_empty() {
+        lines.push(format!("unknown input {}", list(&unknown)));
+    }
+    if !consts.is_empty() {
+        let c: Vec<String> = consts.iter().map(|c| rename(c)).collect();
+        lines.push(format!("const {}", c.join(", ")));
+    }
+    let mut line_map = Vec::new();
+    for ((s, _), (e, at)) in states.iter().zip(&f) {
+        let mut t = String::new();
+        show(e, &mut t, &rename);
+        lines.push(format!("{}' = {t}", rename(s)));
+        line_map.push((lines.len(), at.0, at.1));
+    }
+    // Outputs y1, y2, ... unless a declared name has that form.
+    let clash = all.iter().any(|n| {
+        n.strip_prefix('y')
+            .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
+    });
+    let base = if clash { "y_out" } else { "y" };
+    for (k, (e, at)) in h.iter().enumerate() {
+        let mut t = String::new();
+        show(e, &mut t, &rename);
+        lines.push(format!("output {base}{} = {t}", k + 1));
+        line_map.push((lines.len(), at.0, at.1));
+    }
+    let mut sys_text = lines.join("\n");
+    sys_text.push('\n');
+    Ok(Converted {
+        name,
+        sys_text,
+        line_map,
+        table_lines: Vec::new(),
+    })
+}

@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Regenerate systems/benchmarks/strike-goldd/*.sys from the model files in its src/ folder.
+
+Each src/z_create_NAME.m was written for obsan from its model's equations (the reference is
+in the file; no STRIKE-GOLDD text, which is GPL-3, is used). This runs
+`obsan import strike-goldd` on each (from the folder, so the header names src/...), and puts
+the source line and the verdict of verdicts.list (made by benches/peers/sg_verdicts.py, SymPy,
+never obsan) at the top of NAME.sys.
+
+Usage: cargo build --release && python3 scripts/import_strike_goldd.py
+"""
+
+import os
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DIR = os.path.join(ROOT, "systems", "benchmarks", "strike-goldd")
+OBSAN = os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release", "obsan")
+
+
+def main():
+    verdicts = {}
+    for line in open(os.path.join(DIR, "verdicts.list"), encoding="utf-8"):
+        if line.strip() and not line.startswith("#"):
+            name, spec = line.rstrip("\n").split("\t", 1)
+            verdicts[name] = spec
+    for m in sorted(os.listdir(os.path.join(DIR, "src"))):
+        if not (m.startswith("z_create_") and m.endswith(".m")):
+            continue
+        name = m[len("z_create_"):-2]
+        out = subprocess.run(
+            [OBSAN, "import", "strike-goldd", f"src/{m}"], cwd=DIR, capture_output=True, text=True
+        )
+        if out.returncode != 0:
+            sys.exit(out.stderr)
+        if name not in verdicts:
+            sys.exit(f"{name}: no line in verdicts.list")
+        header = [
+            f"# Source: src/{m}, written for obsan from the model's equations (reference in that file).",
+            "# verdict-source: independent (SymPy: rank of the Lie-derivative Jacobian at a random integer point, benches/peers/sg_verdicts.py)",
+            f"# verdict: {verdicts[name]}",
+        ]
+        with open(os.path.join(DIR, f"{name}.sys"), "w", encoding="utf-8") as f:
+            f.write("\n".join(header) + "\n" + out.stdout)
+        print(f"{name}.sys")
+
+
+if __name__ == "__main__":
+    main()
