@@ -17,6 +17,7 @@
 
 mod decomp;
 mod derive;
+mod design;
 mod experiments;
 mod fields;
 mod fp_linalg;
@@ -32,6 +33,10 @@ mod unknown_input;
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
+pub use design::{
+    design_inputs, design_outputs, Candidate, CandidateEffect, Combination, DesignOptions,
+    DesignReport, DesignSet, FamilyReport, InputDesignReport,
 };
 pub use experiments::{
     experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
