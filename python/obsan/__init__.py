@@ -264,6 +264,46 @@ class System:
             dict(known=known, known_generic=generic, input=input, set=set, seed=seed, **options),
         )
 
+    def design(
+        self,
+        candidates: Optional[str] = None,
+        target: Union[str, Iterable[str], None] = None,
+        families: bool = False,
+        input: Optional[str] = None,
+        set: Optional[Mapping] = None,
+        seed: Optional[int] = None,
+        **options: Any,
+    ) -> dict:
+        """``obsan design``: which sensor, which trajectory (docs/experiments.md).
+
+        ``candidates``: a candidates file (``candidate NAME [cost C]`` lines, each followed
+        by ``output`` statements): the minimal sets (by count, then cost) that make every
+        variable, or those of ``target``, observable, each with the symmetries it breaks
+        (``result["sensors"]``). Without ``candidates`` (or with ``families=True``): which
+        input families (the model's restrictions) identify everything alone, in several
+        experiments or combined (``result["inputs"]``)."""
+        target = [target] if isinstance(target, str) else (list(target) if target else None)
+        return _call(
+            [
+                "design",
+                self.path,
+                *_flags(
+                    dict(
+                        candidates=candidates,
+                        target=target,
+                        families=families,
+                        input=input,
+                        set=set,
+                        seed=seed,
+                        **options,
+                    ),
+                    join=("target",),
+                ),
+                "--json",
+            ],
+            self._source,
+        )
+
     def symmetries(
         self,
         input: Optional[str] = None,
