@@ -19,7 +19,10 @@ const CANDIDATES: [(&str, &str); 10] = [
     ("lx", "pfx"),
     ("ly", "pfy"),
     ("lz", "pfz"),
-    ("mx", "(qw^2 + qx^2 - qy^2 - qz^2)/(qw^2 + qx^2 + qy^2 + qz^2)"),
+    (
+        "mx",
+        "(qw^2 + qx^2 - qy^2 - qz^2)/(qw^2 + qx^2 + qy^2 + qz^2)",
+    ),
     ("my", "2*(qx*qy + qw*qz)/(qw^2 + qx^2 + qy^2 + qz^2)"),
 ];
 
@@ -39,7 +42,10 @@ fn main() {
     let quick = std::env::args().any(|a| a == "quick");
     let reps = if quick { 3 } else { 7 };
     let src = std::fs::read_to_string(format!("{ROOT}/systems/vins.sys")).expect("vins.sys");
-    let base = System::parse(&src, "vins.sys").expect("parses").output_names().len();
+    let base = System::parse(&src, "vins.sys")
+        .expect("parses")
+        .output_names()
+        .len();
     let mut text = src.clone();
     for (n, e) in CANDIDATES {
         text.push_str(&format!("\noutput {n} = {e}\n"));

@@ -377,17 +377,8 @@ pub fn design_outputs(
                         found.push(idx.clone());
                     }
                 }
-                // Next k-combination of 0..m.
-                let mut i = k;
-                while i > 0 && idx[i - 1] == m - k + i - 1 {
-                    i -= 1;
-                }
-                if i == 0 {
+                if !next_combination(&mut idx, m) {
                     break;
-                }
-                idx[i - 1] += 1;
-                for j in i..k {
-                    idx[j] = idx[j - 1] + 1;
                 }
             }
             complete_to_size = k;
@@ -444,6 +435,20 @@ pub fn design_outputs(
         symmetry_note,
         error_bound,
     })
+}
+
+/// The next k-subset of `0..m` in lexicographic order (`false`: none).
+fn next_combination(idx: &mut [usize], m: usize) -> bool {
+    let k = idx.len();
+    let Some(i) = (0..k).rev().find(|&i| idx[i] != m - k + i) else {
+        return false;
+    };
+    idx[i] += 1;
+    let first = idx[i];
+    for (o, x) in idx[i + 1..].iter_mut().enumerate() {
+        *x = first + 1 + o;
+    }
+    true
 }
 
 fn check_time(deadline: Option<Instant>, screened: usize) -> Result<(), AnalysisError> {
@@ -586,16 +591,8 @@ pub fn design_inputs(
                         error_bound = error_bound.max(r.error_bound);
                     }
                 }
-                let mut i = k;
-                while i > 0 && idx[i - 1] == p - k + i - 1 {
-                    i -= 1;
-                }
-                if i == 0 {
+                if !next_combination(&mut idx, p) {
                     break;
-                }
-                idx[i - 1] += 1;
-                for j in i..k {
-                    idx[j] = idx[j - 1] + 1;
                 }
             }
         }
@@ -607,4 +604,24 @@ pub fn design_inputs(
         combinations_complete: p <= 12,
         error_bound,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::next_combination;
+
+    // Every k-subset of 0..m once, in lexicographic order: C(5, k) of them.
+    #[test]
+    fn combinations_enumerate_each_subset_once() {
+        for (k, count) in [(1, 5), (2, 10), (3, 10), (5, 1)] {
+            let mut idx: Vec<usize> = (0..k).collect();
+            let mut seen = vec![idx.clone()];
+            while next_combination(&mut idx, 5) {
+                assert!(idx.windows(2).all(|w| w[0] < w[1]) && idx[k - 1] < 5);
+                assert!(seen.last().is_some_and(|p| *p < idx));
+                seen.push(idx.clone());
+            }
+            assert_eq!(seen.len(), count, "C(5, {k})");
+        }
+    }
 }
