@@ -54,7 +54,10 @@ fn vins_which_sensor_fixes_position_and_yaw() {
     let cand = "systems/design/vins_sensors.cand";
     let v = json(&["design", "systems/vins.sys", "--candidates", cand]);
     let s = &v["sensors"];
-    assert_eq!((s["base_rank"].as_u64(), s["n"].as_u64()), (Some(15), Some(19)));
+    assert_eq!(
+        (s["base_rank"].as_u64(), s["n"].as_u64()),
+        (Some(15), Some(19))
+    );
     assert_eq!(s["all_rank"], 19);
     let ranks: Vec<u64> = s["candidates"]
         .as_array()
@@ -141,9 +144,15 @@ fn calib_circles_alone_never_several_yes() {
     assert_eq!(f[0]["restriction"], Value::Null);
     assert_eq!(f[0]["single_full"], true);
     assert_eq!(f[1]["restriction"], "q");
-    assert_eq!((f[1]["single_rank"].as_u64(), f[1]["single_n"].as_u64()), (Some(4), Some(7)));
+    assert_eq!(
+        (f[1]["single_rank"].as_u64(), f[1]["single_n"].as_u64()),
+        (Some(4), Some(7))
+    );
     assert_eq!(f[1]["single_full"], false);
-    assert_eq!((f[1]["experiments"].as_u64(), f[1]["full"].as_bool()), (Some(3), Some(true)));
+    assert_eq!(
+        (f[1]["experiments"].as_u64(), f[1]["full"].as_bool()),
+        (Some(3), Some(true))
+    );
 }
 
 // systems/design/c2m_inputs.sys (Villaverde et al. 2019; STRIKE-GOLDD
@@ -163,7 +172,10 @@ fn two_compartment_needs_a_ramp() {
             .clone()
     };
     let c = by("constant");
-    assert_eq!((c["single_rank"].as_u64(), c["single_n"].as_u64()), (Some(6), Some(7)));
+    assert_eq!(
+        (c["single_rank"].as_u64(), c["single_n"].as_u64()),
+        (Some(6), Some(7))
+    );
     assert_eq!(c["full"], false, "no number of constant inputs");
     assert_eq!(by("ramp")["single_full"], true);
     assert_eq!(f[0]["single_full"], true);
@@ -186,7 +198,10 @@ fn families_combined() {
     let c = i["combinations"].as_array().expect("combinations");
     assert_eq!(c.len(), 1);
     assert_eq!(c[0]["families"], serde_json::json!(["only1", "only2"]));
-    assert_eq!((c[0]["rank"].as_u64(), c[0]["n"].as_u64()), (Some(4), Some(4)));
+    assert_eq!(
+        (c[0]["rank"].as_u64(), c[0]["n"].as_u64()),
+        (Some(4), Some(4))
+    );
 }
 
 #[test]
