@@ -369,7 +369,7 @@ pub fn design_outputs(
                         exhaustive = false;
                         break 'sizes;
                     }
-                    if screened % 256 == 0 {
+                    if screened.is_multiple_of(256) {
                         check_time(opts.deadline, screened)?;
                     }
                     screened += 1;
