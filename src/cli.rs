@@ -214,6 +214,25 @@ sin/cos/atan/exp/log/sqrt yet). --json prints {system, variables: [{name, kind (
 state), verdict (global | local | not identifiable), values}], solutions, all_local, maps,
 group_order, order, rank_order, unknowns, equations, primes, exact: false, method}.")]
     Global(GlobalArgs),
+    /// Which sensor, which trajectory: the minimal sets of candidate outputs
+    /// (by count, then cost) that make the system (or --target) observable,
+    /// each with the symmetries it breaks; and which input families
+    /// (restrictions) make everything observable, alone or combined.
+    #[command(after_help = "Examples:
+  obsan design systems/vins.sys --candidates systems/design/vins_sensors.cand
+  obsan design systems/vins.sys --candidates systems/design/vins_sensors.cand --target rx,ry,rz
+  obsan design systems/calib.sys                  # input families: circles alone never, 3 yes
+  obsan design systems/design/c2m_inputs.sys      # constant input never, a ramp yes
+
+A candidates file holds `candidate NAME [cost C]` lines, each followed by the `output`
+statements of that sensor (docs/experiments.md). Without --candidates (or with --families)
+the input families are compared. --json prints {system, restriction, sensors: {state, n,
+base_rank, all_rank, target, already, reachable, symmetries, candidates: [{name, cost,
+outputs, rank, breaks}], sets: [{candidates, count, cost, rank, n, exact, error_bound, breaks,
+unobservable_variables}], subsets_screened, complete_to_size, exhaustive, error_bound} | null,
+inputs: {families: [{restriction, single_rank, single_n, single_full, experiments, rank, n,
+full}], combinations: [{families, rank, n}], ...} | null, seed}.")]
+    Design(DesignArgs),
 }
 
 #[derive(Args)]
@@ -642,6 +661,7 @@ impl Command {
             Command::Lie(a) => Some(a.limit.max_terms),
             Command::Modes(a) => Some(a.max_terms),
             Command::Global(a) => Some(a.an.max_terms),
+            Command::Design(a) => Some(a.max_terms),
             _ => None,
         }
     }
@@ -665,6 +685,7 @@ impl Command {
             Command::Diagnose(a) => a.timeout,
             Command::Import(ImportCommand::Mrclam(a)) => a.timeout,
             Command::Global(a) => a.an.timeout,
+            Command::Design(a) => a.timeout,
             _ => None,
         }
     }
@@ -896,4 +917,41 @@ pub struct DiffArgs {
     pub limit: LimitArgs,
     #[command(flatten)]
     pub out: OutputArgs,
+}
+
+#[derive(Args)]
+pub struct DesignArgs {
+    /// A system description in the .sys format.
+    pub system: String,
+    /// Candidate sensors: `candidate NAME [cost C]` lines, each followed by
+    /// `output` statements (docs/experiments.md).
+    #[arg(long, value_name = "FILE")]
+    pub candidates: Option<String>,
+    /// The variables the added sensors must make observable (default: all).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub target: Vec<String>,
+    /// Compare the input families (restrictions) too when --candidates is given.
+    #[arg(long)]
+    pub families: bool,
+    /// Sensors under this input restriction of the model.
+    #[arg(long = "input", value_name = "NAME")]
+    pub restriction: Option<String>,
+    /// Give a known constant a value, e.g. `--set q=0.9`.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
+    /// Screen at most this many subsets of candidates.
+    #[arg(long, value_name = "N", default_value_t = 1 << 20)]
+    pub max_subsets: usize,
+    /// Seed of the random evaluation points.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Give up after this many seconds (exit code 2).
+    #[arg(long, value_name = "SECONDS", value_parser = seconds)]
+    pub timeout: Option<f64>,
+    /// Largest polynomial (terms) the engine may build.
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
+    /// Machine-readable JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }

@@ -25,6 +25,7 @@ macro_rules! outln {
 
 mod analysis_cmds;
 mod cli;
+mod design_cmd;
 mod diagnose_cmd;
 mod estimate_cmds;
 mod experiments_cmd;
@@ -459,6 +460,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Diagnose(a) => diagnose_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::Mrclam(a)) => diagnose_cmd::import_mrclam(&a),
         cli::Command::Global(a) => global_cmd::run(&a),
+        cli::Command::Design(a) => design_cmd::run(&a),
         cli::Command::Import(cli::ImportCommand::SiJl(a)) => import_cmd::si_jl(&a),
         cli::Command::Import(cli::ImportCommand::Sbml(a)) => import_cmd::sbml(&a),
         cli::Command::Import(cli::ImportCommand::Petab(a)) => import_cmd::petab(&a),

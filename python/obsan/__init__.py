@@ -28,6 +28,7 @@ from ._results import (
     Calibration,
     Check,
     CramerRao,
+    Design,
     Diagnosis,
     Estimate,
     Expression,
@@ -73,6 +74,7 @@ __all__ = [
     "LieDerivatives",
     "LieDerivative",
     "Check",
+    "Design",
     "Expression",
     "Verification",
     "Calibration",
@@ -240,6 +242,37 @@ class System:
         f = self._flags("rank", input, set).pairs("--known", known).texts("--known-generic", generic)
         f = f.integer("--seed", seed).integer("--known-order", known_order)
         return Rank.of(self._get(_limits(f, timeout, max_terms)))
+
+    def design(
+        self,
+        candidates: Optional[PathLike] = None,
+        *,
+        target: Names = None,
+        families: bool = False,
+        input: Optional[str] = None,
+        set: Settings = None,
+        max_subsets: Optional[int] = None,
+        seed: Optional[int] = None,
+        timeout: Optional[float] = None,
+        max_terms: Optional[int] = None,
+    ) -> Design:
+        """``obsan design``: which sensor, which trajectory (docs/experiments.md).
+
+        ``candidates``: a candidates file (``candidate NAME [cost C]`` lines, each followed
+        by ``output`` statements): the minimal sets (by count, then cost) that make every
+        variable, or those of ``target``, observable, each with the symmetries it breaks
+        (``result.sets``, ``result["sensors"]``). Without ``candidates`` (or with
+        ``families=True``): which input families (the model's restrictions) identify
+        everything alone, in several experiments or combined (``result["inputs"]``)."""
+        f = self._flags("design", input, set)
+        if candidates is not None:
+            f.argv += ["--candidates", existing("design: candidates", candidates)]
+        if target is not None:
+            names = [target] if isinstance(target, str) else list(target)
+            f = f.text("--target", ",".join(A.text("target", t) for t in names))
+        f = f.switch("--families", families).integer("--max-subsets", max_subsets)
+        f = f.integer("--seed", seed)
+        return Design.of(self._get(_limits(f, timeout, max_terms)))
 
     def symmetries(
         self,

@@ -324,6 +324,22 @@ class Check(Result):
 
 
 @dataclass(frozen=True, repr=False, eq=False)
+class Design(Result):
+    """``obsan design``: with candidate sensors, ``sets`` are the minimal sets of
+    candidates (by count, then cost) that make the target observable; the input families'
+    verdicts are in ``result["inputs"]``."""
+
+    system: str
+    sets: List[List[str]]
+
+    @classmethod
+    def of(cls, raw: Dict[str, Any]) -> "Design":
+        sensors = raw.get("sensors") or {}
+        sets = [list(x.get("candidates") or []) for x in sensors.get("sets") or []]
+        return cls(raw=raw, system=str(raw.get("system", "")), sets=sets)
+
+
+@dataclass(frozen=True, repr=False, eq=False)
 class Expression(Result):
     """``obsan simplify`` / ``obsan diff``: the exact canonical form. ``is_zero`` is
     ``None`` where the engine could not decide (``decided`` false)."""

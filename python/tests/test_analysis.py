@@ -140,6 +140,21 @@ def test_experiments_listed_stack_like_the_cli():
     assert r["state"][:2] == ["mu@1", "gamma@1"]
 
 
+def test_design_sensors_and_families():
+    # vins.sys: symmetries T_x, T_y, T_z (r and pf together) and the yaw about the
+    # feature. mag breaks yaw only (cost 2), gps_xy yaw and T_x, T_y (6), gps all (10):
+    # the yaw alone needs one of them (derivation in tests/cli/design.rs).
+    r = obsan.load(SYSTEMS / "vins.sys").design(
+        candidates=str(SYSTEMS / "design" / "vins_sensors.cand"), target=["qw", "qx", "qy", "qz"]
+    )
+    assert [s["candidates"] for s in r["sensors"]["sets"]] == [["mag"], ["gps_xy"], ["gps"]]
+    # Two compartments (Villaverde et al. 2019): x1'' + a1 x1' + a0 x1 = b k21 u + b u';
+    # a constant u shows a1, a0, b k21 only (never), a ramp also b c (everything).
+    f = obsan.load(SYSTEMS / "design" / "c2m_inputs.sys").design()["inputs"]["families"]
+    by = {x["restriction"]: x for x in f}
+    assert by["constant"]["full"] is False and by["ramp"]["single_full"] is True
+
+
 def test_known_initial_condition_riccati():
     # strike-goldd issue 7: S' = 1 + a S^2, y = S, S(0) = 0; y'''(0) = 2a.
     s = obsan.loads("system riccati\nstate S\nparam a\nS' = 1 + a*S^2\noutput y = S\n")

@@ -22,7 +22,7 @@ PUBLIC_FUNCTIONS = [
 SYSTEM_METHODS = [
     obsan.System.show, obsan.System.rank, obsan.System.experiments, obsan.System.rank_known,
     obsan.System.symmetries, obsan.System.modes, obsan.System.global_identifiability,
-    obsan.System.lie, obsan.System.check,
+    obsan.System.lie, obsan.System.check, obsan.System.design,
 ]
 
 

@@ -3,6 +3,7 @@
 mod analysis;
 mod calibrate;
 mod classic;
+mod design;
 mod diagnose;
 mod experiments;
 mod expr;

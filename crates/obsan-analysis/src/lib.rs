@@ -17,6 +17,7 @@
 
 mod decomp;
 mod derive;
+mod design;
 mod experiments;
 mod fields;
 mod fp_linalg;
@@ -33,6 +34,10 @@ mod unknown_input_martinelli;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind};
+pub use design::{
+    design_inputs, design_outputs, Candidate, CandidateEffect, Combination, DesignOptions,
+    DesignReport, DesignSet, FamilyReport, InputDesignReport,
+};
 pub use experiments::{
     experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
     SpecialValue,
