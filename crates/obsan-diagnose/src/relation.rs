@@ -82,13 +82,11 @@ const VAR_FLOOR: f64 = 1e-12;
 /// Fit the params of an input relation `compare u = EXPR` to the measured
 /// inputs of every trajectory where EXPR can be evaluated. `noise` holds
 /// each measured input's intensity `c` (empty or all 0: not stated, then
-/// one common intensity is estimated); `source` says where `noise` comes
-/// from (printed: a level the fit estimated is never called stated);
-/// `alpha` is the test's level.
+/// one common intensity is estimated); `alpha` is the test's level.
 pub(crate) fn input_check(
     e: &Effect,
     data: &Dataset,
-    (noise, source): (&[(String, f64)], &str),
+    noise: &[(String, f64)],
     alpha: f64,
 ) -> InputCheck {
     let mut out = InputCheck {
@@ -348,11 +346,7 @@ pub(crate) fn input_check(
     out.note = format!(
         "{} blocks of {BLOCK} s; encoder noise {}{}",
         r.len(),
-        if stated {
-            source
-        } else {
-            "estimated from the relation's scatter"
-        },
+        out.noise,
         if stated {
             format!(", dispersion {dispersion:.2}")
         } else {
