@@ -43,3 +43,15 @@ def cli():
         return p.returncode, p.stdout, p.stderr
 
     return run
+
+
+@pytest.fixture(autouse=True, scope="session")
+def _ctrl_c_raises_keyboard_interrupt():
+    """A shell starts background jobs with SIGINT ignored, and Python then installs no
+    KeyboardInterrupt handler: the Ctrl-C tests would see nothing (they failed so in a CI
+    run started with `&`). Put Python's own handler back for the session."""
+    import signal
+
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
