@@ -151,7 +151,8 @@ pub(super) fn check_deadline(
     }
 }
 
-/// Builds the modes and the reduced system.
+/// Builds the modes and the reduced system: the steps of the module's
+/// documentation, in order, each adding modes until the rank is reached.
 pub fn derive_modes(
     nf: &mut NormalForm,
     report: &RankReport,
@@ -165,287 +166,56 @@ pub fn derive_modes(
     }
     let rank = report.rank;
     let n = report.n;
-    let vars = nf.state_vars.clone();
-    let names = nf.state.clone();
-    let mut modes: Vec<DerivedMode> = Vec::new();
-    let mut indep = Indep {
-        grads: Vec::new(),
-        seed: opts.seed,
-    };
-    let mut used_names: Vec<String> = names.clone();
-    used_names.extend(nf.consts.iter().map(|c| c.0.clone()));
-    used_names.extend(nf.inputs.iter().cloned());
-    used_names.extend(nf.outputs.iter().map(|o| o.0.clone()));
-    let mut fresh = Names {
-        used: used_names,
-        count: 0,
-    };
-
-    // Which variables enter through cos/sin (angles) and which polynomially.
-    let (fnames, fields) = crate::fields::field_names(nf);
-    let mut used_vars: Vec<u32> = Vec::new();
-    let mut all: Vec<Id> = fields.iter().flatten().copied().collect();
-    all.extend(nf.outputs.iter().map(|o| o.1));
-    for &e in &all {
-        let c = nf.ctx.canon(e);
-        used_vars.extend(c.vars());
-    }
-    let mut angle = vec![false; n];
-    let mut trig: Vec<Option<(Id, Id)>> = vec![None; n];
-    for i in 0..n {
-        let Ok(c) = nf.parse_expr(&format!("cos({})", names[i]), false) else {
-            continue;
-        };
-        let Ok(s) = nf.parse_expr(&format!("sin({})", names[i]), false) else {
-            continue;
-        };
-        let cv = nf.ctx.canon(c).vars();
-        if cv.iter().any(|v| used_vars.contains(v)) {
-            angle[i] = true;
-            trig[i] = Some((c, s));
-        }
-    }
-
+    let lay = Layout::new(nf);
     // w components as expressions.
     let w_ids: Vec<Vec<Id>> = sym
         .vectors
         .iter()
         .map(|w| w.iter().map(|c| nf.ctx.from_canonical(c)).collect())
         .collect();
-    // 1. Variables the symmetries leave alone.
-    for i in 0..n {
-        if modes.len() == rank {
-            break;
-        }
-        if sym.vectors.iter().all(|w| w[i].is_zero()) {
-            let g = nf.ctx.symbol(&names[i]).id;
-            if indep.raises_rank(nf, g)? {
-                modes.push(DerivedMode {
-                    name: names[i].clone(),
-                    expr: g,
-                    text: names[i].clone(),
-                    kind: ModeKind::Variable,
-                    angle: angle[i],
-                    domain: "everywhere".into(),
-                });
-            }
-        }
-    }
-    check_deadline(opts, "the variables", modes.len())?;
-
-    let nsym = w_ids.len();
-    let mut rng = SplitMix(opts.seed ^ 0x6d6f_6465_7321);
-
-    // 2. Integer combinations of angles that every symmetry leaves alone.
-    let angles: Vec<usize> = (0..n).filter(|&i| angle[i]).collect();
-    if modes.len() < rank && angles.len() >= 2 && nsym > 0 {
-        let roots: Vec<Id> = w_ids
-            .iter()
-            .flat_map(|w| angles.iter().map(|&i| w[i]))
-            .collect();
-        let mut rows = Vec::new();
-        for _ in 0..(angles.len() + 2) {
-            let (_, v) = point_for(nf, &mut rng, &roots)?;
-            rows.extend(v.chunks(angles.len()).map(|c| c.to_vec()));
-        }
-        for v in null_space(rows, angles.len()) {
-            if modes.len() == rank {
-                break;
-            }
-            let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
-                continue;
-            };
-            if !qs.iter().all(|q| q.is_integer()) || qs.iter().all(|q| q.is_zero()) {
-                continue;
-            }
-            // Leading coefficient positive, for readability.
-            let lead_neg = qs
-                .iter()
-                .rev()
-                .find(|q| !q.is_zero())
-                .is_some_and(|q| q.is_negative());
-            let qs: Vec<Q> = if lead_neg {
-                qs.iter().map(|q| q.neg()).collect()
-            } else {
-                qs
-            };
-            let blocks: Vec<Id> = angles.iter().map(|&i| vars_id(nf, &names[i])).collect();
-            let monos: Vec<Vec<u32>> = (0..angles.len())
-                .map(|k| (0..angles.len()).map(|l| u32::from(k == l)).collect())
-                .collect();
-            let order: Vec<usize> = (0..angles.len()).rev().collect();
-            let qs_o: Vec<Q> = order.iter().map(|&k| qs[k].clone()).collect();
-            let monos_o: Vec<Vec<u32>> = order.iter().map(|&k| monos[k].clone()).collect();
-            let bnames: Vec<String> = angles.iter().map(|&i| names[i].clone()).collect();
-            let g = build_poly(nf, &qs_o, &monos_o, &blocks);
-            let text = poly_text(&qs_o, &monos_o, &bnames);
-            if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
-                modes.push(DerivedMode {
-                    name: fresh.next(),
-                    expr: g,
-                    text,
-                    kind: ModeKind::Translation,
-                    angle: true,
-                    domain: "everywhere (an angle, modulo 2 pi)".into(),
-                });
-            }
-        }
-    }
-    check_deadline(opts, "the angle differences", modes.len())?;
-
+    let mut found = Found::new(nf, opts);
     let search = Search {
         w_ids: &w_ids,
         rank,
         opts,
     };
+
+    fixed_variables(nf, sym, &lay, rank, &mut found)?;
+    check_deadline(opts, "the variables", found.modes.len())?;
+    angle_differences(nf, &lay, &search, &mut found)?;
+    check_deadline(opts, "the angle differences", found.modes.len())?;
     // 2a. A cross-section of the group when it has a rotation: a generating
     // set of the rational invariants, so the reduced system closes.
-    frame::frame_invariants(nf, &search, &angle, &mut modes, &mut indep, &mut fresh)?;
-
+    frame::frame_invariants(
+        nf,
+        &search,
+        &lay.angle,
+        &mut found.modes,
+        &mut found.indep,
+        &mut found.fresh,
+    )?;
     // 2b. Monomial invariants of scalings (k1 k2 x2, gamma x2 / x3).
     monomial::monomial_invariants(
-        nf, &search, &fields, &mut modes, &mut indep, &mut fresh, &mut rng,
+        nf,
+        &search,
+        &lay.fields,
+        &mut found.modes,
+        &mut found.indep,
+        &mut found.fresh,
+        &mut found.rng,
     )?;
+    let consts = rational_invariants(nf, &lay, &search, &mut found)?;
+    outputs_and_lie_derivatives(nf, report, &search, &mut found)?;
 
-    // 3. Polynomial and rational invariants.
-    let mut blocks: Vec<Id> = Vec::new();
-    let mut bnames: Vec<String> = Vec::new();
-    for i in 0..n {
-        let sym_var = nf.ctx.symbol(&names[i]).id;
-        let as_symbol = !angle[i] || used_vars.contains(&vars[i]);
-        push_state_blocks(
-            &mut blocks,
-            &mut bnames,
-            &names[i],
-            sym_var,
-            as_symbol,
-            trig[i],
-        );
-    }
-    let mut consts = Vec::new();
-    for (name, val) in nf.consts.clone() {
-        if val.is_none() {
-            if let Some(s) = nf.ctx.lookup(&name) {
-                blocks.push(s.id);
-                bnames.push(name.clone());
-                consts.push(name);
-            }
-        }
-    }
-    // Denominator candidates: 1, then the factors of the outputs and of the
-    // first-order Lie derivatives as they come out of the canonical form.
-    let mut dens: Vec<(usize, Id)> = vec![(0, nf.ctx.one())];
-    if modes.len() < rank && nsym > 0 {
-        let mut seen: Vec<Poly> = Vec::new();
-        let mut srcs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
-        for o in nf.outputs.clone() {
-            for f in &fields {
-                srcs.push(lie(nf, o.1, f));
-            }
-        }
-        for e in srcs {
-            let c = nf.ctx.canon(e);
-            for p in [c.numerator().clone(), c.denominator().clone()] {
-                if p.is_constant() || seen.contains(&p) {
-                    continue;
-                }
-                let id = nf.ctx.from_canonical(&RatFun::from_poly(p.clone()));
-                if nf.ctx.is_angle_valued(id) {
-                    continue;
-                }
-                seen.push(p.clone());
-                dens.push((p.len(), id));
-            }
-        }
-    }
-    // Shortest denominators first: simpler modes, and a reduced system whose
-    // exact proof stays small (eq. 39's A_v, V share mu^2 + 2 mu cos(gamma) + 1).
-    dens.sort_by_key(|d| d.0);
-    let dens: Vec<Id> = dens.into_iter().map(|d| d.1).collect();
-    let orig_const: Vec<bool> = bnames.iter().map(|b| consts.contains(b)).collect();
-    let coef = coefficient_blocks(nf, &fields, &names, &angle, &trig, &used_vars, &vars);
-    let orig = (blocks, bnames, orig_const);
-    // The coefficient blocks first when they are fewer: the same invariants
-    // at a lower degree (eq. 16: eta (1 + q delta) cos(phi) is one block).
-    let tries: Vec<(Vec<Id>, Vec<String>, Vec<bool>)> = match coef {
-        Some(c) if c.0.len() < orig.0.len() => vec![c, orig],
-        Some(c) => vec![orig, c],
-        None => vec![orig],
-    };
-    if nsym > 0 {
-        for (blocks, bnames, is_const) in &tries {
-            if modes.len() >= rank {
-                break;
-            }
-            invariant_ansatz(
-                nf,
-                &search,
-                (blocks, bnames, is_const),
-                &dens,
-                &mut modes,
-                &mut indep,
-                &mut fresh,
-                &mut rng,
-            )?;
-        }
-    }
-
-    // 4. The outputs, 5. the basis Lie derivatives.
-    for (oname, h) in nf.outputs.clone() {
-        if modes.len() >= rank {
-            break;
-        }
-        if indep.raises_rank(nf, h)? && screen_mode(nf, &w_ids, h, opts.seed)? {
-            let is_angle = nf.ctx.is_angle_valued(h);
-            let text = nf.ctx.to_text(h);
-            modes.push(DerivedMode {
-                name: fresh.next(),
-                expr: h,
-                text,
-                kind: ModeKind::Output,
-                angle: false,
-                domain: if is_angle {
-                    format!("the branch of the output {oname} as the system defines it")
-                } else {
-                    format!("where the output {oname} is defined")
-                },
-            });
-        }
-    }
-    for w in &report.basis {
-        if modes.len() >= rank {
-            break;
-        }
-        check_deadline(opts, "the Lie derivatives", modes.len())?;
-        let mut g = nf.outputs[w.output].1;
-        for &k in &w.fields {
-            g = lie(nf, g, &report.fields.vectors[k]);
-        }
-        if indep.raises_rank(nf, g)? && screen_mode(nf, &w_ids, g, opts.seed)? {
-            let c = nf.ctx.canon(g);
-            let text = nf.ctx.ratfun_text_factored(&c);
-            let domain = if c.denominator().is_constant() {
-                "everywhere".to_string()
-            } else {
-                format!("where {} != 0", nf.ctx.poly_text(c.denominator()))
-            };
-            let g = nf.ctx.from_canonical(&c);
-            modes.push(DerivedMode {
-                name: fresh.next(),
-                expr: g,
-                text,
-                kind: ModeKind::LieDerivative,
-                angle: false,
-                domain,
-            });
-        }
-    }
     let space = ModeSpace {
-        fields: &fields,
+        fields: &lay.fields,
         consts: &consts,
-        used_vars: &used_vars,
+        used_vars: &lay.used_vars,
         w_ids: &w_ids,
     };
+    let Found {
+        mut modes, mut rng, ..
+    } = found;
     let mut red = reduce(nf, &space, &modes, &mut rng, opts)?;
     // Modes whose dynamics have no rational form (x^2 c and y^2 c, where the
     // fields need x y c = sqrt(z1 z2)): exchange one for a missing derivative.
@@ -467,12 +237,353 @@ pub fn derive_modes(
         rank,
         modes,
         mode_report,
-        field_names: fnames,
+        field_names: lay.fnames,
         derivatives,
         outputs,
         consts,
         reduced_timed_out: timed_out,
     })
+}
+
+/// How the state variables enter the system: which are angles (through cos
+/// and sin), and the fields the search differentiates along.
+struct Layout {
+    vars: Vec<u32>,
+    names: Vec<String>,
+    fnames: Vec<String>,
+    fields: Vec<Vec<Id>>,
+    /// The canonical-form variables the fields and outputs use.
+    used_vars: Vec<u32>,
+    angle: Vec<bool>,
+    /// `(cos x, sin x)` of each angle variable.
+    trig: Vec<Option<(Id, Id)>>,
+}
+
+impl Layout {
+    fn new(nf: &mut NormalForm) -> Layout {
+        let n = nf.state.len();
+        let vars = nf.state_vars.clone();
+        let names = nf.state.clone();
+        let (fnames, fields) = crate::fields::field_names(nf);
+        let mut used_vars: Vec<u32> = Vec::new();
+        let mut all: Vec<Id> = fields.iter().flatten().copied().collect();
+        all.extend(nf.outputs.iter().map(|o| o.1));
+        for &e in &all {
+            let c = nf.ctx.canon(e);
+            used_vars.extend(c.vars());
+        }
+        let mut angle = vec![false; n];
+        let mut trig: Vec<Option<(Id, Id)>> = vec![None; n];
+        for i in 0..n {
+            let Ok(c) = nf.parse_expr(&format!("cos({})", names[i]), false) else {
+                continue;
+            };
+            let Ok(s) = nf.parse_expr(&format!("sin({})", names[i]), false) else {
+                continue;
+            };
+            let cv = nf.ctx.canon(c).vars();
+            if cv.iter().any(|v| used_vars.contains(v)) {
+                angle[i] = true;
+                trig[i] = Some((c, s));
+            }
+        }
+        Layout {
+            vars,
+            names,
+            fnames,
+            fields,
+            used_vars,
+            angle,
+            trig,
+        }
+    }
+}
+
+/// The modes found so far and the state every step shares.
+struct Found {
+    modes: Vec<DerivedMode>,
+    indep: Indep,
+    fresh: Names,
+    rng: SplitMix,
+}
+
+impl Found {
+    fn new(nf: &NormalForm, opts: &DeriveOptions) -> Found {
+        let mut used: Vec<String> = nf.state.clone();
+        used.extend(nf.consts.iter().map(|c| c.0.clone()));
+        used.extend(nf.inputs.iter().cloned());
+        used.extend(nf.outputs.iter().map(|o| o.0.clone()));
+        Found {
+            modes: Vec::new(),
+            indep: Indep {
+                grads: Vec::new(),
+                seed: opts.seed,
+            },
+            fresh: Names { used, count: 0 },
+            rng: SplitMix(opts.seed ^ 0x6d6f_6465_7321),
+        }
+    }
+}
+
+/// 1. Variables every symmetry leaves alone, as themselves.
+fn fixed_variables(
+    nf: &mut NormalForm,
+    sym: &SymmetryReport,
+    lay: &Layout,
+    rank: usize,
+    found: &mut Found,
+) -> Result<(), AnalysisError> {
+    for i in 0..lay.names.len() {
+        if found.modes.len() == rank {
+            break;
+        }
+        if sym.vectors.iter().all(|w| w[i].is_zero()) {
+            let g = nf.ctx.symbol(&lay.names[i]).id;
+            if found.indep.raises_rank(nf, g)? {
+                found.modes.push(DerivedMode {
+                    name: lay.names[i].clone(),
+                    expr: g,
+                    text: lay.names[i].clone(),
+                    kind: ModeKind::Variable,
+                    angle: lay.angle[i],
+                    domain: "everywhere".into(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// 2. Integer combinations of angles that every symmetry leaves alone: the
+/// integer null vectors of the symmetries' angle components at random points.
+fn angle_differences(
+    nf: &mut NormalForm,
+    lay: &Layout,
+    s: &Search,
+    found: &mut Found,
+) -> Result<(), AnalysisError> {
+    let angles: Vec<usize> = (0..lay.names.len()).filter(|&i| lay.angle[i]).collect();
+    if found.modes.len() >= s.rank || angles.len() < 2 || s.w_ids.is_empty() {
+        return Ok(());
+    }
+    let roots: Vec<Id> = s
+        .w_ids
+        .iter()
+        .flat_map(|w| angles.iter().map(|&i| w[i]))
+        .collect();
+    let mut rows = Vec::new();
+    for _ in 0..(angles.len() + 2) {
+        let (_, v) = point_for(nf, &mut found.rng, &roots)?;
+        rows.extend(v.chunks(angles.len()).map(|c| c.to_vec()));
+    }
+    for v in null_space(rows, angles.len()) {
+        if found.modes.len() == s.rank {
+            break;
+        }
+        let Some(qs) = v.iter().map(|&x| rat_recon(x)).collect::<Option<Vec<Q>>>() else {
+            continue;
+        };
+        if !qs.iter().all(|q| q.is_integer()) || qs.iter().all(|q| q.is_zero()) {
+            continue;
+        }
+        // Leading coefficient positive, for readability.
+        let lead_neg = qs
+            .iter()
+            .rev()
+            .find(|q| !q.is_zero())
+            .is_some_and(|q| q.is_negative());
+        let qs: Vec<Q> = if lead_neg {
+            qs.iter().map(|q| q.neg()).collect()
+        } else {
+            qs
+        };
+        let blocks: Vec<Id> = angles.iter().map(|&i| vars_id(nf, &lay.names[i])).collect();
+        let monos: Vec<Vec<u32>> = (0..angles.len())
+            .map(|k| (0..angles.len()).map(|l| u32::from(k == l)).collect())
+            .collect();
+        let order: Vec<usize> = (0..angles.len()).rev().collect();
+        let qs_o: Vec<Q> = order.iter().map(|&k| qs[k].clone()).collect();
+        let monos_o: Vec<Vec<u32>> = order.iter().map(|&k| monos[k].clone()).collect();
+        let bnames: Vec<String> = angles.iter().map(|&i| lay.names[i].clone()).collect();
+        let g = build_poly(nf, &qs_o, &monos_o, &blocks);
+        let text = poly_text(&qs_o, &monos_o, &bnames);
+        if found.indep.raises_rank(nf, g)? && screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+            found.modes.push(DerivedMode {
+                name: found.fresh.next(),
+                expr: g,
+                text,
+                kind: ModeKind::Translation,
+                angle: true,
+                domain: "everywhere (an angle, modulo 2 pi)".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// 3. Polynomial and rational invariants `P/Q` by the linear ansatz, over
+/// the variable blocks and the coefficient blocks. Returns the generic
+/// constants the blocks use (the reduced system keeps them).
+fn rational_invariants(
+    nf: &mut NormalForm,
+    lay: &Layout,
+    s: &Search,
+    found: &mut Found,
+) -> Result<Vec<String>, AnalysisError> {
+    let mut blocks: Vec<Id> = Vec::new();
+    let mut bnames: Vec<String> = Vec::new();
+    for i in 0..lay.names.len() {
+        let sym_var = nf.ctx.symbol(&lay.names[i]).id;
+        let as_symbol = !lay.angle[i] || lay.used_vars.contains(&lay.vars[i]);
+        push_state_blocks(
+            &mut blocks,
+            &mut bnames,
+            &lay.names[i],
+            sym_var,
+            as_symbol,
+            lay.trig[i],
+        );
+    }
+    let mut consts = Vec::new();
+    for (name, val) in nf.consts.clone() {
+        if val.is_none() {
+            if let Some(c) = nf.ctx.lookup(&name) {
+                blocks.push(c.id);
+                bnames.push(name.clone());
+                consts.push(name);
+            }
+        }
+    }
+    let dens = denominators(nf, lay, s, found.modes.len());
+    let orig_const: Vec<bool> = bnames.iter().map(|b| consts.contains(b)).collect();
+    let coef = coefficient_blocks(
+        nf,
+        &lay.fields,
+        &lay.names,
+        &lay.angle,
+        &lay.trig,
+        &lay.used_vars,
+        &lay.vars,
+    );
+    let orig = (blocks, bnames, orig_const);
+    // The coefficient blocks first when they are fewer: the same invariants
+    // at a lower degree (eq. 16: eta (1 + q delta) cos(phi) is one block).
+    let tries: Vec<(Vec<Id>, Vec<String>, Vec<bool>)> = match coef {
+        Some(c) if c.0.len() < orig.0.len() => vec![c, orig],
+        Some(c) => vec![orig, c],
+        None => vec![orig],
+    };
+    if s.w_ids.is_empty() {
+        return Ok(consts);
+    }
+    for (blocks, bnames, is_const) in &tries {
+        if found.modes.len() >= s.rank {
+            break;
+        }
+        invariant_ansatz(
+            nf,
+            s,
+            (blocks, bnames, is_const),
+            &dens,
+            &mut found.modes,
+            &mut found.indep,
+            &mut found.fresh,
+            &mut found.rng,
+        )?;
+    }
+    Ok(consts)
+}
+
+/// Denominator candidates of the ansatz: 1, then the factors of the outputs
+/// and of the first-order Lie derivatives as they come out of the canonical
+/// form, shortest first: simpler modes, and a reduced system whose exact
+/// proof stays small (eq. 39's A_v, V share mu^2 + 2 mu cos(gamma) + 1).
+fn denominators(nf: &mut NormalForm, lay: &Layout, s: &Search, found: usize) -> Vec<Id> {
+    let mut dens: Vec<(usize, Id)> = vec![(0, nf.ctx.one())];
+    if found < s.rank && !s.w_ids.is_empty() {
+        let mut seen: Vec<Poly> = Vec::new();
+        let mut srcs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+        for o in nf.outputs.clone() {
+            for f in &lay.fields {
+                srcs.push(lie(nf, o.1, f));
+            }
+        }
+        for e in srcs {
+            let c = nf.ctx.canon(e);
+            for p in [c.numerator().clone(), c.denominator().clone()] {
+                if p.is_constant() || seen.contains(&p) {
+                    continue;
+                }
+                let id = nf.ctx.from_canonical(&RatFun::from_poly(p.clone()));
+                if nf.ctx.is_angle_valued(id) {
+                    continue;
+                }
+                seen.push(p.clone());
+                dens.push((p.len(), id));
+            }
+        }
+    }
+    dens.sort_by_key(|d| d.0);
+    dens.into_iter().map(|d| d.1).collect()
+}
+
+/// 4. The outputs themselves, 5. the basis Lie derivatives of the rank test.
+fn outputs_and_lie_derivatives(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    s: &Search,
+    found: &mut Found,
+) -> Result<(), AnalysisError> {
+    for (oname, h) in nf.outputs.clone() {
+        if found.modes.len() >= s.rank {
+            break;
+        }
+        if found.indep.raises_rank(nf, h)? && screen_mode(nf, s.w_ids, h, s.opts.seed)? {
+            let is_angle = nf.ctx.is_angle_valued(h);
+            let text = nf.ctx.to_text(h);
+            found.modes.push(DerivedMode {
+                name: found.fresh.next(),
+                expr: h,
+                text,
+                kind: ModeKind::Output,
+                angle: false,
+                domain: if is_angle {
+                    format!("the branch of the output {oname} as the system defines it")
+                } else {
+                    format!("where the output {oname} is defined")
+                },
+            });
+        }
+    }
+    for w in &report.basis {
+        if found.modes.len() >= s.rank {
+            break;
+        }
+        check_deadline(s.opts, "the Lie derivatives", found.modes.len())?;
+        let mut g = nf.outputs[w.output].1;
+        for &k in &w.fields {
+            g = lie(nf, g, &report.fields.vectors[k]);
+        }
+        if found.indep.raises_rank(nf, g)? && screen_mode(nf, s.w_ids, g, s.opts.seed)? {
+            let c = nf.ctx.canon(g);
+            let text = nf.ctx.ratfun_text_factored(&c);
+            let domain = if c.denominator().is_constant() {
+                "everywhere".to_string()
+            } else {
+                format!("where {} != 0", nf.ctx.poly_text(c.denominator()))
+            };
+            let g = nf.ctx.from_canonical(&c);
+            found.modes.push(DerivedMode {
+                name: found.fresh.next(),
+                expr: g,
+                text,
+                kind: ModeKind::LieDerivative,
+                angle: false,
+                domain,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// The names of derived modes: z1, z2, ... skipping names the system uses.
