@@ -28,7 +28,7 @@
 //! size, supersets of found sets skipped.
 
 use crate::experiments::experiments_auto;
-use crate::rank::{lie_jets, random_point, rank, AnalysisError, LieWord, RankOptions};
+use crate::rank::{lie_jets, random_point, rank, AnalysisError, RankOptions, RankReport};
 use crate::symmetry::{symmetries_with, SymmetryOptions, SymmetryReport};
 use crate::AutoOptions;
 use obsan_expr::{Fp, FpPoint, SplitMix, Q};
@@ -214,87 +214,10 @@ pub fn design_outputs(
     let n = nf.state.len();
     let m = candidates.len();
     let target: Vec<usize> = target.map_or_else(|| (0..n).collect(), <[usize]>::to_vec);
-    let mut full = nf.clone();
-    let fields = crate::rank::Fields::of(&mut full);
-    let jets = lie_jets(&full, &fields);
-    let mut rng = SplitMix(opts.seed ^ 0x6465_7369_676e_0001);
-    let points = [
-        random_point(&mut full.ctx, &mut rng)?,
-        random_point(&mut full.ctx, &mut rng)?,
-    ];
-    let n_leaves = full.ctx.leaf_count();
-    let mut error_bound: f64 = 0.0;
-    // One rank test per group: its basis words, rows at the two points.
-    let group = |outs: &[usize]| -> Result<Group, AnalysisError> {
-        if outs.is_empty() {
-            return Ok(Group {
-                rows: vec![vec![], vec![]],
-                error_bound: 0.0,
-            });
-        }
-        let mut g = with_outputs(nf, outs);
-        let r = rank(&mut g, rank_opts(opts.seed, opts.deadline))?;
-        let mut rows = vec![Vec::new(), Vec::new()];
-        for w in &r.basis {
-            let word = LieWord {
-                output: outs[w.output],
-                fields: w.fields.clone(),
-            };
-            for (k, p) in points.iter().enumerate() {
-                let row = jets
-                    .row(word.output, &word.fields, p, false)
-                    .map_err(|_| AnalysisError::NoPoint)?;
-                rows[k].push(row.gradient);
-            }
-        }
-        let eb = if r.rank == r.n { 0.0 } else { r.error_bound };
-        Ok(Group {
-            rows,
-            error_bound: eb,
-        })
-    };
     let base_outs: Vec<usize> = (0..base).collect();
-    let g0 = group(&base_outs)?;
-    let mut groups = Vec::with_capacity(m);
-    for c in candidates {
-        groups.push(group(&c.outputs)?);
-    }
-    error_bound = groups
-        .iter()
-        .chain(std::iter::once(&g0))
-        .fold(error_bound, |a, g| a.max(g.error_bound));
-    // The model's echelon basis at each point, extended per subset.
-    let base_ech: Vec<Echelon> = (0..2)
-        .map(|k| {
-            let mut e = Echelon::default();
-            for r in &g0.rows[k] {
-                e.insert(r);
-            }
-            e
-        })
-        .collect();
-    // Screened rank and goal of a subset: the better point.
-    let screen = |members: &[usize]| -> (usize, bool) {
-        let mut best = (0usize, false);
-        for (k, b) in base_ech.iter().enumerate() {
-            let mut e = b.clone();
-            for &c in members {
-                for r in &groups[c].rows[k] {
-                    e.insert(r);
-                    if e.rows.len() == n {
-                        break;
-                    }
-                }
-            }
-            let rk = e.rows.len();
-            let met = target.iter().all(|&i| e.contains_unit(i, n));
-            if rk > best.0 || (rk == best.0 && met) {
-                best = (rk, met);
-            }
-        }
-        best
-    };
-    let (base_rank, already) = screen(&[]);
+    let sc = Screen::new(nf, &base_outs, candidates, target, opts)?;
+    let mut error_bound = sc.error_bound;
+    let (base_rank, already) = sc.screen(&[]);
     let mut base_model = with_outputs(nf, &base_outs);
     let base_report = if base > 0 {
         Some(rank(&mut base_model, rank_opts(opts.seed, opts.deadline))?)
@@ -305,90 +228,29 @@ pub fn design_outputs(
         .as_ref()
         .map_or_else(|| vec![false; n], |r| r.observable.clone());
     let all: Vec<usize> = (0..m).collect();
-    let (all_rank, reachable) = screen(&all);
-    // The model's symmetries, and which each candidate breaks.
-    let (symmetries, symmetry_note) = match (&base_report, opts.symmetries) {
-        (Some(r), true) if r.rank < n => {
-            match symmetries_with(
-                &mut base_model,
-                r,
-                &SymmetryOptions {
-                    deadline: opts.deadline,
-                    ..Default::default()
-                },
-            ) {
-                Ok(s) => (Some(s), None),
-                Err(AnalysisError::Cancelled) => return Err(AnalysisError::Cancelled),
-                Err(e) => (None, Some(format!("the model's symmetries: {e}"))),
-            }
-        }
-        _ => (None, None),
-    };
-    let sym_at: Vec<Vec<Option<Vec<Fp>>>> = (0..2)
-        .map(|k| {
-            symmetries.as_ref().map_or_else(Vec::new, |s| {
-                s.vectors
-                    .iter()
-                    .map(|v| vector_at(v, &points[k], n_leaves))
-                    .collect()
-            })
-        })
-        .collect();
-    let n_sym = symmetries.as_ref().map_or(0, |s| s.vectors.len());
-    let breaks = |members: &[usize]| -> Vec<usize> {
-        (0..n_sym)
-            .filter(|&j| {
-                (0..2).any(|k| {
-                    sym_at[k][j].as_ref().is_some_and(|w| {
-                        members
-                            .iter()
-                            .any(|&c| groups[c].rows[k].iter().any(|r| !dot(r, w).is_zero()))
-                    })
-                })
-            })
-            .collect()
-    };
+    let (all_rank, reachable) = sc.screen(&all);
+    let (symmetries, symmetry_note) =
+        base_symmetries(&mut base_model, base_report.as_ref(), n, opts)?;
+    let sym_at = sc.symmetries_at(symmetries.as_ref());
     let effects = (0..m)
         .map(|c| CandidateEffect {
-            rank: screen(&[c]).0,
-            breaks: breaks(&[c]),
+            rank: sc.screen(&[c]).0,
+            breaks: sc.breaks(&sym_at, &[c]),
         })
         .collect();
-    // Subsets by size; within a size in lexicographic order; supersets of a
-    // found set skipped.
-    let mut found: Vec<Vec<usize>> = Vec::new();
-    let mut screened = 0usize;
-    let mut complete_to_size = 0usize;
-    let mut exhaustive = true;
-    if !already && reachable {
-        'sizes: for k in 1..=m {
-            let mut idx: Vec<usize> = (0..k).collect();
-            loop {
-                if !found.iter().any(|f| f.iter().all(|x| idx.contains(x))) {
-                    if screened >= opts.max_subsets {
-                        exhaustive = false;
-                        break 'sizes;
-                    }
-                    if screened.is_multiple_of(256) {
-                        check_time(opts.deadline, screened)?;
-                    }
-                    screened += 1;
-                    if screen(&idx).1 {
-                        found.push(idx.clone());
-                    }
-                }
-                if !next_combination(&mut idx, m) {
-                    break;
-                }
-            }
-            complete_to_size = k;
-        }
+    let search = if !already && reachable {
+        search_subsets(&sc, m, opts)?
     } else {
-        complete_to_size = m;
-    }
+        Subsets {
+            found: Vec::new(),
+            screened: 0,
+            complete_to_size: m,
+            exhaustive: true,
+        }
+    };
     // Confirm each set by the rank test on the model with its outputs.
     let mut sets = Vec::new();
-    for f in found {
+    for f in search.found {
         let mut outs = base_outs.clone();
         for &c in &f {
             outs.extend(&candidates[c].outputs);
@@ -399,12 +261,12 @@ pub fn design_outputs(
             error_bound = error_bound.max(r.error_bound);
         }
         // The screen's rank at a point is a lower bound of this rank.
-        if !target.iter().all(|&i| r.observable[i]) {
+        if !sc.target.iter().all(|&i| r.observable[i]) {
             continue;
         }
         sets.push(DesignSet {
             cost: f.iter().map(|&c| candidates[c].cost).sum(),
-            breaks: breaks(&f),
+            breaks: sc.breaks(&sym_at, &f),
             members: f,
             rank: r.rank,
             error_bound: if r.rank == n { 0.0 } else { r.error_bound },
@@ -423,18 +285,226 @@ pub fn design_outputs(
         base_rank: base_report.as_ref().map_or(base_rank, |r| r.rank),
         base_observable,
         all_rank,
-        target,
+        target: sc.target,
         already,
         reachable,
         candidates: effects,
         sets,
-        subsets_screened: screened,
-        complete_to_size,
-        exhaustive,
+        subsets_screened: search.screened,
+        complete_to_size: search.complete_to_size,
+        exhaustive: search.exhaustive,
         symmetries,
         symmetry_note,
         error_bound,
     })
+}
+
+/// The rank screen of subsets of candidates: each group's basis rows at two
+/// random points, added to the model's own echelon basis there.
+struct Screen {
+    n: usize,
+    target: Vec<usize>,
+    points: [FpPoint; 2],
+    n_leaves: usize,
+    groups: Vec<Group>,
+    base_ech: Vec<Echelon>,
+    /// The largest error bound of the groups' rank tests.
+    error_bound: f64,
+}
+
+impl Screen {
+    fn new(
+        nf: &NormalForm,
+        base_outs: &[usize],
+        candidates: &[Candidate],
+        target: Vec<usize>,
+        opts: &DesignOptions,
+    ) -> Result<Screen, AnalysisError> {
+        let mut full = nf.clone();
+        let fields = crate::rank::Fields::of(&mut full);
+        let jets = lie_jets(&full, &fields);
+        let mut rng = SplitMix(opts.seed ^ 0x6465_7369_676e_0001);
+        let points = [
+            random_point(&mut full.ctx, &mut rng)?,
+            random_point(&mut full.ctx, &mut rng)?,
+        ];
+        let n_leaves = full.ctx.leaf_count();
+        // One rank test per group: its basis words, rows at the two points.
+        let group = |outs: &[usize]| -> Result<Group, AnalysisError> {
+            if outs.is_empty() {
+                return Ok(Group {
+                    rows: vec![vec![], vec![]],
+                    error_bound: 0.0,
+                });
+            }
+            let mut g = with_outputs(nf, outs);
+            let r = rank(&mut g, rank_opts(opts.seed, opts.deadline))?;
+            let mut rows = vec![Vec::new(), Vec::new()];
+            for w in &r.basis {
+                for (k, p) in points.iter().enumerate() {
+                    let row = jets
+                        .row(outs[w.output], &w.fields, p, false)
+                        .map_err(|_| AnalysisError::NoPoint)?;
+                    rows[k].push(row.gradient);
+                }
+            }
+            let eb = if r.rank == r.n { 0.0 } else { r.error_bound };
+            Ok(Group {
+                rows,
+                error_bound: eb,
+            })
+        };
+        let g0 = group(base_outs)?;
+        let mut groups = Vec::with_capacity(candidates.len());
+        for c in candidates {
+            groups.push(group(&c.outputs)?);
+        }
+        let error_bound = groups
+            .iter()
+            .chain(std::iter::once(&g0))
+            .fold(0.0f64, |a, g| a.max(g.error_bound));
+        // The model's echelon basis at each point, extended per subset.
+        let base_ech: Vec<Echelon> = (0..2)
+            .map(|k| {
+                let mut e = Echelon::default();
+                for r in &g0.rows[k] {
+                    e.insert(r);
+                }
+                e
+            })
+            .collect();
+        Ok(Screen {
+            n: nf.state.len(),
+            target,
+            points,
+            n_leaves,
+            groups,
+            base_ech,
+            error_bound,
+        })
+    }
+
+    /// Screened rank of a subset and whether it meets the goal: the better
+    /// point (a rank at a point is a lower bound of the generic rank).
+    fn screen(&self, members: &[usize]) -> (usize, bool) {
+        let n = self.n;
+        let mut best = (0usize, false);
+        for (k, b) in self.base_ech.iter().enumerate() {
+            let mut e = b.clone();
+            for &c in members {
+                for r in &self.groups[c].rows[k] {
+                    e.insert(r);
+                    if e.rows.len() == n {
+                        break;
+                    }
+                }
+            }
+            let rk = e.rows.len();
+            let met = self.target.iter().all(|&i| e.contains_unit(i, n));
+            if rk > best.0 || (rk == best.0 && met) {
+                best = (rk, met);
+            }
+        }
+        best
+    }
+
+    /// The symmetry vectors at each point (`[point][symmetry]`).
+    fn symmetries_at(&self, sym: Option<&SymmetryReport>) -> Vec<Vec<Option<Vec<Fp>>>> {
+        (0..2)
+            .map(|k| {
+                sym.map_or_else(Vec::new, |s| {
+                    s.vectors
+                        .iter()
+                        .map(|v| vector_at(v, &self.points[k], self.n_leaves))
+                        .collect()
+                })
+            })
+            .collect()
+    }
+
+    /// The symmetries a subset breaks: some row of its members is not
+    /// orthogonal to the symmetry at one of the points.
+    fn breaks(&self, sym_at: &[Vec<Option<Vec<Fp>>>], members: &[usize]) -> Vec<usize> {
+        let n_sym = sym_at.first().map_or(0, Vec::len);
+        (0..n_sym)
+            .filter(|&j| {
+                (0..2).any(|k| {
+                    sym_at[k][j].as_ref().is_some_and(|w| {
+                        members
+                            .iter()
+                            .any(|&c| self.groups[c].rows[k].iter().any(|r| !dot(r, w).is_zero()))
+                    })
+                })
+            })
+            .collect()
+    }
+}
+
+/// The model's symmetries when it is rank-deficient (a failure to find them
+/// is a note, not an error: the design stands without them).
+fn base_symmetries(
+    base_model: &mut NormalForm,
+    report: Option<&RankReport>,
+    n: usize,
+    opts: &DesignOptions,
+) -> Result<(Option<SymmetryReport>, Option<String>), AnalysisError> {
+    match (report, opts.symmetries) {
+        (Some(r), true) if r.rank < n => match symmetries_with(
+            base_model,
+            r,
+            &SymmetryOptions {
+                deadline: opts.deadline,
+                ..Default::default()
+            },
+        ) {
+            Ok(s) => Ok((Some(s), None)),
+            Err(AnalysisError::Cancelled) => Err(AnalysisError::Cancelled),
+            Err(e) => Ok((None, Some(format!("the model's symmetries: {e}")))),
+        },
+        _ => Ok((None, None)),
+    }
+}
+
+/// The subsets that meet the goal, found by size.
+struct Subsets {
+    found: Vec<Vec<usize>>,
+    screened: usize,
+    complete_to_size: usize,
+    exhaustive: bool,
+}
+
+/// Subsets by size; within a size in lexicographic order; supersets of a
+/// found set skipped (they are not minimal).
+fn search_subsets(sc: &Screen, m: usize, opts: &DesignOptions) -> Result<Subsets, AnalysisError> {
+    let mut out = Subsets {
+        found: Vec::new(),
+        screened: 0,
+        complete_to_size: 0,
+        exhaustive: true,
+    };
+    for k in 1..=m {
+        let mut idx: Vec<usize> = (0..k).collect();
+        loop {
+            if !out.found.iter().any(|f| f.iter().all(|x| idx.contains(x))) {
+                if out.screened >= opts.max_subsets {
+                    out.exhaustive = false;
+                    return Ok(out);
+                }
+                if out.screened.is_multiple_of(256) {
+                    check_time(opts.deadline, out.screened)?;
+                }
+                out.screened += 1;
+                if sc.screen(&idx).1 {
+                    out.found.push(idx.clone());
+                }
+            }
+            if !next_combination(&mut idx, m) {
+                break;
+            }
+        }
+        out.complete_to_size = k;
+    }
+    Ok(out)
 }
 
 /// The next k-subset of `0..m` in lexicographic order (`false`: none).
