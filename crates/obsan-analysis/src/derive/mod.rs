@@ -325,7 +325,7 @@ impl Found {
     }
 }
 
-/// 1. Variables every symmetry leaves alone, as themselves.
+/// Step 1: variables every symmetry leaves alone, as themselves.
 fn fixed_variables(
     nf: &mut NormalForm,
     sym: &SymmetryReport,
@@ -354,8 +354,8 @@ fn fixed_variables(
     Ok(())
 }
 
-/// 2. Integer combinations of angles that every symmetry leaves alone: the
-/// integer null vectors of the symmetries' angle components at random points.
+/// Step 2: integer combinations of angles that every symmetry leaves alone:
+/// the integer null vectors of the symmetries' angle components at random points.
 fn angle_differences(
     nf: &mut NormalForm,
     lay: &Layout,
@@ -421,7 +421,7 @@ fn angle_differences(
     Ok(())
 }
 
-/// 3. Polynomial and rational invariants `P/Q` by the linear ansatz, over
+/// Step 3: polynomial and rational invariants `P/Q` by the linear ansatz, over
 /// the variable blocks and the coefficient blocks. Returns the generic
 /// constants the blocks use (the reduced system keeps them).
 fn rational_invariants(
@@ -527,7 +527,8 @@ fn denominators(nf: &mut NormalForm, lay: &Layout, s: &Search, found: usize) -> 
     dens.into_iter().map(|d| d.1).collect()
 }
 
-/// 4. The outputs themselves, 5. the basis Lie derivatives of the rank test.
+/// Steps 4 and 5: the outputs themselves, then the basis Lie derivatives of
+/// the rank test.
 fn outputs_and_lie_derivatives(
     nf: &mut NormalForm,
     report: &RankReport,
