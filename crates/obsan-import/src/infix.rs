@@ -6,7 +6,7 @@
 //! (`-x^2` is `-(x^2)`). Positions are 1-based line and column of the text
 //! as placed in its file (`at`: where the text starts).
 
-use crate::julia::Ex;
+use crate::ex::Ex;
 use crate::ImportError;
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -398,7 +398,7 @@ pub(crate) fn parse_placed(src: &[(char, (usize, usize))], d: Dialect) -> Result
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::julia::show;
+    use crate::ex::show;
 
     fn text(s: &str, d: Dialect) -> String {
         let e = parse(s, (1, 1), d).unwrap();

@@ -20,6 +20,7 @@
 )]
 
 mod error;
+mod ex;
 mod infix;
 mod julia;
 mod matlab;

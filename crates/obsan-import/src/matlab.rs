@@ -10,8 +10,8 @@
 //! The format is read from its description in STRIKE-GOLDD's documentation;
 //! no STRIKE-GOLDD text (GPL-3) is used.
 
+use crate::ex::{show, Ex, RESERVED};
 use crate::infix::{self, Dialect, Placed};
-use crate::julia::{show, Ex, RESERVED};
 use crate::sbml::{one_line, walk_names_at};
 use crate::{Converted, ImportError};
 use std::collections::BTreeMap;

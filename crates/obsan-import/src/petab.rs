@@ -13,8 +13,8 @@
 //! the output), initial values set by conditions and preequilibration do not
 //! change the structure and are not read (a header comment says so).
 
+use crate::ex::Ex;
 use crate::infix::{self, Dialect};
-use crate::julia::Ex;
 use crate::sbml::{check_names, one_line, Sbml};
 use crate::yaml::{self, Y};
 use crate::{Converted, ImportError};

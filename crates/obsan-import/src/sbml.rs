@@ -10,7 +10,7 @@
 //! line: events, algebraic rules, delays, `time`, piecewise, stoichiometry
 //! math, compartments that vary.
 
-use crate::julia::{show, Ex, RESERVED};
+use crate::ex::{show, Ex, RESERVED};
 use crate::{Converted, ImportError};
 use roxmltree::{Document, Node};
 use std::collections::BTreeMap;
