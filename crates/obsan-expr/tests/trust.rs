@@ -2,7 +2,9 @@
 //! Every reproducer of the issue is here, checked against an independent
 //! computation (exponent arithmetic, term counts, exact evaluation).
 
-use obsan_expr::{line_col, parse_ast, Budget, Ctx, Limit, Mono, Poly, RatFun, Var, MAX_HEIGHT, Q};
+use obsan_expr::{
+    line_col, parse_ast, Budget, Ctx, Limit, Mono, Poly, RatFun, Var, MAX_DEPTH, MAX_HEIGHT, Q,
+};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 use std::time::{Duration, Instant};
@@ -155,10 +157,40 @@ fn deep_nesting_is_refused_with_a_place() {
         .unwrap_err()
         .message
         .contains("nested too deeply"));
-    // Within the limits, the tree height stays below MAX_HEIGHT.
+    // Within the limits, the tree height stays below MAX_HEIGHT, measured here by
+    // the test's own walk of the tree: 400 parentheses nest (brackets add no node),
+    // and a flat chain of 100,000 terms is balanced by the parser, not a 100,000-deep
+    // spine that every later recursion would walk.
     let ok = format!("{}x{}", "(".repeat(400), ")".repeat(400));
-    assert!(parse_ast(&ok).is_ok());
-    let _ = MAX_HEIGHT;
+    assert!(tree_height(&parse_ast(&ok).unwrap()) <= MAX_HEIGHT);
+    let chain = vec!["x"; 100_000].join(" + ");
+    let h = tree_height(&parse_ast(&chain).unwrap());
+    assert!(
+        h <= MAX_HEIGHT,
+        "a flat sum of 100,000 terms is {h} levels high"
+    );
+    let nested = format!("{}x", "-".repeat(MAX_DEPTH / 2));
+    assert!(tree_height(&parse_ast(&nested).unwrap()) <= MAX_HEIGHT);
+}
+
+/// Height of a syntax tree (a leaf is 1), by an explicit stack.
+fn tree_height(a: &obsan_expr::Ast) -> usize {
+    use obsan_expr::AstKind;
+    let mut best = 0;
+    let mut stack = vec![(a, 1usize)];
+    while let Some((a, d)) = stack.pop() {
+        best = best.max(d);
+        match &a.kind {
+            AstKind::Neg(x) => stack.push((x, d + 1)),
+            AstKind::Bin(_, l, r) => {
+                stack.push((l, d + 1));
+                stack.push((r, d + 1));
+            }
+            AstKind::Call(_, args) => stack.extend(args.iter().map(|x| (x, d + 1))),
+            _ => {}
+        }
+    }
+    best
 }
 
 #[test]
