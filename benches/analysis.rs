@@ -79,7 +79,7 @@ fn main() {
         let inp = input.map(|i| format!(" --input {i}")).unwrap_or_default();
         println!("{what:18} {path}{inp}: {:.2} ms ({:.2})", ms(med), ms(min));
     }
-    // Rank by jets against the older graph route (issue 15): the paper's
+    // Rank by jets against the older graph route: the paper's
     // systems and the order-10 pharmacokinetic model (the graph route takes
     // tens of seconds there, so it runs once, and not with `quick`).
     println!("\n== rank: jets vs the graph route (rank_symbolic), median (min)");

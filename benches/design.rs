@@ -1,4 +1,4 @@
-//! `obsan design` (issue 35 item 4): minimal sets among 10 candidate sensors
+//! `obsan design`: minimal sets among 10 candidate sensors
 //! (1,024 subsets) on vins.sys, a suite model (target < 5 s), and the input
 //! families of calib.sys. Run: `cargo bench --bench design` (`-- quick`).
 

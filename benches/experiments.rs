@@ -1,4 +1,4 @@
-//! Several experiments and known initial conditions (issue 35): the
+//! Several experiments and known initial conditions: the
 //! multi-experiment rank of calib.sys with three circles (target < 0.05 s),
 //! `--experiments auto` on every suite model (target < 1 s each), and the
 //! known-initial-condition test. Run: `cargo bench --bench experiments`

@@ -132,7 +132,7 @@ pub fn entries(root: &Path) -> Result<Vec<Entry>, String> {
     Ok(out)
 }
 
-/// The StructuralIdentifiability.jl models, systems/benchmarks/si-jl/*.sys (issue 32). Each must
+/// The StructuralIdentifiability.jl models, systems/benchmarks/si-jl/*.sys. Each must
 /// name its source (`# Source:`) and carry a `# verdict-source:` line; the verdict itself is
 /// optional (`verdict-source: none`): such an entry has `Verdict::default()` (neither rank nor
 /// variables cited) and is timed but not judged.

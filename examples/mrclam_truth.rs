@@ -1,8 +1,7 @@
 //! The ground-truth figures of docs/diagnose.md ("Against the ground truth"),
 //! computed from the raw MRCLAM files: what the Vicon poses say about the
 //! odometry and the range sensor, independently of obsan's fits; and the
-//! checks of the cascade `--generated` names (docs/diagnose.md, generated candidates;
-//! issue 18.6): the bearings against the Vicon pose, the turn rate by speed,
+//! checks of the cascade `--generated` names (docs/diagnose.md, generated candidates): the bearings against the Vicon pose, the turn rate by speed,
 //! the heading drift of the commanded odometry, and the bearing scale that
 //! drift alone produces in a deterministic fit of a window.
 //!
@@ -154,7 +153,7 @@ fn robot(dir: &str, r: u32) -> Result<(), Box<dyn Error>> {
         "  commanded v to Vicon speed: best correlation {:.3} at a lag of {:.2} s",
         best.1, best.0
     );
-    // 2b. Forward speed against the turn rate (issue 18.6): 1 s blocks of
+    // 2b. Forward speed against the turn rate: 1 s blocks of
     //    commands, the Vicon forward distance over the same second 0.25 s
     //    later (the lag above), binned by the block's mean |omega|; and the
     //    least-squares c of v_true = v (1 + c |omega|) over the blocks.
@@ -266,7 +265,7 @@ fn robot(dir: &str, r: u32) -> Result<(), Box<dyn Error>> {
 }
 
 // ---------------------------------------------------------------------------
-// Vicon checks of the generated cascade (issue 18.6): the bearings, the turn
+// Vicon checks of the generated cascade: the bearings, the turn
 // rate by speed, the heading drift, and what that drift does to a bearing
 // scale fitted deterministically per window.
 

@@ -378,7 +378,7 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
     let fields = obsan_analysis::Fields::of(&mut nf);
     // outputs x (1 + F + ... + F^order) derivatives, each at least one
     // printed term: past the term budget the answer cannot fit in it, so it
-    // is refused before any word is built (issue 31.4: vins at order 8 is
+    // is refused before any word is built (vins at order 8 is
     // 13 million words).
     let n_words = (0..=a.order)
         .try_fold(0usize, |acc, k| {

@@ -78,7 +78,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let data = read_dataset(a.data(), &inputs, &outputs)?;
     // A constant the model declares without a value comes from each
     // trajectory's meta.json: a missing one is an error, never a silent 0
-    // (issue 31: a window without lx9 named other effects).
+    // (a window of MRCLAM without lx9 named other effects).
     for t in &data.trajectories {
         if let Some(c) = sys
             .decls_of(Kind::Const)

@@ -166,7 +166,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
             }
             Value::Object(o)
         });
-        // Which encoder noise ML's sds include (issue 18.4); null for the other methods.
+        // Which encoder noise ML's sds include; null for the other methods.
         let enc = (m == Method::Ml).then(|| match r.encoder_noise {
             EncoderNoise::Stated { k, c } => json!({"route": "stated", "k": k, "c": c}),
             EncoderNoise::Estimated { k, c, samples } => {
@@ -238,7 +238,7 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
     if sd.is_none() {
         outln!("(det gives no standard deviations; use ls or ml)");
     }
-    // Issue 18.4: which encoder noise ML's sds include.
+    // Which encoder noise ML's sds include.
     if sd.is_some() && matches!(m, Method::Ml) {
         match r.encoder_noise {
             EncoderNoise::Stated { k, .. } => outln!(

@@ -191,7 +191,7 @@ fn resolved(p: &Path) -> PathBuf {
 /// Refuse an output (`out`, a folder or file the command writes) that is,
 /// holds or lies inside something the same command reads (`reads`: its
 /// input files and folders), compared by canonical path: `--force` must
-/// never replace a command's own input (issue 31), and an output inside an
+/// never replace a command's own input, and an output inside an
 /// input folder would change that input. Checked before any work is done.
 pub fn check_outside(out: &str, reads: &[&str]) -> Result<(), Failure> {
     let o = resolved(Path::new(out));

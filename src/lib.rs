@@ -235,7 +235,7 @@ fn execute(
                 (r, None) => r,
                 // An error that names the limit and where in the input it
                 // was reached (file:line:col, the argument's column) says
-                // more than the limit alone (issue 31, item 9).
+                // more than the limit alone.
                 (Ok(Ok(Err(f))), Some(l))
                     if f.0.contains(&l.to_string()) && f.0.len() > l.to_string().len() =>
                 {

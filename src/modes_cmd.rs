@@ -72,7 +72,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     // Variables no output reaches are unobservable, each its own symmetry
     // d/dx, and in no mode: the modes are derived on the subsystem of the
     // reached ones (same rank, same modes), so that unused params cost
-    // nothing (issue 31, item 2).
+    // nothing.
     let n_full = r.n;
     let mut unreached: Vec<String> = Vec::new();
     let (mut nf, r) = match obsan_analysis::restrict_to_reached(&mut nf) {

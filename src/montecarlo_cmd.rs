@@ -13,7 +13,7 @@ use serde_json::{json, Value};
 use std::process::ExitCode;
 
 /// The most runs per cell (`--runs`): each run's values are kept for the
-/// summary, so memory grows with it (issue 31).
+/// summary, so memory grows with it.
 pub const MAX_RUNS: usize = 100_000;
 /// The most worker threads (`--threads`).
 pub const MAX_THREADS: usize = 1024;

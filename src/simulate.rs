@@ -34,12 +34,12 @@ pub fn dataset_files(
 
 /// The most bearings per trajectory `--bearings` may ask for (the paper's
 /// tables use at most a few hundred). Refused before anything is allocated:
-/// memory grows with bearings x trajectories (issue 31).
+/// memory grows with bearings x trajectories.
 pub const MAX_BEARINGS: usize = 1_000_000;
 /// The most trajectories (`--q` ratios) of one simulation.
 pub const MAX_TRAJECTORIES: usize = 100;
 /// The most bearings of all trajectories together (`--bearings` x ratios):
-/// 3 x 10^6 is the 97 MB dataset of issue 31 (crlb on it peaks at 704 MB).
+/// 3 x 10^6 is a 97 MB dataset (crlb on it peaks at 704 MB).
 pub const MAX_TOTAL_BEARINGS: usize = 3_000_000;
 
 /// The simulator's options from the command line, checked.

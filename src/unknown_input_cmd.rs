@@ -1,4 +1,4 @@
-//! `obsan rank` on a model with unknown inputs (issue 33), and the refusal of
+//! `obsan rank` on a model with unknown inputs, and the refusal of
 //! the commands that do not handle them yet.
 
 use crate::cli::RankArgs;

@@ -1,4 +1,4 @@
-//! Fuzz the expression parser and canonicaliser (issue 14).
+//! Fuzz the expression parser and canonicaliser.
 //!
 //! Input bytes are an expression (invalid UTF-8 is skipped). It is parsed
 //! and canonicalised under a small budget; an error is fine, a panic or a

@@ -34,7 +34,7 @@ def test_load_error_names_the_file(tmp_path, cli):
 
 def test_missing_file_and_bad_expression():
     # A missing input is what open() raises, naming the path; a misspelt keyword is
-    # Python's own TypeError (issue 34.7), not the CLI's "Usage:" text.
+    # Python's own TypeError, not the CLI's "Usage:" text.
     with pytest.raises(FileNotFoundError) as e:
         obsan.load(SYSTEMS / "no-such.sys")
     assert e.value.filename == str(SYSTEMS / "no-such.sys")
@@ -93,7 +93,7 @@ def test_timeout_is_the_cli_error():
 
 
 def test_wrong_types_are_type_errors_before_anything_runs(tmp_path, monkeypatch):
-    # Issue 31: simulate(None) wrote ./None, diff('x^2', None) returned 0,
+    # simulate(None) wrote ./None, diff('x^2', None) returned 0,
     # simplify(float('inf')) returned the symbol inf.
     monkeypatch.chdir(tmp_path)
     with pytest.raises(TypeError):
@@ -114,7 +114,7 @@ def test_wrong_types_are_type_errors_before_anything_runs(tmp_path, monkeypatch)
 
 
 def test_sizes_past_the_limit_are_refused_before_allocating():
-    # Issue 31: crlb(bearings=2**63) grew to 11 GB.
+    # crlb(bearings=2**63) grew to 11 GB.
     with pytest.raises(obsan.ObsanError) as e:
         obsan.crlb(bearings=2**63)
     assert "at most 1000000" in str(e.value)

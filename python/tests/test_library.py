@@ -1,4 +1,4 @@
-"""The package as a Python library (issue 34.7): real signatures, typed results that
+"""The package as a Python library: real signatures, typed results that
 are also the CLI's JSON, Python's own exceptions, systems built from Python values,
 quiet progress, and type information for mypy."""
 

@@ -285,7 +285,7 @@ fn paper_decompositions_verify() {
     }
 }
 
-/// Issue 16: the .dec that `obsan modes --out` writes passes `obsan verify`
+/// The .dec that `obsan modes --out` writes passes `obsan verify`
 /// on the default route, and the verdict names what it rests on: the
 /// closure of the reduced system (exact), and the symmetries' certificate,
 /// the same one `obsan symmetries` reports for the system.

@@ -117,7 +117,10 @@ fn crlb_and_montecarlo_run() {
     let base = sd(&cells[0], "crlb_sd");
     for (c, sigma) in cells.iter().zip([1.0, 3.0, 5.0]) {
         let ratio = sd(c, "crlb_sd") / base;
-        assert!((ratio - sigma).abs() < 1e-3 * sigma, "{ratio} for sigma {sigma}");
+        assert!(
+            (ratio - sigma).abs() < 1e-3 * sigma,
+            "{ratio} for sigma {sigma}"
+        );
         let psi = c["methods"][0]["mean_estimate"][1].as_f64().unwrap();
         let bound = sd(c, "crlb_sd_with_encoder_noise");
         assert!((psi - 90.0).abs() < 4.0 * bound, "{psi} against sd {bound}");
@@ -157,7 +160,7 @@ fn plot_writes_figures_5_to_7_as_png_and_svg_and_never_overwrites() {
         for m in [">DET<", ">LS<", ">ML<", ">observed<"] {
             assert!(svg.contains(m), "{m} in {traj}_fits.svg");
         }
-        // Angles drawn in degrees, as the CLI prints them (issue 34.9): a bearing spans more
+        // Angles drawn in degrees, as the CLI prints them: a bearing spans more
         // than the +-pi of radians, so some tick label lies beyond 4 in magnitude.
         assert!(svg.contains(">beta (deg)<"), "{traj}_fits.svg axis label");
         let ticks: Vec<f64> = svg
@@ -217,7 +220,7 @@ fn crlb_of_a_dataset_at_its_estimate_matches_the_bound_at_the_truth() {
     bad(&["crlb", &data, "--seed", "3"], "cannot be used with");
 }
 
-/// Issue 34.9: a unicycle dataset (inputs v, omega) given to calibrate gets the missing column
+/// A unicycle dataset (inputs v, omega) given to calibrate gets the missing column
 /// and the command that fits any model, with exit 2.
 #[test]
 fn calibrate_on_another_models_data_points_to_diagnose() {

@@ -283,7 +283,7 @@ fn import_mrclam_rejects_bad_input() {
     assert!(!std::path::Path::new(&out).exists());
 }
 
-/// Issue 34.9: `diagnose` takes its model and data by position as every other
+/// `diagnose` takes its model and data by position as every other
 /// command takes its input; `--model`/`--data` stay, and give the same answer.
 #[test]
 fn diagnose_takes_model_and_data_by_position_or_by_flag_alike() {

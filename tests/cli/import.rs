@@ -218,7 +218,7 @@ fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
     );
 }
 
-/// systems/benchmarks/strike-goldd/ (issue 32): each NAME.sys is `obsan import strike-goldd` of
+/// systems/benchmarks/strike-goldd/: each NAME.sys is `obsan import strike-goldd` of
 /// its src/z_create_NAME.m (written for obsan from the model's equations) under a header, and
 /// obsan's rank agrees with the verdict the file cites (SymPy, benches/peers/sg_verdicts.py).
 #[test]

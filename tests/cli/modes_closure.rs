@@ -1,5 +1,5 @@
-//! `obsan modes` closes the reduced system whenever a closed form exists
-//! (issue 39, item 2). Each system here is written so that one exists by
+//! `obsan modes` closes the reduced system whenever a closed form exists.
+//! Each system here is written so that one exists by
 //! construction; the test checks the written reduced system itself: at random
 //! rational points (angles at rational points of the circle) the reduced
 //! field `F_k(z(x), u)` equals the chain rule `d/dt z_k = grad z_k . f(x, u)`

@@ -13,7 +13,7 @@ use std::collections::BTreeSet;
 
 /// Models left out of this CI check, with the reason. `cargo bench --bench suite` still runs
 /// them and reports their verdicts.
-// None any more: with the rank on Taylor jets (issue 15), pk_demignot (order-10 Lie
+// None any more: with the rank on Taylor jets, pk_demignot (order-10 Lie
 // derivatives) takes 0.04 s and vins.sys 0.11 s, so every entry is checked.
 const SLOW: &[(&str, &str)] = &[];
 
@@ -110,7 +110,7 @@ fn suite_verdicts_match_the_cited_ones() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The StructuralIdentifiability.jl models (systems/benchmarks/si-jl/, issue 32): every one that
+/// The StructuralIdentifiability.jl models (systems/benchmarks/si-jl/): every one that
 /// cites a verdict (derived from SI.jl's published identifiable functions, never from obsan) is
 /// checked; the others are only required to name their source. All are fast (the slowest cited
 /// one, QY, takes seconds, not minutes), so none is skipped.

@@ -1,4 +1,4 @@
-//! What every command shows its user (issue 19): each subcommand's --help,
+//! What every command shows its user: each subcommand's --help,
 //! found from `obsan --help` itself so a new one cannot be missed, ends with
 //! examples and says what --json prints; `import` prints progress lines when
 //! stderr is not a terminal (montecarlo's and diagnose's: montecarlo.rs).
@@ -133,7 +133,7 @@ fn promised_keys(help: &str) -> Vec<String> {
         .collect()
 }
 
-/// Issue 34.6: a user reads `--help` to find a JSON field; every top-level key the help names
+/// A user reads `--help` to find a JSON field; every top-level key the help names
 /// must be in the output, and every key of the output must be named.
 #[test]
 fn each_json_help_names_exactly_the_keys_the_command_prints() {

@@ -1,4 +1,4 @@
-//! Regressions of issue 14 (trust): no silent wrong answer, no panic, no lost
+//! Regressions (trust): no silent wrong answer, no panic, no lost
 //! file. One test per reported reproducer.
 
 use crate::util::*;
@@ -13,7 +13,7 @@ fn files_in(dir: &str) -> Vec<String> {
     v
 }
 
-/// Issue 14.3: `cd my-folder && obsan simulate --out . --force` emptied the folder.
+/// `cd my-folder && obsan simulate --out . --force` emptied the folder.
 #[test]
 fn force_never_replaces_the_working_directory() {
     let d = fresh_dir("force-cwd");
@@ -31,7 +31,7 @@ fn force_never_replaces_the_working_directory() {
     );
 }
 
-/// Issue 14.3: --force on a folder holding files obsan did not write deletes nothing.
+/// --force on a folder holding files obsan did not write deletes nothing.
 #[test]
 fn force_never_deletes_what_obsan_did_not_write() {
     let root = fresh_dir("force-foreign");
@@ -87,7 +87,7 @@ fn force_never_deletes_what_obsan_did_not_write() {
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "keep");
 }
 
-/// Issue 14.4: the README's `obsan simulate --out data/sim` failed when data/ did not exist.
+/// The README's `obsan simulate --out data/sim` failed when data/ did not exist.
 #[test]
 fn missing_parent_folders_are_created() {
     let d = fresh_dir("mkdir-p");
@@ -109,7 +109,7 @@ fn missing_parent_folders_are_created() {
     );
 }
 
-/// Issue 14.8: an expression starting with '-' was read as a flag.
+/// An expression starting with '-' was read as a flag.
 #[test]
 fn expressions_may_start_with_a_minus() {
     let out = ok(&["simplify", "-x^2"]);
@@ -128,7 +128,7 @@ fn timeouts_are_checked() {
         let flag = format!("--timeout={t}");
         bad(&["rank", "systems/calib.sys", &flag], "seconds");
     }
-    // simplify, diff, show and lie honour --timeout (issue 14.6).
+    // simplify, diff, show and lie honour --timeout.
     ok(&["simplify", "x+x", "--timeout", "5"]);
     ok(&["diff", "x^2", "x", "--timeout", "5"]);
     ok(&["show", "systems/calib.sys", "--timeout", "5"]);
@@ -142,7 +142,7 @@ fn timeouts_are_checked() {
     ]);
 }
 
-/// Issue 14.10: simulate wrote datasets that calibrate then refused.
+/// Simulate wrote datasets that calibrate then refused.
 #[test]
 fn simulate_refuses_datasets_calibrate_cannot_use() {
     let d = fresh_dir("few-bearings");
@@ -173,7 +173,7 @@ fn a_closed_pipe_ends_the_output_quietly() {
     assert_eq!(out.status.code(), Some(0), "{stderr}");
 }
 
-/// Every example in a subcommand's --help runs (issue 19: examples in every --help).
+/// Every example in a subcommand's --help runs.
 /// Paths under data/ go to a temporary folder; the slow examples run smaller.
 #[test]
 fn every_help_example_runs() {
@@ -265,7 +265,7 @@ fn shell_words(s: &str) -> Vec<String> {
     words
 }
 
-/// Issue 14.2 and 14.9: a BOM, non-ASCII text and invalid UTF-8 in a .sys file.
+/// A BOM, non-ASCII text and invalid UTF-8 in a .sys file.
 #[test]
 fn sys_files_with_bom_unicode_or_bad_bytes() {
     let loc = std::fs::read_to_string("systems/localization.sys").unwrap();
@@ -300,7 +300,7 @@ fn sys_files_with_bom_unicode_or_bad_bytes() {
     bad(&["rank", &cut], "cut.sys:3:");
 }
 
-/// Issue 14.1: exponents above 65535 wrapped (x^70000 printed as x^4464).
+/// Exponents above 65535 wrapped (x^70000 printed as x^4464).
 #[test]
 fn large_exponents_are_exact() {
     let seven = ["x^10000"; 7].join("*");
@@ -318,7 +318,7 @@ fn large_exponents_are_exact() {
     assert!(out.contains("x^80000"), "{out}");
 }
 
-/// Issue 14.2: `((x^10000)^10000)^100` panicked; past the engine's exponent
+/// `((x^10000)^10000)^100` panicked; past the engine's exponent
 /// range it is a clear error, never a wrapped answer.
 #[test]
 fn exponents_past_the_range_are_an_error() {
@@ -328,7 +328,7 @@ fn exponents_past_the_range_are_an_error() {
     assert!(r.stderr.contains("exponent"), "{}", r.stderr);
 }
 
-/// Issue 14.2: a sum of 100,000 terms overflowed the stack (exit 134).
+/// A sum of 100,000 terms overflowed the stack (exit 134).
 #[test]
 fn long_and_deep_expressions_do_not_overflow_the_stack() {
     let terms = vec!["x"; 100_000].join(" + ");
@@ -356,7 +356,7 @@ fn long_and_deep_expressions_do_not_overflow_the_stack() {
     }
 }
 
-/// Issue 14.6: a product of 22 binomials took 22 s and 1.5 GB; the budget
+/// A product of 22 binomials took 22 s and 1.5 GB; the budget
 /// stops it with a clear error, and a flag raises the budget.
 #[test]
 fn expression_size_has_a_budget() {
@@ -375,7 +375,7 @@ fn expression_size_has_a_budget() {
     );
 }
 
-/// Issue 14.5: one value 1e308 in outputs.csv made calibrate and diagnose run for minutes.
+/// One value 1e308 in outputs.csv made calibrate and diagnose run for minutes.
 #[test]
 fn absurd_values_are_located_errors() {
     let d = fresh_dir("absurd");
@@ -395,7 +395,7 @@ fn absurd_values_are_located_errors() {
     );
 }
 
-/// Issue 14.7: what spreadsheets and loggers write is read as the same data:
+/// What spreadsheets and loggers write is read as the same data:
 /// a BOM, CRLF or CR-only line endings, comment lines, quoted headers, a
 /// trailing comma and an extra text column.
 #[test]
@@ -499,7 +499,7 @@ fn modes_force_keeps_the_users_files() {
 }
 
 // ---------------------------------------------------------------------------
-// Issue 31 (trust, second round).
+// Trust, second round: inputs never destroyed, memory bounded, no false "exact".
 
 /// Every entry of `dir`, hidden ones included (a temp folder is hidden).
 fn entries(dir: &str) -> Vec<String> {
@@ -543,7 +543,7 @@ fn mrclam_source(dir: &str) {
     .unwrap();
 }
 
-/// Issue 31.1: `calibrate ds --plot ds --force` replaced the dataset by its
+/// `calibrate ds --plot ds --force` replaced the dataset by its
 /// figures; the same for diagnose --report and an imported folder. An output
 /// that is, holds or lies inside an input is refused (exit 2) before any
 /// work, and the input is left byte for byte as it was.
@@ -657,7 +657,7 @@ fn force_never_replaces_the_commands_own_input() {
     assert_eq!(std::fs::read(&loc).unwrap(), loc_before);
 }
 
-/// Issue 31.5: SIGTERM while a large `simulate` writes its folder (100 MB)
+/// SIGTERM while a large `simulate` writes its folder (100 MB)
 /// left `.NAME.obsan-tmp-PID/` behind. Now the temp folder is removed and
 /// the exit code is 128 + 15. Waits for the temp folder to appear before
 /// signalling, so the test does not depend on the machine's speed.
@@ -703,7 +703,7 @@ fn sigterm_while_writing_leaves_nothing() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// Issue 31.5: a later run removes a stale temp folder of a process that is
+/// A later run removes a stale temp folder of a process that is
 /// no longer running, and says so; a temp folder of a live process stays.
 #[cfg(unix)]
 #[test]
@@ -730,7 +730,7 @@ fn a_stale_temp_folder_of_a_dead_run_is_removed() {
     assert!(Path::new(&live).exists());
 }
 
-/// Issue 31.4: each long command takes --timeout with the analysis
+/// Each long command takes --timeout with the analysis
 /// commands' meaning: exit code 2, "timed out", and no output or temp
 /// folder left. Each input is far beyond what a machine does in the second
 /// of grace (calibrate, crlb, diagnose: minutes here; simulate: seconds),
@@ -804,7 +804,7 @@ fn long_commands_stop_at_their_timeout_and_leave_nothing() {
     let _ = std::fs::remove_dir_all(&root);
 }
 
-/// Issue 31.3: sizes given by flags are bounded before anything is
+/// Sizes given by flags are bounded before anything is
 /// allocated (`--bearings 4294967296` aborted in the allocator), and each
 /// limit is in --help.
 #[test]
@@ -849,7 +849,7 @@ fn size_flags_have_stated_limits() {
     }
 }
 
-/// Issue 31.8: removing a constant the model needs from one trajectory's
+/// Removing a constant the model needs from one trajectory's
 /// meta.json made diagnose use 0 in silence. calib.sys declares `const q`
 /// (eq. 17), which simulate writes into each meta.json.
 #[test]
@@ -865,7 +865,7 @@ fn a_missing_model_constant_is_named_with_its_file() {
     assert!(e.contains("q0/meta.json"), "{e}");
 }
 
-/// Issue 31.9: `modes --out P` on a full-rank system exited 0 in silence.
+/// `modes --out P` on a full-rank system exited 0 in silence.
 /// calib.sys has rank 7 of 7 (the paper's section V): nothing to reduce, said.
 #[test]
 fn modes_out_on_a_full_rank_system_says_why_nothing_is_written() {
@@ -881,7 +881,7 @@ fn modes_out_on_a_full_rank_system_says_why_nothing_is_written() {
     assert_eq!(entries(&d), Vec::<String>::new());
 }
 
-/// Issue 31.9: montecarlo merge accepts a BOM, names the part in a run-order
+/// Montecarlo merge accepts a BOM, names the part in a run-order
 /// error and reports an infinite value.
 #[test]
 fn montecarlo_merge_names_its_parts() {
@@ -936,7 +936,7 @@ fn montecarlo_merge_names_its_parts() {
     );
 }
 
-/// Issue 31.9: import mrclam said nothing without the ground truth, blamed
+/// Import mrclam said nothing without the ground truth, blamed
 /// an empty landmark file on the measurements, and gave no line for bad UTF-8.
 #[test]
 fn import_mrclam_names_what_is_wrong() {
@@ -982,7 +982,7 @@ fn import_mrclam_names_what_is_wrong() {
     assert_eq!(entries(&d), ["a", "mr"]);
 }
 
-/// Issue 31.9: "number too large" names where it is: 2^2^2^2^2^2 is
+/// "number too large" names where it is: 2^2^2^2^2^2 is
 /// 2^(2^65536) (right-associative), past the engine's 65,536 bits; on line 4
 /// of the file the tower spans columns 10 to 20. 10^100000 has about
 /// 332,000 bits; in `x+10^100000` it starts at column 3. The same in a
@@ -1032,7 +1032,7 @@ fn localization_with_unused(count: usize) -> (String, Vec<String>) {
     (path, names)
 }
 
-/// Issue 31.2: unused params cost nothing in symmetries and modes; the
+/// Unused params cost nothing in symmetries and modes; the
 /// answer is the plain system's plus one free direction d/dp per param.
 #[test]
 fn unused_params_are_free_directions() {
@@ -1070,7 +1070,7 @@ fn unused_params_are_free_directions() {
     );
 }
 
-/// Issue 31.2: the memory budget bounds the symmetry routes' dense work: an
+/// The memory budget bounds the symmetry routes' dense work: an
 /// output reaching 400 params (rank 1, 399 symmetries over 400 variables:
 /// 32 x 404 x 400 bytes of F_p rows and 399 x 400 canonical forms, over the
 /// 5,000 x 2,048 bytes of --max-terms 5000) is refused, located by the limit
@@ -1092,7 +1092,7 @@ fn symmetries_past_the_memory_budget_are_refused() {
     }
 }
 
-/// Issue 31.4: `lie systems/vins.sys --order 8` (the documented maximum)
+/// `lie systems/vins.sys --order 8` (the documented maximum)
 /// grew past 3.5 GB. Its answer is 2 outputs x (1 + 7 + ... + 7^8) words
 /// (drift and six inputs: 7 fields) = 2 (7^9 - 1) / 6 = 2 x 6,725,601 = 13,451,202 Lie
 /// derivatives of at least one term each, past the default term budget

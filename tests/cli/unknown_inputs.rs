@@ -1,4 +1,4 @@
-//! `obsan rank` with unknown inputs (issue 33), as a user runs it; verdicts
+//! `obsan rank` with unknown inputs, as a user runs it; verdicts
 //! derived by hand in the model files (systems/benchmarks/unknown-inputs/).
 
 use crate::util::*;

@@ -1,4 +1,4 @@
-//! Scaling of the symmetries with the number of parts (issue 39, item 1):
+//! Scaling of the symmetries with the number of parts:
 //! k copies of the paper's calibration system (eq. 16 under the circular
 //! restriction (17), `--input q`), stacked into one system with renamed
 //! states and params (independent copies, n = 7k) or with the five params

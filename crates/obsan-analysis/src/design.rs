@@ -1,4 +1,4 @@
-//! Which sensor, which trajectory (issue 35 item 4; docs/experiments.md).
+//! Which sensor, which trajectory (docs/experiments.md).
 //!
 //! Sensors. The observability codistribution of a set of outputs is the
 //! smallest codistribution containing their differentials and invariant

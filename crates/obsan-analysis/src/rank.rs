@@ -474,7 +474,7 @@ fn rank_with(
     let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
     // Only the variables the outputs reach through the fields get columns:
     // every other column is zero in every row, exactly (reached_states), so
-    // an unused parameter costs nothing (issue 31 item 2: 12,000 of them
+    // an unused parameter costs nothing (12,000 of them
     // made the dense (n + 1)-wide jets take gigabytes).
     let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
     // The symbolic route keeps every column: an independent check of this

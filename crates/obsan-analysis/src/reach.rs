@@ -1,4 +1,4 @@
-//! The subsystem over the variables the outputs reach (issue 31, item 2).
+//! The subsystem over the variables the outputs reach.
 //!
 //! A state variable that no output reaches through the fields
 //! ([`obsan_expr::reached_states`]) enters no Lie derivative: its column of

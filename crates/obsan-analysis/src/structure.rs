@@ -1,4 +1,4 @@
-//! Cheap structure before the general symmetry machinery (issue 15, item 3):
+//! Cheap structure before the general symmetry machinery:
 //! variables nothing depends on, translations `sum c_k d/dx_k` (constant c)
 //! and scalings `sum l_k x_k d/dx_k` (integer l), as STRIKE-GOLDD's and SIAN's
 //! scaling searches look for.

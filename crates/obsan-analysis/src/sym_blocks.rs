@@ -1,4 +1,4 @@
-//! Symmetries block by block (issue 39, item 1): a system made of parts that
+//! Symmetries block by block: a system made of parts that
 //! do not see each other, or that see each other only through shared
 //! variables (several experiments with common parameters), is solved one
 //! part at a time, so the cost grows with the number of parts instead of
@@ -79,7 +79,7 @@ pub(crate) fn split(nf: &NormalForm, fields: &[Vec<Id>]) -> Option<Split> {
     let jets = LieJets::new(&nf.ctx, &nf.state_vars, &[], &roots);
     let supp = |i: usize| jets.support(i, &[]).unwrap_or_else(|| vec![false; n]);
     // deps[v]: variables some field component f_v depends on (lists, not
-    // an n x n table: unused params must cost nothing, issue 31 item 2).
+    // an n x n table: unused params must cost nothing).
     let mut deps: Vec<Vec<usize>> = vec![Vec::new(); n];
     let mut used = vec![false; n];
     for (k, &(_, j)) in comp_of.iter().enumerate() {

@@ -1,4 +1,4 @@
-//! Symmetries by reconstruction (issue 15, item 2; docs/reconstruction.md).
+//! Symmetries by reconstruction (docs/reconstruction.md).
 //!
 //! Black box: at a point of F_p (p = 2^61 - 1, the engine's prime) the
 //! gradients of the basis Lie derivatives come from Taylor jets (nothing is

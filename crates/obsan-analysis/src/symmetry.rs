@@ -35,7 +35,7 @@ pub struct SymmetryReport {
     /// Variables no output reaches (state indices, increasing): each `d/dx`
     /// is a symmetry, exactly (its column of the codistribution is zero), kept
     /// apart from `vectors` so that n unused params cost n indices, not n^2
-    /// canonical forms (issue 31, item 2). [`crate::derive_modes`] wants a
+    /// canonical forms. [`crate::derive_modes`] wants a
     /// report without them: run it on [`crate::restrict_to_reached`]'s subsystem.
     pub free: Vec<usize>,
     /// The exact closure check passed: the rank and the symmetries are exact.

@@ -1,4 +1,4 @@
-//! Observability with unknown inputs (issue 33): which states and params are
+//! Observability with unknown inputs: which states and params are
 //! observable, and which unknown inputs are reconstructable and from which
 //! derivative order of the outputs, when `S' = f0 + sum f_i u_i + sum g_j w_j`
 //! with the `u_i` known and the `w_j` unmeasured.

@@ -1,4 +1,4 @@
-//! Symmetries of stacked systems solved block by block (issue 39, item 1),
+//! Symmetries of stacked systems solved block by block,
 //! checked against the copies' own symmetries (by span) and, for copies
 //! sharing their params, by invariance with an evaluator written here.
 

@@ -343,7 +343,7 @@ fn row_degree_bounds_cover_the_true_degrees() {
     }
 }
 
-/// Issue 31 item 2: parameters no output reaches cost nothing. calib.sys
+/// Parameters no output reaches cost nothing. calib.sys
 /// (rank 7 of 7, eq. 16 of the paper) with 3,000 unused params declared
 /// after its states: the rank stays 7, exactly the 7 original variables are
 /// observable and hold the pivots, and the test runs under the default

@@ -1,4 +1,4 @@
-//! Variables no output reaches (issue 31, item 2): the symmetries and the
+//! Variables no output reaches: the symmetries and the
 //! mode checks of a system with unused parameters and unreached states are
 //! those of the system without them plus one `d/dx` per extra variable
 //! (compared by span), and the dense work is bounded by the memory budget.

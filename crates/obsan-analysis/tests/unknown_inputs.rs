@@ -1,4 +1,4 @@
-//! The rank test with unknown inputs (issue 33) on cases whose verdicts are
+//! The rank test with unknown inputs on cases whose verdicts are
 //! derived by hand here, beside each test. Never obsan's own output.
 
 use obsan_analysis::{unknown_input_rank, UnknownInputOptions, UnknownInputReport};

@@ -1,4 +1,4 @@
-//! Issue 18, item 4: the standard deviations `obsan calibrate --method ml`
+//! The standard deviations `obsan calibrate --method ml`
 //! reports are honest whether or not dataset.json states the noise: over
 //! 100 seeded datasets the z-scores `(estimate - truth) / sd` of every param
 //! have a standard deviation within 0.85-1.2. Stated: generalised least

@@ -250,7 +250,7 @@ fn a_fast_lag_follows_its_exact_solution() {
     }
 }
 
-/// Issue 14 item 9: a start that makes the state blow up is an error that
+/// A start that makes the state blow up is an error that
 /// names the trajectory, the parameter values and what to do.
 #[test]
 fn a_diverging_start_names_the_trajectory_and_the_params() {

@@ -1,4 +1,4 @@
-//! The dataset reader (issue 14 items 5, 7, 9): benign variations of valid
+//! The dataset reader: benign variations of valid
 //! files are read to the same numbers; mutated files never panic and every
 //! rejection names a file of the dataset and a line within it.
 
@@ -132,7 +132,7 @@ fn real_errors_stay_located() {
         &'a str,
     );
     let cases: Vec<Case> = vec![
-        // Issue 14 item 5: the value that hung calibrate.
+        // The value that hung calibrate.
         (
             ins.clone(),
             outs.replace("\n1.5,0.02\n", "\n1.5,1e308\n"),
@@ -386,7 +386,7 @@ proptest! {
     }
 }
 
-/// Issue 14 item 5: one bearing of 1e308 made calibrate run for minutes (an
+/// One bearing of 1e308 made calibrate run for minutes (an
 /// SVD that never converged). The reader now refuses it; the estimators,
 /// given it anyway (or a large value within the bound), return.
 #[test]

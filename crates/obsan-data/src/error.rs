@@ -132,7 +132,7 @@ pub enum DataErrorKind {
 }
 
 /// The most characters of a cell (or header) a message echoes: a 10 MB
-/// cell must not make a 10 MB message (issue 31).
+/// cell must not make a 10 MB message.
 pub const MAX_ECHO_CHARS: usize = 80;
 
 /// `text` as echoed in a message: whole if short, else its start and its
@@ -285,7 +285,7 @@ mod tests {
         (e.row, e.column, e.kind)
     }
 
-    /// Issue 31: a 10 MB cell made a 10 MB message. The echo is cut to
+    /// A 10 MB cell made a 10 MB message. The echo is cut to
     /// MAX_ECHO_CHARS characters plus the cell's length in bytes.
     #[test]
     fn a_huge_cell_is_cut_in_the_message() {

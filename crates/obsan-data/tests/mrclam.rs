@@ -137,7 +137,7 @@ fn vicon_poses_replace_the_landmark_outputs_in_the_same_windows() {
     assert!(e.to_string().contains("ground-truth"), "{e}");
 }
 
-/// Issue 31: an empty landmark file was blamed on the measurement file (no
+/// An empty landmark file was blamed on the measurement file (no
 /// measurement could match a landmark); the error now names the landmark file.
 #[test]
 fn an_empty_landmark_file_is_named() {

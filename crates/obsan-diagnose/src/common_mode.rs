@@ -1,5 +1,5 @@
 //! The heading-free check of a candidate that rewrites a group of angle
-//! outputs (issue 18.6, h/vicon's finding on MRCLAM).
+//! outputs (found on MRCLAM's Vicon data).
 //!
 //! Any error common to every member of an angle group at one instant (a
 //! heading error enters every bearing additively) can be absorbed by a

@@ -1,4 +1,4 @@
-//! Candidate effects nobody wrote (issue 18.6): generated from the model's
+//! Candidate effects nobody wrote: generated from the model's
 //! structure alone, as `.eff` text, so the rank test, the fit and the
 //! likelihood ratio treat them exactly as the user's effects.
 //!

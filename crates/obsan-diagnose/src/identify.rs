@@ -366,7 +366,7 @@ pub fn stacked_rank(
         // Only the variables the basis functions reach have a non-zero
         // gradient column: each other one is a null direction on its own
         // (d/dx_j, exactly), so the gradients and the SVD are sized by what
-        // the outputs reach, not by the number of params (issue 31.2: an
+        // the outputs reach, not by the number of params (an
         // effect with 6,000 params made a 6,000^2 SVD).
         let ids = report.basis_functions(&mut nf);
         let reached = obsan_expr::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);

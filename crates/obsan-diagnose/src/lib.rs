@@ -1,4 +1,4 @@
-//! obsan's discrepancy workflow (issue 5): where a model and measured data
+//! obsan's discrepancy workflow: where a model and measured data
 //! disagree, which candidate effect explains it, and whether the data can
 //! reveal it at all.
 //!

@@ -25,7 +25,7 @@ pub struct DiagnoseOptions {
     pub input_noise: InputNoise,
     /// Also try the candidates generated from the model's structure
     /// ([`crate::generate`]), under their own share of `alpha`. On by
-    /// default: a user's model misses effects nobody wrote (issue 18.6).
+    /// default: a user's model misses effects nobody wrote.
     pub generate: bool,
     /// Screen the generated candidates by their score statistic before
     /// fitting them ([`crate::screen`]); off: fit every one (to compare).

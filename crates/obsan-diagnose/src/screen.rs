@@ -1,4 +1,4 @@
-//! A cheap screen for the generated candidates (issue 18.6): the score
+//! A cheap screen for the generated candidates: the score
 //! (Lagrange-multiplier) statistic of each candidate at the current fit,
 //! from one pass of the extended model's sensitivities, no refit. Only the
 //! candidates whose statistic clears `LR critical / SCREEN_SAFETY` are

@@ -154,7 +154,7 @@ fn named(d: &Diagnosis) -> Vec<String> {
     d.named.iter().map(|n| n.effect.clone()).collect()
 }
 
-/// Heading drift of MRCLAM's size (h/vicon: about 0.035 rad/sqrt(s)).
+/// Heading drift of MRCLAM's size (about 0.035 rad/sqrt(s), measured against the Vicon poses).
 const WALK: f64 = 0.035;
 
 #[test]

@@ -1,4 +1,4 @@
-//! Issue 18.2 under the default options: with no noise stated in
+//! Evidence without stated noise, under the default options: with no noise stated in
 //! `dataset.json`, `DiagnoseOptions::default()` weighs the evidence with the
 //! input noise estimated (`InputNoise::Auto`), so clean data name nothing
 //! where white-noise likelihood ratios named an effect on 11 of 60 sets

@@ -1,4 +1,4 @@
-//! Issue 18.2: evidence without stated noise. When `dataset.json` states no
+//! Evidence without stated noise. When `dataset.json` states no
 //! noise at all, `InputNoise::Auto` (`--input-noise auto`, the default)
 //! estimates the input noise on few trajectories, so the likelihood ratios
 //! weigh the integrated encoder noise: clean data name nothing (the white-noise ratios named an effect on

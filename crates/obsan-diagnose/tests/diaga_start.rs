@@ -1,4 +1,4 @@
-//! Issue 18, item 1: a diagnosis never hangs on the paper's start. When DET
+//! A diagnosis never hangs on the paper's start. When DET
 //! cannot read a circle (a loop that does not close, a period it cannot
 //! find), the start is made from the circles it can read and a screened
 //! grid, and says so.

@@ -1,4 +1,4 @@
-//! Effects nobody wrote (issue 18.6): a unicycle (systems/mrclam.sys,
+//! Effects nobody wrote: a unicycle (systems/mrclam.sys,
 //! landmarks on a ring, by range and bearing) whose forward speed falls in
 //! proportion to |omega|, an effect systems/mrclam.eff lacks. The workflow
 //! must name the generated coupling with its magnitude, and on clean data

@@ -1,4 +1,4 @@
-//! Input relations (issue 18, part 3): a commanded wheel-speed ratio that
+//! Input relations: a commanded wheel-speed ratio that
 //! the executed one misses is tested per trajectory under the encoder-noise
 //! model and, when the measured inputs contradict it, named as the missing
 //! effect (in `named`, and in the extended model's restriction).

@@ -1,4 +1,4 @@
-//! Issue 14 item 5: one bearing of 1e308 made `obsan diagnose` run for
+//! One bearing of 1e308 made `obsan diagnose` run for
 //! minutes. The dataset reader refuses such a value; the workflow, given it
 //! anyway (or the largest value the reader accepts), returns an answer that
 //! says so.

@@ -1,4 +1,4 @@
-//! The discrepancy workflow on simulated data with hidden effects (issue 5):
+//! The discrepancy workflow on simulated data with hidden effects:
 //! each identifiable effect is named with its magnitude, effects the data
 //! cannot reveal are reported as such, clean data name nothing.
 //!
@@ -286,7 +286,7 @@ fn commanded_ratio_error_shows_in_the_inputs() {
     let (_, x, sd) = c.estimates[0];
     assert!((x - 0.02).abs() < 3.0 * sd, "{x} ± {sd}");
     // The bearings do not see it: the fit uses the measured wheel speeds;
-    // it is named as the input relation it is (issue 18), and only that.
+    // it is named as the input relation it is, and only that.
     assert_eq!(named(&d), ["commanded_ratio"]);
     assert_eq!(d.named[0].origin, obsan_diagnose::ORIGIN_RELATION);
 }

@@ -1,4 +1,4 @@
-//! Issue 31.2: the rank test's null vectors cost what the outputs reach,
+//! The rank test's null vectors cost what the outputs reach,
 //! not the number of params. A param no basis function depends on is a
 //! symmetry on its own (`d/dp`, exactly: every gradient column of it is 0),
 //! found without a gradient or an SVD column for it; past the stated limit

@@ -300,7 +300,7 @@ impl Ctx {
     /// (`cos(atan(2))` is `sin(atan(1/2))`, and `tan(atan(u))` is `u`).
     /// Fractional multiples stay in the atom (not detected: docs/engine.md).
     ///
-    /// Non-constant arguments too (issue 31 item 6): `cos(atan u) =
+    /// Non-constant arguments too: `cos(atan u) =
     /// 1/sqrt(1 + u^2)`, `sin(atan u) = u/sqrt(1 + u^2)` for every real `u`,
     /// and `cos(atan2(y, x)) = x/r`, `sin(atan2(y, x)) = y/r` with
     /// `r = sqrt(x^2 + y^2)` wherever atan2 is defined (`(x, y) != (0, 0)`);
@@ -568,7 +568,7 @@ impl Ctx {
         }
         // log(exp(a)^k w) = k a + log(w), exact where the log is real
         // (w > 0 there): the exp leaves of the monomial content of the
-        // numerator and the denominator come out (issue 31 item 6).
+        // numerator and the denominator come out.
         let (mn, md) = (c.num.mono_content(), c.den.mono_content());
         let pulled = |m: &Mono| -> Vec<(Var, u32)> {
             m.iter()

@@ -32,7 +32,7 @@ thread_local! {
 /// Where a leaf goes in printed text: by the name of its symbol (the symbol,
 /// then its sin, cos and exp), other atoms by their own text. Never by the
 /// order leaves were created in, so equal forms print identically in any
-/// context and a printed form re-read prints the same (issue 31 item 7).
+/// context and a printed form re-read prints the same.
 type LeafKey = (String, u8, u32, String);
 
 /// Run a top-level printer with a cache of leaf keys (a nested call reuses
@@ -360,7 +360,7 @@ impl Ctx {
             (LeafKind::Cos(a), Style::Text) => format!("cos({})", angle(a)),
             (LeafKind::Exp(a), Style::Text) => format!("exp({})", angle(a)),
             // Arguments always in parentheses: `\cos g \mu` reads as cos(g mu)
-            // (issue 34 item 5).
+            // when pasted into a paper.
             (LeafKind::Sin(a), Style::Latex) if simple_angle(a) => format!("\\sin({})", angle(a)),
             (LeafKind::Cos(a), Style::Latex) if simple_angle(a) => format!("\\cos({})", angle(a)),
             (LeafKind::Sin(a), Style::Latex) => format!("\\sin\\left({}\\right)", angle(a)),

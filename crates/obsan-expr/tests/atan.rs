@@ -188,7 +188,7 @@ fn constant_square_roots_split_into_primes() {
     ));
 }
 
-/// Regression (h/engine, float_eval's `agrees_with_the_engine_without_branches`):
+/// Regression (found by float_eval's `agrees_with_the_engine_without_branches`):
 /// an angle with a constant atan and a number besides, `sin(1 - atan(pi))`,
 /// was read as `sin(1)`: the number's angle atom replaced the atan's factor
 /// instead of multiplying it. The reference is f64 evaluation of the text.

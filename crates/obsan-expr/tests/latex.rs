@@ -1,4 +1,4 @@
-//! The LaTeX printer read back (issue 34 item 5): a small reader of the LaTeX
+//! The LaTeX printer read back: a small reader of the LaTeX
 //! obsan prints, which reads the way a human reader does (`\cos g \mu` is
 //! cos(g mu): an argument without parentheses runs to the end of the
 //! product), evaluated at random points and compared with the expression.

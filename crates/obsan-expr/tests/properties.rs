@@ -222,7 +222,7 @@ proptest! {
         prop_assert_eq!(engine(&mut ctx, |c| c.canon(again))?, c, "factored: {}", factored);
     }
 
-    /// Printing orders by symbol name, not creation order (issue 31 item 7):
+    /// Printing orders by symbol name, not creation order:
     /// the printed canonical form read in a fresh context prints the same,
     /// and a context that created the symbols in the reverse order prints
     /// the expression identically.
@@ -384,7 +384,7 @@ fn atan_sqrt_exp_log_identities() {
     let c = ctx.canon(e);
     assert_eq!(
         ctx.ratfun_text_factored(&c),
-        // Factors by name (issue 31 item 7): leaves, then sums.
+        // Factors by name: leaves, then sums.
         "eta*mu*(cos(g)*mu + 1)*(delta*q + 1)"
     );
     let e = ctx.parse("-(x^2 - 1)/(2*y*(x + 3))").unwrap();
@@ -641,7 +641,7 @@ fn equal_expressions_print_identically() {
     assert_eq!(a.to_text(ea), "-1/(x - y)");
 }
 
-/// Issue 31 item 6: compositions that are identically zero on their real
+/// Compositions that are identically zero on their real
 /// domains (exp(log x) = x for x > 0; cos(atan x) = 1/sqrt(1 + x^2); the
 /// atan2 ones with r = sqrt(x^2 + y^2), (x, y) != 0) are decided as zero.
 #[test]

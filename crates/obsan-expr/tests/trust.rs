@@ -1,4 +1,4 @@
-//! Issue 14 (engine part): no silent wrong answer, no panic, a budget.
+//! No silent wrong answer, no panic, a budget.
 //! Every reproducer of the issue is here, checked against an independent
 //! computation (exponent arithmetic, term counts, exact evaluation).
 
@@ -19,7 +19,7 @@ fn monomial(r: &RatFun) -> Vec<(Var, u32)> {
 
 #[test]
 fn large_exponents_are_exact_not_wrapped() {
-    // Issue 14, defect 1: this printed x^4464 (70000 mod 65536).
+    // This printed x^4464 (70000 mod 65536).
     let mut ctx = Ctx::new();
     let x = ctx.symbol("x").var;
     let src = ["x^10000"; 7].join("*");
@@ -41,7 +41,7 @@ fn large_exponents_are_exact_not_wrapped() {
 
 #[test]
 fn exponent_beyond_the_graph_range_is_an_error() {
-    // Issue 14, defect 2: an `expect` on an i32 conversion panicked here.
+    // An `expect` on an i32 conversion panicked here.
     let mut ctx = Ctx::new();
     let e = ctx.parse("((x^10000)^10000)^100").unwrap_err();
     assert!(e.message.contains("exponent too large"), "{}", e.message);
@@ -105,7 +105,7 @@ fn an_expression_ending_in_an_operator_is_a_located_error() {
 
 #[test]
 fn long_flat_chains_do_not_recurse() {
-    // Issue 14: a sum of 100,000 terms overflowed the stack (exit 134). The
+    // A sum of 100,000 terms overflowed the stack (exit 134). The
     // test thread has the default 2 MB stack.
     let n = 100_000;
     let mut ctx = Ctx::new();
@@ -214,7 +214,7 @@ fn columns_count_characters() {
 
 #[test]
 fn the_term_budget_stops_a_product_of_binomials() {
-    // Issue 14, defect 6: 22 binomials took 22 s and 1.5 GB.
+    // 22 binomials took 22 s and 1.5 GB.
     let src: Vec<String> = (0..22).map(|i| format!("(a{i} + 1)")).collect();
     let mut ctx = Ctx::new();
     let id = ctx.parse(&src.join("*")).unwrap();

@@ -1,6 +1,6 @@
 //! Predicting the outputs of any `.sys` model along measured inputs: the
-//! forward model of maximum-likelihood fitting (issue 4) and of the
-//! discrepancy workflow (issue 5). The dynamics come from the model file,
+//! forward model of maximum-likelihood fitting and of the
+//! discrepancy workflow. The dynamics come from the model file,
 //! the single source of truth.
 
 use crate::FitError;

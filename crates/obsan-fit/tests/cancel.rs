@@ -148,7 +148,7 @@ fn the_least_squares_core_stops_at_a_cancel() {
 }
 
 /// More shared params than MAX_FIT_PARAMS is refused by its error before
-/// the dense normal equations are allocated (issue 31.2); at the limit the
+/// the dense normal equations are allocated; at the limit the
 /// problem is accepted (it fails later only on its own start values here).
 #[test]
 fn more_params_than_the_limit_is_refused() {

@@ -347,7 +347,7 @@ fn restrictions_and_constants_give_the_right_fields() {
     assert_eq!(nf.inputs, vec!["u"]);
 }
 
-/// Unknown inputs (issue 33): declared with `unknown input` or `varying`,
+/// Unknown inputs: declared with `unknown input` or `varying`,
 /// affine together with the known inputs, allowed in outputs, with their
 /// fields g_j in the normal form.
 #[test]

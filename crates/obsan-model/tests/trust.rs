@@ -1,4 +1,4 @@
-//! Issue 14 (model part): the readers never panic on user text, every
+//! The readers never panic on user text, every
 //! rejection has a place, and benign file variations (byte-order mark, CRLF
 //! or CR line ends, non-ASCII comments) read as the plain file does.
 

@@ -60,7 +60,7 @@ pub fn height_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(f64, f64)> {
 }
 
 /// One free coordinate of a point, for black boxes that must be functions of
-/// their point (reconstruction, issue 15): every leaf's value at a point of
+/// their point (reconstruction): every leaf's value at a point of
 /// [`Ctx::fp_point_at`] is a rational function of the coordinates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Coord {

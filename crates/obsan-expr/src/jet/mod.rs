@@ -1,5 +1,5 @@
 //! Lie derivatives and their gradients at a point of F_p, never built as
-//! expressions (issue 15; reconstruction.md section 1).
+//! expressions (reconstruction.md section 1).
 //!
 //! For a word `(a_1, ..., a_k)` (`a_1` applied first) and the flows `Phi^a_t`
 //! of the fields,
@@ -376,7 +376,7 @@ impl LieJets {
 /// of the reached variables along a field only reads the field's reached
 /// components), so it is unobservable with the symmetry `d/dx_j`. One
 /// traversal of the graph with a shared visited set: the cost is the size of
-/// what the outputs reach, not the number of variables (issue 31 item 2).
+/// what the outputs reach, not the number of variables.
 pub fn reached_states(ctx: &Ctx, states: &[Var], fields: &[Vec<Id>], outputs: &[Id]) -> Vec<usize> {
     let index: FxHashMap<Var, usize> = states.iter().enumerate().map(|(k, &v)| (v, k)).collect();
     let mut seen: rustc_hash::FxHashSet<Id> = Default::default();
