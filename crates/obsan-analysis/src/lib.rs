@@ -28,12 +28,15 @@ mod reach;
 pub mod structure;
 mod sym_blocks;
 mod sym_recon;
+mod sym_report;
 mod symmetry;
 mod unknown_input;
 mod unknown_input_martinelli;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
-pub use derive::{verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind};
+pub use derive::{
+    derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
+};
 pub use design::{
     design_inputs, design_outputs, Candidate, CandidateEffect, Combination, DesignOptions,
     DesignReport, DesignSet, FamilyReport, InputDesignReport,
@@ -48,7 +51,7 @@ pub use global::{
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
-pub use reach::{derive_modes, reached_variables, restrict_to_reached, Reached};
+pub use reach::{reached_variables, restrict_to_reached, Reached};
 pub use structure::SymmetryKind;
 pub use sym_blocks::rank_by_blocks;
 pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};

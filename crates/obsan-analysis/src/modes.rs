@@ -2,7 +2,7 @@
 //! every symmetry w (eq. 11). The test is exact.
 
 use crate::rank::{gradient, random_point, AnalysisError};
-use crate::symmetry::SymmetryReport;
+use crate::sym_report::SymmetryReport;
 use obsan_expr::{Fp, Id, RatFun, SplitMix, P};
 use obsan_model::NormalForm;
 

@@ -10,11 +10,9 @@
 //! and, extended by zeros, the same symmetries. The symmetry and mode
 //! commands work on it, so an unused parameter costs nothing but its name.
 
-use crate::derive::{Derivation, DeriveOptions};
 use crate::fields::field_names;
-use crate::rank::{AnalysisError, RankReport};
-use crate::symmetry::SymmetryReport;
-use obsan_expr::{reached_states, Ctx, Id, RatFun};
+use crate::rank::AnalysisError;
+use obsan_expr::{reached_states, Ctx, Id};
 use obsan_model::NormalForm;
 
 /// A system restricted to its reached variables.
@@ -93,28 +91,4 @@ pub(crate) fn check_symmetry_memory(m: usize, k: usize) -> Result<(), AnalysisEr
     let bytes = 32 * (m + 4) * m + k * m * rf;
     obsan_expr::check_memory(bytes, "the symmetries (dense in the reached variables)")
         .map_err(|l| AnalysisError::Invalid(l.to_string()))
-}
-
-/// [`crate::derive::derive_modes`] for any symmetry report: the free
-/// directions of `sym` become unit vectors first (the derivation reads every
-/// symmetry as a vector), within the memory budget. `obsan modes` derives
-/// on the reached subsystem instead, where there are none.
-pub fn derive_modes(
-    nf: &mut NormalForm,
-    report: &RankReport,
-    sym: &SymmetryReport,
-    opts: &DeriveOptions,
-) -> Result<Derivation, AnalysisError> {
-    if sym.free.is_empty() {
-        return crate::derive::derive_modes(nf, report, sym, opts);
-    }
-    check_symmetry_memory(sym.n, sym.count())?;
-    let mut dense = sym.clone();
-    for &j in &sym.free {
-        let mut e = vec![RatFun::zero(); sym.n];
-        e[j] = RatFun::one();
-        dense.vectors.push(e);
-    }
-    dense.free.clear();
-    crate::derive::derive_modes(nf, report, &dense, opts)
 }

@@ -38,9 +38,7 @@
 use crate::rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 use crate::structure::SymmetryKind;
 use crate::sym_recon::RandomCheck;
-use crate::symmetry::{
-    primitive_vector, symmetries_inner, Certificate, SymmetryOptions, SymmetryReport,
-};
+use crate::sym_report::{primitive_vector, Certificate, SymmetryOptions, SymmetryReport};
 use obsan_expr::{Ctx, Id, LieJets, RatFun};
 use obsan_model::NormalForm;
 
@@ -297,12 +295,18 @@ struct Solved {
     cert: Certificate,
 }
 
+/// The route that solves one block (the general route, without blocks:
+/// `symmetry.rs` passes it in, so this module stays below it).
+pub(crate) type SolveBlock<'a> =
+    dyn FnMut(&mut NormalForm, &RankReport) -> Result<SymmetryReport, AnalysisError> + 'a;
+
 fn solve_block(
     nf: &mut NormalForm,
     report: &RankReport,
     opts: &SymmetryOptions,
     vars: &[usize],
     outs: &[usize],
+    solve: &mut SolveBlock,
 ) -> Result<Solved, AnalysisError> {
     let (mut sub, _) = sub_system(nf, &report.fields.vectors, &report.fields.names, vars, outs);
     let res = (|| {
@@ -314,7 +318,7 @@ fn solve_block(
                 progress: None,
             },
         )?;
-        symmetries_inner(&mut sub, &r, opts, false)
+        solve(&mut sub, &r)
     })();
     nf.ctx = std::mem::replace(&mut sub.ctx, Ctx::new());
     let s = res?;
@@ -333,6 +337,7 @@ pub(crate) fn symmetries_by_blocks(
     nf: &mut NormalForm,
     report: &RankReport,
     opts: &SymmetryOptions,
+    solve: &mut SolveBlock,
 ) -> Result<Option<SymmetryReport>, AnalysisError> {
     let Some(sp) = split(nf, &report.fields.vectors) else {
         return Ok(None);
@@ -340,7 +345,7 @@ pub(crate) fn symmetries_by_blocks(
     let n = report.n;
     let mut solved = Vec::with_capacity(sp.blocks.len());
     for (vars, outs) in &sp.blocks {
-        solved.push(solve_block(nf, report, opts, vars, outs)?);
+        solved.push(solve_block(nf, report, opts, vars, outs, solve)?);
     }
     let mut vectors: Vec<Vec<RatFun>> = Vec::new();
     let mut kinds: Vec<SymmetryKind> = Vec::new();

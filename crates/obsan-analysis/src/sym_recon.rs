@@ -235,7 +235,7 @@ pub(crate) fn reconstruct_basis(
 }
 
 /// The words whose gradients a symmetry basis must annihilate for the
-/// closure argument of [`crate::symmetry`]: every output (level 0, so that
+/// closure argument of the exact route (`symmetry.rs`): every output (level 0, so that
 /// outputs the rank test set aside are covered too), every basis word and
 /// every one-step extension of one (structurally zero ones left out).
 fn closure_words(nf: &NormalForm, report: &RankReport) -> Vec<LieWord> {

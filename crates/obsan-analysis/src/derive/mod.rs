@@ -44,7 +44,8 @@ pub use reduced::verify_derivation;
 use crate::decomp::{verify_decomposition_with, Check, Decomposition};
 use crate::modes::{check_modes, ModeReport};
 use crate::rank::{AnalysisError, RankReport};
-use crate::symmetry::SymmetryReport;
+use crate::reach::check_symmetry_memory;
+use crate::sym_report::SymmetryReport;
 use obsan_expr::{Fp, FpPoint, Id, Int, Mono, Poly, RatFun, SplitMix, Q};
 use obsan_model::NormalForm;
 use std::time::Instant;
@@ -151,9 +152,34 @@ pub(super) fn check_deadline(
     }
 }
 
-/// Builds the modes and the reduced system: the steps of the module's
-/// documentation, in order, each adding modes until the rank is reached.
+/// Builds the modes and the reduced system for any symmetry report: the free
+/// directions of `sym` become unit vectors first (the derivation reads every
+/// symmetry as a vector), within the memory budget. `obsan modes` derives
+/// on the reached subsystem instead, where there are none.
 pub fn derive_modes(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    sym: &SymmetryReport,
+    opts: &DeriveOptions,
+) -> Result<Derivation, AnalysisError> {
+    if sym.free.is_empty() {
+        return derive_dense(nf, report, sym, opts);
+    }
+    check_symmetry_memory(sym.n, sym.count())?;
+    let mut dense = sym.clone();
+    for &j in &sym.free {
+        let mut e = vec![RatFun::zero(); sym.n];
+        e[j] = RatFun::one();
+        dense.vectors.push(e);
+    }
+    dense.free.clear();
+    derive_dense(nf, report, &dense, opts)
+}
+
+/// The derivation over a report whose symmetries are all vectors: the
+/// steps of the module's documentation, in order, each adding modes until
+/// the rank is reached.
+fn derive_dense(
     nf: &mut NormalForm,
     report: &RankReport,
     sym: &SymmetryReport,
