@@ -144,13 +144,21 @@ fn candidates(
 ) -> Result<(Vec<Vec<RatFun>>, Vec<usize>), AnalysisError> {
     let n = report.n;
     let r = report.rank;
-    let ext = extend(nf, report.max_order);
+    // The first order whose state part has the final rank: its rows span
+    // Omega already, and the jets up to it are exact in a system truncated
+    // there (unknown_input.rs), much cheaper than the order the growth went on to.
+    let m0 = report
+        .steps
+        .iter()
+        .find(|s| s.state_rank == r)
+        .map_or(report.max_order, |s| s.order);
+    let ext = extend(nf, m0);
     let len = ext.unknown_cols;
     let jets = LieJets::new(&ext.ctx, &ext.vars, &ext.fields.vectors, &ext.outputs);
     // Each output's basis words are y^(0..=m): one jet gives all prefixes.
     let mut tops: Vec<usize> = vec![0; ext.outputs.len()];
     let mut used = vec![false; ext.outputs.len()];
-    for w in &report.basis {
+    for w in report.basis.iter().filter(|w| w.order() <= m0) {
         used[w.output] = true;
         tops[w.output] = tops[w.output].max(w.order());
     }
@@ -243,8 +251,11 @@ fn candidates(
                 .collect(),
         ))
     };
+    // One agreeing value ends an interpolation (as sym_recon.rs): a premature
+    // stop gives a wrong candidate, which the exact certificate rejects.
     let opts = Options {
         primes: Some(vec![P]),
+        agree: 1,
         deadline,
         seed: seed ^ 0x0b5a_0033,
         ..Options::default()

@@ -190,3 +190,37 @@ fn a_kernel_without_a_certificate_is_refused() {
     let e = s.unwrap_err().to_string();
     assert!(e.contains("no exact certificate"), "{e}");
 }
+
+/// Planar visual-inertial vehicle pushed by an unmeasured force of any
+/// direction (derivation in vio_planar_force.sys): z and the body velocity
+/// only, rank 4 of 5; the one lost direction is the rotation about the
+/// landmark R = (-y, x, -vy, vx, 1) (checked by hand there: L_R z = 0, R
+/// commutes with f0, the thrust fields and d/dtheta, [d/dvx, R] = d/dvy).
+#[test]
+fn planar_visual_inertial_with_an_unknown_force_loses_the_rotation() {
+    let (mut nf, s) = run(&file("vio_planar_force.sys"));
+    let s = s.unwrap();
+    assert_eq!((s.report.rank, s.report.n), (4, 5));
+    assert_eq!(s.vectors.len(), 1);
+    let want = vector(&mut nf, &["-y", "x", "-vy", "vx", "1"]);
+    let v = &s.vectors[0];
+    for i in 0..5 {
+        let l = nf.ctx.rf_mul(&v[i], &want[0]);
+        let r = nf.ctx.rf_mul(&want[i], &v[0]);
+        assert!(nf.ctx.rf_sub(&l, &r).is_zero(), "component {i}");
+    }
+    assert!(s.report.reconstructable.iter().all(Option::is_none));
+}
+
+/// The same with the force along the world x axis (vio_planar_wind_x.sys):
+/// z'' shows w (cos theta, -sin theta), so the heading, then everything, is
+/// observable from order 2 and w reconstructable from order 2; no symmetry.
+#[test]
+fn planar_visual_inertial_with_a_wind_of_known_direction_is_observable() {
+    let (_, s) = run(&file("vio_planar_wind_x.sys"));
+    let s = s.unwrap();
+    assert_eq!((s.report.rank, s.report.n), (5, 5));
+    assert!(s.vectors.is_empty());
+    assert_eq!(s.report.observable, vec![Some(2); 5]);
+    assert_eq!(s.report.reconstructable, vec![Some(2)]);
+}
