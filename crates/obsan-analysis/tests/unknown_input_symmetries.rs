@@ -47,8 +47,8 @@ fn moved(nf: &NormalForm, s: &UnknownInputSymmetries) -> Vec<String> {
 /// beta = atan2(-y, -x) - theta. By hand: the rotation about the landmark
 /// carrying the heading, R = (-y, x, 1), changes atan2(-y, -x) by the angle
 /// and theta by the same angle (L_R beta = 0), and commutes with the fields
-/// g = (cos theta, sin theta, 0) of v ([g, R] = dR.g - dg.R = (-sin, cos, 0)
-/// - (-sin, cos, 0) = 0) and d/dtheta of omega; the scaling D = (x, y, 0)
+/// g = (cos theta, sin theta, 0) of v ([g, R] = dR.g - dg.R, both terms
+/// (-sin, cos, 0), so 0) and d/dtheta of omega; the scaling D = (x, y, 0)
 /// leaves the bearing invariant and [g, D] = dD.g - dg.D = g, in span(g)
 /// (the speed scales with the distance). Two lost directions, so the
 /// kernel is span(R, D) (rank 1: only beta is observable).
