@@ -280,7 +280,9 @@ pub(crate) fn free_line(nf: &NormalForm, s: &SymmetryReport) -> String {
 
 pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    crate::unknown_input_cmd::refuse(&nf, "symmetries")?;
+    if !nf.unknown_inputs.is_empty() {
+        return crate::unknown_input_cmd::symmetries(a, &mut nf);
+    }
     // The whole --timeout: the stages poll this deadline and stop on it with
     // a message saying how far they got (the watchdog waits a second more).
     let deadline = deadline_after(Instant::now(), Some(a.timeout()));
@@ -374,7 +376,11 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
         )));
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    crate::unknown_input_cmd::refuse(&nf, "lie")?;
+    crate::unknown_input_cmd::refuse_because(
+        &nf,
+        "lie",
+        "it prints Lie derivatives along the known fields only",
+    )?;
     let fields = obsan_analysis::Fields::of(&mut nf);
     // outputs x (1 + F + ... + F^order) derivatives, each at least one
     // printed term: past the term budget the answer cannot fit in it, so it
@@ -453,7 +459,11 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
 
 pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    crate::unknown_input_cmd::refuse(&nf, "check")?;
+    crate::unknown_input_cmd::refuse_because(
+        &nf,
+        "check",
+        "the residuals of eq. (11) are taken against the known-input symmetries",
+    )?;
     let mut ids = Vec::new();
     for m in &a.modes {
         ids.push(parse_arg_in(&mut nf, m)?);
@@ -557,7 +567,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     let mut nf = sys
         .normal_form(d.restriction.as_deref(), &d.set)
         .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
-    crate::unknown_input_cmd::refuse(&nf, "verify")?;
+    crate::unknown_input_cmd::refuse_because(&nf, "verify", "a decomposition's reduced system would need the reconstructable input combinations as inputs")?;
     let (r, s) = compute_symmetries(&mut nf, &a.an, a.exact)?;
     let checks = verify_decomposition_with(&mut nf, &d, a.an.seed, Some((&r, &s)))
         .map_err(|e| Failure(e.to_string()))?;

@@ -79,7 +79,14 @@ solved as separate blocks.
 --json prints {system, restriction, state, n, rank, symmetries (one object per vector: variable ->
 {text, latex}), free_directions (the variables no output reaches: each d/dx is a symmetry too,
 listed by name), rows_checked, blocks, exact, certificate (closure | invariance | random), certification
-(for random: {points, primes, identities, degree, error_bound}, else null)}.")]
+(for random: {points, primes, identities, degree, error_bound}, else null)}.
+
+A model with unknown inputs (obsan symmetries systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys)
+gives the kernel of its observable codistribution, certified exactly (docs/engine.md, \"Symmetries
+with unknown inputs\"); with unknown inputs --json prints {system, restriction, state, unknown_inputs,
+n, rank, symmetries, observable_variables, unobservable_variables (moved by a symmetry: exact),
+reconstructable_inputs, exact, certificate (unknown_input_invariance), identities, error_bound
+(of the rank test for the observable ones), seed}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
     #[command(after_help = "Examples:

@@ -1,24 +1,157 @@
-//! `obsan rank` on a model with unknown inputs, and the refusal of
-//! the commands that do not handle them yet.
+//! `obsan rank` and `obsan symmetries` on a model with unknown inputs
+//! (docs/engine.md, "Unknown inputs"), and the refusal of the commands that
+//! do not handle them yet.
 
-use crate::cli::RankArgs;
+use crate::cli::{RankArgs, SymArgs};
 use crate::Failure;
-use obsan_analysis::{unknown_input_rank, UnknownInputOptions};
+use obsan_analysis::{unknown_input_rank, unknown_input_symmetries, UnknownInputOptions};
 use obsan_model::NormalForm;
 use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-/// Commands other than `rank` would treat the unknown inputs as absent.
+/// Commands other than `rank` and `symmetries` would treat the unknown
+/// inputs as absent.
 pub fn refuse(nf: &NormalForm, command: &str) -> Result<(), Failure> {
+    refuse_because(nf, command, "it treats every input as known")
+}
+
+/// [`refuse`] saying what the command lacks.
+pub fn refuse_because(nf: &NormalForm, command: &str, why: &str) -> Result<(), Failure> {
     if nf.unknown_inputs.is_empty() {
         return Ok(());
     }
     Err(Failure(format!(
-        "{} has unknown inputs ({}): `obsan {command}` does not handle them yet; `obsan rank` does",
+        "{} has unknown inputs ({}): `obsan {command}` does not handle them yet ({why}); `obsan rank` and `obsan symmetries` do",
         nf.name,
         nf.unknown_inputs.join(", ")
     )))
+}
+
+/// `obsan symmetries` with unknown inputs: the kernel of the observable
+/// codistribution, each vector certified exactly (docs/engine.md,
+/// "Symmetries with unknown inputs").
+pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure> {
+    let deadline = Some(Instant::now() + Duration::from_secs_f64(a.timeout().max(0.0)));
+    let s = unknown_input_symmetries(
+        nf,
+        UnknownInputOptions {
+            seed: a.an.seed,
+            deadline,
+            max_order: None,
+        },
+    )
+    .map_err(|e| Failure(e.to_string()))?;
+    let r = &s.report;
+    let moved: Vec<bool> = (0..r.n)
+        .map(|i| s.vectors.iter().any(|v| !v[i].is_zero()))
+        .collect();
+    let names = |keep: bool| -> Vec<String> {
+        nf.state
+            .iter()
+            .zip(&moved)
+            .filter(|p| *p.1 != keep)
+            .map(|p| p.0.clone())
+            .collect()
+    };
+    let (observable, unobservable) = (names(true), names(false));
+    let rec: Vec<String> = nf
+        .unknown_inputs
+        .iter()
+        .zip(&r.reconstructable)
+        .filter(|p| p.1.is_some())
+        .map(|p| p.0.clone())
+        .collect();
+    if a.out.json {
+        let vecs: Vec<serde_json::Value> = s
+            .vectors
+            .iter()
+            .map(|v| {
+                let m: serde_json::Map<String, serde_json::Value> = nf
+                    .state
+                    .iter()
+                    .zip(v)
+                    .map(|(n, e)| {
+                        (
+                            n.clone(),
+                            json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
+                        )
+                    })
+                    .collect();
+                serde_json::Value::Object(m)
+            })
+            .collect();
+        let v = json!({
+            "system": nf.name,
+            "restriction": nf.restriction,
+            "state": nf.state,
+            "unknown_inputs": nf.unknown_inputs,
+            "n": r.n,
+            "rank": r.rank,
+            "symmetries": vecs,
+            "observable_variables": observable,
+            "unobservable_variables": unobservable,
+            "reconstructable_inputs": rec,
+            "exact": true,
+            "certificate": "unknown_input_invariance",
+            "identities": s.identities,
+            "error_bound": r.error_bound,
+            "seed": r.seed,
+        });
+        outln!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(ExitCode::SUCCESS);
+    }
+    let k = s.vectors.len();
+    let mut o = format!(
+        "system {}: state [{}], unknown inputs [{}]\nrank {} of {} with unknown inputs, {} independent symmetr{}\n",
+        nf.name,
+        nf.state.join(", "),
+        nf.unknown_inputs.join(", "),
+        r.rank,
+        r.n,
+        k,
+        if k == 1 { "y" } else { "ies" }
+    );
+    o.push_str(&format!("state order: [{}]\n", nf.state.join(", ")));
+    for (j, v) in s.vectors.iter().enumerate() {
+        let comps: Vec<String> = v
+            .iter()
+            .map(|e| {
+                if a.out.latex {
+                    nf.ctx.ratfun_latex_factored(e)
+                } else {
+                    nf.ctx.ratfun_text_factored(e)
+                }
+            })
+            .collect();
+        o.push_str(&format!("w{} = [{}]\n", j + 1, comps.join(", ")));
+    }
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "(none)".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    o.push_str(&format!(
+        "unobservable (moved by a symmetry, exact): {}\n",
+        list(&unobservable)
+    ));
+    o.push_str(&format!("observable: {}\n", list(&observable)));
+    o.push_str(&format!("unknown inputs reconstructable: {}\n", list(&rec)));
+    if k == 0 {
+        o.push_str(&format!(
+            "no continuous symmetry: the state is weakly locally observable with unknown inputs (probability of error <= {:.1e}, the rank test's bound)\n",
+            r.error_bound
+        ));
+    } else {
+        o.push_str(&format!(
+            "exact: each symmetry leaves every output invariant, and the bracket of every field (f0, the known and the unknown inputs' fields) with it lies in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
+            s.identities, r.rank, r.error_bound
+        ));
+    }
+    out!("{o}");
+    Ok(ExitCode::SUCCESS)
 }
 
 fn order_text(o: Option<usize>) -> String {

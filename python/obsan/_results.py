@@ -148,7 +148,10 @@ class SystemInfo(Result):
 class Rank(Result):
     """``obsan rank``: the observability rank condition (one experiment, several, or
     with known initial values). ``exact`` is true when the rank is proven; otherwise
-    ``error_bound`` bounds the probability that the true rank is higher."""
+    ``error_bound`` bounds the probability that the true rank is higher. With unknown
+    inputs (docs/engine.md): ``observable`` lists names (``orders`` gives the output
+    derivative order from which each is observable), ``unknown_inputs`` the model's, and
+    ``reconstructable`` each reconstructable input with its order."""
 
     system: str
     n: int
@@ -159,20 +162,30 @@ class Rank(Result):
     weakly_locally_observable: bool
     exact: bool
     error_bound: Optional[float]
+    unknown_inputs: List[str] = field(default_factory=list)
+    orders: Dict[str, int] = field(default_factory=dict)
+    reconstructable: Dict[str, int] = field(default_factory=dict)
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Rank":
+        obs = list(raw.get("observable_variables") or [])
+        # With unknown inputs each entry is {name, order}.
+        orders = {str(o["name"]): int(o["order"]) for o in obs if isinstance(o, dict)}
+        rec = raw.get("reconstructable_inputs") or []
         return cls(
             raw=raw,
             system=raw.get("system", ""),
             n=int(raw.get("n", 0)),
             rank=int(raw.get("rank", 0)),
             variables=list(raw.get("state") or []),
-            observable=list(raw.get("observable_variables") or []),
+            observable=[str(o["name"]) if isinstance(o, dict) else o for o in obs],
             unobservable=list(raw.get("unobservable_variables") or []),
             weakly_locally_observable=bool(raw.get("weakly_locally_observable", False)),
             exact=bool(raw.get("exact", False)),
             error_bound=raw.get("error_bound"),
+            unknown_inputs=list(raw.get("unknown_inputs") or []),
+            orders=orders,
+            reconstructable={str(o["name"]): int(o["order"]) for o in rec},
         )
 
 
@@ -181,7 +194,9 @@ class Symmetries(Result):
     """``obsan symmetries``: a basis of the continuous symmetries, each a vector
     (variable -> component as text), plus ``free``: the variables no output reaches,
     each direction d/dx a symmetry too; ``certificate`` is what it rests on
-    (``closure`` exact, ``random`` with ``certification["error_bound"]``)."""
+    (``closure`` exact, ``random`` with ``certification["error_bound"]``). With unknown
+    inputs: the kernel of the observable codistribution, ``certificate``
+    ``unknown_input_invariance`` (exact; docs/engine.md)."""
 
     system: str
     rank: int

@@ -78,7 +78,7 @@ fn other_commands_refuse_unknown_inputs() {
         ],
         "is an unknown input",
     );
-    for cmd in ["symmetries", "modes", "check", "global", "lie"] {
+    for cmd in ["modes", "check", "global", "lie"] {
         let mut args = vec![cmd, "systems/benchmarks/unknown-inputs/chain.sys"];
         if cmd == "check" {
             args.extend(["--mode", "x1"]);
@@ -88,4 +88,78 @@ fn other_commands_refuse_unknown_inputs() {
         }
         bad(&args, "has unknown inputs (w)");
     }
+}
+
+#[test]
+fn symmetries_of_the_unicycle_with_unknown_speed() {
+    // unicycle_one_landmark.sys: rotation about the landmark and scaling are
+    // lost (derived in the file and in the analysis crate's
+    // tests/unknown_input_symmetries.rs): two symmetries, rank 1, nothing
+    // observable but the bearing, v not reconstructable.
+    let f = "systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys";
+    let out = ok(&["symmetries", f]);
+    assert!(
+        out.contains("rank 1 of 3 with unknown inputs, 2 independent symmetries"),
+        "{out}"
+    );
+    assert!(
+        out.contains("unobservable (moved by a symmetry, exact): x, y, theta"),
+        "{out}"
+    );
+    assert!(
+        out.contains("exact: each symmetry leaves every output invariant"),
+        "{out}"
+    );
+    let v: Value = serde_json::from_str(&ok(&["symmetries", "--json", f])).unwrap();
+    assert_eq!(v["symmetries"].as_array().unwrap().len(), 2);
+    assert_eq!(v["certificate"], "unknown_input_invariance");
+    assert_eq!(v["exact"], true);
+    assert_eq!(v["reconstructable_inputs"].as_array().unwrap().len(), 0);
+    // --help names exactly the keys of this object (its second --json sentence).
+    let help = ok(&["symmetries", "--help"]);
+    let at = help
+        .find("unknown inputs --json prints {")
+        .expect("no unknown-input sentence");
+    let text = &help[at + "unknown inputs --json prints {".len()..];
+    let body = &text[..text.find('}').unwrap()];
+    let mut promised: Vec<String> = body
+        .split(',')
+        .map(|i| {
+            i.trim()
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect();
+    promised.sort();
+    let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    got.sort();
+    assert_eq!(promised, got);
+}
+
+#[test]
+fn symmetries_with_unknown_inputs_full_rank_and_refusals() {
+    // chain.sys: y, y' give x1, x2: no symmetry.
+    let out = ok(&["symmetries", "systems/benchmarks/unknown-inputs/chain.sys"]);
+    assert!(out.contains("0 independent symmetries"), "{out}");
+    // Two-compartment, b known: x2, k1e, k12, k21 lost (file comment).
+    let v: Value = serde_json::from_str(&ok(&[
+        "symmetries",
+        "--json",
+        "systems/benchmarks/unknown-inputs/c2m_known_b.sys",
+    ]))
+    .unwrap();
+    assert_eq!(
+        v["unobservable_variables"],
+        serde_json::json!(["x2", "k1e", "k12", "k21"])
+    );
+    assert_eq!(v["observable_variables"], serde_json::json!(["x1"]));
+    let dir = fresh_dir("ui-feedthrough");
+    let p = format!("{dir}/f.sys");
+    std::fs::write(
+        &p,
+        "system f\nstate x\nunknown input w\nx' = w\noutput y = x + w\n",
+    )
+    .unwrap();
+    bad(&["symmetries", &p], "contains the unknown input w");
 }

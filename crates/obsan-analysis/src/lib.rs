@@ -32,6 +32,7 @@ mod sym_report;
 mod symmetry;
 mod unknown_input;
 mod unknown_input_martinelli;
+mod unknown_input_symmetry;
 
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
@@ -61,3 +62,4 @@ pub use symmetry::{
 };
 pub use unknown_input::{unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport};
 pub use unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
+pub use unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};

@@ -123,21 +123,21 @@ impl UnknownInputReport {
 
 /// The extended system: its context (with the jet symbols), coordinates and
 /// fields.
-struct Extended {
-    ctx: Ctx,
-    vars: Vec<Var>,
-    fields: Fields,
-    outputs: Vec<Id>,
+pub(crate) struct Extended {
+    pub(crate) ctx: Ctx,
+    pub(crate) vars: Vec<Var>,
+    pub(crate) fields: Fields,
+    pub(crate) outputs: Vec<Id>,
     /// Column of `w_j` (order 0) in the extended state.
     w_cols: Vec<usize>,
     /// First column of the unknown-input jets.
     first_w: usize,
     /// Columns before this one are unknowns (state and unknown-input jets);
     /// the clock of the known inputs follows, known, so never part of a row.
-    unknown_cols: usize,
+    pub(crate) unknown_cols: usize,
 }
 
-fn extend(nf: &NormalForm, order: usize) -> Extended {
+pub(crate) fn extend(nf: &NormalForm, order: usize) -> Extended {
     let mut ctx = nf.ctx.clone();
     let n = nf.state.len();
     let nw = nf.unknown_inputs.len();

@@ -1,0 +1,435 @@
+//! Continuous symmetries of a system with unknown inputs (docs/engine.md,
+//! "Symmetries with unknown inputs").
+//!
+//! The system is `S' = f0 + sum f_i u_i + sum g_j w_j`, `y = h(S)`, with the
+//! `w_j` unmeasured. Its observable codistribution `Omega` (Martinelli's, the
+//! x-part of the extended-state codistribution, computed by
+//! [`unknown_input_rank`]) has rank `r`; its kernel has dimension `k = n - r`.
+//!
+//! **Candidates.** At a point of `S` (the unknown-input jets, the clock and
+//! the known inputs' coefficients fixed at random values), the rows of the
+//! extended codistribution give `Omega` as the annihilator of the projection
+//! on the S-columns of their kernel; the kernel vector with a 1 on free column
+//! `j` and 0 on the other free columns is a rational function of the point,
+//! which `obsan_recon` reconstructs (as the known-input route does).
+//!
+//! **Certificate (exact).** A candidate basis `xi_1..xi_k` is accepted only
+//! if, in canonical form (the half-angle view for trig):
+//! (a) `L_xi h = 0` for every output, and
+//! (b) `[f, xi_a]` lies in `span(xi_1..xi_k, g_1..g_m)` over the rational
+//! functions, for every `f` among `f0`, the `f_i` and the `g_j`.
+//! Then every `xi` in `Delta = span(xi)` is an unobservable direction for
+//! every unknown input: along a trajectory with input `w(t)`, the variation
+//! `dS = sum c_a(t) xi_a(S(t))` satisfies the linearised dynamics with the
+//! input variation `dw = sum c_a beta_a` when the `c_a` solve the linear ODE
+//! `c' = -A^T c` given by `[F, xi_a] = sum_b A_ab xi_b + sum_j beta_aj g_j`
+//! (`F` the field with the inputs' values: (b) holds for it since the
+//! inputs do not depend on S), and it leaves `y` unchanged by (a). So no
+//! function of the outputs and known inputs separates `S` from `S + eps xi`
+//! to first order, and `dphi . xi = 0` for every `dphi` in `Omega`: the rank
+//! is at most `n - k` and each variable a `xi` moves is unobservable, exactly.
+//! That the rank is at least `n - k` (the variables no `xi` moves are
+//! observable) is the rank test's verdict, with its probability bound.
+//! A candidate failing (b) is reported as such: the lost directions then
+//! depend on the input's history and have no certificate of this form.
+
+use crate::fp_linalg::null_space;
+use crate::rank::AnalysisError;
+use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
+use obsan_expr::{Coord, Ctx, Fp, Id, LieJets, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P};
+use obsan_model::NormalForm;
+use obsan_recon::{reconstruct_vec, Options, ReconError};
+use std::time::Instant;
+
+/// Symmetries of a system with unknown inputs, with their exact certificate.
+#[derive(Clone, Debug)]
+pub struct UnknownInputSymmetries {
+    /// The rank test (its verdicts and bound).
+    pub report: UnknownInputReport,
+    /// A basis of the kernel of the observable codistribution, each vector
+    /// with a 1 on its free column and 0 on the other free columns.
+    pub vectors: Vec<Vec<RatFun>>,
+    /// The free column of each vector.
+    pub free: Vec<usize>,
+    /// Identities checked exactly: `L_xi h = 0` per output and vector, and
+    /// one span membership per field and vector.
+    pub identities: usize,
+}
+
+/// The symmetries of a normal form with unknown inputs (module docs):
+/// `Err(Invalid)` with the reason when a candidate is not certified, the
+/// outputs contain an unknown input, or the two rank routes disagree.
+pub fn unknown_input_symmetries(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<UnknownInputSymmetries, AnalysisError> {
+    refuse_feedthrough(nf)?;
+    let deadline = opts.deadline;
+    let seed = opts.seed;
+    let report = unknown_input_rank(nf, opts)?;
+    if !report.agree {
+        return Err(AnalysisError::Invalid(
+            "the two unknown-input rank routes disagree (see `obsan rank`): no kernel to certify"
+                .into(),
+        ));
+    }
+    let n = report.n;
+    let r = report.rank;
+    let (vectors, free) = if r == n {
+        (vec![], vec![])
+    } else if r == 0 {
+        // Nothing is observable: every unit vector.
+        let units = (0..n)
+            .map(|j| {
+                (0..n)
+                    .map(|i| {
+                        if i == j {
+                            RatFun::one()
+                        } else {
+                            RatFun::zero()
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        (units, (0..n).collect())
+    } else {
+        candidates(nf, &report, seed, deadline)?
+    };
+    let identities = certify(nf, &vectors)?;
+    Ok(UnknownInputSymmetries {
+        report,
+        vectors,
+        free,
+        identities,
+    })
+}
+
+/// Outputs that contain an unknown input make (a) depend on the input's
+/// variation too: not handled.
+fn refuse_feedthrough(nf: &mut NormalForm) -> Result<(), AnalysisError> {
+    let outs: Vec<(String, Id)> = nf.outputs.clone();
+    for (name, id) in outs {
+        let h = nf.ctx.canon(id);
+        for (w, &v) in nf.unknown_inputs.clone().iter().zip(&nf.unknown_input_vars) {
+            if !nf.ctx.rf_diff(&h, v).is_zero() {
+                return Err(AnalysisError::Invalid(format!(
+                    "output {name} contains the unknown input {w}: symmetries with a direct feedthrough are not supported (the certificate assumes outputs that are functions of the state)"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The rows of `Omega` (x-part) at one point of the extended space: the
+/// annihilator in S-space of the S-projection of the extended kernel.
+fn state_rows(ext_rows: &[Vec<Fp>], len: usize, n: usize) -> Vec<Vec<Fp>> {
+    let ker = null_space(ext_rows.to_vec(), len);
+    let proj: Vec<Vec<Fp>> = ker.iter().map(|v| v[..n].to_vec()).collect();
+    null_space(proj, n)
+}
+
+/// Rank of a list of F_p rows.
+fn fp_rank(rows: &[Vec<Fp>], ncols: usize) -> usize {
+    ncols - null_space(rows.to_vec(), ncols).len()
+}
+
+/// Candidate kernel vectors by reconstruction (module docs).
+fn candidates(
+    nf: &mut NormalForm,
+    report: &UnknownInputReport,
+    seed: u64,
+    deadline: Option<Instant>,
+) -> Result<(Vec<Vec<RatFun>>, Vec<usize>), AnalysisError> {
+    let n = report.n;
+    let r = report.rank;
+    // The first order whose state part has the final rank: its rows span
+    // Omega already, and the jets up to it are exact in a system truncated
+    // there (unknown_input.rs), much cheaper than the order the growth went on to.
+    let m0 = report
+        .steps
+        .iter()
+        .find(|s| s.state_rank == r)
+        .map_or(report.max_order, |s| s.order);
+    let ext = extend(nf, m0);
+    let len = ext.unknown_cols;
+    let jets = LieJets::new(&ext.ctx, &ext.vars, &ext.fields.vectors, &ext.outputs);
+    // Each output's basis words are y^(0..=m): one jet gives all prefixes.
+    let mut tops: Vec<usize> = vec![0; ext.outputs.len()];
+    let mut used = vec![false; ext.outputs.len()];
+    for w in report.basis.iter().filter(|w| w.order() <= m0) {
+        used[w.output] = true;
+        tops[w.output] = tops[w.output].max(w.order());
+    }
+    let mut nf_roots: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+    nf_roots.extend(nf.f0.iter().copied());
+    for f in nf.fields.iter().chain(&nf.unknown_fields) {
+        nf_roots.extend(f.iter().copied());
+    }
+    let unsupported = || {
+        AnalysisError::Invalid(
+            "symmetries with unknown inputs: a square root in the system is not supported".into(),
+        )
+    };
+    let xcoords = nf.ctx.free_coords(&nf_roots, &[]).ok_or_else(unsupported)?;
+    let mut ext_roots = ext.outputs.clone();
+    ext_roots.extend(ext.fields.vectors[0].iter().copied());
+    let all = ext
+        .ctx
+        .free_coords(&ext_roots, &[])
+        .ok_or_else(unsupported)?;
+    let extra: Vec<Coord> = all.into_iter().filter(|c| !xcoords.contains(c)).collect();
+    let mut rng = SplitMix(seed ^ 0x51e0_7a11_c0de_0033);
+    let fixed: Vec<Fp> = extra.iter().map(|_| rng.fp()).collect();
+    let coords: Vec<Coord> = xcoords.iter().chain(&extra).cloned().collect();
+    let rows_at = |ctx: &Ctx, x: &[Fp]| -> Option<Vec<Vec<Fp>>> {
+        let vals: Vec<Fp> = x.iter().chain(&fixed).copied().collect();
+        let pt = ctx.fp_point_at(&coords, &vals).ok()?;
+        let mut rows = Vec::new();
+        for (o, &m) in tops.iter().enumerate() {
+            if !used[o] {
+                continue;
+            }
+            let rs = jets.prefix_rows(o, &vec![0; m], &pt).ok()?;
+            rows.extend(rs.into_iter().map(|mut r| {
+                r.gradient.truncate(len);
+                r.gradient
+            }));
+        }
+        let s = state_rows(&rows, len, n);
+        (fp_rank(&s, n) == r).then_some(s)
+    };
+    // Pivots from the last column back at a random point, so that the free
+    // columns are the earliest unobservable variables.
+    let x0: Vec<Fp> = xcoords.iter().map(|_| rng.fp()).collect();
+    let s0 = rows_at(&ext.ctx, &x0).ok_or(AnalysisError::NoPoint)?;
+    let mut piv: Vec<usize> = Vec::new();
+    for c in (0..n).rev() {
+        let mut t = piv.clone();
+        t.push(c);
+        let sub: Vec<Vec<Fp>> = s0
+            .iter()
+            .map(|row| t.iter().map(|&j| row[j]).collect())
+            .collect();
+        if fp_rank(&sub, t.len()) == t.len() {
+            piv = t;
+        }
+        if piv.len() == r {
+            break;
+        }
+    }
+    piv.sort_unstable();
+    let free: Vec<usize> = (0..n).filter(|j| !piv.contains(j)).collect();
+    let order: Vec<usize> = piv.iter().chain(&free).copied().collect();
+    let k = free.len();
+    let ctx = &ext.ctx;
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, String> {
+        if p != P {
+            return Err(format!("internal: the black box works modulo {P} only"));
+        }
+        if obsan_expr::cancel_requested() {
+            return Err("interrupted".into());
+        }
+        let vals: Vec<Fp> = x.iter().map(|&v| Fp::new(v)).collect();
+        let Some(s) = rows_at(ctx, &vals) else {
+            return Ok(None);
+        };
+        // Columns reordered pivots first: the echelon kernel then has its
+        // unit entries on the free columns.
+        let sp: Vec<Vec<Fp>> = s
+            .iter()
+            .map(|row| order.iter().map(|&j| row[j]).collect())
+            .collect();
+        let ker = null_space(sp, n);
+        if ker.len() != k || ker.iter().enumerate().any(|(j, v)| v[r + j] != Fp::ONE) {
+            return Ok(None);
+        }
+        Ok(Some(
+            ker.iter()
+                .flat_map(|v| v[..r].iter().map(|f| f.0))
+                .collect(),
+        ))
+    };
+    // One agreeing value ends an interpolation (as sym_recon.rs): a premature
+    // stop gives a wrong candidate, which the exact certificate rejects.
+    let opts = Options {
+        primes: Some(vec![P]),
+        agree: 1,
+        deadline,
+        seed: seed ^ 0x0b5a_0033,
+        ..Options::default()
+    };
+    let rec = match reconstruct_vec(xcoords.len(), k * r, &mut bb, &opts) {
+        Ok(x) => x,
+        Err(_) if obsan_expr::cancel_requested() => return Err(AnalysisError::Cancelled),
+        Err(e @ ReconError::Budget { .. }) => {
+            return Err(AnalysisError::Timeout(format!(
+                "reconstructing the symmetries with unknown inputs: {e}"
+            )))
+        }
+        Err(e) => {
+            return Err(AnalysisError::Invalid(format!(
+                "reconstructing the symmetries with unknown inputs: {e}"
+            )))
+        }
+    };
+    // The coordinates are nf's own leaves (the extended context is a clone
+    // with the jets appended), so the forms are built in nf's context.
+    let th = nf.ctx.tan_half();
+    let vectors = to_vectors(&mut nf.ctx, &th, &xcoords, &rec.functions, &piv, &free, n)?;
+    Ok((vectors, free))
+}
+
+/// The reconstructed entries as canonical forms in sin/cos.
+fn to_vectors(
+    ctx: &mut Ctx,
+    th: &TanHalf,
+    coords: &[Coord],
+    functions: &[obsan_recon::Rational],
+    piv: &[usize],
+    free: &[usize],
+    n: usize,
+) -> Result<Vec<Vec<RatFun>>, AnalysisError> {
+    let r = piv.len();
+    let to_poly = |p: &obsan_recon::Poly| {
+        Poly::from_terms(p.terms().iter().map(|t| {
+            let mono = Mono::from_pairs(
+                t.exps
+                    .iter()
+                    .zip(coords)
+                    .filter(|(&e, _)| e > 0)
+                    .map(|(&e, c)| (c.var(), e)),
+            );
+            (mono, t.coeff.clone())
+        }))
+    };
+    let angles = coords.iter().any(|c| matches!(c, Coord::Angle { .. }));
+    let mut vectors = Vec::with_capacity(free.len());
+    for (j, &fc) in free.iter().enumerate() {
+        let mut v = vec![RatFun::zero(); n];
+        v[fc] = RatFun::one();
+        for (i, &pc) in piv.iter().enumerate() {
+            let f = &functions[j * r + i];
+            let num = RatFun::from_poly(to_poly(f.num()));
+            let den = RatFun::from_poly(to_poly(f.den()));
+            let inv = ctx.rf_inv(&den).ok_or_else(|| {
+                AnalysisError::Invalid("internal: a reconstructed denominator is zero".into())
+            })?;
+            let e = ctx.rf_mul(&num, &inv);
+            v[pc] = if angles { ctx.from_tan_half(th, &e) } else { e };
+        }
+        vectors.push(v);
+    }
+    Ok(vectors)
+}
+
+/// An echelon basis of vectors of canonical forms in the half-angle view,
+/// where a form is zero iff it is the zero function (exact membership).
+struct Span {
+    rows: Vec<(usize, Vec<RatFun>)>,
+}
+
+impl Span {
+    fn reduce(&self, ctx: &Ctx, mut v: Vec<RatFun>) -> Vec<RatFun> {
+        for (p, row) in &self.rows {
+            if v[*p].is_zero() {
+                continue;
+            }
+            // row[p] is 1.
+            let f = v[*p].clone();
+            for (x, y) in v.iter_mut().zip(row) {
+                if !y.is_zero() {
+                    let t = ctx.rf_mul(&f, y);
+                    *x = ctx.rf_sub(x, &t);
+                }
+            }
+        }
+        v
+    }
+
+    /// Adds `v` (in the half-angle view); `false` if it was in the span.
+    fn insert(&mut self, ctx: &Ctx, v: Vec<RatFun>) -> bool {
+        let v = self.reduce(ctx, v);
+        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
+            return false;
+        };
+        let Some(inv) = ctx.rf_inv(&v[p]) else {
+            return false;
+        };
+        let v: Vec<RatFun> = v.iter().map(|x| ctx.rf_mul(x, &inv)).collect();
+        self.rows.push((p, v));
+        true
+    }
+}
+
+/// The exact certificate (a) and (b) of the module docs; the number of
+/// identities checked, or the reason a candidate fails.
+fn certify(nf: &mut NormalForm, vectors: &[Vec<RatFun>]) -> Result<usize, AnalysisError> {
+    if vectors.is_empty() {
+        return Ok(0);
+    }
+    let th = nf.ctx.tan_half();
+    if !th.complete(&nf.ctx) {
+        return Err(AnalysisError::Invalid(
+            "symmetries with unknown inputs: a square root in the system is not supported".into(),
+        ));
+    }
+    let vars: Vec<Var> = nf.state_vars.clone();
+    let canon_vec =
+        |ctx: &mut Ctx, f: &[Id]| -> Vec<RatFun> { f.iter().map(|&e| ctx.canon(e)).collect() };
+    let mut fields: Vec<(String, Vec<RatFun>)> =
+        vec![("f0".into(), canon_vec(&mut nf.ctx, &nf.f0.clone()))];
+    for (name, f) in nf.inputs.clone().iter().zip(nf.fields.clone()) {
+        fields.push((format!("the field of {name}"), canon_vec(&mut nf.ctx, &f)));
+    }
+    let mut gs = Vec::new();
+    for (name, g) in nf
+        .unknown_inputs
+        .clone()
+        .iter()
+        .zip(nf.unknown_fields.clone())
+    {
+        let gv = canon_vec(&mut nf.ctx, &g);
+        gs.push(gv.clone());
+        fields.push((format!("the field of {name}"), gv));
+    }
+    let mut count = 0;
+    for (name, h) in nf.outputs.clone() {
+        let h = nf.ctx.canon(h);
+        for (a, xi) in vectors.iter().enumerate() {
+            let d = nf.ctx.rf_lie_derivative(&h, &vars, xi);
+            if !nf.ctx.to_tan_half(&th, &d).is_zero() {
+                return Err(AnalysisError::Invalid(format!(
+                    "kernel vector {} of the observable codistribution changes output {name}: the rank test was unlucky; run again with another --seed",
+                    a + 1
+                )));
+            }
+            count += 1;
+        }
+    }
+    let mut span = Span { rows: vec![] };
+    for v in vectors.iter().chain(&gs) {
+        let t: Vec<RatFun> = v.iter().map(|e| nf.ctx.to_tan_half(&th, e)).collect();
+        span.insert(&nf.ctx, t);
+    }
+    for (fname, f) in &fields {
+        for (a, xi) in vectors.iter().enumerate() {
+            let mut b = Vec::with_capacity(vars.len());
+            for i in 0..vars.len() {
+                let p = nf.ctx.rf_lie_derivative(&xi[i], &vars, f);
+                let q = nf.ctx.rf_lie_derivative(&f[i], &vars, xi);
+                let d = nf.ctx.rf_sub(&p, &q);
+                b.push(nf.ctx.to_tan_half(&th, &d));
+            }
+            if span.reduce(&nf.ctx, b).iter().any(|x| !x.is_zero()) {
+                return Err(AnalysisError::Invalid(format!(
+                    "no exact certificate: the bracket of {fname} with kernel vector {} leaves the span of the kernel and the unknown inputs' fields, so the lost directions depend on the unknown input's history (docs/engine.md, \"Symmetries with unknown inputs\")",
+                    a + 1
+                )));
+            }
+            count += 1;
+        }
+    }
+    Ok(count)
+}

@@ -1,0 +1,49 @@
+"""The Python API on models with unknown inputs (docs/engine.md, "Unknown inputs").
+Verdicts derived by hand in the model files (systems/benchmarks/unknown-inputs/)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import obsan
+
+UI = Path(__file__).resolve().parents[2] / "systems" / "benchmarks" / "unknown-inputs"
+
+
+def test_rank_names_the_reconstructable_input_and_its_order() -> None:
+    # chain.sys: y = x1, y' = x2, y'' = w.
+    r = obsan.load(UI / "chain.sys").rank()
+    assert isinstance(r, obsan.Rank)
+    assert (r.rank, r.n) == (2, 2)
+    assert r.observable == ["x1", "x2"]
+    assert r.orders == {"x1": 0, "x2": 1}
+    assert r.unknown_inputs == ["w"]
+    assert r.reconstructable == {"w": 2}
+    assert r.weakly_locally_observable
+
+
+def test_rank_of_the_two_compartment_model_with_b_known() -> None:
+    # c2m_known_b.sys: w absorbs the x1 equation; only x1 = y is observable.
+    r = obsan.load(UI / "c2m_known_b.sys").rank()
+    assert r.observable == ["x1"]
+    assert r.unobservable == ["x2", "k1e", "k12", "k21"]
+    assert r.reconstructable == {}
+
+
+def test_symmetries_of_the_unicycle_with_unknown_speed() -> None:
+    # unicycle_one_landmark.sys: rotation about the landmark and scaling lost.
+    s = obsan.load(UI / "unicycle_one_landmark.sys").symmetries()
+    assert isinstance(s, obsan.Symmetries)
+    assert s.rank == 1
+    assert len(s.vectors) == 2
+    assert s.exact and s.certificate == "unknown_input_invariance"
+    assert s["unobservable_variables"] == ["x", "y", "theta"]
+
+
+def test_modes_refuse_unknown_inputs_with_the_reason() -> None:
+    try:
+        obsan.load(UI / "chain.sys").modes()
+    except obsan.ObsanError as e:
+        assert "has unknown inputs (w)" in str(e)
+    else:
+        raise AssertionError("modes accepted a model with unknown inputs")
