@@ -105,3 +105,26 @@ pub(crate) const RESERVED: [&str; 23] = [
     "pi",
     "rate",
 ];
+
+/// A name from another tool (a model key, an SBML id, a file stem) as a `.sys`
+/// identifier: other characters become `_`, a leading digit gets a `_` before
+/// it, and a reserved word a `_` after it.
+pub(crate) fn sys_identifier(raw: &str) -> String {
+    let mut s: String = raw
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if !s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
+        s.insert(0, '_');
+    }
+    if RESERVED.contains(&s.as_str()) {
+        s.push('_');
+    }
+    s
+}

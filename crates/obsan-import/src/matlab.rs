@@ -10,7 +10,7 @@
 //! The format is read from its description in STRIKE-GOLDD's documentation;
 //! no STRIKE-GOLDD text (GPL-3) is used.
 
-use crate::ex::{show, Ex, RESERVED};
+use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::infix::{self, Dialect, Placed};
 use crate::sbml::{one_line, walk_names_at};
 use crate::{Converted, ImportError};
@@ -439,22 +439,7 @@ fn convert(
         .trim_end_matches(".m");
     let mut name =
         saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
-    name = name
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if !name.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
-        name.insert(0, '_');
-    }
-    if RESERVED.contains(&name.as_str()) {
-        name.push('_');
-    }
+    name = sys_identifier(&name);
     let list = |v: &[(String, At)]| {
         v.iter()
             .map(|x| rename(&x.0))

@@ -10,7 +10,7 @@
 //! line: events, algebraic rules, delays, `time`, piecewise, stoichiometry
 //! math, compartments that vary.
 
-use crate::ex::{show, Ex, RESERVED};
+use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::{Converted, ImportError};
 use roxmltree::{Document, Node};
 use std::collections::BTreeMap;
@@ -588,23 +588,7 @@ fn sys_name(model: Node) -> String {
         .attribute("id")
         .or(model.attribute("name"))
         .unwrap_or("sbml_model");
-    let mut s: String = mid
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if !s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
-        s.insert(0, '_');
-    }
-    if RESERVED.contains(&s.as_str()) {
-        s.push('_');
-    }
-    s
+    sys_identifier(mid)
 }
 
 /// Function definitions, each body read with the ones defined before it.

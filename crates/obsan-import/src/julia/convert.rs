@@ -3,7 +3,7 @@
 use super::lex::{err, ident, is_punct, items, tokenize, Token};
 use super::parse::{rename_bare, walk, P};
 use super::{Lincomp, SiJlModel};
-use crate::ex::{show, Ex, RESERVED};
+use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::{Converted, ImportError};
 use std::collections::BTreeMap;
 
@@ -384,23 +384,7 @@ fn header(model: &SiJlModel, origin: &str, what: &str) -> Vec<String> {
 }
 
 fn sys_name(key: &str) -> String {
-    let mut s: String = key
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect();
-    if !s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_') {
-        s.insert(0, '_');
-    }
-    if RESERVED.contains(&s.as_str()) {
-        s.push('_');
-    }
-    s
+    sys_identifier(key)
 }
 
 fn lincomp_sys(lc: &Lincomp, model: &SiJlModel, origin: &str) -> Converted {
