@@ -184,25 +184,25 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
-    let vecs: Vec<Value> = s
-        .vectors
+/// One symmetry vector as JSON: per state variable, its component's text
+/// and LaTeX.
+pub(crate) fn vector_json(nf: &NormalForm, v: &[obsan_expr::RatFun]) -> Value {
+    let comps: serde_json::Map<String, Value> = nf
+        .state
         .iter()
-        .map(|v| {
-            let comps: serde_json::Map<String, Value> = nf
-                .state
-                .iter()
-                .zip(v)
-                .map(|(n, e)| {
-                    (
-                        n.clone(),
-                        json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
-                    )
-                })
-                .collect();
-            Value::Object(comps)
+        .zip(v)
+        .map(|(n, e)| {
+            (
+                n.clone(),
+                json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
+            )
         })
         .collect();
+    Value::Object(comps)
+}
+
+fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
+    let vecs: Vec<Value> = s.vectors.iter().map(|v| vector_json(nf, v)).collect();
     // `certificate` stays the kind's name (the suite bench reads it); the
     // random certificate's figures go in `certification`.
     let (kind, detail) = match &s.certificate {

@@ -66,20 +66,7 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
         let vecs: Vec<serde_json::Value> = s
             .vectors
             .iter()
-            .map(|v| {
-                let m: serde_json::Map<String, serde_json::Value> = nf
-                    .state
-                    .iter()
-                    .zip(v)
-                    .map(|(n, e)| {
-                        (
-                            n.clone(),
-                            json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
-                        )
-                    })
-                    .collect();
-                serde_json::Value::Object(m)
-            })
+            .map(|v| crate::analysis_cmds::vector_json(nf, v))
             .collect();
         let v = json!({
             "system": nf.name,
