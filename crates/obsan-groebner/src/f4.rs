@@ -182,7 +182,14 @@ fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
             piv[rank[c] as usize] = Some((cols(row), coeffs(row)));
         }
     }
-    let mut acc = vec![0u64; ncols];
+    // Delayed reduction: products of residues below p < 2^63 stay below
+    // 2^126, so the accumulator is a u128 folded modulo p only when it
+    // passes 2^127 (before two more products could overflow it) and once
+    // when its column is read: one division per non-zero column instead of
+    // one per product.
+    const FOLD: u128 = 1 << 127;
+    let p128 = p as u128;
+    let mut acc = vec![0u128; ncols];
     let mut out: Vec<(u32, Vec<(u32, u64)>)> = Vec::new();
     for (n, &t) in todo.iter().enumerate() {
         if n % 64 == 0 {
@@ -195,22 +202,28 @@ fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
         let row = &s.rows[t];
         let rc = cols(row);
         for (&c, &v) in rc.iter().zip(coeffs(row).iter()) {
-            acc[c as usize] = v;
+            acc[c as usize] = v as u128;
         }
         let mut res: Vec<(u32, u64)> = Vec::new();
         for c in rc[0] as usize..ncols {
-            let a = acc[c];
+            if acc[c] == 0 {
+                continue;
+            }
+            let a = (acc[c] % p128) as u64;
+            acc[c] = 0;
             if a == 0 {
                 continue;
             }
-            acc[c] = 0;
             match &piv[c] {
-                // Pivots are monic: subtracting a * pivot clears column c.
+                // Pivots are monic: adding (p - a) * pivot clears column c.
                 Some((pc, pv)) => {
-                    let m = p - a;
+                    let m = (p - a) as u128;
                     for (&x, &y) in pc[1..].iter().zip(&pv[1..]) {
-                        let x = x as usize;
-                        acc[x] = fld.add(acc[x], fld.mul(m, y));
+                        let e = &mut acc[x as usize];
+                        *e += m * y as u128;
+                        if *e >= FOLD {
+                            *e %= p128;
+                        }
                     }
                 }
                 None => res.push((c as u32, a)),

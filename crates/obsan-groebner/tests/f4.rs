@@ -149,3 +149,16 @@ proptest! {
         prop_assert_eq!(&c.polys, &b.polys);
     }
 }
+
+/// Timing aid, not a test of speed: `cargo test --release -p obsan-groebner
+/// --test f4 -- --ignored --nocapture cyclic_6`.
+#[test]
+#[ignore]
+fn cyclic_6_f4_time() {
+    let r = Ring::new(Field::new(P).unwrap(), 6, Order::Grevlex);
+    let t = std::time::Instant::now();
+    let b = f4(&r, &cyclic(&r, 6), GbBudget::default()).unwrap();
+    eprintln!("cyclic-6 F4: {:?}, {} elements", t.elapsed(), b.polys.len());
+    // Cyclic-6 has 156 solutions (Björck and Fröberg 1991).
+    assert_eq!(b.standard_monomials(1000).unwrap().len(), 156);
+}
