@@ -212,9 +212,10 @@ written to --out and a one-line summary to stdout."
 Counts are over the complex numbers, as SIAN and StructuralIdentifiability.jl count; two
 independent random points modulo two primes must agree. Rational models, and sin/cos of a
 state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp/log/sqrt.
---json prints {system, variables: [{name, kind (param | state), angle, verdict (global |
-local | not identifiable), values}], solutions, all_local, maps,
-group_order, order, rank_order, unknowns, equations, primes, exact: false, method}.")]
+--json prints {system, restriction, variables: [{name, kind (param | state), angle,
+verdict (global | local | not identifiable), values}], solutions, all_local, maps, group_order,
+order, rank_order, output_orders: [{output, order}], error_bound, degree_bound_local,
+log10_degree_bound_global, unknowns, equations, primes, exact: false, method}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,
