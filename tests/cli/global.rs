@@ -67,10 +67,22 @@ fn structural_identifiability_jl_readme() {
 
 #[test]
 fn global_refuses_what_it_cannot_count() {
+    // The pendulum's output is the angle itself (y = th): not rational in
+    // the half-angle view t = tan(th/2).
     bad(
         &["global", "systems/benchmarks/pendulum.sys"],
-        "not a plain symbol",
+        "occurs outside sin/cos",
     );
+    let half = temp_file(
+        "global_half_angle.sys",
+        "system h\nstate x\nparam k, th\nx' = -k*x\noutput y = x*sin(th/2)\n",
+    );
+    bad(&["global", &half], "unit other than 1");
+    let at = temp_file(
+        "global_atan.sys",
+        "system a\nstate x\nparam k\nx' = -k*x\noutput y = atan(x)\n",
+    );
+    bad(&["global", &at], "not a plain symbol");
     bad(&["global", "systems/global/missing.sys"], "missing.sys");
 }
 
