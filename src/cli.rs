@@ -214,12 +214,15 @@ written to --out and a one-line summary to stdout."
   obsan global systems/global/squared_rate.sys    # a: 2 values (a -> -a); x global
   obsan global systems/global/two_decays.sys      # every variable 2 values: the swap
   obsan global systems/classic/hiv.sys --json
+  obsan global systems/global/angle_mod_pi.sys   # theta: 2 values (known modulo pi only)
 
 Counts are over the complex numbers, as SIAN and StructuralIdentifiability.jl count; two
-independent random points modulo two primes must agree. Rational models only (no
-sin/cos/atan/exp/log/sqrt yet). --json prints {system, variables: [{name, kind (param |
-state), verdict (global | local | not identifiable), values}], solutions, all_local, maps,
-group_order, order, rank_order, unknowns, equations, primes, exact: false, method}.")]
+independent random points modulo two primes must agree. Rational models, and sin/cos of a
+state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp/log/sqrt.
+--json prints {system, restriction, variables: [{name, kind (param | state), angle,
+verdict (global | local | not identifiable), values}], solutions, all_local, maps, group_order,
+order, rank_order, output_orders: [{output, order}], error_bound, degree_bound_local,
+log10_degree_bound_global, unknowns, equations, primes, exact: false, method}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,

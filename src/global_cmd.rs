@@ -33,7 +33,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             "variables": r.variables.iter().map(|v| {
                 let (t, k) = verdict(v.verdict);
                 json!({"name": v.name, "kind": if v.param { "param" } else { "state" },
-                       "verdict": t, "values": k})
+                       "angle": v.angle, "verdict": t, "values": k})
             }).collect::<Vec<_>>(),
             "solutions": r.solutions,
             "all_local": r.all_local,
@@ -75,7 +75,13 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             Identifiability::Local(k) => format!("locally identifiable, {k} values"),
             Identifiability::NotIdentifiable => "not identifiable".to_string(),
         };
-        o.push_str(&format!("  {:w$}  {kind}  {text}\n", v.name));
+        // An angle in sin/cos is counted as tan(theta/2): modulo 2 pi.
+        let angle = if v.angle {
+            " (angle, counted modulo 2 pi)"
+        } else {
+            ""
+        };
+        o.push_str(&format!("  {:w$}  {kind}  {text}{angle}\n", v.name));
     }
     let scope = if r.all_local {
         "(params, initial states)"

@@ -262,6 +262,8 @@ class Identifiability(NamedTuple):
     kind: str
     verdict: str
     values: Optional[int]
+    angle: bool = False
+    """An angle entering only through sin/cos, counted modulo 2 pi."""
 
 
 @dataclass(frozen=True, repr=False, eq=False)
@@ -280,7 +282,13 @@ class Global(Result):
             raw=raw,
             system=raw.get("system", ""),
             variables=[
-                Identifiability(v.get("name", ""), v.get("kind", ""), v.get("verdict", ""), v.get("values"))
+                Identifiability(
+                    v.get("name", ""),
+                    v.get("kind", ""),
+                    v.get("verdict", ""),
+                    v.get("values"),
+                    bool(v.get("angle", False)),
+                )
                 for v in raw.get("variables") or []
             ],
             solutions=raw.get("solutions"),

@@ -67,10 +67,22 @@ fn structural_identifiability_jl_readme() {
 
 #[test]
 fn global_refuses_what_it_cannot_count() {
+    // The pendulum's output is the angle itself (y = th): not rational in
+    // the half-angle view t = tan(th/2).
     bad(
         &["global", "systems/benchmarks/pendulum.sys"],
-        "not a plain symbol",
+        "occurs outside sin/cos",
     );
+    let half = temp_file(
+        "global_half_angle.sys",
+        "system h\nstate x\nparam k, th\nx' = -k*x\noutput y = x*sin(th/2)\n",
+    );
+    bad(&["global", &half], "unit other than 1");
+    let at = temp_file(
+        "global_atan.sys",
+        "system a\nstate x\nparam k\nx' = -k*x\noutput y = atan(x)\n",
+    );
+    bad(&["global", &at], "not a plain symbol");
     bad(&["global", "systems/global/missing.sys"], "missing.sys");
 }
 
@@ -90,7 +102,7 @@ fn per_output_orders_and_bounds() {
     let t = ok(&["global", "systems/global/squared_rate.sys"]);
     assert!(t.contains("y to order 2"), "{t}");
     assert!(t.contains("wrong with probability <="), "{t}");
-    // angle_mod_pi: order 0 gives x0 (y1) and t (y2); order 1 gives k from
+    // angle_mod_pi: order 0 gives x0 (y1) and theta (y2); order 1 gives k from
     // y1' = -k x while y2' = 0 is dependent: y2 stops at 1, y1 at 2.
     let a = global_json("systems/global/angle_mod_pi.sys");
     assert_eq!(a["output_orders"][0]["order"], 2);
@@ -99,15 +111,39 @@ fn per_output_orders_and_bounds() {
 
 #[test]
 fn angle_known_modulo_pi_against_atan2() {
-    // Derived by hand in the files: tan(theta) = 2t/(1 - t^2) is the same at
-    // t and -1/t (theta and theta + pi): 2 values; cos and sin together give
-    // t = sin/(1 + cos): 1 value.
+    // Derived by hand in the files (trig form, counted as t = tan(theta/2)):
+    // tan(theta) is the same at theta and theta + pi: 2 values; cos and sin
+    // together fix theta modulo 2 pi: 1 value.
     let v = global_json("systems/global/angle_mod_pi.sys");
-    assert_eq!(var(&v, "t"), ("local".into(), Some(2)));
+    assert_eq!(var(&v, "theta"), ("local".into(), Some(2)));
     assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
     assert_eq!(var(&v, "x"), ("global".into(), Some(1)));
     assert_eq!(v["solutions"], 2);
+    let theta = v["variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["name"] == "theta")
+        .unwrap();
+    assert_eq!(theta["angle"], true);
     let w = global_json("systems/global/angle_atan2.sys");
-    assert_eq!(var(&w, "t"), ("global".into(), Some(1)));
+    assert_eq!(var(&w, "theta"), ("global".into(), Some(1)));
     assert_eq!(w["solutions"], 1);
+    let t = ok(&["global", "systems/global/angle_mod_pi.sys"]);
+    assert!(
+        t.contains("theta") && t.contains("counted modulo 2 pi"),
+        "{t}"
+    );
+}
+
+#[test]
+fn bearing_only_mirror() {
+    // Derived by hand in the file: cos(beta) gives beta up to sign, and
+    // r = -v (1 - y^2)/y'; the mirror beta -> -beta maps the model to itself.
+    let v = global_json("systems/global/bearing_mirror.sys");
+    assert_eq!(var(&v, "beta"), ("local".into(), Some(2)));
+    assert_eq!(var(&v, "r"), ("global".into(), Some(1)));
+    assert_eq!(v["solutions"], 2);
+    assert_eq!(v["maps"][0], "beta -> -beta");
+    assert_eq!(v["group_order"], 2);
 }

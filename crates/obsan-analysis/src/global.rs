@@ -19,6 +19,8 @@ use obsan_model::NormalForm;
 use std::collections::HashMap;
 use std::time::Instant;
 
+mod trig;
+
 /// Options of [`global_identifiability`].
 #[derive(Clone, Debug)]
 pub struct GlobalOptions {
@@ -61,6 +63,9 @@ pub struct GlobalVariable {
     pub name: String,
     /// A parameter (else the initial value of a state).
     pub param: bool,
+    /// An angle entering only through sin/cos: its values are counted modulo
+    /// 2 pi (as its half-angle tangent `tan(theta/2)`).
+    pub angle: bool,
     pub verdict: Identifiability,
 }
 
@@ -131,6 +136,8 @@ pub struct GlobalReport {
 /// The model over Z: dynamic states (with their derivative `num/den`), params,
 /// inputs, known constants (given random values), outputs.
 struct ZModel {
+    /// Per state then param: an angle counted as `t = tan(theta/2)`.
+    angle: Vec<bool>,
     dyn_vars: Vec<Var>,
     param_vars: Vec<Var>,
     input_vars: Vec<Var>,
@@ -159,8 +166,6 @@ fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
         ));
     }
     let nd = nf.n_dynamic;
-    let dyn_vars = nf.state_vars[..nd].to_vec();
-    let param_vars = nf.state_vars[nd..].to_vec();
     let input_vars = nf.input_vars.clone();
     let mut const_vars = Vec::new();
     for (name, _) in &nf.consts {
@@ -181,15 +186,21 @@ fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
             parts.push(t);
         }
         let id = nf.ctx.add(&parts);
-        let r = nf.ctx.try_canon(id).map_err(limit)?;
-        rhs.push((r.numerator().clone(), r.denominator().clone()));
+        rhs.push(nf.ctx.try_canon(id).map_err(limit)?);
     }
     let mut outputs = Vec::new();
     for k in 0..nf.outputs.len() {
         let id = nf.outputs[k].1;
-        let r = nf.ctx.try_canon(id).map_err(limit)?;
-        outputs.push((r.numerator().clone(), r.denominator().clone()));
+        outputs.push(nf.ctx.try_canon(id).map_err(limit)?);
     }
+    // Angles in sin/cos become their half-angle tangents (trig.rs).
+    let mut vars = nf.state_vars.clone();
+    let angle = trig::half_angle_view(&mut nf.ctx, &mut vars, &mut rhs, &mut outputs)?;
+    let dyn_vars = vars[..nd].to_vec();
+    let param_vars = vars[nd..].to_vec();
+    let parts = |r: obsan_expr::RatFun| (r.numerator().clone(), r.denominator().clone());
+    let rhs: Vec<(ZPoly, ZPoly)> = rhs.into_iter().map(parts).collect();
+    let outputs: Vec<(ZPoly, ZPoly)> = outputs.into_iter().map(parts).collect();
     let known: Vec<Var> = dyn_vars
         .iter()
         .chain(&param_vars)
@@ -201,13 +212,14 @@ fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
         for v in n.vars().into_iter().chain(d.vars()) {
             if !known.contains(&v) {
                 return Err(err(format!(
-                    "global: `{}` is not a plain symbol; models with sin/cos/atan/exp/log/sqrt are not counted yet (write them in rational form, e.g. with the tangent half-angle)",
+                    "global: `{}` is not a plain symbol; only sin/cos of a state or parameter (counted in the half-angle view) and rational functions are counted; atan/exp/log/sqrt and sin/cos of inputs are not",
                     nf.ctx.leaf_text(v)
                 )));
             }
         }
     }
     Ok(ZModel {
+        angle,
         dyn_vars,
         param_vars,
         input_vars,
@@ -1110,9 +1122,11 @@ pub fn global_identifiability(
     let variables: Vec<GlobalVariable> = names
         .iter()
         .zip(&a.per_var)
-        .map(|((name, param), c)| GlobalVariable {
+        .enumerate()
+        .map(|(i, ((name, param), c))| GlobalVariable {
             name: name.clone(),
             param: *param,
+            angle: m.angle[if i < np { nx + i } else { i - np }],
             verdict: match c {
                 None => Identifiability::NotIdentifiable,
                 Some(1) => Identifiability::Global,

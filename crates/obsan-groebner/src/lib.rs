@@ -1,6 +1,8 @@
 //! Gröbner bases over prime fields F_p, p < 2^63, on this crate's own sparse
-//! polynomials: Buchberger's algorithm with the sugar strategy and the
-//! Gebauer–Möller criteria, under grevlex, lex or a block elimination order;
+//! polynomials: F4 (Faugère 1999; sparse Macaulay matrices, the normal
+//! selection strategy) and, as its oracle, Buchberger's algorithm with the
+//! sugar strategy, both with the Gebauer–Möller criteria, under grevlex, lex
+//! or a block elimination order;
 //! and the counts a zero-dimensional ideal gives (dimension of the quotient,
 //! minimal polynomials of elements of the quotient, distinct roots of an
 //! elimination polynomial).
@@ -27,13 +29,14 @@
 )]
 
 mod count;
+mod f4;
 mod field;
 mod gb;
 mod poly;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
 pub use field::{is_prime, Field};
-pub use gb::{groebner, Basis, GbBudget};
+pub use gb::{buchberger, f4, groebner, Basis, GbBudget};
 pub use poly::{Mono, Order, Poly, Ring, MAX_DEGREE};
 
 /// Why a computation stopped.
