@@ -87,25 +87,6 @@ impl Bounds<'_> {
             fl: a.fl.join(b.fl),
         }
     }
-    /// `a^k` by squaring, in the order of the values' `pow`.
-    fn pow(&self, a: &DJet, mut k: u32) -> DJet {
-        let mut acc: Option<DJet> = None;
-        let mut b = a.clone();
-        loop {
-            if k & 1 == 1 {
-                acc = Some(match acc {
-                    None => b.clone(),
-                    Some(x) => self.mul(&x, &b),
-                });
-            }
-            k >>= 1;
-            if k == 0 {
-                break;
-            }
-            b = self.mul(&b, &b);
-        }
-        acc.unwrap_or_else(|| self.constant(Deg::poly(0)))
-    }
     /// `1 / a`, where `inverses[idx]` bounds `1 / a0`.
     fn inv(&self, a: &DJet, idx: usize) -> DJet {
         let id = &self.inverses[idx];
@@ -156,11 +137,8 @@ impl Bounds<'_> {
                 Op::Add(cs) => cs[1..]
                     .iter()
                     .fold(at(&cs[0]).clone(), |a, c| self.add(&a, at(c))),
-                Op::Mul(cs) => cs[1..]
-                    .iter()
-                    .fold(at(&cs[0]).clone(), |a, c| self.mul(&a, at(c))),
-                Op::Pow(b, k) => self.pow(at(b), *k),
-                Op::InvPow(b, k, idx) => self.pow(&self.inv(at(b), *idx), *k),
+                Op::Mul(a, b) => self.mul(at(a), at(b)),
+                Op::Inv(b, idx) => self.inv(at(b), *idx),
                 Op::Exp(_, arg, _) | Op::Sin(_, _, arg, _) | Op::Cos(_, _, arg, _)
                     if at(arg).fl.is_const() =>
                 {

@@ -282,7 +282,7 @@ impl LieJets {
             shapes,
             runs,
             x,
-            x0,
+            x0f,
             xf,
             h,
             vals,
@@ -303,28 +303,28 @@ impl LieJets {
             });
         }
         for (j, &(field, m)) in runs.iter().enumerate().rev() {
-            x0.clear();
-            x0.extend_from_slice(x);
-            let x0f: Vec<Fl> = xf.clone();
+            x0f.clear();
+            x0f.extend_from_slice(xf);
             let prog = &self.fields[field];
             for pass in 0..m {
                 // Picard pass `pass` makes the flow exact to t_j-degree
-                // pass + 1; it needs the field to degree `pass` only.
+                // pass + 1; it needs the field to degree `pass` only, and
+                // the field's coefficients of lower degree are those of the
+                // previous pass (computed from the same, already exact,
+                // coefficients of the flow), kept in the slots.
                 let ar = Vals {
                     sh,
                     v: sh.view(j, pass),
+                    fresh: sh.fresh(j, pass),
                     len,
                     point,
                 };
                 ar.run(vals, prog, x, xf)?;
-                // x = x0 + int_0^{t_j} f(x).
+                // x = x0 + int_0^{t_j} f(x): x0 has no positive t_j-degree.
                 for (k, &r) in prog.roots.iter().enumerate() {
                     let (f, ff) = ar.root(vals, r);
                     let out = &mut x[k * len..(k + 1) * len];
-                    let fi = ar.integrate(out, f, ff, j);
-                    for (a, &b) in out.iter_mut().zip(&x0[k * len..(k + 1) * len]) {
-                        *a = *a + b;
-                    }
+                    let fi = ar.integrate_at(out, f, ff, j);
                     xf[k] = fi.join(x0f[k]);
                 }
             }
@@ -332,6 +332,7 @@ impl LieJets {
         let ar = Vals {
             sh,
             v: sh.full(),
+            fresh: sh.all(),
             len,
             point,
         };
@@ -409,7 +410,7 @@ struct Sweep {
     caps: Vec<usize>,
     runs: Vec<(usize, usize)>,
     x: Vec<Fp>,
-    x0: Vec<Fp>,
+    x0f: Vec<Fl>,
     xf: Vec<Fl>,
     /// The series of the output after the last sweep.
     h: Vec<Fp>,
