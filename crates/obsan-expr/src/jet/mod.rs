@@ -344,14 +344,56 @@ impl LieJets {
         Ok(pos)
     }
 
-    /// The numerator degree bound of the row of `h_output` along `runs`
-    /// (structural: the same sweep on bounds, [`bound`]).
-    fn degree(&self, output: usize, runs: &[(usize, usize)], sh: &Shape) -> Option<u64> {
-        let b = Bounds {
+    /// The rows of `L_field^j h_output` for j = 0 to k (the prefixes of the
+    /// word of k times `field`, [`LieJets::prefix_rows`]), with the degree
+    /// bound of each when `track`: from one sweep of bounds when the
+    /// programs are rational ([`bound`]'s `run_limit`), else one per row.
+    pub fn run_rows(
+        &self,
+        output: usize,
+        field: usize,
+        k: usize,
+        point: &FpPoint,
+        track: bool,
+    ) -> Result<Vec<LieRow>, BadPoint> {
+        let word = vec![field; k];
+        let mut rows = self.prefix_rows(output, &word, point)?;
+        if track {
+            let sh = Shape::new(self.n, &[k]);
+            let limit = self.bounds(&sh).run_limit(&self.fields[field], &self.outputs[output]);
+            for (j, row) in rows.iter_mut().enumerate() {
+                row.degree = match &limit {
+                    Some(h) if j > 0 => h[j + 1].as_ref().map(|d| d.n),
+                    _ => {
+                        let runs: Vec<(usize, usize)> =
+                            (j > 0).then_some((field, j)).into_iter().collect();
+                        let caps: Vec<usize> = runs.iter().map(|r| r.1).collect();
+                        self.degree(output, &runs, &Shape::new(self.n, &caps))
+                    }
+                };
+            }
+        }
+        Ok(rows)
+    }
+
+    fn bounds<'s>(&'s self, sh: &'s Shape) -> Bounds<'s> {
+        Bounds {
             sh,
             bases: &self.bases,
             inverses: &self.inverses,
-        };
+        }
+    }
+
+    /// The numerator degree bound of the row of `h_output` along `runs`
+    /// (structural: the same sweep on bounds, [`bound`]). One run of a
+    /// rational field: every grade at its limit, as [`LieJets::run_rows`].
+    fn degree(&self, output: usize, runs: &[(usize, usize)], sh: &Shape) -> Option<u64> {
+        let b = self.bounds(sh);
+        if let [(field, _)] = runs {
+            if let Some(h) = b.run_limit(&self.fields[*field], &self.outputs[output]) {
+                return h[sh.grades].as_ref().map(|d| d.n);
+            }
+        }
         let mut x: Vec<DJet> = (0..self.n).map(|_| b.state()).collect();
         for &(field, m) in runs.iter().rev() {
             let x0 = x.clone();
