@@ -12,7 +12,12 @@
 //! A run of one field merges (`Phi^a_s o Phi^a_t = Phi^a_{s+t}`), so a run of
 //! length m is one variable truncated at degree m, and the derivative is m!
 //! times a coefficient. Each flow is a truncated Taylor series computed by
-//! Picard iteration (one order per pass) on the expression DAG; every
+//! Picard iteration (one order per pass) on the expression DAG: pass c only
+//! adds the coefficients of degree c of each op (the lower ones, computed
+//! from coefficients of the flow that were already exact, stay in the ops'
+//! slots), so a product costs O(m^2) coefficient products per sweep for
+//! the whole run, not O(m^3); [`LieJets::run_rows`] reads every shorter run
+//! off one sweep. Every
 //! coefficient also carries its first-order part in each state variable
 //! (dual numbers), which is the gradient. Functions become series by their
 //! Taylor expansions at the point (`exp`, `sin`/`cos` from the point's

@@ -265,6 +265,12 @@ pub(super) struct Scratch2 {
     acc: Vec<u128>,
 }
 
+/// Pairs of products summed unreduced between two folds of an accumulator:
+/// a product of two values below p = 2^61 - 1 is below 2^122, so a folded
+/// accumulator (below 2^68) plus 2 (LAZY - 1) = 62 products stays below
+/// 2^128.
+const LAZY: usize = 32;
+
 /// `w mod p` up to a multiple of p, below 2^62: products are summed
 /// unreduced (2^66 of them fit in a u128).
 #[inline(always)]
@@ -471,22 +477,25 @@ impl Vals<'_> {
             } else {
                 &by_k[k]
             };
-            for &(i, j) in pairs {
+            for (n, &(i, j)) in pairs.iter().enumerate() {
                 let (i, j) = (i as usize, j as usize);
                 if fb.tconst && j > 0 {
                     continue;
                 }
+                if n % LAZY == LAZY - 1 {
+                    acc.iter_mut().for_each(|x| *x = fold(*x));
+                }
                 let (ai, bj) = (&a[i * w..i * w + w], &b[j * w..j * w + w]);
                 let (av, bv) = (ai[0].0 as u128, bj[0].0 as u128);
-                acc[0] += fold(av * bv);
+                acc[0] += av * bv;
                 if fb.eps && av != 0 {
                     for (x, y) in acc[1..].iter_mut().zip(&bj[1..]) {
-                        *x += fold(av * y.0 as u128);
+                        *x += av * y.0 as u128;
                     }
                 }
                 if fa.eps && bv != 0 {
                     for (x, y) in acc[1..].iter_mut().zip(&ai[1..]) {
-                        *x += fold(y.0 as u128 * bv);
+                        *x += y.0 as u128 * bv;
                     }
                 }
             }
