@@ -331,7 +331,10 @@ impl JetRows<'_> {
             }
         }
         let degree = self.degrees.get(&(output, vec![field; k])).copied();
-        Ok(self.runs.get(&key).map(|g| (g.clone(), degree.unwrap_or(0))))
+        Ok(self
+            .runs
+            .get(&key)
+            .map(|g| (g.clone(), degree.unwrap_or(0))))
     }
 }
 

@@ -463,7 +463,11 @@ fn random_words_agree_with_graph_rows() {
                 for (j, r) in rows.iter().enumerate() {
                     let alone = jets.row(0, &vec![f; j], &pt, true).unwrap();
                     let what = format!("{src}\nrun of {f} to {len}, prefix {j}");
-                    assert_eq!((&r.gradient, r.value), (&alone.gradient, alone.value), "{what}");
+                    assert_eq!(
+                        (&r.gradient, r.value),
+                        (&alone.gradient, alone.value),
+                        "{what}"
+                    );
                     assert_eq!(r.degree, alone.degree, "{what}");
                 }
             }

@@ -365,7 +365,9 @@ impl LieJets {
         let mut rows = self.prefix_rows(output, &word, point)?;
         if track {
             let sh = Shape::new(self.n, &[k]);
-            let limit = self.bounds(&sh).run_limit(&self.fields[field], &self.outputs[output]);
+            let limit = self
+                .bounds(&sh)
+                .run_limit(&self.fields[field], &self.outputs[output]);
             for (j, row) in rows.iter_mut().enumerate() {
                 row.degree = match &limit {
                     Some(h) if j > 0 => h[j + 1].as_ref().map(|d| d.n),

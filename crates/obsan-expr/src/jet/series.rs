@@ -451,14 +451,23 @@ impl Vals<'_> {
                 }
             }
         }
-        cs.iter().fold(flags[cs[0] as usize], |a, &c| a.join(flags[c as usize]))
+        cs.iter()
+            .fold(flags[cs[0] as usize], |a, &c| a.join(flags[c as usize]))
     }
 
     /// `out[k] = (a b)[k] = sum_{i + j = k} a_i b_j` (dual numbers) for the
     /// fresh k: a Picard pass adds one t-degree, so each coefficient of a
     /// product is computed once per sweep (O(k) for coefficient k, not the
     /// O(k^2) of recomputing the truncated product in every pass).
-    fn mul_at(&self, acc: &mut Vec<u128>, out: &mut [Fp], a: &[Fp], fa: Fl, b: &[Fp], fb: Fl) -> Fl {
+    fn mul_at(
+        &self,
+        acc: &mut Vec<u128>,
+        out: &mut [Fp],
+        a: &[Fp],
+        fa: Fl,
+        b: &[Fp],
+        fb: Fl,
+    ) -> Fl {
         let (a, fa, b, fb) = if fb.tconst && !fa.tconst {
             (b, fb, a, fa)
         } else {
@@ -472,11 +481,7 @@ impl Vals<'_> {
             let k = k as usize;
             acc.fill(0);
             // With `a` t-constant only the pair (0, k) can be non-zero.
-            let pairs: &[(u32, u32)] = if fa.tconst {
-                &by_k[k][..1]
-            } else {
-                &by_k[k]
-            };
+            let pairs: &[(u32, u32)] = if fa.tconst { &by_k[k][..1] } else { &by_k[k] };
             for (n, &(i, j)) in pairs.iter().enumerate() {
                 let (i, j) = (i as usize, j as usize);
                 if fb.tconst && j > 0 {
@@ -508,7 +513,13 @@ impl Vals<'_> {
 
     /// `out = 1 / a` at the fresh indices, by the recurrence of
     /// [`Vals::inv`] (index 0 first, then each from lower ones).
-    fn inv_at(&self, acc: &mut Vec<u128>, out: &mut [Fp], a: &[Fp], fa: Fl) -> Result<Fl, BadPoint> {
+    fn inv_at(
+        &self,
+        acc: &mut Vec<u128>,
+        out: &mut [Fp],
+        a: &[Fp],
+        fa: Fl,
+    ) -> Result<Fl, BadPoint> {
         let w = self.sh.w;
         if fa.is_const() {
             let i0 = a[0].inv().ok_or(BadPoint)?;
