@@ -437,7 +437,10 @@ fn random_words_agree_with_graph_rows() {
         let vars = nf.state_vars.clone();
         for _ in 0..6 {
             let len = 1 + (rng.next_u64() % 6) as usize;
-            let one = (rng.next_u64() % 2 == 0).then(|| (rng.next_u64() % m as u64) as usize);
+            let one = rng
+                .next_u64()
+                .is_multiple_of(2)
+                .then(|| (rng.next_u64() % m as u64) as usize);
             let w: Vec<usize> = (0..len)
                 .map(|_| one.unwrap_or_else(|| (rng.next_u64() % m as u64) as usize))
                 .collect();

@@ -2,6 +2,8 @@
 //! place: every op writes one slot of an arena that is kept across points,
 //! and temporaries come from a pool, so a sweep allocates nothing once warm.
 //! Products accumulate unreduced in u128 and reduce once per coefficient.
+//! The polynomial ops compute only the coefficients a Picard pass adds
+//! ([`Vals::run`]); the others recompute their sub-box.
 
 use super::compile::{Op, Program};
 use crate::eval::{BadPoint, FpPoint};
@@ -704,7 +706,11 @@ impl Vals<'_> {
     }
 
     /// Runs `prog` on the state series `x` (`n` slots, flags `xf`); the
-    /// values stay in `sc` (see [`Vals::root`]).
+    /// values stay in `sc` (see [`Vals::root`]). Sums, products and
+    /// inverses write only the `fresh` indices and read their arguments at
+    /// lower ones: the caller runs the same program on the sub-boxes of one
+    /// run in increasing order, starting with a `fresh` that is the whole
+    /// sub-box, and changes `x` only at indices no pass has read yet.
     pub(super) fn run(
         &self,
         sc: &mut Scratch,
