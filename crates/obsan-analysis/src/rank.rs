@@ -286,6 +286,56 @@ impl Rows for SymbolicRows<'_> {
 struct JetRows<'a> {
     jets: &'a LieJets,
     degrees: &'a mut HashMap<(usize, Vec<usize>), u64>,
+    /// Gradients at this point of the words of one field repeated, by
+    /// (output, field, order): one sweep of a longer such word gives every
+    /// shorter one ([`LieJets::run_rows`]).
+    runs: HashMap<(usize, usize, usize), Vec<Fp>>,
+    /// The longest word the growth can ask for (it stops once every level
+    /// has raised the rank: at most m - 1 fields for m columns).
+    cap: usize,
+}
+
+impl JetRows<'_> {
+    /// The row of `field` applied `k` times to `output`, from the cache or
+    /// from the sweep of a longer run: twice as long (so the sweeps of a
+    /// chain of orders cost a constant factor of the last one, O(k^2) each),
+    /// or the longest possible once that is within four times as long.
+    fn run_row(
+        &mut self,
+        output: usize,
+        field: usize,
+        k: usize,
+        point: &FpPoint,
+    ) -> Result<Option<(Vec<Fp>, u64)>, AnalysisError> {
+        let key = (output, field, k);
+        if !self.runs.contains_key(&key) {
+            let mut len = if 4 * k >= self.cap { self.cap } else { 2 * k }.max(k);
+            if obsan_expr::check_memory(self.jets.sweep_bytes(&vec![field; len]), "").is_err() {
+                len = k;
+            }
+            obsan_expr::check_memory(
+                self.jets.sweep_bytes(&vec![field; len]),
+                "the jets of the rank test",
+            )
+            .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
+            let track = (1..=len).any(|j| !self.degrees.contains_key(&(output, vec![field; j])));
+            let rows = self
+                .jets
+                .run_rows(output, field, len, point, track)
+                .map_err(|BadPoint| AnalysisError::NoPoint)?;
+            for (j, row) in rows.into_iter().enumerate().skip(1) {
+                if let Some(d) = row.degree {
+                    self.degrees.entry((output, vec![field; j])).or_insert(d);
+                }
+                self.runs.insert((output, field, j), row.gradient);
+            }
+        }
+        let degree = self.degrees.get(&(output, vec![field; k])).copied();
+        Ok(self
+            .runs
+            .get(&key)
+            .map(|g| (g.clone(), degree.unwrap_or(0))))
+    }
 }
 
 impl Rows for JetRows<'_> {
@@ -297,6 +347,14 @@ impl Rows for JetRows<'_> {
         _: &(),
         point: &FpPoint,
     ) -> Result<(Vec<Fp>, u64), AnalysisError> {
+        if let [first, rest @ ..] = word.fields.as_slice() {
+            if rest.iter().all(|f| f == first) {
+                let k = word.fields.len();
+                if let Some(r) = self.run_row(word.output, *first, k, point)? {
+                    return Ok(r);
+                }
+            }
+        }
         let key = (word.output, word.fields.clone());
         let known = self.degrees.get(&key).copied();
         obsan_expr::check_memory(
@@ -507,6 +565,8 @@ fn rank_with(
             let mut rows = JetRows {
                 jets,
                 degrees: &mut degrees,
+                runs: HashMap::new(),
+                cap: m.saturating_sub(1).max(1),
             };
             grow(
                 nf,

@@ -352,40 +352,70 @@ fn names_of(
     Ok(out)
 }
 
-fn convert(
-    roles: BTreeMap<&str, Vector>,
-    syms: &[String],
-    saved: Option<String>,
-    origin: &str,
-) -> Result<Converted, ImportError> {
-    let need = |k: &str, what: &str| -> Result<(), ImportError> {
-        if roles.contains_key(k) {
-            Ok(())
-        } else {
-            Err(ImportError::at(
+/// A model's roles, checked: the names declared as states, parameters,
+/// known and unknown inputs, and the entries of `f` and `h`.
+struct Model {
+    states: Vec<(String, At)>,
+    params: Vec<(String, At)>,
+    inputs: Vec<(String, At)>,
+    unknown: Vec<(String, At)>,
+    f: Vec<(Ex, At)>,
+    h: Vec<(Ex, At)>,
+}
+
+impl Model {
+    /// Every declared name (x, p, u, w).
+    fn declared(&self) -> Vec<&str> {
+        self.states
+            .iter()
+            .chain(&self.params)
+            .chain(&self.inputs)
+            .chain(&self.unknown)
+            .map(|n| n.0.as_str())
+            .collect()
+    }
+}
+
+/// Step 1: the roles present (x, f, h required), each list of names made
+/// of names, one entry of `f` per state, no name declared twice.
+fn checked_roles(roles: &BTreeMap<&str, Vector>) -> Result<Model, ImportError> {
+    for (k, what) in [
+        ("x", "the states"),
+        ("f", "the dynamics"),
+        ("h", "the outputs"),
+    ] {
+        if !roles.contains_key(k) {
+            return Err(ImportError::at(
                 1,
                 1,
                 format!("no '{k} = [...]' ({what}) in the file"),
-            ))
+            ));
         }
+    }
+    let m = Model {
+        states: names_of(roles, "x", "the states")?,
+        params: names_of(roles, "p", "the parameters")?,
+        inputs: names_of(roles, "u", "the known inputs")?,
+        unknown: names_of(roles, "w", "the unknown inputs")?,
+        f: roles.get("f").cloned().unwrap_or_default().0,
+        h: roles.get("h").cloned().unwrap_or_default().0,
     };
-    need("x", "the states")?;
-    need("f", "the dynamics")?;
-    need("h", "the outputs")?;
-    let states = names_of(&roles, "x", "the states")?;
-    let params = names_of(&roles, "p", "the parameters")?;
-    let inputs = names_of(&roles, "u", "the known inputs")?;
-    let unknown = names_of(&roles, "w", "the unknown inputs")?;
-    let (f, fat) = roles.get("f").cloned().unwrap_or_default();
-    if f.len() != states.len() {
+    if m.f.len() != m.states.len() {
+        let fat = roles.get("f").map_or((1, 1), |v| v.1);
         return Err(ImportError::at(
             fat.0,
             fat.1,
-            format!("f has {} entries for {} states", f.len(), states.len()),
+            format!("f has {} entries for {} states", m.f.len(), m.states.len()),
         ));
     }
     let mut all: Vec<&str> = Vec::new();
-    for (n, at) in states.iter().chain(&params).chain(&inputs).chain(&unknown) {
+    for (n, at) in m
+        .states
+        .iter()
+        .chain(&m.params)
+        .chain(&m.inputs)
+        .chain(&m.unknown)
+    {
         if all.contains(&n.as_str()) {
             return Err(ImportError::at(
                 at.0,
@@ -395,11 +425,16 @@ fn convert(
         }
         all.push(n);
     }
-    let (h, _) = roles.get("h").cloned().unwrap_or_default();
-    // A symbol declared with `syms` but in none of x, p, u, w is a known
-    // constant, as STRIKE-GOLDD reads it.
+    Ok(m)
+}
+
+/// Step 2: the known constants. A symbol declared with `syms` but in none
+/// of x, p, u, w is a known constant, as STRIKE-GOLDD reads it; any other
+/// name in `f` or `h` is refused at its place.
+fn constants(m: &Model, syms: &[String]) -> Result<Vec<String>, ImportError> {
+    let all = m.declared();
     let mut consts: Vec<String> = Vec::new();
-    for (e, _) in f.iter().chain(&h) {
+    for (e, _) in m.f.iter().chain(&m.h) {
         let mut bad = None;
         walk_names_at(e, &mut |n, p| {
             if all.contains(&n) || consts.iter().any(|c| c == n) {
@@ -425,21 +460,33 @@ fn convert(
             ));
         }
     }
-    let rename = |n: &str| -> String {
-        if RESERVED.contains(&n) {
-            format!("{n}_")
-        } else {
-            n.to_string()
-        }
-    };
+    Ok(consts)
+}
+
+/// Step 3: the system's name: `save('NAME', ...)`'s, else the file's stem
+/// less `z_create_`, made a valid `.sys` name.
+fn system_name(saved: Option<String>, origin: &str) -> String {
     let stem = origin
         .rsplit(['/', '\\'])
         .next()
         .unwrap_or(origin)
         .trim_end_matches(".m");
-    let mut name =
-        saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
-    name = sys_identifier(&name);
+    let name = saved.unwrap_or_else(|| stem.strip_prefix("z_create_").unwrap_or(stem).to_string());
+    sys_identifier(&name)
+}
+
+/// `.sys` names: a reserved word gets a trailing `_`.
+fn rename(n: &str) -> String {
+    if RESERVED.contains(&n) {
+        format!("{n}_")
+    } else {
+        n.to_string()
+    }
+}
+
+/// Step 4: the `.sys` text, with the source place of each equation and
+/// output line.
+fn write_sys(m: &Model, consts: &[String], name: String, origin: &str) -> Converted {
     let list = |v: &[(String, At)]| {
         v.iter()
             .map(|x| rename(&x.0))
@@ -452,35 +499,35 @@ fn convert(
             one_line(origin)
         ),
         format!("system {name}"),
-        format!("state {}", list(&states)),
+        format!("state {}", list(&m.states)),
     ];
-    if !params.is_empty() {
-        lines.push(format!("param {}", list(&params)));
-    }
-    if !inputs.is_empty() {
-        lines.push(format!("input {}", list(&inputs)));
-    }
-    if !unknown.is_empty() {
-        lines.push(format!("unknown input {}", list(&unknown)));
+    for (kw, v) in [
+        ("param", &m.params),
+        ("input", &m.inputs),
+        ("unknown input", &m.unknown),
+    ] {
+        if !v.is_empty() {
+            lines.push(format!("{kw} {}", list(v)));
+        }
     }
     if !consts.is_empty() {
         let c: Vec<String> = consts.iter().map(|c| rename(c)).collect();
         lines.push(format!("const {}", c.join(", ")));
     }
     let mut line_map = Vec::new();
-    for ((s, _), (e, at)) in states.iter().zip(&f) {
+    for ((s, _), (e, at)) in m.states.iter().zip(&m.f) {
         let mut t = String::new();
         show(e, &mut t, &rename);
         lines.push(format!("{}' = {t}", rename(s)));
         line_map.push((lines.len(), at.0, at.1));
     }
     // Outputs y1, y2, ... unless a declared name has that form.
-    let clash = all.iter().any(|n| {
+    let clash = m.declared().iter().any(|n| {
         n.strip_prefix('y')
             .is_some_and(|d| !d.is_empty() && d.chars().all(|c| c.is_ascii_digit()))
     });
     let base = if clash { "y_out" } else { "y" };
-    for (k, (e, at)) in h.iter().enumerate() {
+    for (k, (e, at)) in m.h.iter().enumerate() {
         let mut t = String::new();
         show(e, &mut t, &rename);
         lines.push(format!("output {base}{} = {t}", k + 1));
@@ -488,10 +535,21 @@ fn convert(
     }
     let mut sys_text = lines.join("\n");
     sys_text.push('\n');
-    Ok(Converted {
+    Converted {
         name,
         sys_text,
         line_map,
         table_lines: Vec::new(),
-    })
+    }
+}
+
+fn convert(
+    roles: BTreeMap<&str, Vector>,
+    syms: &[String],
+    saved: Option<String>,
+    origin: &str,
+) -> Result<Converted, ImportError> {
+    let m = checked_roles(&roles)?;
+    let consts = constants(&m, syms)?;
+    Ok(write_sys(&m, &consts, system_name(saved, origin), origin))
 }

@@ -87,25 +87,6 @@ impl Bounds<'_> {
             fl: a.fl.join(b.fl),
         }
     }
-    /// `a^k` by squaring, in the order of the values' `pow`.
-    fn pow(&self, a: &DJet, mut k: u32) -> DJet {
-        let mut acc: Option<DJet> = None;
-        let mut b = a.clone();
-        loop {
-            if k & 1 == 1 {
-                acc = Some(match acc {
-                    None => b.clone(),
-                    Some(x) => self.mul(&x, &b),
-                });
-            }
-            k >>= 1;
-            if k == 0 {
-                break;
-            }
-            b = self.mul(&b, &b);
-        }
-        acc.unwrap_or_else(|| self.constant(Deg::poly(0)))
-    }
     /// `1 / a`, where `inverses[idx]` bounds `1 / a0`.
     fn inv(&self, a: &DJet, idx: usize) -> DJet {
         let id = &self.inverses[idx];
@@ -156,11 +137,8 @@ impl Bounds<'_> {
                 Op::Add(cs) => cs[1..]
                     .iter()
                     .fold(at(&cs[0]).clone(), |a, c| self.add(&a, at(c))),
-                Op::Mul(cs) => cs[1..]
-                    .iter()
-                    .fold(at(&cs[0]).clone(), |a, c| self.mul(&a, at(c))),
-                Op::Pow(b, k) => self.pow(at(b), *k),
-                Op::InvPow(b, k, idx) => self.pow(&self.inv(at(b), *idx), *k),
+                Op::Mul(a, b) => self.mul(at(a), at(b)),
+                Op::Inv(b, idx) => self.inv(at(b), *idx),
                 Op::Exp(_, arg, _) | Op::Sin(_, _, arg, _) | Op::Cos(_, _, arg, _)
                     if at(arg).fl.is_const() =>
                 {
@@ -222,5 +200,138 @@ impl Bounds<'_> {
             .iter()
             .map(|&r| vals[r as usize].clone())
             .collect()
+    }
+}
+
+/// Per op, its bounds by grade (`None`: structurally zero).
+type Grades = Vec<Option<Deg>>;
+
+impl Bounds<'_> {
+    /// The bounds of `h` along one run of a field, every grade at once
+    /// (grades `0..=sh.grades`), or `None` if a program holds an op other
+    /// than sums, products and inverses.
+    ///
+    /// The Picard iteration of [`Bounds::run`] makes grade g of the flow
+    /// final after g passes (grade g of an op reads only grades <= g of its
+    /// arguments, and integration raises the grade), so the flow is
+    /// computed one grade per pass from final lower grades, and each grade
+    /// of each op once: O(grades^2) products per op instead of O(grades^3).
+    /// Grade j + 1 of `h` is then the bound of every coefficient of that
+    /// grade in the sweep of the run of length grades - 1, among them the
+    /// gradient of the Lie derivative of order j: one sweep bounds every
+    /// prefix of the run. (The per-word [`Bounds::run`] stops after as many
+    /// passes as the word is long, where grade j + 1 is not yet final:
+    /// another bound of the same coefficients, not always the same number.)
+    pub(super) fn run_limit(&self, field: &Program, out: &Program) -> Option<Grades> {
+        let supported = |p: &Program| {
+            p.ops.iter().all(|op| {
+                matches!(
+                    op,
+                    Op::Const(_)
+                        | Op::NoValue
+                        | Op::Fixed(_)
+                        | Op::State(_)
+                        | Op::Add(_)
+                        | Op::Mul(..)
+                        | Op::Inv(..)
+                )
+            })
+        };
+        if !supported(field) || !supported(out) {
+            return None;
+        }
+        let top = self.sh.grades;
+        let n = field.roots.len();
+        let mut x: Vec<Grades> = (0..n).map(|_| self.state().d).collect();
+        let mut fv = Limit::new(field, top);
+        for g in 0..top {
+            fv.grade(self, &x, g);
+            for (xs, &r) in x.iter_mut().zip(&field.roots) {
+                // x = x0 + int f: x0 has grades 0 and 1 only.
+                let f = &fv.vals[r as usize][g];
+                xs[g + 1] = self.join(&xs[g + 1], f);
+            }
+        }
+        let mut hv = Limit::new(out, top);
+        for g in 0..=top {
+            hv.grade(self, &x, g);
+        }
+        Some(hv.vals[out.roots[0] as usize].clone())
+    }
+}
+
+/// The by-grade values of one program's ops ([`Bounds::run_limit`]).
+struct Limit<'p> {
+    prog: &'p Program,
+    vals: Vec<Grades>,
+    /// The series `sum_k (-M)^k` of each inverse (see [`Bounds::inv`]).
+    aux: Vec<Grades>,
+    /// Ops that do not depend on the state.
+    konst: Vec<bool>,
+}
+
+impl<'p> Limit<'p> {
+    fn new(prog: &'p Program, top: usize) -> Limit<'p> {
+        let mut konst: Vec<bool> = Vec::with_capacity(prog.ops.len());
+        for op in &prog.ops {
+            let k = match op {
+                Op::State(_) => false,
+                Op::Add(cs) => cs.iter().all(|&c| konst[c as usize]),
+                Op::Mul(a, b) => konst[*a as usize] && konst[*b as usize],
+                Op::Inv(b, _) => konst[*b as usize],
+                _ => true,
+            };
+            konst.push(k);
+        }
+        Limit {
+            prog,
+            vals: vec![vec![None; top + 1]; prog.ops.len()],
+            aux: vec![vec![None; top + 1]; prog.ops.len()],
+            konst,
+        }
+    }
+
+    /// Grade `g` of every op, from grades `< g` of the ops and `<= g` of `x`.
+    fn grade(&mut self, b: &Bounds, x: &[Grades], g: usize) {
+        for (i, op) in self.prog.ops.iter().enumerate() {
+            let d0 = &self.prog.deg0[i];
+            if g == 0 {
+                self.vals[i][0] = Some(d0.clone());
+                if let Op::Inv(..) = op {
+                    self.aux[i][0] = Some(Deg::poly(0));
+                }
+                continue;
+            }
+            let v = match op {
+                Op::State(k) => x[*k][g].clone(),
+                Op::Add(cs) => cs
+                    .iter()
+                    .fold(None, |a, &c| b.join(&a, &self.vals[c as usize][g])),
+                Op::Mul(p, q) => {
+                    let (p, q) = (&self.vals[*p as usize], &self.vals[*q as usize]);
+                    (0..=g).fold(None, |acc, j| match (&p[j], &q[g - j]) {
+                        (Some(u), Some(v)) => b.join(&acc, &Some(b.bases.mul(u, v))),
+                        _ => acc,
+                    })
+                }
+                Op::Inv(a, idx) if !self.konst[*a as usize] => {
+                    // A_g = join_{j >= 1} (a_j / a0) A_{g-j}; the inverse is A / a0.
+                    let id = &b.inverses[*idx];
+                    let a = &self.vals[*a as usize];
+                    let aux = &self.aux[i];
+                    let s = (1..=g).fold(None, |acc, j| match (&a[j], &aux[g - j]) {
+                        (Some(u), Some(v)) => {
+                            b.join(&acc, &Some(b.bases.mul(&b.bases.mul(u, id), v)))
+                        }
+                        _ => acc,
+                    });
+                    let r = s.as_ref().map(|s| b.bases.mul(id, s));
+                    self.aux[i][g] = s;
+                    r
+                }
+                _ => None,
+            };
+            self.vals[i][g] = v;
+        }
     }
 }

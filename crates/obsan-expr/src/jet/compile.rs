@@ -86,11 +86,11 @@ pub(super) enum Op {
     /// angle or exponential of such a symbol): its value at the point.
     Fixed(Var),
     Add(Vec<u32>),
-    Mul(Vec<u32>),
-    /// `x^e`, e > 0.
-    Pow(u32, u32),
-    /// `x^-e`, e > 0, with the bound of `1/x`.
-    InvPow(u32, u32, usize),
+    /// A binary product (products of more factors and powers are chains of
+    /// them).
+    Mul(u32, u32),
+    /// `1/x`, with the bound of `1/x`.
+    Inv(u32, usize),
     /// `exp(a)`, `sin(a)`, `cos(a)` with the argument `a = arg / den`.
     Exp(Var, u32, u64),
     /// With the partner leaf (cos of a sin leaf, sin of a cos leaf).
@@ -130,14 +130,53 @@ impl Compiler<'_> {
         self.inverses.len() - 1
     }
 
+    /// A binary product op (its bound is the product of the bounds).
+    fn mul2(&mut self, ops: &mut Vec<Op>, deg0: &mut Vec<Deg>, a: u32, b: u32) -> u32 {
+        let d = self.bases.mul(&deg0[a as usize], &deg0[b as usize]);
+        ops.push(Op::Mul(a, b));
+        deg0.push(d);
+        (ops.len() - 1) as u32
+    }
+
+    /// A product of several factors as a chain of binary products, left to
+    /// right: the series ops then hold every partial product, so a Picard
+    /// pass can compute only its new coefficients of each (see
+    /// [`super::series`]). The bounds are those of the n-ary fold.
+    fn product(&mut self, ops: &mut Vec<Op>, deg0: &mut Vec<Deg>, args: &[u32]) -> u32 {
+        let mut acc = args[0];
+        for &c in &args[1..] {
+            acc = self.mul2(ops, deg0, acc, c);
+        }
+        acc
+    }
+
+    /// `x^k`, k >= 1, as binary products by squaring (the order of the
+    /// bounds' `pow`).
+    fn power(&mut self, ops: &mut Vec<Op>, deg0: &mut Vec<Deg>, x: u32, mut k: u32) -> u32 {
+        let (mut acc, mut b) = (None, x);
+        loop {
+            if k & 1 == 1 {
+                acc = Some(match acc {
+                    None => b,
+                    Some(a) => self.mul2(ops, deg0, a, b),
+                });
+            }
+            k >>= 1;
+            if k == 0 {
+                break;
+            }
+            b = self.mul2(ops, deg0, b, b);
+        }
+        acc.unwrap_or(x)
+    }
+
     pub(super) fn compile(&mut self, roots: &[Id]) -> Program {
         let ctx = self.ctx;
         let order = ctx.reachable(roots);
         let mut local: FxHashMap<Id, u32> = FxHashMap::default();
         let mut ops = Vec::with_capacity(order.len());
         let mut deg0: Vec<Deg> = Vec::with_capacity(order.len());
-        for (i, &id) in order.iter().enumerate() {
-            local.insert(id, i as u32);
+        for &id in &order {
             let l = |x: Id| local[&x];
             let (op, d) = match ctx.node(id) {
                 Node::Num(q) => match q.to_fp() {
@@ -155,29 +194,27 @@ impl Compiler<'_> {
                     (Op::Add(cs.iter().map(|&c| l(c)).collect()), d)
                 }
                 Node::Mul(cs) => {
-                    let d = cs
-                        .iter()
-                        .skip(1)
-                        .fold(deg0[l(cs[0]) as usize].clone(), |a, c| {
-                            self.bases.mul(&a, &deg0[l(*c) as usize])
-                        });
-                    (Op::Mul(cs.iter().map(|&c| l(c)).collect()), d)
+                    let args: Vec<u32> = cs.iter().map(|&c| l(c)).collect();
+                    let top = self.product(&mut ops, &mut deg0, &args);
+                    local.insert(id, top);
+                    continue;
                 }
                 Node::Pow(b, e) => {
                     let k = e.unsigned_abs();
-                    let base = if *e > 0 {
-                        deg0[l(*b) as usize].clone()
-                    } else {
-                        let idx = self.inverse(&deg0[l(*b) as usize].clone());
-                        ops.push(Op::InvPow(l(*b), k, idx));
-                        let d = pow_deg(&self.inverses[idx], k);
-                        deg0.push(d);
-                        continue;
-                    };
-                    (Op::Pow(l(*b), k), pow_deg(&base, k))
+                    let mut base = l(*b);
+                    if *e < 0 {
+                        let idx = self.inverse(&deg0[base as usize].clone());
+                        ops.push(Op::Inv(base, idx));
+                        deg0.push(self.inverses[idx].clone());
+                        base = (ops.len() - 1) as u32;
+                    }
+                    let top = self.power(&mut ops, &mut deg0, base, k);
+                    local.insert(id, top);
+                    continue;
                 }
                 Node::Leaf(v) => self.leaf(*v, &l, &deg0),
             };
+            local.insert(id, ops.len() as u32);
             ops.push(op);
             deg0.push(d);
         }
@@ -255,12 +292,5 @@ impl Compiler<'_> {
                 (Op::Sqrt(v, l(*u), self.inverse(&d)), Deg::poly(n))
             }
         }
-    }
-}
-
-pub(super) fn pow_deg(d: &Deg, k: u32) -> Deg {
-    Deg {
-        n: d.n.saturating_mul(k as u64),
-        e: d.e.iter().map(|&x| x.saturating_mul(k)).collect(),
     }
 }

@@ -12,7 +12,12 @@
 //! A run of one field merges (`Phi^a_s o Phi^a_t = Phi^a_{s+t}`), so a run of
 //! length m is one variable truncated at degree m, and the derivative is m!
 //! times a coefficient. Each flow is a truncated Taylor series computed by
-//! Picard iteration (one order per pass) on the expression DAG; every
+//! Picard iteration (one order per pass) on the expression DAG: pass c only
+//! adds the coefficients of degree c of each op (the lower ones, computed
+//! from coefficients of the flow that were already exact, stay in the ops'
+//! slots), so a product costs O(m^2) coefficient products per sweep for
+//! the whole run, not O(m^3); [`LieJets::run_rows`] reads every shorter run
+//! off one sweep. Every
 //! coefficient also carries its first-order part in each state variable
 //! (dual numbers), which is the gradient. Functions become series by their
 //! Taylor expansions at the point (`exp`, `sin`/`cos` from the point's
@@ -282,7 +287,7 @@ impl LieJets {
             shapes,
             runs,
             x,
-            x0,
+            x0f,
             xf,
             h,
             vals,
@@ -303,28 +308,28 @@ impl LieJets {
             });
         }
         for (j, &(field, m)) in runs.iter().enumerate().rev() {
-            x0.clear();
-            x0.extend_from_slice(x);
-            let x0f: Vec<Fl> = xf.clone();
+            x0f.clear();
+            x0f.extend_from_slice(xf);
             let prog = &self.fields[field];
             for pass in 0..m {
                 // Picard pass `pass` makes the flow exact to t_j-degree
-                // pass + 1; it needs the field to degree `pass` only.
+                // pass + 1; it needs the field to degree `pass` only, and
+                // the field's coefficients of lower degree are those of the
+                // previous pass (computed from the same, already exact,
+                // coefficients of the flow), kept in the slots.
                 let ar = Vals {
                     sh,
                     v: sh.view(j, pass),
+                    fresh: sh.fresh(j, pass),
                     len,
                     point,
                 };
                 ar.run(vals, prog, x, xf)?;
-                // x = x0 + int_0^{t_j} f(x).
+                // x = x0 + int_0^{t_j} f(x): x0 has no positive t_j-degree.
                 for (k, &r) in prog.roots.iter().enumerate() {
                     let (f, ff) = ar.root(vals, r);
                     let out = &mut x[k * len..(k + 1) * len];
-                    let fi = ar.integrate(out, f, ff, j);
-                    for (a, &b) in out.iter_mut().zip(&x0[k * len..(k + 1) * len]) {
-                        *a = *a + b;
-                    }
+                    let fi = ar.integrate_at(out, f, ff, j);
                     xf[k] = fi.join(x0f[k]);
                 }
             }
@@ -332,6 +337,7 @@ impl LieJets {
         let ar = Vals {
             sh,
             v: sh.full(),
+            fresh: sh.all(),
             len,
             point,
         };
@@ -343,14 +349,58 @@ impl LieJets {
         Ok(pos)
     }
 
-    /// The numerator degree bound of the row of `h_output` along `runs`
-    /// (structural: the same sweep on bounds, [`bound`]).
-    fn degree(&self, output: usize, runs: &[(usize, usize)], sh: &Shape) -> Option<u64> {
-        let b = Bounds {
+    /// The rows of `L_field^j h_output` for j = 0 to k (the prefixes of the
+    /// word of k times `field`, [`LieJets::prefix_rows`]), with the degree
+    /// bound of each when `track`: from one sweep of bounds when the
+    /// programs are rational ([`bound`]'s `run_limit`), else one per row.
+    pub fn run_rows(
+        &self,
+        output: usize,
+        field: usize,
+        k: usize,
+        point: &FpPoint,
+        track: bool,
+    ) -> Result<Vec<LieRow>, BadPoint> {
+        let word = vec![field; k];
+        let mut rows = self.prefix_rows(output, &word, point)?;
+        if track {
+            let sh = Shape::new(self.n, &[k]);
+            let limit = self
+                .bounds(&sh)
+                .run_limit(&self.fields[field], &self.outputs[output]);
+            for (j, row) in rows.iter_mut().enumerate() {
+                row.degree = match &limit {
+                    Some(h) if j > 0 => h[j + 1].as_ref().map(|d| d.n),
+                    _ => {
+                        let runs: Vec<(usize, usize)> =
+                            (j > 0).then_some((field, j)).into_iter().collect();
+                        let caps: Vec<usize> = runs.iter().map(|r| r.1).collect();
+                        self.degree(output, &runs, &Shape::new(self.n, &caps))
+                    }
+                };
+            }
+        }
+        Ok(rows)
+    }
+
+    fn bounds<'s>(&'s self, sh: &'s Shape) -> Bounds<'s> {
+        Bounds {
             sh,
             bases: &self.bases,
             inverses: &self.inverses,
-        };
+        }
+    }
+
+    /// The numerator degree bound of the row of `h_output` along `runs`
+    /// (structural: the same sweep on bounds, [`bound`]). One run of a
+    /// rational field: every grade at its limit, as [`LieJets::run_rows`].
+    fn degree(&self, output: usize, runs: &[(usize, usize)], sh: &Shape) -> Option<u64> {
+        let b = self.bounds(sh);
+        if let [(field, _)] = runs {
+            if let Some(h) = b.run_limit(&self.fields[*field], &self.outputs[output]) {
+                return h[sh.grades].as_ref().map(|d| d.n);
+            }
+        }
         let mut x: Vec<DJet> = (0..self.n).map(|_| b.state()).collect();
         for &(field, m) in runs.iter().rev() {
             let x0 = x.clone();
@@ -409,7 +459,7 @@ struct Sweep {
     caps: Vec<usize>,
     runs: Vec<(usize, usize)>,
     x: Vec<Fp>,
-    x0: Vec<Fp>,
+    x0f: Vec<Fl>,
     xf: Vec<Fl>,
     /// The series of the output after the last sweep.
     h: Vec<Fp>,

@@ -2,6 +2,8 @@
 //! place: every op writes one slot of an arena that is kept across points,
 //! and temporaries come from a pool, so a sweep allocates nothing once warm.
 //! Products accumulate unreduced in u128 and reduce once per coefficient.
+//! The polynomial ops compute only the coefficients a Picard pass adds
+//! ([`Vals::run`]); the others recompute their sub-box.
 
 use super::compile::{Op, Program};
 use crate::eval::{BadPoint, FpPoint};
@@ -27,6 +29,9 @@ pub(super) struct Shape {
     views: Vec<View>,
     /// Index in `views` of run j's first sub-box.
     first: Vec<usize>,
+    /// Per view: the indices it adds to the previous sub-box of its run
+    /// (all of its members for the whole box and for cap 0), ascending.
+    fresh: Vec<Vec<u32>>,
 }
 
 /// A sub-box of a shape (a lower set of indices, so the indices outside it
@@ -85,6 +90,7 @@ impl Shape {
             }
         };
         let mut views = vec![view(caps)];
+        let mut fresh = vec![views[0].members.clone()];
         let mut first = Vec::with_capacity(caps.len());
         for j in 0..caps.len() {
             first.push(views.len());
@@ -92,7 +98,15 @@ impl Shape {
                 let mut sub = caps.to_vec();
                 sub[..j].fill(0);
                 sub[j] = c;
-                views.push(view(&sub));
+                let v = view(&sub);
+                let new = v
+                    .members
+                    .iter()
+                    .copied()
+                    .filter(|&i| c == 0 || all[i as usize][j] == c)
+                    .collect();
+                fresh.push(new);
+                views.push(v);
             }
         }
         let degree = all.iter().map(|d| d.iter().sum::<usize>() as u32).collect();
@@ -105,6 +119,7 @@ impl Shape {
             degree,
             views,
             first,
+            fresh,
         }
     }
 
@@ -119,6 +134,17 @@ impl Shape {
     /// at most c (they make the flow exact to degree c + 1).
     pub(super) fn view(&self, j: usize, c: usize) -> &View {
         &self.views[self.first[j] + c]
+    }
+
+    /// The indices of [`Shape::view`]`(j, c)` outside `view(j, c - 1)`:
+    /// those of t_j-degree c (every index for c = 0).
+    pub(super) fn fresh(&self, j: usize, c: usize) -> &[u32] {
+        &self.fresh[self.first[j] + c]
+    }
+
+    /// Every index of the whole box, ascending.
+    pub(super) fn all(&self) -> &[u32] {
+        &self.fresh[0]
     }
 }
 
@@ -241,6 +267,12 @@ pub(super) struct Scratch2 {
     acc: Vec<u128>,
 }
 
+/// Pairs of products summed unreduced between two folds of an accumulator:
+/// a product of two values below p = 2^61 - 1 is below 2^122, so a folded
+/// accumulator (below 2^68) plus 2 (LAZY - 1) = 62 products stays below
+/// 2^128.
+const LAZY: usize = 32;
+
 /// `w mod p` up to a multiple of p, below 2^62: products are summed
 /// unreduced (2^66 of them fit in a u128).
 #[inline(always)]
@@ -261,6 +293,10 @@ pub(super) struct Vals<'a> {
     pub(super) sh: &'a Shape,
     /// The sub-box computed (zeros outside).
     pub(super) v: &'a View,
+    /// The indices of `v` not computed before: the polynomial ops (sums,
+    /// products, inverses) compute only these and keep the rest of their
+    /// slot, the others recompute the whole of `v` (see [`Vals::run`]).
+    pub(super) fresh: &'a [u32],
     /// `size * w`.
     pub(super) len: usize,
     pub(super) point: &'a FpPoint,
@@ -277,15 +313,6 @@ impl Vals<'_> {
         out.fill(Fp::ZERO);
         out[0] = v;
         Fl::CONST
-    }
-
-    /// `out += a`.
-    fn add_to(&self, out: &mut [Fp], fo: Fl, a: &[Fp], fa: Fl) -> Fl {
-        let k = if fa.tconst { self.sh.w } else { self.len };
-        for (x, &y) in out[..k].iter_mut().zip(&a[..k]) {
-            *x = *x + y;
-        }
-        fo.join(fa)
     }
 
     fn scale(out: &mut [Fp], s: Fp) {
@@ -339,47 +366,6 @@ impl Vals<'_> {
         fa.join(fb)
     }
 
-    /// `out = a^k`, k >= 1, by squaring.
-    fn pow(&self, s: &mut Scratch2, out: &mut [Fp], a: &[Fp], fa: Fl, mut k: u32) -> Fl {
-        if k == 0 {
-            return Self::set_const(out, Fp::ONE);
-        }
-        if k == 1 {
-            out.copy_from_slice(a);
-            return fa;
-        }
-        if k == 2 {
-            return self.mul(&mut s.acc, out, a, fa, a, fa);
-        }
-        let mut b = self.take(&mut s.pool);
-        let mut tmp = self.take(&mut s.pool);
-        b.copy_from_slice(a);
-        let mut fb = fa;
-        let mut have = false;
-        let mut fo = fa;
-        loop {
-            if k & 1 == 1 {
-                if have {
-                    fo = self.mul(&mut s.acc, &mut tmp, out, fo, &b, fb);
-                    out.copy_from_slice(&tmp);
-                } else {
-                    out.copy_from_slice(&b);
-                    fo = fb;
-                    have = true;
-                }
-            }
-            k >>= 1;
-            if k == 0 {
-                break;
-            }
-            fb = self.mul(&mut s.acc, &mut tmp, &b, fb, &b, fb);
-            std::mem::swap(&mut b, &mut tmp);
-        }
-        s.pool.push(b);
-        s.pool.push(tmp);
-        fo
-    }
-
     /// `out = 1 / a` coefficient by coefficient: with every coefficient a
     /// dual number (value and first-order parts), `b = 1/a` has `b_0 =
     /// 1/a_0` and `b_k = -b_0 sum_{i + j = k, i != 0} a_i b_j` (j < k).
@@ -416,6 +402,164 @@ impl Vals<'_> {
             let t0 = reduce(acc[0]);
             let (b0, nb0) = (out[0], -out[0]);
             out[k * w] = nb0 * t0;
+            for q in 1..w {
+                let tq = reduce(acc[q]);
+                out[k * w + q] = -(b0 * tq + out[q] * t0);
+            }
+        }
+        Ok(fa)
+    }
+
+    /// `out[k] = a[k]` for the fresh k.
+    fn copy_at(&self, out: &mut [Fp], a: &[Fp]) {
+        let w = self.sh.w;
+        for &k in self.fresh {
+            let k = k as usize;
+            out[k * w..k * w + w].copy_from_slice(&a[k * w..k * w + w]);
+        }
+    }
+
+    /// The constant `v` at the fresh indices.
+    fn const_at(&self, out: &mut [Fp], v: Fp) -> Fl {
+        let w = self.sh.w;
+        for &k in self.fresh {
+            let k = k as usize;
+            out[k * w..k * w + w].fill(Fp::ZERO);
+            if k == 0 {
+                out[0] = v;
+            }
+        }
+        Fl::CONST
+    }
+
+    /// `out[k] = sum of the args at k` for the fresh k (`prev` the slots of
+    /// the earlier ops, `flags` their flags).
+    fn add_at(&self, out: &mut [Fp], cs: &[u32], prev: &[Fp], flags: &[Fl]) -> Fl {
+        let (w, len) = (self.sh.w, self.len);
+        let slot = |c: u32, k: usize| {
+            let at = c as usize * len + k * w;
+            &prev[at..at + w]
+        };
+        for &k in self.fresh {
+            let k = k as usize;
+            let o = &mut out[k * w..k * w + w];
+            o.copy_from_slice(slot(cs[0], k));
+            for &c in &cs[1..] {
+                if k > 0 && flags[c as usize].tconst {
+                    continue;
+                }
+                for (x, &y) in o.iter_mut().zip(slot(c, k)) {
+                    *x = *x + y;
+                }
+            }
+        }
+        cs.iter()
+            .fold(flags[cs[0] as usize], |a, &c| a.join(flags[c as usize]))
+    }
+
+    /// `out[k] = (a b)[k] = sum_{i + j = k} a_i b_j` (dual numbers) for the
+    /// fresh k: a Picard pass adds one t-degree, so each coefficient of a
+    /// product is computed once per sweep (O(k) for coefficient k, not the
+    /// O(k^2) of recomputing the truncated product in every pass).
+    fn mul_at(
+        &self,
+        acc: &mut Vec<u128>,
+        out: &mut [Fp],
+        a: &[Fp],
+        fa: Fl,
+        b: &[Fp],
+        fb: Fl,
+    ) -> Fl {
+        let (a, fa, b, fb) = if fb.tconst && !fa.tconst {
+            (b, fb, a, fa)
+        } else {
+            (a, fa, b, fb)
+        };
+        let w = self.sh.w;
+        acc.clear();
+        acc.resize(w, 0);
+        let by_k = &self.sh.full().by_k;
+        for &k in self.fresh {
+            let k = k as usize;
+            acc.fill(0);
+            // With `a` t-constant only the pair (0, k) can be non-zero.
+            let pairs: &[(u32, u32)] = if fa.tconst { &by_k[k][..1] } else { &by_k[k] };
+            for (n, &(i, j)) in pairs.iter().enumerate() {
+                let (i, j) = (i as usize, j as usize);
+                if fb.tconst && j > 0 {
+                    continue;
+                }
+                if n % LAZY == LAZY - 1 {
+                    acc.iter_mut().for_each(|x| *x = fold(*x));
+                }
+                let (ai, bj) = (&a[i * w..i * w + w], &b[j * w..j * w + w]);
+                let (av, bv) = (ai[0].0 as u128, bj[0].0 as u128);
+                acc[0] += av * bv;
+                if fb.eps && av != 0 {
+                    for (x, y) in acc[1..].iter_mut().zip(&bj[1..]) {
+                        *x += av * y.0 as u128;
+                    }
+                }
+                if fa.eps && bv != 0 {
+                    for (x, y) in acc[1..].iter_mut().zip(&ai[1..]) {
+                        *x += y.0 as u128 * bv;
+                    }
+                }
+            }
+            for (x, &y) in out[k * w..k * w + w].iter_mut().zip(acc.iter()) {
+                *x = reduce(y);
+            }
+        }
+        fa.join(fb)
+    }
+
+    /// `out = 1 / a` at the fresh indices, by the recurrence of
+    /// [`Vals::inv`] (index 0 first, then each from lower ones).
+    fn inv_at(
+        &self,
+        acc: &mut Vec<u128>,
+        out: &mut [Fp],
+        a: &[Fp],
+        fa: Fl,
+    ) -> Result<Fl, BadPoint> {
+        let w = self.sh.w;
+        if fa.is_const() {
+            let i0 = a[0].inv().ok_or(BadPoint)?;
+            return Ok(self.const_at(out, i0));
+        }
+        let by_k = &self.sh.full().by_k;
+        acc.clear();
+        acc.resize(w, 0);
+        for &k in self.fresh {
+            let k = k as usize;
+            if k == 0 {
+                let i0 = a[0].inv().ok_or(BadPoint)?;
+                out[0] = i0;
+                let m0 = -(i0 * i0);
+                for q in 1..w {
+                    out[q] = a[q] * m0;
+                }
+                continue;
+            }
+            acc.fill(0);
+            if !fa.tconst {
+                for &(i, j) in &by_k[k] {
+                    let (i, j) = (i as usize, j as usize);
+                    if i == 0 {
+                        continue;
+                    }
+                    let (ai, bj) = (&a[i * w..i * w + w], &out[j * w..j * w + w]);
+                    let (av, bv) = (ai[0].0 as u128, bj[0].0 as u128);
+                    acc[0] += fold(av * bv);
+                    for q in 1..w {
+                        acc[q] += fold(av * bj[q].0 as u128) + fold(ai[q].0 as u128 * bv);
+                    }
+                }
+            }
+            // b_k = -(b_0 t) for the dual numbers b_0 and t.
+            let t0 = reduce(acc[0]);
+            let b0 = out[0];
+            out[k * w] = -(b0 * t0);
             for q in 1..w {
                 let tq = reduce(acc[q]);
                 out[k * w + q] = -(b0 * tq + out[q] * t0);
@@ -530,19 +674,20 @@ impl Vals<'_> {
         fc
     }
 
-    /// `out = int_0^{t_v} a`.
-    pub(super) fn integrate(&self, out: &mut [Fp], a: &[Fp], fa: Fl, v: usize) -> Fl {
+    /// `out[k + stride_v] = a[k] / (c + 1)` for the fresh k (t_v-degree
+    /// c < cap): the new coefficients of `int_0^{t_v} a`. The rest of `out`
+    /// is kept (before run v it is zero at every positive t_v-degree).
+    pub(super) fn integrate_at(&self, out: &mut [Fp], a: &[Fp], fa: Fl, v: usize) -> Fl {
         let (w, st, m) = (self.sh.w, self.sh.strides[v], self.sh.caps[v]);
-        for i in 0..self.sh.size {
-            let digit = (i / st) % (m + 1);
-            let o = &mut out[i * w..i * w + w];
-            if digit == 0 {
-                o.fill(Fp::ZERO);
+        for &k in self.fresh {
+            let k = k as usize;
+            let digit = (k / st) % (m + 1);
+            if digit == m {
                 continue;
             }
-            let inv = inv_small(digit as u64);
-            let src = &a[(i - st) * w..(i - st) * w + w];
-            for (x, &y) in o.iter_mut().zip(src) {
+            let inv = inv_small(digit as u64 + 1);
+            let o = &mut out[(k + st) * w..(k + st) * w + w];
+            for (x, &y) in o.iter_mut().zip(&a[k * w..k * w + w]) {
                 *x = y * inv;
             }
         }
@@ -561,7 +706,11 @@ impl Vals<'_> {
     }
 
     /// Runs `prog` on the state series `x` (`n` slots, flags `xf`); the
-    /// values stay in `sc` (see [`Vals::root`]).
+    /// values stay in `sc` (see [`Vals::root`]). Sums, products and
+    /// inverses write only the `fresh` indices and read their arguments at
+    /// lower ones: the caller runs the same program on the sub-boxes of one
+    /// run in increasing order, starting with a `fresh` that is the whole
+    /// sub-box, and changes `x` only at indices no pass has read yet.
     pub(super) fn run(
         &self,
         sc: &mut Scratch,
@@ -594,53 +743,16 @@ impl Vals<'_> {
             let at = |k: &u32| &prev[*k as usize * len..(*k as usize + 1) * len];
             let fat = |k: &u32| flags[*k as usize];
             let f = match op {
-                Op::Const(v) => Self::set_const(out, *v),
+                Op::Const(v) => self.const_at(out, *v),
                 Op::NoValue => return Err(BadPoint),
                 Op::State(k) => {
-                    out.copy_from_slice(&x[k * len..(k + 1) * len]);
+                    self.copy_at(out, &x[k * len..(k + 1) * len]);
                     xf[*k]
                 }
-                Op::Fixed(v) => Self::set_const(out, pv(*v)),
-                Op::Add(cs) => {
-                    out.copy_from_slice(at(&cs[0]));
-                    let mut fo = fat(&cs[0]);
-                    for c in &cs[1..] {
-                        fo = self.add_to(out, fo, at(c), fat(c));
-                    }
-                    fo
-                }
-                Op::Mul(cs) => {
-                    if cs.len() == 1 {
-                        out.copy_from_slice(at(&cs[0]));
-                        fat(&cs[0])
-                    } else {
-                        let mut fo = self.mul(
-                            &mut s.acc,
-                            out,
-                            at(&cs[0]),
-                            fat(&cs[0]),
-                            at(&cs[1]),
-                            fat(&cs[1]),
-                        );
-                        if cs.len() > 2 {
-                            let mut tmp = self.take(&mut s.pool);
-                            for c in &cs[2..] {
-                                fo = self.mul(&mut s.acc, &mut tmp, out, fo, at(c), fat(c));
-                                out.copy_from_slice(&tmp);
-                            }
-                            s.pool.push(tmp);
-                        }
-                        fo
-                    }
-                }
-                Op::Pow(b, k) => self.pow(s, out, at(b), fat(b), *k),
-                Op::InvPow(b, k, _) => {
-                    let mut t = self.take(&mut s.pool);
-                    let ft = self.inv(s, &mut t, at(b), fat(b))?;
-                    let fo = self.pow(s, out, &t, ft, *k);
-                    s.pool.push(t);
-                    fo
-                }
+                Op::Fixed(v) => self.const_at(out, pv(*v)),
+                Op::Add(cs) => self.add_at(out, cs, prev, flags),
+                Op::Mul(a, b) => self.mul_at(&mut s.acc, out, at(a), fat(a), at(b), fat(b)),
+                Op::Inv(b, _) => self.inv_at(&mut s.acc, out, at(b), fat(b))?,
                 Op::Exp(v, arg, _) | Op::Sin(v, _, arg, _) | Op::Cos(v, _, arg, _)
                     if fat(arg).is_const() =>
                 {
