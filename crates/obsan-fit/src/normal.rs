@@ -301,6 +301,12 @@ impl Problem<'_> {
         } else {
             Weights::Kept
         };
+        if keep && matches!(weights, Weights::Fresh { .. }) {
+            // The old whiteners are not read by a fresh pass: dropped
+            // first, they never sit beside the new ones (each is as large
+            // as the data). A pass that fails ends the fit or bound anyway.
+            self.whiteners_mut().iter_mut().for_each(|w| *w = None);
+        }
         let parts = self
             .per_trajectory(|k| self.trajectory(k, &lay.state_of(theta, k), weights, true, rows))?;
         let mut out = Normal {
