@@ -7,7 +7,7 @@
 //! secant model needs them ([`JacStore`]): memory is the data's size plus
 //! one Jacobian, not several copies of it.
 
-use crate::fit::{FitOptions, FitTrajectory};
+use crate::options::{FitOptions, FitTrajectory};
 use crate::predict::{Integration, Measured, Predictor};
 use crate::whiten::{RowFilter, Whitener, WhitenerBuilder};
 use crate::FitError;

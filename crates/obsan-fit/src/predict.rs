@@ -728,8 +728,7 @@ fn add_grad(row: &mut [f64], j: usize, g: f64, phi: &[f64], nd: usize) {
 /// output time, which of a predictor's outputs are measured (in model
 /// order) and their values. Built once per fit, so that the predictions
 /// and residuals visit only these (a MRCLAM row measures one or two of 30
-/// outputs, and scanning the empty cells cost a cache miss each). The
-/// times are the series' own, borrowed: a copy would cost 8 bytes a row.
+/// outputs, and scanning the empty cells cost a cache miss each); times borrowed.
 #[derive(Clone, Debug)]
 pub struct Measured<'a> {
     t: &'a [f64],
