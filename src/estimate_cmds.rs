@@ -8,7 +8,7 @@ use crate::Failure;
 use obsan_calib::{
     calib_predictor, calibrate, simulate, CalibrateOptions, EncoderNoise, Method, Table, PARAMS,
 };
-use obsan_data::{DataFile, Dataset, DatasetFiles, TrajectoryFiles};
+use obsan_data::{DataFile, Dataset, DatasetReader, TrajectoryFiles};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
@@ -27,8 +27,10 @@ fn read(path: &Path) -> Result<Option<DataFile>, Failure> {
 
 /// Read a dataset folder (docs/data-format.md): dataset.json (optional), one
 /// folder per trajectory with inputs.csv, outputs.csv, meta.json (optional).
-/// The files are read here and checked by the library; its warnings (e.g.
-/// an ignored text column) are printed once each.
+/// The files are read here and checked by the library, one trajectory at a
+/// time (its file bytes dropped once parsed: a large dataset's text is never
+/// held whole beside its values); its warnings (e.g. an ignored text
+/// column) are printed once each.
 pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Dataset, Failure> {
     let root = Path::new(dir);
     if !root.is_dir() {
@@ -41,29 +43,29 @@ pub fn read_dataset(dir: &str, inputs: &[&str], outputs: &[&str]) -> Result<Data
         .map(|e| e.file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    let mut files = DatasetFiles {
-        meta: read(&root.join("dataset.json"))?,
-        trajectories: Vec::new(),
-    };
+    let meta = read(&root.join("dataset.json"))?;
+    let mut reader = DatasetReader::new(meta.as_ref(), inputs, outputs)?;
+    let mut any = false;
     for name in names {
         let tdir = root.join(&name);
         let (ipath, opath) = (tdir.join("inputs.csv"), tdir.join("outputs.csv"));
         if !ipath.exists() && !opath.exists() {
             continue; // not a trajectory
         }
-        files.trajectories.push(TrajectoryFiles {
+        any = true;
+        reader.add(&TrajectoryFiles {
             name,
             inputs: read(&ipath)?,
             outputs: read(&opath)?,
             meta: read(&tdir.join("meta.json"))?,
-        });
+        })?;
     }
-    if files.trajectories.is_empty() {
+    if !any {
         return Err(Failure(format!(
             "{dir}: no trajectory folder (with inputs.csv and outputs.csv)"
         )));
     }
-    let r = obsan_data::read_dataset(&files, inputs, outputs)?;
+    let r = reader.finish()?;
     for w in &r.warnings {
         eprintln!("warning: {w}");
     }

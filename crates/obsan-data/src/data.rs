@@ -151,178 +151,213 @@ impl Series {
         required: &[&str],
         allow_empty: bool,
     ) -> Result<(Series, Vec<DataWarning>), DataError> {
-        parse_rows(text, file, required, allow_empty).map(|(s, w, _)| (s, w))
+        parse_rows(text, file, required, allow_empty)
     }
 }
 
-/// The body of [`Series::parse_csv_warn`], also returning the 1-based line of
-/// each row.
-#[allow(clippy::type_complexity)]
+/// The body of [`Series::parse_csv_warn`]. Two passes over the text, neither
+/// keeping the cells: the first checks each row's shape and finds the text
+/// columns (as a whole-file scan must, before any value is taken), the
+/// second parses the values straight into the series. A file's rows are
+/// never held as strings: they cost several times the file's own size.
 fn parse_rows(
     text: &str,
     file: &str,
     required: &[&str],
     allow_empty: bool,
-) -> Result<(Series, Vec<DataWarning>, Vec<usize>), DataError> {
-    {
-        let err = |row: Option<usize>, column: Option<String>, kind: K| {
-            DataError::new(file, row, column, kind)
-        };
-        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let mut lines = split_lines(text).into_iter().filter(|(_, l)| {
-            let l = l.trim();
-            !l.is_empty() && !l.starts_with('#')
-        });
-        let Some((hrow, header)) = lines.next() else {
-            return Err(err(None, None, K::EmptyFile));
-        };
-        let mut cols =
-            split_fields(header).map_err(|(c, m)| err(Some(hrow), Some(format!("{c}")), m))?;
-        // A trailing comma ends the header with an empty name.
-        if cols.len() > 1 && cols.last().is_some_and(String::is_empty) {
-            cols.pop();
+) -> Result<(Series, Vec<DataWarning>), DataError> {
+    let err = |row: Option<usize>, column: Option<String>, kind: K| {
+        DataError::new(file, row, column, kind)
+    };
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let (hrow, cols) = header(text, file, required)?;
+    // Pass 1: field counts, and the first text cell of each column the
+    // caller does not need.
+    let mut first_text: Vec<Option<(usize, String)>> = vec![None; cols.len()];
+    let mut n_rows = 0;
+    for (row, line) in data_lines(text, hrow) {
+        let cells = row_cells(line, row, &cols, file)?;
+        n_rows += 1;
+        for (j, cell) in cells.iter().enumerate().skip(1) {
+            if first_text[j].is_none()
+                && !required.contains(&cols[j].as_str())
+                && !cell.is_empty()
+                && cell.parse::<f64>().is_err()
+            {
+                first_text[j] = Some((row, cell.clone()));
+            }
         }
-        if cols.first().map(String::as_str) != Some("t") {
+    }
+    // A column the caller does not need that holds text is ignored.
+    let mut keep = vec![true; cols.len()];
+    let mut warnings = Vec::new();
+    for (j, c) in cols.iter().enumerate().skip(1) {
+        if let Some((row, cell)) = &first_text[j] {
+            keep[j] = false;
+            warnings.push(DataWarning {
+                file: file.to_string(),
+                message: format!(
+                    "column '{c}' holds text (line {row}: '{cell}') and is not needed: ignored"
+                ),
+            });
+        }
+    }
+    let kept: Vec<String> = cols
+        .iter()
+        .zip(&keep)
+        .skip(1)
+        .filter(|(_, k)| **k)
+        .map(|(c, _)| c.clone())
+        .collect();
+    let mut s = Series::new(kept);
+    s.t.reserve_exact(n_rows);
+    for c in &mut s.values {
+        c.reserve_exact(n_rows);
+    }
+    // Pass 2: the values (the shapes were checked by pass 1).
+    let mut vals = Vec::with_capacity(cols.len());
+    for (row, line) in data_lines(text, hrow) {
+        let cells = row_cells(line, row, &cols, file)?;
+        vals.clear();
+        let mut t = 0.0;
+        for (j, cell) in cells.iter().enumerate() {
+            if !keep[j] {
+                continue;
+            }
+            let bound = if j == 0 { MAX_ABS_TIME } else { MAX_ABS_VALUE };
+            let v = if cell.is_empty() {
+                if j == 0 || !allow_empty {
+                    return Err(err(Some(row), Some(cols[j].clone()), K::EmptyValue));
+                }
+                None
+            } else {
+                Some(
+                    cell_value(cell, bound, j == 0)
+                        .map_err(|k| err(Some(row), Some(cols[j].clone()), k))?,
+                )
+            };
+            match (j, v) {
+                (0, Some(x)) => t = x,
+                (0, None) => {}
+                _ => vals.push(v),
+            }
+        }
+        if let Some(&prev) = s.t.last() {
+            if t < prev {
+                return Err(err(
+                    Some(row),
+                    Some("t".into()),
+                    K::TimeBackwards { t, prev },
+                ));
+            }
+        }
+        s.push(t, &vals);
+    }
+    Ok((s, warnings))
+}
+
+/// The header of a CSV file: its line and its column names, checked (`t`
+/// first, no empty or repeated name, every `required` column present).
+fn header(text: &str, file: &str, required: &[&str]) -> Result<(usize, Vec<String>), DataError> {
+    let err = |row: Option<usize>, column: Option<String>, kind: K| {
+        DataError::new(file, row, column, kind)
+    };
+    let Some((hrow, header)) = data_lines(text, 0).next() else {
+        return Err(err(None, None, K::EmptyFile));
+    };
+    let mut cols =
+        split_fields(header).map_err(|(c, m)| err(Some(hrow), Some(format!("{c}")), m))?;
+    // A trailing comma ends the header with an empty name.
+    if cols.len() > 1 && cols.last().is_some_and(String::is_empty) {
+        cols.pop();
+    }
+    if cols.first().map(String::as_str) != Some("t") {
+        return Err(err(
+            Some(hrow),
+            None,
+            K::FirstColumn {
+                found: cols.first().cloned().unwrap_or_default(),
+            },
+        ));
+    }
+    for (i, c) in cols.iter().enumerate() {
+        if c.is_empty() {
+            return Err(err(Some(hrow), None, K::UnnamedColumn { index: i + 1 }));
+        }
+        if cols[..i].contains(c) {
+            return Err(err(Some(hrow), Some(c.clone()), K::DuplicateColumn));
+        }
+    }
+    for r in required {
+        if !cols.iter().any(|c| c == r) {
             return Err(err(
                 Some(hrow),
-                None,
-                K::FirstColumn {
-                    found: cols.first().cloned().unwrap_or_default(),
+                Some(r.to_string()),
+                K::MissingColumn {
+                    name: r.to_string(),
+                    header: cols.join(","),
                 },
             ));
         }
-        for (i, c) in cols.iter().enumerate() {
-            if c.is_empty() {
-                return Err(err(Some(hrow), None, K::UnnamedColumn { index: i + 1 }));
-            }
-            if cols[..i].contains(c) {
-                return Err(err(Some(hrow), Some(c.clone()), K::DuplicateColumn));
-            }
-        }
-        for r in required {
-            if !cols.iter().any(|c| c == r) {
-                return Err(err(
-                    Some(hrow),
-                    Some(r.to_string()),
-                    K::MissingColumn {
-                        name: r.to_string(),
-                        header: cols.join(","),
-                    },
-                ));
-            }
-        }
-        let mut rows: Vec<(usize, Vec<String>)> = Vec::new();
-        for (row, line) in lines {
-            let mut cells =
-                split_fields(line).map_err(|(c, m)| err(Some(row), cols.get(c - 1).cloned(), m))?;
-            if cells.len() == cols.len() + 1 && cells.last().is_some_and(String::is_empty) {
-                cells.pop();
-            }
-            if cells.len() != cols.len() {
-                return Err(err(
-                    Some(row),
-                    None,
-                    K::FieldCount {
-                        found: cells.len(),
-                        expected: cols.len(),
-                    },
-                ));
-            }
-            rows.push((row, cells));
-        }
-        // A column the caller does not need that holds text is ignored.
-        let mut keep = vec![true; cols.len()];
-        let mut warnings = Vec::new();
-        for (j, c) in cols.iter().enumerate().skip(1) {
-            if required.contains(&c.as_str()) {
-                continue;
-            }
-            let text_cell = rows
-                .iter()
-                .find(|(_, cells)| !cells[j].is_empty() && cells[j].parse::<f64>().is_err());
-            if let Some((row, cells)) = text_cell {
-                keep[j] = false;
-                warnings.push(DataWarning {
-                    file: file.to_string(),
-                    message: format!(
-                        "column '{c}' holds text (line {row}: '{}') and is not needed: ignored",
-                        cells[j]
-                    ),
-                });
-            }
-        }
-        let kept: Vec<String> = cols
-            .iter()
-            .zip(&keep)
-            .skip(1)
-            .filter(|(_, k)| **k)
-            .map(|(c, _)| c.clone())
-            .collect();
-        let mut s = Series::new(kept);
-        let mut vals = Vec::with_capacity(cols.len());
-        for (row, cells) in &rows {
-            let row = *row;
-            vals.clear();
-            let mut t = 0.0;
-            for (j, cell) in cells.iter().enumerate() {
-                if !keep[j] {
-                    continue;
-                }
-                let bound = if j == 0 { MAX_ABS_TIME } else { MAX_ABS_VALUE };
-                let v = if cell.is_empty() {
-                    if j == 0 || !allow_empty {
-                        return Err(err(Some(row), Some(cols[j].clone()), K::EmptyValue));
-                    }
-                    None
-                } else {
-                    match cell.parse::<f64>() {
-                        Ok(x) if !x.is_finite() => {
-                            return Err(err(
-                                Some(row),
-                                Some(cols[j].clone()),
-                                K::NotFinite(cell.clone()),
-                            ))
-                        }
-                        Ok(x) if x.abs() > bound => {
-                            return Err(err(
-                                Some(row),
-                                Some(cols[j].clone()),
-                                K::OutOfRange {
-                                    cell: cell.clone(),
-                                    time: j == 0,
-                                    bound,
-                                },
-                            ))
-                        }
-                        Ok(x) => Some(x),
-                        Err(_) => {
-                            return Err(err(
-                                Some(row),
-                                Some(cols[j].clone()),
-                                K::NotANumber(cell.clone()),
-                            ))
-                        }
-                    }
-                };
-                match (j, v) {
-                    (0, Some(x)) => t = x,
-                    (0, None) => {}
-                    _ => vals.push(v),
-                }
-            }
-            if let Some(&prev) = s.t.last() {
-                if t < prev {
-                    return Err(err(
-                        Some(row),
-                        Some("t".into()),
-                        K::TimeBackwards { t, prev },
-                    ));
-                }
-            }
-            s.push(t, &vals);
-        }
-        Ok((s, warnings, rows.iter().map(|(r, _)| *r).collect()))
     }
+    Ok((hrow, cols))
+}
+
+/// The lines after line `after` that are neither blank nor `#` comments.
+fn data_lines(text: &str, after: usize) -> impl Iterator<Item = (usize, &str)> {
+    split_lines(text).filter(move |(row, l)| {
+        let l = l.trim();
+        *row > after && !l.is_empty() && !l.starts_with('#')
+    })
+}
+
+/// The cells of one data row, as many as the header's columns (a trailing
+/// comma allowed).
+fn row_cells(
+    line: &str,
+    row: usize,
+    cols: &[String],
+    file: &str,
+) -> Result<Vec<String>, DataError> {
+    let mut cells = split_fields(line)
+        .map_err(|(c, m)| DataError::new(file, Some(row), cols.get(c - 1).cloned(), m))?;
+    if cells.len() == cols.len() + 1 && cells.last().is_some_and(String::is_empty) {
+        cells.pop();
+    }
+    if cells.len() != cols.len() {
+        return Err(DataError::new(
+            file,
+            Some(row),
+            None,
+            K::FieldCount {
+                found: cells.len(),
+                expected: cols.len(),
+            },
+        ));
+    }
+    Ok(cells)
+}
+
+/// One non-empty cell's value: a finite number within `bound`.
+fn cell_value(cell: &str, bound: f64, time: bool) -> Result<f64, K> {
+    match cell.parse::<f64>() {
+        Ok(x) if !x.is_finite() => Err(K::NotFinite(cell.to_string())),
+        Ok(x) if x.abs() > bound => Err(K::OutOfRange {
+            cell: cell.to_string(),
+            time,
+            bound,
+        }),
+        Ok(x) => Ok(x),
+        Err(_) => Err(K::NotANumber(cell.to_string())),
+    }
+}
+
+/// The 1-based line of data row `k` (0-based, header excluded) of a CSV
+/// text, for a message about that row.
+fn line_of_row(text: &str, k: usize) -> Option<usize> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let (hrow, _) = data_lines(text, 0).next()?;
+    data_lines(text, hrow).nth(k).map(|(row, _)| row)
 }
 
 /// Something accepted but worth saying once (e.g. an ignored column).
@@ -339,28 +374,26 @@ impl fmt::Display for DataWarning {
 }
 
 /// Lines with their 1-based numbers; `\n`, `\r\n` and a lone `\r` each end one.
-fn split_lines(text: &str) -> Vec<(usize, &str)> {
+fn split_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
     let b = text.as_bytes();
-    let (mut out, mut start, mut line, mut i) = (Vec::new(), 0, 1, 0);
-    while i < b.len() {
-        match b[i] {
-            b'\n' | b'\r' => {
-                out.push((line, &text[start..i]));
-                line += 1;
-                i += if b[i] == b'\r' && b.get(i + 1) == Some(&b'\n') {
-                    2
-                } else {
-                    1
-                };
-                start = i;
-            }
-            _ => i += 1,
+    let (mut start, mut line) = (0, 0);
+    std::iter::from_fn(move || {
+        if start >= b.len() {
+            return None;
         }
-    }
-    if start < b.len() {
-        out.push((line, &text[start..]));
-    }
-    out
+        let end = b[start..]
+            .iter()
+            .position(|&c| c == b'\n' || c == b'\r')
+            .map_or(b.len(), |p| start + p);
+        let out = (line + 1, &text[start..end]);
+        line += 1;
+        start = if b.get(end) == Some(&b'\r') && b.get(end + 1) == Some(&b'\n') {
+            end + 2
+        } else {
+            end + 1
+        };
+        Some(out)
+    })
 }
 
 /// The fields of one CSV line, trimmed; a field may be quoted (`"a,b"`, with
@@ -556,33 +589,68 @@ pub fn read_dataset(
     inputs: &[&str],
     outputs: &[&str],
 ) -> Result<ReadDataset, DataError> {
-    let located = |f: &DataFile, e: serde_json::Error, hint: &str| {
-        DataError::new(
-            f.path.clone(),
-            // serde_json counts lines from 1; 0 means no position.
-            (e.line() > 0).then_some(e.line()),
-            (e.line() > 0).then(|| e.column().to_string()),
-            K::Json(format!("{e}{hint}")),
-        )
-    };
-    let meta: DatasetMeta = match &files.meta {
-        Some(f) => {
-            let m: DatasetMeta =
-                serde_json::from_str(utf8(&f.bytes, &f.path)?).map_err(|e| located(f, e, ""))?;
-            let values = m
-                .nominal
-                .iter()
-                .chain(&m.noise)
-                .map(|(k, v)| (k.as_str(), *v))
-                .chain(m.d0.map(|v| ("d0", v)));
-            check_json_values(f, values)?;
-            m
-        }
-        None => DatasetMeta::default(),
-    };
-    let mut warnings = Vec::new();
-    let mut trajectories = Vec::new();
+    let mut reader = DatasetReader::new(files.meta.as_ref(), inputs, outputs)?;
     for tf in &files.trajectories {
+        reader.add(tf)?;
+    }
+    reader.finish()
+}
+
+/// [`read_dataset`] one trajectory at a time: a caller that reads the files
+/// of a trajectory, adds them and drops them holds one trajectory's file
+/// bytes at most, never the whole dataset's beside the parsed series.
+pub struct DatasetReader<'c> {
+    inputs: &'c [&'c str],
+    outputs: &'c [&'c str],
+    meta: DatasetMeta,
+    warnings: Vec<DataWarning>,
+    trajectories: Vec<Trajectory>,
+}
+
+fn located(f: &DataFile, e: serde_json::Error, hint: &str) -> DataError {
+    DataError::new(
+        f.path.clone(),
+        // serde_json counts lines from 1; 0 means no position.
+        (e.line() > 0).then_some(e.line()),
+        (e.line() > 0).then(|| e.column().to_string()),
+        K::Json(format!("{e}{hint}")),
+    )
+}
+
+impl<'c> DatasetReader<'c> {
+    /// Start with `dataset.json` (`None`: absent); `inputs` and `outputs`
+    /// are the columns the model needs.
+    pub fn new(
+        meta: Option<&DataFile>,
+        inputs: &'c [&'c str],
+        outputs: &'c [&'c str],
+    ) -> Result<DatasetReader<'c>, DataError> {
+        let meta: DatasetMeta = match meta {
+            Some(f) => {
+                let m: DatasetMeta = serde_json::from_str(utf8(&f.bytes, &f.path)?)
+                    .map_err(|e| located(f, e, ""))?;
+                let values = m
+                    .nominal
+                    .iter()
+                    .chain(&m.noise)
+                    .map(|(k, v)| (k.as_str(), *v))
+                    .chain(m.d0.map(|v| ("d0", v)));
+                check_json_values(f, values)?;
+                m
+            }
+            None => DatasetMeta::default(),
+        };
+        Ok(DatasetReader {
+            inputs,
+            outputs,
+            meta,
+            warnings: Vec::new(),
+            trajectories: Vec::new(),
+        })
+    }
+
+    /// Parse and check one trajectory's files (trajectories in name order).
+    pub fn add(&mut self, tf: &TrajectoryFiles) -> Result<(), DataError> {
         let missing = |which: &str| {
             DataError::new(
                 format!("{}/{which}", tf.name),
@@ -596,10 +664,11 @@ pub fn read_dataset(
         };
         let fi = tf.inputs.as_ref().ok_or_else(|| missing("inputs.csv"))?;
         let fo = tf.outputs.as_ref().ok_or_else(|| missing("outputs.csv"))?;
-        let (ins, w, _) = parse_rows(utf8(&fi.bytes, &fi.path)?, &fi.path, inputs, false)?;
-        warnings.extend(w);
-        let (outs, w, out_lines) = parse_rows(utf8(&fo.bytes, &fo.path)?, &fo.path, outputs, true)?;
-        warnings.extend(w);
+        let (ins, w) = parse_rows(utf8(&fi.bytes, &fi.path)?, &fi.path, self.inputs, false)?;
+        self.warnings.extend(w);
+        let out_text = utf8(&fo.bytes, &fo.path)?;
+        let (outs, w) = parse_rows(out_text, &fo.path, self.outputs, true)?;
+        self.warnings.extend(w);
         let meta: BTreeMap<String, f64> = match &tf.meta {
             Some(f) => {
                 let m: BTreeMap<String, f64> = serde_json::from_str(utf8(&f.bytes, &f.path)?)
@@ -619,7 +688,7 @@ pub fn read_dataset(
             let t = outs.t[k];
             return Err(DataError {
                 file: fo.path.clone(),
-                row: out_lines.get(k).copied(),
+                row: line_of_row(out_text, k),
                 column: Some("t".into()),
                 kind: if t < t0 {
                     K::OutputBeforeInputs {
@@ -637,25 +706,33 @@ pub fn read_dataset(
                 },
             });
         }
-        trajectories.push(Trajectory {
+        self.trajectories.push(Trajectory {
             name: tf.name.clone(),
             inputs: ins,
             outputs: outs,
             meta,
         });
+        Ok(())
     }
-    if trajectories.is_empty() {
-        return Err(DataError {
-            file: "the dataset".into(),
-            row: None,
-            column: None,
-            kind: K::NoTrajectory,
-        });
+
+    /// The dataset, with its warnings; at least one trajectory.
+    pub fn finish(self) -> Result<ReadDataset, DataError> {
+        if self.trajectories.is_empty() {
+            return Err(DataError {
+                file: "the dataset".into(),
+                row: None,
+                column: None,
+                kind: K::NoTrajectory,
+            });
+        }
+        Ok(ReadDataset {
+            dataset: Dataset {
+                meta: self.meta,
+                trajectories: self.trajectories,
+            },
+            warnings: self.warnings,
+        })
     }
-    Ok(ReadDataset {
-        dataset: Dataset { meta, trajectories },
-        warnings,
-    })
 }
 
 /// Numbers from a JSON file obey the CSV bound ([`MAX_ABS_VALUE`]).

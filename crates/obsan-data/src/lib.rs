@@ -17,7 +17,7 @@ mod mrclam;
 pub use angle::wrap;
 pub use data::{
     add_derived_inputs, read_dataset, DataFile, DataWarning, Dataset, DatasetFiles, DatasetMeta,
-    ReadDataset, Series, Trajectory, TrajectoryFiles,
+    DatasetReader, ReadDataset, Series, Trajectory, TrajectoryFiles,
 };
 pub use error::{DataError, DataErrorKind, DerivedInputError};
 pub use limits::{MAX_ABS_TIME, MAX_ABS_VALUE, MIN_OUTPUT_SAMPLES};

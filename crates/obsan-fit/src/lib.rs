@@ -13,16 +13,20 @@ mod error;
 mod fit;
 mod lsq;
 mod noise;
+mod normal;
+mod options;
 mod predict;
 mod rng;
 mod whiten;
 
 pub use error::FitError;
-pub use fit::{crlb, fit, FitOptions, FitResult, FitTrajectory, MAX_FIT_PARAMS};
+pub use fit::{crlb, fit, FitResult};
 pub use lsq::{minimise, LmOptions, LmResult};
 pub use noise::{
     estimate_noise, input_noise_from_samples, NoiseEstimate, NoiseOptions, SampledNoise,
 };
+pub use normal::MAX_FIT_PARAMS;
+pub use options::{FitOptions, FitTrajectory};
 pub use predict::{Integration, Measured, Prediction, Predictor};
 pub use rng::Rng;
 pub use whiten::Whitener;

@@ -31,7 +31,7 @@
 //! intensities come out high (up to twice), which errs towards larger
 //! standard deviations, not smaller.
 
-use crate::fit::FitTrajectory;
+use crate::options::FitTrajectory;
 use crate::predict::{Integration, Predictor};
 use crate::whiten::Whitener;
 use crate::FitError;

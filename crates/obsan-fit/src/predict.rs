@@ -296,7 +296,7 @@ impl Predictor {
         cells: &Measured,
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.collect(x0, consts, inputs, &cells.t, opts, Some(cells))
+        self.collect(x0, consts, inputs, cells.t, opts, Some(cells))
     }
 
     /// [`Predictor::predict_measured`] handing each output time's values,
@@ -312,7 +312,7 @@ impl Predictor {
         opts: &Integration,
         sink: &mut Sink,
     ) -> Result<(), FitError> {
-        self.integrate(x0, consts, inputs, &cells.t, opts, Some(cells), sink)
+        self.integrate(x0, consts, inputs, cells.t, opts, Some(cells), sink)
     }
 
     /// [`Predictor::integrate`] kept whole, as a [`Prediction`].
@@ -728,20 +728,20 @@ fn add_grad(row: &mut [f64], j: usize, g: f64, phi: &[f64], nd: usize) {
 /// output time, which of a predictor's outputs are measured (in model
 /// order) and their values. Built once per fit, so that the predictions
 /// and residuals visit only these (a MRCLAM row measures one or two of 30
-/// outputs, and scanning the empty cells cost a cache miss each).
+/// outputs, and scanning the empty cells cost a cache miss each); times borrowed.
 #[derive(Clone, Debug)]
-pub struct Measured {
-    t: Vec<f64>,
+pub struct Measured<'a> {
+    t: &'a [f64],
     /// The cells of time k are `start[k]..start[k + 1]`.
     start: Vec<usize>,
     output: Vec<usize>,
     value: Vec<f64>,
 }
 
-impl Measured {
+impl<'a> Measured<'a> {
     /// The cells of `outputs` present in the column named after each of
     /// `p`'s outputs (an output without a column is never measured).
-    pub fn new(p: &Predictor, outputs: &Series) -> Measured {
+    pub fn new(p: &Predictor, outputs: &'a Series) -> Measured<'a> {
         let cols: Vec<Option<&[Option<f64>]>> =
             p.outputs.iter().map(|o| outputs.column(o)).collect();
         let mut start = Vec::with_capacity(outputs.len() + 1);
@@ -757,7 +757,7 @@ impl Measured {
         }
         start.push(output.len());
         Measured {
-            t: outputs.t().to_vec(),
+            t: outputs.t(),
             start,
             output,
             value,

@@ -43,37 +43,21 @@ impl Whitener {
         if a.len() != n * r || m.len() != n * r * r {
             return None;
         }
-        let mut p = vec![0.0; r * r];
-        let mut prev = vec![0.0; r * r];
-        let mut gain = vec![0.0; n * r];
-        let mut sd = vec![0.0; n];
-        let mut pa = vec![0.0; r];
+        let mut b = WhitenerBuilder::new(r, n, true);
         for i in 0..n {
-            let mi = &m[i * r * r..(i + 1) * r * r];
-            for k in 0..r * r {
-                p[k] += mi[k] - prev[k];
-            }
-            prev.copy_from_slice(mi);
-            let ai = &a[i * r..(i + 1) * r];
-            for (x, pa_x) in pa.iter_mut().enumerate() {
-                *pa_x = (0..r).map(|y| p[x * r + y] * ai[y]).sum();
-            }
-            let s = 1.0 + ai.iter().zip(&pa).map(|(x, y)| x * y).sum::<f64>();
-            // S >= 1 for a positive semi-definite P; well below means the
-            // increments were not.
-            if !s.is_finite() || s < 1.0 - 1e-9 {
-                return None;
-            }
-            let s = s.max(1.0);
-            for x in 0..r {
-                gain[i * r + x] = pa[x] / s;
-                for y in 0..r {
-                    p[x * r + y] -= pa[x] * pa[y] / s;
-                }
-            }
-            sd[i] = s.sqrt();
+            b.push(&a[i * r..(i + 1) * r], &m[i * r * r..(i + 1) * r * r])?;
         }
-        Some(Whitener { r, a, m, gain, sd })
+        b.finish()
+    }
+
+    /// Residual `i`'s `a_i`, gain `K_i` and `sqrt(S_i)` (for [`RowFilter`]).
+    pub(crate) fn step(&self, i: usize) -> (&[f64], &[f64], f64) {
+        let r = self.r;
+        (
+            &self.a[i * r..(i + 1) * r],
+            &self.gain[i * r..(i + 1) * r],
+            self.sd[i],
+        )
     }
 
     /// Number of residuals.
@@ -141,6 +125,123 @@ impl Whitener {
             }
             s
         })
+    }
+}
+
+/// [`Whitener::new`] one residual at a time, in time order: the filter's
+/// gains are a forward recursion, so a prediction can be whitened while it
+/// is produced, without its rows being stored first.
+pub(crate) struct WhitenerBuilder {
+    r: usize,
+    /// The filter's error covariance `P` before the current residual.
+    p: Vec<f64>,
+    prev: Vec<f64>,
+    pa: Vec<f64>,
+    /// The last residual's `a_i` and gain (r entries each).
+    a: Vec<f64>,
+    gain: Vec<f64>,
+    /// The whitener built, when it is kept (a bound on the Fisher
+    /// information needs only each residual's gain as it passes).
+    w: Option<Whitener>,
+}
+
+impl WhitenerBuilder {
+    /// For `n` residuals (the capacity; more may be pushed); `keep`: build
+    /// the whitener ([`WhitenerBuilder::finish`]), not only its gains.
+    pub(crate) fn new(r: usize, n: usize, keep: bool) -> WhitenerBuilder {
+        WhitenerBuilder {
+            r,
+            p: vec![0.0; r * r],
+            prev: vec![0.0; r * r],
+            pa: vec![0.0; r],
+            a: vec![0.0; r],
+            gain: vec![0.0; r],
+            w: keep.then(|| Whitener {
+                r,
+                a: Vec::with_capacity(n * r),
+                m: Vec::with_capacity(n * r * r),
+                gain: Vec::with_capacity(n * r),
+                sd: Vec::with_capacity(n),
+            }),
+        }
+    }
+
+    /// The next residual's `a_i` (r entries) and `M(t_i)` (r x r); its
+    /// `a_i`, gain and `sqrt(S_i)`, or `None` (and the builder is spent)
+    /// when the increment `M(t_i) - M(t_{i-1})` is not positive
+    /// semi-definite.
+    pub(crate) fn push(&mut self, ai: &[f64], mi: &[f64]) -> Option<(&[f64], &[f64], f64)> {
+        let r = self.r;
+        if ai.len() != r || mi.len() != r * r {
+            return None;
+        }
+        let (p, pa) = (&mut self.p, &mut self.pa);
+        for k in 0..r * r {
+            p[k] += mi[k] - self.prev[k];
+        }
+        self.prev.copy_from_slice(mi);
+        for (x, pa_x) in pa.iter_mut().enumerate() {
+            *pa_x = (0..r).map(|y| p[x * r + y] * ai[y]).sum();
+        }
+        let s = 1.0 + ai.iter().zip(pa.iter()).map(|(x, y)| x * y).sum::<f64>();
+        // S >= 1 for a positive semi-definite P; well below means the
+        // increments were not.
+        if !s.is_finite() || s < 1.0 - 1e-9 {
+            return None;
+        }
+        let s = s.max(1.0);
+        for x in 0..r {
+            self.gain[x] = pa[x] / s;
+            for y in 0..r {
+                p[x * r + y] -= pa[x] * pa[y] / s;
+            }
+        }
+        self.a.copy_from_slice(ai);
+        let sd = s.sqrt();
+        if let Some(w) = self.w.as_mut() {
+            w.gain.extend_from_slice(&self.gain);
+            w.sd.push(sd);
+            w.a.extend_from_slice(ai);
+            w.m.extend_from_slice(mi);
+        }
+        Some((&self.a, &self.gain, sd))
+    }
+
+    /// The whitener, when kept.
+    pub(crate) fn finish(self) -> Option<Whitener> {
+        self.w
+    }
+}
+
+/// `L^-1` applied to several vectors at once, one residual (row) at a time:
+/// the Kalman filter of [`Whitener::whiten_in_place`] with one state per
+/// column, so a row of residual and Jacobian entries is whitened as soon as
+/// it is known, with the same arithmetic as column by column.
+pub(crate) struct RowFilter {
+    r: usize,
+    /// Per column, the filtered state estimate (r entries).
+    w: Vec<f64>,
+}
+
+impl RowFilter {
+    /// For rows of `width` entries and a whitener of `r` states.
+    pub(crate) fn new(r: usize, width: usize) -> RowFilter {
+        RowFilter {
+            r,
+            w: vec![0.0; r * width],
+        }
+    }
+
+    /// Whiten the next row in place, given its residual's `a_i`, gain and
+    /// `sqrt(S_i)` ([`Whitener::step`]).
+    pub(crate) fn apply(&mut self, ai: &[f64], gain: &[f64], sd: f64, row: &mut [f64]) {
+        for (v, w) in row.iter_mut().zip(self.w.chunks_exact_mut(self.r.max(1))) {
+            let e = *v - ai.iter().zip(w.iter()).map(|(x, y)| x * y).sum::<f64>();
+            for (wx, g) in w.iter_mut().zip(gain) {
+                *wx += g * e;
+            }
+            *v = e / sd;
+        }
     }
 }
 
