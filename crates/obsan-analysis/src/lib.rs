@@ -15,6 +15,10 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod along;
+mod along_linalg;
+mod along_report;
+mod along_sym;
 mod decomp;
 mod derive;
 mod design;
@@ -32,6 +36,11 @@ mod symmetry;
 mod unknown_input;
 mod unknown_input_martinelli;
 
+pub use along::{
+    generic_consts, AlongOptions, AlongTrajectory, AlongWindow, ROUNDING_FLOOR, TOL_SAFETY,
+};
+pub use along_report::{along, AlongReport, AlongStretch, DatasetRank};
+pub use along_sym::{InputSpan, SymmetryMatch, INPUT_REL_TOL};
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind};
 pub use design::{
