@@ -207,7 +207,7 @@ fn strings(v: &Value) -> Vec<String> {
 // from_a_file` above), 11 of 11.
 #[test]
 fn paper_circles_lose_the_three_circle_symmetries() {
-    let d = fresh_dir("along-circles");
+    let d = format!("{}/data", fresh_dir("along-circles"));
     ok(&[
         "simulate",
         "--out",
@@ -308,13 +308,14 @@ fn hand_built_straight_line_and_standstill() {
 // An MRCLAM robot (CI=true: the data must be there): the windows whose
 // odometry is all zero must come out as standstills (relations v = 0 and
 // omega = 0), those with omega all zero and some v as straight lines (omega
-// = 0 alone), read here from the imported inputs.csv. At a standstill the
+// = 0, and no v = 0), read here from the imported inputs.csv; 2 s windows,
+// as the robots rarely hold still or straight for 10 s. At a standstill the
 // state does not move, so each measured output column gives one row:
 // the rank is at most the number of distinct outputs measured.
 #[test]
 fn mrclam_straight_lines_and_standstills_where_the_odometry_says() {
     let Some(src) = mrclam_dir() else { return };
-    let d = fresh_dir("along-mrclam1");
+    let d = format!("{}/data", fresh_dir("along-mrclam1"));
     ok(&[
         "import",
         "mrclam",
@@ -327,7 +328,7 @@ fn mrclam_straight_lines_and_standstills_where_the_odometry_says() {
         "--max-windows",
         "6",
     ]);
-    let v = along(&["systems/mrclam.sys", "--along", &d, "--window", "10"]);
+    let v = along(&["systems/mrclam.sys", "--along", &d, "--window", "2"]);
     let wins = v["windows"].as_array().unwrap();
     let (mut stills, mut lines) = (0, 0);
     for w in wins {
@@ -369,8 +370,10 @@ fn mrclam_straight_lines_and_standstills_where_the_odometry_says() {
                 "{w}"
             );
         } else if line {
+            // Straight: omega = 0, and v free (or constant, a second relation).
             lines += 1;
-            assert_eq!(rel, vec!["omega = 0".to_string()], "{w}");
+            assert!(rel.iter().any(|r| r == "omega = 0"), "{w}");
+            assert!(!rel.iter().any(|r| r == "v = 0"), "{w}");
         } else {
             assert!(!rel.iter().any(|r| r == "omega = 0"), "{w}");
         }
