@@ -53,7 +53,7 @@ pub fn run(a: &RankArgs) -> Result<ExitCode, Failure> {
     };
     let r = along(&mut nf, &trajs, &opts).map_err(|e| Failure(e.to_string()))?;
     if a.out.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(&to_json(&nf, dir, a.window, &trajs, &r))?
         );
@@ -317,7 +317,7 @@ fn to_json(
         .collect();
     let d = &r.dataset;
     json!({
-        "system": nf.name, "dataset": dir, "window": window, "n": r.n, "state": nf.state,
+        "system": nf.name, "along": dir, "window": window, "n": r.n, "state": nf.state,
         "tolerance_safety": TOL_SAFETY, "rounding_floor": ROUNDING_FLOOR,
         "input_rel_tol": INPUT_REL_TOL, "windows": windows, "stretches": stretches,
         "dataset": {
@@ -329,7 +329,7 @@ fn to_json(
 
 fn print_text(nf: &NormalForm, trajs: &[AlongTrajectory], r: &AlongReport) {
     let n = r.n;
-    println!(
+    outln!(
         "system {}: observability along the data ({} variables: {})",
         nf.name,
         n,
@@ -349,18 +349,18 @@ fn print_text(nf: &NormalForm, trajs: &[AlongTrajectory], r: &AlongReport) {
             String::new()
         };
         let plural = if ws.len() == 1 { "" } else { "s" };
-        println!(
+        outln!(
             "{}: {} window{plural}, {full} of full rank{cond}",
             t.name,
             ws.len()
         );
     }
     if r.stretches.is_empty() {
-        println!("no degenerate stretch");
+        outln!("no degenerate stretch");
     }
     for s in &r.stretches {
         let m = &s.symmetry;
-        println!(
+        outln!(
             "{} {}-{} s: rank {} of {n}; inputs: {}",
             trajs[s.trajectory].name,
             num(s.t0),
@@ -376,10 +376,10 @@ fn print_text(nf: &NormalForm, trajs: &[AlongTrajectory], r: &AlongReport) {
             }
         );
         for k in echelon(&s.kernel) {
-            println!("  lost: {}", vector_text(&nf.state, &k));
+            outln!("  lost: {}", vector_text(&nf.state, &k));
         }
         let angle = m.kernel_to_symmetries.max(m.symmetries_to_kernel);
-        println!(
+        outln!(
             "  {} the {} symmetries of the model restricted to these inputs and outputs (rank {}){}",
             if m.matches { "matches" } else { "does not match" },
             m.vectors.len(),
@@ -392,12 +392,12 @@ fn print_text(nf: &NormalForm, trajs: &[AlongTrajectory], r: &AlongReport) {
         );
     }
     let d = &r.dataset;
-    println!(
+    outln!(
         "whole dataset (params shared, each trajectory its own start): rank {} of {}",
         d.rank,
         d.columns.len()
     );
     for k in echelon(&d.kernel) {
-        println!("  lost: {}", vector_text(&d.columns, &k));
+        outln!("  lost: {}", vector_text(&d.columns, &k));
     }
 }

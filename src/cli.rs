@@ -65,7 +65,7 @@ degree_bound, seed, basis (Lie words with their order), max_order, evaluated, ex
 stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
 unknown inputs print their own objects (docs/experiments.md, docs/engine.md).
 
---along --json prints {system, dataset, window, n, state, tolerance_safety, rounding_floor,
+--along --json prints {system, along, window, n, state, tolerance_safety, rounding_floor,
 input_rel_tol, windows: [{trajectory, t0, t1, rows, rank, condition, singular_values,
 tolerance, kernel, weakest, input_relations}], stretches: [{trajectory, t0, t1, windows, rank,
 lost, input_relations, symmetry: {restricted_rank, vectors, angles_deg, kernel_to_symmetries_deg,

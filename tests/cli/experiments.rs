@@ -243,6 +243,16 @@ fn paper_circles_lose_the_three_circle_symmetries() {
         assert_eq!(s["symmetry"]["vectors"].as_array().unwrap().len(), 3);
         assert_eq!(s["symmetry"]["matches"], true, "{s}");
     }
+    // On q = 0 (wL = 0) eq. 16 has no delta (it multiplies wL only): d/d delta
+    // itself is lost, a row of the reduced echelon basis (state order: mu,
+    // gamma, phi, psi, eta, delta, xi).
+    let q0 = st.iter().find(|s| s["trajectory"] == "q0").unwrap();
+    let e_delta: Vec<f64> = vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    assert!(q0["lost"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|r| serde_json::from_value::<Vec<f64>>(r.clone()).unwrap() == e_delta));
     assert_eq!(v["dataset"]["n"], 11);
     assert_eq!(v["dataset"]["rank"], 11);
 }
