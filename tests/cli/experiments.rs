@@ -224,12 +224,12 @@ fn paper_circles_lose_the_three_circle_symmetries() {
     assert!(wins.len() >= 3);
     for w in wins {
         assert_eq!(w["rank"], 4, "window {w}");
-        let q: f64 = w["trajectory"].as_str().unwrap()[1..].parse().unwrap();
         let rel = strings(&w["input_relations"]);
-        let expect = match q {
-            x if x == 0.0 => "wL = 0".to_string(),
-            x if x == -1.0 => "wL = -wR".to_string(),
-            x => format!("wL = {x}*wR"),
+        // Eq. 17: wL = q wR, q from the trajectory's name (q0.9, q0, q-1).
+        let expect = match w["trajectory"].as_str().unwrap() {
+            "q0" => "wL = 0".to_string(),
+            "q-1" => "wL = -wR".to_string(),
+            name => format!("wL = {}*wR", &name[1..]),
         };
         assert_eq!(rel, vec![expect], "window {w}");
     }

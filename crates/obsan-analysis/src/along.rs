@@ -198,8 +198,8 @@ impl Compiled {
                 continue;
             }
             let b = &vals[i * block..(i + 1) * block];
-            for k in 0..nd {
-                dx[k] += c * b[k];
+            for (d, x) in dx.iter_mut().zip(&b[..nd]) {
+                *d += c * x;
             }
             for (j, x) in jac.iter_mut().enumerate() {
                 *x += c * b[nd + j];
@@ -273,13 +273,31 @@ impl Compiled {
     }
 }
 
+/// Rows of a matrix.
+pub(crate) type Rows = Vec<Vec<f64>>;
+
+/// One window of one pass.
+pub(crate) struct WindowRows {
+    t0: f64,
+    t1: f64,
+    /// The model's state at `t0`.
+    state: Vec<f64>,
+    rows: Rows,
+    /// Which outputs were measured.
+    seen: Vec<bool>,
+    /// The active input samples as `(1, u)`.
+    inputs: Rows,
+}
+
 /// The matrices of one trajectory at one step refinement.
 pub(crate) struct Pass {
-    /// Per window: (t0, t1, state at t0, rows, measured outputs, inputs).
-    pub windows: Vec<(f64, f64, Vec<f64>, Vec<Vec<f64>>, Vec<bool>, Vec<Vec<f64>>)>,
+    pub windows: Vec<WindowRows>,
     /// The whole trajectory's rows (sensitivity to its start).
-    pub whole: Vec<Vec<f64>>,
+    pub whole: Rows,
 }
+
+/// The whole trajectories' rows at the fine and the coarse step.
+pub(crate) type Wholes = Vec<[Rows; 2]>;
 
 fn identity_phi(nd: usize, n: usize) -> Vec<f64> {
     let mut p = vec![0.0; nd * n];
@@ -382,8 +400,14 @@ pub(crate) fn integrate(
             r.extend(&tr.inputs[k]);
             inputs.push(r);
         }
-        pass.windows
-            .push((w0, w1.min(t_end), state, rows, seen, inputs));
+        pass.windows.push(WindowRows {
+            t0: w0,
+            t1: w1.min(t_end),
+            state,
+            rows,
+            seen,
+            inputs,
+        });
         if ko >= tr.output_t.len() {
             break;
         }
@@ -453,7 +477,7 @@ pub(crate) fn windows(
     nf: &mut NormalForm,
     trajs: &[AlongTrajectory],
     opts: &AlongOptions,
-) -> Result<(Vec<AlongWindow>, Vec<[Vec<Vec<f64>>; 2]>), AnalysisError> {
+) -> Result<(Vec<AlongWindow>, Wholes), AnalysisError> {
     let c = compile(nf)?;
     let n = c.n;
     let mut out = Vec::new();
@@ -471,8 +495,15 @@ pub(crate) fn windows(
         let coarse = integrate(&c, tr, opts.window, 1, opts.deadline)?;
         let fine = integrate(&c, tr, opts.window, 2, opts.deadline)?;
         for (wf, wc) in fine.windows.into_iter().zip(coarse.windows) {
-            let (t0, t1, state, rows, seen, inputs) = wf;
-            let (s, tol, rank, v) = numerical_rank(&rows, &wc.3, n);
+            let WindowRows {
+                t0,
+                t1,
+                state,
+                rows,
+                seen,
+                inputs,
+            } = wf;
+            let (s, tol, rank, v) = numerical_rank(&rows, &wc.rows, n);
             let condition = if rank == 0 {
                 f64::INFINITY
             } else {

@@ -3,7 +3,7 @@
 //! exact symmetries of the model restricted to those inputs; and the rank of
 //! the whole dataset (every trajectory's own start, shared params).
 
-use crate::along::{numerical_rank, windows, AlongOptions, AlongTrajectory, AlongWindow};
+use crate::along::{numerical_rank, windows, AlongOptions, AlongTrajectory, AlongWindow, Wholes};
 use crate::along_sym::{compare, input_span, Cache, InputSpan, SymmetryMatch};
 use crate::rank::AnalysisError;
 use obsan_model::NormalForm;
@@ -106,11 +106,7 @@ pub fn along(
 
 /// Stack each trajectory's rows (sensitivity to its own start and the
 /// params) into one matrix: params shared, initial states apart.
-fn dataset_rank(
-    nf: &NormalForm,
-    trajs: &[AlongTrajectory],
-    wholes: &[[Vec<Vec<f64>>; 2]],
-) -> DatasetRank {
+fn dataset_rank(nf: &NormalForm, trajs: &[AlongTrajectory], wholes: &Wholes) -> DatasetRank {
     let (n, nd) = (nf.state.len(), nf.n_dynamic);
     let np = n - nd;
     let mut columns: Vec<String> = nf.state[nd..].to_vec();
