@@ -41,6 +41,9 @@ pub const TOL_SAFETY: f64 = 100.0;
 /// relative terms (linear worst case), below 1e-9 with margin.
 pub const ROUNDING_FLOOR: f64 = 1e-9;
 
+/// Windows per trajectory at most (each costs a small SVD and its report).
+pub const MAX_WINDOWS: usize = 1_000_000;
+
 /// One trajectory of a dataset, as plain numbers in the model's order.
 #[derive(Clone, Debug)]
 pub struct AlongTrajectory {
@@ -327,7 +330,14 @@ pub(crate) fn integrate(
     };
     // Whole windows; the remainder joins the last one (a sliver with a sample
     // or two would report what two samples cannot see, not the data's degeneracy).
-    let n_win = (((t_end - t_start) / window).floor() as usize).max(1);
+    let count = ((t_end - t_start) / window).floor();
+    if count > MAX_WINDOWS as f64 {
+        return Err(AnalysisError::Invalid(format!(
+            "trajectory '{}': {count} windows of {window} s (at most {MAX_WINDOWS}): choose a longer --window",
+            tr.name
+        )));
+    }
+    let n_win = (count as usize).max(1);
     let mut pass = Pass {
         windows: Vec::with_capacity(n_win),
         whole: Vec::new(),
@@ -395,7 +405,7 @@ pub(crate) fn integrate(
             }
             t = next;
         }
-        for k in ki_first..=ki_last.min(tr.inputs.len().saturating_sub(1)) {
+        for k in (ki_first..=ki_last).filter(|&k| k < tr.inputs.len()) {
             let mut r = vec![1.0];
             r.extend(&tr.inputs[k]);
             inputs.push(r);
