@@ -83,6 +83,9 @@ fn system_title(nf: &NormalForm) -> String {
 }
 
 pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
+    if a.along.is_some() {
+        return crate::along_cmd::run(a);
+    }
     if a.sys.experiments.as_deref() == Some("auto") {
         return crate::experiments_cmd::auto_cmd(a);
     }

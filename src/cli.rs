@@ -57,12 +57,20 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys --experiment 'q: q=0.9' --experiment 'q: q=0' --experiment 'q: q=-1'
   obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
   obsan rank systems/classic/two_compartment.sys --known-generic x1,x2   # known initial conditions
+  obsan rank systems/calib.sys --along data/sim --window 20        # along a dataset's truth
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
 weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
 degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
 stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
-unknown inputs print their own objects (docs/experiments.md, docs/engine.md).")]
+unknown inputs print their own objects (docs/experiments.md, docs/engine.md).
+
+--along --json prints {system, along, window, n, state, tolerance_safety, rounding_floor,
+input_rel_tol, windows: [{trajectory, t0, t1, rows, rank, condition, singular_values,
+tolerance, kernel, weakest, input_relations}], stretches: [{trajectory, t0, t1, windows, rank,
+lost, input_relations, symmetry: {restricted_rank, vectors, angles_deg, kernel_to_symmetries_deg,
+symmetries_to_kernel_deg, angle_bound_deg, matches, exact}}], dataset: {columns, n, rank,
+singular_values, tolerance, kernel}}.")]
     Rank(RankArgs),
     /// A basis of the continuous symmetries (null space of the Lie-derivative
     /// gradients), each certified before it is printed: cheap structure and
@@ -762,6 +770,23 @@ pub struct RankArgs {
     /// With --known: evaluate every Lie derivative up to this order at the point.
     #[arg(long = "known-order", value_name = "K", default_value_t = 12)]
     pub known_order: usize,
+    /// Observability along a dataset (docs/experiments.md): window by window,
+    /// the numerical rank at the recorded truth's states with the recorded
+    /// inputs, and the degenerate stretches with the symmetries they match.
+    #[arg(long = "along", value_name = "DATASET")]
+    pub along: Option<String>,
+    /// With --along: the window length in seconds.
+    #[arg(
+        long = "window",
+        value_name = "SECONDS",
+        default_value_t = 10.0,
+        requires = "along"
+    )]
+    pub window: f64,
+    /// With --along: the states and params to start each trajectory from, a
+    /// JSON file shaped like truth.json (default: DATASET/truth.json).
+    #[arg(long = "truth", value_name = "FILE", requires = "along")]
+    pub truth: Option<String>,
 }
 
 #[derive(Args)]

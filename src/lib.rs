@@ -23,6 +23,7 @@ macro_rules! outln {
     ($($t:tt)*) => { $crate::emit(format_args!($($t)*), true) };
 }
 
+mod along_cmd;
 mod analysis_cmds;
 mod cli;
 mod design_cmd;

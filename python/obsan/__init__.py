@@ -39,7 +39,9 @@ from ._results import (
     Modes,
     MonteCarloTable,
     NamedEffect,
+    AlongStretch,
     Rank,
+    RankAlong,
     Result,
     Symmetries,
     SystemInfo,
@@ -67,6 +69,8 @@ __all__ = [
     "Result",
     "SystemInfo",
     "Rank",
+    "RankAlong",
+    "AlongStretch",
     "Symmetries",
     "Modes",
     "Global",
@@ -242,6 +246,27 @@ class System:
         f = self._flags("rank", input, set).pairs("--known", known).texts("--known-generic", generic)
         f = f.integer("--seed", seed).integer("--known-order", known_order)
         return Rank.of(self._get(_limits(f, timeout, max_terms)))
+
+    def rank_along(
+        self,
+        dataset: PathLike,
+        *,
+        window: Optional[Number] = None,
+        truth: Optional[PathLike] = None,
+        set: Settings = None,
+        timeout: Optional[float] = None,
+    ) -> RankAlong:
+        """``obsan rank --along``: observability along a dataset, window by window
+        (``window`` seconds, default 10), at the states of ``truth`` (default: the
+        dataset's truth.json: simulated truth or MRCLAM's Vicon truth; a fit's values in
+        that shape). The degenerate stretches are named by their input relations, lost
+        directions and the symmetries they match (docs/experiments.md)."""
+        f = self._flags("rank", None, set)
+        f.argv += ["--along", existing("rank_along: dataset", dataset)]
+        f = f.number("--window", window)
+        if truth is not None:
+            f.argv += ["--truth", existing("rank_along: truth", truth)]
+        return RankAlong.of(self._get(_limits(f, timeout, None)))
 
     def design(
         self,

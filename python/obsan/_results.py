@@ -362,6 +362,64 @@ class Design(Result):
         return cls(raw=raw, system=str(raw.get("system", "")), sets=sets)
 
 
+class AlongStretch(NamedTuple):
+    """A degenerate stretch of ``obsan rank --along``: its trajectory and time span,
+    its rank, the input relations that name it (``"omega = 0"``), the lost directions
+    (reduced echelon basis over ``RankAlong.state``) and whether they are exactly the
+    symmetries of the model restricted to those inputs."""
+
+    trajectory: str
+    t0: float
+    t1: float
+    rank: int
+    input_relations: List[str]
+    lost: List[List[float]]
+    matches_symmetries: bool
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class RankAlong(Result):
+    """``obsan rank --along``: window by window, the numerical rank of the sampled
+    outputs' sensitivity at the data's states with the recorded inputs; the degenerate
+    stretches named; and the rank of the whole dataset (``dataset_rank`` of
+    ``dataset_n``: params shared, each trajectory its own start). Every window is in
+    ``result["windows"]`` (docs/experiments.md)."""
+
+    system: str
+    n: int
+    state: List[str]
+    ranks: List[int]
+    stretches: List[AlongStretch]
+    dataset_rank: int
+    dataset_n: int
+
+    @classmethod
+    def of(cls, raw: Dict[str, Any]) -> "RankAlong":
+        stretches = [
+            AlongStretch(
+                trajectory=str(s.get("trajectory", "")),
+                t0=float(s.get("t0", 0.0)),
+                t1=float(s.get("t1", 0.0)),
+                rank=int(s.get("rank", 0)),
+                input_relations=[str(x) for x in s.get("input_relations") or []],
+                lost=[[float(y) for y in x] for x in s.get("lost") or []],
+                matches_symmetries=bool((s.get("symmetry") or {}).get("matches", False)),
+            )
+            for s in raw.get("stretches") or []
+        ]
+        data = raw.get("dataset") or {}
+        return cls(
+            raw=raw,
+            system=str(raw.get("system", "")),
+            n=int(raw.get("n", 0)),
+            state=[str(x) for x in raw.get("state") or []],
+            ranks=[int(w.get("rank", 0)) for w in raw.get("windows") or []],
+            stretches=stretches,
+            dataset_rank=int(data.get("rank", 0)),
+            dataset_n=int(data.get("n", 0)),
+        )
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class Expression(Result):
     """``obsan simplify`` / ``obsan diff``: the exact canonical form. ``is_zero`` is

@@ -163,3 +163,17 @@ def test_known_initial_condition_riccati():
     assert r["order_checked"] == 3
     g = s.rank_known(generic="S")
     assert g["rank"] == 1 and g["point_rank"] is None
+
+
+def test_rank_along_circles(tmp_path):
+    # The paper's circles with noise-free encoders (docs/experiments.md): Table I, a
+    # circle keeps 4 of 7, so every window has rank 4 and loses the 3 circle
+    # symmetries; the three circles together fix all 11 (5 params, 2 states each).
+    d = obsan.simulate(tmp_path / "circles", k=0, speed_profile="sine:0.5:20")
+    r = obsan.load(CALIB).rank_along(d, window=30)
+    assert r.n == 7 and r.ranks and set(r.ranks) == {4}
+    assert len(r.stretches) == 3
+    for s in r.stretches:
+        assert len(s.lost) == 3 and s.matches_symmetries
+    assert r.stretches[0].input_relations in (["wL = 0.9*wR"], ["wL = 0"], ["wL = -wR"])
+    assert (r.dataset_rank, r.dataset_n) == (11, 11)

@@ -15,6 +15,10 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod along;
+mod along_linalg;
+mod along_report;
+mod along_sym;
 mod decomp;
 mod derive;
 mod design;
@@ -34,6 +38,11 @@ mod unknown_input;
 mod unknown_input_martinelli;
 mod unknown_input_symmetry;
 
+pub use along::{
+    generic_consts, AlongOptions, AlongTrajectory, AlongWindow, ROUNDING_FLOOR, TOL_SAFETY,
+};
+pub use along_report::{along, AlongReport, AlongStretch, DatasetRank};
+pub use along_sym::{InputSpan, SymmetryMatch, INPUT_REL_TOL};
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
