@@ -457,31 +457,38 @@ class NamedEffect(NamedTuple):
 
 @dataclass(frozen=True, repr=False, eq=False)
 class Diagnosis(Result):
-    """``obsan diagnose``: the named effects (in order), the final fit and the
-    evidence; ``extended_sys`` is the model with them added."""
+    """``obsan diagnose``: the named effects (in order), those only suggested (LR
+    significant, Wald z not), whether the nominal fit converged, the final fit; and
+    ``extended_sys``, the model with the named effects added."""
 
     model: str
     named: List[NamedEffect]
+    suggested: List[NamedEffect]
+    nominal_converged: bool
     params: Dict[str, Estimate]
     extended_sys: Optional[str]
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Diagnosis":
-        named = [
-            NamedEffect(
-                n.get("effect", ""),
-                n.get("origin", ""),
-                {e[0]: Estimate(e[1], e[2]) for e in n.get("estimates") or []},
-                float(n.get("lr", 0.0)),
-            )
-            for n in raw.get("named") or []
-        ]
+        def effects(key: str) -> List[NamedEffect]:
+            return [
+                NamedEffect(
+                    n.get("effect", ""),
+                    n.get("origin", ""),
+                    {e[0]: Estimate(e[1], e[2]) for e in n.get("estimates") or []},
+                    float(n.get("lr") or 0.0),
+                )
+                for n in raw.get(key) or []
+            ]
+
         final = raw.get("final_fit") or {}
         params = {p[0]: Estimate(p[1], p[2]) for p in final.get("params") or []}
         return cls(
             raw=raw,
             model=str(raw.get("model", "")),
-            named=named,
+            named=effects("named"),
+            suggested=effects("suggested"),
+            nominal_converged=bool(raw.get("nominal_converged", True)),
             params=params,
             extended_sys=raw.get("extended_sys"),
         )
