@@ -7,8 +7,8 @@ use crate::fsio::write_folder_atomically;
 use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
-    diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
-    Named,
+    diagnose, start_values, CandidateResult, Combination, DiagnoseOptions, Diagnosis, InputNoise,
+    ModelFit, Named,
 };
 use obsan_model::{EffectLibrary, Kind};
 use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
@@ -288,6 +288,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
     }
     named_text(d, &mut s);
+    combinations_text(d, &mut s);
     for c in &d.suggested {
         let _ = writeln!(
             s,
@@ -473,6 +474,41 @@ fn named_text(d: &Diagnosis, s: &mut String) {
     }
 }
 
+/// The pairs fixed only in combination, with the combination the data fix.
+fn combinations_text(d: &Diagnosis, s: &mut String) {
+    for c in &d.combinations {
+        let _ = writeln!(s, "{}", combination_line(c));
+    }
+}
+
+/// One pair fixed only in combination, as one line.
+fn combination_line(c: &Combination) -> String {
+    let (head, tail) = match (c.named, c.established) {
+        (true, true) => ("fixed in combination", "each alone is an extrapolation"),
+        (true, false) => (
+            "fixed in combination, not established",
+            "each alone is an extrapolation",
+        ),
+        (false, true) => (
+            "fixed in combination (suggested effects fitted together; not in the extended model)",
+            "neither alone is established",
+        ),
+        (false, false) => (
+            "suggested in combination, not established (fitted together; not in the extended model)",
+            "neither alone is established",
+        ),
+    };
+    format!(
+        "{head}: {} and {}: {}; Wald z {:.1} (alone {:.1} and {:.1}): {tail}",
+        c.effects[0],
+        c.effects[1],
+        c.text(),
+        c.wald_z,
+        c.wald_z_alone[0],
+        c.wald_z_alone[1]
+    )
+}
+
 /// The refit notes and every round's table of candidates.
 fn rounds_text(d: &Diagnosis, s: &mut String) {
     for r in &d.refits {
@@ -621,6 +657,19 @@ fn verdict(d: &Diagnosis, s: &mut String) {
             .map(|c| format!("{} (Wald z {:.1})", mark(c), c.wald_z))
             .collect();
         parts.push(format!("suggested, not established: {}", sug.join(", ")));
+    }
+    for c in &d.combinations {
+        let what = if c.established {
+            "fixed in combination"
+        } else {
+            "not established even in combination"
+        };
+        parts.push(format!(
+            "{} and {} {what}: {}",
+            c.effects[0],
+            c.effects[1],
+            c.text()
+        ));
     }
     if !d.nominal_converged {
         parts.push("the nominal fit from the start had not converged and was refitted".into());

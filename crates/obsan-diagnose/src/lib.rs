@@ -21,6 +21,7 @@
 )]
 
 mod candidate;
+mod combine;
 mod common_mode;
 mod correlation;
 mod error;
@@ -31,7 +32,9 @@ mod options;
 mod relation;
 mod report;
 mod residual;
+mod sandwich;
 mod screen;
+mod settle;
 mod start;
 mod stats;
 mod workflow;
@@ -39,7 +42,7 @@ mod workflow;
 pub use common_mode::{
     difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
 };
-pub use correlation::{correlated, correlation, Correlation, CORRELATION_CAUTION};
+pub use correlation::{correlated, correlation, Combination, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{

@@ -3,7 +3,7 @@
 //! fit, check and correlation types and no step of the workflow.
 
 use crate::common_mode::CommonModeCheck;
-use crate::correlation::Correlation;
+use crate::correlation::{Combination, Correlation};
 use crate::generate::ORIGIN_GENERATED;
 use crate::model_fit::ModelFit;
 use crate::relation::InputCheck;
@@ -191,6 +191,12 @@ pub struct Diagnosis {
     /// model's and the cluster-robust sd, below the critical value):
     /// suggested, not established, never named.
     pub suggested: Vec<CandidateResult>,
+    /// Pairs of params fixed only in combination (`|r| >=`
+    /// [`crate::CORRELATION_CAUTION`]): of two named effects in the final
+    /// fit, then of two suggested candidates fitted together (`named`
+    /// false). Compare such a pair through its combination, not each
+    /// param alone.
+    pub combinations: Vec<Combination>,
     pub input_checks: Vec<InputCheck>,
     pub final_fit: ModelFit,
     /// Effects these data cannot reveal, with what absorbs them.
