@@ -27,6 +27,7 @@ from ._native import ObsanError, __version__
 from ._results import (
     Calibration,
     Check,
+    Combination,
     CramerRao,
     Design,
     Diagnosis,
@@ -79,6 +80,7 @@ __all__ = [
     "Verification",
     "Calibration",
     "CramerRao",
+    "Combination",
     "Diagnosis",
     "NamedEffect",
     "MonteCarloTable",
