@@ -101,13 +101,15 @@ def _mrclam_dir():
     pytest.skip(f"the MRCLAM data are not at {d}")
 
 
-def test_diagnose_reports_a_pair_fixed_only_in_combination(tmp_path):
+def test_diagnose_reports_a_pair_fixed_only_in_combination(tmp_path, cli):
     # MRCLAM robot 1's Vicon poses: the turn scale and the turn rate's coupling with
     # |v| are each suggested, not established; fitted together they correlate at
     # r = -0.99, and the result carries their combination.
     src = _mrclam_dir()
     poses = tmp_path / "poses"
-    obsan.run("import", "mrclam", src, "--robot", "1", "--out", poses, "--vicon-poses")
+    # The import prints a summary line, no JSON: the binary, not obsan.run.
+    code, out, err = cli("import", "mrclam", src, "--robot", "1", "--out", poses, "--vicon-poses")
+    assert code == 0, err
     d = obsan.diagnose(SYSTEMS / "mrclam-pose.sys", poses)
     pairs = [c for c in d.combinations if set(c.params) == {"kw", "gc_omega_v"}]
     assert len(pairs) == 1, d.combinations

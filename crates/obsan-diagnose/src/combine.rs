@@ -46,13 +46,17 @@ fn pair(
     (i, j): (usize, usize),
     effects: [String; 2],
     crit: f64,
-) -> Result<Option<Combination>, DiagnoseError> {
+) -> Option<Combination> {
     let Some(r) = correlation(&f.covariance, i, j).filter(|r| r.abs() >= CORRELATION_CAUTION)
     else {
-        return Ok(None);
+        return None;
     };
     let levels = (at.sigma, !at.noise.is_empty(), at.o.max_step);
-    let rob = robust_covariance(sys, prepared, f, levels, &[i, j])?;
+    // A prediction that fails here (it did not in the fit) leaves the
+    // robust sd unknown, not the diagnosis failed.
+    let rob = robust_covariance(sys, prepared, f, levels, &[i, j])
+        .ok()
+        .flatten();
     let robust = match rob {
         Some(v) => [[v[0][0], v[0][1]], [v[1][0], v[1][1]]],
         None => [[f64::NAN; 2]; 2],
@@ -66,7 +70,7 @@ fn pair(
         robust,
     );
     c.established = c.wald_z > crit.sqrt();
-    Ok(Some(c))
+    Some(c)
 }
 
 /// Every pair of params of two named effects (the earlier one's first)
@@ -103,7 +107,7 @@ pub(crate) fn of_named(
             let Some(p) = prepared.as_ref() else { continue };
             let c = crit(&n.origin).max(crit(&m.origin));
             let effects = [n.effect.clone(), m.effect.clone()];
-            out.extend(pair(at, (at.sys, p, at.fit), (*i, *j), effects, c)?);
+            out.extend(pair(at, (at.sys, p, at.fit), (*i, *j), effects, c));
         }
     }
     Ok(out)
@@ -184,5 +188,5 @@ fn jointly(
         return Ok(None);
     };
     let effects = [ca.effect.clone(), cb.effect.clone()];
-    pair(at, (&ext, &prepared, &f), (i, j), effects, crit)
+    Ok(pair(at, (&ext, &prepared, &f), (i, j), effects, crit))
 }
