@@ -43,6 +43,13 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
         &report,
     ]);
     assert!(out.contains("named: bearing_distortion: a2 = "), "{out}");
+    // Failure 8 of the never-confidently-wrong rules: the verdict leads,
+    // on the line after the header, naming the effect with its estimate.
+    let second = out.lines().nth(1).unwrap_or("");
+    assert!(
+        second.starts_with("verdict: named bearing_distortion (a2 = "),
+        "{out}"
+    );
     assert!(out.contains("bearing_bias: absorbed by psi"), "{out}");
     for f in [
         "report.md",
@@ -97,6 +104,12 @@ fn diagnose_says_consistent_with_noise_on_clean_data() {
     let out = ok(&["diagnose", "--model", "systems/calib.sys", "--data", &data]);
     assert!(out.contains("named: none"), "{out}");
     assert!(out.contains("consistent with noise"), "{out}");
+    let second = out.lines().nth(1).unwrap_or("");
+    assert!(second.starts_with("verdict: nothing named"), "{out}");
+    assert!(
+        second.contains("the final fit is consistent with noise"),
+        "{out}"
+    );
     assert!(
         out.contains("time_offset: these data leave it without effect"),
         "{out}"

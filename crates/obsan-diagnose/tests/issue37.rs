@@ -114,3 +114,53 @@ fn a_diverging_start_is_replaced_and_weak_evidence_is_only_suggested() {
         assert!(!named(&r).contains(&c.effect.as_str()));
     }
 }
+
+/// Failure 3. Residuals far below the stated noise are a finding, never
+/// "consistent with noise". Clean circles (no effect, no encoder noise, so
+/// the residual is the bearing noise alone) with the bearing noise stated
+/// twice its true value: the whitened residuals have variance 1/4, so the
+/// chi-square is about dof/4 and its z, (dof/4 - dof) / sqrt(2 dof) =
+/// -0.53 sqrt(dof), is far below -Z_STRUCTURE for the circles' thousands of
+/// bearings. Nothing may be named on clean data, and the final fit must not
+/// be called consistent with noise.
+#[test]
+fn residuals_far_below_the_stated_noise_are_a_finding() {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let lib = EffectLibrary::parse(&read("systems/calib.eff"), "calib.eff").unwrap();
+    let o = SimOptions {
+        seed: 1,
+        k_encoder: 0.0,
+        ..SimOptions::default()
+    };
+    let (mut d, _) = simulate(&o).unwrap();
+    d.meta.noise.remove("encoder_k");
+    let stated = 2.0 * o.sigma_beta;
+    d.meta.noise.insert("beta".into(), stated);
+    let start = start_values(&sys, &d, &BTreeMap::new()).unwrap();
+    let r = diagnose(
+        &sys,
+        Some(&lib),
+        &d,
+        &start,
+        &DiagnoseOptions::default(),
+        &|_| {},
+    )
+    .unwrap();
+    assert!(r.named.is_empty(), "{:?}", named(&r));
+    assert!(!r.sigma_estimated);
+    let st = r.final_fit.residuals.structure();
+    let level = st
+        .iter()
+        .find(|s| s.test == "chi2")
+        .unwrap_or_else(|| panic!("{st:?}"));
+    let n = r.final_fit.n as f64;
+    let dof = n - r.final_fit.n_fitted as f64;
+    let want = -0.75 * dof / (2.0 * dof).sqrt();
+    // The chi-square of dof unit-variance residuals scaled by 1/4 has sd
+    // sqrt(2 dof)/4 around dof/4: in z units 1/4, so a 2 z-unit window is 8
+    // of its sds.
+    assert!((level.z - want).abs() < 2.0, "z {} against {want}", level.z);
+    assert!(level.z < -obsan_diagnose::Z_STRUCTURE);
+    assert!(level.description.contains("far below the stated noise"));
+    assert!(!r.final_fit.residuals.consistent_with_noise());
+}
