@@ -47,10 +47,7 @@ fn pair(
     effects: [String; 2],
     crit: f64,
 ) -> Option<Combination> {
-    let Some(r) = correlation(&f.covariance, i, j).filter(|r| r.abs() >= CORRELATION_CAUTION)
-    else {
-        return None;
-    };
+    let r = correlation(&f.covariance, i, j).filter(|r| r.abs() >= CORRELATION_CAUTION)?;
     let levels = (at.sigma, !at.noise.is_empty(), at.o.max_step);
     // A prediction that fails here (it did not in the fit) leaves the
     // robust sd unknown, not the diagnosis failed.

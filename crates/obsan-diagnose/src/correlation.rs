@@ -287,6 +287,41 @@ mod tests {
     }
 
     #[test]
+    fn the_combination_of_a_pair_by_hand() {
+        // sds 2 and 3, r = -0.8: weight = -sign(r) 2/3 = +2/3; values 1 and
+        // -1.2 give 1 - 0.8 = 0.2; model sd 2 sqrt(2 (1 - 0.8)) = 1.2649.
+        // The robust covariance equal to the model's ([[4, -4.8], [-4.8,
+        // 9]]): 4 + (2/3)(-9.6) + (4/9) 9 = 1.6, the same variance.
+        let robust = [[4.0, -4.8], [-4.8, 9.0]];
+        let c = Combination::new(
+            ["a".into(), "b".into()],
+            ["e1".into(), "e2".into()],
+            ([1.0, -1.2], [2.0, 3.0], -0.8),
+            robust,
+        );
+        assert!((c.weight - 2.0 / 3.0).abs() < 1e-15);
+        assert!((c.estimate - 0.2).abs() < 1e-15);
+        assert!((c.sd - 2.0 * 0.4f64.sqrt()).abs() < 1e-15);
+        assert!((c.robust_sd - 1.6f64.sqrt()).abs() < 1e-15);
+        assert!((c.wald_z - 0.2 / 1.6f64.sqrt()).abs() < 1e-12);
+        assert_eq!(c.wald_z_alone, [0.5, 0.4]);
+        // Along another direction: weight 0 is the first param alone.
+        assert_eq!(c.at(0.0), (1.0, 2.0));
+        // Positive r: the weight changes sign (the difference is fixed).
+        let d = Combination::new(
+            ["a".into(), "b".into()],
+            ["e1".into(), "e2".into()],
+            ([1.0, 1.2], [2.0, 3.0], 0.8),
+            [[f64::NAN; 2]; 2],
+        );
+        assert!((d.weight + 2.0 / 3.0).abs() < 1e-15);
+        assert!(d.estimate.abs() < 1e-15 && d.robust_sd.is_nan());
+        // No robust sd: the model's alone in the Wald z.
+        assert_eq!(d.wald_z_alone, [0.5, 0.4]);
+        assert!(d.text().starts_with("a - 6.667e-1 b = "), "{}", d.text());
+    }
+
+    #[test]
     fn a_singular_fit_has_no_correlations() {
         let nan = vec![vec![f64::NAN; 2]; 2];
         assert_eq!(correlation(&nan, 0, 1), None);
