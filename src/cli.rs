@@ -192,13 +192,17 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
   obsan diagnose --model systems/calib.sys --data data/sim --report data/report
   obsan diagnose --model systems/mrclam.sys --data data/mrclam1 --json
 
---json prints {model, nominal, rounds, named, input_checks, final_fit, extended_sys, sigma,
-input_noise, lr_critical, lr_critical_generated, generated_dropped, screen_threshold, ...};
+--json prints {model, nominal, rounds, named, suggested, combinations, input_checks, final_fit,
+extended_sys, sigma, input_noise, lr_critical, lr_critical_generated, generated_dropped,
+screen_threshold, ...};
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
 relation\"), generated candidates their score and screened_out, candidates that rewrite angle
 outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
 vetoed, ...}, named effects their correlations with the final fit's other params at |r| >= 0.9
-correlated [{param, with, with_effect, r}]. Candidates generated from the model's structure are
+correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two named effects,
+or two suggested ones fitted together) are combinations [{params, effects, values, sds, r,
+robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
+params[0] + weight params[1], the smallest-variance direction of the pair. Candidates generated from the model's structure are
 tried too (--no-generated: the effects file's alone). --report writes report.md, SVG plots,
 extended.sys and diagnosis.json.")]
     Diagnose(DiagnoseArgs),

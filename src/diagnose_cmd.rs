@@ -7,8 +7,8 @@ use crate::fsio::write_folder_atomically;
 use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
-    diagnose, start_values, CandidateResult, DiagnoseOptions, Diagnosis, InputNoise, ModelFit,
-    Named,
+    diagnose, start_values, CandidateResult, Combination, DiagnoseOptions, Diagnosis, InputNoise,
+    ModelFit, Named,
 };
 use obsan_model::{EffectLibrary, Kind};
 use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
@@ -237,7 +237,8 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "obsan diagnose: model {} on {data} ({n_traj} trajectories, {} output samples)",
         d.model, d.nominal.n
     );
-    let _ = writeln!(s, "start: {}", d.start);
+    verdict(d, &mut s);
+    let _ = writeln!(s, "\nstart: {}", d.start);
     let sig: Vec<String> = d
         .sigma
         .iter()
@@ -281,85 +282,116 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         white_rms(&d.nominal)
     );
     structure_text(&d.nominal, &mut s);
-    for (i, round) in d.rounds.iter().enumerate() {
-        let _ = writeln!(
-            s,
-            "\ncandidates, round {} (named when LR > {:.2}: p < alpha / candidates, and BIC falls; [± sd across trajectories], cluster-robust):",
-            i + 1,
-            d.lr_critical
-        );
-        if d.lr_critical_generated.is_finite() {
-            let _ = writeln!(
-                s,
-                "  (candidates marked * are generated from the model's structure: named when LR > {:.2}, their share of alpha split over them)",
-                d.lr_critical_generated
-            );
-        }
-        for c in round {
-            if let Some(e) = &c.error {
-                let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
-            } else if let Some(v) = c
-                .common_mode
-                .as_ref()
-                .filter(|v| c.screened_out && v.predicted && v.vetoed)
-            {
-                let sc = c.score.unwrap_or(0.0);
-                let _ = writeln!(
-                    s,
-                    "  {:<20} not fitted: score {sc:.2}; the heading-free check, predicted, vetoes it",
-                    mark(c)
-                );
-                let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
-            } else if c.screened_out {
-                let sc = c.score.unwrap_or(0.0);
-                let why = if sc < d.screen_threshold {
-                    format!("below the screen's {:.2}", d.screen_threshold)
-                } else {
-                    format!(
-                        "x {} below this round's best LR: it cannot win the round",
-                        obsan_diagnose::SCREEN_SAFETY
-                    )
-                };
-                let _ = writeln!(s, "  {:<20} not fitted: score {sc:.2} {why}", mark(c));
-            } else if !c.identifiable {
-                let _ = writeln!(
-                    s,
-                    "  {:<20} not identifiable on these data: {}",
-                    mark(c),
-                    hidden_text(c)
-                );
-            } else {
-                let est = with_robust(&c.estimates, &c.robust_sd);
-                let _ = writeln!(
-                    s,
-                    "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
-                    mark(c),
-                    est.join(", "),
-                    c.lr,
-                    c.p_value,
-                    c.delta_bic,
-                    if c.significant { "  significant" } else { "" }
-                );
-                match c.common_mode.as_ref().filter(|v| v.applies) {
-                    Some(v) if v.vetoed => {
-                        let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
-                    }
-                    Some(v) => {
-                        let _ = writeln!(
-                            s,
-                            "    supported by simultaneous differences: {} = {:.4} ± {:.4} ({:.1} combined robust sds from the full fit, limit {:.2})",
-                            v.param, v.differences, v.differences_robust_sd, v.z, v.limit
-                        );
-                    }
-                    None => {}
-                }
-            }
-        }
-    }
+    rounds_text(d, &mut s);
     let _ = writeln!(s);
     if d.named.is_empty() {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
     }
+    named_text(d, &mut s);
+    combinations_text(d, &mut s);
+    for c in &d.suggested {
+        let _ = writeln!(
+            s,
+            "suggested, not established: {}: {} (LR {:.1} above its critical value, but {:.1} sds \
+             from 0 with the larger of the model's and the cluster-robust sd: not named)",
+            mark(c),
+            with_robust(&c.estimates, &c.robust_sd).join(", "),
+            c.lr,
+            c.wald_z
+        );
+    }
+    // A candidate the heading-free check vetoed, once (its last round).
+    let mut vetoed: Vec<&CandidateResult> = Vec::new();
+    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
+        if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
+            && !vetoed.iter().any(|x| x.effect == c.effect)
+        {
+            vetoed.push(c);
+        }
+    }
+    for c in vetoed.iter().rev() {
+        if let Some(v) = &c.common_mode {
+            let _ = writeln!(s, "caution: {}", v.veto_text(&mark(c)));
+        }
+    }
+    for c in &d.input_checks {
+        let est: Vec<String> = c
+            .estimates
+            .iter()
+            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "input check {}: {} (z {:.1}, {}): {}",
+            c.effect,
+            if est.is_empty() {
+                c.note.clone()
+            } else {
+                est.join(", ")
+            },
+            c.z,
+            c.note,
+            if c.significant {
+                "the measured inputs disagree with the commanded relation"
+            } else {
+                "consistent"
+            }
+        );
+        if c.significant {
+            for t in &c.per_trajectory {
+                let est: Vec<String> = t
+                    .estimates
+                    .iter()
+                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "  trajectory {}: {} (z {:.1})",
+                    t.trajectory,
+                    est.join(", "),
+                    t.z
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\nfinal fit: residual RMS {}; whitened RMS {:.3}",
+        rms_text(&d.final_fit, d),
+        white_rms(&d.final_fit)
+    );
+    structure_text(&d.final_fit, &mut s);
+    if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
+        let unfitted = unfitted_file_candidates(d);
+        if unfitted.is_empty() {
+            let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+        } else {
+            let _ = writeln!(
+                s,
+                "  no candidate explains this structure; not really fitted in the last round: {} \
+                 (failed, not fitted, or LR 0 with the estimate at its start), so the effects \
+                 file is not ruled out",
+                unfitted.join(", ")
+            );
+        }
+    }
+    if !d.hidden.is_empty() {
+        let _ = writeln!(s, "\nthese data cannot reveal:");
+        for c in &d.hidden {
+            let _ = writeln!(s, "  {}: {}", mark(c), hidden_text(c));
+        }
+    }
+    if !d.generated_dropped.is_empty() {
+        let _ = writeln!(s, "\ngenerated candidates left out:");
+        for (n, why) in &d.generated_dropped {
+            let _ = writeln!(s, "  {n}: {why}");
+        }
+    }
+    s
+}
+
+/// Every named effect with its residuals and cautions.
+fn named_text(d: &Diagnosis, s: &mut String) {
     for (k, n) in d.named.iter().enumerate() {
         let est = with_robust(&n.estimates, &n.robust_sd);
         if n.origin == obsan_diagnose::ORIGIN_RELATION {
@@ -440,83 +472,223 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             let _ = writeln!(s, "  caution: {text}");
         }
     }
-    // A candidate the heading-free check vetoed, once (its last round).
-    let mut vetoed: Vec<&CandidateResult> = Vec::new();
-    for c in d.rounds.iter().rev().flat_map(|r| r.iter().rev()) {
-        if c.common_mode.as_ref().is_some_and(|v| v.vetoed)
-            && !vetoed.iter().any(|x| x.effect == c.effect)
-        {
-            vetoed.push(c);
-        }
+}
+
+/// The pairs fixed only in combination, with the combination the data fix.
+fn combinations_text(d: &Diagnosis, s: &mut String) {
+    for c in &d.combinations {
+        let _ = writeln!(s, "{}", combination_line(c));
     }
-    for c in vetoed.iter().rev() {
-        if let Some(v) = &c.common_mode {
-            let _ = writeln!(s, "caution: {}", v.veto_text(&mark(c)));
-        }
-    }
-    for c in &d.input_checks {
-        let est: Vec<String> = c
-            .estimates
-            .iter()
-            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
-            .collect();
+}
+
+/// One pair fixed only in combination, as one line.
+fn combination_line(c: &Combination) -> String {
+    let (head, tail) = match (c.named, c.established) {
+        (true, true) => ("fixed in combination", "each alone is an extrapolation"),
+        (true, false) => (
+            "fixed in combination, not established",
+            "each alone is an extrapolation",
+        ),
+        (false, true) => (
+            "fixed in combination (suggested effects fitted together; not in the extended model)",
+            "neither alone is established",
+        ),
+        (false, false) => (
+            "suggested in combination, not established (fitted together; not in the extended model)",
+            "neither alone is established",
+        ),
+    };
+    format!(
+        "{head}: {} and {}: {}; Wald z {:.1} (alone {:.1} and {:.1}): {tail}",
+        c.effects[0],
+        c.effects[1],
+        c.text(),
+        c.wald_z,
+        c.wald_z_alone[0],
+        c.wald_z_alone[1]
+    )
+}
+
+/// The refit notes and every round's table of candidates.
+fn rounds_text(d: &Diagnosis, s: &mut String) {
+    for r in &d.refits {
         let _ = writeln!(
             s,
-            "input check {}: {} (z {:.1}, {}): {}",
-            c.effect,
-            if est.is_empty() {
-                c.note.clone()
+            "  note: {} fit had not converged: refitted from {}'s point with its params at 0, \
+             -2 log L {:.1} -> {:.1}; round {}'s candidates are compared with the refit{}",
+            if r.round == 1 {
+                "the nominal"
             } else {
-                est.join(", ")
+                "the current"
             },
-            c.z,
-            c.note,
-            if c.significant {
-                "the measured inputs disagree with the commanded relation"
-            } else {
-                "consistent"
-            }
+            r.from,
+            r.m2ll_before,
+            r.m2ll_after,
+            r.round,
+            if r.round == 1 { " (shown above)" } else { "" }
         );
-        if c.significant {
-            for t in &c.per_trajectory {
-                let est: Vec<String> = t
-                    .estimates
-                    .iter()
-                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
-                    .collect();
+    }
+    for (i, round) in d.rounds.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "\ncandidates, round {} (named when LR > {:.2}: p < alpha / candidates, and BIC falls; [± sd across trajectories], cluster-robust):",
+            i + 1,
+            d.lr_critical
+        );
+        if d.lr_critical_generated.is_finite() {
+            let _ = writeln!(
+                s,
+                "  (candidates marked * are generated from the model's structure: named when LR > {:.2}, their share of alpha split over them)",
+                d.lr_critical_generated
+            );
+        }
+        let mut hidden: Vec<String> = Vec::new();
+        for c in round {
+            if let Some(e) = &c.error {
+                let _ = writeln!(s, "  {:<20} failed: {e}", mark(c));
+            } else if let Some(v) = c
+                .common_mode
+                .as_ref()
+                .filter(|v| c.screened_out && v.predicted && v.vetoed)
+            {
+                let sc = c.score.unwrap_or(0.0);
                 let _ = writeln!(
                     s,
-                    "  trajectory {}: {} (z {:.1})",
-                    t.trajectory,
-                    est.join(", "),
-                    t.z
+                    "  {:<20} not fitted: score {sc:.2}; the heading-free check, predicted, vetoes it",
+                    mark(c)
                 );
+                let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
+            } else if c.screened_out {
+                let sc = c.score.unwrap_or(0.0);
+                let why = if sc < d.screen_threshold {
+                    format!("below the screen's {:.2}", d.screen_threshold)
+                } else {
+                    format!(
+                        "x {} below this round's best LR: it cannot win the round",
+                        obsan_diagnose::SCREEN_SAFETY
+                    )
+                };
+                let _ = writeln!(s, "  {:<20} not fitted: score {sc:.2} {why}", mark(c));
+            } else if !c.identifiable {
+                hidden.push(mark(c));
+            } else {
+                let est = with_robust(&c.estimates, &c.robust_sd);
+                let _ = writeln!(
+                    s,
+                    "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
+                    mark(c),
+                    est.join(", "),
+                    c.lr,
+                    c.p_value,
+                    c.delta_bic,
+                    if c.significant {
+                        "  significant"
+                    } else if c.suggested {
+                        "  suggested (Wald z below critical)"
+                    } else {
+                        ""
+                    }
+                );
+                match c.common_mode.as_ref().filter(|v| v.applies) {
+                    Some(v) if v.vetoed => {
+                        let _ = writeln!(s, "    not named: {}", v.veto_text(&mark(c)));
+                    }
+                    Some(v) => {
+                        let _ = writeln!(
+                            s,
+                            "    supported by simultaneous differences: {} = {:.4} ± {:.4} ({:.1} combined robust sds from the full fit, limit {:.2})",
+                            v.param, v.differences, v.differences_robust_sd, v.z, v.limit
+                        );
+                    }
+                    None => {}
+                }
             }
         }
+        if !hidden.is_empty() {
+            let _ = writeln!(
+                s,
+                "  not identifiable on these data: {} (see \"these data cannot reveal\")",
+                hidden.join(", ")
+            );
+        }
     }
-    let _ = writeln!(
-        s,
-        "\nfinal fit: residual RMS {}; whitened RMS {:.3}",
-        rms_text(&d.final_fit, d),
-        white_rms(&d.final_fit)
-    );
-    structure_text(&d.final_fit, &mut s);
-    if !d.final_fit.residuals.consistent_with_noise() && d.named.len() < d.rounds.len().max(1) {
-        let _ = writeln!(s, "  no candidate explains this structure: the model misses something not in the effects file");
+}
+
+/// The effects file's candidates of the last round that were identifiable
+/// but not really fitted: failed, screened out, or LR exactly 0.
+fn unfitted_file_candidates(d: &Diagnosis) -> Vec<String> {
+    d.rounds
+        .last()
+        .map(|r| {
+            r.iter()
+                .filter(|c| c.origin != obsan_diagnose::ORIGIN_GENERATED)
+                .filter(|c| c.error.is_some() || c.screened_out || (c.identifiable && c.lr == 0.0))
+                .map(|c| c.effect.clone())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// The one-paragraph verdict that leads the text: what is named with its
+/// magnitude, what is only suggested, whether the nominal fit had to be
+/// refitted, and what remains unexplained (issue 37.8).
+fn verdict(d: &Diagnosis, s: &mut String) {
+    let mut parts: Vec<String> = Vec::new();
+    if d.named.is_empty() {
+        parts.push("nothing named".into());
+    } else {
+        let named: Vec<String> = d
+            .named
+            .iter()
+            .map(|n| {
+                format!(
+                    "{} ({})",
+                    named_mark(n),
+                    with_robust(&n.estimates, &n.robust_sd).join(", ")
+                )
+            })
+            .collect();
+        parts.push(format!("named {}", named.join("; ")));
+    }
+    if !d.suggested.is_empty() {
+        let sug: Vec<String> = d
+            .suggested
+            .iter()
+            .map(|c| format!("{} (Wald z {:.1})", mark(c), c.wald_z))
+            .collect();
+        parts.push(format!("suggested, not established: {}", sug.join(", ")));
+    }
+    for c in &d.combinations {
+        let what = if c.established {
+            "fixed in combination"
+        } else {
+            "not established even in combination"
+        };
+        parts.push(format!(
+            "{} and {} {what}: {}",
+            c.effects[0],
+            c.effects[1],
+            c.text()
+        ));
+    }
+    if !d.nominal_converged {
+        parts.push("the nominal fit from the start had not converged and was refitted".into());
+    }
+    let st = d.final_fit.residuals.structure();
+    if st.is_empty() {
+        parts.push("the final fit is consistent with noise".into());
+    } else {
+        let what: Vec<String> = st
+            .iter()
+            .map(|x| format!("{} (z {:.1})", x.test, x.z))
+            .collect();
+        parts.push(format!("unexplained: {}", what.join(", ")));
     }
     if !d.hidden.is_empty() {
-        let _ = writeln!(s, "\nthese data cannot reveal:");
-        for c in &d.hidden {
-            let _ = writeln!(s, "  {}: {}", mark(c), hidden_text(c));
-        }
+        let h: Vec<String> = d.hidden.iter().map(mark).collect();
+        parts.push(format!("these data cannot reveal {}", h.join(", ")));
     }
-    if !d.generated_dropped.is_empty() {
-        let _ = writeln!(s, "\ngenerated candidates left out:");
-        for (n, why) in &d.generated_dropped {
-            let _ = writeln!(s, "  {n}: {why}");
-        }
-    }
-    s
+    let _ = writeln!(s, "verdict: {}.", parts.join("; "));
 }
 
 fn residual_chart(title: &str, f: &ModelFit) -> Figure {

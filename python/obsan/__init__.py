@@ -27,6 +27,7 @@ from ._native import ObsanError, __version__
 from ._results import (
     Calibration,
     Check,
+    Combination,
     CramerRao,
     Design,
     Diagnosis,
@@ -83,6 +84,7 @@ __all__ = [
     "Verification",
     "Calibration",
     "CramerRao",
+    "Combination",
     "Diagnosis",
     "NamedEffect",
     "MonteCarloTable",
@@ -593,7 +595,11 @@ def diagnose(
     the residuals, name the significant effects (from ``effects``, default the model's
     ``.eff``, and generated from the model's structure unless ``generated=False``).
     ``report`` writes a report folder (all or nothing; ``force=True`` replaces one);
-    ``input_noise`` is ``auto``, ``stated``, ``estimate`` or ``none``."""
+    ``input_noise`` is ``auto``, ``stated``, ``estimate`` or ``none``.
+
+    ``named`` holds only established effects; ``suggested`` those whose LR clears its
+    critical value but whose Wald z does not; ``nominal_converged`` is false when the
+    fit from the start had stopped short (``result["refits"]`` says where from)."""
     source = None
     if isinstance(model, System):
         source, m = model._source, model.path

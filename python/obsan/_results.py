@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import copy
 import html
+import math
 import re
 import sys
 from dataclasses import dataclass, field, fields
@@ -536,33 +537,94 @@ class NamedEffect(NamedTuple):
     lr: float
 
 
+class Combination(NamedTuple):
+    """Two params ``diagnose`` finds fixed only in combination (``|r| >= 0.9``):
+    ``params[0] + weight * params[1]`` along the smallest-variance direction of
+    their joint covariance (each param scaled by its sd), in the units of
+    ``params[0]``, as an :class:`Estimate` (model sd) with its cluster-robust sd.
+    ``values`` and ``robust_covariance`` are the two params' own (cross term
+    included); ``named``: both effects are named (else two suggested ones fitted
+    together); ``established``: its Wald z clears the critical value."""
+
+    params: Tuple[str, str]
+    effects: Tuple[str, str]
+    weight: float
+    estimate: Estimate
+    robust_sd: float
+    r: float
+    values: Tuple[float, float]
+    robust_covariance: Tuple[Tuple[float, float], Tuple[float, float]]
+    named: bool
+    established: bool
+
+    def at(self, weight: float) -> Estimate:
+        """``params[0] + weight * params[1]`` with its cluster-robust sd: to compare
+        along another diagnosis's direction."""
+        (a, b), (c, d) = self.robust_covariance
+        var = a + weight * (b + c) + weight * weight * d
+        sd = math.sqrt(var) if var >= 0 else math.nan
+        return Estimate(self.values[0] + weight * self.values[1], sd)
+
+
+def _combination(c: Mapping[str, Any]) -> Combination:
+    def num(x: Any) -> float:
+        return math.nan if x is None else float(x)
+
+    def pair(x: Any) -> Tuple[float, float]:
+        return (num(x[0]), num(x[1]))
+
+    rc = c.get("robust_covariance") or [[None, None], [None, None]]
+    return Combination(
+        (str(c["params"][0]), str(c["params"][1])),
+        (str(c["effects"][0]), str(c["effects"][1])),
+        num(c.get("weight")),
+        Estimate(num(c.get("estimate")), num(c.get("sd"))),
+        num(c.get("robust_sd")),
+        num(c.get("r")),
+        pair(c.get("values") or [None, None]),
+        (pair(rc[0]), pair(rc[1])),
+        bool(c.get("named")),
+        bool(c.get("established")),
+    )
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class Diagnosis(Result):
-    """``obsan diagnose``: the named effects (in order), the final fit and the
-    evidence; ``extended_sys`` is the model with them added."""
+    """``obsan diagnose``: the named effects (in order), those only suggested (LR
+    significant, Wald z not), the pairs fixed only in combination
+    (:class:`Combination`), whether the nominal fit converged, the final fit; and
+    ``extended_sys``, the model with the named effects added."""
 
     model: str
     named: List[NamedEffect]
+    suggested: List[NamedEffect]
+    combinations: List[Combination]
+    nominal_converged: bool
     params: Dict[str, Estimate]
     extended_sys: Optional[str]
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Diagnosis":
-        named = [
-            NamedEffect(
-                n.get("effect", ""),
-                n.get("origin", ""),
-                {e[0]: Estimate(e[1], e[2]) for e in n.get("estimates") or []},
-                float(n.get("lr", 0.0)),
-            )
-            for n in raw.get("named") or []
-        ]
+        def effects(key: str) -> List[NamedEffect]:
+            return [
+                NamedEffect(
+                    n.get("effect", ""),
+                    n.get("origin", ""),
+                    {e[0]: Estimate(e[1], e[2]) for e in n.get("estimates") or []},
+                    float(n.get("lr") or 0.0),
+                )
+                for n in raw.get(key) or []
+            ]
+
         final = raw.get("final_fit") or {}
         params = {p[0]: Estimate(p[1], p[2]) for p in final.get("params") or []}
         return cls(
             raw=raw,
             model=str(raw.get("model", "")),
-            named=named,
+            named=effects("named"),
+            suggested=effects("suggested"),
+            combinations=[_combination(c) for c in raw.get("combinations") or []],
+            nominal_converged=bool(raw.get("nominal_converged", True)),
             params=params,
             extended_sys=raw.get("extended_sys"),
         )

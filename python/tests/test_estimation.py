@@ -2,11 +2,13 @@
 
 import json
 import math
+import os
+import pathlib
 
 import pytest
 
 import obsan
-from conftest import SYSTEMS
+from conftest import ROOT, SYSTEMS
 
 
 @pytest.fixture(scope="module")
@@ -88,3 +90,43 @@ def test_diagnose_tries_generated_candidates_unless_told_not_to(tmp_path):
     assert "generated" in origins(obsan.diagnose(model, data))
     assert "generated" not in origins(obsan.diagnose(model, data, generated=False))
     assert "generated" in origins(obsan.diagnose(model, data, generated=True))
+
+
+def _mrclam_dir():
+    d = pathlib.Path(os.environ.get("OBSAN_MRCLAM_DIR", ROOT.parent / "shared" / "data" / "mrclam"))
+    if (d / "robot1_Odometry.txt").exists():
+        return d
+    ci = os.environ.get("CI", "") not in ("", "0", "false")
+    assert not ci, f"CI is set and the MRCLAM data are not at {d}"
+    pytest.skip(f"the MRCLAM data are not at {d}")
+
+
+def test_diagnose_reports_a_pair_fixed_only_in_combination(tmp_path, cli):
+    # MRCLAM robot 1's Vicon poses: the turn scale and the turn rate's coupling with
+    # |v| are each suggested, not established; fitted together they correlate at
+    # r = -0.99, and the result carries their combination.
+    src = _mrclam_dir()
+    poses = tmp_path / "poses"
+    # The import prints a summary line, no JSON: the binary, not obsan.run.
+    code, out, err = cli("import", "mrclam", src, "--robot", "1", "--out", poses, "--vicon-poses")
+    assert code == 0, err
+    d = obsan.diagnose(SYSTEMS / "mrclam-pose.sys", poses)
+    pairs = [c for c in d.combinations if set(c.params) == {"kw", "gc_omega_v"}]
+    assert len(pairs) == 1, d.combinations
+    c = pairs[0]
+    raw = next(x for x in d["combinations"] if set(x["params"]) == {"kw", "gc_omega_v"})
+    assert c.estimate == obsan.Estimate(raw["estimate"], raw["sd"])
+    assert c.r <= -0.9 and not c.named
+    assert set(c.effects) == {"turn_scale", "omega_with_abs_v"}
+    # The smallest-variance direction of the pair scaled by its sds: the weight is
+    # -sign(r) sd0 / sd1, and along it the model variance is 2 sd0^2 (1 - |r|).
+    sd0, sd1 = raw["sds"]
+    assert math.isclose(c.weight, sd0 / sd1, rel_tol=1e-12)
+    assert math.isclose(c.estimate.sd, sd0 * math.sqrt(2 * (1 - abs(c.r))), rel_tol=1e-12)
+    # at(): the combination along any direction from the pair's own values and robust
+    # covariance, here recomputed by hand at the pair's own weight and at 0.
+    (a, _), _ = c.robust_covariance
+    own = c.at(c.weight)
+    assert math.isclose(own.value, c.estimate.value, rel_tol=1e-9)
+    assert math.isclose(own.sd, c.robust_sd, rel_tol=1e-9)
+    assert c.at(0.0) == obsan.Estimate(c.values[0], math.sqrt(a))

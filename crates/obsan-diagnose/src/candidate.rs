@@ -174,7 +174,7 @@ pub(crate) fn candidate(
     data: &Dataset,
     which: &[usize],
     levels: Noise,
-    (crit, robust_z): (f64, Option<f64>),
+    (crit, wald_z_crit): (f64, Option<f64>),
     o: &DiagnoseOptions,
     origin: &str,
     warm: Option<&[f64]>,
@@ -286,17 +286,19 @@ pub(crate) fn candidate(
             .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
             .collect();
         res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
-        // `robust_z`: every new param also this many cluster-robust sds from
-        // 0 (the spread across trajectories does not read the within-
-        // trajectory drift as evidence); an sd that is not finite (one
-        // trajectory) does not veto.
-        let robust_ok = robust_z.is_none_or(|z| {
-            res.estimates
-                .iter()
-                .zip(&res.robust_sd)
-                .all(|((_, v, _), r)| !(r.is_finite() && *r > 0.0) || (v / r).abs() > z)
-        });
-        res.significant = res.lr > crit && res.delta_bic < 0.0 && robust_ok;
+        out_of_range(e, &f, &prepared)?;
+        // `wald_z`: every new param also this many sds from 0, each sd the
+        // larger of the model's (inflated) and the cluster-robust one. The
+        // LR reads the residuals as independent within a trajectory; with
+        // three trajectories the robust sd has two degrees of freedom and
+        // can be 10 times too small, so neither alone is the evidence. A
+        // candidate whose LR clears its critical value but not this is
+        // suggested, not established (issue 37.4).
+        res.wald_z = wald_z(&res.estimates, &res.robust_sd);
+        let wald_ok = wald_z_crit.is_none_or(|z| res.wald_z > z);
+        let by_lr = res.lr > crit && res.delta_bic < 0.0;
+        res.significant = by_lr && wald_ok;
+        res.suggested = by_lr && !wald_ok;
         // A candidate that rewrites angle outputs must also be supported by
         // the simultaneous differences of its members, which cancel any
         // common-mode error (heading drift) it could be absorbing
@@ -309,6 +311,7 @@ pub(crate) fn candidate(
                 }));
             if res.common_mode.as_ref().is_some_and(|c| c.vetoed) {
                 res.significant = false;
+                res.suggested = false;
             }
         }
         res.rms = f.rms.clone();
@@ -331,5 +334,104 @@ pub(crate) fn candidate(
             res.error = Some(e.to_string());
             (res, None)
         }
+    }
+}
+
+/// The smallest `|estimate| / sd` over a candidate's params, each sd the
+/// larger of the model's and the cluster-robust one (a robust sd that is
+/// not finite, one trajectory, leaves the model's); 0 when an sd is not
+/// finite or not positive (nothing is established).
+pub(crate) fn wald_z(estimates: &[(String, f64, f64)], robust: &[f64]) -> f64 {
+    estimates
+        .iter()
+        .enumerate()
+        .map(|(i, (_, v, sd))| {
+            let r = robust.get(i).copied().filter(|r| r.is_finite());
+            let s = r.map_or(*sd, |r| sd.max(r));
+            if s.is_finite() && s > 0.0 {
+                (v / s).abs()
+            } else {
+                0.0
+            }
+        })
+        .fold(f64::INFINITY, f64::min)
+        .min(f64::MAX)
+}
+
+/// The effect's time params: its delay and every param that divides in its
+/// dynamics (`x' = (u - x)/T`: a time constant).
+fn time_params(e: &Effect) -> Vec<&str> {
+    let divides = |p: &str, rhs: &str| {
+        let t: String = rhs.chars().filter(|c| !c.is_whitespace()).collect();
+        [format!("/{p}"), format!("/({p})")].iter().any(|pat| {
+            t.match_indices(pat.as_str()).any(|(i, m)| {
+                !t[i + m.len()..]
+                    .chars()
+                    .next()
+                    .is_some_and(|c| c.is_ascii_alphanumeric() || c == '_')
+            })
+        })
+    };
+    e.params
+        .iter()
+        .filter(|p| {
+            e.delay.as_deref() == Some(p.as_str()) || e.dynamics.iter().any(|d| divides(p, &d.1))
+        })
+        .map(String::as_str)
+        .collect()
+}
+
+/// A time param estimated beyond the longest trajectory is a failed fit
+/// (a 129 s lag on 60 s windows, a 10^4 s lag on a 715 s circle from a
+/// nominal fit that stopped short), never a finding (issue 37.0).
+fn out_of_range(e: &Effect, f: &ModelFit, data: &Dataset) -> Result<(), DiagnoseError> {
+    let longest = data
+        .trajectories
+        .iter()
+        .map(|t| {
+            let tt = t.outputs.t();
+            tt.last().zip(tt.first()).map_or(0.0, |(b, a)| b - a)
+        })
+        .fold(0.0, f64::max);
+    for p in time_params(e) {
+        if let Some((v, _)) = f.param(p) {
+            if v.is_nan() || v.abs() > longest {
+                return Err(DiagnoseError::OutOfRange {
+                    param: p.to_string(),
+                    value: v,
+                    longest,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wald_z_takes_the_larger_sd() {
+        let est = vec![("a".to_string(), 0.1, 0.01)];
+        // The robust sd 10 times smaller than the model's: the model's counts.
+        assert!((wald_z(&est, &[0.001]) - 10.0).abs() < 1e-12);
+        // Larger: the robust one counts; not finite: the model's.
+        assert!((wald_z(&est, &[0.05]) - 2.0).abs() < 1e-12);
+        assert!((wald_z(&est, &[f64::NAN]) - 10.0).abs() < 1e-12);
+        let bad = vec![("a".to_string(), 0.1, f64::NAN)];
+        assert_eq!(wald_z(&bad, &[]), 0.0);
+    }
+
+    #[test]
+    fn time_params_are_delays_and_divisors_in_the_dynamics() {
+        let lib = obsan_model::EffectLibrary::parse(
+            "effect lag\nparam T, k\nstate s = u\ns' = (u - s)/T + k*s\nsubst u = s\n\n\
+             effect d\nparam tau\ndelay tau\n\neffect n\nparam Tx, Txy\nstate z = u\nz' = (u - z)*Tx/Txy\nsubst u = z\n",
+            "t.eff",
+        )
+        .unwrap();
+        let names: Vec<Vec<&str>> = lib.effects.iter().map(time_params).collect();
+        assert_eq!(names, vec![vec!["T"], vec!["tau"], vec!["Txy"]]);
     }
 }

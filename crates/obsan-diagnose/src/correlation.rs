@@ -57,6 +57,129 @@ impl Correlation {
     }
 }
 
+/// Two params fixed in combination: the best-determined combination
+/// `params[0] + weight * params[1]` of their joint covariance, in the units
+/// of `params[0]`.
+///
+/// The direction is the smallest-variance eigenvector of the pair's
+/// covariance with each param in units of its own sd (the correlation
+/// matrix, eigenvalues `1 ± |r|`): `(1, -sign r) / sqrt 2`, so `weight =
+/// -sign(r) sd_0 / sd_1`, and the combination's variance is `2 sd_0^2 (1 -
+/// |r|)`. In the params' raw units the eigenvector would depend on the
+/// units chosen (a param in mm against one in m would always win); scaled
+/// by their sds it does not. For nearly proportional regressors (`omega`
+/// and `omega |v|` at a nearly constant `|v| = v0`) it is `kw + v0 c`: the
+/// turn-rate scale at the typical speed, which either effect alone fits.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Combination {
+    /// The two params and the effects that own them.
+    pub params: [String; 2],
+    pub effects: [String; 2],
+    /// Their estimates and sds (the model's, inflated as the named
+    /// estimates are).
+    pub values: [f64; 2],
+    pub sds: [f64; 2],
+    /// Their correlation in the fit.
+    pub r: f64,
+    /// Their cluster-robust covariance (trajectories as clusters), cross
+    /// term included; NaN where it could not be formed (under input noise,
+    /// one trajectory).
+    pub robust_covariance: [[f64; 2]; 2],
+    pub weight: f64,
+    pub estimate: f64,
+    pub sd: f64,
+    pub robust_sd: f64,
+    /// `|estimate|` over the larger of `sd` and `robust_sd`.
+    pub wald_z: f64,
+    /// Each param alone: `|value|` over the larger of its sd and its
+    /// robust sd.
+    pub wald_z_alone: [f64; 2],
+    /// Both effects are named (`false`: the two were suggested, not
+    /// established, and fitted together only for this).
+    pub named: bool,
+    /// `wald_z` clears the critical value (the square root of the LR's,
+    /// the larger of the two effects'): the data fix the combination.
+    pub established: bool,
+}
+
+impl Combination {
+    /// The combination of two params with estimates `values`, model sds
+    /// `sds`, correlation `r` and robust covariance `robust`.
+    pub fn new(
+        params: [String; 2],
+        effects: [String; 2],
+        (values, sds, r): ([f64; 2], [f64; 2], f64),
+        robust: [[f64; 2]; 2],
+    ) -> Combination {
+        let sign = if r < 0.0 { -1.0 } else { 1.0 };
+        let weight = -sign * sds[0] / sds[1];
+        let estimate = values[0] + weight * values[1];
+        let sd = sds[0] * (2.0 * (1.0 - r.abs())).max(0.0).sqrt();
+        let robust_sd = quadratic(&robust, weight).sqrt();
+        let z = |v: f64, s: f64, rs: f64| {
+            let s = if rs.is_finite() { s.max(rs) } else { s };
+            if s > 0.0 {
+                (v / s).abs()
+            } else {
+                0.0
+            }
+        };
+        Combination {
+            wald_z: z(estimate, sd, robust_sd),
+            wald_z_alone: [
+                z(values[0], sds[0], robust[0][0].sqrt()),
+                z(values[1], sds[1], robust[1][1].sqrt()),
+            ],
+            params,
+            effects,
+            values,
+            sds,
+            r,
+            robust_covariance: robust,
+            weight,
+            estimate,
+            sd,
+            robust_sd,
+            named: true,
+            established: false,
+        }
+    }
+
+    /// `params[0] + weight * params[1]` at another weight (the other side
+    /// of a comparison's direction), with its robust sd.
+    pub fn at(&self, weight: f64) -> (f64, f64) {
+        (
+            self.values[0] + weight * self.values[1],
+            quadratic(&self.robust_covariance, weight).sqrt(),
+        )
+    }
+
+    /// The text: `kw + 8.3e-2 gc = -2.8e-2 ± 3.5e-3 [± 5.1e-3]`.
+    pub fn text(&self) -> String {
+        let robust = if self.robust_sd.is_finite() {
+            format!(" [± {:.1e}]", self.robust_sd)
+        } else {
+            String::new()
+        };
+        format!(
+            "{} {} {:.3e} {} = {:.4e} ± {:.1e}{robust} (in the units of {}; r = {:+.3})",
+            self.params[0],
+            if self.weight < 0.0 { "-" } else { "+" },
+            self.weight.abs(),
+            self.params[1],
+            self.estimate,
+            self.sd,
+            self.params[0],
+            self.r
+        )
+    }
+}
+
+/// `(1, w) V (1, w)^T` of a 2 x 2 covariance.
+fn quadratic(v: &[[f64; 2]; 2], w: f64) -> f64 {
+    v[0][0] + w * (v[0][1] + v[1][0]) + w * w * v[1][1]
+}
+
 /// The correlation of entries `i` and `j` of covariance `cov`; `None` when
 /// either variance is not positive and finite (a singular fit's NaN).
 pub fn correlation(cov: &[Vec<f64>], i: usize, j: usize) -> Option<f64> {
@@ -161,6 +284,43 @@ mod tests {
         assert!((r[0].2 - 0.6).abs() < 1e-12);
         // a and c are uncorrelated: nothing at any positive threshold.
         assert!(correlated(&names, &cov, &s(&["a"]), &owner, 0.65).is_empty());
+    }
+
+    #[test]
+    fn the_combination_of_a_pair_by_hand() {
+        // sds 2 and 3, r = -0.8: weight = -sign(r) 2/3 = +2/3; values 1 and
+        // -1.2 give 1 - 0.8 = 0.2; model sd 2 sqrt(2 (1 - 0.8)) = 1.2649.
+        // The robust covariance equal to the model's ([[4, -4.8], [-4.8,
+        // 9]]): 4 + (2/3)(-9.6) + (4/9) 9 = 1.6, the same variance.
+        let robust = [[4.0, -4.8], [-4.8, 9.0]];
+        let c = Combination::new(
+            ["a".into(), "b".into()],
+            ["e1".into(), "e2".into()],
+            ([1.0, -1.2], [2.0, 3.0], -0.8),
+            robust,
+        );
+        assert!((c.weight - 2.0 / 3.0).abs() < 1e-15);
+        assert!((c.estimate - 0.2).abs() < 1e-15);
+        assert!((c.sd - 2.0 * 0.4f64.sqrt()).abs() < 1e-15);
+        assert!((c.robust_sd - 1.6f64.sqrt()).abs() < 1e-15);
+        assert!((c.wald_z - 0.2 / 1.6f64.sqrt()).abs() < 1e-12);
+        let near = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs() + (a[1] - b[1]).abs() < 1e-15;
+        assert!(near(c.wald_z_alone, [0.5, 0.4]), "{:?}", c.wald_z_alone);
+        // Along another direction: weight 0 is the first param alone.
+        assert_eq!(c.at(0.0), (1.0, 2.0));
+        // Positive r: the weight changes sign (the difference is fixed):
+        // 1 - (2/3) 1.2 = 0.2.
+        let d = Combination::new(
+            ["a".into(), "b".into()],
+            ["e1".into(), "e2".into()],
+            ([1.0, 1.2], [2.0, 3.0], 0.8),
+            [[f64::NAN; 2]; 2],
+        );
+        assert!((d.weight + 2.0 / 3.0).abs() < 1e-15);
+        assert!((d.estimate - 0.2).abs() < 1e-15 && d.robust_sd.is_nan());
+        // No robust sd: the model's alone in the Wald z.
+        assert!(near(d.wald_z_alone, [0.5, 0.4]), "{:?}", d.wald_z_alone);
+        assert!(d.text().starts_with("a - 6.667e-1 b = "), "{}", d.text());
     }
 
     #[test]

@@ -96,6 +96,14 @@ pub enum DiagnoseError {
     },
     /// A state added by an effect has no declared start (trajectory index).
     NewStateNoStart { state: String, trajectory: usize },
+    /// A time param (a delay, a lag's time constant) estimated beyond the
+    /// longest trajectory: no data of that length can fix it, so the fit
+    /// failed rather than found it.
+    OutOfRange {
+        param: String,
+        value: f64,
+        longest: f64,
+    },
 }
 
 impl fmt::Display for DiagnoseError {
@@ -180,6 +188,15 @@ impl fmt::Display for DiagnoseError {
             } => write!(
                 f,
                 "start of state {state} = {expr} on trajectory {trajectory}: no value at the first input row"
+            ),
+            OutOfRange {
+                param,
+                value,
+                longest,
+            } => write!(
+                f,
+                "{param} = {value:.3e} s is longer than the longest trajectory ({longest:.1} s): \
+                 a failed fit, not a finding"
             ),
             NewStateNoStart { state, trajectory } => write!(
                 f,

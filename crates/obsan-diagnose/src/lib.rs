@@ -21,6 +21,7 @@
 )]
 
 mod candidate;
+mod combine;
 mod common_mode;
 mod correlation;
 mod error;
@@ -31,7 +32,9 @@ mod options;
 mod relation;
 mod report;
 mod residual;
+mod sandwich;
 mod screen;
+mod settle;
 mod start;
 mod stats;
 mod workflow;
@@ -39,7 +42,7 @@ mod workflow;
 pub use common_mode::{
     difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
 };
-pub use correlation::{correlated, correlation, Correlation, CORRELATION_CAUTION};
+pub use correlation::{correlated, correlation, Combination, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use identify::{
@@ -50,7 +53,7 @@ pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use report::{
-    CandidateResult, Diagnosis, Named, Rival, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
+    CandidateResult, Diagnosis, Named, Refit, Rival, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
 };
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;

@@ -3,7 +3,7 @@
 //! likelihood fit with its residual tests.
 
 use crate::error::DiagnoseError;
-use crate::options::DiagnoseOptions;
+use crate::options::{DiagnoseOptions, AUTO_ESTIMATE_BELOW};
 use crate::residual::{analyse, ResidualReport, ResidualSeries};
 use obsan_data::{add_derived_inputs, wrap, Dataset};
 use obsan_fit::{
@@ -439,6 +439,92 @@ pub fn fit_model(
         series: std::sync::Arc::new(series),
         covariance: r.covariance,
     })
+}
+
+/// The fit from `start`; when it cannot be made (the model diverges from
+/// the start on some trajectory), a continuation replaces the start: fits on
+/// each trajectory's first eighth, quarter and half of its outputs, each
+/// from the last, then the whole data. A start from which a trajectory
+/// diverges is never the answer (issue 37.1). The note says what was done.
+pub(crate) fn first_fit(
+    sys: &System,
+    prepared: &Dataset,
+    start: &Start,
+    sigma: &[f64],
+    noise: &[(String, f64)],
+    o: &DiagnoseOptions,
+) -> Result<(ModelFit, Option<String>), DiagnoseError> {
+    let err = match fit_model(sys, prepared, &start.0, &start.1, sigma, noise, o) {
+        Ok(f) => return Ok((f, None)),
+        Err(e) => e,
+    };
+    // Every route that gives a fit; the lowest -2 log L is kept (a route
+    // can end in another basin).
+    let mut routes: Vec<(ModelFit, String)> = Vec::new();
+    let (mut pv, mut sv) = (start.0.clone(), start.1.clone());
+    let mut done = Vec::new();
+    for (frac, what) in [(0.125, "eighth"), (0.25, "quarter"), (0.5, "half")] {
+        if let Ok(f) = fit_model(sys, &shortened(prepared, frac), &pv, &sv, sigma, &[], o) {
+            pv = f.params.iter().map(|p| p.1).collect();
+            sv = f.initial_states;
+            done.push(what);
+        }
+    }
+    if !done.is_empty() {
+        if let Ok(f) = fit_model(sys, prepared, &pv, &sv, sigma, noise, o) {
+            let how = format!(
+                "fits on each trajectory's first {} of its outputs, each started from the last",
+                done.join(", ")
+            );
+            routes.push((f, how));
+        }
+    }
+    // A trajectory the start cannot follow left out of a first fit, whose
+    // params then start the whole data.
+    for k in 0..prepared.trajectories.len().min(AUTO_ESTIMATE_BELOW) {
+        let mut d = prepared.clone();
+        d.trajectories.remove(k);
+        let mut s0 = start.1.clone();
+        s0.remove(k);
+        let Ok(f) = fit_model(sys, &d, &start.0, &s0, sigma, &[], o) else {
+            continue;
+        };
+        let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
+        let mut sv = f.initial_states;
+        sv.insert(k, start.1[k].clone());
+        if let Ok(f) = fit_model(sys, prepared, &pv, &sv, sigma, noise, o) {
+            let how = format!(
+                "a fit without trajectory '{}', whose params started the whole data",
+                prepared.trajectories[k].name
+            );
+            routes.push((f, how));
+        }
+    }
+    let n = routes.len();
+    let (f, how) = routes
+        .into_iter()
+        .min_by(|a, b| a.0.m2ll().total_cmp(&b.0.m2ll()))
+        .ok_or(err.clone())?;
+    let note = format!(
+        "the fit from this start failed ({err}); replaced by {how} (the best of {n} routes)"
+    );
+    Ok((f, Some(note)))
+}
+
+/// `data` with each trajectory's outputs cut to the first `frac` of its
+/// duration (at least two rows).
+fn shortened(data: &Dataset, frac: f64) -> Dataset {
+    let mut d = data.clone();
+    for t in &mut d.trajectories {
+        let tt = t.outputs.t();
+        let (Some(a), Some(b)) = (tt.first(), tt.last()) else {
+            continue;
+        };
+        let cut = a + frac * (b - a);
+        let n = tt.iter().take_while(|x| **x <= cut).count().max(2);
+        t.outputs.truncate(n);
+    }
+    d
 }
 
 /// Start values for `sys` on `data`: a function of the model (see

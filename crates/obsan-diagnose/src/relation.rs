@@ -82,11 +82,13 @@ const VAR_FLOOR: f64 = 1e-12;
 /// Fit the params of an input relation `compare u = EXPR` to the measured
 /// inputs of every trajectory where EXPR can be evaluated. `noise` holds
 /// each measured input's intensity `c` (empty or all 0: not stated, then
-/// one common intensity is estimated); `alpha` is the test's level.
+/// one common intensity is estimated); `source` says where `noise` comes
+/// from (printed: a level the fit estimated is never called stated);
+/// `alpha` is the test's level.
 pub(crate) fn input_check(
     e: &Effect,
     data: &Dataset,
-    noise: &[(String, f64)],
+    (noise, source): (&[(String, f64)], &str),
     alpha: f64,
 ) -> InputCheck {
     let mut out = InputCheck {
@@ -346,7 +348,11 @@ pub(crate) fn input_check(
     out.note = format!(
         "{} blocks of {BLOCK} s; encoder noise {}{}",
         r.len(),
-        out.noise,
+        if stated {
+            source
+        } else {
+            "estimated from the relation's scatter"
+        },
         if stated {
             format!(", dispersion {dispersion:.2}")
         } else {

@@ -3,7 +3,7 @@
 //! fit, check and correlation types and no step of the workflow.
 
 use crate::common_mode::CommonModeCheck;
-use crate::correlation::Correlation;
+use crate::correlation::{Combination, Correlation};
 use crate::generate::ORIGIN_GENERATED;
 use crate::model_fit::ModelFit;
 use crate::relation::InputCheck;
@@ -37,6 +37,12 @@ pub struct CandidateResult {
     pub rms: Vec<(String, f64)>,
     pub whiteness_z: f64,
     pub significant: bool,
+    /// The smallest `|estimate| / sd` of its params, each sd the larger of
+    /// the model's and the cluster-robust one (the Wald check).
+    pub wald_z: f64,
+    /// Its LR clears the critical value but its Wald z does not: suggested,
+    /// not established (never named).
+    pub suggested: bool,
     /// Weighed at white input noise: under `auto` with estimated input
     /// noise, the candidate fitted better there than at the estimated levels.
     pub white_input_noise: bool,
@@ -78,6 +84,8 @@ impl CandidateResult {
             rms: vec![],
             whiteness_z: 0.0,
             significant: false,
+            wald_z: 0.0,
+            suggested: false,
             white_input_noise: false,
             error: None,
             score: None,
@@ -113,6 +121,20 @@ pub struct Named {
     /// change correlates with calib.sys's delta at 0.999). Empty for an
     /// input relation, which is not in the fit.
     pub correlated: Vec<Correlation>,
+}
+
+/// The current model refitted before a round's comparison: a candidate's
+/// point with its params at 0 fitted better than the current fit, which
+/// had stopped short.
+#[derive(Clone, Debug, Serialize)]
+pub struct Refit {
+    /// The round (1-based) whose candidates were weighed again.
+    pub round: usize,
+    /// The candidate whose point the refit started from.
+    pub from: String,
+    /// `-2 log L` of the current fit before and after.
+    pub m2ll_before: f64,
+    pub m2ll_after: f64,
 }
 
 /// A candidate that explains the data about as well as a named effect.
@@ -154,9 +176,27 @@ pub struct Diagnosis {
     /// against white output noise alone.
     pub input_noise_lr: Vec<f64>,
     pub input_class: String,
+    /// The nominal fit, converged: when a candidate's point showed that the
+    /// fit from the start had stopped short, its refit (see `refits`).
     pub nominal: ModelFit,
+    /// `false`: the fit from the start had not converged (`refits` says
+    /// from where it was refitted, and by how much `-2 log L` fell).
+    pub nominal_converged: bool,
+    /// Every refit of the current model before a round's comparison.
+    pub refits: Vec<Refit>,
     pub rounds: Vec<Vec<CandidateResult>>,
     pub named: Vec<Named>,
+    /// The last round's candidates whose LR clears the critical value but
+    /// whose estimate is not established (Wald z, with the larger of the
+    /// model's and the cluster-robust sd, below the critical value):
+    /// suggested, not established, never named.
+    pub suggested: Vec<CandidateResult>,
+    /// Pairs of params fixed only in combination (`|r| >=`
+    /// [`crate::CORRELATION_CAUTION`]): of two named effects in the final
+    /// fit, then of two suggested candidates fitted together (`named`
+    /// false). Compare such a pair through its combination, not each
+    /// param alone.
+    pub combinations: Vec<Combination>,
     pub input_checks: Vec<InputCheck>,
     pub final_fit: ModelFit,
     /// Effects these data cannot reveal, with what absorbs them.

@@ -124,7 +124,23 @@ pub fn analyse(series: &[ResidualSeries], n_fitted: usize) -> ResidualReport {
     let white: Vec<Vec<f64>> = series.iter().map(|s| s.whitened(&s.e)).collect();
     let chi2: f64 = white.iter().flatten().map(|x| x * x).sum();
     let dof = (n as f64 - n_fitted as f64).max(1.0);
-    let mut tests = Vec::new();
+    // The level test is two-sided: residuals far below the stated level
+    // are a finding too (the stated sigma is too large, or named effects
+    // absorb noise), never "consistent with noise" (issue 37.3).
+    let z_level = (chi2 - dof) / (2.0 * dof).sqrt();
+    let mut tests = vec![Structure {
+        test: "chi2".into(),
+        description: if z_level < -Z_STRUCTURE {
+            format!(
+                "residual level far below the stated noise: chi-square {chi2:.1} on {dof:.0} \
+                 degrees of freedom (the stated levels are too large, or the fit absorbs noise)"
+            )
+        } else {
+            format!("residual level: chi-square {chi2:.1} on {dof:.0} degrees of freedom")
+        },
+        z: z_level,
+        significant: z_level.abs() > Z_STRUCTURE,
+    }];
     let mut push = |test: &str, description: String, z: f64| {
         tests.push(Structure {
             test: test.into(),
@@ -133,11 +149,6 @@ pub fn analyse(series: &[ResidualSeries], n_fitted: usize) -> ResidualReport {
             significant: z > Z_STRUCTURE,
         });
     };
-    push(
-        "chi2",
-        format!("residual level: chi-square {chi2:.1} on {dof:.0} degrees of freedom"),
-        (chi2 - dof) / (2.0 * dof).sqrt(),
-    );
     // Ljung–Box over lags 1..=10 within each series, pooled.
     let (mut q, mut k) = (0.0, 0.0);
     let (mut lr_sum, mut lr_w) = (0.0, 0.0);

@@ -254,12 +254,17 @@ fn screen_cost(p: &Predictor, t: &Trajectory, x0: &[f64], sigma: &[f64]) -> f64 
 /// The model's outputs at trajectory `t`'s first [`SCREEN_OUTPUTS`] output
 /// times from `x0`.
 fn first_rows(p: &Predictor, t: &Trajectory, x0: &[f64]) -> Result<Vec<Vec<f64>>, FitError> {
+    rows(p, t, x0, SCREEN_OUTPUTS)
+}
+
+/// The model's outputs at trajectory `t`'s first `n` output times from `x0`.
+fn rows(p: &Predictor, t: &Trajectory, x0: &[f64], n: usize) -> Result<Vec<Vec<f64>>, FitError> {
     let consts: Vec<f64> = p
         .consts
         .iter()
         .map(|c| t.meta.get(c).copied().unwrap_or(0.0))
         .collect();
-    let rows = t.outputs.len().min(SCREEN_OUTPUTS);
+    let rows = t.outputs.len().min(n);
     p.predict(x0, &consts, &t.inputs, &t.outputs.t()[..rows])
 }
 
@@ -366,8 +371,8 @@ fn screened_states(
     ))
 }
 
-/// The check behind [`calib_start`]'s `usable`: the model predicts the
-/// first [`SCREEN_OUTPUTS`] output rows of every trajectory whose (mu0,
+/// The check behind [`calib_start`]'s `usable`: the model predicts every
+/// output row of every trajectory whose (mu0,
 /// gamma0) is known from the calib params given, its other params at
 /// `given` or their declared values (else 0), its other states at 0.
 fn integrable<'a>(
@@ -400,7 +405,10 @@ fn integrable<'a>(
                             .unwrap_or(0.0),
                     })
                     .collect();
-                if let Err(e) = first_rows(&p, t, &x0) {
+                // The whole trajectory, not its first rows: a DET + LS start
+                // whose q = 0 circle diverges at t = 31 s was the fit's
+                // first point, and diagnose stopped there (issue 37.1).
+                if let Err(e) = rows(&p, t, &x0, usize::MAX) {
                     return Err(format!("trajectory '{}': {e}", t.name));
                 }
             }

@@ -14,19 +14,18 @@
 //!    then the [`Diagnosis`] is assembled.
 
 use crate::candidate::{candidate, rank_only, Fitted, Noise};
-use crate::correlation::{correlated, CORRELATION_CAUTION};
+use crate::combine::{of_named, of_suggested, At};
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
 use crate::model_fit::{
-    class_inputs, estimate_levels, fit_model, input_noise, prepare, ModelFit, Start,
+    class_inputs, estimate_levels, first_fit, fit_model, input_noise, prepare, ModelFit, Start,
 };
 use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
-use crate::relation::{input_check, with_relation, InputCheck};
-use crate::report::{
-    CandidateResult, Diagnosis, Named, Rival, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
-};
+use crate::relation::{input_check, InputCheck};
+use crate::report::{CandidateResult, Diagnosis, Named, Refit, Rival, ORIGIN_FILE, RIVAL_BIC};
 use crate::screen::{file_stand_in, score, Outcome, Scored, SCREEN_SAFETY};
+use crate::settle::{extended_model, name_relations, settle};
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -78,8 +77,15 @@ pub fn diagnose(
         .into_iter()
         .chain(gen.candidates.iter().map(|g| &g.effect))
         .collect();
-    let input_checks = input_checks(sys, data, &effects, &levels.noise, limits.a_user);
+    let input_checks = input_checks(
+        sys,
+        data,
+        &effects,
+        (&levels.noise, levels.estimate),
+        limits.a_user,
+    );
 
+    let all_candidates = candidates.clone();
     let mut rounds = Rounds::new(
         sys,
         lib,
@@ -104,10 +110,43 @@ pub fn diagnose(
         hidden,
         class_text,
         levels,
+        refits,
+        nominal_refit,
         ..
     } = rounds;
+    // What the last round found above its critical value but not by its
+    // Wald z: suggested, not established (issue 37.4).
+    let suggested: Vec<CandidateResult> = rounds
+        .last()
+        .map(|r| r.iter().filter(|c| c.suggested).cloned().collect())
+        .unwrap_or_default();
+    let start_text = match &levels.start_replaced {
+        Some(why) => format!("{}; {why}", start.2),
+        None => start.2.clone(),
+    };
 
     settle(&mut named, &rounds, &current, &gen);
+    // Pairs fixed only in combination (item 7 of the never-confidently-
+    // wrong rules): among the named effects, and among the suggested ones
+    // fitted together.
+    let crit = |origin: &str| {
+        if origin == ORIGIN_GENERATED {
+            limits.crit_gen
+        } else {
+            limits.crit
+        }
+    };
+    let at = At {
+        sys: &current_sys,
+        data,
+        fit: &current,
+        sigma: &levels.sigma,
+        noise: &levels.noise,
+        o,
+    };
+    progress("combinations of correlated effects");
+    let mut combinations = of_named(&named, &at, &crit)?;
+    combinations.extend(of_suggested(&suggested, &all_candidates, &at, &crit));
     let mut extended_sys = extended_model(&named, &current_sys);
     name_relations(&mut named, &mut extended_sys, &input_checks, &effects);
     let screen_threshold = match o.screen && levels.noise.is_empty() {
@@ -116,7 +155,7 @@ pub fn diagnose(
     };
     Ok(Diagnosis {
         model: sys.name.clone(),
-        start: start.2.clone(),
+        start: start_text,
         sigma: outputs.into_iter().zip(levels.sigma).collect(),
         sigma_estimated: levels.sigma_estimated,
         input_noise_source: if levels.noise.is_empty() {
@@ -130,9 +169,13 @@ pub fn diagnose(
         input_noise: levels.noise,
         input_noise_lr: levels.noise_lr,
         input_class: class_text,
-        nominal,
+        nominal_converged: !refits.iter().any(|r| r.round == 1),
+        nominal: nominal_refit.unwrap_or(nominal),
+        refits,
         rounds,
         named,
+        suggested,
+        combinations,
         input_checks,
         final_fit: current,
         hidden,
@@ -181,7 +224,7 @@ fn output_levels(
         .iter()
         .map(|s| if s.is_nan() { 1.0 } else { *s })
         .collect();
-    let f = fit_model(sys, prepared, &start.0, &start.1, &ones, &[], o)?;
+    let (f, _) = first_fit(sys, prepared, start, &ones, &[], o)?;
     let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
     for (s, r) in sigma.iter_mut().zip(&f.rms) {
         if s.is_nan() {
@@ -207,6 +250,8 @@ struct Levels {
     /// candidate is weighed at both, see `candidate`).
     white_sigma: Option<Vec<f64>>,
     white_fit: Option<ModelFit>,
+    /// Why the start was replaced, when the fit could not be made from it.
+    start_replaced: Option<String>,
 }
 
 /// The nominal fit under the input noise the options choose: stated, or
@@ -233,7 +278,7 @@ fn nominal_fit(
         InputNoise::Stated | InputNoise::Auto => stated,
         InputNoise::Estimate | InputNoise::None => vec![],
     };
-    let nominal = fit_model(sys, prepared, &start.0, &start.1, &sigma, &noise, o)?;
+    let (nominal, replaced) = first_fit(sys, prepared, start, &sigma, &noise, o)?;
     let mut levels = Levels {
         sigma,
         sigma_estimated,
@@ -242,6 +287,7 @@ fn nominal_fit(
         noise_lr: Vec::new(),
         white_sigma: None,
         white_fit: None,
+        start_replaced: replaced,
     };
     if !estimate {
         return Ok((levels, nominal));
@@ -322,18 +368,18 @@ fn input_checks(
     sys: &System,
     data: &Dataset,
     effects: &[&Effect],
-    noise: &[(String, f64)],
+    (noise, estimated): (&[(String, f64)], bool),
     alpha: f64,
 ) -> Vec<InputCheck> {
-    let relation_noise = if noise.is_empty() {
-        input_noise(sys, data)
-    } else {
-        noise.to_vec()
+    let (relation_noise, source) = match (noise.is_empty(), estimated) {
+        (true, _) => (input_noise(sys, data), "stated in dataset.json"),
+        (false, true) => (noise.to_vec(), "estimated with the fit"),
+        (false, false) => (noise.to_vec(), "stated in dataset.json"),
     };
     effects
         .iter()
         .filter(|e| e.is_input_side())
-        .map(|e| input_check(e, data, &relation_noise, alpha))
+        .map(|e| input_check(e, data, (&relation_noise, source), alpha))
         .collect()
 }
 
@@ -359,6 +405,10 @@ struct Rounds<'a> {
     /// Effects the data cannot reveal (the first round's rank tests).
     hidden: Vec<CandidateResult>,
     class_text: String,
+    /// Refits of the current model that a candidate's point showed had
+    /// stopped short, and the nominal fit's refit (the first round's).
+    refits: Vec<Refit>,
+    nominal_refit: Option<ModelFit>,
     /// Each candidate's last estimate of its new params: the next round's
     /// fit starts there (the same optimum, fewer iterations; on MRCLAM
     /// robot 1 the named list and its printed estimates are unchanged).
@@ -398,6 +448,8 @@ impl<'a> Rounds<'a> {
             rounds: Vec::new(),
             hidden: Vec::new(),
             class_text: String::new(),
+            refits: Vec::new(),
+            nominal_refit: None,
             warm: HashMap::new(),
         }
     }
@@ -429,6 +481,26 @@ impl<'a> Rounds<'a> {
         // couplings were named).
         let round_data = prepare(&self.current_sys, self.data)?;
         let mut results = self.weigh(round, &remaining, &round_data);
+        // An LR is only meaningful against a converged fit (issue 37.0):
+        // where a candidate's point, its params at 0, fits better than the
+        // current fit, the current fit had stopped short; it is refitted and
+        // the round weighed again.
+        for _ in 0..MAX_REFITS {
+            let Some((fit, from)) = self.refit(&results, &round_data) else {
+                break;
+            };
+            self.refits.push(Refit {
+                round: round + 1,
+                from,
+                m2ll_before: self.current.m2ll(),
+                m2ll_after: fit.m2ll(),
+            });
+            if round == 0 {
+                self.nominal_refit = Some(fit.clone());
+            }
+            self.current = fit;
+            results = self.weigh(round, &remaining, &round_data);
+        }
         if round == 0 {
             self.first_round(&remaining, &round_data, &mut results)?;
         }
@@ -531,7 +603,9 @@ impl<'a> Rounds<'a> {
                 Some(_) => (lim.crit_gen, ORIGIN_GENERATED),
                 None => (lim.crit, self.lib.map_or("effects", |l| l.origin.as_str())),
             };
-            let robust = g.map(|_| lim.crit_gen.sqrt());
+            // Every candidate's Wald z at its side's one-degree critical
+            // value (issue 37.4: the same rule for file and generated).
+            let wald = Some(if g.is_some() { lim.crit_gen } else { lim.crit }.sqrt());
             let (mut r, x) = obsan_expr::with_cancel(cancel.clone(), || {
                 let levels = Noise {
                     sigma: &lv.sigma,
@@ -546,7 +620,7 @@ impl<'a> Rounds<'a> {
                     data,
                     &self.which,
                     levels,
-                    (c, robust),
+                    (c, wald),
                     o,
                     origin,
                     self.warm.get(&e.name).map(Vec::as_slice),
@@ -605,6 +679,65 @@ impl<'a> Rounds<'a> {
             .map(|r| r.0.clone())
             .collect();
         Ok(())
+    }
+
+    /// The current model refitted from the points of the round's best
+    /// candidates (by LR, above the lower critical value), each with its new
+    /// params at 0 (the current model's params and states read from the
+    /// candidate's fit by name): the best such fit when it lowers `-2 log L`
+    /// by more than [`REFIT_GAIN`], with the candidate it came from.
+    fn refit(&self, results: &[Outcome<Fitted>], data: &Dataset) -> Option<(ModelFit, String)> {
+        use rayon::prelude::*;
+        let (lv, o) = (&self.levels, self.o);
+        let floor = self.limits.crit.min(self.limits.crit_gen);
+        let mut from: Vec<(&CandidateResult, &Fitted)> = results
+            .iter()
+            .filter_map(|r| Some((&r.0, r.1.as_ref()?)))
+            .filter(|(r, _)| r.error.is_none() && r.lr > floor)
+            .collect();
+        from.sort_by(|a, b| b.0.lr.total_cmp(&a.0.lr));
+        from.truncate(REFIT_FROM);
+        let names = |sys: &System| -> Vec<String> {
+            sys.decls_of(obsan_model::Kind::State)
+                .map(|d| d.name.clone())
+                .collect()
+        };
+        let (states, cur) = (names(&self.current_sys), &self.current);
+        let cancel = obsan_expr::cancel_flag();
+        let best = from
+            .par_iter()
+            .filter_map(|(r, f)| {
+                let pv: Vec<f64> = cur
+                    .params
+                    .iter()
+                    .map(|p| f.fit.param(&p.0).map_or(p.1, |x| x.0))
+                    .collect();
+                let ext_states = names(&f.sys);
+                let sv: Vec<Vec<f64>> = cur
+                    .initial_states
+                    .iter()
+                    .zip(&f.fit.initial_states)
+                    .map(|(c, e)| {
+                        states
+                            .iter()
+                            .zip(c)
+                            .map(|(n, v)| {
+                                ext_states
+                                    .iter()
+                                    .position(|x| x == n)
+                                    .and_then(|i| e.get(i).copied())
+                                    .unwrap_or(*v)
+                            })
+                            .collect()
+                    })
+                    .collect();
+                obsan_expr::with_cancel(cancel.clone(), || {
+                    fit_model(&self.current_sys, data, &pv, &sv, &lv.sigma, &lv.noise, o).ok()
+                })
+                .map(|fit| (fit, r.effect.clone()))
+            })
+            .min_by(|a, b| a.0.m2ll().total_cmp(&b.0.m2ll()))?;
+        (best.0.m2ll() < cur.m2ll() - REFIT_GAIN).then_some(best)
     }
 
     /// Each fitted candidate's estimates, to start its next fit from.
@@ -715,6 +848,17 @@ impl<'a> Rounds<'a> {
     }
 }
 
+/// Refits of the current model per round, at most (each weighs the round
+/// again).
+const MAX_REFITS: usize = 2;
+/// The round's candidates (best LR first) whose points restart the current
+/// fit.
+const REFIT_FROM: usize = 2;
+/// A restart that lowers `-2 log L` by more than this replaces the current
+/// fit: below it no likelihood ratio moves by a unit (critical values are
+/// near 10), above it the comparison was with a fit that had stopped short.
+const REFIT_GAIN: f64 = 1.0;
+
 /// The other significant candidates of a round whose BIC is within
 /// [`RIVAL_BIC`] of the best one's.
 fn rivals(results: &[Outcome<Fitted>], best: &CandidateResult) -> Vec<Rival> {
@@ -731,152 +875,4 @@ fn rivals(results: &[Outcome<Fitted>], best: &CandidateResult) -> Vec<Rival> {
             jointly_identifiable: None,
         })
         .collect()
-}
-
-/// What was named, settled against the final fit: rivals the next round
-/// found confounded, whether each rival is jointly identifiable, estimates
-/// refined by later rounds, correlations, and a generated effect's words.
-fn settle(
-    named: &mut [Named],
-    rounds: &[Vec<CandidateResult>],
-    current: &ModelFit,
-    gen: &Generation,
-) {
-    confounded_rivals(named, rounds);
-    // A rival's rank test in the round after its named effect says whether
-    // the two are confounded on these data.
-    for (i, n) in named.iter_mut().enumerate() {
-        for rv in &mut n.rivals {
-            rv.jointly_identifiable = rounds
-                .get(i + 1)
-                .and_then(|r| r.iter().find(|c| c.effect == rv.effect))
-                .filter(|c| c.error.is_none() && !c.screened_out)
-                .map(|c| c.identifiable);
-        }
-    }
-    // Estimates of earlier named effects are refined by later rounds.
-    for n in named.iter_mut() {
-        for (i, e) in n.estimates.iter_mut().enumerate() {
-            if let Some((v, s)) = current.param(&e.0) {
-                e.1 = v;
-                e.2 = s * current.inflation().sqrt();
-            }
-            if let (Some(r), Some(slot)) = (current.robust_sd(&e.0), n.robust_sd.get_mut(i)) {
-                *slot = r;
-            }
-        }
-    }
-    correlations(named, current);
-    // A generated effect's words follow the sign of its refined estimate.
-    for n in named.iter_mut() {
-        if let Some(g) = gen.candidates.iter().find(|g| g.effect.name == n.effect) {
-            n.description = g.words(n.estimates.first().map_or(0.0, |x| x.1));
-        }
-    }
-}
-
-/// A significant candidate that the next round's rank test finds
-/// confounded with the named effect is a rival whatever its BIC: on these
-/// data the two differ only outside what the data identify.
-fn confounded_rivals(named: &mut [Named], rounds: &[Vec<CandidateResult>]) {
-    for (i, n) in named.iter_mut().enumerate() {
-        let (Some(this), Some(next)) = (rounds.get(i), rounds.get(i + 1)) else {
-            continue;
-        };
-        let best = this
-            .iter()
-            .find(|c| c.effect == n.effect)
-            .map(|c| c.delta_bic);
-        for c in this
-            .iter()
-            .filter(|c| c.significant && c.effect != n.effect)
-        {
-            let confounded = next.iter().any(|x| {
-                x.effect == c.effect && x.error.is_none() && !x.screened_out && !x.identifiable
-            });
-            if confounded && !n.rivals.iter().any(|r| r.effect == c.effect) {
-                n.rivals.push(Rival {
-                    effect: c.effect.clone(),
-                    delta_bic: (c.delta_bic - best.unwrap_or(c.delta_bic)).max(0.0),
-                    jointly_identifiable: None,
-                });
-            }
-        }
-    }
-}
-
-/// Correlations in the final fit: two named effects whose regressors are
-/// nearly proportional on these data are fixed only in combination.
-fn correlations(named: &mut [Named], current: &ModelFit) {
-    let names: Vec<String> = current.params.iter().map(|p| p.0.clone()).collect();
-    let owners: Vec<(String, String)> = named
-        .iter()
-        .flat_map(|n| n.estimates.iter().map(|e| (e.0.clone(), n.effect.clone())))
-        .collect();
-    let owner = |p: &str| owners.iter().find(|o| o.0 == p).map(|o| o.1.clone());
-    for n in named.iter_mut() {
-        let of: Vec<String> = n.estimates.iter().map(|e| e.0.clone()).collect();
-        n.correlated = correlated(
-            &names,
-            &current.covariance,
-            &of,
-            &owner,
-            CORRELATION_CAUTION,
-        );
-    }
-}
-
-/// The extended model as .sys text, each generated effect announced in a
-/// comment with its estimates.
-fn extended_model(named: &[Named], current_sys: &System) -> String {
-    let mut extended_sys = String::new();
-    for n in named.iter().filter(|n| n.origin == ORIGIN_GENERATED) {
-        let est: Vec<String> = n
-            .estimates
-            .iter()
-            .map(|(p, v, sd)| format!("{p} = {v:e} ± {sd:.1e}"))
-            .collect();
-        extended_sys.push_str(&format!(
-            "# generated from the model's structure (not in the effects file): {}: {}, {}\n",
-            n.effect,
-            n.description,
-            est.join(", ")
-        ));
-    }
-    extended_sys.push_str(&current_sys.to_sys_text());
-    extended_sys
-}
-
-/// A relation the measured inputs contradict is a missing effect too: the
-/// data were not taken under the declared restriction. Named after the
-/// model's effects (it changes no fit: the fit uses the measured inputs),
-/// and written into the extended model's restriction.
-fn name_relations(
-    named: &mut Vec<Named>,
-    extended_sys: &mut String,
-    checks: &[InputCheck],
-    effects: &[&Effect],
-) {
-    for (c, e) in checks
-        .iter()
-        .zip(effects.iter().filter(|e| e.is_input_side()))
-    {
-        if !c.significant {
-            continue;
-        }
-        named.push(Named {
-            effect: c.effect.clone(),
-            description: c.description.clone(),
-            origin: ORIGIN_RELATION.into(),
-            estimates: c.estimates.clone(),
-            robust_sd: vec![f64::NAN; c.estimates.len()],
-            rms_before: vec![],
-            rms_after: vec![],
-            lr: c.z * c.z,
-            p_value: c.p_value,
-            rivals: vec![],
-            correlated: vec![],
-        });
-        *extended_sys = with_relation(extended_sys, e, &c.estimates);
-    }
 }

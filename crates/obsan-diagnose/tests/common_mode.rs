@@ -193,10 +193,18 @@ fn heading_drift_is_not_named_as_a_bearing_scale() {
     // In later rounds the veto is predicted before any fit, beyond the
     // margin, and the scale is not fitted: its entry says so, with the
     // heading-free estimate (the truth: no scale) within 3 robust sds of 0.
+    // Later rounds follow a named effect only: with the Wald check (a
+    // candidate named only where its estimate stands the critical value of
+    // robust sds from 0) this seed's drift names nothing, and there is no
+    // later round to skip it in.
     let skipped: Vec<&CandidateResult> = b_scales(&d)
         .filter(|c| c.common_mode.as_ref().is_some_and(|m| m.predicted))
         .collect();
-    assert!(!skipped.is_empty(), "b_scale never skipped");
+    assert!(
+        d.rounds.len() < 2 || !skipped.is_empty(),
+        "b_scale never skipped in {} rounds",
+        d.rounds.len()
+    );
     for c in &skipped {
         let m = c.common_mode.as_ref().unwrap();
         assert!(

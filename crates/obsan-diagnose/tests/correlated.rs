@@ -164,6 +164,47 @@ fn nearly_proportional_effects_are_named_with_their_correlation() {
         assert!(r.r <= -CORRELATION_CAUTION, "{r:?}");
         assert!(r.variance_inflation() >= 1.0 / (1.0 - CORRELATION_CAUTION.powi(2)));
     }
+    // Fixed in combination: one pair, in the order named, and the
+    // combination the data fix, kw + w c along the smallest-variance
+    // direction (w = -sign(r) sd0/sd1 from the reported sds: about v0 = 0.3
+    // for (kw, c); 1/v0 for (c, kw)). Its truth from the simulation's
+    // params as the fitted model reads them, against the robust sd.
+    assert_eq!(d.combinations.len(), 1, "{:?}", d.combinations);
+    let comb = &d.combinations[0];
+    assert!(comb.named);
+    let order: Vec<&str> = d.named.iter().map(|n| n.effect.as_str()).collect();
+    assert_eq!(
+        comb.effects.iter().map(String::as_str).collect::<Vec<_>>(),
+        order
+    );
+    assert!(comb.r <= -CORRELATION_CAUTION, "{comb:?}");
+    let want_w = comb.sds[0] / comb.sds[1];
+    assert!((comb.weight - want_w).abs() < 1e-12 * want_w, "{comb:?}");
+    let truth = |p: &str| if p == "kw" { kw } else { c_fitted };
+    let want = truth(&comb.params[0]) + comb.weight * truth(&comb.params[1]);
+    assert!(
+        (comb.estimate - want).abs() < 3.0 * comb.robust_sd.max(comb.sd),
+        "{comb:?} against {want}"
+    );
+    // The combination is known far better than either param: its sd is
+    // sd0 sqrt(2 (1 - |r|)), below half of sd0 at |r| >= 0.9.
+    let sd0 = comb.sds[0];
+    assert!((comb.sd - sd0 * (2.0 * (1.0 - comb.r.abs())).sqrt()).abs() < 1e-12 * sd0);
+    assert!(comb.sd < 0.5 * sd0 && comb.established, "{comb:?}");
+    // The robust covariance's diagonal, recomputed from the trajectories'
+    // scores (sandwich.rs), is the fitter's own robust variance of each
+    // param (obsan-fit's clustered sds), to rounding; its cross term makes
+    // the combination's robust sd smaller than either param's.
+    for (k, p) in comb.params.iter().enumerate() {
+        let n = d.named.iter().find(|n| n.estimates[0].0 == *p).unwrap();
+        let fitter = n.robust_sd[0];
+        let ours = comb.robust_covariance[k][k].sqrt();
+        assert!(
+            (ours - fitter).abs() < 1e-6 * fitter,
+            "{p}: {ours} against {fitter}"
+        );
+    }
+    assert!(comb.robust_sd < comb.robust_covariance[0][0].sqrt());
     // One caution for the pair, under the effect named second.
     assert!(d.correlated_with_earlier(0).is_empty());
     let pairs = d.correlated_with_earlier(1);
@@ -186,6 +227,7 @@ fn nearly_proportional_effects_are_named_with_their_correlation() {
 fn one_hidden_effect_is_named_without_correlations() {
     let d = run(0.1, 0.0, 1);
     assert_eq!(named(&d), ["turn_scale"]);
+    assert!(d.combinations.is_empty(), "{:?}", d.combinations);
     // mrclam.sys has no params of its own: nothing else to correlate with.
     assert!(
         d.named[0].correlated.is_empty(),
