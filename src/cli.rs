@@ -301,6 +301,7 @@ and exits 2 if any was refused.")]
     #[command(after_help = "Examples:
   obsan import sbml model.xml                        (.sys text to stdout; every state measured)
   obsan import sbml model.xml --observe S1,S2 --out model.sys
+  obsan import sbml model.xml --out model.sys --values model.values
 
 Assignment rules are substituted and function definitions inlined; events, algebraic rules,
 delays, time, piecewise and varying compartments are refused naming the element and its line,
@@ -365,6 +366,10 @@ pub struct SbmlArgs {
     /// Write the .sys here instead of stdout.
     #[arg(long)]
     pub out: Option<String>,
+    /// Also write the numbers the SBML file gives, one `name = value` line each (parameter
+    /// values, compartment sizes, species' initial values as their states are written).
+    #[arg(long)]
+    pub values: Option<String>,
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,

@@ -136,7 +136,17 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
     let text = crate::fsio::read_text(path)?;
     let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
         .map_err(|e| Failure(located(path, &e)))?;
-    check_and_write(path, &c, a.out.as_deref(), a.force)
+    let code = check_and_write(path, &c, a.out.as_deref(), a.force)?;
+    if let Some(out) = &a.values {
+        let values = obsan_import::sbml_values(&text).map_err(|e| Failure(located(path, &e)))?;
+        // `{:?}` is the shortest text that reads back to the same f64.
+        let text: String = values
+            .iter()
+            .map(|(n, v)| format!("{n} = {v:?}\n"))
+            .collect();
+        write_whole(out, &text, a.force)?;
+    }
+    Ok(code)
 }
 
 pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {

@@ -121,6 +121,15 @@ fn sbml_import_then_rank_gives_the_derived_verdict() {
     ok(&["import", "sbml", &src, "--observe", "S2", "--out", &out]);
     let v: Value = serde_json::from_str(&ok(&["rank", &out, "--json"])).unwrap();
     assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(3), Some(3)));
+    // The file states k1 = 1 and the size 1 of cell; S1 and S2 have no initial value.
+    let vals = format!("{dir}/conv.values");
+    ok(&[
+        "import", "sbml", &src, "--out", &out, "--values", &vals, "--force",
+    ]);
+    assert_eq!(
+        std::fs::read_to_string(&vals).unwrap(),
+        "cell = 1.0\nk1 = 1.0\n"
+    );
     bad(
         &["import", "sbml", &src, "--observe", "S9"],
         "'S9' is not an id",

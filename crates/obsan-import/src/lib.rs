@@ -26,6 +26,7 @@ mod julia;
 mod matlab;
 mod petab;
 mod sbml;
+mod sbml_values;
 mod yaml;
 
 pub use error::ImportError;
@@ -33,6 +34,7 @@ pub use julia::{si_jl_convert, si_jl_models, SiJlModel};
 pub use matlab::strike_goldd_to_sys;
 pub use petab::{petab_files, petab_to_sys, PetabError, PetabFile, PetabFiles, PetabTexts};
 pub use sbml::sbml_to_sys;
+pub use sbml_values::sbml_values;
 
 /// A translated model: its `.sys` text and, for each `.sys` line that came
 /// from the foreign file, that place (1-based line and column there).

@@ -2,7 +2,7 @@
 //! and the SBML specification's constructs); expected equations are derived by hand beside each
 //! test from SBML's semantics: d[S]/dt = sum(stoichiometry * rate) / compartment size.
 
-use obsan_import::{sbml_to_sys, ImportError};
+use obsan_import::{sbml_to_sys, sbml_values, ImportError};
 use obsan_model::System;
 use proptest::prelude::*;
 
@@ -206,4 +206,50 @@ proptest! {
             }
         }
     }
+}
+
+const VALUED: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+  <model id="valued">
+    <listOfCompartments>
+      <compartment id="cell" size="2" constant="true"/>
+    </listOfCompartments>
+    <listOfSpecies>
+      <species id="A" compartment="cell" initialAmount="3" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+      <species id="B" compartment="cell" initialConcentration="0.5" hasOnlySubstanceUnits="true" boundaryCondition="false" constant="false"/>
+      <species id="C" compartment="cell" initialConcentration="0.25" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+    </listOfSpecies>
+    <listOfParameters>
+      <parameter id="k" value="0.3" constant="true"/>
+      <parameter id="j" value="7" constant="true"/>
+    </listOfParameters>
+    <listOfInitialAssignments>
+      <initialAssignment symbol="j"><math xmlns="http://www.w3.org/1998/Math/MathML"><cn>1</cn></math></initialAssignment>
+    </listOfInitialAssignments>
+  </model>
+</sbml>"#;
+
+#[test]
+fn values_are_given_as_the_states_are_written() {
+    let got = sbml_values(VALUED).unwrap();
+    // By hand, compartment size 2: A's amount 3 is the concentration 3/2;
+    // B is an amount (hasOnlySubstanceUnits), 0.5 * 2 = 1; C stays 0.25;
+    // j is set by an initial assignment, so its `value` 7 is not given.
+    let want: Vec<(String, f64)> = [
+        ("A", 1.5),
+        ("B", 1.0),
+        ("C", 0.25),
+        ("cell", 2.0),
+        ("k", 0.3),
+    ]
+    .iter()
+    .map(|(n, v)| (n.to_string(), *v))
+    .collect();
+    assert_eq!(got, want);
+}
+
+#[test]
+fn values_of_unreadable_xml_are_a_located_error() {
+    let e = sbml_values("<sbml>\n<model>\n</sbml>").unwrap_err();
+    assert_eq!(e.line, 3, "{e:?}");
 }
