@@ -1,5 +1,5 @@
 //! One candidate effect weighed against the current model (a round of
-//! [`crate::workflow`]): the exact rank test on these data, then the fits
+//! `workflow.rs`): the exact rank test on these data, then the fits
 //! under the noise models in use and the likelihood ratio, moved out of
 //! workflow.rs whole.
 

@@ -388,7 +388,7 @@ pub(crate) fn check(
 pub const PREDICTED_MARGIN: f64 = 0.5;
 
 /// The check predicted at the current fit, before any fit of the candidate
-/// (`crate::screen::score`): the full fit's estimate as the Gauss-Newton
+/// (`score` in `screen.rs`): the full fit's estimate as the Gauss-Newton
 /// step of every free quantity, `(value, robust sd)` with the sandwich at
 /// the step, and `d` the within-instant estimate from the residuals moved
 /// by that step (to first order; exact in the param for an effect linear

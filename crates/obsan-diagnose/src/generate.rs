@@ -30,7 +30,7 @@ pub struct Generated {
     pub positive: String,
     pub negative: String,
     /// The effect whose score statistic at zero new params screens this
-    /// candidate before its fit (`crate::screen`): the effect itself, or
+    /// candidate before its fit (`screen.rs`): the effect itself, or
     /// for a lag its limit as T -> 0, `u - T rate(u)` (a lag at T = 0 is
     /// singular, and its state is held at the first input: no transient).
     /// `None`: always fitted (an exact `delay`, whose sensitivity the

@@ -24,11 +24,11 @@ pub struct DiagnoseOptions {
     /// by generalised least squares, see [`crate::input_noise`]).
     pub input_noise: InputNoise,
     /// Also try the candidates generated from the model's structure
-    /// ([`crate::generate`]), under their own share of `alpha`. On by
+    /// (`generate.rs`), under their own share of `alpha`. On by
     /// default: a user's model misses effects nobody wrote.
     pub generate: bool,
     /// Screen the generated candidates by their score statistic before
-    /// fitting them ([`crate::screen`]); off: fit every one (to compare).
+    /// fitting them (`screen.rs`); off: fit every one (to compare).
     pub screen: bool,
 }
 

@@ -48,7 +48,7 @@ pub struct CandidateResult {
     pub white_input_noise: bool,
     pub error: Option<String>,
     /// The candidate's score statistic at the current fit (see
-    /// [`crate::screen`]), when computed: generated candidates in every
+    /// `screen.rs`), when computed: generated candidates in every
     /// round, the file's from the second round on.
     pub score: Option<f64>,
     /// Left unfitted: its score is below [`Diagnosis::screen_threshold`].

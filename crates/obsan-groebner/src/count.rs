@@ -4,8 +4,9 @@
 //! of distinct roots of a univariate polynomial.
 
 use crate::field::Field;
-use crate::gb::{groebner, Basis, GbBudget};
+use crate::gb::{Basis, GbBudget};
 use crate::poly::{Mono, Order, Poly, Ring};
+use crate::select::groebner;
 use crate::GbError;
 use std::collections::HashMap;
 

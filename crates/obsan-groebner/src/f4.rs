@@ -6,7 +6,7 @@
 //! of that element as a pivot row; Gaussian elimination of the S-polynomial
 //! rows by the pivots (and by each other) leaves rows whose leading
 //! monomials are new, and they join the basis through the same
-//! Gebauer–Möller update as Buchberger's algorithm (crate::gb).
+//! Gebauer–Möller update as Buchberger's algorithm (`gb.rs`).
 
 use crate::gb::{finish, start, unit, Basis, GbBudget, Pair, Work};
 use crate::poly::{Mono, Poly, Ring};

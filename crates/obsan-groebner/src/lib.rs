@@ -33,11 +33,13 @@ mod f4;
 mod field;
 mod gb;
 mod poly;
+mod select;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
 pub use field::{is_prime, Field};
-pub use gb::{buchberger, f4, groebner, Basis, GbBudget};
+pub use gb::{buchberger, Basis, GbBudget};
 pub use poly::{Mono, Order, Poly, Ring, MAX_DEGREE};
+pub use select::{f4, groebner};
 
 /// Why a computation stopped.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -22,6 +22,9 @@ type Vector = (Vec<(Ex, At)>, At);
 
 /// Split the text into statements (comments and continuations blanked,
 /// newlines inside brackets kept as row separators).
+/// MATLAB's bracket pairs (opening, closing).
+const BRACKETS: [(char, char); 3] = [('[', ']'), ('(', ')'), ('{', '}')];
+
 fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
     let src = infix::placed(text.strip_prefix('\u{feff}').unwrap_or(text), (1, 1));
     let mut out = Vec::new();
@@ -72,16 +75,14 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
             i += 1;
             continue;
         }
+        let opens = BRACKETS.iter().any(|b| b.0 == ch);
+        let closes = BRACKETS.iter().find(|b| b.1 == ch).map(|b| b.0);
         match ch {
-            '[' | '(' | '{' => depth.push((ch, at)),
-            ']' | ')' | '}' => {
-                let want = match ch {
-                    ']' => '[',
-                    ')' => '(',
-                    _ => '{',
-                };
+            _ if opens => depth.push((ch, at)),
+            _ if closes.is_some() => {
+                let want = closes;
                 match depth.pop() {
-                    Some((o, _)) if o == want => {}
+                    Some((o, _)) if Some(o) == want => {}
                     _ => return Err(ImportError::at(at.0, at.1, format!("unmatched '{ch}'"))),
                 }
             }
