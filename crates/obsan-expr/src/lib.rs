@@ -46,6 +46,7 @@ mod print;
 mod ratfun;
 mod subst;
 mod tanhalf;
+mod undecided;
 pub mod tutorial;
 
 pub use budget::{
