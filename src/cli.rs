@@ -38,15 +38,19 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan simplify 'sin(g-p)*cos(p) + cos(g-p)*sin(p) - sin(g)'     # 0
   obsan simplify '-x^2 + (x+1)^2'                                # 2*x + 1
   obsan simplify '(a^2-b^2)/(a-b)' --latex
+  obsan simplify 'log(x*y) - log(x) - log(y)'                    # not decided: atoms listed
 
---json prints {input, canonical, latex, is_zero, exact}.")]
+--json prints {input, canonical, latex, is_zero, decided, undecided_atoms, exact}: is_zero is
+null and decided false when the form is nonzero over atoms that may be related (listed in
+undecided_atoms); a zero form is always decided.")]
     Simplify(ExprArgs),
     /// Print the derivative of an expression with respect to a symbol, in canonical form.
     #[command(after_help = "Examples:
   obsan diff 'atan2(sin(g), -mu - cos(g))' g
   obsan diff 'x^3*exp(x)' x --latex
 
---json prints {input, variable, canonical, latex, is_zero, exact}.")]
+--json prints {input, variable, canonical, latex, is_zero, decided, undecided_atoms, exact}
+(as simplify: is_zero null when not decided).")]
     Diff(DiffArgs),
     /// The observability rank test (Hermann-Krener): generic rank, a basis of
     /// Lie derivatives, which variables are observable on their own.

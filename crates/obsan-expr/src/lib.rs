@@ -46,8 +46,8 @@ mod print;
 mod ratfun;
 mod subst;
 mod tanhalf;
-mod undecided;
 pub mod tutorial;
+mod undecided;
 
 pub use budget::{
     budget_tripped, cancel_flag, cancel_requested, check_memory, with_cancel, within_thread_budget,

@@ -139,13 +139,23 @@ impl Ctx {
     /// The canonical form of an atom's argument, if it is a function of the
     /// symbols only (no other leaf).
     fn symbols_only(&mut self, a: Id) -> Option<RatFun> {
+        self.argument_over(a, false)
+    }
+
+    /// The canonical form of an atom's argument if its leaves are symbols
+    /// or, with `per_symbol`, also the per-symbol `sin`, `cos`, `exp` (whose
+    /// field is, by Ax's theorem, that of independent transcendentals).
+    fn argument_over(&mut self, a: Id, per_symbol: bool) -> Option<RatFun> {
         let f = self.canon(a);
-        let only = f
-            .num
-            .vars()
-            .into_iter()
-            .chain(f.den.vars())
-            .all(|w| matches!(self.leaves[w as usize].kind, LeafKind::Symbol(_)));
+        let only = f.num.vars().into_iter().chain(f.den.vars()).all(|w| {
+            match &self.leaves[w as usize].kind {
+                LeafKind::Symbol(_) => true,
+                LeafKind::Sin(Angle::Symbol { .. })
+                | LeafKind::Cos(Angle::Symbol { .. })
+                | LeafKind::Exp(Angle::Symbol { .. }) => per_symbol,
+                _ => false,
+            }
+        });
         only.then_some(f)
     }
 
@@ -157,7 +167,10 @@ impl Ctx {
             LeafKind::Sin(Angle::Symbol { .. })
             | LeafKind::Cos(Angle::Symbol { .. })
             | LeafKind::Exp(Angle::Symbol { .. }) => Role::Free,
-            LeafKind::Pi => Role::Transcendental { key: v, baker: true },
+            LeafKind::Pi => Role::Transcendental {
+                key: v,
+                baker: true,
+            },
             LeafKind::Sqrt(a) => {
                 let Some(f) = self.symbols_only(a) else {
                     return Role::Undecided;
@@ -172,13 +185,16 @@ impl Ctx {
                     None => Role::FunctionSqrt,
                 }
             }
-            LeafKind::Atan(a) => match self.symbols_only(a) {
+            LeafKind::Atan(a) => match self.argument_over(a, true) {
                 Some(f) => match f.as_q() {
                     // arg(q + ip) of a Gaussian prime (gauss.rs) when its norm is prime.
                     Some(q) => {
                         let norm = q.num() * q.num() + q.den() * q.den();
                         match u64::try_from(&norm) {
-                            Ok(n) if is_prime(n) => Role::Transcendental { key: v, baker: true },
+                            Ok(n) if is_prime(n) => Role::Transcendental {
+                                key: v,
+                                baker: true,
+                            },
                             _ => Role::Undecided,
                         }
                     }
@@ -187,8 +203,8 @@ impl Ctx {
                 None => Role::Undecided,
             },
             LeafKind::Atan2(y, x) => {
-                let fy = self.symbols_only(y);
-                let fx = self.symbols_only(x);
+                let fy = self.argument_over(y, true);
+                let fx = self.argument_over(x, true);
                 match (fy, fx) {
                     (Some(fy), Some(fx)) if fy.as_q().is_none() || fx.as_q().is_none() => {
                         Role::Class(Class::Arctangent, v, self.leaf_node(v))
@@ -211,7 +227,7 @@ impl Ctx {
     /// A log, exp or angle atom: of a rational constant, a transcendental
     /// number (Lindemann); of a function of the symbols, a member of its class.
     fn constant_or_class(&mut self, a: Id, key: Var, class: Class, exponent: Id) -> Role {
-        match self.symbols_only(a) {
+        match self.argument_over(a, true) {
             Some(f) => match f.as_q() {
                 Some(_) => Role::Transcendental { key, baker: false },
                 None => Role::Class(class, key, exponent),
@@ -252,7 +268,7 @@ impl Ctx {
             if points >= members.len() + 1 {
                 break;
             }
-            let Ok(pt) = self.random_fp_point(&mut rng, &|_| None) else {
+            let Ok(pt) = self.random_point(&mut rng, &|_| None, false) else {
                 continue;
             };
             let Ok(vals) = self.eval_fp(&hess, &pt) else {

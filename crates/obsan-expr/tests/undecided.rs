@@ -107,8 +107,7 @@ fn zero_is_always_decided() {
 
 fn arg() -> impl Strategy<Value = String> {
     // Positive on x, y, z > 0: the identities' domains are not empty.
-    (1u32..5, 0u32..3, 0u32..3, 1u32..4)
-        .prop_map(|(a, i, j, c)| format!("({a}*x^{i}*z^{j} + {c})"))
+    (1u32..5, 0u32..3, 0u32..3, 1u32..4).prop_map(|(a, i, j, c)| format!("({a}*x^{i}*z^{j} + {c})"))
 }
 
 proptest! {
