@@ -63,8 +63,9 @@ undecided_atoms); a zero form is always decided.")]
   obsan rank systems/classic/two_compartment.sys --known-generic x1,x2   # known initial conditions
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
-weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
-degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
+weakly_locally_observable (null when full rank rests on undecided atoms), decided,
+undecided_atoms (atoms that may be related), observable_variables, unobservable_variables, exact,
+error_bound, degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
 stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
 unknown inputs print their own objects (docs/experiments.md, docs/engine.md).")]
     Rank(RankArgs),
@@ -98,8 +99,8 @@ exact}.")]
   obsan check systems/localization.sys --mode D --mode 'thetaR - phiR'
   obsan check systems/localization.sys --mode D --json
 
---json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode,
-residuals}], independent, independent_count, complete, exact, certificate (closure | invariance |
+--json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode
+(null: not decided), decided, undecided_atoms, residuals}], independent, independent_count, complete, exact, certificate (closure | invariance |
 random), certification}: the residuals are exact; the symmetries are certified as `certificate`
 says (random: error_bound in certification; --exact for the exact route). Exit 1 when a mode fails.")]
     Check(CheckArgs),
@@ -108,8 +109,8 @@ says (random: error_bound in certification; --exact for the exact route). Exit 1
   obsan verify systems/decomp_localization.dec
   obsan verify systems/decomp_21_22.dec --json
 
---json prints {system, restriction, decomposition, checks: [{check, pass, detail}], pass,
-exact, verdict, certificate (closure |
+--json prints {system, restriction, decomposition, checks: [{check, pass, detail, decided,
+undecided_atoms}], pass, decided, exact, verdict, certificate (closure |
 invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
 the exact one); a passing decomposition that writes every output is exact by closure whatever
 certified them. Exit 1 when a check fails.")]
