@@ -1,7 +1,7 @@
 //! `obsan rank`, `symmetries`, `lie`, `check`, `verify`.
 
 use crate::cli::{AnalysisArgs, CheckArgs, LieArgs, OutputArgs, RankArgs, SymArgs, VerifyArgs};
-use crate::expr_cmds::parse_arg_in;
+use crate::expr_cmds::{not_decided_note, parse_arg_in};
 use crate::show::{load_normal_form, load_system};
 use crate::Failure;
 use obsan_analysis::{
@@ -100,6 +100,10 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         .map(|e| crate::experiments_cmd::describe(&e));
     let deadline = deadline_after(Instant::now(), a.an.timeout);
     let r = run_rank(&mut nf, &a.an, deadline, false)?;
+    // The ranks are of the formal field in which the atoms are independent;
+    // a relation among them can only lower the true rank, so full rank is
+    // certified only over independent atoms.
+    let undecided = system_undecided_atoms(&mut nf);
     let words: Vec<String> = r
         .basis
         .iter()
@@ -119,7 +123,8 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         .filter(|(_, o)| !**o)
         .map(|(s, _)| s)
         .collect();
-    let exact = r.rank == r.n;
+    let full = r.rank == r.n;
+    let exact = full && undecided.is_empty();
     if a.out.json {
         let v = json!({
             "system": nf.name,
@@ -128,7 +133,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             "state": nf.state,
             "n": r.n,
             "rank": r.rank,
-            "weakly_locally_observable": exact,
+            "weakly_locally_observable": if undecided.is_empty() || !full { json!(full) } else { Value::Null },
+            "decided": undecided.is_empty(),
+            "undecided_atoms": undecided,
             "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
             "max_order": r.max_order,
             "observable_variables": obs,
@@ -155,6 +162,8 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     }
     let verdict = if exact {
         "weakly locally observable"
+    } else if full {
+        "weakly locally observable if the atoms below are independent (not decided)"
     } else {
         "not weakly locally observable"
     };
@@ -175,8 +184,16 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     };
     o.push_str(&format!("observable on their own: {}\n", list(&obs)));
     o.push_str(&format!("not observable on their own: {}\n", list(&unobs)));
+    if !undecided.is_empty() {
+        o.push_str(&format!(
+            "not decided: the atoms {} may be related in ways the engine does not detect; the rank above is that of the system with them independent, an upper bound on the true rank: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",
+            undecided.join(", ")
+        ));
+    }
     if exact {
         o.push_str("exact: a non-singular minor of full rank was found (a non-zero value at a point proves it)\n");
+    } else if full {
+        o.push_str("a non-singular minor of full rank was found at a point where the atoms above take independent values\n");
     } else {
         o.push_str(&format!(
             "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); the rank is never too high, and too low with probability <= {:.1e} (Schwartz-Zippel, degree bound {}); `obsan symmetries --exact` proves it exactly\n",
@@ -187,9 +204,21 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// The atoms of a system's fields and outputs whose independence the rank
+/// test assumes but the engine cannot prove.
+fn system_undecided_atoms(nf: &mut NormalForm) -> Vec<String> {
+    let mut ids: Vec<obsan_expr::Id> = nf.f0.clone();
+    ids.extend(nf.fields.iter().flatten());
+    ids.extend(nf.unknown_fields.iter().flatten());
+    ids.extend(nf.outputs.iter().map(|o| o.1));
+    let forms: Vec<RatFun> = ids.iter().map(|&id| nf.ctx.canon(id)).collect();
+    let vs = nf.ctx.undecided_atoms_in(&forms, false);
+    nf.ctx.atom_texts(&vs)
+}
+
 /// One symmetry vector as JSON: per state variable, its component's text
 /// and LaTeX.
-pub(crate) fn vector_json(nf: &NormalForm, v: &[obsan_expr::RatFun]) -> Value {
+pub(crate) fn vector_json(nf: &NormalForm, v: &[RatFun]) -> Value {
     let comps: serde_json::Map<String, Value> = nf
         .state
         .iter()
@@ -481,9 +510,12 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             .iter()
             .zip(&rep.checks)
             .map(|(m, c)| {
+                let undecided = mode_undecided(&mut nf.ctx, c);
                 json!({
                     "mode": m,
-                    "observable_mode": c.is_mode,
+                    "observable_mode": if undecided.is_empty() { json!(c.is_mode) } else { Value::Null },
+                    "decided": undecided.is_empty(),
+                    "undecided_atoms": undecided,
                     "residuals": c.residuals.iter().map(|r| nf.ctx.ratfun_text(r)).collect::<Vec<_>>(),
                 })
             })
@@ -519,6 +551,7 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
                     }
                 ));
             } else {
+                let undecided = mode_undecided(&mut nf.ctx, c);
                 // A failed mode has a non-zero residual; 0 keeps the line well-formed regardless.
                 let k = c.residuals.iter().position(|r| !r.is_zero()).unwrap_or(0);
                 // Past the vectors, the residuals are against the free d/dx.
@@ -527,9 +560,17 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
                     None => format!("w{}", k + 1),
                 };
                 o.push_str(&format!(
-                    "FAIL {m}: grad({m}) . {w} = {}\n",
+                    "{} {m}: grad({m}) . {w} = {}\n",
+                    if undecided.is_empty() {
+                        "FAIL"
+                    } else {
+                        "NOT DECIDED"
+                    },
                     fmt_rf(&nf, &c.residuals[k], &a.out)
                 ));
+                if !undecided.is_empty() {
+                    o.push_str(&format!("  {}\n", not_decided_note(&undecided)));
+                }
             }
         }
         let accepted = rep.checks.iter().filter(|c| c.is_mode).count();
@@ -556,6 +597,22 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// The atoms that leave a failed mode undecided: none when one nonzero
+/// residual is provably nonzero (or the mode passed).
+fn mode_undecided(ctx: &mut obsan_expr::Ctx, c: &obsan_analysis::ModeCheck) -> Vec<String> {
+    let mut all = Vec::new();
+    for r in c.residuals.iter().filter(|r| !r.is_zero()) {
+        let atoms = ctx.undecided_atom_texts(r);
+        if atoms.is_empty() {
+            return Vec::new();
+        }
+        all.extend(atoms);
+    }
+    all.sort();
+    all.dedup();
+    all
 }
 
 pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
@@ -587,12 +644,15 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
         format!("eq. (11) residuals exact, the symmetries wrong with probability <= {bound:.1e}")
     };
     let exact = closure || bound == 0.0;
+    // A failure whose residuals hold only related-looking atoms is not a proof.
+    let decided = checks.iter().all(|c| c.pass || c.undecided.is_empty());
     if a.out.json {
         let sj = symmetry_json(&nf, &s);
         let v = json!({
             "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
-            "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>(),
-            "pass": ok, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
+            "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail,
+                "decided": c.pass || c.undecided.is_empty(), "undecided_atoms": c.undecided})).collect::<Vec<_>>(),
+            "pass": ok, "decided": decided, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
             "certificate": sj["certificate"], "certification": sj["certification"],
         });
         outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -604,17 +664,29 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
             a.file
         );
         for c in &checks {
+            let undecided = !c.pass && !c.undecided.is_empty();
             o.push_str(&format!(
                 "{} {}\n",
-                if c.pass { "PASS" } else { "FAIL" },
+                if c.pass {
+                    "PASS"
+                } else if undecided {
+                    "NOT DECIDED"
+                } else {
+                    "FAIL"
+                },
                 c.name
             ));
             if !c.pass && !c.detail.is_empty() {
                 o.push_str(&format!("     {}\n", c.detail));
             }
+            if undecided {
+                o.push_str(&format!("     {}\n", not_decided_note(&c.undecided)));
+            }
         }
         o.push_str(&format!("symmetries: {} ({cert})\n", s.count()));
-        o.push_str(&if !ok {
+        o.push_str(&if !ok && !decided {
+            "decomposition not decided: no check failed for certain, and the ones marked NOT DECIDED may hold\n".to_string()
+        } else if !ok {
             "decomposition NOT verified\n".to_string()
         } else if exact {
             format!("decomposition verified (exact)\ncertificate: {verdict}\n")

@@ -38,15 +38,19 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan simplify 'sin(g-p)*cos(p) + cos(g-p)*sin(p) - sin(g)'     # 0
   obsan simplify '-x^2 + (x+1)^2'                                # 2*x + 1
   obsan simplify '(a^2-b^2)/(a-b)' --latex
+  obsan simplify 'log(x*y) - log(x) - log(y)'                    # not decided: atoms listed
 
---json prints {input, canonical, latex, is_zero, exact}.")]
+--json prints {input, canonical, latex, is_zero, decided, undecided_atoms, exact}: is_zero is
+null and decided false when the form is nonzero over atoms that may be related (listed in
+undecided_atoms); a zero form is always decided.")]
     Simplify(ExprArgs),
     /// Print the derivative of an expression with respect to a symbol, in canonical form.
     #[command(after_help = "Examples:
   obsan diff 'atan2(sin(g), -mu - cos(g))' g
   obsan diff 'x^3*exp(x)' x --latex
 
---json prints {input, variable, canonical, latex, is_zero, exact}.")]
+--json prints {input, variable, canonical, latex, is_zero, decided, undecided_atoms, exact}
+(as simplify: is_zero null when not decided).")]
     Diff(DiffArgs),
     /// The observability rank test (Hermann-Krener): generic rank, a basis of
     /// Lie derivatives, which variables are observable on their own.
@@ -60,8 +64,9 @@ fields, outputs, exact}, each formula as {text, latex}; \"exact\": true.")]
   obsan rank systems/calib.sys --along data/sim --window 20        # along a dataset's truth
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
-weakly_locally_observable, observable_variables, unobservable_variables, exact, error_bound,
-degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
+weakly_locally_observable (null when full rank rests on undecided atoms), decided,
+undecided_atoms (atoms that may be related), observable_variables, unobservable_variables, exact,
+error_bound, degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
 stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
 unknown inputs print their own objects (docs/experiments.md, docs/engine.md).
 
@@ -109,8 +114,8 @@ exact}.")]
   obsan check systems/localization.sys --mode D --mode 'thetaR - phiR'
   obsan check systems/localization.sys --mode D --json
 
---json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode,
-residuals}], independent, independent_count, complete, exact, certificate (closure | invariance |
+--json prints {system, restriction, rank, symmetries, checks: [{mode, observable_mode
+(null: not decided), decided, undecided_atoms, residuals}], independent, independent_count, complete, exact, certificate (closure | invariance |
 random), certification}: the residuals are exact; the symmetries are certified as `certificate`
 says (random: error_bound in certification; --exact for the exact route). Exit 1 when a mode fails.")]
     Check(CheckArgs),
@@ -119,8 +124,8 @@ says (random: error_bound in certification; --exact for the exact route). Exit 1
   obsan verify systems/decomp_localization.dec
   obsan verify systems/decomp_21_22.dec --json
 
---json prints {system, restriction, decomposition, checks: [{check, pass, detail}], pass,
-exact, verdict, certificate (closure |
+--json prints {system, restriction, decomposition, checks: [{check, pass, detail, decided,
+undecided_atoms}], pass, decided, exact, verdict, certificate (closure |
 invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
 the exact one); a passing decomposition that writes every output is exact by closure whatever
 certified them. Exit 1 when a check fails.")]

@@ -25,24 +25,48 @@ fn emit(
     let c = ctx
         .try_canon(id)
         .map_err(|limit| Failure(format!("<expression>: {limit}")))?;
+    // A nonzero form proves "nonzero" only over independent atoms; a zero
+    // form is a proof of zero whatever its atoms.
+    let undecided = if c.is_zero() {
+        Vec::new()
+    } else {
+        ctx.within_budget(|ctx| ctx.undecided_atom_texts(&c))
+            .map_err(|limit| Failure(format!("<expression>: {limit}")))?
+    };
+    let decided = undecided.is_empty();
     if out.json {
         let mut v = json!({
             "input": input,
             "canonical": ctx.ratfun_text(&c),
             "latex": ctx.ratfun_latex(&c),
-            "is_zero": c.is_zero(),
-            "exact": true,
+            "is_zero": if decided { json!(c.is_zero()) } else { json!(null) },
+            "decided": decided,
+            "undecided_atoms": undecided,
+            "exact": decided,
         });
         if let (Some(m), Some(e)) = (v.as_object_mut(), extra.as_object()) {
             m.extend(e.clone());
         }
         outln!("{}", serde_json::to_string_pretty(&v)?);
-    } else if out.latex {
-        outln!("{}", ctx.ratfun_latex(&c));
     } else {
-        outln!("{}", ctx.ratfun_text(&c));
+        if out.latex {
+            outln!("{}", ctx.ratfun_latex(&c));
+        } else {
+            outln!("{}", ctx.ratfun_text(&c));
+        }
+        if !decided {
+            outln!("{}", not_decided_note(&undecided));
+        }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The text line for a nonzero form over atoms that may be related.
+pub fn not_decided_note(atoms: &[String]) -> String {
+    format!(
+        "not decided: whether this is zero (the form is nonzero, but its atoms {} may be related in ways the engine does not detect; docs/engine.md, \"Decided and not decided\")",
+        atoms.join(", ")
+    )
 }
 
 /// A context whose budget is the command line's.

@@ -424,12 +424,15 @@ class RankAlong(Result):
 @dataclass(frozen=True, repr=False, eq=False)
 class Expression(Result):
     """``obsan simplify`` / ``obsan diff``: the exact canonical form. ``is_zero`` is
-    ``None`` where the engine could not decide (``decided`` false)."""
+    ``None`` where the engine could not decide (``decided`` false): the form is
+    nonzero but holds atoms that may be related, listed in ``undecided_atoms``."""
 
     input: str
     canonical: str
     latex: str
     is_zero: Optional[bool]
+    decided: bool
+    undecided_atoms: List[str]
     exact: bool
 
     @classmethod
@@ -440,6 +443,8 @@ class Expression(Result):
             canonical=raw.get("canonical", ""),
             latex=raw.get("latex", ""),
             is_zero=raw.get("is_zero"),
+            decided=bool(raw.get("decided", raw.get("is_zero") is not None)),
+            undecided_atoms=[str(a) for a in raw.get("undecided_atoms", [])],
             exact=bool(raw.get("exact", False)),
         )
 

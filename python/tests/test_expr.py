@@ -14,6 +14,17 @@ def test_simplify_identities():
     assert obsan.simplify("x + 1")["is_zero"] is False
 
 
+def test_simplify_says_not_decided_over_related_atoms():
+    # log(x*y) = log(x) + log(y) for x, y > 0: identically zero there, but the
+    # engine does not relate the three logarithms, so it must not say "nonzero".
+    e = obsan.simplify("log(x*y) - log(x) - log(y)")
+    assert e.is_zero is None and e.decided is False and e["is_zero"] is None
+    assert e.undecided_atoms == ["log(x)", "log(x*y)", "log(y)"]
+    # Independent atoms: a nonzero form is a proof.
+    d = obsan.simplify("log(x) - x")
+    assert d.is_zero is False and d.decided is True and d.undecided_atoms == []
+
+
 def test_diff_identities():
     d = obsan.diff("x^3*exp(x)", "x")
     assert d["variable"] == "x"

@@ -15,7 +15,7 @@
 use crate::modes::{check_modes, gradient_rank};
 use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::symmetry::{symmetries, SymmetryReport};
-use obsan_expr::{line_col, parse_ast, Ast, Ctx, Id, ParseError, Span, Var, Q};
+use obsan_expr::{line_col, parse_ast, Ast, Ctx, Id, ParseError, RatFun, Span, Var, Q};
 use obsan_model::NormalForm;
 
 /// A parsed decomposition file.
@@ -40,6 +40,26 @@ pub struct Check {
     pub pass: bool,
     /// On failure, the residual or the reason.
     pub detail: String,
+    /// A failure that is not decided: every nonzero residual holds atoms
+    /// whose independence the engine cannot prove (they are listed); empty
+    /// when the verdict is certain.
+    pub undecided: Vec<String>,
+}
+
+/// The atoms that leave a failure undecided: none if one nonzero residual
+/// is provably nonzero, else every undecided atom of the residuals.
+fn undecided_of(nf: &mut NormalForm, residuals: &[RatFun]) -> Vec<String> {
+    let mut all = Vec::new();
+    for r in residuals.iter().filter(|r| !r.is_zero()) {
+        let atoms = nf.ctx.undecided_atom_texts(r);
+        if atoms.is_empty() {
+            return Vec::new();
+        }
+        all.extend(atoms);
+    }
+    all.sort();
+    all.dedup();
+    all
 }
 
 fn err(origin: &str, src: &str, at: usize, msg: impl Into<String>) -> AnalysisError {
@@ -287,6 +307,7 @@ pub fn verify_decomposition_with(
                 nf.ctx.ratfun_text(&c.residuals[k])
             ),
         };
+        let undecided = undecided_of(nf, &c.residuals);
         checks.push(Check {
             name: format!(
                 "{s} is an observable mode (eq. 11, {} symmetries)",
@@ -294,6 +315,7 @@ pub fn verify_decomposition_with(
             ),
             pass: c.is_mode,
             detail,
+            undecided,
         });
     }
     // 2. Independent, 3. complete.
@@ -306,6 +328,7 @@ pub fn verify_decomposition_with(
         } else {
             format!("their gradients have rank {indep}")
         },
+        undecided: Vec::new(),
     });
     checks.push(Check {
         name: format!("they are complete (rank of the system is {})", report.rank),
@@ -315,6 +338,7 @@ pub fn verify_decomposition_with(
         } else {
             format!("{indep} independent variables for rank {}", report.rank)
         },
+        undecided: Vec::new(),
     });
     // 4. Dynamics: L_{f_i} g_k equals the claimed coefficient of u_i, for every field.
     let input_vars = nf.input_vars.clone();
@@ -326,6 +350,7 @@ pub fn verify_decomposition_with(
                 name: format!("{s}' is given"),
                 pass: false,
                 detail: format!("no equation {s}' = ... in the file"),
+                undecided: Vec::new(),
             });
             continue;
         };
@@ -335,6 +360,7 @@ pub fn verify_decomposition_with(
         // Drift and per-input coefficients of the claim.
         let mut claim_rest = rhs;
         let mut residual_text = Vec::new();
+        let mut residuals = Vec::new();
         for (i, &u) in input_vars.iter().enumerate() {
             let ci = nf.ctx.diff(rhs, u);
             let ui = nf.ctx.symbol(&nf.inputs[i].clone()).id;
@@ -351,6 +377,7 @@ pub fn verify_decomposition_with(
                     nf.inputs[i],
                     nf.ctx.ratfun_text(&r)
                 ));
+                residuals.push(r);
             }
         }
         let f0 = nf.f0.clone();
@@ -362,11 +389,14 @@ pub fn verify_decomposition_with(
                 "drift: L_f0 {s} - claimed = {}",
                 nf.ctx.ratfun_text(&r)
             ));
+            residuals.push(r);
         }
+        let undecided = undecided_of(nf, &residuals);
         checks.push(Check {
             name: format!("{s}' = {}", ast_text(&d.src, ast, *at)),
             pass: residual_text.is_empty(),
             detail: residual_text.join("; "),
+            undecided,
         });
     }
     // 5. Outputs, up to a constant.
@@ -383,6 +413,7 @@ pub fn verify_decomposition_with(
         let diff = nf.ctx.sub(h, claim);
         let c = nf.ctx.canon(diff);
         let mut bad = Vec::new();
+        let mut residuals = Vec::new();
         for (j, &x) in state_vars.iter().enumerate() {
             let dx = nf.ctx.rf_diff(&c, x);
             if !dx.is_zero() {
@@ -391,8 +422,10 @@ pub fn verify_decomposition_with(
                     nf.state[j],
                     nf.ctx.ratfun_text(&dx)
                 ));
+                residuals.push(dx);
             }
         }
+        let undecided = undecided_of(nf, &residuals);
         checks.push(Check {
             name: format!(
                 "output {name} = {} (up to a constant)",
@@ -400,6 +433,7 @@ pub fn verify_decomposition_with(
             ),
             pass: bad.is_empty(),
             detail: bad.join("; "),
+            undecided,
         });
     }
     Ok(checks)

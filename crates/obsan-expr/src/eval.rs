@@ -289,6 +289,17 @@ impl Ctx {
         rng: &mut SplitMix,
         fixed: &dyn Fn(Var) -> Option<Fp>,
     ) -> Result<FpPoint, BadPoint> {
+        self.random_point(rng, fixed, true)
+    }
+
+    /// A random point; with `roots` false every `sqrt` leaf is 0 (for roots
+    /// that reach no square root: a non-square radicand is then no `BadPoint`).
+    pub(crate) fn random_point(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+        roots: bool,
+    ) -> Result<FpPoint, BadPoint> {
         let mut values = vec![Fp::ZERO; self.leaves.len()];
         let mut done = vec![false; self.leaves.len()];
         for v in 0..self.leaves.len() {
@@ -310,6 +321,7 @@ impl Ctx {
                     values[p] = if is_sin { c } else { s };
                     done[p] = true;
                 }
+                LeafKind::Sqrt(_) if !roots => values[v] = Fp::ZERO,
                 LeafKind::Sqrt(_) => {
                     let r = self.radicand(v as Var).ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];

@@ -101,7 +101,7 @@ impl Field {
     }
 }
 
-fn is_prime(n: u64) -> bool {
+pub(crate) fn is_prime(n: u64) -> bool {
     if n < 2 {
         return false;
     }

@@ -47,6 +47,7 @@ mod ratfun;
 mod subst;
 mod tanhalf;
 pub mod tutorial;
+mod undecided;
 
 pub use budget::{
     budget_tripped, cancel_flag, cancel_requested, check_memory, with_cancel, within_thread_budget,

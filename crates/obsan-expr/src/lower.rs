@@ -478,6 +478,18 @@ impl Ctx {
             let en = self.leaf_node(e);
             factors.push(self.pow(en, n));
         }
+        // exp(c + r) = exp(c) exp(r) for a rational c (all reals): the
+        // constant gets its own atom, so exp(x y + 1) = exp(1) exp(x y).
+        if let (Some(d), true) = (rest.den.as_constant(), rest.num.len() > 1) {
+            let c0 = rest.num.terms().iter().find(|(m, _)| m.is_one());
+            if let Some((_, k)) = c0 {
+                let c = RatFun::from_q(&Q::new(k.clone(), d));
+                rest = self.rf_sub(&rest, &c);
+                let cid = self.from_canonical(&c);
+                let e = self.leaf(LeafKind::Exp(Angle::Generic(cid)));
+                factors.push(self.leaf_node(e));
+            }
+        }
         if !rest.is_zero() {
             let id = self.from_canonical(&rest);
             let e = self.leaf(LeafKind::Exp(Angle::Generic(id)));
@@ -751,7 +763,7 @@ fn square_part(n: &Int) -> (Int, Int) {
 }
 
 /// Whether a polynomial is the square of a polynomial (schoolbook square root).
-fn is_square_poly(p: &Poly) -> bool {
+pub(crate) fn is_square_poly(p: &Poly) -> bool {
     if p.is_zero() {
         return true;
     }
