@@ -265,7 +265,7 @@ impl Ctx {
         let mut rng = SplitMix(0x5eed_0b5a_4e11_u64 ^ members.len() as u64);
         let mut points = 0;
         for _ in 0..4 * members.len() + 4 {
-            if points >= members.len() + 1 {
+            if points > members.len() {
                 break;
             }
             let Ok(pt) = self.random_point(&mut rng, &|_| None, false) else {
