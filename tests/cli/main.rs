@@ -18,6 +18,7 @@ mod suite;
 #[path = "../../benches/suite_entries.rs"]
 mod suite_entries;
 mod surface;
+mod symmetry_invariance;
 mod trust;
 mod tutorial;
 mod unknown_inputs;
