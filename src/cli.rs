@@ -208,8 +208,9 @@ correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two
 or two suggested ones fitted together) are combinations [{params, effects, values, sds, r,
 robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
 params[0] + weight params[1], the smallest-variance direction of the pair. Candidates generated from the model's structure are
-tried too (--no-generated: the effects file's alone). --report writes report.md, SVG plots,
-extended.sys and diagnosis.json.")]
+tried too (--no-generated: the effects file's alone). --report writes report.md (verdict, estimates,
+residuals pooled per output before and after, candidate scores), PNG and SVG charts, extended.sys
+and diagnosis.json (docs/diagnose.md).")]
     Diagnose(DiagnoseArgs),
     /// Convert an external data set into the obsan data format.
     #[command(

@@ -11,7 +11,6 @@ use obsan_diagnose::{
     ModelFit, Named,
 };
 use obsan_model::{EffectLibrary, Kind};
-use obsan_plot::{bars, chart, figure_files, Figure, Series, Style, COLORS, GREY, PALE};
 use std::collections::BTreeMap;
 use std::fmt::Write;
 use std::path::PathBuf;
@@ -125,7 +124,12 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
         out!("{text}");
     }
     if let Some(dir) = &a.report {
-        write_folder_atomically(dir, a.force, &reads, &report_files(&d, &text))?;
+        write_folder_atomically(
+            dir,
+            a.force,
+            &reads,
+            &crate::diagnose_report::report_files(&d, &text),
+        )?;
         if !a.json {
             outln!("report written to {dir}/report.md");
         }
@@ -689,173 +693,6 @@ fn verdict(d: &Diagnosis, s: &mut String) {
         parts.push(format!("these data cannot reveal {}", h.join(", ")));
     }
     let _ = writeln!(s, "verdict: {}.", parts.join("; "));
-}
-
-fn residual_chart(title: &str, f: &ModelFit) -> Figure {
-    let series: Vec<Series> = f
-        .series
-        .iter()
-        .enumerate()
-        .map(|(i, s)| Series {
-            name: &s.trajectory,
-            color: COLORS[i % COLORS.len()],
-            style: Style::Points,
-            xy: s.t.iter().zip(&s.e).map(|(t, e)| (*t, *e)).collect(),
-        })
-        .collect();
-    chart(title, "time (s)", "residual / sigma (unitless)", &series)
-}
-
-fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut files = vec![
-        (
-            PathBuf::from("extended.sys"),
-            d.extended_sys.clone().into_bytes(),
-        ),
-        (
-            PathBuf::from("diagnosis.json"),
-            serde_json::to_string_pretty(d)
-                .unwrap_or_default()
-                .into_bytes(),
-        ),
-    ];
-    files.extend(figure_files(
-        "residuals_before",
-        &residual_chart("residuals of the nominal model", &d.nominal),
-    ));
-    files.extend(figure_files(
-        "residuals_after",
-        &residual_chart("residuals with the named effects", &d.final_fit),
-    ));
-    // Fitted outputs per trajectory: measured, nominal, extended.
-    let mut fit_links = Vec::new();
-    // At most MAX_FIT_CHARTS charts (a real log has hundreds of series).
-    const MAX_FIT_CHARTS: usize = 8;
-    for (k, (sb, sa)) in d
-        .nominal
-        .series
-        .iter()
-        .zip(d.final_fit.series.iter())
-        .enumerate()
-        .take(MAX_FIT_CHARTS)
-    {
-        let sigma = d
-            .sigma
-            .iter()
-            .find(|x| x.0 == sb.output)
-            .map_or(1.0, |x| x.1);
-        // An angle is drawn in (-pi, pi], its lines cut where they wrap.
-        let angle = |y: f64| if sb.angular { obsan_data::wrap(y) } else { y };
-        let line = |xy: Vec<(f64, f64)>| {
-            if sb.angular {
-                obsan_plot::wrapped_angles(&xy)
-            } else {
-                xy
-            }
-        };
-        let measured: Vec<(f64, f64)> =
-            sb.t.iter()
-                .zip(sb.predicted.iter().zip(&sb.e))
-                .map(|(t, (y, e))| (*t, angle(y + e * sigma)))
-                .collect();
-        let series = vec![
-            Series {
-                name: "measured",
-                color: GREY,
-                style: Style::Points,
-                xy: measured,
-            },
-            Series {
-                name: "nominal",
-                color: COLORS[0],
-                style: Style::Line,
-                xy: line(
-                    sb.t.iter()
-                        .copied()
-                        .zip(sb.predicted.iter().map(|y| angle(*y)))
-                        .collect(),
-                ),
-            },
-            Series {
-                name: "with effects",
-                color: COLORS[1],
-                style: Style::Line,
-                xy: line(
-                    sa.t.iter()
-                        .copied()
-                        .zip(sa.predicted.iter().map(|y| angle(*y)))
-                        .collect(),
-                ),
-            },
-        ];
-        let stem = format!("fit_{k}_{}", sb.output);
-        files.extend(figure_files(
-            &stem,
-            &chart(
-                &format!("{} on {}", sb.output, sb.trajectory),
-                "time (s)",
-                &if sb.angular {
-                    format!("{} (rad)", sb.output)
-                } else {
-                    format!("{} (units of outputs.csv)", sb.output)
-                },
-                &series,
-            ),
-        ));
-        fit_links.push(stem);
-    }
-    // Candidate scores of the first round.
-    if let Some(r) = d.rounds.first() {
-        let items: Vec<(String, f64, obsan_plot::Rgb)> = r
-            .iter()
-            .filter(|c| !c.screened_out)
-            .map(|c| {
-                let color = if !c.identifiable {
-                    PALE
-                } else if c.significant {
-                    COLORS[1]
-                } else {
-                    COLORS[0]
-                };
-                let label = if c.identifiable {
-                    mark(c)
-                } else {
-                    format!("{} (hidden)", mark(c))
-                };
-                (label, c.lr, color)
-            })
-            .collect();
-        files.extend(figure_files(
-            "candidates",
-            &bars(
-                "candidate effects, round 1: likelihood ratio",
-                "LR statistic",
-                &items,
-                Some((d.lr_critical, "critical")),
-            ),
-        ));
-    }
-    let mut md = String::new();
-    let _ = writeln!(md, "# obsan diagnose: {}\n", d.model);
-    let _ = writeln!(md, "```\n{text}```\n");
-    let _ = writeln!(md, "## Candidate scores\n\n![candidates](candidates.png)\n");
-    let _ = writeln!(md, "## Residuals\n\nBefore (nominal model):\n\n![before](residuals_before.png)\n\nAfter (with the named effects):\n\n![after](residuals_after.png)\n");
-    let _ = writeln!(
-        md,
-        "## Fitted outputs\n\nThe first {} of {} series (trajectory, output):\n",
-        fit_links.len(),
-        d.nominal.series.len()
-    );
-    for l in &fit_links {
-        let _ = writeln!(md, "![{l}]({l}.png)\n");
-    }
-    let _ = writeln!(md, "## Extended model\n\n`extended.sys` (the nominal model with the named effects; `obsan rank extended.sys` and `obsan diagnose --model extended.sys` read it):\n\n```\n{}```", d.extended_sys);
-    let _ = writeln!(
-        md,
-        "\nEvery chart is also written as SVG (same name, `.svg`)."
-    );
-    files.push((PathBuf::from("report.md"), md.into_bytes()));
-    files
 }
 
 /// `obsan import mrclam`: read one robot's files, write a dataset folder.

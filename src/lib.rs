@@ -28,6 +28,7 @@ mod analysis_cmds;
 mod cli;
 mod design_cmd;
 mod diagnose_cmd;
+mod diagnose_report;
 mod estimate_cmds;
 mod experiments_cmd;
 mod expr_cmds;

@@ -55,8 +55,9 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
         "report.md",
         "extended.sys",
         "diagnosis.json",
-        "residuals_before.svg",
-        "residuals_after.svg",
+        "residuals_beta.svg",
+        "residuals_beta_vs_beta.png",
+        "residuals_beta_vs_wR.svg",
         "candidates.svg",
         "fit_0_beta.svg",
     ] {
@@ -65,6 +66,28 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
             "{f} missing"
         );
     }
+    // The report reads as a paper's section: the verdict first, then the
+    // estimates (the effect's param new in the extended model) and the RMS
+    // before and after, with the pooled residuals per output.
+    let md = std::fs::read_to_string(format!("{report}/report.md")).unwrap();
+    let body: Vec<&str> = md.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert!(
+        body[1].starts_with("verdict: named bearing_distortion"),
+        "{md}"
+    );
+    assert!(md.contains("| a2 | (not in the model) | 0.0"), "{md}");
+    let rms = md
+        .lines()
+        .find(|l| l.starts_with("| beta |"))
+        .expect("an RMS row for beta");
+    assert!(rms.ends_with("% |") && rms.contains("| -"), "{rms}");
+    // Pooled: one legend entry per fit, none per trajectory (the simulated
+    // trajectories are q0.9, q0, q-1).
+    let svg = std::fs::read_to_string(format!("{report}/residuals_beta.svg")).unwrap();
+    assert!(
+        !svg.contains(">q0.9<") && svg.contains(">with effects<"),
+        "{svg:.400}"
+    );
     // The extended model is a valid system that the analysis reads: one more param.
     let ext = format!("{report}/extended.sys");
     let r = ok(&["rank", &ext, "--input", "q"]);

@@ -219,8 +219,30 @@ pub fn bars(
     items: &[(String, f64, Rgb)],
     reference: Option<(f64, &str)>,
 ) -> Figure {
+    bars_with_legend(title, xlabel, items, reference, &[])
+}
+
+/// [`bars`] with a scale under the bars (ticks and values, so lengths read
+/// as numbers) and a legend of what each colour means, one a line below it.
+pub fn bars_with_legend(
+    title: &str,
+    xlabel: &str,
+    items: &[(String, f64, Rgb)],
+    reference: Option<(f64, &str)>,
+    legend: &[(Rgb, &str)],
+) -> Figure {
     let n = items.len().max(1) as f64;
-    let (w, l, r, t, b) = (760.0, 170.0, 80.0, 30.0, 40.0);
+    // Room above the bars for the reference line's label when a legend
+    // takes the bottom.
+    let (w, l, r) = (760.0, 170.0, 80.0);
+    let t = if legend.is_empty() { 30.0 } else { 46.0 };
+    // Room for the scale's labels and one legend line per two entries.
+    let b = 40.0
+        + if legend.is_empty() {
+            0.0
+        } else {
+            20.0 + 18.0 * legend.len() as f64
+        };
     let h = t + b + 24.0 * n;
     let vmax = items
         .iter()
@@ -252,10 +274,43 @@ pub fn bars(
         let xv = if v.is_finite() { sx(*v) } else { l };
         f.text(xv + 4.0, y + 13.0, &shown, 12.0, Anchor::Start);
     }
-    if let Some((v, label)) = reference {
-        f.line((sx(v), t - 4.0), (sx(v), h - b + 4.0), BLACK, 1.0, true);
-        f.text(sx(v), h - b + 18.0, label, 12.0, Anchor::Middle);
+    let base = t + 24.0 * n;
+    if !legend.is_empty() {
+        // The scale: an axis line with ticks below the bars.
+        f.line((l, base + 2.0), (w - r, base + 2.0), BLACK, 1.0, false);
+        let st = step(vmax);
+        let mut v = 0.0;
+        while v <= vmax + 1e-9 * st {
+            f.line((sx(v), base + 2.0), (sx(v), base + 6.0), BLACK, 1.0, false);
+            f.text(sx(v), base + 18.0, &fmt_tick(v, st), 11.0, Anchor::Middle);
+            v += st;
+        }
     }
-    f.text((l + w - r) / 2.0, h - 6.0, xlabel, 12.0, Anchor::Middle);
+    if let Some((v, label)) = reference {
+        f.line((sx(v), t - 4.0), (sx(v), base + 4.0), BLACK, 1.0, true);
+        if legend.is_empty() {
+            f.text(sx(v), h - b + 18.0, label, 12.0, Anchor::Middle);
+        } else {
+            f.text(sx(v) + 4.0, t - 6.0, label, 11.0, Anchor::Start);
+        }
+    }
+    let xl_y = if legend.is_empty() {
+        h - 6.0
+    } else {
+        base + 34.0
+    };
+    f.text((l + w - r) / 2.0, xl_y, xlabel, 12.0, Anchor::Middle);
+    for (k, (color, what)) in legend.iter().enumerate() {
+        let (x, y) = (l, base + 52.0 + 18.0 * k as f64);
+        f.ops.push(Op::Rect {
+            x,
+            y: y - 9.0,
+            w: 12.0,
+            h: 10.0,
+            fill: Some(*color),
+            stroke: None,
+        });
+        f.text(x + 18.0, y, what, 11.0, Anchor::Start);
+    }
     f
 }

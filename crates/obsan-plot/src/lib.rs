@@ -14,7 +14,7 @@ mod png;
 mod raster;
 mod svg;
 
-pub use chart::{bars, chart, wrapped_angles};
+pub use chart::{bars, bars_with_legend, chart, wrapped_angles};
 
 /// An sRGB colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
