@@ -99,11 +99,14 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let experiments = crate::experiments_cmd::experiments_of(&a.sys)?
         .map(|e| crate::experiments_cmd::describe(&e));
     let deadline = deadline_after(Instant::now(), a.an.timeout);
-    let r = run_rank(&mut nf, &a.an, deadline, false)?;
+    let mut r = run_rank(&mut nf, &a.an, deadline, false)?;
     // The ranks are of the formal field in which the atoms are independent;
     // a relation among them can only lower the true rank, so full rank is
     // certified only over independent atoms.
     let undecided = system_undecided_atoms(&mut nf);
+    // Explicit time: report the user's states, not the clock.
+    crate::clock::hide_in_rank(&nf, &mut r);
+    let nf = crate::clock::user_view(&nf).unwrap_or(nf);
     let words: Vec<String> = r
         .basis
         .iter()
@@ -323,7 +326,11 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         deadline,
         route: if a.exact { Route::Exact } else { Route::Auto },
     };
-    let s = symmetries_with(&mut nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
+    let mut s = symmetries_with(&mut nf, &r, &opts).map_err(|e| Failure(e.to_string()))?;
+    // Explicit time: report the user's states, not the clock.
+    let mut r = r;
+    crate::clock::hide_in_symmetries(&nf, &mut r, &mut s);
+    let nf = crate::clock::user_view(&nf).unwrap_or(nf);
     if a.out.json {
         let mut v = symmetry_json(&nf, &s);
         let Some(m) = v.as_object_mut() else {

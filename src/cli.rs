@@ -62,13 +62,17 @@ undecided_atoms); a zero form is always decided.")]
   obsan rank systems/calib.sys --input q --experiments auto   # how many circles (3)
   obsan rank systems/classic/two_compartment.sys --known-generic x1,x2   # known initial conditions
   obsan rank systems/calib.sys --along data/sim --window 20        # along a dataset's truth
+  obsan rank systems/benchmarks/unknown-inputs/time_gain.sys       # explicit time t (y = t*x1)
 
 --json prints {system, restriction, state (the analysed variables), n, rank,
 weakly_locally_observable (null when full rank rests on undecided atoms), decided,
 undecided_atoms (atoms that may be related), observable_variables, unobservable_variables, exact,
 error_bound, degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
 stacked experiments, or null)}. --known/--known-generic, --experiments auto and a model with
-unknown inputs print their own objects (docs/experiments.md, docs/engine.md).
+unknown inputs print their own objects (docs/experiments.md, docs/engine.md). A model may use time
+t explicitly: it is known along the trajectory (a clock t' = 1), and state, n, rank and basis
+leave the clock out (docs/sys-format.md, \"Explicit time\"); --along, --known and --experiments
+refuse it.
 
 --along --json prints {system, along, window, n, state, tolerance_safety, rounding_floor,
 input_rel_tol, windows: [{trajectory, t0, t1, rows, rank, condition, singular_values,

@@ -159,13 +159,17 @@ fn read_candidates(
     }
     let before = model_src.matches('\n').count() + 1;
     let combined = format!("{model_src}\n{blanked}");
-    let sys = System::parse(&combined, model_path).map_err(|e| match (e.line, e.col) {
+    let relocate = |e: ModelError| match (e.line, e.col) {
         (Some(l), Some(c)) if l > before => {
             let o = offset_of(&text, l - before, c);
             Failure(ModelError::at(path, &text, o, o + 1, e.message.clone()).to_string())
         }
         _ => Failure(e.to_string()),
-    })?;
+    };
+    let sys = System::parse(&combined, model_path).map_err(relocate)?;
+    if let Some(e) = sys.time_refusal("`obsan design`") {
+        return Err(relocate(e));
+    }
     Ok((sys, cands))
 }
 
@@ -198,6 +202,7 @@ pub fn run(a: &DesignArgs) -> Result<ExitCode, Failure> {
     };
     let src = crate::fsio::read_text(&a.system)?;
     let model = System::parse(&src, &a.system).map_err(|e| Failure(e.to_string()))?;
+    crate::clock::refuse_time(&model)?;
     let sets = parse_sets(&a.set)?;
     if a.candidates.is_none() && !a.target.is_empty() {
         return Err(Failure(

@@ -26,6 +26,7 @@ macro_rules! outln {
 mod along_cmd;
 mod analysis_cmds;
 mod cli;
+mod clock;
 mod design_cmd;
 mod diagnose_cmd;
 mod diagnose_report;
@@ -444,7 +445,35 @@ fn outcome(code: ExitCode, held: Option<String>) -> Result<Outcome, Failure> {
     }
 }
 
+/// The command's name as typed, for refusals that name it (explicit time).
+fn command_name(command: &cli::Command) -> &'static str {
+    use cli::Command as C;
+    match command {
+        C::Show(_) => "show",
+        C::Simplify(_) => "simplify",
+        C::Diff(_) => "diff",
+        C::Rank(a) if a.along.is_some() => "rank --along",
+        C::Rank(a) if a.sys.experiments.as_deref() == Some("auto") => "rank --experiments auto",
+        C::Rank(a) if !a.known.is_empty() || !a.known_generic.is_empty() => "rank --known",
+        C::Rank(_) => "rank",
+        C::Symmetries(_) => "symmetries",
+        C::Lie(_) => "lie",
+        C::Check(_) => "check",
+        C::Verify(_) => "verify",
+        C::Modes(_) => "modes",
+        C::Simulate(_) => "simulate",
+        C::Calibrate(_) => "calibrate",
+        C::Crlb(_) => "crlb",
+        C::Montecarlo(_) => "montecarlo",
+        C::Diagnose(_) => "diagnose",
+        C::Global(_) => "global",
+        C::Design(_) => "design",
+        C::Import(_) => "import",
+    }
+}
+
 fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
+    clock::set_command(command_name(&command));
     match command {
         cli::Command::Show(a) => show::run(&a),
         cli::Command::Simplify(a) => expr_cmds::simplify(&a),

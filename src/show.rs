@@ -11,7 +11,9 @@ use std::process::ExitCode;
 /// Read and check a .sys file.
 pub fn load_system(path: &str) -> Result<System, Failure> {
     let src = crate::fsio::read_text(path)?;
-    System::parse(&src, path).map_err(|e| Failure(e.to_string()))
+    let sys = System::parse(&src, path).map_err(|e| Failure(e.to_string()))?;
+    crate::clock::refuse_time(&sys)?;
+    Ok(sys)
 }
 
 /// Parse `--set NAME=VALUE` flags (values are exact: `0.9` is 9/10).
@@ -61,7 +63,14 @@ fn expr_json(ctx: &mut Ctx, id: Id) -> Value {
 pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     let (sys, mut nf) = load_normal_form(&a.sys)?;
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
-    let states: Vec<String> = nf.state[..nf.n_dynamic].to_vec();
+    // The user's states: the clock of explicit time is the analysis' own.
+    let clock = nf.clock();
+    let states: Vec<String> = nf.state[..nf.n_dynamic]
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| Some(*k) != clock)
+        .map(|(_, s)| s.clone())
+        .collect();
     if a.out.json {
         let field = |nf: &mut NormalForm, f: &[Id]| -> Value {
             let mut m = Map::new();
@@ -141,6 +150,9 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     out.push_str(&format!("inputs: {}\n", list(&nf.inputs)));
     if !nf.unknown_inputs.is_empty() {
         out.push_str(&format!("unknown inputs: {}\n", list(&nf.unknown_inputs)));
+    }
+    if clock.is_some() {
+        out.push_str("time: the fields or outputs use t explicitly; analysed with the clock t' = 1 and the known output t (not a state of the model)\n");
     }
     out.push_str(&format!("analysed state S = [{}]\n", nf.state.join(", ")));
     let mut fields: Vec<(String, Vec<Id>)> = vec![("f0".to_string(), nf.f0.clone())];

@@ -42,6 +42,11 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
         },
     )
     .map_err(|e| Failure(e.to_string()))?;
+    // Explicit time: report the user's states, not the clock.
+    let mut s = s;
+    crate::clock::hide_in_unknown_input_symmetries(nf, &mut s);
+    let view = crate::clock::user_view(nf);
+    let nf: &NormalForm = view.as_ref().unwrap_or(nf);
     let r = &s.report;
     let moved: Vec<bool> = (0..r.n)
         .map(|i| s.vectors.iter().any(|v| !v[i].is_zero()))
@@ -162,6 +167,11 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         },
     )
     .map_err(|e| Failure(e.to_string()))?;
+    // Explicit time: report the user's states, not the clock.
+    let mut r = r;
+    crate::clock::hide_in_unknown_input(nf, &mut r);
+    let view = crate::clock::user_view(nf);
+    let nf: &NormalForm = view.as_ref().unwrap_or(nf);
     let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
     // Every basis function is a time derivative y^(m) of an output (the
     // words have the one drift field).

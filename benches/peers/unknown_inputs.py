@@ -12,6 +12,7 @@ time derivatives y^(m) of the outputs are built by the total derivative
 
     D = sum_k F_k d/dx_k + sum_{j,l} w_j^(l+1) d/dw_j^(l) + sum_{i,l} u_i^(l+1) d/du_i^(l),
 
+plus d/dt where the model uses time `t` explicitly (a known coordinate, never a column),
 F = f0 + sum f_i u_i + sum g_j w_j read from the .sys text, with the unknown inputs' and the
 known inputs' derivatives as fresh symbols (no truncation: the order M decides which appear).
 At order m the Jacobian of (y^(0), ..., y^(m)) with respect to (states, params,
@@ -90,6 +91,11 @@ def oracle(path, order):
     loc.update({"atan2": sp.atan2, "atan": sp.atan, "sin": sp.sin, "cos": sp.cos,
                 "tan": sp.tan, "exp": sp.exp, "log": sp.log, "sqrt": sp.sqrt, "pi": sp.pi})
 
+    # Explicit time `t` (never declared): a known coordinate with t' = 1, so the total
+    # derivative gains d/dt and t is no column of the Jacobian.
+    time_t = sp.Symbol("time_t")
+    loc["t"] = time_t
+
     def parse(e):
         return sp.sympify(e.replace("^", "**"), locals=loc)
 
@@ -100,7 +106,7 @@ def oracle(path, order):
     us = m["input"]
 
     def total(phi, lvl):
-        d = sum(sp.diff(phi, x) * f for x, f in zip(states, rhs))
+        d = sum(sp.diff(phi, x) * f for x, f in zip(states, rhs)) + sp.diff(phi, time_t)
         for nm in ws + us:
             for l in range(lvl + 1):
                 d += sp.diff(phi, jet(nm, l)) * jet(nm, l + 1)
@@ -110,6 +116,7 @@ def oracle(path, order):
     point = {}
     for n in m["state"] + m["param"] + m["const"]:
         point[sym[n]] = sp.Rational(rng.randint(2, 97), rng.randint(2, 97))
+    point[time_t] = sp.Rational(rng.randint(2, 97), rng.randint(2, 97))
     for nm in ws + us:
         for l in range(order + 3):
             point[jet(nm, l)] = sp.Rational(rng.randint(2, 97), rng.randint(2, 97))

@@ -47,3 +47,27 @@ def test_modes_refuse_unknown_inputs_with_the_reason() -> None:
         assert "has unknown inputs (w)" in str(e)
     else:
         raise AssertionError("modes accepted a model with unknown inputs")
+
+
+def test_rank_with_explicit_time() -> None:
+    # x' = w, y = x + t^2 (t known, t' = 1): x = y - t^2 from y, w = y' - 2t from y'.
+    # The clock is not reported as a state.
+    r = obsan.loads("system q\nstate x\nunknown input w\nx' = w\noutput y = x + t^2\n").rank()
+    assert (r.rank, r.n) == (1, 1)
+    assert r.variables == ["x"]
+    assert r.orders == {"x": 0}
+    assert r.reconstructable == {"w": 1}
+    # Known inputs only: y = x*t with x' = 0 gives x = y/t where t != 0.
+    g = obsan.loads("system g\nstate x\nx' = 0\noutput y = x*t\n").rank()
+    assert (g.rank, g.n) == (1, 1)
+    assert g.observable == ["x"]
+
+
+def test_modes_refuse_explicit_time_at_its_place() -> None:
+    try:
+        obsan.loads("system g\nstate x\nx' = 0\noutput y = x*t\n").modes()
+    except obsan.ObsanError as e:
+        assert "<string>:4:14: explicit time 't'" in str(e)
+        assert "`obsan modes`" in str(e)
+    else:
+        raise AssertionError("modes accepted a model with explicit time")

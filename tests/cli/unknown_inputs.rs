@@ -163,3 +163,159 @@ fn symmetries_with_unknown_inputs_full_rank_and_refusals() {
     .unwrap();
     bad(&["symmetries", &p], "contains the unknown input w");
 }
+
+// Explicit time `t` (docs/sys-format.md, "Explicit time"): a known
+// coordinate with t' = 1. Each verdict below is derived by hand beside it.
+
+fn rank_json(name: &str, src: &str) -> Value {
+    let f = temp_file(name, src);
+    serde_json::from_str(&ok(&["rank", "--json", &f])).unwrap()
+}
+
+fn names(v: &Value) -> Vec<String> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.get("name").unwrap_or(x).as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn time_in_the_output_with_an_unknown_input() {
+    // x' = w, y = x + t^2: x = y - t^2 (order 0), y' = w + 2t so
+    // w = y' - 2t (order 1). The clock is not a state of the user's.
+    let v = rank_json(
+        "time_quad.sys",
+        "system q\nstate x\nunknown input w\nx' = w\noutput y = x + t^2\n",
+    );
+    assert_eq!(v["state"], serde_json::json!(["x"]));
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(1)));
+    assert_eq!(v["observable_variables"][0]["name"], "x");
+    assert_eq!(v["observable_variables"][0]["order"], 0);
+    assert_eq!(v["reconstructable_inputs"][0]["name"], "w");
+    assert_eq!(v["reconstructable_inputs"][0]["order"], 1);
+    assert_eq!(v["martinelli"]["rank"], 1);
+    assert_eq!(v["agree"], true);
+    // The clock's row is not in the printed basis: y and y' only.
+    assert_eq!(v["basis"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn a_time_varying_gain_makes_a_state_observable_that_a_constant_gain_hides() {
+    // x' = 0, y = x*t: x = y/t where t != 0 (and y' = x): observable.
+    let v = rank_json(
+        "time_gain.sys",
+        "system g\nstate x\nx' = 0\noutput y = x*t\n",
+    );
+    assert_eq!(v["state"], serde_json::json!(["x"]));
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(1)));
+    assert_eq!(names(&v["observable_variables"]), ["x"]);
+    assert_eq!(v["weakly_locally_observable"], true);
+    // The same model with t replaced by an unknown constant c: y = x*c,
+    // y' = 0; (x, c) -> (l x, c/l) leaves y unchanged: rank 1 of 2, neither
+    // observable.
+    let v = rank_json(
+        "const_gain.sys",
+        "system g\nstate x\nparam c\nx' = 0\noutput y = x*c\n",
+    );
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(2)));
+    assert!(names(&v["observable_variables"]).is_empty());
+    // With an unknown input too: y = x + c^2, y' = w: x is lost with c
+    // (x + c^2 alone is seen), while y = x + t^2 above gives x.
+    let v = rank_json(
+        "const_quad.sys",
+        "system q\nstate x\nparam c\nunknown input w\nx' = w\noutput y = x + c^2\n",
+    );
+    assert_eq!(v["rank"], 1);
+    assert!(names(&v["observable_variables"]).is_empty());
+    assert_eq!(v["reconstructable_inputs"][0]["name"], "w");
+}
+
+#[test]
+fn time_in_the_benchmark_models() {
+    // time_gain.sys: y = t*x1, y' = x1 + t*x2, y'' = 2*x2 + t*w (in the file).
+    let v: Value = serde_json::from_str(&ok(&[
+        "rank",
+        "--json",
+        "systems/benchmarks/unknown-inputs/time_gain.sys",
+    ]))
+    .unwrap();
+    assert_eq!(v["state"], serde_json::json!(["x1", "x2"]));
+    assert_eq!(v["rank"], 2);
+    let orders: Vec<u64> = v["observable_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["order"].as_u64().unwrap())
+        .collect();
+    assert_eq!(orders, [0, 1]);
+    assert_eq!(v["reconstructable_inputs"][0]["order"], 2);
+    // time_offset.sys: y = x + b*t, y' = w + b; -t d/dx + d/db (with
+    // w -> w - 1) is lost: rank 1 of 2, w not reconstructable.
+    let f = "systems/benchmarks/unknown-inputs/time_offset.sys";
+    let v: Value = serde_json::from_str(&ok(&["symmetries", "--json", f])).unwrap();
+    assert_eq!(v["state"], serde_json::json!(["x", "b"]));
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(2)));
+    let s = v["symmetries"].as_array().unwrap();
+    assert_eq!(s.len(), 1);
+    let comps = s[0].as_object().unwrap();
+    assert_eq!(comps.len(), 2, "no clock component: {comps:?}");
+    // Proportional to (-t, 1): x-component / b-component = -t.
+    let (x, b) = (
+        comps["x"]["text"].as_str().unwrap(),
+        comps["b"]["text"].as_str().unwrap(),
+    );
+    assert!(same_function(&format!("({x})/({b})"), "-t"), "{x}, {b}");
+    assert_eq!(v["unobservable_variables"], serde_json::json!(["x", "b"]));
+    assert_eq!(v["reconstructable_inputs"], serde_json::json!([]));
+}
+
+#[test]
+fn symmetries_with_time_and_known_inputs_leave_the_clock_out() {
+    // x' = 0, param k, y = x*k*t: y' = x*k, y'' = 0; only x*k is seen, the
+    // scaling x d/dx - k d/dk is lost: rank 1 of 2, one symmetry on (x, k).
+    let f = temp_file(
+        "time_scaling.sys",
+        "system s\nstate x\nparam k\nx' = 0\noutput y = x*k*t\n",
+    );
+    let v: Value = serde_json::from_str(&ok(&["symmetries", "--json", &f])).unwrap();
+    assert_eq!(v["state"], serde_json::json!(["x", "k"]));
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(2)));
+    let s = v["symmetries"].as_array().unwrap();
+    assert_eq!(s.len(), 1);
+    let (x, k) = (
+        s[0]["x"]["text"].as_str().unwrap(),
+        s[0]["k"]["text"].as_str().unwrap(),
+    );
+    assert!(s[0].get("t").is_none());
+    assert!(same_function(&format!("({x})/({k})"), "-x/k"), "{x}, {k}");
+    let out = ok(&["show", &f]);
+    assert!(out.contains("states: x\n"), "{out}");
+    assert!(out.contains("time: "), "{out}");
+}
+
+#[test]
+fn commands_without_a_clock_refuse_time_at_its_place() {
+    let f = temp_file(
+        "time_refused.sys",
+        "system g\nstate x\ninput u\nx' = u\noutput y = x*t\n",
+    );
+    let place = format!("{f}:5:14: explicit time 't'");
+    for (cmd, extra) in [
+        ("modes", vec![]),
+        ("global", vec![]),
+        ("lie", vec!["--order", "1"]),
+        ("check", vec!["--mode", "x"]),
+    ] {
+        let mut args = vec![cmd, f.as_str()];
+        args.extend(extra);
+        let err = bad(&args, &place);
+        assert!(err.contains(&format!("`obsan {cmd}`")), "{err}");
+    }
+    let err = bad(&["rank", &f, "--known-generic", "x"], &place);
+    assert!(err.contains("`obsan rank --known`"), "{err}");
+    bad(
+        &["rank", &f, "--experiment", "", "--experiment", ""],
+        &place,
+    );
+}

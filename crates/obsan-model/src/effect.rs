@@ -484,6 +484,10 @@ impl System {
             }
             let mut next = System::parse(&text, &format!("{}+{}", cur.name, e.name))
                 .map_err(|err| fail(format!("the extended model is not valid: {err}")))?;
+            // Fitting and diagnosis have no clock: time stays out of effects.
+            if let Some(err) = next.time_refusal("an effect's extended model") {
+                return Err(fail(format!("{err}")));
+            }
             next.description = if cur.description.is_empty() {
                 format!("with {}", e.name)
             } else {

@@ -109,6 +109,9 @@ impl System {
                 ),
             ));
         }
+        if let Some(e) = self.time_refusal("several experiments (`--experiment`)") {
+            return Err(e);
+        }
         // Validate names as normal_form does (same messages).
         for x in exps {
             self.normal_form(x.restriction.as_deref(), &x.set)?;

@@ -26,4 +26,4 @@ pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
 pub use error::{decode_text, normalize_text, ModelError};
 pub use experiment::{experiment_name, Experiment};
 pub use normal::NormalForm;
-pub use sys::{Decl, Kind, Restriction, Start, System};
+pub use sys::{Decl, Kind, Restriction, Start, System, TIME};

@@ -1,7 +1,7 @@
 //! The normal form `S' = f0(S) + sum_i f_i(S) u_i`, `y = h(S)` (eq. 6 of the paper).
 
 use crate::error::ModelError;
-use crate::sys::{Kind, System};
+use crate::sys::{Kind, System, TIME};
 use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, Var, Q};
 
 /// Resolves names beyond the system's own first: `None` to fall through.
@@ -47,6 +47,38 @@ pub struct NormalForm {
 }
 
 impl NormalForm {
+    /// Index in `state` of the clock `t` (`t' = 1`, known through its own
+    /// output `t`), present when the fields or outputs use time explicitly.
+    /// It is the analysis' coordinate, never a state of the user's: reports
+    /// leave it out.
+    pub fn clock(&self) -> Option<usize> {
+        self.state.iter().position(|s| s == TIME)
+    }
+
+    /// Time as a known coordinate (Martinelli's route for time-varying
+    /// systems): the last dynamic state `t` with `t' = 1` in the drift and no
+    /// input or unknown input moving it, and the output `t` (first), so its
+    /// differential is in the codistribution from order 0.
+    fn append_clock(&mut self) {
+        let t = self.ctx.symbol(TIME);
+        let (zero, one) = (self.ctx.int(0), self.ctx.int(1));
+        let k = self.n_dynamic;
+        self.state.insert(k, TIME.to_string());
+        self.state_vars.insert(k, t.var);
+        self.f0.insert(k, one);
+        for f in self.fields.iter_mut().chain(self.unknown_fields.iter_mut()) {
+            f.insert(k, zero);
+        }
+        self.n_dynamic += 1;
+        if let Some(d) = self.delay.as_mut() {
+            // The delay is a param, after every dynamic state.
+            *d += 1;
+        }
+        // First among the outputs: its row `dt` then always opens the basis
+        // (order 0), so reports can set it aside.
+        self.outputs.insert(0, (TIME.to_string(), t.id));
+    }
+
     /// `true` if the drift is identically zero.
     pub fn drift_is_zero(&mut self) -> bool {
         let f0 = self.f0.clone();
@@ -202,7 +234,7 @@ impl System {
                 .map_err(|e| self.err_at(loc, &e.0))?;
             outputs.push((n.clone(), h));
         }
-        Ok(NormalForm {
+        let mut nf = NormalForm {
             ctx,
             name: self.name.clone(),
             description: self.description.clone(),
@@ -223,7 +255,11 @@ impl System {
             unknown_inputs,
             unknown_input_vars: unknown_syms.iter().map(|s| s.var).collect(),
             unknown_fields,
-        })
+        };
+        if self.uses_time() {
+            nf.append_clock();
+        }
+        Ok(nf)
     }
 
     pub(crate) fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {

@@ -426,3 +426,46 @@ fn unknown_inputs() {
         "not the unknown input 'w'",
     );
 }
+
+#[test]
+fn time_is_read_in_right_hand_sides_and_outputs_and_never_declared() {
+    let src = "system s\nstate x\nparam a\ninput u\nx' = -a*x + sin(t)*u\noutput y = x*t\n";
+    let s = System::parse(src, "t.sys").unwrap();
+    assert!(s.uses_time());
+    let mut nf = s.normal_form(None, &[]).unwrap();
+    // The clock: last dynamic state, t' = 1 in the drift, no input moves it;
+    // its output first.
+    assert_eq!(nf.state, vec!["x", "t", "a"]);
+    assert_eq!((nf.n_dynamic, nf.clock()), (2, Some(1)));
+    assert_eq!(nf.ctx.to_text(nf.f0[1]), "1");
+    assert!(nf.ctx.is_identically_zero(nf.fields[0][1]));
+    assert_eq!(nf.outputs[0].0, "t");
+    assert_eq!(nf.ctx.to_text(nf.outputs[0].1), "t");
+    // The user's field keeps t as a coordinate: f_u = sin(t) on x.
+    assert_eq!(nf.ctx.to_text(nf.fields[0][0]), "sin(t)");
+    // A model without t has no clock.
+    let plain = System::parse(GOOD, "t.sys").unwrap();
+    assert!(!plain.uses_time());
+    assert_eq!(plain.normal_form(None, &[]).unwrap().clock(), None);
+    // Declared, named as an output, substituted or measured: refused at its place.
+    check(&edit("state x, y", "state x, y, t"), 2, 13, "'t' is time");
+    check(&edit("param a", "param a, t"), 3, 10, "'t' is time");
+    check(&edit("output h = x", "output t = x"), 8, 8, "'t' is time");
+    check(
+        &edit("restrict r: u = v, w = 2*v", "restrict r: u = t*v, w = 2*v"),
+        9,
+        17,
+        "time 't' cannot be substituted",
+    );
+    check(
+        &edit("input u, w", "input u, w\ninput d = t*u"),
+        6,
+        11,
+        "not 't'",
+    );
+    // The first use locates the refusal of a route without a clock.
+    let e = s.time_refusal("`obsan modes`").unwrap();
+    assert_eq!((e.line, e.col), (Some(5), Some(17)));
+    assert!(e.message.contains("`obsan modes`"), "{e}");
+    assert!(plain.time_refusal("`obsan modes`").is_none());
+}

@@ -36,6 +36,14 @@ impl Reader<'_> {
                     ),
                 ));
             }
+            if p.name == super::TIME {
+                return Err(self.err_src(
+                    p.at,
+                    p.at + p.name.len(),
+                    "'t' is time, known to every model (its clock t' = 1): it cannot be declared; \
+                     use it in right-hand sides and outputs as it is",
+                ));
+            }
             if p.name == "pi"
                 || FUNCTIONS.iter().any(|f| f.0 == p.name)
                 || KEYWORDS.contains(&p.name.as_str())
@@ -254,6 +262,13 @@ impl Reader<'_> {
         let mut outputs: Vec<(String, Located)> = Vec::new();
         for o in raw {
             let (nm, at, map) = (&o.name, o.at, &o.map);
+            if nm == super::TIME {
+                return Err(self.err_src(
+                    at,
+                    at + nm.len(),
+                    "'t' is time: an output cannot be named 't' (the clock is already a known output)",
+                ));
+            }
             if find(nm).is_some() || outputs.iter().any(|(p, _)| p == nm) {
                 return Err(self.err_src(
                     at,
@@ -394,6 +409,9 @@ impl Reader<'_> {
         for (_, ast, map) in &raw {
             for (n, span) in ast.idents() {
                 let (a, b) = span_in(map, span);
+                if n == super::TIME {
+                    return Err(self.err_src(a, b, format!("restriction '{rname}': time 't' cannot be substituted for an input (a restriction's new names are inputs; explicit time belongs in the dynamics and outputs)")));
+                }
                 match find(n) {
                     Some(d) if d.kind == Kind::Const => {}
                     Some(d) if d.kind == Kind::Input => {
@@ -534,8 +552,10 @@ fn build_checked(
     what: &str,
 ) -> Result<Id, ModelError> {
     let index: HashMap<&str, &Decl> = decls.iter().map(|d| (d.name.as_str(), d)).collect();
-    let mut resolve = |_c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
+    let mut resolve = |c: &mut Ctx, n: &str, s: Span| -> Result<Id, ParseError> {
         match index.get(n).copied() {
+            // Explicit time: never declared (refused above), a known coordinate.
+            None if n == super::TIME => Ok(c.symbol(n).id),
             // The declaration's symbol was made in this context.
             Some(d) if allowed.contains(&d.kind) => Ok(d.sym.id),
             Some(d) => Err(ParseError::new(

@@ -15,6 +15,11 @@ use read::{Reader, Statements};
 
 use obsan_expr::{Ast, Ctx, Id, Span, Symbol, Q};
 
+/// Explicit time in right-hand sides and outputs: never declared, a known
+/// coordinate with derivative 1 (the normal form appends it as a clock state
+/// with its own output, as in Martinelli's treatment of time-varying systems).
+pub const TIME: &str = "t";
+
 /// What a declared name is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
@@ -126,6 +131,8 @@ pub struct System {
     /// Source text of each dynamics right-hand side, output expression and
     /// restriction statement (for [`System::to_sys_text`]).
     pub(crate) texts: Texts,
+    /// Source offset of the first use of time `t` in the dynamics or outputs.
+    pub(crate) time_at: Option<usize>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -168,7 +175,20 @@ impl System {
                 ));
             }
         }
+        let time_at = dynamics
+            .iter()
+            .chain(outputs.iter().map(|o| &o.1))
+            .flat_map(|l| {
+                l.ast
+                    .idents()
+                    .into_iter()
+                    .filter(|(n, _)| *n == TIME)
+                    .map(|(_, s)| l.src_span(s).0)
+                    .collect::<Vec<_>>()
+            })
+            .min();
         Ok(System {
+            time_at,
             name,
             description: raw.description.join(" ").trim().to_string(),
             ctx,
@@ -274,6 +294,27 @@ impl System {
 
     pub fn restriction(&self, name: &str) -> Option<&Restriction> {
         self.restrictions.iter().find(|r| r.name == name)
+    }
+
+    /// `true` if a right-hand side or an output uses time `t` explicitly.
+    pub fn uses_time(&self) -> bool {
+        self.time_at.is_some()
+    }
+
+    /// A located refusal of explicit time by a route that cannot handle it
+    /// yet (`what` names it): at the first use of `t`, or `None` when the
+    /// system does not use time.
+    pub fn time_refusal(&self, what: &str) -> Option<ModelError> {
+        let at = self.time_at?;
+        Some(ModelError::at(
+            &self.origin,
+            &self.src,
+            at,
+            at + TIME.len(),
+            format!(
+                "explicit time 't' is not supported by {what} yet (`obsan rank`, `obsan symmetries` and `obsan show` handle it)"
+            ),
+        ))
     }
 
     /// Output names in declaration order.
