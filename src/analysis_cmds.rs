@@ -103,7 +103,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     // The ranks are of the formal field in which the atoms are independent;
     // a relation among them can only lower the true rank, so full rank is
     // certified only over independent atoms.
-    let undecided = system_undecided_atoms(&mut nf);
+    let undecided = obsan_analysis::undecided_atoms_of(&mut nf, &[]);
     // Explicit time: report the user's states, not the clock.
     crate::clock::hide_in_rank(&nf, &mut r);
     let nf = crate::clock::user_view(&nf).unwrap_or(nf);
@@ -207,18 +207,6 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// The atoms of a system's fields and outputs whose independence the rank
-/// test assumes but the engine cannot prove.
-fn system_undecided_atoms(nf: &mut NormalForm) -> Vec<String> {
-    let mut ids: Vec<obsan_expr::Id> = nf.f0.clone();
-    ids.extend(nf.fields.iter().flatten());
-    ids.extend(nf.unknown_fields.iter().flatten());
-    ids.extend(nf.outputs.iter().map(|o| o.1));
-    let forms: Vec<RatFun> = ids.iter().map(|&id| nf.ctx.canon(id)).collect();
-    let vs = nf.ctx.undecided_atoms_in(&forms, false);
-    nf.ctx.atom_texts(&vs)
-}
-
 /// One symmetry vector as JSON: per state variable, its component's text
 /// and LaTeX.
 pub(crate) fn vector_json(nf: &NormalForm, v: &[RatFun]) -> Value {
@@ -252,8 +240,10 @@ fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
     // Unreached variables: each d/dx is a symmetry, listed by name (a unit
     // vector each would make the output quadratic in the state).
     let free: Vec<&String> = s.free.iter().map(|&j| &nf.state[j]).collect();
-    json!({ "symmetries": vecs, "free_directions": free, "exact": s.exact, "rows_checked": s.rows_checked, "blocks": s.blocks,
-        "certificate": kind, "certification": detail })
+    // `exact` is the whole answer: vectors, count and independence. Over
+    // undecided atoms only the annihilation (zero forms) is proven.
+    json!({ "symmetries": vecs, "free_directions": free, "exact": s.exact && s.decided(), "rows_checked": s.rows_checked, "blocks": s.blocks,
+        "certificate": kind, "certification": detail, "decided": s.decided(), "undecided_atoms": s.undecided })
 }
 
 /// The rank and the symmetries for `check`/`verify`: the default route
@@ -278,7 +268,11 @@ fn compute_symmetries(
 fn sym_certificate(s: &SymmetryReport) -> (String, f64) {
     let n = s.count();
     match &s.certificate {
-        _ if n == 0 => ("none to find: the rank is full (exact)".into(), 0.0),
+        _ if n == 0 && s.decided() => ("none to find: the rank is full (exact)".into(), 0.0),
+        _ if n == 0 => (
+            "none found: the rank is full with the atoms independent (not decided)".into(),
+            0.0,
+        ),
         Certificate::Closure => ("exact Gauss-Jordan, proven by the exact closure check".into(), 0.0),
         Certificate::Invariance(_) => ("cheap structure, proven exactly by invariance".into(), 0.0),
         Certificate::Random(c) => (
@@ -347,12 +341,18 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
-        "{}: rank {} of {}, {} independent symmetr{}\n",
+        "{}: rank {} of {}, {} {}symmetr{}{}\n",
         system_title(&nf),
         r.rank,
         r.n,
         s.count(),
-        if s.count() == 1 { "y" } else { "ies" }
+        if s.decided() { "independent " } else { "" },
+        if s.count() == 1 { "y" } else { "ies" },
+        if s.decided() {
+            ""
+        } else {
+            " found (not decided: see below)"
+        }
     );
     o.push_str(&format!("state order: [{}]\n", nf.state.join(", ")));
     for (k, v) in s.vectors.iter().enumerate() {
@@ -360,7 +360,9 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         o.push_str(&format!("w{} = [{}]\n", k + 1, comps.join(", ")));
     }
     o.push_str(&free_line(&nf, &s));
-    if s.count() == 0 {
+    if !s.decided() {
+        o.push_str(&sym_not_decided(&s));
+    } else if s.count() == 0 {
         o.push_str("no continuous symmetry: the state is weakly locally observable (exact)\n");
     } else if let obsan_analysis::Certificate::Invariance(kinds) = &s.certificate {
         let names: Vec<String> = kinds
@@ -405,6 +407,31 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)
+}
+
+/// What a symmetry report over undecided atoms still proves, and what not.
+fn sym_not_decided(s: &SymmetryReport) -> String {
+    let shown = if s.vectors.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "each w above annihilates the gradients of every Lie derivative where its components are defined ({}: zero canonical forms prove zero); ",
+            match &s.certificate {
+                Certificate::Random(c) => format!("certified at random points, error below {:.0e}", c.error_bound.max(1e-300)),
+                _ => "exact".into(),
+            }
+        )
+    };
+    format!(
+        "not decided: the atoms {} may be related in ways the engine does not detect; {shown}the rank {} is that of the system with them independent, an upper bound on the true rank, so there may be more symmetries than listed{}\n",
+        s.undecided.join(", "),
+        s.rank,
+        if s.vectors.len() > 1 {
+            ", and the independence of the w (nonzero pivots over these atoms) is not proven"
+        } else {
+            ""
+        }
+    )
 }
 
 pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
@@ -511,6 +538,9 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     let rep = check_modes(&mut nf, &s, &ids, a.an.seed).map_err(|e| Failure(e.to_string()))?;
     let all_pass = rep.checks.iter().all(|c| c.is_mode) && rep.independent;
     let (cert, bound) = sym_certificate(&s);
+    // Independence (a nonzero minor) and completeness (the rank) rest on
+    // nonzero forms; a dependence found is formal, hence true.
+    let decided = rep.decided() && s.decided();
     if a.out.json {
         let checks: Vec<Value> = a
             .modes
@@ -529,8 +559,11 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             .collect();
         let v = json!({
             "system": nf.name, "restriction": nf.restriction, "symmetries": s.count(), "rank": rep.rank,
-            "checks": checks, "independent": rep.independent, "independent_count": rep.independent_count,
-            "complete": rep.complete, "exact": bound == 0.0,
+            "checks": checks,
+            "independent": if decided || !rep.independent { json!(rep.independent) } else { Value::Null },
+            "independent_count": rep.independent_count,
+            "complete": if decided { json!(rep.complete) } else { Value::Null },
+            "exact": bound == 0.0 && decided,
         });
         let mut v = v;
         if let (Some(m), Some(c)) = (v.as_object_mut(), symmetry_json(&nf, &s).as_object()) {
@@ -551,7 +584,9 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
             if c.is_mode {
                 o.push_str(&format!(
                     "PASS {m}: satisfies eq. (11) for every symmetry ({})\n",
-                    if bound == 0.0 {
+                    if !decided {
+                        "exact residuals against the symmetries found; see \"not decided\" below"
+                    } else if bound == 0.0 {
                         "exact"
                     } else {
                         "exact residuals; the symmetries as certified above"
@@ -583,7 +618,13 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
         let accepted = rep.checks.iter().filter(|c| c.is_mode).count();
         o.push_str(&format!(
             "accepted modes: {accepted}; independent: {} (gradient rank {}){}\n",
-            if rep.independent { "yes" } else { "no" },
+            if !rep.independent {
+                "no"
+            } else if decided {
+                "yes"
+            } else {
+                "not decided"
+            },
             rep.independent_count,
             if rep.independent {
                 String::new()
@@ -593,10 +634,24 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
         ));
         o.push_str(&format!(
             "complete: {} ({} independent modes for rank {})\n",
-            if rep.complete { "yes" } else { "no" },
+            match (decided, rep.complete) {
+                (false, _) => "not decided",
+                (true, true) => "yes",
+                (true, false) => "no",
+            },
             rep.independent_count,
             rep.rank
         ));
+        if !decided {
+            let mut atoms = rep.undecided.clone();
+            atoms.extend(s.undecided.iter().cloned());
+            atoms.sort();
+            atoms.dedup();
+            o.push_str(&format!(
+                "not decided: the atoms {} may be related in ways the engine does not detect; the zero residuals above are proofs, but the rank and the modes' independence are nonzero forms over these atoms, so the true rank may be lower, with more symmetries than those checked\n",
+                atoms.join(", ")
+            ));
+        }
         out!("{o}");
     }
     Ok(if all_pass {
@@ -650,16 +705,35 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     } else {
         format!("eq. (11) residuals exact, the symmetries wrong with probability <= {bound:.1e}")
     };
-    let exact = closure || bound == 0.0;
-    // A failure whose residuals hold only related-looking atoms is not a proof.
-    let decided = checks.iter().all(|c| c.pass || c.undecided.is_empty());
+    // A failure whose residuals hold only related-looking atoms is not a
+    // proof, nor a pass resting on a minor or the rank over such atoms, nor
+    // symmetries whose count is not proven.
+    let failure_certain = checks.iter().any(|c| !c.pass && c.undecided.is_empty());
+    let mut undecided: Vec<String> = s.undecided.clone();
+    undecided.extend(checks.iter().flat_map(|c| c.undecided.iter().cloned()));
+    undecided.sort();
+    undecided.dedup();
+    let decided = if ok {
+        undecided.is_empty()
+    } else {
+        failure_certain
+    };
+    let exact = (closure || bound == 0.0) && decided;
+    let verdict = if ok && !decided {
+        format!(
+            "not decided: every check passed with the atoms {} independent, but they may be related in ways the engine does not detect (the independence and completeness checks rest on nonzero forms over them)",
+            undecided.join(", ")
+        )
+    } else {
+        verdict
+    };
     if a.out.json {
         let sj = symmetry_json(&nf, &s);
         let v = json!({
             "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
             "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail,
-                "decided": c.pass || c.undecided.is_empty(), "undecided_atoms": c.undecided})).collect::<Vec<_>>(),
-            "pass": ok, "decided": decided, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
+                "decided": c.undecided.is_empty(), "undecided_atoms": c.undecided})).collect::<Vec<_>>(),
+            "pass": ok, "decided": decided, "undecided_atoms": undecided, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
             "certificate": sj["certificate"], "certification": sj["certification"],
         });
         outln!("{}", serde_json::to_string_pretty(&v)?);
@@ -671,10 +745,12 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
             a.file
         );
         for c in &checks {
-            let undecided = !c.pass && !c.undecided.is_empty();
+            let undecided = !c.undecided.is_empty();
             o.push_str(&format!(
                 "{} {}\n",
-                if c.pass {
+                if c.pass && undecided {
+                    "PASS (not decided)"
+                } else if c.pass {
                     "PASS"
                 } else if undecided {
                     "NOT DECIDED"
@@ -686,12 +762,19 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
             if !c.pass && !c.detail.is_empty() {
                 o.push_str(&format!("     {}\n", c.detail));
             }
-            if undecided {
+            if undecided && c.pass {
+                o.push_str(&format!(
+                    "     not decided: this rests on a nonzero minor or rank over the atoms {}, which may be related in ways the engine does not detect\n",
+                    c.undecided.join(", ")
+                ));
+            } else if undecided {
                 o.push_str(&format!("     {}\n", not_decided_note(&c.undecided)));
             }
         }
         o.push_str(&format!("symmetries: {} ({cert})\n", s.count()));
-        o.push_str(&if !ok && !decided {
+        o.push_str(&if ok && !decided {
+            format!("decomposition verified only with the atoms independent ({verdict})\n")
+        } else if !ok && !decided {
             "decomposition not decided: no check failed for certain, and the ones marked NOT DECIDED may hold\n".to_string()
         } else if !ok {
             "decomposition NOT verified\n".to_string()

@@ -96,7 +96,9 @@ solved as separate blocks.
 --json prints {system, restriction, state, n, rank, symmetries (one object per vector: variable ->
 {text, latex}), free_directions (the variables no output reaches: each d/dx is a symmetry too,
 listed by name), rows_checked, blocks, exact, certificate (closure | invariance | random), certification
-(for random: {points, primes, identities, degree, error_bound}, else null)}.
+(for random: {points, primes, identities, degree, error_bound}, else null), decided, undecided_atoms
+(atoms that may be related: then each vector still annihilates the codistribution, but the count
+and the independence rest on the rank over them, an upper bound: exact is false)}.
 
 A model with unknown inputs (obsan symmetries systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys)
 gives the kernel of its observable codistribution, certified exactly (docs/engine.md, \"Symmetries
@@ -129,7 +131,7 @@ says (random: error_bound in certification; --exact for the exact route). Exit 1
   obsan verify systems/decomp_21_22.dec --json
 
 --json prints {system, restriction, decomposition, checks: [{check, pass, detail, decided,
-undecided_atoms}], pass, decided, exact, verdict, certificate (closure |
+undecided_atoms}], pass, decided, undecided_atoms, exact, verdict, certificate (closure |
 invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
 the exact one); a passing decomposition that writes every output is exact by closure whatever
 certified them. Exit 1 when a check fails.")]
@@ -143,7 +145,10 @@ certified them. Exit 1 when a check fails.")]
 --json prints {system, restriction, n, rank, full_rank, symmetries, unreached (variables no
 output reaches: unobservable, in no mode), modes: [{name, expr, kind,
 angle, domain}], reduced: {inputs, dynamics: [{name, rhs}], outputs: [{name, expr}], closed,
-missing}, certificate: {text, modes_exact, independent, complete, verified, checks}, sys, dec}.
+missing}, decided, undecided_atoms (atoms that may be related: then the rank is an upper bound,
+full_rank, modes_exact and complete are null, independent and verified null unless false for
+certain, and certificate says what is still proven),
+certificate: {text, modes_exact, independent, complete, verified, checks}, sys, dec}.
 --out PREFIX writes PREFIX.sys (the reduced system) and PREFIX.dec (for obsan verify).
 Exit 1 when the reduced system could not be closed or a check failed.")]
     Modes(ModesArgs),

@@ -44,18 +44,34 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         None => nf.name.clone(),
     };
     if r.rank == r.n {
+        // The full rank is a nonzero minor: a proof only over decided atoms
+        // (else the true rank may be lower, as `obsan rank` says too).
+        let undecided = obsan_analysis::undecided_atoms_of(&mut nf, &[]);
+        let decided = undecided.is_empty();
+        let certificate = if decided {
+            "rank equals the dimension: a non-zero minor at a point proves it (exact)".to_string()
+        } else {
+            not_decided_text(&undecided, r.rank)
+        };
         if a.out.json {
             let v = json!({
                 "system": nf.name, "restriction": nf.restriction, "n": r.n, "rank": r.rank,
-                "full_rank": true,
+                "full_rank": if decided { json!(true) } else { Value::Null },
+                "decided": decided, "undecided_atoms": undecided,
                 "modes": nf.state.iter().map(|s| json!({"name": s, "expr": s, "kind": "variable"})).collect::<Vec<_>>(),
                 "reduced": Value::Null,
-                "certificate": "rank equals the dimension: a non-zero minor at a point proves it (exact)",
+                "certificate": certificate,
             });
             outln!("{}", serde_json::to_string_pretty(&v)?);
-        } else {
+        } else if decided {
             outln!(
                 "{title}: rank {} of {}: every variable is observable; the modes are the variables",
+                r.rank,
+                r.n
+            );
+        } else {
+            outln!(
+                "{title}: rank {} of {} with the atoms independent\n{certificate}",
                 r.rank,
                 r.n
             );
@@ -134,6 +150,21 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         None => None,
     };
     let verified = checks.as_ref().is_some_and(|c| c.iter().all(|c| c.pass));
+    // Everything resting on a nonzero form (the rank, the modes'
+    // independence, a check's minor, a failed residual) is proven only over
+    // decided atoms; zero residuals and substitutions are proofs regardless.
+    let mut undecided: Vec<String> = sym.undecided.clone();
+    undecided.extend(d.mode_report.undecided.iter().cloned());
+    for c in checks.iter().flatten() {
+        undecided.extend(c.undecided.iter().cloned());
+    }
+    undecided.sort();
+    undecided.dedup();
+    let decided = undecided.is_empty();
+    let failure_certain = checks
+        .iter()
+        .flatten()
+        .any(|c| !c.pass && c.undecided.is_empty());
     let modes_ok = d.mode_report.checks.iter().all(|c| c.is_mode)
         && d.mode_report.independent
         && d.mode_report.complete;
@@ -155,6 +186,18 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             checks.as_ref().map_or(0, |c| c.len()),
             d.rank,
             plural(nsym),
+        )
+    } else if !decided {
+        format!(
+            "{} mode(s), each satisfies eq. (11) exactly (canonical forms) for the {nsym} symmetr{} found ({sym_cert}); {}; {}",
+            d.modes.len(),
+            plural(nsym),
+            match &checks {
+                Some(_) if verified => "the reduced system writes every output and field in the modes (exact substitution)".to_string(),
+                Some(_) => "reduced system: a decomposition check did not pass".to_string(),
+                None => format!("reduced system not closed: no form in the modes found for {}", d.missing().join(", ")),
+            },
+            not_decided_text(&undecided, d.rank)
         )
     } else {
         format!(
@@ -199,13 +242,14 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
                 "closed": d.closed(),
                 "missing": d.missing(),
             },
+            "decided": decided, "undecided_atoms": undecided,
             "certificate": {
                 "text": certificate,
-                "modes_exact": modes_ok,
-                "independent": d.mode_report.independent,
-                "complete": d.mode_report.complete,
-                "verified": verified,
-                "exact": closure || (modes_ok && sym.exact),
+                "modes_exact": if decided { json!(modes_ok) } else { Value::Null },
+                "independent": if decided || !d.mode_report.independent { json!(d.mode_report.independent) } else { Value::Null },
+                "complete": if decided { json!(d.mode_report.complete) } else { Value::Null },
+                "verified": if decided || failure_certain { json!(verified) } else { Value::Null },
+                "exact": closure || (modes_ok && sym.exact && decided),
                 "method": if closure { "closure" } else { "symmetries" },
                 "symmetries": sym_cert,
                 "checks": checks.as_ref().map(|cs| cs.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>()),
@@ -273,6 +317,15 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// What stays unproven over undecided atoms (the rank and every nonzero
+/// form built on it), and what is still proven.
+fn not_decided_text(atoms: &[String], rank: usize) -> String {
+    format!(
+        "not decided: the atoms {} may be related in ways the engine does not detect; the rank {rank} is that of the system with them independent, an upper bound on the true rank, so there may be more symmetries, fewer observable modes and a smaller reduced system than shown (zero residuals and exact substitutions above are proofs; nonzero minors and pivots over these atoms are not)",
+        atoms.join(", ")
+    )
 }
 
 /// The first line of every file `obsan modes --out` writes: `--force`

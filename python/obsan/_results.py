@@ -197,7 +197,10 @@ class Symmetries(Result):
     each direction d/dx a symmetry too; ``certificate`` is what it rests on
     (``closure`` exact, ``random`` with ``certification["error_bound"]``). With unknown
     inputs: the kernel of the observable codistribution, ``certificate``
-    ``unknown_input_invariance`` (exact; docs/engine.md)."""
+    ``unknown_input_invariance`` (exact; docs/engine.md). ``decided`` false: the
+    atoms in ``undecided_atoms`` may be related, so each vector is still proven to
+    annihilate the codistribution but the rank is an upper bound and there may be
+    more symmetries (``exact`` is then false)."""
 
     system: str
     rank: int
@@ -206,6 +209,8 @@ class Symmetries(Result):
     free: List[str]
     exact: bool
     certificate: str
+    decided: bool = True
+    undecided_atoms: List[str] = field(default_factory=list)
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Symmetries":
@@ -218,6 +223,8 @@ class Symmetries(Result):
             free=list(raw.get("free_directions") or []),
             exact=bool(raw.get("exact", False)),
             certificate=str(raw.get("certificate", "")),
+            decided=bool(raw.get("decided", True)),
+            undecided_atoms=[str(a) for a in raw.get("undecided_atoms") or []],
         )
 
     def _repr_latex_(self) -> str:
@@ -232,14 +239,19 @@ class Symmetries(Result):
 class Modes(Result):
     """``obsan modes``: the observable modes and the reduced system. ``closed`` is true
     when the reduced dynamics were found in the modes (then ``reduced_sys`` is its
-    ``.sys`` text, full rank by construction)."""
+    ``.sys`` text, full rank by construction). ``decided`` false: the atoms in
+    ``undecided_atoms`` may be related, so the rank is an upper bound (``full_rank``
+    is then ``None`` at formal full rank): the modes' eq. (11) residuals and the
+    reduced system's substitutions are proven, their completeness is not."""
 
     system: str
     rank: int
-    full_rank: bool
+    full_rank: Optional[bool]
     modes: List[str]
     closed: bool
     reduced_sys: Optional[str]
+    decided: bool = True
+    undecided_atoms: List[str] = field(default_factory=list)
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Modes":
@@ -248,10 +260,12 @@ class Modes(Result):
             raw=raw,
             system=raw.get("system", ""),
             rank=int(raw.get("rank", 0)),
-            full_rank=bool(raw.get("full_rank", False)),
+            full_rank=None if raw.get("full_rank") is None else bool(raw["full_rank"]),
             modes=[m["expr"] for m in raw.get("modes") or []],
             closed=bool(reduced.get("closed", False)),
             reduced_sys=raw.get("sys"),
+            decided=bool(raw.get("decided", True)),
+            undecided_atoms=[str(a) for a in raw.get("undecided_atoms") or []],
         )
 
 

@@ -63,6 +63,27 @@ def test_symmetries_are_vectors_of_formulas_and_render_as_latex():
     assert s._repr_latex_().startswith("$") and "pmatrix" in s._repr_latex_()
 
 
+# x' = 0, y' = 0, outputs x and y (log(x y) - log(x) - log(y)): the second is 0 for
+# x, y > 0, so d/dy is a true symmetry, but over independent logarithms the rank
+# looks full (2 of 2). Neither result may claim it exactly.
+HIDDEN = (
+    "system hidden\nstate x, y\nx' = 0\ny' = 0\n"
+    "output h1 = x\noutput h2 = y*(log(x*y) - log(x) - log(y))\n"
+)
+
+
+def test_symmetries_and_modes_over_related_atoms_are_not_decided():
+    s = obsan.loads(HIDDEN).symmetries()
+    assert s.decided is False and s.exact is False
+    assert {"log(x)", "log(x*y)"} <= set(s.undecided_atoms)
+    m = obsan.loads(HIDDEN).modes()
+    assert m.decided is False and m.full_rank is None
+    assert "log(y)" in m.undecided_atoms
+    # A decided system keeps its certificate (eq. 17: 3 symmetries, exact route).
+    c = obsan.load(SYSTEMS / "calib.sys").symmetries(input="q")
+    assert c.decided is True and c.undecided_atoms == []
+
+
 def test_expressions_and_estimates_are_typed():
     e = obsan.simplify("sin(g-p)*cos(p) + cos(g-p)*sin(p) - sin(g)")
     assert isinstance(e, obsan.Expression) and e.is_zero is True and e.canonical == "0"

@@ -511,3 +511,148 @@ fn symmetries_past_the_timeout_say_how_far_they_got() {
         r.stderr
     );
 }
+
+/// x' = 0, y' = 0, h1 = x, h2 = y (log(x y) - log(x) - log(y)): h2 = 0 for
+/// x, y > 0, so y is unobservable and d/dy a true symmetry (true rank 1);
+/// over independent logarithms dh2/dy looks nonzero and the rank 2 of 2.
+const HIDDEN_SYMMETRY: &str = "system hidden\nstate x, y\nx' = 0\ny' = 0\n\
+    output h1 = x\noutput h2 = y*(log(x*y) - log(x) - log(y))\n";
+
+/// x' = 0, y' = 0, h1 = log(x), h2 = log(x y) - log(y) (= h1 for x, y > 0):
+/// the gradients are (1/x, 0) both, so d/dy is found, but the outputs'
+/// atoms are related.
+const RELATED_OUTPUTS: &str = "system logs\nstate x, y\nx' = 0\ny' = 0\n\
+    output h1 = log(x)\noutput h2 = log(x*y) - log(y)\n";
+
+fn names_the_logs(v: &Value) -> bool {
+    let atoms: Vec<&str> = v["undecided_atoms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap())
+        .collect();
+    ["log(x)", "log(x*y)", "log(y)"]
+        .iter()
+        .all(|a| atoms.contains(a))
+}
+
+/// "No symmetry" and "these are all" rest on the rank, a nonzero minor: over
+/// related atoms they are not claimed; a vector found is still listed.
+#[test]
+fn symmetries_over_related_atoms_are_not_claimed_complete() {
+    let sys = temp_file("undecided_sym_hidden.sys", HIDDEN_SYMMETRY);
+    let v = json(&["symmetries", &sys]);
+    assert_eq!(
+        (v["decided"].clone(), v["exact"].clone()),
+        (false.into(), false.into())
+    );
+    assert!(names_the_logs(&v), "{v}");
+    let text = ok(&["symmetries", &sys]);
+    assert!(text.contains("not decided"), "{text}");
+    assert!(!text.contains("no continuous symmetry"), "{text}");
+    assert!(
+        !text.contains("(exact)") && !text.contains("exact:"),
+        "{text}"
+    );
+
+    let sys = temp_file("undecided_sym_logs.sys", RELATED_OUTPUTS);
+    let v = json(&["symmetries", &sys]);
+    assert_eq!(v["decided"], false);
+    assert_eq!(v["exact"], false);
+    assert!(names_the_logs(&v), "{v}");
+    // d/dy, up to a factor: its x component is 0.
+    let w = symmetry_vectors(&v, &["x", "y"]);
+    assert_eq!(w.len(), 1);
+    assert_eq!(w[0][0], "0");
+    let text = ok(&["symmetries", &sys]);
+    assert!(
+        text.contains("may be more symmetries than listed"),
+        "{text}"
+    );
+    assert!(!text.contains("independent symmetr"), "{text}");
+
+    // check: the zero residual of log(x) stands, completeness does not.
+    let r = obsan(&["check", &sys, "--mode", "log(x)", "--json"]);
+    let v: Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["checks"][0]["observable_mode"], true);
+    assert_eq!(v["complete"], Value::Null);
+    assert_eq!(v["exact"], false);
+    let text = ok(&["check", &sys, "--mode", "log(x)"]);
+    assert!(text.contains("complete: not decided"), "{text}");
+}
+
+/// Decided atoms (sin, cos of one angle; the paper's systems): certified as
+/// before.
+#[test]
+fn symmetries_over_decided_atoms_stay_exact() {
+    for sys in ["systems/localization.sys", "systems/psi.sys"] {
+        let v = json(&["symmetries", sys, "--exact"]);
+        assert_eq!(v["decided"], true, "{sys}: {v}");
+        assert_eq!(v["undecided_atoms"], serde_json::json!([]));
+        assert_eq!(v["exact"], true, "{sys}");
+    }
+    let v = json(&[
+        "check",
+        "systems/localization.sys",
+        "--mode",
+        "D",
+        "--mode",
+        "thetaR - phiR",
+    ]);
+    assert_eq!(
+        (v["complete"].clone(), v["exact"].clone()),
+        (true.into(), true.into())
+    );
+}
+
+/// h2 = z (log(2 z) - log(z) - log(2)) is 0 for z > 0: the true rank is 1 and
+/// z unobservable, but over independent logarithms the decomposition
+/// (z, x y) closes with rank 2. Every substitution passes (zero forms), so
+/// exit 0 as for rank; the completeness check rests on the rank and is
+/// not decided, and the closure is not called exact.
+#[test]
+fn verify_closure_over_related_atoms_is_not_exact() {
+    let dir = fresh_dir("undecided_closure");
+    std::fs::write(
+        format!("{dir}/closing.sys"),
+        "system closing\nstate x, y, z\nx' = 0\ny' = 0\nz' = 0\n\
+         output h1 = x*y\noutput h2 = z*(log(2*z) - log(z) - log(2))\n",
+    )
+    .unwrap();
+    let dec = format!("{dir}/c.dec");
+    std::fs::write(
+        &dec,
+        "system closing.sys\nlet m = x*y\nstate z, m\nz' = 0\nm' = 0\n\
+         output h1 = m\noutput h2 = z*(log(2*z) - log(z) - log(2))\n",
+    )
+    .unwrap();
+    let r = obsan(&["verify", &dec]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stdout.contains("PASS (not decided) they are complete"),
+        "{}",
+        r.stdout
+    );
+    assert!(
+        r.stdout
+            .contains("PASS the 2 new variables are independent"),
+        "{}",
+        r.stdout
+    );
+    assert!(!r.stdout.contains("(exact)"), "{}", r.stdout);
+    let v = json(&["verify", &dec]);
+    assert_eq!(
+        (v["pass"].clone(), v["decided"].clone(), v["exact"].clone()),
+        (true.into(), false.into(), false.into())
+    );
+    assert!(v["undecided_atoms"]
+        .as_array()
+        .unwrap()
+        .contains(&Value::from("log(z)")));
+    // The paper's decomposition (decided atoms) stays exact.
+    let v = json(&["verify", "systems/decomp_21_22.dec"]);
+    assert_eq!(
+        (v["decided"].clone(), v["exact"].clone()),
+        (true.into(), true.into())
+    );
+}

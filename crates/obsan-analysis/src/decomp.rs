@@ -40,9 +40,11 @@ pub struct Check {
     pub pass: bool,
     /// On failure, the residual or the reason.
     pub detail: String,
-    /// A failure that is not decided: every nonzero residual holds atoms
-    /// whose independence the engine cannot prove (they are listed); empty
-    /// when the verdict is certain.
+    /// A verdict that is not decided, with the atoms whose independence the
+    /// engine cannot prove: a failure whose every nonzero residual holds
+    /// such atoms, or a verdict resting on a nonzero minor or on the rank
+    /// (independence, completeness) over such atoms. Empty when the verdict
+    /// is certain (a pass by zero residuals always is).
     pub undecided: Vec<String>,
 }
 
@@ -208,9 +210,11 @@ impl Decomposition {
     /// observable codistribution; the rank test's non-zero minor bounds that
     /// from below by the same count (the completeness check); so the two are
     /// equal and each new variable is a mode (eq. 11) with no probability.
+    /// The minor proves only over decided atoms: an undecided check proves
+    /// nothing.
     pub fn closure_proves(&self, nf: &NormalForm, checks: &[Check]) -> bool {
         !checks.is_empty()
-            && checks.iter().all(|c| c.pass)
+            && checks.iter().all(|c| c.pass && c.undecided.is_empty())
             && nf
                 .outputs
                 .iter()
@@ -318,8 +322,14 @@ pub fn verify_decomposition_with(
             undecided,
         });
     }
-    // 2. Independent, 3. complete.
+    // 2. Independent, 3. complete. A rank found at a point is a nonzero
+    // minor of the new gradients (their atoms), and the system's rank one
+    // over the system's atoms: over undecided atoms, both may be too high.
+    // (A rank deficit at a point is only probabilistic, and a formal
+    // dependence is a true one: "not independent" needs no atom.)
     let (indep, _) = gradient_rank(nf, &g, seed)?;
+    let own = crate::decided::undecided_atoms_of_forms(nf, &g);
+    let atoms = crate::decided::undecided_atoms_of(nf, &g);
     checks.push(Check {
         name: format!("the {} new variables are independent", g.len()),
         pass: indep == g.len(),
@@ -328,7 +338,7 @@ pub fn verify_decomposition_with(
         } else {
             format!("their gradients have rank {indep}")
         },
-        undecided: Vec::new(),
+        undecided: if indep == g.len() { own } else { Vec::new() },
     });
     checks.push(Check {
         name: format!("they are complete (rank of the system is {})", report.rank),
@@ -338,7 +348,7 @@ pub fn verify_decomposition_with(
         } else {
             format!("{indep} independent variables for rank {}", report.rank)
         },
-        undecided: Vec::new(),
+        undecided: atoms,
     });
     // 4. Dynamics: L_{f_i} g_k equals the claimed coefficient of u_i, for every field.
     let input_vars = nf.input_vars.clone();

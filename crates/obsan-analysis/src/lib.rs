@@ -19,6 +19,7 @@ mod along;
 mod along_linalg;
 mod along_report;
 mod along_sym;
+mod decided;
 mod decomp;
 mod derive;
 mod design;
@@ -43,6 +44,7 @@ pub use along::{
 };
 pub use along_report::{along, AlongReport, AlongStretch, DatasetRank};
 pub use along_sym::{InputSpan, SymmetryMatch, INPUT_REL_TOL};
+pub use decided::undecided_atoms_of;
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,

@@ -29,6 +29,20 @@ pub struct ModeReport {
     /// As many independent accepted modes as the rank of the system.
     pub complete: bool,
     pub rank: usize,
+    /// Atoms of the system and of the accepted modes the engine cannot prove
+    /// independent ([`crate::undecided_atoms_of`]). Not empty: the residuals
+    /// that are zero still prove eq. (11) for the symmetries given, but
+    /// `independent` and `complete` rest on nonzero forms over these atoms
+    /// (a minor, the rank) and are not proven; nor is a failure whose every
+    /// nonzero residual holds only such atoms.
+    pub undecided: Vec<String>,
+}
+
+impl ModeReport {
+    /// `independent` and `complete` are proven (no undecided atom).
+    pub fn decided(&self) -> bool {
+        self.undecided.is_empty()
+    }
 }
 
 /// Rank of the gradients of `fs` at a random point (a lower bound, equal to
@@ -126,7 +140,9 @@ pub fn check_modes(
         .collect();
     let (independent_count, dependence_error) = gradient_rank(nf, &accepted, seed)?;
     let independent = independent_count == accepted.len();
+    let undecided = crate::decided::undecided_atoms_of(nf, &accepted);
     Ok(ModeReport {
+        undecided,
         complete: independent && accepted.len() == sym.rank,
         independent,
         independent_count,

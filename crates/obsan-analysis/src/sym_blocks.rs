@@ -406,6 +406,7 @@ pub(crate) fn symmetries_by_blocks(
         certificate,
         blocks: sp.blocks.len(),
         free: Vec::new(),
+        undecided: Vec::new(),
     }))
 }
 

@@ -31,6 +31,14 @@ pub struct SymmetryReport {
     /// Independent blocks solved apart (`sym_blocks.rs`); 1 when the
     /// system was solved whole.
     pub blocks: usize,
+    /// Atoms of the system the engine cannot prove independent
+    /// ([`crate::undecided_atoms_of`]). Empty: everything above is certified
+    /// as `certificate` says. Not empty: each vector still annihilates the
+    /// codistribution (zero forms) where its components are defined, but the
+    /// rank's minor and the pivots are nonzero forms over these atoms, so
+    /// neither the count ("no more symmetries") nor the vectors'
+    /// independence is proven: the true rank may be lower.
+    pub undecided: Vec<String>,
 }
 
 /// How a symmetry basis was proved.
@@ -75,6 +83,12 @@ impl SymmetryReport {
     /// The number of independent symmetries: `vectors` and `free`.
     pub fn count(&self) -> usize {
         self.vectors.len() + self.free.len()
+    }
+
+    /// The count and the independence of the symmetries are proven (no
+    /// undecided atom); the annihilation of each vector is proven either way.
+    pub fn decided(&self) -> bool {
+        self.undecided.is_empty()
     }
 }
 

@@ -294,7 +294,11 @@ pub fn symmetries_with(
     report: &RankReport,
     opts: &SymmetryOptions,
 ) -> Result<SymmetryReport, AnalysisError> {
-    symmetries_inner(nf, report, opts, true)
+    let mut s = symmetries_inner(nf, report, opts, true)?;
+    // The rank and the pivots are nonzero forms over the system's atoms:
+    // certified only when those are proven independent.
+    s.undecided = crate::decided::undecided_atoms_of(nf, &[]);
+    Ok(s)
 }
 
 /// [`symmetries_with`]; `by_blocks`: first try solving independent blocks
@@ -319,6 +323,7 @@ pub(crate) fn symmetries_inner(
             certificate: Certificate::Closure,
             blocks: 1,
             free: Vec::new(),
+            undecided: Vec::new(),
         });
     }
     // Variables no output reaches: each is its own symmetry d/dx; the rest
@@ -354,6 +359,7 @@ pub(crate) fn symmetries_inner(
             certificate: Certificate::Invariance(c.kinds),
             blocks: 1,
             free: Vec::new(),
+            undecided: Vec::new(),
         });
     }
     let recon = match opts.route {
@@ -379,6 +385,7 @@ pub(crate) fn symmetries_inner(
                         certificate: Certificate::Random(c),
                         blocks: 1,
                         free: Vec::new(),
+                        undecided: Vec::new(),
                     }),
                     None => Err(AnalysisError::Invalid(
                         "the reconstructed symmetries failed certification (a coefficient too large for one prime, or an unlucky rank test); try --exact or another --seed".into(),
@@ -485,6 +492,7 @@ fn symmetries_reached(
         certificate,
         blocks: s.blocks,
         free: unreached,
+        undecided: Vec::new(),
     })
 }
 
@@ -600,6 +608,7 @@ fn exact_route(nf: &mut NormalForm, report: &RankReport) -> Result<SymmetryRepor
         certificate: Certificate::Closure,
         blocks: 1,
         free: Vec::new(),
+        undecided: Vec::new(),
     })
 }
 

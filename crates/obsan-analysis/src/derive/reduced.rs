@@ -26,14 +26,19 @@ impl Derivation {
     /// where both are regular), the rank is exactly r, and every symmetry
     /// `w` (Definition 2: `w` annihilates the codistribution) satisfies
     /// `sum_i w_i dg_k/dS_i = 0`, eq. (11): the `g_k` are a complete set of
-    /// observable modes. No probability enters.
+    /// observable modes. No probability enters. Both minors are nonzero
+    /// forms: they prove only when the atoms of the system and the modes are
+    /// decided (`mode_report.undecided` empty, and no check undecided);
+    /// otherwise the substitutions still prove that every output and field
+    /// is written in the modes (a valid reduction), not that it is minimal.
     pub fn closure_proves(&self, checks: &[Check]) -> bool {
         self.closed()
             && !checks.is_empty()
-            && checks.iter().all(|c| c.pass)
+            && checks.iter().all(|c| c.pass && c.undecided.is_empty())
             && self.modes.len() == self.rank
             && self.mode_report.independent
             && self.mode_report.independent_count == self.rank
+            && self.mode_report.decided()
     }
 
     /// What could not be written in the modes.
