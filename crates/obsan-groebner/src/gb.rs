@@ -148,11 +148,11 @@ impl Work<'_> {
         let hm = lh.mask();
         let old = std::mem::take(&mut self.pairs);
         for p in old {
-            let keep = !(hm & !p.mask == 0
+            let dropped = hm & !p.mask == 0
                 && lh.divides(&p.lcm)
                 && !lh.lcm_is(&self.lm[p.i], &p.lcm)
-                && !lh.lcm_is(&self.lm[p.j], &p.lcm));
-            if keep {
+                && !lh.lcm_is(&self.lm[p.j], &p.lcm);
+            if !dropped {
                 self.pairs.push(p);
             }
         }
