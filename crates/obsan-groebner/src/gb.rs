@@ -43,6 +43,8 @@ pub(crate) struct Pair {
     pub(crate) i: usize,
     pub(crate) j: usize,
     pub(crate) lcm: Mono,
+    /// `lcm.mask()`: screens the divisibility tests of the update.
+    pub(crate) mask: u64,
     pub(crate) sugar: u32,
 }
 
@@ -122,27 +124,35 @@ impl Work<'_> {
             c.push(Pair {
                 i: g,
                 j: hi,
+                mask: lcm.mask(),
                 lcm,
                 sugar: s,
             });
         }
         // Criterion M/F: drop (h, g) if another new pair's lcm divides its lcm
         // (keeping coprime ones for the product criterion below).
+        // This is quadratic in the basis size, so a divisor-mask test (a
+        // necessary condition) screens each comparison before `divides`.
         let mut d: Vec<Pair> = Vec::new();
         while let Some(p) = c.pop() {
             let coprime = lh.coprime(&self.lm[p.i]);
-            let dominated = c.iter().chain(d.iter()).any(|q| q.lcm.divides(&p.lcm));
+            let dominated = c
+                .iter()
+                .chain(d.iter())
+                .any(|q| q.mask & !p.mask == 0 && q.lcm.divides(&p.lcm));
             if coprime || !dominated {
                 d.push(p);
             }
         }
-        // Criterion B on old pairs.
+        // Criterion B on old pairs (the lcm tests build no monomial).
+        let hm = lh.mask();
         let old = std::mem::take(&mut self.pairs);
         for p in old {
-            let keep = !(lh.divides(&p.lcm)
-                && lh.lcm(&self.lm[p.i]) != p.lcm
-                && lh.lcm(&self.lm[p.j]) != p.lcm);
-            if keep {
+            let dropped = hm & !p.mask == 0
+                && lh.divides(&p.lcm)
+                && !lh.lcm_is(&self.lm[p.i], &p.lcm)
+                && !lh.lcm_is(&self.lm[p.j], &p.lcm);
+            if !dropped {
                 self.pairs.push(p);
             }
         }

@@ -94,6 +94,16 @@ impl Mono {
         }
     }
 
+    /// Whether `lcm(self, o) == l`, without building the lcm (the
+    /// Gebauer–Möller update asks this for every old pair).
+    pub(crate) fn lcm_is(&self, o: &Mono, l: &Mono) -> bool {
+        self.e
+            .iter()
+            .zip(o.e.iter())
+            .zip(l.e.iter())
+            .all(|((a, b), c)| *a.max(b) == *c)
+    }
+
     /// A 64-bit summary of the variables present (variable `v` sets bit
     /// `v mod 64`): `a | b` needs `mask(a) & !mask(b) == 0`, a cheap
     /// rejection before [`Mono::divides`].
@@ -456,4 +466,24 @@ impl Ring {
 fn unreachable_degree() -> Poly {
     // add/sub multiply by the monomial 1, which never raises a degree.
     Poly::zero()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Mono;
+
+    fn m(e: &[u32]) -> Mono {
+        Mono::from_exponents(e.to_vec()).unwrap()
+    }
+
+    /// By hand: lcm(x^2 y, y^3 z) = x^2 y^3 z; neither x^2 y^2 z nor
+    /// x^2 y^3 z^2 is that lcm, though the second is a common multiple.
+    #[test]
+    fn lcm_is_matches_the_exponentwise_maximum() {
+        let (a, b) = (m(&[2, 1, 0]), m(&[0, 3, 1]));
+        assert!(a.lcm_is(&b, &m(&[2, 3, 1])));
+        assert!(!a.lcm_is(&b, &m(&[2, 2, 1])));
+        assert!(!a.lcm_is(&b, &m(&[2, 3, 2])));
+        assert_eq!(a.lcm(&b), m(&[2, 3, 1]));
+    }
 }
