@@ -40,6 +40,7 @@ mod montecarlo_cmd;
 mod progress;
 mod show;
 mod simulate;
+mod simulate_sys;
 mod unknown_input_cmd;
 
 use clap::Parser;
