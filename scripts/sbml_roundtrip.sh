@@ -59,6 +59,13 @@ def species_info(xml):
     return out
 
 
+def rows(path):
+    """A CSV as dicts, the header names stripped (some results files put spaces after commas)."""
+    r = list(csv.reader(open(path)))
+    head = [h.strip() for h in r[0]]
+    return [dict(zip(head, (x.strip() for x in row))) for row in r[1:] if row]
+
+
 def run(args):
     return subprocess.run([obsan] + args, capture_output=True, text=True)
 
@@ -99,18 +106,22 @@ with tempfile.TemporaryDirectory() as tmp:
             reasons["simulate: " + reason(r.stderr)] += 1
             continue
         tally["simulated"] += 1
-        got = list(csv.DictReader(open(out_f)))
-        want = list(csv.DictReader(open(os.path.join(d, f"{case}-results.csv"))))
+        got = rows(out_f)
+        want = rows(os.path.join(d, f"{case}-results.csv"))
         values = {}
         for line in open(val_f):
             k, v = line.split("=")
             values[k.strip()] = float(v)
         info = species_info(xml)
+        # Constant in time: the .sys params (an assignment-rule variable also has a value in the
+        # file, its initial one, but it varies: not compared).
+        params = {n.strip() for line in open(sys_f) if line.startswith("param ")
+                  for n in line[len("param "):].split(",")}
         amount, atol, rtol = names(st.get("amount", "")), float(st["absolute"]), float(st["relative"])
         ok, missing = True, None
         for v in names(st["variables"]):
             col = v if v in got[0] else v + "_" if v + "_" in got[0] else None
-            const = values.get(v, values.get(v + "_"))
+            const = next((values[n] for n in (v, v + "_") if n in params and n in values), None)
             if col is None and const is None:
                 missing = v
                 break

@@ -54,7 +54,11 @@ pub fn sbml_values(text: &str) -> Result<Vec<(String, f64)>, ImportError> {
     let mut sizes = BTreeMap::new();
     for c in list(model, "listOfCompartments", "compartment") {
         if let (Some(id), Some(v)) = (c.attribute("id"), num(c, "size")) {
-            sizes.insert(id.to_string(), v);
+            // A size an initial assignment replaces is stale: a species
+            // amount is not divided by it (its concentration is left out).
+            if !set_later.contains(&id) {
+                sizes.insert(id.to_string(), v);
+            }
             out.insert(id.to_string(), v);
         }
     }
