@@ -149,12 +149,13 @@ Exit 1 when the reduced system could not be closed or a check failed.")]
   obsan simulate --out data/sim                              # section VI-A, q = 0.9, 0, -1
   obsan simulate --out data/sim2 --q 0.5,-0.5 --seed 7 --effect bearing_scale=0.04
   obsan simulate --out data/sine --speed-profile sine:0.5:60
-  obsan simulate m.sys --values m.values --until 10 --every 0.1 --out m.csv
-  obsan simulate m.sys --set k=0.5 --init x=1 --input u=0 --until 5 --every 1 --json
+  obsan simulate systems/classic/lotka_volterra.sys --set a=1 --set b=0.5 --set c=1 --set d=0.2 --init x=4 --init y=2 --until 5 --every 1 --json
+  obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=1 --init x2=0 --input u=0 --until 10 --every 0.5 --out data/two.csv
 
 Without MODEL: writes dataset.json, one folder per trajectory (inputs.csv, outputs.csv,
 meta.json) and truth.json; --force replaces only a folder obsan wrote.
-With MODEL: prints (or writes to --out FILE.csv) the CSV time,<states>,<outputs> at
+With MODEL (values from --values FILE, as import sbml --values writes, and the flags over it):
+prints (or writes to --out FILE.csv) the CSV time,<states>,<outputs> at
 0, DT, 2 DT, ... up to T (at most 1000000 rows), integrated by RK4 with step doubling
 until the estimated error of every value is within 1e-9 (|value| + 1).
 --json prints {model, columns, rows, steps, error_estimate, tolerance}.")]
