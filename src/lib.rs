@@ -42,6 +42,7 @@ mod montecarlo_cmd;
 mod progress;
 mod show;
 mod simulate;
+mod simulate_sys;
 mod unknown_input_cmd;
 
 use clap::Parser;

@@ -134,13 +134,24 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
 }
 
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
+    if let Some(model) = &a.model {
+        return crate::simulate_sys::run(model, a);
+    }
+    let out = a.out.as_deref().unwrap_or_default();
+    if a.sys.until.is_some()
+        || !(a.sys.set.is_empty() && a.sys.init.is_empty() && a.sys.input.is_empty())
+    {
+        return Err(Failure(
+            "--until, --every, --set, --init and --input need a MODEL.sys".into(),
+        ));
+    }
     let reads: Vec<&str> = a.sim.inputs.iter().map(String::as_str).collect();
-    crate::fsio::check_outside(&a.out, &reads)?;
+    crate::fsio::check_outside(out, &reads)?;
     let o = sim_options(&a.sim)?;
     let (data, truth) = simulate(&o).map_err(Failure::from)?;
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;
-    write_folder_atomically(&a.out, a.force, &reads, &files)?;
+    write_folder_atomically(out, a.force, &reads, &files)?;
     let summary: Vec<String> = data
         .trajectories
         .iter()
@@ -153,6 +164,6 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
             )
         })
         .collect();
-    eprintln!("wrote {}: {}", a.out, summary.join(", "));
+    eprintln!("wrote {}: {}", out, summary.join(", "));
     Ok(ExitCode::SUCCESS)
 }

@@ -44,6 +44,7 @@ from ._results import (
     Rank,
     RankAlong,
     Result,
+    Simulation,
     Symmetries,
     SystemInfo,
     Verification,
@@ -62,6 +63,7 @@ __all__ = [
     "crlb",
     "diagnose",
     "simulate",
+    "simulate_model",
     "montecarlo",
     "montecarlo_merge",
     "verify",
@@ -89,6 +91,7 @@ __all__ = [
     "NamedEffect",
     "MonteCarloTable",
     "Estimate",
+    "Simulation",
     "NUMPY",
     "PROGRESS",
     "__version__",
@@ -525,6 +528,33 @@ def simulate(
     f = _sim(f, q, sigma_beta_deg, k, iota, dq, nu, speed_profile, bearing_rate, bearings, d0, effect, inputs, seed)
     run(*f.number("--timeout", timeout).argv)
     return o
+
+
+def simulate_model(
+    model: PathLike,
+    *,
+    until: Number,
+    every: Number,
+    values: Optional[PathLike] = None,
+    set: Settings = None,
+    init: Settings = None,
+    inputs: Settings = None,
+    out: Optional[PathLike] = None,
+    force: bool = False,
+    timeout: Optional[float] = None,
+) -> Simulation:
+    """``obsan simulate MODEL.sys``: integrate any model from ``values`` (a file of
+    ``name = value`` lines, as ``obsan import sbml --values`` writes), ``set`` params,
+    ``init`` initial states and constant ``inputs`` (``{"u": 0.2}``), at times 0,
+    ``every``, ... up to ``until``; ``out`` also writes the CSV. A missing value raises
+    :class:`ObsanError` naming it."""
+    f = Flags("simulate", existing("simulate_model: model", model))
+    if values is not None:
+        f = f.text("--values", existing("simulate_model: values", values))
+    f = f.pairs("--set", set).pairs("--init", init).pairs("--input", inputs)
+    f = f.number("--until", until).number("--every", every)
+    f = f.path("--out", out).switch("--force", force).number("--timeout", timeout)
+    return Simulation.of(_value(f))
 
 
 def calibrate(

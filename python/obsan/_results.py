@@ -489,6 +489,38 @@ class Verification(Result):
         )
 
 
+@dataclass(frozen=True, repr=False, eq=False)
+class Simulation(Result):
+    """``obsan simulate MODEL.sys``: the states and outputs at evenly spaced times.
+    ``columns`` starts with ``time``; ``rows`` holds one list of values per time (an
+    array when numpy is installed); ``error_estimate`` is within ``tolerance`` (relative
+    to ``|value| + 1``)."""
+
+    model: str
+    columns: List[str]
+    rows: Any
+    steps: int
+    error_estimate: float
+    tolerance: float
+
+    @classmethod
+    def of(cls, raw: Dict[str, Any]) -> "Simulation":
+        return cls(
+            raw=raw,
+            model=str(raw.get("model", "")),
+            columns=[str(c) for c in raw.get("columns") or []],
+            rows=arrays(raw.get("rows") or []),
+            steps=int(raw.get("steps", 0)),
+            error_estimate=float(raw.get("error_estimate", 0.0)),
+            tolerance=float(raw.get("tolerance", 0.0)),
+        )
+
+    def column(self, name: str) -> List[float]:
+        """The values of one column (``time``, a state or an output), in time order."""
+        i = self.columns.index(name)
+        return [float(r[i]) for r in self.raw.get("rows") or []]
+
+
 _UNIT = re.compile(r"^(.*?) \((.*)\)$")
 
 

@@ -1,5 +1,5 @@
 //! The numbers an SBML file gives, named as `sbml_to_sys` writes the `.sys`
-//! model: global parameter values, compartment sizes, and each species'
+//! model: global and kinetic-law parameter values, compartment sizes, and each species'
 //! initial value as its state is written (a concentration, amount / size,
 //! unless `hasOnlySubstanceUnits`, then an amount, concentration * size).
 //! Initial assignments are not evaluated here: an id they set is left out,
@@ -54,13 +54,35 @@ pub fn sbml_values(text: &str) -> Result<Vec<(String, f64)>, ImportError> {
     let mut sizes = BTreeMap::new();
     for c in list(model, "listOfCompartments", "compartment") {
         if let (Some(id), Some(v)) = (c.attribute("id"), num(c, "size")) {
-            sizes.insert(id.to_string(), v);
+            // A size an initial assignment replaces is stale: a species
+            // amount is not divided by it (its concentration is left out).
+            if !set_later.contains(&id) {
+                sizes.insert(id.to_string(), v);
+            }
             out.insert(id.to_string(), v);
         }
     }
     for p in list(model, "listOfParameters", "parameter") {
         if let (Some(id), Some(v)) = (p.attribute("id"), num(p, "value")) {
             out.insert(id.to_string(), v);
+        }
+    }
+    // Kinetic-law parameters, named `REACTION_ID` as the `.sys` names them.
+    for r in list(model, "listOfReactions", "reaction") {
+        let (Some(rid), Some(law)) = (
+            r.attribute("id"),
+            r.children()
+                .find(|c| c.is_element() && c.tag_name().name() == "kineticLaw"),
+        ) else {
+            continue;
+        };
+        for lp in list(law, "listOfParameters", "parameter")
+            .into_iter()
+            .chain(list(law, "listOfLocalParameters", "localParameter"))
+        {
+            if let (Some(id), Some(v)) = (lp.attribute("id"), num(lp, "value")) {
+                out.insert(format!("{rid}_{id}"), v);
+            }
         }
     }
     for s in list(model, "listOfSpecies", "species") {

@@ -253,3 +253,44 @@ fn values_of_unreadable_xml_are_a_located_error() {
     let e = sbml_values("<sbml>\n<model>\n</sbml>").unwrap_err();
     assert_eq!(e.line, 3, "{e:?}");
 }
+
+#[test]
+fn values_name_kinetic_law_parameters_as_the_sys_does() {
+    // Reaction r1's local k (value 0.4) is the `.sys` param r1_k; the global k keeps 2.
+    let text = r#"<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+<model id="m">
+  <listOfCompartments><compartment id="c" size="1" constant="true"/></listOfCompartments>
+  <listOfSpecies><species id="S" compartment="c" initialConcentration="1" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/></listOfSpecies>
+  <listOfParameters><parameter id="k" value="2" constant="true"/></listOfParameters>
+  <listOfReactions><reaction id="r1" reversible="false">
+    <listOfReactants><speciesReference species="S" stoichiometry="1" constant="true"/></listOfReactants>
+    <kineticLaw><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><ci>k</ci><ci>S</ci></apply></math>
+      <listOfLocalParameters><localParameter id="k" value="0.4"/></listOfLocalParameters>
+    </kineticLaw>
+  </reaction></listOfReactions>
+</model>
+</sbml>"#;
+    let got = sbml_values(text).unwrap();
+    let want: Vec<(String, f64)> = [("S", 1.0), ("c", 1.0), ("k", 2.0), ("r1_k", 0.4)]
+        .iter()
+        .map(|(n, v)| (n.to_string(), *v))
+        .collect();
+    assert_eq!(got, want);
+    let sys = sbml_to_sys(text, "m.xml", &[]).unwrap().sys_text;
+    assert!(sys.contains("r1_k"), "{sys}");
+}
+
+#[test]
+fn values_leave_out_a_concentration_over_an_assigned_size() {
+    // c's size 1 is replaced by the initial assignment c = 2 p: A's amount 3 has no
+    // concentration from the file's numbers alone, so neither c nor A is given.
+    let text = r#"<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+<model id="m">
+  <listOfCompartments><compartment id="c" size="1" constant="true"/></listOfCompartments>
+  <listOfSpecies><species id="A" compartment="c" initialAmount="3" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/></listOfSpecies>
+  <listOfParameters><parameter id="p" value="0.5" constant="true"/></listOfParameters>
+  <listOfInitialAssignments><initialAssignment symbol="c"><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><cn>2</cn><ci>p</ci></apply></math></initialAssignment></listOfInitialAssignments>
+</model>
+</sbml>"#;
+    assert_eq!(sbml_values(text).unwrap(), vec![("p".to_string(), 0.5)]);
+}

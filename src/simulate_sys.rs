@@ -1,0 +1,361 @@
+//! `obsan simulate MODEL.sys`: any model integrated from given values
+//! (params, initial states, constant inputs) with obsan-fit's integrator, the
+//! states and outputs printed as a CSV at evenly spaced times.
+
+use crate::cli::SimulateArgs;
+use crate::Failure;
+use obsan_data::Series;
+use obsan_fit::{FitError, Predictor};
+use obsan_model::System;
+use serde_json::json;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::ExitCode;
+
+/// The most output rows (`--until` / `--every` + 1): refused, never cut.
+pub const MAX_ROWS: usize = 1_000_000;
+/// The most RK4 steps of one integration (all doublings together stay
+/// under twice this).
+pub const MAX_STEPS: usize = 20_000_000;
+/// Every printed value `v` has an estimated error within `TOLERANCE (|v| + 1)`:
+/// the steps are halved until two runs differ by at most 15 times this, since
+/// RK4's error falls by 2^4 = 16 when its step is halved (Richardson: the
+/// finer run's error is the difference / 15).
+pub const TOLERANCE: f64 = 1e-9;
+/// Steps per output interval of the first run.
+const FIRST_STEPS: usize = 4;
+
+/// `NAME=VALUE` of `flag`, the value finite.
+fn assignment(flag: &str, s: &str) -> Result<(String, f64), Failure> {
+    let Some((n, v)) = s.split_once('=') else {
+        return Err(Failure(format!("{flag} {s}: expected NAME=VALUE")));
+    };
+    let v: f64 = v
+        .trim()
+        .parse()
+        .ok()
+        .filter(|x: &f64| x.is_finite())
+        .ok_or_else(|| Failure(format!("{flag} {s}: the value must be a finite number")))?;
+    Ok((n.trim().to_string(), v))
+}
+
+/// A values file: `name = value` a line; `#` starts a comment.
+fn read_values(path: &str) -> Result<BTreeMap<String, f64>, Failure> {
+    let text = crate::fsio::read_text(path)?;
+    let mut out = BTreeMap::new();
+    for (i, line) in text.lines().enumerate() {
+        let body = line.split('#').next().unwrap_or_default();
+        if body.trim().is_empty() {
+            continue;
+        }
+        let col = body.len() - body.trim_start().len() + 1;
+        let at = |m: &str| Failure(format!("{path}:{}:{col}: {m}", i + 1));
+        let Some((n, v)) = body.split_once('=') else {
+            return Err(at("expected `name = value`"));
+        };
+        let v: f64 = v
+            .trim()
+            .parse()
+            .ok()
+            .filter(|x: &f64| x.is_finite())
+            .ok_or_else(|| {
+                at(&format!(
+                    "the value of '{}' is not a finite number",
+                    n.trim()
+                ))
+            })?;
+        out.insert(n.trim().to_string(), v);
+    }
+    Ok(out)
+}
+
+/// The start of the integration: the whole state (dynamic states, then
+/// params), the known constants and the constant inputs, in model order.
+struct Start {
+    x0: Vec<f64>,
+    consts: Vec<f64>,
+    inputs: Vec<f64>,
+}
+
+fn start(p: &Predictor, a: &SimulateArgs) -> Result<Start, Failure> {
+    let f = &a.sys;
+    let file = match &f.values {
+        Some(path) => read_values(path)?,
+        None => BTreeMap::new(),
+    };
+    let nd = p.n_dynamic;
+    let (states, params) = p.state.split_at(nd);
+    let mut given = file.clone();
+    let settable: Vec<&String> = params.iter().chain(&p.consts).collect();
+    for (flag, list, names) in [
+        ("--set", &f.set, settable),
+        ("--init", &f.init, states.iter().collect()),
+    ] {
+        for s in list {
+            let (n, v) = assignment(flag, s)?;
+            if !names.contains(&&n) {
+                let what = if flag == "--set" {
+                    "param or constant"
+                } else {
+                    "state"
+                };
+                return Err(Failure(format!(
+                    "{flag} {s}: the model has no {what} '{n}'"
+                )));
+            }
+            given.insert(n, v);
+        }
+    }
+    let mut inputs = BTreeMap::new();
+    for s in &f.input {
+        let (n, v) = assignment("--input", s)?;
+        if !p.inputs.contains(&n) {
+            return Err(Failure(format!(
+                "--input {s}: the model has no input '{n}'"
+            )));
+        }
+        inputs.insert(n, v);
+    }
+    let mut missing = Vec::new();
+    let mut take = |kind: &str, names: &[String], from: &BTreeMap<String, f64>| -> Vec<f64> {
+        names
+            .iter()
+            .map(|n| {
+                from.get(n).copied().unwrap_or_else(|| {
+                    missing.push(format!("{kind} {n}"));
+                    0.0
+                })
+            })
+            .collect()
+    };
+    let mut x0 = take("init", states, &given);
+    x0.extend(take("param", params, &given));
+    let consts = take("constant", &p.consts, &given);
+    let inputs = take("input", &p.inputs, &inputs);
+    if !missing.is_empty() {
+        return Err(Failure(format!(
+            "missing values: {} (give them with --values FILE, --init NAME=V, --set NAME=V, --input NAME=V)",
+            missing.join(", ")
+        )));
+    }
+    Ok(Start { x0, consts, inputs })
+}
+
+/// The model with every dynamic state also an output (first), so that the
+/// predictor reports them.
+fn predictor(model: &str) -> Result<Predictor, Failure> {
+    let text = crate::fsio::read_text(model)?;
+    let sys = System::parse(&text, model).map_err(|e| Failure(e.to_string()))?;
+    let mut nf = sys
+        .normal_form(None, &[])
+        .map_err(|e| Failure(format!("{model}: {e}")))?;
+    if let Some(w) = nf.unknown_inputs.first() {
+        return Err(Failure(format!(
+            "{model}: unknown input '{w}' has no value to simulate with"
+        )));
+    }
+    let mut outs = Vec::with_capacity(nf.n_dynamic + nf.outputs.len());
+    for k in 0..nf.n_dynamic {
+        let s = nf
+            .ctx
+            .lookup(&nf.state[k])
+            .filter(|s| s.var == nf.state_vars[k])
+            .ok_or_else(|| Failure(format!("{model}: state '{}' not found", nf.state[k])))?;
+        outs.push((nf.state[k].clone(), s.id));
+    }
+    outs.append(&mut nf.outputs);
+    nf.outputs = outs;
+    Ok(Predictor::new(&nf))
+}
+
+/// States and outputs at `times`, at least `n_sub` RK4 steps per output
+/// interval (more where the integrator finds the dynamics faster than the
+/// steps; it also splits steps itself where they are stiff), and the steps
+/// taken. Each interval starts from the state the previous one ended at.
+fn integrate(
+    p: &Predictor,
+    s: &Start,
+    times: &[f64],
+    n_sub: usize,
+) -> Result<(Vec<Vec<f64>>, usize), Failure> {
+    let nd = p.n_dynamic;
+    let mut x = s.x0.clone();
+    let row: Vec<Option<f64>> = s.inputs.iter().map(|&u| Some(u)).collect();
+    let first = p
+        .predict(
+            &x,
+            &s.consts,
+            &constant(p, &row, times[0], times[0], 1),
+            &times[..1],
+        )
+        .map_err(Failure::from)?;
+    let mut rows = first;
+    let mut steps = 0;
+    for w in times.windows(2) {
+        let mut n = n_sub;
+        let y = loop {
+            let ins = constant(p, &row, w[0], w[1], n);
+            match p.predict(&x, &s.consts, &ins, &w[1..]) {
+                Err(FitError::TooStiff {
+                    time_scale,
+                    spacing,
+                }) if time_scale > 0.0 && steps + 2 * n <= MAX_STEPS => {
+                    // Steps within the time scale the integrator measured.
+                    n = ((n as f64 * spacing / time_scale).ceil() as usize).max(2 * n);
+                }
+                r => break r.map_err(Failure::from)?,
+            }
+        };
+        steps += n;
+        if steps > MAX_STEPS {
+            return Err(too_many_steps());
+        }
+        let y = y.into_iter().next().unwrap_or_default();
+        x[..nd].copy_from_slice(&y[..nd]);
+        rows.push(y);
+    }
+    Ok((rows, steps))
+}
+
+fn too_many_steps() -> Failure {
+    Failure(format!(
+        "the estimated error did not fall within {TOLERANCE:e} (|value| + 1) in {MAX_STEPS} \
+         RK4 steps (obsan's limit): the model may be stiff or blow up; try a shorter --until"
+    ))
+}
+
+/// Constant inputs on `n` rows evenly spread over `[t0, t1)`: one RK4 step each.
+fn constant(p: &Predictor, row: &[Option<f64>], t0: f64, t1: f64, n: usize) -> Series {
+    let mut s = Series::new(p.inputs.clone());
+    let h = (t1 - t0) / n as f64;
+    for j in 0..n {
+        s.push(t0 + j as f64 * h, row);
+    }
+    s
+}
+
+/// The largest `|a - b| / (|b| + 1)` over every value.
+fn spread(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
+    a.iter()
+        .flatten()
+        .zip(b.iter().flatten())
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs() / (y.abs() + 1.0)))
+}
+
+/// Halve the steps until the Richardson estimate meets [`TOLERANCE`].
+/// Returns the rows, the RK4 steps of the run printed and the estimated error.
+fn converge(
+    p: &Predictor,
+    s: &Start,
+    times: &[f64],
+) -> Result<(Vec<Vec<f64>>, usize, f64), Failure> {
+    let intervals = times.len().saturating_sub(1);
+    if intervals == 0 {
+        return Ok((integrate(p, s, times, 1)?.0, 0, 0.0));
+    }
+    let mut n_sub = FIRST_STEPS;
+    let mut coarse = integrate(p, s, times, n_sub)?.0;
+    loop {
+        if 2 * n_sub * intervals > MAX_STEPS {
+            return Err(too_many_steps());
+        }
+        n_sub *= 2;
+        let (fine, steps) = integrate(p, s, times, n_sub)?;
+        let err = spread(&coarse, &fine) / 15.0;
+        if err <= TOLERANCE {
+            return Ok((fine, steps, err));
+        }
+        coarse = fine;
+    }
+}
+
+/// The output times 0, DT, 2 DT, ... up to T.
+fn times(until: f64, every: f64) -> Result<Vec<f64>, Failure> {
+    if !(until.is_finite() && until >= 0.0 && every.is_finite() && every > 0.0) {
+        return Err(Failure(
+            "--until must be a finite number >= 0 and --every one > 0".into(),
+        ));
+    }
+    let n = (until / every * (1.0 + 1e-12)).floor() + 1.0;
+    if n > MAX_ROWS as f64 {
+        return Err(Failure(format!(
+            "--until {until} --every {every} asks for {n} rows: at most {MAX_ROWS} (obsan's limit)"
+        )));
+    }
+    Ok((0..n as usize).map(|k| k as f64 * every).collect())
+}
+
+fn csv(columns: &[String], times: &[f64], rows: &[Vec<f64>]) -> String {
+    let mut s = columns.join(",") + "\n";
+    for (t, r) in times.iter().zip(rows) {
+        s += &format!("{t:?}");
+        for v in r {
+            s += &format!(",{v:?}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+pub fn run(model: &str, a: &SimulateArgs) -> Result<ExitCode, Failure> {
+    let (Some(until), Some(every)) = (a.sys.until, a.sys.every) else {
+        return Err(Failure(
+            "obsan simulate MODEL.sys needs --until T and --every DT".into(),
+        ));
+    };
+    let p = predictor(model)?;
+    let s = start(&p, a)?;
+    let times = times(until, every)?;
+    let (rows, steps, err) = converge(&p, &s, &times)?;
+    let mut columns = vec!["time".to_string()];
+    columns.extend(p.outputs.iter().cloned());
+    let text = csv(&columns, &times, &rows);
+    if let Some(out) = &a.out {
+        let mut reads = vec![model];
+        reads.extend(a.sys.values.as_deref());
+        crate::fsio::check_outside(out, &reads)?;
+        write_whole(out, &text, a.force)?;
+    }
+    if a.sys.json {
+        let rows: Vec<Vec<f64>> = times
+            .iter()
+            .zip(&rows)
+            .map(|(t, r)| std::iter::once(*t).chain(r.iter().copied()).collect())
+            .collect();
+        let v = json!({
+            "model": model,
+            "columns": columns,
+            "rows": rows,
+            "steps": steps,
+            "error_estimate": err,
+            "tolerance": TOLERANCE,
+        });
+        outln!("{}", serde_json::to_string_pretty(&v)?);
+    } else if a.out.is_none() {
+        out!("{text}");
+    } else {
+        eprintln!(
+            "wrote {} rows ({} RK4 steps, estimated error {err:.1e})",
+            times.len(),
+            steps
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Write `text` to `out` whole (a sibling temporary file renamed into place).
+fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
+    let p = Path::new(out);
+    if p.exists() && !force {
+        return Err(Failure(format!("{out} exists (--force replaces it)")));
+    }
+    if p.is_dir() {
+        return Err(Failure(format!("{out} is a folder")));
+    }
+    let tmp = format!("{out}.tmp-{}", std::process::id());
+    std::fs::write(&tmp, text).map_err(|e| Failure(format!("cannot write {tmp}: {e}")))?;
+    std::fs::rename(&tmp, out).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Failure(format!("cannot write {out}: {e}"))
+    })
+}
