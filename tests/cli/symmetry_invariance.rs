@@ -421,10 +421,11 @@ fn numeric_rank(m: &mut [Vec<f64>]) -> usize {
             continue;
         }
         m.swap(rank, p);
-        for r in rank + 1..m.len() {
-            let t = m[r][c] / m[rank][c];
-            for k in c..cols {
-                m[r][k] -= t * m[rank][k];
+        let pivot = m[rank].clone();
+        for row in m.iter_mut().skip(rank + 1) {
+            let t = row[c] / pivot[c];
+            for (x, p) in row[c..].iter_mut().zip(&pivot[c..]) {
+                *x -= t * p;
             }
         }
         rank += 1;
