@@ -218,7 +218,9 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
 extended_sys, sigma, input_noise, lr_critical, lr_critical_generated, generated_dropped,
 screen_threshold, ...};
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
-relation\"), generated candidates their score and screened_out, candidates that rewrite angle
+relation\"), generated candidates their score and screened_out, every candidate moved (its
+fit left its start), joint_levels (weighed at levels estimated with it) and structure (the
+residual tests its fit leaves, [test, z]), candidates that rewrite angle
 outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
 vetoed, ...}, named effects their correlations with the final fit's other params at |r| >= 0.9
 correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two named effects,

@@ -373,7 +373,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             let _ = writeln!(
                 s,
                 "  no candidate explains this structure; not really fitted in the last round: {} \
-                 (failed, not fitted, or LR 0 with the estimate at its start), so the effects \
+                 (failed, not fitted, or its estimate never left its start), so the effects \
                  file is not ruled out",
                 unfitted.join(", ")
             );
@@ -619,14 +619,21 @@ fn rounds_text(d: &Diagnosis, s: &mut String) {
 }
 
 /// The effects file's candidates of the last round that were identifiable
-/// but not really fitted: failed, screened out, or LR exactly 0.
+/// but not really fitted: failed, screened out, or a fit that never moved its
+/// params (LR 0 included).
 fn unfitted_file_candidates(d: &Diagnosis) -> Vec<String> {
     d.rounds
         .last()
         .map(|r| {
             r.iter()
                 .filter(|c| c.origin != obsan_diagnose::ORIGIN_GENERATED)
-                .filter(|c| c.error.is_some() || c.screened_out || (c.identifiable && c.lr == 0.0))
+                // A fit that never moved its params from their start
+                // (`moved`) weighed nothing: the effect is not ruled out.
+                .filter(|c| {
+                    c.error.is_some()
+                        || c.screened_out
+                        || (c.identifiable && (!c.moved || c.lr == 0.0))
+                })
                 .map(|c| c.effect.clone())
                 .collect()
         })

@@ -6,9 +6,11 @@
 use crate::common_mode;
 use crate::error::DiagnoseError;
 use crate::identify::{input_class, stacked_rank, Identifiability, InputClass};
-use crate::model_fit::{class_inputs, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z};
+use crate::model_fit::{
+    class_inputs, estimate_levels, fit_model, prepare, without_outliers, ModelFit, OUTLIER_Z,
+};
 use crate::options::DiagnoseOptions;
-use crate::report::CandidateResult;
+use crate::report::{CandidateResult, MOVED_SD};
 use crate::start::extended_start;
 use crate::stats::chi2_1_p;
 use obsan_data::Dataset;
@@ -258,7 +260,21 @@ pub(crate) fn candidate(
             }
             Some((sw, bw)) => {
                 let base_m2ll = base_fit.m2ll_at(sigma).min(white_m2ll(bw, sw));
-                match (held, fit_under(sw, &[], bw.m2ll())) {
+                let white_side = fit_under(sw, &[], bw.m2ll());
+                // Noise and effect decided jointly: an effect that the
+                // estimated levels absorbed (a distortion read as heading
+                // noise) gains at white noise but loses there to the absorbing
+                // levels, and its fit at those levels does not leave its
+                // start. The levels are estimated again with the effect in
+                // the model, from its white-noise fit, and the candidate is
+                // refitted under them: the profile over the levels of both
+                // sides of the ratio.
+                let joint_from = white_side
+                    .as_ref()
+                    .ok()
+                    .filter(|w| white_m2ll(bw, sw) - white_m2ll(w, sw) > crit)
+                    .cloned();
+                let mut fits = match (held, white_side) {
                     (Ok(h), Ok(w)) if h.m2ll_at(sigma) <= white_m2ll(&w, sw) => {
                         let m = h.m2ll_at(sigma);
                         (h, Some(w), false, base_m2ll, m)
@@ -272,7 +288,16 @@ pub(crate) fn candidate(
                         (h, None, false, base_m2ll, m)
                     }
                     (Err(e), Err(_)) => return Err(e),
+                };
+                if let Some(w) = joint_from.filter(|_| fits.3 - fits.4 <= crit) {
+                    if let Some((j, m)) = joint(&ext, &prepared, &w, (sigma, profile), o) {
+                        if m < fits.4 {
+                            fits = (j, None, false, fits.3, m);
+                            res.joint_levels = true;
+                        }
+                    }
                 }
+                fits
             }
         };
         let inflate = f.inflation();
@@ -286,6 +311,9 @@ pub(crate) fn candidate(
             .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
             .collect();
         res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
+        // A warm start is the last round's estimate: a fit that stays there
+        // with a gain was fitted (it converged at once).
+        res.moved = moved(&f, &pv, &res.estimates) || (warmed && res.lr > 0.0);
         out_of_range(e, &f, &prepared)?;
         // `wald_z`: every new param also this many sds from 0, each sd the
         // larger of the model's (inflated) and the cluster-robust one. The
@@ -314,6 +342,12 @@ pub(crate) fn candidate(
                 res.suggested = false;
             }
         }
+        res.structure = f
+            .residuals
+            .structure()
+            .iter()
+            .map(|t| (t.test.clone(), t.z))
+            .collect();
         res.rms = f.rms.clone();
         res.whiteness_z = f
             .residuals
@@ -335,6 +369,45 @@ pub(crate) fn candidate(
             (res, None)
         }
     }
+}
+
+/// The candidate `ext` refitted at noise levels estimated with it in the
+/// model, from its fit `w` at white input noise (the output levels `sigma`
+/// re-estimated too when `profile`), and that fit's `-2 log L` with its own
+/// levels' term; `None` when the estimate or the fit fails.
+fn joint(
+    ext: &System,
+    data: &Dataset,
+    w: &ModelFit,
+    (sigma, profile): (&[f64], bool),
+    o: &DiagnoseOptions,
+) -> Option<(ModelFit, f64)> {
+    let (s, c, _) = estimate_levels(ext, data, w, sigma, profile, o).ok()?;
+    let pv: Vec<f64> = w.params.iter().map(|p| p.1).collect();
+    let j = fit_model(ext, data, &pv, &w.initial_states, &s, &c, o).ok()?;
+    let m = j.m2ll_at(&s);
+    Some((j, m))
+}
+
+/// Whether the fit `f` moved the new params (`estimates`) from their start
+/// (`pv`, in the order of `f.params`) by more than [`MOVED_SD`] of their sd;
+/// an sd that is not finite counts a move larger than 1e-12 of the start.
+fn moved(f: &ModelFit, pv: &[f64], estimates: &[(String, f64, f64)]) -> bool {
+    estimates.iter().any(|(p, v, sd)| {
+        let start = f
+            .params
+            .iter()
+            .position(|q| q.0 == *p)
+            .and_then(|i| pv.get(i))
+            .copied()
+            .unwrap_or(0.0);
+        let scale = if sd.is_finite() && *sd > 0.0 {
+            MOVED_SD * sd
+        } else {
+            1e-12 * start.abs().max(1.0)
+        };
+        (v - start).abs() > scale
+    })
 }
 
 /// The smallest `|estimate| / sd` over a candidate's params, each sd the

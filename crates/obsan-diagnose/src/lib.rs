@@ -53,7 +53,8 @@ pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use report::{
-    CandidateResult, Diagnosis, Named, Refit, Rival, ORIGIN_FILE, ORIGIN_RELATION, RIVAL_BIC,
+    CandidateResult, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE, ORIGIN_RELATION,
+    RIVAL_BIC,
 };
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;

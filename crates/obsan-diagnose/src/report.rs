@@ -46,6 +46,19 @@ pub struct CandidateResult {
     /// Weighed at white input noise: under `auto` with estimated input
     /// noise, the candidate fitted better there than at the estimated levels.
     pub white_input_noise: bool,
+    /// Weighed at noise levels estimated again with the effect in the
+    /// model (its white-noise fit gained, but lost to the levels that had
+    /// absorbed it; see `candidate::joint`).
+    pub joint_levels: bool,
+    /// The residual structure its fit leaves: each significant residual
+    /// test (`Structure::test`) with its z, strongest first. When a
+    /// generated and a file candidate compete, this says what each fails
+    /// to explain.
+    pub structure: Vec<(String, f64)>,
+    /// The fit moved its new params from their start (by more than
+    /// [`MOVED_SD`] of their sd). `false` with an LR near 0: the candidate
+    /// was not really fitted, so it is not ruled out.
+    pub moved: bool,
     pub error: Option<String>,
     /// The candidate's score statistic at the current fit (see
     /// `screen.rs`), when computed: generated candidates in every
@@ -87,6 +100,9 @@ impl CandidateResult {
             wald_z: 0.0,
             suggested: false,
             white_input_noise: false,
+            joint_levels: false,
+            structure: vec![],
+            moved: false,
             error: None,
             score: None,
             screened_out: false,
@@ -151,6 +167,12 @@ pub struct Rival {
 
 /// [`Named::origin`] of an effect from the effects file.
 pub const ORIGIN_FILE: &str = "effects file";
+
+/// A candidate whose new params ended within this fraction of their sd of
+/// their start was not moved by its fit ([`CandidateResult::moved`]): a
+/// thousandth of an sd changes `-2 log L` by about 1e-6, nothing any test
+/// can see, so such a fit says nothing about the effect.
+pub const MOVED_SD: f64 = 1e-3;
 /// [`Named::origin`] of an input relation the measured inputs contradict.
 pub const ORIGIN_RELATION: &str = "input relation";
 

@@ -339,16 +339,25 @@ pub(crate) type Outcome<T> = (CandidateResult, Option<T>);
 /// significant LR found so far: below that the candidate cannot win the
 /// round, and only the winner is named. `threshold` `None`: fit every one.
 /// The outcomes are in the order of `cands`.
-pub(crate) fn round<T, S, F>(
+///
+/// When the best significant candidate is generated, every candidate of the
+/// effects file (`is_file`) left unfitted is fitted too, unless its check
+/// vetoes it: a generated form must not win against a file effect that was
+/// never fitted (own-speed wheel slip named a bearing harmonic while the
+/// file's turn-rate slip stayed screened out); both fitted, each entry says
+/// the residual structure its fit leaves.
+pub(crate) fn round<T, S, F, I>(
     cands: &[&Effect],
     score: S,
     fit: F,
     threshold: Option<f64>,
+    is_file: I,
 ) -> Vec<Outcome<T>>
 where
     T: Send,
     S: Fn(&Effect) -> Option<Scored> + Sync,
     F: Fn(&Effect, Option<&Scored>) -> Outcome<T> + Sync,
+    I: Fn(&Effect) -> bool + Sync,
 {
     use rayon::prelude::*;
     let scores: Vec<Option<Scored>> = cands.par_iter().map(|e| score(e)).collect();
@@ -396,6 +405,24 @@ where
         let done: Vec<(usize, Outcome<T>)> = next
             .par_iter()
             .map(|&(i, _)| (i, fit(cands[i], scores[i].as_ref())))
+            .collect();
+        for (i, o) in done {
+            out[i] = Some(o);
+        }
+    }
+    let generated_wins = out
+        .iter()
+        .flatten()
+        .filter(|o| o.0.significant)
+        .max_by(|a, b| a.0.lr.total_cmp(&b.0.lr))
+        .is_some_and(|o| o.0.origin == crate::generate::ORIGIN_GENERATED);
+    if generated_wins {
+        let rest: Vec<usize> = (0..cands.len())
+            .filter(|&i| out[i].is_none() && is_file(cands[i]))
+            .collect();
+        let done: Vec<(usize, Outcome<T>)> = rest
+            .par_iter()
+            .map(|&i| (i, fit(cands[i], scores[i].as_ref())))
             .collect();
         for (i, o) in done {
             out[i] = Some(o);

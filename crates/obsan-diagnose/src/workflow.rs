@@ -634,7 +634,8 @@ impl<'a> Rounds<'a> {
             }
             (r, x)
         };
-        let mut results = crate::screen::round(remaining, scorer, fit, screen_at);
+        let is_file = |e: &Effect| gen_of(e).is_none();
+        let mut results = crate::screen::round(remaining, scorer, fit, screen_at, is_file);
         for r in results.iter_mut().filter(|r| r.0.screened_out) {
             if gen_of_name(&r.0.effect).is_none() {
                 r.0.origin = ORIGIN_FILE.into();
