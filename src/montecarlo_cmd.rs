@@ -3,13 +3,13 @@
 
 use crate::cli::{MergeArgs, MontecarloArgs, MontecarloCommand};
 use crate::progress::Progress;
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_calib::{
     calib_predictor, merge_runs, run_runs, shard_runs, summarize, table, RunOutcome, RunRecord,
     Table,
 };
 use obsan_fit::Predictor;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::process::ExitCode;
 
 /// The most runs per cell (`--runs`): each run's values are kept for the
@@ -100,52 +100,69 @@ fn parse_shard(s: &str) -> Result<(usize, usize), Failure> {
 const PARTIAL: &str = "obsan montecarlo --shard K/N --json";
 const PARTIAL_VERSION: u32 = 1;
 
+/// The JSON Schema of a partial result.
+pub(crate) fn partial_schema() -> schemars::Schema {
+    schemars::schema_for!(Partial)
+}
+
 /// A partial result, as written by `--shard K/N --json`. Values are IEEE-754
 /// bits in hex, so that the merge sums exactly the numbers one run sums.
-#[derive(serde::Serialize, serde::Deserialize)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
 struct Partial {
+    /// The marker "obsan montecarlo --shard K/N --json".
     partial: String,
+    /// The format's version (a merge refuses any other).
     version: u32,
+    /// Run r uses seed + r.
     seed: u64,
     /// (K, N).
     shard: (usize, usize),
+    /// The tables' runs in this shard.
     tables: Vec<PartialTable>,
 }
 
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 struct PartialTable {
+    /// The paper's table number.
     table: u8,
+    /// Runs per cell in the whole sweep.
     runs: usize,
+    /// The cells run.
     cells: Vec<PartialCell>,
 }
 
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 struct PartialCell {
     /// 1-based, as --cell.
     cell: usize,
+    /// The set-up.
     label: String,
+    /// The methods run, in the order of each run's outcomes.
     methods: Vec<String>,
     /// [first, end) of the run indices.
     run_range: (usize, usize),
+    /// Every run of the shard.
     records: Vec<PartialRun>,
 }
 
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 struct PartialRun {
+    /// The run index (seed + run).
     run: usize,
+    /// Per method: its outcome.
     outcomes: Vec<PartialOutcome>,
 }
 
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
 #[serde(untagged)]
 enum PartialOutcome {
+    /// The method's estimates and errors per column, as IEEE-754 bits in hex.
     Ok {
         errors: Vec<String>,
         estimates: Vec<String>,
     },
-    Failed {
-        failed: String,
-    },
+    /// The method failed: why.
+    Failed { failed: String },
 }
 
 fn to_hex(v: &[f64]) -> Vec<String> {
@@ -344,21 +361,50 @@ fn report_tables(
             };
             print_table(t, &shown, &runs_text);
         }
-        all.push(json!({"table": t.number, "title": t.title, "runs": runs, "seed": seed, "columns": t.columns,
-            "cells": shown.iter().map(|(i, c, r)| json!({
-                "cell": i + 1,
-                "label": r.label,
-                "crlb_sd": r.crlb_sd,
-                "crlb_sd_with_encoder_noise": r.crlb_sd_encoders,
-                "paper": c.paper.iter().map(|(m, v)| json!({"method": m.name(), "values": v})).collect::<Vec<_>>(),
-                "methods": r.methods.iter().map(|m| json!({"method": m.method.name(), "mean_abs_error": m.mean_abs,
-                    "rms_error": m.rms, "mean_estimate": m.mean_estimate, "failures": m.failures,
-                    "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
+        all.push(json::McTable {
+            cells: shown.iter().map(|(i, c, r)| mc_cell(*i, c, r)).collect(),
+            columns: t.columns.iter().map(|c| c.to_string()).collect(),
+            runs: *runs,
+            seed,
+            table: t.number,
+            title: t.title.clone(),
+        });
     }
     if json {
-        outln!("{}", serde_json::to_string_pretty(&Value::Array(all))?);
+        json::print(&all)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One cell of a table as `--json` prints it (a non-finite figure as null).
+fn mc_cell(i: usize, c: &obsan_calib::Cell, r: &obsan_calib::CellResult) -> json::McCell {
+    let fin = |v: &[f64]| v.iter().map(|&x| json::finite(x)).collect::<Vec<_>>();
+    json::McCell {
+        cell: i + 1,
+        crlb_sd: r.crlb_sd.as_deref().map(fin),
+        crlb_sd_with_encoder_noise: r.crlb_sd_encoders.as_deref().map(fin),
+        label: r.label.clone(),
+        methods: r
+            .methods
+            .iter()
+            .map(|m| json::McMethod {
+                failures: m.failures,
+                first_failure: m.first_failure.clone(),
+                mean_abs_error: fin(&m.mean_abs),
+                mean_estimate: fin(&m.mean_estimate),
+                method: m.method.name().to_string(),
+                rms_error: fin(&m.rms),
+            })
+            .collect(),
+        paper: c
+            .paper
+            .iter()
+            .map(|(m, v)| json::McPaper {
+                method: m.name().to_string(),
+                values: fin(v),
+            })
+            .collect(),
+    }
 }
 
 /// `obsan montecarlo merge`: check that the parts are every shard of one
