@@ -80,7 +80,11 @@ fn calibrate_json(m: Method, r: &obsan_calib::CalibrationReport) -> json::Calibr
             iterations: f.iterations,
             residuals: f.n_residuals,
         }),
-        params: estimates(&PARAMS, &r.calibration.values(), sd.as_ref().map(|s| &s[..])),
+        params: estimates(
+            &PARAMS,
+            &r.calibration.values(),
+            sd.as_ref().map(|s| &s[..]),
+        ),
         sigma_beta: r.sigma_beta,
         sigma_beta_estimated: r.sigma_estimated,
         trajectories,

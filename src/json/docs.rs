@@ -9,7 +9,11 @@ fn type_text(v: &Value) -> String {
     if let Some(r) = v.get("$ref").and_then(Value::as_str) {
         return r.rsplit('/').next().unwrap_or(r).to_string();
     }
-    if let Some(alts) = v.get("anyOf").or_else(|| v.get("oneOf")).and_then(Value::as_array) {
+    if let Some(alts) = v
+        .get("anyOf")
+        .or_else(|| v.get("oneOf"))
+        .and_then(Value::as_array)
+    {
         return alts.iter().map(type_text).collect::<Vec<_>>().join(" | ");
     }
     if let Some(c) = v.get("const") {
@@ -51,7 +55,11 @@ fn table(out: &mut String, v: &Value) {
     out.push_str("| key | type | description |\n|---|---|---|\n");
     for (k, p) in props {
         let d = p.get("description").and_then(Value::as_str).unwrap_or("");
-        out.push_str(&format!("| `{k}` | {} | {} |\n", cell(&type_text(p)), cell(d)));
+        out.push_str(&format!(
+            "| `{k}` | {} | {} |\n",
+            cell(&type_text(p)),
+            cell(d)
+        ));
     }
 }
 
@@ -68,7 +76,12 @@ fn section(out: &mut String, title: &str, v: &Value) {
         ));
     }
     table(out, v);
-    for alt in v.get("oneOf").and_then(Value::as_array).into_iter().flatten() {
+    for alt in v
+        .get("oneOf")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+    {
         let d = alt.get("description").and_then(Value::as_str).unwrap_or("");
         out.push_str(&format!("\nVariant: {}\n\n", d.replace('\n', " ")));
         table(out, alt);

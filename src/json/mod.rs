@@ -93,7 +93,10 @@ pub const TYPED: &[Typed] = &[
 /// without `--json`.
 pub const UNTYPED: &[(&str, &str)] = &[
     ("show", "not yet typed"),
-    ("rank", "not yet typed: the plain rank, --along, unknown inputs"),
+    (
+        "rank",
+        "not yet typed: the plain rank, --along, unknown inputs",
+    ),
     ("symmetries", "not yet typed"),
     ("check", "not yet typed"),
     ("verify", "not yet typed"),
