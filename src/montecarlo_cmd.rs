@@ -2,8 +2,9 @@
 //! runs at a time (`--shard K/N --json`), and `montecarlo merge` of the parts.
 
 use crate::cli::{MergeArgs, MontecarloArgs, MontecarloCommand};
+use crate::json::{self, Partial, PartialCell, PartialOutcome, PartialRun, PartialTable};
 use crate::progress::Progress;
-use crate::{json, Failure};
+use crate::Failure;
 use obsan_calib::{
     calib_predictor, merge_runs, run_runs, shard_runs, summarize, table, RunOutcome, RunRecord,
     Table,
@@ -99,71 +100,6 @@ fn parse_shard(s: &str) -> Result<(usize, usize), Failure> {
 /// The marker and version of a partial result; a merge refuses any other.
 const PARTIAL: &str = "obsan montecarlo --shard K/N --json";
 const PARTIAL_VERSION: u32 = 1;
-
-/// The JSON Schema of a partial result.
-pub(crate) fn partial_schema() -> schemars::Schema {
-    schemars::schema_for!(Partial)
-}
-
-/// A partial result, as written by `--shard K/N --json`. Values are IEEE-754
-/// bits in hex, so that the merge sums exactly the numbers one run sums.
-#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema)]
-struct Partial {
-    /// The marker "obsan montecarlo --shard K/N --json".
-    partial: String,
-    /// The format's version (a merge refuses any other).
-    version: u32,
-    /// Run r uses seed + r.
-    seed: u64,
-    /// (K, N).
-    shard: (usize, usize),
-    /// The tables' runs in this shard.
-    tables: Vec<PartialTable>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
-struct PartialTable {
-    /// The paper's table number.
-    table: u8,
-    /// Runs per cell in the whole sweep.
-    runs: usize,
-    /// The cells run.
-    cells: Vec<PartialCell>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
-struct PartialCell {
-    /// 1-based, as --cell.
-    cell: usize,
-    /// The set-up.
-    label: String,
-    /// The methods run, in the order of each run's outcomes.
-    methods: Vec<String>,
-    /// [first, end) of the run indices.
-    run_range: (usize, usize),
-    /// Every run of the shard.
-    records: Vec<PartialRun>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
-struct PartialRun {
-    /// The run index (seed + run).
-    run: usize,
-    /// Per method: its outcome.
-    outcomes: Vec<PartialOutcome>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, schemars::JsonSchema, PartialEq)]
-#[serde(untagged)]
-enum PartialOutcome {
-    /// The method's estimates and errors per column, as IEEE-754 bits in hex.
-    Ok {
-        errors: Vec<String>,
-        estimates: Vec<String>,
-    },
-    /// The method failed: why.
-    Failed { failed: String },
-}
 
 fn to_hex(v: &[f64]) -> Vec<String> {
     v.iter().map(|x| format!("{:016x}", x.to_bits())).collect()

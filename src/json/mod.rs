@@ -10,6 +10,7 @@ mod design;
 mod docs;
 mod estimate;
 mod expr;
+mod partial;
 
 pub use design::{
     BasisWord, ConstantValue, Design, Experiment, Family, FamilyCombination, Inputs, KnownValue,
@@ -21,6 +22,7 @@ pub use estimate::{
     ModesSd, Trajectory,
 };
 pub use expr::{Diff, Lie, LieDerivative, Simplify};
+pub use partial::{Partial, PartialCell, PartialOutcome, PartialRun, PartialTable};
 
 use schemars::{schema_for, Schema};
 use std::process::ExitCode;
@@ -80,7 +82,7 @@ pub const TYPED: &[Typed] = &[
     Typed {
         name: "montecarlo-shard",
         command: "obsan montecarlo --shard K/N --json",
-        schema: crate::montecarlo_cmd::partial_schema,
+        schema: || schema_for!(Partial),
     },
     Typed {
         name: "design",
