@@ -499,16 +499,21 @@ pub fn lie(a: &LieArgs) -> Result<ExitCode, Failure> {
         rows.push((word_text(&nf, &fields, w), w.order(), f));
     }
     if a.out.json {
-        let v: Vec<Value> = rows
+        let lie_derivatives = rows
             .iter()
-            .map(|(t, k, f)| json!({"lie_derivative": t, "order": k, "text": nf.ctx.ratfun_text(f), "latex": nf.ctx.ratfun_latex(f)}))
+            .map(|(t, k, f)| crate::json::LieDerivative {
+                latex: nf.ctx.ratfun_latex(f),
+                lie_derivative: t.clone(),
+                order: *k,
+                text: nf.ctx.ratfun_text(f),
+            })
             .collect();
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(
-                &json!({"system": nf.name, "restriction": nf.restriction, "lie_derivatives": v, "exact": true})
-            )?
-        );
+        crate::json::print(&crate::json::Lie {
+            exact: true,
+            lie_derivatives,
+            restriction: nf.restriction.clone(),
+            system: nf.name.clone(),
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(

@@ -274,12 +274,35 @@ log10_degree_bound_global, unknowns, equations, primes, exact: false, method}.")
 A candidates file holds `candidate NAME [cost C]` lines, each followed by the `output`
 statements of that sensor (docs/experiments.md). Without --candidates (or with --families)
 the input families are compared. --json prints {system, restriction, sensors: {state, n,
-base_rank, all_rank, target, already, reachable, symmetries, candidates: [{name, cost,
-outputs, rank, breaks}], sets: [{candidates, count, cost, rank, n, exact, error_bound, breaks,
-unobservable_variables}], subsets_screened, complete_to_size, exhaustive, error_bound} | null,
-inputs: {families: [{restriction, single_rank, single_n, single_full, experiments, rank, n,
-full}], combinations: [{families, rank, n}], ...} | null, seed}.")]
+outputs, base_rank, base_unobservable_variables, all_rank, target, already, reachable,
+symmetries, symmetry_note, candidates: [{name, cost, outputs, rank, breaks}], sets:
+[{candidates, count, cost, rank, n, exact, error_bound, breaks, unobservable_variables}],
+subsets_screened, complete_to_size, exhaustive, error_bound} | null, inputs: {families:
+[{restriction, single_rank, single_n, single_full, experiments, rank, n, full}], combinations:
+[{families, rank, n}], combinations_tried, combinations_complete, error_bound} | null, seed}
+(obsan schema design).")]
     Design(DesignArgs),
+    /// The JSON Schema of a command's --json output (docs/json.md), derived from the types
+    /// that print it; the field descriptions are the schema's.
+    #[command(after_help = "Examples:
+  obsan schema --list               # the commands with a schema, and those not yet typed
+  obsan schema calibrate            # what `obsan calibrate DATASET --json` prints
+  obsan schema rank-known           # obsan rank --known ... --json
+  obsan schema --markdown           # docs/json.md")]
+    Schema(SchemaArgs),
+}
+
+#[derive(Args)]
+pub struct SchemaArgs {
+    /// The command (as `obsan schema --list` names it).
+    #[arg(required_unless_present_any = ["list", "markdown"])]
+    pub command: Option<String>,
+    /// List the commands with a schema, and those without one yet.
+    #[arg(long, conflicts_with_all = ["command", "markdown"])]
+    pub list: bool,
+    /// Print docs/json.md: every schema as tables.
+    #[arg(long, conflicts_with = "command")]
+    pub markdown: bool,
 }
 
 #[derive(Args)]

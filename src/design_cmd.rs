@@ -3,12 +3,11 @@
 
 use crate::cli::DesignArgs;
 use crate::show::parse_sets;
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_analysis::{
     design_inputs, design_outputs, Candidate, DesignOptions, DesignReport, InputDesignReport,
 };
 use obsan_model::{ModelError, NormalForm, System};
-use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -216,10 +215,8 @@ pub fn run(a: &DesignArgs) -> Result<ExitCode, Failure> {
             a.system
         )));
     }
-    let mut out_json = serde_json::Map::new();
     let mut text = String::new();
-    out_json.insert("system".into(), json!(model.name));
-    out_json.insert("restriction".into(), json!(a.restriction));
+    let mut sensors = None;
     if let Some(cpath) = &a.candidates {
         let (sys, cands) = read_candidates(&a.system, &src, cpath)?;
         let nf = sys
@@ -246,25 +243,24 @@ pub fn run(a: &DesignArgs) -> Result<ExitCode, Failure> {
         let r = design_outputs(&nf, base, &candidates, target.as_deref(), &opts)
             .map_err(|e| Failure(e.to_string()))?;
         let (j, t) = report_outputs(&nf, &cands, &r, a);
-        out_json.insert("sensors".into(), j);
+        sensors = Some(j);
         text.push_str(&t);
-    } else {
-        out_json.insert("sensors".into(), serde_json::Value::Null);
     }
+    let mut inputs = None;
     if families {
         let r = design_inputs(&model, &sets, &opts).map_err(|e| Failure(e.to_string()))?;
         let (j, t) = report_inputs(&r);
-        out_json.insert("inputs".into(), j);
+        inputs = Some(j);
         text.push_str(&t);
-    } else {
-        out_json.insert("inputs".into(), serde_json::Value::Null);
     }
-    out_json.insert("seed".into(), json!(a.seed));
     if a.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&serde_json::Value::Object(out_json))?
-        );
+        json::print(&json::Design {
+            inputs,
+            restriction: a.restriction.clone(),
+            seed: a.seed,
+            sensors,
+            system: model.name.clone(),
+        })?;
     } else {
         out!("system {}\n{text}", model.name);
     }
@@ -284,18 +280,17 @@ fn report_outputs(
     cands: &[CandText],
     r: &DesignReport,
     a: &DesignArgs,
-) -> (serde_json::Value, String) {
+) -> (json::Sensors, String) {
     let wname = |j: &usize| format!("w{}", j + 1);
-    let sym_json: Vec<serde_json::Value> = r.symmetries.as_ref().map_or_else(Vec::new, |s| {
+    let symmetries = r.symmetries.as_ref().map_or_else(Vec::new, |s| {
         s.vectors
             .iter()
             .map(|v| {
-                json!(nf
-                    .state
+                nf.state
                     .iter()
                     .zip(v)
-                    .map(|(n, e)| (n.clone(), json!(nf.ctx.ratfun_text_factored(e))))
-                    .collect::<serde_json::Map<_, _>>())
+                    .map(|(n, e)| (n.clone(), nf.ctx.ratfun_text_factored(e)))
+                    .collect()
             })
             .collect()
     });
@@ -311,45 +306,51 @@ fn report_outputs(
     } else {
         format!("{} observable", names(&r.target).join(", "))
     };
-    let sets_json: Vec<serde_json::Value> = r
+    let sets = r
         .sets
         .iter()
-        .map(|s| {
-            json!({
-                "candidates": s.members.iter().map(|&c| cands[c].name.clone()).collect::<Vec<_>>(),
-                "count": s.members.len(),
-                "cost": s.cost,
-                "rank": s.rank,
-                "n": r.n,
-                "exact": s.rank == r.n,
-                "error_bound": s.error_bound,
-                "breaks": s.breaks.iter().map(wname).collect::<Vec<_>>(),
-                "unobservable_variables": unobs(&s.observable),
-            })
+        .map(|s| json::SensorSet {
+            breaks: s.breaks.iter().map(wname).collect(),
+            candidates: s.members.iter().map(|&c| cands[c].name.clone()).collect(),
+            cost: s.cost,
+            count: s.members.len(),
+            error_bound: s.error_bound,
+            exact: s.rank == r.n,
+            n: r.n,
+            rank: s.rank,
+            unobservable_variables: unobs(&s.observable),
         })
         .collect();
-    let j = json!({
-        "state": nf.state,
-        "n": r.n,
-        "outputs": nf.outputs.iter().map(|o| o.0.clone()).collect::<Vec<_>>(),
-        "base_rank": r.base_rank,
-        "base_unobservable_variables": unobs(&r.base_observable),
-        "all_rank": r.all_rank,
-        "target": names(&r.target),
-        "already": r.already,
-        "reachable": r.reachable,
-        "symmetries": sym_json,
-        "symmetry_note": r.symmetry_note,
-        "candidates": cands.iter().zip(&r.candidates).map(|(c, e)| json!({
-            "name": c.name, "cost": c.cost, "outputs": c.outputs,
-            "rank": e.rank, "breaks": e.breaks.iter().map(wname).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
-        "sets": sets_json,
-        "subsets_screened": r.subsets_screened,
-        "complete_to_size": r.complete_to_size,
-        "exhaustive": r.exhaustive,
-        "error_bound": r.error_bound,
-    });
+    let candidates = cands
+        .iter()
+        .zip(&r.candidates)
+        .map(|(c, e)| json::SensorCandidate {
+            breaks: e.breaks.iter().map(wname).collect(),
+            cost: c.cost,
+            name: c.name.clone(),
+            outputs: c.outputs.clone(),
+            rank: e.rank,
+        })
+        .collect();
+    let j = json::Sensors {
+        all_rank: r.all_rank,
+        already: r.already,
+        base_rank: r.base_rank,
+        base_unobservable_variables: unobs(&r.base_observable),
+        candidates,
+        complete_to_size: r.complete_to_size,
+        error_bound: r.error_bound,
+        exhaustive: r.exhaustive,
+        n: r.n,
+        outputs: nf.outputs.iter().map(|o| o.0.clone()).collect(),
+        reachable: r.reachable,
+        sets,
+        state: nf.state.clone(),
+        subsets_screened: r.subsets_screened,
+        symmetries,
+        symmetry_note: r.symmetry_note.clone(),
+        target: names(&r.target),
+    };
     let mut o = format!(
         "sensors{}: rank {} of {} with the model's outputs; {} with every candidate\ngoal: {goal}\n",
         a.restriction
@@ -445,22 +446,40 @@ fn report_outputs(
     (j, o)
 }
 
-fn report_inputs(r: &InputDesignReport) -> (serde_json::Value, String) {
+fn report_inputs(r: &InputDesignReport) -> (json::Inputs, String) {
     let fname = |f: &Option<String>| f.clone().unwrap_or_else(|| "unrestricted".into());
-    let j = json!({
-        "families": r.families.iter().map(|f| json!({
-            "restriction": f.restriction,
-            "single_rank": f.single_rank, "single_n": f.single_n, "single_full": f.single_full(),
-            "experiments": f.experiments, "rank": f.rank, "n": f.n, "full": f.full(),
-        })).collect::<Vec<_>>(),
-        "combinations": r.combinations.iter().map(|c| json!({
-            "families": c.families.iter().map(|&i| fname(&r.families[i].restriction)).collect::<Vec<_>>(),
-            "rank": c.rank, "n": c.n,
-        })).collect::<Vec<_>>(),
-        "combinations_tried": r.combinations_tried,
-        "combinations_complete": r.combinations_complete,
-        "error_bound": r.error_bound,
-    });
+    let j = json::Inputs {
+        combinations: r
+            .combinations
+            .iter()
+            .map(|c| json::FamilyCombination {
+                families: c
+                    .families
+                    .iter()
+                    .map(|&i| fname(&r.families[i].restriction))
+                    .collect(),
+                n: c.n,
+                rank: c.rank,
+            })
+            .collect(),
+        combinations_complete: r.combinations_complete,
+        combinations_tried: r.combinations_tried,
+        error_bound: r.error_bound,
+        families: r
+            .families
+            .iter()
+            .map(|f| json::Family {
+                experiments: f.experiments,
+                full: f.full(),
+                n: f.n,
+                rank: f.rank,
+                restriction: f.restriction.clone(),
+                single_full: f.single_full(),
+                single_n: f.single_n,
+                single_rank: f.single_rank,
+            })
+            .collect(),
+    };
     let mut o =
         String::from("input families (restrictions of the model; experiments share the params):\n");
     for f in &r.families {

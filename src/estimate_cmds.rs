@@ -4,12 +4,11 @@
 use crate::cli::{CalibrateArgs, CrlbArgs};
 use crate::figures::write_figures;
 use crate::simulate::sim_options;
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_calib::{
     calib_predictor, calibrate, simulate, CalibrateOptions, EncoderNoise, Method, Table, PARAMS,
 };
 use obsan_data::{DataFile, Dataset, DatasetReader, TrajectoryFiles};
-use serde_json::{json, Value};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -23,6 +22,73 @@ fn read(path: &Path) -> Result<Option<DataFile>, Failure> {
         path: path.display().to_string(),
         bytes,
     }))
+}
+
+/// `calibrate --json`: the report in the binary's own types.
+fn calibrate_json(m: Method, r: &obsan_calib::CalibrationReport) -> json::Calibrate {
+    let sd = r.calibration.sd();
+    let estimates = |names: &[&str], v: &[f64], sd: Option<&[f64]>| {
+        names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                let e = json::Estimate {
+                    sd: sd.map(|s| s[i]),
+                    value: v[i],
+                };
+                (n.to_string(), e)
+            })
+            .collect()
+    };
+    let trajectories = r
+        .trajectories
+        .iter()
+        .map(|t| json::Trajectory {
+            l: t.closed.l,
+            c: t.closed.c(),
+            gamma0: json::finite(t.start.1),
+            k: t.closed.k(),
+            mu0: json::finite(t.start.0),
+            name: t.name.clone(),
+            period_from_others: t.period_from_others,
+            q: t.q,
+            residual_rms: t.rms,
+            sd: t.modes_sd().map(|s| json::ModesSd {
+                l: s[1],
+                xi_q: s[0],
+            }),
+            xi_q: t.closed.xi_q,
+        })
+        .collect();
+    json::Calibrate {
+        // Which encoder noise ML's sds include; null for the other methods.
+        encoder_noise: (m == Method::Ml).then_some(match r.encoder_noise {
+            EncoderNoise::Stated { k, c } => json::EncoderNoise::Stated { c, k },
+            EncoderNoise::Estimated { k, c, samples } => {
+                json::EncoderNoise::Estimated { c, k, samples }
+            }
+            EncoderNoise::BearingsOnly => json::EncoderNoise::BearingsOnly,
+        }),
+        exact: false,
+        method: m.name().to_string(),
+        metric: r.metric.as_ref().map(|(mm, msd)| {
+            let names = ["rho", "r_right", "r_left", "B"];
+            estimates(&names, &mm.values(), msd.as_ref().map(|s| &s[..]))
+        }),
+        ml: r.ml.as_ref().map(|f| json::MlFit {
+            cost: f.cost,
+            iterations: f.iterations,
+            residuals: f.n_residuals,
+        }),
+        params: estimates(
+            &PARAMS,
+            &r.calibration.values(),
+            sd.as_ref().map(|s| &s[..]),
+        ),
+        sigma_beta: r.sigma_beta,
+        sigma_beta_estimated: r.sigma_estimated,
+        trajectories,
+    }
 }
 
 /// Read a dataset folder (docs/data-format.md): dataset.json (optional), one
@@ -138,51 +204,11 @@ pub fn calibrate_cmd(a: &CalibrateArgs) -> Result<ExitCode, Failure> {
         let n = write_figures(dir, a.force, &[&a.dataset], &data, &p, &o, &r)?;
         eprintln!("wrote {n} figures (PNG and SVG) to {dir}");
     }
-    let sd = r.calibration.sd();
     if a.json {
-        let trajs: Vec<Value> = r
-            .trajectories
-            .iter()
-            .map(|t| {
-                json!({"name": t.name, "q": t.q, "xi_q": t.closed.xi_q, "L": t.closed.l,
-                       "c": t.closed.c(), "k": t.closed.k(), "sd": t.modes_sd().map(|s| json!({"xi_q": s[0], "L": s[1]})),
-                       "mu0": t.start.0, "gamma0": t.start.1, "residual_rms": t.rms,
-                       "period_from_others": t.period_from_others})
-            })
-            .collect();
-        let mut params = serde_json::Map::new();
-        for (i, name) in PARAMS.iter().enumerate() {
-            params.insert(
-                name.to_string(),
-                json!({"value": r.calibration.values()[i], "sd": sd.map(|s| s[i])}),
-            );
-        }
-        let metric = r.metric.as_ref().map(|(mm, msd)| {
-            let names = ["rho", "r_right", "r_left", "B"];
-            let mut o = serde_json::Map::new();
-            for (i, n) in names.iter().enumerate() {
-                o.insert(
-                    n.to_string(),
-                    json!({"value": mm.values()[i], "sd": msd.map(|s| s[i])}),
-                );
-            }
-            Value::Object(o)
-        });
-        // Which encoder noise ML's sds include; null for the other methods.
-        let enc = (m == Method::Ml).then(|| match r.encoder_noise {
-            EncoderNoise::Stated { k, c } => json!({"route": "stated", "k": k, "c": c}),
-            EncoderNoise::Estimated { k, c, samples } => {
-                json!({"route": "estimated", "k": k, "c": c, "samples": samples})
-            }
-            EncoderNoise::BearingsOnly => json!({"route": "bearings_only"}),
-        });
-        let out = json!({"method": m.name(), "exact": false, "encoder_noise": enc,
-            "sigma_beta": r.sigma_beta, "sigma_beta_estimated": r.sigma_estimated,
-            "params": params, "metric": metric, "trajectories": trajs,
-            "ml": r.ml.as_ref().map(|f| json!({"iterations": f.iterations, "cost": f.cost, "residuals": f.n_residuals}))});
-        outln!("{}", serde_json::to_string_pretty(&out)?);
+        crate::json::print(&calibrate_json(m, &r))?;
         return Ok(ExitCode::SUCCESS);
     }
+    let sd = r.calibration.sd();
     outln!(
         "method {} on {} ({} trajectories); bearing noise {:.3} deg{}",
         m.name(),
@@ -330,21 +356,18 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
     };
     if a.json {
         let obj = |sd: &[f64]| {
-            let mut m = serde_json::Map::new();
-            for (i, c) in Table::PARAM_COLUMNS.iter().enumerate() {
-                m.insert(c.to_string(), json!(sd[i]));
-            }
-            Value::Object(m)
+            Table::PARAM_COLUMNS
+                .iter()
+                .zip(sd)
+                .map(|(c, v)| (c.to_string(), *v))
+                .collect()
         };
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&json!({
-                "setup": setup,
-                "crlb_sd": obj(&bearing),
-                "crlb_sd_with_encoder_noise": full.as_ref().map(|f| obj(f)),
-                "bearings": counts,
-            }))?
-        );
+        crate::json::print(&json::Crlb {
+            bearings: counts,
+            crlb_sd: obj(&bearing),
+            crlb_sd_with_encoder_noise: full.as_ref().map(|f| obj(f)),
+            setup,
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     outln!("Cramér–Rao bound: {setup}; bearings: {}", counts.join(", "));

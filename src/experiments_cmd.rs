@@ -4,13 +4,12 @@
 
 use crate::cli::{RankArgs, SystemArgs};
 use crate::show::{load_system, parse_sets};
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_analysis::{
     experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
 };
 use obsan_expr::{Ctx, Q};
 use obsan_model::{Experiment, NormalForm};
-use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -66,13 +65,21 @@ pub fn experiments_of(a: &SystemArgs) -> Result<Option<Vec<Experiment>>, Failure
 
 /// The experiments as JSON and as one line of text.
 pub fn describe(exps: &[Experiment]) -> (serde_json::Value, String) {
+    let (j, t) = describe_typed(exps);
+    (serde_json::to_value(j).unwrap_or_default(), t)
+}
+
+/// The experiments in the binary's JSON types and as one line of text.
+fn describe_typed(exps: &[Experiment]) -> (Vec<json::Experiment>, String) {
     let j = exps
         .iter()
-        .map(|e| {
-            json!({
-                "restriction": e.restriction,
-                "set": e.set.iter().map(|(n, q)| (n.clone(), json!(q.to_string()))).collect::<serde_json::Map<_, _>>(),
-            })
+        .map(|e| json::Experiment {
+            restriction: e.restriction.clone(),
+            set: e
+                .set
+                .iter()
+                .map(|(n, q)| (n.clone(), q.to_string()))
+                .collect(),
         })
         .collect::<Vec<_>>();
     let t = exps
@@ -93,7 +100,7 @@ pub fn describe(exps: &[Experiment]) -> (serde_json::Value, String) {
         })
         .collect::<Vec<_>>()
         .join("; ");
-    (json!(j), t)
+    (j, t)
 }
 
 /// `--known`/`--known-generic` names as state indices (a bare state name in
@@ -202,39 +209,44 @@ pub fn rank_known_cmd(a: &RankArgs, mut nf: NormalForm) -> Result<ExitCode, Fail
         })
         .collect();
     let certificate = certificate_text(&r);
-    let (exps_json, _) = match experiments_of(&a.sys)? {
-        Some(e) => {
-            let d = describe(&e);
-            (d.0, d.1)
-        }
-        None => (serde_json::Value::Null, String::new()),
-    };
+    let experiments = experiments_of(&a.sys)?.map(|e| describe_typed(&e).0);
     if a.out.json {
-        let v = json!({
-            "system": nf.name,
-            "restriction": nf.restriction,
-            "experiments": exps_json,
-            "state": nf.state,
-            "known": known.iter().map(|k| json!({"name": nf.state[k.index], "value": k.value.as_ref().map(|q| q.to_string())})).collect::<Vec<_>>(),
-            "unknowns": r.unknown.iter().map(|&i| nf.state[i].clone()).collect::<Vec<_>>(),
-            "n": r.unknown.len(),
-            "rank": r.rank,
-            "identifiable": r.full(),
-            "point_rank": r.point_rank,
-            "generic_rank": r.generic_rank,
-            "determined": r.determined,
-            "invariant": r.invariant,
-            "order_checked": r.order_checked,
-            "words_evaluated": r.words_evaluated,
-            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
-            "observable_variables": obs,
-            "unobservable_variables": unobs,
-            "exact": r.full(),
-            "error_bound": if r.full() { 0.0 } else { r.generic_error_bound },
-            "certificate": certificate,
-            "seed": a.an.seed,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        let basis = r.basis.iter().zip(&words);
+        json::print(&json::RankKnown {
+            basis: basis
+                .map(|(w, t)| json::BasisWord {
+                    lie_derivative: t.clone(),
+                    order: w.order(),
+                })
+                .collect(),
+            certificate,
+            determined: r.determined,
+            error_bound: if r.full() { 0.0 } else { r.generic_error_bound },
+            exact: r.full(),
+            experiments,
+            generic_rank: r.generic_rank,
+            identifiable: r.full(),
+            invariant: r.invariant,
+            known: known
+                .iter()
+                .map(|k| json::KnownValue {
+                    name: nf.state[k.index].clone(),
+                    value: k.value.as_ref().map(|q| q.to_string()),
+                })
+                .collect(),
+            n: r.unknown.len(),
+            observable_variables: obs,
+            order_checked: r.order_checked,
+            point_rank: r.point_rank,
+            rank: r.rank,
+            restriction: nf.restriction.clone(),
+            seed: a.an.seed,
+            state: nf.state.clone(),
+            system: nf.name.clone(),
+            unknowns: r.unknown.iter().map(|&i| nf.state[i].clone()).collect(),
+            unobservable_variables: unobs,
+            words_evaluated: r.words_evaluated,
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -363,29 +375,49 @@ pub fn auto_cmd(a: &RankArgs) -> Result<ExitCode, Failure> {
 fn print_auto(name: &str, a: &RankArgs, r: &AutoReport) -> Result<ExitCode, Failure> {
     let exact = r.rank == r.n;
     if a.out.json {
-        let v = json!({
-            "system": name,
-            "restriction": a.sys.restriction,
-            "experiments": r.experiments,
-            "rank": r.rank,
-            "n": r.n,
-            "full_rank": exact,
-            "ranks": r.ranks.iter().map(|(k, rk, n)| json!({"experiments": k, "rank": rk, "n": n})).collect::<Vec<_>>(),
-            "state_rank": r.state_rank,
-            "param_rank": r.param_rank,
-            "n_params": r.n_params,
-            "constants": r.constants,
-            "special_values": r.special.iter().map(|s| json!({
-                "constant": s.constant, "value": s.value.to_string(),
-                "single_rank": s.single_rank, "design_rank": s.design_rank,
-                "degenerate": s.degenerate,
-            })).collect::<Vec<_>>(),
-            "poles": r.poles.iter().map(|(c, q)| json!({"constant": c, "value": q.to_string()})).collect::<Vec<_>>(),
-            "exact": exact && r.error_bound == 0.0,
-            "error_bound": r.error_bound,
-            "seed": a.an.seed,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        json::print(&json::RankAuto {
+            constants: r.constants.clone(),
+            error_bound: r.error_bound,
+            exact: exact && r.error_bound == 0.0,
+            experiments: r.experiments,
+            full_rank: exact,
+            n: r.n,
+            n_params: r.n_params,
+            param_rank: r.param_rank,
+            poles: r
+                .poles
+                .iter()
+                .map(|(c, q)| json::ConstantValue {
+                    constant: c.clone(),
+                    value: q.to_string(),
+                })
+                .collect(),
+            rank: r.rank,
+            ranks: r
+                .ranks
+                .iter()
+                .map(|&(experiments, rank, n)| json::RankStep {
+                    experiments,
+                    n,
+                    rank,
+                })
+                .collect(),
+            restriction: a.sys.restriction.clone(),
+            seed: a.an.seed,
+            special_values: r
+                .special
+                .iter()
+                .map(|s| json::SpecialValue {
+                    constant: s.constant.clone(),
+                    degenerate: s.degenerate,
+                    design_rank: s.design_rank,
+                    single_rank: s.single_rank,
+                    value: s.value.to_string(),
+                })
+                .collect(),
+            state_rank: r.state_rank,
+            system: name.to_string(),
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(

@@ -1,10 +1,9 @@
 //! `obsan simplify` and `obsan diff`.
 
 use crate::cli::{DiffArgs, ExprArgs, LimitArgs, OutputArgs};
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_expr::{Budget, Ctx, Id};
 use obsan_model::ModelError;
-use serde_json::json;
 use std::process::ExitCode;
 
 /// Parse a command-line expression; errors point into it with a caret.
@@ -19,7 +18,7 @@ fn emit(
     input: &str,
     id: Id,
     out: &OutputArgs,
-    extra: serde_json::Value,
+    variable: Option<&str>,
 ) -> Result<ExitCode, Failure> {
     // Under the engine's budget: a huge expansion is an error, not minutes of work.
     let c = ctx
@@ -35,19 +34,30 @@ fn emit(
     };
     let decided = undecided.is_empty();
     if out.json {
-        let mut v = json!({
-            "input": input,
-            "canonical": ctx.ratfun_text(&c),
-            "latex": ctx.ratfun_latex(&c),
-            "is_zero": if decided { json!(c.is_zero()) } else { json!(null) },
-            "decided": decided,
-            "undecided_atoms": undecided,
-            "exact": decided,
-        });
-        if let (Some(m), Some(e)) = (v.as_object_mut(), extra.as_object()) {
-            m.extend(e.clone());
+        let (canonical, latex) = (ctx.ratfun_text(&c), ctx.ratfun_latex(&c));
+        let is_zero = decided.then(|| c.is_zero());
+        let input = input.to_string();
+        match variable {
+            None => crate::json::print(&json::Simplify {
+                canonical,
+                decided,
+                exact: decided,
+                input,
+                is_zero,
+                latex,
+                undecided_atoms: undecided,
+            })?,
+            Some(v) => crate::json::print(&json::Diff {
+                canonical,
+                decided,
+                exact: decided,
+                input,
+                is_zero,
+                latex,
+                undecided_atoms: undecided,
+                variable: v.to_string(),
+            })?,
         }
-        outln!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         if out.latex {
             outln!("{}", ctx.ratfun_latex(&c));
@@ -82,7 +92,7 @@ fn budgeted_ctx(limit: &LimitArgs) -> Ctx {
 pub fn simplify(a: &ExprArgs) -> Result<ExitCode, Failure> {
     let mut ctx = budgeted_ctx(&a.limit);
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
-    emit(&mut ctx, &a.expr, id, &a.out, json!({}))
+    emit(&mut ctx, &a.expr, id, &a.out, None)
 }
 
 pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
@@ -103,7 +113,7 @@ pub fn diff(a: &DiffArgs) -> Result<ExitCode, Failure> {
     let id = parse_arg(&mut ctx, &a.expr, "<expression>")?;
     let x = ctx.symbol(&a.var);
     let d = ctx.diff(id, x.var);
-    emit(&mut ctx, &a.expr, d, &a.out, json!({ "variable": a.var }))
+    emit(&mut ctx, &a.expr, d, &a.out, Some(&a.var))
 }
 
 /// Parse a command-line expression over a system's state and constants.

@@ -37,6 +37,7 @@ mod figures;
 mod fsio;
 mod global_cmd;
 mod import_cmd;
+pub mod json;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
@@ -497,6 +498,7 @@ fn dispatch(command: cli::Command) -> Result<ExitCode, Failure> {
         cli::Command::Import(cli::ImportCommand::Sbml(a)) => import_cmd::sbml(&a),
         cli::Command::Import(cli::ImportCommand::Petab(a)) => import_cmd::petab(&a),
         cli::Command::Import(cli::ImportCommand::StrikeGoldd(a)) => import_cmd::strike_goldd(&a),
+        cli::Command::Schema(a) => json::schema_cmd(&a),
     }
 }
 

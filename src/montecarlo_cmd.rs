@@ -2,6 +2,7 @@
 //! runs at a time (`--shard K/N --json`), and `montecarlo merge` of the parts.
 
 use crate::cli::{MergeArgs, MontecarloArgs, MontecarloCommand};
+use crate::json::{self, Partial, PartialCell, PartialOutcome, PartialRun, PartialTable};
 use crate::progress::Progress;
 use crate::Failure;
 use obsan_calib::{
@@ -9,7 +10,7 @@ use obsan_calib::{
     Table,
 };
 use obsan_fit::Predictor;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::process::ExitCode;
 
 /// The most runs per cell (`--runs`): each run's values are kept for the
@@ -99,54 +100,6 @@ fn parse_shard(s: &str) -> Result<(usize, usize), Failure> {
 /// The marker and version of a partial result; a merge refuses any other.
 const PARTIAL: &str = "obsan montecarlo --shard K/N --json";
 const PARTIAL_VERSION: u32 = 1;
-
-/// A partial result, as written by `--shard K/N --json`. Values are IEEE-754
-/// bits in hex, so that the merge sums exactly the numbers one run sums.
-#[derive(serde::Serialize, serde::Deserialize)]
-struct Partial {
-    partial: String,
-    version: u32,
-    seed: u64,
-    /// (K, N).
-    shard: (usize, usize),
-    tables: Vec<PartialTable>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
-struct PartialTable {
-    table: u8,
-    runs: usize,
-    cells: Vec<PartialCell>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
-struct PartialCell {
-    /// 1-based, as --cell.
-    cell: usize,
-    label: String,
-    methods: Vec<String>,
-    /// [first, end) of the run indices.
-    run_range: (usize, usize),
-    records: Vec<PartialRun>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
-struct PartialRun {
-    run: usize,
-    outcomes: Vec<PartialOutcome>,
-}
-
-#[derive(serde::Serialize, serde::Deserialize, PartialEq)]
-#[serde(untagged)]
-enum PartialOutcome {
-    Ok {
-        errors: Vec<String>,
-        estimates: Vec<String>,
-    },
-    Failed {
-        failed: String,
-    },
-}
 
 fn to_hex(v: &[f64]) -> Vec<String> {
     v.iter().map(|x| format!("{:016x}", x.to_bits())).collect()
@@ -344,21 +297,50 @@ fn report_tables(
             };
             print_table(t, &shown, &runs_text);
         }
-        all.push(json!({"table": t.number, "title": t.title, "runs": runs, "seed": seed, "columns": t.columns,
-            "cells": shown.iter().map(|(i, c, r)| json!({
-                "cell": i + 1,
-                "label": r.label,
-                "crlb_sd": r.crlb_sd,
-                "crlb_sd_with_encoder_noise": r.crlb_sd_encoders,
-                "paper": c.paper.iter().map(|(m, v)| json!({"method": m.name(), "values": v})).collect::<Vec<_>>(),
-                "methods": r.methods.iter().map(|m| json!({"method": m.method.name(), "mean_abs_error": m.mean_abs,
-                    "rms_error": m.rms, "mean_estimate": m.mean_estimate, "failures": m.failures,
-                    "first_failure": m.first_failure})).collect::<Vec<_>>()})).collect::<Vec<_>>()}));
+        all.push(json::McTable {
+            cells: shown.iter().map(|(i, c, r)| mc_cell(*i, c, r)).collect(),
+            columns: t.columns.iter().map(|c| c.to_string()).collect(),
+            runs: *runs,
+            seed,
+            table: t.number,
+            title: t.title.clone(),
+        });
     }
     if json {
-        outln!("{}", serde_json::to_string_pretty(&Value::Array(all))?);
+        json::print(&all)?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One cell of a table as `--json` prints it (a non-finite figure as null).
+fn mc_cell(i: usize, c: &obsan_calib::Cell, r: &obsan_calib::CellResult) -> json::McCell {
+    let fin = |v: &[f64]| v.iter().map(|&x| json::finite(x)).collect::<Vec<_>>();
+    json::McCell {
+        cell: i + 1,
+        crlb_sd: r.crlb_sd.as_deref().map(fin),
+        crlb_sd_with_encoder_noise: r.crlb_sd_encoders.as_deref().map(fin),
+        label: r.label.clone(),
+        methods: r
+            .methods
+            .iter()
+            .map(|m| json::McMethod {
+                failures: m.failures,
+                first_failure: m.first_failure.clone(),
+                mean_abs_error: fin(&m.mean_abs),
+                mean_estimate: fin(&m.mean_estimate),
+                method: m.method.name().to_string(),
+                rms_error: fin(&m.rms),
+            })
+            .collect(),
+        paper: c
+            .paper
+            .iter()
+            .map(|(m, v)| json::McPaper {
+                method: m.name().to_string(),
+                values: fin(v),
+            })
+            .collect(),
+    }
 }
 
 /// `obsan montecarlo merge`: check that the parts are every shard of one

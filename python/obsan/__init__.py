@@ -67,6 +67,7 @@ __all__ = [
     "montecarlo",
     "montecarlo_merge",
     "verify",
+    "schema",
     "run",
     "Run",
     "Result",
@@ -133,6 +134,16 @@ def run(*argv: Union[str, PathLike, Number], source: Optional[Tuple[str, str]] =
         _native.set_progress(bool(PROGRESS))
     code, out = _native.run_json(argv_text, source)
     return Run(code, json.loads(out))
+
+
+def schema(command: str) -> Dict[str, Any]:
+    """``obsan schema COMMAND``: the JSON Schema of a command's ``--json`` output, which is
+    also the mapping its result object wraps (e.g. ``schema("calibrate")["properties"]``
+    are the keys of :func:`calibrate`'s result). Names: ``obsan schema --list``; docs/json.md."""
+    v = run("schema", A.text("schema: command", command)).value
+    if not isinstance(v, dict):
+        raise ObsanError(f"obsan schema {command} printed no JSON object")
+    return v
 
 
 def _value(f: Flags, source: Optional[Tuple[str, str]] = None) -> Dict[str, Any]:

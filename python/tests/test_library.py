@@ -17,7 +17,7 @@ from conftest import ROOT, SYSTEMS
 PUBLIC_FUNCTIONS = [
     obsan.load, obsan.loads, obsan.system, obsan.simplify, obsan.diff, obsan.verify,
     obsan.simulate, obsan.calibrate, obsan.crlb, obsan.diagnose, obsan.montecarlo,
-    obsan.montecarlo_merge,
+    obsan.montecarlo_merge, obsan.schema,
 ]
 SYSTEM_METHODS = [
     obsan.System.show, obsan.System.rank, obsan.System.experiments, obsan.System.rank_known,
@@ -173,3 +173,16 @@ def test_mypy_strict_passes_on_the_examples_and_the_package():
             capture_output=True, text=True, cwd=ROOT,
         )
         assert p.returncode == 0, p.stdout + p.stderr
+
+
+def test_a_schema_names_the_keys_of_its_result():
+    # The result objects are mappings of the CLI's JSON: the schema's properties are their keys.
+    s = obsan.schema("simplify")
+    assert set(s["properties"]) == set(obsan.simplify("x + 1").to_dict())
+    assert s["additionalProperties"] is False
+    d = obsan.schema("crlb")
+    assert set(d["properties"]) == set(obsan.crlb(bearings=40).to_dict())
+    with pytest.raises(obsan.ObsanError, match="no schema for 'nope'"):
+        obsan.schema("nope")
+    with pytest.raises(TypeError):
+        obsan.schema(3)  # type: ignore[arg-type]

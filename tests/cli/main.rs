@@ -9,6 +9,7 @@ mod experiments;
 mod expr;
 mod global;
 mod import;
+mod json_schema;
 mod modes;
 mod modes_closure;
 mod montecarlo;
