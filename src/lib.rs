@@ -471,6 +471,7 @@ fn command_name(command: &cli::Command) -> &'static str {
         C::Global(_) => "global",
         C::Design(_) => "design",
         C::Import(_) => "import",
+        C::Schema(_) => "schema",
     }
 }
 
