@@ -345,7 +345,9 @@ fn read_observables(text: &str) -> Result<Vec<Placed<(usize, usize)>>, ImportErr
 }
 
 /// Conditions: id -> [(column id, value text, place)], and each column's header place.
-type Conditions = Vec<(String, Vec<(String, String, (usize, usize))>)>;
+/// A condition's id and the values it sets: (column id, value, place).
+type Condition = (String, Vec<(String, String, (usize, usize))>);
+type Conditions = Vec<Condition>;
 
 fn read_conditions(text: &str) -> Result<Conditions, ImportError> {
     let t = Table::read(text)?;
@@ -514,7 +516,7 @@ fn condition_values(
     m: &Sbml,
     table: &ParamTable,
     c: &str,
-    row: Option<&(String, Vec<(String, String, (usize, usize))>)>,
+    row: Option<&Condition>,
     ignored_init: &mut Vec<String>,
 ) -> Result<BTreeMap<String, Ex>, PetabError> {
     let mut set: BTreeMap<String, Ex> = BTreeMap::new();
