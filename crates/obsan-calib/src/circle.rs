@@ -227,6 +227,16 @@ impl Interp {
 
 /// The minimiser of a unimodal `f` on `[a, b]` by golden section, one new
 /// evaluation per step (`steps` steps shrink the bracket by 0.618^steps).
+///
+/// Not the least-squares core: both uses minimise over one variable a
+/// function without a Jacobian at hand (the algebraic residual of the
+/// implicit observation equation over `xi_q`, the other unknowns eliminated
+/// exactly at each value, see [`Implicit`]; Algorithm 1's spread statistic
+/// over the node), inside a bracket a grid scan found; the core then
+/// refines the whole estimate (LS, section V-B). Not argmin's
+/// `GoldenSectionSearch` either: it stops at a tolerance through its
+/// executor, while a fixed number of steps here makes the work and the
+/// estimate the same for every data set size, in fifteen lines.
 fn golden_min(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, steps: usize) -> f64 {
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let (mut c1, mut c2) = (b - g * (b - a), a + g * (b - a));

@@ -261,8 +261,8 @@ fn speed(profile: &SpeedProfile, nu: f64, t: f64) -> f64 {
     }
 }
 
-/// Simulate the dataset and its truth.
-pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
+/// Refuse options the simulation cannot honour.
+fn check(o: &SimOptions) -> Result<(), CalibError> {
     let rb = &o.robot;
     if [rb.r_right, rb.r_left, rb.wheel_base, rb.rho]
         .iter()
@@ -284,7 +284,184 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
     {
         return Err(CalibError::Rates);
     }
+    Ok(())
+}
+
+/// One trajectory driven: the encoder readings (as wheel speeds) and the
+/// true pose after each encoder step.
+struct Drive {
+    inputs: Series,
+    /// The pose at each encoder time `k dt`, from the start.
+    poses: Vec<(f64, f64, f64)>,
+    duration: f64,
+}
+
+/// Drive one trajectory from `pose0` with the right-wheel radius `r_right`:
+/// a circle of ratio `q` (one full loop), or the given inputs (to their end).
+fn drive(
+    o: &SimOptions,
+    q: Option<f64>,
+    r_right: f64,
+    pose0: (f64, f64, f64),
+    rng: &mut Rng,
+) -> Result<Drive, CalibError> {
+    let rb = &o.robot;
     let dt = 1.0 / o.encoder_rate;
+    let mut pose = pose0;
+    let mut poses = vec![pose];
+    let mut inputs = Series::new(vec!["wR".into(), "wL".into()]);
+    let mut turned = 0.0;
+    let mut t = 0.0;
+    let mut steps = 0u64;
+    let loop_guess =
+        q.map(|q| 2.0 * PI * rb.wheel_base / (o.nu * (rb.r_right - q * rb.r_left)).abs());
+    let seg_len = loop_guess.map_or(f64::INFINITY, |l| l / o.segments as f64);
+    let mut seg_index = usize::MAX;
+    let (mut fr, mut fl) = (1.0, 1.0);
+    loop {
+        let (w_r, w_l) = match (&o.inputs, q) {
+            (Some(s), _) => {
+                let k = s.t().partition_point(|&x| x <= t).saturating_sub(1);
+                let get = |c: usize| s.values()[c][k].unwrap_or(0.0);
+                (get(0), get(1))
+            }
+            (None, Some(q)) => {
+                let nu = speed(&o.profile, o.nu, t);
+                (nu, (q + o.dq) * nu)
+            }
+            (None, None) => unreachable!("a plan has q or inputs"),
+        };
+        if o.iota > 0.0 {
+            let s = (t / seg_len) as usize;
+            if s != seg_index {
+                seg_index = s;
+                fr = 1.0 + o.iota * rng.normal();
+                fl = 1.0 + o.iota * rng.normal();
+            }
+        }
+        let (da_r, da_l) = (w_r * fr * dt, w_l * fl * dt);
+        // Encoders measure the wheel rotation (error model of [10]).
+        let noise = |rng: &mut Rng, da: f64| {
+            da + (o.k_encoder * o.k_encoder * da.abs() / o.r_nominal).sqrt() * rng.normal()
+        };
+        let (m_r, m_l) = (noise(rng, da_r), noise(rng, da_l));
+        inputs.push(t, &[Some(m_r / dt), Some(m_l / dt)]);
+        // Slip proportional to the turn rate reduces the rotation that moves the robot.
+        let omega = (r_right * da_r - rb.r_left * da_l) / rb.wheel_base / dt;
+        let keep = 1.0 - o.effects.wheel_slip * omega.abs();
+        let next = step(rb, r_right, pose, da_r * keep, da_l * keep);
+        turned += next.2 - pose.2;
+        pose = next;
+        poses.push(pose);
+        steps += 1;
+        t = steps as f64 * dt; // not accumulated: clean time stamps
+        let done = match (&o.inputs, q) {
+            (Some(s), _) => t >= *s.t().last().unwrap_or(&0.0),
+            _ => turned.abs() >= 2.0 * PI,
+        };
+        if done {
+            break;
+        }
+        if t > o.max_duration {
+            return Err(CalibError::NoLoop {
+                q,
+                turned: turned.abs(),
+                max_duration: o.max_duration,
+                ratio: rb.r_right / rb.r_left,
+            });
+        }
+    }
+    Ok(Drive {
+        inputs,
+        poses,
+        duration: t,
+    })
+}
+
+/// The bearings along a driven trajectory, at the bearing rate (or the
+/// requested count), in camera time, with the effects and the noise.
+fn bearings(o: &SimOptions, d: &Drive, rng: &mut Rng) -> Series {
+    let (rb, dt, duration, poses) = (&o.robot, 1.0 / o.encoder_rate, d.duration, &d.poses);
+    let mut outputs = Series::new(vec!["beta".into()]);
+    let mut k = 0usize;
+    loop {
+        let tc = match o.bearings {
+            Some(n) if k >= n => break,
+            Some(n) => k as f64 * duration / n as f64,
+            None => k as f64 / o.bearing_rate,
+        };
+        if tc > duration + 1e-9 {
+            break;
+        }
+        let te = tc - o.effects.time_offset;
+        k += 1;
+        if te < 0.0 || te > duration {
+            continue;
+        }
+        // Pose at encoder time te: linear interpolation within the 20 ms step.
+        let i = ((te / dt) as usize).min(poses.len() - 2);
+        let f = (te - i as f64 * dt) / dt;
+        let (a, b) = (poses[i], poses[i + 1]);
+        let p = (
+            a.0 + f * (b.0 - a.0),
+            a.1 + f * (b.1 - a.1),
+            a.2 + f * (b.2 - a.2),
+        );
+        let beta = rb.bearing(p.0, p.1, p.2);
+        let e = &o.effects;
+        let meas = (1.0 + e.bearing_scale) * beta
+            + e.bearing_distortion * (2.0 * beta).sin()
+            + e.bearing_bias
+            + o.sigma_beta * rng.normal();
+        outputs.push(tc, &[Some(wrap(meas))]);
+    }
+    outputs
+}
+
+/// A trajectory's truth: its start and, for a circle, its observable modes
+/// (eq. 18 with this trajectory's right-wheel radius; L as in ERRATA.md).
+fn trajectory_truth(
+    o: &SimOptions,
+    name: &str,
+    q: Option<f64>,
+    r_right: f64,
+    pose0: (f64, f64, f64),
+    duration: f64,
+) -> TrajectoryTruth {
+    let rb = &o.robot;
+    let (eta, delta, xi) = (
+        r_right / (2.0 * rb.rho),
+        rb.r_left / r_right,
+        r_right / rb.wheel_base,
+    );
+    let modes = q.map(|q| {
+        let (eta_q, xi_q) = (eta * (1.0 + q * delta), xi * (1.0 - q * delta));
+        (
+            eta_q,
+            xi_q,
+            rb.psi - (xi_q - eta_q * rb.phi.sin()).atan2(eta_q * rb.phi.cos()),
+        )
+    });
+    let theta_rel = pose0.2 - pose0.1.atan2(pose0.0);
+    TrajectoryTruth {
+        name: name.to_string(),
+        q,
+        x0: pose0.0,
+        y0: pose0.1,
+        theta0: pose0.2,
+        mu0: rb.rho / o.d0,
+        gamma0: wrap(theta_rel + rb.phi),
+        duration,
+        eta_q: modes.map(|m| m.0),
+        xi_q: modes.map(|m| m.1),
+        l: modes.map(|m| wrap(m.2)),
+    }
+}
+
+/// Simulate the dataset and its truth.
+pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
+    check(o)?;
+    let rb = &o.robot;
     let mut trajectories = Vec::new();
     let mut truths = Vec::new();
     let plans: Vec<(String, Option<f64>)> = match &o.inputs {
@@ -301,105 +478,9 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
             };
         // Start at distance d0 from the feature, heading so that it lies to the left.
         let pose0 = (o.d0, 0.0, PI / 2.0);
-        let mut pose = pose0;
-        let mut poses = vec![pose];
-        let mut inputs = Series::new(vec!["wR".into(), "wL".into()]);
-        let mut turned = 0.0;
-        let mut t = 0.0;
-        let mut steps = 0u64;
-        let loop_guess =
-            q.map(|q| 2.0 * PI * rb.wheel_base / (o.nu * (rb.r_right - q * rb.r_left)).abs());
-        let seg_len = loop_guess.map_or(f64::INFINITY, |l| l / o.segments as f64);
-        let mut seg_index = usize::MAX;
-        let (mut fr, mut fl) = (1.0, 1.0);
-        loop {
-            let (w_r, w_l) = match (&o.inputs, q) {
-                (Some(s), _) => {
-                    let k = s.t().partition_point(|&x| x <= t).saturating_sub(1);
-                    let get = |c: usize| s.values()[c][k].unwrap_or(0.0);
-                    (get(0), get(1))
-                }
-                (None, Some(q)) => {
-                    let nu = speed(&o.profile, o.nu, t);
-                    (nu, (q + o.dq) * nu)
-                }
-                (None, None) => unreachable!("a plan has q or inputs"),
-            };
-            if o.iota > 0.0 {
-                let s = (t / seg_len) as usize;
-                if s != seg_index {
-                    seg_index = s;
-                    fr = 1.0 + o.iota * rng.normal();
-                    fl = 1.0 + o.iota * rng.normal();
-                }
-            }
-            let (da_r, da_l) = (w_r * fr * dt, w_l * fl * dt);
-            // Encoders measure the wheel rotation (error model of [10]).
-            let noise = |rng: &mut Rng, da: f64| {
-                da + (o.k_encoder * o.k_encoder * da.abs() / o.r_nominal).sqrt() * rng.normal()
-            };
-            let (m_r, m_l) = (noise(&mut rng, da_r), noise(&mut rng, da_l));
-            inputs.push(t, &[Some(m_r / dt), Some(m_l / dt)]);
-            // Slip proportional to the turn rate reduces the rotation that moves the robot.
-            let omega = (r_right * da_r - rb.r_left * da_l) / rb.wheel_base / dt;
-            let keep = 1.0 - o.effects.wheel_slip * omega.abs();
-            let next = step(rb, r_right, pose, da_r * keep, da_l * keep);
-            turned += next.2 - pose.2;
-            pose = next;
-            poses.push(pose);
-            steps += 1;
-            t = steps as f64 * dt; // not accumulated: clean time stamps
-            let done = match (&o.inputs, q) {
-                (Some(s), _) => t >= *s.t().last().unwrap_or(&0.0),
-                _ => turned.abs() >= 2.0 * PI,
-            };
-            if done {
-                break;
-            }
-            if t > o.max_duration {
-                return Err(CalibError::NoLoop {
-                    q: *q,
-                    turned: turned.abs(),
-                    max_duration: o.max_duration,
-                    ratio: rb.r_right / rb.r_left,
-                });
-            }
-        }
-        let duration = t;
-        // Bearings at the bearing rate, in camera time.
-        let mut outputs = Series::new(vec!["beta".into()]);
-        let mut k = 0usize;
-        loop {
-            let tc = match o.bearings {
-                Some(n) if k >= n => break,
-                Some(n) => k as f64 * duration / n as f64,
-                None => k as f64 / o.bearing_rate,
-            };
-            if tc > duration + 1e-9 {
-                break;
-            }
-            let te = tc - o.effects.time_offset;
-            k += 1;
-            if te < 0.0 || te > duration {
-                continue;
-            }
-            // Pose at encoder time te: linear interpolation within the 20 ms step.
-            let i = ((te / dt) as usize).min(poses.len() - 2);
-            let f = (te - i as f64 * dt) / dt;
-            let (a, b) = (poses[i], poses[i + 1]);
-            let p = (
-                a.0 + f * (b.0 - a.0),
-                a.1 + f * (b.1 - a.1),
-                a.2 + f * (b.2 - a.2),
-            );
-            let beta = rb.bearing(p.0, p.1, p.2);
-            let e = &o.effects;
-            let meas = (1.0 + e.bearing_scale) * beta
-                + e.bearing_distortion * (2.0 * beta).sin()
-                + e.bearing_bias
-                + o.sigma_beta * rng.normal();
-            outputs.push(tc, &[Some(wrap(meas))]);
-        }
+        let driven = drive(o, *q, r_right, pose0, &mut rng)?;
+        let outputs = bearings(o, &driven, &mut rng);
+        let duration = driven.duration;
         // The readers refuse such a trajectory (data.rs): refuse to write it.
         if outputs.len() < MIN_OUTPUT_SAMPLES {
             return Err(CalibError::TooFewBearings {
@@ -413,36 +494,10 @@ pub fn simulate(o: &SimOptions) -> Result<(Dataset, Truth), CalibError> {
         if let Some(q) = q {
             meta.insert("q".to_string(), *q);
         }
-        let (eta, delta, xi) = (
-            r_right / (2.0 * rb.rho),
-            rb.r_left / r_right,
-            r_right / rb.wheel_base,
-        );
-        let modes = q.map(|q| {
-            let (eta_q, xi_q) = (eta * (1.0 + q * delta), xi * (1.0 - q * delta));
-            (
-                eta_q,
-                xi_q,
-                rb.psi - (xi_q - eta_q * rb.phi.sin()).atan2(eta_q * rb.phi.cos()),
-            )
-        });
-        let theta_rel = pose0.2 - pose0.1.atan2(pose0.0);
-        truths.push(TrajectoryTruth {
-            name: name.clone(),
-            q: *q,
-            x0: pose0.0,
-            y0: pose0.1,
-            theta0: pose0.2,
-            mu0: rb.rho / o.d0,
-            gamma0: wrap(theta_rel + rb.phi),
-            duration,
-            eta_q: modes.map(|m| m.0),
-            xi_q: modes.map(|m| m.1),
-            l: modes.map(|m| wrap(m.2)),
-        });
+        truths.push(trajectory_truth(o, name, *q, r_right, pose0, duration));
         trajectories.push(Trajectory {
             name: name.clone(),
-            inputs,
+            inputs: driven.inputs,
             outputs,
             meta,
         });

@@ -104,10 +104,6 @@ pub fn landmarks(text: &str, file: &str) -> Result<Vec<(u32, f64, f64)>, DataErr
         .collect()
 }
 
-/// Convert one robot's log into windows of `window` seconds (a window
-/// needs at least `min_measurements` landmark observations, else it is
-/// skipped). Output columns `r<barcode>`, `b<barcode>`; the landmark
-/// positions are each window's constants `lx<barcode>`, `ly<barcode>`.
 /// Vicon poses as outputs (`px`, `py`, `pth`) are sampled this often.
 pub const POSE_INTERVAL: f64 = 0.5;
 
@@ -125,36 +121,43 @@ pub enum MrclamOutputs {
 /// The most windows a log may be cut into.
 const MAX_WINDOWS: f64 = 1e6;
 
-pub fn convert(
-    t: &MrclamText,
-    window: f64,
-    min_measurements: usize,
-    what: MrclamOutputs,
-) -> Result<(Dataset, Vec<WindowTruth>), DataError> {
-    if window.is_nan() || window <= 0.0 {
-        return Err(DataError {
-            file: "--window".into(),
-            row: None,
-            column: None,
-            kind: K::BadWindow,
-        });
+/// A ground-truth row (t, x, y, theta).
+type Pose = (f64, f64, f64, f64);
+
+/// One robot's log, read and checked: the windows are cut from it.
+struct Log {
+    /// Landmarks (barcode, x, y).
+    lms: Vec<(u32, f64, f64)>,
+    /// Odometry (t, v, omega), in time order (checked).
+    odo: Vec<(f64, f64, f64)>,
+    /// Landmark observations (t, barcode, range, bearing), sorted by time;
+    /// other robots' barcodes dropped.
+    meas: Vec<(f64, u32, f64, f64)>,
+    gt: Vec<Pose>,
+    /// Whether `gt` is in time order (as shipped): then cut by bisection.
+    gt_sorted: bool,
+    /// The output columns: `r<barcode>` for each landmark, then `b<barcode>`.
+    cols: Vec<String>,
+}
+
+fn no_rows(file: &str, kind: K) -> DataError {
+    DataError {
+        file: file.into(),
+        row: None,
+        column: None,
+        kind,
     }
-    let lms = landmarks(t.landmarks.0, t.landmarks.1)?;
-    if lms.is_empty() {
-        return Err(DataError {
-            file: t.landmarks.1.into(),
-            row: None,
-            column: None,
-            kind: K::NoLandmarks,
-        });
-    }
+}
+
+/// The odometry rows (t, v, omega); time must not run backwards.
+fn read_odometry(text: &str, file: &str) -> Result<Vec<(f64, f64, f64)>, DataError> {
     let mut odo: Vec<(f64, f64, f64)> = Vec::new();
-    for r in rows(t.odometry.0, t.odometry.1, 3) {
+    for r in rows(text, file, 3) {
         let (line, v) = r?;
         if let Some(last) = odo.last() {
             if v[0] < last.0 {
                 return Err(DataError {
-                    file: t.odometry.1.into(),
+                    file: file.into(),
                     row: Some(line),
                     column: Some("1".into()),
                     kind: K::LogTimeBackwards {
@@ -167,15 +170,19 @@ pub fn convert(
         odo.push((v[0], v[1], v[2]));
     }
     if odo.len() < 2 {
-        return Err(DataError {
-            file: t.odometry.1.into(),
-            row: None,
-            column: None,
-            kind: K::TooFewOdometryRows,
-        });
+        return Err(no_rows(file, K::TooFewOdometryRows));
     }
+    Ok(odo)
+}
+
+/// The observations of the given landmarks, sorted by time.
+fn read_measurements(
+    text: &str,
+    file: &str,
+    lms: &[(u32, f64, f64)],
+) -> Result<Vec<(f64, u32, f64, f64)>, DataError> {
     let mut meas: Vec<(f64, u32, f64, f64)> = Vec::new();
-    for r in rows(t.measurements.0, t.measurements.1, 4) {
+    for r in rows(text, file, 4) {
         let (_, v) = r?;
         let code = v[1] as u32;
         // Other robots' barcodes are not landmarks: skipped.
@@ -184,37 +191,202 @@ pub fn convert(
         }
     }
     meas.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let gt: Vec<(f64, f64, f64, f64)> = match &t.groundtruth {
-        Some((text, file)) => rows(text, file, 4)
-            .map(|r| r.map(|(_, v)| (v[0], v[1], v[2], v[3])))
-            .collect::<Result<_, _>>()?,
-        None => vec![],
-    };
-    // Ground truth in time order (as shipped) is cut by bisection too;
-    // otherwise each window scans it, in file order, as before.
-    let gt_sorted = gt.windows(2).all(|w| w[0].0 <= w[1].0);
-    let mut cols = Vec::new();
-    for (code, _, _) in &lms {
-        cols.push(format!("r{code}"));
+    Ok(meas)
+}
+
+impl Log {
+    fn read(t: &MrclamText) -> Result<Log, DataError> {
+        let lms = landmarks(t.landmarks.0, t.landmarks.1)?;
+        if lms.is_empty() {
+            return Err(no_rows(t.landmarks.1, K::NoLandmarks));
+        }
+        let odo = read_odometry(t.odometry.0, t.odometry.1)?;
+        let meas = read_measurements(t.measurements.0, t.measurements.1, &lms)?;
+        let gt: Vec<Pose> = match &t.groundtruth {
+            Some((text, file)) => rows(text, file, 4)
+                .map(|r| r.map(|(_, v)| (v[0], v[1], v[2], v[3])))
+                .collect::<Result<_, _>>()?,
+            None => vec![],
+        };
+        // Ground truth in time order (as shipped) is cut by bisection too;
+        // otherwise each window scans it, in file order, as before.
+        let gt_sorted = gt.windows(2).all(|w| w[0].0 <= w[1].0);
+        let cols = (lms.iter().map(|(code, _, _)| format!("r{code}")))
+            .chain(lms.iter().map(|(code, _, _)| format!("b{code}")))
+            .collect();
+        Ok(Log {
+            lms,
+            odo,
+            meas,
+            gt,
+            gt_sorted,
+            cols,
+        })
     }
-    for (code, _, _) in &lms {
-        cols.push(format!("b{code}"));
+
+    /// The ground-truth rows with start <= t <= end, in file order.
+    fn poses(&self, start: f64, end: f64) -> Box<dyn Iterator<Item = &Pose> + '_> {
+        in_window(&self.gt, self.gt_sorted, start, end)
     }
-    let nl = lms.len();
-    let (t0, t1) = (odo[0].0, odo[odo.len() - 1].0);
+
+    /// The window [a, b) as the trajectory `name`, or `None` when it has
+    /// fewer than two odometry rows, fewer than `min_measurements`
+    /// observations, or (for Vicon outputs) fewer than two poses.
+    fn window(
+        &self,
+        name: String,
+        (a, b): (f64, f64),
+        min_measurements: usize,
+        what: MrclamOutputs,
+    ) -> Option<Trajectory> {
+        let mut inputs = Series::new(vec!["v".into(), "omega".into()]);
+        // The logs are in time order (odometry checked, measurements
+        // sorted): a window is a slice, found by bisection, so the import
+        // is linear in the log's size, not windows x rows.
+        let odo = &self.odo;
+        let (lo, hi) = (
+            odo.partition_point(|o| o.0 < a),
+            odo.partition_point(|o| o.0 < b),
+        );
+        for &(t, v, w) in &odo[lo..hi] {
+            inputs.push(t, &[Some(v), Some(w)]);
+        }
+        if inputs.len() < 2 {
+            return None;
+        }
+        let start = inputs.t()[0];
+        let end = inputs.t()[inputs.len() - 1];
+        let (outputs, n_meas) = self.observations(start, end);
+        if n_meas < min_measurements {
+            return None;
+        }
+        let outputs = match what {
+            MrclamOutputs::Landmarks => outputs,
+            MrclamOutputs::ViconPoses => {
+                let mut poses = Series::new(vec!["px".into(), "py".into(), "pth".into()]);
+                let mut last = f64::NEG_INFINITY;
+                for g in self.poses(start, end) {
+                    if g.0 >= last + POSE_INTERVAL - 1e-9 {
+                        poses.push(g.0, &[Some(g.1), Some(g.2), Some(g.3)]);
+                        last = g.0;
+                    }
+                }
+                if poses.len() < 2 {
+                    return None;
+                }
+                poses
+            }
+        };
+        let mut meta = BTreeMap::new();
+        for (code, x, y) in &self.lms {
+            meta.insert(format!("lx{code}"), *x);
+            meta.insert(format!("ly{code}"), *y);
+        }
+        Some(Trajectory {
+            name,
+            inputs,
+            outputs,
+            meta,
+        })
+    }
+
+    /// The landmark observations with start <= t <= end, one row each, and
+    /// their number.
+    fn observations(&self, start: f64, end: f64) -> (Series, usize) {
+        let nl = self.lms.len();
+        let mut outputs = Series::new(self.cols.clone());
+        let mut n_meas = 0;
+        let meas = &self.meas;
+        let (lo, hi) = (
+            meas.partition_point(|m| m.0 < start),
+            meas.partition_point(|m| m.0 <= end),
+        );
+        for &(t, code, r, brg) in &meas[lo..hi] {
+            // Only landmarks' codes were kept in `meas`.
+            let Some(i) = self.lms.iter().position(|l| l.0 == code) else {
+                continue;
+            };
+            let mut row = vec![None; 2 * nl];
+            row[i] = Some(r);
+            row[nl + i] = Some(brg);
+            // Same time twice is allowed (two landmarks at once).
+            outputs.push(t, &row);
+            n_meas += 1;
+        }
+        (outputs, n_meas)
+    }
+
+    /// A window's ground truth beside its commanded odometry, `None`
+    /// without ground truth or with fewer than two poses in it.
+    fn truth(&self, traj: &Trajectory) -> Option<WindowTruth> {
+        if self.gt.is_empty() {
+            return None;
+        }
+        let inputs = &traj.inputs;
+        let start = inputs.t()[0];
+        let end = inputs.t()[inputs.len() - 1];
+        // Vicon poses every 0.5 s: summing 100 Hz jitter would inflate the distance.
+        let mut seg: Vec<&Pose> = Vec::new();
+        for g in self.poses(start, end) {
+            if seg.last().is_none_or(|l| g.0 >= l.0 + 0.5) {
+                seg.push(g);
+            }
+        }
+        if seg.len() < 2 {
+            return None;
+        }
+        let dist: f64 = seg
+            .windows(2)
+            .map(|w| ((w[1].1 - w[0].1).powi(2) + (w[1].2 - w[0].2).powi(2)).sqrt())
+            .sum();
+        let turn: f64 = seg.windows(2).map(|w| wrap(w[1].3 - w[0].3)).sum();
+        let (mut cd, mut ct) = (0.0, 0.0);
+        for i in 0..inputs.len() {
+            let dt = if i + 1 < inputs.len() {
+                inputs.t()[i + 1] - inputs.t()[i]
+            } else {
+                end - inputs.t()[i]
+            };
+            cd += inputs.values()[0][i].unwrap_or(0.0).abs() * dt;
+            ct += inputs.values()[1][i].unwrap_or(0.0) * dt;
+        }
+        Some(WindowTruth {
+            name: traj.name.clone(),
+            truth_distance: dist,
+            commanded_distance: cd,
+            truth_turn: turn,
+            commanded_turn: ct,
+            start: [seg[0].1, seg[0].2, seg[0].3],
+        })
+    }
+}
+
+/// Convert one robot's log into windows of `window` seconds (a window
+/// needs at least `min_measurements` landmark observations, else it is
+/// skipped). Output columns `r<barcode>`, `b<barcode>`; the landmark
+/// positions are each window's constants `lx<barcode>`, `ly<barcode>`.
+pub fn convert(
+    t: &MrclamText,
+    window: f64,
+    min_measurements: usize,
+    what: MrclamOutputs,
+) -> Result<(Dataset, Vec<WindowTruth>), DataError> {
+    if window.is_nan() || window <= 0.0 {
+        return Err(no_rows("--window", K::BadWindow));
+    }
+    let log = Log::read(t)?;
+    let (t0, t1) = (log.odo[0].0, log.odo[log.odo.len() - 1].0);
     // The window loop runs once per window: bound it (a tiny --window would
     // otherwise spin for hours over empty windows).
     if (t1 - t0) / window > MAX_WINDOWS {
-        return Err(DataError {
-            file: "--window".into(),
-            row: None,
-            column: None,
-            kind: K::TooManyWindows {
+        return Err(no_rows(
+            "--window",
+            K::TooManyWindows {
                 window,
                 span: t1 - t0,
                 max: MAX_WINDOWS,
             },
-        });
+        ));
     }
     let mut trajectories = Vec::new();
     let mut truths = Vec::new();
@@ -225,122 +397,24 @@ pub fn convert(
             break;
         }
         k += 1;
-        let b = b.min(t1);
-        let mut inputs = Series::new(vec!["v".into(), "omega".into()]);
-        // The logs are in time order (odometry checked, measurements
-        // sorted): a window is a slice, found by bisection, so the import
-        // is linear in the log's size, not windows x rows.
-        let (lo, hi) = (
-            odo.partition_point(|o| o.0 < a),
-            odo.partition_point(|o| o.0 < b),
-        );
-        for &(t, v, w) in &odo[lo..hi] {
-            inputs.push(t, &[Some(v), Some(w)]);
-        }
-        if inputs.len() < 2 {
-            continue;
-        }
-        let start = inputs.t()[0];
-        let end = inputs.t()[inputs.len() - 1];
-        let mut outputs = Series::new(cols.clone());
-        let mut n_meas = 0;
-        let (lo, hi) = (
-            meas.partition_point(|m| m.0 < start),
-            meas.partition_point(|m| m.0 <= end),
-        );
-        for &(t, code, r, brg) in &meas[lo..hi] {
-            // Only landmarks' codes were kept in `meas`.
-            let Some(i) = lms.iter().position(|l| l.0 == code) else {
-                continue;
-            };
-            let mut row = vec![None; 2 * nl];
-            row[i] = Some(r);
-            row[nl + i] = Some(brg);
-            // Same time twice is allowed (two landmarks at once).
-            outputs.push(t, &row);
-            n_meas += 1;
-        }
-        if n_meas < min_measurements {
-            continue;
-        }
-        if what == MrclamOutputs::ViconPoses {
-            outputs = Series::new(vec!["px".into(), "py".into(), "pth".into()]);
-            let mut last = f64::NEG_INFINITY;
-            for g in in_window(&gt, gt_sorted, start, end) {
-                if g.0 >= last + POSE_INTERVAL - 1e-9 {
-                    outputs.push(g.0, &[Some(g.1), Some(g.2), Some(g.3)]);
-                    last = g.0;
-                }
-            }
-            if outputs.len() < 2 {
-                continue;
-            }
-        }
         let name = format!("w{:03}", k - 1);
-        let mut meta = BTreeMap::new();
-        for (code, x, y) in &lms {
-            meta.insert(format!("lx{code}"), *x);
-            meta.insert(format!("ly{code}"), *y);
-        }
-        if !gt.is_empty() {
-            // Vicon poses every 0.5 s: summing 100 Hz jitter would inflate the distance.
-            let mut seg: Vec<&(f64, f64, f64, f64)> = Vec::new();
-            for g in in_window(&gt, gt_sorted, start, end) {
-                if seg.last().is_none_or(|l| g.0 >= l.0 + 0.5) {
-                    seg.push(g);
-                }
-            }
-            if seg.len() >= 2 {
-                let dist: f64 = seg
-                    .windows(2)
-                    .map(|w| ((w[1].1 - w[0].1).powi(2) + (w[1].2 - w[0].2).powi(2)).sqrt())
-                    .sum();
-                let turn: f64 = seg.windows(2).map(|w| wrap(w[1].3 - w[0].3)).sum();
-                let (mut cd, mut ct) = (0.0, 0.0);
-                for i in 0..inputs.len() {
-                    let dt = if i + 1 < inputs.len() {
-                        inputs.t()[i + 1] - inputs.t()[i]
-                    } else {
-                        end - inputs.t()[i]
-                    };
-                    cd += inputs.values()[0][i].unwrap_or(0.0).abs() * dt;
-                    ct += inputs.values()[1][i].unwrap_or(0.0) * dt;
-                }
-                truths.push(WindowTruth {
-                    name: name.clone(),
-                    truth_distance: dist,
-                    commanded_distance: cd,
-                    truth_turn: turn,
-                    commanded_turn: ct,
-                    start: [seg[0].1, seg[0].2, seg[0].3],
-                });
-            }
-        }
-        trajectories.push(Trajectory {
-            name,
-            inputs,
-            outputs,
-            meta,
-        });
+        let Some(traj) = log.window(name, (a, b.min(t1)), min_measurements, what) else {
+            continue;
+        };
+        truths.extend(log.truth(&traj));
+        trajectories.push(traj);
     }
-    if what == MrclamOutputs::ViconPoses && gt.is_empty() {
-        return Err(DataError {
-            file: t.odometry.1.into(),
-            row: None,
-            column: None,
-            kind: K::NeedsGroundTruth,
-        });
+    if what == MrclamOutputs::ViconPoses && log.gt.is_empty() {
+        return Err(no_rows(t.odometry.1, K::NeedsGroundTruth));
     }
     if trajectories.is_empty() {
-        return Err(DataError {
-            file: t.measurements.1.into(),
-            row: None,
-            column: None,
-            kind: K::NoWindow {
+        return Err(no_rows(
+            t.measurements.1,
+            K::NoWindow {
                 window,
                 min_measurements,
             },
-        });
+        ));
     }
     let meta = DatasetMeta {
         model: Some(match what {

@@ -8,7 +8,7 @@
 //! organised by trajectory: a trajectory's initial state affects only its
 //! own residuals.
 
-use crate::lsq::{solve_symmetric, LmOptions};
+use crate::lsq::{dot, levenberg_marquardt, solve_symmetric, LmModel, LmOptions, LmResult};
 use crate::normal::{cancel_point, JacStore, Layout, Normal, Problem, Rows};
 use crate::options::{FitOptions, FitTrajectory};
 use crate::predict::Predictor;
@@ -90,10 +90,6 @@ fn gn_distance(l: &Normal) -> f64 {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
 fn mat_vec(m: &[Vec<f64>], v: &[f64]) -> Vec<f64> {
     m.iter().map(|row| dot(row, v)).collect()
 }
@@ -164,6 +160,119 @@ fn inverse(a: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
     )
 }
 
+/// The fit as the core loop's problem ([`LmModel`]): normal equations
+/// assembled by trajectory blocks from streamed rows, and NL2SOL's secant
+/// model of the residuals' curvature near the optimum.
+struct Blocks<'p, 'a> {
+    prob: &'p Problem<'a>,
+    store: JacStore,
+    /// The current point's linearisation.
+    cur: Normal,
+    /// Gauss-Newton leaves out the residuals' curvature; where it matters
+    /// (a weakly determined direction whose noise-driven curvature is
+    /// comparable to J^T J) plain steps zig-zag or creep. `s_mat`
+    /// approximates it by secant updates; each step uses the model (with
+    /// or without it: `augmented`) that predicted the last reduction better.
+    s_mat: Vec<Vec<f64>>,
+    augmented: bool,
+    /// Whether the last iteration's first trial failed: then this one's
+    /// first trial is costed before it is linearised too.
+    retried: bool,
+    /// Converged when the Gauss-Newton distance ([`gn_distance`]) falls
+    /// below this.
+    step_tolerance: f64,
+}
+
+impl LmModel for Blocks<'_, '_> {
+    type Error = FitError;
+    type Trial = Normal;
+
+    fn begin_iteration(&mut self, _x: &[f64]) -> bool {
+        gn_distance(&self.cur) >= self.step_tolerance
+    }
+
+    fn normal(&self) -> (&[Vec<f64>], &[f64]) {
+        (&self.cur.jtj, &self.cur.jtr)
+    }
+
+    fn curvature(&self) -> Option<&[Vec<f64>]> {
+        self.augmented.then_some(&self.s_mat[..])
+    }
+
+    fn drop_curvature(&mut self) -> bool {
+        std::mem::replace(&mut self.augmented, false)
+    }
+
+    fn trial(
+        &mut self,
+        theta: &[f64],
+        cand: &mut [f64],
+        cost: f64,
+        attempt: usize,
+    ) -> Result<Option<(f64, Normal)>, FitError> {
+        // The first trial point of an iteration is linearised at once:
+        // accepted steps (most, near the optimum) then need no second
+        // prediction. After a rejection, trials are costed first, and
+        // so is the first trial after an iteration that needed one:
+        // a fit whose damping cycles (MRCLAM's lag fits rejected the
+        // first trial of 15-18 of 22-26 iterations) would otherwise
+        // pay for sensitivities it discards.
+        if (attempt > 0 || self.retried) && !self.prob.cost(cand).is_ok_and(|c| c < cost) {
+            return Ok(None);
+        }
+        // A rejected trial without a spare overwrote the current
+        // rows: they are computed again (the same numbers: the same
+        // point and weighting).
+        if !self.store.valid {
+            self.prob.normal(theta, false, Rows::Keep(&self.store))?;
+            self.store.valid = true;
+        }
+        match self.prob.normal(cand, false, Rows::Trial(&self.store)) {
+            Ok(next) => Ok(Some((next.cost, next))),
+            Err(_) => {
+                self.store.settle(false);
+                Ok(None)
+            }
+        }
+    }
+
+    fn reject(&mut self, _next: Normal) {
+        self.store.settle(false);
+    }
+
+    fn accept(&mut self, next: Normal, step: &[f64], attempt: usize) -> bool {
+        self.store.settle(true);
+        let cur = &self.cur;
+        let jtj_s = mat_vec(&cur.jtj, step);
+        // Which model predicted this reduction better (cost = r^T r).
+        let actual = cur.cost - next.cost;
+        let gn = 2.0 * dot(step, &cur.jtr) - dot(step, &jtj_s);
+        let aug = gn - dot(step, &mat_vec(&self.s_mat, step));
+        // The secant model only near the optimum (within a few
+        // standard deviations): far away the curvature it learnt
+        // from long steps misleads.
+        self.augmented = (aug - actual).abs() < (gn - actual).abs() && gn_distance(&next) < 3.0;
+        // Half-cost gradient g = -J^T r: y = g+ - g, and the part
+        // of it that J+^T J+ does not explain, -(J+ - J)^T r+.
+        let y: Vec<f64> = cur.jtr.iter().zip(&next.jtr).map(|(a, b)| a - b).collect();
+        let ys: Vec<f64> = next
+            .old_jt
+            .iter()
+            .zip(&next.jtr)
+            .map(|(a, b)| a - b)
+            .collect();
+        secant_update(&mut self.s_mat, step, &y, &ys);
+        self.cur = next;
+        self.retried = attempt > 0;
+        // Stalled: a larger step was just rejected (the quadratic
+        // model fails beyond this trust region), and within it both
+        // the predicted and the actual decrease are below
+        // STALL_DECREASE. What is left lies along directions the
+        // model cannot reach, and the fit would creep there.
+        attempt > 0 && actual < STALL_DECREASE && gn < STALL_DECREASE
+    }
+}
+
 /// Fit `params` (the predictor's params) and each trajectory's initial dynamic state.
 pub fn fit(
     p: &Predictor,
@@ -188,140 +297,56 @@ pub(crate) fn fit_with(
 ) -> Result<FitResult, FitError> {
     let prob = Problem::new(p, trajs, opts, init_params, init_states)?;
     let (lay, n_params) = (&prob.lay, prob.lay.n_params);
-    let mut theta = theta_of(init_params, init_states);
     let n = lay.len();
-    // The core's damping schedule; the loop itself stays here for the secant
-    // model and the trajectory blocks.
     let lm = LmOptions {
         max_iterations: opts.max_iterations,
         max_tries: 20,
         relative_cost_tolerance: opts.cost_tolerance,
+        indefinite_fallback: true,
         ..LmOptions::default()
     };
-    let mut lambda = lm.initial_damping;
-    let mut iterations = 0;
     // The current point's Jacobian rows, for the secant update (with a
     // spare beside them while two fit in memory, see SPARE_JACOBIAN_BYTES).
     let mut store = JacStore::new(trajs.len(), spare.unwrap_or_else(|| prob.spare_fits()));
-    let mut cur = prob.normal(&theta, true, Rows::Keep(&store))?;
+    let theta = theta_of(init_params, init_states);
+    let cur = prob.normal(&theta, true, Rows::Keep(&store))?;
     store.valid = true;
-    // Gauss-Newton leaves out the residuals' curvature; where it matters
-    // (a weakly determined direction whose noise-driven curvature is
-    // comparable to J^T J) plain steps zig-zag or creep. `s_mat`
-    // approximates it by secant updates; each step uses the model (with
-    // or without it) that predicted the last reduction better.
-    let mut s_mat = vec![vec![0.0; n]; n];
-    let mut augmented = false;
-    // Whether the last iteration's first trial failed: then this one's
-    // first trial is costed before it is linearised too.
-    let mut retried = false;
+    let mut run = LmResult {
+        x: theta,
+        cost: cur.cost,
+        iterations: 0,
+        converged: false,
+    };
+    let mut model = Blocks {
+        prob: &prob,
+        store,
+        cur,
+        s_mat: vec![vec![0.0; n]; n],
+        augmented: false,
+        retried: false,
+        step_tolerance: opts.step_tolerance,
+    };
     // With input noise: a second pass with the covariance at the first
-    // estimate (the curvature model carries over: the residuals barely change).
+    // estimate (the curvature model carries over: the residuals barely
+    // change; the damping starts afresh).
     let passes = if opts.input_noise.is_some() { 2 } else { 1 };
     for pass in 0..passes {
         if pass > 0 {
-            cur = prob.normal(&theta, true, Rows::Keep(&store))?;
-            store.valid = true;
-            lambda = lm.initial_damping;
+            model.cur = prob.normal(&run.x, true, Rows::Keep(&model.store))?;
+            model.store.valid = true;
+            run.cost = model.cur.cost;
         }
         // A pass that only places the whitening for the next one needs the
         // estimate to a tenth of its uncertainty, not more.
-        let step_tolerance = if pass + 1 < passes {
+        model.step_tolerance = if pass + 1 < passes {
             opts.step_tolerance.max(0.1)
         } else {
             opts.step_tolerance
         };
-        loop {
-            if iterations >= lm.max_iterations || gn_distance(&cur) < step_tolerance {
-                break;
-            }
-            iterations += 1;
-            let mut improved = false;
-            for attempt in 0..lm.max_tries {
-                let mut a = cur.jtj.clone();
-                for (i, row) in a.iter_mut().enumerate() {
-                    if augmented {
-                        for (x, sx) in row.iter_mut().zip(&s_mat[i]) {
-                            *x += sx;
-                        }
-                    }
-                    row[i] += lambda * cur.jtj[i][i].max(lm.min_diagonal);
-                }
-                let step = solve_symmetric(&a, &cur.jtr).filter(|st| dot(st, &cur.jtr) > 0.0);
-                let Some(step) = step else {
-                    if augmented {
-                        augmented = false;
-                    } else {
-                        lambda *= lm.damping_up_singular;
-                    }
-                    continue;
-                };
-                let cand: Vec<f64> = theta.iter().zip(&step).map(|(t, s)| t + s).collect();
-                // The first trial point of an iteration is linearised at once:
-                // accepted steps (most, near the optimum) then need no second
-                // prediction. After a rejection, trials are costed first, and
-                // so is the first trial after an iteration that needed one:
-                // a fit whose damping cycles (MRCLAM's lag fits rejected the
-                // first trial of 15-18 of 22-26 iterations) would otherwise
-                // pay for sensitivities it discards.
-                if (attempt > 0 || retried) && !prob.cost(&cand).is_ok_and(|c| c < cur.cost) {
-                    lambda *= lm.damping_up;
-                    continue;
-                }
-                // A rejected trial without a spare overwrote the current
-                // rows: they are computed again (the same numbers: the same
-                // point and weighting).
-                if !store.valid {
-                    prob.normal(&theta, false, Rows::Keep(&store))?;
-                    store.valid = true;
-                }
-                let next = match prob.normal(&cand, false, Rows::Trial(&store)) {
-                    Ok(next) if next.cost < cur.cost => next,
-                    _ => {
-                        store.settle(false);
-                        lambda *= lm.damping_up;
-                        continue;
-                    }
-                };
-                store.settle(true);
-                let rel = (cur.cost - next.cost) / cur.cost.max(1e-300);
-                let jtj_s = mat_vec(&cur.jtj, &step);
-                // Which model predicted this reduction better (cost = r^T r).
-                let actual = cur.cost - next.cost;
-                let gn = 2.0 * dot(&step, &cur.jtr) - dot(&step, &jtj_s);
-                let aug = gn - dot(&step, &mat_vec(&s_mat, &step));
-                // The secant model only near the optimum (within a few
-                // standard deviations): far away the curvature it learnt
-                // from long steps misleads.
-                augmented = (aug - actual).abs() < (gn - actual).abs() && gn_distance(&next) < 3.0;
-                // Half-cost gradient g = -J^T r: y = g+ - g, and the part
-                // of it that J+^T J+ does not explain, -(J+ - J)^T r+.
-                let y: Vec<f64> = cur.jtr.iter().zip(&next.jtr).map(|(a, b)| a - b).collect();
-                let ys: Vec<f64> = next
-                    .old_jt
-                    .iter()
-                    .zip(&next.jtr)
-                    .map(|(a, b)| a - b)
-                    .collect();
-                secant_update(&mut s_mat, &step, &y, &ys);
-                theta = cand;
-                cur = next;
-                retried = attempt > 0;
-                lambda = (lambda / lm.damping_down).max(lm.min_damping);
-                // Stalled: a larger step was just rejected (the quadratic
-                // model fails beyond this trust region), and within it both
-                // the predicted and the actual decrease are below
-                // STALL_DECREASE. What is left lies along directions the
-                // model cannot reach, and the fit would creep there.
-                let stalled = attempt > 0 && actual < STALL_DECREASE && gn < STALL_DECREASE;
-                improved = rel > lm.relative_cost_tolerance && !stalled;
-                break;
-            }
-            if !improved {
-                break;
-            }
-        }
+        run = levenberg_marquardt(&mut model, run, &lm)?;
     }
+    let Blocks { store, mut cur, .. } = model;
+    let (theta, iterations) = (run.x, run.iterations);
     // A cancel makes every trial above fail, which reads as convergence.
     cancel_point()?;
     // With input noise the last linearisation's weighting was placed at the

@@ -1,9 +1,11 @@
 //! The least-squares core: one Levenberg–Marquardt loop with one options
 //! struct, and the dense solves of its damped normal equations (nalgebra's
 //! Cholesky; LU with partial pivoting where round-off or a secant term makes
-//! the matrix indefinite). The trajectory-blocked fitter (`fit.rs`) assembles
-//! its normal equations by blocks and solves them here; the small dense
-//! problems of the paper's estimator and of the diagnosis run [`minimise`].
+//! the matrix indefinite). One loop, [`levenberg_marquardt`], over an
+//! [`LmModel`]: the trajectory-blocked fitter (`fit.rs`) streams its rows
+//! into block normal equations and adds a secant model; the small dense
+//! problems of the paper's estimator and of the diagnosis run [`minimise`],
+//! whose normal equations come from a closure.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -32,6 +34,10 @@ pub struct LmOptions {
     pub relative_cost_tolerance: f64,
     /// Accept a step that leaves the cost equal (not only lower).
     pub accept_equal_cost: bool,
+    /// When the damped matrix is not positive definite (a secant curvature
+    /// term can make it so), solve it by LU and keep the step only if it
+    /// descends; otherwise only Cholesky, a failure raising the damping.
+    pub indefinite_fallback: bool,
 }
 
 impl Default for LmOptions {
@@ -47,11 +53,12 @@ impl Default for LmOptions {
             min_diagonal: 1e-12,
             relative_cost_tolerance: 1e-12,
             accept_equal_cost: false,
+            indefinite_fallback: false,
         }
     }
 }
 
-/// Where [`minimise`] stopped.
+/// Where [`minimise`] (or a run of the core loop) stopped.
 #[derive(Clone, Debug)]
 pub struct LmResult {
     pub x: Vec<f64>,
@@ -61,6 +68,191 @@ pub struct LmResult {
     /// The last accepted step met the relative cost tolerance (otherwise the
     /// iteration or damping budget, or a cancel, ended the loop).
     pub converged: bool,
+}
+
+/// What the one Levenberg–Marquardt loop ([`levenberg_marquardt`]) asks of a
+/// problem: its normal equations at the current point (however they are
+/// accumulated: `minimise` takes them from a closure, the trajectory fitter
+/// streams rows into them), the cost of a trial point, and what to do when a
+/// trial is accepted. The loop owns the damping schedule, the trial count,
+/// the acceptance and the convergence test.
+pub(crate) trait LmModel {
+    type Error;
+    /// What the model keeps of a trial point until it is accepted or
+    /// rejected (its linearisation, say).
+    type Trial;
+    /// Before each iteration, at the current point `x`: have the normal
+    /// equations ready; `false` ends the loop (unconverged) first.
+    fn begin_iteration(&mut self, x: &[f64]) -> bool;
+    /// `J^T J` and `J^T r` at the current point (`J = -dr/dx`).
+    fn normal(&self) -> (&[Vec<f64>], &[f64]);
+    /// A term added to `J^T J` before damping (a secant model of the
+    /// residuals' curvature), if any.
+    fn curvature(&self) -> Option<&[Vec<f64>]> {
+        None
+    }
+    /// The damped matrix could not be solved: `true` when the model dropped
+    /// its curvature term (then the trial is repeated at the same damping).
+    fn drop_curvature(&mut self) -> bool {
+        false
+    }
+    /// The cost at `cand` (the current point `x` plus a step, which the
+    /// model may map onto its chart) with what it keeps of the trial, or
+    /// `None` for a trial the model rejects itself (a failed prediction, or
+    /// a cheaper test that showed no decrease below the current `cost`).
+    /// Trial `attempt` of this iteration, counting from 0.
+    fn trial(
+        &mut self,
+        x: &[f64],
+        cand: &mut [f64],
+        cost: f64,
+        attempt: usize,
+    ) -> Result<Option<(f64, Self::Trial)>, Self::Error>;
+    /// The trial was accepted: `step` was taken. `true` when the model
+    /// sees the fit stalled (the loop then ends as converged).
+    fn accept(&mut self, trial: Self::Trial, step: &[f64], attempt: usize) -> bool;
+    /// The trial was rejected: its cost was not lower.
+    fn reject(&mut self, _trial: Self::Trial) {}
+}
+
+/// The one Levenberg–Marquardt loop, from `start` (its cost already known;
+/// its iterations count on into `opts.max_iterations`, so that a second
+/// pass shares the budget). Each trial solves
+/// `(J^T J + S + lambda diag(max(J^T J_ii, min_diagonal))) step = J^T r`
+/// with `S` the model's curvature term; see [`LmOptions`] for the schedule.
+pub(crate) fn levenberg_marquardt<M: LmModel>(
+    model: &mut M,
+    start: LmResult,
+    opts: &LmOptions,
+) -> Result<LmResult, M::Error> {
+    let LmResult {
+        mut x,
+        cost: mut c,
+        mut iterations,
+        ..
+    } = start;
+    let mut lambda = opts.initial_damping;
+    let mut converged = false;
+    while iterations < opts.max_iterations {
+        if !model.begin_iteration(&x) {
+            break;
+        }
+        iterations += 1;
+        let mut improved = false;
+        for attempt in 0..opts.max_tries {
+            let Some(step) = damped_step(model, lambda, opts) else {
+                if !model.drop_curvature() {
+                    lambda *= opts.damping_up_singular;
+                }
+                continue;
+            };
+            let mut cand: Vec<f64> = x.iter().zip(&step).map(|(a, b)| a + b).collect();
+            let (c2, trial) = match model.trial(&x, &mut cand, c, attempt)? {
+                Some((c2, t)) if c2 < c || (opts.accept_equal_cost && c2 <= c) => (c2, t),
+                Some((_, t)) => {
+                    model.reject(t);
+                    lambda *= opts.damping_up;
+                    continue;
+                }
+                None => {
+                    lambda *= opts.damping_up;
+                    continue;
+                }
+            };
+            let stalled = model.accept(trial, &step, attempt);
+            // Relative decrease, as a product so that a zero cost is not divided by.
+            improved = c - c2 > opts.relative_cost_tolerance * c.max(1e-300) && !stalled;
+            x = cand;
+            c = c2;
+            lambda = (lambda / opts.damping_down).max(opts.min_damping);
+            break;
+        }
+        if !improved {
+            converged = true;
+            break;
+        }
+    }
+    Ok(LmResult {
+        x,
+        cost: c,
+        iterations,
+        converged,
+    })
+}
+
+/// The step of the damped normal equations at `lambda`, or `None` when they
+/// cannot be solved (see [`LmOptions::indefinite_fallback`]).
+fn damped_step<M: LmModel>(model: &M, lambda: f64, opts: &LmOptions) -> Option<Vec<f64>> {
+    let (jtj, jtr) = model.normal();
+    let curvature = model.curvature();
+    let mut a = jtj.to_vec();
+    for (i, row) in a.iter_mut().enumerate() {
+        if let Some(s) = curvature {
+            for (x, sx) in row.iter_mut().zip(&s[i]) {
+                *x += sx;
+            }
+        }
+        row[i] += lambda * jtj[i][i].max(opts.min_diagonal);
+    }
+    if opts.indefinite_fallback {
+        // A descent direction only: an indefinite matrix can give a step
+        // that raises the cost to first order.
+        return solve_symmetric(&a, jtr).filter(|st| dot(st, jtr) > 0.0);
+    }
+    let n = jtr.len();
+    let m = DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let step = m.cholesky()?.solve(&DVector::from_column_slice(jtr));
+    Some(step.iter().copied().collect())
+}
+
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// [`minimise`]'s problem: normal equations and cost from closures.
+struct Closures<C, N, H> {
+    cost: C,
+    normal: N,
+    chart: H,
+    jtj: Vec<Vec<f64>>,
+    jtr: Vec<f64>,
+}
+
+impl<C, N, H> LmModel for Closures<C, N, H>
+where
+    C: FnMut(&[f64]) -> f64,
+    N: FnMut(&[f64]) -> (DMatrix<f64>, DVector<f64>),
+    H: Fn(&mut [f64]),
+{
+    type Error = std::convert::Infallible;
+    type Trial = ();
+    fn begin_iteration(&mut self, x: &[f64]) -> bool {
+        if obsan_expr::cancel_requested() {
+            return false;
+        }
+        let (jtj, jtr) = (self.normal)(x);
+        self.jtj = (0..jtj.nrows())
+            .map(|i| jtj.row(i).iter().copied().collect())
+            .collect();
+        self.jtr = jtr.iter().copied().collect();
+        true
+    }
+    fn normal(&self) -> (&[Vec<f64>], &[f64]) {
+        (&self.jtj, &self.jtr)
+    }
+    fn trial(
+        &mut self,
+        _x: &[f64],
+        cand: &mut [f64],
+        _cost: f64,
+        _attempt: usize,
+    ) -> Result<Option<(f64, ())>, Self::Error> {
+        (self.chart)(cand);
+        Ok(Some(((self.cost)(cand), ())))
+    }
+    fn accept(&mut self, _trial: (), _step: &[f64], _attempt: usize) -> bool {
+        false
+    }
 }
 
 /// Minimise `cost(x) = |r(x)|^2` from `x0`. `normal(x)` returns `(J^T J, J^T r)`
@@ -73,54 +265,26 @@ pub struct LmResult {
 pub fn minimise(
     x0: &[f64],
     mut cost: impl FnMut(&[f64]) -> f64,
-    mut normal: impl FnMut(&[f64]) -> (DMatrix<f64>, DVector<f64>),
+    normal: impl FnMut(&[f64]) -> (DMatrix<f64>, DVector<f64>),
     chart: impl Fn(&mut [f64]),
     opts: &LmOptions,
 ) -> LmResult {
-    let mut x = x0.to_vec();
-    let mut c = cost(&x);
-    let mut lambda = opts.initial_damping;
-    let mut iterations = 0;
-    let mut converged = false;
-    while iterations < opts.max_iterations {
-        if obsan_expr::cancel_requested() {
-            break;
-        }
-        iterations += 1;
-        let (jtj, jtr) = normal(&x);
-        let mut improved = false;
-        for _ in 0..opts.max_tries {
-            let mut a = jtj.clone();
-            for i in 0..a.nrows() {
-                a[(i, i)] += lambda * jtj[(i, i)].max(opts.min_diagonal);
-            }
-            let Some(step) = a.cholesky().map(|ch| ch.solve(&jtr)) else {
-                lambda *= opts.damping_up_singular;
-                continue;
-            };
-            let mut cand: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-            chart(&mut cand);
-            let c2 = cost(&cand);
-            if c2 < c || (opts.accept_equal_cost && c2 <= c) {
-                // Relative decrease, as a product so that a zero cost is not divided by.
-                improved = c - c2 > opts.relative_cost_tolerance * c.max(1e-300);
-                x = cand;
-                c = c2;
-                lambda = (lambda / opts.damping_down).max(opts.min_damping);
-                break;
-            }
-            lambda *= opts.damping_up;
-        }
-        if !improved {
-            converged = true;
-            break;
-        }
-    }
-    LmResult {
-        x,
-        cost: c,
-        iterations,
-        converged,
+    let start = LmResult {
+        x: x0.to_vec(),
+        cost: cost(x0),
+        iterations: 0,
+        converged: false,
+    };
+    let mut model = Closures {
+        cost,
+        normal,
+        chart,
+        jtj: Vec::new(),
+        jtr: Vec::new(),
+    };
+    match levenberg_marquardt(&mut model, start, opts) {
+        Ok(r) => r,
+        Err(never) => match never {},
     }
 }
 
@@ -164,6 +328,111 @@ mod tests {
             out.x
         );
         assert!(out.cost < 1e-12);
+    }
+
+    /// A linear problem `r = b - x` (J = I) whose model counts the loop's
+    /// calls and can declare itself stalled: what fit.rs's model relies on.
+    struct Linear {
+        b: Vec<f64>,
+        jtj: Vec<Vec<f64>>,
+        jtr: Vec<f64>,
+        stall: bool,
+        curvature: Option<Vec<Vec<f64>>>,
+        dropped: usize,
+    }
+
+    impl LmModel for Linear {
+        type Error = ();
+        type Trial = ();
+        fn begin_iteration(&mut self, x: &[f64]) -> bool {
+            let n = x.len();
+            self.jtj = (0..n)
+                .map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect())
+                .collect();
+            self.jtr = self.b.iter().zip(x).map(|(b, x)| b - x).collect();
+            true
+        }
+        fn normal(&self) -> (&[Vec<f64>], &[f64]) {
+            (&self.jtj, &self.jtr)
+        }
+        fn curvature(&self) -> Option<&[Vec<f64>]> {
+            self.curvature.as_deref()
+        }
+        fn drop_curvature(&mut self) -> bool {
+            self.dropped += 1;
+            self.curvature.take().is_some()
+        }
+        fn trial(
+            &mut self,
+            _x: &[f64],
+            cand: &mut [f64],
+            _cost: f64,
+            _attempt: usize,
+        ) -> Result<Option<(f64, ())>, ()> {
+            let c = self
+                .b
+                .iter()
+                .zip(&*cand)
+                .map(|(b, x)| (b - x).powi(2))
+                .sum();
+            Ok(Some((c, ())))
+        }
+        fn accept(&mut self, _trial: (), _step: &[f64], _attempt: usize) -> bool {
+            self.stall
+        }
+    }
+
+    fn linear(stall: bool, curvature: Option<Vec<Vec<f64>>>) -> (Linear, LmResult) {
+        let b = vec![3.0, -1.0];
+        let start = LmResult {
+            cost: b.iter().map(|v| v * v).sum(),
+            x: vec![0.0, 0.0],
+            iterations: 0,
+            converged: false,
+        };
+        let model = Linear {
+            b,
+            jtj: Vec::new(),
+            jtr: Vec::new(),
+            stall,
+            curvature,
+            dropped: 0,
+        };
+        (model, start)
+    }
+
+    /// The loop's contract with a model: a stall ends it after the accepted
+    /// step, converged; a start whose iterations already fill the budget
+    /// runs none (fit.rs's second pass shares the budget); a curvature term
+    /// that leaves no descent step is dropped and the trial
+    /// repeated, not the damping raised (then the first step is the one
+    /// without it: damping 1e-3 on J = I gives x = b / 1.001).
+    #[test]
+    fn the_loop_honours_its_model() {
+        let opts = LmOptions {
+            indefinite_fallback: true,
+            ..LmOptions::default()
+        };
+        let (mut m, start) = linear(true, None);
+        let out = levenberg_marquardt(&mut m, start, &opts).unwrap();
+        assert_eq!((out.iterations, out.converged), (1, true));
+
+        let (mut m, mut start) = linear(false, None);
+        start.iterations = opts.max_iterations;
+        let out = levenberg_marquardt(&mut m, start, &opts).unwrap();
+        assert_eq!(
+            (out.iterations, out.x.clone()),
+            (opts.max_iterations, vec![0.0, 0.0])
+        );
+
+        // With -2 I the damped matrix is -0.999 I: its LU step ascends.
+        let minus = vec![vec![-2.0, 0.0], vec![0.0, -2.0]];
+        let (mut m, start) = linear(true, Some(minus));
+        let out = levenberg_marquardt(&mut m, start, &opts).unwrap();
+        assert_eq!(m.dropped, 1);
+        for (x, b) in out.x.iter().zip([3.0, -1.0]) {
+            assert!((x - b / 1.001).abs() < 1e-12, "{:?}", out.x);
+        }
     }
 
     #[test]

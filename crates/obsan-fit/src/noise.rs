@@ -458,6 +458,11 @@ pub fn input_noise_from_samples(
 /// Minimise `f` within the box `[lo, hi]` by BFGS (projected steps,
 /// backtracking line search, central-difference gradients). Returns the
 /// minimiser and the iterations used.
+///
+/// Not the least-squares core: the restricted likelihood is not a sum of
+/// squares (its log-determinants, module docs), so Levenberg-Marquardt's
+/// `J^T J` does not model it. Not argmin: its BFGS and L-BFGS take no box
+/// bounds (it has no L-BFGS-B), and the log-levels need them.
 fn bfgs(
     f: &(dyn Fn(&[f64]) -> f64 + Sync),
     x0: Vec<f64>,

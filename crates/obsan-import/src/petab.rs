@@ -345,7 +345,9 @@ fn read_observables(text: &str) -> Result<Vec<Placed<(usize, usize)>>, ImportErr
 }
 
 /// Conditions: id -> [(column id, value text, place)], and each column's header place.
-type Conditions = Vec<(String, Vec<(String, String, (usize, usize))>)>;
+/// A condition's id and the values it sets: (column id, value, place).
+type Condition = (String, Vec<(String, String, (usize, usize))>);
+type Conditions = Vec<Condition>;
 
 fn read_conditions(text: &str) -> Result<Conditions, ImportError> {
     let t = Table::read(text)?;
@@ -433,18 +435,15 @@ fn in_file(file: PetabFile) -> impl Fn(ImportError) -> PetabError {
     move |error| PetabError { file, error }
 }
 
-/// Translate a PEtab problem into `.sys` text. `condition`: only this
-/// simulation condition (default: every condition the measurements use).
-pub fn petab_to_sys(
+/// The conditions to copy the model for, the measurement table's overrides,
+/// and whether any measurement asks for preequilibration: the conditions the
+/// measurements use (all of the table without measurements), narrowed to
+/// `condition` if given; one unnamed condition when there is none.
+fn used_conditions(
     t: &PetabTexts,
-    origin: &str,
+    conditions: &Conditions,
     condition: Option<&str>,
-) -> Result<Converted, PetabError> {
-    use PetabFile as F;
-    let m = Sbml::read(t.sbml).map_err(in_file(F::Sbml))?;
-    let table = read_parameters(t.parameters).map_err(in_file(F::Parameters))?;
-    let observables = read_observables(t.observables).map_err(in_file(F::Observables))?;
-    let conditions = read_conditions(t.conditions).map_err(in_file(F::Conditions))?;
+) -> Result<(Vec<String>, Overrides, bool), PetabError> {
     let (mut used, over, preeq) = match t.measurements.is_empty() {
         false => read_measurements(&t.measurements)?,
         true => (
@@ -456,7 +455,7 @@ pub fn petab_to_sys(
     if let Some(c) = condition {
         if !conditions.iter().any(|x| x.0 == c) {
             return Err(PetabError {
-                file: F::Conditions,
+                file: PetabFile::Conditions,
                 error: ImportError::at(1, 1, format!("no condition '{c}' in the condition table")),
             });
         }
@@ -465,16 +464,23 @@ pub fn petab_to_sys(
             used.push(c.to_string());
         }
     }
-    let measured_all = t.measurements.is_empty();
     if used.is_empty() {
         used.push(String::new());
     }
-    let states: Vec<String> = m.eqs.iter().map(|e| e.0.clone()).collect();
+    Ok((used, over, preeq))
+}
+
+/// The observables' formulas, with assignment rules and sizes substituted;
+/// their names checked first, at their place.
+fn observable_formulas(
+    m: &Sbml,
+    table: &ParamTable,
+    observables: &[Placed<(usize, usize)>],
+) -> Result<Vec<Placed<(usize, usize)>>, PetabError> {
     let mut known: Vec<String> = m.known().iter().map(|s| s.to_string()).collect();
     known.extend(table.iter().map(|p| p.0.clone()));
-    // The observables' formulas, with assignment rules and sizes substituted.
     let mut formulas = Vec::new();
-    for (o, f, at) in &observables {
+    for (o, f, at) in observables {
         let mut k = known.clone();
         let prefix = "observableParameter";
         let mut ph = Vec::new();
@@ -492,120 +498,130 @@ pub fn petab_to_sys(
             &k,
             "an id of the model, the parameter table or this observable's parameters",
         )
-        .map_err(in_file(F::Observables))?;
+        .map_err(in_file(PetabFile::Observables))?;
         let r = m.resolve(f).map_err(|e| PetabError {
-            file: F::Observables,
+            file: PetabFile::Observables,
             error: ImportError::at(at.0, at.1, e.message),
         })?;
         formulas.push((o.clone(), r, *at));
     }
-    let many = used.len() > 1;
-    let mut eqs = Vec::new();
-    let mut outputs: Vec<Placed<Option<(usize, usize)>>> = Vec::new();
-    let mut ignored_init: Vec<String> = Vec::new();
-    for c in &used {
-        let suffix = if many { format!("_{c}") } else { String::new() };
-        let mut set: BTreeMap<String, Ex> = BTreeMap::new();
-        let row = conditions.iter().find(|x| &x.0 == c);
-        for (id, v, at) in row.map_or(&[][..], |r| r.1.as_slice()) {
-            if nan(v) {
-                continue;
-            }
-            let err = |msg: String| PetabError {
-                file: F::Conditions,
-                error: ImportError::at(at.0, at.1, msg),
-            };
-            if states.contains(id) {
-                if !ignored_init.contains(id) {
-                    ignored_init.push(id.clone());
-                }
-                continue;
-            }
-            if m.sizes.contains_key(id) {
-                return Err(err(format!(
-                    "condition '{c}' sets the size of compartment '{id}', which is folded in as a \
-                     number: not supported"
-                )));
-            }
-            if !(m.params.contains(id) || m.consts.contains(id)) {
-                return Err(err(format!(
-                    "column '{id}' is not a parameter, species or compartment of the model"
-                )));
-            }
-            let x = value(v, *at).map_err(|e| PetabError {
-                file: F::Conditions,
-                error: e,
-            })?;
-            if let Ex::Name { name, .. } = &x {
-                if !table.iter().any(|p| &p.0 == name) && !m.params.contains(name) {
-                    return Err(err(format!(
-                        "'{name}' is not in the parameter table (condition '{c}', column '{id}')"
-                    )));
-                }
-            }
-            set.insert(id.clone(), x);
+    Ok(formulas)
+}
+
+/// The values condition `c` sets (its `row` of the condition table):
+/// parameters and compartments without a size, each a number or a
+/// parameter of the table or the model. Initial values of states are not
+/// read: their ids are added to `ignored_init`.
+fn condition_values(
+    m: &Sbml,
+    table: &ParamTable,
+    c: &str,
+    row: Option<&Condition>,
+    ignored_init: &mut Vec<String>,
+) -> Result<BTreeMap<String, Ex>, PetabError> {
+    let mut set: BTreeMap<String, Ex> = BTreeMap::new();
+    for (id, v, at) in row.map_or(&[][..], |r| r.1.as_slice()) {
+        if nan(v) {
+            continue;
         }
-        let ren = |n: &str| -> Option<Ex> {
-            if states.iter().any(|s| s == n) {
-                Some(Ex::Name {
-                    name: format!("{n}{suffix}"),
-                    timed: false,
-                    at: (1, 1),
-                })
-            } else {
-                set.get(n).cloned()
-            }
+        let err = |msg: String| PetabError {
+            file: PetabFile::Conditions,
+            error: ImportError::at(at.0, at.1, msg),
         };
-        for (v, e, at) in &m.eqs {
-            eqs.push((format!("{v}{suffix}"), subst_names(e, &ren), *at));
+        if m.eqs.iter().any(|e| &e.0 == id) {
+            if !ignored_init.contains(id) {
+                ignored_init.push(id.clone());
+            }
+            continue;
         }
-        for (o, f, at) in &formulas {
-            let lists = over.get(&(c.clone(), o.clone()));
-            let lists: Vec<(Vec<String>, usize, usize)> = match lists {
-                Some(l) => l.clone(),
-                None if measured_all => vec![(Vec::new(), 0, 0)],
-                None => continue,
-            };
-            for (j, (ps, file, line)) in lists.iter().enumerate() {
-                let mut vals: BTreeMap<String, Ex> = BTreeMap::new();
-                for (n, p) in ps.iter().enumerate() {
-                    let x = value(p, (*line, 1)).map_err(in_file(F::Measurements(*file)))?;
-                    vals.insert(format!("observableParameter{}_{o}", n + 1), x);
-                }
-                let g = subst_names(f, &|n| vals.get(n).cloned());
-                let mut missing = None;
-                crate::sbml::walk_names(&g, &mut |n| {
-                    if n.starts_with("observableParameter") && missing.is_none() && !ps.is_empty() {
-                        missing = Some(n.to_string());
-                    }
-                });
-                if let Some(n) = missing {
-                    return Err(PetabError {
-                        file: F::Measurements(*file),
-                        error: ImportError::at(
-                            *line,
-                            1,
-                            format!("observable '{o}' needs '{n}', which this row does not give"),
-                        ),
-                    });
-                }
-                let name = if lists.len() > 1 {
-                    format!("{o}{suffix}_{}", j + 1)
-                } else {
-                    format!("{o}{suffix}")
-                };
-                outputs.push((name, subst_names(&g, &ren), Some(*at)));
+        if m.sizes.contains_key(id) {
+            return Err(err(format!(
+                "condition '{c}' sets the size of compartment '{id}', which is folded in as a \
+                 number: not supported"
+            )));
+        }
+        if !(m.params.contains(id) || m.consts.contains(id)) {
+            return Err(err(format!(
+                "column '{id}' is not a parameter, species or compartment of the model"
+            )));
+        }
+        let x = value(v, *at).map_err(|e| PetabError {
+            file: PetabFile::Conditions,
+            error: e,
+        })?;
+        if let Ex::Name { name, .. } = &x {
+            if !table.iter().any(|p| &p.0 == name) && !m.params.contains(name) {
+                return Err(err(format!(
+                    "'{name}' is not in the parameter table (condition '{c}', column '{id}')"
+                )));
             }
         }
+        set.insert(id.clone(), x);
     }
-    if outputs.is_empty() {
-        return Err(PetabError {
-            file: F::Measurements(0),
-            error: ImportError::at(1, 1, "no observable is measured in the conditions read"),
-        });
+    Ok(set)
+}
+
+/// Condition `c`'s outputs, pushed onto `outputs`: each observable measured
+/// in it, once per distinct list of placeholder overrides (all observables,
+/// unoverridden, when the problem has no measurements), renamed by `ren`.
+fn condition_outputs(
+    formulas: &[Placed<(usize, usize)>],
+    over: &Overrides,
+    c: &str,
+    measured_all: bool,
+    suffix: &str,
+    ren: &dyn Fn(&str) -> Option<Ex>,
+    outputs: &mut Vec<Placed<Option<(usize, usize)>>>,
+) -> Result<(), PetabError> {
+    for (o, f, at) in formulas {
+        let lists = over.get(&(c.to_string(), o.clone()));
+        let lists: Vec<(Vec<String>, usize, usize)> = match lists {
+            Some(l) => l.clone(),
+            None if measured_all => vec![(Vec::new(), 0, 0)],
+            None => continue,
+        };
+        for (j, (ps, file, line)) in lists.iter().enumerate() {
+            let mut vals: BTreeMap<String, Ex> = BTreeMap::new();
+            for (n, p) in ps.iter().enumerate() {
+                let x = value(p, (*line, 1)).map_err(in_file(PetabFile::Measurements(*file)))?;
+                vals.insert(format!("observableParameter{}_{o}", n + 1), x);
+            }
+            let g = subst_names(f, &|n| vals.get(n).cloned());
+            let mut missing = None;
+            crate::sbml::walk_names(&g, &mut |n| {
+                if n.starts_with("observableParameter") && missing.is_none() && !ps.is_empty() {
+                    missing = Some(n.to_string());
+                }
+            });
+            if let Some(n) = missing {
+                return Err(PetabError {
+                    file: PetabFile::Measurements(*file),
+                    error: ImportError::at(
+                        *line,
+                        1,
+                        format!("observable '{o}' needs '{n}', which this row does not give"),
+                    ),
+                });
+            }
+            let name = if lists.len() > 1 {
+                format!("{o}{suffix}_{}", j + 1)
+            } else {
+                format!("{o}{suffix}")
+            };
+            outputs.push((name, subst_names(&g, ren), Some(*at)));
+        }
     }
-    // Declarations: estimated -> param; fixed -> const with its value; SBML
-    // parameters the table does not list keep their SBML value.
+    Ok(())
+}
+
+/// Declarations: estimated -> param; fixed -> const with its value; SBML
+/// parameters the table does not list keep their SBML value; placeholders
+/// no measurement overrides are unknown params.
+fn declarations(
+    m: &Sbml,
+    table: &ParamTable,
+    outputs: &[Placed<Option<(usize, usize)>>],
+) -> (Vec<String>, Vec<(String, Option<Ex>)>) {
     let mut params: Vec<String> = Vec::new();
     let mut consts: Vec<(String, Option<Ex>)> = Vec::new();
     for p in m.params.iter().chain(table.iter().map(|p| &p.0)) {
@@ -618,8 +634,7 @@ pub fn petab_to_sys(
             None => consts.push((p.clone(), m.values.get(p).cloned())),
         }
     }
-    // Placeholders no measurement overrides are unknown.
-    for (_, e, _) in &outputs {
+    for (_, e, _) in outputs {
         crate::sbml::walk_names(e, &mut |n| {
             if n.starts_with("observableParameter") && !params.iter().any(|p| p == n) {
                 params.push(n.to_string());
@@ -627,11 +642,16 @@ pub fn petab_to_sys(
         });
     }
     consts.extend(m.consts.iter().map(|c| (c.clone(), None)));
+    (params, consts)
+}
+
+/// The `.sys` header: where it came from, the conditions, what was not read.
+fn header(origin: &str, used: &[String], ignored_init: bool, preeq: bool) -> Vec<String> {
     let mut header = vec![format!(
         "# Imported by `obsan import petab` from {}.",
         one_line(origin)
     )];
-    if many {
+    if used.len() > 1 {
         header.push(format!(
             "# One copy of the model per simulation condition (states and outputs suffixed \
              _CONDITION), parameters shared: {}.",
@@ -646,7 +666,7 @@ pub fn petab_to_sys(
             .into(),
     );
     let mut not_read = vec!["noise formulas", "observable transformations"];
-    if !ignored_init.is_empty() {
+    if ignored_init {
         not_read.push("initial values set by conditions");
     }
     if preeq {
@@ -657,6 +677,65 @@ pub fn petab_to_sys(
          bijection of the output): {}.",
         not_read.join(", ")
     ));
+    header
+}
+
+/// Translate a PEtab problem into `.sys` text. `condition`: only this
+/// simulation condition (default: every condition the measurements use).
+pub fn petab_to_sys(
+    t: &PetabTexts,
+    origin: &str,
+    condition: Option<&str>,
+) -> Result<Converted, PetabError> {
+    use PetabFile as F;
+    let m = Sbml::read(t.sbml).map_err(in_file(F::Sbml))?;
+    let table = read_parameters(t.parameters).map_err(in_file(F::Parameters))?;
+    let observables = read_observables(t.observables).map_err(in_file(F::Observables))?;
+    let conditions = read_conditions(t.conditions).map_err(in_file(F::Conditions))?;
+    let (used, over, preeq) = used_conditions(t, &conditions, condition)?;
+    let measured_all = t.measurements.is_empty();
+    let states: Vec<String> = m.eqs.iter().map(|e| e.0.clone()).collect();
+    let formulas = observable_formulas(&m, &table, &observables)?;
+    let many = used.len() > 1;
+    let mut eqs = Vec::new();
+    let mut outputs: Vec<Placed<Option<(usize, usize)>>> = Vec::new();
+    let mut ignored_init: Vec<String> = Vec::new();
+    for c in &used {
+        let suffix = if many { format!("_{c}") } else { String::new() };
+        let row = conditions.iter().find(|x| &x.0 == c);
+        let set = condition_values(&m, &table, c, row, &mut ignored_init)?;
+        let ren = |n: &str| -> Option<Ex> {
+            if states.iter().any(|s| s == n) {
+                Some(Ex::Name {
+                    name: format!("{n}{suffix}"),
+                    timed: false,
+                    at: (1, 1),
+                })
+            } else {
+                set.get(n).cloned()
+            }
+        };
+        for (v, e, at) in &m.eqs {
+            eqs.push((format!("{v}{suffix}"), subst_names(e, &ren), *at));
+        }
+        condition_outputs(
+            &formulas,
+            &over,
+            c,
+            measured_all,
+            &suffix,
+            &ren,
+            &mut outputs,
+        )?;
+    }
+    if outputs.is_empty() {
+        return Err(PetabError {
+            file: F::Measurements(0),
+            error: ImportError::at(1, 1, "no observable is measured in the conditions read"),
+        });
+    }
+    let (params, consts) = declarations(&m, &table, &outputs);
+    let header = header(origin, &used, !ignored_init.is_empty(), preeq);
     let mut out = m;
     out.eqs = eqs;
     Ok(out.emit(header, &params, &consts, &outputs))
