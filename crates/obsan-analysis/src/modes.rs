@@ -77,27 +77,9 @@ pub(crate) fn gradient_rank(
     Ok((best, per * per))
 }
 
-pub(crate) fn fp_rank(mut m: Vec<Vec<Fp>>, n: usize) -> usize {
-    let mut r = 0;
-    for c in 0..n {
-        let Some(i) = (r..m.len()).find(|&i| !m[i][c].is_zero()) else {
-            continue;
-        };
-        m.swap(r, i);
-        #[allow(clippy::expect_used)] // the pivot was found non-zero
-        let inv = m[r][c].inv().expect("nonzero");
-        for i in 0..m.len() {
-            if i != r && !m[i][c].is_zero() {
-                let f = m[i][c] * inv;
-                let pivot = m[r].clone();
-                for (x, y) in m[i].iter_mut().zip(&pivot) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-        r += 1;
-    }
-    r
+/// The rank over F_p of rows with `n` columns.
+pub(crate) fn fp_rank(m: Vec<Vec<Fp>>, n: usize) -> usize {
+    Fp::matrix_rank(m, n)
 }
 
 /// Check candidate modes against every symmetry.

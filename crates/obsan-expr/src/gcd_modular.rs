@@ -23,10 +23,10 @@
 //! back to the primitive PRS (which stops at once on a tripped budget).
 
 use crate::budget;
-use crate::num::{int, int_gcd, Int, SplitMix};
+use crate::num::{int, int_gcd, int_mod, Int, SplitMix};
 use crate::poly::{Mono, Poly, Var};
-use dashu_int::ops::{Abs, DivRem};
-use dashu_int::Sign;
+use dashu_int::ops::Abs;
+use obsan_recon::fp;
 use smallvec::SmallVec;
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
@@ -44,7 +44,8 @@ const MAX_FAILURES: usize = 8;
 
 // ---------------------------------------------------------------- F_p
 
-/// Arithmetic modulo a prime `p < 2^62` (so `a + b` never overflows).
+/// Arithmetic modulo a prime `p < 2^62`: obsan-recon's `fp`, the
+/// workspace's one implementation; this type only carries the modulus.
 #[derive(Clone, Copy, Debug)]
 struct Field {
     p: u64,
@@ -53,100 +54,26 @@ struct Field {
 impl Field {
     #[inline]
     fn add(self, a: u64, b: u64) -> u64 {
-        let s = a + b;
-        if s >= self.p {
-            s - self.p
-        } else {
-            s
-        }
+        fp::add(a, b, self.p)
     }
     #[inline]
     fn sub(self, a: u64, b: u64) -> u64 {
-        if a >= b {
-            a - b
-        } else {
-            a + self.p - b
-        }
+        fp::sub(a, b, self.p)
     }
     #[inline]
     fn mul(self, a: u64, b: u64) -> u64 {
-        ((a as u128 * b as u128) % self.p as u128) as u64
+        fp::mul(a, b, self.p)
     }
-    /// Inverse of a nonzero element (extended Euclid); `0` maps to `0`.
+    /// Inverse of a nonzero element; `0` maps to `0`.
     fn inv(self, a: u64) -> u64 {
-        let (mut r0, mut r1) = (self.p as i128, a as i128);
-        let (mut t0, mut t1) = (0i128, 1i128);
-        while r1 != 0 {
-            let q = r0 / r1;
-            (r0, r1) = (r1, r0 - q * r1);
-            (t0, t1) = (t1, t0 - q * t1);
-        }
-        if r0 != 1 {
-            return 0;
-        }
-        t0.rem_euclid(self.p as i128) as u64
+        fp::inv(a, self.p).unwrap_or(0)
     }
     fn reduce(self, x: &Int) -> u64 {
-        if let Ok(v) = i64::try_from(x) {
-            return (v as i128).rem_euclid(self.p as i128) as u64;
-        }
-        let (_, r) = x.clone().div_rem(Int::from(self.p));
-        let r = if r.sign() == Sign::Negative {
-            r + Int::from(self.p)
-        } else {
-            r
-        };
-        // 0 <= r < p < 2^62.
-        u64::try_from(&r).unwrap_or(0)
+        int_mod(x, self.p)
     }
 }
 
-pub(crate) fn is_prime(n: u64) -> bool {
-    if n < 2 {
-        return false;
-    }
-    const BASES: [u64; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
-    for &b in &BASES {
-        if n == b {
-            return true;
-        }
-        if n.is_multiple_of(b) {
-            return false;
-        }
-    }
-    let mulm = |a: u64, b: u64| ((a as u128 * b as u128) % n as u128) as u64;
-    let powm = |mut b: u64, mut e: u64| {
-        let mut r = 1u64;
-        while e > 0 {
-            if e & 1 == 1 {
-                r = mulm(r, b);
-            }
-            b = mulm(b, b);
-            e >>= 1;
-        }
-        r
-    };
-    let (mut d, mut s) = (n - 1, 0);
-    while d.is_multiple_of(2) {
-        d /= 2;
-        s += 1;
-    }
-    // These bases are a deterministic Miller–Rabin test for all n < 3.3e24.
-    'bases: for &a in &BASES {
-        let mut x = powm(a, d);
-        if x == 1 || x == n - 1 {
-            continue;
-        }
-        for _ in 1..s {
-            x = mulm(x, x);
-            if x == n - 1 {
-                continue 'bases;
-            }
-        }
-        return false;
-    }
-    true
-}
+pub(crate) use obsan_recon::is_prime;
 
 /// The `i`-th prime below 2^62, in decreasing order (cached per thread).
 fn prime(i: usize) -> u64 {

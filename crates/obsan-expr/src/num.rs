@@ -227,6 +227,20 @@ impl fmt::Display for Q {
     }
 }
 
+/// `x mod q` in `0..q` for any modulus `q` (the residue of an exact integer
+/// in a prime field).
+pub(crate) fn int_mod(x: &Int, q: u64) -> u64 {
+    if let Ok(v) = i64::try_from(x) {
+        return (v as i128).rem_euclid(q as i128) as u64;
+    }
+    let (_, mut r) = x.clone().div_rem(IBig::from(q));
+    if r.sign() == Sign::Negative {
+        r += IBig::from(q);
+    }
+    // 0 <= r < q < 2^64.
+    u64::try_from(&r).unwrap_or(0)
+}
+
 /// The Mersenne prime 2^61 - 1: reduction is a shift and an add.
 pub const P: u64 = (1u64 << 61) - 1;
 
@@ -248,13 +262,7 @@ impl Fp {
         }
     }
     pub fn from_int(x: &Int) -> Fp {
-        let p = IBig::from(P);
-        let (_, mut r) = x.clone().div_rem(p.clone());
-        if r.sign() == Sign::Negative {
-            r += &p;
-        }
-        // 0 <= r < p < 2^64.
-        Fp(u64::try_from(&r).unwrap_or(0))
+        Fp(int_mod(x, P))
     }
     pub fn pow(self, mut e: u64) -> Fp {
         let (mut b, mut r) = (self, Fp::ONE);
@@ -277,6 +285,31 @@ impl Fp {
     }
     pub fn is_zero(self) -> bool {
         self.0 == 0
+    }
+    /// The rank of a matrix over F_p with `ncols` columns, given by its rows
+    /// (Gaussian elimination): the workspace's one elimination for ranks.
+    pub fn matrix_rank(mut rows: Vec<Vec<Fp>>, ncols: usize) -> usize {
+        let mut rank = 0;
+        for c in 0..ncols {
+            let Some(p) = (rank..rows.len()).find(|&i| !rows[i][c].is_zero()) else {
+                continue;
+            };
+            rows.swap(rank, p);
+            let Some(inv) = rows[rank][c].inv() else {
+                continue;
+            };
+            let pivot = rows[rank].clone();
+            for row in rows.iter_mut().skip(rank + 1) {
+                let f = row[c] * inv;
+                if !f.is_zero() {
+                    for (x, y) in row.iter_mut().zip(&pivot) {
+                        *x = *x - f * *y;
+                    }
+                }
+            }
+            rank += 1;
+        }
+        rank
     }
     /// A square root if one exists (Tonelli–Shanks; p - 1 = 2 * odd * ...).
     pub fn sqrt(self) -> Option<Fp> {

@@ -279,7 +279,8 @@ impl Ctx {
             }
             points += 1;
         }
-        fp_rank(rows) == members.len()
+        let cols = rows.first().map_or(0, Vec::len);
+        Fp::matrix_rank(rows, cols) == members.len()
     }
 
     /// Square roots of rational functions of the symbols generate a proper
@@ -338,30 +339,4 @@ fn constants_independent(forms: &[RatFun], trans: &[(Var, Var, bool)], linear_ok
                 <= 1
         })
     })
-}
-
-/// Rank of a matrix over F_p (Gaussian elimination).
-fn fp_rank(mut rows: Vec<Vec<Fp>>) -> usize {
-    let cols = rows.first().map_or(0, Vec::len);
-    let mut rank = 0;
-    for c in 0..cols {
-        let Some(p) = (rank..rows.len()).find(|&i| !rows[i][c].is_zero()) else {
-            continue;
-        };
-        rows.swap(rank, p);
-        let Some(inv) = rows[rank][c].inv() else {
-            continue;
-        };
-        let pivot = rows[rank].clone();
-        for row in rows.iter_mut().skip(rank + 1) {
-            let f = row[c] * inv;
-            if !f.is_zero() {
-                for (x, y) in row.iter_mut().zip(&pivot) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-        rank += 1;
-    }
-    rank
 }

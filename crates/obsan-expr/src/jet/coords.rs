@@ -7,6 +7,7 @@ use crate::graph::{Angle, Id, LeafKind, Node};
 use crate::memo::Ctx;
 use crate::num::Fp;
 use crate::poly::Var;
+use obsan_recon::fp;
 
 /// Bounds on the coefficient sizes of `roots` as rational functions of the
 /// coordinates of [`Ctx::free_coords`], in the form of [`degree_bounds`]
@@ -175,34 +176,18 @@ impl Ctx {
     }
 }
 
-/// Arithmetic modulo a prime `q < 2^63` for [`Ctx::eval_mod_prime`].
+/// Arithmetic modulo a prime `q < 2^63` for [`Ctx::eval_mod_prime`]:
+/// obsan-recon's `fp`, the workspace's one implementation.
 fn mulq(a: u64, b: u64, q: u64) -> u64 {
-    ((a as u128 * b as u128) % q as u128) as u64
+    fp::mul(a, b, q)
 }
 
-fn powq(mut a: u64, mut e: u64, q: u64) -> u64 {
-    let mut r = 1 % q;
-    while e > 0 {
-        if e & 1 == 1 {
-            r = mulq(r, a, q);
-        }
-        a = mulq(a, a, q);
-        e >>= 1;
-    }
-    r
+fn powq(a: u64, e: u64, q: u64) -> u64 {
+    fp::pow(a % q, e, q)
 }
 
 fn invq(a: u64, q: u64) -> Option<u64> {
-    (!a.is_multiple_of(q)).then(|| powq(a, q - 2, q))
-}
-
-fn int_mod(x: &crate::Int, q: u64) -> u64 {
-    let qq = crate::Int::from(q);
-    let mut r = x % &qq;
-    if r < crate::Int::ZERO {
-        r += &qq;
-    }
-    u64::try_from(&r).unwrap_or(0)
+    fp::inv(a % q, q)
 }
 
 impl Ctx {
@@ -240,13 +225,11 @@ impl Ctx {
         for id in order {
             let x = match self.node(id) {
                 Node::Num(c) => {
-                    let d = invq(int_mod(c.den(), q), q).ok_or(BadPoint)?;
-                    mulq(int_mod(c.num(), q), d, q)
+                    let d = invq(crate::num::int_mod(c.den(), q), q).ok_or(BadPoint)?;
+                    mulq(crate::num::int_mod(c.num(), q), d, q)
                 }
-                Node::Leaf(v) => *leaf.get(*v as usize).ok_or(BadPoint)?,
-                Node::Add(cs) => cs.iter().fold(0u64, |a, c| {
-                    ((a as u128 + val[c.index()] as u128) % q as u128) as u64
-                }),
+                Node::Leaf(v) => *leaf.get(*v as usize).ok_or(BadPoint)? % q,
+                Node::Add(cs) => cs.iter().fold(0u64, |a, c| fp::add(a, val[c.index()], q)),
                 Node::Mul(cs) => cs.iter().fold(1 % q, |a, c| mulq(a, val[c.index()], q)),
                 Node::Pow(b, e) => {
                     let base = val[b.index()];
@@ -281,7 +264,7 @@ impl Ctx {
         let order = self.reachable_with(roots, true);
         let mut slot = vec![u32::MAX; self.len()];
         let mut t: Vec<u64> = Vec::with_capacity(order.len() * w);
-        let addq = |a: u64, b: u64| ((a as u128 + b as u128) % q as u128) as u64;
+        let addq = |a: u64, b: u64| fp::add(a, b, q);
         for id in order {
             let base = t.len();
             t.resize(base + w, 0);
@@ -294,8 +277,8 @@ impl Ctx {
             };
             match self.node(id) {
                 Node::Num(c) => {
-                    let d = invq(int_mod(c.den(), q), q).ok_or(BadPoint)?;
-                    t[base] = mulq(int_mod(c.num(), q), d, q);
+                    let d = invq(crate::num::int_mod(c.den(), q), q).ok_or(BadPoint)?;
+                    t[base] = mulq(crate::num::int_mod(c.num(), q), d, q);
                 }
                 Node::Add(cs) => {
                     for c in cs.iter() {
@@ -337,7 +320,7 @@ impl Ctx {
                     }
                 }
                 Node::Leaf(v) => {
-                    let lv = *leaf.get(*v as usize).ok_or(BadPoint)?;
+                    let lv = *leaf.get(*v as usize).ok_or(BadPoint)? % q;
                     t[base] = lv;
                     let l = &self.leaves[*v as usize];
                     // d(leaf) = fac * d(arg) for one argument node (or a symbol).
