@@ -167,6 +167,9 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         },
     )
     .map_err(|e| Failure(e.to_string()))?;
+    // The ranks treat the atoms as independent (as `rank` does without unknown
+    // inputs): an "observable" verdict is certified only when they are.
+    let undecided = obsan_analysis::undecided_atoms_of(&mut nf.clone(), &[]);
     // Explicit time: report the user's states, not the clock.
     let mut r = r;
     crate::clock::hide_in_unknown_input(nf, &mut r);
@@ -208,7 +211,9 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
             "unknown_inputs": nf.unknown_inputs,
             "n": r.n,
             "rank": r.rank,
-            "weakly_locally_observable": r.rank == r.n,
+            "weakly_locally_observable": if undecided.is_empty() || r.rank < r.n { json!(r.rank == r.n) } else { serde_json::Value::Null },
+            "decided": undecided.is_empty(),
+            "undecided_atoms": undecided,
             "observable_variables": obs.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
             "unobservable_variables": unobs,
             "reconstructable_inputs": rec.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
@@ -340,6 +345,12 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         "probabilistic: exact arithmetic mod 2^61-1 at random points (2 for the orders, 1 plus 1 per extension in Martinelli's algorithm; seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
         r.seed, r.error_bound, r.degree_bound
     ));
+    if !undecided.is_empty() {
+        o.push_str(&format!(
+            "not decided: the atoms {} may be related in ways the engine does not detect; the ranks above are those of the system with them independent, upper bounds on the true ones: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",
+            undecided.join(", ")
+        ));
+    }
     out!("{o}");
     Ok(ExitCode::SUCCESS)
 }

@@ -319,3 +319,31 @@ fn commands_without_a_clock_refuse_time_at_its_place() {
         &place,
     );
 }
+
+#[test]
+fn observable_over_related_atoms_is_not_claimed_under_unknown_inputs() {
+    // h2 = y (log(x y) - log x - log y) is 0 where it is real (x, y > 0), so
+    // y is truly unobservable; the engine keeps log(x y), log x, log y as
+    // independent atoms, where the formal rank is 2 of 2. Full rank must
+    // not be claimed: "not decided", with the atoms named.
+    let v = rank_json(
+        "related_atoms_ui.sys",
+        "system r\nstate x, y\nunknown input w\nx' = w\ny' = 0\noutput h1 = x\noutput h2 = y*(log(x*y) - log(x) - log(y))\n",
+    );
+    assert_eq!(v["decided"], false, "{v}");
+    assert!(v["weakly_locally_observable"].is_null(), "{v}");
+    let atoms: Vec<String> = v["undecided_atoms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| a.as_str().unwrap().to_string())
+        .collect();
+    assert!(atoms.iter().any(|a| a.contains("log")), "{atoms:?}");
+    // A model over decided atoms keeps its verdict.
+    let v = rank_json(
+        "decided_atoms_ui.sys",
+        "system d\nstate x, y\nunknown input w\nx' = w\ny' = 0\noutput h1 = x\noutput h2 = log(y)\n",
+    );
+    assert_eq!(v["decided"], true, "{v}");
+    assert_eq!(v["weakly_locally_observable"], true, "{v}");
+}
