@@ -169,7 +169,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     .map_err(|e| Failure(e.to_string()))?;
     // The ranks treat the atoms as independent (as `rank` does without unknown
     // inputs): an "observable" verdict is certified only when they are.
-    let undecided = obsan_analysis::undecided_atoms_of(&mut nf.clone(), &[]);
+    let undecided_atoms = obsan_analysis::undecided_atoms_of(&mut nf.clone(), &[]);
     // Explicit time: report the user's states, not the clock.
     let mut r = r;
     crate::clock::hide_in_unknown_input(nf, &mut r);
@@ -211,9 +211,9 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
             "unknown_inputs": nf.unknown_inputs,
             "n": r.n,
             "rank": r.rank,
-            "weakly_locally_observable": if undecided.is_empty() || r.rank < r.n { json!(r.rank == r.n) } else { serde_json::Value::Null },
-            "decided": undecided.is_empty(),
-            "undecided_atoms": undecided,
+            "weakly_locally_observable": if undecided_atoms.is_empty() || r.rank < r.n { json!(r.rank == r.n) } else { serde_json::Value::Null },
+            "decided": undecided_atoms.is_empty(),
+            "undecided_atoms": undecided_atoms,
             "observable_variables": obs.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
             "unobservable_variables": unobs,
             "reconstructable_inputs": rec.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
@@ -311,7 +311,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         m.rank,
         m.n
     ));
-    let undecided: Vec<String> = nf
+    let open_inputs: Vec<String> = nf
         .unknown_inputs
         .iter()
         .zip(&m.reconstructable)
@@ -320,10 +320,10 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         .collect();
     if r.agree {
         o.push_str("both routes agree: every verdict is final at every derivative order");
-        if !undecided.is_empty() {
+        if !open_inputs.is_empty() {
             o.push_str(&format!(
                 " (except: {} not reconstructable up to order {} only, the state not being observable)",
-                undecided.join(", "),
+                open_inputs.join(", "),
                 r.max_order
             ));
         }
@@ -345,10 +345,10 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         "probabilistic: exact arithmetic mod 2^61-1 at random points (2 for the orders, 1 plus 1 per extension in Martinelli's algorithm; seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
         r.seed, r.error_bound, r.degree_bound
     ));
-    if !undecided.is_empty() {
+    if !undecided_atoms.is_empty() {
         o.push_str(&format!(
             "not decided: the atoms {} may be related in ways the engine does not detect; the ranks above are those of the system with them independent, upper bounds on the true ones: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",
-            undecided.join(", ")
+            undecided_atoms.join(", ")
         ));
     }
     out!("{o}");

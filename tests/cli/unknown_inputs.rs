@@ -339,6 +339,18 @@ fn observable_over_related_atoms_is_not_claimed_under_unknown_inputs() {
         .map(|a| a.as_str().unwrap().to_string())
         .collect();
     assert!(atoms.iter().any(|a| a.contains("log")), "{atoms:?}");
+    // The text says the same, naming the atoms (not the unknown inputs left
+    // unreconstructed, a different list).
+    let f = temp_file(
+        "related_atoms_ui_text.sys",
+        "system r\nstate x, y\nunknown input w\nx' = w\ny' = 0\noutput h1 = x\noutput h2 = y*(log(x*y) - log(x) - log(y))\n",
+    );
+    let text = ok(&["rank", &f]);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("not decided: the atoms"))
+        .unwrap_or_else(|| panic!("no 'not decided' line:\n{text}"));
+    assert!(line.contains("log") && !line.contains("atoms w "), "{line}");
     // A model over decided atoms keeps its verdict.
     let v = rank_json(
         "decided_atoms_ui.sys",
