@@ -35,7 +35,7 @@
 //! experiment, so for all): k is the smallest number of experiments.
 
 use crate::rank::{lie_jets, random_point, rank, AnalysisError, Fields, LieWord, RankOptions};
-use obsan_expr::{Fp, FpPoint, LieJets, SplitMix, Var, Q};
+use obsan_expr::{evaluate::FpPoint, lie::LieJets, Fp, SplitMix, Var, Q};
 use obsan_model::{Experiment, Kind, NormalForm, System};
 use std::time::Instant;
 

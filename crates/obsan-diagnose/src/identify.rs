@@ -369,7 +369,7 @@ pub fn stacked_rank(
         // the outputs reach, not by the number of params (an
         // effect with 6,000 params made a 6,000^2 SVD).
         let ids = report.basis_functions(&mut nf);
-        let reached = obsan_expr::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
+        let reached = obsan_expr::lie::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
         if reached.len() > MAX_NULL_COLUMNS {
             return Err(DiagnoseError::TooManyReached {
                 reached: reached.len(),
