@@ -64,7 +64,7 @@ pub use ratfun::RatFun;
 pub use tanhalf::TanHalf;
 
 /// The engine's limits: the hard caps of the canonical form and the parser, and the
-/// per-thread budget's less common entry points ([`Budget`] and [`Limit`] are at the root).
+/// per-thread budget's less common entry points ([`crate::Budget`] and [`crate::Limit`] are at the root).
 pub mod limits {
     pub use crate::budget::{
         budget_tripped, check_memory, within_thread_budget_keep, EXP_MAX, NUM_BITS_MAX, POW_MAX,
@@ -80,7 +80,7 @@ pub mod evaluate {
     };
 }
 
-/// Multivariate polynomial gcds: the engine's choice ([`gcds::gcd`]) and each method
+/// Multivariate polynomial gcds: the engine's choice ([`crate::gcds::gcd`]) and each method
 /// behind the `PolyGcd` trait (for tests and comparisons).
 pub mod gcds {
     pub use crate::gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
