@@ -407,7 +407,7 @@ fn hidden_symmetries(
     which: &[usize],
     n_states: usize,
     point: (&[f64], &[Vec<f64>]),
-) -> Result<Vec<(String, Vec<(String, f64)>)>, DiagnoseError> {
+) -> Result<Vec<HiddenSymmetry>, DiagnoseError> {
     let (pv, sv) = point;
     let mut x = Vec::with_capacity(nf.state.len());
     for &k in which {
@@ -494,6 +494,9 @@ fn hidden_symmetries(
     }
     Ok(symmetries)
 }
+
+/// A hidden param and its null vector, as in [`Identifiability::symmetries`].
+type HiddenSymmetry = (String, Vec<(String, f64)>);
 
 /// Whole-identifier substitution (see obsan-model's effect patches).
 fn substitute(text: &str, map: &[(String, String)]) -> String {

@@ -4,6 +4,11 @@ use crate::error::ModelError;
 use crate::sys::{Kind, System, TIME};
 use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, Var, Q};
 
+/// A substitution: each variable and the expression that replaces it.
+type Subst = Vec<(Var, Id)>;
+/// `f0`, the input fields and the unknown-input fields, one entry per state each.
+type SplitFields = (Vec<Id>, Vec<Vec<Id>>, Vec<Vec<Id>>);
+
 /// Resolves names beyond the system's own first: `None` to fall through.
 pub type ExtraNames<'a> = dyn Fn(&str, Span) -> Option<Result<Id, ParseError>> + 'a;
 
@@ -199,7 +204,7 @@ impl System {
         &self,
         ctx: &mut Ctx,
         set: &[(String, Q)],
-    ) -> (Vec<(Var, Id)>, Vec<(String, Option<Q>)>) {
+    ) -> (Subst, Vec<(String, Option<Q>)>) {
         let mut subst: Vec<(Var, Id)> = Vec::new();
         let mut consts: Vec<(String, Option<Q>)> = Vec::new();
         for d in self.decls_of(Kind::Const) {
@@ -252,7 +257,6 @@ impl System {
     /// `f0`, the input fields `f_i = d rhs / d u_i` and the unknown-input fields
     /// `g_j = d rhs / d w_j` of each of the `n_states` states (zero for the params),
     /// after `subst`.
-    #[allow(clippy::type_complexity)]
     fn split_fields(
         &self,
         ctx: &mut Ctx,
@@ -260,7 +264,7 @@ impl System {
         input_syms: &[Symbol],
         unknown_syms: &[Symbol],
         n_states: usize,
-    ) -> Result<(Vec<Id>, Vec<Vec<Id>>, Vec<Vec<Id>>), ModelError> {
+    ) -> Result<SplitFields, ModelError> {
         let n_dynamic = self.dynamics.len();
         let input_vars: Vec<Var> = input_syms.iter().map(|s| s.var).collect();
         let mut unknown_fields = vec![Vec::new(); unknown_syms.len()];
