@@ -2,7 +2,10 @@
 //! (1,024 subsets) on vins.sys, a suite model (target < 5 s), and the input
 //! families of calib.sys. Run: `cargo bench --bench design` (`-- quick`).
 
-use obsan_analysis::{design_inputs, design_outputs, Candidate, DesignOptions};
+use obsan_analysis::{
+    sensor_design::design_inputs, sensor_design::design_outputs, sensor_design::Candidate,
+    sensor_design::DesignOptions,
+};
 use obsan_model::System;
 use std::time::{Duration, Instant};
 

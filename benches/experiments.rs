@@ -5,7 +5,9 @@
 //! (`-- quick` for fewer runs).
 
 use obsan_analysis::{
-    experiments_auto, rank, rank_known, AutoOptions, Known, KnownOptions, RankOptions,
+    multi_experiment::experiments_auto, multi_experiment::rank_known,
+    multi_experiment::AutoOptions, multi_experiment::Known, multi_experiment::KnownOptions, rank,
+    RankOptions,
 };
 use obsan_expr::Q;
 use obsan_model::{Experiment, System};

@@ -8,8 +8,9 @@ use crate::cli::RankArgs;
 use crate::show::load_normal_form;
 use crate::Failure;
 use obsan_analysis::{
-    along, generic_consts, AlongOptions, AlongReport, AlongTrajectory, INPUT_REL_TOL,
-    ROUNDING_FLOOR, TOL_SAFETY,
+    trajectory::along, trajectory::generic_consts, trajectory::AlongOptions,
+    trajectory::AlongReport, trajectory::AlongTrajectory, trajectory::INPUT_REL_TOL,
+    trajectory::ROUNDING_FLOOR, trajectory::TOL_SAFETY,
 };
 use obsan_data::Dataset;
 use obsan_model::NormalForm;

@@ -103,7 +103,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     // The ranks are of the formal field in which the atoms are independent;
     // a relation among them can only lower the true rank, so full rank is
     // certified only over independent atoms.
-    let undecided = obsan_analysis::undecided_atoms_of(&mut nf, &[]);
+    let undecided = obsan_analysis::certify::undecided_atoms_of(&mut nf, &[]);
     // Explicit time: report the user's states, not the clock.
     crate::clock::hide_in_rank(&nf, &mut r);
     let nf = crate::clock::user_view(&nf).unwrap_or(nf);

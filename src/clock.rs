@@ -10,8 +10,8 @@
 
 use crate::Failure;
 use obsan_analysis::{
-    Certificate, LieWord, RankReport, SymmetryKind, SymmetryReport, UnknownInputReport,
-    UnknownInputSymmetries,
+    unknown_inputs::UnknownInputReport, unknown_inputs::UnknownInputSymmetries, Certificate,
+    LieWord, RankReport, SymmetryKind, SymmetryReport,
 };
 use obsan_model::{NormalForm, System};
 use std::cell::Cell;

@@ -5,7 +5,8 @@ use crate::cli::DesignArgs;
 use crate::show::parse_sets;
 use crate::{json, Failure};
 use obsan_analysis::{
-    design_inputs, design_outputs, Candidate, DesignOptions, DesignReport, InputDesignReport,
+    sensor_design::design_inputs, sensor_design::design_outputs, sensor_design::Candidate,
+    sensor_design::DesignOptions, sensor_design::DesignReport, sensor_design::InputDesignReport,
 };
 use obsan_model::{ModelError, NormalForm, System};
 use std::process::ExitCode;

@@ -7,8 +7,8 @@ use crate::fsio::write_folder_atomically;
 use crate::show::load_system;
 use crate::Failure;
 use obsan_diagnose::{
-    diagnose, start_values, CandidateResult, Combination, DiagnoseOptions, Diagnosis, InputNoise,
-    ModelFit, Named,
+    diagnose, start_values, statistics::Combination, CandidateResult, DiagnoseOptions, Diagnosis,
+    InputNoise, ModelFit, Named,
 };
 use obsan_model::{EffectLibrary, Kind};
 use std::collections::BTreeMap;

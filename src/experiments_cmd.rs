@@ -6,7 +6,9 @@ use crate::cli::{RankArgs, SystemArgs};
 use crate::show::{load_system, parse_sets};
 use crate::{json, Failure};
 use obsan_analysis::{
-    experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
+    multi_experiment::experiments_auto, multi_experiment::rank_known,
+    multi_experiment::AutoOptions, multi_experiment::AutoReport, multi_experiment::Known,
+    multi_experiment::KnownOptions, multi_experiment::KnownReport,
 };
 use obsan_expr::{Ctx, Q};
 use obsan_model::{Experiment, NormalForm};

@@ -3,7 +3,9 @@
 use crate::cli::GlobalArgs;
 use crate::show::load_normal_form;
 use crate::Failure;
-use obsan_analysis::{global_identifiability, GlobalOptions, Identifiability};
+use obsan_analysis::{
+    global_id::global_identifiability, global_id::GlobalOptions, global_id::Identifiability,
+};
 use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};

@@ -104,7 +104,7 @@ pub fn install_panic_hook() {
     ONCE.call_once(|| {
         let default_hook = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            if !obsan_expr::budget_tripped() {
+            if !obsan_expr::limits::budget_tripped() {
                 default_hook(info)
             }
         }));
@@ -231,8 +231,8 @@ fn execute(
             // the scope so the limit is still known.
             // Every form printed is capped too: a form past MAX_FORM_BYTES
             // trips the budget like any other limit (never a cut-short form).
-            let (r, tripped) = obsan_expr::within_thread_budget_keep(&budget, || {
-                obsan_expr::within_text_cap(MAX_FORM_BYTES, || {
+            let (r, tripped) = obsan_expr::limits::within_thread_budget_keep(&budget, || {
+                obsan_expr::text::within_text_cap(MAX_FORM_BYTES, || {
                     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| dispatch(command)))
                 })
             });

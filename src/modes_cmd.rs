@@ -46,7 +46,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     if r.rank == r.n {
         // The full rank is a nonzero minor: a proof only over decided atoms
         // (else the true rank may be lower, as `obsan rank` says too).
-        let undecided = obsan_analysis::undecided_atoms_of(&mut nf, &[]);
+        let undecided = obsan_analysis::certify::undecided_atoms_of(&mut nf, &[]);
         let decided = undecided.is_empty();
         let certificate = if decided {
             "rank equals the dimension: a non-zero minor at a point proves it (exact)".to_string()
@@ -337,7 +337,7 @@ const WRITTEN_BY: &str = "# written by obsan modes (--force may replace this fil
 fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
     // After a limit (terms, time, a form too long to print) the texts are
     // placeholders or cut short: write nothing; the caller reports the limit.
-    if obsan_expr::budget_tripped() {
+    if obsan_expr::limits::budget_tripped() {
         return Err(Failure("an engine limit was reached".into()));
     }
     let (sys, dec) = (

@@ -4,7 +4,10 @@
 
 use crate::cli::{RankArgs, SymArgs};
 use crate::Failure;
-use obsan_analysis::{unknown_input_rank, unknown_input_symmetries, UnknownInputOptions};
+use obsan_analysis::{
+    unknown_inputs::unknown_input_rank, unknown_inputs::unknown_input_symmetries,
+    unknown_inputs::UnknownInputOptions,
+};
 use obsan_model::NormalForm;
 use serde_json::json;
 use std::process::ExitCode;

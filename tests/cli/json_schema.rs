@@ -3,7 +3,7 @@
 //! schema the binary prints; its `--help` (or doc page) names exactly the schema's keys;
 //! docs/json.md is `obsan schema --markdown`; every command is listed, typed or not.
 
-use crate::util::{bad, fresh_dir, ok, temp_file};
+use crate::util::{bad, fresh_dir, ok, subcommands, temp_file};
 use obsan_cli::json;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
@@ -413,17 +413,10 @@ fn every_command_is_listed_typed_or_not() {
         .filter_map(|l| l.split_whitespace().next())
         .map(|n| n.split('-').next().unwrap_or(n))
         .collect();
-    let help = ok(&["--help"]);
-    let commands = help
-        .lines()
-        .skip_while(|l| !l.starts_with("Commands:"))
-        .skip(1)
-        .take_while(|l| l.starts_with("  "))
-        .filter_map(|l| l.split_whitespace().next())
-        .filter(|c| !matches!(*c, "help" | "schema"));
-    for c in commands {
+    let commands = subcommands(&ok(&["--help"]));
+    for c in commands.iter().filter(|c| *c != "schema") {
         assert!(
-            listed.contains(&c),
+            listed.contains(&c.as_str()),
             "obsan {c} is not in `obsan schema --list`:\n{list}"
         );
     }

@@ -6,7 +6,7 @@
 //! of the mode formulas, and each output equals its form in the modes.
 
 use crate::util::{obsan, temp_file};
-use obsan_expr::{parse_ast, rational_angle, Ctx, FloatExpr, SplitMix, Q};
+use obsan_expr::{evaluate::rational_angle, parse_ast, Ctx, FloatExpr, SplitMix, Q};
 use serde_json::Value;
 use std::collections::HashMap;
 

@@ -3,20 +3,8 @@
 //! examples and says what --json prints; `import` prints progress lines when
 //! stderr is not a terminal (montecarlo's and diagnose's: montecarlo.rs).
 
-use crate::util::ok;
+use crate::util::{ok, subcommands};
 use std::process::Command;
-
-/// The subcommand names a help text lists under "Commands:" (not `help`).
-fn subcommands(help: &str) -> Vec<String> {
-    help.lines()
-        .skip_while(|l| !l.starts_with("Commands:"))
-        .skip(1)
-        .take_while(|l| l.starts_with("  "))
-        .filter_map(|l| l.split_whitespace().next())
-        .filter(|c| *c != "help")
-        .map(str::to_string)
-        .collect()
-}
 
 #[test]
 fn every_subcommand_help_ends_with_examples_and_says_what_json_prints() {

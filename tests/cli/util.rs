@@ -101,3 +101,15 @@ pub fn mrclam_dir() -> Option<String> {
     eprintln!("skipped: the MRCLAM data are not at {d}");
     None
 }
+
+/// The subcommand names a help text lists under "Commands:" (not `help`).
+pub fn subcommands(help: &str) -> Vec<String> {
+    help.lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|c| *c != "help")
+        .map(str::to_string)
+        .collect()
+}

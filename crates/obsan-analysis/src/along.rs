@@ -159,7 +159,7 @@ pub(crate) fn compile(nf: &mut NormalForm) -> Result<Compiled, AnalysisError> {
             groots.push(nf.ctx.diff(o, v));
         }
     }
-    let unbound = |e: obsan_expr::UnboundSymbol| {
+    let unbound = |e: obsan_expr::evaluate::UnboundSymbol| {
         AnalysisError::Invalid(format!(
             "'{}' has no value: give every constant a value (meta.json or --set)",
             e.0

@@ -245,46 +245,100 @@ pub fn verify_decomposition_with(
     seed: u64,
     known: Option<(&RankReport, &SymmetryReport)>,
 ) -> Result<Vec<Check>, AnalysisError> {
-    // Lets, in terms of the original variables (earlier lets may be used).
-    let mut defs: Vec<(String, Id)> = Vec::new();
-    for (name, ast, at) in &d.lets {
-        if nf.state.contains(name) || nf.consts.iter().any(|c| &c.0 == name) {
-            return Err(d.at(*at, format!("'{name}' is already a variable of the system")));
-        }
-        let id = build_over(nf, ast, &defs, &[]).map_err(|e| d.at(at + e.span.start, e.message))?;
-        defs.push((name.clone(), id));
+    let new = NewState::build(nf, d)?;
+    let mut checks = mode_and_rank_checks(nf, d, &new.g, seed, known)?;
+    for (k, s) in d.new_state.iter().enumerate() {
+        checks.push(dynamics_check(nf, d, &new, k, s)?);
     }
-    // The new state.
-    let mut g: Vec<Id> = Vec::new();
-    for s in &d.new_state {
-        if let Some((_, id)) = defs.iter().find(|(n, _)| n == s) {
-            g.push(*id);
-        } else if nf.state.contains(s) {
-            g.push(nf.ctx.symbol(s).id);
-        } else {
-            return Err(d.at(
-                d.new_state_at,
-                format!("'{s}' in the new state is neither a 'let' nor a variable of the system"),
-            ));
-        }
+    for (name, ast, at) in &d.outputs {
+        checks.push(output_check(nf, d, &new, name, ast, *at)?);
     }
-    // Placeholders for the new variables in the claimed expressions.
-    let placeholders: Vec<(String, Id, Var)> = d
-        .new_state
-        .iter()
-        .map(|s| {
-            let sym = nf.ctx.symbol(&format!("{s}\u{2032}new"));
-            (s.clone(), sym.id, sym.var)
-        })
-        .collect();
-    let back: Vec<(Var, Id)> = placeholders
-        .iter()
-        .zip(&g)
-        .map(|(p, &id)| (p.2, id))
-        .collect();
-    let mut checks = Vec::new();
+    Ok(checks)
+}
 
-    // 1. Symmetries, and each new variable an observable mode.
+/// The new state over the original variables, and the placeholders that stand for the
+/// new variables in the claimed expressions.
+struct NewState {
+    /// Each new variable as an expression in the original variables.
+    g: Vec<Id>,
+    /// Per new variable: its name, its placeholder symbol and that symbol's variable.
+    placeholders: Vec<(String, Id, Var)>,
+    /// Each placeholder's variable and the expression it stands for.
+    back: Vec<(Var, Id)>,
+}
+
+impl NewState {
+    /// Build the lets (in terms of the original variables, earlier lets usable) and the
+    /// new state the file names.
+    fn build(nf: &mut NormalForm, d: &Decomposition) -> Result<NewState, AnalysisError> {
+        let mut defs: Vec<(String, Id)> = Vec::new();
+        for (name, ast, at) in &d.lets {
+            if nf.state.contains(name) || nf.consts.iter().any(|c| &c.0 == name) {
+                return Err(d.at(*at, format!("'{name}' is already a variable of the system")));
+            }
+            let id =
+                build_over(nf, ast, &defs, &[]).map_err(|e| d.at(at + e.span.start, e.message))?;
+            defs.push((name.clone(), id));
+        }
+        let mut g: Vec<Id> = Vec::new();
+        for s in &d.new_state {
+            if let Some((_, id)) = defs.iter().find(|(n, _)| n == s) {
+                g.push(*id);
+            } else if nf.state.contains(s) {
+                g.push(nf.ctx.symbol(s).id);
+            } else {
+                return Err(d.at(
+                    d.new_state_at,
+                    format!(
+                        "'{s}' in the new state is neither a 'let' nor a variable of the system"
+                    ),
+                ));
+            }
+        }
+        let placeholders: Vec<(String, Id, Var)> = d
+            .new_state
+            .iter()
+            .map(|s| {
+                let sym = nf.ctx.symbol(&format!("{s}\u{2032}new"));
+                (s.clone(), sym.id, sym.var)
+            })
+            .collect();
+        let back: Vec<(Var, Id)> = placeholders
+            .iter()
+            .zip(&g)
+            .map(|(p, &id)| (p.2, id))
+            .collect();
+        Ok(NewState {
+            g,
+            placeholders,
+            back,
+        })
+    }
+
+    /// A claimed expression over the new variables, written back in the original ones.
+    fn claim(
+        &self,
+        nf: &mut NormalForm,
+        d: &Decomposition,
+        ast: &Ast,
+        at: usize,
+    ) -> Result<Id, AnalysisError> {
+        let e = build_over(nf, ast, &[], &self.placeholders)
+            .map_err(|e| d.at(at + e.span.start, e.message))?;
+        nf.ctx.substitute(e, &self.back).map_err(|e| d.at(at, e.0))
+    }
+}
+
+/// Checks 1 to 3: each new variable an observable mode (eq. 11) of the system's
+/// symmetries, the new variables independent, and as many as the system's rank.
+fn mode_and_rank_checks(
+    nf: &mut NormalForm,
+    d: &Decomposition,
+    g: &[Id],
+    seed: u64,
+    known: Option<(&RankReport, &SymmetryReport)>,
+) -> Result<Vec<Check>, AnalysisError> {
+    let mut checks = Vec::new();
     let computed;
     let (report, sym) = match known {
         Some(k) => k,
@@ -301,7 +355,7 @@ pub fn verify_decomposition_with(
             (&computed.0, &computed.1)
         }
     };
-    let modes = check_modes(nf, sym, &g, seed)?;
+    let modes = check_modes(nf, sym, g, seed)?;
     for (s, c) in d.new_state.iter().zip(&modes.checks) {
         let detail = match c.residuals.iter().position(|r| !r.is_zero()) {
             None => String::new(),
@@ -327,9 +381,9 @@ pub fn verify_decomposition_with(
     // over the system's atoms: over undecided atoms, both may be too high.
     // (A rank deficit at a point is only probabilistic, and a formal
     // dependence is a true one: "not independent" needs no atom.)
-    let (indep, _) = gradient_rank(nf, &g, seed)?;
-    let own = crate::decided::undecided_atoms_of_forms(nf, &g);
-    let atoms = crate::decided::undecided_atoms_of(nf, &g);
+    let (indep, _) = gradient_rank(nf, g, seed)?;
+    let own = crate::decided::undecided_atoms_of_forms(nf, g);
+    let atoms = crate::decided::undecided_atoms_of(nf, g);
     checks.push(Check {
         name: format!("the {} new variables are independent", g.len()),
         pass: indep == g.len(),
@@ -350,103 +404,112 @@ pub fn verify_decomposition_with(
         },
         undecided: atoms,
     });
-    // 4. Dynamics: L_{f_i} g_k equals the claimed coefficient of u_i, for every field.
+    Ok(checks)
+}
+
+/// Check 4 for the `k`-th new variable `s`: `L_{f_i} g_k` equals the claimed coefficient
+/// of `u_i` for every input field, and `L_{f0} g_k` the claimed drift.
+fn dynamics_check(
+    nf: &mut NormalForm,
+    d: &Decomposition,
+    new: &NewState,
+    k: usize,
+    s: &str,
+) -> Result<Check, AnalysisError> {
+    let Some((_, ast, at)) = d.dynamics.iter().find(|x| x.0 == s) else {
+        return Ok(Check {
+            name: format!("{s}' is given"),
+            pass: false,
+            detail: format!("no equation {s}' = ... in the file"),
+            undecided: Vec::new(),
+        });
+    };
+    let rhs = new.claim(nf, d, ast, *at)?;
     let input_vars = nf.input_vars.clone();
     let state_vars = nf.state_vars.clone();
-    for (k, s) in d.new_state.iter().enumerate() {
-        let claimed = d.dynamics.iter().find(|x| &x.0 == s);
-        let Some((_, ast, at)) = claimed else {
-            checks.push(Check {
-                name: format!("{s}' is given"),
-                pass: false,
-                detail: format!("no equation {s}' = ... in the file"),
-                undecided: Vec::new(),
-            });
-            continue;
-        };
-        let rhs = build_over(nf, ast, &[], &placeholders)
-            .map_err(|e| d.at(at + e.span.start, e.message))?;
-        let rhs = nf.ctx.substitute(rhs, &back).map_err(|e| d.at(*at, e.0))?;
-        // Drift and per-input coefficients of the claim.
-        let mut claim_rest = rhs;
-        let mut residual_text = Vec::new();
-        let mut residuals = Vec::new();
-        for (i, &u) in input_vars.iter().enumerate() {
-            let ci = nf.ctx.diff(rhs, u);
-            let ui = nf.ctx.symbol(&nf.inputs[i].clone()).id;
-            let t = nf.ctx.mul(&[ci, ui]);
-            claim_rest = nf.ctx.sub(claim_rest, t);
-            let field = nf.fields[i].clone();
-            let actual = nf.ctx.lie_derivative(g[k], &state_vars, &field);
-            let diff = nf.ctx.sub(actual, ci);
-            let r = nf.ctx.canon(diff);
-            if !r.is_zero() {
-                residual_text.push(format!(
-                    "coefficient of {}: L_f{} {s} - claimed = {}",
-                    nf.inputs[i],
-                    nf.inputs[i],
-                    nf.ctx.ratfun_text(&r)
-                ));
-                residuals.push(r);
-            }
-        }
-        let f0 = nf.f0.clone();
-        let drift = nf.ctx.lie_derivative(g[k], &state_vars, &f0);
-        let diff = nf.ctx.sub(drift, claim_rest);
+    // Drift and per-input coefficients of the claim.
+    let mut claim_rest = rhs;
+    let mut residual_text = Vec::new();
+    let mut residuals = Vec::new();
+    for (i, &u) in input_vars.iter().enumerate() {
+        let ci = nf.ctx.diff(rhs, u);
+        let ui = nf.ctx.symbol(&nf.inputs[i].clone()).id;
+        let t = nf.ctx.mul(&[ci, ui]);
+        claim_rest = nf.ctx.sub(claim_rest, t);
+        let field = nf.fields[i].clone();
+        let actual = nf.ctx.lie_derivative(new.g[k], &state_vars, &field);
+        let diff = nf.ctx.sub(actual, ci);
         let r = nf.ctx.canon(diff);
         if !r.is_zero() {
             residual_text.push(format!(
-                "drift: L_f0 {s} - claimed = {}",
+                "coefficient of {}: L_f{} {s} - claimed = {}",
+                nf.inputs[i],
+                nf.inputs[i],
                 nf.ctx.ratfun_text(&r)
             ));
             residuals.push(r);
         }
-        let undecided = undecided_of(nf, &residuals);
-        checks.push(Check {
-            name: format!("{s}' = {}", ast_text(&d.src, ast, *at)),
-            pass: residual_text.is_empty(),
-            detail: residual_text.join("; "),
-            undecided,
-        });
     }
-    // 5. Outputs, up to a constant.
-    for (name, ast, at) in &d.outputs {
-        let Some(h) = nf.outputs.iter().find(|o| &o.0 == name).map(|o| o.1) else {
-            return Err(d.at(*at, format!("'{name}' is not an output of the system")));
-        };
-        let claim = build_over(nf, ast, &[], &placeholders)
-            .map_err(|e| d.at(at + e.span.start, e.message))?;
-        let claim = nf
-            .ctx
-            .substitute(claim, &back)
-            .map_err(|e| d.at(*at, e.0))?;
-        let diff = nf.ctx.sub(h, claim);
-        let c = nf.ctx.canon(diff);
-        let mut bad = Vec::new();
-        let mut residuals = Vec::new();
-        for (j, &x) in state_vars.iter().enumerate() {
-            let dx = nf.ctx.rf_diff(&c, x);
-            if !dx.is_zero() {
-                bad.push(format!(
-                    "d/d{} ({name} - claimed) = {}",
-                    nf.state[j],
-                    nf.ctx.ratfun_text(&dx)
-                ));
-                residuals.push(dx);
-            }
+    let f0 = nf.f0.clone();
+    let drift = nf.ctx.lie_derivative(new.g[k], &state_vars, &f0);
+    let diff = nf.ctx.sub(drift, claim_rest);
+    let r = nf.ctx.canon(diff);
+    if !r.is_zero() {
+        residual_text.push(format!(
+            "drift: L_f0 {s} - claimed = {}",
+            nf.ctx.ratfun_text(&r)
+        ));
+        residuals.push(r);
+    }
+    let undecided = undecided_of(nf, &residuals);
+    Ok(Check {
+        name: format!("{s}' = {}", ast_text(&d.src, ast, *at)),
+        pass: residual_text.is_empty(),
+        detail: residual_text.join("; "),
+        undecided,
+    })
+}
+
+/// Check 5 for output `name`: the system's output equals the claim up to a constant
+/// (every state derivative of the difference is zero).
+fn output_check(
+    nf: &mut NormalForm,
+    d: &Decomposition,
+    new: &NewState,
+    name: &str,
+    ast: &Ast,
+    at: usize,
+) -> Result<Check, AnalysisError> {
+    let Some(h) = nf.outputs.iter().find(|o| o.0 == name).map(|o| o.1) else {
+        return Err(d.at(at, format!("'{name}' is not an output of the system")));
+    };
+    let claim = new.claim(nf, d, ast, at)?;
+    let diff = nf.ctx.sub(h, claim);
+    let c = nf.ctx.canon(diff);
+    let state_vars = nf.state_vars.clone();
+    let mut bad = Vec::new();
+    let mut residuals = Vec::new();
+    for (j, &x) in state_vars.iter().enumerate() {
+        let dx = nf.ctx.rf_diff(&c, x);
+        if !dx.is_zero() {
+            bad.push(format!(
+                "d/d{} ({name} - claimed) = {}",
+                nf.state[j],
+                nf.ctx.ratfun_text(&dx)
+            ));
+            residuals.push(dx);
         }
-        let undecided = undecided_of(nf, &residuals);
-        checks.push(Check {
-            name: format!(
-                "output {name} = {} (up to a constant)",
-                ast_text(&d.src, ast, *at)
-            ),
-            pass: bad.is_empty(),
-            detail: bad.join("; "),
-            undecided,
-        });
     }
-    Ok(checks)
+    let undecided = undecided_of(nf, &residuals);
+    Ok(Check {
+        name: format!(
+            "output {name} = {} (up to a constant)",
+            ast_text(&d.src, ast, at)
+        ),
+        pass: bad.is_empty(),
+        detail: bad.join("; "),
+        undecided,
+    })
 }
 
 fn ast_text(src: &str, ast: &Ast, at: usize) -> String {

@@ -22,16 +22,16 @@
 //! Trajectories. Each input restriction of the model is a family of
 //! experiments; several experiments of one family, or one of each of several
 //! families, stack ([`obsan_model::System::stacked_normal_form`]). A family
-//! alone: one experiment's rank, and [`crate::experiments_auto`]'s smallest
+//! alone: one experiment's rank, and [`crate::multi_experiment::experiments_auto`]'s smallest
 //! number of generic experiments of it and the rank they reach. Combinations:
 //! one generic experiment of each family in a set of distinct families, by
 //! size, supersets of found sets skipped.
 
 use crate::experiments::experiments_auto;
+use crate::experiments::AutoOptions;
 use crate::rank::{lie_jets, random_point, rank, AnalysisError, RankOptions, RankReport};
 use crate::symmetry::{symmetries_with, SymmetryOptions, SymmetryReport};
-use crate::AutoOptions;
-use obsan_expr::{Fp, FpPoint, SplitMix, Q};
+use obsan_expr::{evaluate::FpPoint, Fp, SplitMix, Q};
 use obsan_model::{Experiment, NormalForm, System};
 use std::time::Instant;
 

@@ -35,7 +35,7 @@
 //! experiment, so for all): k is the smallest number of experiments.
 
 use crate::rank::{lie_jets, random_point, rank, AnalysisError, Fields, LieWord, RankOptions};
-use obsan_expr::{Fp, FpPoint, LieJets, SplitMix, Var, Q};
+use obsan_expr::{evaluate::FpPoint, lie::LieJets, Fp, SplitMix, Var, Q};
 use obsan_model::{Experiment, Kind, NormalForm, System};
 use std::time::Instant;
 
@@ -234,20 +234,7 @@ pub fn rank_known(
         .collect();
     let (generic_rank, generic_obs, generic_basis, generic_error_bound, fields) =
         rank_in_columns(nf, &unknown, opts.seed, opts.deadline)?;
-    let specific: Vec<(Var, Fp, String)> = known
-        .iter()
-        .filter_map(|k| k.value.as_ref().map(|q| (k.index, q)))
-        .map(|(i, q)| {
-            q.to_fp()
-                .map(|f| (nf.state_vars[i], f, nf.state[i].clone()))
-                .ok_or_else(|| {
-                    AnalysisError::Invalid(format!(
-                        "the value {q} of {} has a denominator divisible by 2^61-1",
-                        nf.state[i]
-                    ))
-                })
-        })
-        .collect::<Result<_, _>>()?;
+    let specific = specific_values(nf, known)?;
     if specific.is_empty() {
         return Ok(KnownReport {
             rank: generic_rank,
@@ -264,21 +251,7 @@ pub fn rank_known(
             generic_error_bound,
         });
     }
-    // A value fixes a symbol; a function of it (sin, exp, atan ...) is an
-    // atom the point would give an unrelated random value, so refuse. A
-    // square root is computed from its radicand at the point: consistent.
-    for v in 0..nf.ctx.leaf_count() {
-        let v = v as Var;
-        if nf.ctx.symbol_name(v).is_some() || nf.ctx.sqrt_arg(v).is_some() {
-            continue;
-        }
-        let text = nf.ctx.leaf_text(v);
-        if let Some((_, _, name)) = specific.iter().find(|s| mentions(&text, &s.2)) {
-            return Err(AnalysisError::Invalid(format!(
-                "--known {name}=...: {name} appears inside {text}, whose value at a specific point is not a rational number obsan evaluates exactly; use --known-generic {name}"
-            )));
-        }
-    }
+    refuse_functions_of_known(nf, &specific)?;
     // If every field leaves the known coordinates where they are, the state
     // stays on M = {x_K = values}, where the Lie derivatives are those of
     // the system restricted to M: its rank test (valid there with pruning)
@@ -293,23 +266,126 @@ pub fn rank_known(
         None => generic_rank,
     };
     let fixed: Vec<(Var, Fp)> = specific.iter().map(|s| (s.0, s.1)).collect();
-    let jets = lie_jets(nf, &fields);
-    let mut rng = SplitMix(opts.seed ^ 0x6b6e_6f77_6e00_0002);
-    let mut point = None;
+    let point = point_with_known(nf, opts.seed, &fixed)?;
+    let cap = upper.min(unknown.len());
+    let at = words_at_point(nf, &fields, &point, &unknown, cap, &opts)?;
+    let (point_rank, words, evaluated, order_checked) =
+        (at.rank, at.words, at.evaluated, at.order_checked);
+    let observable = at.observable;
+    let (rank, observable) = match &invariant {
+        // The restricted system's rank test is the answer on M.
+        Some((m, cols)) => {
+            let mut m = m.clone();
+            let (r, obs, _, _, _) = rank_in_columns(&mut m, cols, opts.seed, opts.deadline)?;
+            (r, obs)
+        }
+        None => (point_rank, observable),
+    };
+    Ok(KnownReport {
+        rank,
+        invariant: invariant.is_some(),
+        determined: invariant.is_some()
+            || point_rank == unknown.len()
+            || point_rank == generic_rank,
+        point_rank: Some(point_rank),
+        order_checked,
+        words_evaluated: evaluated,
+        basis: words,
+        fields,
+        observable,
+        unknown,
+        generic_rank,
+        generic_error_bound,
+    })
+}
+
+/// The known values at a specific point, in F_p, with their variables and names.
+fn specific_values(
+    nf: &NormalForm,
+    known: &[Known],
+) -> Result<Vec<(Var, Fp, String)>, AnalysisError> {
+    known
+        .iter()
+        .filter_map(|k| k.value.as_ref().map(|q| (k.index, q)))
+        .map(|(i, q)| {
+            q.to_fp()
+                .map(|f| (nf.state_vars[i], f, nf.state[i].clone()))
+                .ok_or_else(|| {
+                    AnalysisError::Invalid(format!(
+                        "the value {q} of {} has a denominator divisible by 2^61-1",
+                        nf.state[i]
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// A value fixes a symbol; a function of it (sin, exp, atan ...) is an
+/// atom the point would give an unrelated random value, so refuse. A
+/// square root is computed from its radicand at the point: consistent.
+fn refuse_functions_of_known(
+    nf: &NormalForm,
+    specific: &[(Var, Fp, String)],
+) -> Result<(), AnalysisError> {
+    for v in 0..nf.ctx.leaf_count() {
+        let v = v as Var;
+        if nf.ctx.symbol_name(v).is_some() || nf.ctx.sqrt_arg(v).is_some() {
+            continue;
+        }
+        let text = nf.ctx.leaf_text(v);
+        if let Some((_, _, name)) = specific.iter().find(|s| mentions(&text, &s.2)) {
+            return Err(AnalysisError::Invalid(format!(
+                "--known {name}=...: {name} appears inside {text}, whose value at a specific point is not a rational number obsan evaluates exactly; use --known-generic {name}"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A random F_p point with the known values `fixed`, avoiding the system's poles (64
+/// tries).
+fn point_with_known(
+    nf: &mut NormalForm,
+    seed: u64,
+    fixed: &[(Var, Fp)],
+) -> Result<FpPoint, AnalysisError> {
+    let mut rng = SplitMix(seed ^ 0x6b6e_6f77_6e00_0002);
     for _ in 0..64 {
         if let Ok(p) = nf
             .ctx
             .random_fp_point(&mut rng, &|v| fixed.iter().find(|f| f.0 == v).map(|f| f.1))
         {
-            point = Some(p);
-            break;
+            return Ok(p);
         }
     }
-    let point = point.ok_or_else(|| {
-        AnalysisError::Invalid(
-            "no point with the known values avoided the system's poles (is a denominator zero there?)".into(),
-        )
-    })?;
+    Err(AnalysisError::Invalid(
+        "no point with the known values avoided the system's poles (is a denominator zero there?)"
+            .into(),
+    ))
+}
+
+/// What [`words_at_point`] found at the point.
+struct PointRank {
+    rank: usize,
+    observable: Vec<bool>,
+    /// The words whose gradients raised the rank.
+    words: Vec<LieWord>,
+    evaluated: usize,
+    order_checked: usize,
+}
+
+/// The rank at one point of the gradients (restricted to the `unknown` columns) of
+/// every word, order by order (no pruning: see the module doc), until `cap` rows, the
+/// order `opts.max_order` or `opts.max_words` words.
+fn words_at_point(
+    nf: &NormalForm,
+    fields: &Fields,
+    point: &FpPoint,
+    unknown: &[usize],
+    cap: usize,
+    opts: &KnownOptions,
+) -> Result<PointRank, AnalysisError> {
+    let jets = lie_jets(nf, fields);
     // Every word, order by order (no pruning: see the module doc).
     let n_out = nf.outputs.len();
     let mut level: Vec<LieWord> = (0..n_out)
@@ -322,7 +398,6 @@ pub fn rank_known(
     let mut words = Vec::new();
     let mut evaluated = 0usize;
     let mut order_checked = 0usize;
-    let cap = upper.min(unknown.len());
     'orders: for order in 0..=opts.max_order {
         for w in &level {
             if obsan_expr::cancel_requested() {
@@ -336,7 +411,7 @@ pub fn rank_known(
                     )));
                 }
             }
-            let row = jets.row(w.output, &w.fields, &point, false).map_err(|_| {
+            let row = jets.row(w.output, &w.fields, point, false).map_err(|_| {
                 AnalysisError::Invalid(format!(
                     "a Lie derivative has a pole at the known values ({})",
                     w.display(
@@ -346,7 +421,7 @@ pub fn rank_known(
                 ))
             })?;
             evaluated += 1;
-            if basis.insert(restrict(&row.gradient, &unknown)) {
+            if basis.insert(restrict(&row.gradient, unknown)) {
                 words.push(w.clone());
             }
             if basis.rows.len() >= cap {
@@ -376,34 +451,14 @@ pub fn rank_known(
         }
         level = next;
     }
-    let point_rank = basis.rows.len();
-    let observable = (0..unknown.len())
-        .map(|i| basis.contains_unit(i, unknown.len()))
-        .collect();
-    let (rank, observable) = match &invariant {
-        // The restricted system's rank test is the answer on M.
-        Some((m, cols)) => {
-            let mut m = m.clone();
-            let (r, obs, _, _, _) = rank_in_columns(&mut m, cols, opts.seed, opts.deadline)?;
-            (r, obs)
-        }
-        None => (point_rank, observable),
-    };
-    Ok(KnownReport {
-        rank,
-        invariant: invariant.is_some(),
-        determined: invariant.is_some()
-            || point_rank == unknown.len()
-            || point_rank == generic_rank,
-        point_rank: Some(point_rank),
+    Ok(PointRank {
+        rank: basis.rows.len(),
+        observable: (0..unknown.len())
+            .map(|i| basis.contains_unit(i, unknown.len()))
+            .collect(),
+        words,
+        evaluated,
         order_checked,
-        words_evaluated: evaluated,
-        basis: words,
-        fields,
-        observable,
-        unknown,
-        generic_rank,
-        generic_error_bound,
     })
 }
 

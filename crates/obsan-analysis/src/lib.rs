@@ -39,38 +39,71 @@ mod unknown_input;
 mod unknown_input_martinelli;
 mod unknown_input_symmetry;
 
-pub use along::{
-    generic_consts, AlongOptions, AlongTrajectory, AlongWindow, ROUNDING_FLOOR, TOL_SAFETY,
-};
-pub use along_report::{along, AlongReport, AlongStretch, DatasetRank};
-pub use along_sym::{InputSpan, SymmetryMatch, INPUT_REL_TOL};
-pub use decided::undecided_atoms_of;
+// The root keeps what most users need (rank, symmetries, modes, decompositions); the
+// other questions are behind public modules, so the root stays small (at most 40 names,
+// checked by scripts/module_dag.py --exports).
 pub use decomp::{verify_decomposition, verify_decomposition_with, Check, Decomposition};
 pub use derive::{
     derive_modes, verify_derivation, Derivation, DeriveOptions, DerivedMode, ModeKind,
-};
-pub use design::{
-    design_inputs, design_outputs, Candidate, CandidateEffect, Combination, DesignOptions,
-    DesignReport, DesignSet, FamilyReport, InputDesignReport,
-};
-pub use experiments::{
-    experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
-    SpecialValue,
-};
-pub use global::{
-    global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
-    Identifiability,
 };
 pub use modes::{check_modes, ModeCheck, ModeReport};
 pub use rank::{rank, rank_symbolic, AnalysisError, Fields, LieWord, RankOptions, RankReport};
 pub use reach::{reached_variables, restrict_to_reached, Reached};
 pub use structure::SymmetryKind;
 pub use sym_blocks::rank_by_blocks;
-pub use sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
 pub use symmetry::{
     canonical_lie, determinant, symmetries, symmetries_with, Certificate, Route, SymmetryOptions,
     SymmetryReport,
 };
-pub use unknown_input::{unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport};
-pub use unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
-pub use unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
+
+/// The rank along a recorded trajectory (`obsan along`): windows of a dataset, the rank
+/// on each, and whether a symmetry survives the inputs actually applied.
+pub mod trajectory {
+    pub use crate::along::{
+        generic_consts, AlongOptions, AlongTrajectory, AlongWindow, ROUNDING_FLOOR, TOL_SAFETY,
+    };
+    pub use crate::along_report::{along, AlongReport, AlongStretch, DatasetRank};
+    pub use crate::along_sym::{InputSpan, SymmetryMatch, INPUT_REL_TOL};
+}
+
+/// Which inputs or outputs to add so that a system becomes observable (`obsan design`).
+pub mod sensor_design {
+    pub use crate::design::{
+        design_inputs, design_outputs, Candidate, CandidateEffect, Combination, DesignOptions,
+        DesignReport, DesignSet, FamilyReport, InputDesignReport,
+    };
+}
+
+/// Several experiments at once: the rank with known values, and the search for the
+/// experiments that make a system observable (`obsan experiments`).
+pub mod multi_experiment {
+    pub use crate::experiments::{
+        experiments_auto, rank_known, AutoOptions, AutoReport, Known, KnownOptions, KnownReport,
+        SpecialValue,
+    };
+}
+
+/// Global (not only local) identifiability by Gröbner bases (`obsan global`).
+pub mod global_id {
+    pub use crate::global::{
+        global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
+        Identifiability,
+    };
+}
+
+/// Observability with unknown inputs: the extended rank test, Martinelli's algorithm and
+/// the symmetries of a system with unknown inputs.
+pub mod unknown_inputs {
+    pub use crate::unknown_input::{
+        unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
+    };
+    pub use crate::unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
+    pub use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
+}
+
+/// Certificates: the random-point check of reconstructed symmetries, and the atoms whose
+/// independence the engine cannot prove.
+pub mod certify {
+    pub use crate::decided::undecided_atoms_of;
+    pub use crate::sym_recon::{certify_symmetries, RandomCheck, CHECK_POINTS, CHECK_PRIMES};
+}

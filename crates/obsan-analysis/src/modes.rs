@@ -30,7 +30,7 @@ pub struct ModeReport {
     pub complete: bool,
     pub rank: usize,
     /// Atoms of the system and of the accepted modes the engine cannot prove
-    /// independent ([`crate::undecided_atoms_of`]). Not empty: the residuals
+    /// independent ([`crate::certify::undecided_atoms_of`]). Not empty: the residuals
     /// that are zero still prove eq. (11) for the symmetries given, but
     /// `independent` and `complete` rest on nonzero forms over these atoms
     /// (a minor, the rank) and are not proven; nor is a failure whose every
@@ -57,7 +57,7 @@ pub(crate) fn gradient_rank(
     let mut deg = 0u64;
     for &f in fs {
         let g = gradient(nf, f);
-        let d = obsan_expr::degree_bounds(&nf.ctx, &g);
+        let d = obsan_expr::evaluate::degree_bounds(&nf.ctx, &g);
         deg = deg.saturating_add(
             d.iter().map(|x| x.0).max().unwrap_or(0) + d.iter().map(|x| x.1).sum::<u64>(),
         );

@@ -10,7 +10,7 @@
 //! nothing, after at most n levels.
 //!
 //! Each Lie derivative's gradient is evaluated at the point by truncated
-//! Taylor jets along the flows of the fields ([`obsan_expr::LieJets`]), never
+//! Taylor jets along the flows of the fields ([`obsan_expr::lie::LieJets`]), never
 //! built as an expression: the cost is polynomial in the order. The degree
 //! bound of each row comes from the same computation (see that module). The
 //! older route, which builds every Lie derivative on the expression graph
@@ -19,7 +19,8 @@
 
 use crate::fields::field_names;
 use obsan_expr::{
-    degree_bounds, reached_states, BadPoint, Ctx, Fp, FpPoint, Id, LieJets, SplitMix, Var, P,
+    evaluate::degree_bounds, evaluate::BadPoint, evaluate::FpPoint, lie::reached_states,
+    lie::LieJets, Ctx, Fp, Id, SplitMix, Var, P,
 };
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -310,10 +311,12 @@ impl JetRows<'_> {
         let key = (output, field, k);
         if !self.runs.contains_key(&key) {
             let mut len = if 4 * k >= self.cap { self.cap } else { 2 * k }.max(k);
-            if obsan_expr::check_memory(self.jets.sweep_bytes(&vec![field; len]), "").is_err() {
+            if obsan_expr::limits::check_memory(self.jets.sweep_bytes(&vec![field; len]), "")
+                .is_err()
+            {
                 len = k;
             }
-            obsan_expr::check_memory(
+            obsan_expr::limits::check_memory(
                 self.jets.sweep_bytes(&vec![field; len]),
                 "the jets of the rank test",
             )
@@ -357,7 +360,7 @@ impl Rows for JetRows<'_> {
         }
         let key = (word.output, word.fields.clone());
         let known = self.degrees.get(&key).copied();
-        obsan_expr::check_memory(
+        obsan_expr::limits::check_memory(
             self.jets.sweep_bytes(&word.fields),
             "the jets of the rank test",
         )
@@ -555,7 +558,7 @@ fn rank_with(
         let mu = m as u128;
         let k = (fields.vectors.len() + outputs.len()) as u128;
         let bytes = k * mu * mu + 8 * (mu + 1) * (3 * mu + 1);
-        obsan_expr::check_memory(bytes, "the jets of the rank test")
+        obsan_expr::limits::check_memory(bytes, "the jets of the rank test")
             .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
     }
     let jets = (!symbolic).then(|| LieJets::new(&nf.ctx, &r_vars, &r_vectors, &outputs));

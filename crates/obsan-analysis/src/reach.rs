@@ -1,7 +1,7 @@
 //! The subsystem over the variables the outputs reach.
 //!
 //! A state variable that no output reaches through the fields
-//! ([`obsan_expr::reached_states`]) enters no Lie derivative: its column of
+//! ([`obsan_expr::lie::reached_states`]) enters no Lie derivative: its column of
 //! the codistribution is zero, exactly, so it is unobservable and `d/dx` is a
 //! symmetry (Definition 2). The Lie derivatives of the outputs depend only
 //! on the reached variables and read only the fields' reached components,
@@ -12,7 +12,7 @@
 
 use crate::fields::field_names;
 use crate::rank::AnalysisError;
-use obsan_expr::{reached_states, Ctx, Id};
+use obsan_expr::{lie::reached_states, Ctx, Id};
 use obsan_model::NormalForm;
 
 /// A system restricted to its reached variables.
@@ -89,6 +89,6 @@ pub(crate) fn check_symmetry_memory(m: usize, k: usize) -> Result<(), AnalysisEr
     let (m, k) = (m as u128, k as u128);
     let rf = std::mem::size_of::<obsan_expr::RatFun>() as u128;
     let bytes = 32 * (m + 4) * m + k * m * rf;
-    obsan_expr::check_memory(bytes, "the symmetries (dense in the reached variables)")
+    obsan_expr::limits::check_memory(bytes, "the symmetries (dense in the reached variables)")
         .map_err(|l| AnalysisError::Invalid(l.to_string()))
 }

@@ -19,7 +19,7 @@
 
 use crate::fp_linalg::null_space;
 use crate::rank::{random_point, AnalysisError, RankReport};
-use obsan_expr::{Ctx, Fp, FpPoint, Id, RatFun, SplitMix, Var, P, Q};
+use obsan_expr::{evaluate::FpPoint, Ctx, Fp, Id, RatFun, SplitMix, Var, P, Q};
 use obsan_model::NormalForm;
 
 /// What a cheaply found symmetry is.

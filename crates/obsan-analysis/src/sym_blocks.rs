@@ -39,7 +39,7 @@ use crate::rank::{rank, AnalysisError, Fields, LieWord, RankOptions, RankReport}
 use crate::structure::SymmetryKind;
 use crate::sym_recon::RandomCheck;
 use crate::sym_report::{primitive_vector, Certificate, SymmetryOptions, SymmetryReport};
-use obsan_expr::{Ctx, Id, LieJets, RatFun};
+use obsan_expr::{lie::LieJets, Ctx, Id, RatFun};
 use obsan_model::NormalForm;
 
 /// How the state splits into blocks.

@@ -17,7 +17,10 @@
 //! that the reconstruction's prime cannot hide an error in a coefficient).
 
 use crate::rank::{lie_jets, AnalysisError, LieWord, RankReport};
-use obsan_expr::{degree_bounds, height_bounds, Coord, Fp, Id, Mono, Poly, RatFun, SplitMix, P};
+use obsan_expr::{
+    evaluate::degree_bounds, lie::height_bounds, lie::Coord, Fp, Id, Mono, Poly, RatFun, SplitMix,
+    P,
+};
 use obsan_model::NormalForm;
 use obsan_recon::{reconstruct_vec, Options, ReconError};
 use std::collections::HashSet;

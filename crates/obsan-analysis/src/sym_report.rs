@@ -32,7 +32,7 @@ pub struct SymmetryReport {
     /// system was solved whole.
     pub blocks: usize,
     /// Atoms of the system the engine cannot prove independent
-    /// ([`crate::undecided_atoms_of`]). Empty: everything above is certified
+    /// ([`crate::certify::undecided_atoms_of`]). Empty: everything above is certified
     /// as `certificate` says. Not empty: each vector still annihilates the
     /// codistribution (zero forms) where its components are defined, but the
     /// rank's minor and the pivots are nonzero forms over these atoms, so
@@ -143,14 +143,14 @@ pub(crate) fn normalize_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
 pub(crate) fn primitive_vector(ctx: &mut Ctx, v: &[RatFun]) -> Vec<RatFun> {
     let mut lcm = Poly::one();
     for e in v.iter().filter(|e| !e.is_zero()) {
-        let g = obsan_expr::gcd(&lcm, e.denominator());
+        let g = obsan_expr::gcds::gcd(&lcm, e.denominator());
         lcm = lcm.mul(&e.denominator().div_exact(&g).expect("gcd divides"));
     }
     let l = RatFun::from_poly(lcm);
     let polys: Vec<RatFun> = v.iter().map(|e| ctx.rf_mul(e, &l)).collect();
     let mut g = Poly::zero();
     for e in &polys {
-        g = obsan_expr::gcd(&g, e.numerator());
+        g = obsan_expr::gcds::gcd(&g, e.numerator());
     }
     if g.is_zero() {
         return polys;

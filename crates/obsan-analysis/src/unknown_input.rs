@@ -39,7 +39,7 @@
 
 use crate::rank::{random_point_counted, AnalysisError, Echelon, Fields, LieWord};
 use crate::unknown_input_martinelli::{martinelli, MartinelliReport};
-use obsan_expr::{Ctx, Fp, FpPoint, Id, LieJets, SplitMix, Var, P};
+use obsan_expr::{evaluate::FpPoint, lie::LieJets, Ctx, Fp, Id, SplitMix, Var, P};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
 use std::time::Instant;

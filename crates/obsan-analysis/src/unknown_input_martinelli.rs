@@ -42,7 +42,7 @@
 //! Every "non-zero" and every "independent" is proven by a non-zero value in
 //! F_p (`p = 2^61 - 1`); every "zero" and "dependent" holds unless the random
 //! point is a root of a non-zero rational function whose numerator degree is
-//! bounded ([`obsan_expr::degree_bounds`]); the sum of those bounds over p is
+//! bounded ([`obsan_expr::evaluate::degree_bounds`]); the sum of those bounds over p is
 //! the stated error bound (Schwartz–Zippel, union bound).
 //!
 //! Unlike TUIO6 the whole chain `v_j, ..., v_j^(ord)` is kept (all of it is
@@ -52,7 +52,7 @@
 //! repeated with `D` doubled.
 
 use crate::rank::{random_point_counted, AnalysisError, Echelon};
-use obsan_expr::{degree_bounds, Ctx, Fp, FpPoint, Id, SplitMix, Var, P};
+use obsan_expr::{evaluate::degree_bounds, evaluate::FpPoint, Ctx, Fp, Id, SplitMix, Var, P};
 use obsan_model::NormalForm;
 use std::time::Instant;
 
@@ -263,7 +263,7 @@ fn grow(
     }
     st.built.extend_from_slice(&st.hobs.clone());
     let all = st.all();
-    let jets = obsan_expr::LieJets::new(&st.ctx, &all, &all_fields, &st.hobs);
+    let jets = obsan_expr::lie::LieJets::new(&st.ctx, &all, &all_fields, &st.hobs);
     let mut cod = Cod::default();
     // (output, word, root output)
     let mut gens: Vec<(usize, Vec<usize>, usize)> = Vec::new();

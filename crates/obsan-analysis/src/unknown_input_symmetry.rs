@@ -36,7 +36,9 @@
 use crate::fp_linalg::null_space;
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
-use obsan_expr::{Coord, Ctx, Fp, Id, LieJets, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P};
+use obsan_expr::{
+    lie::Coord, lie::LieJets, Ctx, Fp, Id, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P,
+};
 use obsan_model::NormalForm;
 use obsan_recon::{reconstruct_vec, Options, ReconError};
 use std::time::Instant;

@@ -6,7 +6,7 @@ mod common;
 
 use common::rank_fp;
 use obsan_analysis::{rank, symmetries, RankOptions};
-use obsan_expr::{rational_angle, Fp, SplitMix, Var, Q};
+use obsan_expr::{evaluate::rational_angle, Fp, SplitMix, Var, Q};
 use obsan_model::{NormalForm, System};
 use std::collections::HashMap;
 

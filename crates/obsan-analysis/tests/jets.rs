@@ -141,7 +141,7 @@ fn pharmacokinetics_needs_order_ten() {
 #[test]
 fn jet_rows_equal_graph_rows() {
     use obsan_analysis::{Fields, LieWord};
-    use obsan_expr::{LieJets, SplitMix};
+    use obsan_expr::{lie::LieJets, SplitMix};
     for (path, max) in [
         ("crates/obsan-analysis/tests/data/pharmacokinetics.sys", 6),
         ("systems/calib.sys", 3),
@@ -285,7 +285,7 @@ fn random_systems_agree_with_the_symbolic_route() {
 #[test]
 fn row_degree_bounds_cover_the_true_degrees() {
     use obsan_analysis::{canonical_lie, Fields, LieWord};
-    use obsan_expr::{LieJets, RatFun, SplitMix};
+    use obsan_expr::{lie::LieJets, RatFun, SplitMix};
     for (path, max) in [
         ("systems/classic/hiv.sys", 3),
         ("systems/classic/fitzhugh_nagumo.sys", 4),
@@ -326,7 +326,7 @@ fn row_degree_bounds_cover_the_true_degrees() {
                 .collect();
             let mut lcm = obsan_expr::Poly::one();
             for e in row.iter().filter(|e| !e.is_zero()) {
-                let gg = obsan_expr::gcd(&lcm, e.denominator());
+                let gg = obsan_expr::gcds::gcd(&lcm, e.denominator());
                 lcm = lcm.mul(&e.denominator().div_exact(&gg).unwrap());
             }
             let l = RatFun::from_poly(lcm);
@@ -414,7 +414,7 @@ fn dense_jets_past_the_memory_budget_are_refused() {
 #[test]
 fn random_words_agree_with_graph_rows() {
     use obsan_analysis::{Fields, LieWord};
-    use obsan_expr::{LieJets, SplitMix};
+    use obsan_expr::{lie::LieJets, SplitMix};
     let mut rng = SplitMix(77);
     let mut checked = 0;
     for _ in 0..25 {

@@ -10,7 +10,7 @@ use obsan_analysis::{
     check_modes, rank, restrict_to_reached, symmetries, symmetries_with, AnalysisError,
     Certificate, RankOptions, Route, SymmetryOptions, SymmetryReport,
 };
-use obsan_expr::{Fp, FpPoint, SplitMix};
+use obsan_expr::{evaluate::FpPoint, Fp, SplitMix};
 use obsan_model::{NormalForm, System};
 
 /// Martinelli 2011, Section II, eq. (3): rank 2 of 3, one symmetry

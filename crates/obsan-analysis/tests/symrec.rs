@@ -5,10 +5,10 @@ mod common;
 
 use common::rank_fp;
 use obsan_analysis::{
-    certify_symmetries, rank, symmetries_with, Certificate, RankOptions, RankReport, Route,
-    SymmetryOptions, SymmetryReport,
+    certify::certify_symmetries, rank, symmetries_with, Certificate, RankOptions, RankReport,
+    Route, SymmetryOptions, SymmetryReport,
 };
-use obsan_expr::{Fp, LieJets, RatFun, SplitMix};
+use obsan_expr::{lie::LieJets, Fp, RatFun, SplitMix};
 use obsan_model::{NormalForm, System};
 
 const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../..");
@@ -63,7 +63,7 @@ fn recon(path: &str, input: Option<&str>) -> (NormalForm, RankReport, SymmetryRe
     (nf, r, s)
 }
 
-fn values(nf: &mut NormalForm, v: &[RatFun], pt: &obsan_expr::FpPoint) -> Vec<Fp> {
+fn values(nf: &mut NormalForm, v: &[RatFun], pt: &obsan_expr::evaluate::FpPoint) -> Vec<Fp> {
     let ids: Vec<_> = v.iter().map(|e| nf.ctx.from_canonical(e)).collect();
     nf.ctx.eval_fp(&ids, pt).unwrap()
 }
@@ -228,7 +228,7 @@ fn prefix_rows_agree_with_rows() {
 /// exactly and independently of the bound.
 #[test]
 fn height_bounds_cover_the_coefficient_norm() {
-    use obsan_expr::{height_bounds, Ctx, Q};
+    use obsan_expr::{lie::height_bounds, Ctx, Q};
     let cases = [
         "(2*x + 3*y)^3*(x + 5)^2 + 7*x*y",
         "(x + y + z)^6",

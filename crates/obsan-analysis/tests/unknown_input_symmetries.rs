@@ -4,8 +4,8 @@
 //! obsan's own output.
 
 use obsan_analysis::{
-    determinant, unknown_input_symmetries, AnalysisError, UnknownInputOptions,
-    UnknownInputSymmetries,
+    determinant, unknown_inputs::unknown_input_symmetries, unknown_inputs::UnknownInputOptions,
+    unknown_inputs::UnknownInputSymmetries, AnalysisError,
 };
 use obsan_expr::RatFun;
 use obsan_model::{NormalForm, System};

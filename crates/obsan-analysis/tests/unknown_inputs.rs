@@ -1,7 +1,10 @@
 //! The rank test with unknown inputs on cases whose verdicts are
 //! derived by hand here, beside each test. Never obsan's own output.
 
-use obsan_analysis::{unknown_input_rank, UnknownInputOptions, UnknownInputReport};
+use obsan_analysis::{
+    unknown_inputs::unknown_input_rank, unknown_inputs::UnknownInputOptions,
+    unknown_inputs::UnknownInputReport,
+};
 use obsan_model::System;
 
 fn run(src: &str, max_order: Option<usize>) -> (Vec<String>, Vec<String>, UnknownInputReport) {
@@ -179,10 +182,15 @@ fn vins_with_an_unknown_vertical_acceleration() {
 mod martinelli_route {
     use super::*;
 
-    fn mart(name: &str) -> (Vec<String>, obsan_analysis::MartinelliReport) {
+    fn mart(
+        name: &str,
+    ) -> (
+        Vec<String>,
+        obsan_analysis::unknown_inputs::MartinelliReport,
+    ) {
         let sys = System::parse(&file(name), name).unwrap();
         let nf = sys.normal_form(None, &[]).unwrap();
-        let r = obsan_analysis::martinelli(&nf, 1, None).unwrap();
+        let r = obsan_analysis::unknown_inputs::martinelli(&nf, 1, None).unwrap();
         assert!(r.error_bound < 1e-12, "{}", r.error_bound);
         (nf.state.clone(), r)
     }

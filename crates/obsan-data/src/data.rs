@@ -398,6 +398,11 @@ fn split_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
 
 /// The fields of one CSV line, trimmed; a field may be quoted (`"a,b"`, with
 /// `""` for a quote inside). An error gives the 1-based field number.
+///
+/// Hand-written rather than the `csv` crate: the format is one row per line (a quote
+/// never spans lines, so a row number is a line number), and every rejection names the
+/// field; `csv` reads quoted newlines, accepts text after a closing quote (`"a"b`) and
+/// reports a byte and record position, not the field.
 fn split_fields(line: &str) -> Result<Vec<String>, (usize, K)> {
     let mut out = Vec::new();
     let mut chars = line.chars().peekable();

@@ -18,8 +18,9 @@
 //! data (a derived input such as `rate(u)` counts as free when `u` varies).
 
 use crate::error::DiagnoseError;
+use obsan_analysis::RankReport;
 use obsan_data::Dataset;
-use obsan_model::{EffectLibrary, Kind, System};
+use obsan_model::{EffectLibrary, Kind, NormalForm, System};
 use serde::Serialize;
 
 /// A measured input varies when the standard deviation of its 1 s block
@@ -257,9 +258,63 @@ pub fn stacked_rank(
     which: &[usize],
     point: (&[f64], &[Vec<f64>]),
 ) -> Result<Identifiability, DiagnoseError> {
+    let text = stacked_text(sys, class, consts, outputs_seen, which)?;
+    let stacked =
+        System::parse(&text, "stacked").map_err(|e| DiagnoseError::Stacking(Box::new(e)))?;
+    let mut nf = stacked
+        .normal_form(None, &[])
+        .map_err(DiagnoseError::model)?;
+    let report = obsan_analysis::rank(&mut nf, Default::default()).map_err(DiagnoseError::Rank)?;
+    let observable: Vec<(String, bool)> = nf
+        .state
+        .iter()
+        .zip(&report.observable)
+        .map(|(n, o)| (pretty(n, which), *o))
+        .collect();
+    // Numeric null vectors at the point, for the params that are not identifiable.
+    let hidden: Vec<usize> = (nf.n_dynamic..nf.state.len())
+        .filter(|&i| !report.observable[i])
+        .collect();
+    let symmetries = if hidden.is_empty() {
+        Vec::new()
+    } else {
+        let n_states = sys.decls_of(Kind::State).count();
+        hidden_symmetries(&mut nf, &report, &hidden, which, n_states, point)?
+    };
+    Ok(Identifiability {
+        rank: report.rank,
+        n: report.n,
+        observable,
+        error_bound: report.error_bound,
+        symmetries,
+    })
+}
+
+/// A stacked variable's name for the reader: `x__t1` is trajectory `which[1]`'s `x`,
+/// written `x[k]`; a param keeps its name.
+fn pretty(n: &str, which: &[usize]) -> String {
+    match n.rsplit_once("__t") {
+        Some((s, c)) => {
+            let k = c.parse::<usize>().map(|c| which[c]).unwrap_or(0);
+            format!("{s}[{k}]")
+        }
+        None => n.to_string(),
+    }
+}
+
+/// The `.sys` text of the stacked drift-free system: per chosen trajectory `c`, a copy
+/// `x__t{c}` of each state driven by one input `v__t{c}_{a}` per sample of its input
+/// class (the field `F(u_a)` with that trajectory's constants), the params shared, and
+/// the outputs that trajectory measured.
+fn stacked_text(
+    sys: &System,
+    class: &InputClass,
+    consts: &[Vec<(String, f64)>],
+    outputs_seen: &[Vec<bool>],
+    which: &[usize],
+) -> Result<String, DiagnoseError> {
     let states: Vec<String> = sys.decls_of(Kind::State).map(|d| d.name.clone()).collect();
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
-    let inputs: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
     let outputs: Vec<String> = sys.output_names().iter().map(|s| s.to_string()).collect();
     let mut text = String::from("system stacked\n");
     let mut st_names = Vec::new();
@@ -287,28 +342,7 @@ pub fn stacked_rank(
             base.push((n.clone(), num(*v)));
         }
         for s in &states {
-            let rhs = sys
-                .rhs_text(s)
-                .ok_or(DiagnoseError::Incomplete("state without equation"))?;
-            let terms: Vec<String> = class.samples[k]
-                .iter()
-                .enumerate()
-                .map(|(a, u)| {
-                    let mut m = base.clone();
-                    // With a delay the class also holds each input's rate
-                    // (after the inputs): u(t - tau) ~ u - tau du/dt.
-                    for (i, n) in inputs.iter().enumerate() {
-                        let val = match (&sys.delay, u.get(inputs.len() + i)) {
-                            (Some(tau), Some(du)) => {
-                                format!("{} - {tau}*({})", num(u[i]), num(*du))
-                            }
-                            _ => num(u[i]),
-                        };
-                        m.push((n.clone(), val));
-                    }
-                    format!("v__t{c}_{a}*({})", substitute(rhs, &m))
-                })
-                .collect();
+            let terms = sampled_fields(sys, s, &class.samples[k], &base, c)?;
             text.push_str(&format!("{s}__t{c}' = {}\n", terms.join(" + ")));
         }
         for (o, y) in outputs.iter().enumerate() {
@@ -325,132 +359,144 @@ pub fn stacked_rank(
     if !any_output {
         return Err(DiagnoseError::NoOutputMeasured);
     }
-    let stacked =
-        System::parse(&text, "stacked").map_err(|e| DiagnoseError::Stacking(Box::new(e)))?;
-    let mut nf = stacked
-        .normal_form(None, &[])
-        .map_err(DiagnoseError::model)?;
-    let report = obsan_analysis::rank(&mut nf, Default::default()).map_err(DiagnoseError::Rank)?;
-    let pretty = |n: &str| -> String {
-        match n.rsplit_once("__t") {
-            Some((s, c)) => {
-                let k = c.parse::<usize>().map(|c| which[c]).unwrap_or(0);
-                format!("{s}[{k}]")
-            }
-            None => n.to_string(),
-        }
-    };
-    let observable: Vec<(String, bool)> = nf
-        .state
+    Ok(text)
+}
+
+/// State `s`'s equation in copy `c`: one term `v__t{c}_{a} * rhs(u_a)` per sample input
+/// `u_a` of the class, the states renamed and the constants set by `base`.
+fn sampled_fields(
+    sys: &System,
+    s: &str,
+    samples: &[Vec<f64>],
+    base: &[(String, String)],
+    c: usize,
+) -> Result<Vec<String>, DiagnoseError> {
+    let inputs: Vec<String> = sys.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
+    let rhs = sys
+        .rhs_text(s)
+        .ok_or(DiagnoseError::Incomplete("state without equation"))?;
+    Ok(samples
         .iter()
-        .zip(&report.observable)
-        .map(|(n, o)| (pretty(n), *o))
-        .collect();
-    // Numeric null vectors at the point, for the params that are not identifiable.
-    let mut symmetries = Vec::new();
-    let hidden: Vec<usize> = (nf.n_dynamic..nf.state.len())
-        .filter(|&i| !report.observable[i])
-        .collect();
-    if !hidden.is_empty() {
-        let (pv, sv) = point;
-        let mut x = Vec::with_capacity(nf.state.len());
-        for &k in which {
-            x.extend(
-                sv.get(k)
-                    .cloned()
-                    .unwrap_or_else(|| vec![0.1; states.len()]),
-            );
-        }
-        x.extend(pv.iter().copied());
-        x.resize(nf.state.len(), 0.0);
-        // Only the variables the basis functions reach have a non-zero
-        // gradient column: each other one is a null direction on its own
-        // (d/dx_j, exactly), so the gradients and the SVD are sized by what
-        // the outputs reach, not by the number of params (an
-        // effect with 6,000 params made a 6,000^2 SVD).
-        let ids = report.basis_functions(&mut nf);
-        let reached = obsan_expr::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
-        if reached.len() > MAX_NULL_COLUMNS {
-            return Err(DiagnoseError::TooManyReached {
-                reached: reached.len(),
-                limit: MAX_NULL_COLUMNS,
-                at: String::new(),
-            });
-        }
-        let vars: Vec<_> = reached.iter().map(|&j| nf.state_vars[j]).collect();
-        let x: Vec<f64> = reached.iter().map(|&j| x[j]).collect();
-        let mut grads = Vec::new();
-        for &id in &ids {
-            for &v in &vars {
-                grads.push(nf.ctx.diff(id, v));
+        .enumerate()
+        .map(|(a, u)| {
+            let mut m = base.to_vec();
+            // With a delay the class also holds each input's rate
+            // (after the inputs): u(t - tau) ~ u - tau du/dt.
+            for (i, n) in inputs.iter().enumerate() {
+                let val = match (&sys.delay, u.get(inputs.len() + i)) {
+                    (Some(tau), Some(du)) => {
+                        format!("{} - {tau}*({})", num(u[i]), num(*du))
+                    }
+                    _ => num(u[i]),
+                };
+                m.push((n.clone(), val));
             }
-        }
-        let tape = obsan_expr::Tape::compile(&nf.ctx, &grads, &vars)
-            .map_err(|_| DiagnoseError::GradientTape)?;
-        let g = tape.eval(&x);
-        let n = vars.len();
-        let r = report.basis.len();
-        // Null space of the r x n gradient matrix: right singular vectors.
-        let mut m = nalgebra::DMatrix::zeros(r.max(n), n);
-        for i in 0..r {
-            for j in 0..n {
-                m[(i, j)] = g[i * n + j];
-            }
-        }
-        // A point where the gradients are not finite gives no null vector.
-        let svd = if m.iter().all(|x| x.is_finite()) {
-            nalgebra::SVD::try_new(m, false, true, 1e-14, 10_000)
-        } else {
-            None
-        };
-        let Some(svd) = svd else {
-            return Ok(Identifiability {
-                rank: report.rank,
-                n: report.n,
-                observable,
-                error_bound: report.error_bound,
-                symmetries,
-            });
-        };
-        let Some(vt) = svd.v_t else {
-            return Err(DiagnoseError::NoSingularVectors);
-        };
-        let smax = svd.singular_values.max().max(1e-300);
-        let null: Vec<Vec<f64>> = (0..n)
-            .filter(|&i| svd.singular_values[i] < 1e-8 * smax)
-            .map(|i| (0..n).map(|j| vt[(i, j)]).collect())
-            .collect();
-        for &hv in &hidden {
-            let Ok(h) = reached.binary_search(&hv) else {
-                // Not reached: its own symmetry.
-                symmetries.push((nf.state[hv].clone(), vec![(pretty(&nf.state[hv]), 1.0)]));
-                continue;
-            };
-            // The null vector (in the span) with the largest weight on h.
-            let mut best: Option<Vec<f64>> = None;
-            for v in &null {
-                if best.as_ref().is_none_or(|b| v[h].abs() > b[h].abs()) {
-                    best = Some(v.clone());
-                }
-            }
-            let Some(v) = best.filter(|v| v[h].abs() > 1e-9) else {
-                continue;
-            };
-            let terms: Vec<(String, f64)> = (0..n)
-                .filter(|&j| (v[j] / v[h]).abs() > 1e-6)
-                .map(|j| (pretty(&nf.state[reached[j]]), v[j] / v[h]))
-                .collect();
-            symmetries.push((nf.state[hv].clone(), terms));
+            format!("v__t{c}_{a}*({})", substitute(rhs, &m))
+        })
+        .collect())
+}
+
+/// Per hidden param (`hidden`, indices into the stacked state): a numeric null vector of
+/// the stacked codistribution at `point` (params, then per chosen trajectory its dynamic
+/// state; `n_states` per copy), scaled so the param's own coefficient is 1. Empty where
+/// the gradients at the point are not finite.
+fn hidden_symmetries(
+    nf: &mut NormalForm,
+    report: &RankReport,
+    hidden: &[usize],
+    which: &[usize],
+    n_states: usize,
+    point: (&[f64], &[Vec<f64>]),
+) -> Result<Vec<HiddenSymmetry>, DiagnoseError> {
+    let (pv, sv) = point;
+    let mut x = Vec::with_capacity(nf.state.len());
+    for &k in which {
+        x.extend(sv.get(k).cloned().unwrap_or_else(|| vec![0.1; n_states]));
+    }
+    x.extend(pv.iter().copied());
+    x.resize(nf.state.len(), 0.0);
+    // Only the variables the basis functions reach have a non-zero
+    // gradient column: each other one is a null direction on its own
+    // (d/dx_j, exactly), so the gradients and the SVD are sized by what
+    // the outputs reach, not by the number of params (an
+    // effect with 6,000 params made a 6,000^2 SVD).
+    let ids = report.basis_functions(nf);
+    let reached = obsan_expr::lie::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
+    if reached.len() > MAX_NULL_COLUMNS {
+        return Err(DiagnoseError::TooManyReached {
+            reached: reached.len(),
+            limit: MAX_NULL_COLUMNS,
+            at: String::new(),
+        });
+    }
+    let vars: Vec<_> = reached.iter().map(|&j| nf.state_vars[j]).collect();
+    let x: Vec<f64> = reached.iter().map(|&j| x[j]).collect();
+    let mut grads = Vec::new();
+    for &id in &ids {
+        for &v in &vars {
+            grads.push(nf.ctx.diff(id, v));
         }
     }
-    Ok(Identifiability {
-        rank: report.rank,
-        n: report.n,
-        observable,
-        error_bound: report.error_bound,
-        symmetries,
-    })
+    let tape = obsan_expr::Tape::compile(&nf.ctx, &grads, &vars)
+        .map_err(|_| DiagnoseError::GradientTape)?;
+    let g = tape.eval(&x);
+    let n = vars.len();
+    let r = report.basis.len();
+    // Null space of the r x n gradient matrix: right singular vectors.
+    let mut m = nalgebra::DMatrix::zeros(r.max(n), n);
+    for i in 0..r {
+        for j in 0..n {
+            m[(i, j)] = g[i * n + j];
+        }
+    }
+    // A point where the gradients are not finite gives no null vector.
+    let svd = if m.iter().all(|x| x.is_finite()) {
+        nalgebra::SVD::try_new(m, false, true, 1e-14, 10_000)
+    } else {
+        None
+    };
+    let Some(svd) = svd else {
+        return Ok(Vec::new());
+    };
+    let Some(vt) = svd.v_t else {
+        return Err(DiagnoseError::NoSingularVectors);
+    };
+    let smax = svd.singular_values.max().max(1e-300);
+    let null: Vec<Vec<f64>> = (0..n)
+        .filter(|&i| svd.singular_values[i] < 1e-8 * smax)
+        .map(|i| (0..n).map(|j| vt[(i, j)]).collect())
+        .collect();
+    let mut symmetries = Vec::new();
+    for &hv in hidden {
+        let Ok(h) = reached.binary_search(&hv) else {
+            // Not reached: its own symmetry.
+            symmetries.push((
+                nf.state[hv].clone(),
+                vec![(pretty(&nf.state[hv], which), 1.0)],
+            ));
+            continue;
+        };
+        // The null vector (in the span) with the largest weight on h.
+        let mut best: Option<Vec<f64>> = None;
+        for v in &null {
+            if best.as_ref().is_none_or(|b| v[h].abs() > b[h].abs()) {
+                best = Some(v.clone());
+            }
+        }
+        let Some(v) = best.filter(|v| v[h].abs() > 1e-9) else {
+            continue;
+        };
+        let terms: Vec<(String, f64)> = (0..n)
+            .filter(|&j| (v[j] / v[h]).abs() > 1e-6)
+            .map(|j| (pretty(&nf.state[reached[j]], which), v[j] / v[h]))
+            .collect();
+        symmetries.push((nf.state[hv].clone(), terms));
+    }
+    Ok(symmetries)
 }
+
+/// A hidden param and its null vector, as in [`Identifiability::symmetries`].
+type HiddenSymmetry = (String, Vec<(String, f64)>);
 
 /// Whole-identifier substitution (see obsan-model's effect patches).
 fn substitute(text: &str, map: &[(String, String)]) -> String {

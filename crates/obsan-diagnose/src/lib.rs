@@ -7,7 +7,7 @@
 //!    ([`ResidualReport`]).
 //! 2. Each candidate [`obsan_model::Effect`] extends the model. The rank
 //!    test of the extended model on this data's input class
-//!    ([`input_class`], [`stacked_rank`]) decides whether its params are
+//!    ([`identifiability::input_class`], [`identifiability::stacked_rank`]) decides whether its params are
 //!    identifiable; if not, the null vector that hides them is reported.
 //! 3. Identifiable candidates are fitted from the current fit and scored
 //!    (likelihood ratio, BIC); the best significant one is named, and the
@@ -39,16 +39,11 @@ mod start;
 mod stats;
 mod workflow;
 
-pub use common_mode::{
-    difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
-};
-pub use correlation::{correlated, correlation, Combination, Correlation, CORRELATION_CAUTION};
+// The root keeps the workflow, its options and its report; the identifiability and
+// statistical checks are behind public modules, so the root stays small (at most 40
+// names, checked by scripts/module_dag.py --exports).
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
-pub use identify::{
-    check_effect_sizes, input_class, stacked_rank, Identifiability, InputClass, DIRECTION,
-    MAX_NULL_COLUMNS, VARYING,
-};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
@@ -60,3 +55,23 @@ pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTU
 pub use screen::SCREEN_SAFETY;
 pub use start::start_values;
 pub use workflow::diagnose;
+
+/// Whether a candidate's params are identifiable on the data's input class: the stacked
+/// rank test and the null vector that hides them.
+pub mod identifiability {
+    pub use crate::identify::{
+        check_effect_sizes, input_class, stacked_rank, Identifiability, InputClass, DIRECTION,
+        MAX_NULL_COLUMNS, VARYING,
+    };
+}
+
+/// Statistics between fitted candidates: correlations of estimates and the common-mode
+/// check of candidates that differ by a shared offset.
+pub mod statistics {
+    pub use crate::common_mode::{
+        difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
+    };
+    pub use crate::correlation::{
+        correlated, correlation, Combination, Correlation, CORRELATION_CAUTION,
+    };
+}

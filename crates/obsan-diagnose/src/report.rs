@@ -131,7 +131,7 @@ pub struct Named {
     /// well (BIC within [`RIVAL_BIC`]): the data hardly tell them apart.
     pub rivals: Vec<Rival>,
     /// Its params' correlations with the final model's other params with
-    /// `|r| >=` [`crate::CORRELATION_CAUTION`]: with another named effect's, the
+    /// `|r| >=` [`crate::statistics::CORRELATION_CAUTION`]: with another named effect's, the
     /// data fix a combination of the two rather than each. Those with the
     /// user's model's own params are informative only (a correct radius
     /// change correlates with calib.sys's delta at 0.999). Empty for an
@@ -214,7 +214,7 @@ pub struct Diagnosis {
     /// suggested, not established, never named.
     pub suggested: Vec<CandidateResult>,
     /// Pairs of params fixed only in combination (`|r| >=`
-    /// [`crate::CORRELATION_CAUTION`]): of two named effects in the final
+    /// [`crate::statistics::CORRELATION_CAUTION`]): of two named effects in the final
     /// fit, then of two suggested candidates fitted together (`named`
     /// false). Compare such a pair through its combination, not each
     /// param alone.

@@ -19,8 +19,8 @@ mod common;
 use common::{read, ring, Rng};
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{
-    diagnose, difference_estimate, start_values, CandidateResult, DiagnoseOptions, Diagnosis,
-    Member, PREDICTED_MARGIN,
+    diagnose, start_values, statistics::difference_estimate, statistics::Member,
+    statistics::PREDICTED_MARGIN, CandidateResult, DiagnoseOptions, Diagnosis,
 };
 use obsan_expr::SplitMix;
 use obsan_model::{EffectLibrary, System};

@@ -11,7 +11,7 @@ mod common;
 use common::{read, ring, Rng};
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{
-    diagnose, prepare, start_values, DiagnoseOptions, Diagnosis, CORRELATION_CAUTION,
+    diagnose, prepare, start_values, statistics::CORRELATION_CAUTION, DiagnoseOptions, Diagnosis,
 };
 use obsan_expr::SplitMix;
 use obsan_fit::Predictor;

@@ -5,7 +5,7 @@
 //! of reached variables the test is refused with its error, never a dense
 //! SVD in the number of params squared.
 
-use obsan_diagnose::{stacked_rank, DiagnoseError, InputClass};
+use obsan_diagnose::{identifiability::stacked_rank, identifiability::InputClass, DiagnoseError};
 use obsan_model::System;
 
 /// `x' = -k x + u` observed as `y = 2 x + EXTRA`, with `unused` more params
@@ -19,7 +19,10 @@ fn system(unused: usize, extra: &str) -> System {
     System::parse(&src, "decay.sys").unwrap()
 }
 
-fn rank(sys: &System, n_params: usize) -> Result<obsan_diagnose::Identifiability, DiagnoseError> {
+fn rank(
+    sys: &System,
+    n_params: usize,
+) -> Result<obsan_diagnose::identifiability::Identifiability, DiagnoseError> {
     // Two different input values: u varies on the trajectory.
     let class = InputClass {
         samples: vec![vec![vec![1.0], vec![2.0]]],
@@ -69,7 +72,7 @@ fn a_reached_null_vector_still_mixes_the_reached_params() {
 
 #[test]
 fn more_reached_variables_than_the_limit_is_refused() {
-    let limit = obsan_diagnose::MAX_NULL_COLUMNS;
+    let limit = obsan_diagnose::identifiability::MAX_NULL_COLUMNS;
     // Every extra param reached (and all but one direction of them hidden).
     let extra: String = (0..limit).map(|i| format!(" + p{i}")).collect();
     let sys = system(limit, &extra);
@@ -87,7 +90,7 @@ fn more_reached_variables_than_the_limit_is_refused() {
 /// passes (an unused param costs nothing).
 #[test]
 fn an_effect_using_more_params_than_the_limit_is_refused_where_it_is() {
-    let limit = obsan_diagnose::MAX_NULL_COLUMNS;
+    let limit = obsan_diagnose::identifiability::MAX_NULL_COLUMNS;
     let names: Vec<String> = (0..6000).map(|i| format!("p{i}")).collect();
     let eff = |used: usize| {
         let terms: String = (0..used).map(|i| format!(" + p{i}*sin(beta)")).collect();
@@ -98,9 +101,9 @@ fn an_effect_using_more_params_than_the_limit_is_refused_where_it_is() {
         )
     };
     let lib = obsan_model::EffectLibrary::parse(&eff(1), "many.eff").unwrap();
-    obsan_diagnose::check_effect_sizes(&lib).unwrap();
+    obsan_diagnose::identifiability::check_effect_sizes(&lib).unwrap();
     let lib = obsan_model::EffectLibrary::parse(&eff(limit + 1), "many.eff").unwrap();
-    let e = obsan_diagnose::check_effect_sizes(&lib).unwrap_err();
+    let e = obsan_diagnose::identifiability::check_effect_sizes(&lib).unwrap_err();
     assert!(
         matches!(&e, DiagnoseError::EffectTooLarge { params, limit: l, at }
             if *params == limit + 1 && *l == limit && at == "many.eff:7: effect 'many'"),

@@ -7,8 +7,8 @@
 //! Run: `cargo bench -p obsan-expr --bench gcd` (optionally `-- REPS`).
 
 use obsan_expr::{
-    within_thread_budget, Budget, EngineGcd, HeuristicGcd, Int, ModularGcd, Mono, Poly, PolyGcd,
-    SplitMix, Var,
+    gcds::EngineGcd, gcds::HeuristicGcd, gcds::ModularGcd, gcds::PolyGcd, within_thread_budget,
+    Budget, Int, Mono, Poly, SplitMix, Var,
 };
 use polycore::{Order, Ring};
 use std::time::{Duration, Instant};

@@ -37,7 +37,7 @@ impl FloatExpr {
     /// The value with `values[i]` for `names()[i]`; an identifier without a
     /// value (a short slice) is NaN, as are a function outside the language
     /// and a real function outside its domain (`log(-1)`, `sqrt(-1)`).
-    /// Recursion is bounded by the parser's [`crate::MAX_DEPTH`].
+    /// Recursion is bounded by the parser's [`crate::limits::MAX_DEPTH`].
     pub fn eval(&self, values: &[f64]) -> f64 {
         self.node(&self.ast, values)
     }

@@ -303,41 +303,105 @@ fn mp_div_exact(f: Field, a: &MP, d: &MP) -> Option<MP> {
     Some(q)
 }
 
+/// The gcd of two univariate polynomials (in `x_0`, the other exponents zero) by the
+/// dense Euclidean algorithm, monic.
+fn pgcd_univariate(f: Field, a: &MP, b: &MP) -> MP {
+    let dense = |p: &MP| {
+        let mut u = vec![0; p.first().map_or(0, |t| t.0[0] as usize) + 1];
+        for (e, c) in p {
+            u[e[0] as usize] = *c;
+        }
+        u
+    };
+    let g = uni_gcd(f, &dense(a), &dense(b));
+    let n = a.first().map_or(1, |t| t.0.len());
+    let mut out = MP::new();
+    for (d, &c) in g.iter().enumerate().rev() {
+        if c != 0 {
+            let mut e: Exps = smallvec::smallvec![0; n];
+            e[0] = d as u32;
+            out.push((e, c));
+        }
+    }
+    out
+}
+
+/// The content in `F_p[x_{k-1}]` of a polynomial grouped by its other monomials: the
+/// gcd of its coefficient polynomials.
+fn uni_content(f: Field, g: &[(Exps, Vec<u64>)]) -> Vec<u64> {
+    let mut c: Vec<u64> = Vec::new();
+    for (_, u) in g {
+        c = uni_gcd(f, &c, u);
+        if uni_is_one(&c) {
+            break;
+        }
+    }
+    c
+}
+
+/// One Newton interpolation step at `alpha`: `h += (img - h(alpha)) / q(alpha) * q`,
+/// per monomial (both sorted the same way, `h`'s coefficients polynomials in
+/// `x_{k-1}`). Whether `h` changed.
+fn newton_step(
+    f: Field,
+    h: &mut Vec<(Exps, Vec<u64>)>,
+    img: &MP,
+    q: &[u64],
+    alpha: u64,
+) -> Option<bool> {
+    let qinv = f.inv(uni_eval(f, q, alpha));
+    let mut changed = false;
+    let old = std::mem::take(h);
+    let mut old = old.into_iter().peekable();
+    let mut j = 0;
+    while old.peek().is_some() || j < img.len() {
+        let ord = match (old.peek(), img.get(j)) {
+            (Some(x), Some(y)) => x.0.cmp(&y.0),
+            (Some(_), None) => Ordering::Greater,
+            _ => Ordering::Less,
+        };
+        let (key, mut u, v) = match ord {
+            Ordering::Greater => {
+                let (key, u) = old.next()?;
+                (key, u, 0)
+            }
+            Ordering::Less => {
+                j += 1;
+                (img[j - 1].0.clone(), Vec::new(), img[j - 1].1)
+            }
+            Ordering::Equal => {
+                let (key, u) = old.next()?;
+                j += 1;
+                (key, u, img[j - 1].1)
+            }
+        };
+        let d = f.mul(f.sub(v, uni_eval(f, &u, alpha)), qinv);
+        if d != 0 {
+            changed = true;
+            if u.len() < q.len() {
+                u.resize(q.len(), 0);
+            }
+            for (x, &qc) in u.iter_mut().zip(q.iter()) {
+                *x = f.add(*x, f.mul(d, qc));
+            }
+            trim(&mut u);
+        }
+        if !u.is_empty() {
+            h.push((key, u));
+        }
+    }
+    Some(changed)
+}
+
 /// Monic gcd of two nonzero polynomials modulo p in `x_0..x_{k-1}` (Brown's
 /// PGCD); `None` on a budget trip or an unexpected run of failures.
 fn pgcd(f: Field, a: &MP, b: &MP, k: usize, rng: &mut SplitMix) -> Option<MP> {
     if k == 1 {
-        let dense = |p: &MP| {
-            let mut u = vec![0; p.first().map_or(0, |t| t.0[0] as usize) + 1];
-            for (e, c) in p {
-                u[e[0] as usize] = *c;
-            }
-            u
-        };
-        let g = uni_gcd(f, &dense(a), &dense(b));
-        let n = a.first().map_or(1, |t| t.0.len());
-        let mut out = MP::new();
-        for (d, &c) in g.iter().enumerate().rev() {
-            if c != 0 {
-                let mut e: Exps = smallvec::smallvec![0; n];
-                e[0] = d as u32;
-                out.push((e, c));
-            }
-        }
-        return Some(out);
+        return Some(pgcd_univariate(f, a, b));
     }
     let (mut ga, mut gb) = (groups(a, k), groups(b, k));
     // Contents in F_p[x_{k-1}] and primitive parts.
-    let content = |g: &[(Exps, Vec<u64>)]| {
-        let mut c: Vec<u64> = Vec::new();
-        for (_, u) in g {
-            c = uni_gcd(f, &c, u);
-            if uni_is_one(&c) {
-                break;
-            }
-        }
-        c
-    };
+    let content = |g: &[(Exps, Vec<u64>)]| uni_content(f, g);
     let (ca, cb) = (content(&ga), content(&gb));
     let cont = uni_gcd(f, &ca, &cb);
     for (g, c) in [(&mut ga, &ca), (&mut gb, &cb)] {
@@ -412,53 +476,13 @@ fn pgcd(f: Field, a: &MP, b: &MP, k: usize, rng: &mut SplitMix) -> Option<MP> {
         if reject.as_ref().is_some_and(|r| ilm >= *r) {
             continue;
         }
-        let mut changed = false;
-        match lm.as_ref().map(|l| ilm.cmp(l)) {
+        let changed = match lm.as_ref().map(|l| ilm.cmp(l)) {
             Some(Ordering::Greater) => continue,
             Some(Ordering::Equal) => {
-                // Newton step: h += (img - h(alpha)) / q(alpha) * q, per monomial.
-                let qinv = f.inv(uni_eval(f, &q, alpha));
-                let old = std::mem::take(&mut h);
-                let mut old = old.into_iter().peekable();
-                let mut j = 0;
-                while old.peek().is_some() || j < img.len() {
-                    let ord = match (old.peek(), img.get(j)) {
-                        (Some(x), Some(y)) => x.0.cmp(&y.0),
-                        (Some(_), None) => Ordering::Greater,
-                        _ => Ordering::Less,
-                    };
-                    let (key, mut u, v) = match ord {
-                        Ordering::Greater => {
-                            let (key, u) = old.next()?;
-                            (key, u, 0)
-                        }
-                        Ordering::Less => {
-                            j += 1;
-                            (img[j - 1].0.clone(), Vec::new(), img[j - 1].1)
-                        }
-                        Ordering::Equal => {
-                            let (key, u) = old.next()?;
-                            j += 1;
-                            (key, u, img[j - 1].1)
-                        }
-                    };
-                    let d = f.mul(f.sub(v, uni_eval(f, &u, alpha)), qinv);
-                    if d != 0 {
-                        changed = true;
-                        if u.len() < q.len() {
-                            u.resize(q.len(), 0);
-                        }
-                        for (x, &qc) in u.iter_mut().zip(q.iter()) {
-                            *x = f.add(*x, f.mul(d, qc));
-                        }
-                        trim(&mut u);
-                    }
-                    if !u.is_empty() {
-                        h.push((key, u));
-                    }
-                }
+                let changed = newton_step(f, &mut h, &img, &q, alpha)?;
                 q = uni_mul(f, &q, &[f.sub(0, alpha), 1]);
                 points += 1;
+                changed
             }
             // First point, or every earlier point was unlucky.
             None | Some(Ordering::Less) => {
@@ -466,9 +490,9 @@ fn pgcd(f: Field, a: &MP, b: &MP, k: usize, rng: &mut SplitMix) -> Option<MP> {
                 h = img.into_iter().map(|(e, c)| (e, vec![c])).collect();
                 q = vec![f.sub(0, alpha), 1];
                 points = 1;
-                changed = true;
+                true
             }
-        }
+        };
         // Stop at the degree bound, or early when a new point changed nothing.
         if changed && points <= bound {
             continue;

@@ -49,25 +49,50 @@ mod tanhalf;
 pub mod tutorial;
 mod undecided;
 
-pub use budget::{
-    budget_tripped, cancel_flag, cancel_requested, check_memory, with_cancel, within_thread_budget,
-    within_thread_budget_keep, Budget, Limit, EXP_MAX, NUM_BITS_MAX, POW_MAX,
-};
-pub use eval::{
-    degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, FrozenTape, Tape, UnboundSymbol,
-};
+// The root keeps what most users need; the rest is behind public modules, so the root
+// stays small (at most 40 names, checked by scripts/module_dag.py --exports).
+pub use budget::{cancel_flag, cancel_requested, with_cancel, within_thread_budget, Budget, Limit};
+pub use eval::{FrozenTape, Tape};
 pub use float_eval::FloatExpr;
-pub use gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
 pub use graph::{Id, Symbol};
-pub use jet::{height_bounds, reached_states, Coord, LieJets, LieRow};
 pub use lower::EngineError;
 pub use memo::Ctx;
 pub use num::{Fp, Int, SplitMix, P, Q};
-pub use parse::{
-    line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS, MAX_DEPTH, MAX_DIGITS,
-    MAX_HEIGHT,
-};
+pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
 pub use poly::{Mono, Poly, Var};
-pub use print::{latex_name, within_text_cap};
 pub use ratfun::RatFun;
 pub use tanhalf::TanHalf;
+
+/// The engine's limits: the hard caps of the canonical form and the parser, and the
+/// per-thread budget's less common entry points ([`crate::Budget`] and [`crate::Limit`] are at the root).
+pub mod limits {
+    pub use crate::budget::{
+        budget_tripped, check_memory, within_thread_budget_keep, EXP_MAX, NUM_BITS_MAX, POW_MAX,
+    };
+    pub use crate::parse::{MAX_DEPTH, MAX_DIGITS, MAX_HEIGHT};
+}
+
+/// Exact and modular evaluation: points of F_p, rational evaluation and its errors,
+/// degree bounds for the Schwartz–Zippel lemma.
+pub mod evaluate {
+    pub use crate::eval::{
+        degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, UnboundSymbol,
+    };
+}
+
+/// Multivariate polynomial gcds: the engine's choice ([`crate::gcds::gcd`]) and each method
+/// behind the `PolyGcd` trait (for tests and comparisons).
+pub mod gcds {
+    pub use crate::gcd::{gcd, EngineGcd, HeuristicGcd, ModularGcd, PolyGcd, PrsGcd};
+}
+
+/// Lie derivatives along words of fields and their gradients at an F_p point, by
+/// truncated Taylor jets on the expression DAG.
+pub mod lie {
+    pub use crate::jet::{height_bounds, reached_states, Coord, LieJets, LieRow};
+}
+
+/// Text output helpers: LaTeX names and the cap on printed text.
+pub mod text {
+    pub use crate::print::{latex_name, within_text_cap};
+}

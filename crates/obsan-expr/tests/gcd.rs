@@ -4,8 +4,8 @@
 //! gcd(a g, b g) = g gcd(a, b) up to sign.
 
 use obsan_expr::{
-    gcd, within_thread_budget, Budget, HeuristicGcd, Int, Limit, ModularGcd, Mono, Poly, PolyGcd,
-    PrsGcd, SplitMix, Var,
+    gcds::gcd, gcds::HeuristicGcd, gcds::ModularGcd, gcds::PolyGcd, gcds::PrsGcd,
+    within_thread_budget, Budget, Int, Limit, Mono, Poly, SplitMix, Var,
 };
 use polycore::{Order, Ring};
 use proptest::prelude::*;

@@ -3,7 +3,7 @@
 //! cos(g mu): an argument without parentheses runs to the end of the
 //! product), evaluated at random points and compared with the expression.
 
-use obsan_expr::{latex_name, Ctx, SplitMix, Tape, Var};
+use obsan_expr::{text::latex_name, Ctx, SplitMix, Tape, Var};
 use proptest::prelude::*;
 use std::collections::HashMap;
 

@@ -2,7 +2,8 @@
 //! Case counts are capped so CI stays fast; raise PROPTEST_CASES to search harder.
 
 use obsan_expr::{
-    gcd, parse_ast, Budget, Ctx, Id, Poly, PolyGcd, PrsGcd, RatFun, SplitMix, Tape, Var,
+    gcds::gcd, gcds::PolyGcd, gcds::PrsGcd, parse_ast, Budget, Ctx, Id, Poly, RatFun, SplitMix,
+    Tape, Var,
 };
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -551,7 +552,7 @@ proptest! {
 /// symbols x, y rational; the angle leaves of x from t = 1/3 (x = 2 atan t).
 #[test]
 fn exact_rational_evaluation_matches_f64() {
-    use obsan_expr::{rational_angle, Q};
+    use obsan_expr::{evaluate::rational_angle, Q};
     let mut ctx = Ctx::new();
     let (x, y) = (ctx.symbol("x"), ctx.symbol("y"));
     let e = ctx

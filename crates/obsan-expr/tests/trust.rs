@@ -3,7 +3,8 @@
 //! computation (exponent arithmetic, term counts, exact evaluation).
 
 use obsan_expr::{
-    line_col, parse_ast, Budget, Ctx, Limit, Mono, Poly, RatFun, Var, MAX_DEPTH, MAX_HEIGHT, Q,
+    limits::MAX_DEPTH, limits::MAX_HEIGHT, line_col, parse_ast, Budget, Ctx, Limit, Mono, Poly,
+    RatFun, Var, Q,
 };
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -430,7 +431,7 @@ fn huge_rational_powers_are_refused_at_once() {
         .and_then(|r| r.split(' ').next())
         .and_then(|b| b.parse().ok())
         .unwrap_or_else(|| panic!("no size in {:?}", e.message));
-    assert!(bits > obsan_expr::NUM_BITS_MAX, "{}", e.message);
+    assert!(bits > obsan_expr::limits::NUM_BITS_MAX, "{}", e.message);
     assert!((2_000_000..=8_000_000).contains(&bits), "{}", e.message);
     // The same base to a power within the limit is exact: compare with an
     // independent count of its bits (66666666661 has 36 bits).
@@ -482,18 +483,18 @@ fn a_text_cap_scope_refuses_every_long_form_and_trips_an_armed_budget() {
     let id = ctx.parse(src).unwrap();
     let r = ctx.try_canon(id).unwrap();
     let cap = 1 << 20;
-    let text = obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&r));
+    let text = obsan_expr::text::within_text_cap(cap, || ctx.ratfun_text(&r));
     assert_eq!(text, Err(Limit::Text { max: cap }));
-    let latex = obsan_expr::within_text_cap(cap, || ctx.ratfun_latex_factored(&r));
+    let latex = obsan_expr::text::within_text_cap(cap, || ctx.ratfun_latex_factored(&r));
     assert_eq!(latex, Err(Limit::Text { max: cap }));
     let armed = obsan_expr::within_thread_budget(&Budget::default(), || {
-        obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&r).len())
+        obsan_expr::text::within_text_cap(cap, || ctx.ratfun_text(&r).len())
     });
     assert_eq!(armed, Err(Limit::Text { max: cap }));
     // A short form is untouched, and the cap ends with its scope.
     let x = ctx.parse("x^2 - 1").unwrap();
     let small = ctx.canon(x);
-    let capped = obsan_expr::within_text_cap(cap, || ctx.ratfun_text(&small));
+    let capped = obsan_expr::text::within_text_cap(cap, || ctx.ratfun_text(&small));
     assert_eq!(capped.as_deref(), Ok("x^2 - 1"));
     assert!(ctx.ratfun_text(&r).len() > cap);
 }

@@ -115,7 +115,6 @@ pub fn estimate_noise(
 ) -> Result<NoiseEstimate, FitError> {
     let no = p.outputs.len();
     let nd = p.n_dynamic;
-    let n = p.state.len();
     if sigma0.len() != no || inputs.len() != p.inputs.len() || states.len() != trajs.len() {
         return Err(FitError::NoiseSizes);
     }
@@ -123,87 +122,10 @@ pub fn estimate_noise(
     let parts: Vec<Parts> = trajs
         .par_iter()
         .zip(states)
-        .map(|(t, x)| {
-            let mut x0 = x.clone();
-            x0.extend_from_slice(params);
-            let cols: Vec<Option<usize>> = p
-                .outputs
-                .iter()
-                .map(|o| t.outputs.columns().iter().position(|c| c == o))
-                .collect();
-            let mut ms: Vec<Vec<Vec<f64>>> = Vec::new();
-            let mut pred = None;
-            for &j in &est_in {
-                let mut c = vec![0.0; inputs.len()];
-                c[j] = 1.0;
-                let integ = Integration {
-                    max_step: opts.max_step,
-                    sensitivities: true,
-                    input_noise: Some(c),
-                };
-                let pr = p
-                    .predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
-                    .map_err(|e| named(t, e))?;
-                ms.push(pr.noise_m.clone());
-                pred = Some(pr);
-            }
-            let pred = match pred {
-                Some(p) => p,
-                None => {
-                    let integ = Integration {
-                        max_step: opts.max_step,
-                        sensitivities: true,
-                        input_noise: None,
-                    };
-                    p.predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
-                        .map_err(|e| named(t, e))?
-                }
-            };
-            let mut parts = Parts {
-                d: vec![],
-                o: vec![],
-                a: vec![],
-                m: vec![Vec::new(); est_in.len()],
-            };
-            for (k, yk) in pred.outputs.iter().enumerate() {
-                for (o, c) in cols.iter().enumerate() {
-                    let Some(v) = c.and_then(|c| t.outputs.values()[c][k]) else {
-                        continue;
-                    };
-                    let d = v - yk[o];
-                    parts.d.push(if p.angular[o] { wrap(d) } else { d });
-                    parts.o.push(o);
-                    parts
-                        .a
-                        .extend_from_slice(&pred.jacobians[k][o * n..o * n + nd]);
-                    for (mj, src) in parts.m.iter_mut().zip(&ms) {
-                        mj.extend_from_slice(&src[k]);
-                    }
-                }
-            }
-            Ok(parts)
-        })
+        .map(|(t, x)| Parts::of_trajectory(p, t, x, params, &est_in, opts))
         .collect::<Result<_, FitError>>()?;
     let count: usize = parts.iter().map(|p| p.d.len()).sum();
-    // Outputs with data get a free level; the rest keep sigma0.
-    let mut seen = vec![0usize; no];
-    let mut sq = vec![0.0; no];
-    for pt in &parts {
-        for (d, &o) in pt.d.iter().zip(&pt.o) {
-            seen[o] += 1;
-            sq[o] += d * d;
-        }
-    }
-    let est_out: Vec<usize> = (0..no).filter(|&o| opts.outputs && seen[o] > 0).collect();
-    let white: Vec<f64> = (0..no)
-        .map(|o| {
-            if opts.outputs && seen[o] > 0 {
-                (sq[o] / seen[o] as f64).sqrt().max(1e-300)
-            } else {
-                sigma0[o]
-            }
-        })
-        .collect();
+    let (est_out, white) = white_levels(&parts, sigma0, opts.outputs);
 
     let dim = est_out.len() + est_in.len();
     let log_min_c = opts.min_intensity.max(1e-300).ln();
@@ -218,55 +140,7 @@ pub fn estimate_noise(
     let m2ll = |sigma: &[f64], c: &[f64]| -> f64 {
         parts
             .par_iter()
-            .map(|pt| {
-                let len = pt.d.len();
-                let mut a = Vec::with_capacity(len * nd);
-                let mut e = Vec::with_capacity(len);
-                let mut logs = 0.0;
-                for i in 0..len {
-                    let s = sigma[pt.o[i]];
-                    e.push(pt.d[i] / s);
-                    a.extend(pt.a[i * nd..(i + 1) * nd].iter().map(|v| v / s));
-                    logs += 2.0 * s.ln();
-                }
-                let mut m = vec![0.0; len * nd * nd];
-                for (cj, mj) in c.iter().zip(&pt.m) {
-                    for (x, y) in m.iter_mut().zip(mj) {
-                        *x += cj * y;
-                    }
-                }
-                let Some(w) = Whitener::new(nd, a.clone(), m) else {
-                    return f64::INFINITY;
-                };
-                w.whiten_in_place(&mut e);
-                // Each initial state is profiled out (its generalised least-
-                // squares correction under this covariance) and its
-                // restricted-likelihood term added: the levels are not
-                // judged at an initial state fitted under other ones.
-                let cols: Vec<Vec<f64>> = (0..nd)
-                    .map(|c| w.whiten(&(0..len).map(|i| a[i * nd + c]).collect::<Vec<f64>>()))
-                    .collect();
-                let ata = nalgebra::DMatrix::from_fn(nd, nd, |x, y| {
-                    cols[x]
-                        .iter()
-                        .zip(&cols[y])
-                        .map(|(p, q)| p * q)
-                        .sum::<f64>()
-                });
-                let ate = nalgebra::DVector::from_fn(nd, |x, _| {
-                    cols[x].iter().zip(&e).map(|(p, q)| p * q).sum::<f64>()
-                });
-                let ee: f64 = e.iter().map(|x| x * x).sum();
-                let (fit, logdet) = match ata.clone().cholesky() {
-                    Some(ch) => {
-                        let sol = ch.solve(&ate);
-                        let ld: f64 = ch.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
-                        (ate.dot(&sol), ld)
-                    }
-                    None => (0.0, 0.0),
-                };
-                ee - fit + logdet + w.log_det() + logs
-            })
+            .map(|pt| pt.m2ll(sigma, c, nd))
             .sum::<f64>()
             + count as f64 * (2.0 * std::f64::consts::PI).ln()
     };
@@ -281,46 +155,11 @@ pub fn estimate_noise(
             iterations: 0,
         });
     }
-    // Start: the output levels at their white-noise values or half of them
-    // (drift taken out of the residuals lowers them) with a common
-    // intensity on a half-decade grid; then each intensity on the grid in
-    // turn, the others held (the likelihood need not be unimodal in them).
-    let grid: Vec<f64> = (-24..=2)
-        .map(|k| (10f64.powf(k as f64 / 2.0)).ln().max(log_min_c))
-        .collect();
     let eval = |th: &[f64]| {
         let (s, c) = unpack(th);
         m2ll(&s, &c)
     };
-    let mut best = (f64::INFINITY, vec![0.0; dim]);
-    for &lc in &grid {
-        for f in [1.0f64, 0.5] {
-            let mut th: Vec<f64> = est_out.iter().map(|&o| (white[o] * f).ln()).collect();
-            th.extend(std::iter::repeat_n(lc, est_in.len()));
-            let v = eval(&th);
-            if v < best.0 {
-                best = (v, th);
-            }
-        }
-    }
-    if !best.0.is_finite() {
-        return Err(FitError::NoiseNotCarried);
-    }
-    if est_in.len() > 1 {
-        for _ in 0..2 {
-            for k in 0..est_in.len() {
-                let i = est_out.len() + k;
-                for &lc in &grid {
-                    let mut th = best.1.clone();
-                    th[i] = lc;
-                    let v = eval(&th);
-                    if v < best.0 {
-                        best = (v, th);
-                    }
-                }
-            }
-        }
-    }
+    let start = grid_start(&eval, &white, &est_out, est_in.len(), dim, log_min_c)?;
     let lo: Vec<f64> = est_out
         .iter()
         .map(|&o| (white[o] * 1e-4).ln())
@@ -331,7 +170,7 @@ pub fn estimate_noise(
         .map(|&o| (white[o] * 10.0).ln())
         .chain(std::iter::repeat_n(1e6f64.ln(), est_in.len()))
         .collect();
-    let (th, iterations) = bfgs(&eval, best.1, &lo, &hi, opts.max_iterations, opts.tolerance);
+    let (th, iterations) = bfgs(&eval, start, &lo, &hi, opts.max_iterations, opts.tolerance);
     let (sigma, c) = unpack(&th);
     let value = m2ll(&sigma, &c);
     let mut input_noise = vec![0.0; inputs.len()];
@@ -351,6 +190,199 @@ pub fn estimate_noise(
         n: count,
         iterations,
     })
+}
+
+impl Parts {
+    /// Trajectory `t`'s residuals at the fit (`x` its states, `params` shared), their
+    /// sensitivities to the initial dynamic state and, per estimated input `est_in`, the
+    /// covariance shape `M_j` of the integrated input noise at each residual's time.
+    fn of_trajectory(
+        p: &Predictor,
+        t: &FitTrajectory,
+        x: &[f64],
+        params: &[f64],
+        est_in: &[usize],
+        opts: &NoiseOptions,
+    ) -> Result<Parts, FitError> {
+        let (n, nd) = (p.state.len(), p.n_dynamic);
+        let mut x0 = x.to_vec();
+        x0.extend_from_slice(params);
+        let cols: Vec<Option<usize>> = p
+            .outputs
+            .iter()
+            .map(|o| t.outputs.columns().iter().position(|c| c == o))
+            .collect();
+        let predict = |input_noise: Option<Vec<f64>>| {
+            let integ = Integration {
+                max_step: opts.max_step,
+                sensitivities: true,
+                input_noise,
+            };
+            p.predict_with(&x0, &t.consts, t.inputs, t.outputs.t(), &integ)
+                .map_err(|e| named(t, e))
+        };
+        let mut ms: Vec<Vec<Vec<f64>>> = Vec::new();
+        let mut pred = None;
+        for &j in est_in {
+            let mut c = vec![0.0; p.inputs.len()];
+            c[j] = 1.0;
+            let pr = predict(Some(c))?;
+            ms.push(pr.noise_m.clone());
+            pred = Some(pr);
+        }
+        let pred = match pred {
+            Some(p) => p,
+            None => predict(None)?,
+        };
+        let mut parts = Parts {
+            d: vec![],
+            o: vec![],
+            a: vec![],
+            m: vec![Vec::new(); est_in.len()],
+        };
+        for (k, yk) in pred.outputs.iter().enumerate() {
+            for (o, c) in cols.iter().enumerate() {
+                let Some(v) = c.and_then(|c| t.outputs.values()[c][k]) else {
+                    continue;
+                };
+                let d = v - yk[o];
+                parts.d.push(if p.angular[o] { wrap(d) } else { d });
+                parts.o.push(o);
+                parts
+                    .a
+                    .extend_from_slice(&pred.jacobians[k][o * n..o * n + nd]);
+                for (mj, src) in parts.m.iter_mut().zip(&ms) {
+                    mj.extend_from_slice(&src[k]);
+                }
+            }
+        }
+        Ok(parts)
+    }
+
+    /// This trajectory's terms of `-2 log L` (module docs) at output levels `sigma` and
+    /// input intensities `c`, without the `n log(2 pi)` constant; infinite where the
+    /// covariance is not positive definite.
+    fn m2ll(&self, sigma: &[f64], c: &[f64], nd: usize) -> f64 {
+        let len = self.d.len();
+        let mut a = Vec::with_capacity(len * nd);
+        let mut e = Vec::with_capacity(len);
+        let mut logs = 0.0;
+        for i in 0..len {
+            let s = sigma[self.o[i]];
+            e.push(self.d[i] / s);
+            a.extend(self.a[i * nd..(i + 1) * nd].iter().map(|v| v / s));
+            logs += 2.0 * s.ln();
+        }
+        let mut m = vec![0.0; len * nd * nd];
+        for (cj, mj) in c.iter().zip(&self.m) {
+            for (x, y) in m.iter_mut().zip(mj) {
+                *x += cj * y;
+            }
+        }
+        let Some(w) = Whitener::new(nd, a.clone(), m) else {
+            return f64::INFINITY;
+        };
+        w.whiten_in_place(&mut e);
+        // Each initial state is profiled out (its generalised least-squares correction
+        // under this covariance) and its restricted-likelihood term added: the levels are
+        // not judged at an initial state fitted under other ones.
+        let cols: Vec<Vec<f64>> = (0..nd)
+            .map(|c| w.whiten(&(0..len).map(|i| a[i * nd + c]).collect::<Vec<f64>>()))
+            .collect();
+        let ata = nalgebra::DMatrix::from_fn(nd, nd, |x, y| {
+            cols[x]
+                .iter()
+                .zip(&cols[y])
+                .map(|(p, q)| p * q)
+                .sum::<f64>()
+        });
+        let ate = nalgebra::DVector::from_fn(nd, |x, _| {
+            cols[x].iter().zip(&e).map(|(p, q)| p * q).sum::<f64>()
+        });
+        let ee: f64 = e.iter().map(|x| x * x).sum();
+        let (fit, logdet) = match ata.clone().cholesky() {
+            Some(ch) => {
+                let sol = ch.solve(&ate);
+                let ld: f64 = ch.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
+                (ate.dot(&sol), ld)
+            }
+            None => (0.0, 0.0),
+        };
+        ee - fit + logdet + w.log_det() + logs
+    }
+}
+
+/// The outputs whose level is estimated (those with data, when `outputs` is asked) and
+/// the best white-noise levels: each estimated output's RMS residual, the others `sigma0`.
+fn white_levels(parts: &[Parts], sigma0: &[f64], outputs: bool) -> (Vec<usize>, Vec<f64>) {
+    let no = sigma0.len();
+    let mut seen = vec![0usize; no];
+    let mut sq = vec![0.0; no];
+    for pt in parts {
+        for (d, &o) in pt.d.iter().zip(&pt.o) {
+            seen[o] += 1;
+            sq[o] += d * d;
+        }
+    }
+    let est_out: Vec<usize> = (0..no).filter(|&o| outputs && seen[o] > 0).collect();
+    let white: Vec<f64> = (0..no)
+        .map(|o| {
+            if outputs && seen[o] > 0 {
+                (sq[o] / seen[o] as f64).sqrt().max(1e-300)
+            } else {
+                sigma0[o]
+            }
+        })
+        .collect();
+    (est_out, white)
+}
+
+/// BFGS's starting point (log levels, estimated outputs first, then `n_in` intensities):
+/// the output levels at their white-noise values or half of them (drift taken out of
+/// the residuals lowers them) with a common intensity on a half-decade grid; then each
+/// intensity on the grid in turn, the others held (the likelihood need not be unimodal
+/// in them).
+fn grid_start(
+    eval: &(dyn Fn(&[f64]) -> f64 + Sync),
+    white: &[f64],
+    est_out: &[usize],
+    n_in: usize,
+    dim: usize,
+    log_min_c: f64,
+) -> Result<Vec<f64>, FitError> {
+    let grid: Vec<f64> = (-24..=2)
+        .map(|k| (10f64.powf(k as f64 / 2.0)).ln().max(log_min_c))
+        .collect();
+    let mut best = (f64::INFINITY, vec![0.0; dim]);
+    for &lc in &grid {
+        for f in [1.0f64, 0.5] {
+            let mut th: Vec<f64> = est_out.iter().map(|&o| (white[o] * f).ln()).collect();
+            th.extend(std::iter::repeat_n(lc, n_in));
+            let v = eval(&th);
+            if v < best.0 {
+                best = (v, th);
+            }
+        }
+    }
+    if !best.0.is_finite() {
+        return Err(FitError::NoiseNotCarried);
+    }
+    if n_in > 1 {
+        for _ in 0..2 {
+            for k in 0..n_in {
+                let i = est_out.len() + k;
+                for &lc in &grid {
+                    let mut th = best.1.clone();
+                    th[i] = lc;
+                    let v = eval(&th);
+                    if v < best.0 {
+                        best = (v, th);
+                    }
+                }
+            }
+        }
+    }
+    Ok(best.1)
 }
 
 /// An input-noise intensity read from the measured inputs themselves

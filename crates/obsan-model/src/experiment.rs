@@ -9,7 +9,7 @@
 use crate::error::ModelError;
 use crate::normal::NormalForm;
 use crate::sys::{Kind, System};
-use obsan_expr::{Id, Symbol, Var, Q};
+use obsan_expr::{Ctx, Id, Symbol, Var, Q};
 
 /// One experiment: an input restriction (or none: every input free) and
 /// values of known constants (the others, if they vary between experiments,
@@ -91,6 +91,83 @@ impl System {
     /// file's value is not used for it); other constants are shared (their
     /// file value or generic). Params are shared and come last.
     pub fn stacked_normal_form(&self, exps: &[Experiment]) -> Result<NormalForm, ModelError> {
+        self.refuse_stacking(exps)?;
+        let varying = self.experiment_consts(exps);
+        let mut ctx = self.ctx.clone();
+        let params: Vec<_> = self.decls_of(Kind::Param).cloned().collect();
+        let nd = self.dynamics.len();
+        let k = exps.len();
+        let n = k * nd + params.len();
+        let zero = ctx.int(0);
+        let mut st = Stacked {
+            ctx,
+            state: Vec::with_capacity(n),
+            state_vars: Vec::with_capacity(n),
+            consts: Vec::new(),
+            inputs: Vec::new(),
+            input_vars: Vec::new(),
+            input_block: Vec::new(),
+            f0: Vec::with_capacity(n),
+            field_rows: Vec::new(),
+            outputs: Vec::new(),
+        };
+        let mut shared: Vec<(Var, Id)> = Vec::new();
+        for d in self.decls_of(Kind::Const) {
+            if varying.contains(&d.name) {
+                continue;
+            }
+            if let Some(q) = &d.value {
+                shared.push((d.sym.var, st.ctx.num(q.clone())));
+            }
+            st.consts.push((d.name.clone(), d.value.clone()));
+        }
+        for (e, x) in exps.iter().enumerate() {
+            self.stack_experiment(&mut st, e, x, &shared, &varying)?;
+        }
+        for d in &params {
+            st.state.push(d.name.clone());
+            st.state_vars.push(d.sym.var);
+            st.f0.push(zero);
+        }
+        // Each input's field lives in its own experiment's block.
+        let fields: Vec<Vec<Id>> = st
+            .field_rows
+            .into_iter()
+            .zip(&st.input_block)
+            .map(|(rows, &e)| {
+                let mut v = vec![zero; n];
+                v[e * nd..(e + 1) * nd].copy_from_slice(&rows);
+                v
+            })
+            .collect();
+        let delay = self
+            .delay
+            .as_ref()
+            .and_then(|d| st.state.iter().position(|s| s == d));
+        Ok(NormalForm {
+            ctx: st.ctx,
+            name: self.name.clone(),
+            description: self.description.clone(),
+            state: st.state,
+            state_vars: st.state_vars,
+            n_dynamic: k * nd,
+            consts: st.consts,
+            inputs: st.inputs,
+            input_vars: st.input_vars,
+            f0: st.f0,
+            fields,
+            unknown_inputs: Vec::new(),
+            unknown_input_vars: Vec::new(),
+            unknown_fields: Vec::new(),
+            outputs: st.outputs,
+            restriction: None,
+            delay,
+        })
+    }
+
+    /// The experiments that cannot be stacked: none, a model with unknown inputs or time,
+    /// or an experiment `normal_form` refuses (same messages).
+    fn refuse_stacking(&self, exps: &[Experiment]) -> Result<(), ModelError> {
         if exps.is_empty() {
             return Err(ModelError::general(
                 "--experiment",
@@ -112,169 +189,143 @@ impl System {
         if let Some(e) = self.time_refusal("several experiments (`--experiment`)") {
             return Err(e);
         }
-        // Validate names as normal_form does (same messages).
         for x in exps {
             self.normal_form(x.restriction.as_deref(), &x.set)?;
         }
-        let varying = self.experiment_consts(exps);
-        let mut ctx = self.ctx.clone();
-        let states: Vec<_> = self.decls_of(Kind::State).cloned().collect();
-        let params: Vec<_> = self.decls_of(Kind::Param).cloned().collect();
-        let all_inputs: Vec<_> = self.decls_of(Kind::Input).cloned().collect();
-        let nd = self.dynamics.len();
-        let k = exps.len();
-        let n = k * nd + params.len();
-        let zero = ctx.int(0);
+        Ok(())
+    }
 
-        let mut state = Vec::with_capacity(n);
-        let mut state_vars = Vec::with_capacity(n);
-        let mut consts: Vec<(String, Option<Q>)> = Vec::new();
-        let mut shared: Vec<(Var, Id)> = Vec::new();
+    /// Add experiment `e` (0-based; its names carry `@{e + 1}`) to the stack: its
+    /// varying constants and states renamed, its inputs (restricted as it says), its
+    /// dynamics split into drift and input fields, its outputs. `shared` sets the
+    /// constants common to every experiment.
+    fn stack_experiment(
+        &self,
+        st: &mut Stacked,
+        e: usize,
+        x: &Experiment,
+        shared: &[(Var, Id)],
+        varying: &[String],
+    ) -> Result<(), ModelError> {
+        let tag = e + 1;
+        let nd = self.dynamics.len();
+        let mut map: Vec<(Var, Id)> = shared.to_vec();
         for d in self.decls_of(Kind::Const) {
-            if varying.contains(&d.name) {
+            if !varying.contains(&d.name) {
                 continue;
             }
-            if let Some(q) = &d.value {
-                shared.push((d.sym.var, ctx.num(q.clone())));
-            }
-            consts.push((d.name.clone(), d.value.clone()));
-        }
-        let mut inputs = Vec::new();
-        let mut input_vars = Vec::new();
-        let mut input_block = Vec::new(); // experiment of each stacked input
-        let mut f0 = Vec::with_capacity(n);
-        let mut field_rows: Vec<Vec<Id>> = Vec::new(); // per stacked input, its block entries
-        let mut outputs = Vec::new();
-
-        for (e, x) in exps.iter().enumerate() {
-            let tag = e + 1;
-            let mut map: Vec<(Var, Id)> = shared.clone();
-            for d in self.decls_of(Kind::Const) {
-                if !varying.contains(&d.name) {
-                    continue;
-                }
-                let name = experiment_name(&d.name, tag);
-                let v = x
-                    .set
-                    .iter()
-                    .rev()
-                    .find(|(m, _)| m == &d.name)
-                    .map(|s| s.1.clone());
-                let id = match &v {
-                    Some(q) => ctx.num(q.clone()),
-                    None => ctx.symbol(&name).id,
-                };
-                map.push((d.sym.var, id));
-                consts.push((name, v));
-            }
-            let mut block_vars = Vec::new();
-            for d in &states {
-                let s = ctx.symbol(&experiment_name(&d.name, tag));
-                map.push((d.sym.var, s.id));
-                state.push(experiment_name(&d.name, tag));
-                state_vars.push(s.var);
-                block_vars.push(s.var);
-            }
-            // Inputs of this experiment, renamed; restricted inputs replaced.
-            let mut exp_inputs: Vec<String> = all_inputs.iter().map(|d| d.name.clone()).collect();
-            let mut in_map: Vec<(Var, Id)> = Vec::new();
-            let restriction = match x.restriction.as_deref() {
-                Some(r) => self.restriction(r),
-                None => None,
+            let name = experiment_name(&d.name, tag);
+            let v = x
+                .set
+                .iter()
+                .rev()
+                .find(|(m, _)| m == &d.name)
+                .map(|s| s.1.clone());
+            let id = match &v {
+                Some(q) => st.ctx.num(q.clone()),
+                None => st.ctx.symbol(&name).id,
             };
-            if let Some(r) = restriction {
-                exp_inputs = r.inputs.clone();
-            }
-            let mut syms: Vec<Symbol> = Vec::new();
-            for name in &exp_inputs {
-                let orig = ctx.symbol(name);
-                let renamed = ctx.symbol(&experiment_name(name, tag));
-                in_map.push((orig.var, renamed.id));
-                syms.push(renamed);
-            }
-            if let Some(r) = restriction {
-                let mut rmap = map.clone();
-                rmap.extend(in_map.iter().cloned());
-                for (ii, loc) in &r.subs {
-                    let rhs = ctx
-                        .substitute(loc.id, &rmap)
-                        .map_err(|er| self.err_at(loc, &er.0))?;
-                    if let Some(d) = all_inputs.get(*ii) {
-                        map.push((d.sym.var, rhs));
-                    }
-                }
-            }
-            map.extend(in_map);
-            let first = field_rows.len();
-            for (name, s) in exp_inputs.iter().zip(&syms) {
-                inputs.push(experiment_name(name, tag));
-                input_vars.push(s.var);
-                input_block.push(e);
-                field_rows.push(Vec::with_capacity(nd));
-            }
-            for loc in &self.dynamics {
-                let ex = ctx
-                    .substitute(loc.id, &map)
-                    .map_err(|er| self.err_at(loc, &er.0))?;
-                let mut rest = ex;
-                for (j, s) in syms.iter().enumerate() {
-                    let fi = ctx.diff(ex, s.var);
-                    let c = ctx.canon(fi);
-                    let fi = ctx.from_canonical(&c);
-                    let term = ctx.mul(&[fi, s.id]);
-                    rest = ctx.sub(rest, term);
-                    field_rows[first + j].push(fi);
-                }
-                let c = ctx.canon(rest);
-                f0.push(ctx.from_canonical(&c));
-            }
-            for (name, loc) in &self.outputs {
-                let h = ctx
-                    .substitute(loc.id, &map)
-                    .map_err(|er| self.err_at(loc, &er.0))?;
-                outputs.push((experiment_name(name, tag), h));
-            }
-            debug_assert_eq!(block_vars.len(), nd);
+            map.push((d.sym.var, id));
+            st.consts.push((name, v));
         }
-        for d in &params {
-            state.push(d.name.clone());
-            state_vars.push(d.sym.var);
-            f0.push(zero);
+        for d in self.decls_of(Kind::State) {
+            let s = st.ctx.symbol(&experiment_name(&d.name, tag));
+            map.push((d.sym.var, s.id));
+            st.state.push(experiment_name(&d.name, tag));
+            st.state_vars.push(s.var);
         }
-        // Each input's field lives in its own experiment's block.
-        let fields: Vec<Vec<Id>> = field_rows
-            .into_iter()
-            .zip(&input_block)
-            .map(|(rows, &e)| {
-                let mut v = vec![zero; n];
-                v[e * nd..(e + 1) * nd].copy_from_slice(&rows);
-                v
-            })
-            .collect();
-        let delay = self
-            .delay
-            .as_ref()
-            .and_then(|d| state.iter().position(|s| s == d));
-        Ok(NormalForm {
-            ctx,
-            name: self.name.clone(),
-            description: self.description.clone(),
-            state,
-            state_vars,
-            n_dynamic: k * nd,
-            consts,
-            inputs,
-            input_vars,
-            f0,
-            fields,
-            unknown_inputs: Vec::new(),
-            unknown_input_vars: Vec::new(),
-            unknown_fields: Vec::new(),
-            outputs,
-            restriction: None,
-            delay,
-        })
+        let (exp_inputs, syms) = self.experiment_inputs(&mut st.ctx, tag, x, &mut map)?;
+        let first = st.field_rows.len();
+        for (name, s) in exp_inputs.iter().zip(&syms) {
+            st.inputs.push(experiment_name(name, tag));
+            st.input_vars.push(s.var);
+            st.input_block.push(e);
+            st.field_rows.push(Vec::with_capacity(nd));
+        }
+        let ctx = &mut st.ctx;
+        for loc in &self.dynamics {
+            let ex = ctx
+                .substitute(loc.id, &map)
+                .map_err(|er| self.err_at(loc, &er.0))?;
+            let mut rest = ex;
+            for (j, s) in syms.iter().enumerate() {
+                let fi = ctx.diff(ex, s.var);
+                let c = ctx.canon(fi);
+                let fi = ctx.from_canonical(&c);
+                let term = ctx.mul(&[fi, s.id]);
+                rest = ctx.sub(rest, term);
+                st.field_rows[first + j].push(fi);
+            }
+            let c = ctx.canon(rest);
+            st.f0.push(ctx.from_canonical(&c));
+        }
+        for (name, loc) in &self.outputs {
+            let h = ctx
+                .substitute(loc.id, &map)
+                .map_err(|er| self.err_at(loc, &er.0))?;
+            st.outputs.push((experiment_name(name, tag), h));
+        }
+        Ok(())
     }
+
+    /// Experiment `tag`'s inputs, renamed `u@tag` (the restricted system's inputs under
+    /// its restriction), and their symbols; `map` gains the renaming and each restricted
+    /// input's replacement.
+    fn experiment_inputs(
+        &self,
+        ctx: &mut Ctx,
+        tag: usize,
+        x: &Experiment,
+        map: &mut Vec<(Var, Id)>,
+    ) -> Result<(Vec<String>, Vec<Symbol>), ModelError> {
+        let all_inputs: Vec<_> = self.decls_of(Kind::Input).collect();
+        let mut exp_inputs: Vec<String> = all_inputs.iter().map(|d| d.name.clone()).collect();
+        let mut in_map: Vec<(Var, Id)> = Vec::new();
+        let restriction = match x.restriction.as_deref() {
+            Some(r) => self.restriction(r),
+            None => None,
+        };
+        if let Some(r) = restriction {
+            exp_inputs = r.inputs.clone();
+        }
+        let mut syms: Vec<Symbol> = Vec::new();
+        for name in &exp_inputs {
+            let orig = ctx.symbol(name);
+            let renamed = ctx.symbol(&experiment_name(name, tag));
+            in_map.push((orig.var, renamed.id));
+            syms.push(renamed);
+        }
+        if let Some(r) = restriction {
+            let mut rmap = map.clone();
+            rmap.extend(in_map.iter().cloned());
+            for (ii, loc) in &r.subs {
+                let rhs = ctx
+                    .substitute(loc.id, &rmap)
+                    .map_err(|er| self.err_at(loc, &er.0))?;
+                if let Some(d) = all_inputs.get(*ii) {
+                    map.push((d.sym.var, rhs));
+                }
+            }
+        }
+        map.extend(in_map);
+        Ok((exp_inputs, syms))
+    }
+}
+
+/// The stacked normal form's parts, filled experiment by experiment.
+struct Stacked {
+    ctx: Ctx,
+    state: Vec<String>,
+    state_vars: Vec<Var>,
+    consts: Vec<(String, Option<Q>)>,
+    inputs: Vec<String>,
+    input_vars: Vec<Var>,
+    /// The experiment of each stacked input.
+    input_block: Vec<usize>,
+    f0: Vec<Id>,
+    /// Per stacked input, its field's entries in its experiment's block.
+    field_rows: Vec<Vec<Id>>,
+    outputs: Vec<(String, Id)>,
 }
 
 #[cfg(test)]

@@ -4,6 +4,11 @@ use crate::error::ModelError;
 use crate::sys::{Kind, System, TIME};
 use obsan_expr::{parse_ast, Ast, Ctx, Id, ParseError, Span, Symbol, Var, Q};
 
+/// A substitution: each variable and the expression that replaces it.
+type Subst = Vec<(Var, Id)>;
+/// `f0`, the input fields and the unknown-input fields, one entry per state each.
+type SplitFields = (Vec<Id>, Vec<Vec<Id>>, Vec<Vec<Id>>);
+
 /// Resolves names beyond the system's own first: `None` to fall through.
 pub type ExtraNames<'a> = dyn Fn(&str, Span) -> Option<Result<Id, ParseError>> + 'a;
 
@@ -94,79 +99,14 @@ impl System {
         restriction: Option<&str>,
         set: &[(String, Q)],
     ) -> Result<NormalForm, ModelError> {
+        self.check_set(set)?;
         let mut ctx = self.ctx.clone();
         // Constant values: from the file, then from --set.
-        let mut subst: Vec<(Var, Id)> = Vec::new();
-        let mut consts: Vec<(String, Option<Q>)> = Vec::new();
-        for (n, _) in set {
-            match self.decls.iter().find(|d| &d.name == n) {
-                Some(d) if d.kind == Kind::Const => {}
-                Some(d) => {
-                    return Err(ModelError::general(
-                        "--set",
-                        format!(
-                            "'{n}' is a {} of {}, not a known constant",
-                            d.kind.word(),
-                            self.name
-                        ),
-                    ))
-                }
-                None => {
-                    let names: Vec<&str> = self
-                        .decls_of(Kind::Const)
-                        .map(|d| d.name.as_str())
-                        .collect();
-                    let known = if names.is_empty() {
-                        "it has none".to_string()
-                    } else {
-                        format!("its constants: {}", names.join(", "))
-                    };
-                    return Err(ModelError::general(
-                        "--set",
-                        format!("'{n}' is not a constant of {} ({known})", self.name),
-                    ));
-                }
-            }
-        }
-        for d in self.decls_of(Kind::Const) {
-            let v = set
-                .iter()
-                .rev()
-                .find(|(n, _)| n == &d.name)
-                .map(|(_, q)| q.clone())
-                .or_else(|| d.value.clone());
-            if let Some(q) = &v {
-                subst.push((d.sym.var, ctx.num(q.clone())));
-            }
-            consts.push((d.name.clone(), v));
-        }
-        // Restriction.
-        let mut inputs: Vec<String> = self.decls_of(Kind::Input).map(|d| d.name.clone()).collect();
-        if let Some(rn) = restriction {
-            let Some(r) = self.restriction(rn) else {
-                let names: Vec<&str> = self.restrictions.iter().map(|r| r.name.as_str()).collect();
-                let known = if names.is_empty() {
-                    "it declares none".to_string()
-                } else {
-                    format!("it declares: {}", names.join(", "))
-                };
-                return Err(ModelError::general(
-                    "--input",
-                    format!("{} has no restriction named '{rn}' ({known})", self.origin),
-                ));
-            };
-            let input_decls: Vec<_> = self.decls_of(Kind::Input).collect();
-            for (ii, loc) in &r.subs {
-                let rhs = ctx
-                    .substitute(loc.id, &subst)
-                    .map_err(|e| self.err_at(loc, &e.0))?;
-                // `ii` indexes the inputs (made so by the reader).
-                if let Some(d) = input_decls.get(*ii) {
-                    subst.push((d.sym.var, rhs));
-                }
-            }
-            inputs = r.inputs.clone();
-        }
+        let (mut subst, consts) = self.const_values(&mut ctx, set);
+        let inputs = match restriction {
+            Some(rn) => self.restricted_inputs(&mut ctx, rn, &mut subst)?,
+            None => self.decls_of(Kind::Input).map(|d| d.name.clone()).collect(),
+        };
         let input_syms: Vec<Symbol> = inputs.iter().map(|n| ctx.symbol(n)).collect();
         let input_vars: Vec<Var> = input_syms.iter().map(|s| s.var).collect();
         let state_decls: Vec<_> = self
@@ -181,52 +121,13 @@ impl System {
             .map(|d| d.name.clone())
             .collect();
         let unknown_syms: Vec<Symbol> = self.decls_of(Kind::Unknown).map(|d| d.sym).collect();
-        let mut unknown_fields = vec![Vec::new(); unknown_syms.len()];
-        let mut f0 = Vec::new();
-        let mut fields = vec![Vec::new(); inputs.len()];
-        let zero = ctx.int(0);
-        for (k, _) in state_decls.iter().enumerate() {
-            if k >= n_dynamic {
-                f0.push(zero);
-                for f in fields.iter_mut().chain(unknown_fields.iter_mut()) {
-                    f.push(zero);
-                }
-                continue;
-            }
-            let loc = &self.dynamics[k];
-            let e = ctx
-                .substitute(loc.id, &subst)
-                .map_err(|er| self.err_at(loc, &er.0))?;
-            // e is affine in the inputs (checked when read; restrictions are affine too).
-            let mut rest = e;
-            for (i, &u) in input_vars.iter().enumerate() {
-                let fi = ctx.diff(e, u);
-                let c = ctx.canon(fi);
-                debug_assert!(
-                    input_vars.iter().all(|&w| {
-                        let d = ctx.diff(fi, w);
-                        ctx.is_identically_zero(d)
-                    }),
-                    "affine"
-                );
-                let fi = ctx.from_canonical(&c);
-                let term = ctx.mul(&[fi, input_syms[i].id]);
-                rest = ctx.sub(rest, term);
-                fields[i].push(fi);
-            }
-            // g_j = d rhs / d w_j (affine in the inputs and the w_j jointly,
-            // checked when read).
-            for (j, w) in unknown_syms.iter().enumerate() {
-                let gj = ctx.diff(e, w.var);
-                let c = ctx.canon(gj);
-                let gj = ctx.from_canonical(&c);
-                let term = ctx.mul(&[gj, w.id]);
-                rest = ctx.sub(rest, term);
-                unknown_fields[j].push(gj);
-            }
-            let c = ctx.canon(rest);
-            f0.push(ctx.from_canonical(&c));
-        }
+        let (f0, fields, unknown_fields) = self.split_fields(
+            &mut ctx,
+            &subst,
+            &input_syms,
+            &unknown_syms,
+            state_decls.len(),
+        )?;
         let mut outputs = Vec::new();
         for (n, loc) in &self.outputs {
             let h = ctx
@@ -260,6 +161,159 @@ impl System {
             nf.append_clock();
         }
         Ok(nf)
+    }
+
+    /// Every `--set` name must be a known constant of the system.
+    fn check_set(&self, set: &[(String, Q)]) -> Result<(), ModelError> {
+        for (n, _) in set {
+            match self.decls.iter().find(|d| &d.name == n) {
+                Some(d) if d.kind == Kind::Const => {}
+                Some(d) => {
+                    return Err(ModelError::general(
+                        "--set",
+                        format!(
+                            "'{n}' is a {} of {}, not a known constant",
+                            d.kind.word(),
+                            self.name
+                        ),
+                    ))
+                }
+                None => {
+                    let names: Vec<&str> = self
+                        .decls_of(Kind::Const)
+                        .map(|d| d.name.as_str())
+                        .collect();
+                    let known = if names.is_empty() {
+                        "it has none".to_string()
+                    } else {
+                        format!("its constants: {}", names.join(", "))
+                    };
+                    return Err(ModelError::general(
+                        "--set",
+                        format!("'{n}' is not a constant of {} ({known})", self.name),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each constant's value (the last `--set`, else the file's, else none: generic),
+    /// and the substitution of the valued ones.
+    fn const_values(
+        &self,
+        ctx: &mut Ctx,
+        set: &[(String, Q)],
+    ) -> (Subst, Vec<(String, Option<Q>)>) {
+        let mut subst: Vec<(Var, Id)> = Vec::new();
+        let mut consts: Vec<(String, Option<Q>)> = Vec::new();
+        for d in self.decls_of(Kind::Const) {
+            let v = set
+                .iter()
+                .rev()
+                .find(|(n, _)| n == &d.name)
+                .map(|(_, q)| q.clone())
+                .or_else(|| d.value.clone());
+            if let Some(q) = &v {
+                subst.push((d.sym.var, ctx.num(q.clone())));
+            }
+            consts.push((d.name.clone(), v));
+        }
+        (subst, consts)
+    }
+
+    /// The inputs under restriction `rn`; `subst` gains each replaced input's expression.
+    fn restricted_inputs(
+        &self,
+        ctx: &mut Ctx,
+        rn: &str,
+        subst: &mut Vec<(Var, Id)>,
+    ) -> Result<Vec<String>, ModelError> {
+        let Some(r) = self.restriction(rn) else {
+            let names: Vec<&str> = self.restrictions.iter().map(|r| r.name.as_str()).collect();
+            let known = if names.is_empty() {
+                "it declares none".to_string()
+            } else {
+                format!("it declares: {}", names.join(", "))
+            };
+            return Err(ModelError::general(
+                "--input",
+                format!("{} has no restriction named '{rn}' ({known})", self.origin),
+            ));
+        };
+        let input_decls: Vec<_> = self.decls_of(Kind::Input).collect();
+        for (ii, loc) in &r.subs {
+            let rhs = ctx
+                .substitute(loc.id, subst)
+                .map_err(|e| self.err_at(loc, &e.0))?;
+            // `ii` indexes the inputs (made so by the reader).
+            if let Some(d) = input_decls.get(*ii) {
+                subst.push((d.sym.var, rhs));
+            }
+        }
+        Ok(r.inputs.clone())
+    }
+
+    /// `f0`, the input fields `f_i = d rhs / d u_i` and the unknown-input fields
+    /// `g_j = d rhs / d w_j` of each of the `n_states` states (zero for the params),
+    /// after `subst`.
+    fn split_fields(
+        &self,
+        ctx: &mut Ctx,
+        subst: &[(Var, Id)],
+        input_syms: &[Symbol],
+        unknown_syms: &[Symbol],
+        n_states: usize,
+    ) -> Result<SplitFields, ModelError> {
+        let n_dynamic = self.dynamics.len();
+        let input_vars: Vec<Var> = input_syms.iter().map(|s| s.var).collect();
+        let mut unknown_fields = vec![Vec::new(); unknown_syms.len()];
+        let mut f0 = Vec::new();
+        let mut fields = vec![Vec::new(); input_syms.len()];
+        let zero = ctx.int(0);
+        for k in 0..n_states {
+            if k >= n_dynamic {
+                f0.push(zero);
+                for f in fields.iter_mut().chain(unknown_fields.iter_mut()) {
+                    f.push(zero);
+                }
+                continue;
+            }
+            let loc = &self.dynamics[k];
+            let e = ctx
+                .substitute(loc.id, subst)
+                .map_err(|er| self.err_at(loc, &er.0))?;
+            // e is affine in the inputs (checked when read; restrictions are affine too).
+            let mut rest = e;
+            for (i, &u) in input_vars.iter().enumerate() {
+                let fi = ctx.diff(e, u);
+                let c = ctx.canon(fi);
+                debug_assert!(
+                    input_vars.iter().all(|&w| {
+                        let d = ctx.diff(fi, w);
+                        ctx.is_identically_zero(d)
+                    }),
+                    "affine"
+                );
+                let fi = ctx.from_canonical(&c);
+                let term = ctx.mul(&[fi, input_syms[i].id]);
+                rest = ctx.sub(rest, term);
+                fields[i].push(fi);
+            }
+            // g_j = d rhs / d w_j (affine in the inputs and the w_j jointly,
+            // checked when read).
+            for (j, w) in unknown_syms.iter().enumerate() {
+                let gj = ctx.diff(e, w.var);
+                let c = ctx.canon(gj);
+                let gj = ctx.from_canonical(&c);
+                let term = ctx.mul(&[gj, w.id]);
+                rest = ctx.sub(rest, term);
+                unknown_fields[j].push(gj);
+            }
+            let c = ctx.canon(rest);
+            f0.push(ctx.from_canonical(&c));
+        }
+        Ok((f0, fields, unknown_fields))
     }
 
     pub(crate) fn err_at(&self, loc: &crate::sys::Located, msg: &str) -> ModelError {

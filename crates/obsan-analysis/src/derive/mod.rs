@@ -46,7 +46,7 @@ use crate::modes::{check_modes, ModeReport};
 use crate::rank::{AnalysisError, RankReport};
 use crate::reach::check_symmetry_memory;
 use crate::sym_report::SymmetryReport;
-use obsan_expr::{Fp, FpPoint, Id, Int, Mono, Poly, RatFun, SplitMix, Q};
+use obsan_expr::{evaluate::FpPoint, Fp, Id, Int, Mono, Poly, RatFun, SplitMix, Q};
 use obsan_model::NormalForm;
 use std::time::Instant;
 

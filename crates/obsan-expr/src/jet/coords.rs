@@ -20,7 +20,7 @@ use obsan_recon::fp;
 /// divides the content of a non-zero identity (its content is at most
 /// `2^bits`).
 ///
-/// [`degree_bounds`]: crate::degree_bounds
+/// [`degree_bounds`]: crate::evaluate::degree_bounds
 pub fn height_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(f64, f64)> {
     use dashu_int::ops::BitTest;
     let order = ctx.reachable(roots);
@@ -158,7 +158,7 @@ impl Ctx {
     }
 
     /// Exact leaf values at the rational point with these coordinate values
-    /// (angles by [`crate::rational_angle`]), for [`Ctx::eval_q`]; leaves
+    /// (angles by [`crate::evaluate::rational_angle`]), for [`Ctx::eval_q`]; leaves
     /// outside `coords` are unbound.
     pub fn q_point_at(&self, coords: &[Coord], values: &[crate::Q]) -> Vec<Option<crate::Q>> {
         let mut out = vec![None; self.leaves.len()];
@@ -166,7 +166,7 @@ impl Ctx {
             match *c {
                 Coord::Leaf(v) => out[v as usize] = Some(x.clone()),
                 Coord::Angle { sin, cos, .. } => {
-                    let (s, co) = crate::rational_angle(x);
+                    let (s, co) = crate::eval::rational_angle(x);
                     out[sin as usize] = Some(s);
                     out[cos as usize] = Some(co);
                 }

@@ -43,7 +43,7 @@
 //! where the evaluation succeeded (every base was inverted there), so the
 //! minor vanishes at the point only where that numerator does.
 //!
-//! [`degree_bounds`]: crate::degree_bounds
+//! [`degree_bounds`]: crate::evaluate::degree_bounds
 
 mod bound;
 mod compile;
@@ -167,7 +167,7 @@ impl LieJets {
     /// Bytes the sweep of `word` holds: the state series, their copy and the
     /// output's (`n` coefficients by `(n + 1)` gradient entries each, dense),
     /// and one slot per op of the largest program. Checked against the
-    /// memory budget before a sweep ([`crate::check_memory`]).
+    /// memory budget before a sweep ([`crate::limits::check_memory`]).
     pub fn sweep_bytes(&self, word: &[usize]) -> u128 {
         let mut size: u128 = 1;
         let mut run = 0u128;
