@@ -172,7 +172,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     .map_err(|e| Failure(e.to_string()))?;
     // The ranks treat the atoms as independent (as `rank` does without unknown
     // inputs): an "observable" verdict is certified only when they are.
-    let undecided_atoms = obsan_analysis::undecided_atoms_of(&mut nf.clone(), &[]);
+    let undecided_atoms = obsan_analysis::certify::undecided_atoms_of(&mut nf.clone(), &[]);
     // Explicit time: report the user's states, not the clock.
     let mut r = r;
     crate::clock::hide_in_unknown_input(nf, &mut r);
