@@ -48,14 +48,15 @@ def names(v):
 
 
 def species_info(xml):
-    """species id -> (compartment size or None, hasOnlySubstanceUnits)."""
+    """species id -> (compartment size or None, hasOnlySubstanceUnits, compartment id)."""
     t = ET.parse(xml).getroot()
     ns = t.tag[: t.tag.index("}") + 1] if t.tag.startswith("{") else ""
     sizes = {c.get("id"): c.get("size") or c.get("volume") for c in t.iter(ns + "compartment")}
     out = {}
     for s in t.iter(ns + "species"):
         size = sizes.get(s.get("compartment"))
-        out[s.get("id")] = (float(size) if size else None, s.get("hasOnlySubstanceUnits") == "true")
+        out[s.get("id")] = (float(size) if size else None, s.get("hasOnlySubstanceUnits") == "true",
+                            s.get("compartment"))
     return out
 
 
@@ -125,7 +126,9 @@ with tempfile.TemporaryDirectory() as tmp:
             if col is None and const is None:
                 missing = v
                 break
-            size, amount_units = info.get(v, (None, True))
+            size, amount_units, comp = info.get(v, (None, True, None))
+            # An initial assignment may set the size: the values file holds it then.
+            size = values.get(comp, values.get(f"{comp}_", size))
             # The .sys state is a concentration unless hasOnlySubstanceUnits.
             scale = 1.0
             if v in info and v in amount and not amount_units:

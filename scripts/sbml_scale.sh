@@ -1,12 +1,18 @@
 #!/usr/bin/env bash
-# SBML scale test (issue 32): `obsan import sbml` on every Level 3 Version 1 model of the SBML
-# test suite's semantic cases (public repository sbmlteam/sbml-test-suite; clone it yourself,
-# nothing of it is committed here). Prints the count converted, the count refused (each with a
-# located error: file:line:col), the refusals grouped by reason, and the slowest import.
-#   cargo build --release && scripts/sbml_scale.sh PATH/TO/sbml-test-suite
+# SBML scale test: `obsan import sbml` on every model of a folder (nothing of it is committed
+# here): the SBML test suite (public repository sbmlteam/sbml-test-suite: its semantic cases'
+# Level 3 Version 1 files), or any folder of real models (every *.xml under it, e.g. a BioModels
+# or PEtab benchmark-collection clone). Prints the count converted, the count refused (each with a
+# located error: file:line:col), the refusals grouped by reason, the median and slowest import.
+#   cargo build --release -p obsan && scripts/sbml_scale.sh PATH/TO/sbml-test-suite-or-folder
 set -euo pipefail
-suite="${1:?usage: scripts/sbml_scale.sh PATH/TO/sbml-test-suite}"
-obsan="${CARGO_TARGET_DIR:-$(dirname "$0")/../target}/release/obsan"
+suite="${1:?usage: scripts/sbml_scale.sh PATH/TO/sbml-test-suite-or-folder}"
+obsan="${OBSAN_BIN:-${CARGO_TARGET_DIR:-$(dirname "$0")/../target}/release/obsan}"
+if [ -d "$suite/cases/semantic" ]; then
+  files() { find "$suite/cases/semantic" -name '*-sbml-l3v1.xml' | sort; }
+else
+  files() { find "$suite" -name '*.xml' | sort; }
+fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 ok=0 n=0 slowest=0 slowest_file=""
@@ -19,9 +25,11 @@ while IFS= read -r f; do
     head -1 "$tmp/err" >>"$tmp/refused"
   fi
   ms=$((($(date +%s%N) - s) / 1000000))
+  echo "$ms" >>"$tmp/times"
   if [ "$ms" -gt "$slowest" ]; then slowest=$ms slowest_file=$f; fi
-done < <(find "$suite/cases/semantic" -name '*-sbml-l3v1.xml' | sort)
-echo "$ok of $n models converted, $((n - ok)) refused; slowest import ${slowest} ms wall ($slowest_file)"
+done < <(files)
+median=$(sort -n "$tmp/times" | awk '{a[NR] = $1} END {print (NR ? a[int((NR + 1) / 2)] : 0)}')
+echo "$ok of $n models converted, $((n - ok)) refused; median import ${median} ms wall, slowest ${slowest} ms ($slowest_file)"
 if [ -s "$tmp/refused" ]; then
   # Group by reason: the message without file, place and quoted ids.
   sed -E "s/^error: .*\.xml:[0-9]+:[0-9]+: //; s/'[^']*'/'ID'/g" "$tmp/refused" | sort | uniq -c | sort -rn

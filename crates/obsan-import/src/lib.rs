@@ -26,6 +26,7 @@ mod julia;
 mod matlab;
 mod petab;
 mod sbml;
+mod sbml_math;
 mod sbml_values;
 mod yaml;
 

@@ -1,14 +1,18 @@
 //! The numbers an SBML file gives, named as `sbml_to_sys` writes the `.sys`
-//! model: global and kinetic-law parameter values, compartment sizes, and each species'
-//! initial value as its state is written (a concentration, amount / size,
-//! unless `hasOnlySubstanceUnits`, then an amount, concentration * size).
-//! Initial assignments are not evaluated here: an id they set is left out,
-//! so a simulation asks for it by name instead of using a wrong number.
+//! model: global and kinetic-law parameter values, compartment sizes,
+//! speciesReference stoichiometries, and each species' initial value as its
+//! state is written (a concentration, amount / size, unless
+//! `hasOnlySubstanceUnits`, then an amount, concentration * size).
+//! Initial assignments (and assignment rules, at time 0) are evaluated in
+//! floating point from those numbers; one whose math obsan cannot read or
+//! whose inputs have no value is left out, so a simulation asks for its id
+//! by name instead of using a wrong number.
 
-use crate::ex::RESERVED;
+use crate::ex::{Ex, RESERVED};
+use crate::sbml_math::{child, mathml, read_functions, Ctx};
 use crate::ImportError;
 use roxmltree::{Document, Node};
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 fn list<'a, 'i>(model: Node<'a, 'i>, outer: &str, inner: &'a str) -> Vec<Node<'a, 'i>> {
     model
@@ -33,6 +37,62 @@ fn sys_id(id: &str) -> String {
     s
 }
 
+/// Numeric value of `e` from `vals`; `None` when a name has no value or the
+/// result is not finite.
+fn eval(e: &Ex, vals: &BTreeMap<String, f64>) -> Option<f64> {
+    let v = match e {
+        Ex::Num(s) if s == "pi" => std::f64::consts::PI,
+        Ex::Num(s) => s.parse().ok()?,
+        Ex::Name { name, .. } => *vals.get(name)?,
+        Ex::Neg(a) => -eval(a, vals)?,
+        Ex::Bin(op, a, b) => {
+            let (x, y) = (eval(a, vals)?, eval(b, vals)?);
+            match op {
+                '+' => x + y,
+                '-' => x - y,
+                '*' => x * y,
+                '/' => x / y,
+                '^' => x.powf(y),
+                _ => return None,
+            }
+        }
+        Ex::Call(f, args) => {
+            let [a] = args.as_slice() else {
+                return None;
+            };
+            let x = eval(a, vals)?;
+            match f.as_str() {
+                "exp" => x.exp(),
+                "log" => x.ln(),
+                "sqrt" => x.sqrt(),
+                "sin" => x.sin(),
+                "cos" => x.cos(),
+                "tan" => x.tan(),
+                "atan" => x.atan(),
+                _ => return None,
+            }
+        }
+    };
+    v.is_finite().then_some(v)
+}
+
+/// Each species' initial value as its state is written, where the file and
+/// the compartment sizes known so far give it.
+fn species_value(s: Node, sizes: &BTreeMap<String, f64>) -> Option<f64> {
+    let size = s
+        .attribute("compartment")
+        .and_then(|c| sizes.get(c))
+        .copied();
+    let amount_units = s.attribute("hasOnlySubstanceUnits") == Some("true");
+    match (num(s, "initialAmount"), num(s, "initialConcentration")) {
+        (Some(a), _) if amount_units => Some(a),
+        (_, Some(c)) if amount_units => size.map(|z| c * z),
+        (_, Some(c)) => Some(c),
+        (Some(a), None) => size.filter(|z| *z != 0.0).map(|z| a / z),
+        (None, None) => None,
+    }
+}
+
 /// `(name, value)` of every number the file gives, sorted by name.
 pub fn sbml_values(text: &str) -> Result<Vec<(String, f64)>, ImportError> {
     let doc = Document::parse(text).map_err(|e| {
@@ -46,34 +106,58 @@ pub fn sbml_values(text: &str) -> Result<Vec<(String, f64)>, ImportError> {
     else {
         return Err(ImportError::at(1, 1, "no <model> element"));
     };
-    let set_later: Vec<&str> = list(model, "listOfInitialAssignments", "initialAssignment")
-        .iter()
-        .filter_map(|n| n.attribute("symbol"))
-        .collect();
+    let mut cx = Ctx {
+        doc: &doc,
+        funcs: BTreeMap::new(),
+    };
+    // A function definition obsan cannot read only leaves out the values
+    // that call it.
+    let _ = read_functions(&mut cx, model);
+    // `(symbol, math)` of initial assignments, then of assignment rules
+    // (their value at time 0, which other initial values may use).
+    let mut formulas: Vec<(String, Option<Ex>)> = Vec::new();
+    for n in list(model, "listOfInitialAssignments", "initialAssignment")
+        .into_iter()
+        .chain(list(model, "listOfRules", "assignmentRule"))
+    {
+        let sym = n.attribute("symbol").or(n.attribute("variable"));
+        if let Some(sym) = sym {
+            let e = child(n, "math").and_then(|m| mathml(&cx, m, 0).ok());
+            formulas.push((sym.to_string(), e));
+        }
+    }
+    let set_later: BTreeSet<&str> = formulas.iter().map(|f| f.0.as_str()).collect();
     let mut out = BTreeMap::new();
     let mut sizes = BTreeMap::new();
     for c in list(model, "listOfCompartments", "compartment") {
         if let (Some(id), Some(v)) = (c.attribute("id"), num(c, "size")) {
-            // A size an initial assignment replaces is stale: a species
-            // amount is not divided by it (its concentration is left out).
-            if !set_later.contains(&id) {
+            // A size a formula replaces is stale: no species amount is
+            // divided by it until the formula has its value.
+            if !set_later.contains(id) {
                 sizes.insert(id.to_string(), v);
+                out.insert(id.to_string(), v);
             }
-            out.insert(id.to_string(), v);
         }
     }
     for p in list(model, "listOfParameters", "parameter") {
         if let (Some(id), Some(v)) = (p.attribute("id"), num(p, "value")) {
-            out.insert(id.to_string(), v);
+            if !set_later.contains(id) {
+                out.insert(id.to_string(), v);
+            }
         }
     }
-    // Kinetic-law parameters, named `REACTION_ID` as the `.sys` names them.
+    // Kinetic-law parameters, named `REACTION_ID` as the `.sys` names them,
+    // and the stoichiometry a speciesReference id names.
     for r in list(model, "listOfReactions", "reaction") {
-        let (Some(rid), Some(law)) = (
-            r.attribute("id"),
-            r.children()
-                .find(|c| c.is_element() && c.tag_name().name() == "kineticLaw"),
-        ) else {
+        for sr in list(r, "listOfReactants", "speciesReference")
+            .into_iter()
+            .chain(list(r, "listOfProducts", "speciesReference"))
+        {
+            if let Some(id) = sr.attribute("id").filter(|id| !set_later.contains(id)) {
+                out.insert(id.to_string(), num(sr, "stoichiometry").unwrap_or(1.0));
+            }
+        }
+        let (Some(rid), Some(law)) = (r.attribute("id"), child(r, "kineticLaw")) else {
             continue;
         };
         for lp in list(law, "listOfParameters", "parameter")
@@ -85,29 +169,35 @@ pub fn sbml_values(text: &str) -> Result<Vec<(String, f64)>, ImportError> {
             }
         }
     }
-    for s in list(model, "listOfSpecies", "species") {
-        let Some(id) = s.attribute("id") else {
-            continue;
-        };
-        let size = s
-            .attribute("compartment")
-            .and_then(|c| sizes.get(c))
-            .copied();
-        let amount_units = s.attribute("hasOnlySubstanceUnits") == Some("true");
-        let v = match (num(s, "initialAmount"), num(s, "initialConcentration")) {
-            (Some(a), _) if amount_units => Some(a),
-            (_, Some(c)) if amount_units => size.map(|z| c * z),
-            (_, Some(c)) => Some(c),
-            (Some(a), None) => size.filter(|z| *z != 0.0).map(|z| a / z),
-            (None, None) => None,
-        };
-        if let Some(v) = v {
-            out.insert(id.to_string(), v);
+    let species = list(model, "listOfSpecies", "species");
+    // Each round adds the values whose inputs are known; a round that adds
+    // none ends it (what is left refers to itself or to a missing value).
+    loop {
+        let mut added = false;
+        for s in &species {
+            let Some(id) = s.attribute("id").filter(|id| !set_later.contains(id)) else {
+                continue;
+            };
+            if !out.contains_key(id) {
+                if let Some(v) = species_value(*s, &sizes) {
+                    out.insert(id.to_string(), v);
+                    added = true;
+                }
+            }
+        }
+        for (sym, e) in &formulas {
+            if out.contains_key(sym) {
+                continue;
+            }
+            if let Some(v) = e.as_ref().and_then(|e| eval(e, &out)) {
+                out.insert(sym.clone(), v);
+                sizes.insert(sym.clone(), v);
+                added = true;
+            }
+        }
+        if !added {
+            break;
         }
     }
-    Ok(out
-        .into_iter()
-        .filter(|(id, _)| !set_later.contains(&id.as_str()))
-        .map(|(id, v)| (sys_id(&id), v))
-        .collect())
+    Ok(out.into_iter().map(|(id, v)| (sys_id(&id), v)).collect())
 }

@@ -234,12 +234,13 @@ fn values_are_given_as_the_states_are_written() {
     let got = sbml_values(VALUED).unwrap();
     // By hand, compartment size 2: A's amount 3 is the concentration 3/2;
     // B is an amount (hasOnlySubstanceUnits), 0.5 * 2 = 1; C stays 0.25;
-    // j is set by an initial assignment, so its `value` 7 is not given.
+    // j is set by the initial assignment j = 1, which replaces its `value` 7.
     let want: Vec<(String, f64)> = [
         ("A", 1.5),
         ("B", 1.0),
         ("C", 0.25),
         ("cell", 2.0),
+        ("j", 1.0),
         ("k", 0.3),
     ]
     .iter()
@@ -281,9 +282,9 @@ fn values_name_kinetic_law_parameters_as_the_sys_does() {
 }
 
 #[test]
-fn values_leave_out_a_concentration_over_an_assigned_size() {
-    // c's size 1 is replaced by the initial assignment c = 2 p: A's amount 3 has no
-    // concentration from the file's numbers alone, so neither c nor A is given.
+fn values_evaluate_initial_assignments_before_dividing_by_a_size() {
+    // c's size 1 is replaced by the initial assignment c = 2 p = 2 * 0.5 = 1 (by hand); A's
+    // amount 3 is divided by that size: concentration 3 / 1 = 3 (not by the stale attribute).
     let text = r#"<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
 <model id="m">
   <listOfCompartments><compartment id="c" size="1" constant="true"/></listOfCompartments>
@@ -292,5 +293,116 @@ fn values_leave_out_a_concentration_over_an_assigned_size() {
   <listOfInitialAssignments><initialAssignment symbol="c"><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><cn>2</cn><ci>p</ci></apply></math></initialAssignment></listOfInitialAssignments>
 </model>
 </sbml>"#;
-    assert_eq!(sbml_values(text).unwrap(), vec![("p".to_string(), 0.5)]);
+    let text = text.replace("value=\"0.5\"", "value=\"1.5\"");
+    // With p = 1.5: c = 3, A = 3 / 3 = 1.
+    let want: Vec<(String, f64)> = [("A", 1.0), ("c", 3.0), ("p", 1.5)]
+        .iter()
+        .map(|(n, v)| (n.to_string(), *v))
+        .collect();
+    assert_eq!(sbml_values(&text).unwrap(), want);
+}
+
+#[test]
+fn values_evaluate_initial_assignments_that_use_each_other() {
+    // After the suite's case 00471 (C = k2 / 50), chained: k2 = 2 k1 = 2 * 25 = 50, so C = 1,
+    // and S's amount 2 over C is the concentration 2. An assignment that reads a value the
+    // file does not give (q) is left out, not guessed.
+    let text = r#"<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+<model id="m">
+  <listOfCompartments><compartment id="C" size="7" constant="true"/></listOfCompartments>
+  <listOfSpecies><species id="S" compartment="C" initialAmount="2" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/></listOfSpecies>
+  <listOfParameters><parameter id="k1" value="25" constant="true"/><parameter id="k2" constant="true"/><parameter id="q" constant="true"/><parameter id="z" value="9" constant="true"/></listOfParameters>
+  <listOfInitialAssignments>
+    <initialAssignment symbol="C"><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><divide/><ci>k2</ci><cn type="integer">50</cn></apply></math></initialAssignment>
+    <initialAssignment symbol="k2"><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><cn>2</cn><ci>k1</ci></apply></math></initialAssignment>
+    <initialAssignment symbol="z"><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><plus/><ci>q</ci><cn>1</cn></apply></math></initialAssignment>
+  </listOfInitialAssignments>
+</model>
+</sbml>"#;
+    let want: Vec<(String, f64)> = [("C", 1.0), ("S", 2.0), ("k1", 25.0), ("k2", 50.0)]
+        .iter()
+        .map(|(n, v)| (n.to_string(), *v))
+        .collect();
+    assert_eq!(sbml_values(text).unwrap(), want);
+}
+
+#[test]
+fn fast_reactions_are_refused_at_their_line() {
+    // SBML's fast reactions are in rapid equilibrium (an algebraic constraint): no .sys form.
+    let e = refused(&CASE1.replace(
+        r#"<reaction id="reaction1" reversible="false">"#,
+        r#"<reaction id="reaction1" reversible="false" fast="true">"#,
+    ));
+    // CASE1's <reaction> is on its line 15.
+    assert_eq!((e.line, e.col), (15, 7), "{e}");
+    assert!(
+        e.message.contains("'reaction1'") && e.message.contains("fast"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_species_reference_id_is_its_stoichiometry() {
+    // The product's reference `st` (stoichiometry 3): S2' = 3 k1 S1 (compartment 1), and the
+    // kinetic law may read it too.
+    let with_id = CASE1.replace(
+        r#"<listOfProducts><speciesReference species="S2" stoichiometry="1""#,
+        r#"<listOfProducts><speciesReference id="st" species="S2" stoichiometry="3""#,
+    );
+    let c = sbml_to_sys(&with_id, "x.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S2", "3*k1*S1");
+    equation_is(&c.sys_text, "S1", "-k1*S1");
+    // An initial assignment st = 2 k1 holds at all times (no events): S2' = 2 k1 * k1 S1.
+    let ia = with_id.replace(
+        "    <listOfReactions>",
+        "    <listOfInitialAssignments><initialAssignment symbol=\"st\"><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><apply><times/><cn>2</cn><ci>k1</ci></apply></math></initialAssignment></listOfInitialAssignments>\n    <listOfReactions>",
+    );
+    let c = sbml_to_sys(&ia, "x.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S2", "2*k1*k1*S1");
+    // A rate rule st' = k1 makes it a state, with its attribute as initial value.
+    let rr = with_id.replace(
+        "    <listOfReactions>",
+        "    <listOfRules><rateRule variable=\"st\"><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><ci>k1</ci></math></rateRule></listOfRules>\n    <listOfReactions>",
+    );
+    let c = sbml_to_sys(&rr, "x.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "st", "k1");
+    equation_is(&c.sys_text, "S2", "st*k1*S1");
+    assert!(sbml_values(&rr).unwrap().contains(&("st".to_string(), 3.0)));
+}
+
+#[test]
+fn stoichiometry_math_is_the_stoichiometry() {
+    // SBML Level 2's <stoichiometryMath> 2 k1: S2' = 2 k1 * k1 S1.
+    let c = sbml_to_sys(
+        &CASE1.replace(
+            r#"<speciesReference species="S2" stoichiometry="1" constant="true"/>"#,
+            r#"<speciesReference species="S2"><stoichiometryMath><math xmlns="http://www.w3.org/1998/Math/MathML"><apply><times/><cn>2</cn><ci>k1</ci></apply></math></stoichiometryMath></speciesReference>"#,
+        ),
+        "x.xml",
+        &[],
+    )
+    .unwrap();
+    equation_is(&c.sys_text, "S2", "2*k1*k1*S1");
+}
+
+#[test]
+fn conversion_factors_multiply_the_reaction_terms() {
+    // SBML Level 3: dS/dt = conversionFactor * (sum of stoichiometry * rate) / size; the
+    // model's factor cf applies to S1, S2's own cf2 overrides it.
+    let text = CASE1
+        .replace(
+            r#"<model id="case00001""#,
+            r#"<model id="case00001" conversionFactor="cf""#,
+        )
+        .replace(
+            r#"<species id="S2" compartment="compartment""#,
+            r#"<species id="S2" conversionFactor="cf2" compartment="compartment""#,
+        )
+        .replace(
+            r#"<parameter id="k1" value="1" constant="true"/>"#,
+            r#"<parameter id="k1" value="1" constant="true"/><parameter id="cf" value="2" constant="true"/><parameter id="cf2" value="3" constant="true"/>"#,
+        );
+    let c = sbml_to_sys(&text, "x.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S1", "-cf*k1*S1");
+    equation_is(&c.sys_text, "S2", "cf2*k1*S1");
 }

@@ -1,0 +1,297 @@
+//! SBML's XML and MathML read into expressions: element helpers, located
+//! errors, exact decimal numbers, the MathML content subset obsan reads, and
+//! function definitions (inlined at each call).
+
+use crate::ex::Ex;
+use crate::ImportError;
+use roxmltree::{Document, Node};
+use std::collections::BTreeMap;
+
+pub(crate) struct Ctx<'a> {
+    pub doc: &'a Document<'a>,
+    pub funcs: BTreeMap<String, (Vec<String>, Ex)>,
+}
+
+impl Ctx<'_> {
+    pub fn pos(&self, n: Node) -> (usize, usize) {
+        let p = self.doc.text_pos_at(n.range().start);
+        (p.row as usize, p.col as usize)
+    }
+    pub fn err(&self, n: Node, msg: impl Into<String>) -> ImportError {
+        let (l, c) = self.pos(n);
+        ImportError::at(l, c, msg)
+    }
+}
+
+pub(crate) fn elems<'a, 'i>(n: Node<'a, 'i>) -> impl Iterator<Item = Node<'a, 'i>> {
+    n.children().filter(|c| c.is_element())
+}
+
+pub(crate) fn child<'a, 'i>(n: Node<'a, 'i>, name: &str) -> Option<Node<'a, 'i>> {
+    elems(n).find(|c| c.tag_name().name() == name)
+}
+
+pub(crate) fn list<'a, 'i>(n: Node<'a, 'i>, list: &str, item: &str) -> Vec<Node<'a, 'i>> {
+    child(n, list).map_or(Vec::new(), |l| {
+        elems(l).filter(|c| c.tag_name().name() == item).collect()
+    })
+}
+
+pub(crate) fn id_of(cx: &Ctx, n: Node, attr: &str) -> Result<String, ImportError> {
+    let id = n
+        .attribute(attr)
+        .ok_or_else(|| cx.err(n, format!("<{}> has no '{attr}'", n.tag_name().name())))?;
+    if id.is_empty()
+        || !id.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+        || !id.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+    {
+        return Err(cx.err(n, format!("'{id}' is not a valid SBML id")));
+    }
+    Ok(id.to_string())
+}
+
+/// A number as `.sys` reads it (exact decimal), from SBML text.
+pub(crate) fn number(cx: &Ctx, n: Node, text: &str) -> Result<Ex, ImportError> {
+    let t = text.trim().to_ascii_lowercase();
+    let (neg, body) = match t.strip_prefix('-') {
+        Some(b) => (true, b.to_string()),
+        None => (false, t.trim_start_matches('+').to_string()),
+    };
+    let mut parts = body.splitn(2, 'e');
+    let mant = parts.next().unwrap_or("");
+    let exp = parts.next();
+    let mant_ok = !mant.is_empty()
+        && mant.chars().all(|c| c.is_ascii_digit() || c == '.')
+        && mant.chars().filter(|&c| c == '.').count() <= 1
+        && mant.chars().any(|c| c.is_ascii_digit());
+    let exp_ok = exp.is_none_or(|e| {
+        let d = e.trim_start_matches(['+', '-']);
+        !d.is_empty() && d.len() <= 4 && d.chars().all(|c| c.is_ascii_digit())
+    });
+    if !mant_ok || !exp_ok {
+        return Err(cx.err(n, format!("'{}' is not a finite number", text.trim())));
+    }
+    let mut s = mant.to_string();
+    if s.starts_with('.') {
+        s.insert(0, '0');
+    }
+    if s.ends_with('.') {
+        s.push('0');
+    }
+    if let Some(e) = exp {
+        s = format!("{s}e{e}");
+    }
+    let e = Ex::Num(s);
+    Ok(if neg { Ex::Neg(Box::new(e)) } else { e })
+}
+
+pub(crate) fn name(s: &str, n: (usize, usize)) -> Ex {
+    Ex::Name {
+        name: s.to_string(),
+        timed: false,
+        at: n,
+    }
+}
+
+pub(crate) fn bin(op: char, a: Ex, b: Ex) -> Ex {
+    Ex::Bin(op, Box::new(a), Box::new(b))
+}
+
+/// Replace names by expressions.
+pub(crate) fn subst(e: &Ex, f: &dyn Fn(&str) -> Option<Ex>) -> Ex {
+    match e {
+        Ex::Name { name, .. } => f(name).unwrap_or_else(|| e.clone()),
+        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, f))),
+        Ex::Bin(op, a, b) => bin(*op, subst(a, f), subst(b, f)),
+        Ex::Call(g, args) => Ex::Call(g.clone(), args.iter().map(|a| subst(a, f)).collect()),
+        Ex::Num(_) => e.clone(),
+    }
+}
+
+pub(crate) const MAX_DEPTH: usize = 200;
+
+/// A MathML content element as an expression.
+pub(crate) fn mathml(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
+    if depth > MAX_DEPTH {
+        return Err(cx.err(n, "MathML nested too deeply"));
+    }
+    let tag = n.tag_name().name();
+    match tag {
+        "math" | "semantics" => {
+            let first = elems(n)
+                .next()
+                .ok_or_else(|| cx.err(n, format!("empty <{tag}>")))?;
+            mathml(cx, first, depth + 1)
+        }
+        "cn" => {
+            let kind = n.attribute("type").unwrap_or("real");
+            let texts: Vec<&str> = n
+                .children()
+                .filter(|c| c.is_text())
+                .filter_map(|c| c.text())
+                .map(str::trim)
+                .filter(|t| !t.is_empty())
+                .collect();
+            match (kind, texts.as_slice()) {
+                ("integer" | "real" | "double", [t]) => number(cx, n, t),
+                ("e-notation", [m, e]) => number(cx, n, &format!("{m}e{e}")),
+                ("rational", [a, b]) => Ok(bin('/', number(cx, n, a)?, number(cx, n, b)?)),
+                _ => Err(cx.err(n, format!("cannot read this <cn type=\"{kind}\">"))),
+            }
+        }
+        "ci" => {
+            let t = n.text().unwrap_or("").trim();
+            Ok(name(t, cx.pos(n)))
+        }
+        "pi" => Ok(Ex::Num("pi".into())),
+        "exponentiale" => Ok(Ex::Call("exp".into(), vec![Ex::Num("1".into())])),
+        "csymbol" => {
+            let url = n.attribute("definitionURL").unwrap_or("");
+            let what = url.rsplit('/').next().unwrap_or(url);
+            Err(cx.err(
+                n,
+                format!(
+                    "<csymbol> '{what}' is not supported (time, delay and avogadro: the model \
+                     must be autonomous and without delays)"
+                ),
+            ))
+        }
+        "apply" => {
+            let mut it = elems(n);
+            let op = it.next().ok_or_else(|| cx.err(n, "empty <apply>"))?;
+            let rest: Vec<Node> = it.collect();
+            let qual = |q: &str| rest.iter().find(|c| c.tag_name().name() == q).copied();
+            let args: Vec<Ex> = rest
+                .iter()
+                .filter(|c| !matches!(c.tag_name().name(), "degree" | "logbase"))
+                .map(|c| mathml(cx, *c, depth + 1))
+                .collect::<Result<_, _>>()?;
+            let opname = op.tag_name().name();
+            let arity = |k: usize| -> Result<(), ImportError> {
+                if args.len() == k {
+                    Ok(())
+                } else {
+                    Err(cx.err(op, format!("<{opname}> takes {k} argument(s), not {}", args.len())))
+                }
+            };
+            let call = |f: &str, a: Ex| Ex::Call(f.to_string(), vec![a]);
+            match opname {
+                "plus" => Ok(args
+                    .into_iter()
+                    .reduce(|a, b| bin('+', a, b))
+                    .unwrap_or(Ex::Num("0".into()))),
+                "times" => Ok(args
+                    .into_iter()
+                    .reduce(|a, b| bin('*', a, b))
+                    .unwrap_or(Ex::Num("1".into()))),
+                "minus" => {
+                    let mut a = args.into_iter();
+                    match (a.next(), a.next(), a.next()) {
+                        (Some(x), None, None) => Ok(Ex::Neg(Box::new(x))),
+                        (Some(x), Some(y), None) => Ok(bin('-', x, y)),
+                        _ => Err(cx.err(op, "<minus> takes one or two arguments")),
+                    }
+                }
+                "divide" | "power" => {
+                    arity(2)?;
+                    let mut a = args.into_iter();
+                    let (x, y) = (a.next(), a.next());
+                    match (x, y) {
+                        (Some(x), Some(y)) => Ok(bin(if opname == "divide" { '/' } else { '^' }, x, y)),
+                        _ => Err(cx.err(op, "missing argument")),
+                    }
+                }
+                "root" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    match qual("degree") {
+                        None => Ok(call("sqrt", x)),
+                        Some(d) => {
+                            let dn = elems(d).next().ok_or_else(|| cx.err(d, "empty <degree>"))?;
+                            let deg = mathml(cx, dn, depth + 1)?;
+                            Ok(bin('^', x, bin('/', Ex::Num("1".into()), deg)))
+                        }
+                    }
+                }
+                "exp" | "ln" | "sin" | "cos" | "tan" | "arctan" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    let f = match opname {
+                        "ln" => "log",
+                        "arctan" => "atan",
+                        f => f,
+                    };
+                    Ok(call(f, x))
+                }
+                "log" => {
+                    arity(1)?;
+                    let x = args.into_iter().next().ok_or_else(|| cx.err(op, "missing argument"))?;
+                    let base = match qual("logbase") {
+                        Some(b) => {
+                            let bn = elems(b).next().ok_or_else(|| cx.err(b, "empty <logbase>"))?;
+                            mathml(cx, bn, depth + 1)?
+                        }
+                        None => Ex::Num("10".into()),
+                    };
+                    Ok(bin('/', call("log", x), call("log", base)))
+                }
+                "ci" => {
+                    let f = op.text().unwrap_or("").trim();
+                    let (params, body) = cx.funcs.get(f).ok_or_else(|| {
+                        cx.err(op, format!("'{f}' is called but is not a function definition"))
+                    })?;
+                    if params.len() != args.len() {
+                        return Err(cx.err(
+                            op,
+                            format!("'{f}' takes {} argument(s), not {}", params.len(), args.len()),
+                        ));
+                    }
+                    let map: BTreeMap<&str, &Ex> =
+                        params.iter().map(String::as_str).zip(args.iter()).collect();
+                    Ok(subst(body, &|nm| map.get(nm).map(|e| (*e).clone())))
+                }
+                "csymbol" => mathml(cx, op, depth + 1),
+                other => Err(cx.err(
+                    op,
+                    format!("MathML <{other}> is not supported (obsan reads + - * / ^, root, exp, ln, log, sin, cos, tan, arctan)"),
+                )),
+            }
+        }
+        other => Err(cx.err(
+            n,
+            format!("MathML <{other}> is not supported (piecewise, relations and logic have no .sys form)"),
+        )),
+    }
+}
+
+pub(crate) fn math_of(cx: &Ctx, n: Node) -> Result<Ex, ImportError> {
+    let m = child(n, "math")
+        .ok_or_else(|| cx.err(n, format!("<{}> has no <math>", n.tag_name().name())))?;
+    mathml(cx, m, 0)
+}
+
+/// Function definitions, each body read with the ones defined before it.
+pub(crate) fn read_functions(cx: &mut Ctx, model: Node) -> Result<(), ImportError> {
+    for f in list(model, "listOfFunctionDefinitions", "functionDefinition") {
+        let id = id_of(cx, f, "id")?;
+        let lambda = child(f, "math")
+            .and_then(|m| {
+                child(m, "lambda")
+                    .or_else(|| child(m, "semantics").and_then(|s| child(s, "lambda")))
+            })
+            .ok_or_else(|| cx.err(f, format!("function '{id}' has no <lambda>")))?;
+        let mut params = Vec::new();
+        let mut body = None;
+        for c in elems(lambda) {
+            if c.tag_name().name() == "bvar" {
+                let ci = child(c, "ci").ok_or_else(|| cx.err(c, "<bvar> without <ci>"))?;
+                params.push(ci.text().unwrap_or("").trim().to_string());
+            } else {
+                body = Some(mathml(cx, c, 0)?);
+            }
+        }
+        let body = body.ok_or_else(|| cx.err(lambda, format!("function '{id}' has no body")))?;
+        cx.funcs.insert(id, (params, body));
+    }
+    Ok(())
+}
