@@ -53,8 +53,8 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         crate::json::print(&json::Global {
             all_local: r.all_local,
             degree_bound_local: r.delta_local,
-            error_bound: r.error_bound,
             equations: r.equations,
+            error_bound: r.error_bound,
             exact: false,
             group_order: r.group_order,
             log10_degree_bound_global: r.log10_delta_global,

@@ -11,10 +11,10 @@ pub struct Global {
     pub all_local: bool,
     /// The degree bound of the local test.
     pub degree_bound_local: f64,
-    /// Probability bound that some verdict is wrong.
-    pub error_bound: f64,
     /// The number of polynomial equations.
     pub equations: usize,
+    /// Probability bound that some verdict is wrong.
+    pub error_bound: f64,
     /// Always false: the answer is probabilistic (`error_bound`).
     pub exact: bool,
     /// The order of the group of discrete symmetries found.
