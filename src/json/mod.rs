@@ -6,6 +6,7 @@
 //! Fields are declared in alphabetical order, the order `serde_json::json!` objects print in,
 //! so that typing a command kept its output byte for byte.
 
+mod along;
 mod analysis;
 mod design;
 mod diagnose;
@@ -18,6 +19,7 @@ mod modes;
 mod partial;
 mod unknown;
 
+pub use along::{Along, AlongDataset, AlongStretch, AlongSymmetry, AlongWindow};
 pub use analysis::{
     Certification, Check, Constant, DecompositionCheck, Formula, ModeCheck, Rank, Show,
     SymCertificate, Symmetries, Verify,
@@ -92,6 +94,11 @@ pub const TYPED: &[Typed] = &[
         name: "rank-unknown-inputs",
         command: "obsan rank SYSTEM --json (a model with unknown inputs)",
         schema: || schema_for!(RankUnknownInputs),
+    },
+    Typed {
+        name: "rank-along",
+        command: "obsan rank SYSTEM --along DATASET --json",
+        schema: || schema_for!(Along),
     },
     Typed {
         name: "rank-known",
@@ -173,7 +180,6 @@ pub const TYPED: &[Typed] = &[
 /// Commands with `--json` whose output is still built ad hoc (to be typed), and commands
 /// without `--json`.
 pub const UNTYPED: &[(&str, &str)] = &[
-    ("rank", "not yet typed: --along"),
     (
         "simulate",
         "no --json without MODEL.sys: writes a dataset folder",

@@ -378,6 +378,30 @@ fn global_and_simulate_outputs_match_their_types_and_schemas() {
 }
 
 #[test]
+fn rank_along_matches_its_type_and_schema() {
+    let dir = fresh_dir("json-schema-along");
+    let sim = format!("{dir}/sim");
+    ok(&["simulate", "--out", &sim, "--bearings", "40"]);
+    let v = typed::<json::Along>(
+        "rank-along",
+        &[
+            "rank",
+            "systems/calib.sys",
+            "--along",
+            &sim,
+            "--window",
+            "20",
+        ],
+    );
+    // calib.sys has 7 variables (rank 7 of 7, eq. 16).
+    assert_eq!(v["n"], 7, "{v}");
+    assert!(
+        v["windows"].as_array().is_some_and(|w| !w.is_empty()),
+        "{v}"
+    );
+}
+
+#[test]
 fn diagnose_output_and_report_match_the_type_and_schema() {
     let dir = fresh_dir("json-schema-diag");
     let sim = format!("{dir}/sim");
@@ -480,8 +504,9 @@ fn design_outputs_match_their_types_and_schemas() {
 #[test]
 fn help_names_exactly_the_schema_keys() {
     let help = |c: &[&str]| ok(&[c, &["--help"]].concat());
-    let cases: [(&str, String, &str); 18] = [
+    let cases: [(&str, String, &str); 19] = [
         ("diagnose", help(&["diagnose"]), "--json prints"),
+        ("rank-along", help(&["rank"]), "--along --json prints"),
         ("show", help(&["show"]), "--json prints"),
         ("rank", help(&["rank"]), "--json prints"),
         (
