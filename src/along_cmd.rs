@@ -5,6 +5,7 @@
 
 use crate::analysis_cmds::deadline_after;
 use crate::cli::RankArgs;
+use crate::json;
 use crate::show::load_normal_form;
 use crate::Failure;
 use obsan_analysis::{
@@ -14,7 +15,7 @@ use obsan_analysis::{
 };
 use obsan_data::Dataset;
 use obsan_model::NormalForm;
-use serde_json::{json, Value};
+use serde_json::Value;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -54,10 +55,7 @@ pub fn run(a: &RankArgs) -> Result<ExitCode, Failure> {
     };
     let r = along(&mut nf, &trajs, &opts).map_err(|e| Failure(e.to_string()))?;
     if a.out.json {
-        outln!(
-            "{}",
-            serde_json::to_string_pretty(&to_json(&nf, dir, a.window, &trajs, &r))?
-        );
+        json::print(&to_json(&nf, dir, a.window, &trajs, &r))?;
     } else {
         print_text(&nf, &trajs, &r);
     }
@@ -276,56 +274,87 @@ fn deg(x: f64) -> f64 {
     x.to_degrees()
 }
 
+fn nums(v: &[f64]) -> Vec<json::Num> {
+    v.iter().map(|x| json::finite(*x)).collect()
+}
+
+fn rows(v: &[Vec<f64>]) -> Vec<Vec<json::Num>> {
+    v.iter().map(|r| nums(r)).collect()
+}
+
 fn to_json(
     nf: &NormalForm,
     dir: &str,
     window: f64,
     trajs: &[AlongTrajectory],
     r: &AlongReport,
-) -> Value {
-    let finite = |x: f64| if x.is_finite() { json!(x) } else { Value::Null };
-    let windows: Vec<Value> = r
+) -> json::Along {
+    let finite = json::finite;
+    let windows = r
         .windows
         .iter()
         .enumerate()
-        .map(|(i, w)| {
-            json!({
-                "trajectory": trajs[w.trajectory].name, "t0": w.t0, "t1": w.t1, "rows": w.rows,
-                "rank": w.rank, "condition": finite(w.condition),
-                "singular_values": w.singular_values, "tolerance": w.tolerance,
-                "kernel": w.kernel, "weakest": w.weakest, "input_relations": relations(nf, r, i),
-            })
+        .map(|(i, w)| json::AlongWindow {
+            condition: finite(w.condition),
+            input_relations: relations(nf, r, i),
+            kernel: rows(&w.kernel),
+            rank: w.rank,
+            rows: w.rows,
+            singular_values: nums(&w.singular_values),
+            t0: finite(w.t0),
+            t1: finite(w.t1),
+            tolerance: finite(w.tolerance),
+            trajectory: trajs[w.trajectory].name.clone(),
+            weakest: nums(&w.weakest),
         })
         .collect();
-    let stretches: Vec<Value> = r
+    let stretches = r
         .stretches
         .iter()
         .map(|s| {
             let m = &s.symmetry;
-            json!({
-                "trajectory": trajs[s.trajectory].name, "t0": s.t0, "t1": s.t1,
-                "windows": s.windows.len(), "rank": s.rank, "lost": echelon(&s.kernel),
-                "input_relations": relations(nf, r, s.windows[0]),
-                "symmetry": {
-                    "restricted_rank": m.restricted_rank, "vectors": m.vectors,
-                    "angles_deg": m.angles.iter().map(|a| deg(*a)).collect::<Vec<_>>(),
-                    "kernel_to_symmetries_deg": deg(m.kernel_to_symmetries),
-                    "symmetries_to_kernel_deg": deg(m.symmetries_to_kernel),
-                    "angle_bound_deg": deg(m.angle_bound), "matches": m.matches, "exact": m.exact,
+            json::AlongStretch {
+                input_relations: relations(nf, r, s.windows[0]),
+                lost: rows(&echelon(&s.kernel)),
+                rank: s.rank,
+                symmetry: json::AlongSymmetry {
+                    angle_bound_deg: finite(deg(m.angle_bound)),
+                    angles_deg: m.angles.iter().map(|a| finite(deg(*a))).collect(),
+                    exact: m.exact,
+                    kernel_to_symmetries_deg: finite(deg(m.kernel_to_symmetries)),
+                    matches: m.matches,
+                    restricted_rank: m.restricted_rank,
+                    symmetries_to_kernel_deg: finite(deg(m.symmetries_to_kernel)),
+                    vectors: rows(&m.vectors),
                 },
-            })
+                t0: finite(s.t0),
+                t1: finite(s.t1),
+                trajectory: trajs[s.trajectory].name.clone(),
+                windows: s.windows.len(),
+            }
         })
         .collect();
     let d = &r.dataset;
-    json!({
-        "system": nf.name, "along": dir, "window": window, "n": r.n, "state": nf.state,
-        "tolerance_safety": TOL_SAFETY, "rounding_floor": ROUNDING_FLOOR,
-        "input_rel_tol": INPUT_REL_TOL, "windows": windows, "stretches": stretches,
-        "dataset": {
-            "columns": d.columns, "n": d.columns.len(), "rank": d.rank,
-            "singular_values": d.singular_values, "tolerance": d.tolerance, "kernel": d.kernel,
+    json::Along {
+        along: dir.to_string(),
+        dataset: json::AlongDataset {
+            columns: d.columns.clone(),
+            kernel: rows(&d.kernel),
+            n: d.columns.len(),
+            rank: d.rank,
+            singular_values: nums(&d.singular_values),
+            tolerance: finite(d.tolerance),
         },
-    })
+        input_rel_tol: finite(INPUT_REL_TOL),
+        n: r.n,
+        rounding_floor: finite(ROUNDING_FLOOR),
+        state: nf.state.clone(),
+        stretches,
+        system: nf.name.clone(),
+        tolerance_safety: finite(TOL_SAFETY),
+        window: finite(window),
+        windows,
+    }
 }
 
 fn print_text(nf: &NormalForm, trajs: &[AlongTrajectory], r: &AlongReport) {

@@ -2,6 +2,7 @@
 
 use crate::cli::{AnalysisArgs, CheckArgs, LieArgs, OutputArgs, RankArgs, SymArgs, VerifyArgs};
 use crate::expr_cmds::{not_decided_note, parse_arg_in};
+use crate::json;
 use crate::show::{load_normal_form, load_system};
 use crate::Failure;
 use obsan_analysis::{
@@ -11,7 +12,7 @@ use obsan_analysis::{
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
-use serde_json::{json, Value};
+use std::collections::BTreeMap;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -97,7 +98,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         return crate::experiments_cmd::rank_known_cmd(a, nf);
     }
     let experiments = crate::experiments_cmd::experiments_of(&a.sys)?
-        .map(|e| crate::experiments_cmd::describe(&e));
+        .map(|e| crate::experiments_cmd::describe_typed(&e));
     let deadline = deadline_after(Instant::now(), a.an.timeout);
     let mut r = run_rank(&mut nf, &a.an, deadline, false)?;
     // The ranks are of the formal field in which the atoms are independent;
@@ -129,27 +130,34 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     let full = r.rank == r.n;
     let exact = full && undecided.is_empty();
     if a.out.json {
-        let v = json!({
-            "system": nf.name,
-            "restriction": nf.restriction,
-            "experiments": experiments.as_ref().map(|e| e.0.clone()),
-            "state": nf.state,
-            "n": r.n,
-            "rank": r.rank,
-            "weakly_locally_observable": if undecided.is_empty() || !full { json!(full) } else { Value::Null },
-            "decided": undecided.is_empty(),
-            "undecided_atoms": undecided,
-            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"lie_derivative": t, "order": w.order()})).collect::<Vec<_>>(),
-            "max_order": r.max_order,
-            "observable_variables": obs,
-            "unobservable_variables": unobs,
-            "evaluated": r.evaluated,
-            "exact": exact,
-            "error_bound": if exact { 0.0 } else { r.error_bound },
-            "degree_bound": r.degree_bound,
-            "seed": r.seed,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&json::Rank {
+            basis: r
+                .basis
+                .iter()
+                .zip(&words)
+                .map(|(w, t)| json::BasisWord {
+                    lie_derivative: t.clone(),
+                    order: w.order(),
+                })
+                .collect(),
+            decided: undecided.is_empty(),
+            degree_bound: r.degree_bound,
+            error_bound: if exact { 0.0 } else { r.error_bound },
+            evaluated: r.evaluated,
+            exact,
+            experiments: experiments.map(|e| e.0),
+            max_order: r.max_order,
+            n: r.n,
+            observable_variables: obs.into_iter().cloned().collect(),
+            rank: r.rank,
+            restriction: nf.restriction.clone(),
+            seed: r.seed,
+            state: nf.state.clone(),
+            system: nf.name.clone(),
+            weakly_locally_observable: (undecided.is_empty() || !full).then_some(full),
+            undecided_atoms: undecided,
+            unobservable_variables: unobs.into_iter().cloned().collect(),
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = String::new();
@@ -209,41 +217,61 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
 
 /// One symmetry vector as JSON: per state variable, its component's text
 /// and LaTeX.
-pub(crate) fn vector_json(nf: &NormalForm, v: &[RatFun]) -> Value {
-    let comps: serde_json::Map<String, Value> = nf
-        .state
+pub(crate) fn vector_json(nf: &NormalForm, v: &[RatFun]) -> BTreeMap<String, json::Formula> {
+    nf.state
         .iter()
         .zip(v)
         .map(|(n, e)| {
-            (
-                n.clone(),
-                json!({"text": nf.ctx.ratfun_text(e), "latex": nf.ctx.ratfun_latex(e)}),
-            )
+            let f = json::Formula {
+                latex: nf.ctx.ratfun_latex(e),
+                text: nf.ctx.ratfun_text(e),
+            };
+            (n.clone(), f)
         })
-        .collect();
-    Value::Object(comps)
+        .collect()
 }
 
-fn symmetry_json(nf: &NormalForm, s: &SymmetryReport) -> Value {
-    let vecs: Vec<Value> = s.vectors.iter().map(|v| vector_json(nf, v)).collect();
-    // `certificate` stays the kind's name (the suite bench reads it); the
-    // random certificate's figures go in `certification`.
-    let (kind, detail) = match &s.certificate {
-        Certificate::Closure => ("closure", Value::Null),
-        Certificate::Invariance(_) => ("invariance", Value::Null),
+/// What certified the symmetries, as JSON: the kind's name (the suite bench reads it) and,
+/// for a random certificate, its figures.
+fn certificate_json(s: &SymmetryReport) -> (json::SymCertificate, Option<json::Certification>) {
+    match &s.certificate {
+        Certificate::Closure => (json::SymCertificate::Closure, None),
+        Certificate::Invariance(_) => (json::SymCertificate::Invariance, None),
         Certificate::Random(c) => (
-            "random",
-            json!({"points": c.points, "primes": c.primes, "identities": c.identities,
-                "degree": c.degree, "error_bound": c.error_bound}),
+            json::SymCertificate::Random,
+            Some(json::Certification {
+                degree: c.degree,
+                error_bound: c.error_bound,
+                identities: c.identities,
+                points: c.points,
+                primes: c.primes,
+            }),
         ),
-    };
-    // Unreached variables: each d/dx is a symmetry, listed by name (a unit
-    // vector each would make the output quadratic in the state).
-    let free: Vec<&String> = s.free.iter().map(|&j| &nf.state[j]).collect();
-    // `exact` is the whole answer: vectors, count and independence. Over
-    // undecided atoms only the annihilation (zero forms) is proven.
-    json!({ "symmetries": vecs, "free_directions": free, "exact": s.exact && s.decided(), "rows_checked": s.rows_checked, "blocks": s.blocks,
-        "certificate": kind, "certification": detail, "decided": s.decided(), "undecided_atoms": s.undecided })
+    }
+}
+
+fn symmetry_json(nf: &NormalForm, r: &RankReport, s: &SymmetryReport) -> json::Symmetries {
+    let (certificate, certification) = certificate_json(s);
+    json::Symmetries {
+        blocks: s.blocks,
+        certificate,
+        certification,
+        decided: s.decided(),
+        // `exact` is the whole answer: vectors, count and independence. Over
+        // undecided atoms only the annihilation (zero forms) is proven.
+        exact: s.exact && s.decided(),
+        // Unreached variables: each d/dx is a symmetry, listed by name (a unit
+        // vector each would make the output quadratic in the state).
+        free_directions: s.free.iter().map(|&j| nf.state[j].clone()).collect(),
+        n: r.n,
+        rank: r.rank,
+        restriction: nf.restriction.clone(),
+        rows_checked: s.rows_checked,
+        state: nf.state.clone(),
+        symmetries: s.vectors.iter().map(|v| vector_json(nf, v)).collect(),
+        system: nf.name.clone(),
+        undecided_atoms: s.undecided.clone(),
+    }
 }
 
 /// The rank and the symmetries for `check`/`verify`: the default route
@@ -326,18 +354,7 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
     crate::clock::hide_in_symmetries(&nf, &mut r, &mut s);
     let nf = crate::clock::user_view(&nf).unwrap_or(nf);
     if a.out.json {
-        let mut v = symmetry_json(&nf, &s);
-        let Some(m) = v.as_object_mut() else {
-            return Err(Failure(
-                "internal: the symmetry report is not a JSON object".into(),
-            ));
-        };
-        m.insert("system".into(), json!(nf.name));
-        m.insert("restriction".into(), json!(nf.restriction));
-        m.insert("state".into(), json!(nf.state));
-        m.insert("rank".into(), json!(r.rank));
-        m.insert("n".into(), json!(r.n));
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&symmetry_json(&nf, &r, &s))?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = format!(
@@ -547,35 +564,35 @@ pub fn check(a: &CheckArgs) -> Result<ExitCode, Failure> {
     // nonzero forms; a dependence found is formal, hence true.
     let decided = rep.decided() && s.decided();
     if a.out.json {
-        let checks: Vec<Value> = a
+        let checks = a
             .modes
             .iter()
             .zip(&rep.checks)
             .map(|(m, c)| {
                 let undecided = mode_undecided(&mut nf.ctx, c);
-                json!({
-                    "mode": m,
-                    "observable_mode": if undecided.is_empty() { json!(c.is_mode) } else { Value::Null },
-                    "decided": undecided.is_empty(),
-                    "undecided_atoms": undecided,
-                    "residuals": c.residuals.iter().map(|r| nf.ctx.ratfun_text(r)).collect::<Vec<_>>(),
-                })
+                json::ModeCheck {
+                    decided: undecided.is_empty(),
+                    mode: m.clone(),
+                    observable_mode: undecided.is_empty().then_some(c.is_mode),
+                    residuals: c.residuals.iter().map(|r| nf.ctx.ratfun_text(r)).collect(),
+                    undecided_atoms: undecided,
+                }
             })
             .collect();
-        let v = json!({
-            "system": nf.name, "restriction": nf.restriction, "symmetries": s.count(), "rank": rep.rank,
-            "checks": checks,
-            "independent": if decided || !rep.independent { json!(rep.independent) } else { Value::Null },
-            "independent_count": rep.independent_count,
-            "complete": if decided { json!(rep.complete) } else { Value::Null },
-            "exact": bound == 0.0 && decided,
-        });
-        let mut v = v;
-        if let (Some(m), Some(c)) = (v.as_object_mut(), symmetry_json(&nf, &s).as_object()) {
-            m.insert("certificate".into(), c["certificate"].clone());
-            m.insert("certification".into(), c["certification"].clone());
-        }
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        let (certificate, certification) = certificate_json(&s);
+        crate::json::print(&json::Check {
+            certificate,
+            certification,
+            checks,
+            complete: decided.then_some(rep.complete),
+            exact: bound == 0.0 && decided,
+            independent: (decided || !rep.independent).then_some(rep.independent),
+            independent_count: rep.independent_count,
+            rank: rep.rank,
+            restriction: nf.restriction.clone(),
+            symmetries: s.count(),
+            system: nf.name.clone(),
+        })?;
     } else {
         let mut o = format!(
             "{}: rank {}, {} symmetr{}\n",
@@ -733,15 +750,31 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
         verdict
     };
     if a.out.json {
-        let sj = symmetry_json(&nf, &s);
-        let v = json!({
-            "decomposition": a.file, "system": nf.name, "restriction": nf.restriction,
-            "checks": checks.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail,
-                "decided": c.undecided.is_empty(), "undecided_atoms": c.undecided})).collect::<Vec<_>>(),
-            "pass": ok, "decided": decided, "undecided_atoms": undecided, "exact": ok && exact, "verdict": verdict, "symmetries": s.count(),
-            "certificate": sj["certificate"], "certification": sj["certification"],
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        let (certificate, certification) = certificate_json(&s);
+        let checks = checks
+            .iter()
+            .map(|c| json::DecompositionCheck {
+                check: c.name.clone(),
+                decided: c.undecided.is_empty(),
+                detail: c.detail.clone(),
+                pass: c.pass,
+                undecided_atoms: c.undecided.clone(),
+            })
+            .collect();
+        crate::json::print(&json::Verify {
+            certificate,
+            certification,
+            checks,
+            decided,
+            decomposition: a.file.clone(),
+            exact: ok && exact,
+            pass: ok,
+            restriction: nf.restriction.clone(),
+            symmetries: s.count(),
+            system: nf.name.clone(),
+            undecided_atoms: undecided,
+            verdict,
+        })?;
     } else {
         let mut o = format!(
             "{} -> new state [{}] ({})\n",

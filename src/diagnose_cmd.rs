@@ -119,7 +119,7 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     drop(bar);
     let text = render_text(&d, a.data());
     if a.json {
-        outln!("{}", serde_json::to_string_pretty(&d)?);
+        crate::json::print(&crate::json::Diagnose::from(&d))?;
     } else {
         out!("{text}");
     }

@@ -430,7 +430,7 @@ pub(crate) fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)>
         ),
         (
             PathBuf::from("diagnosis.json"),
-            serde_json::to_string_pretty(d)
+            serde_json::to_string_pretty(&crate::json::Diagnose::from(d))
                 .unwrap_or_default()
                 .into_bytes(),
         ),

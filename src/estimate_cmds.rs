@@ -334,7 +334,7 @@ pub fn crlb_cmd(a: &CrlbArgs) -> Result<ExitCode, Failure> {
             )
         }
         None => {
-            let o = sim_options(&a.sim)?;
+            let o = sim_options(&a.sim, &a.set)?;
             let b = o.crlb_sd(&p, false)?;
             let f = (o.k_encoder > 0.0)
                 .then(|| o.crlb_sd(&p, true))

@@ -65,14 +65,8 @@ pub fn experiments_of(a: &SystemArgs) -> Result<Option<Vec<Experiment>>, Failure
     Ok(Some(exps))
 }
 
-/// The experiments as JSON and as one line of text.
-pub fn describe(exps: &[Experiment]) -> (serde_json::Value, String) {
-    let (j, t) = describe_typed(exps);
-    (serde_json::to_value(j).unwrap_or_default(), t)
-}
-
 /// The experiments in the binary's JSON types and as one line of text.
-fn describe_typed(exps: &[Experiment]) -> (Vec<json::Experiment>, String) {
+pub(crate) fn describe_typed(exps: &[Experiment]) -> (Vec<json::Experiment>, String) {
     let j = exps
         .iter()
         .map(|e| json::Experiment {

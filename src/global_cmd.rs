@@ -1,12 +1,10 @@
 //! `obsan global`: global identifiability and discrete symmetries.
 
 use crate::cli::GlobalArgs;
+use crate::json;
 use crate::show::load_normal_form;
 use crate::Failure;
-use obsan_analysis::{
-    global_id::global_identifiability, global_id::GlobalOptions, global_id::Identifiability,
-};
-use serde_json::json;
+use obsan_analysis::global_id::{global_identifiability, GlobalOptions, Identifiability};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -23,37 +21,55 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     };
     let r = global_identifiability(&mut nf, &opts).map_err(|e| Failure(e.to_string()))?;
     let verdict = |v: Identifiability| match v {
-        Identifiability::Global => ("global", Some(1)),
-        Identifiability::Local(k) => ("local", Some(k)),
-        Identifiability::NotIdentifiable => ("not identifiable", None),
+        Identifiability::Global => (json::Verdict::Global, Some(1)),
+        Identifiability::Local(k) => (json::Verdict::Local, Some(k)),
+        Identifiability::NotIdentifiable => (json::Verdict::NotIdentifiable, None),
     };
     let maps: Vec<String> = r.maps.iter().map(|m| m.to_string()).collect();
     if a.out.json {
-        let v = json!({
-            "system": nf.name,
-            "restriction": nf.restriction,
-            "variables": r.variables.iter().map(|v| {
-                let (t, k) = verdict(v.verdict);
-                json!({"name": v.name, "kind": if v.param { "param" } else { "state" },
-                       "angle": v.angle, "verdict": t, "values": k})
-            }).collect::<Vec<_>>(),
-            "solutions": r.solutions,
-            "all_local": r.all_local,
-            "maps": maps,
-            "group_order": r.group_order,
-            "order": r.order,
-            "rank_order": r.rank_order,
-            "output_orders": r.output_orders.iter().map(|(n, k)| json!({"output": n, "order": k})).collect::<Vec<_>>(),
-            "error_bound": r.error_bound,
-            "degree_bound_local": r.delta_local,
-            "log10_degree_bound_global": r.log10_delta_global,
-            "unknowns": r.unknowns,
-            "equations": r.equations,
-            "primes": r.primes,
-            "method": "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree",
-            "exact": false,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        let variables = r
+            .variables
+            .iter()
+            .map(|v| json::GlobalVariable {
+                angle: v.angle,
+                kind: if v.param {
+                    json::VariableKind::Param
+                } else {
+                    json::VariableKind::State
+                },
+                name: v.name.clone(),
+                values: verdict(v.verdict).1,
+                verdict: verdict(v.verdict).0,
+            })
+            .collect();
+        let output_orders = r
+            .output_orders
+            .iter()
+            .map(|(n, k)| json::OutputOrder {
+                order: *k,
+                output: n.clone(),
+            })
+            .collect();
+        crate::json::print(&json::Global {
+            all_local: r.all_local,
+            degree_bound_local: r.delta_local,
+            equations: r.equations,
+            error_bound: r.error_bound,
+            exact: false,
+            group_order: r.group_order,
+            log10_degree_bound_global: r.log10_delta_global,
+            maps,
+            method: "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into(),
+            order: r.order,
+            output_orders,
+            primes: r.primes.to_vec(),
+            rank_order: r.rank_order,
+            restriction: nf.restriction.clone(),
+            solutions: r.solutions,
+            system: nf.name.clone(),
+            unknowns: r.unknowns,
+            variables,
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let mut o = String::new();

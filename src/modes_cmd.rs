@@ -1,13 +1,13 @@
 //! `obsan modes`: observable modes and the reduced system, derived and proven.
 
 use crate::cli::ModesArgs;
+use crate::json;
 use crate::show::load_normal_form;
 use crate::Failure;
 use obsan_analysis::{
     derive_modes, rank as rank_test, symmetries_with, verify_derivation, Certificate,
     DeriveOptions, RankOptions, Route, SymmetryOptions,
 };
-use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -54,15 +54,27 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             not_decided_text(&undecided, r.rank)
         };
         if a.out.json {
-            let v = json!({
-                "system": nf.name, "restriction": nf.restriction, "n": r.n, "rank": r.rank,
-                "full_rank": if decided { json!(true) } else { Value::Null },
-                "decided": decided, "undecided_atoms": undecided,
-                "modes": nf.state.iter().map(|s| json!({"name": s, "expr": s, "kind": "variable"})).collect::<Vec<_>>(),
-                "reduced": Value::Null,
-                "certificate": certificate,
-            });
-            outln!("{}", serde_json::to_string_pretty(&v)?);
+            let modes = nf
+                .state
+                .iter()
+                .map(|s| json::VariableMode {
+                    expr: s.clone(),
+                    kind: "variable".into(),
+                    name: s.clone(),
+                })
+                .collect();
+            crate::json::print(&json::Modes::FullRank(json::ModesFullRank {
+                certificate,
+                decided,
+                full_rank: decided.then_some(true),
+                modes,
+                n: r.n,
+                rank: r.rank,
+                reduced: None,
+                restriction: nf.restriction.clone(),
+                system: nf.name.clone(),
+                undecided_atoms: undecided,
+            }))?;
         } else if decided {
             outln!(
                 "{title}: rank {} of {}: every variable is observable; the modes are the variables",
@@ -217,46 +229,74 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         write_pair(prefix, a.force, sys_text, dec)?;
     }
     if a.out.json {
-        let modes: Vec<Value> = d
+        let modes = d
             .modes
             .iter()
-            .map(|m| {
-                let mut v = json!({"name": m.name, "expr": m.text, "kind": m.kind.word(), "angle": m.angle, "domain": m.domain});
-                if a.out.latex {
-                    v["latex"] = json!(nf.ctx.to_latex(m.expr));
-                }
-                v
+            .map(|m| json::DerivedMode {
+                angle: m.angle,
+                domain: m.domain.clone(),
+                expr: m.text.clone(),
+                kind: m.kind.word().to_string(),
+                name: m.name.clone(),
             })
             .collect();
-        let dynamics: Vec<Value> = (0..d.modes.len())
-            .map(|k| json!({"name": d.modes[k].name, "rhs": d.dynamics(k)}))
+        let dynamics = (0..d.modes.len())
+            .map(|k| json::ReducedDynamics {
+                name: d.modes[k].name.clone(),
+                rhs: d.dynamics(k),
+            })
             .collect();
-        let v = json!({
-            "system": nf.name, "restriction": nf.restriction, "n": n_full, "rank": d.rank,
-            "full_rank": false, "symmetries": nsym, "unreached": unreached,
-            "modes": modes,
-            "reduced": {
-                "inputs": d.inputs(),
-                "dynamics": dynamics,
-                "outputs": d.outputs.iter().map(|(n, e)| json!({"name": n, "expr": e})).collect::<Vec<_>>(),
-                "closed": d.closed(),
-                "missing": d.missing(),
-            },
-            "decided": decided, "undecided_atoms": undecided,
-            "certificate": {
-                "text": certificate,
-                "modes_exact": if decided { json!(modes_ok) } else { Value::Null },
-                "independent": if decided || !d.mode_report.independent { json!(d.mode_report.independent) } else { Value::Null },
-                "complete": if decided { json!(d.mode_report.complete) } else { Value::Null },
-                "verified": if decided || failure_certain { json!(verified) } else { Value::Null },
-                "exact": closure || (modes_ok && sym.exact && decided),
-                "method": if closure { "closure" } else { "symmetries" },
-                "symmetries": sym_cert,
-                "checks": checks.as_ref().map(|cs| cs.iter().map(|c| json!({"check": c.name, "pass": c.pass, "detail": c.detail})).collect::<Vec<_>>()),
-            },
-            "sys": sys_text, "dec": dec,
+        let outputs = d
+            .outputs
+            .iter()
+            .map(|(n, e)| json::ReducedOutput {
+                expr: e.clone(),
+                name: n.clone(),
+            })
+            .collect();
+        let checks = checks.as_ref().map(|cs| {
+            cs.iter()
+                .map(|c| json::PassCheck {
+                    check: c.name.clone(),
+                    detail: c.detail.clone(),
+                    pass: c.pass,
+                })
+                .collect()
         });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        let certificate = json::ModesCertificate {
+            checks,
+            complete: decided.then_some(d.mode_report.complete),
+            exact: closure || (modes_ok && sym.exact && decided),
+            independent: (decided || !d.mode_report.independent)
+                .then_some(d.mode_report.independent),
+            method: if closure { "closure" } else { "symmetries" }.into(),
+            modes_exact: decided.then_some(modes_ok),
+            symmetries: sym_cert,
+            text: certificate,
+            verified: (decided || failure_certain).then_some(verified),
+        };
+        crate::json::print(&json::Modes::Derived(Box::new(json::ModesDerived {
+            certificate,
+            dec: dec.clone(),
+            decided,
+            full_rank: false,
+            modes,
+            n: n_full,
+            rank: d.rank,
+            reduced: json::Reduced {
+                closed: d.closed(),
+                dynamics,
+                inputs: d.inputs(),
+                missing: d.missing(),
+                outputs,
+            },
+            restriction: nf.restriction.clone(),
+            symmetries: nsym,
+            sys: sys_text,
+            system: nf.name.clone(),
+            undecided_atoms: undecided,
+            unreached,
+        })))?;
     } else {
         let mut o = format!(
             "{title}: rank {} of {}, {} symmetr{}; {} observable modes:\n",

@@ -5,7 +5,6 @@ use crate::cli::{ShowArgs, SystemArgs};
 use crate::Failure;
 use obsan_expr::{Ctx, Id, Q};
 use obsan_model::{Kind, NormalForm, System};
-use serde_json::{json, Map, Value};
 use std::process::ExitCode;
 
 /// Read and check a .sys file.
@@ -55,9 +54,12 @@ pub fn load_normal_form(a: &SystemArgs) -> Result<(System, NormalForm), Failure>
     Ok((sys, nf))
 }
 
-fn expr_json(ctx: &mut Ctx, id: Id) -> Value {
+fn expr_json(ctx: &mut Ctx, id: Id) -> crate::json::Formula {
     let c = ctx.canon(id);
-    json!({ "text": ctx.ratfun_text(&c), "latex": ctx.ratfun_latex(&c) })
+    crate::json::Formula {
+        latex: ctx.ratfun_latex(&c),
+        text: ctx.ratfun_text(&c),
+    }
 }
 
 pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
@@ -72,44 +74,47 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
         .map(|(_, s)| s.clone())
         .collect();
     if a.out.json {
-        let field = |nf: &mut NormalForm, f: &[Id]| -> Value {
-            let mut m = Map::new();
+        use std::collections::BTreeMap;
+        let field = |nf: &mut NormalForm, f: &[Id]| {
+            let mut m = BTreeMap::new();
             for (k, &c) in f.iter().enumerate() {
                 m.insert(nf.state[k].clone(), expr_json(&mut nf.ctx, c));
             }
-            Value::Object(m)
+            m
         };
         let f0 = nf.f0.clone();
         let f0j = field(&mut nf, &f0);
-        let mut fields = Map::new();
+        let mut fields = BTreeMap::new();
         for (i, f) in nf.fields.clone().iter().enumerate() {
             let fj = field(&mut nf, f);
             fields.insert(nf.inputs[i].clone(), fj);
         }
-        let mut outs = Map::new();
+        let mut outputs = BTreeMap::new();
         for (n, h) in nf.outputs.clone() {
-            outs.insert(n, expr_json(&mut nf.ctx, h));
+            outputs.insert(n, expr_json(&mut nf.ctx, h));
         }
-        let consts: Vec<Value> = nf
+        let consts = nf
             .consts
             .iter()
-            .map(|(n, v)| json!({ "name": n, "value": v.as_ref().map(|q| q.to_string()) }))
+            .map(|(n, v)| crate::json::Constant {
+                name: n.clone(),
+                value: v.as_ref().map(|q| q.to_string()),
+            })
             .collect();
-        let v = json!({
-            "system": nf.name,
-            "file": a.sys.system,
-            "description": nf.description,
-            "restriction": nf.restriction,
-            "states": states,
-            "params": params,
-            "consts": consts,
-            "inputs": nf.inputs,
-            "f0": f0j,
-            "fields": fields,
-            "outputs": outs,
-            "exact": true,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&crate::json::Show {
+            consts,
+            description: nf.description.clone(),
+            exact: true,
+            f0: f0j,
+            fields,
+            file: a.sys.system.clone(),
+            inputs: nf.inputs.clone(),
+            outputs,
+            params,
+            restriction: nf.restriction.clone(),
+            states,
+            system: nf.name.clone(),
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let fmt = |nf: &mut NormalForm, id: Id| -> String {

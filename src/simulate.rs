@@ -36,16 +36,47 @@ pub fn dataset_files(
 /// tables use at most a few hundred). Refused before anything is allocated:
 /// memory grows with bearings x trajectories.
 pub const MAX_BEARINGS: usize = 1_000_000;
-/// The most trajectories (`--q` ratios) of one simulation.
+/// The most trajectories (`--set q=RATIOS`) of one simulation.
 pub const MAX_TRAJECTORIES: usize = 100;
 /// The most bearings of all trajectories together (`--bearings` x ratios):
 /// 3 x 10^6 is a 97 MB dataset (crlb on it peaks at 704 MB).
 pub const MAX_TOTAL_BEARINGS: usize = 3_000_000;
 
-/// The simulator's options from the command line, checked.
-pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
+/// The wheel-speed ratios of the simulated circles (eq. 17), spelled as the model's constant:
+/// `--set q=0.9,0,-1`, one trajectory each; `--q 0.9,0,-1` is the old spelling, still read.
+pub fn ratios(old: &[f64], set: &[String]) -> Result<Vec<f64>, Failure> {
+    let mut q: Option<Vec<f64>> = None;
+    for s in set {
+        let Some(("q", list)) = s.split_once('=').map(|(n, v)| (n.trim(), v)) else {
+            return Err(Failure(format!(
+                "--set {s}: without a MODEL.sys the simulated set-up has one constant, q (the wheel-speed ratios), e.g. --set q=0.9,0,-1"
+            )));
+        };
+        let values: Result<Vec<f64>, _> = list.split(',').map(|x| x.trim().parse()).collect();
+        let values = values.map_err(|_| {
+            Failure(format!(
+                "--set {s}: q needs one or more finite ratios, e.g. --set q=0.9,0,-1"
+            ))
+        })?;
+        if q.replace(values).is_some() {
+            return Err(Failure("q is given twice: one --set q=RATIOS".into()));
+        }
+    }
+    match (q, old.is_empty()) {
+        (Some(_), false) => Err(Failure(
+            "q is given twice: --set q=RATIOS (--q is its old spelling)".into(),
+        )),
+        (Some(q), true) => Ok(q),
+        (None, false) => Ok(old.to_vec()),
+        (None, true) => Ok(vec![0.9, 0.0, -1.0]),
+    }
+}
+
+/// The simulator's options from the command line, checked; `set` holds `--set q=RATIOS`.
+pub fn sim_options(a: &SimFlags, set: &[String]) -> Result<SimOptions, Failure> {
+    let q = ratios(&a.q, set)?;
     let mut o = SimOptions {
-        q: a.q.clone(),
+        q: q.clone(),
         sigma_beta: a.sigma_beta_deg.to_radians(),
         k_encoder: a.k,
         iota: a.iota,
@@ -73,15 +104,15 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
             )));
         }
     }
-    if a.q.is_empty() || a.q.iter().any(|q| !q.is_finite()) {
+    if q.is_empty() || q.iter().any(|q| !q.is_finite()) {
         return Err(Failure(
-            "--q needs one or more finite ratios, e.g. --q 0.9,0,-1".into(),
+            "q needs one or more finite ratios, e.g. --set q=0.9,0,-1".into(),
         ));
     }
-    if a.q.len() > MAX_TRAJECTORIES {
+    if q.len() > MAX_TRAJECTORIES {
         return Err(Failure(format!(
-            "--q gives {} ratios: at most {MAX_TRAJECTORIES} trajectories (obsan's limit)",
-            a.q.len()
+            "q gives {} ratios: at most {MAX_TRAJECTORIES} trajectories (obsan's limit)",
+            q.len()
         )));
     }
     if let Some(n) = a.bearings.filter(|n| *n > MAX_BEARINGS) {
@@ -89,10 +120,10 @@ pub fn sim_options(a: &SimFlags) -> Result<SimOptions, Failure> {
             "--bearings {n}: at most {MAX_BEARINGS} per trajectory (obsan's limit)"
         )));
     }
-    if let Some(n) = a.bearings.filter(|n| n * a.q.len() > MAX_TOTAL_BEARINGS) {
+    if let Some(n) = a.bearings.filter(|n| n * q.len() > MAX_TOTAL_BEARINGS) {
         return Err(Failure(format!(
             "--bearings {n} on {} trajectories: at most {MAX_TOTAL_BEARINGS} bearings in all (obsan's limit)",
-            a.q.len()
+            q.len()
         )));
     }
     for e in &a.effects {
@@ -138,16 +169,14 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
         return crate::simulate_sys::run(model, a);
     }
     let out = a.out.as_deref().unwrap_or_default();
-    if a.sys.until.is_some()
-        || !(a.sys.set.is_empty() && a.sys.init.is_empty() && a.sys.input.is_empty())
-    {
+    if a.sys.until.is_some() || !(a.sys.init.is_empty() && a.sys.input.is_empty()) {
         return Err(Failure(
-            "--until, --every, --set, --init and --input need a MODEL.sys".into(),
+            "--until, --every, --init and --input need a MODEL.sys".into(),
         ));
     }
     let reads: Vec<&str> = a.sim.inputs.iter().map(String::as_str).collect();
     crate::fsio::check_outside(out, &reads)?;
-    let o = sim_options(&a.sim)?;
+    let o = sim_options(&a.sim, &a.sys.set)?;
     let (data, truth) = simulate(&o).map_err(Failure::from)?;
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;

@@ -7,7 +7,6 @@ use crate::Failure;
 use obsan_data::Series;
 use obsan_fit::{FitError, Predictor};
 use obsan_model::System;
-use serde_json::json;
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
@@ -322,15 +321,14 @@ pub fn run(model: &str, a: &SimulateArgs) -> Result<ExitCode, Failure> {
             .zip(&rows)
             .map(|(t, r)| std::iter::once(*t).chain(r.iter().copied()).collect())
             .collect();
-        let v = json!({
-            "model": model,
-            "columns": columns,
-            "rows": rows,
-            "steps": steps,
-            "error_estimate": err,
-            "tolerance": TOLERANCE,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&crate::json::SimulateSys {
+            columns,
+            error_estimate: err,
+            model: model.to_string(),
+            rows,
+            steps,
+            tolerance: TOLERANCE,
+        })?;
     } else if a.out.is_none() {
         out!("{text}");
     } else {

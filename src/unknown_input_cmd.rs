@@ -3,13 +3,13 @@
 //! do not handle them yet.
 
 use crate::cli::{RankArgs, SymArgs};
+use crate::json;
 use crate::Failure;
 use obsan_analysis::{
     unknown_inputs::unknown_input_rank, unknown_inputs::unknown_input_symmetries,
-    unknown_inputs::UnknownInputOptions,
+    unknown_inputs::UnknownInputOptions, unknown_inputs::UnknownInputReport,
 };
 use obsan_model::NormalForm;
-use serde_json::json;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -71,29 +71,27 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
         .map(|p| p.0.clone())
         .collect();
     if a.out.json {
-        let vecs: Vec<serde_json::Value> = s
-            .vectors
-            .iter()
-            .map(|v| crate::analysis_cmds::vector_json(nf, v))
-            .collect();
-        let v = json!({
-            "system": nf.name,
-            "restriction": nf.restriction,
-            "state": nf.state,
-            "unknown_inputs": nf.unknown_inputs,
-            "n": r.n,
-            "rank": r.rank,
-            "symmetries": vecs,
-            "observable_variables": observable,
-            "unobservable_variables": unobservable,
-            "reconstructable_inputs": rec,
-            "exact": true,
-            "certificate": "unknown_input_invariance",
-            "identities": s.identities,
-            "error_bound": r.error_bound,
-            "seed": r.seed,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&json::SymmetriesUnknownInputs {
+            certificate: "unknown_input_invariance".into(),
+            error_bound: r.error_bound,
+            exact: true,
+            identities: s.identities,
+            n: r.n,
+            observable_variables: observable,
+            rank: r.rank,
+            reconstructable_inputs: rec,
+            restriction: nf.restriction.clone(),
+            seed: r.seed,
+            state: nf.state.clone(),
+            symmetries: s
+                .vectors
+                .iter()
+                .map(|v| crate::analysis_cmds::vector_json(nf, v))
+                .collect(),
+            system: nf.name.clone(),
+            unknown_inputs: nf.unknown_inputs.clone(),
+            unobservable_variables: unobservable,
+        })?;
         return Ok(ExitCode::SUCCESS);
     }
     let k = s.vectors.len();
@@ -205,46 +203,8 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     };
     let (obs, unobs) = split(&nf.state, &r.observable);
     let (rec, unrec) = split(&nf.unknown_inputs, &r.reconstructable);
-    let complete = r.complete();
     if a.out.json {
-        let v = json!({
-            "system": nf.name,
-            "restriction": nf.restriction,
-            "state": nf.state,
-            "unknown_inputs": nf.unknown_inputs,
-            "n": r.n,
-            "rank": r.rank,
-            "weakly_locally_observable": if undecided_atoms.is_empty() || r.rank < r.n { json!(r.rank == r.n) } else { serde_json::Value::Null },
-            "decided": undecided_atoms.is_empty(),
-            "undecided_atoms": undecided_atoms,
-            "observable_variables": obs.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
-            "unobservable_variables": unobs,
-            "reconstructable_inputs": rec.iter().map(|(s, m)| json!({"name": s, "order": m})).collect::<Vec<_>>(),
-            "unreconstructable_inputs": unrec,
-            "steps": r.steps.iter().map(|s| json!({"order": s.order, "extended_rank": s.rank, "state_rank": s.state_rank})).collect::<Vec<_>>(),
-            "max_order": r.max_order,
-            "converged": r.converged,
-            "agree": r.agree,
-            "martinelli": {
-                "rank": r.martinelli.rank,
-                "observable": nf.state.iter().zip(&r.martinelli.observable).filter(|p| *p.1).map(|p| p.0.clone()).collect::<Vec<_>>(),
-                "reconstructable": nf.unknown_inputs.iter().zip(&r.martinelli.reconstructable).filter(|p| *p.1 == Some(true)).map(|p| p.0.clone()).collect::<Vec<_>>(),
-                "not_reconstructable": nf.unknown_inputs.iter().zip(&r.martinelli.reconstructable).filter(|p| *p.1 == Some(false)).map(|p| p.0.clone()).collect::<Vec<_>>(),
-                "steps": r.martinelli.steps.iter().map(|s| json!({"degree": s.degree, "action": s.action})).collect::<Vec<_>>(),
-                "rounds": r.martinelli.rounds,
-                "dimension": r.martinelli.dimension,
-                "codistribution_rank": r.martinelli.codistribution_rank,
-                "input_jets": r.martinelli.input_jets,
-                "error_bound": r.martinelli.error_bound,
-            },
-            "complete": complete,
-            "basis": r.basis.iter().zip(&words).map(|(w, t)| json!({"derivative": t, "output": outs[w.output], "order": w.order()})).collect::<Vec<_>>(),
-            "evaluated": r.evaluated,
-            "error_bound": r.error_bound,
-            "degree_bound": r.degree_bound,
-            "seed": r.seed,
-        });
-        outln!("{}", serde_json::to_string_pretty(&v)?);
+        crate::json::print(&rank_json(nf, &r, &words, undecided_atoms))?;
         return Ok(ExitCode::SUCCESS);
     }
     let list = |v: &[String]| {
@@ -356,4 +316,117 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)
+}
+
+/// The unknown-input rank as the binary's JSON.
+/// The JSON view; `undecided` are the atoms whose independence the engine
+/// cannot prove (a formal full rank over them is not claimed).
+fn rank_json(
+    nf: &NormalForm,
+    r: &UnknownInputReport,
+    words: &[String],
+    undecided: Vec<String>,
+) -> json::RankUnknownInputs {
+    let orders = |names: &[String], v: &[Option<usize>]| -> Vec<json::NamedOrder> {
+        names
+            .iter()
+            .zip(v)
+            .filter_map(|(s, o)| {
+                o.map(|order| json::NamedOrder {
+                    name: s.clone(),
+                    order,
+                })
+            })
+            .collect()
+    };
+    let missing = |names: &[String], v: &[Option<usize>]| -> Vec<String> {
+        names
+            .iter()
+            .zip(v)
+            .filter(|(_, o)| o.is_none())
+            .map(|(s, _)| s.clone())
+            .collect()
+    };
+    let inputs_where = |want: bool| -> Vec<String> {
+        nf.unknown_inputs
+            .iter()
+            .zip(&r.martinelli.reconstructable)
+            .filter(|p| *p.1 == Some(want))
+            .map(|p| p.0.clone())
+            .collect()
+    };
+    let m = &r.martinelli;
+    let martinelli = json::Martinelli {
+        codistribution_rank: m.codistribution_rank,
+        dimension: m.dimension,
+        error_bound: m.error_bound,
+        input_jets: m.input_jets,
+        not_reconstructable: inputs_where(false),
+        observable: nf
+            .state
+            .iter()
+            .zip(&m.observable)
+            .filter(|p| *p.1)
+            .map(|p| p.0.clone())
+            .collect(),
+        rank: m.rank,
+        reconstructable: inputs_where(true),
+        rounds: m.rounds,
+        steps: m
+            .steps
+            .iter()
+            .map(|s| json::MartinelliStep {
+                action: s.action.clone(),
+                degree: s.degree,
+            })
+            .collect(),
+    };
+    let outs: Vec<&String> = nf.outputs.iter().map(|o| &o.0).collect();
+    // The ranks are of the formal field in which the atoms are independent; a relation
+    // among them can only lower the true rank: "not observable" stands, full rank does not.
+    let full = r.rank == r.n;
+    let weakly_locally_observable = (undecided.is_empty() || !full).then_some(full);
+    json::RankUnknownInputs {
+        agree: r.agree,
+        basis: r
+            .basis
+            .iter()
+            .zip(words)
+            .map(|(w, t)| json::UnknownInputWord {
+                derivative: t.clone(),
+                order: w.order(),
+                output: outs[w.output].clone(),
+            })
+            .collect(),
+        complete: r.complete(),
+        converged: r.converged,
+        decided: undecided.is_empty(),
+        degree_bound: r.degree_bound,
+        error_bound: r.error_bound,
+        evaluated: r.evaluated,
+        martinelli,
+        max_order: r.max_order,
+        n: r.n,
+        observable_variables: orders(&nf.state, &r.observable),
+        rank: r.rank,
+        reconstructable_inputs: orders(&nf.unknown_inputs, &r.reconstructable),
+        restriction: nf.restriction.clone(),
+        seed: r.seed,
+        state: nf.state.clone(),
+        steps: r
+            .steps
+            .iter()
+            .map(|s| json::UnknownInputStep {
+                extended_rank: s.rank,
+                order: s.order,
+                state_rank: s.state_rank,
+            })
+            .collect(),
+        system: nf.name.clone(),
+        undecided_atoms: undecided,
+        unknown_inputs: nf.unknown_inputs.clone(),
+        unobservable_variables: missing(&nf.state, &r.observable),
+        unreconstructable_inputs: missing(&nf.unknown_inputs, &r.reconstructable),
+        weakly_locally_observable,
+    }
 }

@@ -496,7 +496,8 @@ def _sim(
     inputs: Optional[PathLike],
     seed: Optional[int],
 ) -> Flags:
-    f = f.numbers("--q", q).number("--sigma-beta-deg", sigma_beta_deg).number("--k", k)
+    f = f.numbers("--set", q, key="q").number("--sigma-beta-deg", sigma_beta_deg)
+    f = f.number("--k", k)
     f = f.number("--iota", iota).number("--dq", dq).number("--nu", nu)
     f = f.text("--speed-profile", speed_profile).number("--bearing-rate", bearing_rate)
     f = f.integer("--bearings", bearings).number("--d0", d0).pairs("--effect", effect)

@@ -132,16 +132,21 @@ class Flags:
             self.argv += [flag, f"{text(_kw(flag) + ' key', k)}={value(x)}"]
         return self
 
-    def numbers(self, flag: str, vs: Union[Number, Sequence[Number], Any, None]) -> "Flags":
-        """One comma-joined list (``q=[0.9, 0, -1]`` is ``--q 0.9,0,-1``)."""
+    def numbers(
+        self, flag: str, vs: Union[Number, Sequence[Number], Any, None], key: Optional[str] = None
+    ) -> "Flags":
+        """One comma-joined list; with ``key``, as ``flag key=LIST`` (``q=[0.9, 0, -1]`` is
+        ``--set q=0.9,0,-1``)."""
         if vs is None:
             return self
+        name = key if key is not None else _kw(flag)
         items: Any = getattr(vs, "tolist")() if is_array(vs) else vs
         if isinstance(items, numbers.Real):
             items = [items]
         if not isinstance(items, (list, tuple)):
-            raise TypeError(f"{_kw(flag)} must be a number or a list of numbers")
-        self.argv += [flag, ",".join(value(x) for x in items)]
+            raise TypeError(f"{name} must be a number or a list of numbers")
+        joined = ",".join(value(x) for x in items)
+        self.argv += [flag, joined if key is None else f"{key}={joined}"]
         return self
 
 

@@ -76,6 +76,11 @@ fn section(out: &mut String, title: &str, v: &Value) {
         ));
     }
     table(out, v);
+    // An untagged enum (one of several objects): name them; their tables follow.
+    if let Some(alts) = v.get("anyOf").and_then(Value::as_array) {
+        let names: Vec<String> = alts.iter().map(|a| format!("`{}`", type_text(a))).collect();
+        out.push_str(&format!("One of: {}.\n", names.join(", ")));
+    }
     for alt in v
         .get("oneOf")
         .and_then(Value::as_array)

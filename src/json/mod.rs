@@ -6,15 +6,41 @@
 //! Fields are declared in alphabetical order, the order `serde_json::json!` objects print in,
 //! so that typing a command kept its output byte for byte.
 
+mod along;
+mod analysis;
 mod design;
+mod diagnose;
 mod docs;
 mod estimate;
 mod expr;
+mod from_diagnosis;
+mod global;
+mod modes;
 mod partial;
+mod unknown;
+
+pub use along::{Along, AlongDataset, AlongStretch, AlongSymmetry, AlongWindow};
+pub use analysis::{
+    Certification, Check, Constant, DecompositionCheck, Formula, ModeCheck, Rank, Show,
+    SymCertificate, Symmetries, Verify,
+};
+pub use global::{Global, GlobalVariable, OutputOrder, SimulateSys, VariableKind, Verdict};
+pub use modes::{
+    DerivedMode, Modes, ModesCertificate, ModesDerived, ModesFullRank, PassCheck, Reduced,
+    ReducedDynamics, ReducedOutput, VariableMode,
+};
+pub use unknown::{
+    Martinelli, MartinelliStep, NamedOrder, RankUnknownInputs, SymmetriesUnknownInputs,
+    UnknownInputStep, UnknownInputWord,
+};
 
 pub use design::{
     BasisWord, ConstantValue, Design, Experiment, Family, FamilyCombination, Inputs, KnownValue,
     RankAuto, RankKnown, RankStep, SensorCandidate, SensorSet, Sensors, SpecialValue,
+};
+pub use diagnose::{
+    Candidate, Combination, CommonMode, Correlation, Diagnose, Fit, InputCheck, NameEstimateSd,
+    NameValue, Named, Num, Refit, Residuals, Rival, StructureTest, TrajectoryCheck,
 };
 pub use docs::markdown;
 pub use estimate::{
@@ -40,6 +66,11 @@ pub struct Typed {
 /// Every typed output, in the order `obsan schema --list` prints them.
 pub const TYPED: &[Typed] = &[
     Typed {
+        name: "show",
+        command: "obsan show SYSTEM --json",
+        schema: || schema_for!(Show),
+    },
+    Typed {
         name: "simplify",
         command: "obsan simplify EXPR --json",
         schema: || schema_for!(Simplify),
@@ -55,6 +86,21 @@ pub const TYPED: &[Typed] = &[
         schema: || schema_for!(Lie),
     },
     Typed {
+        name: "rank",
+        command: "obsan rank SYSTEM --json",
+        schema: || schema_for!(Rank),
+    },
+    Typed {
+        name: "rank-unknown-inputs",
+        command: "obsan rank SYSTEM --json (a model with unknown inputs)",
+        schema: || schema_for!(RankUnknownInputs),
+    },
+    Typed {
+        name: "rank-along",
+        command: "obsan rank SYSTEM --along DATASET --json",
+        schema: || schema_for!(Along),
+    },
+    Typed {
         name: "rank-known",
         command: "obsan rank SYSTEM --known NAME=VALUE | --known-generic NAME --json",
         schema: || schema_for!(RankKnown),
@@ -63,6 +109,46 @@ pub const TYPED: &[Typed] = &[
         name: "rank-auto",
         command: "obsan rank SYSTEM --experiments auto --json",
         schema: || schema_for!(RankAuto),
+    },
+    Typed {
+        name: "symmetries",
+        command: "obsan symmetries SYSTEM --json",
+        schema: || schema_for!(Symmetries),
+    },
+    Typed {
+        name: "symmetries-unknown-inputs",
+        command: "obsan symmetries SYSTEM --json (a model with unknown inputs)",
+        schema: || schema_for!(SymmetriesUnknownInputs),
+    },
+    Typed {
+        name: "check",
+        command: "obsan check SYSTEM --mode EXPR --json",
+        schema: || schema_for!(Check),
+    },
+    Typed {
+        name: "verify",
+        command: "obsan verify FILE.dec --json",
+        schema: || schema_for!(Verify),
+    },
+    Typed {
+        name: "modes",
+        command: "obsan modes SYSTEM --json",
+        schema: || schema_for!(Modes),
+    },
+    Typed {
+        name: "global",
+        command: "obsan global SYSTEM --json",
+        schema: || schema_for!(Global),
+    },
+    Typed {
+        name: "simulate",
+        command: "obsan simulate MODEL.sys --until T --every DT --json",
+        schema: || schema_for!(SimulateSys),
+    },
+    Typed {
+        name: "diagnose",
+        command: "obsan diagnose MODEL DATA --json (and the report's diagnosis.json)",
+        schema: || schema_for!(Diagnose),
     },
     Typed {
         name: "calibrate",
@@ -94,18 +180,10 @@ pub const TYPED: &[Typed] = &[
 /// Commands with `--json` whose output is still built ad hoc (to be typed), and commands
 /// without `--json`.
 pub const UNTYPED: &[(&str, &str)] = &[
-    ("show", "not yet typed"),
     (
-        "rank",
-        "not yet typed: the plain rank, --along, unknown inputs",
+        "simulate",
+        "no --json without MODEL.sys: writes a dataset folder",
     ),
-    ("symmetries", "not yet typed"),
-    ("check", "not yet typed"),
-    ("verify", "not yet typed"),
-    ("modes", "not yet typed"),
-    ("global", "not yet typed"),
-    ("diagnose", "not yet typed"),
-    ("simulate", "no --json: writes a dataset folder"),
     ("import", "no --json: writes a dataset or .sys file"),
 ];
 

@@ -57,10 +57,10 @@ fn calibrate_recovers_the_parameters_within_their_standard_deviations() {
 #[test]
 fn degenerate_data_get_a_message_naming_what_cannot_be_estimated() {
     let two = tmp_dir("two");
-    ok(&["simulate", "--out", &two, "--q", "0,-1"]);
+    ok(&["simulate", "--out", &two, "--set", "q=0,-1"]);
     bad(&["calibrate", &two], "phi, psi and eta need a third circle");
     let one = tmp_dir("one");
-    ok(&["simulate", "--out", &one, "--q", "0"]);
+    ok(&["simulate", "--out", &one, "--set", "q=0"]);
     bad(&["calibrate", &one], "xi and delta need two circles");
     // The feature out of view half of the time: drop the second half's bearings.
     let half = tmp_dir("half");
@@ -84,7 +84,7 @@ fn degenerate_data_get_a_message_naming_what_cannot_be_estimated() {
     bad(&["calibrate", &half], "out of view");
     // Bad input: a malformed cell names file, row and column.
     let broken = tmp_dir("broken");
-    ok(&["simulate", "--out", &broken, "--q", "0,-1,0.5"]);
+    ok(&["simulate", "--out", &broken, "--set", "q=0,-1,0.5"]);
     let path = format!("{broken}/q0/inputs.csv");
     let text = std::fs::read_to_string(&path)
         .unwrap()

@@ -142,7 +142,15 @@ fn diagnose_says_consistent_with_noise_on_clean_data() {
 #[test]
 fn diagnose_rejects_bad_input_with_positions() {
     let data = tmp_dir("bad");
-    ok(&["simulate", "--out", &data, "--seed", "1", "--q", "0.9,0,-1"]);
+    ok(&[
+        "simulate",
+        "--out",
+        &data,
+        "--seed",
+        "1",
+        "--set",
+        "q=0.9,0,-1",
+    ]);
     let eff = temp_file(
         "bad.eff",
         "model calib\neffect x\nparam k\noutput beta = beta + k*nope\n",

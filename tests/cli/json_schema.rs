@@ -183,6 +183,14 @@ fn properties(s: &Value, root: &Value) -> Vec<String> {
     keys
 }
 
+/// The keys of every alternative of a schema, once each, sorted.
+fn all_properties(s: &Value, root: &Value) -> Vec<String> {
+    let mut keys = properties(s, root);
+    keys.sort();
+    keys.dedup();
+    keys
+}
+
 #[test]
 fn expression_outputs_match_their_types_and_schemas() {
     let v = typed::<json::Simplify>("simplify", &["simplify", "-x^2 + (x+1)^2"]);
@@ -231,6 +239,191 @@ fn rank_known_and_auto_match_their_types_and_schemas() {
             "auto",
         ],
     );
+}
+
+#[test]
+fn show_and_rank_outputs_match_their_types_and_schemas() {
+    let v = typed::<json::Show>(
+        "show",
+        &[
+            "show",
+            "systems/calib.sys",
+            "--input",
+            "q",
+            "--set",
+            "q=0.9",
+        ],
+    );
+    assert_eq!(v["consts"][0]["value"], "9/10", "{v}");
+    // localization.sys: x' = f0 + v f_v + omega f_omega, one output (eq. 3).
+    let v = typed::<json::Show>("show", &["show", "systems/localization.sys"]);
+    assert_eq!(v["fields"].as_object().map(|f| f.len()), Some(2), "{v}");
+    // Rank 2 of 3 (Martinelli 2011, section II: one symmetry).
+    let v = typed::<json::Rank>("rank", &["rank", "systems/localization.sys"]);
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(3)),
+        "{v}"
+    );
+    assert_eq!(v["weakly_locally_observable"], false, "{v}");
+    let v = typed::<json::Rank>(
+        "rank",
+        &[
+            "rank",
+            "systems/calib.sys",
+            "--experiment",
+            "q: q=0.9",
+            "--experiment",
+            "q: q=0",
+        ],
+    );
+    assert_eq!(v["experiments"][1]["set"]["q"], "0", "{v}");
+    // The unknown-input route prints its own object: v is not reconstructable (the
+    // file's hand derivation), the bearing's rank is 1 of the 3 states.
+    let v = typed::<json::RankUnknownInputs>(
+        "rank-unknown-inputs",
+        &[
+            "rank",
+            "systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys",
+        ],
+    );
+    assert_eq!(
+        v["unreconstructable_inputs"],
+        serde_json::json!(["v"]),
+        "{v}"
+    );
+    // A plain rank's output is not an unknown-input one, nor the other way round.
+    let plain = ok(&["rank", "systems/localization.sys", "--json"]);
+    assert!(serde_json::from_str::<json::RankUnknownInputs>(&plain).is_err());
+}
+
+#[test]
+fn symmetry_and_mode_outputs_match_their_types_and_schemas() {
+    // localization.sys: the one symmetry [0, 1, 1] (a rotation about the feature, eq. 3).
+    let v = typed::<json::Symmetries>("symmetries", &["symmetries", "systems/localization.sys"]);
+    let w = &v["symmetries"];
+    assert_eq!(w.as_array().map(Vec::len), Some(1), "{v}");
+    let (d, p, t) = (
+        &w[0]["D"]["text"],
+        &w[0]["phiR"]["text"],
+        &w[0]["thetaR"]["text"],
+    );
+    assert!(d == "0" && p != "0" && p == t, "{v}");
+    let v = typed::<json::SymmetriesUnknownInputs>(
+        "symmetries-unknown-inputs",
+        &[
+            "symmetries",
+            "systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys",
+        ],
+    );
+    assert_eq!(v["certificate"], "unknown_input_invariance", "{v}");
+    let v = typed::<json::Check>(
+        "check",
+        &[
+            "check",
+            "systems/localization.sys",
+            "--mode",
+            "D",
+            "--mode",
+            "thetaR - phiR",
+        ],
+    );
+    assert_eq!(v["checks"][1]["observable_mode"], true, "{v}");
+    let v = typed::<json::Verify>("verify", &["verify", "systems/decomp_21_22.dec"]);
+    assert_eq!(v["pass"], true, "{v}");
+    // Below full rank the derivation, at full rank (calib.sys: 7 of 7) the short object.
+    let v = typed::<json::Modes>("modes", &["modes", "systems/calib_q_nopsi.sys"]);
+    assert!(v["reduced"].is_object() && v["full_rank"] == false, "{v}");
+    let v = typed::<json::Modes>("modes", &["modes", "systems/calib.sys"]);
+    assert!(v["reduced"].is_null() && v["full_rank"] == true, "{v}");
+}
+
+#[test]
+fn global_and_simulate_outputs_match_their_types_and_schemas() {
+    // squared_rate.sys: x' = -a^2 x, y = x; by hand (in the file) a has 2 values, x 1.
+    let v = typed::<json::Global>("global", &["global", "systems/global/squared_rate.sys"]);
+    let vars = v["variables"].as_array().expect("variables");
+    let of = |n: &str| vars.iter().find(|x| x["name"] == n).cloned().unwrap();
+    assert_eq!(
+        (of("a")["verdict"].clone(), of("a")["values"].clone()),
+        ("local".into(), 2.into())
+    );
+    assert_eq!(of("x")["verdict"], "global", "{v}");
+    // Times 0, 0.5, 1: three rows of time, the two states, the output.
+    let v = typed::<json::SimulateSys>(
+        "simulate",
+        &[
+            "simulate",
+            "systems/classic/lotka_volterra.sys",
+            "--set",
+            "a=1",
+            "--set",
+            "b=0.5",
+            "--set",
+            "c=1",
+            "--set",
+            "d=0.2",
+            "--init",
+            "x=4",
+            "--init",
+            "y=2",
+            "--until",
+            "1",
+            "--every",
+            "0.5",
+        ],
+    );
+    assert_eq!(v["rows"].as_array().map(Vec::len), Some(3), "{v}");
+    assert_eq!(v["rows"][0][1], 4.0, "x(0) = 4: {v}");
+}
+
+#[test]
+fn rank_along_matches_its_type_and_schema() {
+    let dir = fresh_dir("json-schema-along");
+    let sim = format!("{dir}/sim");
+    ok(&["simulate", "--out", &sim, "--bearings", "40"]);
+    let v = typed::<json::Along>(
+        "rank-along",
+        &[
+            "rank",
+            "systems/calib.sys",
+            "--along",
+            &sim,
+            "--window",
+            "20",
+        ],
+    );
+    // calib.sys has 7 variables (rank 7 of 7, eq. 16).
+    assert_eq!(v["n"], 7, "{v}");
+    assert!(
+        v["windows"].as_array().is_some_and(|w| !w.is_empty()),
+        "{v}"
+    );
+}
+
+#[test]
+fn diagnose_output_and_report_match_the_type_and_schema() {
+    let dir = fresh_dir("json-schema-diag");
+    let sim = format!("{dir}/sim");
+    ok(&[
+        "simulate",
+        "--out",
+        &sim,
+        "--bearings",
+        "200",
+        "--effect",
+        "bearing_scale=0.04",
+    ]);
+    let report = format!("{dir}/report");
+    let v = typed::<json::Diagnose>(
+        "diagnose",
+        &["diagnose", "systems/calib.sys", &sim, "--report", &report],
+    );
+    assert!(v["rounds"].as_array().is_some_and(|r| !r.is_empty()), "{v}");
+    // The report's diagnosis.json is the same view.
+    let file = std::fs::read_to_string(format!("{report}/diagnosis.json")).unwrap();
+    serde_json::from_str::<json::Diagnose>(&file).expect("diagnosis.json is a Diagnose");
+    assert_eq!(serde_json::from_str::<Value>(&file).unwrap(), v);
 }
 
 #[test]
@@ -311,7 +504,28 @@ fn design_outputs_match_their_types_and_schemas() {
 #[test]
 fn help_names_exactly_the_schema_keys() {
     let help = |c: &[&str]| ok(&[c, &["--help"]].concat());
-    let cases: [(&str, String, &str); 7] = [
+    let cases: [(&str, String, &str); 19] = [
+        ("diagnose", help(&["diagnose"]), "--json prints"),
+        ("rank-along", help(&["rank"]), "--along --json prints"),
+        ("show", help(&["show"]), "--json prints"),
+        ("rank", help(&["rank"]), "--json prints"),
+        (
+            "rank-unknown-inputs",
+            help(&["rank"]),
+            "With unknown inputs, --json prints",
+        ),
+        ("symmetries", help(&["symmetries"]), "--json prints"),
+        (
+            "symmetries-unknown-inputs",
+            help(&["symmetries"]),
+            "with unknown inputs --json prints",
+        ),
+        ("check", help(&["check"]), "--json prints"),
+        ("verify", help(&["verify"]), "--json prints"),
+        // Both objects' keys: the full-rank one's are a subset of the derivation's.
+        ("modes", help(&["modes"]), "--json prints"),
+        ("global", help(&["global"]), "--json prints"),
+        ("simulate", help(&["simulate"]), "--json prints"),
         ("simplify", help(&["simplify"]), "--json prints"),
         ("diff", help(&["diff"]), "--json prints"),
         ("lie", help(&["lie"]), "--json prints"),
@@ -343,7 +557,7 @@ fn help_names_exactly_the_schema_keys() {
         let s = schema(name);
         assert_eq!(
             keys_after(text, marker),
-            properties(&s, &s),
+            all_properties(&s, &s),
             "{name}: {marker}"
         );
     }

@@ -9,7 +9,7 @@ fn tmp_dir(name: &str) -> String {
 #[test]
 fn simulate_writes_the_data_format() {
     let out = tmp_dir("ok");
-    ok(&["simulate", "--out", &out, "--q", "0,-1", "--seed", "3"]);
+    ok(&["simulate", "--out", &out, "--set", "q=0,-1", "--seed", "3"]);
     for f in [
         "dataset.json",
         "truth.json",
@@ -29,15 +29,70 @@ fn simulate_writes_the_data_format() {
     assert_eq!(meta["q"], -1.0);
     // The same seed gives the same data.
     let again = tmp_dir("again");
-    ok(&["simulate", "--out", &again, "--q", "0,-1", "--seed", "3"]);
+    ok(&[
+        "simulate", "--out", &again, "--set", "q=0,-1", "--seed", "3",
+    ]);
     assert_eq!(
         std::fs::read_to_string(format!("{out}/q0/outputs.csv")).unwrap(),
         std::fs::read_to_string(format!("{again}/q0/outputs.csv")).unwrap()
     );
     // Refuses to overwrite; --force replaces.
     bad(&["simulate", "--out", &out], "already exists");
-    ok(&["simulate", "--out", &out, "--q", "0", "--force"]);
+    ok(&["simulate", "--out", &out, "--set", "q=0", "--force"]);
     assert!(!std::path::Path::new(&out).join("q-1").exists());
+}
+
+/// The wheel-speed ratio has one spelling, the model's constant: `--set q=RATIOS` (one
+/// trajectory each). The old `--q RATIOS` is a hidden alias that gives the same data; giving
+/// both, or another constant without a model, is refused.
+#[test]
+fn q_is_set_like_the_models_constant_and_the_old_flag_still_works() {
+    let new = tmp_dir("q-new");
+    let old = tmp_dir("q-old");
+    ok(&[
+        "simulate",
+        "--out",
+        &new,
+        "--set",
+        "q=0.5,-0.5",
+        "--seed",
+        "5",
+    ]);
+    ok(&["simulate", "--out", &old, "--q", "0.5,-0.5", "--seed", "5"]);
+    for f in ["dataset.json", "q0.5/outputs.csv", "q-0.5/inputs.csv"] {
+        let read = |d: &str| std::fs::read_to_string(format!("{d}/{f}")).unwrap();
+        assert_eq!(read(&new), read(&old), "{f}");
+    }
+    // The default is the paper's three circles (section VI-A): q = 0.9, 0, -1.
+    let default = tmp_dir("q-default");
+    ok(&["simulate", "--out", &default, "--bearings", "20"]);
+    for q in ["q0.9", "q0", "q-1"] {
+        assert!(std::path::Path::new(&default).join(q).exists(), "{q}");
+    }
+    let crlb = |a: &[&str]| ok(&[&["crlb", "--bearings", "40", "--json"], a].concat());
+    assert_eq!(crlb(&["--set", "q=0.9,0"]), crlb(&["--q", "0.9,0"]));
+    assert_ne!(
+        crlb(&["--set", "q=0.9,0"]),
+        crlb(&[]),
+        "the ratios are used"
+    );
+    let both = tmp_dir("q-both");
+    bad(
+        &["simulate", "--out", &both, "--set", "q=0", "--q", "0"],
+        "q is given twice",
+    );
+    bad(
+        &["simulate", "--out", &both, "--set", "mu=1"],
+        "one constant, q",
+    );
+    bad(&["crlb", "--set", "q=0.9,x"], "finite ratios");
+    assert!(!std::path::Path::new(&both).exists());
+    // --help shows the one spelling only.
+    let help = ok(&["simulate", "--help"]);
+    assert!(
+        help.contains("--set q=") && !help.contains("--q "),
+        "{help}"
+    );
 }
 
 #[test]
@@ -60,8 +115,8 @@ fn simulate_rejects_bad_options_and_leaves_nothing() {
             "simulate",
             "--out",
             &out,
-            "--q",
-            "0.98409",
+            "--set",
+            "q=0.98409",
             "--sigma-beta-deg",
             "1",
         ],

@@ -45,7 +45,7 @@ fn force_never_deletes_what_obsan_did_not_write() {
     );
     // A dataset to calibrate, then --plot and diagnose --report into the user's folder.
     let data = format!("{root}/data");
-    ok(&["simulate", "--out", &data, "--q", "0.9,0,-1"]);
+    ok(&["simulate", "--out", &data, "--set", "q=0.9,0,-1"]);
     bad(
         &["calibrate", &data, "--plot", &mine, "--force"],
         "refusing to replace",
@@ -69,7 +69,7 @@ fn force_never_deletes_what_obsan_did_not_write() {
         "keep"
     );
     // A folder obsan wrote is replaced by --force ...
-    ok(&["simulate", "--out", &data, "--q", "0", "--force"]);
+    ok(&["simulate", "--out", &data, "--set", "q=0", "--force"]);
     assert!(!Path::new(&data).join("q0.9").exists());
     assert!(Path::new(&data).join("q0/outputs.csv").exists());
     // ... but not once the user has put a file of their own into it.
@@ -91,7 +91,10 @@ fn force_never_deletes_what_obsan_did_not_write() {
 #[test]
 fn missing_parent_folders_are_created() {
     let d = fresh_dir("mkdir-p");
-    let r = obsan_in(&d, &["simulate", "--out", "data/deeper/sim", "--q", "0"]);
+    let r = obsan_in(
+        &d,
+        &["simulate", "--out", "data/deeper/sim", "--set", "q=0"],
+    );
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert!(Path::new(&d)
         .join("data/deeper/sim/q0/outputs.csv")
@@ -100,7 +103,7 @@ fn missing_parent_folders_are_created() {
     assert_eq!(files_in(&format!("{d}/data/deeper")), ["sim"]);
     // A parent that is a file gets a message saying so.
     std::fs::write(format!("{d}/plain"), "x").unwrap();
-    let r = obsan_in(&d, &["simulate", "--out", "plain/sim", "--q", "0"]);
+    let r = obsan_in(&d, &["simulate", "--out", "plain/sim", "--set", "q=0"]);
     assert_eq!(r.code, 2);
     assert!(
         r.stderr.contains("plain exists and is not a folder"),
@@ -402,7 +405,15 @@ fn absurd_values_are_located_errors() {
 fn benign_data_file_variations_give_the_same_calibration() {
     let d = fresh_dir("benign");
     let data = format!("{d}/sim");
-    ok(&["simulate", "--out", &data, "--q", "0.9,0,-1", "--seed", "4"]);
+    ok(&[
+        "simulate",
+        "--out",
+        &data,
+        "--set",
+        "q=0.9,0,-1",
+        "--seed",
+        "4",
+    ]);
     let plain = ok(&["calibrate", &data, "--method", "ls", "--json"]);
     for (i, tr) in ["q0.9", "q0", "q-1"].iter().enumerate() {
         for file in ["inputs.csv", "outputs.csv"] {
@@ -825,11 +836,12 @@ fn size_flags_have_stated_limits() {
     assert!(!Path::new(&format!("{d}/big")).exists());
     let many: Vec<String> = (0..101).map(|k| format!("0.{k:03}")).collect();
     bad(
-        &["crlb", "--q", &many.join(",")],
+        &["crlb", "--set", &format!("q={}", many.join(","))],
         "at most 100 trajectories",
     );
     // 4 x 10^6 bearings in all: past the total of 3 x 10^6.
     bad(
+        // The old spelling --q goes through the same checks.
         &["crlb", "--bearings", "1000000", "--q", "0.9,0,-1,0.5"],
         "at most 3000000 bearings in all",
     );

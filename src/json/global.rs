@@ -1,0 +1,114 @@
+//! `obsan global` and `obsan simulate MODEL.sys`.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// `obsan global SYSTEM --json`: global identifiability (SIAN).
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Global {
+    /// Every variable is at least locally identifiable.
+    pub all_local: bool,
+    /// The degree bound of the local test.
+    pub degree_bound_local: f64,
+    /// The number of polynomial equations.
+    pub equations: usize,
+    /// Probability bound that some verdict is wrong.
+    pub error_bound: f64,
+    /// Always false: the answer is probabilistic (`error_bound`).
+    pub exact: bool,
+    /// The order of the group of discrete symmetries found.
+    pub group_order: usize,
+    /// log10 of the degree bound of the global test.
+    pub log10_degree_bound_global: f64,
+    /// The discrete symmetries, as text.
+    pub maps: Vec<String>,
+    /// How the answer was found, in words.
+    pub method: String,
+    /// The Taylor order used.
+    pub order: usize,
+    /// Each output's order.
+    pub output_orders: Vec<OutputOrder>,
+    /// The two primes.
+    pub primes: Vec<u64>,
+    /// The order the rank needed.
+    pub rank_order: usize,
+    /// The input restriction applied, or null.
+    pub restriction: Option<String>,
+    /// The number of solutions, or null when not counted.
+    pub solutions: Option<usize>,
+    /// The system's name.
+    pub system: String,
+    /// The number of unknowns.
+    pub unknowns: usize,
+    /// Each variable's verdict.
+    pub variables: Vec<GlobalVariable>,
+}
+
+/// An output's Taylor order.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct OutputOrder {
+    /// Its order.
+    pub order: usize,
+    /// The output.
+    pub output: String,
+}
+
+/// One variable's identifiability.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct GlobalVariable {
+    /// It is an angle (values modulo 2 pi).
+    pub angle: bool,
+    /// `param` or `state`.
+    pub kind: VariableKind,
+    /// Its name.
+    pub name: String,
+    /// How many values the outputs allow (1: global), or null when not identifiable.
+    pub values: Option<usize>,
+    /// The verdict.
+    pub verdict: Verdict,
+}
+
+/// A variable's kind.
+#[derive(Serialize, Deserialize, JsonSchema, Debug, Clone, Copy)]
+#[serde(rename_all = "lowercase")]
+pub enum VariableKind {
+    /// A parameter.
+    Param,
+    /// A state (its initial value).
+    State,
+}
+
+/// Global identifiability verdicts.
+#[derive(Serialize, Deserialize, JsonSchema, Debug, Clone, Copy)]
+pub enum Verdict {
+    /// One value.
+    #[serde(rename = "global")]
+    Global,
+    /// Finitely many values.
+    #[serde(rename = "local")]
+    Local,
+    /// Infinitely many values.
+    #[serde(rename = "not identifiable")]
+    NotIdentifiable,
+}
+
+/// `obsan simulate MODEL.sys --json`: the model integrated (RK4) at evenly spaced times.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateSys {
+    /// `time`, then the states, then the outputs.
+    pub columns: Vec<String>,
+    /// The estimated integration error (relative to |value| + 1).
+    pub error_estimate: f64,
+    /// The model file as given.
+    pub model: String,
+    /// One row per time: the time, then each state and each output.
+    pub rows: Vec<Vec<f64>>,
+    /// The RK4 steps taken.
+    pub steps: usize,
+    /// The error the step size is chosen for.
+    pub tolerance: f64,
+}
