@@ -94,8 +94,8 @@ pub fn global_identifiability(
             images: s
                 .iter()
                 .enumerate()
-                .filter(|(v, &(w, e))| *v != w || e < 0)
-                .map(|(v, &(w, e))| (all_names[v].to_string(), e, all_names[w].to_string()))
+                .filter(|(v, im)| *v != im.var || im.sign < 0 || im.exp < 0)
+                .map(|(v, im)| im.named(all_names[v], &all_names))
                 .collect(),
         })
         .collect();

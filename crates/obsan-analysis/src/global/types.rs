@@ -53,22 +53,39 @@ pub struct GlobalVariable {
     pub verdict: Identifiability,
 }
 
-/// A discrete symmetry: each moved variable and its image, `(v, sign, w)`
-/// meaning `v -> sign * w`. Checked exactly: the dynamics and outputs are
-/// invariant as rational functions over Q.
+/// A discrete symmetry: each moved variable and its image. Checked exactly:
+/// the dynamics and outputs are invariant as rational functions over Q (in
+/// the half-angle view for angles).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DiscreteMap {
-    pub images: Vec<(String, i8, String)>,
+    pub images: Vec<MapImage>,
+}
+
+/// `var -> sign * image`, plus pi when `plus_pi` (angles only: `theta ->
+/// phi + pi` or `pi - phi`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MapImage {
+    pub var: String,
+    pub sign: i8,
+    pub image: String,
+    pub plus_pi: bool,
+}
+
+impl std::fmt::Display for MapImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.sign < 0, self.plus_pi) {
+            (false, false) => write!(f, "{}", self.image),
+            (true, false) => write!(f, "-{}", self.image),
+            (false, true) => write!(f, "{} + pi", self.image),
+            (true, true) => write!(f, "pi - {}", self.image),
+        }
+    }
 }
 
 impl std::fmt::Display for DiscreteMap {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let lhs: Vec<&str> = self.images.iter().map(|(v, _, _)| v.as_str()).collect();
-        let rhs: Vec<String> = self
-            .images
-            .iter()
-            .map(|(_, s, w)| if *s < 0 { format!("-{w}") } else { w.clone() })
-            .collect();
+        let lhs: Vec<&str> = self.images.iter().map(|m| m.var.as_str()).collect();
+        let rhs: Vec<String> = self.images.iter().map(|m| m.to_string()).collect();
         if lhs.len() == 1 {
             write!(f, "{} -> {}", lhs[0], rhs[0])
         } else {
@@ -88,7 +105,8 @@ pub struct GlobalReport {
     pub solutions: Option<usize>,
     /// Whether every variable is at least locally identifiable.
     pub all_local: bool,
-    /// Exact discrete symmetries found (signed permutations of the variables).
+    /// Exact discrete symmetries found: signed permutations of the variables,
+    /// angles also shifted by pi or reflected (`theta -> phi + pi`, `pi - phi`).
     pub maps: Vec<DiscreteMap>,
     /// Size of the group the maps generate (an orbit of a generic point).
     pub group_order: usize,
