@@ -112,3 +112,31 @@ fn rational_model_clears_denominators() {
     assert_eq!(verdict(&r, "a"), Identifiability::Global);
     assert_eq!(verdict(&r, "x"), Identifiability::Global);
 }
+
+#[test]
+fn angle_maps_beyond_signed_permutations() {
+    // Each derived by hand in its file (systems/global/): the map is checked
+    // exactly on the equations and generates every counted solution.
+    for (file, map) in [
+        ("global/angle_mod_pi.sys", "theta -> theta + pi"),
+        ("global/line_direction.sys", "theta -> theta + pi"),
+        (
+            "global/bearing_heading_mod_pi.sys",
+            "(x, y, theta) -> (-x, -y, theta + pi)",
+        ),
+        (
+            "global/wall_reflection.sys",
+            "(x, theta) -> (-x, pi - theta)",
+        ),
+        ("global/bearing_mirror.sys", "beta -> -beta"),
+    ] {
+        let r = file_report(file);
+        assert_eq!(r.solutions, Some(2), "{file}");
+        assert_eq!(r.maps.len(), 1, "{file}");
+        assert_eq!(r.maps[0].to_string(), map, "{file}");
+        assert_eq!(r.group_order, 2, "{file}");
+    }
+    let r = file_report("global/wall_reflection.sys");
+    assert_eq!(verdict(&r, "y"), Identifiability::Global);
+    assert_eq!(verdict(&r, "theta"), Identifiability::Local(2));
+}
