@@ -8,7 +8,7 @@
 //! `theta = pi`) to the line, so the count of `t` values is the count of
 //! angles modulo 2 pi, and the variable keeps the angle's name.
 
-use super::err;
+use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Ctx, Int, Poly as ZPoly, RatFun, Var, Q};
 

@@ -1,0 +1,312 @@
+//! One run's counts: the per-output Taylor orders, local identifiability,
+//! the Gröbner basis and the number of values of each variable; SIAN's bounds.
+
+use super::model::ZModel;
+use super::run::Run;
+use super::types::{err, gb_err, GlobalOptions};
+use crate::rank::AnalysisError;
+use obsan_expr::Poly as ZPoly;
+use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, Mono, Poly};
+use std::time::Instant;
+
+/// Rows in echelon form over F_p (each row reduced by the earlier ones at
+/// insertion, so reducing in insertion order is a full reduction).
+struct Echelon {
+    field: Field,
+    rows: Vec<(Vec<u64>, usize)>,
+}
+
+impl Echelon {
+    fn reduce(&self, mut v: Vec<u64>) -> Vec<u64> {
+        let f = &self.field;
+        for (row, piv) in &self.rows {
+            let c = v[*piv];
+            if c != 0 {
+                for (a, b) in v.iter_mut().zip(row) {
+                    *a = f.sub(*a, f.mul(c, *b));
+                }
+            }
+        }
+        v
+    }
+
+    /// Adds `v` if it is independent of the rows; whether it was.
+    fn insert(&mut self, v: Vec<u64>) -> bool {
+        let v = self.reduce(v);
+        let Some(piv) = v.iter().position(|&x| x != 0) else {
+            return false;
+        };
+        let inv = self.field.inv(v[piv]).unwrap_or(0);
+        let v: Vec<u64> = v.iter().map(|&x| self.field.mul(x, inv)).collect();
+        self.rows.push((v, piv));
+        true
+    }
+
+    fn contains(&self, v: Vec<u64>) -> bool {
+        self.reduce(v).iter().all(|&x| x == 0)
+    }
+}
+
+/// One run's answer: per target (params then model states) the number of
+/// values (`None`: infinitely many), and the joint count.
+pub(super) struct Counts {
+    pub(super) per_var: Vec<Option<usize>>,
+    pub(super) joint: Option<usize>,
+    /// Per output, the Taylor order used (inclusive): the first order at
+    /// which its row of the Jacobian is dependent on the rows kept before.
+    pub(super) orders: Vec<usize>,
+    /// Highest order of an independent (kept) row.
+    pub(super) rank_order: usize,
+    pub(super) unknowns: usize,
+    pub(super) equations: usize,
+    /// Total degrees of the equations in the unknowns (SIAN's Bezout product).
+    pub(super) degrees: Vec<u32>,
+    /// Number of locally identifiable targets (SIAN's |theta_l|).
+    pub(super) n_local: usize,
+}
+
+/// One run: the per-output orders by SIAN's greedy rank test on the total
+/// gradients of the output coefficients (docs/engine.md, "Taylor orders"),
+/// local identifiability from the same Jacobian, then the counts.
+pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, AnalysisError> {
+    let f = run.field;
+    let targets: Vec<usize> = (0..run.np)
+        .chain((0..run.nx).map(|s| run.sv(s, 0)))
+        .collect();
+    let nt = targets.len();
+    // Total gradients d v / d (params, x(0)) of the derivation variables at
+    // the point, built order by order (inputs are known: gradient 0).
+    let mut grads: Vec<Option<Vec<u64>>> = vec![None; run.ring.n];
+    for (t, &v) in targets.iter().enumerate() {
+        let mut e = vec![0u64; nt];
+        e[t] = 1;
+        grads[v] = Some(e);
+    }
+    let combine = |g: &[(usize, u64)], grads: &[Option<Vec<u64>>]| -> Vec<u64> {
+        let mut out = vec![0u64; nt];
+        for &(v, c) in g {
+            if let Some(gv) = &grads[v] {
+                for (a, b) in out.iter_mut().zip(gv) {
+                    *a = f.add(*a, f.mul(c, *b));
+                }
+            }
+        }
+        out
+    };
+    // z = 1/den at order 0: from z den - 1 = 0, grad z = -(sum_{v != z}
+    // q_v grad v) / q_z.
+    for (i, q) in run.inits.clone().iter().enumerate() {
+        let zv = run.sv(run.nx + i, 0);
+        let g = run.grad_at(q);
+        let qz = g.iter().find(|(v, _)| *v == zv).map_or(0, |x| x.1);
+        let rest: Vec<(usize, u64)> = g.into_iter().filter(|(v, _)| *v != zv).collect();
+        let num = combine(&rest, &grads);
+        let inv = f
+            .inv(qz)
+            .ok_or_else(|| err("global: a denominator's auxiliary state is degenerate"))?;
+        let k = f.neg(inv);
+        grads[zv] = Some(num.iter().map(|&x| f.mul(x, k)).collect());
+    }
+    let m = run.out_d.len();
+    let mut open = vec![true; m];
+    let mut orders = vec![0usize; m];
+    let mut ech = Echelon {
+        field: f,
+        rows: Vec::new(),
+    };
+    let mut rank_order = 0;
+    let mut j = 0;
+    while open.iter().any(|&o| o) {
+        if j >= opts.max_order {
+            return Err(err(format!(
+                "global: the outputs' Jacobian still gained rank at Taylor order {}",
+                opts.max_order
+            )));
+        }
+        run.prepare(j)?;
+        if j >= 1 {
+            for s in 0..run.ns {
+                let g = run.grad_at(&run.rhs_d[s][j - 1]);
+                let v = run.sv(s, j);
+                grads[v] = Some(combine(&g, &grads));
+            }
+        }
+        for i in 0..m {
+            if !open[i] {
+                continue;
+            }
+            let g = run.grad_at(&run.out_d[i][j]);
+            if ech.insert(combine(&g, &grads)) {
+                rank_order = j;
+            } else {
+                open[i] = false;
+                orders[i] = j;
+            }
+        }
+        if let Some(d) = opts.deadline {
+            if Instant::now() > d {
+                return Err(AnalysisError::Timeout("choosing the Taylor orders".into()));
+            }
+        }
+        j += 1;
+    }
+    let rank = ech.rows.len();
+    let fibre_dim = nt - rank;
+    // theta_t is locally identifiable iff e_t lies in the row space.
+    let local: Vec<bool> = (0..nt)
+        .map(|t| {
+            let mut e = vec![0u64; nt];
+            e[t] = 1;
+            ech.contains(e)
+        })
+        .collect();
+    let budget = GbBudget {
+        max_basis: opts.max_basis,
+        deadline: opts.deadline,
+        ..GbBudget::default()
+    };
+    count_at(
+        run, &orders, &targets, &local, fibre_dim, budget, opts, rank_order,
+    )
+}
+
+/// The counts on the truncated system. A fibre of positive dimension `d` (some
+/// variables not locally identifiable) is first cut by `d` random affine
+/// hyperplanes through the point in the coordinates of those variables: a
+/// generic fibre of the output map is equidimensional (every component has
+/// dimension `d`, the fibre-dimension theorem for the dominant map from the
+/// irreducible space of (params, initial states)), and the locally
+/// identifiable variables are constant on each component, so a generic
+/// codimension-`d` slice meets every component and keeps every value they take.
+#[allow(clippy::too_many_arguments)]
+fn count_at(
+    run: &mut Run,
+    orders: &[usize],
+    targets: &[usize],
+    local: &[bool],
+    fibre_dim: usize,
+    budget: GbBudget,
+    opts: &GlobalOptions,
+    rank_order: usize,
+) -> Result<Counts, AnalysisError> {
+    let f = run.field;
+    let (mut eqs, unk) = run.equations(orders)?;
+    let free: Vec<usize> = targets
+        .iter()
+        .zip(local)
+        .filter(|(_, &l)| !l)
+        .map(|(&t, _)| t)
+        .collect();
+    if fibre_dim > free.len() {
+        return Err(err(
+            "global: the fibre is larger than the non-identifiable variables span (a non-generic point); try another --seed",
+        ));
+    }
+    for _ in 0..fibre_dim {
+        let r = &run.ring;
+        let mut h = Poly::zero();
+        let mut c0 = 0u64;
+        for &v in &free {
+            let c = run.rng.elem(&f);
+            h = r.add(&h, &r.scale(&r.var(v), c));
+            c0 = f.add(c0, f.mul(c, run.point[v]));
+        }
+        eqs.push(r.sub(&h, &r.constant(c0)));
+    }
+    let (ring, gens) = run.to_unknown_ring(&eqs, &unk, 0)?;
+    let tpos: Vec<usize> = targets
+        .iter()
+        .map(|v| unk.iter().position(|u| u == v).unwrap_or(0))
+        .collect();
+    let b = groebner(&ring, &gens, budget).map_err(gb_err)?;
+    if b.is_unit() {
+        return Err(err(
+            "global: the system at the random point has no solution (a degenerate point); try another --seed",
+        ));
+    }
+    if !b.is_zero_dimensional() {
+        return Err(err(
+            "global: the sliced system still has infinitely many solutions (a non-generic point); try another --seed",
+        ));
+    }
+    let mut per_var = Vec::with_capacity(targets.len());
+    for (i, &t) in tpos.iter().enumerate() {
+        if !local[i] {
+            per_var.push(None);
+            continue;
+        }
+        let m = b
+            .minimal_polynomial(&ring.var(t), opts.max_solutions)
+            .map_err(gb_err)?;
+        per_var.push(Some(distinct_roots(f, &m)));
+    }
+    // A random linear form in the locally identifiable variables separates
+    // their joint values (with probability at least 1 - C(s, 2)/p), so its
+    // distinct values count them.
+    let mut terms = Vec::new();
+    for (i, &t) in tpos.iter().enumerate() {
+        if local[i] {
+            terms.push((Mono::var(ring.n, t, 1), run.rng.elem(&f)));
+        }
+    }
+    let lf = ring.from_terms(terms);
+    let m = b
+        .minimal_polynomial(&lf, opts.max_solutions)
+        .map_err(gb_err)?;
+    let joint = Some(distinct_roots(f, &m));
+    Ok(Counts {
+        per_var,
+        joint,
+        orders: orders.to_vec(),
+        rank_order,
+        unknowns: unk.len(),
+        equations: eqs.len(),
+        degrees: gens.iter().map(|g| g.degree()).collect(),
+        n_local: local.iter().filter(|&&l| l).count(),
+    })
+}
+
+/// SIAN's bounds (Hong, Ovchinnikov, Pogudin, Yap 2020, Algorithm 1, steps
+/// 2(b) and 3(a); docs/engine.md): with `n` states, `l` params, `s = n + l`,
+/// `d0` the largest degree of `Q f`, `Q h` and `Q` (`Q` the lcm of the
+/// denominators, here bounded by their product), the orders and local
+/// verdicts are wrong only on a hypersurface of degree
+/// `D1 = (s + 1) 2 d0 s (n + 1)(1 + 2 d0 s)` in the point, the global ones on
+/// one of degree `D2 = 6 |theta_l| prod(deg E_t) (1 + 2 d0 max beta)`.
+/// Schwartz–Zippel over F_p: one run errs with probability at most
+/// `(D1 + D2)/p`; the two runs are independent and must agree.
+pub(super) fn error_bounds(m: &ZModel, runs: &[Counts], primes: &[u64; 2]) -> (f64, f64, f64) {
+    let n = m.dyn_vars.len() as f64;
+    let s = n + m.param_vars.len() as f64;
+    let mut dens: Vec<&ZPoly> = Vec::new();
+    for (_, d) in m.rhs.iter().chain(&m.outputs) {
+        if d.total_degree() > 0 && !dens.contains(&d) {
+            dens.push(d);
+        }
+    }
+    let deg_q: u64 = dens.iter().map(|d| d.total_degree()).sum();
+    let mut d0 = deg_q;
+    for (num, den) in m.rhs.iter().chain(&m.outputs) {
+        d0 = d0.max(num.total_degree() + deg_q - den.total_degree().min(deg_q));
+    }
+    let d0 = d0.max(1) as f64;
+    let d1 = (s + 1.0) * 2.0 * d0 * s * (n + 1.0) * (1.0 + 2.0 * d0 * s);
+    let mut worst_log = f64::NEG_INFINITY;
+    let mut probs = Vec::new();
+    for (c, &p) in runs.iter().zip(primes) {
+        let max_beta = c.orders.iter().copied().max().unwrap_or(0) as f64;
+        let log_d2 = if c.n_local == 0 {
+            f64::NEG_INFINITY
+        } else {
+            (6.0 * c.n_local as f64 * (1.0 + 2.0 * d0 * max_beta)).log10()
+                + c.degrees
+                    .iter()
+                    .map(|&d| (d.max(1) as f64).log10())
+                    .sum::<f64>()
+        };
+        worst_log = worst_log.max(log_d2);
+        let total = d1 + 10f64.powf(log_d2);
+        probs.push((total / p as f64).min(1.0));
+    }
+    (d1, worst_log, probs.iter().product())
+}

@@ -1,0 +1,234 @@
+//! Discrete symmetries: candidate maps between the multi-valued variables,
+//! each checked exactly on the model equations over Z.
+//!
+//! A candidate sends each variable `v` to `s * x_w^e` (`s, e = ±1`) of a
+//! variable `w` of the same kind (state or param, angle or not). For a plain
+//! variable `e = 1`: a signed permutation. For an angle, which the count sees
+//! as `t = tan(theta/2)` (trig.rs), the four images of `t_w` are the angle
+//! maps `theta -> phi` (`t`), `-phi` (`-t`), `phi + pi` (`-1/t`, since
+//! `tan((phi + pi)/2) = -cot(phi/2)`) and `pi - phi` (`1/t`).
+
+use super::model::ZModel;
+use super::types::MapImage;
+use obsan_expr::{Int, Mono as ZMono, Poly as ZPoly, Var};
+use std::collections::HashMap;
+
+/// One variable's image in the half-angle coordinates: `x_v -> sign * x_var^exp`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Image {
+    pub(super) var: usize,
+    pub(super) sign: i8,
+    /// 1, or -1 for an angle shifted by pi (`t -> ∓1/t`).
+    pub(super) exp: i8,
+}
+
+impl Image {
+    fn identity(v: usize) -> Image {
+        Image {
+            var: v,
+            sign: 1,
+            exp: 1,
+        }
+    }
+
+    /// The map in the angle's own terms: `theta -> sign * phi (+ pi)`.
+    pub(super) fn named(&self, var: &str, names: &[&str]) -> MapImage {
+        MapImage {
+            var: var.to_string(),
+            // t -> -1/t is phi + pi; t -> 1/t is pi - phi.
+            sign: if self.exp < 0 { -self.sign } else { self.sign },
+            image: names[self.var].to_string(),
+            plus_pi: self.exp < 0,
+        }
+    }
+}
+
+/// A map of the model's variables (dynamic states, then params): entry `v`
+/// is the image of variable `v`.
+pub(super) type Candidate = Vec<Image>;
+
+/// `S(p) = p(x_v := s_v x_w^e_v)` as `N / M`, `M` a monomial (the negative
+/// powers of `x_w` cleared).
+struct Substituted {
+    num: ZPoly,
+    den: ZPoly,
+}
+
+fn substitute(p: &ZPoly, images: &HashMap<Var, (Var, i8, i8)>) -> Substituted {
+    let mut terms: Vec<(HashMap<Var, i64>, Int)> = Vec::with_capacity(p.len());
+    let mut low: HashMap<Var, i64> = HashMap::new();
+    for (mono, c) in p.terms() {
+        let mut neg = false;
+        let mut exps: HashMap<Var, i64> = HashMap::new();
+        for (v, k) in mono.iter() {
+            let (w, s, e) = images.get(&v).copied().unwrap_or((v, 1, 1));
+            if s < 0 && k % 2 == 1 {
+                neg = !neg;
+            }
+            *exps.entry(w).or_insert(0) += i64::from(e) * i64::from(k);
+        }
+        for (&w, &k) in &exps {
+            let l = low.entry(w).or_insert(0);
+            *l = (*l).min(k);
+        }
+        terms.push((exps, if neg { -c.clone() } else { c.clone() }));
+    }
+    let shift = |w: &Var| -low.get(w).copied().unwrap_or(0);
+    // Every term times `prod x_w^shift(w)`, also those without `x_w`.
+    let num = ZPoly::from_terms(terms.into_iter().map(|(mut exps, c)| {
+        for w in low.keys() {
+            exps.entry(*w).or_insert(0);
+        }
+        let pairs = exps.iter().map(|(w, &k)| (*w, (k + shift(w)) as u32));
+        (ZMono::from_pairs(pairs), c)
+    }));
+    let den_pairs = low.keys().map(|w| (*w, shift(w) as u32));
+    let den = ZPoly::monomial(ZMono::from_pairs(den_pairs), Int::from(1));
+    Substituted { num, den }
+}
+
+/// Whether `sigma` maps the model to itself exactly (over Z). With
+/// `T(x)_v = g_v(x_w)` (`w` the image's variable) and `S(p) = p o T`:
+/// `S(h) = h` for each output, and `S(f_v) = g_v'(x_w) f_w` for each state
+/// (`T` maps solutions to solutions: `(g_v(x_w))' = g_v'(x_w) x_w'`), with
+/// `g' = s` for `s x`, `-s/x^2` for `s/x`.
+fn is_symmetry(m: &ZModel, sigma: &Candidate) -> bool {
+    let vars: Vec<Var> = m.dyn_vars.iter().chain(&m.param_vars).copied().collect();
+    let images: HashMap<Var, (Var, i8, i8)> = sigma
+        .iter()
+        .enumerate()
+        .map(|(v, im)| (vars[v], (vars[im.var], im.sign, im.exp)))
+        .collect();
+    for (n, d) in &m.outputs {
+        let (sn, sd) = (substitute(n, &images), substitute(d, &images));
+        // sn.num/sn.den / (sd.num/sd.den) = n/d
+        let lhs = sn.num.mul(&sd.den).mul(d);
+        let rhs = n.mul(&sd.num).mul(&sn.den);
+        if !lhs.sub(&rhs).is_zero() {
+            return false;
+        }
+    }
+    for (v, im) in sigma.iter().enumerate().take(m.dyn_vars.len()) {
+        let (sn, sd) = (
+            substitute(&m.rhs[v].0, &images),
+            substitute(&m.rhs[v].1, &images),
+        );
+        let (nw, dw) = &m.rhs[im.var];
+        // g' = c x_w^k: c = s, k = 0 for e = 1; c = -s, k = -2 for e = -1.
+        let c = Int::from(i64::from(im.sign * im.exp));
+        let mut lhs = sn.num.mul(&sd.den).mul(dw);
+        if im.exp < 0 {
+            let w = vars[im.var];
+            lhs = lhs.mul(&ZPoly::var(w)).mul(&ZPoly::var(w));
+        }
+        let rhs = nw.mul(&sd.num).mul(&sn.den).mul(&ZPoly::constant(c));
+        if !lhs.sub(&rhs).is_zero() {
+            return false;
+        }
+    }
+    true
+}
+
+/// The search: each movable variable to a movable variable of its kind not
+/// yet used, with each of its images; at most `cap` candidates checked.
+struct Search<'a> {
+    m: &'a ZModel,
+    movable: Vec<usize>,
+    /// Per variable (states then params): an angle.
+    angle: Vec<bool>,
+    nx: usize,
+    cap: usize,
+    tried: usize,
+    cur: Candidate,
+    used: Vec<bool>,
+    found: Vec<Candidate>,
+}
+
+impl Search<'_> {
+    fn rec(&mut self, i: usize) {
+        if self.tried >= self.cap {
+            return;
+        }
+        if i == self.movable.len() {
+            let identity = self
+                .cur
+                .iter()
+                .enumerate()
+                .all(|(k, im)| *im == Image::identity(k));
+            if !identity {
+                self.tried += 1;
+                if is_symmetry(self.m, &self.cur) {
+                    self.found.push(self.cur.clone());
+                }
+            }
+            return;
+        }
+        let v = self.movable[i];
+        let exps: &[i8] = if self.angle[v] { &[1, -1] } else { &[1] };
+        for k in 0..self.movable.len() {
+            let w = self.movable[k];
+            let same_kind = (v < self.nx) == (w < self.nx) && self.angle[v] == self.angle[w];
+            if self.used[w] || !same_kind {
+                continue;
+            }
+            for &exp in exps {
+                for sign in [1i8, -1] {
+                    self.used[w] = true;
+                    self.cur[v] = Image { var: w, sign, exp };
+                    self.rec(i + 1);
+                    self.used[w] = false;
+                }
+            }
+        }
+        self.cur[v] = Image::identity(v);
+    }
+}
+
+/// Maps of the multi-valued variables (states to states, params to params,
+/// angles to angles), each checked exactly; at most `cap` candidates.
+pub(super) fn find_maps(m: &ZModel, multi: &[bool], cap: usize) -> Vec<Candidate> {
+    let nx = m.dyn_vars.len();
+    let n = nx + m.param_vars.len();
+    let mut s = Search {
+        m,
+        movable: (0..n).filter(|&i| multi[i]).collect(),
+        angle: m.angle.clone(),
+        nx,
+        cap,
+        tried: 0,
+        cur: (0..n).map(Image::identity).collect(),
+        used: vec![false; n],
+        found: Vec::new(),
+    };
+    s.rec(0);
+    s.found
+}
+
+/// The group the maps generate (closure under composition), capped at `cap`
+/// elements. Images compose as monomials: `x_v -> s x_w^e` then
+/// `x_w -> s' x_u^e'` gives `x_v -> s s' x_u^(e e')` (`s'^e = s'`).
+pub(super) fn group_order(maps: &[Candidate], n: usize, cap: usize) -> usize {
+    let id: Candidate = (0..n).map(Image::identity).collect();
+    let mut elems = vec![id];
+    let mut k = 0;
+    while k < elems.len() && elems.len() < cap {
+        for g in maps {
+            let c: Candidate = elems[k]
+                .iter()
+                .map(|a| {
+                    let b = g[a.var];
+                    Image {
+                        var: b.var,
+                        sign: a.sign * b.sign,
+                        exp: a.exp * b.exp,
+                    }
+                })
+                .collect();
+            if !elems.contains(&c) {
+                elems.push(c);
+            }
+        }
+        k += 1;
+    }
+    elems.len()
+}

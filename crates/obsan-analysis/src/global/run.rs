@@ -1,0 +1,482 @@
+//! The prolonged system (SIAN): the derivation ring of the parameters and
+//! the states' and inputs' derivatives modulo one prime, at one random point.
+
+use super::model::ZModel;
+use super::types::{err, gb_err};
+use crate::rank::AnalysisError;
+use obsan_expr::{Int, Poly as ZPoly, Var};
+use obsan_groebner::{Field, Mono, Order, Poly, Ring};
+use std::collections::HashMap;
+
+fn int_mod(f: &Field, c: &Int) -> u64 {
+    let p = Int::from(f.modulus());
+    let r = c % &p;
+    match i64::try_from(&r) {
+        Ok(x) => f.from_i64(x),
+        Err(_) => 0, // |r| < p < 2^63 always fits
+    }
+}
+
+/// Small deterministic generator (SplitMix64) for the random points.
+pub(super) struct Rng(u64);
+
+impl Rng {
+    pub(super) fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    pub(super) fn elem(&mut self, f: &Field) -> u64 {
+        loop {
+            let x = f.reduce(self.next());
+            if x > 1 {
+                return x;
+            }
+        }
+    }
+}
+
+/// The prolonged system modulo one prime at one random point.
+pub(super) struct Run {
+    pub(super) field: Field,
+    /// Derivation ring: params, then per dynamic state (model states and the
+    /// `z` of each denominator) orders `0..=kmax`, then per input orders `0..=kmax`.
+    pub(super) ring: Ring,
+    pub(super) np: usize,
+    pub(super) ns: usize,
+    /// Number of model states (the first `nx` of the `ns`).
+    pub(super) nx: usize,
+    pub(super) nu: usize,
+    pub(super) kmax: usize,
+    /// `D^j` of each state's right-hand side and each output, computed lazily.
+    pub(super) rhs_d: Vec<Vec<Poly>>,
+    pub(super) out_d: Vec<Vec<Poly>>,
+    /// Polynomials that vanish on the point at order 0 (`z * den - 1`).
+    pub(super) inits: Vec<Poly>,
+    /// The point: values of every derivation-ring variable (filled by order).
+    pub(super) point: Vec<u64>,
+    pub(super) point_order: usize,
+    /// Random coefficient of the separating linear form.
+    pub(super) rng: Rng,
+}
+
+impl Run {
+    pub(super) fn sv(&self, s: usize, k: usize) -> usize {
+        self.np + s * (self.kmax + 1) + k
+    }
+    pub(super) fn uv(&self, i: usize, k: usize) -> usize {
+        self.np + self.ns * (self.kmax + 1) + i * (self.kmax + 1) + k
+    }
+
+    /// The system of `m` modulo `p`, at a random point drawn from `seed`,
+    /// prepared for Taylor orders below `kmax`.
+    pub(super) fn new(m: &ZModel, p: u64, seed: u64, kmax: usize) -> Result<Run, AnalysisError> {
+        let field = Field::new(p).ok_or_else(|| err("global: bad prime"))?;
+        let mut rng = Rng(seed);
+        let dens = Denominators::of(m);
+        let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
+        let ns = nx + dens.distinct.len();
+        let n = np + (ns + nu) * (kmax + 1);
+        let mut run = Run {
+            field,
+            ring: Ring::new(field, n, Order::Grevlex),
+            np,
+            ns,
+            nx,
+            nu,
+            kmax,
+            rhs_d: Vec::new(),
+            out_d: Vec::new(),
+            inits: Vec::new(),
+            point: vec![0; n],
+            point_order: 0,
+            rng: Rng(0),
+        };
+        // Known constants: random values (they are known, hence fixed).
+        let consts: Vec<(Var, u64)> = m
+            .const_vars
+            .iter()
+            .map(|&v| (v, rng.elem(&field)))
+            .collect();
+        let conv = Conv::new(&run, m, &consts);
+        let den_p = run.model_polys(m, &conv, &dens)?;
+        for _ in 0..16 {
+            if run.sample_point(&mut rng, &den_p)? {
+                run.rng = Rng(rng.next());
+                return Ok(run);
+            }
+        }
+        Err(AnalysisError::NoPoint)
+    }
+
+    /// The right-hand sides (with `z' = -z^2 sum_s d(den)/dx_s x_s'` for each
+    /// denominator's `z`) and the outputs as polynomials, `num * z` (or
+    /// `num / constant`). Returns each denominator with its `z`.
+    fn model_polys(
+        &mut self,
+        m: &ZModel,
+        conv: &Conv,
+        dens: &Denominators,
+    ) -> Result<Vec<(Poly, Poly)>, AnalysisError> {
+        let nx = self.nx;
+        let mut rhs: Vec<Poly> = Vec::with_capacity(self.ns);
+        for (s, (num, den)) in m.rhs.iter().enumerate() {
+            rhs.push(self.with_den(conv, num, den, dens.rhs[s])?);
+        }
+        let mut den_p = Vec::new();
+        for (i, d) in dens.distinct.iter().enumerate() {
+            let dp = conv.poly(self, d)?;
+            let mut dd = Poly::zero();
+            for (s, f) in rhs.iter().take(nx).enumerate() {
+                let g = self.ring.derivative(&dp, self.sv(s, 0));
+                if !g.is_zero() {
+                    dd = self.ring.add(&dd, &self.ring.mul(&g, f).map_err(gb_err)?);
+                }
+            }
+            let z = self.ring.var(self.sv(nx + i, 0));
+            let z2 = self.ring.mul(&z, &z).map_err(gb_err)?;
+            let zr = self.ring.mul(&z2, &dd).map_err(gb_err)?;
+            den_p.push((dp, z));
+            rhs.push(self.ring.scale(&zr, self.field.neg(1)));
+        }
+        let mut outs = Vec::new();
+        for (k, (num, den)) in m.outputs.iter().enumerate() {
+            outs.push(self.with_den(conv, num, den, dens.outputs[k])?);
+        }
+        self.rhs_d = rhs.into_iter().map(|f| vec![f]).collect();
+        self.out_d = outs.into_iter().map(|f| vec![f]).collect();
+        Ok(den_p)
+    }
+
+    /// `num/den` as a polynomial: `num * z` for a denominator with its `z`,
+    /// else `num` divided by the number (known constants at their values).
+    fn with_den(
+        &self,
+        conv: &Conv,
+        num: &ZPoly,
+        den: &ZPoly,
+        di: Option<usize>,
+    ) -> Result<Poly, AnalysisError> {
+        let nump = conv.poly(self, num)?;
+        match di {
+            Some(i) => self
+                .ring
+                .mul(&nump, &self.ring.var(self.sv(self.nx + i, 0)))
+                .map_err(gb_err),
+            None => {
+                let dp = conv.poly(self, den)?;
+                let c = self.ring.eval(&dp, &self.point);
+                let ci = self
+                    .field
+                    .inv(c)
+                    .ok_or_else(|| err("global: a denominator vanishes modulo the prime"))?;
+                Ok(self.ring.scale(&nump, ci))
+            }
+        }
+    }
+
+    /// The point at order 0: params, states, inputs' coefficients random;
+    /// `z = 1/den`. False when a denominator vanishes there (draw again).
+    fn sample_point(
+        &mut self,
+        rng: &mut Rng,
+        den_p: &[(Poly, Poly)],
+    ) -> Result<bool, AnalysisError> {
+        let field = self.field;
+        for i in 0..self.np {
+            self.point[i] = rng.elem(&field);
+        }
+        for s in 0..self.nx {
+            let v = self.sv(s, 0);
+            self.point[v] = rng.elem(&field);
+        }
+        for i in 0..self.nu {
+            for k in 0..=self.kmax {
+                let v = self.uv(i, k);
+                self.point[v] = rng.elem(&field);
+            }
+        }
+        self.inits.clear();
+        for (i, (dp, z)) in den_p.iter().enumerate() {
+            let dv = self.ring.eval(dp, &self.point);
+            let Some(inv) = field.inv(dv) else {
+                return Ok(false);
+            };
+            let zi = self.sv(self.nx + i, 0);
+            self.point[zi] = inv;
+            let e = self.ring.mul(dp, z).map_err(gb_err)?;
+            self.inits.push(self.ring.sub(&e, &self.ring.constant(1)));
+        }
+        Ok(true)
+    }
+
+    /// The total derivative: `x_s^(k) -> x_s^(k+1)`, `u^(k) -> u^(k+1)`.
+    pub(super) fn derive(&self, p: &Poly) -> Result<Poly, AnalysisError> {
+        let r = &self.ring;
+        let mut out = Poly::zero();
+        for s in 0..self.ns {
+            for k in 0..=self.kmax {
+                let v = self.sv(s, k);
+                let g = r.derivative(p, v);
+                if g.is_zero() {
+                    continue;
+                }
+                if k == self.kmax {
+                    return Err(err("global: Taylor order past the prepared maximum"));
+                }
+                out = r.add(&out, &r.mul(&g, &r.var(self.sv(s, k + 1))).map_err(gb_err)?);
+            }
+        }
+        for i in 0..self.nu {
+            for k in 0..=self.kmax {
+                let v = self.uv(i, k);
+                let g = r.derivative(p, v);
+                if g.is_zero() {
+                    continue;
+                }
+                if k == self.kmax {
+                    return Err(err("global: Taylor order past the prepared maximum"));
+                }
+                out = r.add(&out, &r.mul(&g, &r.var(self.uv(i, k + 1))).map_err(gb_err)?);
+            }
+        }
+        Ok(out)
+    }
+
+    /// `D^j` of every right-hand side (j < order) and output (j <= order),
+    /// and the point's state derivatives up to `order`.
+    pub(super) fn prepare(&mut self, order: usize) -> Result<(), AnalysisError> {
+        if order >= self.kmax {
+            return Err(err("global: Taylor order past the prepared maximum"));
+        }
+        for s in 0..self.ns {
+            while self.rhs_d[s].len() < order {
+                let last = self.rhs_d[s].last().cloned().unwrap_or_default();
+                let d = self.derive(&last)?;
+                self.rhs_d[s].push(d);
+            }
+        }
+        for y in 0..self.out_d.len() {
+            while self.out_d[y].len() <= order {
+                let last = self.out_d[y].last().cloned().unwrap_or_default();
+                let d = self.derive(&last)?;
+                self.out_d[y].push(d);
+            }
+        }
+        while self.point_order < order {
+            let j = self.point_order;
+            let vals: Vec<u64> = (0..self.ns)
+                .map(|s| self.ring.eval(&self.rhs_d[s][j], &self.point))
+                .collect();
+            for (s, x) in vals.into_iter().enumerate() {
+                let v = self.sv(s, j + 1);
+                self.point[v] = x;
+            }
+            self.point_order += 1;
+        }
+        Ok(())
+    }
+
+    /// The system of the proven truncation: output `y` up to order
+    /// `orders[y]` (inclusive), and the state equations `x^(k) = D^(k-1) f`
+    /// for exactly the derivatives those rows use (a closure: each added row
+    /// uses only lower orders). Returns `(equations in the derivation ring,
+    /// unknowns)`, the unknowns highest derivatives first (grevlex then treats
+    /// them as the largest variables), params last.
+    pub(super) fn equations(
+        &mut self,
+        orders: &[usize],
+    ) -> Result<(Vec<Poly>, Vec<usize>), AnalysisError> {
+        let top = orders.iter().copied().max().unwrap_or(0);
+        self.prepare(top)?;
+        let r = &self.ring;
+        let mut used = vec![false; r.n];
+        let mark = |p: &Poly, used: &mut Vec<bool>| {
+            for (m, _) in p.terms() {
+                for (v, &e) in m.exponents().iter().enumerate() {
+                    if e > 0 {
+                        used[v] = true;
+                    }
+                }
+            }
+        };
+        let mut eqs = self.inits.clone();
+        for e in &eqs {
+            mark(e, &mut used);
+        }
+        for (y, &d) in orders.iter().enumerate() {
+            for j in 0..=d {
+                let c = r.eval(&self.out_d[y][j], &self.point);
+                let e = r.sub(&self.out_d[y][j], &r.constant(c));
+                mark(&e, &mut used);
+                eqs.push(e);
+            }
+        }
+        for k in (1..=top).rev() {
+            for s in 0..self.ns {
+                let v = self.sv(s, k);
+                if used[v] {
+                    let e = r.sub(&r.var(v), &self.rhs_d[s][k - 1]);
+                    mark(&e, &mut used);
+                    eqs.push(e);
+                }
+            }
+        }
+        let mut unknowns = Vec::new();
+        for k in (1..=top).rev() {
+            for s in 0..self.ns {
+                if used[self.sv(s, k)] {
+                    unknowns.push(self.sv(s, k));
+                }
+            }
+        }
+        for s in 0..self.ns {
+            unknowns.push(self.sv(s, 0));
+        }
+        unknowns.extend(0..self.np);
+        Ok((eqs, unknowns))
+    }
+
+    /// The equations in the ring of the unknowns (inputs substituted), with
+    /// `extra` further variables appended at the end.
+    pub(super) fn to_unknown_ring(
+        &self,
+        eqs: &[Poly],
+        unknowns: &[usize],
+        extra: usize,
+    ) -> Result<(Ring, Vec<Poly>), AnalysisError> {
+        let n = unknowns.len() + extra;
+        let ring = Ring::new(self.field, n, Order::Grevlex);
+        let mut pos: HashMap<usize, usize> = HashMap::new();
+        for (i, &v) in unknowns.iter().enumerate() {
+            pos.insert(v, i);
+        }
+        let mut out = Vec::with_capacity(eqs.len());
+        for p in eqs {
+            let mut terms = Vec::with_capacity(p.len());
+            for (m, c) in p.terms() {
+                let mut c = *c;
+                let mut e = vec![0u32; n];
+                for (v, &k) in m.exponents().iter().enumerate() {
+                    if k == 0 {
+                        continue;
+                    }
+                    match pos.get(&v) {
+                        Some(&i) => e[i] = k,
+                        None => c = self.field.mul(c, self.field.pow(self.point[v], k as u64)),
+                    }
+                }
+                terms.push((Mono::from_exponents(e).map_err(gb_err)?, c));
+            }
+            out.push(ring.from_terms(terms));
+        }
+        Ok((ring, out))
+    }
+
+    /// The gradient of `p` at the point: `(variable, d p / d variable)` for
+    /// the variables `p` uses.
+    pub(super) fn grad_at(&self, p: &Poly) -> Vec<(usize, u64)> {
+        let f = &self.field;
+        let mut out: HashMap<usize, u64> = HashMap::new();
+        for (m, c) in p.terms() {
+            let occ: Vec<(usize, u32)> = m
+                .exponents()
+                .iter()
+                .enumerate()
+                .filter(|(_, &e)| e > 0)
+                .map(|(v, &e)| (v, e))
+                .collect();
+            for (i, &(v, e)) in occ.iter().enumerate() {
+                // c * e * x_v^(e-1) * prod of the other factors
+                let mut t = f.mul(*c, f.reduce(e as u64));
+                t = f.mul(t, f.pow(self.point[v], e as u64 - 1));
+                for (k, &(w, ew)) in occ.iter().enumerate() {
+                    if k != i {
+                        t = f.mul(t, f.pow(self.point[w], ew as u64));
+                    }
+                }
+                let acc = out.entry(v).or_insert(0);
+                *acc = f.add(*acc, t);
+            }
+        }
+        out.into_iter().filter(|&(_, x)| x != 0).collect()
+    }
+}
+
+/// The distinct non-constant denominators (each gets a `z` state), and which
+/// one each right-hand side and output has (`None`: a constant).
+struct Denominators {
+    distinct: Vec<ZPoly>,
+    rhs: Vec<Option<usize>>,
+    outputs: Vec<Option<usize>>,
+}
+
+impl Denominators {
+    fn of(m: &ZModel) -> Denominators {
+        let mut distinct: Vec<ZPoly> = Vec::new();
+        let mut index = |d: &ZPoly| -> Option<usize> {
+            if d.vars().iter().all(|v| m.const_vars.contains(v)) {
+                return None;
+            }
+            match distinct.iter().position(|e| e == d) {
+                Some(i) => Some(i),
+                None => {
+                    distinct.push(d.clone());
+                    Some(distinct.len() - 1)
+                }
+            }
+        };
+        let rhs: Vec<Option<usize>> = m.rhs.iter().map(|(_, d)| index(d)).collect();
+        let outputs: Vec<Option<usize>> = m.outputs.iter().map(|(_, d)| index(d)).collect();
+        Denominators {
+            distinct,
+            rhs,
+            outputs,
+        }
+    }
+}
+
+/// Model polynomials over Z to the derivation ring modulo p: each symbol to
+/// its ring variable, or (a known constant) to its random value.
+struct Conv {
+    vmap: HashMap<Var, Result<usize, u64>>,
+}
+
+impl Conv {
+    fn new(run: &Run, m: &ZModel, consts: &[(Var, u64)]) -> Conv {
+        let mut vmap: HashMap<Var, Result<usize, u64>> = HashMap::new();
+        for (i, &v) in m.param_vars.iter().enumerate() {
+            vmap.insert(v, Ok(i));
+        }
+        for (i, &v) in m.dyn_vars.iter().enumerate() {
+            vmap.insert(v, Ok(run.sv(i, 0)));
+        }
+        for (i, &v) in m.input_vars.iter().enumerate() {
+            vmap.insert(v, Ok(run.uv(i, 0)));
+        }
+        for &(v, x) in consts {
+            vmap.insert(v, Err(x));
+        }
+        Conv { vmap }
+    }
+
+    fn poly(&self, run: &Run, z: &ZPoly) -> Result<Poly, AnalysisError> {
+        let n = run.ring.n;
+        let mut terms = Vec::with_capacity(z.len());
+        for (mono, c) in z.terms() {
+            let mut c = int_mod(&run.field, c);
+            let mut e = vec![0u32; n];
+            for (v, k) in mono.iter() {
+                match self.vmap.get(&v) {
+                    Some(Ok(i)) => e[*i] += k,
+                    Some(Err(x)) => c = run.field.mul(c, run.field.pow(*x, k as u64)),
+                    None => return Err(err("global: unknown symbol")),
+                }
+            }
+            terms.push((Mono::from_exponents(e).map_err(gb_err)?, c));
+        }
+        Ok(run.ring.from_terms(terms))
+    }
+}

@@ -1,0 +1,149 @@
+//! The types of `obsan global`'s answer and options, and the error helpers
+//! every step shares (the bottom of the module graph).
+
+use crate::rank::AnalysisError;
+use obsan_groebner::GbError;
+use std::time::Instant;
+
+/// Options of [`global_identifiability`](super::global_identifiability).
+#[derive(Clone, Debug)]
+pub struct GlobalOptions {
+    /// Seed of the random points (two independent runs use `seed` and `seed + 1`).
+    pub seed: u64,
+    pub deadline: Option<Instant>,
+    /// Largest Taylor order tried.
+    pub max_order: usize,
+    /// Largest Gröbner basis (elements added) before giving up.
+    pub max_basis: usize,
+    /// Largest quotient dimension counted.
+    pub max_solutions: usize,
+}
+
+impl Default for GlobalOptions {
+    fn default() -> Self {
+        GlobalOptions {
+            seed: 0x5eed_61b0,
+            deadline: None,
+            max_order: 24,
+            max_basis: 20_000,
+            max_solutions: 100_000,
+        }
+    }
+}
+
+/// The verdict on one variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Identifiability {
+    /// One value: globally identifiable.
+    Global,
+    /// Finitely many values (`k > 1`) over the complex numbers.
+    Local(usize),
+    /// Infinitely many values.
+    NotIdentifiable,
+}
+
+#[derive(Clone, Debug)]
+pub struct GlobalVariable {
+    pub name: String,
+    /// A parameter (else the initial value of a state).
+    pub param: bool,
+    /// An angle entering only through sin/cos: its values are counted modulo
+    /// 2 pi (as its half-angle tangent `tan(theta/2)`).
+    pub angle: bool,
+    pub verdict: Identifiability,
+}
+
+/// A discrete symmetry: each moved variable and its image. Checked exactly:
+/// the dynamics and outputs are invariant as rational functions over Q (in
+/// the half-angle view for angles).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DiscreteMap {
+    pub images: Vec<MapImage>,
+}
+
+/// `var -> sign * image`, plus pi when `plus_pi` (angles only: `theta ->
+/// phi + pi` or `pi - phi`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MapImage {
+    pub var: String,
+    pub sign: i8,
+    pub image: String,
+    pub plus_pi: bool,
+}
+
+impl std::fmt::Display for MapImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (self.sign < 0, self.plus_pi) {
+            (false, false) => write!(f, "{}", self.image),
+            (true, false) => write!(f, "-{}", self.image),
+            (false, true) => write!(f, "{} + pi", self.image),
+            (true, true) => write!(f, "pi - {}", self.image),
+        }
+    }
+}
+
+impl std::fmt::Display for DiscreteMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let lhs: Vec<&str> = self.images.iter().map(|m| m.var.as_str()).collect();
+        let rhs: Vec<String> = self.images.iter().map(|m| m.to_string()).collect();
+        if lhs.len() == 1 {
+            write!(f, "{} -> {}", lhs[0], rhs[0])
+        } else {
+            write!(f, "({}) -> ({})", lhs.join(", "), rhs.join(", "))
+        }
+    }
+}
+
+/// The answer of [`global_identifiability`](super::global_identifiability).
+#[derive(Clone, Debug)]
+pub struct GlobalReport {
+    /// Parameters, then initial states, in the system's order.
+    pub variables: Vec<GlobalVariable>,
+    /// How many (params, initial states) give the output of the generic one
+    /// (counting only the locally identifiable variables when some are not:
+    /// `None` then means that even those take infinitely many joint values).
+    pub solutions: Option<usize>,
+    /// Whether every variable is at least locally identifiable.
+    pub all_local: bool,
+    /// Exact discrete symmetries found: signed permutations of the variables,
+    /// angles also shifted by pi or reflected (`theta -> phi + pi`, `pi - phi`).
+    pub maps: Vec<DiscreteMap>,
+    /// Size of the group the maps generate (an orbit of a generic point).
+    pub group_order: usize,
+    /// Highest Taylor order used, and the highest order of a row that
+    /// raised the Jacobian's rank.
+    pub order: usize,
+    pub rank_order: usize,
+    /// Per output, the Taylor order used (inclusive): the proven truncation
+    /// of docs/engine.md, "Taylor orders".
+    pub output_orders: Vec<(String, usize)>,
+    /// SIAN's degree bounds for one run (Hong, Ovchinnikov, Pogudin, Yap
+    /// 2020, Algorithm 1): `delta_local` for the orders and local verdicts,
+    /// `log10_delta_global` (log10 of the Bezout bound, which can pass any
+    /// float) for the global verdicts.
+    pub delta_local: f64,
+    pub log10_delta_global: f64,
+    /// Probability that a verdict (global / local / not identifiable) is
+    /// wrong: both independent runs would have to be wrong,
+    /// `min(1, D/p1) * min(1, D/p2)` with `D = delta_local + delta_global`.
+    /// 1 means no bound.
+    pub error_bound: f64,
+    /// Unknowns and equations of the polynomial system at `order`.
+    pub unknowns: usize,
+    pub equations: usize,
+    /// The primes of the two independent runs.
+    pub primes: [u64; 2],
+}
+
+pub(super) fn err(s: impl Into<String>) -> AnalysisError {
+    AnalysisError::Invalid(s.into())
+}
+
+pub(super) fn gb_err(e: GbError) -> AnalysisError {
+    match e {
+        GbError::Budget("deadline") => {
+            AnalysisError::Timeout("the Gröbner basis did not finish".into())
+        }
+        e => err(format!("global: {e}")),
+    }
+}
