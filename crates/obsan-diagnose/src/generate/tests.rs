@@ -62,6 +62,10 @@ fn mrclam_candidates_skip_what_the_file_has() {
     ] {
         assert!(n.contains(&new), "{new} missing: {n:?}");
     }
+    // docs/diagnose.md's count: the 12 first families' survivors, and the
+    // two drifts, v's periodic error, the range quadratic and the two
+    // groups' biases with th (new_families_follow_the_structure).
+    assert_eq!(n.len(), 18, "{n:?}");
     // Grouped by form: one bearing scale for the 15 bearings.
     let bs = g
         .candidates
