@@ -611,7 +611,13 @@ impl<'a> Rounds<'a> {
                 let levels = Noise {
                     sigma: &lv.sigma,
                     noise: &lv.noise,
-                    white: lv.white_sigma.as_deref().zip(lv.white_fit.as_ref()),
+                    // A drift is weighed at the estimated input noise
+                    // only (generate/families.rs, `drifts`).
+                    white: lv
+                        .white_sigma
+                        .as_deref()
+                        .zip(lv.white_fit.as_ref())
+                        .filter(|_| !g.is_some_and(|g| g.estimated_noise_only)),
                     profile: lv.sigma_estimated,
                 };
                 candidate(

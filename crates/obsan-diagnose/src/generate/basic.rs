@@ -22,6 +22,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
             negative: format!("{u} acts smaller than measured"),
             screen: None,
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
         let b = names.fresh(&format!("gb_{u}"));
         drafts.push(Draft {
@@ -32,6 +33,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
             negative: format!("{u} acts with a negative offset"),
             screen: None,
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
         for w in inputs.iter().filter(|w| *w != u) {
             let c = names.fresh(&format!("gc_{u}_{w}"));
@@ -48,6 +50,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
                 negative: format!("{u} falls with |{w}|"),
                 screen: None,
                 limits: Vec::new(),
+                estimated_noise_only: false,
             });
         }
         let t = names.fresh(&format!("gT_{u}"));
@@ -67,6 +70,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
                 "param {t}\ninput {r0} = rate({u})\nsubst {u} = {u} - {t}*{r0}\n"
             ))),
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
         let tau = names.fresh(&format!("gtau_{u}"));
         if inputs.len() == 1 {
@@ -78,6 +82,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
                 negative: format!("{u} acts early"),
                 screen: Some(None),
                 limits: Vec::new(),
+                estimated_noise_only: false,
             });
         } else {
             // One input of several: `delay` shifts them all, so this one is
@@ -92,6 +97,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
                 negative: format!("{u} acts early"),
                 screen: None,
                 limits: Vec::new(),
+                estimated_noise_only: false,
             });
         }
     }
@@ -105,6 +111,7 @@ pub(super) fn input_drafts(inputs: &[String], names: &mut Names) -> Vec<Draft> {
             negative: "the inputs act early (or the outputs' clock is behind)".into(),
             screen: Some(None),
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
     }
     drafts
@@ -146,6 +153,7 @@ pub(super) fn output_drafts(groups: &[Group], names: &mut Names) -> Vec<Draft> {
             negative: format!("{label} reads small"),
             screen: None,
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
         let b = names.fresh(&format!("gb_{label}"));
         drafts.push(Draft {
@@ -156,6 +164,7 @@ pub(super) fn output_drafts(groups: &[Group], names: &mut Names) -> Vec<Draft> {
             negative: format!("{label} reads low"),
             screen: None,
             limits: Vec::new(),
+            estimated_noise_only: false,
         });
         if !angle {
             continue;
@@ -185,6 +194,7 @@ pub(super) fn output_drafts(groups: &[Group], names: &mut Names) -> Vec<Draft> {
                 negative: format!("{label} is distorted by a harmonic"),
                 screen: None,
                 limits: Vec::new(),
+                estimated_noise_only: false,
             });
         }
     }

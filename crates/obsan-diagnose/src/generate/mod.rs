@@ -54,6 +54,10 @@ pub struct Generated {
     pub screen: Option<Effect>,
     /// The physical ranges of its fitted params ([`Generated::implausible`]).
     pub(crate) limits: Vec<Limit>,
+    /// Weighed only at the estimated input noise, never also at white
+    /// input noise (where the workflow otherwise tries every candidate):
+    /// an effect that the noise's random walk itself mimics (a drift).
+    pub(crate) estimated_noise_only: bool,
 }
 
 impl Generated {
@@ -121,6 +125,7 @@ struct Draft {
     /// itself, `Some(None)` no screen, `Some(Some(body))` this body.
     screen: Option<Option<String>>,
     limits: Vec<Limit>,
+    estimated_noise_only: bool,
 }
 
 impl Draft {
@@ -134,6 +139,7 @@ impl Draft {
             negative: words.1,
             screen: None,
             limits: Vec::new(),
+            estimated_noise_only: false,
         }
     }
 }
@@ -249,6 +255,7 @@ fn admit(sys: &System, user: &[&Effect], drafts: Vec<Draft>) -> Generation {
             negative: d.negative,
             screen,
             limits: d.limits,
+            estimated_noise_only: d.estimated_noise_only,
         });
     }
     out
