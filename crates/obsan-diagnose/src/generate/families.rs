@@ -112,15 +112,19 @@ fn quadratics(groups: &[Group], n: &mut Names) -> Vec<Draft> {
     out
 }
 
-/// Per measured input `u` that no state integrates by itself (`th' =
-/// omega`: its integral is that state, whose periodic effects are the
-/// state-dependent biases): `u (1 + a cos(phi_u))` with a new state
-/// `phi_u' = u`, the input's integral, an angle when `u` is an angular
-/// speed in rad/s (a wheel). Its free start in each trajectory is the
-/// wheel's phase there, so one amplitude serves trajectories recorded
-/// apart; a cosine and a sine beside a free phase would be a continuous
-/// symmetry. At `a = 0` the phase has no sensitivity: the screen scores
-/// the pair `a cos + b sin` with the state held, which sees any phase.
+/// Per measured input `u`, when no state integrates an input by itself:
+/// `u (1 + a cos(phi_u))` with a new state `phi_u' = u`, the input's
+/// integral, an angle when `u` is a wheel's angular speed in rad/s. A state
+/// that integrates an input by itself (`th' = omega`) makes the inputs a
+/// body's velocities, not wheel speeds: the heading's periodic effects are
+/// the state-dependent biases, and a travelled distance has no period (a
+/// unicycle's heading random walk was named as `v`'s periodic error, K + 1
+/// free values soaking it up: tests/common_mode.rs). The free start of
+/// `phi_u` in each trajectory is the wheel's phase there, so one amplitude
+/// serves trajectories recorded apart; a cosine and a sine beside a free
+/// phase would be a continuous symmetry. At `a = 0` the phase has no
+/// sensitivity: the screen scores the pair `a cos + b sin` with the state
+/// held, which sees any phase.
 fn wobbles(sys: &System, inputs: &[String], n: &mut Names) -> Vec<Draft> {
     let squash = |s: &str| s.chars().filter(|c| !c.is_whitespace()).collect::<String>();
     let integrated: Vec<String> = sys
@@ -128,7 +132,10 @@ fn wobbles(sys: &System, inputs: &[String], n: &mut Names) -> Vec<Draft> {
         .filter_map(|d| sys.rhs_text(&d.name).map(squash))
         .collect();
     let mut out = Vec::new();
-    for u in inputs.iter().filter(|u| !integrated.contains(u)) {
+    if inputs.iter().any(|u| integrated.contains(u)) {
+        return out;
+    }
+    for u in inputs {
         let a = n.fresh(&format!("gw_{u}"));
         let b = n.fresh(&format!("gw_{u}_sin"));
         let phi = n.fresh(&format!("g_{u}_angle"));

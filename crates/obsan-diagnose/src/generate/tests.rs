@@ -63,9 +63,9 @@ fn mrclam_candidates_skip_what_the_file_has() {
         assert!(n.contains(&new), "{new} missing: {n:?}");
     }
     // docs/diagnose.md's count: the 12 first families' survivors, and the
-    // two drifts, v's periodic error, the range quadratic and the two
-    // groups' biases with th (new_families_follow_the_structure).
-    assert_eq!(n.len(), 18, "{n:?}");
+    // two drifts, the range quadratic and the two groups' biases with th
+    // (new_families_follow_the_structure).
+    assert_eq!(n.len(), 17, "{n:?}");
     // Grouped by form: one bearing scale for the 15 bearings.
     let bs = g
         .candidates
@@ -127,17 +127,18 @@ fn new_families_follow_the_structure() {
     let mrclam = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").unwrap();
     let g = generate(&mrclam, &[]);
     let n = names(&g);
-    // omega is integrated by th itself: no periodic error of omega; the
-    // ranges (not angles) get a quadratic; both groups a bias with th.
-    for new in [
-        "v_periodic",
-        "r_quadratic",
-        "r_bias_with_th",
-        "b_bias_with_th",
-    ] {
+    // omega is integrated by th itself: body velocities, no periodic
+    // error of either; the ranges (not angles) get a quadratic; both
+    // groups a bias with th.
+    for new in ["v_drift", "r_quadratic", "r_bias_with_th", "b_bias_with_th"] {
         assert!(n.contains(&new), "{new} missing: {n:?}");
     }
-    for absent in ["omega_periodic", "b_quadratic", "r_bias_with_x"] {
+    for absent in [
+        "v_periodic",
+        "omega_periodic",
+        "b_quadratic",
+        "r_bias_with_x",
+    ] {
         assert!(!n.contains(&absent), "{absent} generated: {n:?}");
     }
     let q = g
