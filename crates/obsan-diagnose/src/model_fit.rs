@@ -127,6 +127,7 @@ pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, DiagnoseError> {
             derived.push((format!("rate__{}", d.name), format!("rate({})", d.name)));
         }
     }
+    add_session_clocks(sys, &mut d);
     for (k, t) in d.trajectories.iter_mut().enumerate() {
         t.meta
             .entry("later".into())
@@ -140,6 +141,38 @@ pub fn prepare(sys: &System, data: &Dataset) -> Result<Dataset, DiagnoseError> {
         })?;
     }
     Ok(d)
+}
+
+/// The generated drifts' session clocks (measured inputs named
+/// `session_t...` that the data lack): the time since the dataset's first
+/// input row, one clock over every trajectory.
+fn add_session_clocks(sys: &System, d: &mut Dataset) {
+    let (t0, _) = crate::generate::session(d);
+    let clocks: Vec<String> = sys
+        .decls_of(Kind::Input)
+        .filter(|x| x.derived.is_none() && x.name.starts_with(crate::generate::SESSION_CLOCK))
+        .map(|x| x.name.clone())
+        .collect();
+    for tr in &mut d.trajectories {
+        let missing: Vec<&String> = clocks
+            .iter()
+            .filter(|c| tr.inputs.column(c).is_none())
+            .collect();
+        if missing.is_empty() {
+            continue;
+        }
+        let mut cols = tr.inputs.columns().to_vec();
+        cols.extend(missing.iter().map(|c| c.to_string()));
+        let mut s = obsan_data::Series::new(cols);
+        let mut row: Vec<Option<f64>> = Vec::new();
+        for (k, &t) in tr.inputs.t().iter().enumerate() {
+            row.clear();
+            row.extend(tr.inputs.values().iter().map(|c| c[k]));
+            row.extend(missing.iter().map(|_| Some(t - t0)));
+            s.push(t, &row);
+        }
+        tr.inputs = s;
+    }
 }
 
 /// The measured inputs' noise (see `obsan_fit::Integration::input_noise`)

@@ -596,8 +596,9 @@ impl<'a> Rounds<'a> {
             // cluster-robust sds; one that adds states is tested with a
             // degree of freedom per free initial value (K per state).
             let (c, origin) = match g {
-                Some(g) if !g.effect.states.is_empty() => {
-                    let df = 1 + g.effect.states.len() * data.trajectories.len();
+                Some(g) if !g.effect.states.is_empty() || g.effect.params.len() > 1 => {
+                    let k = data.trajectories.len();
+                    let df = g.effect.params.len() + g.effect.states.len() * k;
                     (chi2_critical(lim.a_gen, df as f64), ORIGIN_GENERATED)
                 }
                 Some(_) => (lim.crit_gen, ORIGIN_GENERATED),
@@ -606,11 +607,17 @@ impl<'a> Rounds<'a> {
             // Every candidate's Wald z at its side's one-degree critical
             // value (issue 37.4: the same rule for file and generated).
             let wald = Some(if g.is_some() { lim.crit_gen } else { lim.crit }.sqrt());
-            let (mut r, x) = obsan_expr::with_cancel(cancel.clone(), || {
+            let (mut r, mut x) = obsan_expr::with_cancel(cancel.clone(), || {
                 let levels = Noise {
                     sigma: &lv.sigma,
                     noise: &lv.noise,
-                    white: lv.white_sigma.as_deref().zip(lv.white_fit.as_ref()),
+                    // A drift is weighed at the estimated input noise
+                    // only (generate/families.rs, `drifts`).
+                    white: lv
+                        .white_sigma
+                        .as_deref()
+                        .zip(lv.white_fit.as_ref())
+                        .filter(|_| !g.is_some_and(|g| g.estimated_noise_only)),
                     profile: lv.sigma_estimated,
                 };
                 candidate(
@@ -626,6 +633,11 @@ impl<'a> Rounds<'a> {
                     self.warm.get(&e.name).map(Vec::as_slice),
                 )
             });
+            // A generated param outside its physical range: a failed fit.
+            let fitted = g.filter(|_| x.is_some());
+            if let Some(why) = fitted.and_then(|g| g.implausible(&r.estimates, data)) {
+                (r.error, r.significant, r.suggested, x) = (Some(why), false, false, None);
+            }
             r.score = scored.map(|s| s.score);
             // Beside the check, the z its prediction gave.
             let pz = scored.and_then(|s| s.check.as_ref()).map(|c| c.predicted_z);
