@@ -214,7 +214,7 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
   obsan diagnose --model systems/calib.sys --data data/sim --report data/report
   obsan diagnose --model systems/mrclam.sys --data data/mrclam1 --json
 
---json prints {model, nominal, rounds, named, suggested, combinations, input_checks, final_fit,
+--json prints {model, nominal, rounds, named, suggested, combinations, competing, input_checks, final_fit,
 extended_sys, sigma, input_noise, lr_critical, lr_critical_generated, generated_dropped,
 screen_threshold, ...};
 candidates and named effects carry origin (\"effects file\", \"generated\", \"input
@@ -226,7 +226,10 @@ vetoed, ...}, named effects their correlations with the final fit's other params
 correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two named effects,
 or two suggested ones fitted together) are combinations [{params, effects, values, sds, r,
 robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
-params[0] + weight params[1], the smallest-variance direction of the pair. Candidates generated from the model's structure are
+params[0] + weight params[1], the smallest-variance direction of the pair. A generated winner
+fitted together with a competing file candidate is in competing [{round, effects, lr_alone,
+estimates, robust_sd, wald_z, wald_z_critical, structure, established}] (established null: neither
+named, competing explanations not separated by these data). Candidates generated from the model's structure are
 tried too (--no-generated: the effects file's alone). --report writes report.md (verdict, estimates,
 residuals pooled per output before and after, candidate scores), PNG and SVG charts, extended.sys
 and diagnosis.json (docs/diagnose.md).")]

@@ -23,6 +23,7 @@
 mod candidate;
 mod combine;
 mod common_mode;
+mod compete;
 mod correlation;
 mod error;
 mod generate;
@@ -42,6 +43,7 @@ mod workflow;
 pub use common_mode::{
     difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
 };
+pub use compete::competing_text;
 pub use correlation::{correlated, correlation, Combination, Correlation, CORRELATION_CAUTION};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
@@ -53,8 +55,8 @@ pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use report::{
-    CandidateResult, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE, ORIGIN_RELATION,
-    RIVAL_BIC,
+    CandidateResult, Competing, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE,
+    ORIGIN_RELATION, RIVAL_BIC,
 };
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;
