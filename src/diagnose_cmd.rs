@@ -288,11 +288,29 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     structure_text(&d.nominal, &mut s);
     rounds_text(d, &mut s);
     let _ = writeln!(s);
-    if d.named.is_empty() {
+    let unseparated: Vec<_> = d
+        .competing
+        .iter()
+        .filter(|c| c.established.is_none())
+        .collect();
+    if d.named.is_empty() && unseparated.is_empty() {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
+    } else if d.named.is_empty() {
+        let _ = writeln!(
+            s,
+            "named: none: the best candidates compete, not separated by these data"
+        );
     }
     named_text(d, &mut s);
     combinations_text(d, &mut s);
+    for c in &unseparated {
+        let _ = writeln!(
+            s,
+            "competing explanations, not separated by these data (round {}, neither named): {}",
+            c.round,
+            obsan_diagnose::statistics::competing_text(c)
+        );
+    }
     for c in &d.suggested {
         let _ = writeln!(
             s,
@@ -680,6 +698,13 @@ fn verdict(d: &Diagnosis, s: &mut String) {
             c.effects[0],
             c.effects[1],
             c.text()
+        ));
+    }
+    for c in d.competing.iter().filter(|c| c.established.is_none()) {
+        parts.push(format!(
+            "competing explanations, not separated by these data: {}; what they explain remains \
+             unexplained (neither is in the final model)",
+            obsan_diagnose::statistics::competing_text(c)
         ));
     }
     if !d.nominal_converged {

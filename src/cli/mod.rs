@@ -237,7 +237,7 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
 
 --json prints {model, start, sigma, sigma_estimated, input_noise, input_noise_source,
 input_noise_lr, input_class, nominal, nominal_converged, refits, rounds, named, suggested,
-combinations, input_checks, final_fit, hidden, extended_sys, lr_critical, lr_critical_generated,
+combinations, competing, input_checks, final_fit, hidden, extended_sys, lr_critical, lr_critical_generated,
 generated_dropped, screen_threshold} (every field: obsan schema diagnose; a float that cannot be
 formed, such as a robust sd on one trajectory, is null); candidates and named effects carry origin (\"effects file\", \"generated\", \"input
 relation\"), generated candidates their score and screened_out, every candidate moved (its
@@ -248,7 +248,10 @@ vetoed, ...}, named effects their correlations with the final fit's other params
 correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two named effects,
 or two suggested ones fitted together) are combinations [{params, effects, values, sds, r,
 robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
-params[0] + weight params[1], the smallest-variance direction of the pair. Candidates generated from the model's structure are
+params[0] + weight params[1], the smallest-variance direction of the pair. A generated winner
+fitted together with a competing file candidate is in competing [{round, effects, lr_alone,
+estimates, robust_sd, wald_z, wald_z_critical, structure, established}] (established null: neither
+named, competing explanations not separated by these data). Candidates generated from the model's structure are
 tried too (--no-generated: the effects file's alone). --report writes report.md (verdict, estimates,
 residuals pooled per output before and after, candidate scores), PNG and SVG charts, extended.sys
 and diagnosis.json (docs/diagnose.md).")]

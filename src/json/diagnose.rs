@@ -49,6 +49,8 @@ pub struct Diagnose {
     pub suggested: Vec<Candidate>,
     /// Pairs of params fixed only in combination.
     pub combinations: Vec<Combination>,
+    /// A generated winner fitted together with a competing file candidate.
+    pub competing: Vec<Competing>,
     /// The effects on the measured inputs (`compare` relations).
     pub input_checks: Vec<InputCheck>,
     /// The final fit (nominal plus the named effects).
@@ -315,6 +317,32 @@ pub struct Combination {
     pub named: bool,
     /// `wald_z` clears the critical value: the data fix the combination.
     pub established: bool,
+}
+
+/// A generated winner and a file candidate fitted together (docs/diagnose.md, "Competing
+/// explanations").
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Competing {
+    /// The round (1-based) in which they competed.
+    pub round: usize,
+    /// The generated winner and the file candidate.
+    pub effects: [String; 2],
+    /// Each one's LR alone against the round's current model.
+    pub lr_alone: [Num; 2],
+    /// The joint fit's estimates of both effects' params: [name, estimate, sd].
+    pub estimates: Vec<NameEstimateSd>,
+    /// Their cluster-robust sds.
+    pub robust_sd: Vec<Num>,
+    /// Each effect's Wald z in the joint fit (the other present).
+    pub wald_z: [Num; 2],
+    /// The Wald z each must clear (square root of its LR critical value).
+    pub wald_z_critical: [Num; 2],
+    /// The residual tests each one's own fit leaves, [test, z].
+    pub structure: [Vec<NameValue>; 2],
+    /// The one still established with the other present (it is named); null: neither is
+    /// named, competing explanations not separated by these data.
+    pub established: Option<String>,
 }
 
 /// An effect on the measured inputs (a `compare` relation).

@@ -155,6 +155,20 @@ fn combination(c: &lib::statistics::Combination) -> v::Combination {
     }
 }
 
+fn competing(c: &lib::Competing) -> v::Competing {
+    v::Competing {
+        round: c.round,
+        effects: c.effects.clone(),
+        lr_alone: two(c.lr_alone),
+        estimates: triples(&c.estimates),
+        robust_sd: nums(&c.robust_sd),
+        wald_z: two(c.wald_z),
+        wald_z_critical: two(c.wald_z_critical),
+        structure: [pairs(&c.structure[0]), pairs(&c.structure[1])],
+        established: c.established.clone(),
+    }
+}
+
 fn input_check(c: &lib::InputCheck) -> v::InputCheck {
     v::InputCheck {
         effect: c.effect.clone(),
@@ -206,6 +220,7 @@ impl From<&lib::Diagnosis> for v::Diagnose {
             named: d.named.iter().map(named).collect(),
             suggested: candidates(&d.suggested),
             combinations: d.combinations.iter().map(combination).collect(),
+            competing: d.competing.iter().map(competing).collect(),
             input_checks: d.input_checks.iter().map(input_check).collect(),
             final_fit: fit(&d.final_fit),
             hidden: candidates(&d.hidden),

@@ -23,6 +23,7 @@
 mod candidate;
 mod combine;
 mod common_mode;
+mod compete;
 mod correlation;
 mod error;
 mod generate;
@@ -48,8 +49,8 @@ pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use report::{
-    CandidateResult, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE, ORIGIN_RELATION,
-    RIVAL_BIC,
+    CandidateResult, Competing, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE,
+    ORIGIN_RELATION, RIVAL_BIC,
 };
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};
 pub use screen::SCREEN_SAFETY;
@@ -71,6 +72,7 @@ pub mod statistics {
     pub use crate::common_mode::{
         difference_estimate, CommonModeCheck, DifferenceEstimate, Member, PREDICTED_MARGIN,
     };
+    pub use crate::compete::competing_text;
     pub use crate::correlation::{
         correlated, correlation, Combination, Correlation, CORRELATION_CAUTION,
     };

@@ -180,6 +180,30 @@ pub const ORIGIN_RELATION: &str = "input relation";
 /// rivals ("strong evidence" starts at 6 on Kass and Raftery's scale).
 pub const RIVAL_BIC: f64 = 6.0;
 
+/// Two candidates of one round fitted together: the generated winner
+/// first, the file's competitor second.
+#[derive(Clone, Debug, Serialize)]
+pub struct Competing {
+    /// Round (1-based) in which they competed.
+    pub round: usize,
+    pub effects: [String; 2],
+    /// Each one's LR alone (against the current model of the round).
+    pub lr_alone: [f64; 2],
+    /// The joint fit's estimates of both effects' params (name, value,
+    /// model sd inflated as a candidate's), then their cluster-robust sds.
+    pub estimates: Vec<(String, f64, f64)>,
+    pub robust_sd: Vec<f64>,
+    /// Each effect's Wald z in the joint fit (the other present).
+    pub wald_z: [f64; 2],
+    /// The Wald z each must clear (square root of its LR critical value).
+    pub wald_z_critical: [f64; 2],
+    /// The residual tests each one's own fit leaves, `[test, z]`.
+    pub structure: [Vec<(String, f64)>; 2],
+    /// The one still established with the other present (it is named), or
+    /// `None`: competing explanations, not separated by these data.
+    pub established: Option<String>,
+}
+
 /// The whole outcome.
 #[derive(Clone, Debug, Serialize)]
 pub struct Diagnosis {
@@ -219,6 +243,11 @@ pub struct Diagnosis {
     /// false). Compare such a pair through its combination, not each
     /// param alone.
     pub combinations: Vec<Combination>,
+    /// A generated winner fitted together with a competing file candidate
+    /// ([`Competing`]); with `established` `None` neither is named
+    /// (competing explanations, not separated by these data) and the
+    /// search stopped there.
+    pub competing: Vec<Competing>,
     pub input_checks: Vec<InputCheck>,
     pub final_fit: ModelFit,
     /// Effects these data cannot reveal, with what absorbs them.

@@ -3,11 +3,13 @@
 //! a generated effect's words; and the extended model's text (step 6),
 //! input relations included.
 
+use crate::candidate::Fitted;
 use crate::correlation::{correlated, CORRELATION_CAUTION};
 use crate::generate::{Generation, ORIGIN_GENERATED};
 use crate::model_fit::ModelFit;
 use crate::relation::{with_relation, InputCheck};
-use crate::report::{CandidateResult, Named, Rival, ORIGIN_RELATION};
+use crate::report::{CandidateResult, Named, Rival, ORIGIN_RELATION, RIVAL_BIC};
+use crate::screen::Outcome;
 use obsan_model::{Effect, System};
 
 /// What was named, settled against the final fit: rivals the next round
@@ -156,4 +158,22 @@ pub(crate) fn name_relations(
         });
         *extended_sys = with_relation(extended_sys, e, &c.estimates);
     }
+}
+
+/// The other significant candidates of a round whose BIC is within
+/// [`RIVAL_BIC`] of the best one's.
+pub(crate) fn rivals(results: &[Outcome<Fitted>], best: &CandidateResult) -> Vec<Rival> {
+    results
+        .iter()
+        .filter(|r| {
+            r.0.significant
+                && r.0.effect != best.effect
+                && r.0.delta_bic - best.delta_bic < RIVAL_BIC
+        })
+        .map(|r| Rival {
+            effect: r.0.effect.clone(),
+            delta_bic: (r.0.delta_bic - best.delta_bic).max(0.0),
+            jointly_identifiable: None,
+        })
+        .collect()
 }

@@ -15,6 +15,7 @@
 
 use crate::candidate::{candidate, rank_only, Fitted, Noise};
 use crate::combine::{of_named, of_suggested, At};
+use crate::compete::{file_rival, fit_together};
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
@@ -23,9 +24,9 @@ use crate::model_fit::{
 };
 use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 use crate::relation::{input_check, InputCheck};
-use crate::report::{CandidateResult, Diagnosis, Named, Refit, Rival, ORIGIN_FILE, RIVAL_BIC};
+use crate::report::{CandidateResult, Competing, Diagnosis, Named, Refit, Rival, ORIGIN_FILE};
 use crate::screen::{file_stand_in, score, Outcome, Scored, SCREEN_SAFETY};
-use crate::settle::{extended_model, name_relations, settle};
+use crate::settle::{extended_model, name_relations, rivals, settle};
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -112,6 +113,7 @@ pub fn diagnose(
         levels,
         refits,
         nominal_refit,
+        competing,
         ..
     } = rounds;
     // What the last round found above its critical value but not by its
@@ -176,6 +178,7 @@ pub fn diagnose(
         named,
         suggested,
         combinations,
+        competing,
         input_checks,
         final_fit: current,
         hidden,
@@ -413,6 +416,8 @@ struct Rounds<'a> {
     /// fit starts there (the same optimum, fewer iterations; on MRCLAM
     /// robot 1 the named list and its printed estimates are unchanged).
     warm: HashMap<String, Vec<f64>>,
+    /// Generated winners fitted together with a competing file candidate.
+    competing: Vec<Competing>,
 }
 
 impl<'a> Rounds<'a> {
@@ -451,6 +456,7 @@ impl<'a> Rounds<'a> {
             refits: Vec::new(),
             nominal_refit: None,
             warm: HashMap::new(),
+            competing: Vec::new(),
         }
     }
 
@@ -513,20 +519,48 @@ impl<'a> Rounds<'a> {
             .as_ref()
             .map(|(b, _)| rivals(&results, b))
             .unwrap_or_default();
+        let file_rival = best
+            .as_ref()
+            .and_then(|(b, _)| file_rival(b, &results, &self.current));
         self.remember_estimates(&results);
         self.rounds.push(results.into_iter().map(|r| r.0).collect());
-        let Some((res, Some(fitted))) = best else {
+        let Some((mut res, Some(mut fitted))) = best else {
             return Ok(false);
         };
         // `best` is one of the candidates.
-        let Some(eff) = self
-            .candidates
-            .iter()
-            .copied()
-            .find(|e| e.name == res.effect)
-        else {
+        let find = |n: &str| self.candidates.iter().copied().find(|e| e.name == n);
+        let Some(mut eff) = find(&res.effect) else {
             return Ok(false);
         };
+        // A generated winner and a competing file candidate: fitted
+        // together, one is named only if it alone stays established.
+        if let Some((fe, fres, ffit)) = file_rival.and_then(|(r, f)| Some((find(&r.effect)?, r, f)))
+        {
+            let lv = &self.levels;
+            let levels = match (fitted.white_won, lv.white_sigma.as_deref()) {
+                (true, Some(w)) => (w, &[][..]),
+                _ => (&lv.sigma[..], &lv.noise[..]),
+            };
+            let at = (&self.current_sys, &self.current, &round_data);
+            let crit = [self.limits.crit_gen, self.limits.crit];
+            if let Ok(c) = fit_together(
+                at,
+                (&res, eff),
+                (&fres, fe),
+                levels,
+                crit,
+                round + 1,
+                self.o,
+            ) {
+                let who = c.established.clone();
+                self.competing.push(c);
+                match who {
+                    None => return Ok(false),
+                    Some(n) if n == fres.effect => (res, fitted, eff) = (fres, ffit, fe),
+                    Some(_) => {}
+                }
+            }
+        }
         self.name(eff, &res, &fitted, rivals);
         let white = fitted.white.clone();
         let white_won = fitted.white_won;
@@ -871,21 +905,3 @@ const REFIT_FROM: usize = 2;
 /// fit: below it no likelihood ratio moves by a unit (critical values are
 /// near 10), above it the comparison was with a fit that had stopped short.
 const REFIT_GAIN: f64 = 1.0;
-
-/// The other significant candidates of a round whose BIC is within
-/// [`RIVAL_BIC`] of the best one's.
-fn rivals(results: &[Outcome<Fitted>], best: &CandidateResult) -> Vec<Rival> {
-    results
-        .iter()
-        .filter(|r| {
-            r.0.significant
-                && r.0.effect != best.effect
-                && r.0.delta_bic - best.delta_bic < RIVAL_BIC
-        })
-        .map(|r| Rival {
-            effect: r.0.effect.clone(),
-            delta_bic: (r.0.delta_bic - best.delta_bic).max(0.0),
-            jointly_identifiable: None,
-        })
-        .collect()
-}
