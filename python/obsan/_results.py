@@ -639,17 +639,61 @@ def _combination(c: Mapping[str, Any]) -> Combination:
     )
 
 
+class Competing(NamedTuple):
+    """A generated winner and a file candidate ``diagnose`` fitted together:
+    each one's LR alone, the joint fit's estimates, each one's Wald z beside the
+    other against its critical value, the residual structure each one's own fit
+    leaves (``[test, z]``), and the one still ``established`` (named), or
+    ``None``: competing explanations, not separated by these data."""
+
+    round: int
+    effects: Tuple[str, str]
+    lr_alone: Tuple[float, float]
+    estimates: Dict[str, Estimate]
+    wald_z: Tuple[float, float]
+    wald_z_critical: Tuple[float, float]
+    structure: Tuple[List[Tuple[str, float]], List[Tuple[str, float]]]
+    established: Optional[str]
+
+
+def _competing(c: Mapping[str, Any]) -> Competing:
+    def num(x: Any) -> float:
+        return math.nan if x is None else float(x)
+
+    def pair(x: Any) -> Tuple[float, float]:
+        x = x or [None, None]
+        return (num(x[0]), num(x[1]))
+
+    def tests(x: Any) -> List[Tuple[str, float]]:
+        return [(str(t[0]), num(t[1])) for t in x or []]
+
+    st = c.get("structure") or [[], []]
+    est = c.get("established")
+    return Competing(
+        int(c.get("round", 0)),
+        (str(c["effects"][0]), str(c["effects"][1])),
+        pair(c.get("lr_alone")),
+        {str(e[0]): Estimate(num(e[1]), num(e[2])) for e in c.get("estimates") or []},
+        pair(c.get("wald_z")),
+        pair(c.get("wald_z_critical")),
+        (tests(st[0]), tests(st[1])),
+        None if est is None else str(est),
+    )
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class Diagnosis(Result):
     """``obsan diagnose``: the named effects (in order), those only suggested (LR
     significant, Wald z not), the pairs fixed only in combination
-    (:class:`Combination`), whether the nominal fit converged, the final fit; and
+    (:class:`Combination`), the candidates fitted together as competing
+    explanations (:class:`Competing`), whether the nominal fit converged, the final fit; and
     ``extended_sys``, the model with the named effects added."""
 
     model: str
     named: List[NamedEffect]
     suggested: List[NamedEffect]
     combinations: List[Combination]
+    competing: List[Competing]
     nominal_converged: bool
     params: Dict[str, Estimate]
     extended_sys: Optional[str]
@@ -675,6 +719,7 @@ class Diagnosis(Result):
             named=effects("named"),
             suggested=effects("suggested"),
             combinations=[_combination(c) for c in raw.get("combinations") or []],
+            competing=[_competing(c) for c in raw.get("competing") or []],
             nominal_converged=bool(raw.get("nominal_converged", True)),
             params=params,
             extended_sys=raw.get("extended_sys"),

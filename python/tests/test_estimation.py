@@ -130,3 +130,8 @@ def test_diagnose_reports_a_pair_fixed_only_in_combination(tmp_path, cli):
     assert math.isclose(own.value, c.estimate.value, rel_tol=1e-9)
     assert math.isclose(own.sd, c.robust_sd, rel_tol=1e-9)
     assert c.at(0.0) == obsan.Estimate(c.values[0], math.sqrt(a))
+    # Every competing pair in the JSON is typed as it is printed.
+    assert len(d.competing) == len(d["competing"])
+    for t, x in zip(d.competing, d["competing"]):
+        assert t.effects == tuple(x["effects"]) and t.established == x["established"]
+        assert all(t.estimates[e[0]].value == e[1] for e in x["estimates"])

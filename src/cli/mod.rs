@@ -269,7 +269,8 @@ written to --out and a one-line summary to stdout."
     /// Global identifiability: for each param and initial state, globally
     /// identifiable, locally with k values, or not identifiable; the number of
     /// (params, initial states) giving the output of a generic one; the
-    /// discrete symmetries (signed permutations) between them, each checked
+    /// discrete symmetries between them (signed permutations, and angles
+    /// mapped by theta -> phi, -phi, phi + pi or pi - phi), each checked
     /// exactly. SIAN's route: Taylor coefficients of the outputs, a Gröbner
     /// basis over F_p at a random point (docs/engine.md).
     #[command(after_help = "Examples:
