@@ -565,3 +565,50 @@ fn shortened(data: &Dataset, frac: f64) -> Dataset {
 /// state, and how they were found (printed with the diagnosis).
 #[derive(Clone, Debug)]
 pub struct Start(pub Vec<f64>, pub Vec<Vec<f64>>, pub String);
+
+/// The output noise levels the options or `dataset.json` give; NaN where
+/// neither does (estimated by [`output_levels`]).
+pub(crate) fn given_levels(outputs: &[String], data: &Dataset, o: &DiagnoseOptions) -> Vec<f64> {
+    match &o.sigma {
+        Some(s) => s.clone(),
+        None => outputs
+            .iter()
+            .map(|n| {
+                data.meta
+                    .noise
+                    .get(n)
+                    .copied()
+                    .filter(|s| *s > 0.0)
+                    .unwrap_or(f64::NAN)
+            })
+            .collect(),
+    }
+}
+
+/// The output levels not given are estimated from a fit at unit levels (its
+/// RMS, corrected for the fitted params); then the chi-square test of the
+/// level is void and the LR uses the fitted level. Returns the levels and
+/// whether any was estimated.
+pub(crate) fn output_levels(
+    sys: &System,
+    prepared: &Dataset,
+    start: &Start,
+    mut sigma: Vec<f64>,
+    o: &DiagnoseOptions,
+) -> Result<(Vec<f64>, bool), DiagnoseError> {
+    if !sigma.iter().any(|s| s.is_nan()) {
+        return Ok((sigma, false));
+    }
+    let ones: Vec<f64> = sigma
+        .iter()
+        .map(|s| if s.is_nan() { 1.0 } else { *s })
+        .collect();
+    let (f, _) = first_fit(sys, prepared, start, &ones, &[], o)?;
+    let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
+    for (s, r) in sigma.iter_mut().zip(&f.rms) {
+        if s.is_nan() {
+            *s = (r.1 * scale).max(1e-12);
+        }
+    }
+    Ok((sigma, true))
+}

@@ -20,7 +20,8 @@ use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
 use crate::model_fit::{
-    class_inputs, estimate_levels, first_fit, fit_model, input_noise, prepare, ModelFit, Start,
+    class_inputs, estimate_levels, first_fit, fit_model, given_levels, input_noise, output_levels,
+    prepare, ModelFit, Start,
 };
 use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 use crate::relation::{input_check, InputCheck};
@@ -188,53 +189,6 @@ pub fn diagnose(
         generated_dropped: gen.dropped,
         screen_threshold,
     })
-}
-
-/// The output noise levels the options or `dataset.json` give; NaN where
-/// neither does (estimated by [`output_levels`]).
-fn given_levels(outputs: &[String], data: &Dataset, o: &DiagnoseOptions) -> Vec<f64> {
-    match &o.sigma {
-        Some(s) => s.clone(),
-        None => outputs
-            .iter()
-            .map(|n| {
-                data.meta
-                    .noise
-                    .get(n)
-                    .copied()
-                    .filter(|s| *s > 0.0)
-                    .unwrap_or(f64::NAN)
-            })
-            .collect(),
-    }
-}
-
-/// The output levels not given are estimated from a fit at unit levels (its
-/// RMS, corrected for the fitted params); then the chi-square test of the
-/// level is void and the LR uses the fitted level. Returns the levels and
-/// whether any was estimated.
-fn output_levels(
-    sys: &System,
-    prepared: &Dataset,
-    start: &Start,
-    mut sigma: Vec<f64>,
-    o: &DiagnoseOptions,
-) -> Result<(Vec<f64>, bool), DiagnoseError> {
-    if !sigma.iter().any(|s| s.is_nan()) {
-        return Ok((sigma, false));
-    }
-    let ones: Vec<f64> = sigma
-        .iter()
-        .map(|s| if s.is_nan() { 1.0 } else { *s })
-        .collect();
-    let (f, _) = first_fit(sys, prepared, start, &ones, &[], o)?;
-    let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
-    for (s, r) in sigma.iter_mut().zip(&f.rms) {
-        if s.is_nan() {
-            *s = (r.1 * scale).max(1e-12);
-        }
-    }
-    Ok((sigma, true))
 }
 
 /// The noise model in use, carried from round to round.
