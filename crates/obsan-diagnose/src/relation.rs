@@ -106,38 +106,132 @@ pub(crate) fn input_check(
     let np = e.params.len();
     let stated = noise.iter().any(|(_, c)| *c > 0.0);
     out.noise = if stated { "stated" } else { "estimated" }.into();
-    let consts_at = |k: usize, theta: &[f64]| -> BTreeMap<String, f64> {
-        let mut c = data.trajectories[k].meta.clone();
-        for (p, v) in e.params.iter().zip(theta) {
-            c.insert(p.clone(), *v);
-        }
-        c
-    };
-    // The relation's right side per (trajectory, compare) at theta, with the
-    // compared input; None where it cannot be evaluated (e.g. no q).
-    let sides = |theta: &[f64]| -> Vec<Option<Sides>> {
-        let mut v = Vec::new();
-        for (k, t) in data.trajectories.iter().enumerate() {
-            let consts = consts_at(k, theta);
-            for (u, rhs) in &e.compares {
-                let mut s = t.inputs.clone();
-                let ok = add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts);
-                v.push(match (ok, s.column(u), s.column("__cmp")) {
-                    (Ok(()), Some(m), Some(c)) => Some((m.to_vec(), c.to_vec())),
-                    _ => None,
-                });
-            }
-        }
-        v
-    };
-    let nc = e.compares.len();
     let theta0 = vec![0.0; np];
-    let base = sides(&theta0);
-    // Blocks and their variances per unit intensity, at the declared
-    // relation (theta = 0: the null hypothesis the test is about).
-    let mut blocks: Vec<(usize, Block)> = Vec::new(); // (side index, block)
+    let base = relation_sides(e, data, &theta0);
+    let blocks = noise_blocks(e, data, &base, (noise, stated));
+    if blocks.is_empty() {
+        out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
+        return out;
+    }
+    let (weights, floor) = block_weights(&blocks);
+    let resid = |theta: &[f64]| block_residuals(&relation_sides(e, data, theta), &blocks, &weights);
+    // J = -dr/dtheta by forward differences, rows of the blocks.
+    let jacobian = |theta: &[f64], r: &[f64]| -> Vec<Vec<f64>> {
+        (0..np)
+            .map(|i| {
+                let mut t2 = theta.to_vec();
+                let h = 1e-6 * (1.0 + theta[i].abs());
+                t2[i] += h;
+                let r2 = resid(&t2);
+                r.iter().zip(&r2).map(|(a, b)| (a - b) / h).collect()
+            })
+            .collect()
+    };
+    let normal = |theta: &[f64]| {
+        let r = resid(theta);
+        let jac = jacobian(theta, &r);
+        normal_of(np, &jac, &r, &|_| true)
+    };
+    let cost = |theta: &[f64]| resid(theta).iter().map(|x| x * x).sum::<f64>();
+    let theta = minimise(&theta0, cost, normal, |_| {}, &LmOptions::default()).x;
+    let r = resid(&theta);
+    let jac = jacobian(&theta, &r);
+    let (jtj, _) = normal_of(np, &jac, &r, &|_| true);
+    let Some(inv) = jtj.try_inverse() else {
+        out.note = "the inputs do not determine the relation's params".into();
+        return out;
+    };
+    let dof = (r.len() as f64 - np as f64).max(1.0);
+    let dispersion = r.iter().map(|x| x * x).sum::<f64>() / dof;
+    out.dispersion = dispersion;
+    // Stated noise: the model's own variance, inflated if the scatter is
+    // larger (quasi-likelihood); estimated: the scatter sets the level.
+    let s2 = if stated && floor.is_some() {
+        dispersion.max(1.0)
+    } else {
+        dispersion
+    };
+    let cov = inv * s2;
+    out.estimates = with_sd(e, &theta, &cov);
+    out.z = zmax(&out.estimates);
+    out.p_value = normal_two_sided(out.z);
+    out.significant = out.z > normal_critical(alpha);
+    // Each trajectory alone: one Gauss-Newton step from the joint estimate
+    // on its own blocks.
     for (k, t) in data.trajectories.iter().enumerate() {
-        let consts = consts_at(k, &theta0);
+        let pick = |b: usize| blocks[b].1.traj == k;
+        if !(0..r.len()).any(pick) {
+            continue;
+        }
+        let (a, g) = normal_of(np, &jac, &r, &pick);
+        let Some(ai) = a.try_inverse() else { continue };
+        let step = &ai * g;
+        let x: Vec<f64> = (0..np).map(|i| theta[i] + step[i]).collect();
+        let est = with_sd(e, &x, &(ai * s2));
+        out.per_trajectory.push(TrajectoryCheck {
+            trajectory: t.name.clone(),
+            z: zmax(&est),
+            estimates: est,
+        });
+    }
+    out.note = format!(
+        "{} blocks of {BLOCK} s; encoder noise {}{}",
+        r.len(),
+        if stated {
+            source
+        } else {
+            "estimated from the relation's scatter"
+        },
+        if stated {
+            format!(", dispersion {dispersion:.2}")
+        } else {
+            format!(", c = {dispersion:.2e} (one for every input)")
+        }
+    );
+    out
+}
+
+/// Trajectory `k`'s constants with the relation's params at `theta`.
+fn consts_at(e: &Effect, data: &Dataset, k: usize, theta: &[f64]) -> BTreeMap<String, f64> {
+    let mut c = data.trajectories[k].meta.clone();
+    for (p, v) in e.params.iter().zip(theta) {
+        c.insert(p.clone(), *v);
+    }
+    c
+}
+
+/// The relation's right side per (trajectory, compare) at `theta`, with the
+/// compared input; None where it cannot be evaluated (e.g. no q).
+fn relation_sides(e: &Effect, data: &Dataset, theta: &[f64]) -> Vec<Option<Sides>> {
+    let mut v = Vec::new();
+    for (k, t) in data.trajectories.iter().enumerate() {
+        let consts = consts_at(e, data, k, theta);
+        for (u, rhs) in &e.compares {
+            let mut s = t.inputs.clone();
+            let ok = add_derived_inputs(&mut s, &[("__cmp".into(), rhs.clone())], &consts);
+            v.push(match (ok, s.column(u), s.column("__cmp")) {
+                (Ok(()), Some(m), Some(c)) => Some((m.to_vec(), c.to_vec())),
+                _ => None,
+            });
+        }
+    }
+    v
+}
+
+/// Blocks of `BLOCK` s per (trajectory, compare) and their variances per
+/// unit intensity, at the declared relation (theta = 0: the null hypothesis
+/// the test is about), as (side index, block).
+fn noise_blocks(
+    e: &Effect,
+    data: &Dataset,
+    base: &[Option<Sides>],
+    (noise, stated): (&[(String, f64)], bool),
+) -> Vec<(usize, Block)> {
+    let nc = e.compares.len();
+    let theta0 = vec![0.0; e.params.len()];
+    let mut blocks: Vec<(usize, Block)> = Vec::new();
+    for (k, t) in data.trajectories.iter().enumerate() {
+        let consts = consts_at(e, data, k, &theta0);
         for (ci, (u, rhs)) in e.compares.iter().enumerate() {
             let si = k * nc + ci;
             let Some((m, c)) = &base[si] else { continue };
@@ -222,10 +316,13 @@ pub(crate) fn input_check(
             }
         }
     }
-    if blocks.is_empty() {
-        out.note = "no trajectory has what the relation needs (e.g. q in meta.json)".into();
-        return out;
-    }
+    blocks
+}
+
+/// Each block's weight, 1/sd, with the variances floored at `VAR_FLOOR`
+/// times their median (and the floor: `None` when no block has noise, then
+/// unweighted, the scale estimated).
+fn block_weights(blocks: &[(usize, Block)]) -> (Vec<f64>, Option<f64>) {
     let mut pos: Vec<f64> = blocks
         .iter()
         .map(|b| b.1.var)
@@ -233,133 +330,71 @@ pub(crate) fn input_check(
         .collect();
     pos.sort_by(f64::total_cmp);
     let floor = pos.get(pos.len() / 2).map(|m| m * VAR_FLOOR);
-    let weights: Vec<f64> = blocks
+    let weights = blocks
         .iter()
         .map(|b| match floor {
             Some(f) => 1.0 / b.1.var.max(f).sqrt(),
-            None => 1.0, // no noise anywhere: unweighted, scale estimated
+            None => 1.0,
         })
         .collect();
-    let resid = |theta: &[f64]| -> Vec<f64> {
-        let sd = sides(theta);
-        blocks
-            .iter()
-            .zip(&weights)
-            .map(|((si, b), w)| {
-                let Some((m, c)) = &sd[*si] else { return 0.0 };
-                let (mut a, mut n) = (0.0, 0usize);
-                for j in b.rows.clone() {
-                    if let (Some(x), Some(y)) = (m[j], c[j]) {
-                        a += x - y;
-                        n += 1;
-                    }
+    (weights, floor)
+}
+
+/// The weighted mean of `u - EXPR` over each block.
+fn block_residuals(sd: &[Option<Sides>], blocks: &[(usize, Block)], weights: &[f64]) -> Vec<f64> {
+    blocks
+        .iter()
+        .zip(weights)
+        .map(|((si, b), w)| {
+            let Some((m, c)) = &sd[*si] else { return 0.0 };
+            let (mut a, mut n) = (0.0, 0usize);
+            for j in b.rows.clone() {
+                if let (Some(x), Some(y)) = (m[j], c[j]) {
+                    a += x - y;
+                    n += 1;
                 }
-                w * a / n.max(1) as f64
-            })
-            .collect()
-    };
-    // J = -dr/dtheta by forward differences, rows of the blocks.
-    let jacobian = |theta: &[f64], r: &[f64]| -> Vec<Vec<f64>> {
-        (0..np)
-            .map(|i| {
-                let mut t2 = theta.to_vec();
-                let h = 1e-6 * (1.0 + theta[i].abs());
-                t2[i] += h;
-                let r2 = resid(&t2);
-                r.iter().zip(&r2).map(|(a, b)| (a - b) / h).collect()
-            })
-            .collect()
-    };
-    let normal_of = |jac: &[Vec<f64>], r: &[f64], pick: &dyn Fn(usize) -> bool| {
-        let jtj = nalgebra::DMatrix::from_fn(np, np, |i, j| {
-            (0..r.len())
-                .filter(|&b| pick(b))
-                .map(|b| jac[i][b] * jac[j][b])
-                .sum()
-        });
-        let jtr = nalgebra::DVector::from_fn(np, |i, _| {
-            (0..r.len())
-                .filter(|&b| pick(b))
-                .map(|b| jac[i][b] * r[b])
-                .sum()
-        });
-        (jtj, jtr)
-    };
-    let normal = |theta: &[f64]| {
-        let r = resid(theta);
-        let jac = jacobian(theta, &r);
-        normal_of(&jac, &r, &|_| true)
-    };
-    let cost = |theta: &[f64]| resid(theta).iter().map(|x| x * x).sum::<f64>();
-    let theta = minimise(&theta0, cost, normal, |_| {}, &LmOptions::default()).x;
-    let r = resid(&theta);
-    let jac = jacobian(&theta, &r);
-    let (jtj, _) = normal_of(&jac, &r, &|_| true);
-    let Some(inv) = jtj.try_inverse() else {
-        out.note = "the inputs do not determine the relation's params".into();
-        return out;
-    };
-    let dof = (r.len() as f64 - np as f64).max(1.0);
-    let dispersion = r.iter().map(|x| x * x).sum::<f64>() / dof;
-    out.dispersion = dispersion;
-    // Stated noise: the model's own variance, inflated if the scatter is
-    // larger (quasi-likelihood); estimated: the scatter sets the level.
-    let s2 = if stated && floor.is_some() {
-        dispersion.max(1.0)
-    } else {
-        dispersion
-    };
-    let cov = inv * s2;
-    let zcrit = normal_critical(alpha);
-    let with_sd = |x: &[f64], cov: &nalgebra::DMatrix<f64>| -> Vec<(String, f64, f64)> {
-        e.params
-            .iter()
-            .enumerate()
-            .map(|(i, p)| (p.clone(), x[i], cov[(i, i)].max(0.0).sqrt()))
-            .collect()
-    };
-    let zmax = |est: &[(String, f64, f64)]| {
-        est.iter()
-            .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
-            .fold(0.0, f64::max)
-    };
-    out.estimates = with_sd(&theta, &cov);
-    out.z = zmax(&out.estimates);
-    out.p_value = normal_two_sided(out.z);
-    out.significant = out.z > zcrit;
-    // Each trajectory alone: one Gauss-Newton step from the joint estimate
-    // on its own blocks.
-    for (k, t) in data.trajectories.iter().enumerate() {
-        let pick = |b: usize| blocks[b].1.traj == k;
-        if !(0..r.len()).any(pick) {
-            continue;
-        }
-        let (a, g) = normal_of(&jac, &r, &pick);
-        let Some(ai) = a.try_inverse() else { continue };
-        let step = &ai * g;
-        let x: Vec<f64> = (0..np).map(|i| theta[i] + step[i]).collect();
-        let est = with_sd(&x, &(ai * s2));
-        out.per_trajectory.push(TrajectoryCheck {
-            trajectory: t.name.clone(),
-            z: zmax(&est),
-            estimates: est,
-        });
-    }
-    out.note = format!(
-        "{} blocks of {BLOCK} s; encoder noise {}{}",
-        r.len(),
-        if stated {
-            source
-        } else {
-            "estimated from the relation's scatter"
-        },
-        if stated {
-            format!(", dispersion {dispersion:.2}")
-        } else {
-            format!(", c = {dispersion:.2e} (one for every input)")
-        }
-    );
-    out
+            }
+            w * a / n.max(1) as f64
+        })
+        .collect()
+}
+
+/// The normal equations `(J^T J, J^T r)` over the blocks `pick` keeps.
+fn normal_of(
+    np: usize,
+    jac: &[Vec<f64>],
+    r: &[f64],
+    pick: &dyn Fn(usize) -> bool,
+) -> (nalgebra::DMatrix<f64>, nalgebra::DVector<f64>) {
+    let jtj = nalgebra::DMatrix::from_fn(np, np, |i, j| {
+        (0..r.len())
+            .filter(|&b| pick(b))
+            .map(|b| jac[i][b] * jac[j][b])
+            .sum()
+    });
+    let jtr = nalgebra::DVector::from_fn(np, |i, _| {
+        (0..r.len())
+            .filter(|&b| pick(b))
+            .map(|b| jac[i][b] * r[b])
+            .sum()
+    });
+    (jtj, jtr)
+}
+
+/// The relation's params at `x` with their sds from `cov`.
+fn with_sd(e: &Effect, x: &[f64], cov: &nalgebra::DMatrix<f64>) -> Vec<(String, f64, f64)> {
+    e.params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.clone(), x[i], cov[(i, i)].max(0.0).sqrt()))
+        .collect()
+}
+
+/// The largest |estimate / sd|.
+fn zmax(est: &[(String, f64, f64)]) -> f64 {
+    est.iter()
+        .map(|(_, v, s)| if *s > 0.0 { (v / s).abs() } else { 0.0 })
+        .fold(0.0, f64::max)
 }
 
 /// `text` (a .sys file) with a contradicted input relation written in: its
