@@ -300,61 +300,15 @@ pub(crate) fn candidate(
                 fits
             }
         };
-        let inflate = f.inflation();
-        res.lr = (base_m2ll - f_m2ll).max(0.0) / inflate;
-        res.white_input_noise = white_won;
-        res.p_value = chi2_1_p(res.lr);
-        res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
-        res.estimates = e
-            .params
-            .iter()
-            .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
-            .collect();
-        res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
-        // A warm start is the last round's estimate: a fit that stays there
-        // with a gain was fitted (it converged at once).
-        res.moved = moved(&f, &pv, &res.estimates) || (warmed && res.lr > 0.0);
-        out_of_range(e, &f, &prepared)?;
-        // `wald_z`: every new param also this many sds from 0, each sd the
-        // larger of the model's (inflated) and the cluster-robust one. The
-        // LR reads the residuals as independent within a trajectory; with
-        // three trajectories the robust sd has two degrees of freedom and
-        // can be 10 times too small, so neither alone is the evidence. A
-        // candidate whose LR clears its critical value but not this is
-        // suggested, not established (issue 37.4).
-        res.wald_z = wald_z(&res.estimates, &res.robust_sd);
-        let wald_ok = wald_z_crit.is_none_or(|z| res.wald_z > z);
-        let by_lr = res.lr > crit && res.delta_bic < 0.0;
-        res.significant = by_lr && wald_ok;
-        res.suggested = by_lr && !wald_ok;
-        // A candidate that rewrites angle outputs must also be supported by
-        // the simultaneous differences of its members, which cancel any
-        // common-mode error (heading drift) it could be absorbing
-        // (common_mode.rs). A failed check does not veto; it is reported.
-        if rewrites_angle {
-            let c = common_mode::check(e, &ext, &prepared, &f, (crit, res.significant), o);
-            res.common_mode =
-                Some(c.unwrap_or_else(|err| {
-                    common_mode::CommonModeCheck::failed(e, &err.to_string())
-                }));
-            if res.common_mode.as_ref().is_some_and(|c| c.vetoed) {
-                res.significant = false;
-                res.suggested = false;
-            }
-        }
-        res.structure = f
-            .residuals
-            .structure()
-            .iter()
-            .map(|t| (t.test.clone(), t.z))
-            .collect();
-        res.rms = f.rms.clone();
-        res.whiteness_z = f
-            .residuals
-            .tests
-            .iter()
-            .find(|t| t.test == "whiteness")
-            .map_or(0.0, |t| t.z);
+        score(
+            &mut res,
+            (e, &ext, &prepared),
+            &f,
+            (base_m2ll, f_m2ll, white_won),
+            (&pv, warmed, rewrites_angle),
+            (crit, wald_z_crit),
+            o,
+        )?;
         Ok(Some(Fitted {
             sys: ext,
             fit: f,
@@ -369,6 +323,77 @@ pub(crate) fn candidate(
             (res, None)
         }
     }
+}
+
+/// A fitted candidate's scores: its LR against the current model (inflated
+/// as the fit's dispersion says), p-value, BIC change, estimates with sds and
+/// robust sds, whether it moved, its Wald z and the naming tests, the
+/// common-mode check of a candidate that rewrites angle outputs, and the
+/// residual structure its fit leaves.
+#[allow(clippy::too_many_arguments)]
+fn score(
+    res: &mut CandidateResult,
+    (e, ext, prepared): (&Effect, &System, &Dataset),
+    f: &ModelFit,
+    (base_m2ll, f_m2ll, white_won): (f64, f64, bool),
+    (pv, warmed, rewrites_angle): (&[f64], bool, bool),
+    (crit, wald_z_crit): (f64, Option<f64>),
+    o: &DiagnoseOptions,
+) -> Result<(), DiagnoseError> {
+    let inflate = f.inflation();
+    res.lr = (base_m2ll - f_m2ll).max(0.0) / inflate;
+    res.white_input_noise = white_won;
+    res.p_value = chi2_1_p(res.lr);
+    res.delta_bic = -(res.lr - e.params.len() as f64 * (f.n as f64).ln());
+    res.estimates = e
+        .params
+        .iter()
+        .filter_map(|p| f.param(p).map(|(v, s)| (p.clone(), v, s * inflate.sqrt())))
+        .collect();
+    res.robust_sd = e.params.iter().filter_map(|p| f.robust_sd(p)).collect();
+    // A warm start is the last round's estimate: a fit that stays there
+    // with a gain was fitted (it converged at once).
+    res.moved = moved(f, pv, &res.estimates) || (warmed && res.lr > 0.0);
+    out_of_range(e, f, prepared)?;
+    // `wald_z`: every new param also this many sds from 0, each sd the
+    // larger of the model's (inflated) and the cluster-robust one. The
+    // LR reads the residuals as independent within a trajectory; with
+    // three trajectories the robust sd has two degrees of freedom and
+    // can be 10 times too small, so neither alone is the evidence. A
+    // candidate whose LR clears its critical value but not this is
+    // suggested, not established (issue 37.4).
+    res.wald_z = wald_z(&res.estimates, &res.robust_sd);
+    let wald_ok = wald_z_crit.is_none_or(|z| res.wald_z > z);
+    let by_lr = res.lr > crit && res.delta_bic < 0.0;
+    res.significant = by_lr && wald_ok;
+    res.suggested = by_lr && !wald_ok;
+    // A candidate that rewrites angle outputs must also be supported by
+    // the simultaneous differences of its members, which cancel any
+    // common-mode error (heading drift) it could be absorbing
+    // (common_mode.rs). A failed check does not veto; it is reported.
+    if rewrites_angle {
+        let c = common_mode::check(e, ext, prepared, f, (crit, res.significant), o);
+        res.common_mode =
+            Some(c.unwrap_or_else(|err| common_mode::CommonModeCheck::failed(e, &err.to_string())));
+        if res.common_mode.as_ref().is_some_and(|c| c.vetoed) {
+            res.significant = false;
+            res.suggested = false;
+        }
+    }
+    res.structure = f
+        .residuals
+        .structure()
+        .iter()
+        .map(|t| (t.test.clone(), t.z))
+        .collect();
+    res.rms = f.rms.clone();
+    res.whiteness_z = f
+        .residuals
+        .tests
+        .iter()
+        .find(|t| t.test == "whiteness")
+        .map_or(0.0, |t| t.z);
+    Ok(())
 }
 
 /// The candidate `ext` refitted at noise levels estimated with it in the
