@@ -4,7 +4,7 @@
 use super::model::ZModel;
 use super::types::{err, gb_err};
 use crate::rank::AnalysisError;
-use obsan_expr::{Int, Poly as ZPoly, Var};
+use obsan_expr::{Int, Poly as ZPoly, SplitMix, Var};
 use obsan_groebner::{Field, Mono, Order, Poly, Ring};
 use std::collections::HashMap;
 
@@ -17,16 +17,16 @@ fn int_mod(f: &Field, c: &Int) -> u64 {
     }
 }
 
-/// Small deterministic generator (SplitMix64) for the random points.
-pub(super) struct Rng(u64);
+/// The random points' generator: the engine's SplitMix64 (one implementation
+/// in the workspace's obsan crates), drawing field elements above 1.
+pub(super) struct Rng(SplitMix);
 
 impl Rng {
+    pub(super) fn new(seed: u64) -> Rng {
+        Rng(SplitMix(seed))
+    }
     pub(super) fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     pub(super) fn elem(&mut self, f: &Field) -> u64 {
         loop {
@@ -74,7 +74,7 @@ impl Run {
     /// prepared for Taylor orders below `kmax`.
     pub(super) fn new(m: &ZModel, p: u64, seed: u64, kmax: usize) -> Result<Run, AnalysisError> {
         let field = Field::new(p).ok_or_else(|| err("global: bad prime"))?;
-        let mut rng = Rng(seed);
+        let mut rng = Rng::new(seed);
         let dens = Denominators::of(m);
         let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
         let ns = nx + dens.distinct.len();
@@ -92,7 +92,7 @@ impl Run {
             inits: Vec::new(),
             point: vec![0; n],
             point_order: 0,
-            rng: Rng(0),
+            rng: Rng::new(0),
         };
         // Known constants: random values (they are known, hence fixed).
         let consts: Vec<(Var, u64)> = m
@@ -104,7 +104,7 @@ impl Run {
         let den_p = run.model_polys(m, &conv, &dens)?;
         for _ in 0..16 {
             if run.sample_point(&mut rng, &den_p)? {
-                run.rng = Rng(rng.next());
+                run.rng = Rng::new(rng.next());
                 return Ok(run);
             }
         }
