@@ -1,6 +1,6 @@
 //! The estimation side's seeded generator: the engine's SplitMix64
 //! ([`obsan_expr::SplitMix`]; only obsan-recon, which depends on no obsan crate,
-//! and the Gröbner route's `global.rs` keep copies of it) with uniform and normal
+//! keeps a copy of it) with uniform and normal
 //! (Box–Muller) deviates. Results depend on the seed only, never on a crate version
 //! or on scheduling.
 
