@@ -19,6 +19,13 @@ use obsan_model::{Kind, System};
 /// Beyond it the "wheel" would lose half its radius: a failed fit.
 const HALF: f64 = 0.5;
 
+/// A drift may change an input's scale by at most this fraction over the
+/// session: wear and warming change a wheel's radius by a few percent in an
+/// hour, not by a third in minutes. A larger trend is something else (a fit
+/// stopped short, a scale error of another input read as a trend): a failed
+/// fit, not a finding.
+const DRIFT_MAX: f64 = 0.1;
+
 /// Every new family, in the order: drifts, quadratics, wobbles, biases
 /// with an angle state.
 pub(super) fn drafts(
@@ -67,7 +74,7 @@ fn drifts(inputs: &[String], n: &mut Names) -> Vec<Draft> {
         );
         d.limits.push(Limit {
             param: k,
-            bound: HALF,
+            bound: DRIFT_MAX,
             per_second: true,
             outputs: None,
             what: format!("the change of {u}'s scale over the session"),
