@@ -17,6 +17,11 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             .an
             .timeout
             .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0))),
+        // The engine's memory budget, as every other stage counts it.
+        max_bytes: usize::try_from(
+            (a.an.max_terms as u128).saturating_mul(obsan_expr::Budget::BYTES_PER_TERM),
+        )
+        .unwrap_or(usize::MAX),
         ..GlobalOptions::default()
     };
     let r = global_identifiability(&mut nf, &opts).map_err(|e| Failure(e.to_string()))?;

@@ -281,6 +281,57 @@ class Identifiability(NamedTuple):
     """An angle entering only through sin/cos, counted modulo 2 pi."""
 
 
+class MapImage(NamedTuple):
+    """One moved variable of a discrete map: ``var -> sign * image``, plus pi
+    when ``plus_pi`` (angles: ``theta -> phi + pi`` or ``pi - phi``)."""
+
+    var: str
+    image: str
+    sign: int
+    plus_pi: bool
+
+
+class DiscreteMap(NamedTuple):
+    """An exact discrete symmetry of ``obsan global`` (``text`` as printed, e.g.
+    ``(x, theta) -> (-x, pi - theta)``) with its moved variables."""
+
+    text: str
+    images: List[MapImage]
+
+    @classmethod
+    def parse(cls, text: str) -> "DiscreteMap":
+        """Reads the printed form: ``a -> b`` or ``(a, b) -> (c, d)``, each image
+        ``v``, ``-v``, ``v + pi`` or ``pi - v``."""
+        lhs, sep, rhs = text.partition(" -> ")
+        if not sep:
+            raise ValueError(f"not a map: {text!r}")
+        names = [n for n in lhs.strip().strip("()").split(", ")]
+        targets = [t for t in rhs.strip().strip("()").split(", ")]
+        if len(names) != len(targets):
+            raise ValueError(f"not a map: {text!r}")
+        images = []
+        for n, t in zip(names, targets):
+            if t.startswith("pi - "):
+                images.append(MapImage(n, t[5:], -1, True))
+            elif t.endswith(" + pi"):
+                images.append(MapImage(n, t[:-5], 1, True))
+            elif t.startswith("-"):
+                images.append(MapImage(n, t[1:], -1, False))
+            else:
+                images.append(MapImage(n, t, 1, False))
+        return cls(text, images)
+
+    def apply(self, values: Mapping[str, float]) -> Dict[str, float]:
+        """The image of a point (a value per variable; unmoved ones are kept)."""
+        out = dict(values)
+        for im in self.images:
+            out[im.var] = im.sign * values[im.image] + (math.pi if im.plus_pi else 0.0)
+        return out
+
+    def __str__(self) -> str:
+        return self.text
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class Global(Result):
     """``obsan global``: per variable global / local with k values / not identifiable,
@@ -289,7 +340,7 @@ class Global(Result):
     system: str
     variables: List[Identifiability]
     solutions: Optional[int]
-    maps: List[Any]
+    maps: List[DiscreteMap]
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Global":
@@ -307,7 +358,7 @@ class Global(Result):
                 for v in raw.get("variables") or []
             ],
             solutions=raw.get("solutions"),
-            maps=list(raw.get("maps") or []),
+            maps=[DiscreteMap.parse(str(m)) for m in raw.get("maps") or []],
         )
 
 

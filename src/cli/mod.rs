@@ -282,6 +282,9 @@ written to --out and a one-line summary to stdout."
 Counts are over the complex numbers, as SIAN and StructuralIdentifiability.jl count; two
 independent random points modulo two primes must agree. Rational models, and sin/cos of a
 state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp/log/sqrt.
+Memory: the Taylor system, the Gröbner basis and its F4 matrices may hold 2048 bytes per
+--max-terms unit (about 195 MiB by default); past it, exit 2 with the stage named ('too large:
+the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms').
 --json prints {system, restriction, variables: [{name, kind (param | state), angle,
 verdict (global | local | not identifiable), values}], solutions, all_local, maps, group_order,
 order, rank_order, output_orders: [{output, order}], error_bound, degree_bound_local,

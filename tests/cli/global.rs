@@ -147,3 +147,36 @@ fn bearing_only_mirror() {
     assert_eq!(v["maps"][0], "beta -> -beta");
     assert_eq!(v["group_order"], 2);
 }
+
+#[test]
+fn the_memory_budget_stops_the_groebner_stage() {
+    // llw1987 is answered under the default budget (p1, p3: 2 values, in
+    // docs/performance.md); at --max-terms 500 the budget is 500 * 2,048
+    // bytes, under 1 MiB, and its F4 matrices are refused (counted in bytes,
+    // so the stage is named whatever the machine's speed).
+    let e = bad(
+        &[
+            "global",
+            "systems/benchmarks/llw1987.sys",
+            "--max-terms",
+            "500",
+        ],
+        "too large: the Groebner basis (F4 matrix of ",
+    );
+    assert!(e.contains("raise it with --max-terms"), "{e}");
+    assert!(!e.contains("timed out"), "{e}");
+    // The Taylor system, before any basis: at --max-terms 100 (200 KiB)
+    // chemostat's derivatives do not fit; every monomial holds an exponent
+    // for each of the derivation ring's variables (the params, and 27
+    // Taylor orders of each state, denominator state and input).
+    let e = bad(
+        &[
+            "global",
+            "systems/benchmarks/chemostat.sys",
+            "--max-terms",
+            "100",
+        ],
+        "too large: the Taylor system (derivatives of the right-hand sides and outputs",
+    );
+    assert!(e.contains("raise it with --max-terms"), "{e}");
+}

@@ -8,6 +8,7 @@ mod diagnose;
 mod experiments;
 mod expr;
 mod global;
+mod global_maps;
 mod import;
 mod json_schema;
 mod modes;

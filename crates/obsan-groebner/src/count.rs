@@ -5,10 +5,12 @@
 
 use crate::field::Field;
 use crate::gb::{Basis, GbBudget};
+use crate::mem::{block, mono_bytes, over};
 use crate::poly::{Mono, Order, Poly, Ring};
 use crate::select::groebner;
 use crate::GbError;
 use std::collections::HashMap;
+use std::mem::size_of;
 
 impl Basis {
     /// Whether the ideal is zero-dimensional (finitely many common zeros over
@@ -38,6 +40,9 @@ impl Basis {
         }
         let n = self.ring.n;
         let lms = self.leading_monomials();
+        // Each monomial seen is held in `seen` (a hash slot at 7/8 load),
+        // a standard one in `out` too, and up to n children on the stack.
+        let per = mono_bytes(n) * (2 + n) + (size_of::<Mono>() + 1) * 8 / 7;
         let mut out: Vec<Mono> = Vec::new();
         let mut stack = vec![Mono::one(n)];
         let mut seen: std::collections::HashSet<Mono> = std::collections::HashSet::new();
@@ -48,6 +53,15 @@ impl Basis {
             out.push(m.clone());
             if out.len() > cap {
                 return Err(GbError::Budget("dimension of the quotient"));
+            }
+            let need = seen.len() * per;
+            if need > self.max_bytes {
+                return Err(over(need, self.max_bytes, || {
+                    format!(
+                        "the count of solutions (the quotient's basis, {} monomials so far)",
+                        out.len()
+                    )
+                }));
             }
             for v in 0..n {
                 stack.push(m.mul(&Mono::var(n, v, 1))?);
@@ -70,6 +84,17 @@ impl Basis {
             .map(|(i, m)| (m, i))
             .collect();
         let dim = std.len();
+        // Dense: up to dim + 1 echelon rows, each a vector of dim and a
+        // combination of dim + 1 coefficients, beside the quotient's basis
+        // and its column map.
+        let rows_bytes = (dim + 1)
+            * (size_of::<(Vec<u64>, Vec<u64>, usize)>() + block(8 * dim) + block(8 * (dim + 1)));
+        let need = rows_bytes + dim * (2 * mono_bytes(r.n) + 2 * size_of::<usize>());
+        if need > self.max_bytes {
+            return Err(over(need, self.max_bytes, || {
+                format!("the count of solutions (a dense {dim} x {dim} matrix over the quotient)")
+            }));
+        }
         // Echelon rows: (vector, combination of powers it represents).
         let mut rows: Vec<(Vec<u64>, Vec<u64>, usize)> = Vec::new(); // (vec, combo, pivot)
         let f = self.reduce(f)?;

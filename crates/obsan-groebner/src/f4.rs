@@ -9,10 +9,12 @@
 //! Gebauer–Möller update as Buchberger's algorithm (`gb.rs`).
 
 use crate::gb::{finish, start, unit, Basis, GbBudget, Pair, Work};
+use crate::mem::{block, mono_bytes, over, term_bytes};
 use crate::poly::{Mono, Poly, Ring};
 use crate::GbError;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
+use std::mem::size_of;
 use std::time::Instant;
 
 /// The multiplicative hash of rustc (FxHash): monomials are keyed by
@@ -75,7 +77,7 @@ pub(crate) fn f4(ring: &Ring, gens: &[Poly], budget: GbBudget) -> Result<Basis, 
         // active set stays minimal.
         for h in new {
             if h.terms[0].0.is_one() {
-                return Ok(unit(ring));
+                return Ok(unit(ring, budget.max_bytes));
             }
             w.check(&h)?;
             w.update(h, sugar)?;
@@ -102,9 +104,57 @@ struct Sym<'w, 'a> {
     queue: Vec<u32>,
     /// The active basis elements (fixed while one matrix is built).
     act: Vec<usize>,
+    /// Bytes the matrix will hold through its elimination ([`col_bytes`],
+    /// [`row_bytes`]), beside `base` held by the basis and its pairs.
+    bytes: usize,
+    base: usize,
+}
+
+/// Bytes of one column, from symbolic preprocessing to the end of the
+/// elimination: its monomial twice (the hash map's key and `monos`), the
+/// hash slot (a (Mono, u32) and a control byte, at the map's 7/8 load),
+/// its pivot and queue entries, then `by_order`, `rank`, the pivot slot,
+/// the u128 accumulator and a bit of `nz`.
+fn col_bytes(n: usize) -> usize {
+    2 * mono_bytes(n)
+        + (size_of::<(Mono, u32)>() + 1) * 8 / 7
+        + size_of::<Option<usize>>()
+        + 4
+        + 4
+        + 4
+        + size_of::<Option<(Vec<u32>, Vec<u64>)>>()
+        + 16
+        + 1
+}
+
+/// Bytes of one row of `len` entries: its column ids, and in the
+/// elimination its copy as a pivot (ids and coefficients) or the transient
+/// copies of a row being reduced (the same sizes).
+fn row_bytes(len: usize) -> usize {
+    size_of::<Row>() + 2 * block(4 * len) + block(8 * len)
+}
+
+/// Bytes of one entry of a new (reduced) row: the result, its pivot copy,
+/// the output row and the polynomial term it becomes.
+fn new_entry_bytes(n: usize) -> usize {
+    size_of::<(u32, u64)>() + 4 + 8 + size_of::<(u32, u64)>() + term_bytes(n)
 }
 
 impl Sym<'_, '_> {
+    /// Counts `extra` more bytes, or refuses if the budget would pass.
+    fn grow(&mut self, extra: usize) -> Result<(), GbError> {
+        let need = self.base + self.bytes + extra;
+        let max = self.w.budget.max_bytes;
+        if need > max {
+            let (r, c) = (self.rows.len(), self.monos.len());
+            return Err(over(need, max, || {
+                format!("the Groebner basis (F4 matrix of {r} rows x {c} columns)")
+            }));
+        }
+        self.bytes += extra;
+        Ok(())
+    }
+
     fn column(&mut self, m: Mono) -> Result<u32, GbError> {
         if let Some(&c) = self.ids.get(&m) {
             return Ok(c);
@@ -112,6 +162,7 @@ impl Sym<'_, '_> {
         if self.monos.len() >= self.w.budget.max_terms {
             return Err(GbError::Budget("columns of the F4 matrix"));
         }
+        self.grow(col_bytes(self.w.ring.n))?;
         let c = self.monos.len() as u32;
         self.ids.insert(m.clone(), c);
         self.monos.push(m);
@@ -123,6 +174,7 @@ impl Sym<'_, '_> {
     /// Adds the row `mult * g_k`; returns its index.
     fn add_row(&mut self, mult: &Mono, k: usize) -> Result<usize, GbError> {
         let w = self.w;
+        self.grow(row_bytes(w.polys[k].len()))?;
         let mut cols = Vec::with_capacity(w.polys[k].len());
         for (m, _) in w.polys[k].terms() {
             let c = self.column(mult.mul(m)?)?;
@@ -157,6 +209,8 @@ fn reduce_pairs(w: &Work, sel: &[Pair]) -> Result<Vec<Poly>, GbError> {
         rows: Vec::new(),
         queue: Vec::new(),
         act: (0..w.polys.len()).filter(|&k| w.active[k]).collect(),
+        bytes: 0,
+        base: w.held(),
     };
     // Each pair gives two multiples with the same leading monomial (its lcm):
     // one becomes the pivot of that column (if none is yet), the other a row
@@ -165,9 +219,12 @@ fn reduce_pairs(w: &Work, sel: &[Pair]) -> Result<Vec<Poly>, GbError> {
     let mut todo: Vec<usize> = Vec::new();
     for p in sel {
         for k in [p.i, p.j] {
-            if seen.insert((k, p.lcm.clone()), ()).is_some() {
+            let key = (k, p.lcm.clone());
+            if seen.contains_key(&key) {
                 continue;
             }
+            s.grow((size_of::<(usize, Mono)>() + 1) * 8 / 7 + mono_bytes(w.ring.n))?;
+            seen.insert(key, ());
             let mult = w.lm[k].quotient(&p.lcm);
             let r = s.add_row(&mult, k)?;
             let lead = s.rows[r].cols[0] as usize;
@@ -232,6 +289,7 @@ fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
     // (rows are short against the 10^4-10^5 columns of a large matrix).
     let mut nz = vec![0u64; ncols.div_ceil(64)];
     let mut out: Vec<(u32, Vec<(u32, u64)>)> = Vec::new();
+    let mut new_bytes = 0usize;
     for (n, &t) in todo.iter().enumerate() {
         if n % 64 == 0 {
             if let Some(d) = w.budget.deadline {
@@ -283,6 +341,17 @@ fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
         let Some(&(lead, lc)) = res.first() else {
             continue;
         };
+        new_bytes += res.len() * new_entry_bytes(w.ring.n);
+        let need = s.base + s.bytes + new_bytes;
+        if need > w.budget.max_bytes {
+            let (r, c) = (s.rows.len(), ncols);
+            return Err(over(need, w.budget.max_bytes, || {
+                format!(
+                    "the Groebner basis (F4 matrix of {r} rows x {c} columns, {} new rows)",
+                    out.len() + 1
+                )
+            }));
+        }
         let inv = fld.inv(lc).ok_or(GbError::Budget("zero pivot"))?;
         let pc: Vec<u32> = res.iter().map(|t| t.0).collect();
         let pv: Vec<u64> = res.iter().map(|t| fld.mul(t.1, inv)).collect();

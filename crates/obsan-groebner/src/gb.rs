@@ -3,10 +3,12 @@
 //! Möller 1988, in the form of Becker and Weispfenning, "Gröbner Bases",
 //! algorithm UPDATE).
 
+use crate::mem::{block, mono_bytes, mono_heap, over};
 use crate::poly::{Mono, Order, Poly, Ring};
 use crate::GbError;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
+use std::mem::size_of;
 use std::time::Instant;
 
 /// Limits of one computation: past any of them it stops with an error.
@@ -18,6 +20,11 @@ pub struct GbBudget {
     pub max_terms: usize,
     /// S-polynomials reduced.
     pub max_pairs: usize,
+    /// Bytes held at once (the basis, its pairs, a reduction, an F4
+    /// matrix, the counts' dense matrices; `mem.rs` says how they are
+    /// counted), refused before an allocation would pass it. `usize::MAX`
+    /// (the default): no bound but the others.
+    pub max_bytes: usize,
     pub deadline: Option<Instant>,
 }
 
@@ -27,6 +34,7 @@ impl Default for GbBudget {
             max_basis: 20_000,
             max_terms: 2_000_000,
             max_pairs: 2_000_000,
+            max_bytes: usize::MAX,
             deadline: None,
         }
     }
@@ -37,6 +45,9 @@ impl Default for GbBudget {
 pub struct Basis {
     pub ring: Ring,
     pub polys: Vec<Poly>,
+    /// The memory budget of the computation, kept for the counts made on
+    /// the basis (normal forms, the quotient's dense matrices).
+    pub max_bytes: usize,
 }
 
 pub(crate) struct Pair {
@@ -61,9 +72,33 @@ pub(crate) struct Work<'a> {
     pub(crate) active: Vec<bool>,
     pub(crate) pairs: Vec<Pair>,
     pub(crate) budget: GbBudget,
+    /// Bytes held by the elements (`polys` and the per-element vectors);
+    /// the pairs are counted by [`Work::held`].
+    pub(crate) elem_bytes: usize,
+}
+
+/// Bytes of one critical pair in `n` variables (its lcm's exponents too).
+pub(crate) fn pair_bytes(n: usize) -> usize {
+    size_of::<Pair>() + mono_heap(n)
+}
+
+/// Bytes of one basis element's slots beside its polynomial: its `Poly`
+/// value, sugar, leading monomial, mask and active flag.
+fn elem_slot_bytes(n: usize) -> usize {
+    size_of::<Poly>() + size_of::<u32>() + mono_bytes(n) + size_of::<u64>() + 1
 }
 
 impl Work<'_> {
+    /// Bytes held by the basis and its pairs.
+    pub(crate) fn held(&self) -> usize {
+        self.elem_bytes + self.pairs.len() * pair_bytes(self.ring.n)
+    }
+
+    /// The budget left beside what the basis holds.
+    pub(crate) fn bytes_left(&self) -> usize {
+        self.budget.max_bytes.saturating_sub(self.held())
+    }
+
     pub(crate) fn check(&self, p: &Poly) -> Result<(), GbError> {
         if p.len() > self.budget.max_terms {
             return Err(GbError::Budget("terms of a polynomial"));
@@ -76,18 +111,22 @@ impl Work<'_> {
         Ok(())
     }
 
+    /// An active element whose leading monomial divides `m`.
+    fn reducer(&self, m: &Mono) -> Option<usize> {
+        let mm = m.mask();
+        (0..self.polys.len())
+            .find(|&k| self.active[k] && self.masks[k] & !mm == 0 && self.lm[k].divides(m))
+    }
+
     /// Full reduction of `f` by the active elements.
     pub(crate) fn reduce(&self, f: Poly) -> Result<Poly, GbError> {
         reduce_by(
             self.ring,
             f.terms,
             &self.polys,
-            |m| {
-                let mm = m.mask();
-                (0..self.polys.len())
-                    .find(|&k| self.active[k] && self.masks[k] & !mm == 0 && self.lm[k].divides(m))
-            },
+            |m| self.reducer(m),
             self.budget.max_terms,
+            self.bytes_left(),
             self.budget.deadline,
         )
     }
@@ -112,6 +151,21 @@ impl Work<'_> {
             Some((m, _)) => m.clone(),
             None => return Ok(()),
         };
+        // At most one new pair per active element, held beside the old
+        // pairs until criterion B has run, and the new element itself.
+        let n = self.ring.n;
+        let grow = h.stored_bytes(n) + elem_slot_bytes(n);
+        let need = self.held() + grow + 2 * hi * pair_bytes(n);
+        if need > self.budget.max_bytes {
+            return Err(over(need, self.budget.max_bytes, || {
+                format!(
+                    "the Groebner basis ({} elements, {} critical pairs, {} variables)",
+                    hi + 1,
+                    self.pairs.len() + hi,
+                    n
+                )
+            }));
+        }
         // New pairs (h, g) for active g.
         let mut c: Vec<Pair> = Vec::new();
         for g in 0..hi {
@@ -172,6 +226,7 @@ impl Work<'_> {
         self.masks.push(lh.mask());
         self.lm.push(lh);
         self.active.push(true);
+        self.elem_bytes += grow;
         Ok(())
     }
 }
@@ -192,6 +247,7 @@ pub(crate) fn start<'a>(
         active: Vec::new(),
         pairs: Vec::new(),
         budget,
+        elem_bytes: 0,
     };
     let mut g: Vec<Poly> = gens
         .iter()
@@ -205,7 +261,7 @@ pub(crate) fn start<'a>(
         if !h.is_zero() {
             let h = ring.monic(&h);
             if h.terms[0].0.is_one() {
-                return Ok(Err(unit(ring)));
+                return Ok(Err(unit(ring, budget.max_bytes)));
             }
             w.update(h, s)?;
         }
@@ -247,7 +303,7 @@ pub fn buchberger(ring: &Ring, gens: &[Poly], budget: GbBudget) -> Result<Basis,
         }
         let h = ring.monic(&h);
         if h.terms[0].0.is_one() {
-            return Ok(unit(ring));
+            return Ok(unit(ring, budget.max_bytes));
         }
         w.update(h, p.sugar)?;
     }
@@ -261,18 +317,41 @@ pub(crate) fn finish(w: &Work) -> Result<Basis, GbError> {
     let mut keep: Vec<usize> = (0..w.polys.len()).filter(|&k| w.active[k]).collect();
     keep.sort_by(|&a, &b| ring.order.cmp(&w.lm[a], &w.lm[b]));
     let mut out: Vec<Poly> = Vec::with_capacity(keep.len());
+    // The reduced basis is built beside the work's.
+    let mut out_bytes = block(keep.len() * size_of::<Poly>());
     for &k in &keep {
         let (m, c) = w.polys[k].terms[0].clone();
         let tail = Poly {
             terms: w.polys[k].terms[1..].to_vec(),
         };
-        let mut t = w.reduce(tail)?;
+        let mut t = reduce_by(
+            ring,
+            tail.terms,
+            &w.polys,
+            |m| w.reducer(m),
+            w.budget.max_terms,
+            w.bytes_left().saturating_sub(out_bytes),
+            w.budget.deadline,
+        )?;
         t.terms.insert(0, (m, c));
+        t.terms.shrink_to_fit();
+        out_bytes += t.stored_bytes(ring.n);
+        let need = w.held() + out_bytes;
+        if need > w.budget.max_bytes {
+            return Err(over(need, w.budget.max_bytes, || {
+                format!(
+                    "the Groebner basis (its reduced form, {} of {} elements)",
+                    out.len() + 1,
+                    keep.len()
+                )
+            }));
+        }
         out.push(t);
     }
     Ok(Basis {
         ring: ring.clone(),
         polys: out,
+        max_bytes: w.budget.max_bytes,
     })
 }
 
@@ -316,16 +395,30 @@ struct Stream {
 /// monomial): the pending polynomial is kept as a sum of streams merged by a
 /// heap (Johnson; Monagan and Pearce, "Sparse polynomial division using a
 /// heap", 2011), so each step costs a logarithm, not a pass over the rest.
-fn reduce_by(
+/// The streams, their heads and the remainder may hold `max_bytes`.
+pub(crate) fn reduce_by(
     ring: &Ring,
     f: Vec<(Mono, u64)>,
     polys: &[Poly],
     find: impl Fn(&Mono) -> Option<usize>,
     max_terms: usize,
+    max_bytes: usize,
     deadline: Option<Instant>,
 ) -> Result<Poly, GbError> {
     let fld = ring.field;
     let order = ring.order;
+    // A stream holds its multiplier, the heap its next term; a remainder
+    // term its monomial (the remainder's buffer grows by doubling: 2x).
+    let per_stream = size_of::<Stream>() + size_of::<Head>() + 2 * mono_heap(ring.n);
+    let per_done = 2 * std::mem::size_of::<(Mono, u64)>() + mono_heap(ring.n);
+    let held = |streams: usize, done: usize| streams * per_stream + done * per_done;
+    let too_big = |streams: usize, done: usize| {
+        over(held(streams, done), max_bytes, || {
+            format!(
+                "the Groebner basis (a reduction of {streams} multiples into {done} remainder terms)"
+            )
+        })
+    };
     let mut streams: Vec<Stream> = vec![Stream {
         c: 1,
         q: Mono::one(ring.n),
@@ -394,6 +487,9 @@ fn reduce_by(
                 if streams.len() > max_terms {
                     return Err(GbError::Budget("terms of a polynomial"));
                 }
+                if held(streams.len(), done.len()) > max_bytes {
+                    return Err(too_big(streams.len(), done.len()));
+                }
                 if steps % 1024 == 0 {
                     if let Some(d) = deadline {
                         if Instant::now() > d {
@@ -403,6 +499,9 @@ fn reduce_by(
                 }
             }
             None => {
+                if held(streams.len(), done.len() + 1) > max_bytes {
+                    return Err(too_big(streams.len(), done.len() + 1));
+                }
                 done.push((mono, coef));
                 if done.len() > max_terms {
                     return Err(GbError::Budget("terms of a polynomial"));
@@ -413,10 +512,11 @@ fn reduce_by(
     Ok(Poly { terms: done })
 }
 
-pub(crate) fn unit(ring: &Ring) -> Basis {
+pub(crate) fn unit(ring: &Ring, max_bytes: usize) -> Basis {
     Basis {
         ring: ring.clone(),
         polys: vec![ring.constant(1)],
+        max_bytes,
     }
 }
 
@@ -439,6 +539,7 @@ impl Basis {
                     .find(|&k| masks[k] & !mm == 0 && self.polys[k].terms[0].0.divides(m))
             },
             usize::MAX,
+            self.max_bytes,
             None,
         )
     }

@@ -21,7 +21,7 @@
 //! ```
 //!
 //! Depends only on obsan-recon (its prime-field arithmetic). Every limit (degree, terms, basis size,
-//! deadline) is an error, never a truncated basis.
+//! bytes held, deadline) is an error, never a truncated basis.
 
 #![cfg_attr(
     not(test),
@@ -32,12 +32,14 @@ mod count;
 mod f4;
 mod field;
 mod gb;
+mod mem;
 mod poly;
 mod select;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
 pub use field::{is_prime, Field};
 pub use gb::{buchberger, Basis, GbBudget};
+pub use mem::term_bytes;
 pub use poly::{Mono, Order, Poly, Ring, MAX_DEGREE};
 pub use select::{f4, groebner};
 
@@ -50,6 +52,13 @@ pub enum GbError {
     Budget(&'static str),
     /// A count was asked of an ideal with infinitely many zeros.
     NotZeroDimensional,
+    /// The stored data would pass `GbBudget::max_bytes`: `what` names the
+    /// stage and its size, `bytes` what it would hold.
+    Memory {
+        bytes: u128,
+        max: u128,
+        what: String,
+    },
 }
 
 impl std::fmt::Display for GbError {
@@ -58,6 +67,12 @@ impl std::fmt::Display for GbError {
             GbError::Degree => write!(f, "a monomial degree passed {MAX_DEGREE}"),
             GbError::Budget(what) => write!(f, "Gröbner basis budget exhausted: {what}"),
             GbError::NotZeroDimensional => write!(f, "the ideal is not zero-dimensional"),
+            GbError::Memory { bytes, max, what } => write!(
+                f,
+                "too large: {what} would need {} MiB, the memory budget is {} MiB",
+                bytes.div_ceil(1 << 20),
+                max >> 20
+            ),
         }
     }
 }

@@ -162,6 +162,7 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
         .collect();
     let budget = GbBudget {
         max_basis: opts.max_basis,
+        max_bytes: opts.max_bytes,
         deadline: opts.deadline,
         ..GbBudget::default()
     };

@@ -42,6 +42,7 @@ pub fn global_identifiability(
     let mut results = Vec::new();
     for (r, &p) in primes.iter().enumerate() {
         let mut run = Run::new(&m, p, opts.seed.wrapping_add(r as u64), kmax)?;
+        run.max_bytes = opts.max_bytes;
         results.push(count_once(&mut run, opts)?);
     }
     let (a, b) = (&results[0], &results[1]);

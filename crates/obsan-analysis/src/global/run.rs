@@ -2,7 +2,7 @@
 //! the states' and inputs' derivatives modulo one prime, at one random point.
 
 use super::model::ZModel;
-use super::types::{err, gb_err};
+use super::types::{err, gb_err, too_large};
 use crate::rank::AnalysisError;
 use obsan_expr::{Int, Poly as ZPoly, SplitMix, Var};
 use obsan_groebner::{Field, Mono, Order, Poly, Ring};
@@ -60,6 +60,8 @@ pub(super) struct Run {
     pub(super) point_order: usize,
     /// Random coefficient of the separating linear form.
     pub(super) rng: Rng,
+    /// Bytes the derivatives and the system may hold (the memory budget).
+    pub(super) max_bytes: usize,
 }
 
 impl Run {
@@ -93,6 +95,7 @@ impl Run {
             point: vec![0; n],
             point_order: 0,
             rng: Rng::new(0),
+            max_bytes: usize::MAX,
         };
         // Known constants: random values (they are known, hence fixed).
         let consts: Vec<(Var, u64)> = m
@@ -251,10 +254,21 @@ impl Run {
         if order >= self.kmax {
             return Err(err("global: Taylor order past the prepared maximum"));
         }
+        // Each derivative is counted as it joins the others (in the
+        // derivation ring's `n` variables: every monomial holds all of them).
+        let n = self.ring.n;
+        let mut held: usize = self
+            .rhs_d
+            .iter()
+            .chain(&self.out_d)
+            .flatten()
+            .map(|p| p.stored_bytes(n))
+            .sum();
         for s in 0..self.ns {
             while self.rhs_d[s].len() < order {
                 let last = self.rhs_d[s].last().cloned().unwrap_or_default();
                 let d = self.derive(&last)?;
+                held = self.count_derivative(held, &d, order)?;
                 self.rhs_d[s].push(d);
             }
         }
@@ -262,6 +276,7 @@ impl Run {
             while self.out_d[y].len() <= order {
                 let last = self.out_d[y].last().cloned().unwrap_or_default();
                 let d = self.derive(&last)?;
+                held = self.count_derivative(held, &d, order)?;
                 self.out_d[y].push(d);
             }
         }
@@ -277,6 +292,27 @@ impl Run {
             self.point_order += 1;
         }
         Ok(())
+    }
+
+    /// `held` plus the bytes of a new derivative, or the memory error.
+    fn count_derivative(
+        &self,
+        held: usize,
+        d: &Poly,
+        order: usize,
+    ) -> Result<usize, AnalysisError> {
+        let held = held + d.stored_bytes(self.ring.n);
+        if held > self.max_bytes {
+            return Err(too_large(
+                held as u128,
+                self.max_bytes as u128,
+                &format!(
+                    "the Taylor system (derivatives of the right-hand sides and outputs to order {order}, in {} variables)",
+                    self.ring.n
+                ),
+            ));
+        }
+        Ok(held)
     }
 
     /// The system of the proven truncation: output `y` up to order
@@ -323,6 +359,18 @@ impl Run {
                     eqs.push(e);
                 }
             }
+        }
+        let bytes: usize = eqs.iter().map(|p| p.stored_bytes(r.n)).sum();
+        if bytes > self.max_bytes {
+            return Err(too_large(
+                bytes as u128,
+                self.max_bytes as u128,
+                &format!(
+                    "the Taylor system ({} equations to order {top}, in {} variables)",
+                    eqs.len(),
+                    r.n
+                ),
+            ));
         }
         let mut unknowns = Vec::new();
         for k in (1..=top).rev() {

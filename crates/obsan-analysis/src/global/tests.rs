@@ -140,3 +140,38 @@ fn angle_maps_beyond_signed_permutations() {
     assert_eq!(verdict(&r, "y"), Identifiability::Global);
     assert_eq!(verdict(&r, "theta"), Identifiability::Local(2));
 }
+
+#[test]
+fn memory_errors_use_the_engines_words() {
+    // The same text as the engine's other stages for the same numbers.
+    let engine = obsan_expr::Limit::Memory {
+        bytes: 3 << 20,
+        max: 2 << 20,
+        what: "the Groebner basis",
+    };
+    let ours = types::too_large(3 << 20, 2 << 20, "the Groebner basis");
+    assert_eq!(ours.to_string(), engine.to_string());
+}
+
+#[test]
+fn a_small_memory_budget_stops_the_count() {
+    // Two summed decays (counted above under the default budget). In the
+    // derivation ring's 2 + 2 * 27 = 56 variables a term takes 32 + 240
+    // bytes, and the Taylor system to order 4 has 9 derivatives of one or two
+    // terms: more than 4 KiB, so it must refuse, never count.
+    let sys = System::parse(
+        "system t\nstate x1, x2\nparam a, b\nx1' = -a*x1\nx2' = -b*x2\noutput y = x1 + x2\n",
+        "t.sys",
+    )
+    .unwrap();
+    let mut nf = sys.normal_form(None, &[]).unwrap();
+    let opts = GlobalOptions {
+        max_bytes: 4 << 10,
+        ..GlobalOptions::default()
+    };
+    let e = global_identifiability(&mut nf, &opts)
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("too large: the "), "{e}");
+    assert!(e.ends_with("raise it with --max-terms"), "{e}");
+}

@@ -17,6 +17,10 @@ pub struct GlobalOptions {
     pub max_basis: usize,
     /// Largest quotient dimension counted.
     pub max_solutions: usize,
+    /// Bytes the Taylor system, the Gröbner basis and the counts may hold
+    /// (the engine's memory budget: `--max-terms` times
+    /// `obsan_expr::Budget::BYTES_PER_TERM`).
+    pub max_bytes: usize,
 }
 
 impl Default for GlobalOptions {
@@ -27,6 +31,7 @@ impl Default for GlobalOptions {
             max_order: 24,
             max_basis: 20_000,
             max_solutions: 100_000,
+            max_bytes: memory_budget(obsan_expr::Budget::DEFAULT_MAX_TERMS),
         }
     }
 }
@@ -135,6 +140,23 @@ pub struct GlobalReport {
     pub primes: [u64; 2],
 }
 
+/// The memory budget of a term budget, as every engine stage counts it.
+fn memory_budget(max_terms: usize) -> usize {
+    let b = (max_terms as u128).saturating_mul(obsan_expr::Budget::BYTES_PER_TERM);
+    usize::try_from(b).unwrap_or(usize::MAX)
+}
+
+/// A stage that would pass the memory budget, in the words of the engine's
+/// other stages (`obsan_expr::Limit::Memory`).
+pub(super) fn too_large(bytes: u128, max: u128, what: &str) -> AnalysisError {
+    err(format!(
+        "too large: {what} would need {} MiB, the memory budget is {} MiB ({} bytes per --max-terms); raise it with --max-terms",
+        bytes.div_ceil(1 << 20),
+        max >> 20,
+        obsan_expr::Budget::BYTES_PER_TERM
+    ))
+}
+
 pub(super) fn err(s: impl Into<String>) -> AnalysisError {
     AnalysisError::Invalid(s.into())
 }
@@ -144,6 +166,7 @@ pub(super) fn gb_err(e: GbError) -> AnalysisError {
         GbError::Budget("deadline") => {
             AnalysisError::Timeout("the Gröbner basis did not finish".into())
         }
+        GbError::Memory { bytes, max, what } => too_large(bytes, max, &what),
         e => err(format!("global: {e}")),
     }
 }

@@ -1,0 +1,45 @@
+"""``obsan global`` from Python: the counts derived by hand in systems/global/
+and the typed discrete maps, checked by applying them to the model."""
+
+import math
+
+import pytest
+
+import obsan
+from conftest import SYSTEMS
+
+
+def test_wall_reflection_map_is_typed_and_exact():
+    # Hand derivation in the file: sin(theta) and x0 cos(theta) are known,
+    # so (x, theta) -> (-x, pi - theta) gives the second of 2 solutions.
+    g = obsan.load(SYSTEMS / "global" / "wall_reflection.sys").global_identifiability()
+    assert g.solutions == 2
+    values = {v.name: v.values for v in g.variables}
+    assert values == {"theta": 2, "x": 2, "y": 1}
+    assert len(g.maps) == 1
+    m = g.maps[0]
+    assert isinstance(m, obsan.DiscreteMap)
+    assert str(m) == g["maps"][0]  # still a Mapping of the JSON
+    assert sorted(im.var for im in m.images) == ["theta", "x"]
+    # The outputs y and x^2 + y^2 are unchanged; x' = v cos(theta) changes
+    # sign with x, y' = v sin(theta) is kept.
+    p = {"x": 0.7, "y": 1.3, "theta": 0.4, "v": 1.1}
+    q = m.apply(p)
+    assert q["x"] != pytest.approx(p["x"])
+    assert q["y"] == p["y"]
+    assert q["x"] ** 2 + q["y"] ** 2 == pytest.approx(p["x"] ** 2 + p["y"] ** 2, rel=1e-12)
+    assert q["v"] * math.cos(q["theta"]) == pytest.approx(-p["v"] * math.cos(p["theta"]), rel=1e-12)
+    assert q["v"] * math.sin(q["theta"]) == pytest.approx(p["v"] * math.sin(p["theta"]), rel=1e-12)
+
+
+def test_map_parse_reads_every_printed_form():
+    m = obsan.DiscreteMap.parse("(a, b, c, d) -> (b, -a, c + pi, pi - d)")
+    assert m.images == [
+        obsan.MapImage("a", "b", 1, False),
+        obsan.MapImage("b", "a", -1, False),
+        obsan.MapImage("c", "c", 1, True),
+        obsan.MapImage("d", "d", -1, True),
+    ]
+    assert obsan.DiscreteMap.parse("a -> -a").apply({"a": 2.0}) == {"a": -2.0}
+    with pytest.raises(ValueError):
+        obsan.DiscreteMap.parse("a")
