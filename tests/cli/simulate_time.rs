@@ -183,3 +183,40 @@ fn an_inputs_file_is_refused_at_its_line_and_column() {
         "input 'u' is also given by --input",
     );
 }
+
+/// -> S1 at rate k * time (substance per time) with k = 0.4 in a compartment of size 2,
+/// initial amount 1: d[S1]/dt = 0.4 t / 2, so [S1] = 0.5 + 0.1 t^2.
+const SBML_TIMED: &str = r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+  <model id="timed">
+    <listOfCompartments><compartment id="cell" size="2" constant="true"/></listOfCompartments>
+    <listOfSpecies>
+      <species id="S1" compartment="cell" initialAmount="1" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/>
+    </listOfSpecies>
+    <listOfParameters><parameter id="k" value="0.4" constant="true"/></listOfParameters>
+    <listOfReactions>
+      <reaction id="R1" reversible="false">
+        <listOfProducts><speciesReference species="S1" stoichiometry="1" constant="true"/></listOfProducts>
+        <kineticLaw><math xmlns="http://www.w3.org/1998/Math/MathML">
+          <apply><times/><ci>k</ci><csymbol encoding="text" definitionURL="http://www.sbml.org/sbml/symbols/time">time</csymbol></apply>
+        </math></kineticLaw>
+      </reaction>
+    </listOfReactions>
+  </model>
+</sbml>
+"#;
+
+#[test]
+fn sbml_time_imports_as_t_and_simulates_to_the_closed_form() {
+    let src = temp_file("timed.xml", SBML_TIMED);
+    let dir = fresh_dir("sim-sbml-time");
+    let (sys, vals) = (format!("{dir}/t.sys"), format!("{dir}/t.values"));
+    ok(&["import", "sbml", &src, "--out", &sys, "--values", &vals]);
+    let text = std::fs::read_to_string(&sys).unwrap();
+    assert!(text.contains("k*t"), "{text}");
+    let (cols, rows) = simulate_json(&[&sys, "--values", &vals, "--until", "4", "--every", "0.5"]);
+    let i = cols.iter().position(|c| c == "S1").unwrap();
+    for r in &rows {
+        close(r[i], 0.5 + 0.1 * r[0] * r[0], "[S1]");
+    }
+}
