@@ -1,12 +1,12 @@
 //! The inputs time course of `obsan simulate MODEL.sys --inputs FILE.csv`
-//! (obsan_cli::input_table). Oracles: no panic; a rejection starts with
+//! (obsan_cli::read_input_table). Oracles: no panic; a rejection starts with
 //! `file:line:column:` and the line is inside the text; an accepted table has
 //! finite values, non-decreasing times with at most two rows at one time,
 //! one value per column in every row, and a piece for every column.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use obsan_cli::input_table::read_input_table;
+use obsan_cli::read_input_table;
 
 fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
