@@ -181,7 +181,7 @@ Exit 1 when the reduced system could not be closed or a check failed.")]
   obsan simulate systems/classic/lotka_volterra.sys --set a=1 --set b=0.5 --set c=1 --set d=0.2 --init x=4 --init y=2 --until 5 --every 1 --json
   obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=1 --init x2=0 --input u=0 --until 10 --every 0.5 --out data/two.csv
   obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=1 --init x2=0 --input 'u=1+sin(t)' --until 10 --every 0.5
-  obsan simulate systems/classic/two_compartment.sys --values two.values --inputs dose.csv --until 10 --every 0.5
+  obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=0 --init x2=0 --inputs systems/classic/two_compartment_dose.csv --until 10 --every 0.5
 
 Without MODEL: writes dataset.json, one folder per trajectory (inputs.csv, outputs.csv,
 meta.json) and truth.json; --force replaces only a folder obsan wrote.
