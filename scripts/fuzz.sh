@@ -47,7 +47,7 @@ seed() {
       [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true
       ;;
     dec) cp systems/*.dec "$dir/" 2>/dev/null || true ;;
-    mrclam | mcpart)
+    mrclam | mcpart | inputs_csv)
       # Framed seeds (see fuzz_targets/$t.rs).
       [ -d "fuzz/seeds/$t" ] && cp "fuzz/seeds/$t"/* "$dir/" 2>/dev/null || true
       ;;

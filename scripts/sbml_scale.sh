@@ -8,13 +8,18 @@
 set -euo pipefail
 suite="${1:?usage: scripts/sbml_scale.sh PATH/TO/sbml-test-suite-or-folder}"
 obsan="${OBSAN_BIN:-${CARGO_TARGET_DIR:-$(dirname "$0")/../target}/release/obsan}"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+if [ ! -d "$suite/cases/semantic" ] && git -C "$suite" rev-parse --git-dir >/dev/null 2>&1; then
+  # A bare mirror (no work tree): check out the semantic cases, as sbml_roundtrip.sh does.
+  git -C "$suite" archive HEAD cases/semantic 2>/dev/null | tar -x -C "$tmp"
+  suite=$tmp
+fi
 if [ -d "$suite/cases/semantic" ]; then
   files() { find "$suite/cases/semantic" -name '*-sbml-l3v1.xml' | sort; }
 else
   files() { find "$suite" -name '*.xml' | sort; }
 fi
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
 ok=0 n=0 slowest=0 slowest_file=""
 while IFS= read -r f; do
   n=$((n + 1))
@@ -28,6 +33,7 @@ while IFS= read -r f; do
   echo "$ms" >>"$tmp/times"
   if [ "$ms" -gt "$slowest" ]; then slowest=$ms slowest_file=$f; fi
 done < <(files)
+[ "$n" -gt 0 ] || { echo "no models under $suite"; exit 1; }
 median=$(sort -n "$tmp/times" | awk '{a[NR] = $1} END {print (NR ? a[int((NR + 1) / 2)] : 0)}')
 echo "$ok of $n models converted, $((n - ok)) refused; median import ${median} ms wall, slowest ${slowest} ms ($slowest_file)"
 if [ -s "$tmp/refused" ]; then

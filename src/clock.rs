@@ -23,7 +23,7 @@ thread_local! {
 }
 
 /// The commands that handle explicit time.
-const HANDLED: [&str; 3] = ["show", "rank", "symmetries"];
+const HANDLED: [&str; 4] = ["show", "rank", "symmetries", "simulate"];
 
 /// Note the command being run on this thread (see [`refuse_time`]).
 pub fn set_command(name: &'static str) {

@@ -37,11 +37,13 @@ mod figures;
 mod fsio;
 mod global_cmd;
 mod import_cmd;
+mod input_table;
 pub mod json;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
 mod show;
+mod sim_drive;
 mod simulate;
 mod simulate_sys;
 mod unknown_input_cmd;
@@ -50,6 +52,8 @@ use clap::Parser;
 use std::process::ExitCode;
 
 pub use fsio::Overlay;
+/// The reader of `simulate MODEL.sys --inputs FILE.csv` (its fuzz target calls it).
+pub use input_table::{read_input_table, InputTable};
 
 /// An error to report on stderr with exit code 2.
 #[derive(Debug)]

@@ -1,12 +1,16 @@
 //! `obsan simulate MODEL.sys`: any model integrated from given values
-//! (params, initial states, constant inputs) with obsan-fit's integrator, the
-//! states and outputs printed as a CSV at evenly spaced times.
+//! (params, initial states, inputs constant, expressions of time or a CSV
+//! time course) with obsan-fit's integrator, the states and outputs printed
+//! as a CSV at evenly spaced times. Explicit time `t` is the clock state
+//! `t' = 1`, exact under RK4.
 
 use crate::cli::SimulateArgs;
+use crate::input_table::read_input_table;
+use crate::sim_drive::{self, Drive};
 use crate::Failure;
 use obsan_data::Series;
 use obsan_fit::{FitError, Predictor};
-use obsan_model::System;
+use obsan_model::{System, TIME};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::ExitCode;
@@ -68,15 +72,15 @@ fn read_values(path: &str) -> Result<BTreeMap<String, f64>, Failure> {
     Ok(out)
 }
 
-/// The start of the integration: the whole state (dynamic states, then
-/// params), the known constants and the constant inputs, in model order.
+/// The start of the integration: the whole state (dynamic states, the clock
+/// at 0, then params) and the predictor's constants (the model's, in model
+/// order, then the drive's, set per step by [`Drive::set_piece`]).
 struct Start {
     x0: Vec<f64>,
     consts: Vec<f64>,
-    inputs: Vec<f64>,
 }
 
-fn start(p: &Predictor, a: &SimulateArgs) -> Result<Start, Failure> {
+fn start(p: &Predictor, d: &Drive, a: &SimulateArgs) -> Result<Start, Failure> {
     let f = &a.sys;
     let file = match &f.values {
         Some(path) => read_values(path)?,
@@ -84,12 +88,16 @@ fn start(p: &Predictor, a: &SimulateArgs) -> Result<Start, Failure> {
     };
     let nd = p.n_dynamic;
     let (states, params) = p.state.split_at(nd);
+    let users: Vec<&String> = states.iter().filter(|s| *s != TIME).collect();
+    let model_consts: Vec<String> = p
+        .consts
+        .iter()
+        .filter(|c| !Drive::is_internal(c))
+        .cloned()
+        .collect();
     let mut given = file.clone();
-    let settable: Vec<&String> = params.iter().chain(&p.consts).collect();
-    for (flag, list, names) in [
-        ("--set", &f.set, settable),
-        ("--init", &f.init, states.iter().collect()),
-    ] {
+    let settable: Vec<&String> = params.iter().chain(&model_consts).collect();
+    for (flag, list, names) in [("--set", &f.set, settable), ("--init", &f.init, users)] {
         for s in list {
             let (n, v) = assignment(flag, s)?;
             if !names.contains(&&n) {
@@ -105,21 +113,14 @@ fn start(p: &Predictor, a: &SimulateArgs) -> Result<Start, Failure> {
             given.insert(n, v);
         }
     }
-    let mut inputs = BTreeMap::new();
-    for s in &f.input {
-        let (n, v) = assignment("--input", s)?;
-        if !p.inputs.contains(&n) {
-            return Err(Failure(format!(
-                "--input {s}: the model has no input '{n}'"
-            )));
-        }
-        inputs.insert(n, v);
-    }
     let mut missing = Vec::new();
     let mut take = |kind: &str, names: &[String], from: &BTreeMap<String, f64>| -> Vec<f64> {
         names
             .iter()
             .map(|n| {
+                if n == TIME || Drive::is_internal(n) {
+                    return 0.0;
+                }
                 from.get(n).copied().unwrap_or_else(|| {
                     missing.push(format!("{kind} {n}"));
                     0.0
@@ -130,21 +131,25 @@ fn start(p: &Predictor, a: &SimulateArgs) -> Result<Start, Failure> {
     let mut x0 = take("init", states, &given);
     x0.extend(take("param", params, &given));
     let consts = take("constant", &p.consts, &given);
-    let inputs = take("input", &p.inputs, &inputs);
+    missing.extend(d.missing.iter().map(|u| format!("input {u}")));
     if !missing.is_empty() {
         return Err(Failure(format!(
-            "missing values: {} (give them with --values FILE, --init NAME=V, --set NAME=V, --input NAME=V)",
+            "missing values: {} (give them with --values FILE, --init NAME=V, --set NAME=V, \
+             --input NAME=EXPR, --inputs FILE.csv)",
             missing.join(", ")
         )));
     }
-    Ok(Start { x0, consts, inputs })
+    debug_assert_eq!(x0[d.clock], 0.0);
+    Ok(Start { x0, consts })
 }
 
-/// The model with every dynamic state also an output (first), so that the
-/// predictor reports them.
-fn predictor(model: &str) -> Result<Predictor, Failure> {
+/// The model with its inputs driven as the flags say (see [`sim_drive`])
+/// and every dynamic state but the clock also an output (first), so that
+/// the predictor reports them.
+fn predictor(model: &str, a: &SimulateArgs) -> Result<(Predictor, Drive), Failure> {
     let text = crate::fsio::read_text(model)?;
     let sys = System::parse(&text, model).map_err(|e| Failure(e.to_string()))?;
+    crate::clock::refuse_time(&sys)?;
     let mut nf = sys
         .normal_form(None, &[])
         .map_err(|e| Failure(format!("{model}: {e}")))?;
@@ -153,8 +158,13 @@ fn predictor(model: &str) -> Result<Predictor, Failure> {
             "{model}: unknown input '{w}' has no value to simulate with"
         )));
     }
+    let table = match &a.sim.inputs {
+        Some(path) => Some(read_input_table(&crate::fsio::read_text(path)?, path)?),
+        None => None,
+    };
+    let drive = sim_drive::drive(&mut nf, &a.sys.input, table)?;
     let mut outs = Vec::with_capacity(nf.n_dynamic + nf.outputs.len());
-    for k in 0..nf.n_dynamic {
+    for k in (0..nf.n_dynamic).filter(|&k| k != drive.clock) {
         let s = nf
             .ctx
             .lookup(&nf.state[k])
@@ -164,37 +174,51 @@ fn predictor(model: &str) -> Result<Predictor, Failure> {
     }
     outs.append(&mut nf.outputs);
     nf.outputs = outs;
-    Ok(Predictor::new(&nf))
+    Ok((Predictor::new(&nf), drive))
 }
 
-/// States and outputs at `times`, at least `n_sub` RK4 steps per output
-/// interval (more where the integrator finds the dynamics faster than the
-/// steps; it also splits steps itself where they are stiff), and the steps
-/// taken. Each interval starts from the state the previous one ended at.
+/// The times the integration stops at: every output time and every
+/// breakpoint of the inputs, sorted, each with its output row (if any).
+fn stops(times: &[f64], breaks: &[f64]) -> Vec<(f64, Option<usize>)> {
+    let mut all: Vec<(f64, Option<usize>)> = times
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| (t, Some(k)))
+        .chain(breaks.iter().map(|&t| (t, None)))
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.is_some().cmp(&a.1.is_some())));
+    all.dedup_by(|b, a| a.0 == b.0);
+    all
+}
+
+/// States and outputs at the output times, at least `n_sub` RK4 steps
+/// between consecutive stops (more where the integrator finds the dynamics
+/// faster than the steps; it also splits steps itself where they are
+/// stiff), and the steps taken. Each interval starts from the state the
+/// previous one ended at, the clock set to the interval's start exactly.
 fn integrate(
     p: &Predictor,
+    d: &Drive,
     s: &Start,
-    times: &[f64],
+    stops: &[(f64, Option<usize>)],
     n_sub: usize,
 ) -> Result<(Vec<Vec<f64>>, usize), Failure> {
     let nd = p.n_dynamic;
     let mut x = s.x0.clone();
-    let row: Vec<Option<f64>> = s.inputs.iter().map(|&u| Some(u)).collect();
+    let mut consts = s.consts.clone();
+    let t0 = stops[0].0;
     let first = p
-        .predict(
-            &x,
-            &s.consts,
-            &constant(p, &row, times[0], times[0], 1),
-            &times[..1],
-        )
+        .predict(&x, &consts, &steps_of(t0, t0, 1), &[t0])
         .map_err(Failure::from)?;
     let mut rows = first;
     let mut steps = 0;
-    for w in times.windows(2) {
+    for w in stops.windows(2) {
+        let (a, b) = (w[0].0, w[1].0);
+        d.set_piece(p, &mut consts, a, b);
+        x[d.clock] = a;
         let mut n = n_sub;
         let y = loop {
-            let ins = constant(p, &row, w[0], w[1], n);
-            match p.predict(&x, &s.consts, &ins, &w[1..]) {
+            match p.predict(&x, &consts, &steps_of(a, b, n), &[b]) {
                 Err(FitError::TooStiff {
                     time_scale,
                     spacing,
@@ -210,8 +234,13 @@ fn integrate(
             return Err(too_many_steps());
         }
         let y = y.into_iter().next().unwrap_or_default();
-        x[..nd].copy_from_slice(&y[..nd]);
-        rows.push(y);
+        // The outputs open with the dynamic states, the clock left out.
+        for (k, v) in (0..nd).filter(|&k| k != d.clock).zip(&y) {
+            x[k] = *v;
+        }
+        if w[1].1.is_some() {
+            rows.push(y);
+        }
     }
     Ok((rows, steps))
 }
@@ -223,12 +252,13 @@ fn too_many_steps() -> Failure {
     ))
 }
 
-/// Constant inputs on `n` rows evenly spread over `[t0, t1)`: one RK4 step each.
-fn constant(p: &Predictor, row: &[Option<f64>], t0: f64, t1: f64, n: usize) -> Series {
-    let mut s = Series::new(p.inputs.clone());
+/// `n` RK4 steps evenly spread over `[t0, t1)`: the predictor takes one
+/// step per row (the inputs are in the drift, so the rows carry no values).
+fn steps_of(t0: f64, t1: f64, n: usize) -> Series {
+    let mut s = Series::new(Vec::new());
     let h = (t1 - t0) / n as f64;
     for j in 0..n {
-        s.push(t0 + j as f64 * h, row);
+        s.push(t0 + j as f64 * h, &[]);
     }
     s
 }
@@ -245,21 +275,22 @@ fn spread(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 /// Returns the rows, the RK4 steps of the run printed and the estimated error.
 fn converge(
     p: &Predictor,
+    d: &Drive,
     s: &Start,
-    times: &[f64],
+    stops: &[(f64, Option<usize>)],
 ) -> Result<(Vec<Vec<f64>>, usize, f64), Failure> {
-    let intervals = times.len().saturating_sub(1);
+    let intervals = stops.len().saturating_sub(1);
     if intervals == 0 {
-        return Ok((integrate(p, s, times, 1)?.0, 0, 0.0));
+        return Ok((integrate(p, d, s, stops, 1)?.0, 0, 0.0));
     }
     let mut n_sub = FIRST_STEPS;
-    let mut coarse = integrate(p, s, times, n_sub)?.0;
+    let mut coarse = integrate(p, d, s, stops, n_sub)?.0;
     loop {
         if 2 * n_sub * intervals > MAX_STEPS {
             return Err(too_many_steps());
         }
         n_sub *= 2;
-        let (fine, steps) = integrate(p, s, times, n_sub)?;
+        let (fine, steps) = integrate(p, d, s, stops, n_sub)?;
         let err = spread(&coarse, &fine) / 15.0;
         if err <= TOLERANCE {
             return Ok((fine, steps, err));
@@ -302,16 +333,18 @@ pub fn run(model: &str, a: &SimulateArgs) -> Result<ExitCode, Failure> {
             "obsan simulate MODEL.sys needs --until T and --every DT".into(),
         ));
     };
-    let p = predictor(model)?;
-    let s = start(&p, a)?;
+    let (p, drive) = predictor(model, a)?;
+    let s = start(&p, &drive, a)?;
     let times = times(until, every)?;
-    let (rows, steps, err) = converge(&p, &s, &times)?;
+    let stops = stops(&times, &drive.breakpoints(until)?);
+    let (rows, steps, err) = converge(&p, &drive, &s, &stops)?;
     let mut columns = vec!["time".to_string()];
     columns.extend(p.outputs.iter().cloned());
     let text = csv(&columns, &times, &rows);
     if let Some(out) = &a.out {
         let mut reads = vec![model];
         reads.extend(a.sys.values.as_deref());
+        reads.extend(a.sim.inputs.as_deref());
         crate::fsio::check_outside(out, &reads)?;
         write_whole(out, &text, a.force)?;
     }

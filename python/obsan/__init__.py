@@ -556,19 +556,24 @@ def simulate_model(
     values: Optional[PathLike] = None,
     set: Settings = None,
     init: Settings = None,
-    inputs: Settings = None,
+    inputs: Optional[Mapping[str, Union[Number, str]]] = None,
+    inputs_csv: Optional[PathLike] = None,
     out: Optional[PathLike] = None,
     force: bool = False,
     timeout: Optional[float] = None,
 ) -> Simulation:
     """``obsan simulate MODEL.sys``: integrate any model from ``values`` (a file of
     ``name = value`` lines, as ``obsan import sbml --values`` writes), ``set`` params,
-    ``init`` initial states and constant ``inputs`` (``{"u": 0.2}``), at times 0,
+    ``init`` initial states and ``inputs``, each a number or an expression of time ``t``
+    (``{"u": 0.2}``, ``{"u": "sin(t)"}``), or ``inputs_csv``, a time course (header
+    ``t,<inputs>``, linear between rows, two rows at one ``t`` a step), at times 0,
     ``every``, ... up to ``until``; ``out`` also writes the CSV. A missing value raises
     :class:`ObsanError` naming it."""
     f = Flags("simulate", existing("simulate_model: model", model))
     if values is not None:
         f = f.text("--values", existing("simulate_model: values", values))
+    if inputs_csv is not None:
+        f = f.text("--inputs", existing("simulate_model: inputs_csv", inputs_csv))
     f = f.pairs("--set", set).pairs("--init", init).pairs("--input", inputs)
     f = f.number("--until", until).number("--every", every)
     f = f.path("--out", out).switch("--force", force).number("--timeout", timeout)

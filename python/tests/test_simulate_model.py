@@ -33,3 +33,21 @@ def test_a_missing_value_is_named(tmp_path: Path) -> None:
     m.write_text("system decay\nstate x\nparam k\nx' = -k*x\noutput y = x\n")
     with pytest.raises(obsan.ObsanError, match="param k"):
         obsan.simulate_model(m, init={"x": 1}, until=1, every=1)
+
+
+def test_inputs_of_time_and_a_time_course(tmp_path: Path) -> None:
+    # x' = u with u = sin(t): x = x0 + 1 - cos(t).
+    m = tmp_path / "acc.sys"
+    m.write_text("system acc\nstate x\ninput u\nx' = u\noutput y = x\n")
+    s = obsan.simulate_model(m, init={"x": 0.5}, inputs={"u": "sin(t)"}, until=6, every=0.5)
+    for t, x in zip(s.column("time"), s.column("x")):
+        assert abs(x - (1.5 - math.cos(t))) <= TOL
+    # u = 2 t up to 1, then a step to -1: x = t^2, then 1 - (t - 1).
+    course = tmp_path / "u.csv"
+    course.write_text("t,u\n0,0\n1,2\n1,-1\n3,-1\n")
+    s = obsan.simulate_model(m, init={"x": 0}, inputs_csv=course, until=3, every=0.25)
+    for t, x in zip(s.column("time"), s.column("x")):
+        assert abs(x - (t * t if t <= 1 else 2 - t)) <= TOL
+    course.write_text("t,u\n0,0\n1,oops\n")
+    with pytest.raises(obsan.ObsanError, match="u.csv:3:3"):
+        obsan.simulate_model(m, init={"x": 0}, inputs_csv=course, until=1, every=1)

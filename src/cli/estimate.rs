@@ -192,7 +192,7 @@ pub struct SimulateArgs {
     pub timeout: Option<f64>,
 }
 
-/// `obsan simulate MODEL.sys`: values, constant inputs and the output times.
+/// `obsan simulate MODEL.sys`: values, inputs and the output times.
 #[derive(Args, Clone)]
 pub struct SysSimFlags {
     /// Values of params and initial states, one `name = value` a line (`import sbml --values`).
@@ -206,8 +206,9 @@ pub struct SysSimFlags {
     /// An initial state NAME=VALUE (over --values).
     #[arg(long = "init", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     pub init: Vec<String>,
-    /// A constant input NAME=VALUE (every input of the model needs one).
-    #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    /// An input NAME=EXPR: a number or an expression of time t (and the model's params
+    /// and constants), e.g. u=1.5 or u=sin(t); every input needs this or an --inputs column.
+    #[arg(long = "input", value_name = "NAME=EXPR", allow_hyphen_values = true)]
     pub input: Vec<String>,
     /// The last time T (the simulation starts at 0).
     #[arg(long, value_name = "T", requires = "every")]
@@ -259,6 +260,8 @@ pub struct SimFlags {
     #[arg(long = "effect", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     pub effects: Vec<String>,
     /// Drive one trajectory by this wheel-speed history (CSV t,wR,wL) instead of circles.
+    /// With MODEL: the inputs' time course (CSV t,<inputs>; linear between rows, two rows
+    /// at one t a step; covering 0 to --until).
     #[arg(long)]
     pub inputs: Option<String>,
     #[arg(long, default_value_t = 1)]

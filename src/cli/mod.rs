@@ -180,6 +180,8 @@ Exit 1 when the reduced system could not be closed or a check failed.")]
   obsan simulate --out data/sine --speed-profile sine:0.5:60
   obsan simulate systems/classic/lotka_volterra.sys --set a=1 --set b=0.5 --set c=1 --set d=0.2 --init x=4 --init y=2 --until 5 --every 1 --json
   obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=1 --init x2=0 --input u=0 --until 10 --every 0.5 --out data/two.csv
+  obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=1 --init x2=0 --input 'u=1+sin(t)' --until 10 --every 0.5
+  obsan simulate systems/classic/two_compartment.sys --set k01=0.1 --set k02=0 --set k12=0.2 --set k21=0.3 --init x1=0 --init x2=0 --inputs systems/classic/two_compartment_dose.csv --until 10 --every 0.5
 
 Without MODEL: writes dataset.json, one folder per trajectory (inputs.csv, outputs.csv,
 meta.json) and truth.json; --force replaces only a folder obsan wrote.
@@ -187,6 +189,9 @@ With MODEL (values from --values FILE, as import sbml --values writes, and the f
 prints (or writes to --out FILE.csv) the CSV time,<states>,<outputs> at
 0, DT, 2 DT, ... up to T (at most 1000000 rows), integrated by RK4 with step doubling
 until the estimated error of every value is within 1e-9 (|value| + 1).
+Explicit time t in the model, --input u=EXPR of t and --inputs FILE.csv (header t,<inputs>,
+rows in increasing t, linear between rows, two rows at one t a step) are evaluated at every
+RK4 stage time; the integrator stops at every row time of the file, so a step is not smeared.
 --json prints {model, columns, rows, steps, error_estimate, tolerance}.")]
     Simulate(SimulateArgs),
     /// Calibrate from a dataset of circles: phi, psi, eta, delta, xi with

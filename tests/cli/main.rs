@@ -16,6 +16,7 @@ mod modes_closure;
 mod montecarlo;
 mod show;
 mod simulate;
+mod simulate_time;
 mod suite;
 #[path = "../../benches/suite_entries.rs"]
 mod suite_entries;

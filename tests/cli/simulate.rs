@@ -151,10 +151,10 @@ fn simulate_rejects_bad_options_and_leaves_nothing() {
 /// The simulator promises an estimated error within 1e-9 (|v| + 1) per value; the
 /// values below are at most 3 in size, so 4e-9 each, and the Richardson estimate is
 /// itself an estimate: allow 10x that.
-const SIM_TOL: f64 = 4e-8;
+pub(crate) const SIM_TOL: f64 = 4e-8;
 
 /// Rows of `simulate ... --json` and its column names.
-fn simulate_json(args: &[&str]) -> (Vec<String>, Vec<Vec<f64>>) {
+pub(crate) fn simulate_json(args: &[&str]) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut a = vec!["simulate"];
     a.extend_from_slice(args);
     a.push("--json");
@@ -181,7 +181,7 @@ fn simulate_json(args: &[&str]) -> (Vec<String>, Vec<Vec<f64>>) {
     (cols, rows)
 }
 
-fn close(got: f64, want: f64, what: &str) {
+pub(crate) fn close(got: f64, want: f64, what: &str) {
     assert!(
         (got - want).abs() <= SIM_TOL,
         "{what}: got {got}, want {want}"

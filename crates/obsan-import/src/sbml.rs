@@ -7,14 +7,14 @@
 //! and kinetic-law parameters become unknown params (local ones prefixed with
 //! their reaction id). SBML has no outputs: `observe` names them (species or
 //! parameter ids), or every state is measured. Refused with the element and its
-//! line: events, algebraic rules, delays, `time`, piecewise, `fast`
+//! line: events, algebraic rules, delays, avogadro, piecewise, `fast`
 //! reactions, compartments that vary. A Level 3 speciesReference id is its
 //! stoichiometry (a value, or a state under a rate rule); a conversion factor
 //! multiplies the species' reaction terms.
 
 use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::sbml_math::{
-    bin, child, elems, id_of, list, math_of, name, number, read_functions, subst, Ctx,
+    bin, child, elems, id_of, list, math_of, name, number, read_functions, subst, Ctx, TIME,
 };
 use crate::{Converted, ImportError};
 use roxmltree::{Document, Node};
@@ -236,7 +236,7 @@ impl Sbml {
         let mut params: Vec<&String> = params.iter().filter(|p| used.contains(p)).collect();
         params.dedup();
         let rename = |n: &str| -> String {
-            if RESERVED.contains(&n) {
+            if RESERVED.contains(&n) || n == TIME {
                 format!("{n}_")
             } else {
                 n.to_string()
@@ -412,10 +412,51 @@ fn constant_initial_assignments(
     for ia in list(model, "listOfInitialAssignments", "initialAssignment") {
         let v = id_of(cx, ia, "symbol")?;
         if constant.contains(&v) && !rate.contains_key(&v) && !assign.contains_key(&v) {
-            assign.insert(v, (math_of(cx, ia)?, cx.pos(ia)));
+            let e = at_time_zero(&math_of(cx, ia)?, assign);
+            assign.insert(v, (e, cx.pos(ia)));
         }
     }
     Ok(())
+}
+
+fn uses_time(e: &Ex) -> bool {
+    match e {
+        Ex::Num(n) => n == TIME,
+        Ex::Name { .. } => false,
+        Ex::Neg(a) => uses_time(a),
+        Ex::Bin(_, a, b) => uses_time(a) || uses_time(b),
+        Ex::Call(_, args) => args.iter().any(uses_time),
+    }
+}
+
+/// An initial assignment's value: taken at time 0, so where its math uses
+/// time (itself or through assignment rules) those rules are expanded and
+/// `t` set to 0; otherwise the math as written.
+fn at_time_zero(e: &Ex, assign: &Rules) -> Ex {
+    let mut cur = e.clone();
+    // Each round expands one level of rules; a chain is at most every rule
+    // long (a cycle is refused where the rules are substituted).
+    for _ in 0..=assign.len() {
+        let mut more = false;
+        walk_names(&cur, &mut |n| more |= assign.contains_key(n));
+        if !more {
+            break;
+        }
+        cur = subst(&cur, &|n| assign.get(n).map(|r| r.0.clone()));
+    }
+    if !uses_time(&cur) {
+        return e.clone();
+    }
+    fn zero(e: &Ex) -> Ex {
+        match e {
+            Ex::Num(n) if n == TIME => Ex::Num("0".into()),
+            Ex::Num(_) | Ex::Name { .. } => e.clone(),
+            Ex::Neg(a) => Ex::Neg(Box::new(zero(a))),
+            Ex::Bin(op, a, b) => bin(*op, zero(a), zero(b)),
+            Ex::Call(f, args) => Ex::Call(f.clone(), args.iter().map(zero).collect()),
+        }
+    }
+    zero(&cur)
 }
 
 /// A speciesReference with an id (SBML Level 3) names its stoichiometry, a
@@ -451,7 +492,7 @@ fn stoichiometry_ids(
                 .iter()
                 .find(|ia| ia.attribute("symbol") == Some(&id))
             {
-                Some(ia) => (math_of(cx, *ia)?, cx.pos(*ia)),
+                Some(ia) => (at_time_zero(&math_of(cx, *ia)?, assign), cx.pos(*ia)),
                 None => (stoichiometry_attr(cx, sr)?, cx.pos(sr)),
             };
             assign.insert(id, value);

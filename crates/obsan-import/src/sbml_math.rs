@@ -110,6 +110,9 @@ pub(crate) fn subst(e: &Ex, f: &dyn Fn(&str) -> Option<Ex>) -> Ex {
 
 pub(crate) const MAX_DEPTH: usize = 200;
 
+/// Explicit time in the `.sys` text (an SBML id `t` is written `t_`).
+pub(crate) const TIME: &str = "t";
+
 /// A MathML content element as an expression.
 pub(crate) fn mathml(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
     if depth > MAX_DEPTH {
@@ -148,11 +151,16 @@ pub(crate) fn mathml(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError>
         "csymbol" => {
             let url = n.attribute("definitionURL").unwrap_or("");
             let what = url.rsplit('/').next().unwrap_or(url);
+            if what == "time" {
+                // Explicit time is `t` in a `.sys` file; written as a number
+                // token so that no renaming of SBML ids touches it.
+                return Ok(Ex::Num(TIME.into()));
+            }
             Err(cx.err(
                 n,
                 format!(
-                    "<csymbol> '{what}' is not supported (time, delay and avogadro: the model \
-                     must be autonomous and without delays)"
+                    "<csymbol> '{what}' is not supported (time is; delay and avogadro are not: \
+                     the model must be without delays)"
                 ),
             ))
         }

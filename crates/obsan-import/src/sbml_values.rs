@@ -31,7 +31,7 @@ fn num(n: Node, attr: &str) -> Option<f64> {
 
 fn sys_id(id: &str) -> String {
     let mut s = id.to_string();
-    if RESERVED.contains(&s.as_str()) {
+    if RESERVED.contains(&s.as_str()) || s == crate::sbml_math::TIME {
         s.push('_');
     }
     s
@@ -42,6 +42,8 @@ fn sys_id(id: &str) -> String {
 fn eval(e: &Ex, vals: &BTreeMap<String, f64>) -> Option<f64> {
     let v = match e {
         Ex::Num(s) if s == "pi" => std::f64::consts::PI,
+        // Initial values are at time 0.
+        Ex::Num(s) if s == crate::sbml_math::TIME => 0.0,
         Ex::Num(s) => s.parse().ok()?,
         Ex::Name { name, .. } => *vals.get(name)?,
         Ex::Neg(a) => -eval(a, vals)?,

@@ -142,6 +142,42 @@ fn rules_functions_local_parameters_and_compartments_are_folded() {
     assert_eq!(params, ["vf", "kd", "R1_Km", "B"], "{t}");
 }
 
+const TIME: &str = "<csymbol encoding=\"text\" definitionURL=\"http://www.sbml.org/sbml/symbols/time\">time</csymbol>";
+
+#[test]
+fn time_is_the_sys_files_explicit_time() {
+    // rate = compartment*k1*t*time with compartment = 1 and a parameter whose id is `t`
+    // (written t_, since `t` is time in a .sys): S1' = -k1 t_ t, S2' = k1 t_ t.
+    let src = CASE1
+        .replace(
+            "<ci> S1 </ci></apply>",
+            &format!("<ci> t </ci>{TIME}</apply>"),
+        )
+        .replace(
+            "<parameter id=\"k1\" value=\"1\" constant=\"true\"/>",
+            "<parameter id=\"k1\" value=\"1\" constant=\"true\"/><parameter id=\"t\" value=\"2\" constant=\"true\"/>",
+        );
+    let c = sbml_to_sys(&src, "time.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S1", "-k1*t_*t");
+    equation_is(&c.sys_text, "S2", "k1*t_*t");
+    let vals = sbml_values(&src).unwrap();
+    assert!(vals.contains(&("t_".to_string(), 2.0)), "{vals:?}");
+    // An initial assignment holds its value at time 0 (the suite's case 00879):
+    // k1 = 1/5 + k2 exp(time) is 1/5 + k2 for all times, so S1' = -(1/5 + k2) S1.
+    let ia = CASE1.replace(
+        "<parameter id=\"k1\" value=\"1\" constant=\"true\"/>",
+        &format!(
+            "<parameter id=\"k1\" constant=\"true\"/><parameter id=\"k2\" value=\"0.5\" constant=\"true\"/>\
+             </listOfParameters><listOfInitialAssignments><initialAssignment symbol=\"k1\">\
+             <math xmlns=\"http://www.w3.org/1998/Math/MathML\"><apply><plus/><cn>0.2</cn>\
+             <apply><times/><ci>k2</ci><apply><exp/>{TIME}</apply></apply></apply></math>\
+             </initialAssignment></listOfInitialAssignments><listOfParameters>"
+        ),
+    );
+    let c = sbml_to_sys(&ia, "ia.xml", &[]).unwrap();
+    equation_is(&c.sys_text, "S1", "-(1/5 + k2)*S1");
+}
+
 fn refused(src: &str) -> ImportError {
     match sbml_to_sys(src, "x.xml", &[]) {
         Ok(c) => panic!("accepted:\n{}", c.sys_text),
@@ -161,13 +197,13 @@ fn unsupported_elements_are_refused_at_their_line() {
         "    <listOfRules><algebraicRule><math xmlns=\"http://www.w3.org/1998/Math/MathML\"><ci>S1</ci></math></algebraicRule></listOfRules>",
     ));
     assert_eq!((e.line, e.col), (25, 18), "{e}");
-    let time = CASE1.replace(
+    let avogadro = CASE1.replace(
         "<ci> S1 </ci></apply>",
-        "<csymbol encoding=\"text\" definitionURL=\"http://www.sbml.org/sbml/symbols/time\">t</csymbol></apply>",
+        "<csymbol encoding=\"text\" definitionURL=\"http://www.sbml.org/sbml/symbols/avogadro\">N</csymbol></apply>",
     );
-    let e = refused(&time);
+    let e = refused(&avogadro);
     assert_eq!(e.line, 20, "{e}");
-    assert!(e.message.contains("time"), "{e}");
+    assert!(e.message.contains("avogadro"), "{e}");
     let pw = CASE1.replace("<ci> S1 </ci></apply>", "<piecewise/></apply>");
     assert!(refused(&pw).message.contains("piecewise"));
     let unknown = CASE1.replace("<ci> S1 </ci></apply>", "<ci> S9 </ci></apply>");
