@@ -312,7 +312,7 @@ impl System {
             at,
             at + TIME.len(),
             format!(
-                "explicit time 't' is not supported by {what} yet (`obsan rank`, `obsan symmetries` and `obsan show` handle it)"
+                "explicit time 't' is not supported by {what} yet (`obsan rank`, `obsan symmetries`, `obsan show` and `obsan simulate` handle it)"
             ),
         ))
     }
