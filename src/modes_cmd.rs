@@ -19,7 +19,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         }
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    crate::unknown_input_cmd::refuse_because(&nf, "modes", "the mode search and the reduced system are built for known inputs; `obsan symmetries` gives the lost directions, whose invariants are the modes")?;
+    if !nf.unknown_inputs.is_empty() {
+        return crate::unknown_input_cmd::modes(a, &mut nf);
+    }
     if nf.outputs.is_empty() {
         return Err(Failure(format!(
             "{}: the system has no output, so nothing is observable",
@@ -374,7 +376,7 @@ const WRITTEN_BY: &str = "# written by obsan modes (--force may replace this fil
 
 /// Write PREFIX.sys and PREFIX.dec: each to a temporary sibling, then renamed;
 /// an existing file is replaced only with --force, and only if obsan wrote it.
-fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
+pub(crate) fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
     // After a limit (terms, time, a form too long to print) the texts are
     // placeholders or cut short: write nothing; the caller reports the limit.
     if obsan_expr::limits::budget_tripped() {
