@@ -564,6 +564,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure> {
             input: i.input.clone(),
             mode: i.mode.clone(),
             name: i.name.clone(),
+            offset: i.offset.clone(),
             order: i.order,
         })
         .collect();
@@ -717,7 +718,11 @@ fn ui_modes_text(
             ": every variable is observable; the modes are the variables and the reduced system is the model itself\n",
         ),
         Some(d) => {
-            o.push_str(&format!("; {} observable modes:\n", d.modes.len()));
+            let k = d.modes.len();
+            o.push_str(&format!(
+                "; {k} observable mode{}:\n",
+                if k == 1 { "" } else { "s" }
+            ));
             for (e, md) in exprs.iter().zip(&d.modes) {
                 o.push_str(&format!(
                     "  {} = {e}    ({}; {})\n",
@@ -755,8 +760,11 @@ fn ui_modes_text(
                     order_text(i.order)
                 ),
                 Some(f) => format!(
-                    "{} = ({f})*{} (a combination; reconstructable from the first derivative of {})",
-                    i.name, i.input, i.mode
+                    "{} = ({f})*{}{} (a combination; reconstructable from the first derivative of {})",
+                    i.name,
+                    i.input,
+                    i.offset.as_ref().map(|o| format!(" + {o}")).unwrap_or_default(),
+                    i.mode
                 ),
             })
             .collect();

@@ -180,7 +180,8 @@ known inputs and the reconstructable unknown inputs, or combinations factor*w of
 (docs/engine.md, \"Modes with unknown inputs\"); exit 2 naming the mode and the input when it
 would need one that is not reconstructable. With unknown inputs --json prints {system,
 restriction, n, rank, full_rank, unknown_inputs, symmetries, modes, reduced (null at full rank),
-reduced_inputs ([{name, input, factor (null: the input itself), mode, order (of the output
+reduced_inputs ([{name, input, factor (null: the input itself), offset (drift and known-input
+terms added), mode, order (of the output
 derivatives it is recovered from; null for a combination)}]), verified, checks, certificate,
 error_bound (of the rank test the modes' count rests on), seed, decided, undecided_atoms, sys,
 dec}.")]

@@ -43,6 +43,10 @@ pub struct ReducedInput {
     pub factor: Option<String>,
     /// The first mode whose derivative needs it.
     pub mode: String,
+    /// For a combination whose mode's drift or known-input terms are not
+    /// functions of the modes: `alpha0 + sum alpha_i u_i`, added to
+    /// `factor * w` (those terms of the mode's derivative, moved into the input).
+    pub offset: Option<String>,
     /// The output-derivative order it is reconstructable from (the rank
     /// route's, for an input itself); `None` for a combination, recovered
     /// from the modes' first derivatives.
@@ -154,6 +158,12 @@ pub fn unknown_input_modes(
     let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
     let mut inputs = Vec::new();
     let mut rescaled = false;
+    // The drift and known fields whose derivatives are not functions of the
+    // modes: projected along the first combination input (module docs).
+    let mut to_project: Vec<usize> = (0..d.field_names.len())
+        .filter(|&i| !nf.unknown_inputs.contains(&d.field_names[i]))
+        .filter(|&i| d.derivatives.iter().any(|row| row[i].is_none()))
+        .collect();
     for (j, w) in nf.unknown_inputs.iter().enumerate() {
         let Some(idx) = d.field_names.iter().position(|f| f == w) else {
             continue;
@@ -166,28 +176,40 @@ pub fn unknown_input_modes(
         let Some(first) = col.iter().position(|c| *c != Some("0")) else {
             continue; // no mode sees w_j
         };
-        match col.iter().position(Option::is_none) {
-            None => inputs.push(plain(&s, j, w, &d.modes[first].name)?),
-            Some(k0) => {
-                let mode = d.modes[k0].clone();
-                let g = view.fields[known + j].clone();
-                let beta = crate::derive::lie_along(&mut view, mode.expr, &g);
-                let beta_c = view.ctx.canon(beta);
-                let beta = view.ctx.from_canonical(&beta_c);
-                view.fields[known + j] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
-                let name = fresh_name(&view, &format!("{w}_{}", mode.name));
-                view.inputs[known + j] = name.clone();
-                view.input_vars[known + j] = view.ctx.symbol(&name).var;
-                inputs.push(ReducedInput {
-                    name,
-                    input: w.clone(),
-                    factor: Some(view.ctx.ratfun_text_factored(&beta_c)),
-                    mode: mode.name.clone(),
-                    order: None,
-                });
-                rescaled = true;
+        let k0 = match col.iter().position(Option::is_none) {
+            None if to_project.is_empty() => {
+                inputs.push(plain(&s, j, w, &d.modes[first].name)?);
+                continue;
             }
-        }
+            None => first,
+            Some(k0) => k0,
+        };
+        let mode = d.modes[k0].clone();
+        let g = view.fields[known + j].clone();
+        let beta = crate::derive::lie_along(&mut view, mode.expr, &g);
+        let beta_c = view.ctx.canon(beta);
+        let beta = view.ctx.from_canonical(&beta_c);
+        let offset = project(
+            &mut view,
+            &d,
+            std::mem::take(&mut to_project),
+            mode.expr,
+            &g,
+            beta,
+        );
+        view.fields[known + j] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
+        let name = fresh_name(&view, &format!("{w}_{}", mode.name));
+        view.inputs[known + j] = name.clone();
+        view.input_vars[known + j] = view.ctx.symbol(&name).var;
+        inputs.push(ReducedInput {
+            name,
+            input: w.clone(),
+            factor: Some(view.ctx.ratfun_text_factored(&beta_c)),
+            offset,
+            mode: mode.name.clone(),
+            order: None,
+        });
+        rescaled = true;
     }
     if rescaled {
         d = reduce_in_modes(&mut view, &sym, &d, derive)?;
@@ -215,6 +237,7 @@ fn plain(
             name: w.to_string(),
             input: w.to_string(),
             factor: None,
+            offset: None,
             mode: mode.to_string(),
             order: Some(order),
         }),
@@ -222,6 +245,56 @@ fn plain(
             "the derivative of mode {mode} needs the unknown input {w}, which is not reconstructable (obsan rank: no output derivative determines it): no reduced system driven by reconstructable inputs exists in these modes"
         ))),
     }
+}
+
+/// The fields `cols` (drift or known inputs, by the derivation's column)
+/// projected along `g` onto the kernel of `dm`: `f - (L_f m / beta) g`, `beta
+/// = L_g m`. Returns the terms moved into the combination input,
+/// `sum L_f m u_f` (`u_f = 1` for the drift), as text; `None` when none.
+fn project(
+    view: &mut NormalForm,
+    d: &Derivation,
+    cols: Vec<usize>,
+    m: Id,
+    g: &[Id],
+    beta: Id,
+) -> Option<String> {
+    let mut terms = Vec::new();
+    for i in cols {
+        let name = d.field_names[i].clone();
+        let f = if name == "f0" {
+            view.f0.clone()
+        } else {
+            let k = view.inputs.iter().position(|x| *x == name)?;
+            view.fields[k].clone()
+        };
+        let alpha = crate::derive::lie_along(view, m, &f);
+        let ratio = view.ctx.div(alpha, beta);
+        let new: Vec<Id> = f
+            .iter()
+            .zip(g)
+            .map(|(&fc, &gc)| {
+                let t = view.ctx.mul(&[ratio, gc]);
+                let t = view.ctx.neg(t);
+                view.ctx.add(&[fc, t])
+            })
+            .collect();
+        if name == "f0" {
+            view.f0 = new;
+            terms.push(alpha);
+        } else {
+            let k = view.inputs.iter().position(|x| *x == name)?;
+            view.fields[k] = new;
+            let u = view.ctx.symbol(&name).id;
+            terms.push(view.ctx.mul(&[alpha, u]));
+        }
+    }
+    if terms.is_empty() {
+        return None;
+    }
+    let sum = view.ctx.add(&terms);
+    let c = view.ctx.canon(sum);
+    Some(view.ctx.ratfun_text_factored(&c))
 }
 
 /// A name for a combination that the view does not use yet.
