@@ -20,7 +20,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
     if !nf.unknown_inputs.is_empty() {
-        return crate::unknown_input_cmd::modes(a, &mut nf);
+        return crate::unknown_input_cmd::modes(a, &mut nf, write_pair);
     }
     if nf.outputs.is_empty() {
         return Err(Failure(format!(
@@ -376,7 +376,7 @@ const WRITTEN_BY: &str = "# written by obsan modes (--force may replace this fil
 
 /// Write PREFIX.sys and PREFIX.dec: each to a temporary sibling, then renamed;
 /// an existing file is replaced only with --force, and only if obsan wrote it.
-pub(crate) fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
+fn write_pair(prefix: &str, force: bool, sys: &str, dec: &str) -> Result<(), Failure> {
     // After a limit (terms, time, a form too long to print) the texts are
     // placeholders or cut short: write nothing; the caller reports the limit.
     if obsan_expr::limits::budget_tripped() {

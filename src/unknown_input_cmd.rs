@@ -437,10 +437,14 @@ fn rank_json(
     }
 }
 
+/// How `obsan modes --out` writes its pair of files (prefix, force, sys, dec).
+pub type WritePair = fn(&str, bool, &str, &str) -> Result<(), Failure>;
+
 /// `obsan modes` with unknown inputs: the first integrals of the certified
 /// symmetries and the reduced system driven by the reconstructable inputs or
 /// input combinations (docs/engine.md, "Modes with unknown inputs").
-pub fn modes(a: &ModesArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure> {
+/// `write` writes PREFIX.sys and PREFIX.dec as `obsan modes --out` does.
+pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<ExitCode, Failure> {
     if nf.clock().is_some() {
         return Err(Failure(format!(
             "{}: `obsan modes` with unknown inputs does not handle explicit time yet (`obsan rank` and `obsan symmetries` do)",
@@ -530,7 +534,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure> {
         )
     };
     if let (Some(prefix), Some(dec), Some(sys_text)) = (&a.out_prefix, &dec, &sys_text) {
-        crate::modes_cmd::write_pair(prefix, a.force, sys_text, dec)?;
+        write(prefix, a.force, sys_text, dec)?;
     }
     let modes: Vec<json::DerivedMode> = match &m.derivation {
         None => nf
