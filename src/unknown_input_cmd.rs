@@ -592,37 +592,35 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
                 })
                 .collect(),
         });
-        crate::json::print(&json::Modes::UnknownInputs(Box::new(
-            json::ModesUnknownInputs {
-                certificate,
-                checks: checks.as_ref().map(|cs| {
-                    cs.iter()
-                        .map(|c| json::PassCheck {
-                            check: c.name.clone(),
-                            detail: c.detail.clone(),
-                            pass: c.pass,
-                        })
-                        .collect()
-                }),
-                dec: dec.clone(),
-                decided,
-                error_bound: bound,
-                full_rank: full,
-                modes,
-                n,
-                rank,
-                reduced,
-                reduced_inputs,
-                restriction: nf.restriction.clone(),
-                seed: a.seed,
-                symmetries: nsym,
-                sys: sys_text.clone(),
-                system: nf.name.clone(),
-                undecided_atoms: undecided,
-                unknown_inputs: nf.unknown_inputs.clone(),
-                verified,
-            },
-        )))?;
+        crate::json::print(&json::ModesUnknownInputs {
+            certificate,
+            checks: checks.as_ref().map(|cs| {
+                cs.iter()
+                    .map(|c| json::PassCheck {
+                        check: c.name.clone(),
+                        detail: c.detail.clone(),
+                        pass: c.pass,
+                    })
+                    .collect()
+            }),
+            dec: dec.clone(),
+            decided,
+            error_bound: bound,
+            full_rank: full,
+            modes,
+            n,
+            rank,
+            reduced,
+            reduced_inputs,
+            restriction: nf.restriction.clone(),
+            seed: a.seed,
+            symmetries: nsym,
+            sys: sys_text.clone(),
+            system: nf.name.clone(),
+            undecided_atoms: undecided,
+            unknown_inputs: nf.unknown_inputs.clone(),
+            verified,
+        })?;
     } else {
         let latex: Vec<String> = match (&m.derivation, a.out.latex) {
             (Some(d), true) => d

@@ -136,6 +136,11 @@ pub const TYPED: &[Typed] = &[
         schema: || schema_for!(Modes),
     },
     Typed {
+        name: "modes-unknown-inputs",
+        command: "obsan modes SYSTEM --json (a model with unknown inputs)",
+        schema: || schema_for!(ModesUnknownInputs),
+    },
+    Typed {
         name: "global",
         command: "obsan global SYSTEM --json",
         schema: || schema_for!(Global),

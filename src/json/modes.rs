@@ -12,11 +12,10 @@ pub enum Modes {
     FullRank(ModesFullRank),
     /// Below full rank: the derived modes, the reduced system and its proof.
     Derived(Box<ModesDerived>),
-    /// A model with unknown inputs (docs/engine.md, "Modes with unknown inputs").
-    UnknownInputs(Box<ModesUnknownInputs>),
 }
 
-/// `obsan modes` on a model with unknown inputs.
+/// `obsan modes` on a model with unknown inputs (docs/engine.md, "Modes with unknown
+/// inputs"): its own object, as for `rank` and `symmetries`.
 #[derive(Serialize, Deserialize, JsonSchema, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct ModesUnknownInputs {

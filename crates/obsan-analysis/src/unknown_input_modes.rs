@@ -11,15 +11,20 @@
 //! - `w_j` itself when every `L_{g_j} m_k` is a function of the modes; it must
 //!   be reconstructable (the rank route's verdict, with its order), else the
 //!   reduction is refused;
-//! - else the combination `beta_j w_j`, `beta_j = L_{g_j} m_k` for the first
-//!   mode `m_k` whose `L_{g_j} m_k` is not a function of the modes: the
-//!   certificate's `[g_j, xi_a] in span(xi, g)` makes the direction of `g_j`
-//!   modulo the symmetries invariant, so `dm(g_j) = beta_j c_j(m)` and the
-//!   view's field `g_j / beta_j` has derivatives in the modes. Such a
-//!   combination is reconstructable when the matrix `C(m)` of the reduced
-//!   inputs' coefficients has full column rank (the modes being observable,
-//!   `dm/dt - F(m, u) = C(m) w~` is a function of the outputs' derivatives):
-//!   checked by a non-zero minor at a random point (exact); else refused.
+//! - else (some `L_{g_j} m_k`, or some drift or known-input term of a mode's
+//!   derivative, not a function of the modes) a combination: with `m_k` the
+//!   first mode whose coefficient is not, `beta = L_{g_j} m_k`, the view's
+//!   field becomes `g_j / beta` and each such drift or known field `f`
+//!   becomes `f - (L_f m_k / beta) g_j`, the input `w~ = beta w_j + sum
+//!   L_f m_k u_f`. With one unknown input every derivative is then a function
+//!   of the modes: the certificate gives `[F, xi] = A xi + b g`, so `xi(L_F'
+//!   m_l) = -b L_g m_l` for a projected field `F'`, and `L_F' m_k` constant
+//!   forces `b = 0`. The combination is reconstructable when the matrix
+//!   `C(m)` of the reduced inputs' coefficients has full column rank (the
+//!   modes being observable, `dm/dt - F(m, u) = C(m) w~` is a function of the
+//!   outputs' derivatives): checked by a non-zero minor at a random point
+//!   (exact); else refused. With several unknown inputs a form may not be
+//!   found: the reduced system is then reported not closed, never wrong.
 
 use crate::decided::undecided_atoms_of;
 use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
