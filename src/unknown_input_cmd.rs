@@ -497,7 +497,9 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
         dec = d
             .decomposition_text(&sys_path, nf.restriction.as_deref(), &sets)
             .filter(|_| plain);
-        sys_text = d.sys_text(&nf.name, &format!("observable modes of {title}"));
+        sys_text = d
+            .sys_text(&nf.name, &format!("observable modes of {title}"))
+            .map(|t| unknown_inputs_declared(&t, &nf.inputs));
         let text = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
         if let Some(t) = &text {
             let cs = obsan_analysis::verify_derivation(
@@ -832,4 +834,30 @@ pub fn verify_checks(
     let bound = s.report.error_bound;
     *nf = view;
     Ok((rr, sym, checks, bound))
+}
+
+/// The reduced `.sys` text with the inputs that are not the model's known
+/// ones (the unknown inputs and their combinations) declared `unknown input`.
+fn unknown_inputs_declared(text: &str, known: &[String]) -> String {
+    let mut o = String::new();
+    for line in text.lines() {
+        match line.strip_prefix("input ") {
+            Some(list) => {
+                let names: Vec<&str> = list.split(',').map(str::trim).collect();
+                let (k, u): (Vec<&str>, Vec<&str>) =
+                    names.iter().partition(|n| known.iter().any(|x| x == *n));
+                if !k.is_empty() {
+                    o.push_str(&format!("input {}\n", k.join(", ")));
+                }
+                if !u.is_empty() {
+                    o.push_str(&format!("unknown input {}\n", u.join(", ")));
+                }
+            }
+            None => {
+                o.push_str(line);
+                o.push('\n');
+            }
+        }
+    }
+    o
 }

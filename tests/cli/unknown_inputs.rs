@@ -554,6 +554,17 @@ fn modes_and_verify_with_a_reconstructable_input() {
         out.contains("PASS unknown input w, which drives the reduced dynamics, is reconstructable"),
         "{out}"
     );
+    // The reduced system keeps w unknown: its rank says w is recovered from y'.
+    let dir = fresh_dir("ui-modes-out");
+    let prefix = format!("{dir}/sum");
+    ok(&["modes", &f, "--out", &prefix]);
+    let sys = std::fs::read_to_string(format!("{prefix}.sys")).unwrap();
+    assert!(sys.contains("unknown input w\n"), "{sys}");
+    let out = ok(&["rank", &format!("{prefix}.sys")]);
+    assert!(
+        out.contains("w (from output derivatives of order 1)"),
+        "{out}"
+    );
     // A wrong claim fails: z' = 2 w.
     let wrong = temp_file(
         "sum_input_wrong.dec",
