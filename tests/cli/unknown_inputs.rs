@@ -572,3 +572,24 @@ fn modes_and_verify_with_a_reconstructable_input() {
     );
     assert_eq!(obsan(&["verify", &wrong]).code, 1);
 }
+
+#[test]
+fn a_drift_term_the_modes_cannot_write_moves_into_the_combination() {
+    // x' = k + w, y = x, k a param: y' = k + w, so k is lost (d/dk: [f0, d/dk]
+    // = -g, in the span) and so is w; x is the one mode. x' = k + w needs k,
+    // not a function of x: the reduced input is w_x = 1*w + k = y', and the
+    // reduced system x' = w_x, y = x.
+    let f = temp_file(
+        "drift_offset.sys",
+        "system drift\nstate x\nparam k\nunknown input w\nx' = k + w\noutput y = x\n",
+    );
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", &f])).unwrap();
+    assert_eq!(names(&v["modes"]), ["x"], "{v}");
+    let ri = &v["reduced_inputs"][0];
+    assert_eq!(ri["input"], "w");
+    assert!(same_function(ri["factor"].as_str().unwrap(), "1"), "{ri}");
+    assert!(same_function(ri["offset"].as_str().unwrap(), "k"), "{ri}");
+    let name = ri["name"].as_str().unwrap();
+    assert_eq!(v["reduced"]["dynamics"][0]["rhs"], name, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
+}
