@@ -19,7 +19,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         }
     }
     let (_, mut nf) = load_normal_form(&a.sys)?;
-    crate::unknown_input_cmd::refuse_because(&nf, "modes", "the mode search and the reduced system are built for known inputs; `obsan symmetries` gives the lost directions, whose invariants are the modes")?;
+    if !nf.unknown_inputs.is_empty() {
+        return crate::unknown_input_cmd::modes(a, &mut nf, write_pair);
+    }
     if nf.outputs.is_empty() {
         return Err(Failure(format!(
             "{}: the system has no output, so nothing is observable",

@@ -2,12 +2,18 @@
 //! (docs/engine.md, "Unknown inputs"), and the refusal of the commands that
 //! do not handle them yet.
 
-use crate::cli::{RankArgs, SymArgs};
+use crate::cli::{ModesArgs, RankArgs, SymArgs, VerifyArgs};
 use crate::json;
 use crate::Failure;
 use obsan_analysis::{
-    unknown_inputs::unknown_input_rank, unknown_inputs::unknown_input_symmetries,
-    unknown_inputs::UnknownInputOptions, unknown_inputs::UnknownInputReport,
+    unknown_inputs::unknown_input_modes,
+    unknown_inputs::unknown_input_rank,
+    unknown_inputs::unknown_input_symmetries,
+    unknown_inputs::UnknownInputModes,
+    unknown_inputs::UnknownInputOptions,
+    unknown_inputs::UnknownInputReport,
+    unknown_inputs::{inputs_driving_modes, unknown_input_view},
+    verify_decomposition_with, Check, Decomposition, DeriveOptions, RankReport, SymmetryReport,
 };
 use obsan_model::NormalForm;
 use std::process::ExitCode;
@@ -429,4 +435,429 @@ fn rank_json(
         unreconstructable_inputs: missing(&nf.unknown_inputs, &r.reconstructable),
         weakly_locally_observable,
     }
+}
+
+/// How `obsan modes --out` writes its pair of files (prefix, force, sys, dec).
+pub type WritePair = fn(&str, bool, &str, &str) -> Result<(), Failure>;
+
+/// `obsan modes` with unknown inputs: the first integrals of the certified
+/// symmetries and the reduced system driven by the reconstructable inputs or
+/// input combinations (docs/engine.md, "Modes with unknown inputs").
+/// `write` writes PREFIX.sys and PREFIX.dec as `obsan modes --out` does.
+pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<ExitCode, Failure> {
+    if nf.clock().is_some() {
+        return Err(Failure(format!(
+            "{}: `obsan modes` with unknown inputs does not handle explicit time yet (`obsan rank` and `obsan symmetries` do)",
+            a.sys.system
+        )));
+    }
+    let deadline = crate::analysis_cmds::deadline_after(Instant::now(), a.timeout);
+    let opts = DeriveOptions {
+        seed: a.seed,
+        deadline,
+        ..DeriveOptions::default()
+    };
+    let mut m = unknown_input_modes(
+        nf,
+        UnknownInputOptions {
+            seed: a.seed,
+            deadline,
+            max_order: None,
+        },
+        &opts,
+    )
+    .map_err(|e| Failure(format!("{}: {e}", a.sys.system)))?;
+    let r = &m.symmetries.report;
+    let (rank, n, bound) = (r.rank, r.n, r.error_bound);
+    let nsym = m.symmetries.vectors.len();
+    let view = &mut m.view;
+    let sets: Vec<(String, String)> = a
+        .sys
+        .set
+        .iter()
+        .filter_map(|s| {
+            s.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        })
+        .collect();
+    let sys_path = std::fs::canonicalize(&a.sys.system)
+        .map(|p| p.to_string_lossy().to_string())
+        .unwrap_or_else(|_| a.sys.system.clone());
+    let title = match &nf.restriction {
+        Some(q) => format!("{} (input {q})", nf.name),
+        None => nf.name.clone(),
+    };
+    let mut undecided = m.sym.undecided.clone();
+    let (mut dec, mut sys_text, mut checks) = (None, None, None);
+    if let Some(d) = &m.derivation {
+        undecided.extend(d.mode_report.undecided.iter().cloned());
+        // A combination input has no name in the model: the decomposition
+        // file (read against the model) is written only without them.
+        let plain = m.inputs.iter().all(|i| i.factor.is_none());
+        dec = d
+            .decomposition_text(&sys_path, nf.restriction.as_deref(), &sets)
+            .filter(|_| plain);
+        sys_text = d
+            .sys_text(&nf.name, &format!("observable modes of {title}"))
+            .map(|t| unknown_inputs_declared(&t, &nf.inputs));
+        let text = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
+        if let Some(t) = &text {
+            let cs = obsan_analysis::verify_derivation(
+                view,
+                t,
+                "derived decomposition",
+                a.seed,
+                (&m.rank, &m.sym),
+            )
+            .map_err(|e| Failure(format!("internal: the derived decomposition: {e}")))?;
+            for c in &cs {
+                undecided.extend(c.undecided.iter().cloned());
+            }
+            checks = Some(cs);
+        }
+    }
+    undecided.sort();
+    undecided.dedup();
+    let decided = undecided.is_empty();
+    let full = m.derivation.is_none();
+    let verified = full || checks.as_ref().is_some_and(|c| c.iter().all(|c| c.pass));
+    let modes_ok = m.derivation.as_ref().is_none_or(|d| {
+        d.mode_report.checks.iter().all(|c| c.is_mode)
+            && d.mode_report.independent
+            && d.mode_report.complete
+    });
+    let certificate = ui_modes_certificate(&m, full, verified, modes_ok, &checks, bound);
+    let certificate = if decided {
+        certificate
+    } else {
+        format!(
+            "{certificate}; not decided: the atoms {} may be related, so the rank {rank} is an upper bound (zero residuals and substitutions are still proofs)",
+            undecided.join(", ")
+        )
+    };
+    if let (Some(prefix), Some(dec), Some(sys_text)) = (&a.out_prefix, &dec, &sys_text) {
+        write(prefix, a.force, sys_text, dec)?;
+    }
+    let modes: Vec<json::DerivedMode> = match &m.derivation {
+        None => nf
+            .state
+            .iter()
+            .map(|s| json::DerivedMode {
+                angle: false,
+                domain: "everywhere".into(),
+                expr: s.clone(),
+                kind: "variable".into(),
+                name: s.clone(),
+            })
+            .collect(),
+        Some(d) => d
+            .modes
+            .iter()
+            .map(|m| json::DerivedMode {
+                angle: m.angle,
+                domain: m.domain.clone(),
+                expr: m.text.clone(),
+                kind: m.kind.word().to_string(),
+                name: m.name.clone(),
+            })
+            .collect(),
+    };
+    let reduced_inputs: Vec<json::ReducedUnknownInput> = m
+        .inputs
+        .iter()
+        .map(|i| json::ReducedUnknownInput {
+            factor: i.factor.clone(),
+            input: i.input.clone(),
+            mode: i.mode.clone(),
+            name: i.name.clone(),
+            offset: i.offset.clone(),
+            order: i.order,
+        })
+        .collect();
+    if a.out.json {
+        let reduced = m.derivation.as_ref().map(|d| json::Reduced {
+            closed: d.closed(),
+            dynamics: (0..d.modes.len())
+                .map(|k| json::ReducedDynamics {
+                    name: d.modes[k].name.clone(),
+                    rhs: d.dynamics(k),
+                })
+                .collect(),
+            inputs: nf.inputs.clone(),
+            missing: d.missing(),
+            outputs: d
+                .outputs
+                .iter()
+                .map(|(n, e)| json::ReducedOutput {
+                    expr: e.clone(),
+                    name: n.clone(),
+                })
+                .collect(),
+        });
+        crate::json::print(&json::ModesUnknownInputs {
+            certificate,
+            checks: checks.as_ref().map(|cs| {
+                cs.iter()
+                    .map(|c| json::PassCheck {
+                        check: c.name.clone(),
+                        detail: c.detail.clone(),
+                        pass: c.pass,
+                    })
+                    .collect()
+            }),
+            dec: dec.clone(),
+            decided,
+            error_bound: bound,
+            full_rank: full,
+            modes,
+            n,
+            rank,
+            reduced,
+            reduced_inputs,
+            restriction: nf.restriction.clone(),
+            seed: a.seed,
+            symmetries: nsym,
+            sys: sys_text.clone(),
+            system: nf.name.clone(),
+            undecided_atoms: undecided,
+            unknown_inputs: nf.unknown_inputs.clone(),
+            verified,
+        })?;
+    } else {
+        let latex: Vec<String> = match (&m.derivation, a.out.latex) {
+            (Some(d), true) => d
+                .modes
+                .iter()
+                .map(|x| m.view.ctx.to_latex(x.expr))
+                .collect(),
+            _ => modes.iter().map(|x| x.expr.clone()).collect(),
+        };
+        out!(
+            "{}",
+            ui_modes_text(a, nf, &m, &title, &latex, &reduced_inputs, &certificate)
+        );
+    }
+    if full {
+        if let Some(prefix) = &a.out_prefix {
+            eprintln!(
+                "note: nothing written to {prefix}.sys or {prefix}.dec: every variable is observable, so the reduced system is {} itself",
+                a.sys.system
+            );
+        }
+    } else if a.out_prefix.is_some() && dec.is_none() {
+        eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
+    }
+    if !modes_ok || !verified {
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// What proves the modes and the reduced system with unknown inputs.
+fn ui_modes_certificate(
+    m: &UnknownInputModes,
+    full: bool,
+    verified: bool,
+    modes_ok: bool,
+    checks: &Option<Vec<obsan_analysis::Check>>,
+    bound: f64,
+) -> String {
+    let sym = format!(
+        "{} symmetr{} certified exactly ({} identities: each leaves the outputs invariant, its brackets with the fields in the span of the symmetries and the unknown inputs' fields)",
+        m.symmetries.vectors.len(),
+        if m.symmetries.vectors.len() == 1 { "y" } else { "ies" },
+        m.symmetries.identities
+    );
+    if full {
+        return format!(
+            "every variable observable with unknown inputs (the rank test: wrong with probability <= {bound:.1e}); the reduced system is the model, each unknown input its fields move reconstructable (the rank test's order)"
+        );
+    }
+    let Some(d) = &m.derivation else {
+        return String::new();
+    };
+    let reduced = match checks {
+        Some(c) if verified => format!(
+            "the reduced system writes every output and every field (the known inputs', and each unknown input's or its combination's) in the modes, proven by exact substitution ({} checks)",
+            c.len()
+        ),
+        Some(_) => "reduced system: a decomposition check FAILED".to_string(),
+        None => format!(
+            "reduced system not closed: no form in the modes found for {}",
+            d.missing().join(", ")
+        ),
+    };
+    format!(
+        "{} mode(s){}; {sym}; as many independent modes as the rank with unknown inputs (a non-zero minor, exact; the rank: wrong with probability <= {bound:.1e}); {reduced}",
+        d.modes.len(),
+        if modes_ok {
+            ", each satisfying eq. (11) exactly (canonical forms) for every symmetry"
+        } else {
+            ": a mode check FAILED"
+        }
+    )
+}
+
+/// The text report of [`modes`].
+fn ui_modes_text(
+    a: &ModesArgs,
+    nf: &NormalForm,
+    m: &UnknownInputModes,
+    title: &str,
+    exprs: &[String],
+    inputs: &[json::ReducedUnknownInput],
+    certificate: &str,
+) -> String {
+    let r = &m.symmetries.report;
+    let k = m.symmetries.vectors.len();
+    let mut o = format!(
+        "{title}: unknown inputs [{}]; rank {} of {} with unknown inputs, {k} symmetr{}",
+        nf.unknown_inputs.join(", "),
+        r.rank,
+        r.n,
+        if k == 1 { "y" } else { "ies" }
+    );
+    match &m.derivation {
+        None => o.push_str(
+            ": every variable is observable; the modes are the variables and the reduced system is the model itself\n",
+        ),
+        Some(d) => {
+            let k = d.modes.len();
+            o.push_str(&format!(
+                "; {k} observable mode{}:\n",
+                if k == 1 { "" } else { "s" }
+            ));
+            for (e, md) in exprs.iter().zip(&d.modes) {
+                o.push_str(&format!(
+                    "  {} = {e}    ({}; {})\n",
+                    md.name,
+                    md.kind.word(),
+                    md.domain
+                ));
+            }
+            o.push_str("reduced system:\n");
+            for k in 0..d.modes.len() {
+                o.push_str(&format!(
+                    "  {}' = {}\n",
+                    d.modes[k].name,
+                    d.dynamics(k).unwrap_or_else(|| "(not found)".into())
+                ));
+            }
+            for (name, e) in &d.outputs {
+                o.push_str(&format!(
+                    "  {name} = {}\n",
+                    e.as_deref().unwrap_or("(not found)")
+                ));
+            }
+        }
+    }
+    if inputs.is_empty() {
+        o.push_str("unknown inputs in the reduced system: (none)\n");
+    } else {
+        let items: Vec<String> = inputs
+            .iter()
+            .map(|i| match &i.factor {
+                None => format!(
+                    "{} ({}, reconstructable {})",
+                    i.name,
+                    i.input,
+                    order_text(i.order)
+                ),
+                Some(f) => format!(
+                    "{} = ({f})*{}{} (a combination; reconstructable from the first derivative of {})",
+                    i.name,
+                    i.input,
+                    i.offset.as_ref().map(|o| format!(" + {o}")).unwrap_or_default(),
+                    i.mode
+                ),
+            })
+            .collect();
+        o.push_str(&format!(
+            "unknown inputs in the reduced system: {}\n",
+            items.join("; ")
+        ));
+    }
+    o.push_str(&format!("certificate: {certificate}\n"));
+    if let Some(p) = &a.out_prefix {
+        if m.derivation.is_some() && m.inputs.iter().all(|i| i.factor.is_none()) {
+            o.push_str(&format!("wrote {p}.sys and {p}.dec\n"));
+        }
+    }
+    o
+}
+
+/// `obsan verify` with unknown inputs: the decomposition's checks over the
+/// model with the unknown inputs read as inputs, against the certified
+/// symmetries and the unknown-input rank, plus one check per unknown input
+/// that drives the reduced dynamics (its field outside the symmetries' span):
+/// it must be reconstructable. Returns the rank report and symmetries the
+/// checks used, the checks and the rank test's bound; `nf` becomes the view.
+pub fn verify_checks(
+    a: &VerifyArgs,
+    d: &Decomposition,
+    nf: &mut NormalForm,
+) -> Result<(RankReport, SymmetryReport, Vec<Check>, f64), Failure> {
+    let deadline =
+        a.an.timeout
+            .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
+    let (s, mut view, rr, sym) = unknown_input_view(
+        nf,
+        UnknownInputOptions {
+            seed: a.an.seed,
+            deadline,
+            max_order: None,
+        },
+    )
+    .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
+    let mut checks = verify_decomposition_with(&mut view, d, a.an.seed, Some((&rr, &sym)))
+        .map_err(|e| Failure(e.to_string()))?;
+    let drives = inputs_driving_modes(nf, &s.vectors, a.an.seed);
+    for (j, w) in nf.unknown_inputs.iter().enumerate() {
+        if !drives[j] {
+            continue;
+        }
+        let order = s.report.reconstructable[j];
+        checks.push(Check {
+            name: format!(
+                "unknown input {w}, which drives the reduced dynamics, is reconstructable"
+            ),
+            pass: order.is_some(),
+            detail: match order {
+                Some(_) => String::new(),
+                None => {
+                    format!("{w} is not reconstructable (obsan rank): the reduced dynamics need it")
+                }
+            },
+            undecided: vec![],
+        });
+    }
+    let bound = s.report.error_bound;
+    *nf = view;
+    Ok((rr, sym, checks, bound))
+}
+
+/// The reduced `.sys` text with the inputs that are not the model's known
+/// ones (the unknown inputs and their combinations) declared `unknown input`.
+fn unknown_inputs_declared(text: &str, known: &[String]) -> String {
+    let mut o = String::new();
+    for line in text.lines() {
+        match line.strip_prefix("input ") {
+            Some(list) => {
+                let names: Vec<&str> = list.split(',').map(str::trim).collect();
+                let (k, u): (Vec<&str>, Vec<&str>) =
+                    names.iter().partition(|n| known.iter().any(|x| x == *n));
+                if !k.is_empty() {
+                    o.push_str(&format!("input {}\n", k.join(", ")));
+                }
+                if !u.is_empty() {
+                    o.push_str(&format!("unknown input {}\n", u.join(", ")));
+                }
+            }
+            None => {
+                o.push_str(line);
+                o.push('\n');
+            }
+        }
+    }
+    o
 }

@@ -235,6 +235,20 @@ class Symmetries(Result):
         return _latex_rows(rows or ["\\text{no continuous symmetry}"])
 
 
+class ReducedUnknownInput(NamedTuple):
+    """An unknown input of a reduced system (``obsan modes`` with unknown inputs): the
+    model's ``input`` itself (``factor`` ``None``, reconstructable from output derivatives
+    of ``order``), or the combination ``factor * input + offset`` named ``name``, recovered
+    from the first derivative of ``mode`` (``order`` ``None``)."""
+
+    name: str
+    input: str
+    factor: Optional[str]
+    offset: Optional[str]
+    mode: str
+    order: Optional[int]
+
+
 @dataclass(frozen=True, repr=False, eq=False)
 class Modes(Result):
     """``obsan modes``: the observable modes and the reduced system. ``closed`` is true
@@ -242,7 +256,10 @@ class Modes(Result):
     ``.sys`` text, full rank by construction). ``decided`` false: the atoms in
     ``undecided_atoms`` may be related, so the rank is an upper bound (``full_rank``
     is then ``None`` at formal full rank): the modes' eq. (11) residuals and the
-    reduced system's substitutions are proven, their completeness is not."""
+    reduced system's substitutions are proven, their completeness is not. With unknown
+    inputs, ``unknown_inputs`` are the model's and ``reduced_inputs`` those (or their
+    combinations) the reduced system is driven by; at full rank ``modes`` are the
+    variables and ``closed`` is true (the reduced system is the model)."""
 
     system: str
     rank: int
@@ -252,20 +269,36 @@ class Modes(Result):
     reduced_sys: Optional[str]
     decided: bool = True
     undecided_atoms: List[str] = field(default_factory=list)
+    unknown_inputs: List[str] = field(default_factory=list)
+    reduced_inputs: List[ReducedUnknownInput] = field(default_factory=list)
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Modes":
         reduced = raw.get("reduced") or {}
+        unknown = "unknown_inputs" in raw
+        full = unknown and bool(raw.get("full_rank"))
         return cls(
             raw=raw,
             system=raw.get("system", ""),
             rank=int(raw.get("rank", 0)),
             full_rank=None if raw.get("full_rank") is None else bool(raw["full_rank"]),
             modes=[m["expr"] for m in raw.get("modes") or []],
-            closed=bool(reduced.get("closed", False)),
+            closed=full or bool(reduced.get("closed", False)),
             reduced_sys=raw.get("sys"),
             decided=bool(raw.get("decided", True)),
             undecided_atoms=[str(a) for a in raw.get("undecided_atoms") or []],
+            unknown_inputs=[str(w) for w in raw.get("unknown_inputs") or []],
+            reduced_inputs=[
+                ReducedUnknownInput(
+                    name=str(i["name"]),
+                    input=str(i["input"]),
+                    factor=i.get("factor"),
+                    offset=i.get("offset"),
+                    mode=str(i["mode"]),
+                    order=None if i.get("order") is None else int(i["order"]),
+                )
+                for i in raw.get("reduced_inputs") or []
+            ],
         )
 
 

@@ -40,13 +40,40 @@ def test_symmetries_of_the_unicycle_with_unknown_speed() -> None:
     assert s["unobservable_variables"] == ["x", "y", "theta"]
 
 
-def test_modes_refuse_unknown_inputs_with_the_reason() -> None:
+def test_modes_at_full_rank_name_the_recovered_input() -> None:
+    # chain.sys: rank 2 of 2, so the modes are x1, x2; w moves x2 (g = (0, 1)) and
+    # y'' = w recovers it (order 2).
+    m = obsan.load(UI / "chain.sys").modes()
+    assert isinstance(m, obsan.Modes)
+    assert m.full_rank and m.closed
+    assert m.modes == ["x1", "x2"]
+    assert m.unknown_inputs == ["w"]
+    assert m.reduced_inputs == [
+        obsan.ReducedUnknownInput(
+            name="w", input="w", factor=None, offset=None, mode="x2", order=2
+        )
+    ]
+
+
+def test_modes_of_the_unicycle_with_unknown_speed() -> None:
+    # unicycle_one_landmark.sys: rank 1 of 3 (rotation about the landmark and the
+    # scaling lost), so one mode; v is lost, a combination (dm . g) v drives it.
+    m = obsan.load(UI / "unicycle_one_landmark.sys").modes()
+    assert (m.rank, m.full_rank) == (1, False)
+    assert len(m.modes) == 1 and m.closed
+    [ri] = m.reduced_inputs
+    assert ri.input == "v" and ri.factor is not None and ri.order is None
+
+
+def test_modes_refuse_a_lost_input_with_the_reason() -> None:
+    # x1' = w1 + w2, y = x1: only the sum is seen; the mode x1 needs w1.
+    src = "system q\nstate x1, x2\nunknown input w1, w2\nx1' = w1 + w2\nx2' = w2\noutput y = x1\n"
     try:
-        obsan.load(UI / "chain.sys").modes()
+        obsan.loads(src).modes()
     except obsan.ObsanError as e:
-        assert "has unknown inputs (w)" in str(e)
+        assert "the derivative of mode x1 needs the unknown input w1" in str(e)
     else:
-        raise AssertionError("modes accepted a model with unknown inputs")
+        raise AssertionError("modes accepted a reduced system needing a lost input")
 
 
 def test_rank_with_explicit_time() -> None:

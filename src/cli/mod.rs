@@ -154,7 +154,9 @@ says (random: error_bound in certification; --exact for the exact route). Exit 1
 undecided_atoms}], pass, decided, undecided_atoms, exact, verdict, certificate (closure |
 invariance | random), certification, symmetries}. The symmetries take the default route (--exact:
 the exact one); a passing decomposition that writes every output is exact by closure whatever
-certified them. Exit 1 when a check fails.")]
+certified them. Exit 1 when a check fails. With unknown inputs the checks run against the
+certified unknown-input symmetries, plus one per unknown input the reduced dynamics need: it
+must be reconstructable.")]
     Verify(VerifyArgs),
     /// Derive observable modes and the reduced system, each proven exactly (eqs. 9-11).
     #[command(after_help = "Examples:
@@ -170,7 +172,19 @@ full_rank, modes_exact and complete are null, independent and verified null unle
 certain, and certificate says what is still proven),
 certificate: {text, modes_exact, independent, complete, verified, checks}, sys, dec}.
 --out PREFIX writes PREFIX.sys (the reduced system) and PREFIX.dec (for obsan verify).
-Exit 1 when the reduced system could not be closed or a check failed.")]
+Exit 1 when the reduced system could not be closed or a check failed.
+
+A model with unknown inputs (obsan modes systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys)
+gets the first integrals of its certified symmetries as modes and a reduced system driven by the
+known inputs and the reconstructable unknown inputs, or combinations factor*w of them
+(docs/engine.md, \"Modes with unknown inputs\"); exit 2 naming the mode and the input when it
+would need one that is not reconstructable. With unknown inputs --json prints {system,
+restriction, n, rank, full_rank, unknown_inputs, symmetries, modes, reduced (null at full rank),
+reduced_inputs ([{name, input, factor (null: the input itself), offset (drift and known-input
+terms added), mode, order (of the output
+derivatives it is recovered from; null for a combination)}]), verified, checks, certificate,
+error_bound (of the rank test the modes' count rests on), seed, decided, undecided_atoms, sys,
+dec}.")]
     Modes(ModesArgs),
     /// Simulate the paper's calibration experiment (section VI-A) and write a dataset, or
     /// integrate any MODEL.sys from given values.

@@ -26,8 +26,8 @@ pub use analysis::{
 };
 pub use global::{Global, GlobalVariable, OutputOrder, SimulateSys, VariableKind, Verdict};
 pub use modes::{
-    DerivedMode, Modes, ModesCertificate, ModesDerived, ModesFullRank, PassCheck, Reduced,
-    ReducedDynamics, ReducedOutput, VariableMode,
+    DerivedMode, Modes, ModesCertificate, ModesDerived, ModesFullRank, ModesUnknownInputs,
+    PassCheck, Reduced, ReducedDynamics, ReducedOutput, ReducedUnknownInput, VariableMode,
 };
 pub use unknown::{
     Martinelli, MartinelliStep, NamedOrder, RankUnknownInputs, SymmetriesUnknownInputs,
@@ -134,6 +134,11 @@ pub const TYPED: &[Typed] = &[
         name: "modes",
         command: "obsan modes SYSTEM --json",
         schema: || schema_for!(Modes),
+    },
+    Typed {
+        name: "modes-unknown-inputs",
+        command: "obsan modes SYSTEM --json (a model with unknown inputs)",
+        schema: || schema_for!(ModesUnknownInputs),
     },
     Typed {
         name: "global",

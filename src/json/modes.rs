@@ -14,6 +14,71 @@ pub enum Modes {
     Derived(Box<ModesDerived>),
 }
 
+/// `obsan modes` on a model with unknown inputs (docs/engine.md, "Modes with unknown
+/// inputs"): its own object, as for `rank` and `symmetries`.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ModesUnknownInputs {
+    /// What is proven, and how, in words.
+    pub certificate: String,
+    /// The derived decomposition's checks (as `obsan verify`); null at full rank.
+    pub checks: Option<Vec<PassCheck>>,
+    /// The decomposition file, or null at full rank or when not closed.
+    pub dec: Option<String>,
+    /// False when atoms may be related (then the rank is an upper bound).
+    pub decided: bool,
+    /// Probability bound of the unknown-input rank test (the modes' count rests on it).
+    pub error_bound: f64,
+    /// Every variable observable: the modes are the variables, the reduced system the model.
+    pub full_rank: bool,
+    /// The modes (at full rank, the variables).
+    pub modes: Vec<DerivedMode>,
+    /// The number of analysed variables.
+    pub n: usize,
+    /// The rank with unknown inputs.
+    pub rank: usize,
+    /// The reduced system in the modes; null at full rank.
+    pub reduced: Option<Reduced>,
+    /// The unknown inputs, or their combinations, the reduced system is driven by.
+    pub reduced_inputs: Vec<ReducedUnknownInput>,
+    /// The input restriction applied, or null.
+    pub restriction: Option<String>,
+    /// The seed of the random points.
+    pub seed: u64,
+    /// The number of certified symmetries.
+    pub symmetries: usize,
+    /// The reduced system as .sys text (unknown inputs as inputs), or null.
+    pub sys: Option<String>,
+    /// The system's name.
+    pub system: String,
+    /// The atoms that may be related; empty when decided.
+    pub undecided_atoms: Vec<String>,
+    /// The model's unknown inputs.
+    pub unknown_inputs: Vec<String>,
+    /// Every decomposition check passed (true at full rank).
+    pub verified: bool,
+}
+
+/// An unknown input, or a combination `factor * input`, of the reduced system.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ReducedUnknownInput {
+    /// Null: the input itself; else the state function it is multiplied by.
+    pub factor: Option<String>,
+    /// The model's unknown input.
+    pub input: String,
+    /// The first mode whose derivative needs it.
+    pub mode: String,
+    /// Its name in the reduced system.
+    pub name: String,
+    /// Null, or the drift and known-input terms added to `factor * input` (they are not
+    /// functions of the modes; the combination is then that mode's time derivative).
+    pub offset: Option<String>,
+    /// The output-derivative order it is reconstructable from (the rank test's); null for a
+    /// combination, recovered from the modes' first derivatives.
+    pub order: Option<usize>,
+}
+
 /// `obsan modes` on a model of full rank.
 #[derive(Serialize, Deserialize, JsonSchema, Debug)]
 #[serde(deny_unknown_fields)]

@@ -317,6 +317,15 @@ fn symmetry_and_mode_outputs_match_their_types_and_schemas() {
         ],
     );
     assert_eq!(v["certificate"], "unknown_input_invariance", "{v}");
+    // unicycle_one_landmark.sys: rank 1 of 3 (its file's hand derivation), one mode.
+    let v = typed::<json::ModesUnknownInputs>(
+        "modes-unknown-inputs",
+        &[
+            "modes",
+            "systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys",
+        ],
+    );
+    assert_eq!(v["modes"].as_array().map(Vec::len), Some(1), "{v}");
     let v = typed::<json::Check>(
         "check",
         &[
@@ -504,7 +513,7 @@ fn design_outputs_match_their_types_and_schemas() {
 #[test]
 fn help_names_exactly_the_schema_keys() {
     let help = |c: &[&str]| ok(&[c, &["--help"]].concat());
-    let cases: [(&str, String, &str); 19] = [
+    let cases: [(&str, String, &str); 20] = [
         ("diagnose", help(&["diagnose"]), "--json prints"),
         ("rank-along", help(&["rank"]), "--along --json prints"),
         ("show", help(&["show"]), "--json prints"),
@@ -524,6 +533,11 @@ fn help_names_exactly_the_schema_keys() {
         ("verify", help(&["verify"]), "--json prints"),
         // Both objects' keys: the full-rank one's are a subset of the derivation's.
         ("modes", help(&["modes"]), "--json prints"),
+        (
+            "modes-unknown-inputs",
+            help(&["modes"]),
+            "With unknown inputs --json prints",
+        ),
         ("global", help(&["global"]), "--json prints"),
         ("simulate", help(&["simulate"]), "--json prints"),
         ("simplify", help(&["simplify"]), "--json prints"),

@@ -78,7 +78,7 @@ fn other_commands_refuse_unknown_inputs() {
         ],
         "is an unknown input",
     );
-    for cmd in ["modes", "check", "global", "lie"] {
+    for cmd in ["check", "global", "lie"] {
         let mut args = vec![cmd, "systems/benchmarks/unknown-inputs/chain.sys"];
         if cmd == "check" {
             args.extend(["--mode", "x1"]);
@@ -358,4 +358,238 @@ fn observable_over_related_atoms_is_not_claimed_under_unknown_inputs() {
     );
     assert_eq!(v["decided"], true, "{v}");
     assert_eq!(v["weakly_locally_observable"], true, "{v}");
+}
+
+/// `v . grad(e)` over the named variables, decided zero by the engine (the
+/// derivative taken here, independently of the command that printed `e`).
+fn annihilates(e: &str, vars: &[&str], v: &[&str]) -> bool {
+    let mut ctx = obsan_expr::Ctx::new();
+    let id = ctx.parse(e).unwrap();
+    let mut terms = Vec::new();
+    for (x, c) in vars.iter().zip(v) {
+        let var = ctx.symbol(x).var;
+        let d = ctx.diff(id, var);
+        let c = ctx.parse(c).unwrap();
+        terms.push(ctx.mul(&[c, d]));
+    }
+    let s = ctx.add(&terms);
+    ctx.canon(s).is_zero()
+}
+
+#[test]
+fn modes_at_full_rank_are_the_states_and_name_the_recovered_input() {
+    // chain.sys: y = x1, y' = x2, y'' = w: rank 2 of 2, so the modes are x1,
+    // x2 and the reduced system is the model; w moves x2 first (g = (0, 1))
+    // and is recovered from y'' (order 2).
+    let f = "systems/benchmarks/unknown-inputs/chain.sys";
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", f])).unwrap();
+    assert_eq!(v["full_rank"], true, "{v}");
+    assert_eq!(names(&v["modes"]), ["x1", "x2"]);
+    assert!(v["reduced"].is_null());
+    let ri = v["reduced_inputs"].as_array().unwrap();
+    assert_eq!(ri.len(), 1, "{v}");
+    assert_eq!(ri[0]["input"], "w");
+    assert_eq!(ri[0]["name"], "w");
+    assert!(ri[0]["factor"].is_null());
+    assert_eq!(ri[0]["mode"], "x2");
+    assert_eq!(ri[0]["order"], 2);
+    let out = ok(&["modes", f]);
+    assert!(out.contains("the modes are the variables"), "{out}");
+    assert!(
+        out.contains("w (w, reconstructable from output derivatives of order 2)"),
+        "{out}"
+    );
+}
+
+#[test]
+fn modes_of_the_unicycle_with_unknown_speed_one_landmark() {
+    // unicycle_one_landmark.sys, by hand: the bearing beta = atan2(-y, -x) -
+    // theta is invariant under the rotation about the landmark (-y, x, 1) and
+    // the scaling (x, y, 0) (v scaled with it), the two lost directions; so
+    // 3 - 2 = 1 mode, each printed mode annihilated by both. beta' = phi' -
+    // omega with phi' = (x y' - y x')/rho^2 = v (x sin(theta) - y
+    // cos(theta))/rho^2, not a function of the mode: the reduced system is
+    // driven by the combination (dm . g) v, g = (cos(theta), sin(theta), 0),
+    // which the mode's first derivative gives, while v itself is lost.
+    let f = "systems/benchmarks/unknown-inputs/unicycle_one_landmark.sys";
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", f])).unwrap();
+    assert_eq!(v["full_rank"], false, "{v}");
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(3)));
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 1, "{v}");
+    let vars = ["x", "y", "theta"];
+    for m in modes {
+        let e = m["expr"].as_str().unwrap();
+        assert!(annihilates(e, &vars, &["-y", "x", "1"]), "{e}");
+        assert!(annihilates(e, &vars, &["x", "y", "0"]), "{e}");
+        // Not a constant: it moves along the drive (dm . g != 0).
+        assert!(
+            !annihilates(e, &vars, &["cos(theta)", "sin(theta)", "0"]),
+            "{e}"
+        );
+    }
+    assert_eq!(v["reduced"]["closed"], true, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
+    let ri = v["reduced_inputs"].as_array().unwrap();
+    assert_eq!(ri.len(), 1, "{v}");
+    assert_eq!(ri[0]["input"], "v");
+    assert!(ri[0]["order"].is_null());
+    // The factor is dm . g, g = (cos(theta), sin(theta), 0).
+    let (e, factor) = (
+        modes[0]["expr"].as_str().unwrap(),
+        ri[0]["factor"].as_str().unwrap(),
+    );
+    let mut ctx = obsan_expr::Ctx::new();
+    let m = ctx.parse(e).unwrap();
+    let (xv, yv) = (ctx.symbol("x").var, ctx.symbol("y").var);
+    let (dx, dy) = (ctx.diff(m, xv), ctx.diff(m, yv));
+    let (c, s, fa) = (
+        ctx.parse("cos(theta)").unwrap(),
+        ctx.parse("sin(theta)").unwrap(),
+        ctx.parse(factor).unwrap(),
+    );
+    let (a, b) = (ctx.mul(&[c, dx]), ctx.mul(&[s, dy]));
+    let lg = ctx.add(&[a, b]);
+    assert_eq!(ctx.canon(lg), ctx.canon(fa), "{factor}");
+    // The reduced dynamics use the combination and omega.
+    let rhs = v["reduced"]["dynamics"][0]["rhs"].as_str().unwrap();
+    let name = ri[0]["name"].as_str().unwrap();
+    assert!(rhs.contains(name) && rhs.contains("omega"), "{rhs}");
+    // --help names exactly the keys of this object (its unknown-input sentence).
+    let help = ok(&["modes", "--help"]);
+    let at = help
+        .find("unknown inputs --json prints {")
+        .expect("no unknown-input sentence");
+    let mut promised = top_level_items(&help[at + "unknown inputs --json prints ".len()..]);
+    promised.sort();
+    let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    got.sort();
+    assert_eq!(promised, got);
+}
+
+/// The first identifiers of the depth-1 items of the brace group `text` starts with.
+fn top_level_items(text: &str) -> Vec<String> {
+    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
+    for ch in text.chars() {
+        match ch {
+            '{' | '(' | '[' => depth += 1,
+            '}' | ')' | ']' => depth -= 1,
+            _ => {}
+        }
+        if depth == 0 {
+            items.push(std::mem::take(&mut item));
+            break;
+        }
+        if depth == 1 && ch == ',' {
+            items.push(std::mem::take(&mut item));
+        } else if depth >= 1 && !(depth == 1 && ch == '{') {
+            item.push(ch);
+        }
+    }
+    items
+        .iter()
+        .map(|i| {
+            i.trim()
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn modes_refuse_a_reduced_system_needing_a_lost_input() {
+    // x1' = w1 + w2, x2' = w2, y = x1: y' = w1 + w2 gives the sum only, so
+    // neither w1 nor w2 is reconstructable, and x2 is lost (d/dx2 commutes
+    // with the constant fields and leaves y alone). The one mode is x1 and
+    // x1' = w1 + w2 needs w1: refused, naming both.
+    let f = temp_file(
+        "lost_input.sys",
+        "system lost\nstate x1, x2\nunknown input w1, w2\nx1' = w1 + w2\nx2' = w2\noutput y = x1\n",
+    );
+    let err = bad(
+        &["modes", &f],
+        "the derivative of mode x1 needs the unknown input w1",
+    );
+    assert!(err.contains("not reconstructable"), "{err}");
+    assert!(err.contains(&f), "{err}");
+    // verify says the same of the decomposition x1, x1' = w1 + w2.
+    let dec = temp_file(
+        "lost_input.dec",
+        &format!("system {f}\nstate x1\nx1' = w1 + w2\noutput y = x1\n"),
+    );
+    let r = obsan(&["verify", &dec]);
+    assert_eq!(r.code, 1, "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stdout
+            .contains("FAIL unknown input w1, which drives the reduced dynamics"),
+        "{}",
+        r.stdout
+    );
+}
+
+#[test]
+fn modes_and_verify_with_a_reconstructable_input() {
+    // x1' = w, x2' = 0, y = x1 + x2: y' = w, so only x1 + x2 is observable
+    // (symmetry (1, -1)), w is reconstructable from y' (order 1), and the
+    // reduced system is z' = w, y = z with z = x1 + x2.
+    let f = temp_file(
+        "sum_input.sys",
+        "system sum\nstate x1, x2\nunknown input w\nx1' = w\nx2' = 0\noutput y = x1 + x2\n",
+    );
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", &f])).unwrap();
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 1, "{v}");
+    let e = modes[0]["expr"].as_str().unwrap();
+    assert!(annihilates(e, &["x1", "x2"], &["1", "-1"]), "{e}");
+    assert_eq!(v["verified"], true, "{v}");
+    assert_eq!(v["reduced_inputs"][0]["name"], "w");
+    assert_eq!(v["reduced_inputs"][0]["order"], 1);
+    let dec = temp_file(
+        "sum_input.dec",
+        &format!("system {f}\nlet z = x1 + x2\nstate z\nz' = w\noutput y = z\n"),
+    );
+    let out = ok(&["verify", &dec]);
+    assert!(
+        out.contains("PASS unknown input w, which drives the reduced dynamics, is reconstructable"),
+        "{out}"
+    );
+    // The reduced system keeps w unknown: its rank says w is recovered from y'.
+    let dir = fresh_dir("ui-modes-out");
+    let prefix = format!("{dir}/sum");
+    ok(&["modes", &f, "--out", &prefix]);
+    let sys = std::fs::read_to_string(format!("{prefix}.sys")).unwrap();
+    assert!(sys.contains("unknown input w\n"), "{sys}");
+    let out = ok(&["rank", &format!("{prefix}.sys")]);
+    assert!(
+        out.contains("w (from output derivatives of order 1)"),
+        "{out}"
+    );
+    // A wrong claim fails: z' = 2 w.
+    let wrong = temp_file(
+        "sum_input_wrong.dec",
+        &format!("system {f}\nlet z = x1 + x2\nstate z\nz' = 2*w\noutput y = z\n"),
+    );
+    assert_eq!(obsan(&["verify", &wrong]).code, 1);
+}
+
+#[test]
+fn a_drift_term_the_modes_cannot_write_moves_into_the_combination() {
+    // x' = k + w, y = x, k a param: y' = k + w, so k is lost (d/dk: [f0, d/dk]
+    // = -g, in the span) and so is w; x is the one mode. x' = k + w needs k,
+    // not a function of x: the reduced input is w_x = 1*w + k = y', and the
+    // reduced system x' = w_x, y = x.
+    let f = temp_file(
+        "drift_offset.sys",
+        "system drift\nstate x\nparam k\nunknown input w\nx' = k + w\noutput y = x\n",
+    );
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", &f])).unwrap();
+    assert_eq!(names(&v["modes"]), ["x"], "{v}");
+    let ri = &v["reduced_inputs"][0];
+    assert_eq!(ri["input"], "w");
+    assert!(same_function(ri["factor"].as_str().unwrap(), "1"), "{ri}");
+    assert!(same_function(ri["offset"].as_str().unwrap(), "k"), "{ri}");
+    let name = ri["name"].as_str().unwrap();
+    assert_eq!(v["reduced"]["dynamics"][0]["rhs"], name, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
 }

@@ -37,6 +37,7 @@ mod sym_report;
 mod symmetry;
 mod unknown_input;
 mod unknown_input_martinelli;
+mod unknown_input_modes;
 mod unknown_input_symmetry;
 
 // The root keeps what most users need (rank, symmetries, modes, decompositions); the
@@ -98,6 +99,10 @@ pub mod unknown_inputs {
         unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
     };
     pub use crate::unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
+    pub use crate::unknown_input_modes::{
+        inputs_driving_modes, unknown_input_modes, unknown_input_view, ReducedInput,
+        UnknownInputModes,
+    };
     pub use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
 }
 

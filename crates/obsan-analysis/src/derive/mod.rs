@@ -39,7 +39,7 @@ use crate::fp_linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon}
 use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
 use blocks::{coefficient_blocks, push_state_blocks};
 use reduced::in_modes;
-pub use reduced::verify_derivation;
+pub use reduced::{lie_along, reduce_in_modes, verify_derivation};
 
 use crate::decomp::{verify_decomposition_with, Check, Decomposition};
 use crate::modes::{check_modes, ModeReport};

@@ -188,6 +188,50 @@ impl Derivation {
     }
 }
 
+/// `L_field g` (the derivation's Lie derivative, for callers outside it).
+pub fn lie_along(nf: &mut NormalForm, g: Id, field: &[Id]) -> Id {
+    lie(nf, g, field)
+}
+
+/// The reduced system of modes already derived, over a system whose fields
+/// differ from the derivation's (an unknown input's field divided by a
+/// function of the state): the dynamics and outputs written in the same
+/// modes, and the exact mode checks, without a new search.
+pub fn reduce_in_modes(
+    nf: &mut NormalForm,
+    sym: &SymmetryReport,
+    d: &Derivation,
+    opts: &DeriveOptions,
+) -> Result<Derivation, AnalysisError> {
+    let lay = Layout::new(nf);
+    let w_ids: Vec<Vec<Id>> = sym
+        .vectors
+        .iter()
+        .map(|w| w.iter().map(|c| nf.ctx.from_canonical(c)).collect())
+        .collect();
+    let space = ModeSpace {
+        fields: &lay.fields,
+        consts: &d.consts,
+        used_vars: &lay.used_vars,
+        w_ids: &w_ids,
+    };
+    let mut rng = SplitMix(opts.seed ^ 0x6d6f_6465_7321);
+    let red = reduce(nf, &space, &d.modes, &mut rng, opts)?;
+    let ids: Vec<Id> = d.modes.iter().map(|m| m.expr).collect();
+    let mode_report = check_modes(nf, sym, &ids, opts.seed)?;
+    Ok(Derivation {
+        n: d.n,
+        rank: d.rank,
+        modes: d.modes.clone(),
+        mode_report,
+        field_names: lay.fnames,
+        derivatives: red.derivatives,
+        outputs: red.outputs,
+        consts: d.consts.clone(),
+        reduced_timed_out: red.timed_out,
+    })
+}
+
 /// Check a derived decomposition with the exact checks of `obsan verify`.
 /// The rank report and symmetries are the ones the derivation used.
 pub fn verify_derivation(

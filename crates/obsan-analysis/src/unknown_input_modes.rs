@@ -1,0 +1,424 @@
+//! Observable modes and the reduced system of a system with unknown inputs
+//! (docs/engine.md, "Modes with unknown inputs").
+//!
+//! The modes are a basis of first integrals of the certified unknown-input
+//! symmetries `xi_a` ([`unknown_input_symmetries`]): the derivation of the
+//! known-input case (`derive/`, eq. 11 `dm . xi_a = 0`) run on the *view*, the
+//! model with the unknown inputs read as inputs, against those vectors and the
+//! unknown-input rank. Their dynamics `dm/dt = dm (f0 + sum f_i u_i + sum g_j w_j)`
+//! are then written in the modes, the known inputs and, for each `w_j` some
+//! mode's derivative needs:
+//! - `w_j` itself when every `L_{g_j} m_k` is a function of the modes; it must
+//!   be reconstructable (the rank route's verdict, with its order), else the
+//!   reduction is refused;
+//! - else (some `L_{g_j} m_k`, or some drift or known-input term of a mode's
+//!   derivative, not a function of the modes) a combination: with `m_k` the
+//!   first mode whose coefficient is not, `beta = L_{g_j} m_k`, the view's
+//!   field becomes `g_j / beta` and each such drift or known field `f`
+//!   becomes `f - (L_f m_k / beta) g_j`, the input `w~ = beta w_j + sum
+//!   L_f m_k u_f`. With one unknown input every derivative is then a function
+//!   of the modes: the certificate gives `[F, xi] = A xi + b g`, so `xi(L_F'
+//!   m_l) = -b L_g m_l` for a projected field `F'`, and `L_F' m_k` constant
+//!   forces `b = 0`. The combination is reconstructable when the matrix
+//!   `C(m)` of the reduced inputs' coefficients has full column rank (the
+//!   modes being observable, `dm/dt - F(m, u) = C(m) w~` is a function of the
+//!   outputs' derivatives): checked by a non-zero minor at a random point
+//!   (exact); else refused. With several unknown inputs a form may not be
+//!   found: the reduced system is then reported not closed, never wrong.
+
+use crate::decided::undecided_atoms_of;
+use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
+use crate::fp_linalg::null_space;
+use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
+use crate::sym_report::{Certificate, SymmetryReport};
+use crate::unknown_input::UnknownInputOptions;
+use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
+use obsan_expr::{Fp, Id, RatFun, SplitMix};
+use obsan_model::NormalForm;
+
+/// How an unknown input enters the reduced system.
+#[derive(Clone, Debug)]
+pub struct ReducedInput {
+    /// Its name in the reduced system.
+    pub name: String,
+    /// The model's unknown input.
+    pub input: String,
+    /// `None`: the input itself; else the factor `beta(S)` of the combination
+    /// `beta(S) w` (the derivative of `mode` along the input's field).
+    pub factor: Option<String>,
+    /// The first mode whose derivative needs it.
+    pub mode: String,
+    /// For a combination whose mode's drift or known-input terms are not
+    /// functions of the modes: `alpha0 + sum alpha_i u_i`, added to
+    /// `factor * w` (those terms of the mode's derivative, moved into the input).
+    pub offset: Option<String>,
+    /// The output-derivative order it is reconstructable from (the rank
+    /// route's, for an input itself); `None` for a combination, recovered
+    /// from the modes' first derivatives.
+    pub order: Option<usize>,
+}
+
+/// The modes and reduced system with unknown inputs.
+#[derive(Clone, Debug)]
+pub struct UnknownInputModes {
+    /// The certified symmetries and the rank test.
+    pub symmetries: UnknownInputSymmetries,
+    /// The model with the unknown inputs as inputs (a combination's field
+    /// divided by its factor, under the combination's name): the reduced
+    /// system and its decomposition checks are over it.
+    pub view: NormalForm,
+    /// The view's rank report with the unknown-input rank.
+    pub rank: RankReport,
+    /// The certified vectors as the derivation and the checks read them.
+    pub sym: SymmetryReport,
+    /// `None` at full rank: the modes are the variables and the reduced
+    /// system the model itself.
+    pub derivation: Option<Derivation>,
+    /// The unknown inputs (or combinations) the reduced system needs.
+    pub inputs: Vec<ReducedInput>,
+}
+
+/// The view, its rank report and the symmetries as the known-input
+/// derivation and checks read them (module docs).
+pub fn unknown_input_view(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<
+    (
+        UnknownInputSymmetries,
+        NormalForm,
+        RankReport,
+        SymmetryReport,
+    ),
+    AnalysisError,
+> {
+    let deadline = opts.deadline;
+    let seed = opts.seed;
+    let s = unknown_input_symmetries(nf, opts)?;
+    let mut view = nf.clone();
+    view.inputs.append(&mut view.unknown_inputs);
+    view.input_vars.append(&mut view.unknown_input_vars);
+    view.fields.append(&mut view.unknown_fields);
+    let mut rr = rank(
+        &mut view,
+        RankOptions {
+            seed,
+            deadline,
+            progress: None,
+        },
+    )?;
+    // The view treats the unknown inputs as known: its rank is an upper bound;
+    // the modes are counted by the unknown-input rank.
+    rr.rank = s.report.rank;
+    rr.observable = s.report.observable.iter().map(Option::is_some).collect();
+    let undecided = undecided_atoms_of(nf, &[]);
+    let sym = SymmetryReport {
+        n: s.report.n,
+        rank: s.report.rank,
+        vectors: s.vectors.clone(),
+        free: vec![],
+        exact: true,
+        rows_checked: s.identities,
+        certificate: Certificate::Invariance(vec![]),
+        blocks: 1,
+        undecided,
+    };
+    Ok((s, view, rr, sym))
+}
+
+/// The modes and reduced system of a model with unknown inputs (module
+/// docs). `Err(Invalid)` names the mode and the input when the reduced
+/// system would need an input that is not reconstructable.
+pub fn unknown_input_modes(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+    derive: &DeriveOptions,
+) -> Result<UnknownInputModes, AnalysisError> {
+    let (s, mut view, rr, sym) = unknown_input_view(nf, opts)?;
+    let (n, r) = (s.report.n, s.report.rank);
+    let known = nf.inputs.len();
+    if r == 0 {
+        return Err(AnalysisError::Invalid(
+            "nothing is observable with the unknown inputs (rank 0): there is no mode".into(),
+        ));
+    }
+    if r == n {
+        // The modes are the variables: w_j drives the first state its field moves.
+        let mut inputs = Vec::new();
+        for (j, w) in nf.unknown_inputs.iter().enumerate() {
+            let Some(i) = (0..n).find(|&i| !view.ctx.is_zero(view.fields[known + j][i])) else {
+                continue;
+            };
+            inputs.push(plain(&s, j, w, &nf.state[i])?);
+        }
+        return Ok(UnknownInputModes {
+            symmetries: s,
+            view,
+            rank: rr,
+            sym,
+            derivation: None,
+            inputs,
+        });
+    }
+    let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
+    let mut inputs = Vec::new();
+    let mut rescaled = false;
+    // The drift and known fields whose derivatives are not functions of the
+    // modes: projected along the first combination input (module docs).
+    let mut to_project: Vec<usize> = (0..d.field_names.len())
+        .filter(|&i| !nf.unknown_inputs.contains(&d.field_names[i]))
+        .filter(|&i| d.derivatives.iter().any(|row| row[i].is_none()))
+        .collect();
+    for (j, w) in nf.unknown_inputs.iter().enumerate() {
+        let Some(idx) = d.field_names.iter().position(|f| f == w) else {
+            continue;
+        };
+        let col: Vec<Option<&str>> = d
+            .derivatives
+            .iter()
+            .map(|row| row[idx].as_deref())
+            .collect();
+        let Some(first) = col.iter().position(|c| *c != Some("0")) else {
+            continue; // no mode sees w_j
+        };
+        let k0 = match col.iter().position(Option::is_none) {
+            None if to_project.is_empty() => {
+                inputs.push(plain(&s, j, w, &d.modes[first].name)?);
+                continue;
+            }
+            None => first,
+            Some(k0) => k0,
+        };
+        let mode = d.modes[k0].clone();
+        let g = view.fields[known + j].clone();
+        let beta = crate::derive::lie_along(&mut view, mode.expr, &g);
+        let beta_c = view.ctx.canon(beta);
+        let beta = view.ctx.from_canonical(&beta_c);
+        let offset = project(
+            &mut view,
+            &d,
+            std::mem::take(&mut to_project),
+            mode.expr,
+            &g,
+            beta,
+        );
+        view.fields[known + j] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
+        let name = fresh_name(&view, &format!("{w}_{}", mode.name));
+        view.inputs[known + j] = name.clone();
+        view.input_vars[known + j] = view.ctx.symbol(&name).var;
+        inputs.push(ReducedInput {
+            name,
+            input: w.clone(),
+            factor: Some(view.ctx.ratfun_text_factored(&beta_c)),
+            offset,
+            mode: mode.name.clone(),
+            order: None,
+        });
+        rescaled = true;
+    }
+    if rescaled {
+        d = reduce_in_modes(&mut view, &sym, &d, derive)?;
+        independent_inputs(&mut view, &d, &inputs, derive.seed)?;
+    }
+    Ok(UnknownInputModes {
+        symmetries: s,
+        view,
+        rank: rr,
+        sym,
+        derivation: Some(d),
+        inputs,
+    })
+}
+
+/// `w_j` itself in the reduced system: reconstructable by the rank route, or refused.
+fn plain(
+    s: &UnknownInputSymmetries,
+    j: usize,
+    w: &str,
+    mode: &str,
+) -> Result<ReducedInput, AnalysisError> {
+    match s.report.reconstructable[j] {
+        Some(order) => Ok(ReducedInput {
+            name: w.to_string(),
+            input: w.to_string(),
+            factor: None,
+            offset: None,
+            mode: mode.to_string(),
+            order: Some(order),
+        }),
+        None => Err(AnalysisError::Invalid(format!(
+            "the derivative of mode {mode} needs the unknown input {w}, which is not reconstructable (obsan rank: no output derivative determines it): no reduced system driven by reconstructable inputs exists in these modes"
+        ))),
+    }
+}
+
+/// The fields `cols` (drift or known inputs, by the derivation's column)
+/// projected along `g` onto the kernel of `dm`: `f - (L_f m / beta) g`, `beta
+/// = L_g m`. Returns the terms moved into the combination input,
+/// `sum L_f m u_f` (`u_f = 1` for the drift), as text; `None` when none.
+fn project(
+    view: &mut NormalForm,
+    d: &Derivation,
+    cols: Vec<usize>,
+    m: Id,
+    g: &[Id],
+    beta: Id,
+) -> Option<String> {
+    let mut terms = Vec::new();
+    for i in cols {
+        let name = d.field_names[i].clone();
+        let f = if name == "f0" {
+            view.f0.clone()
+        } else {
+            let k = view.inputs.iter().position(|x| *x == name)?;
+            view.fields[k].clone()
+        };
+        let alpha = crate::derive::lie_along(view, m, &f);
+        let ratio = view.ctx.div(alpha, beta);
+        let new: Vec<Id> = f
+            .iter()
+            .zip(g)
+            .map(|(&fc, &gc)| {
+                let t = view.ctx.mul(&[ratio, gc]);
+                let t = view.ctx.neg(t);
+                view.ctx.add(&[fc, t])
+            })
+            .collect();
+        if name == "f0" {
+            view.f0 = new;
+            terms.push(alpha);
+        } else {
+            let k = view.inputs.iter().position(|x| *x == name)?;
+            view.fields[k] = new;
+            let u = view.ctx.symbol(&name).id;
+            terms.push(view.ctx.mul(&[alpha, u]));
+        }
+    }
+    if terms.is_empty() {
+        return None;
+    }
+    let sum = view.ctx.add(&terms);
+    let c = view.ctx.canon(sum);
+    Some(view.ctx.ratfun_text_factored(&c))
+}
+
+/// A name for a combination that the view does not use yet.
+fn fresh_name(view: &NormalForm, base: &str) -> String {
+    let used = |s: &str| {
+        view.state.iter().any(|x| x == s)
+            || view.inputs.iter().any(|x| x == s)
+            || view.consts.iter().any(|c| c.0 == s)
+            || view.outputs.iter().any(|o| o.0 == s)
+    };
+    let mut name = base.to_string();
+    let mut k = 1;
+    while used(&name) {
+        k += 1;
+        name = format!("{base}_{k}");
+    }
+    name
+}
+
+/// The reduced inputs' coefficient matrix `C(m)` (rows: modes, columns: the
+/// reduced unknown inputs) has full column rank: each column raising the rank
+/// at a random point is a non-zero minor (exact); a column that does not
+/// raise it at two points is refused as not reconstructable (a combination
+/// of the others could hide it).
+fn independent_inputs(
+    view: &mut NormalForm,
+    d: &Derivation,
+    inputs: &[ReducedInput],
+    seed: u64,
+) -> Result<(), AnalysisError> {
+    let mut cols: Vec<(usize, &ReducedInput)> = Vec::new();
+    for ri in inputs {
+        if let Some(i) = view.inputs.iter().position(|x| *x == ri.name) {
+            cols.push((i, ri));
+        }
+    }
+    if cols.len() < 2 {
+        return Ok(()); // one column, non-zero by construction
+    }
+    let mut roots: Vec<Id> = Vec::new();
+    for &(i, _) in &cols {
+        let f = view.fields[i].clone();
+        for m in &d.modes {
+            roots.push(crate::derive::lie_along(view, m.expr, &f));
+        }
+    }
+    let r = d.modes.len();
+    let mut rng = SplitMix(seed ^ 0x7569_6d6f_6465_7321);
+    let mut ok = vec![false; cols.len()];
+    for _ in 0..2 {
+        let Ok(pt) = view.ctx.random_fp_point(&mut rng, &|_| None) else {
+            continue;
+        };
+        let Ok(v) = view.ctx.eval_fp(&roots, &pt) else {
+            continue;
+        };
+        // Columns one by one: does each raise the rank of those before it?
+        let mut taken: Vec<Vec<Fp>> = Vec::new();
+        for (c, chunk) in v.chunks(r).enumerate() {
+            let mut next = taken.clone();
+            next.push(chunk.to_vec());
+            if null_space(transpose(&next, r), next.len()).is_empty() {
+                ok[c] = true;
+                taken = next;
+            }
+        }
+    }
+    if let Some(c) = ok.iter().position(|o| !o) {
+        let ri = cols[c].1;
+        return Err(AnalysisError::Invalid(format!(
+            "the derivative of mode {} needs the unknown input {} ({}), which is not reconstructable: its coefficients in the reduced dynamics are a combination of the other unknown inputs' (no full column rank at two random points)",
+            ri.mode,
+            ri.input,
+            ri.name
+        )));
+    }
+    Ok(())
+}
+
+/// Rows `k` of the columns `cols` (each of length `r`).
+fn transpose(cols: &[Vec<Fp>], r: usize) -> Vec<Vec<Fp>> {
+    (0..r)
+        .map(|k| cols.iter().map(|c| c[k]).collect())
+        .collect()
+}
+
+/// Which unknown inputs drive a reduced system whose modes are the first
+/// integrals of `vectors`: `g_j` outside their span (then `dm(g_j) != 0` for
+/// some mode). A rank raised at a random point is exact; not raised at two
+/// points is a screen (Schwartz-Zippel).
+pub fn inputs_driving_modes(nf: &mut NormalForm, vectors: &[Vec<RatFun>], seed: u64) -> Vec<bool> {
+    let n = nf.state.len();
+    let mut roots: Vec<Id> = Vec::new();
+    for v in vectors {
+        for c in v {
+            roots.push(nf.ctx.from_canonical(c));
+        }
+    }
+    for g in nf.unknown_fields.clone() {
+        roots.extend(g);
+    }
+    let k = vectors.len();
+    let mut rng = SplitMix(seed ^ 0x6472_6976_6573);
+    let mut out = vec![false; nf.unknown_fields.len()];
+    for _ in 0..2 {
+        let Ok(pt) = nf.ctx.random_fp_point(&mut rng, &|_| None) else {
+            continue;
+        };
+        let Ok(v) = nf.ctx.eval_fp(&roots, &pt) else {
+            continue;
+        };
+        let cols: Vec<Vec<Fp>> = v.chunks(n).map(|c| c.to_vec()).collect();
+        let base = k - null_space(transpose(&cols[..k], n), k).len();
+        for (j, o) in out.iter_mut().enumerate() {
+            let mut with: Vec<Vec<Fp>> = cols[..k].to_vec();
+            with.push(cols[k + j].clone());
+            let rk = k + 1 - null_space(transpose(&with, n), k + 1).len();
+            *o |= rk > base;
+        }
+    }
+    out
+}
