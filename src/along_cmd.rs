@@ -3,7 +3,7 @@
 //! ground truth, or a fit's values in the same shape), calls the analysis,
 //! prints the windows and the degenerate stretches.
 
-use crate::analysis_cmds::deadline_after;
+use crate::cli::deadline_after;
 use crate::cli::RankArgs;
 use crate::json;
 use crate::show::load_normal_form;

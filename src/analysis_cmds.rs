@@ -1,6 +1,8 @@
 //! `obsan rank`, `symmetries`, `lie`, `check`, `verify`.
 
-use crate::cli::{AnalysisArgs, CheckArgs, LieArgs, OutputArgs, RankArgs, SymArgs, VerifyArgs};
+use crate::cli::{
+    deadline_after, AnalysisArgs, CheckArgs, LieArgs, OutputArgs, RankArgs, SymArgs, VerifyArgs,
+};
 use crate::expr_cmds::{not_decided_note, parse_arg_in};
 use crate::json;
 use crate::show::{load_normal_form, load_system};
@@ -12,9 +14,8 @@ use obsan_analysis::{
 };
 use obsan_expr::RatFun;
 use obsan_model::NormalForm;
-use std::collections::BTreeMap;
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Formulas for people: partially factored (exact; parses back to the same form).
 fn fmt_rf(nf: &NormalForm, r: &RatFun, out: &OutputArgs) -> String {
@@ -23,14 +24,6 @@ fn fmt_rf(nf: &NormalForm, r: &RatFun, out: &OutputArgs) -> String {
     } else {
         nf.ctx.ratfun_text_factored(r)
     }
-}
-
-/// The one deadline of a command given `--timeout secs`, from the instant it
-/// started: every stage (rank test, symmetries, modes) polls this same
-/// instant, so the whole command stops at `--timeout`, not each stage at its
-/// own; the watchdog of lib.rs waits one more second for the message.
-pub(crate) fn deadline_after(start: Instant, secs: Option<f64>) -> Option<Instant> {
-    secs.map(|s| start + Duration::from_secs_f64(s.max(0.0)))
 }
 
 /// Run the rank test with progress (src/progress.rs) and the deadline;
@@ -97,8 +90,8 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     if !a.known.is_empty() || !a.known_generic.is_empty() {
         return crate::experiments_cmd::rank_known_cmd(a, nf);
     }
-    let experiments = crate::experiments_cmd::experiments_of(&a.sys)?
-        .map(|e| crate::experiments_cmd::describe_typed(&e));
+    let experiments =
+        crate::show::experiments_of(&a.sys)?.map(|e| crate::experiments_cmd::describe_typed(&e));
     let deadline = deadline_after(Instant::now(), a.an.timeout);
     let mut r = run_rank(&mut nf, &a.an, deadline, false)?;
     // The ranks are of the formal field in which the atoms are independent;
@@ -215,22 +208,6 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// One symmetry vector as JSON: per state variable, its component's text
-/// and LaTeX.
-pub(crate) fn vector_json(nf: &NormalForm, v: &[RatFun]) -> BTreeMap<String, json::Formula> {
-    nf.state
-        .iter()
-        .zip(v)
-        .map(|(n, e)| {
-            let f = json::Formula {
-                latex: nf.ctx.ratfun_latex(e),
-                text: nf.ctx.ratfun_text(e),
-            };
-            (n.clone(), f)
-        })
-        .collect()
-}
-
 /// What certified the symmetries, as JSON: the kind's name (the suite bench reads it) and,
 /// for a random certificate, its figures.
 fn certificate_json(s: &SymmetryReport) -> (json::SymCertificate, Option<json::Certification>) {
@@ -268,7 +245,7 @@ fn symmetry_json(nf: &NormalForm, r: &RankReport, s: &SymmetryReport) -> json::S
         restriction: nf.restriction.clone(),
         rows_checked: s.rows_checked,
         state: nf.state.clone(),
-        symmetries: s.vectors.iter().map(|v| vector_json(nf, v)).collect(),
+        symmetries: s.vectors.iter().map(|v| json::vector(nf, v)).collect(),
         system: nf.name.clone(),
         undecided_atoms: s.undecided.clone(),
     }
@@ -849,7 +826,7 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
 
 #[cfg(test)]
 mod tests {
-    use super::deadline_after;
+    use crate::cli::deadline_after;
     use std::time::{Duration, Instant};
 
     /// The command's deadline is its start plus the whole --timeout (no

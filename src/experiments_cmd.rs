@@ -2,68 +2,17 @@
 //! (docs/experiments.md): reading the specs, and `obsan rank`'s reports for
 //! the known-initial-condition test and the automatic design.
 
-use crate::cli::{RankArgs, SystemArgs};
-use crate::show::{load_system, parse_sets};
+use crate::cli::RankArgs;
+use crate::show::{experiments_of, load_system, parse_sets, rational};
 use crate::{json, Failure};
 use obsan_analysis::{
     multi_experiment::experiments_auto, multi_experiment::rank_known,
     multi_experiment::AutoOptions, multi_experiment::AutoReport, multi_experiment::Known,
     multi_experiment::KnownOptions, multi_experiment::KnownReport,
 };
-use obsan_expr::{Ctx, Q};
 use obsan_model::{Experiment, NormalForm};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-
-/// An exact rational from text (`0.9` is 9/10).
-fn rational(v: &str) -> Result<Q, String> {
-    let mut ctx = Ctx::new();
-    let id = ctx.parse(v).map_err(|e| e.to_string())?;
-    ctx.canon(id)
-        .as_q()
-        .ok_or_else(|| format!("'{v}' is not a rational number"))
-}
-
-/// The experiments the flags ask for (`None`: one ordinary experiment).
-/// `--set` values apply to every experiment (an experiment's own win).
-pub fn experiments_of(a: &SystemArgs) -> Result<Option<Vec<Experiment>>, Failure> {
-    let mut exps = Vec::new();
-    if let Some(f) = &a.experiments {
-        if f == "auto" {
-            return Err(Failure(
-                "--experiments auto is a question for `obsan rank`; here give the experiments (--experiment SPEC or --experiments FILE)".into(),
-            ));
-        }
-        let text = crate::fsio::read_text(f)?;
-        for (i, line) in text.lines().enumerate() {
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
-            let e = Experiment::parse(line, &rational)
-                .map_err(|m| Failure(format!("{f}:{}: {m}", i + 1)))?;
-            exps.push(e);
-        }
-        if exps.is_empty() {
-            return Err(Failure(format!("{f}: no experiments in the file")));
-        }
-    }
-    for s in &a.experiment {
-        let e = Experiment::parse(s, &rational)
-            .map_err(|m| Failure(format!("--experiment '{s}': {m}")))?;
-        exps.push(e);
-    }
-    if exps.is_empty() {
-        return Ok(None);
-    }
-    let sets = parse_sets(&a.set)?;
-    for e in exps.iter_mut() {
-        let mut all = sets.clone();
-        all.append(&mut e.set);
-        e.set = all;
-    }
-    Ok(Some(exps))
-}
 
 /// The experiments in the binary's JSON types and as one line of text.
 pub(crate) fn describe_typed(exps: &[Experiment]) -> (Vec<json::Experiment>, String) {

@@ -31,7 +31,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     // The whole --timeout, shared by every stage (rank, symmetries,
     // derivation): a run stopped inside the derivation says how far it got
     // (modes found, stage); the watchdog waits a second more.
-    let deadline = crate::analysis_cmds::deadline_after(Instant::now(), a.timeout);
+    let deadline = crate::cli::deadline_after(Instant::now(), a.timeout);
     let r = rank_test(
         &mut nf,
         RankOptions {

@@ -4,7 +4,7 @@
 use crate::cli::{ShowArgs, SystemArgs};
 use crate::Failure;
 use obsan_expr::{Ctx, Id, Q};
-use obsan_model::{Kind, NormalForm, System};
+use obsan_model::{Experiment, Kind, NormalForm, System};
 use std::process::ExitCode;
 
 /// Read and check a .sys file.
@@ -41,7 +41,7 @@ pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Q)>, Failure> {
 /// Load a system and bring it to normal form as the flags say.
 pub fn load_normal_form(a: &SystemArgs) -> Result<(System, NormalForm), Failure> {
     let sys = load_system(&a.system)?;
-    if let Some(exps) = crate::experiments_cmd::experiments_of(a)? {
+    if let Some(exps) = experiments_of(a)? {
         let nf = sys
             .stacked_normal_form(&exps)
             .map_err(|e| Failure(e.to_string()))?;
@@ -208,4 +208,54 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     }
     out!("{out}");
     Ok(ExitCode::SUCCESS)
+}
+
+/// An exact rational from text (`0.9` is 9/10).
+pub(crate) fn rational(v: &str) -> Result<Q, String> {
+    let mut ctx = Ctx::new();
+    let id = ctx.parse(v).map_err(|e| e.to_string())?;
+    ctx.canon(id)
+        .as_q()
+        .ok_or_else(|| format!("'{v}' is not a rational number"))
+}
+
+/// The experiments the flags ask for (`None`: one ordinary experiment).
+/// `--set` values apply to every experiment (an experiment's own win).
+pub fn experiments_of(a: &SystemArgs) -> Result<Option<Vec<Experiment>>, Failure> {
+    let mut exps = Vec::new();
+    if let Some(f) = &a.experiments {
+        if f == "auto" {
+            return Err(Failure(
+                "--experiments auto is a question for `obsan rank`; here give the experiments (--experiment SPEC or --experiments FILE)".into(),
+            ));
+        }
+        let text = crate::fsio::read_text(f)?;
+        for (i, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let e = Experiment::parse(line, &rational)
+                .map_err(|m| Failure(format!("{f}:{}: {m}", i + 1)))?;
+            exps.push(e);
+        }
+        if exps.is_empty() {
+            return Err(Failure(format!("{f}: no experiments in the file")));
+        }
+    }
+    for s in &a.experiment {
+        let e = Experiment::parse(s, &rational)
+            .map_err(|m| Failure(format!("--experiment '{s}': {m}")))?;
+        exps.push(e);
+    }
+    if exps.is_empty() {
+        return Ok(None);
+    }
+    let sets = parse_sets(&a.set)?;
+    for e in exps.iter_mut() {
+        let mut all = sets.clone();
+        all.append(&mut e.set);
+        e.set = all;
+    }
+    Ok(Some(exps))
 }

@@ -89,11 +89,7 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
             restriction: nf.restriction.clone(),
             seed: r.seed,
             state: nf.state.clone(),
-            symmetries: s
-                .vectors
-                .iter()
-                .map(|v| crate::analysis_cmds::vector_json(nf, v))
-                .collect(),
+            symmetries: s.vectors.iter().map(|v| json::vector(nf, v)).collect(),
             system: nf.name.clone(),
             unknown_inputs: nf.unknown_inputs.clone(),
             unobservable_variables: unobservable,
@@ -451,7 +447,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             a.sys.system
         )));
     }
-    let deadline = crate::analysis_cmds::deadline_after(Instant::now(), a.timeout);
+    let deadline = crate::cli::deadline_after(Instant::now(), a.timeout);
     let opts = DeriveOptions {
         seed: a.seed,
         deadline,

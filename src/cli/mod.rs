@@ -394,3 +394,11 @@ pub(crate) fn seconds(s: &str) -> Result<f64, String> {
         )),
     }
 }
+
+/// The one deadline of a command given `--timeout secs`, from the instant it
+/// started: every stage (rank test, symmetries, modes) polls this same
+/// instant, so the whole command stops at `--timeout`, not each stage at its
+/// own; the watchdog of lib.rs waits one more second for the message.
+pub fn deadline_after(start: std::time::Instant, secs: Option<f64>) -> Option<std::time::Instant> {
+    secs.map(|s| start + std::time::Duration::from_secs_f64(s.max(0.0)))
+}

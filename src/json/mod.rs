@@ -232,3 +232,22 @@ pub(crate) fn schema_cmd(a: &crate::cli::SchemaArgs) -> Result<ExitCode, crate::
     }
     Ok(ExitCode::SUCCESS)
 }
+
+/// One symmetry vector as JSON: per state variable, its component's text
+/// and LaTeX.
+pub fn vector(
+    nf: &obsan_model::NormalForm,
+    v: &[obsan_expr::RatFun],
+) -> std::collections::BTreeMap<String, Formula> {
+    nf.state
+        .iter()
+        .zip(v)
+        .map(|(n, e)| {
+            let f = Formula {
+                latex: nf.ctx.ratfun_latex(e),
+                text: nf.ctx.ratfun_text(e),
+            };
+            (n.clone(), f)
+        })
+        .collect()
+}
