@@ -406,18 +406,16 @@ impl fp::PrimeField for FpField {
 /// membership and solves (`obsan_recon::fp::Echelon`).
 pub type FpEchelon = fp::Echelon<FpField>;
 
-/// Small deterministic PRNG (SplitMix64) for random evaluation points: the
-/// engine must not depend on a particular `rand` version for reproducibility.
+/// Small deterministic PRNG (SplitMix64, stepped by obsan-recon's
+/// `splitmix64`) for random evaluation points: the engine must not depend on
+/// a particular `rand` version for reproducibility.
 #[derive(Clone, Debug)]
 pub struct SplitMix(pub u64);
 
 impl SplitMix {
+    /// The next SplitMix64 output (obsan-recon's `splitmix64`, the one step).
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^ (z >> 31)
+        obsan_recon::splitmix64(&mut self.0)
     }
     /// Uniform element of F_p.
     pub fn fp(&mut self) -> Fp {

@@ -1,8 +1,8 @@
 //! The estimation side's seeded generator: the engine's SplitMix64
-//! ([`obsan_expr::SplitMix`]; only obsan-recon, which depends on no obsan crate,
-//! keeps a copy of it) with uniform and normal
-//! (Box–Muller) deviates. Results depend on the seed only, never on a crate version
-//! or on scheduling.
+//! ([`obsan_expr::SplitMix`], stepped by obsan-recon's `splitmix64`, the
+//! workspace's one) with uniform and normal (Box–Muller: the workspace's one,
+//! which the simulating tests use too) deviates. Results depend on the seed
+//! only, never on a crate version or on scheduling.
 
 use obsan_expr::SplitMix;
 

@@ -71,6 +71,7 @@ pub mod fp {
     pub use crate::field::{add, inv, mul, pow, sub};
 }
 pub use rational::{Poly, Rational, Term};
+pub use rng::splitmix64;
 pub use thiele::{Thiele, ThieleStep};
 
 use field::{inv, mul};
