@@ -161,10 +161,7 @@ pub(crate) fn rank_in_columns(
     for _ in 0..2 {
         let p = random_point(&mut nf.ctx, &mut rng)?;
         let b = restricted_basis(&jets, &r.basis, &p, cols)?;
-        if best
-            .as_ref()
-            .is_none_or(|x| b.0.rank() > x.0.rank())
-        {
+        if best.as_ref().is_none_or(|x| b.0.rank() > x.0.rank()) {
             best = Some(b);
         }
     }

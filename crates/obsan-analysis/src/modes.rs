@@ -76,7 +76,6 @@ pub(crate) fn gradient_rank(
     Ok((best, per * per))
 }
 
-
 /// Check candidate modes against every symmetry.
 pub fn check_modes(
     nf: &mut NormalForm,

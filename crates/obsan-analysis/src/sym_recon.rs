@@ -18,8 +18,8 @@
 
 use crate::rank::{lie_jets, AnalysisError, LieWord, RankReport};
 use obsan_expr::{
-    evaluate::degree_bounds, lie::height_bounds, lie::Coord, Fp, FpEchelon, FpField, Id, Mono, Poly,
-    RatFun, SplitMix, P,
+    evaluate::degree_bounds, lie::height_bounds, lie::Coord, Fp, FpEchelon, FpField, Id, Mono,
+    Poly, RatFun, SplitMix, P,
 };
 use obsan_model::NormalForm;
 use obsan_recon::{reconstruct_vec, Options, ReconError};

@@ -234,7 +234,9 @@ mod tests {
     const F: Zp = Zp(P);
 
     fn dot(a: &[u64], b: &[u64]) -> u64 {
-        a.iter().zip(b).fold(0, |s, (&x, &y)| add(s, field::mul(x, y, P), P))
+        a.iter()
+            .zip(b)
+            .fold(0, |s, (&x, &y)| add(s, field::mul(x, y, P), P))
     }
 
     /// A random solution x and `m` augmented rows `[a | a.x]` in `n` unknowns.

@@ -16,9 +16,9 @@ use std::time::Instant;
 
 use rustc_hash::FxHashMap;
 
+use crate::echelon::{solve, Zp};
 use crate::field::inv;
 use crate::field::{add, mul, pow, sub};
-use crate::echelon::{solve, Zp};
 use crate::linalg::{eval, newton, poly_add, poly_mul, vandermonde_t};
 use crate::rng::Rng;
 use crate::thiele::Thiele;
