@@ -229,14 +229,7 @@ impl Predictor {
         cells: &Measured,
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.collect(&Run {
-            x0,
-            consts,
-            inputs,
-            times: cells.t,
-            opts,
-            needed: Some(cells),
-        })
+        self.collect(&Run::measured(x0, consts, inputs, cells, opts))
     }
 
     /// [`Predictor::predict_measured`] handing each output time's values,
@@ -252,15 +245,7 @@ impl Predictor {
         opts: &Integration,
         sink: &mut Sink,
     ) -> Result<(), FitError> {
-        let run = Run {
-            x0,
-            consts,
-            inputs,
-            times: cells.t,
-            opts,
-            needed: Some(cells),
-        };
-        self.integrate(&run, sink)
+        self.integrate(&Run::measured(x0, consts, inputs, cells, opts), sink)
     }
 
     /// [`Predictor::integrate`] kept whole, as a [`Prediction`].
@@ -272,13 +257,13 @@ impl Predictor {
         };
         let (sens, noise) = (run.opts.sensitivities, run.opts.input_noise.is_some());
         self.integrate(run, &mut |_, y, j, m| {
-                out.outputs.push(y.to_vec());
-                if sens {
-                    out.jacobians.push(j.to_vec());
-                }
-                if noise {
-                    out.noise_m.push(m.to_vec());
-                }
+            out.outputs.push(y.to_vec());
+            if sens {
+                out.jacobians.push(j.to_vec());
+            }
+            if noise {
+                out.noise_m.push(m.to_vec());
+            }
         })?;
         Ok(out)
     }
@@ -449,6 +434,26 @@ struct Run<'a> {
     times: &'a [f64],
     opts: &'a Integration,
     needed: Option<&'a Measured<'a>>,
+}
+
+impl<'a> Run<'a> {
+    /// At the times of `cells`, computing only them.
+    fn measured(
+        x0: &'a [f64],
+        consts: &'a [f64],
+        inputs: &'a Series,
+        cells: &'a Measured<'a>,
+        opts: &'a Integration,
+    ) -> Run<'a> {
+        Run {
+            x0,
+            consts,
+            inputs,
+            times: cells.t,
+            opts,
+            needed: Some(cells),
+        }
+    }
 }
 
 pub(crate) type Sink<'a> = dyn FnMut(usize, &[f64], &[f64], &[f64]) + 'a;
