@@ -22,6 +22,7 @@ use obsan_diagnose::{
     diagnose, start_values, statistics::difference_estimate, statistics::Member,
     statistics::PREDICTED_MARGIN, CandidateResult, DiagnoseOptions, Diagnosis,
 };
+use obsan_expr::SplitMix;
 use obsan_model::{EffectLibrary, System};
 
 const SIGMA_RANGE: f64 = 0.05;
@@ -39,7 +40,7 @@ fn wrap(a: f64) -> f64 {
 /// The true heading takes a random walk of `walk` rad/sqrt(s) on top of the
 /// commanded turn; the bearings read `(1 + kb)` times the true bearing.
 fn simulate(sys: &System, windows: usize, walk: f64, kb: f64, seed: u64) -> Dataset {
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     let common::Ring { codes, marks, meta } = ring(sys);
     let outs = sys.output_names();
     let mut trajectories = Vec::new();
@@ -345,7 +346,7 @@ fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
 /// Random clusters of instants with one to four members, residuals
 /// `k g + common(t) + noise`.
 fn clusters(seed: u64, k: f64, noise: f64) -> Vec<Vec<Member>> {
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     (0..5)
         .map(|_| {
             let mut ms = Vec::new();

@@ -13,6 +13,7 @@ use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{
     diagnose, prepare, start_values, statistics::CORRELATION_CAUTION, DiagnoseOptions, Diagnosis,
 };
+use obsan_expr::SplitMix;
 use obsan_fit::Predictor;
 use obsan_model::{EffectLibrary, System};
 
@@ -49,7 +50,7 @@ fn simulate(sys: &System, lib: &EffectLibrary, kw: f64, c: f64, seed: u64) -> Da
         .iter()
         .map(|n| if n == "kw" { kw } else { c })
         .collect();
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     let common::Ring { codes, meta, .. } = ring(sys);
     let consts: Vec<f64> = p.consts.iter().map(|c| meta[c]).collect();
     let mut data = Dataset {

@@ -15,6 +15,7 @@ use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{
     diagnose, start_values, DiagnoseOptions, Diagnosis, ORIGIN_GENERATED, SCREEN_SAFETY,
 };
+use obsan_expr::SplitMix;
 use obsan_model::{EffectLibrary, System};
 
 const SIGMA_RANGE: f64 = 0.05;
@@ -25,7 +26,7 @@ const DT: f64 = 0.02;
 /// landmark's range and bearing every 0.2 s; the robot moves at
 /// `v (1 + c |omega|)` (c = 0: the nominal model).
 fn simulate(sys: &System, c: f64, seed: u64) -> Dataset {
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     let common::Ring { codes, marks, meta } = ring(sys);
     let outs = sys.output_names();
     let mut trajectories = Vec::new();

@@ -16,7 +16,7 @@
 
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{diagnose, DiagnoseOptions, Diagnosis, Named, Start};
-use obsan_fit::Rng;
+use obsan_expr::SplitMix;
 use obsan_model::System;
 use std::collections::BTreeMap;
 use std::f64::consts::TAU;
@@ -52,6 +52,18 @@ const WINDOWS: usize = 4;
 const ROWS: usize = 3000;
 const GAP: f64 = 70.0;
 
+struct Rng(SplitMix);
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Box-Muller.
+    fn normal(&mut self) -> f64 {
+        let (a, b) = (self.uniform().max(1e-300), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (TAU * b).cos()
+    }
+}
+
 /// What the simulated robot and sensors do beside the model.
 #[derive(Clone, Copy, Default)]
 struct Truth {
@@ -72,7 +84,7 @@ struct Truth {
 
 /// The data and, per window, the robot's initial pose (x, y, th).
 fn simulate(truth: Truth, seed: u64) -> (Dataset, Vec<Vec<f64>>) {
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     let mut meta = BTreeMap::new();
     for (i, (lx, ly)) in MARKS.iter().enumerate() {
         meta.insert(format!("lx{}", i + 1), *lx);

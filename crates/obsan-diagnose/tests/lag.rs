@@ -7,6 +7,7 @@ mod common;
 use common::{read, ring, Rng};
 use obsan_data::{Dataset, DatasetMeta, Series, Trajectory};
 use obsan_diagnose::{diagnose, start_values, DiagnoseOptions, Diagnosis, InputNoise};
+use obsan_expr::SplitMix;
 use obsan_fit::Predictor;
 use obsan_model::{EffectLibrary, System};
 
@@ -24,7 +25,7 @@ fn simulate(sys: &System, params: &[f64], seed: u64) -> Dataset {
 /// density `c_j |u_j|` (the true commands drive the motion).
 fn simulate_noisy(sys: &System, params: &[f64], seed: u64, c: [f64; 2]) -> Dataset {
     let p = Predictor::new(&sys.normal_form(None, &[]).unwrap());
-    let mut rng = Rng::new(seed);
+    let mut rng = Rng(SplitMix(seed));
     let common::Ring { codes, meta, .. } = ring(sys);
     let consts: Vec<f64> = p.consts.iter().map(|c| meta[c]).collect();
     let mut trajectories = Vec::new();

@@ -100,7 +100,7 @@ fn own_speed_slip(design: &str, s: f64, k: f64, seed: u64) -> Dataset {
         ..SimOptions::default()
     };
     let (mut d, _) = simulate(&o).unwrap();
-    let mut rng = Rng::new(seed ^ 0x5eed);
+    let mut rng = Rng(obsan_expr::SplitMix(seed ^ 0x5eed));
     for t in &mut d.trajectories {
         let dt = 1.0 / o.encoder_rate;
         for c in 0..2 {

@@ -1,7 +1,8 @@
 //! Shared by the unicycle tests (lag.rs, diagb_generated.rs): the files of
-//! the workspace, the seeded generator (obsan-fit's), and systems/mrclam.sys's landmarks
+//! the workspace, a seeded generator, and systems/mrclam.sys's landmarks
 //! placed on a ring of radius 4 m.
 
+use obsan_expr::SplitMix;
 use obsan_model::{Kind, System};
 use std::collections::BTreeMap;
 
@@ -10,8 +11,17 @@ pub fn read(p: &str) -> String {
     std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).unwrap()
 }
 
-/// The library's seeded generator (uniform and Box–Muller normal deviates).
-pub use obsan_fit::Rng;
+pub struct Rng(pub SplitMix);
+impl Rng {
+    pub fn uniform(&mut self) -> f64 {
+        (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Box–Muller.
+    pub fn normal(&mut self) -> f64 {
+        let (a, b) = (self.uniform().max(1e-300), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
 
 /// The landmarks of a [`ring`].
 pub struct Ring {
