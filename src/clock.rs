@@ -75,6 +75,25 @@ impl Clock {
     fn is_row(&self, w: &LieWord) -> bool {
         w.output == self.output && w.order() == 0
     }
+
+    /// What both reports hold alike: the clock's row out of the basis (and
+    /// the rank), its state out of `n` and of the per-variable verdicts.
+    /// The rows dropped.
+    fn hide<T: Clone>(
+        &self,
+        basis: &mut Vec<LieWord>,
+        rank: &mut usize,
+        n: &mut usize,
+        observable: &mut Vec<T>,
+    ) -> usize {
+        let before = basis.len();
+        basis.retain(|w| !self.is_row(w));
+        let dropped = before - basis.len();
+        *rank -= dropped.min(*rank);
+        *n -= 1;
+        *observable = self.drop(observable);
+        dropped
+    }
 }
 
 /// A known-input rank report about the user's states. The clock's row `dt`
@@ -82,12 +101,7 @@ impl Clock {
 /// states is one less: each other row minus its `t` component along `dt`.
 pub fn hide_in_rank(nf: &NormalForm, r: &mut RankReport) {
     let Some(c) = Clock::of(nf) else { return };
-    let before = r.basis.len();
-    r.basis.retain(|w| !c.is_row(w));
-    let dropped = before - r.basis.len();
-    r.rank -= dropped.min(r.rank);
-    r.n -= 1;
-    r.observable = c.drop(&r.observable);
+    c.hide(&mut r.basis, &mut r.rank, &mut r.n, &mut r.observable);
     r.pivots.retain(|&p| p != c.state);
     for p in r.pivots.iter_mut() {
         if *p > c.state {
@@ -100,12 +114,7 @@ pub fn hide_in_rank(nf: &NormalForm, r: &mut RankReport) {
 /// `dt` is in the span from order 0 on).
 pub fn hide_in_unknown_input(nf: &NormalForm, r: &mut UnknownInputReport) {
     let Some(c) = Clock::of(nf) else { return };
-    let before = r.basis.len();
-    r.basis.retain(|w| !c.is_row(w));
-    let dropped = before - r.basis.len();
-    r.rank -= dropped.min(r.rank);
-    r.n -= 1;
-    r.observable = c.drop(&r.observable);
+    let dropped = c.hide(&mut r.basis, &mut r.rank, &mut r.n, &mut r.observable);
     for s in r.steps.iter_mut() {
         s.rank -= dropped.min(s.rank);
         s.state_rank -= dropped.min(s.state_rank);

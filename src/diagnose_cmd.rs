@@ -660,7 +660,8 @@ fn unfitted_file_candidates(d: &Diagnosis) -> Vec<String> {
 
 /// The one-paragraph verdict that leads the text: what is named with its
 /// magnitude, what is only suggested, whether the nominal fit had to be
-/// refitted, and what remains unexplained (issue 37.8).
+/// refitted, and what remains unexplained: a reader sees the answer before
+/// the tables.
 fn verdict(d: &Diagnosis, s: &mut String) {
     let mut parts: Vec<String> = Vec::new();
     if d.named.is_empty() {

@@ -605,6 +605,8 @@ def calibrate(
     return Calibration.of(_value(f))
 
 
+# The set-up keywords repeat simulate()'s: each function keeps a real signature
+# (help(), IDEs, mypy --strict) rather than **kwargs; _sim() is the one place using them.
 def crlb(
     dataset: Optional[PathLike] = None,
     *,

@@ -31,7 +31,7 @@ use crate::experiments::experiments_auto;
 use crate::experiments::AutoOptions;
 use crate::rank::{lie_jets, random_point, rank, AnalysisError, RankOptions, RankReport};
 use crate::symmetry::{symmetries_with, SymmetryOptions, SymmetryReport};
-use obsan_expr::{evaluate::FpPoint, Fp, SplitMix, Q};
+use obsan_expr::{evaluate::FpPoint, Fp, FpEchelon, SplitMix, Q};
 use obsan_model::{Experiment, NormalForm, System};
 use std::time::Instant;
 
@@ -118,45 +118,6 @@ pub struct DesignReport {
     pub symmetry_note: Option<String>,
     /// Largest error bound of the ranks below full used (screen and rank tests).
     pub error_bound: f64,
-}
-
-/// Row echelon basis over F_p.
-#[derive(Clone, Default)]
-struct Echelon {
-    rows: Vec<(usize, Vec<Fp>)>,
-}
-
-impl Echelon {
-    fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
-        for (p, r) in &self.rows {
-            let c = v[*p];
-            if !c.is_zero() {
-                for (x, y) in v.iter_mut().zip(r) {
-                    *x = *x - c * *y;
-                }
-            }
-        }
-        v
-    }
-    fn insert(&mut self, v: &[Fp]) -> bool {
-        let mut v = self.reduce(v.to_vec());
-        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
-            return false;
-        };
-        let Some(inv) = v[p].inv() else {
-            return false;
-        };
-        for x in v.iter_mut() {
-            *x = *x * inv;
-        }
-        self.rows.push((p, v));
-        true
-    }
-    fn contains_unit(&self, i: usize, n: usize) -> bool {
-        let mut e = vec![Fp::ZERO; n];
-        e[i] = Fp::ONE;
-        self.reduce(e).iter().all(|x| x.is_zero())
-    }
 }
 
 /// One group of outputs (the model's, or a candidate's): its rank test's
@@ -307,7 +268,7 @@ struct Screen {
     points: [FpPoint; 2],
     n_leaves: usize,
     groups: Vec<Group>,
-    base_ech: Vec<Echelon>,
+    base_ech: Vec<FpEchelon>,
     /// The largest error bound of the groups' rank tests.
     error_bound: f64,
 }
@@ -364,11 +325,11 @@ impl Screen {
             .chain(std::iter::once(&g0))
             .fold(0.0f64, |a, g| a.max(g.error_bound));
         // The model's echelon basis at each point, extended per subset.
-        let base_ech: Vec<Echelon> = (0..2)
+        let base_ech: Vec<FpEchelon> = (0..2)
             .map(|k| {
-                let mut e = Echelon::default();
+                let mut e = FpEchelon::default();
                 for r in &g0.rows[k] {
-                    e.insert(r);
+                    e.insert(r.clone());
                 }
                 e
             })
@@ -393,13 +354,13 @@ impl Screen {
             let mut e = b.clone();
             for &c in members {
                 for r in &self.groups[c].rows[k] {
-                    e.insert(r);
-                    if e.rows.len() == n {
+                    e.insert(r.clone());
+                    if e.rank() == n {
                         break;
                     }
                 }
             }
-            let rk = e.rows.len();
+            let rk = e.rank();
             let met = self.target.iter().all(|&i| e.contains_unit(i, n));
             if rk > best.0 || (rk == best.0 && met) {
                 best = (rk, met);

@@ -35,49 +35,9 @@
 //! experiment, so for all): k is the smallest number of experiments.
 
 use crate::rank::{lie_jets, random_point, rank, AnalysisError, Fields, LieWord, RankOptions};
-use obsan_expr::{evaluate::FpPoint, lie::LieJets, Fp, SplitMix, Var, Q};
+use obsan_expr::{evaluate::FpPoint, lie::LieJets, Fp, FpEchelon, SplitMix, Var, Q};
 use obsan_model::{Experiment, Kind, NormalForm, System};
 use std::time::Instant;
-
-/// Row echelon basis over F_p of vectors restricted to some columns.
-#[derive(Default)]
-struct Basis {
-    rows: Vec<(usize, Vec<Fp>)>,
-}
-
-impl Basis {
-    fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
-        for (p, r) in &self.rows {
-            let c = v[*p];
-            if !c.is_zero() {
-                for (x, y) in v.iter_mut().zip(r) {
-                    *x = *x - c * *y;
-                }
-            }
-        }
-        v
-    }
-    fn insert(&mut self, v: Vec<Fp>) -> bool {
-        let mut v = self.reduce(v);
-        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
-            return false;
-        };
-        let Some(inv) = v[p].inv() else {
-            return false;
-        };
-        for x in v.iter_mut() {
-            *x = *x * inv;
-        }
-        self.rows.push((p, v));
-        true
-    }
-    /// e_i in the span.
-    fn contains_unit(&self, i: usize, n: usize) -> bool {
-        let mut e = vec![Fp::ZERO; n];
-        e[i] = Fp::ONE;
-        self.reduce(e).iter().all(|x| x.is_zero())
-    }
-}
 
 /// A state (or param) whose initial value is known: a specific rational
 /// value, or generic (known, but its value is not special).
@@ -161,8 +121,8 @@ fn restricted_basis(
     words: &[LieWord],
     point: &FpPoint,
     cols: &[usize],
-) -> Result<(Basis, Vec<LieWord>), AnalysisError> {
-    let mut b = Basis::default();
+) -> Result<(FpEchelon, Vec<LieWord>), AnalysisError> {
+    let mut b = FpEchelon::default();
     let mut kept = Vec::new();
     for w in words {
         let row = jets
@@ -197,14 +157,11 @@ pub(crate) fn rank_in_columns(
     )?;
     let jets = lie_jets(nf, &r.fields);
     let mut rng = SplitMix(seed ^ 0x6b6e_6f77_6e00_0001);
-    let mut best: Option<(Basis, Vec<LieWord>)> = None;
+    let mut best: Option<(FpEchelon, Vec<LieWord>)> = None;
     for _ in 0..2 {
         let p = random_point(&mut nf.ctx, &mut rng)?;
         let b = restricted_basis(&jets, &r.basis, &p, cols)?;
-        if best
-            .as_ref()
-            .is_none_or(|x| b.0.rows.len() > x.0.rows.len())
-        {
+        if best.as_ref().is_none_or(|x| b.0.rank() > x.0.rank()) {
             best = Some(b);
         }
     }
@@ -213,7 +170,7 @@ pub(crate) fn rank_in_columns(
         .map(|i| b.contains_unit(i, cols.len()))
         .collect();
     // Minors of the restricted rows are minors of the full rows' entries.
-    Ok((b.rows.len(), obs, kept, r.error_bound, r.fields))
+    Ok((b.rank(), obs, kept, r.error_bound, r.fields))
 }
 
 /// Names that appear in a leaf's text (identifiers may contain `@`).
@@ -394,7 +351,7 @@ fn words_at_point(
             fields: vec![],
         })
         .collect();
-    let mut basis = Basis::default();
+    let mut basis = FpEchelon::default();
     let mut words = Vec::new();
     let mut evaluated = 0usize;
     let mut order_checked = 0usize;
@@ -407,7 +364,7 @@ fn words_at_point(
                 if Instant::now() > d {
                     return Err(AnalysisError::Timeout(format!(
                         "at Lie derivative order {order}, rank {} at the point so far",
-                        basis.rows.len()
+                        basis.rank()
                     )));
                 }
             }
@@ -424,7 +381,7 @@ fn words_at_point(
             if basis.insert(restrict(&row.gradient, unknown)) {
                 words.push(w.clone());
             }
-            if basis.rows.len() >= cap {
+            if basis.rank() >= cap {
                 order_checked = order;
                 break 'orders;
             }
@@ -452,7 +409,7 @@ fn words_at_point(
         level = next;
     }
     Ok(PointRank {
-        rank: basis.rows.len(),
+        rank: basis.rank(),
         observable: (0..unknown.len())
             .map(|i| basis.contains_unit(i, unknown.len()))
             .collect(),

@@ -1,47 +1,7 @@
-//! Linear algebra and rational reconstruction in F_p for the ansatz.
+//! Rational reconstruction and monomials in F_p for the ansatz (the null
+//! spaces are the engine's `Fp::null_space`, obsan-recon's one elimination).
 
 use obsan_expr::{Fp, P, Q};
-
-/// A basis of the right null space, in reduced echelon form (each vector has
-/// a 1 at its free column and 0 at the other free columns).
-pub(crate) fn null_space(mut m: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
-    let mut pivots: Vec<usize> = Vec::new();
-    let mut r = 0;
-    for c in 0..ncols {
-        let Some(i) = (r..m.len()).find(|&i| !m[i][c].is_zero()) else {
-            continue;
-        };
-        m.swap(r, i);
-        let Some(inv) = m[r][c].inv() else { continue };
-        for x in m[r].iter_mut() {
-            *x = *x * inv;
-        }
-        let pivot = m[r].clone();
-        for (i, row) in m.iter_mut().enumerate() {
-            if i != r && !row[c].is_zero() {
-                let f = row[c];
-                for (x, y) in row.iter_mut().zip(&pivot) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-        pivots.push(c);
-        r += 1;
-        if r == m.len() {
-            break;
-        }
-    }
-    let mut out = Vec::new();
-    for f in (0..ncols).filter(|c| !pivots.contains(c)) {
-        let mut v = vec![Fp::ZERO; ncols];
-        v[f] = Fp::ONE;
-        for (k, &pc) in pivots.iter().enumerate() {
-            v[pc] = Fp::ZERO - m[k][f];
-        }
-        out.push(v);
-    }
-    out
-}
 
 /// Rational number reconstruction (Wang): `a/b = u mod p` with |a|, |b| < sqrt(p/2).
 pub(crate) fn rat_recon(u: Fp) -> Option<Q> {
@@ -118,20 +78,6 @@ mod tests {
             let u = Fp::from_i64(a) * Fp::from_i64(b).inv().unwrap();
             let q = rat_recon(u).unwrap();
             assert_eq!(q, Q::from_i64(a).div(&Q::from_i64(b)).unwrap());
-        }
-    }
-
-    #[test]
-    fn null_space_vectors_annihilate_the_rows() {
-        let f = Fp::from_i64;
-        let m = vec![vec![f(1), f(2), f(3), f(4)], vec![f(2), f(4), f(7), f(1)]];
-        let ns = null_space(m.clone(), 4);
-        assert_eq!(ns.len(), 2); // rank 2 of 4 columns
-        for v in &ns {
-            for row in &m {
-                let dot = row.iter().zip(v).fold(Fp::ZERO, |a, (&x, &y)| a + x * y);
-                assert!(dot.is_zero());
-            }
         }
     }
 

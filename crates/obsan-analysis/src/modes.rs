@@ -52,7 +52,6 @@ pub(crate) fn gradient_rank(
     fs: &[Id],
     seed: u64,
 ) -> Result<(usize, f64), AnalysisError> {
-    let n = nf.state.len();
     let mut rows = Vec::new();
     let mut deg = 0u64;
     for &f in fs {
@@ -71,15 +70,10 @@ pub(crate) fn gradient_rank(
         for g in &rows {
             m.push(nf.ctx.eval_fp(g, &pt).map_err(|_| AnalysisError::NoPoint)?);
         }
-        best = best.max(fp_rank(m, n));
+        best = best.max(Fp::matrix_rank(m));
     }
     let per = (deg.max(1) as f64 / P as f64).min(1.0);
     Ok((best, per * per))
-}
-
-/// The rank over F_p of rows with `n` columns.
-pub(crate) fn fp_rank(m: Vec<Vec<Fp>>, n: usize) -> usize {
-    Fp::matrix_rank(m, n)
 }
 
 /// Check candidate modes against every symmetry.

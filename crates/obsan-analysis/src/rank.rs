@@ -137,52 +137,9 @@ pub struct RankReport {
     pub seed: u64,
 }
 
-/// Row echelon basis over F_p.
-#[derive(Default)]
-pub(crate) struct Echelon {
-    rows: Vec<(usize, Vec<Fp>)>, // (pivot column, normalised row)
-}
-
-impl Echelon {
-    /// Reduce `v` against the basis; returns the reduced vector.
-    pub(crate) fn reduce(&self, mut v: Vec<Fp>) -> Vec<Fp> {
-        for (p, r) in &self.rows {
-            let c = v[*p];
-            if !c.is_zero() {
-                for (x, y) in v.iter_mut().zip(r) {
-                    *x = *x - c * *y;
-                }
-            }
-        }
-        v
-    }
-    /// Add `v` if independent; returns whether it was.
-    pub(crate) fn insert(&mut self, v: Vec<Fp>) -> bool {
-        let mut v = self.reduce(v);
-        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
-            return false;
-        };
-        #[allow(clippy::expect_used)] // v[p] is the first non-zero entry
-        let inv = v[p].inv().expect("nonzero");
-        for x in v.iter_mut() {
-            *x = *x * inv;
-        }
-        // Keep the basis reduced on existing pivots too.
-        for (_, r) in self.rows.iter_mut() {
-            let c = r[p];
-            if !c.is_zero() {
-                for (x, y) in r.iter_mut().zip(&v) {
-                    *x = *x - c * *y;
-                }
-            }
-        }
-        self.rows.push((p, v));
-        true
-    }
-    pub(crate) fn rank(&self) -> usize {
-        self.rows.len()
-    }
-}
+/// Row echelon basis over F_p: obsan-recon's one elimination on the
+/// engine's field (the unknown-input routes use it too).
+pub(crate) use obsan_expr::FpEchelon as Echelon;
 
 pub(crate) fn random_point(ctx: &mut Ctx, rng: &mut SplitMix) -> Result<FpPoint, AnalysisError> {
     random_point_counted(ctx, rng).map(|p| p.0)
@@ -397,7 +354,7 @@ fn grow<R: Rows>(
     let n = m;
     let mut run = Run {
         basis: vec![],
-        echelon: Echelon { rows: vec![] },
+        echelon: Echelon::default(),
         evaluated: 0,
         degree: 0,
         worst_rejected: 0,
@@ -612,11 +569,9 @@ fn rank_with(
     // the outputs do not reach: its column is zero).
     let mut observable = vec![false; n];
     for (j, &i) in reach.iter().enumerate() {
-        let mut e = vec![Fp::ZERO; m];
-        e[j] = Fp::ONE;
-        observable[i] = best.echelon.reduce(e).iter().all(|x| x.is_zero());
+        observable[i] = best.echelon.contains_unit(j, m);
     }
-    let mut pivots: Vec<usize> = best.echelon.rows.iter().map(|(p, _)| reach[*p]).collect();
+    let mut pivots: Vec<usize> = best.echelon.pivots().map(|p| reach[p]).collect();
     pivots.sort_unstable();
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);

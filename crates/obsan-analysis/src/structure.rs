@@ -17,9 +17,8 @@
 //! there are `n - rank` of them, the rank test's lower bound (a non-zero minor)
 //! and these upper-bound it, so the rank is exact and they span the symmetries.
 
-use crate::fp_linalg::null_space;
 use crate::rank::{random_point, AnalysisError, RankReport};
-use obsan_expr::{evaluate::FpPoint, Ctx, Fp, Id, RatFun, SplitMix, Var, P, Q};
+use obsan_expr::{evaluate::FpPoint, Ctx, Fp, FpEchelon, Id, RatFun, SplitMix, Var, P, Q};
 use obsan_model::NormalForm;
 
 /// What a cheaply found symmetry is.
@@ -114,19 +113,19 @@ pub(crate) fn cheap_symmetries(
             scale_rows.push(s);
         }
     }
-    for v in null_space(trans_rows.clone(), n) {
+    for v in Fp::null_space(trans_rows, n) {
         if let Some(c) = integer_vector(&v) {
             cands.push((Candidate::Translation(c), SymmetryKind::Translation));
         }
     }
-    for v in null_space(scale_rows.clone(), n) {
+    for v in Fp::null_space(scale_rows, n) {
         if let Some(l) = integer_vector(&v) {
             cands.push((Candidate::Scaling(l), SymmetryKind::Scaling));
         }
     }
     // Keep independent candidates (at a point) that pass the exact check.
     let pt = random_point(&mut nf.ctx, &mut rng)?;
-    let mut span: Vec<(usize, Vec<Fp>)> = Vec::new();
+    let mut span = FpEchelon::default();
     let mut out = Cheap {
         vectors: vec![],
         kinds: vec![],
@@ -139,19 +138,15 @@ pub(crate) fn cheap_symmetries(
             break;
         }
         let at = at_point(&cand, &vars, &pt);
-        if !insert(&mut span, at) {
+        if span.contains(at.clone()) {
             continue;
         }
         let w = vector(&cand, &vars);
-        match certify(&mut nf.ctx, &cand, &w, &vars, &outputs, &fields) {
-            Some(checked) => {
-                out.identities += checked;
-                out.vectors.push(w);
-                out.kinds.push(kind);
-            }
-            None => {
-                span.pop();
-            }
+        if let Some(checked) = certify(&mut nf.ctx, &cand, &w, &vars, &outputs, &fields) {
+            span.insert(at);
+            out.identities += checked;
+            out.vectors.push(w);
+            out.kinds.push(kind);
         }
     }
     Ok((out.vectors.len() == k).then_some(out))
@@ -234,29 +229,6 @@ fn certify(
         }
     }
     Some(checked)
-}
-
-/// Insert into a reduced echelon basis over F_p; whether `v` was independent.
-fn insert(span: &mut Vec<(usize, Vec<Fp>)>, mut v: Vec<Fp>) -> bool {
-    for (p, r) in span.iter() {
-        let c = v[*p];
-        if !c.is_zero() {
-            for (x, y) in v.iter_mut().zip(r) {
-                *x = *x - c * *y;
-            }
-        }
-    }
-    let Some(p) = v.iter().position(|x| !x.is_zero()) else {
-        return false;
-    };
-    let Some(inv) = v[p].inv() else {
-        return false;
-    };
-    for x in v.iter_mut() {
-        *x = *x * inv;
-    }
-    span.push((p, v));
-    true
 }
 
 /// Small rational `a/b` with `a = b x mod p`, |a|, b below 2^30 (Wang's

@@ -18,8 +18,8 @@
 
 use crate::rank::{lie_jets, AnalysisError, LieWord, RankReport};
 use obsan_expr::{
-    evaluate::degree_bounds, lie::height_bounds, lie::Coord, Fp, Id, Mono, Poly, RatFun, SplitMix,
-    P,
+    evaluate::degree_bounds, lie::height_bounds, lie::Coord, Fp, FpEchelon, FpField, Id, Mono,
+    Poly, RatFun, SplitMix, P,
 };
 use obsan_model::NormalForm;
 use obsan_recon::{reconstruct_vec, Options, ReconError};
@@ -53,43 +53,25 @@ pub(crate) enum ReconFail {
     Error(AnalysisError),
 }
 
-/// Gaussian elimination mod P: solve `M_piv X = -M_free` for the rows of
-/// `m` (r x n); `None` if the pivot minor is singular.
+/// Solve `M_piv X = -M_free` mod P for the rows of `m` (r x n); per free
+/// column, the pivot entries of its null vector; `None` if the pivot minor
+/// is singular.
 fn solve_free(m: &[Vec<Fp>], piv: &[usize], free: &[usize]) -> Option<Vec<Vec<Fp>>> {
     let r = piv.len();
-    let mut a: Vec<Vec<Fp>> = m
-        .iter()
-        .map(|row| {
-            piv.iter()
-                .map(|&c| row[c])
-                .chain(free.iter().map(|&c| -row[c]))
-                .collect()
-        })
-        .collect();
-    if a.len() != r {
+    if m.len() != r {
         return None;
     }
-    for c in 0..r {
-        let p = (c..r).find(|&i| !a[i][c].is_zero())?;
-        a.swap(c, p);
-        let inv = a[c][c].inv()?;
-        for x in a[c].iter_mut() {
-            *x = *x * inv;
-        }
-        let pr = a[c].clone();
-        for (i, row) in a.iter_mut().enumerate() {
-            if i != c && !row[c].is_zero() {
-                let f = row[c];
-                for (x, y) in row.iter_mut().zip(&pr) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-    }
-    // Column r + j of the reduced system: the pivot entries of vector j.
+    let a = m.iter().map(|row| {
+        piv.iter()
+            .map(|&c| row[c])
+            .chain(free.iter().map(|&c| -row[c]))
+            .collect()
+    });
+    let x = FpEchelon::of_rows(FpField, a).solve(r)?;
+    // Row i of X holds pivot entry i of every free column's vector.
     Some(
         (0..free.len())
-            .map(|j| (0..r).map(|i| a[i][r + j]).collect())
+            .map(|j| x.iter().map(|xi| xi[j]).collect())
             .collect(),
     )
 }

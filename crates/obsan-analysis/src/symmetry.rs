@@ -21,7 +21,7 @@ use crate::sym_blocks::symmetries_by_blocks;
 use crate::sym_recon::{certify_symmetries, reconstruct_basis, ReconFail};
 use crate::sym_report::{normalize_vector, primitive_vector};
 pub use crate::sym_report::{Certificate, Route, SymmetryOptions, SymmetryReport};
-use obsan_expr::{Ctx, Fp, RatFun, SplitMix};
+use obsan_expr::{Ctx, Fp, FpEchelon, FpField, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
 
@@ -207,34 +207,12 @@ fn choose_free_columns(
 /// Number of zero entries of the reduced echelon null basis for these
 /// pivot/free columns, or `None` if the pivot minor is singular.
 fn echelon_zeros(m: &[Vec<Fp>], piv: &[usize], free: &[usize]) -> Option<usize> {
-    let r = piv.len();
     // Augmented system [M_P | M_F] reduced to [I | X]; null vectors are (-X, I).
-    let mut a: Vec<Vec<Fp>> = m
+    let a = m
         .iter()
-        .map(|row| piv.iter().chain(free).map(|&c| row[c]).collect())
-        .collect();
-    for c in 0..r {
-        let p = (c..a.len()).find(|&i| !a[i][c].is_zero())?;
-        a.swap(c, p);
-        let inv = a[c][c].inv()?;
-        for x in a[c].iter_mut() {
-            *x = *x * inv;
-        }
-        for i in 0..a.len() {
-            if i != c && !a[i][c].is_zero() {
-                let f = a[i][c];
-                let pr = a[c].clone();
-                for (x, y) in a[i].iter_mut().zip(&pr) {
-                    *x = *x - f * *y;
-                }
-            }
-        }
-    }
-    Some(
-        (0..r)
-            .map(|i| (r..r + free.len()).filter(|&j| a[i][j].is_zero()).count())
-            .sum(),
-    )
+        .map(|row| piv.iter().chain(free).map(|&c| row[c]).collect());
+    let x = FpEchelon::of_rows(FpField, a).solve(piv.len())?;
+    Some(x.iter().flatten().filter(|v| v.is_zero()).count())
 }
 
 /// All k-subsets of 0..n in lexicographic order.

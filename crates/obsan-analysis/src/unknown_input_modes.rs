@@ -28,12 +28,11 @@
 
 use crate::decided::undecided_atoms_of;
 use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
-use crate::fp_linalg::null_space;
 use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
 use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
-use obsan_expr::{Fp, Id, RatFun, SplitMix};
+use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun, SplitMix};
 use obsan_model::NormalForm;
 
 /// How an unknown input enters the reduced system.
@@ -357,13 +356,11 @@ fn independent_inputs(
             continue;
         };
         // Columns one by one: does each raise the rank of those before it?
-        let mut taken: Vec<Vec<Fp>> = Vec::new();
+        // (Column rank is row rank: each column is inserted as a row.)
+        let mut taken = FpEchelon::default();
         for (c, chunk) in v.chunks(r).enumerate() {
-            let mut next = taken.clone();
-            next.push(chunk.to_vec());
-            if null_space(transpose(&next, r), next.len()).is_empty() {
+            if taken.insert(chunk.to_vec()) {
                 ok[c] = true;
-                taken = next;
             }
         }
     }
@@ -377,13 +374,6 @@ fn independent_inputs(
         )));
     }
     Ok(())
-}
-
-/// Rows `k` of the columns `cols` (each of length `r`).
-fn transpose(cols: &[Vec<Fp>], r: usize) -> Vec<Vec<Fp>> {
-    (0..r)
-        .map(|k| cols.iter().map(|c| c[k]).collect())
-        .collect()
 }
 
 /// Which unknown inputs drive a reduced system whose modes are the first
@@ -412,12 +402,10 @@ pub fn inputs_driving_modes(nf: &mut NormalForm, vectors: &[Vec<RatFun>], seed: 
             continue;
         };
         let cols: Vec<Vec<Fp>> = v.chunks(n).map(|c| c.to_vec()).collect();
-        let base = k - null_space(transpose(&cols[..k], n), k).len();
+        // The symmetries' span, then whether each g_j raises its rank.
+        let span = FpEchelon::of_rows(FpField, cols[..k].to_vec());
         for (j, o) in out.iter_mut().enumerate() {
-            let mut with: Vec<Vec<Fp>> = cols[..k].to_vec();
-            with.push(cols[k + j].clone());
-            let rk = k + 1 - null_space(transpose(&with, n), k + 1).len();
-            *o |= rk > base;
+            *o |= !span.contains(cols[k + j].clone());
         }
     }
     out

@@ -33,7 +33,6 @@
 //! A candidate failing (b) is reported as such: the lost directions then
 //! depend on the input's history and have no certificate of this form.
 
-use crate::fp_linalg::null_space;
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
 use obsan_expr::{
@@ -127,14 +126,9 @@ fn refuse_feedthrough(nf: &mut NormalForm) -> Result<(), AnalysisError> {
 /// The rows of `Omega` (x-part) at one point of the extended space: the
 /// annihilator in S-space of the S-projection of the extended kernel.
 fn state_rows(ext_rows: &[Vec<Fp>], len: usize, n: usize) -> Vec<Vec<Fp>> {
-    let ker = null_space(ext_rows.to_vec(), len);
+    let ker = Fp::null_space(ext_rows.to_vec(), len);
     let proj: Vec<Vec<Fp>> = ker.iter().map(|v| v[..n].to_vec()).collect();
-    null_space(proj, n)
-}
-
-/// Rank of a list of F_p rows.
-fn fp_rank(rows: &[Vec<Fp>], ncols: usize) -> usize {
-    ncols - null_space(rows.to_vec(), ncols).len()
+    Fp::null_space(proj, n)
 }
 
 /// Candidate kernel vectors by reconstruction (module docs).
@@ -200,7 +194,7 @@ fn candidates(
             }));
         }
         let s = state_rows(&rows, len, n);
-        (fp_rank(&s, n) == r).then_some(s)
+        (Fp::matrix_rank(s.clone()) == r).then_some(s)
     };
     // Pivots from the last column back at a random point, so that the free
     // columns are the earliest unobservable variables.
@@ -214,7 +208,7 @@ fn candidates(
             .iter()
             .map(|row| t.iter().map(|&j| row[j]).collect())
             .collect();
-        if fp_rank(&sub, t.len()) == t.len() {
+        if Fp::matrix_rank(sub) == t.len() {
             piv = t;
         }
         if piv.len() == r {
@@ -243,7 +237,7 @@ fn candidates(
             .iter()
             .map(|row| order.iter().map(|&j| row[j]).collect())
             .collect();
-        let ker = null_space(sp, n);
+        let ker = Fp::null_space(sp, n);
         if ker.len() != k || ker.iter().enumerate().any(|(j, v)| v[r + j] != Fp::ONE) {
             return Ok(None);
         }

@@ -132,7 +132,8 @@ fn riccati() -> System {
     .unwrap()
 }
 
-// strike-goldd issue 7: S' = 1 + a S^2, y = S, S(0) = 0. By hand:
+// A known-initial-condition example from STRIKE-GOLDD's tracker: S' = 1 + a S^2,
+// y = S, S(0) = 0. By hand:
 //   y = S, y' = 1 + a S^2, y'' = 2 a S S' = 2 a S (1 + a S^2),
 //   y''' = 2 a S' (1 + a S^2) + 2 a S d/dt(1 + a S^2) = 2a at S = 0.
 // d/da of y, y', y'' at S = 0 are 0, S^2 = 0, 2 S (1 + 2 a S^2) = 0: a is

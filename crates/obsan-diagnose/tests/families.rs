@@ -57,10 +57,11 @@ impl Rng {
     fn uniform(&mut self) -> f64 {
         (self.0.next_u64() >> 11) as f64 / (1u64 << 53) as f64
     }
-    /// Box-Muller.
+    /// A standard normal deviate by the library's Box–Muller (its first
+    /// output only, so the data stay those of the seeds).
     fn normal(&mut self) -> f64 {
         let (a, b) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (TAU * b).cos()
+        obsan_fit::box_muller(a, b).0
     }
 }
 

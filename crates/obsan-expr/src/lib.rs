@@ -57,7 +57,7 @@ pub use float_eval::FloatExpr;
 pub use graph::{Id, Symbol};
 pub use lower::EngineError;
 pub use memo::Ctx;
-pub use num::{Fp, Int, SplitMix, P, Q};
+pub use num::{Fp, FpEchelon, FpField, Int, SplitMix, P, Q};
 pub use parse::{line_col, parse_ast, Ast, AstKind, BinOp, ParseError, Span, FUNCTIONS};
 pub use poly::{Mono, Poly, Var};
 pub use ratfun::RatFun;

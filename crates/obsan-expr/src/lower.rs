@@ -308,41 +308,52 @@ impl Ctx {
     /// square (refused by `sqrt`), the term stays in the angle atom.
     #[allow(clippy::type_complexity)]
     fn split_const_atans(&mut self, rest: RatFun) -> R<(Vec<((Id, Id), i64)>, RatFun)> {
+        self.split_terms(rest, |ctx, v, coeff| {
+            let atan = matches!(
+                ctx.leaves[v as usize].kind,
+                LeafKind::Atan(_) | LeafKind::Atan2(..)
+            );
+            if !atan || !coeff.is_integer() {
+                return Ok(None);
+            }
+            let n = i64::try_from(coeff.num()).ok().filter(|n| n.abs() <= 64);
+            let Some(n) = n else {
+                let a = ctx.leaf_text(v);
+                return err(format!(
+                    "the multiple {coeff} of {a} inside sin/cos is too large"
+                ));
+            };
+            Ok(ctx.atan_cos_sin(v)?.map(|pair| (pair, n)))
+        })
+    }
+
+    /// The terms `c * leaf` (`c` rational, one leaf to the first power) of
+    /// `rest`, a polynomial over a constant denominator, that `take` maps to
+    /// a part, split off; the other terms recombined as the new rest. Nothing
+    /// is split when the denominator is not constant.
+    fn split_terms<T>(
+        &mut self,
+        rest: RatFun,
+        mut take: impl FnMut(&mut Self, Var, &Q) -> R<Option<T>>,
+    ) -> R<(Vec<T>, RatFun)> {
         let Some(d) = rest.den.as_constant() else {
             return Ok((vec![], rest));
         };
-        let mut atans = Vec::new();
+        let mut parts = Vec::new();
         let mut keep = Vec::new();
         for (m, k) in rest.num.terms() {
             let mut it = m.iter();
-            let single = match (it.next(), it.next()) {
-                (Some((v, 1)), None) => Some(v),
+            let part = match (it.next(), it.next()) {
+                (Some((v, 1)), None) => take(self, v, &Q::new(k.clone(), d.clone()))?,
                 _ => None,
             };
-            let coeff = Q::new(k.clone(), d.clone());
-            let arg = single.and_then(|v| match self.leaves[v as usize].kind {
-                LeafKind::Atan(_) | LeafKind::Atan2(..) => Some(v),
-                _ => None,
-            });
-            match arg {
-                Some(v) if coeff.is_integer() => {
-                    let n = i64::try_from(coeff.num()).ok().filter(|n| n.abs() <= 64);
-                    let Some(n) = n else {
-                        let a = self.leaf_text(v);
-                        return err(format!(
-                            "the multiple {coeff} of {a} inside sin/cos is too large"
-                        ));
-                    };
-                    match self.atan_cos_sin(v)? {
-                        Some(pair) => atans.push((pair, n)),
-                        None => keep.push((m.clone(), k.clone())),
-                    }
-                }
-                _ => keep.push((m.clone(), k.clone())),
+            match part {
+                Some(p) => parts.push(p),
+                None => keep.push((m.clone(), k.clone())),
             }
         }
-        if atans.is_empty() {
-            return Ok((atans, rest));
+        if parts.is_empty() {
+            return Ok((parts, rest));
         }
         let num = Poly::from_terms(keep);
         let rest = if num.is_zero() {
@@ -351,7 +362,7 @@ impl Ctx {
             self.normalize(num, Poly::constant(d))
         };
         stop()?;
-        Ok((atans, rest))
+        Ok((parts, rest))
     }
 
     /// Whether `r` has a negative leading coefficient in the printing order
@@ -390,48 +401,19 @@ impl Ctx {
     /// `exp(n log u) = u^n`, exact where `log u` is real (`u > 0`). Left in
     /// the exponent when `u^n` is refused (a root of a perfect square).
     fn split_logs(&mut self, rest: RatFun) -> R<(Vec<Id>, RatFun)> {
-        let Some(d) = rest.den.as_constant() else {
-            return Ok((vec![], rest));
-        };
-        let mut factors = Vec::new();
-        let mut keep = Vec::new();
-        for (m, k) in rest.num.terms() {
-            let mut it = m.iter();
-            let single = match (it.next(), it.next()) {
-                (Some((v, 1)), None) => Some(v),
-                _ => None,
+        self.split_terms(rest, |ctx, v, coeff| {
+            let LeafKind::Log(u) = ctx.leaves[v as usize].kind else {
+                return Ok(None);
             };
-            let coeff = Q::new(k.clone(), d.clone());
-            let arg = single.and_then(|v| match self.leaves[v as usize].kind {
-                LeafKind::Log(u) => Some(u),
-                _ => None,
-            });
-            let pow = match arg {
-                Some(u) if coeff.is_integer() || coeff.den() == &int(2) => {
-                    match self.pow_q(u, &coeff) {
-                        Ok(p) => Some(p),
-                        Err(e) if budget::tripped() => return Err(e),
-                        Err(_) => None,
-                    }
-                }
-                _ => None,
-            };
-            match pow {
-                Some(p) => factors.push(p),
-                None => keep.push((m.clone(), k.clone())),
+            if !coeff.is_integer() && coeff.den() != &int(2) {
+                return Ok(None);
             }
-        }
-        if factors.is_empty() {
-            return Ok((factors, rest));
-        }
-        let num = Poly::from_terms(keep);
-        let rest = if num.is_zero() {
-            RatFun::zero()
-        } else {
-            self.normalize(num, Poly::constant(d))
-        };
-        stop()?;
-        Ok((factors, rest))
+            match ctx.pow_q(u, coeff) {
+                Ok(p) => Ok(Some(p)),
+                Err(e) if budget::tripped() => Err(e),
+                Err(_) => Ok(None),
+            }
+        })
     }
 
     /// The exponent of an `exp` leaf, as a node.

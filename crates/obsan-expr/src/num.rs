@@ -3,6 +3,7 @@
 
 use dashu_int::ops::{Abs, BitTest, DivRem, Gcd, SquareRoot};
 use dashu_int::{IBig, Sign, UBig};
+use obsan_recon::fp;
 use std::fmt;
 use std::ops::{Mul, Neg};
 
@@ -286,30 +287,14 @@ impl Fp {
     pub fn is_zero(self) -> bool {
         self.0 == 0
     }
-    /// The rank of a matrix over F_p with `ncols` columns, given by its rows
-    /// (Gaussian elimination): the workspace's one elimination for ranks.
-    pub fn matrix_rank(mut rows: Vec<Vec<Fp>>, ncols: usize) -> usize {
-        let mut rank = 0;
-        for c in 0..ncols {
-            let Some(p) = (rank..rows.len()).find(|&i| !rows[i][c].is_zero()) else {
-                continue;
-            };
-            rows.swap(rank, p);
-            let Some(inv) = rows[rank][c].inv() else {
-                continue;
-            };
-            let pivot = rows[rank].clone();
-            for row in rows.iter_mut().skip(rank + 1) {
-                let f = row[c] * inv;
-                if !f.is_zero() {
-                    for (x, y) in row.iter_mut().zip(&pivot) {
-                        *x = *x - f * *y;
-                    }
-                }
-            }
-            rank += 1;
-        }
-        rank
+    /// The rank of a matrix over F_p given by its rows ([`FpEchelon`]).
+    pub fn matrix_rank(rows: Vec<Vec<Fp>>) -> usize {
+        fp::rank(FpField, rows)
+    }
+    /// A basis of the right null space of the rows, vectors of length
+    /// `ncols`, in reduced form: 1 at its own free column, 0 at the others.
+    pub fn null_space(rows: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
+        fp::null_space(FpField, rows, ncols)
     }
     /// A square root if one exists (Tonelli–Shanks; p - 1 = 2 * odd * ...).
     pub fn sqrt(self) -> Option<Fp> {
@@ -389,18 +374,48 @@ impl std::ops::Mul for Fp {
     }
 }
 
-/// Small deterministic PRNG (SplitMix64) for random evaluation points: the
-/// engine must not depend on a particular `rand` version for reproducibility.
+/// F_p with p = 2^61 - 1 as a field for obsan-recon's one dense elimination
+/// ([`FpEchelon`]), with the shift-and-add products above.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FpField;
+
+impl fp::PrimeField for FpField {
+    type Elem = Fp;
+    #[inline]
+    fn zero(self) -> Fp {
+        Fp::ZERO
+    }
+    #[inline]
+    fn one(self) -> Fp {
+        Fp::ONE
+    }
+    #[inline]
+    fn sub(self, a: Fp, b: Fp) -> Fp {
+        a - b
+    }
+    #[inline]
+    fn mul(self, a: Fp, b: Fp) -> Fp {
+        a * b
+    }
+    fn inv(self, a: Fp) -> Option<Fp> {
+        a.inv()
+    }
+}
+
+/// Rows over [`Fp`] in reduced row echelon form: ranks, null spaces,
+/// membership and solves (`obsan_recon::fp::Echelon`).
+pub type FpEchelon = fp::Echelon<FpField>;
+
+/// Small deterministic PRNG (SplitMix64, stepped by obsan-recon's
+/// `splitmix64`) for random evaluation points: the engine must not depend on
+/// a particular `rand` version for reproducibility.
 #[derive(Clone, Debug)]
 pub struct SplitMix(pub u64);
 
 impl SplitMix {
+    /// The next SplitMix64 output (obsan-recon's `splitmix64`, the one step).
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
-        z ^ (z >> 31)
+        obsan_recon::splitmix64(&mut self.0)
     }
     /// Uniform element of F_p.
     pub fn fp(&mut self) -> Fp {

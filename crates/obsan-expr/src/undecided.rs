@@ -279,8 +279,7 @@ impl Ctx {
             }
             points += 1;
         }
-        let cols = rows.first().map_or(0, Vec::len);
-        Fp::matrix_rank(rows, cols) == members.len()
+        Fp::matrix_rank(rows) == members.len()
     }
 
     /// Square roots of rational functions of the symbols generate a proper

@@ -28,5 +28,5 @@ pub use noise::{
 pub use normal::MAX_FIT_PARAMS;
 pub use options::{FitOptions, FitTrajectory};
 pub use predict::{Integration, Measured, Prediction, Predictor};
-pub use rng::Rng;
+pub use rng::{box_muller, Rng};
 pub use whiten::Whitener;

@@ -206,7 +206,14 @@ impl Predictor {
         times: &[f64],
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.collect(x0, consts, inputs, times, opts, None)
+        self.collect(&Run {
+            x0,
+            consts,
+            inputs,
+            times,
+            opts,
+            needed: None,
+        })
     }
 
     /// [`Predictor::predict_with`] at the times of `cells`, computing only
@@ -222,7 +229,7 @@ impl Predictor {
         cells: &Measured,
         opts: &Integration,
     ) -> Result<Prediction, FitError> {
-        self.collect(x0, consts, inputs, cells.t, opts, Some(cells))
+        self.collect(&Run::measured(x0, consts, inputs, cells, opts))
     }
 
     /// [`Predictor::predict_measured`] handing each output time's values,
@@ -238,42 +245,26 @@ impl Predictor {
         opts: &Integration,
         sink: &mut Sink,
     ) -> Result<(), FitError> {
-        self.integrate(x0, consts, inputs, cells.t, opts, Some(cells), sink)
+        self.integrate(&Run::measured(x0, consts, inputs, cells, opts), sink)
     }
 
     /// [`Predictor::integrate`] kept whole, as a [`Prediction`].
-    fn collect(
-        &self,
-        x0: &[f64],
-        consts: &[f64],
-        inputs: &Series,
-        times: &[f64],
-        opts: &Integration,
-        needed: Option<&Measured>,
-    ) -> Result<Prediction, FitError> {
+    fn collect(&self, run: &Run) -> Result<Prediction, FitError> {
         let mut out = Prediction {
-            outputs: Vec::with_capacity(times.len()),
+            outputs: Vec::with_capacity(run.times.len()),
             jacobians: Vec::new(),
             noise_m: Vec::new(),
         };
-        let (sens, noise) = (opts.sensitivities, opts.input_noise.is_some());
-        self.integrate(
-            x0,
-            consts,
-            inputs,
-            times,
-            opts,
-            needed,
-            &mut |_, y, j, m| {
-                out.outputs.push(y.to_vec());
-                if sens {
-                    out.jacobians.push(j.to_vec());
-                }
-                if noise {
-                    out.noise_m.push(m.to_vec());
-                }
-            },
-        )?;
+        let (sens, noise) = (run.opts.sensitivities, run.opts.input_noise.is_some());
+        self.integrate(run, &mut |_, y, j, m| {
+            out.outputs.push(y.to_vec());
+            if sens {
+                out.jacobians.push(j.to_vec());
+            }
+            if noise {
+                out.noise_m.push(m.to_vec());
+            }
+        })?;
         Ok(out)
     }
 
@@ -433,6 +424,38 @@ impl<'a> Measured<'a> {
 /// What a prediction hands on at each output time: its index, the outputs,
 /// their rows of dy/dx0 (empty without sensitivities) and `M(t)` (empty
 /// without input noise).
+/// One prediction's arguments: from `x0` (the whole analysed state) with
+/// `consts` along `inputs` to the output `times`, evaluating only the cells
+/// of `needed` when given (see [`Predictor::predict_measured`]).
+struct Run<'a> {
+    x0: &'a [f64],
+    consts: &'a [f64],
+    inputs: &'a Series,
+    times: &'a [f64],
+    opts: &'a Integration,
+    needed: Option<&'a Measured<'a>>,
+}
+
+impl<'a> Run<'a> {
+    /// At the times of `cells`, computing only them.
+    fn measured(
+        x0: &'a [f64],
+        consts: &'a [f64],
+        inputs: &'a Series,
+        cells: &'a Measured<'a>,
+        opts: &'a Integration,
+    ) -> Run<'a> {
+        Run {
+            x0,
+            consts,
+            inputs,
+            times: cells.t,
+            opts,
+            needed: Some(cells),
+        }
+    }
+}
+
 pub(crate) type Sink<'a> = dyn FnMut(usize, &[f64], &[f64], &[f64]) + 'a;
 
 /// Integration options of [`Predictor::predict_with`].

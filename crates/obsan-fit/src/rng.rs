@@ -1,8 +1,8 @@
 //! The estimation side's seeded generator: the engine's SplitMix64
-//! ([`obsan_expr::SplitMix`]; only obsan-recon, which depends on no obsan crate,
-//! keeps a copy of it) with uniform and normal
-//! (Box–Muller) deviates. Results depend on the seed only, never on a crate version
-//! or on scheduling.
+//! ([`obsan_expr::SplitMix`], stepped by obsan-recon's `splitmix64`, the
+//! workspace's one) with uniform and normal (Box–Muller: the workspace's one,
+//! which the simulating tests use too) deviates. Results depend on the seed
+//! only, never on a crate version or on scheduling.
 
 use obsan_expr::SplitMix;
 
@@ -31,10 +31,18 @@ impl Rng {
         if let Some(s) = self.spare.take() {
             return s;
         }
-        let (u, v) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u.ln()).sqrt();
-        let a = 2.0 * std::f64::consts::PI * v;
-        self.spare = Some(r * a.sin());
-        r * a.cos()
+        let (z, spare) = box_muller(self.uniform(), self.uniform());
+        self.spare = Some(spare);
+        z
     }
+}
+
+/// Two independent standard normal deviates from two independent uniform
+/// deviates `u` in (0, 1] and `v` in [0, 1) (Box & Muller 1958): with
+/// `r = sqrt(-2 ln u)`, `(r cos 2 pi v, r sin 2 pi v)`. The workspace's one
+/// Box–Muller transform; the simulating tests draw through it too.
+pub fn box_muller(u: f64, v: f64) -> (f64, f64) {
+    let r = (-2.0 * u.ln()).sqrt();
+    let a = 2.0 * std::f64::consts::PI * v;
+    (r * a.cos(), r * a.sin())
 }

@@ -9,6 +9,7 @@ use crate::mem::{block, mono_bytes, over};
 use crate::poly::{Mono, Order, Poly, Ring};
 use crate::select::groebner;
 use crate::GbError;
+use obsan_recon::fp::{Echelon, Zp};
 use std::collections::HashMap;
 use std::mem::size_of;
 
@@ -84,63 +85,42 @@ impl Basis {
             .map(|(i, m)| (m, i))
             .collect();
         let dim = std.len();
-        // Dense: up to dim + 1 echelon rows, each a vector of dim and a
-        // combination of dim + 1 coefficients, beside the quotient's basis
-        // and its column map.
-        let rows_bytes = (dim + 1)
-            * (size_of::<(Vec<u64>, Vec<u64>, usize)>() + block(8 * dim) + block(8 * (dim + 1)));
+        // Dense: up to dim + 1 echelon rows [normal form of f^k | e_k] of
+        // 2 dim + 1 entries each, beside the quotient's basis and its column
+        // map.
+        let rows_bytes = (dim + 1) * (size_of::<(usize, Vec<u64>)>() + block(8 * (2 * dim + 1)));
         let need = rows_bytes + dim * (2 * mono_bytes(r.n) + 2 * size_of::<usize>());
         if need > self.max_bytes {
             return Err(over(need, self.max_bytes, || {
                 format!("the count of solutions (a dense {dim} x {dim} matrix over the quotient)")
             }));
         }
-        // Echelon rows: (vector, combination of powers it represents).
-        let mut rows: Vec<(Vec<u64>, Vec<u64>, usize)> = Vec::new(); // (vec, combo, pivot)
+        // The one dense elimination keeps both parts of each row, so a power
+        // whose normal form reduces to zero leaves in its second part the
+        // first linear dependency of the powers.
+        let mut ech = Echelon::new(Zp(fld.modulus()));
         let f = self.reduce(f)?;
         let mut pw = self.reduce(&r.constant(1))?;
         for k in 0..=dim {
-            let mut v = vec![0u64; dim];
+            let mut v = vec![0u64; 2 * dim + 1];
             for (m, c) in pw.terms() {
                 let i = *col
                     .get(m)
                     .ok_or(GbError::Budget("normal form outside the quotient"))?;
                 v[i] = *c;
             }
-            let mut combo = vec![0u64; dim + 1];
-            combo[k] = 1;
-            for (rv, rc, piv) in &rows {
-                let c = v[*piv];
-                if c != 0 {
-                    let nc = fld.neg(c);
-                    for (a, b) in v.iter_mut().zip(rv.iter()) {
-                        *a = fld.add(*a, fld.mul(nc, *b));
-                    }
-                    for (a, b) in combo.iter_mut().zip(rc.iter()) {
-                        *a = fld.add(*a, fld.mul(nc, *b));
-                    }
-                }
+            v[dim + k] = 1;
+            let reduced = ech.reduce(v);
+            if reduced[..dim].iter().all(|&x| x == 0) {
+                // sum combo[i] f^i = 0 with combo[k] != 0: the first
+                // dependency is the minimal polynomial, made monic.
+                let combo = &reduced[dim..=dim + k];
+                let inv = fld
+                    .inv(combo[k])
+                    .ok_or(GbError::Budget("zero leading coefficient"))?;
+                return Ok(combo.iter().map(|&c| fld.mul(c, inv)).collect());
             }
-            match v.iter().position(|&x| x != 0) {
-                None => {
-                    // sum combo[i] f^i = 0: the first dependency is minimal.
-                    combo.truncate(k + 1);
-                    let inv = fld
-                        .inv(combo[k])
-                        .ok_or(GbError::Budget("zero leading coefficient"))?;
-                    return Ok(combo.iter().map(|&c| fld.mul(c, inv)).collect());
-                }
-                Some(piv) => {
-                    let inv = fld.inv(v[piv]).ok_or(GbError::Budget("zero pivot"))?;
-                    for a in v.iter_mut() {
-                        *a = fld.mul(*a, inv);
-                    }
-                    for a in combo.iter_mut() {
-                        *a = fld.mul(*a, inv);
-                    }
-                    rows.push((v, combo, piv));
-                }
-            }
+            ech.insert(reduced);
             if k < dim {
                 pw = self.reduce(&r.mul(&pw, &f)?)?;
             }

@@ -254,6 +254,9 @@ fn reduce_pairs(w: &Work, sel: &[Pair]) -> Result<Vec<Poly>, GbError> {
 /// Gaussian elimination of the rows `todo` by the pivots, left to right on a
 /// dense accumulator; each non-zero result becomes a pivot for the rows after
 /// it.
+/// Not obsan-recon's dense `fp::Echelon`: Macaulay rows are sparse over
+/// 10^4-10^5 columns and only the new pivots are wanted, so rows are kept
+/// sparse and reduced with delayed modular folding (below).
 fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
     let fld = w.ring.field;
     let p = fld.modulus();

@@ -209,6 +209,7 @@ impl P<'_> {
         }
         Ok(())
     }
+    // julia/parse.rs has a parallel descent over its own tokens and levels.
     fn sum(&mut self) -> Result<Ex, ImportError> {
         self.deeper()?;
         let mut a = self.product()?;

@@ -196,6 +196,24 @@ impl Table {
             .ok_or_else(|| ImportError::at(1, 1, format!("the table has no column '{name}'")))
     }
     /// A cell's trimmed text and its place (line, column of its first character).
+    /// The id in column `k` of `row` with its place; an error unless it is
+    /// a valid id (`what`: the table's entries, for the message).
+    fn id<'a>(
+        &self,
+        row: &'a (usize, Vec<String>),
+        k: usize,
+        what: &str,
+    ) -> Result<(&'a str, (usize, usize)), ImportError> {
+        let (id, at) = self.cell(row, k);
+        if !is_id(id) {
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{id}' is not a valid {what} id"),
+            ));
+        }
+        Ok((id, at))
+    }
     fn cell<'a>(&self, row: &'a (usize, Vec<String>), k: usize) -> (&'a str, (usize, usize)) {
         let before: usize = row.1.iter().take(k).map(|c| c.chars().count() + 1).sum();
         match row.1.get(k) {
@@ -253,6 +271,11 @@ fn subst_names(e: &Ex, f: &dyn Fn(&str) -> Option<Ex>) -> Ex {
     }
 }
 
+/// The error of an id met a second time in its table.
+fn listed_twice(what: &str, id: &str, at: (usize, usize)) -> ImportError {
+    ImportError::at(at.0, at.1, format!("{what} '{id}' is listed twice"))
+}
+
 /// The parameter table: id -> `None` estimated, `Some(value)` fixed.
 type ParamTable = Vec<(String, Option<Ex>)>;
 
@@ -262,20 +285,9 @@ fn read_parameters(text: &str) -> Result<ParamTable, ImportError> {
     let cn = t.col("nominalValue");
     let mut out: ParamTable = Vec::new();
     for row in &t.rows {
-        let (id, at) = t.cell(row, ci);
-        if !is_id(id) {
-            return Err(ImportError::at(
-                at.0,
-                at.1,
-                format!("'{id}' is not a valid parameter id"),
-            ));
-        }
+        let (id, at) = t.id(row, ci, "parameter")?;
         if out.iter().any(|p| p.0 == id) {
-            return Err(ImportError::at(
-                at.0,
-                at.1,
-                format!("parameter '{id}' is listed twice"),
-            ));
+            return Err(listed_twice("parameter", id, at));
         }
         let (est, eat) = t.cell(row, ce);
         let fixed = match est {
@@ -316,20 +328,9 @@ fn read_observables(text: &str) -> Result<Vec<Placed<(usize, usize)>>, ImportErr
     let (ci, cf) = (t.need("observableId")?, t.need("observableFormula")?);
     let mut out: Vec<Placed<(usize, usize)>> = Vec::new();
     for row in &t.rows {
-        let (id, at) = t.cell(row, ci);
-        if !is_id(id) {
-            return Err(ImportError::at(
-                at.0,
-                at.1,
-                format!("'{id}' is not a valid observable id"),
-            ));
-        }
+        let (id, at) = t.id(row, ci, "observable")?;
         if out.iter().any(|o| o.0 == id) {
-            return Err(ImportError::at(
-                at.0,
-                at.1,
-                format!("observable '{id}' is listed twice"),
-            ));
+            return Err(listed_twice("observable", id, at));
         }
         let (f, fat) = t.cell(row, cf);
         if f.is_empty() {
@@ -354,14 +355,7 @@ fn read_conditions(text: &str) -> Result<Conditions, ImportError> {
     let ci = t.need("conditionId")?;
     let mut out: Conditions = Vec::new();
     for row in &t.rows {
-        let (id, at) = t.cell(row, ci);
-        if !is_id(id) {
-            return Err(ImportError::at(
-                at.0,
-                at.1,
-                format!("'{id}' is not a valid condition id"),
-            ));
-        }
+        let (id, _) = t.id(row, ci, "condition")?;
         let mut vals = Vec::new();
         for (k, h) in t.header.iter().enumerate() {
             if k == ci || h == "conditionName" {

@@ -1,5 +1,10 @@
 //! The display list rasterised: anti-aliased shapes by pixel coverage, text
 //! from the embedded DejaVu Sans.
+//!
+//! Kept rather than `tiny-skia`: a chart draws four shapes (filled rectangles,
+//! polylines solid or dashed, dots, glyphs whose coverage ab_glyph already
+//! gives), about 200 lines here, where a general path renderer would add a
+//! crate tree and still need ab_glyph for the text.
 
 use crate::{Anchor, Figure, Op, Rgb, BLACK};
 

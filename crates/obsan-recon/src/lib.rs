@@ -44,6 +44,7 @@
     deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
 )]
 
+mod echelon;
 mod field;
 mod linalg;
 mod multi;
@@ -62,10 +63,15 @@ pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
 
 /// Arithmetic modulo a prime `p < 2^63` on residues in `0..p` (products in
 /// u128): the workspace's one implementation; obsan-groebner's `Field` wraps it.
+/// With it the workspace's one dense elimination over a prime field
+/// ([`Echelon`](fp::Echelon): rank, null space, solve), generic over
+/// [`PrimeField`](fp::PrimeField) so the engine's own `Fp` uses it too.
 pub mod fp {
+    pub use crate::echelon::{null_space, rank, solve, Echelon, PrimeField, Zp};
     pub use crate::field::{add, inv, mul, pow, sub};
 }
 pub use rational::{Poly, Rational, Term};
+pub use rng::splitmix64;
 pub use thiele::{Thiele, ThieleStep};
 
 use field::{inv, mul};

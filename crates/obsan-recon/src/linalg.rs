@@ -1,39 +1,10 @@
-//! Dense linear algebra and univariate polynomials over F_p.
+//! Univariate polynomials and Vandermonde systems over F_p (the dense
+//! elimination is `echelon.rs`).
 //!
 //! Univariate polynomials are coefficient vectors, lowest degree first,
 //! without trailing zeros (the zero polynomial is empty).
 
 use crate::field::{add, inv, mul, sub};
-
-/// Solves the square system `a x = b` (rows of `a` with `b` appended as the
-/// last column). `None` when the matrix is singular.
-pub(crate) fn solve(mut a: Vec<Vec<u64>>, p: u64) -> Option<Vec<u64>> {
-    let n = a.len();
-    for col in 0..n {
-        let piv = (col..n).find(|&r| a[r][col] != 0)?;
-        a.swap(col, piv);
-        let ip = inv(a[col][col], p)?;
-        for v in a[col].iter_mut().skip(col) {
-            *v = mul(*v, ip, p);
-        }
-        for r in 0..n {
-            if r != col && a[r][col] != 0 {
-                let f = a[r][col];
-                let (pivot_row, row) = if r < col {
-                    let (lo, hi) = a.split_at_mut(col);
-                    (&hi[0], &mut lo[r])
-                } else {
-                    let (lo, hi) = a.split_at_mut(r);
-                    (&lo[col], &mut hi[0])
-                };
-                for k in col..=n {
-                    row[k] = sub(row[k], mul(f, pivot_row[k], p), p);
-                }
-            }
-        }
-    }
-    Some(a.into_iter().map(|row| row[n]).collect())
-}
 
 /// Solves the transposed Vandermonde system `sum_m c_m v_m^i = y_i`,
 /// `i = 0..T`, in O(T^2) (Zippel 1990): with `P = prod (x - v_m)` and
@@ -182,36 +153,6 @@ pub(crate) fn poly_scale(a: &[u64], s: u64, p: u64) -> Vec<u64> {
     trim(a.iter().map(|&c| mul(c, s, p)).collect())
 }
 
-/// Solves the possibly overdetermined system `a x = b` (rows of `a`, `cols`
-/// unknowns, with `b` appended as the last column): `None` unless it has
-/// exactly one solution (full column rank, every extra row consistent).
-pub(crate) fn solve_over(mut a: Vec<Vec<u64>>, cols: usize, p: u64) -> Option<Vec<u64>> {
-    let m = a.len();
-    for col in 0..cols {
-        let piv = (col..m).find(|&r| a[r][col] != 0)?;
-        a.swap(col, piv);
-        let ip = inv(a[col][col], p)?;
-        for v in a[col].iter_mut().skip(col) {
-            *v = mul(*v, ip, p);
-        }
-        let (lo, hi) = a.split_at_mut(col);
-        let (pivot_row, hi) = hi.split_at_mut(1);
-        let pivot_row = &pivot_row[0];
-        for row in lo.iter_mut().chain(hi.iter_mut()) {
-            let f = row[col];
-            if f != 0 {
-                for k in col..=cols {
-                    row[k] = sub(row[k], mul(f, pivot_row[k], p), p);
-                }
-            }
-        }
-    }
-    if a[cols..].iter().any(|row| row[cols] != 0) {
-        return None;
-    }
-    Some(a.iter().take(cols).map(|row| row[cols]).collect())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,48 +160,6 @@ mod tests {
     use crate::rng::Rng;
 
     const P: u64 = PRIMES[3];
-
-    /// A random solution x and `m` augmented rows `[a | a.x]` in `n` unknowns.
-    fn random_system(rng: &mut Rng, m: usize, n: usize) -> (Vec<u64>, Vec<Vec<u64>>) {
-        let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
-        let rows = (0..m)
-            .map(|_| {
-                let mut r: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
-                let b = r
-                    .iter()
-                    .zip(&x)
-                    .fold(0, |s, (&a, &xi)| add(s, mul(a, xi, P), P));
-                r.push(b);
-                r
-            })
-            .collect();
-        (x, rows)
-    }
-
-    #[test]
-    fn gauss_solves_a_random_system() {
-        let mut rng = Rng::new(1);
-        let n = 7;
-        let (x, rows) = random_system(&mut rng, n, n);
-        assert_eq!(solve(rows, P).unwrap(), x);
-        // Two equal rows: singular.
-        let row = vec![1, 2, 3];
-        assert_eq!(solve(vec![row.clone(), row], P), None);
-    }
-
-    #[test]
-    fn overdetermined_systems_need_consistency_and_full_rank() {
-        let mut rng = Rng::new(2);
-        let (m, n) = (9, 5);
-        let (x, mut rows) = random_system(&mut rng, m, n);
-        assert_eq!(solve_over(rows.clone(), n, P).unwrap(), x);
-        // One right-hand side off: no solution.
-        rows[7][n] = add(rows[7][n], 1, P);
-        assert_eq!(solve_over(rows.clone(), n, P), None);
-        // Fewer independent rows than unknowns: not determined.
-        let few: Vec<Vec<u64>> = (0..m).map(|_| rows[0].clone()).collect();
-        assert_eq!(solve_over(few, n, P), None);
-    }
 
     #[test]
     fn vandermonde_and_newton_recover_known_coefficients() {

@@ -16,9 +16,10 @@ use std::time::Instant;
 
 use rustc_hash::FxHashMap;
 
+use crate::echelon::{solve, Zp};
 use crate::field::inv;
 use crate::field::{add, mul, pow, sub};
-use crate::linalg::{eval, newton, poly_add, poly_mul, solve, solve_over, vandermonde_t};
+use crate::linalg::{eval, newton, poly_add, poly_mul, vandermonde_t};
 use crate::rng::Rng;
 use crate::thiele::Thiele;
 use crate::{Limit, Progress, ReconError};
@@ -411,7 +412,7 @@ where
         }
         let mut den = Vec::with_capacity(dd + 1);
         den.push(1);
-        den.extend(solve_over(rows, dd, p)?);
+        den.extend(solve(Zp(p), rows, dd)?);
         let ts: Vec<u64> = pts.iter().map(|(t, _)| *t).collect();
         let dvals: Vec<u64> = ts.iter().map(|&t| eval(&den, t, p)).collect();
         let mut out = Vec::with_capacity(g.len());
@@ -540,7 +541,7 @@ where
                     row
                 })
                 .collect();
-            let Some(sol) = solve(rows, p) else {
+            let Some(sol) = solve(Zp(p), rows, k) else {
                 return Err(Fail::Unlucky);
             };
             let num = sol[..=dn].to_vec();

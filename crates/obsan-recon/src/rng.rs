@@ -1,4 +1,17 @@
-//! A seeded SplitMix64 generator: reproducible random points without a dependency.
+//! SplitMix64 (Steele, Lea & Flood 2014), the workspace's one seeded
+//! generator step: reproducible random points without a dependency. The
+//! engine's `SplitMix` (obsan-expr) and the estimation side's `Rng`
+//! (obsan-fit, over it) step with [`splitmix64`].
+
+/// Advances `state` and returns the next SplitMix64 output.
+#[inline]
+pub fn splitmix64(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
 
 #[derive(Clone, Debug)]
 pub(crate) struct Rng(u64);
@@ -9,11 +22,7 @@ impl Rng {
     }
 
     pub(crate) fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        splitmix64(&mut self.0)
     }
 
     /// Uniform in `1..p` (rejection sampling, so no modulo bias).

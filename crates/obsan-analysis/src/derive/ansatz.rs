@@ -128,8 +128,8 @@ impl Indep {
         let mut rng = SplitMix(self.seed);
         let (_, vals) = point_for(nf, &mut rng, &roots)?;
         let rows: Vec<Vec<Fp>> = vals.chunks(n).map(|c| c.to_vec()).collect();
-        let before = crate::modes::fp_rank(rows[..rows.len() - 1].to_vec(), n);
-        let after = crate::modes::fp_rank(rows, n);
+        let before = Fp::matrix_rank(rows[..rows.len() - 1].to_vec());
+        let after = Fp::matrix_rank(rows);
         if after > before {
             self.grads.push(grad);
             return Ok(true);
@@ -234,7 +234,7 @@ pub(super) fn invariant_ansatz(
                     );
                 }
             }
-            let mut ns = null_space(rows, nm);
+            let mut ns = Fp::null_space(rows, nm);
             ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
             for v in ns {
                 if modes.len() >= s.rank {

@@ -35,7 +35,7 @@ mod monomial;
 
 mod reduced;
 
-use crate::fp_linalg::{mono_deriv, mono_value, monomials, null_space, rat_recon};
+use crate::fp_linalg::{mono_deriv, mono_value, monomials, rat_recon};
 use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
 use blocks::{coefficient_blocks, push_state_blocks};
 use reduced::in_modes;
@@ -402,7 +402,7 @@ fn angle_differences(
         let (_, v) = point_for(nf, &mut found.rng, &roots)?;
         rows.extend(v.chunks(angles.len()).map(|c| c.to_vec()));
     }
-    for v in null_space(rows, angles.len()) {
+    for v in Fp::null_space(rows, angles.len()) {
         if found.modes.len() == s.rank {
             break;
         }

@@ -291,7 +291,7 @@ pub(super) fn monomial_invariants(
                 .iter()
                 .map(|r| cols.iter().map(|&c| r[c]).collect())
                 .collect();
-            let ns = null_space(m, size);
+            let ns = Fp::null_space(m, size);
             if ns.len() == 1 && ns[0].iter().all(|x| !x.is_zero()) {
                 if let Some(e) = primitive(&ns[0]) {
                     let neg = e.iter().filter(|&&x| x < 0).count();

@@ -275,7 +275,7 @@ fn needed_modes(
         let rows: Vec<Vec<Fp>> = (0..n)
             .map(|i| (0..=r).map(|k| v[k * n + i]).collect())
             .collect();
-        let ns = null_space(rows, r + 1);
+        let ns = Fp::null_space(rows, r + 1);
         // A null vector with a non-zero last entry gives dt in the span.
         let Some(c) = ns.iter().find(|c| !c[r].is_zero()) else {
             return Ok(None);
@@ -409,7 +409,7 @@ fn peel_monomial(
         let rows: Vec<Vec<Fp>> = (0..n)
             .map(|i| (0..=r).map(|k| v[k * n + i]).collect())
             .collect();
-        let ns = null_space(rows, r + 1);
+        let ns = Fp::null_space(rows, r + 1);
         if ns.len() != 1 || ns[0][r].is_zero() {
             return Ok(None);
         }
@@ -653,7 +653,7 @@ fn solve_form(
         }
         rows.push(row);
     }
-    let mut ns = null_space(rows, nu);
+    let mut ns = Fp::null_space(rows, nu);
     ns.sort_by_key(|v| v.iter().filter(|x| !x.is_zero()).count());
     for v in ns {
         if v[nm..].iter().all(|x| x.is_zero()) {

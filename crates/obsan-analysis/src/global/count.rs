@@ -6,46 +6,9 @@ use super::run::Run;
 use super::types::{err, gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
 use obsan_expr::Poly as ZPoly;
-use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, Mono, Poly};
+use obsan_groebner::{distinct_roots, groebner, GbBudget, Mono, Poly};
+use obsan_recon::fp::{Echelon, Zp};
 use std::time::Instant;
-
-/// Rows in echelon form over F_p (each row reduced by the earlier ones at
-/// insertion, so reducing in insertion order is a full reduction).
-struct Echelon {
-    field: Field,
-    rows: Vec<(Vec<u64>, usize)>,
-}
-
-impl Echelon {
-    fn reduce(&self, mut v: Vec<u64>) -> Vec<u64> {
-        let f = &self.field;
-        for (row, piv) in &self.rows {
-            let c = v[*piv];
-            if c != 0 {
-                for (a, b) in v.iter_mut().zip(row) {
-                    *a = f.sub(*a, f.mul(c, *b));
-                }
-            }
-        }
-        v
-    }
-
-    /// Adds `v` if it is independent of the rows; whether it was.
-    fn insert(&mut self, v: Vec<u64>) -> bool {
-        let v = self.reduce(v);
-        let Some(piv) = v.iter().position(|&x| x != 0) else {
-            return false;
-        };
-        let inv = self.field.inv(v[piv]).unwrap_or(0);
-        let v: Vec<u64> = v.iter().map(|&x| self.field.mul(x, inv)).collect();
-        self.rows.push((v, piv));
-        true
-    }
-
-    fn contains(&self, v: Vec<u64>) -> bool {
-        self.reduce(v).iter().all(|&x| x == 0)
-    }
-}
 
 /// One run's answer: per target (params then model states) the number of
 /// values (`None`: infinitely many), and the joint count.
@@ -110,10 +73,8 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
     let m = run.out_d.len();
     let mut open = vec![true; m];
     let mut orders = vec![0usize; m];
-    let mut ech = Echelon {
-        field: f,
-        rows: Vec::new(),
-    };
+    // The one dense elimination over F_p (obsan-recon).
+    let mut ech = Echelon::new(Zp(f.modulus()));
     let mut rank_order = 0;
     let mut j = 0;
     while open.iter().any(|&o| o) {
@@ -150,7 +111,7 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
         }
         j += 1;
     }
-    let rank = ech.rows.len();
+    let rank = ech.rank();
     let fibre_dim = nt - rank;
     // theta_t is locally identifiable iff e_t lies in the row space.
     let local: Vec<bool> = (0..nt)

@@ -6,7 +6,7 @@
 //! private tapes as its own. One step is `step.rs`'s.
 
 use super::step::{Rk4, Stages};
-use super::{Integration, Measured, Predictor, Sink};
+use super::{Integration, Predictor, Run, Sink};
 use crate::FitError;
 use obsan_data::Series;
 use obsan_expr::FrozenTape;
@@ -24,21 +24,19 @@ const STIFF_STEP: f64 = 0.5;
 const EXP_STEP: f64 = 1.0;
 
 impl Predictor {
-    /// The integration of `predict_with`; with `needed`, only its cells
-    /// are evaluated. At each output time `sink` gets its index, the
+    /// The integration of `predict_with` ([`Run`]'s arguments); with
+    /// `needed`, only its cells are evaluated. At each output time `sink` gets its index, the
     /// outputs, their rows of dy/dx0 (empty without sensitivities) and
     /// `M(t)` (empty without input noise).
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn integrate(
-        &self,
-        x0: &[f64],
-        consts: &[f64],
-        inputs: &Series,
-        times: &[f64],
-        opts: &Integration,
-        needed: Option<&Measured>,
-        sink: &mut Sink,
-    ) -> Result<(), FitError> {
+    pub(super) fn integrate(&self, run: &Run, sink: &mut Sink) -> Result<(), FitError> {
+        let Run {
+            x0,
+            consts,
+            inputs,
+            times,
+            opts,
+            needed,
+        } = *run;
         if x0.len() != self.state.len() || consts.len() != self.consts.len() {
             return Err(FitError::StateSize {
                 states: self.state.len(),

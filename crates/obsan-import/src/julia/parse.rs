@@ -44,6 +44,8 @@ impl P<'_> {
         }
         Ok(())
     }
+    // Parallel to infix.rs's descent but apart: it reads julia/lex.rs's
+    // tokens, not characters, and has Julia's levels (`//` above `*`).
     fn sum(&mut self) -> Result<Ex, ImportError> {
         self.deeper()?;
         let mut a = self.product()?;

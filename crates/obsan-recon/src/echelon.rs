@@ -1,0 +1,322 @@
+//! The workspace's one dense elimination over a prime field: a basis of row
+//! vectors kept in reduced row echelon form, grown one row at a time.
+//!
+//! Every rank, null space, membership test and linear solve modulo a prime
+//! in obsan is this type (the rank test's codistribution, the symmetry and
+//! mode searches, reconstruction's interpolation systems, Gröbner minimal
+//! polynomials). It is generic over the field so that the engine's
+//! Mersenne-prime `Fp` (shift-and-add reduction) and the residues modulo any
+//! prime below 2^63 ([`Zp`]) share it at full speed.
+//!
+//! Reduced form (each pivot column zero in every other row) makes the
+//! result of [`Echelon::reduce`] independent of the rows' order, and the
+//! reduced echelon form of a row space is unique, so a null space or a
+//! solution does not depend on the order in which rows were inserted.
+
+use std::fmt::Debug;
+
+use crate::field;
+
+/// The arithmetic of a prime field, as the elimination needs it. `self` is
+/// the field (its modulus, or nothing for a fixed prime).
+pub trait PrimeField: Copy {
+    /// An element, always reduced.
+    type Elem: Copy + PartialEq + Debug;
+    fn zero(self) -> Self::Elem;
+    fn one(self) -> Self::Elem;
+    fn sub(self, a: Self::Elem, b: Self::Elem) -> Self::Elem;
+    fn mul(self, a: Self::Elem, b: Self::Elem) -> Self::Elem;
+    /// The inverse; `None` for zero.
+    fn inv(self, a: Self::Elem) -> Option<Self::Elem>;
+}
+
+/// The field of residues `0..p` modulo a prime `p < 2^63`, with this crate's
+/// arithmetic ([`crate::fp`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Zp(pub u64);
+
+impl PrimeField for Zp {
+    type Elem = u64;
+    #[inline]
+    fn zero(self) -> u64 {
+        0
+    }
+    #[inline]
+    fn one(self) -> u64 {
+        1
+    }
+    #[inline]
+    fn sub(self, a: u64, b: u64) -> u64 {
+        field::sub(a, b, self.0)
+    }
+    #[inline]
+    fn mul(self, a: u64, b: u64) -> u64 {
+        field::mul(a, b, self.0)
+    }
+    fn inv(self, a: u64) -> Option<u64> {
+        field::inv(a, self.0)
+    }
+}
+
+/// Row vectors in reduced row echelon form: each row is 1 at its pivot
+/// column (its first non-zero entry) and every pivot column is 0 in the
+/// other rows. Rows are kept in insertion order.
+#[derive(Clone, Debug, Default)]
+pub struct Echelon<F: PrimeField> {
+    field: F,
+    rows: Vec<(usize, Vec<F::Elem>)>,
+}
+
+impl<F: PrimeField> Echelon<F> {
+    /// The empty basis.
+    pub fn new(field: F) -> Self {
+        Echelon {
+            field,
+            rows: Vec::new(),
+        }
+    }
+
+    /// The basis of the span of `rows` (all of one length).
+    pub fn of_rows(field: F, rows: impl IntoIterator<Item = Vec<F::Elem>>) -> Self {
+        let mut e = Echelon::new(field);
+        for r in rows {
+            e.insert(r);
+        }
+        e
+    }
+
+    /// `v` minus its projection on the rows along the pivot columns: zero
+    /// exactly when `v` is in the span.
+    pub fn reduce(&self, mut v: Vec<F::Elem>) -> Vec<F::Elem> {
+        let f = self.field;
+        let zero = f.zero();
+        for (p, r) in &self.rows {
+            let c = v[*p];
+            if c != zero {
+                for (x, y) in v.iter_mut().zip(r) {
+                    *x = f.sub(*x, f.mul(c, *y));
+                }
+            }
+        }
+        v
+    }
+
+    /// Adds `v` if it is independent of the rows; whether it was.
+    pub fn insert(&mut self, v: Vec<F::Elem>) -> bool {
+        let f = self.field;
+        let zero = f.zero();
+        let mut v = self.reduce(v);
+        let Some(p) = v.iter().position(|x| *x != zero) else {
+            return false;
+        };
+        // A non-zero element of a field has an inverse.
+        let Some(inv) = f.inv(v[p]) else {
+            return false;
+        };
+        for x in v.iter_mut() {
+            *x = f.mul(*x, inv);
+        }
+        // Keep the form reduced: clear the new pivot column in the others.
+        for (_, r) in self.rows.iter_mut() {
+            let c = r[p];
+            if c != zero {
+                for (x, y) in r.iter_mut().zip(&v) {
+                    *x = f.sub(*x, f.mul(c, *y));
+                }
+            }
+        }
+        self.rows.push((p, v));
+        true
+    }
+
+    /// Whether `v` is in the span.
+    pub fn contains(&self, v: Vec<F::Elem>) -> bool {
+        let zero = self.field.zero();
+        self.reduce(v).iter().all(|x| *x == zero)
+    }
+
+    /// Whether the unit vector `e_col` of length `len` is in the span.
+    pub fn contains_unit(&self, col: usize, len: usize) -> bool {
+        let mut e = vec![self.field.zero(); len];
+        e[col] = self.field.one();
+        self.contains(e)
+    }
+
+    /// The dimension of the span.
+    pub fn rank(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The pivot columns, in insertion order.
+    pub fn pivots(&self) -> impl Iterator<Item = usize> + '_ {
+        self.rows.iter().map(|(p, _)| *p)
+    }
+
+    /// The reduced row whose pivot is column `col`.
+    pub fn row_at(&self, col: usize) -> Option<&[F::Elem]> {
+        self.rows
+            .iter()
+            .find(|(p, _)| *p == col)
+            .map(|(_, r)| r.as_slice())
+    }
+
+    /// A basis of the right null space of the rows, for vectors of length
+    /// `ncols`: one vector per non-pivot column `j`, 1 at `j` and 0 at the
+    /// other non-pivot columns (unique: the null space's reduced form).
+    pub fn null_space(&self, ncols: usize) -> Vec<Vec<F::Elem>> {
+        let f = self.field;
+        let mut is_pivot = vec![false; ncols];
+        for (p, _) in &self.rows {
+            is_pivot[*p] = true;
+        }
+        (0..ncols)
+            .filter(|&j| !is_pivot[j])
+            .map(|j| {
+                let mut v = vec![f.zero(); ncols];
+                v[j] = f.one();
+                for (p, r) in &self.rows {
+                    v[*p] = f.sub(f.zero(), r[j]);
+                }
+                v
+            })
+            .collect()
+    }
+
+    /// For rows `[A | B]` with `unknowns` columns in `A`: the unique `X` with
+    /// `A X = B`, as the row of `X` of each unknown in order; `None` unless
+    /// every unknown is a pivot and no pivot lies in `B` (`A` of full column
+    /// rank and the system consistent).
+    pub fn solve(&self, unknowns: usize) -> Option<Vec<Vec<F::Elem>>> {
+        if self.rows.len() != unknowns || self.rows.iter().any(|(p, _)| *p >= unknowns) {
+            return None;
+        }
+        let mut x: Vec<Option<Vec<F::Elem>>> = vec![None; unknowns];
+        for (p, r) in &self.rows {
+            x[*p] = Some(r[unknowns..].to_vec());
+        }
+        x.into_iter().collect()
+    }
+}
+
+/// The rank of the matrix with these rows.
+pub fn rank<F: PrimeField>(field: F, rows: impl IntoIterator<Item = Vec<F::Elem>>) -> usize {
+    Echelon::of_rows(field, rows).rank()
+}
+
+/// A basis of the right null space of the rows, vectors of length `ncols`
+/// ([`Echelon::null_space`]).
+pub fn null_space<F: PrimeField>(
+    field: F,
+    rows: impl IntoIterator<Item = Vec<F::Elem>>,
+    ncols: usize,
+) -> Vec<Vec<F::Elem>> {
+    Echelon::of_rows(field, rows).null_space(ncols)
+}
+
+/// The unique solution of `a x = b` for rows `[a | b]` with `unknowns`
+/// columns in `a` (as many rows as wanted); `None` unless it has exactly one.
+pub fn solve<F: PrimeField>(
+    field: F,
+    rows: impl IntoIterator<Item = Vec<F::Elem>>,
+    unknowns: usize,
+) -> Option<Vec<F::Elem>> {
+    let x = Echelon::of_rows(field, rows).solve(unknowns)?;
+    x.into_iter().map(|r| r.first().copied()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{add, PRIMES};
+    use crate::rng::Rng;
+
+    const P: u64 = PRIMES[3];
+    const F: Zp = Zp(P);
+
+    fn dot(a: &[u64], b: &[u64]) -> u64 {
+        a.iter()
+            .zip(b)
+            .fold(0, |s, (&x, &y)| add(s, field::mul(x, y, P), P))
+    }
+
+    /// A random solution x and `m` augmented rows `[a | a.x]` in `n` unknowns.
+    fn random_system(rng: &mut Rng, m: usize, n: usize) -> (Vec<u64>, Vec<Vec<u64>>) {
+        let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
+        let rows = (0..m)
+            .map(|_| {
+                let mut r: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
+                let b = dot(&r, &x);
+                r.push(b);
+                r
+            })
+            .collect();
+        (x, rows)
+    }
+
+    #[test]
+    fn solves_square_and_overdetermined_systems() {
+        let mut rng = Rng::new(1);
+        let (x, rows) = random_system(&mut rng, 7, 7);
+        assert_eq!(solve(F, rows, 7).unwrap(), x);
+        let (x, mut rows) = random_system(&mut rng, 9, 5);
+        assert_eq!(solve(F, rows.clone(), 5).unwrap(), x);
+        // One right-hand side off: inconsistent, no solution.
+        rows[7][5] = add(rows[7][5], 1, P);
+        assert_eq!(solve(F, rows.clone(), 5), None);
+        // Fewer independent rows than unknowns: not determined.
+        let few: Vec<Vec<u64>> = (0..9).map(|_| rows[0].clone()).collect();
+        assert_eq!(solve(F, few, 5), None);
+        // Two equal rows of a square system: singular.
+        let row = vec![1, 2, 3];
+        assert_eq!(solve(F, vec![row.clone(), row], 2), None);
+    }
+
+    #[test]
+    fn rank_and_null_space_of_a_planted_product() {
+        // A (6 x 9) = B (6 x 4) C (4 x 9) with random B, C: rank 4 (a
+        // random 4 x 4 minor vanishes with probability about 4/P), so the
+        // null space has 5 vectors, each annihilated by every row.
+        let mut rng = Rng::new(3);
+        let b: Vec<Vec<u64>> = (0..6)
+            .map(|_| (0..4).map(|_| rng.nonzero(P)).collect())
+            .collect();
+        let c: Vec<Vec<u64>> = (0..4)
+            .map(|_| (0..9).map(|_| rng.nonzero(P)).collect())
+            .collect();
+        let a: Vec<Vec<u64>> = b
+            .iter()
+            .map(|br| {
+                (0..9)
+                    .map(|j| dot(br, &c.iter().map(|cr| cr[j]).collect::<Vec<_>>()))
+                    .collect()
+            })
+            .collect();
+        assert_eq!(rank(F, a.clone()), 4);
+        let ns = null_space(F, a.clone(), 9);
+        assert_eq!(ns.len(), 5);
+        for v in &ns {
+            for row in &a {
+                assert_eq!(dot(row, v), 0);
+            }
+        }
+        // The null basis does not depend on the rows' order.
+        let mut rev = a.clone();
+        rev.reverse();
+        assert_eq!(null_space(F, rev, 9), ns);
+    }
+
+    #[test]
+    fn membership_and_reduced_form() {
+        let mut e = Echelon::new(F);
+        assert!(e.insert(vec![0, 2, 4, 6]));
+        assert!(e.insert(vec![1, 1, 1, 1]));
+        assert!(!e.insert(vec![2, 4, 6, 8])); // (0,2,4,6) + 2 (1,1,1,1)
+        assert_eq!(e.rank(), 2);
+        assert_eq!(e.pivots().collect::<Vec<_>>(), vec![1, 0]);
+        // Reduced: pivot column 1 is zero in the row of pivot 0.
+        assert_eq!(e.row_at(0).unwrap(), &[1, 0, P - 1, P - 2]);
+        assert_eq!(e.row_at(1).unwrap(), &[0, 1, 2, 3]);
+        assert!(!e.contains_unit(3, 4));
+        assert!(e.contains(vec![3, 5, 7, 9]));
+    }
+}
