@@ -85,7 +85,7 @@ const R_NOMINAL: f64 = 0.3;
 /// Calib data whose wheels slip in proportion to their own speed: the
 /// robot moves with the rotation `w (1 - s |w|)` of each wheel while its
 /// encoder counts `w` (the file's `wheel_slip` is proportional to the turn
-/// rate instead, and no generated family scales a wheel by its own speed).
+/// rate instead; the generated `own_speed_slip` has this form).
 /// obsan's simulator runs without encoder noise, so its measured speeds are
 /// the rotation that moved the robot, `m = w (1 - s |w|)`; here each is
 /// replaced by the `w` that gives it (the root of `s w^2 - w + m = 0` near
@@ -148,60 +148,67 @@ fn a_distortion_the_estimated_noise_could_absorb_is_named_jointly() {
     }
 }
 
+/// The truth of failure 5: each wheel loses the fraction `S |w|` of its
+/// rotation (s/rad), a 5 % slip at the simulator's nominal wheel speed.
+const S: f64 = 0.3;
+
 /// Failure 5: the wrong form, confidently named. The wheels slip in
-/// proportion to their own speed (s = 0.3 s/rad, a 5 % slip at the nominal
-/// wheel speed), which neither the file's turn-rate slip nor any generated
-/// family has. On varying-speed circles (amplitude 0.5, period 60 s, seed
-/// 1, encoders exact and no noise stated) the generated `wR_with_abs_wL`
-/// wins (LR 27) beside the file's `wheel_slip` (LR 14, significant too).
-/// A generated winner and a competing file candidate are now fitted
-/// together and weighed there by the naming rule's Wald z; the pair is
-/// reported (`competing`) with each one's z beside the other and the
-/// residual structure each one's own fit leaves, and what is named is one
-/// that stayed established beside the other (never one that did not).
+/// proportion to their own speed, which the file's turn-rate slip does not
+/// express; before the generated family of that form, the coupling
+/// `wR_with_abs_wL` (gc -0.047) stayed established beside the file's slip
+/// and was named. On varying-speed circles (amplitude 0.5, period 60 s,
+/// seed 1, encoders exact, no noise stated) the truth is now inside the
+/// generated families: `own_speed_slip`, `u (1 - gs_u |u|)` per wheel.
+/// Expected estimates: with gs_wR = gs_wL = S and the simulator's
+/// calibration the extended model moves the robot by exactly the rotation
+/// the simulator used (each measured w was made so that w (1 - S |w|) = m),
+/// and the encoders are exact, so the only noise is the bearing's and the
+/// fit's expected estimates are S for both wheels.
+///
+/// The truth-derived outcome: the family wins the first round, each of its
+/// estimates within 3 sd of S (the larger of the model's and the
+/// cluster-robust sd); the file's slip, fitted too, competes with it; and
+/// what is named is either the family alone, its estimates within 3 sd of
+/// S, or nothing, the pair reported as not separated. (On each circle the
+/// turn-rate slip takes from each wheel nearly a fixed multiple of that
+/// wheel's u |u|, the multiple set by the circle's ratio q, so only the three
+/// circles' different q tell the two forms apart: fitted together, each
+/// param's sd grows about threefold.) Never a wrong form named.
 #[test]
-fn a_wrong_form_competing_with_the_file_is_fitted_together_with_it() {
-    let r = run(&own_speed_slip("sine:0.5:60", 0.3, 0.0, 1));
+fn a_slip_with_each_wheel_s_own_speed_is_named_by_its_own_form_or_left_competing() {
+    let r = run(&own_speed_slip("sine:0.5:60", S, 0.0, 1));
     let s = summary(&r) + &format!("competing {:?}\n", r.competing);
-    for n in &r.named {
-        assert!(
-            n.effect.starts_with("wR") || n.effect.starts_with("wL") || n.effect == "wheel_slip",
-            "{} is not a wheel effect\n{s}",
-            n.effect
-        );
-    }
-    let c = r
-        .competing
+    let near_s = |est: &[(String, f64, f64)], robust: &[f64]| {
+        est.len() == 2
+            && est.iter().enumerate().all(|(k, (_, v, sd))| {
+                let sd = robust.get(k).map_or(*sd, |r| sd.max(*r));
+                (v - S).abs() < 3.0 * sd
+            })
+    };
+    let first = r.rounds[0]
         .iter()
-        .find(|c| c.round == 1 && c.effects[1] == "wheel_slip")
-        .unwrap_or_else(|| panic!("the file's slip did not compete\n{s}"));
-    assert_eq!(
-        c.effects[0],
-        r.rounds[0]
-            .iter()
-            .filter(|c| c.significant)
-            .max_by(|a, b| a.lr.total_cmp(&b.lr))
-            .unwrap()
-            .effect,
-        "{s}"
-    );
-    match &c.established {
-        // Named only if it stayed above its line beside the other, and the
-        // other did not (or both did and the winner is named).
-        Some(e) => {
-            let i = usize::from(*e == c.effects[1]);
-            assert!(c.wald_z[i] > c.wald_z_critical[i], "{s}");
-            assert_eq!(r.named[0].effect, *e, "{s}");
-        }
-        None => {
-            assert!(r.named.is_empty(), "{s}");
-            assert!((0..2).all(|i| c.wald_z[i] <= c.wald_z_critical[i]), "{s}");
-        }
-    }
-    assert!(c.structure.iter().flatten().all(|x| x.1.is_finite()), "{s}");
+        .filter(|c| c.significant)
+        .max_by(|a, b| a.lr.total_cmp(&b.lr))
+        .unwrap_or_else(|| panic!("nothing significant\n{s}"));
+    assert_eq!(first.effect, "own_speed_slip", "{s}");
+    assert!(near_s(&first.estimates, &first.robust_sd), "{s}");
     let slip = r.rounds[0]
         .iter()
         .find(|c| c.effect == "wheel_slip")
         .unwrap();
     assert!(!slip.screened_out && slip.moved, "{s}");
+    let c = r
+        .competing
+        .iter()
+        .find(|c| c.round == 1)
+        .unwrap_or_else(|| panic!("no pair fitted together\n{s}"));
+    assert_eq!(c.effects, ["own_speed_slip", "wheel_slip"], "{s}");
+    let names: Vec<&str> = r.named.iter().map(|n| n.effect.as_str()).collect();
+    match names[..] {
+        [] => assert!(c.established.is_none(), "{s}"),
+        ["own_speed_slip"] => {
+            assert!(near_s(&r.named[0].estimates, &r.named[0].robust_sd), "{s}")
+        }
+        _ => panic!("named {names:?}\n{s}"),
+    }
 }

@@ -3,7 +3,8 @@
 //! in an output that is not an angle (a range reading that bends with
 //! range), a periodic error in an input's integral (an out-of-round wheel,
 //! periodic in the wheel's angle) and an output bias that follows an angle
-//! state (a bearing bias with heading). Each is chosen by the model's
+//! state (a bearing bias with heading), and wheels that slip in
+//! proportion to their own speed. Each is chosen by the model's
 //! structure, never by names, and carries its physical range.
 
 use super::basic::Group;
@@ -15,8 +16,9 @@ use obsan_model::{Kind, System};
 /// A fitted drift may change an input's scale by at most this fraction
 /// over the session; a wobble's amplitude, at most this fraction of the
 /// speed; a quadratic term, at most this fraction of the largest reading;
-/// a state-dependent bias, at most this fraction of the output's spread.
-/// Beyond it the "wheel" would lose half its radius: a failed fit.
+/// a state-dependent bias, at most this fraction of the output's spread;
+/// a wheel's slip with its own speed, at most this fraction of its
+/// rotation at its largest measured speed. Beyond it the "wheel" would lose half its radius: a failed fit.
 const HALF: f64 = 0.5;
 
 /// A drift may change an input's scale by at most this fraction over the
@@ -27,7 +29,7 @@ const HALF: f64 = 0.5;
 const DRIFT_MAX: f64 = 0.1;
 
 /// Every new family, in the order: drifts, quadratics, wobbles, biases
-/// with an angle state.
+/// with an angle state, slip with the wheels' own speeds.
 pub(super) fn drafts(
     sys: &System,
     inputs: &[String],
@@ -38,7 +40,71 @@ pub(super) fn drafts(
     d.extend(quadratics(groups, n));
     d.extend(wobbles(sys, inputs, n));
     d.extend(state_biases(sys, groups, n));
+    d.extend(own_speed_slip(sys, inputs, n));
     d
+}
+
+/// Whether the measured inputs are wheel speeds: no state integrates an
+/// input by itself. A state that does (`th' = omega`) makes the inputs a
+/// body's velocities: a travelled distance has no period, a body speed no
+/// wheel slip.
+fn wheel_speeds(sys: &System, inputs: &[String]) -> bool {
+    let squash = |s: &str| s.chars().filter(|c| !c.is_whitespace()).collect::<String>();
+    let integrated: Vec<String> = sys
+        .decls_of(Kind::State)
+        .filter_map(|d| sys.rhs_text(&d.name).map(squash))
+        .collect();
+    !inputs.iter().any(|u| integrated.contains(u))
+}
+
+/// When the inputs are wheel speeds: each wheel loses the fraction
+/// `s_u |u|` of its rotation, `u (1 - s_u |u|)`, one `s_u` per wheel, all
+/// in one candidate. A tyre's slip grows with its own speed: neither a
+/// scale (a constant fraction, absorbed by the radii) nor a coupling with
+/// another wheel's speed has this form, and a candidate for one wheel
+/// alone leaves the other's slip to a stand-in (on varying-speed circles
+/// whose wheels both slip so, `wR (1 + c |wL|)` won by LR 27 and stayed
+/// established beside the file's turn-rate slip). `|u|` as `sqrt(u^2)` in
+/// a derived input, as the couplings. Range: the slip at the largest
+/// measured speed, `|s_u| max|u|`, at most HALF.
+fn own_speed_slip(sys: &System, inputs: &[String], n: &mut Names) -> Vec<Draft> {
+    if inputs.is_empty() || !wheel_speeds(sys, inputs) {
+        return Vec::new();
+    }
+    let s: Vec<String> = inputs.iter().map(|u| n.fresh(&format!("gs_{u}"))).collect();
+    let g: Vec<String> = (inputs.iter())
+        .map(|u| n.fresh(&format!("g_{u}_abs_{u}")))
+        .collect();
+    let mut body = format!("param {}\n", s.join(", "));
+    for (u, g) in inputs.iter().zip(&g) {
+        body += &format!("input {g} = {u}*sqrt({u}^2)\n");
+    }
+    let substs: Vec<String> = (inputs.iter().zip(s.iter().zip(&g)))
+        .map(|(u, (s, g))| format!("{u} = {u} - {s}*{g}"))
+        .collect();
+    body += &format!("subst {}\n", substs.join(", "));
+    let each: Vec<String> = (inputs.iter().zip(&s))
+        .map(|(u, s)| format!("{u}_eff = {u} (1 - {s} |{u}|)"))
+        .collect();
+    let mut d = Draft::plain(
+        n.fresh("own_speed_slip"),
+        body,
+        each.join(", "),
+        (
+            "the wheels slip in proportion to their own speed".into(),
+            "the wheels act larger in proportion to their own speed".into(),
+        ),
+    );
+    for (u, s) in inputs.iter().zip(s) {
+        d.limits.push(Limit {
+            param: s,
+            bound: HALF,
+            per_second: false,
+            columns: Some((vec![u.clone()], Reading::MaxAbs)),
+            what: format!("the slip of {u} at its largest measured speed"),
+        });
+    }
+    vec![d]
 }
 
 /// Per measured input `u`: `u (1 + d t)`, t the session clock (s since the
@@ -76,7 +142,7 @@ fn drifts(inputs: &[String], n: &mut Names) -> Vec<Draft> {
             param: k,
             bound: DRIFT_MAX,
             per_second: true,
-            outputs: None,
+            columns: None,
             what: format!("the change of {u}'s scale over the session"),
         });
         d.estimated_noise_only = true;
@@ -111,7 +177,7 @@ fn quadratics(groups: &[Group], n: &mut Names) -> Vec<Draft> {
             param: c,
             bound: HALF,
             per_second: false,
-            outputs: Some((members.clone(), Reading::MaxAbs)),
+            columns: Some((members.clone(), Reading::MaxAbs)),
             what: format!("the quadratic term's share of the largest {label}"),
         });
         out.push(d);
@@ -133,13 +199,8 @@ fn quadratics(groups: &[Group], n: &mut Names) -> Vec<Draft> {
 /// sensitivity: the screen scores the pair `a cos + b sin` with the state
 /// held, which sees any phase.
 fn wobbles(sys: &System, inputs: &[String], n: &mut Names) -> Vec<Draft> {
-    let squash = |s: &str| s.chars().filter(|c| !c.is_whitespace()).collect::<String>();
-    let integrated: Vec<String> = sys
-        .decls_of(Kind::State)
-        .filter_map(|d| sys.rhs_text(&d.name).map(squash))
-        .collect();
     let mut out = Vec::new();
-    if inputs.iter().any(|u| integrated.contains(u)) {
+    if !wheel_speeds(sys, inputs) {
         return out;
     }
     for u in inputs {
@@ -163,7 +224,7 @@ fn wobbles(sys: &System, inputs: &[String], n: &mut Names) -> Vec<Draft> {
             param: a,
             bound: HALF,
             per_second: false,
-            outputs: None,
+            columns: None,
             what: format!("the periodic share of {u}"),
         });
         out.push(d);
@@ -202,7 +263,7 @@ fn state_biases(sys: &System, groups: &[Group], n: &mut Names) -> Vec<Draft> {
                     param: p,
                     bound: HALF,
                     per_second: false,
-                    outputs: Some((members.clone(), Reading::Spread)),
+                    columns: Some((members.clone(), Reading::Spread)),
                     what: format!("the bias's share of the spread of {label}"),
                 });
             }

@@ -11,7 +11,7 @@ use obsan_data::Dataset;
 /// the session, not per trajectory).
 pub(crate) const SESSION_CLOCK: &str = "session_t";
 
-/// How a limit reads the outputs it names.
+/// How a limit reads the columns it names (outputs, or measured inputs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Reading {
     /// The value is multiplied by the largest measured |y|.
@@ -20,14 +20,15 @@ pub(crate) enum Reading {
     Spread,
 }
 
-/// `|param| x (session span, if per_second) x (the outputs' reading) <=
+/// `|param| x (session span, if per_second) x (the columns' reading) <=
 /// bound`, the product being what `what` says in words.
 #[derive(Clone, Debug)]
 pub(crate) struct Limit {
     pub(crate) param: String,
     pub(crate) bound: f64,
     pub(crate) per_second: bool,
-    pub(crate) outputs: Option<(Vec<String>, Reading)>,
+    /// Outputs, or measured inputs, of the data read as `Reading` says.
+    pub(crate) columns: Option<(Vec<String>, Reading)>,
     pub(crate) what: String,
 }
 
@@ -44,7 +45,7 @@ impl Limit {
         if self.per_second {
             x *= session(data).1;
         }
-        if let Some((ys, r)) = &self.outputs {
+        if let Some((ys, r)) = &self.columns {
             let (max_abs, spread) = readings(data, ys);
             x = match r {
                 Reading::MaxAbs => x * max_abs,
@@ -79,12 +80,14 @@ pub(crate) fn session(data: &Dataset) -> (f64, f64) {
     }
 }
 
-/// The largest |y| and the spread of the measured values of `ys`.
+/// The largest |y| and the spread of the measured values of `ys`, each an
+/// output or else a measured input.
 fn readings(data: &Dataset, ys: &[String]) -> (f64, f64) {
     let (mut lo, mut hi, mut m) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
     for tr in &data.trajectories {
         for y in ys {
-            for v in tr.outputs.column(y).unwrap_or(&[]).iter().flatten() {
+            let col = tr.outputs.column(y).or_else(|| tr.inputs.column(y));
+            for v in col.unwrap_or(&[]).iter().flatten() {
                 lo = lo.min(*v);
                 hi = hi.max(*v);
                 m = m.max(v.abs());

@@ -13,7 +13,8 @@
 //! scale or of an output group's bias, a quadratic in a non-angle output,
 //! a periodic error in an input's integral (an out-of-round wheel), and an
 //! output bias that depends on an angle state (a bearing bias with
-//! heading); each with a physical range its fitted value must respect
+//! heading), and, when the inputs are wheel speeds, each wheel slipping in
+//! proportion to its own speed, `u (1 - s_u |u|)`; each with a physical range its fitted value must respect
 //! (`limits.rs`). A candidate that extends the model exactly as a user
 //! effect does (compared numerically, params matched in order,
 //! `signature.rs`) is left out: the user's file is the first-class source.

@@ -119,6 +119,7 @@ fn new_families_follow_the_structure() {
         "wR_periodic",
         "wL_periodic",
         "beta_bias_with_gamma",
+        "own_speed_slip",
     ] {
         assert!(n.contains(&new), "{new} missing: {n:?}");
     }
@@ -138,6 +139,7 @@ fn new_families_follow_the_structure() {
         "omega_periodic",
         "b_quadratic",
         "r_bias_with_x",
+        "own_speed_slip",
     ] {
         assert!(!n.contains(&absent), "{absent} generated: {n:?}");
     }
@@ -148,6 +150,37 @@ fn new_families_follow_the_structure() {
         .unwrap();
     assert_eq!(q.effect.outputs.len(), 15);
     assert_eq!(q.limits.len(), 1);
+}
+
+#[test]
+fn own_speed_slip_scales_each_wheel_by_its_own_speed() {
+    let sys = System::parse(&read("systems/calib.sys"), "calib.sys").unwrap();
+    let g = generate(&sys, &[]);
+    let c = g
+        .candidates
+        .iter()
+        .find(|c| c.effect.name == "own_speed_slip")
+        .unwrap();
+    assert_eq!(c.effect.params, ["gs_wR", "gs_wL"]);
+    // The same extension written by hand, wR (1 - a |wR|), wL (1 - b |wL|)
+    // with |u| as sqrt(u^2), is recognised as it: the signature compares the extended model's
+    // right-hand sides numerically, params matched in order.
+    let hand = EffectLibrary::parse(
+        "effect hand\nparam a, b\ninput hR = sqrt(wR^2)*wR\ninput hL = sqrt(wL^2)*wL\n\
+         subst wR = wR - a*hR, wL = wL - b*hL\n",
+        "hand.eff",
+    )
+    .unwrap();
+    let user: Vec<&Effect> = hand.effects.iter().collect();
+    let g2 = generate(&sys, &user);
+    assert!(
+        g2.dropped
+            .iter()
+            .any(|d| d.0 == "own_speed_slip" && d.1.contains("effects file")),
+        "{:?}",
+        g2.dropped
+    );
+    assert_eq!(c.limits.len(), 2);
 }
 
 #[test]
@@ -184,7 +217,7 @@ fn limits_read_the_session_and_the_outputs() {
         param: "d".into(),
         bound: 0.5,
         per_second: true,
-        outputs: None,
+        columns: None,
         what: "the change".into(),
     };
     let est = |v: f64| vec![("d".to_string(), v, 0.001)];
@@ -193,16 +226,24 @@ fn limits_read_the_session_and_the_outputs() {
     // Readings 2..3: a quadratic c = 0.2 is 0.6 of the largest (refused),
     // c = 0.1 is 0.3 (kept); a bias 0.4 is 0.4 of the spread 1 (kept).
     let quad = Limit {
-        outputs: Some((vec!["y".into()], Reading::MaxAbs)),
+        columns: Some((vec!["y".into()], Reading::MaxAbs)),
         per_second: false,
         ..drift.clone()
     };
     assert!(quad.violated(&est(0.2), &data).is_some());
     assert!(quad.violated(&est(0.1), &data).is_none());
     let bias = Limit {
-        outputs: Some((vec!["y".into()], Reading::Spread)),
+        columns: Some((vec!["y".into()], Reading::Spread)),
         ..quad.clone()
     };
     assert!(bias.violated(&est(0.4), &data).is_none());
     assert!(bias.violated(&est(f64::NAN), &data).is_some());
+    // A measured input is read when no output has the name: u = 1
+    // throughout, so a slip s = 0.6 is 0.6 of it (refused), 0.4 kept.
+    let slip = Limit {
+        columns: Some((vec!["u".into()], Reading::MaxAbs)),
+        ..quad.clone()
+    };
+    assert!(slip.violated(&est(0.6), &data).is_some());
+    assert!(slip.violated(&est(-0.4), &data).is_none());
 }
