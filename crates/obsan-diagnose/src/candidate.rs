@@ -361,7 +361,7 @@ fn score(
     // three trajectories the robust sd has two degrees of freedom and
     // can be 10 times too small, so neither alone is the evidence. A
     // candidate whose LR clears its critical value but not this is
-    // suggested, not established (issue 37.4).
+    // suggested, not established.
     res.wald_z = wald_z(&res.estimates, &res.robust_sd);
     let wald_ok = wald_z_crit.is_none_or(|z| res.wald_z > z);
     let by_lr = res.lr > crit && res.delta_bic < 0.0;
@@ -481,7 +481,7 @@ fn time_params(e: &Effect) -> Vec<&str> {
 
 /// A time param estimated beyond the longest trajectory is a failed fit
 /// (a 129 s lag on 60 s windows, a 10^4 s lag on a 715 s circle from a
-/// nominal fit that stopped short), never a finding (issue 37.0).
+/// nominal fit that stopped short), never a finding.
 fn out_of_range(e: &Effect, f: &ModelFit, data: &Dataset) -> Result<(), DiagnoseError> {
     let longest = data
         .trajectories

@@ -478,7 +478,7 @@ pub fn fit_model(
 /// the start on some trajectory), a continuation replaces the start: fits on
 /// each trajectory's first eighth, quarter and half of its outputs, each
 /// from the last, then the whole data. A start from which a trajectory
-/// diverges is never the answer (issue 37.1). The note says what was done.
+/// diverges is never the answer. The note says what was done.
 pub(crate) fn first_fit(
     sys: &System,
     prepared: &Dataset,

@@ -126,7 +126,7 @@ pub fn analyse(series: &[ResidualSeries], n_fitted: usize) -> ResidualReport {
     let dof = (n as f64 - n_fitted as f64).max(1.0);
     // The level test is two-sided: residuals far below the stated level
     // are a finding too (the stated sigma is too large, or named effects
-    // absorb noise), never "consistent with noise" (issue 37.3).
+    // absorb noise), never "consistent with noise".
     let z_level = (chi2 - dof) / (2.0 * dof).sqrt();
     let mut tests = vec![Structure {
         test: "chi2".into(),

@@ -407,7 +407,7 @@ fn integrable<'a>(
                     .collect();
                 // The whole trajectory, not its first rows: a DET + LS start
                 // whose q = 0 circle diverges at t = 31 s was the fit's
-                // first point, and diagnose stopped there (issue 37.1).
+                // first point, and diagnose stopped there.
                 if let Err(e) = rows(&p, t, &x0, usize::MAX) {
                     return Err(format!("trajectory '{}': {e}", t.name));
                 }

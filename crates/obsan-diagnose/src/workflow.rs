@@ -118,7 +118,7 @@ pub fn diagnose(
         ..
     } = rounds;
     // What the last round found above its critical value but not by its
-    // Wald z: suggested, not established (issue 37.4).
+    // Wald z: suggested, not established (docs/diagnose.md, "Never confidently wrong").
     let suggested: Vec<CandidateResult> = rounds
         .last()
         .map(|r| r.iter().filter(|c| c.suggested).cloned().collect())
@@ -441,7 +441,7 @@ impl<'a> Rounds<'a> {
         // couplings were named).
         let round_data = prepare(&self.current_sys, self.data)?;
         let mut results = self.weigh(round, &remaining, &round_data);
-        // An LR is only meaningful against a converged fit (issue 37.0):
+        // An LR is only meaningful against a converged fit:
         // where a candidate's point, its params at 0, fits better than the
         // current fit, the current fit had stopped short; it is refitted and
         // the round weighed again.
@@ -593,7 +593,7 @@ impl<'a> Rounds<'a> {
                 None => (lim.crit, self.lib.map_or("effects", |l| l.origin.as_str())),
             };
             // Every candidate's Wald z at its side's one-degree critical
-            // value (issue 37.4: the same rule for file and generated).
+            // value: the same rule for file and generated candidates.
             let wald = Some(if g.is_some() { lim.crit_gen } else { lim.crit }.sqrt());
             let (mut r, mut x) = obsan_expr::with_cancel(cancel.clone(), || {
                 let levels = Noise {
