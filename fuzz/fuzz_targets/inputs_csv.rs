@@ -20,11 +20,21 @@ fuzz_target!(|data: &[u8]| {
                 assert_eq!(r.len(), t.names.len());
                 assert!(r.iter().all(|v| v.is_finite()));
             }
-            // Every piece is found without a panic.
-            let (a, b) = (t.t[0], t.t[t.t.len() - 1]);
-            if a < b {
-                let piece = t.piece(a + (b - a) / 2.0, b);
-                assert_eq!(piece.len(), t.names.len());
+            // Every piece is found without a panic, asked as the integrator
+            // asks (an interval inside one piece: it stops at every row time),
+            // and gives the rows' values at its ends.
+            for (i, w) in t.t.windows(2).enumerate() {
+                if w[0] < w[1] {
+                    let mid = w[0] + (w[1] - w[0]) / 2.0;
+                    let piece = t.piece(mid, w[1]);
+                    assert_eq!(piece.len(), t.names.len());
+                    for (k, &(v, slope)) in piece.iter().enumerate() {
+                        let (a, b) = (t.rows[i][k], t.rows[i + 1][k]);
+                        let end = v + slope * (w[1] - mid);
+                        let tol = 1e-9 * (1.0 + a.abs().max(b.abs()));
+                        assert!((end - b).abs() <= tol || !end.is_finite(), "{end} vs {b}");
+                    }
+                }
             }
         }
         Err(e) => {
