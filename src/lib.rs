@@ -42,6 +42,7 @@ pub mod json;
 mod modes_cmd;
 mod montecarlo_cmd;
 mod progress;
+mod reduced_text;
 mod show;
 mod sim_drive;
 mod simulate;

@@ -322,28 +322,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             } else {
                 m.text.clone()
             };
-            o.push_str(&format!(
-                "  {} = {}    ({}; {})\n",
-                m.name,
-                e,
-                m.kind.word(),
-                m.domain
-            ));
+            crate::reduced_text::push_mode(&mut o, m, &e);
         }
-        o.push_str("reduced system:\n");
-        for k in 0..d.modes.len() {
-            o.push_str(&format!(
-                "  {}' = {}\n",
-                d.modes[k].name,
-                d.dynamics(k).unwrap_or_else(|| "(not found)".into())
-            ));
-        }
-        for (name, e) in &d.outputs {
-            o.push_str(&format!(
-                "  {name} = {}\n",
-                e.as_deref().unwrap_or("(not found)")
-            ));
-        }
+        crate::reduced_text::push_reduced(&mut o, &d);
         o.push_str(&format!("certificate: {certificate}\n"));
         if let Some(p) = &a.out_prefix {
             if dec.is_some() {

@@ -724,27 +724,9 @@ fn ui_modes_text(
                 if k == 1 { "" } else { "s" }
             ));
             for (e, md) in exprs.iter().zip(&d.modes) {
-                o.push_str(&format!(
-                    "  {} = {e}    ({}; {})\n",
-                    md.name,
-                    md.kind.word(),
-                    md.domain
-                ));
+                crate::reduced_text::push_mode(&mut o, md, e);
             }
-            o.push_str("reduced system:\n");
-            for k in 0..d.modes.len() {
-                o.push_str(&format!(
-                    "  {}' = {}\n",
-                    d.modes[k].name,
-                    d.dynamics(k).unwrap_or_else(|| "(not found)".into())
-                ));
-            }
-            for (name, e) in &d.outputs {
-                o.push_str(&format!(
-                    "  {name} = {}\n",
-                    e.as_deref().unwrap_or("(not found)")
-                ));
-            }
+            crate::reduced_text::push_reduced(&mut o, d);
         }
     }
     if inputs.is_empty() {
