@@ -3,7 +3,7 @@
 //! schema the binary prints; its `--help` (or doc page) names exactly the schema's keys;
 //! docs/json.md is `obsan schema --markdown`; every command is listed, typed or not.
 
-use crate::util::{bad, fresh_dir, ok, subcommands, temp_file};
+use crate::util::{bad, brace_items, fresh_dir, ok, subcommands, temp_file};
 use obsan_cli::json;
 use serde::de::DeserializeOwned;
 use serde_json::Value;
@@ -130,35 +130,7 @@ fn keys_after(text: &str, marker: &str) -> Vec<String> {
     // The group starts at the first brace of the marker or after it.
     let text = &text[from..];
     let text = &text[text.find('{').expect("a brace group")..];
-    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
-    for ch in text.chars() {
-        match ch {
-            '{' | '(' | '[' => depth += 1,
-            '}' | ')' | ']' => depth -= 1,
-            _ => {}
-        }
-        if depth == 0 {
-            items.push(std::mem::take(&mut item));
-            break;
-        }
-        if depth == 1 && ch == ',' {
-            items.push(std::mem::take(&mut item));
-        } else if depth >= 1 && !(depth == 1 && ch == '{') {
-            item.push(ch);
-        }
-    }
-    let mut keys: Vec<String> = items
-        .iter()
-        .filter_map(|i| {
-            let w: String = i
-                .trim()
-                .trim_start_matches('`')
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect();
-            (!w.is_empty()).then_some(w)
-        })
-        .collect();
+    let mut keys = brace_items(text);
     keys.sort();
     keys
 }

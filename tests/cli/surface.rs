@@ -3,7 +3,7 @@
 //! examples and says what --json prints; `import` prints progress lines when
 //! stderr is not a terminal (montecarlo's and diagnose's: montecarlo.rs).
 
-use crate::util::{ok, subcommands};
+use crate::util::{brace_items, ok, subcommands};
 use std::process::Command;
 
 #[test]
@@ -90,35 +90,7 @@ fn import_prints_progress_lines_when_stderr_is_not_a_terminal() {
 /// The top-level keys a `--json prints {...}` sentence names: the items at depth 0 of its first
 /// brace group, each item's first identifier ("basis (Lie words ...)" -> "basis").
 fn promised_keys(help: &str) -> Vec<String> {
-    let text = &help[help.find("--json prints {").expect("no --json sentence") + 14..];
-    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
-    for ch in text.chars() {
-        match ch {
-            '{' | '(' | '[' => depth += 1,
-            '}' | ')' | ']' => depth -= 1,
-            _ => {}
-        }
-        if depth == 0 {
-            items.push(std::mem::take(&mut item));
-            break;
-        }
-        if depth == 1 && ch == ',' {
-            items.push(std::mem::take(&mut item));
-        } else if depth >= 1 && !(depth == 1 && ch == '{') {
-            item.push(ch);
-        }
-    }
-    items
-        .iter()
-        .filter_map(|i| {
-            let w: String = i
-                .trim()
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect();
-            (!w.is_empty()).then_some(w)
-        })
-        .collect()
+    brace_items(&help[help.find("--json prints {").expect("no --json sentence") + 14..])
 }
 
 /// A user reads `--help` to find a JSON field; every top-level key the help names

@@ -460,41 +460,11 @@ fn modes_of_the_unicycle_with_unknown_speed_one_landmark() {
     let at = help
         .find("unknown inputs --json prints {")
         .expect("no unknown-input sentence");
-    let mut promised = top_level_items(&help[at + "unknown inputs --json prints ".len()..]);
+    let mut promised = brace_items(&help[at + "unknown inputs --json prints ".len()..]);
     promised.sort();
     let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
     got.sort();
     assert_eq!(promised, got);
-}
-
-/// The first identifiers of the depth-1 items of the brace group `text` starts with.
-fn top_level_items(text: &str) -> Vec<String> {
-    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
-    for ch in text.chars() {
-        match ch {
-            '{' | '(' | '[' => depth += 1,
-            '}' | ')' | ']' => depth -= 1,
-            _ => {}
-        }
-        if depth == 0 {
-            items.push(std::mem::take(&mut item));
-            break;
-        }
-        if depth == 1 && ch == ',' {
-            items.push(std::mem::take(&mut item));
-        } else if depth >= 1 && !(depth == 1 && ch == '{') {
-            item.push(ch);
-        }
-    }
-    items
-        .iter()
-        .map(|i| {
-            i.trim()
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect()
-        })
-        .collect()
 }
 
 #[test]

@@ -113,3 +113,38 @@ pub fn subcommands(help: &str) -> Vec<String> {
         .map(str::to_string)
         .collect()
 }
+
+/// The first identifiers of the depth-1 items of the brace group `text`
+/// starts at ("basis (Lie words ...)" -> "basis"; backticks and empty items
+/// skipped): the keys a help text's `--json prints {...}` sentence names.
+pub fn brace_items(text: &str) -> Vec<String> {
+    let (mut depth, mut item, mut items) = (0i32, String::new(), Vec::new());
+    for ch in text.chars() {
+        match ch {
+            '{' | '(' | '[' => depth += 1,
+            '}' | ')' | ']' => depth -= 1,
+            _ => {}
+        }
+        if depth == 0 {
+            items.push(std::mem::take(&mut item));
+            break;
+        }
+        if depth == 1 && ch == ',' {
+            items.push(std::mem::take(&mut item));
+        } else if depth >= 1 && !(depth == 1 && ch == '{') {
+            item.push(ch);
+        }
+    }
+    items
+        .iter()
+        .filter_map(|i| {
+            let w: String = i
+                .trim()
+                .trim_start_matches('`')
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            (!w.is_empty()).then_some(w)
+        })
+        .collect()
+}
