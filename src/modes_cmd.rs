@@ -140,20 +140,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         ..DeriveOptions::default()
     };
     let d = derive_modes(&mut nf, &r, &sym, &opts).map_err(|e| Failure(e.to_string()))?;
-    let sets: Vec<(String, String)> = a
-        .sys
-        .set
-        .iter()
-        .filter_map(|s| {
-            s.split_once('=')
-                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-        })
-        .collect();
-    // The decomposition names the system by an absolute path, so it reads
-    // from wherever it is written.
-    let sys_path = std::fs::canonicalize(&a.sys.system)
-        .map(|p| p.to_string_lossy().to_string())
-        .unwrap_or_else(|_| a.sys.system.clone());
+    let (sys_path, sets) = crate::reduced_text::dec_source(&a.sys);
     let dec = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
     let sys_text = d.sys_text(&nf.name, &format!("observable modes of {title}"));
     let checks = match &dec {

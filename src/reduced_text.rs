@@ -31,3 +31,21 @@ pub(crate) fn push_reduced(o: &mut String, d: &Derivation) {
         ));
     }
 }
+
+/// What a written decomposition names: the system by its absolute path (so
+/// the `.dec` reads from wherever it is written) and the `--set` values as
+/// given.
+pub(crate) fn dec_source(sys: &crate::cli::SystemArgs) -> (String, Vec<(String, String)>) {
+    let sets = sys
+        .set
+        .iter()
+        .filter_map(|s| {
+            s.split_once('=')
+                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        })
+        .collect();
+    let path = std::fs::canonicalize(&sys.system)
+        .map(|p| p.to_string_lossy().to_string())
+        .unwrap_or_else(|_| sys.system.clone());
+    (path, sets)
+}

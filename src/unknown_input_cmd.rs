@@ -467,18 +467,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     let (rank, n, bound) = (r.rank, r.n, r.error_bound);
     let nsym = m.symmetries.vectors.len();
     let view = &mut m.view;
-    let sets: Vec<(String, String)> = a
-        .sys
-        .set
-        .iter()
-        .filter_map(|s| {
-            s.split_once('=')
-                .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
-        })
-        .collect();
-    let sys_path = std::fs::canonicalize(&a.sys.system)
-        .map(|p| p.to_string_lossy().to_string())
-        .unwrap_or_else(|_| a.sys.system.clone());
+    let (sys_path, sets) = crate::reduced_text::dec_source(&a.sys);
     let title = match &nf.restriction {
         Some(q) => format!("{} (input {q})", nf.name),
         None => nf.name.clone(),
