@@ -46,7 +46,10 @@ seed() {
       # A dataset's files framed as the target reads them (see fuzz_targets/dataset.rs).
       [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true
       ;;
-    dec) cp systems/*.dec "$dir/" 2>/dev/null || true ;;
+    dec)
+      cp systems/*.dec "$dir/" 2>/dev/null || true
+      [ -d fuzz/seeds/dec ] && cp fuzz/seeds/dec/* "$dir/" 2>/dev/null || true
+      ;;
     mrclam | mcpart | inputs_csv)
       # Framed seeds (see fuzz_targets/$t.rs).
       [ -d "fuzz/seeds/$t" ] && cp "fuzz/seeds/$t"/* "$dir/" 2>/dev/null || true

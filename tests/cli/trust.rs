@@ -1026,6 +1026,23 @@ fn number_too_large_is_located() {
     );
     let e = bad(&["verify", &dec], "number too large");
     assert!(e.contains("tower.dec:6:"), "{e}");
+    // A number to a half-integer power, and a number raised with a variable
+    // (the fuzzer's `.dec` constant of 440 digits `^700007.5` ran for minutes):
+    // c = 81.0...02 with 300 zeros has about 2,000 bits, so c^7007.5 and
+    // (c x)^7007 have millions. `sin^2 + cos^2 - 1` keeps the term until
+    // the canonical form (a plain `0 *` or `D - D` is dropped when the graph is built).
+    let c = format!("81.{}2", "0".repeat(300));
+    for power in [format!("{c}^7007.5"), format!("({c}*D)^7007")] {
+        let dec = temp_file(
+            "half.dec",
+            &format!(
+                "system {root}/systems/localization.sys\nlet theta = thetaR - phiR\nstate D, theta\n\
+                 D' = v*cos(theta) + (sin(theta)^2 + cos(theta)^2 - 1)*{power}\ntheta' = omega - v*sin(theta)/D\noutput y = D\n"
+            ),
+        );
+        let e = bad(&["verify", &dec], "number too large");
+        assert!(e.contains("half.dec:4:"), "{power}: {e}");
+    }
 }
 
 /// localization.sys (Martinelli 2011, eq. 3: rank 2, symmetry [0, 1, 1],

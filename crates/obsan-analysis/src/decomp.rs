@@ -439,7 +439,10 @@ fn dynamics_check(
         let field = nf.fields[i].clone();
         let actual = nf.ctx.lie_derivative(new.g[k], &state_vars, &field);
         let diff = nf.ctx.sub(actual, ci);
-        let r = nf.ctx.canon(diff);
+        let r = nf
+            .ctx
+            .try_canon(diff)
+            .map_err(|l| d.at(*at, l.to_string()))?;
         if !r.is_zero() {
             residual_text.push(format!(
                 "coefficient of {}: L_f{} {s} - claimed = {}",
@@ -453,7 +456,12 @@ fn dynamics_check(
     let f0 = nf.f0.clone();
     let drift = nf.ctx.lie_derivative(new.g[k], &state_vars, &f0);
     let diff = nf.ctx.sub(drift, claim_rest);
-    let r = nf.ctx.canon(diff);
+    // Budgeted here, so that a limit names this line (an unbudgeted form
+    // would leave it to be reported at the next budgeted step's line).
+    let r = nf
+        .ctx
+        .try_canon(diff)
+        .map_err(|l| d.at(*at, l.to_string()))?;
     if !r.is_zero() {
         residual_text.push(format!(
             "drift: L_f0 {s} - claimed = {}",
@@ -485,7 +493,10 @@ fn output_check(
     };
     let claim = new.claim(nf, d, ast, at)?;
     let diff = nf.ctx.sub(h, claim);
-    let c = nf.ctx.canon(diff);
+    let c = nf
+        .ctx
+        .try_canon(diff)
+        .map_err(|l| d.at(at, l.to_string()))?;
     let state_vars = nf.state_vars.clone();
     let mut bad = Vec::new();
     let mut residuals = Vec::new();

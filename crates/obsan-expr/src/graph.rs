@@ -463,12 +463,11 @@ impl Arena {
     /// exponent beyond `i32` outside a budgeted scope, where both are errors.
     pub fn pow(&mut self, b: Id, e: i64) -> Id {
         if let Node::Num(q) = self.node(b) {
-            // The value has about bits * |e| bits: refuse what cannot be stored sensibly.
-            let bits = (q.num().bit_len() + q.den().bit_len()) as u128;
-            let trivial = q.is_zero() || q.is_one() || q.neg().is_one();
-            if !trivial && bits * e.unsigned_abs() as u128 > NUM_BITS_MAX {
+            // Refuse a value over the number size before computing it.
+            let bits = power_bits(q, e.unsigned_abs() as u128);
+            if bits > NUM_BITS_MAX {
                 budget::trip(Limit::Number {
-                    bits: bits * e.unsigned_abs() as u128,
+                    bits,
                     max: NUM_BITS_MAX,
                 });
                 return b;
@@ -498,6 +497,18 @@ impl Arena {
         let ib = self.pow(b, -1);
         self.mul(&[a, ib])
     }
+}
+
+/// A lower bound on the bits of `q^e` (numerator and denominator together):
+/// `|p| >= 2^(bits(p) - 1)`, so `p^e` has at least `e (bits(p) - 1) + 1` bits.
+/// Being a lower bound, refusing above the limit never refuses a number that fits.
+pub(crate) fn power_bits(q: &Q, e: u128) -> u128 {
+    let above_one = |n: usize| (n as u128).saturating_sub(1);
+    let bits = above_one(q.num().bit_len()) + above_one(q.den().bit_len());
+    if bits == 0 {
+        return 1;
+    }
+    bits.saturating_mul(e).saturating_add(1)
 }
 
 impl Arena {

@@ -14,7 +14,7 @@
 
 use crate::budget;
 use crate::gauss;
-use crate::graph::{Angle, Id, LeafKind};
+use crate::graph::{power_bits, Angle, Id, LeafKind, Node};
 use crate::memo::Ctx;
 use crate::num::{int, int_exact_sqrt, trial_factor, Int, Q};
 use crate::poly::{Mono, Poly, Var};
@@ -684,7 +684,6 @@ impl Ctx {
         };
         // b^n, or sqrt(b)^n for a half-integer n/2.
         if q.is_integer() || q.den() == &int(2) {
-            let r = if q.is_integer() { b } else { self.sqrt(b)? };
             let e = i64::try_from(q.num())
                 .ok()
                 .filter(|e| e.abs() <= budget::POW_MAX);
@@ -694,6 +693,23 @@ impl Ctx {
             if zero && e < 0 {
                 return err("division by zero: 0 raised to a negative power");
             }
+            if q.is_integer() {
+                return Ok(self.pow(b, e));
+            }
+            // A number to a half-integer power is raised after its square root,
+            // where the graph's check on a number's power no longer sees a bare
+            // number: check the value's size (`e / 2` times the number's) here.
+            if let Node::Num(n) = self.node(b) {
+                let size = power_bits(n, e.unsigned_abs() as u128) / 2;
+                if size > budget::NUM_BITS_MAX {
+                    return Err(budget::Limit::Number {
+                        bits: size,
+                        max: budget::NUM_BITS_MAX,
+                    }
+                    .into());
+                }
+            }
+            let r = self.sqrt(b)?;
             return Ok(self.pow(r, e));
         }
         err(format!(

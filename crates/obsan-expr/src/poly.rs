@@ -9,6 +9,7 @@
 
 use crate::budget::{self, invariant};
 use crate::num::{int, int_div_exact, int_gcd, Fp, Int};
+use dashu_int::ops::BitTest;
 use dashu_int::Sign;
 use rustc_hash::FxHashMap as HashMap;
 use smallvec::SmallVec;
@@ -455,11 +456,37 @@ impl Poly {
     pub fn scale(&self, c: &Int) -> Poly {
         self.mul_term(&Mono::one(), c)
     }
+    /// Whether `self^k`'s numbers fit the engine's number size; trips
+    /// `Limit::Number` when not. The leading and trailing terms of `self^k` are
+    /// those of `self` to the k-th power, with nothing to cancel them, so the
+    /// result holds `lc^k` exactly: at least `k (bits - 1) + 1` bits. An exact
+    /// lower bound, so nothing that fits is refused.
+    pub(crate) fn power_fits(&self, k: u64) -> bool {
+        let bits = [self.terms.first(), self.terms.last()]
+            .into_iter()
+            .flatten()
+            .map(|(_, c)| c.bit_len() as u128)
+            .max()
+            .unwrap_or(0);
+        let least = bits.saturating_sub(1).saturating_mul(k as u128) + 1;
+        if bits > 1 && least > budget::NUM_BITS_MAX {
+            budget::trip(budget::Limit::Number {
+                bits: least,
+                max: budget::NUM_BITS_MAX,
+            });
+            return false;
+        }
+        true
+    }
+
     pub fn pow(&self, e: u32) -> Poly {
         if e > 1 {
             let top = self.max_exponent() as u64 * e as u64;
             if top > budget::max_degree() as u64 {
                 budget::check_degree(top);
+                return Poly::zero();
+            }
+            if !self.power_fits(e as u64) {
                 return Poly::zero();
             }
         }

@@ -446,6 +446,66 @@ fn huge_rational_powers_are_refused_at_once() {
     );
 }
 
+/// The number of bits a "number too large" message states.
+fn stated_bits(message: &str) -> u128 {
+    message
+        .split("about ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|b| b.parse().ok())
+        .unwrap_or_else(|| panic!("no size in {message:?}"))
+}
+
+#[test]
+fn every_power_of_a_number_is_held_to_the_number_size() {
+    // Found by the fuzzer (a `.dec` constant of 440 digits to the power
+    // 700007.5): two routes raised a number past NUM_BITS_MAX unchecked and
+    // ran for minutes, stopped only by the print limit. c = 81.0...02 with 300
+    // zeros is 8100...02 / 10^301, whose numerator and denominator have
+    // 1004 and 1000 bits (log2 10^302 = 1003.2; log2 10^301 = 999.9).
+    let c = format!("81.{}2", "0".repeat(300));
+    let max = obsan_expr::limits::NUM_BITS_MAX;
+    // A half-integer power: the number's square root, then a power of it.
+    // c^7007.5 has about 7007.5 * 2004 = 14 million bits.
+    for src in [
+        format!("{c}^7007.5"),
+        // A coefficient raised in the canonical form: (c x)^7007 holds c^7007.
+        format!("({c}*x)^7007"),
+        // The same under a square root: sqrt(c x)^7007 holds c^3503.
+        format!("sqrt({c}*x)^7007"),
+        format!("(x + {c})^7007"),
+    ] {
+        let mut ctx = Ctx::new();
+        let e = match ctx.parse(&src) {
+            Err(e) => e.message,
+            Ok(id) => ctx.try_canon(id).expect_err(&src).to_string(),
+        };
+        assert!(e.contains("number too large"), "{src}: {e}");
+        let bits = stated_bits(&e);
+        assert!(bits > max && bits < 20_000_000, "{src}: {e}");
+    }
+    // The bound is a lower bound, so what fits is kept, exactly at the edge:
+    // 2^65535 has 65,536 bits (the limit), 2^65536 one more; 2^30000.5 is
+    // 2^30000 sqrt(2), 30,001 bits and a root.
+    let mut ctx = Ctx::new();
+    let id = ctx.parse("2^65535").unwrap();
+    let r = ctx.try_canon(id).unwrap();
+    let two = Q::from_i64(2);
+    assert_eq!(r.as_q(), two.powi(65535));
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("2^65536").unwrap_err();
+    assert_eq!(stated_bits(&e.message), max + 1, "{}", e.message);
+    let mut ctx = Ctx::new();
+    let id = ctx.parse("2^30000.5").unwrap();
+    let sq = ctx.parse("2^30000*sqrt(2)").unwrap();
+    let (a, b) = (ctx.try_canon(id).unwrap(), ctx.try_canon(sq).unwrap());
+    assert_eq!(a, b);
+    // (3x + 1)^2000: leading coefficient 3^2000 (3,170 bits), well inside.
+    let mut ctx = Ctx::new();
+    let id = ctx.parse("(3*x + 1)^2000").unwrap();
+    assert!(ctx.try_canon(id).is_ok());
+}
+
 #[test]
 fn building_a_long_printed_form_polls_the_deadline() {
     // Fuzz timeout-5952913f: this 77-character input prints as 19.7 MB (the
