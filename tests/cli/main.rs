@@ -13,6 +13,7 @@ mod import;
 mod json_schema;
 mod modes;
 mod modes_closure;
+mod sbml_piecewise;
 mod montecarlo;
 mod show;
 mod simulate;
