@@ -46,15 +46,21 @@ models, obsan, tmp = sys.argv[1], sys.argv[2], sys.argv[3]
 files = sorted(os.path.join(d, f) for d, _, fs in os.walk(models) for f in fs if f.endswith(".xml"))
 if not files:
     sys.exit(f"no *.xml under {models}")
+# A run over LIMIT seconds is stopped and counted apart (neither imported nor refused).
+LIMIT = 20
 imported, fast, slow, refused, bugs, times = 0, 0, [], collections.Counter(), [], []
+timed_out = []
 examples = {}
 tfile = os.path.join(tmp, "time")
 for f in files:
-    r = subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", tfile, obsan, "import", "sbml", f],
-                       capture_output=True, text=True, errors="replace")
+    r = subprocess.run(["/usr/bin/time", "-f", "%e %M", "-o", tfile, "timeout", str(LIMIT), obsan,
+                        "import", "sbml", f], capture_output=True, text=True, errors="replace")
     secs, kb = open(tfile).read().split()[-2:]
     secs = float(secs)
     times.append(secs)
+    if r.returncode == 124:
+        timed_out.append(os.path.basename(f))
+        continue
     if r.returncode == 0:
         imported += 1
         if secs < 1.0:
@@ -77,7 +83,9 @@ times.sort()
 n = len(files)
 print(f"models {n}, imported {imported} (under 1 s: {fast}), refused with a located error "
       f"{sum(refused.values())}, panics or unlocated errors {len(bugs)}")
-print(f"wall time per import: median {times[n // 2]:.2f} s, slowest {times[-1]:.2f} s")
+print(f"stopped after {LIMIT} s: {len(timed_out)} {' '.join(timed_out)}")
+print(f"wall time per import: median {times[n // 2]:.2f} s, slowest finished "
+      f"{max([t for t in times if t < LIMIT] or [0]):.2f} s")
 for s, f in sorted(slow, reverse=True):
     print(f"  imported in {s:.2f} s: {f}")
 for b in bugs:

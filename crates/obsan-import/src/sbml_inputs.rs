@@ -322,7 +322,7 @@ fn holds(c: &Ex, tc: f64, vals: &BTreeMap<String, f64>) -> Result<bool, ImportEr
         "and" => all(&|b| b.iter().all(|x| *x)),
         "or" => all(&|b| b.iter().any(|x| *x)),
         "xor" => all(&|b| b.iter().filter(|x| **x).count() % 2 == 1),
-        "not" => all(&|b| !b.iter().all(|x| *x)),
+        "not" => all(&|b| !b.first().copied().unwrap_or(false)),
         rel => {
             let [a, b] = args.as_slice() else {
                 return Ok(false);

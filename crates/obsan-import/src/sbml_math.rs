@@ -352,7 +352,8 @@ fn condition(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
                 .iter()
                 .map(|c| condition(cx, *c, depth + 1))
                 .collect::<Result<_, _>>()?;
-            if (opname == "not" && a.len() != 1) || a.is_empty() {
+            // An empty <and/> is true, an empty <or/> or <xor/> false (MathML's n-ary forms).
+            if opname == "not" && a.len() != 1 {
                 return Err(cx.err(op, format!("<{opname}> with {} argument(s)", a.len())));
             }
             Ok(Ex::Call(opname.into(), a))
