@@ -5,8 +5,7 @@
 use crate::simulate::{close, simulate_json};
 use crate::util::{bad, fresh_dir, obsan, ok, temp_file};
 
-const TIME: &str =
-    r#"<csymbol encoding="text" definitionURL="http://www.sbml.org/sbml/symbols/time">time</csymbol>"#;
+const TIME: &str = r#"<csymbol encoding="text" definitionURL="http://www.sbml.org/sbml/symbols/time">time</csymbol>"#;
 
 /// A model `x' = k * dose` (x in a compartment of size 1, x(0) = 1) with `dose` given by
 /// the MathML `dose_math` as an assignment rule, and a kinetic law `law`.
@@ -78,8 +77,17 @@ fn a_dose_switched_on_is_an_input_with_its_exact_step_and_simulates_to_the_close
     assert!(r.stdout.contains("x' = k*u_dose/1\n"), "{}", r.stdout);
     assert!(r.stderr.contains("the known input u_dose"), "{}", r.stderr);
     ok(&[
-        "import", "sbml", &src, "--out", &sys, "--values", &vals, "--inputs-out", &inp,
-        "--until", "10",
+        "import",
+        "sbml",
+        &src,
+        "--out",
+        &sys,
+        "--values",
+        &vals,
+        "--inputs-out",
+        &inp,
+        "--until",
+        "10",
     ]);
     // The step at ton = 4.3 exactly: 0 before, D = 2 after, constant in between.
     assert_eq!(
@@ -119,8 +127,17 @@ fn a_ramp_in_a_window_of_a_kinetic_law_is_written_exactly_and_integrates_to_its_
         format!("{dir}/m.csv"),
     );
     ok(&[
-        "import", "sbml", &src, "--out", &sys, "--values", &vals, "--inputs-out", &inp,
-        "--until", "9",
+        "import",
+        "sbml",
+        &src,
+        "--out",
+        &sys,
+        "--values",
+        &vals,
+        "--inputs-out",
+        &inp,
+        "--until",
+        "9",
     ]);
     let text = std::fs::read_to_string(&inp).unwrap();
     // 0 up to 2 (continuous there: one row), the ramp to k 4 = 2 at 6, the step down, 0 to 9.
@@ -170,7 +187,9 @@ fn piecewise_refusals_are_located() {
         "not affine in time",
     );
     // No piece holds and no <otherwise>.
-    let none = format!("<piecewise><piece><ci>D</ci><apply><gt/>{TIME}<cn>1</cn></apply></piece></piecewise>");
+    let none = format!(
+        "<piecewise><piece><ci>D</ci><apply><gt/>{TIME}<cn>1</cn></apply></piece></piecewise>"
+    );
     let src = temp_file("pw-none.xml", &model(&none, K_DOSE));
     bad(
         &["import", "sbml", &src, "--inputs-out", &inp, "--until", "5"],

@@ -360,7 +360,9 @@ fn condition(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
         }
         other => Err(cx.err(
             op,
-            format!("<{other}> is not a condition (relations lt gt leq geq eq neq, and or xor not)"),
+            format!(
+                "<{other}> is not a condition (relations lt gt leq geq eq neq, and or xor not)"
+            ),
         )),
     }
 }
