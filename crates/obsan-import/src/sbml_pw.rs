@@ -54,7 +54,7 @@ pub(crate) fn extract(
         Ex::Call(f, args) => match place(f) {
             Some((at, owner)) => {
                 let mut bad = None;
-                crate::sbml::walk_names_at(e, &mut |n, p| {
+                names_at(e, &mut |n, p| {
                     if bad.is_none() && states.iter().any(|s| s == n) {
                         bad = Some((n.to_string(), p));
                     }
@@ -140,6 +140,19 @@ pub(crate) fn replace(e: &Ex, inputs: &[PwInput]) -> Result<Ex, ImportError> {
         ),
         Ex::Num(_) | Ex::Name { .. } => e.clone(),
     })
+}
+
+fn names_at(e: &Ex, f: &mut dyn FnMut(&str, At)) {
+    match e {
+        Ex::Name { name, at, .. } => f(name, *at),
+        Ex::Neg(a) => names_at(a, f),
+        Ex::Bin(_, a, b) => {
+            names_at(a, f);
+            names_at(b, f);
+        }
+        Ex::Call(_, args) => args.iter().for_each(|a| names_at(a, f)),
+        Ex::Num(_) => {}
+    }
 }
 
 fn input_name(n: &str) -> Ex {
