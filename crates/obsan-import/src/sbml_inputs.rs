@@ -68,7 +68,10 @@ pub fn sbml_inputs(text: &str, until: Option<f64>) -> Result<SbmlInputs, ImportE
     let mut cuts = vec![0.0, until];
     for i in &m.inputs {
         affine(&i.expr, i.at)?;
-        breakpoints(&i.expr, i.at, &vals, &mut cuts)?;
+        breakpoints(&i.expr, i.at, &vals, &mut cuts).map_err(|e| match (e.line, e.col) {
+            (1, 1) => ImportError::at(i.at.0, i.at.1, e.message),
+            _ => e,
+        })?;
     }
     cuts.retain(|c| (0.0..=until).contains(c));
     cuts.sort_by(f64::total_cmp);
@@ -81,8 +84,13 @@ pub fn sbml_inputs(text: &str, until: Option<f64>) -> Result<SbmlInputs, ImportE
         let mut left = Vec::new();
         let mut right = Vec::new();
         for i in &m.inputs {
-            left.push(eval(&i.expr, a, mid, &vals)?);
-            right.push(eval(&i.expr, b, mid, &vals)?);
+            // An evaluation error without a place of its own is the piecewise's.
+            let here = |e: ImportError| match (e.line, e.col) {
+                (1, 1) => ImportError::at(i.at.0, i.at.1, e.message),
+                _ => e,
+            };
+            left.push(eval(&i.expr, a, mid, &vals).map_err(here)?);
+            right.push(eval(&i.expr, b, mid, &vals).map_err(here)?);
         }
         match out.rows.last() {
             Some((t, v)) if *t == a && *v == left => {}
