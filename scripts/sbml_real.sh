@@ -73,10 +73,15 @@ for f in files:
     if r.returncode != 2 or "panicked" in r.stderr or not located:
         bugs.append(f"{os.path.basename(f)}: exit {r.returncode}: {first}")
         continue
-    why = re.sub(r"^error: \S+?:\d+:\d+: ", "", first)
+    why = re.sub(r"^error: \S+?:\d+:\d+: ", "", first).replace("obsan's", "obsan\u2019s")
+    why = re.sub(r": the term .*", "", why)
+    why = re.sub(r"\((u_[^()]*)\)", "(...)", why)
     why = re.sub(r"'[^']*'", "'ID'", why)
-    why = re.sub(r"\(([^()]*)\)$", "(...)", why) if why.startswith("the model is outside") else why
-    why = why[:150]
+    why = re.sub(r"at line \d+", "at line L", why)
+    why = re.sub(r"\d+/\d+", "P/Q", why)
+    why = re.sub(r"with unit \S+ and with coefficient \S+", "with two units", why)
+    why = re.sub(r"\d+ terms", "N terms", why)
+    why = why.replace("obsan\u2019s", "obsan's")[:150]
     refused[why] += 1
     examples.setdefault(why, os.path.basename(f))
 times.sort()
