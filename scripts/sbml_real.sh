@@ -81,6 +81,7 @@ for f in files:
     why = re.sub(r"\d+/\d+", "P/Q", why)
     why = re.sub(r"with unit \S+ and with coefficient \S+", "with two units", why)
     why = re.sub(r"\d+ terms", "N terms", why)
+    why = re.sub(r"(the dynamics|exp|the coefficient \S+) of \S+ ", r"\1 of X ", why)
     why = why.replace("obsan\u2019s", "obsan's")[:150]
     refused[why] += 1
     examples.setdefault(why, os.path.basename(f))
