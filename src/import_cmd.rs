@@ -136,6 +136,9 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
     let text = crate::fsio::read_text(path)?;
     let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
         .map_err(|e| Failure(located(path, &e)))?;
+    // The course is computed before anything is written: a refusal writes nothing.
+    let inputs =
+        obsan_import::sbml_inputs(&text, a.until).map_err(|e| Failure(located(path, &e)))?;
     let code = check_and_write(path, &c, a.out.as_deref(), a.force)?;
     if let Some(out) = &a.values {
         let values = obsan_import::sbml_values(&text).map_err(|e| Failure(located(path, &e)))?;
@@ -145,6 +148,32 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
             .map(|(n, v)| format!("{n} = {v:?}\n"))
             .collect();
         write_whole(out, &text, a.force)?;
+    }
+    if inputs.names.is_empty() {
+        if let Some(out) = &a.inputs_out {
+            eprintln!("note: {path} has no <piecewise> of time: no known input, {out} not written");
+        }
+        return Ok(code);
+    }
+    match &a.inputs_out {
+        Some(out) => {
+            write_whole(out, &inputs.csv(), a.force)?;
+            eprintln!(
+                "{} input(s) ({}): course over [0, {}] written to {out}",
+                inputs.names.len(),
+                inputs.names.join(", "),
+                a.until.unwrap_or(0.0)
+            );
+        }
+        None => {
+            for (n, (l, c)) in inputs.names.iter().zip(&inputs.places) {
+                eprintln!(
+                    "note: {path}:{l}:{c}: the <piecewise> here is the known input {n}: \
+                     supply its course to simulate (--inputs FILE.csv, as --inputs-out FILE.csv \
+                     --until T writes it)"
+                );
+            }
+        }
     }
     Ok(code)
 }

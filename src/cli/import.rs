@@ -38,10 +38,14 @@ and exits 2 if any was refused.")]
   obsan import sbml model.xml                        (.sys text to stdout; every state measured)
   obsan import sbml model.xml --observe S1,S2 --out model.sys
   obsan import sbml model.xml --out model.sys --values model.values
+  obsan import sbml dosing.xml --out m.sys --values m.values --inputs-out m.csv --until 50
 
-Assignment rules are substituted and function definitions inlined; events, algebraic rules,
-delays, time, piecewise and varying compartments are refused naming the element and its line,
-exit 2.")]
+Assignment rules are substituted and function definitions inlined. A <piecewise> of time and
+constants (a dosing switch) becomes a known input u_ID (ID: its rule's variable or reaction);
+--inputs-out writes its exact course over [0, --until] from the file's numbers (conditions
+comparing time with a constant expression, pieces affine in time; others refused at the
+piecewise), for simulate --inputs. Events, algebraic rules, delays, a piecewise reading a state
+and varying compartments are refused naming the element and its line, exit 2.")]
     Sbml(SbmlArgs),
     /// A PEtab v1 problem (YAML, SBML model, tables) to .sys: observables as outputs,
     /// estimated parameters as params, fixed ones as consts, one model copy per condition
@@ -106,6 +110,13 @@ pub struct SbmlArgs {
     /// values, compartment sizes, species' initial values as their states are written).
     #[arg(long)]
     pub values: Option<String>,
+    /// Write the exact time course of the known inputs (each <piecewise> of time) here, as
+    /// `simulate --inputs` reads it (header t,<inputs>; a repeated t is a step). Needs --until.
+    #[arg(long, requires = "until")]
+    pub inputs_out: Option<String>,
+    /// The horizon of --inputs-out: rows cover [0, UNTIL].
+    #[arg(long, requires = "inputs_out")]
+    pub until: Option<f64>,
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,

@@ -14,6 +14,7 @@ mod json_schema;
 mod modes;
 mod modes_closure;
 mod montecarlo;
+mod sbml_piecewise;
 mod show;
 mod simulate;
 mod simulate_time;

@@ -26,7 +26,9 @@ mod julia;
 mod matlab;
 mod petab;
 mod sbml;
+mod sbml_inputs;
 mod sbml_math;
+mod sbml_pw;
 mod sbml_values;
 mod yaml;
 
@@ -35,6 +37,7 @@ pub use julia::{si_jl_convert, si_jl_models, SiJlModel};
 pub use matlab::strike_goldd_to_sys;
 pub use petab::{petab_files, petab_to_sys, PetabError, PetabFile, PetabFiles, PetabTexts};
 pub use sbml::sbml_to_sys;
+pub use sbml_inputs::{sbml_inputs, SbmlInputs};
 pub use sbml_values::sbml_values;
 
 /// A translated model: its `.sys` text and, for each `.sys` line that came

@@ -699,7 +699,8 @@ pub fn petab_to_sys(
         let row = conditions.iter().find(|x| &x.0 == c);
         let set = condition_values(&m, &table, c, row, &mut ignored_init)?;
         let ren = |n: &str| -> Option<Ex> {
-            if states.iter().any(|s| s == n) {
+            // A piecewise input's course may use values the condition sets: one per condition.
+            if states.iter().any(|s| s == n) || m.inputs.iter().any(|i| i.name == n) {
                 Some(Ex::Name {
                     name: format!("{n}{suffix}"),
                     timed: false,
@@ -732,5 +733,17 @@ pub fn petab_to_sys(
     let header = header(origin, &used, !ignored_init.is_empty(), preeq);
     let mut out = m;
     out.eqs = eqs;
+    if many {
+        out.inputs = used
+            .iter()
+            .flat_map(|c| {
+                out.inputs.iter().map(move |i| {
+                    let mut i = i.clone();
+                    i.name = format!("{}_{c}", i.name);
+                    i
+                })
+            })
+            .collect();
+    }
     Ok(out.emit(header, &params, &consts, &outputs))
 }

@@ -16,6 +16,7 @@ use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::sbml_math::{
     bin, child, elems, id_of, list, math_of, name, number, read_functions, subst, Ctx, TIME,
 };
+use crate::sbml_pw::{extract, replace, PwInput};
 use crate::{Converted, ImportError};
 use roxmltree::{Document, Node};
 use std::collections::BTreeMap;
@@ -43,6 +44,8 @@ pub(crate) struct Sbml {
     pub sizes: BTreeMap<String, Ex>,
     pub assign: Rules,
     pub model_at: At,
+    /// Piecewise of time and constants, each a known input (see `sbml_pw`).
+    pub inputs: Vec<PwInput>,
 }
 
 /// Translate an SBML document into `.sys` text. `observe`: the ids measured
@@ -150,17 +153,25 @@ impl Sbml {
             sizes,
             assign,
             model_at: cx.pos(model),
+            inputs: Vec::new(),
         };
         m.params.retain(|p| !eqs.iter().any(|e| &e.0 == p));
         let mut body = Vec::new();
-        let known: Vec<String> = eqs
+        let mut known: Vec<String> = eqs
             .iter()
             .map(|e| e.0.clone())
             .chain(m.params.iter().cloned())
             .chain(m.consts.iter().cloned())
             .collect();
-        for (v, e, at) in &eqs {
-            let r = m.resolve(e)?;
+        let states: Vec<String> = eqs.iter().map(|e| e.0.clone()).collect();
+        let mut inputs = Vec::new();
+        let mut resolved = Vec::new();
+        for (_, e, _) in &eqs {
+            resolved.push(extract(&m.substitute(e)?, &states, &known, &mut inputs)?);
+        }
+        known.extend(inputs.iter().map(|i| i.name.clone()));
+        m.inputs = inputs;
+        for ((v, _, at), r) in eqs.iter().zip(resolved) {
             check_names(
                 &r,
                 &known,
@@ -182,8 +193,14 @@ impl Sbml {
             .collect()
     }
 
-    /// Substitute assignment rules (they may use each other) and compartment sizes.
+    /// Substitute assignment rules (they may use each other) and compartment
+    /// sizes, and name each piecewise by its input.
     pub fn resolve(&self, e: &Ex) -> Result<Ex, ImportError> {
+        replace(&self.substitute(e)?, &self.inputs)
+    }
+
+    /// Substitute assignment rules (they may use each other) and compartment sizes.
+    fn substitute(&self, e: &Ex) -> Result<Ex, ImportError> {
         let mut cur = e.clone();
         // Each round removes one level of rule nesting; more rounds than rules means a cycle.
         for _ in 0..self.assign.len() + 2 {
@@ -255,6 +272,13 @@ impl Sbml {
                 .collect();
             lines.push(format!("# compartment sizes folded in: {}", v.join(", ")));
         }
+        for i in self.inputs.iter().filter(|i| used.contains(&i.name)) {
+            lines.push(format!(
+                "# input {}: the <piecewise> at line {}, a known function of time (its course: \
+                 obsan import sbml MODEL.xml --inputs-out FILE.csv --until T)",
+                i.name, i.at.0
+            ));
+        }
         lines.push(format!("system {}", self.name));
         if let Some(d) = &self.description {
             lines.push(format!("description {d}"));
@@ -279,6 +303,15 @@ impl Sbml {
             .collect();
         if !generic.is_empty() {
             lines.push(format!("const {}", names(generic)));
+        }
+        let inputs: Vec<&String> = self
+            .inputs
+            .iter()
+            .map(|i| &i.name)
+            .filter(|n| used.contains(n))
+            .collect();
+        if !inputs.is_empty() {
+            lines.push(format!("input {}", names(inputs)));
         }
         for (c, v) in consts {
             if let (Some(v), true) = (v, used.contains(c)) {

@@ -265,17 +265,138 @@ pub(crate) fn mathml(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError>
                 )),
             }
         }
+        "piecewise" => piecewise(cx, n, depth),
         other => Err(cx.err(
             n,
-            format!("MathML <{other}> is not supported (piecewise, relations and logic have no .sys form)"),
+            format!("MathML <{other}> is not supported (relations and logic only in a <piecewise> condition)"),
         )),
+    }
+}
+
+/// The call name of a `<piecewise>` read from MathML: `piecewise@LINE:COL`
+/// (its place, so that an error and the input it becomes can name it), to
+/// which `math_of` appends `@OWNER`, the id of the element holding the math.
+/// Arguments: value, condition, value, condition, ..., then the
+/// `<otherwise>` value if there is one (an odd count).
+pub(crate) const PIECEWISE: &str = "piecewise@";
+
+/// `<piecewise>`: its pieces' values and conditions (relations and logic,
+/// read only here), as `Call(PIECEWISE..., args)`.
+fn piecewise(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
+    let mut args = Vec::new();
+    let mut otherwise = None;
+    for c in elems(n) {
+        match c.tag_name().name() {
+            "piece" => {
+                let parts: Vec<Node> = elems(c).collect();
+                let [v, cond] = parts.as_slice() else {
+                    return Err(cx.err(c, "<piece> takes a value and a condition"));
+                };
+                args.push(mathml(cx, *v, depth + 1)?);
+                args.push(condition(cx, *cond, depth + 1)?);
+            }
+            "otherwise" => {
+                let v = elems(c)
+                    .next()
+                    .ok_or_else(|| cx.err(c, "empty <otherwise>"))?;
+                otherwise = Some(mathml(cx, v, depth + 1)?);
+            }
+            other => return Err(cx.err(c, format!("<{other}> in a <piecewise>"))),
+        }
+    }
+    if args.is_empty() && otherwise.is_none() {
+        return Err(cx.err(n, "empty <piecewise>"));
+    }
+    args.extend(otherwise);
+    let (l, col) = cx.pos(n);
+    Ok(Ex::Call(format!("{PIECEWISE}{l}:{col}"), args))
+}
+
+/// Relations (`lt gt leq geq eq neq`, a chain `a < b < c` read pairwise),
+/// logic (`and or xor not`) and `true`/`false`: `Call(op, args)`,
+/// `Num("true")`. Anything else is a value, refused as a condition.
+fn condition(cx: &Ctx, n: Node, depth: usize) -> Result<Ex, ImportError> {
+    if depth > MAX_DEPTH {
+        return Err(cx.err(n, "MathML nested too deeply"));
+    }
+    match n.tag_name().name() {
+        "true" | "false" => return Ok(Ex::Num(n.tag_name().name().into())),
+        "apply" => {}
+        other => return Err(cx.err(n, format!("<{other}> is not a condition"))),
+    }
+    let mut it = elems(n);
+    let op = it.next().ok_or_else(|| cx.err(n, "empty <apply>"))?;
+    let rest: Vec<Node> = it.collect();
+    let opname = op.tag_name().name();
+    match opname {
+        "lt" | "gt" | "leq" | "geq" | "eq" | "neq" => {
+            let a: Vec<Ex> = rest
+                .iter()
+                .map(|c| mathml(cx, *c, depth + 1))
+                .collect::<Result<_, _>>()?;
+            if a.len() < 2 || (opname == "neq" && a.len() != 2) {
+                return Err(cx.err(op, format!("<{opname}> with {} argument(s)", a.len())));
+            }
+            let pairs: Vec<Ex> = a
+                .windows(2)
+                .map(|w| Ex::Call(opname.into(), w.to_vec()))
+                .collect();
+            Ok(if pairs.len() == 1 {
+                pairs.into_iter().next().unwrap_or(Ex::Num("true".into()))
+            } else {
+                Ex::Call("and".into(), pairs)
+            })
+        }
+        "and" | "or" | "xor" | "not" => {
+            let a: Vec<Ex> = rest
+                .iter()
+                .map(|c| condition(cx, *c, depth + 1))
+                .collect::<Result<_, _>>()?;
+            // An empty <and/> is true, an empty <or/> or <xor/> false (MathML's n-ary forms).
+            if opname == "not" && a.len() != 1 {
+                return Err(cx.err(op, format!("<{opname}> with {} argument(s)", a.len())));
+            }
+            Ok(Ex::Call(opname.into(), a))
+        }
+        other => Err(cx.err(
+            op,
+            format!(
+                "<{other}> is not a condition (relations lt gt leq geq eq neq, and or xor not)"
+            ),
+        )),
+    }
+}
+
+/// Append the owner's id to each `<piecewise>` call name in `e`.
+fn own(e: &Ex, owner: &str) -> Ex {
+    match e {
+        Ex::Call(f, args) => {
+            let args = args.iter().map(|a| own(a, owner)).collect();
+            if f.starts_with(PIECEWISE) && f.matches('@').count() == 1 {
+                Ex::Call(format!("{f}@{owner}"), args)
+            } else {
+                Ex::Call(f.clone(), args)
+            }
+        }
+        Ex::Neg(a) => Ex::Neg(Box::new(own(a, owner))),
+        Ex::Bin(op, a, b) => bin(*op, own(a, owner), own(b, owner)),
+        Ex::Num(_) | Ex::Name { .. } => e.clone(),
     }
 }
 
 pub(crate) fn math_of(cx: &Ctx, n: Node) -> Result<Ex, ImportError> {
     let m = child(n, "math")
         .ok_or_else(|| cx.err(n, format!("<{}> has no <math>", n.tag_name().name())))?;
-    mathml(cx, m, 0)
+    let e = mathml(cx, m, 0)?;
+    // The id a piecewise here is named after: the rule's variable, the
+    // initial assignment's symbol, or the reaction of a kinetic law.
+    let owner = n
+        .attribute("variable")
+        .or(n.attribute("symbol"))
+        .or(n.attribute("id"))
+        .or_else(|| n.parent_element().and_then(|p| p.attribute("id")))
+        .unwrap_or("pw");
+    Ok(own(&e, owner))
 }
 
 /// Function definitions, each body read with the ones defined before it.

@@ -442,3 +442,54 @@ fn conversion_factors_multiply_the_reaction_terms() {
     equation_is(&c.sys_text, "S1", "-cf*k1*S1");
     equation_is(&c.sys_text, "S2", "cf2*k1*S1");
 }
+
+/// CASE1 with its first kinetic law times a dose switched on at time 2 for a ramp.
+fn dosed() -> String {
+    CASE1.replace(
+        "<ci> S1 </ci></apply>",
+        &format!(
+            "<ci> S1 </ci><piecewise><piece><apply><times/><cn>3</cn><apply><minus/>{TIME}<cn>2</cn>\
+             </apply></apply><apply><geq/>{TIME}<cn>2</cn></apply></piece><otherwise><cn>0</cn>\
+             </otherwise></piecewise></apply>"
+        ),
+    )
+}
+
+#[test]
+fn a_piecewise_of_time_in_a_kinetic_law_is_a_known_input_with_its_course() {
+    let c = sbml_to_sys(&dosed(), "x.xml", &[]).unwrap();
+    assert!(
+        c.sys_text.contains("\ninput u_reaction1\n"),
+        "{}",
+        c.sys_text
+    );
+    let i = obsan_import::sbml_inputs(&dosed(), Some(4.0)).unwrap();
+    assert_eq!(i.names, vec!["u_reaction1".to_string()]);
+    // 0 until 2, then 3 (t - 2): continuous at 2 (one row), 6 at 4.
+    assert_eq!(i.csv(), "t,u_reaction1\n0.0,0.0\n2.0,0.0\n4.0,6.0\n");
+    // No horizon: the names only.
+    assert!(obsan_import::sbml_inputs(&dosed(), None)
+        .unwrap()
+        .rows
+        .is_empty());
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+    /// Cut or insert anywhere in a file with a piecewise: writing its course never panics,
+    /// and a refusal lies inside the text.
+    #[test]
+    fn inputs_never_panic(cut in 0usize..4000, len in 0usize..40, ins in "[ -~\n]{0,8}") {
+        let base = dosed();
+        let n = base.len();
+        let a = (cut % n).min(n);
+        let b = (a + len).min(n);
+        if base.is_char_boundary(a) && base.is_char_boundary(b) {
+            let src = format!("{}{}{}", &base[..a], ins, &base[b..]);
+            let lines = src.split('\n').count();
+            if let Err(e) = obsan_import::sbml_inputs(&src, Some(10.0)) {
+                prop_assert!(e.line >= 1 && e.line <= lines, "{e}");
+            }
+        }
+    }
+}
