@@ -77,6 +77,10 @@ pub struct StrikeGolddArgs {
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
+    /// Largest polynomial (terms) the check of the written .sys may build before it stops
+    /// with "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 #[derive(Args)]
@@ -93,6 +97,10 @@ pub struct PetabArgs {
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
+    /// Largest polynomial (terms) the check of the written .sys may build before it stops
+    /// with "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 #[derive(Args)]
@@ -120,6 +128,10 @@ pub struct SbmlArgs {
     /// Replace an existing file.
     #[arg(long)]
     pub force: bool,
+    /// Largest polynomial (terms) the check of the written .sys may build before it stops
+    /// with "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 #[derive(Args)]
@@ -142,6 +154,10 @@ pub struct SiJlArgs {
     /// Replace existing .sys files.
     #[arg(long)]
     pub force: bool,
+    /// Largest polynomial (terms) the check of the written .sys may build before it stops
+    /// with "expression too large" (docs/engine.md, Limits).
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    pub max_terms: usize,
 }
 
 #[derive(Args)]

@@ -356,6 +356,11 @@ impl Command {
             Command::Modes(a) => Some(a.max_terms),
             Command::Global(a) => Some(a.an.max_terms),
             Command::Design(a) => Some(a.max_terms),
+            // An imported model is checked by building its normal form.
+            Command::Import(ImportCommand::Sbml(a)) => Some(a.max_terms),
+            Command::Import(ImportCommand::Petab(a)) => Some(a.max_terms),
+            Command::Import(ImportCommand::SiJl(a)) => Some(a.max_terms),
+            Command::Import(ImportCommand::StrikeGoldd(a)) => Some(a.max_terms),
             _ => None,
         }
     }

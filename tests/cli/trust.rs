@@ -1134,3 +1134,50 @@ fn lie_past_the_term_budget_is_refused_before_building() {
     );
     assert!(err.contains("--max-terms"), "{err}");
 }
+
+/// `import` checks the model it writes by building its normal form, which had
+/// no budget: a curated BioModels file (BIOMD0000000017) grew to 19.6 GB in
+/// 11 minutes before the kernel killed it. Now every model import runs under
+/// `--max-terms` as the analysis commands do. Here the kinetic law
+/// `(x + k)^12` has 13 terms once expanded (binomial theorem), so a budget of
+/// 10 stops it at the equation of `x`, which the importer maps to the
+/// species' element, and the default imports it.
+#[test]
+fn import_checks_the_written_model_under_the_term_budget() {
+    let law = "<apply><power/><apply><plus/><ci>x</ci><ci>k</ci></apply><cn>12</cn></apply>";
+    let xml = format!(
+        r#"<?xml version="1.0" encoding="UTF-8"?>
+<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
+  <model id="power">
+    <listOfCompartments><compartment id="c" size="1" constant="true"/></listOfCompartments>
+    <listOfSpecies><species id="x" compartment="c" initialConcentration="1" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/></listOfSpecies>
+    <listOfParameters><parameter id="k" value="0.5" constant="true"/></listOfParameters>
+    <listOfReactions>
+      <reaction id="R" reversible="false">
+        <listOfProducts><speciesReference species="x" stoichiometry="1" constant="true"/></listOfProducts>
+        <kineticLaw><math xmlns="http://www.w3.org/1998/Math/MathML">
+{law}
+        </math></kineticLaw>
+      </reaction>
+    </listOfReactions>
+  </model>
+</sbml>
+"#
+    );
+    let species_line = xml.lines().position(|l| l.contains("<species ")).unwrap() + 1;
+    let path = temp_file("power.xml", &xml);
+    let e = bad(
+        &["import", "sbml", &path, "--max-terms", "10"],
+        "expression too large",
+    );
+    assert!(e.contains("budget 10;"), "{e}");
+    let line: usize = e
+        .split("power.xml:")
+        .nth(1)
+        .and_then(|r| r.split(':').next())
+        .and_then(|l| l.parse().ok())
+        .unwrap_or_else(|| panic!("not located: {e}"));
+    assert_eq!(line, species_line, "{e}");
+    let sys = ok(&["import", "sbml", &path]);
+    assert!(sys.contains("state x"), "{sys}");
+}

@@ -283,11 +283,18 @@ impl System {
             let e = ctx
                 .substitute(loc.id, subst)
                 .map_err(|er| self.err_at(loc, &er.0))?;
+            // Budgeted, so that a form past the term budget (a sum of rate laws
+            // over distinct denominators expands their product) is an error at
+            // its equation, not an unbounded allocation.
+            let canon_at = |ctx: &mut Ctx, id| {
+                ctx.try_canon(id)
+                    .map_err(|l| self.err_at(loc, &l.to_string()))
+            };
             // e is affine in the inputs (checked when read; restrictions are affine too).
             let mut rest = e;
             for (i, &u) in input_vars.iter().enumerate() {
                 let fi = ctx.diff(e, u);
-                let c = ctx.canon(fi);
+                let c = canon_at(ctx, fi)?;
                 debug_assert!(
                     input_vars.iter().all(|&w| {
                         let d = ctx.diff(fi, w);
@@ -304,13 +311,13 @@ impl System {
             // checked when read).
             for (j, w) in unknown_syms.iter().enumerate() {
                 let gj = ctx.diff(e, w.var);
-                let c = ctx.canon(gj);
+                let c = canon_at(ctx, gj)?;
                 let gj = ctx.from_canonical(&c);
                 let term = ctx.mul(&[gj, w.id]);
                 rest = ctx.sub(rest, term);
                 unknown_fields[j].push(gj);
             }
-            let c = ctx.canon(rest);
+            let c = canon_at(ctx, rest)?;
             f0.push(ctx.from_canonical(&c));
         }
         Ok((f0, fields, unknown_fields))
