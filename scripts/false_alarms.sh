@@ -18,7 +18,8 @@
 # {0, 0.15, 0.3} m/s, omega in [-0.5, 0.5) rad/s, held 0.5-3 s), `circles`
 # (v 0.2 m/s, omega 0.3 rad/s) and `stopgo` (v 0.2 m/s and omega 0.2 rad/s
 # for 10 s, then 5 s at rest). The last line is the fraction of all sets
-# that named anything (target at most 5 %).
+# that named anything (target at most 5 %). Each calib line ends with the
+# diagnosis's CPU time (user + system, all threads) from /usr/bin/time.
 GENFLAG=""; [ "${GEN:-on}" = off ] && GENFLAG="--no-generated"
 O=${O:-target/release/obsan}
 SEEDS=${SEEDS:-$(seq 1 20)}
@@ -88,8 +89,8 @@ for seed in $SEEDS; do for prof in constant sine:0.5:60 stopgo:20:10; do
   python3 -c "import json,sys; p=sys.argv[1]+'/dataset.json'; j=json.load(open(p)); j.pop('noise',None); json.dump(j,open(p,'w'))" $d
   for m in $MODES; do
     flag="--input-noise $m"; [ "$m" = default ] && flag=
-    n=$($O diagnose --model systems/calib.sys --effects systems/calib.eff --data $d $flag $GENFLAG | grep '^named:' | tr '\n' ' ')
-    echo "$seed $prof $m $n" | tee -a $out
+    n=$(/usr/bin/time -f '%U %S' -o $d.cpu $O diagnose --model systems/calib.sys --effects systems/calib.eff --data $d $flag $GENFLAG | grep '^named:' | tr '\n' ' ')
+    echo "$seed $prof $m $n [cpu $(awk '{printf "%.1f", $1 + $2}' $d.cpu) s]" | tee -a $out
   done
   rm -rf $(dirname $d)
 done; done

@@ -40,7 +40,7 @@ const MAX_PAIRED: usize = 4;
 /// The combination of params `i` and `j` of fit `f` of `sys` (the data
 /// prepared for it), owned by `effects`, when they correlate at the
 /// caution or more; `crit` the critical value of the Wald z squared.
-fn pair(
+pub(crate) fn pair(
     at: &At,
     (sys, prepared, f): (&System, &Dataset, &ModelFit),
     (i, j): (usize, usize),

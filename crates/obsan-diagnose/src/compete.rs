@@ -9,11 +9,13 @@
 //! residual structure each one's own fit leaves is reported.
 
 use crate::candidate::{wald_z, Fitted};
+use crate::combine::{pair, At};
+use crate::correlation::{correlation, Combination, CORRELATION_CAUTION};
 use crate::error::DiagnoseError;
 use crate::generate::ORIGIN_GENERATED;
 use crate::model_fit::{fit_model, prepare, ModelFit};
 use crate::options::DiagnoseOptions;
-use crate::report::{CandidateResult, Competing};
+use crate::report::{CandidateResult, Competing, Named, ORIGIN_RELATION};
 use crate::screen::Outcome;
 use crate::start::extended_start;
 use obsan_data::Dataset;
@@ -126,6 +128,56 @@ pub(crate) fn fit_together(
         structure: [gen.structure.clone(), file.structure.clone()],
         established,
     })
+}
+
+/// A later round's winner `res` against the effects already named: the
+/// same rule as a generated winner against a file candidate, where the
+/// rival was named in an earlier round. The winner's fit (`at.fit` of
+/// `at.sys`) already holds both; where one of its params correlates with a
+/// named effect's at [`CORRELATION_CAUTION`] or more, the pair's
+/// combination is formed, and the winner may be named only if both stay
+/// established there, each by its Wald z alone (each sd the larger of the
+/// model's, inflated, and the cluster-robust one) above the square root of
+/// its own LR critical value. Otherwise the data fix only the combination
+/// (a bearing scale and the second harmonic within a narrow field of
+/// view, `(1 + k) b + a sin 2b ~ (1 + k + 2a) b`): the returned pair, the
+/// named effect first, is reported and the winner is not named. `None`:
+/// no such correlation, or the pair separated.
+pub(crate) fn against_named(
+    at: &At,
+    res: &CandidateResult,
+    named: &[Named],
+    crit: &dyn Fn(&str) -> f64,
+) -> Result<Option<Combination>, DiagnoseError> {
+    let index = |p: &str| at.fit.params.iter().position(|x| x.0 == p);
+    let mine: Vec<usize> = res.estimates.iter().filter_map(|e| index(&e.0)).collect();
+    let mut best: Option<(f64, usize, usize, &Named)> = None;
+    for n in named.iter().filter(|n| n.origin != ORIGIN_RELATION) {
+        for i in n.estimates.iter().filter_map(|e| index(&e.0)) {
+            for &j in &mine {
+                let Some(r) = correlation(&at.fit.covariance, i, j) else {
+                    continue;
+                };
+                if r.abs() >= CORRELATION_CAUTION && best.is_none_or(|b| r.abs() > b.0) {
+                    best = Some((r.abs(), i, j, n));
+                }
+            }
+        }
+    }
+    let Some((_, i, j, n)) = best else {
+        return Ok(None);
+    };
+    let prepared = prepare(at.sys, at.data)?;
+    let (cn, cw) = (crit(&n.origin), crit(&res.origin));
+    let effects = [n.effect.clone(), res.effect.clone()];
+    let Some(mut c) = pair(at, (at.sys, &prepared, at.fit), (i, j), effects, cn.max(cw)) else {
+        return Ok(None);
+    };
+    if c.wald_z_alone[0] > cn.sqrt() && c.wald_z_alone[1] > cw.sqrt() {
+        return Ok(None);
+    }
+    c.named = false;
+    Ok(Some(c))
 }
 
 /// The text of a pair the data do not separate, for the verdict and the

@@ -15,7 +15,7 @@
 
 use crate::candidate::{candidate, rank_only, Fitted, Noise};
 use crate::combine::{of_named, of_suggested, At};
-use crate::compete::{file_rival, fit_together};
+use crate::compete::{against_named, file_rival, fit_together};
 use crate::error::DiagnoseError;
 use crate::generate::{generate, levels, Generation, ORIGIN_GENERATED};
 use crate::identify::input_class;
@@ -115,6 +115,7 @@ pub fn diagnose(
         refits,
         nominal_refit,
         competing,
+        with_named,
         ..
     } = rounds;
     // What the last round found above its critical value but not by its
@@ -132,13 +133,7 @@ pub fn diagnose(
     // Pairs fixed only in combination (item 7 of the never-confidently-
     // wrong rules): among the named effects, and among the suggested ones
     // fitted together.
-    let crit = |origin: &str| {
-        if origin == ORIGIN_GENERATED {
-            limits.crit_gen
-        } else {
-            limits.crit
-        }
-    };
+    let crit = |origin: &str| limits.of(origin);
     let at = At {
         sys: &current_sys,
         data,
@@ -150,6 +145,7 @@ pub fn diagnose(
     progress("combinations of correlated effects");
     let mut combinations = of_named(&named, &at, &crit)?;
     combinations.extend(of_suggested(&suggested, &all_candidates, &at, &crit));
+    combinations.extend(with_named);
     let mut extended_sys = extended_model(&named, &current_sys);
     name_relations(&mut named, &mut extended_sys, &input_checks, &effects);
     let screen_threshold = match o.screen && levels.noise.is_empty() {
@@ -314,6 +310,15 @@ impl Limits {
             screen_threshold: crit.min(crit_gen) / SCREEN_SAFETY,
         }
     }
+
+    /// The one-degree critical value of an effect of this origin.
+    fn of(&self, origin: &str) -> f64 {
+        if origin == ORIGIN_GENERATED {
+            self.crit_gen
+        } else {
+            self.crit
+        }
+    }
 }
 
 /// The effects file's input relations, each tested on the measured inputs.
@@ -372,6 +377,8 @@ struct Rounds<'a> {
     warm: HashMap<String, Vec<f64>>,
     /// Generated winners fitted together with a competing file candidate.
     competing: Vec<Competing>,
+    /// A later round's winner fixed only in combination with a named effect.
+    with_named: Vec<crate::correlation::Combination>,
 }
 
 impl<'a> Rounds<'a> {
@@ -411,6 +418,7 @@ impl<'a> Rounds<'a> {
             nominal_refit: None,
             warm: HashMap::new(),
             competing: Vec::new(),
+            with_named: Vec::new(),
         }
     }
 
@@ -513,6 +521,28 @@ impl<'a> Rounds<'a> {
                     Some(n) if n == fres.effect => (res, fitted, eff) = (fres, ffit, fe),
                     Some(_) => {}
                 }
+            }
+        }
+        // A winner fixed only in combination with an effect already named
+        // is not named: the pair's combination is reported instead.
+        if round > 0 {
+            let lv = &self.levels;
+            let (sigma, noise) = match (fitted.white_won, lv.white_sigma.as_deref()) {
+                (true, Some(w)) => (w, &[][..]),
+                _ => (&lv.sigma[..], &lv.noise[..]),
+            };
+            let at = At {
+                sys: &fitted.sys,
+                data: self.data,
+                fit: &fitted.fit,
+                sigma,
+                noise,
+                o: self.o,
+            };
+            let crit = |origin: &str| self.limits.of(origin);
+            if let Some(c) = against_named(&at, &res, &self.named, &crit)? {
+                self.with_named.push(c);
+                return Ok(false);
             }
         }
         self.name(eff, &res, &fitted, rivals);

@@ -24,6 +24,33 @@ impl Rng {
     }
 }
 
+/// A source of uniform and standard normal deviates: the tests' [`Rng`]
+/// (Box–Muller's first output only) or the library's whole stream
+/// ([`obsan_fit::Rng`], both outputs of each Box–Muller pair).
+#[allow(dead_code)]
+pub trait Source {
+    fn uniform(&mut self) -> f64;
+    fn normal(&mut self) -> f64;
+}
+
+impl Source for Rng {
+    fn uniform(&mut self) -> f64 {
+        Rng::uniform(self)
+    }
+    fn normal(&mut self) -> f64 {
+        Rng::normal(self)
+    }
+}
+
+impl Source for obsan_fit::Rng {
+    fn uniform(&mut self) -> f64 {
+        obsan_fit::Rng::uniform(self)
+    }
+    fn normal(&mut self) -> f64 {
+        obsan_fit::Rng::normal(self)
+    }
+}
+
 /// The landmarks of a [`ring`].
 pub struct Ring {
     /// The codes of `sys`'s `lxNN` constants.
