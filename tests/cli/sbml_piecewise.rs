@@ -9,7 +9,7 @@ const TIME: &str = r#"<csymbol encoding="text" definitionURL="http://www.sbml.or
 
 /// A model `x' = k * dose` (x in a compartment of size 1, x(0) = 1) with `dose` given by
 /// the MathML `dose_math` as an assignment rule, and a kinetic law `law`.
-fn model(dose_math: &str, law: &str) -> String {
+pub(crate) fn model(dose_math: &str, law: &str) -> String {
     format!(
         r#"<?xml version="1.0" encoding="UTF-8"?>
 <sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
@@ -51,6 +51,23 @@ fn step_dose() -> String {
 
 const K_DOSE: &str = "<apply><times/><ci>k</ci><ci>dose</ci></apply>";
 
+/// `import sbml SRC` writing the `.sys`, its values and the inputs' course up to `until`.
+fn import_with_course(src: &str, (sys, vals, inp): (&str, &str, &str), until: &str) {
+    ok(&[
+        "import",
+        "sbml",
+        src,
+        "--out",
+        sys,
+        "--values",
+        vals,
+        "--inputs-out",
+        inp,
+        "--until",
+        until,
+    ]);
+}
+
 /// The rows of a CSV written by --inputs-out.
 fn course(path: &str) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap();
@@ -76,19 +93,7 @@ fn a_dose_switched_on_is_an_input_with_its_exact_step_and_simulates_to_the_close
     assert!(r.stdout.contains("input u_dose\n"), "{}", r.stdout);
     assert!(r.stdout.contains("x' = k*u_dose/1\n"), "{}", r.stdout);
     assert!(r.stderr.contains("the known input u_dose"), "{}", r.stderr);
-    ok(&[
-        "import",
-        "sbml",
-        &src,
-        "--out",
-        &sys,
-        "--values",
-        &vals,
-        "--inputs-out",
-        &inp,
-        "--until",
-        "10",
-    ]);
+    import_with_course(&src, (&sys, &vals, &inp), "10");
     // The step at ton = 4.3 exactly: 0 before, D = 2 after, constant in between.
     assert_eq!(
         course(&inp),
@@ -126,19 +131,7 @@ fn a_ramp_in_a_window_of_a_kinetic_law_is_written_exactly_and_integrates_to_its_
         format!("{dir}/m.values"),
         format!("{dir}/m.csv"),
     );
-    ok(&[
-        "import",
-        "sbml",
-        &src,
-        "--out",
-        &sys,
-        "--values",
-        &vals,
-        "--inputs-out",
-        &inp,
-        "--until",
-        "9",
-    ]);
+    import_with_course(&src, (&sys, &vals, &inp), "9");
     let text = std::fs::read_to_string(&inp).unwrap();
     // 0 up to 2 (continuous there: one row), the ramp to k 4 = 2 at 6, the step down, 0 to 9.
     assert_eq!(text, "t,u_R\n0.0,0.0\n2.0,0.0\n6.0,2.0\n6.0,0.0\n9.0,0.0\n");

@@ -1145,25 +1145,8 @@ fn lie_past_the_term_budget_is_refused_before_building() {
 #[test]
 fn import_checks_the_written_model_under_the_term_budget() {
     let law = "<apply><power/><apply><plus/><ci>x</ci><ci>k</ci></apply><cn>12</cn></apply>";
-    let xml = format!(
-        r#"<?xml version="1.0" encoding="UTF-8"?>
-<sbml xmlns="http://www.sbml.org/sbml/level3/version1/core" level="3" version="1">
-  <model id="power">
-    <listOfCompartments><compartment id="c" size="1" constant="true"/></listOfCompartments>
-    <listOfSpecies><species id="x" compartment="c" initialConcentration="1" hasOnlySubstanceUnits="false" boundaryCondition="false" constant="false"/></listOfSpecies>
-    <listOfParameters><parameter id="k" value="0.5" constant="true"/></listOfParameters>
-    <listOfReactions>
-      <reaction id="R" reversible="false">
-        <listOfProducts><speciesReference species="x" stoichiometry="1" constant="true"/></listOfProducts>
-        <kineticLaw><math xmlns="http://www.w3.org/1998/Math/MathML">
-{law}
-        </math></kineticLaw>
-      </reaction>
-    </listOfReactions>
-  </model>
-</sbml>
-"#
-    );
+    // The piecewise tests' model, its dose rule a constant the law does not read.
+    let xml = crate::sbml_piecewise::model("<cn>0</cn>", law);
     let species_line = xml.lines().position(|l| l.contains("<species ")).unwrap() + 1;
     let path = temp_file("power.xml", &xml);
     let e = bad(

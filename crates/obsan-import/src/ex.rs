@@ -128,3 +128,18 @@ pub(crate) fn sys_identifier(raw: &str) -> String {
     }
     s
 }
+
+/// A one-argument function of the `.sys` grammar at a number, `None` for any
+/// other name (the importers' numeric evaluators share it).
+pub(crate) fn apply_fn(f: &str, x: f64) -> Option<f64> {
+    Some(match f {
+        "exp" => x.exp(),
+        "log" => x.ln(),
+        "sqrt" => x.sqrt(),
+        "sin" => x.sin(),
+        "cos" => x.cos(),
+        "tan" => x.tan(),
+        "atan" => x.atan(),
+        _ => return None,
+    })
+}

@@ -14,7 +14,8 @@
 
 use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::sbml_math::{
-    bin, child, elems, id_of, list, math_of, name, number, read_functions, subst, Ctx, TIME,
+    bin, child, elems, id_of, list, math_of, name, number, read_functions, subst, uses_time, Ctx,
+    TIME,
 };
 use crate::sbml_pw::{extract, replace, PwInput};
 use crate::{Converted, ImportError};
@@ -450,16 +451,6 @@ fn constant_initial_assignments(
         }
     }
     Ok(())
-}
-
-fn uses_time(e: &Ex) -> bool {
-    match e {
-        Ex::Num(n) => n == TIME,
-        Ex::Name { .. } => false,
-        Ex::Neg(a) => uses_time(a),
-        Ex::Bin(_, a, b) => uses_time(a) || uses_time(b),
-        Ex::Call(_, args) => args.iter().any(uses_time),
-    }
 }
 
 /// An initial assignment's value: taken at time 0, so where its math uses

@@ -8,9 +8,9 @@
 //! affine in time, so two rows per interval give it exactly. Anything else
 //! is refused at the `<piecewise>`.
 
-use crate::ex::{Ex, RESERVED};
+use crate::ex::{apply_fn, Ex, RESERVED};
 use crate::sbml::Sbml;
-use crate::sbml_math::TIME;
+use crate::sbml_math::{uses_time, TIME};
 use crate::sbml_pw::place;
 use crate::ImportError;
 use std::collections::BTreeMap;
@@ -99,16 +99,6 @@ pub fn sbml_inputs(text: &str, until: Option<f64>) -> Result<SbmlInputs, ImportE
         out.rows.push((b, right));
     }
     Ok(out)
-}
-
-fn uses_time(e: &Ex) -> bool {
-    match e {
-        Ex::Num(n) => n == TIME,
-        Ex::Name { .. } => false,
-        Ex::Neg(a) => uses_time(a),
-        Ex::Bin(_, a, b) => uses_time(a) || uses_time(b),
-        Ex::Call(_, args) => args.iter().any(uses_time),
-    }
 }
 
 /// The degree of `e` in time when at most 1 (affine), else `None`.
@@ -268,16 +258,8 @@ fn eval(e: &Ex, t: f64, tc: f64, vals: &BTreeMap<String, f64>) -> Result<f64, Im
                     return Err(ImportError::at(1, 1, format!("cannot evaluate '{f}'")));
                 };
                 let x = eval(a, t, tc, vals)?;
-                match f.as_str() {
-                    "exp" => x.exp(),
-                    "log" => x.ln(),
-                    "sqrt" => x.sqrt(),
-                    "sin" => x.sin(),
-                    "cos" => x.cos(),
-                    "tan" => x.tan(),
-                    "atan" => x.atan(),
-                    _ => return Err(ImportError::at(1, 1, format!("cannot evaluate '{f}'"))),
-                }
+                apply_fn(f, x)
+                    .ok_or_else(|| ImportError::at(1, 1, format!("cannot evaluate '{f}'")))?
             }
         },
     };

@@ -424,3 +424,14 @@ pub(crate) fn read_functions(cx: &mut Ctx, model: Node) -> Result<(), ImportErro
     }
     Ok(())
 }
+
+/// Whether an expression reads SBML's `time`.
+pub(crate) fn uses_time(e: &Ex) -> bool {
+    match e {
+        Ex::Num(n) => n == TIME,
+        Ex::Name { .. } => false,
+        Ex::Neg(a) => uses_time(a),
+        Ex::Bin(_, a, b) => uses_time(a) || uses_time(b),
+        Ex::Call(_, args) => args.iter().any(uses_time),
+    }
+}

@@ -8,7 +8,7 @@
 //! whose inputs have no value is left out, so a simulation asks for its id
 //! by name instead of using a wrong number.
 
-use crate::ex::{Ex, RESERVED};
+use crate::ex::{apply_fn, Ex, RESERVED};
 use crate::sbml_math::{child, mathml, read_functions, Ctx};
 use crate::ImportError;
 use roxmltree::{Document, Node};
@@ -62,17 +62,7 @@ fn eval(e: &Ex, vals: &BTreeMap<String, f64>) -> Option<f64> {
             let [a] = args.as_slice() else {
                 return None;
             };
-            let x = eval(a, vals)?;
-            match f.as_str() {
-                "exp" => x.exp(),
-                "log" => x.ln(),
-                "sqrt" => x.sqrt(),
-                "sin" => x.sin(),
-                "cos" => x.cos(),
-                "tan" => x.tan(),
-                "atan" => x.atan(),
-                _ => return None,
-            }
+            apply_fn(f, eval(a, vals)?)?
         }
     };
     v.is_finite().then_some(v)
