@@ -156,7 +156,8 @@ pub struct SiJlArgs {
     pub force: bool,
     /// Largest polynomial (terms) the check of the written .sys may build before it stops
     /// with "expression too large" (docs/engine.md, Limits).
-    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
+    /// (Not with --all, where each model is checked under the default budget.)
+    #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS, conflicts_with = "all")]
     pub max_terms: usize,
 }
 

@@ -359,7 +359,10 @@ impl Command {
             // An imported model is checked by building its normal form.
             Command::Import(ImportCommand::Sbml(a)) => Some(a.max_terms),
             Command::Import(ImportCommand::Petab(a)) => Some(a.max_terms),
-            Command::Import(ImportCommand::SiJl(a)) => Some(a.max_terms),
+            // With --all one model past the budget must not stop the others: a
+            // tripped thread budget holds for the rest of its scope, so each
+            // model's check keeps its own (the normal form's, the default).
+            Command::Import(ImportCommand::SiJl(a)) if a.all.is_none() => Some(a.max_terms),
             Command::Import(ImportCommand::StrikeGoldd(a)) => Some(a.max_terms),
             _ => None,
         }
