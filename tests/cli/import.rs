@@ -266,3 +266,24 @@ fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
         assert_eq!(want.unobservable.as_ref(), Some(&un), "{path}");
     }
 }
+
+/// With `--all`, a model past the term budget is refused alone: the models
+/// after it are still written. `(a + b + c + d + e + f)^30` has C(35, 5) =
+/// 324,632 terms once expanded, past the default budget of 100,000.
+#[test]
+fn si_jl_all_holds_each_model_to_its_own_budget() {
+    let big = "benchmarks[:Big] = Dict(:name => \"Big\", :ode => @ODEmodel(\n    \
+               x'(t) = (a + b + c + d + e + f)^30 * x(t),\n    y(t) = x(t)))\n\n";
+    let src = temp_file("big.jl", &format!("{big}{TWO}"));
+    let e = bad(
+        &["import", "si-jl", &src, "--model", "Big"],
+        "expression too large",
+    );
+    assert!(e.contains("budget 100000"), "{e}");
+    let dir = fresh_dir("sijl-big");
+    let e = bad(&["import", "si-jl", &src, "--all", &dir], "1 model(s)");
+    assert!(e.contains("model :Big"), "{e}");
+    assert!(std::path::Path::new(&format!("{dir}/Readme.sys")).exists());
+    assert!(std::path::Path::new(&format!("{dir}/Lin.sys")).exists());
+    assert!(!std::path::Path::new(&format!("{dir}/Big.sys")).exists());
+}
