@@ -71,8 +71,9 @@ pub struct ReducedUnknownInput {
     pub mode: String,
     /// Its name in the reduced system.
     pub name: String,
-    /// Null, or the drift and known-input terms added to `factor * input` (they are not
-    /// functions of the modes; the combination is then that mode's time derivative).
+    /// Null, or the terms added to `factor * input`: the drift and known-input terms that are
+    /// not functions of the modes and, for inputs projected jointly, the other unknown inputs'
+    /// terms (the combination is then that mode's time derivative).
     pub offset: Option<String>,
     /// The output-derivative order it is reconstructable from (the rank test's); null for a
     /// combination, recovered from the modes' first derivatives.

@@ -23,14 +23,16 @@
 //!   `C(m)` of the reduced inputs' coefficients has full column rank (the
 //!   modes being observable, `dm/dt - F(m, u) = C(m) w~` is a function of the
 //!   outputs' derivatives): checked by a non-zero minor at a random point
-//!   (exact); else refused. With several unknown inputs a form may not be
-//!   found: the reduced system is then reported not closed, never wrong.
+//!   (exact); else refused. Two or more such inputs are projected jointly
+//!   (unknown_input_joint.rs); a form still not found leaves the reduced
+//!   system reported not closed, never wrong.
 
 use crate::decided::undecided_atoms_of;
 use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
 use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
+use crate::unknown_input_joint as joint;
 use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
 use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun, SplitMix};
 use obsan_model::NormalForm;
@@ -168,7 +170,31 @@ pub fn unknown_input_modes(
         .filter(|&i| !nf.unknown_inputs.contains(&d.field_names[i]))
         .filter(|&i| d.derivatives.iter().any(|row| row[i].is_none()))
         .collect();
+    // Several inputs whose coefficients are not functions of the modes: the
+    // joint projection (unknown_input_joint.rs); one at a time does not close.
+    let needs: Vec<usize> = (0..nf.unknown_inputs.len())
+        .filter(|&j| {
+            let w = &nf.unknown_inputs[j];
+            d.field_names
+                .iter()
+                .position(|f| f == w)
+                .is_some_and(|idx| d.derivatives.iter().any(|row| row[idx].is_none()))
+        })
+        .collect();
+    let joint = if needs.len() >= 2 {
+        joint_inputs(nf, &mut view, &d, &needs, &to_project, derive.seed)?
+    } else {
+        None
+    };
+    if let Some(joint) = joint {
+        inputs = joint;
+        rescaled = true;
+        to_project.clear();
+    }
     for (j, w) in nf.unknown_inputs.iter().enumerate() {
+        if rescaled && needs.contains(&j) {
+            continue;
+        }
         let Some(idx) = d.field_names.iter().position(|f| f == w) else {
             continue;
         };
@@ -227,6 +253,62 @@ pub fn unknown_input_modes(
         derivation: Some(d),
         inputs,
     })
+}
+
+/// The joint projection along the inputs `needs` (module docs of
+/// unknown_input_joint.rs), each a combination `w~_a = B_aa w_a + sum_b B_ab
+/// w_b + moved terms`; `None` when the modes cannot be paired with them.
+fn joint_inputs(
+    nf: &NormalForm,
+    view: &mut NormalForm,
+    d: &Derivation,
+    needs: &[usize],
+    to_project: &[usize],
+    seed: u64,
+) -> Result<Option<Vec<ReducedInput>>, AnalysisError> {
+    let known = nf.inputs.len();
+    let slots: Vec<usize> = needs.iter().map(|j| known + j).collect();
+    let Some(k) = joint::pair_modes(view, d, &slots, seed) else {
+        return Ok(None);
+    };
+    let names: Vec<String> = to_project
+        .iter()
+        .map(|&i| d.field_names[i].clone())
+        .collect();
+    let parts = joint::project(view, d, &slots, &k, &names);
+    let mut out = Vec::new();
+    for (a, p) in parts.iter().enumerate() {
+        let j = needs[a];
+        let w = nf.unknown_inputs[j].clone();
+        let mode = d.modes[p.mode].name.clone();
+        let fc = view.ctx.canon(p.row[a]);
+        let mut terms = p.moved.clone();
+        for (b, &x) in p.row.iter().enumerate() {
+            if b != a {
+                let wb = view.ctx.symbol(&nf.unknown_inputs[needs[b]]).id;
+                terms.push(view.ctx.mul(&[x, wb]));
+            }
+        }
+        let offset = (!terms.is_empty())
+            .then(|| {
+                let sum = view.ctx.add(&terms);
+                view.ctx.canon(sum)
+            })
+            .filter(|c| !c.is_zero())
+            .map(|c| view.ctx.ratfun_text_factored(&c));
+        let name = fresh_name(view, &format!("{w}_{mode}"));
+        view.inputs[slots[a]] = name.clone();
+        view.input_vars[slots[a]] = view.ctx.symbol(&name).var;
+        out.push(ReducedInput {
+            name,
+            input: w,
+            factor: Some(view.ctx.ratfun_text_factored(&fc)),
+            offset,
+            mode,
+            order: None,
+        });
+    }
+    Ok(Some(out))
 }
 
 /// `w_j` itself in the reduced system: reconstructable by the rank route, or refused.
