@@ -244,13 +244,20 @@ fn main() {
         let s = run(root, &args, gnu_time);
         let sv: Value = serde_json::from_str(&s.stdout).unwrap_or(Value::Null);
         let (found, cert) = if s.code == 0 {
-            let found = sv["symmetries"].as_array().map_or(0, |a| a.len());
+            // A variable no output reaches is a symmetry too (`d/dx`), listed
+            // apart in `free_directions`: counted here, marked "free".
+            let structured = sv["symmetries"].as_array().map_or(0, |a| a.len());
+            let free = sv["free_directions"].as_array().map_or(0, |a| a.len());
             let cert = match (&sv["certificate"], &sv["exact"]) {
                 (Value::String(c), _) => c.clone(),
                 (_, Value::Bool(true)) => "exact".into(),
                 _ => "-".into(),
             };
-            (found.to_string(), cert)
+            let found = match (structured, free) {
+                (k, 0) => k.to_string(),
+                (k, f) => format!("{} ({f} free)", k + f),
+            };
+            (found, cert)
         } else {
             (format!("none (exit {})", s.code), "-".into())
         };
