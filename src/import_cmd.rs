@@ -4,7 +4,7 @@
 //! line in the source) and writes the result.
 
 use crate::cli::{PetabArgs, SbmlArgs, SiJlArgs, StrikeGolddArgs};
-use crate::Failure;
+use crate::{json, Failure};
 use obsan_import::{Converted, ImportError};
 use std::path::Path;
 use std::process::ExitCode;
@@ -31,8 +31,10 @@ fn check(path: &str, c: &Converted, at: (usize, usize), key: &str) -> Result<(),
     }
 }
 
-/// Write `text` to `out` whole (a sibling temporary file renamed into place).
-fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
+/// Refuse a target that exists (without --force) or is a folder: checked for
+/// every file a command writes before it writes the first, so that a refusal
+/// leaves nothing partial behind.
+fn writable(out: &str, force: bool) -> Result<(), Failure> {
     let p = Path::new(out);
     if p.exists() && !force {
         return Err(Failure(format!("{out} exists (--force replaces it)")));
@@ -40,6 +42,13 @@ fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
     if p.is_dir() {
         return Err(Failure(format!("{out} is a folder")));
     }
+    Ok(())
+}
+
+/// Write `text` to `out` whole (a sibling temporary file renamed into place).
+fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
+    writable(out, force)?;
+    let p = Path::new(out);
     if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .map_err(|e| Failure(format!("cannot create {}: {e}", dir.display())))?;
@@ -52,6 +61,56 @@ fn write_whole(out: &str, text: &str, force: bool) -> Result<(), Failure> {
     })
 }
 
+/// What `--json` prints: the models converted and the files written.
+fn report(format: &str, source: &str) -> json::Import {
+    json::Import {
+        format: format.into(),
+        inputs_out: None,
+        known_inputs: Vec::new(),
+        models: Vec::new(),
+        refused: Vec::new(),
+        source: source.into(),
+        values: None,
+    }
+}
+
+/// One converted model: written to `out`, or its text kept for stdout.
+fn model(key: Option<&str>, c: &Converted, out: Option<&str>) -> json::ImportedModel {
+    json::ImportedModel {
+        key: key.map(str::to_string),
+        path: out.map(str::to_string),
+        system: c.name.clone(),
+        text: if out.is_none() {
+            Some(c.sys_text.clone())
+        } else {
+            None
+        },
+    }
+}
+
+/// Write the converted model to `out`, or print it; with `--json` print the report
+/// instead of the text and the summary line.
+fn finish(
+    mut r: json::Import,
+    key: Option<&str>,
+    c: &Converted,
+    out: Option<&str>,
+    as_json: bool,
+) -> Result<(), Failure> {
+    r.models.push(model(key, c, out));
+    if as_json {
+        return json::print(&r);
+    }
+    match out {
+        Some(out) => match key {
+            Some(k) => outln!("model :{k} written to {out}"),
+            None => outln!("{} written to {out}", r.source),
+        },
+        None => out!("{}", c.sys_text),
+    }
+    Ok(())
+}
+
 pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
     let path = a.source.as_str();
     let text = crate::fsio::read_text(path)?;
@@ -61,7 +120,7 @@ pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
     }
     if a.list {
         for m in &models {
-            println!(
+            outln!(
                 "{}\t{}:{}\t{}",
                 m.key,
                 path,
@@ -77,24 +136,31 @@ pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
         Ok(c)
     };
     if let Some(dir) = &a.all {
-        let (mut done, mut refused) = (0usize, 0usize);
+        let mut r = report("si-jl", path);
         for m in &models {
             match convert(m) {
                 Ok(c) => {
                     let out = Path::new(dir).join(format!("{}.sys", c.name));
-                    write_whole(&out.to_string_lossy(), &c.sys_text, a.force)?;
-                    done += 1;
+                    let out = out.to_string_lossy();
+                    write_whole(&out, &c.sys_text, a.force)?;
+                    r.models.push(model(Some(&m.key), &c, Some(&out)));
                 }
                 Err(msg) => {
                     eprintln!("{msg}");
-                    refused += 1;
+                    r.refused.push(msg);
                 }
             }
         }
-        println!(
-            "{done} of {} models written to {dir}, {refused} refused",
-            models.len()
-        );
+        let refused = r.refused.len();
+        if a.json {
+            json::print(&r)?;
+        } else {
+            outln!(
+                "{} of {} models written to {dir}, {refused} refused",
+                r.models.len(),
+                models.len()
+            );
+        }
         if refused > 0 {
             return Err(Failure(format!(
                 "{refused} model(s) of {path} refused (messages above)"
@@ -121,13 +187,11 @@ pub fn si_jl(a: &SiJlArgs) -> Result<ExitCode, Failure> {
         }
     };
     let c = convert(m).map_err(Failure)?;
-    match &a.out {
-        Some(out) => {
-            write_whole(out, &c.sys_text, a.force)?;
-            println!("model :{} written to {out}", m.key);
-        }
-        None => print!("{}", c.sys_text),
+    if let Some(out) = &a.out {
+        write_whole(out, &c.sys_text, a.force)?;
     }
+    let r = report("si-jl", path);
+    finish(r, Some(&m.key), &c, a.out.as_deref(), a.json)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -136,28 +200,45 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
     let text = crate::fsio::read_text(path)?;
     let c = obsan_import::sbml_to_sys(&text, path, &a.observe)
         .map_err(|e| Failure(located(path, &e)))?;
-    // The course is computed before anything is written: a refusal writes nothing.
+    // Everything is computed and every target checked before anything is
+    // written: a refusal writes nothing.
     let inputs =
         obsan_import::sbml_inputs(&text, a.until).map_err(|e| Failure(located(path, &e)))?;
-    let code = check_and_write(path, &c, a.out.as_deref(), a.force)?;
-    if let Some(out) = &a.values {
-        let values = obsan_import::sbml_values(&text).map_err(|e| Failure(located(path, &e)))?;
-        // `{:?}` is the shortest text that reads back to the same f64.
-        let text: String = values
-            .iter()
-            .map(|(n, v)| format!("{n} = {v:?}\n"))
-            .collect();
-        write_whole(out, &text, a.force)?;
+    check_sys(path, &c)?;
+    let values = match &a.values {
+        Some(_) => {
+            let values =
+                obsan_import::sbml_values(&text).map_err(|e| Failure(located(path, &e)))?;
+            // `{:?}` is the shortest text that reads back to the same f64.
+            Some(
+                values
+                    .iter()
+                    .map(|(n, v)| format!("{n} = {v:?}\n"))
+                    .collect::<String>(),
+            )
+        }
+        None => None,
+    };
+    let course = a.inputs_out.as_ref().filter(|_| !inputs.names.is_empty());
+    for out in [&a.out, &a.values].into_iter().flatten().chain(course) {
+        writable(out, a.force)?;
     }
-    if inputs.names.is_empty() {
-        if let Some(out) = &a.inputs_out {
+    if let Some(out) = &a.out {
+        write_whole(out, &c.sys_text, a.force)?;
+    }
+    let mut r = report("sbml", path);
+    if let (Some(out), Some(values)) = (&a.values, &values) {
+        write_whole(out, values, a.force)?;
+        r.values = Some(out.clone());
+    }
+    r.known_inputs = inputs.names.clone();
+    match (&a.inputs_out, inputs.names.is_empty()) {
+        (Some(out), true) => {
             eprintln!("note: {path} has no <piecewise> of time: no known input, {out} not written");
         }
-        return Ok(code);
-    }
-    match &a.inputs_out {
-        Some(out) => {
+        (Some(out), false) => {
             write_whole(out, &inputs.csv(), a.force)?;
+            r.inputs_out = Some(out.clone());
             eprintln!(
                 "{} input(s) ({}): course over [0, {}] written to {out}",
                 inputs.names.len(),
@@ -165,7 +246,7 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
                 a.until.unwrap_or(0.0)
             );
         }
-        None => {
+        (None, _) => {
             for (n, (l, c)) in inputs.names.iter().zip(&inputs.places) {
                 eprintln!(
                     "note: {path}:{l}:{c}: the <piecewise> here is the known input {n}: \
@@ -175,7 +256,8 @@ pub fn sbml(a: &SbmlArgs) -> Result<ExitCode, Failure> {
             }
         }
     }
-    Ok(code)
+    finish(r, None, &c, a.out.as_deref(), a.json)?;
+    Ok(ExitCode::SUCCESS)
 }
 
 pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {
@@ -190,16 +272,22 @@ pub fn strike_goldd(a: &StrikeGolddArgs) -> Result<ExitCode, Failure> {
     };
     let c =
         obsan_import::strike_goldd_to_sys(&text, path).map_err(|e| Failure(located(path, &e)))?;
-    check_and_write(path, &c, a.out.as_deref(), a.force)
+    check_sys(path, &c)?;
+    if let Some(out) = &a.out {
+        write_whole(out, &c.sys_text, a.force)?;
+    }
+    finish(
+        report("strike-goldd", path),
+        None,
+        &c,
+        a.out.as_deref(),
+        a.json,
+    )?;
+    Ok(ExitCode::SUCCESS)
 }
 
-/// Read the produced .sys back (an error at its source line) and write it.
-fn check_and_write(
-    path: &str,
-    c: &Converted,
-    out: Option<&str>,
-    force: bool,
-) -> Result<ExitCode, Failure> {
+/// Read the produced .sys back: an error is reported at its source line.
+fn check_sys(path: &str, c: &Converted) -> Result<(), Failure> {
     let origin = format!("{}.sys", c.name);
     obsan_model::System::parse(&c.sys_text, &origin)
         .and_then(|s| s.normal_form(None, &[]).map(|_| ()))
@@ -209,15 +297,7 @@ fn check_and_write(
                 "{path}:{l}:{col}: the model is outside obsan's .sys class: {}",
                 e.message
             ))
-        })?;
-    match out {
-        Some(out) => {
-            write_whole(out, &c.sys_text, force)?;
-            println!("{path} written to {out}");
-        }
-        None => print!("{}", c.sys_text),
-    }
-    Ok(ExitCode::SUCCESS)
+        })
 }
 
 pub fn petab(a: &PetabArgs) -> Result<ExitCode, Failure> {
@@ -279,12 +359,9 @@ pub fn petab(a: &PetabArgs) -> Result<ExitCode, Failure> {
                 e.message
             ))
         })?;
-    match &a.out {
-        Some(out) => {
-            write_whole(out, &c.sys_text, a.force)?;
-            println!("{yaml} written to {out}");
-        }
-        None => print!("{}", c.sys_text),
+    if let Some(out) = &a.out {
+        write_whole(out, &c.sys_text, a.force)?;
     }
+    finish(report("petab", yaml), None, &c, a.out.as_deref(), a.json)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -37,6 +37,8 @@ from ._results import (
     Expression,
     Global,
     Identifiability,
+    Imported,
+    ImportedModel,
     LieDerivative,
     LieDerivatives,
     MapImage,
@@ -68,6 +70,12 @@ __all__ = [
     "diagnose",
     "simulate",
     "simulate_model",
+    "import_sbml",
+    "import_petab",
+    "import_si_jl",
+    "import_strike_goldd",
+    "Imported",
+    "ImportedModel",
     "montecarlo",
     "montecarlo_merge",
     "verify",
@@ -580,6 +588,78 @@ def simulate_model(
     f = f.number("--until", until).number("--every", every)
     f = f.path("--out", out).switch("--force", force).number("--timeout", timeout)
     return Simulation.of(_value(f))
+
+
+def _import(f: Flags, out: Optional[PathLike], force: bool, max_terms: Optional[int]) -> Imported:
+    f = f.path("--out", out).switch("--force", force).integer("--max-terms", max_terms)
+    return Imported.of(_value(f))
+
+
+def import_sbml(
+    source: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    observe: Names = None,
+    values: Optional[PathLike] = None,
+    inputs_out: Optional[PathLike] = None,
+    until: Optional[Number] = None,
+    force: bool = False,
+    max_terms: Optional[int] = None,
+) -> Imported:
+    """``obsan import sbml``: an SBML model to ``.sys``, written to ``out`` (else its text is
+    in ``result.models[0].text``). ``observe`` the measured ids (default every state);
+    ``values`` a file for the model's numbers; ``inputs_out`` a CSV of the known inputs'
+    exact course over ``[0, until]`` (an SBML ``<piecewise>`` of time is a known input),
+    which :func:`simulate_model` reads as ``inputs_csv``. A refusal raises
+    :class:`ObsanError` naming the element's line and writes nothing."""
+    f = Flags("import", "sbml", existing("import_sbml: source", source)).texts("--observe", observe)
+    f = f.path("--values", values).path("--inputs-out", inputs_out).number("--until", until)
+    return _import(f, out, force, max_terms)
+
+
+def import_petab(
+    problem: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    condition: Optional[str] = None,
+    force: bool = False,
+    max_terms: Optional[int] = None,
+) -> Imported:
+    """``obsan import petab``: a PEtab v1 problem (its YAML file) to ``.sys``; observables
+    become outputs, estimated parameters params, fixed ones consts; one model copy per
+    condition, or only ``condition``."""
+    f = Flags("import", "petab", existing("import_petab: problem", problem)).text("--condition", condition)
+    return _import(f, out, force, max_terms)
+
+
+def import_si_jl(
+    source: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    model: Optional[str] = None,
+    all: Optional[PathLike] = None,
+    force: bool = False,
+    max_terms: Optional[int] = None,
+) -> Imported:
+    """``obsan import si-jl``: StructuralIdentifiability.jl's ``@ODEmodel`` text to ``.sys``:
+    ``model`` picks one of a file's models by key; ``all`` a folder that receives every
+    model as ``KEY.sys`` (a model refused raises :class:`ObsanError` after the others are
+    written, as the command exits 2)."""
+    f = Flags("import", "si-jl", existing("import_si_jl: source", source)).text("--model", model)
+    return _import(f.path("--all", all), out, force, max_terms)
+
+
+def import_strike_goldd(
+    source: PathLike,
+    out: Optional[PathLike] = None,
+    *,
+    force: bool = False,
+    max_terms: Optional[int] = None,
+) -> Imported:
+    """``obsan import strike-goldd``: a STRIKE-GOLDD ``z_create_NAME.m`` model file to ``.sys``
+    (``x`` states, ``p`` params, ``u`` known inputs, ``w`` unknown inputs, ``f``, ``h``)."""
+    f = Flags("import", "strike-goldd", existing("import_strike_goldd: source", source))
+    return _import(f, out, force, max_terms)
 
 
 def calibrate(

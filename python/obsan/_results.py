@@ -605,6 +605,54 @@ class Simulation(Result):
         return [float(r[i]) for r in self.raw.get("rows") or []]
 
 
+class ImportedModel(NamedTuple):
+    """One model an import converted: ``path`` where its ``.sys`` was written, or its
+    ``text`` when no ``out`` was given; ``key`` is SI.jl's model key (else ``None``)."""
+
+    system: str
+    path: Optional[str]
+    text: Optional[str]
+    key: Optional[str]
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class Imported(Result):
+    """``obsan import FORMAT SOURCE``: the models converted and the files written.
+    ``known_inputs`` are the inputs the conversion made (an SBML ``<piecewise>`` of time is
+    ``u_ID``), ``inputs_out`` their written course (for ``simulate_model(inputs_csv=...)``),
+    ``values_file`` the file of the source's numbers (JSON ``values``; ``values`` is the
+    mapping's method), ``refused`` the messages of the models
+    ``si-jl --all`` refused. Each model is ``obsan.load(m.path)``, or ``obsan.loads(m.text)``
+    when it was not written."""
+
+    format: str
+    source: str
+    models: List[ImportedModel]
+    values_file: Optional[str]
+    known_inputs: List[str]
+    inputs_out: Optional[str]
+    refused: List[str]
+
+    @classmethod
+    def of(cls, raw: Dict[str, Any]) -> "Imported":
+        def opt(v: Any) -> Optional[str]:
+            return None if v is None else str(v)
+
+        return cls(
+            raw=raw,
+            format=str(raw.get("format", "")),
+            source=str(raw.get("source", "")),
+            models=[
+                ImportedModel(str(m.get("system", "")), opt(m.get("path")), opt(m.get("text")), opt(m.get("key")))
+                for m in raw.get("models") or []
+            ],
+            values_file=opt(raw.get("values")),
+            known_inputs=[str(n) for n in raw.get("known_inputs") or []],
+            inputs_out=opt(raw.get("inputs_out")),
+            refused=[str(r) for r in raw.get("refused") or []],
+        )
+
+
 _UNIT = re.compile(r"^(.*?) \((.*)\)$")
 
 

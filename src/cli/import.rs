@@ -24,12 +24,15 @@ Writes a dataset (docs/data-format.md) with the Vicon ground truth in truth.json
   obsan import si-jl benchmarks.jl --list
   obsan import si-jl benchmarks.jl --model Goodwin --out goodwin.sys
   obsan import si-jl benchmarks.jl --all systems/benchmarks/si-jl
+  obsan import si-jl benchmarks.jl --model Goodwin --out goodwin.sys --json
 
 x'(t) = EXPR makes x a state, y(t) = EXPR an output, another u(t) an input, a bare name a
 parameter; set_parameter_values(ode, Dict(p => QQ(1, 2))) values are substituted. The .sys is
 read back before it is written: a model outside obsan's class (not affine in its inputs) is
 refused at its equation's line in the source, exit 2. --all writes every model that converts
-and exits 2 if any was refused.")]
+and exits 2 if any was refused.
+--json prints {format, inputs_out, known_inputs, models (key, path, system, text), refused,
+source, values}: the files written, or the .sys text in models[].text without --out.")]
     SiJl(SiJlArgs),
     /// An SBML model (Level 2 or 3 core) to .sys: species changed by reactions as states,
     /// rate laws as their equations, compartments folded in, parameters unknown
@@ -39,13 +42,16 @@ and exits 2 if any was refused.")]
   obsan import sbml model.xml --observe S1,S2 --out model.sys
   obsan import sbml model.xml --out model.sys --values model.values
   obsan import sbml dosing.xml --out m.sys --values m.values --inputs-out m.csv --until 50
+  obsan import sbml model.xml --out model.sys --json
 
 Assignment rules are substituted and function definitions inlined. A <piecewise> of time and
 constants (a dosing switch) becomes a known input u_ID (ID: its rule's variable or reaction);
 --inputs-out writes its exact course over [0, --until] from the file's numbers (conditions
 comparing time with a constant expression, pieces affine in time; others refused at the
 piecewise), for simulate --inputs. Events, algebraic rules, delays, a piecewise reading a state
-and varying compartments are refused naming the element and its line, exit 2.")]
+and varying compartments are refused naming the element and its line, exit 2.
+--json prints {format, inputs_out, known_inputs, models (key, path, system, text), refused,
+source, values}: the files written, or the .sys text in models[].text without --out.")]
     Sbml(SbmlArgs),
     /// A PEtab v1 problem (YAML, SBML model, tables) to .sys: observables as outputs,
     /// estimated parameters as params, fixed ones as consts, one model copy per condition
@@ -53,17 +59,23 @@ and varying compartments are refused naming the element and its line, exit 2.")]
     #[command(after_help = "Examples:
   obsan import petab problem.yaml                    (.sys text to stdout)
   obsan import petab problem.yaml --condition c1 --out model.sys
+  obsan import petab problem.yaml --out model.sys --json
 
-Errors name the file (YAML, SBML or table), line and column, exit 2.")]
+Errors name the file (YAML, SBML or table), line and column, exit 2.
+--json prints {format, inputs_out, known_inputs, models (key, path, system, text), refused,
+source, values}: the files written, or the .sys text in models[].text without --out.")]
     Petab(PetabArgs),
     /// A STRIKE-GOLDD model file (z_create_NAME.m: MATLAB syms with x, p, u, w, f, h) to .sys
     /// (docs/import.md).
     #[command(after_help = "Examples:
   obsan import strike-goldd z_create_model.m                (.sys text to stdout)
   obsan import strike-goldd z_create_model.m --out model.sys
+  obsan import strike-goldd z_create_model.m --out model.sys --json
 
 x are the states, p the unknown parameters, u the known inputs, w the unknown inputs, f the
-dynamics and h the outputs (y1, y2, ...); other assignments are substituted where used.")]
+dynamics and h the outputs (y1, y2, ...); other assignments are substituted where used.
+--json prints {format, inputs_out, known_inputs, models (key, path, system, text), refused,
+source, values}: the files written, or the .sys text in models[].text without --out.")]
     StrikeGoldd(StrikeGolddArgs),
 }
 
@@ -81,6 +93,9 @@ pub struct StrikeGolddArgs {
     /// with "expression too large" (docs/engine.md, Limits).
     #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
     pub max_terms: usize,
+    /// Machine-readable JSON on stdout (what was converted and written).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -101,6 +116,9 @@ pub struct PetabArgs {
     /// with "expression too large" (docs/engine.md, Limits).
     #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
     pub max_terms: usize,
+    /// Machine-readable JSON on stdout (what was converted and written).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -132,6 +150,9 @@ pub struct SbmlArgs {
     /// with "expression too large" (docs/engine.md, Limits).
     #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS)]
     pub max_terms: usize,
+    /// Machine-readable JSON on stdout (what was converted and written).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args)]
@@ -159,6 +180,9 @@ pub struct SiJlArgs {
     /// (Not with --all, where each model is checked under the default budget.)
     #[arg(long, value_name = "N", default_value_t = obsan_expr::Budget::DEFAULT_MAX_TERMS, conflicts_with = "all")]
     pub max_terms: usize,
+    /// Machine-readable JSON on stdout (what was converted and written).
+    #[arg(long, conflicts_with = "list")]
+    pub json: bool,
 }
 
 #[derive(Args)]

@@ -15,6 +15,7 @@ mod estimate;
 mod expr;
 mod from_diagnosis;
 mod global;
+mod import;
 mod modes;
 mod partial;
 mod unknown;
@@ -25,6 +26,7 @@ pub use analysis::{
     SymCertificate, Symmetries, Verify,
 };
 pub use global::{Global, GlobalVariable, OutputOrder, SimulateSys, VariableKind, Verdict};
+pub use import::{Import, ImportedModel};
 pub use modes::{
     DerivedMode, Modes, ModesCertificate, ModesDerived, ModesFullRank, ModesUnknownInputs,
     PassCheck, Reduced, ReducedDynamics, ReducedOutput, ReducedUnknownInput, VariableMode,
@@ -151,6 +153,11 @@ pub const TYPED: &[Typed] = &[
         schema: || schema_for!(SimulateSys),
     },
     Typed {
+        name: "import",
+        command: "obsan import sbml|petab|si-jl|strike-goldd SOURCE --json",
+        schema: || schema_for!(Import),
+    },
+    Typed {
         name: "diagnose",
         command: "obsan diagnose MODEL DATA --json (and the report's diagnosis.json)",
         schema: || schema_for!(Diagnose),
@@ -189,7 +196,7 @@ pub const UNTYPED: &[(&str, &str)] = &[
         "simulate",
         "no --json without MODEL.sys: writes a dataset folder",
     ),
-    ("import", "no --json: writes a dataset or .sys file"),
+    ("import mrclam", "no --json: writes a dataset folder"),
 ];
 
 /// The schema of a typed output, by name (`montecarlo merge` is `montecarlo`'s).

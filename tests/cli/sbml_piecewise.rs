@@ -193,3 +193,75 @@ fn piecewise_refusals_are_located() {
     let src = temp_file("pw-rel.xml", &model(&rel, K_DOSE));
     bad(&["import", "sbml", &src], "MathML <gt> is not supported");
 }
+
+#[test]
+fn import_json_names_each_file_written_and_a_refused_target_writes_nothing() {
+    let src = temp_file("pw-json.xml", &model(&step_dose(), K_DOSE));
+    let dir = fresh_dir("pw-json");
+    let (sys, vals, inp) = (
+        format!("{dir}/m.sys"),
+        format!("{dir}/m.values"),
+        format!("{dir}/m.csv"),
+    );
+    let out = ok(&[
+        "import",
+        "sbml",
+        &src,
+        "--out",
+        &sys,
+        "--values",
+        &vals,
+        "--inputs-out",
+        &inp,
+        "--until",
+        "10",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["format"], "sbml");
+    assert_eq!(v["source"], src.as_str());
+    assert_eq!(v["values"], vals.as_str());
+    assert_eq!(v["inputs_out"], inp.as_str());
+    assert_eq!(v["known_inputs"], serde_json::json!(["u_dose"]));
+    assert_eq!(v["refused"], serde_json::json!([]));
+    let m = &v["models"][0];
+    assert_eq!(v["models"].as_array().unwrap().len(), 1);
+    assert_eq!(m["path"], sys.as_str());
+    assert!(m["text"].is_null());
+    // The file named is the model written: its `system` line is the one reported.
+    let written = std::fs::read_to_string(&sys).unwrap();
+    let system = m["system"].as_str().unwrap();
+    assert!(written.contains(&format!("system {system}\n")), "{written}");
+    for f in [&vals, &inp] {
+        assert!(std::path::Path::new(f).exists(), "{f} not written");
+    }
+    // Without --out the text is in the report, and it is the text stdout would have held.
+    let plain = ok(&["import", "sbml", &src]);
+    let v: serde_json::Value =
+        serde_json::from_str(&ok(&["import", "sbml", &src, "--json"])).unwrap();
+    assert_eq!(v["models"][0]["text"], plain.as_str());
+    assert!(v["models"][0]["path"].is_null() && v["values"].is_null());
+    // A target that cannot be written (the values file is a folder) is refused before
+    // anything is written: no .sys is left behind.
+    let dir = fresh_dir("pw-json-partial");
+    let (sys, vals) = (format!("{dir}/m.sys"), format!("{dir}/m.values"));
+    std::fs::create_dir_all(&vals).unwrap();
+    bad(
+        &["import", "sbml", &src, "--out", &sys, "--values", &vals],
+        "m.values exists",
+    );
+    assert!(
+        !std::path::Path::new(&sys).exists(),
+        "a partial import left {sys}"
+    );
+    bad(
+        &[
+            "import", "sbml", &src, "--out", &sys, "--values", &vals, "--force",
+        ],
+        "m.values is a folder",
+    );
+    assert!(
+        !std::path::Path::new(&sys).exists(),
+        "a partial import left {sys}"
+    );
+}

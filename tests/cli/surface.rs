@@ -130,3 +130,31 @@ fn each_json_help_names_exactly_the_keys_the_command_prints() {
         assert_eq!(promised, got, "obsan {} --help against its --json", args[0]);
     }
 }
+
+/// The same for `import`, whose formats are subcommands: each --help's sentence against its
+/// --json, on a STRIKE-GOLDD file and an SBML model of the repository.
+#[test]
+fn each_import_json_help_names_exactly_the_keys_it_prints() {
+    let runs = [
+        (
+            "strike-goldd",
+            "systems/benchmarks/strike-goldd/src/z_create_lotka_volterra.m",
+        ),
+        (
+            "sbml",
+            "crates/obsan-import/tests/petab/Bertozzi_PNAS2020/model.xml",
+        ),
+    ];
+    for (format, file) in runs {
+        let mut promised = promised_keys(&ok(&["import", format, "--help"]));
+        promised.sort();
+        let v: serde_json::Value =
+            serde_json::from_str(&ok(&["import", format, file, "--json"])).unwrap();
+        let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+        got.sort();
+        assert_eq!(
+            promised, got,
+            "obsan import {format} --help against its --json"
+        );
+    }
+}
