@@ -82,6 +82,7 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
             error_bound: r.error_bound,
             exact: true,
             identities: s.identities,
+            made_states: s.made_states.clone(),
             n: r.n,
             observable_variables: observable,
             rank: r.rank,
@@ -140,6 +141,13 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
             r.error_bound
         ));
     } else {
+        if !s.made_states.is_empty() {
+            o.push_str(&format!(
+                "an output holds {}: the certificate is the system's with {} made a state (its derivative the unknown input), the same output trajectories; each symmetry below is the state part of one of that system's\n",
+                s.made_states.join(", "),
+                if s.made_states.len() == 1 { "it" } else { "each" }
+            ));
+        }
         o.push_str(&format!(
             "exact: each symmetry leaves every output invariant, and the bracket of every field (f0, the known and the unknown inputs' fields) with it lies in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
             s.identities, r.rank, r.error_bound

@@ -142,6 +142,9 @@ pub struct SymmetriesUnknownInputs {
     pub exact: bool,
     /// How many identities were checked exactly.
     pub identities: usize,
+    /// The unknown inputs an output holds (direct feedthrough), made states `w' = v` for the
+    /// certificate; the symmetries are the state part of the extended system's (docs/engine.md).
+    pub made_states: Vec<String>,
     /// The number of analysed variables.
     pub n: usize,
     /// The variables no symmetry moves.

@@ -7,6 +7,7 @@ mod design;
 mod diagnose;
 mod experiments;
 mod expr;
+mod feedthrough;
 mod global;
 mod global_maps;
 mod import;

@@ -154,14 +154,6 @@ fn symmetries_with_unknown_inputs_full_rank_and_refusals() {
         serde_json::json!(["x2", "k1e", "k12", "k21"])
     );
     assert_eq!(v["observable_variables"], serde_json::json!(["x1"]));
-    let dir = fresh_dir("ui-feedthrough");
-    let p = format!("{dir}/f.sys");
-    std::fs::write(
-        &p,
-        "system f\nstate x\nunknown input w\nx' = w\noutput y = x + w\n",
-    )
-    .unwrap();
-    bad(&["symmetries", &p], "contains the unknown input w");
 }
 
 // Explicit time `t` (docs/sys-format.md, "Explicit time"): a known

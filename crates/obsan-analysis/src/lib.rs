@@ -36,6 +36,7 @@ mod sym_recon;
 mod sym_report;
 mod symmetry;
 mod unknown_input;
+mod unknown_input_feedthrough;
 mod unknown_input_joint;
 mod unknown_input_martinelli;
 mod unknown_input_modes;

@@ -35,6 +35,7 @@
 
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
+use crate::unknown_input_feedthrough::{feedthrough_inputs, feedthrough_symmetries};
 use obsan_expr::{
     lie::Coord, lie::LieJets, Ctx, Fp, Id, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P,
 };
@@ -55,16 +56,33 @@ pub struct UnknownInputSymmetries {
     /// Identities checked exactly: `L_xi h = 0` per output and vector, and
     /// one span membership per field and vector.
     pub identities: usize,
+    /// The unknown inputs an output holds (direct feedthrough): the
+    /// certificate is that of the system with them made states
+    /// (unknown_input_feedthrough.rs). Empty otherwise.
+    pub made_states: Vec<String>,
 }
 
 /// The symmetries of a normal form with unknown inputs (module docs):
-/// `Err(Invalid)` with the reason when a candidate is not certified, the
-/// outputs contain an unknown input, or the two rank routes disagree.
+/// `Err(Invalid)` with the reason when a candidate is not certified or the
+/// two rank routes disagree. Outputs holding an unknown input go through
+/// the system with that input made a state (unknown_input_feedthrough.rs).
 pub fn unknown_input_symmetries(
     nf: &mut NormalForm,
     opts: UnknownInputOptions,
 ) -> Result<UnknownInputSymmetries, AnalysisError> {
-    refuse_feedthrough(nf)?;
+    let through = feedthrough_inputs(nf);
+    if !through.is_empty() {
+        return feedthrough_symmetries(nf, &through, opts);
+    }
+    symmetries_without_feedthrough(nf, opts)
+}
+
+/// [`unknown_input_symmetries`] of a system whose outputs are functions of
+/// the state.
+pub(crate) fn symmetries_without_feedthrough(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<UnknownInputSymmetries, AnalysisError> {
     let deadline = opts.deadline;
     let seed = opts.seed;
     let report = unknown_input_rank(nf, opts)?;
@@ -103,24 +121,8 @@ pub fn unknown_input_symmetries(
         vectors,
         free,
         identities,
+        made_states: Vec::new(),
     })
-}
-
-/// Outputs that contain an unknown input make (a) depend on the input's
-/// variation too: not handled.
-fn refuse_feedthrough(nf: &mut NormalForm) -> Result<(), AnalysisError> {
-    let outs: Vec<(String, Id)> = nf.outputs.clone();
-    for (name, id) in outs {
-        let h = nf.ctx.canon(id);
-        for (w, &v) in nf.unknown_inputs.clone().iter().zip(&nf.unknown_input_vars) {
-            if !nf.ctx.rf_diff(&h, v).is_zero() {
-                return Err(AnalysisError::Invalid(format!(
-                    "output {name} contains the unknown input {w}: symmetries with a direct feedthrough are not supported (the certificate assumes outputs that are functions of the state)"
-                )));
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The rows of `Omega` (x-part) at one point of the extended space: the
