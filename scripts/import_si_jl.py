@@ -10,8 +10,9 @@ a bare git directory: then benchmarking/benchmarks.jl is read with `git show HEA
 model of benchmarking/benchmarks.jl is converted by `obsan import si-jl --all` (a model outside
 obsan's class is refused and reported, as p53 is); then each file gets its source and licence
 line and the verdict of systems/benchmarks/si-jl/verdicts.list (made by
-benches/peers/sijl_verdicts.py from SI.jl's published identifiable functions), or
-`verdict-source: none`.
+benches/peers/sijl_verdicts.py from SI.jl's published identifiable functions), else that of
+verdicts_symident.list (made by benches/peers/sijl_symident_verdicts.py from symident, an
+independent tool), or `verdict-source: none`.
 """
 
 import glob
@@ -39,6 +40,14 @@ def main():
         if line.strip() and not line.startswith("#"):
             key, spec, source = [x.strip() for x in line.split("|")]
             verdicts[key] = (spec, source)
+    # symident's verdicts, for the models SI.jl publishes none for (their source line is whole).
+    by_symident = {}
+    sym_list = os.path.join(OUT, "verdicts_symident.list")
+    if os.path.exists(sym_list):
+        for line in open(sym_list):
+            if line.strip() and not line.startswith("#"):
+                key, spec, source = [x.strip() for x in line.split("|")]
+                by_symident[key] = (spec, source)
     for old in glob.glob(os.path.join(OUT, "*.sys")):
         os.remove(old)
     with tempfile.TemporaryDirectory() as tmp:
@@ -58,6 +67,10 @@ def main():
             spec, source = verdicts[key]
             add.append(f"# verdict-source: independent ({source}: SI.jl's identifiable functions with "
                        "states; rank and per-variable verdict by benches/peers/sijl_verdicts.py)")
+            add.append(f"# verdict: {spec}")
+        elif key in by_symident:
+            spec, source = by_symident[key]
+            add.append(f"# verdict-source: independent ({source})")
             add.append(f"# verdict: {spec}")
         else:
             add.append("# verdict-source: none (SI.jl publishes no identifiable functions for this "
