@@ -31,7 +31,7 @@ const GNU_TIME: &str = "/usr/bin/time";
 
 #[path = "suite_entries.rs"]
 mod suite_entries;
-use suite_entries::{entries, si_jl_entries, si_jl_published, Verdict};
+use suite_entries::{entries, si_jl_entries, si_jl_published, unknown_input_entries, Verdict};
 
 /// One child run: exit code, stdout, wall time, peak resident memory in KiB.
 struct Run {
@@ -152,6 +152,20 @@ fn judge(v: &Value, cited: &Verdict) -> String {
             diffs.push(format!("unobservable also {extra:?}, not {missing:?}"));
         }
     }
+    if let Some(want) = &cited.reconstructable {
+        // `obsan rank` on a model with unknown inputs: each reconstructable one with its order.
+        let got: BTreeSet<String> = v["reconstructable_inputs"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x["name"].as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default();
+        if *want != got {
+            diffs.push(format!("reconstructable {got:?}, cited {want:?}"));
+        }
+    }
     if diffs.is_empty() {
         "agrees".into()
     } else {
@@ -166,16 +180,16 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with("--"))
         .collect();
-    let (entries, published) = match (entries(root), si_jl_entries(root), si_jl_published(root)) {
-        (Ok(mut e), Ok(s), Ok(p)) => {
-            e.extend(s);
-            (e, p)
-        }
-        (Err(e), _, _) | (_, Err(e), _) | (_, _, Err(e)) => {
-            eprintln!("suite: {e}");
-            std::process::exit(2);
-        }
-    };
+    let all = (|| {
+        let mut e = entries(root)?;
+        e.extend(si_jl_entries(root)?);
+        e.extend(unknown_input_entries(root)?);
+        Ok::<_, String>((e, si_jl_published(root)?))
+    })();
+    let (entries, published) = all.unwrap_or_else(|e| {
+        eprintln!("suite: {e}");
+        std::process::exit(2);
+    });
     // Rank times of the SI.jl models, for the summary (median, max).
     let mut si_rank_secs: Vec<(f64, String)> = Vec::new();
     let mut si_sym: (usize, usize) = (0, 0);

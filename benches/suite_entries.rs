@@ -13,6 +13,9 @@ pub struct Verdict {
     pub rank: Option<u64>,
     /// `Some(empty)` for "observable" (rank n); `None` when only the rank is cited.
     pub unobservable: Option<BTreeSet<String>>,
+    /// With unknown inputs: the reconstructable ones (`reconstructable w1 w2`, or
+    /// `reconstructable none`); `None` when not cited.
+    pub reconstructable: Option<BTreeSet<String>>,
 }
 
 /// One suite entry: a file, an optional restriction, the verdict it cites.
@@ -22,7 +25,8 @@ pub struct Entry {
     pub verdict: Verdict,
 }
 
-/// Parse `observable; rank 6`, `unobservable x2 k1; rank 5` or `rank 4`.
+/// Parse `observable; rank 6`, `unobservable x2 k1; rank 5` or `rank 4`, with unknown inputs
+/// also `; reconstructable w1` (or `reconstructable none`).
 pub fn parse_verdict(spec: &str) -> Result<Verdict, String> {
     let mut v = Verdict::default();
     for part in spec.split(';').map(str::trim) {
@@ -38,6 +42,14 @@ pub fn parse_verdict(spec: &str) -> Result<Verdict, String> {
                 }
                 v.unobservable = Some(names);
             }
+            Some("reconstructable") => {
+                let names: BTreeSet<String> = words.map(String::from).collect();
+                v.reconstructable = Some(match names.iter().next().map(String::as_str) {
+                    None => return Err(format!("'reconstructable' names nothing in '{spec}'")),
+                    Some("none") if names.len() == 1 => BTreeSet::new(),
+                    _ => names,
+                });
+            }
             Some("rank") => {
                 let r = words.next().and_then(|w| w.parse().ok());
                 if r.is_none() || words.next().is_some() {
@@ -48,7 +60,7 @@ pub fn parse_verdict(spec: &str) -> Result<Verdict, String> {
             _ => return Err(format!("cannot read '{part}' in '{spec}'")),
         }
     }
-    if v.rank.is_none() && v.unobservable.is_none() {
+    if v.rank.is_none() && v.unobservable.is_none() && v.reconstructable.is_none() {
         return Err(format!("empty verdict '{spec}'"));
     }
     Ok(v)
@@ -85,27 +97,9 @@ pub fn file_entries(path: &str, text: &str) -> Result<Vec<Entry>, String> {
 /// cite a source and at least one verdict), then systems/benchmarks/paper.list.
 pub fn entries(root: &Path) -> Result<Vec<Entry>, String> {
     let dir = root.join("systems/benchmarks");
-    let mut files: Vec<String> = std::fs::read_dir(&dir)
-        .map_err(|e| format!("{}: {e}", dir.display()))?
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".sys"))
-        .map(|n| format!("systems/benchmarks/{n}"))
-        .collect();
-    files.sort();
+    let mut files = model_files(root, "systems/benchmarks")?;
     files.push("systems/vins.sys".to_string());
-    let mut out = Vec::new();
-    for path in &files {
-        let text = std::fs::read_to_string(root.join(path)).map_err(|e| format!("{path}: {e}"))?;
-        if !text.lines().any(|l| l.starts_with("# verdict-source: ")) {
-            return Err(format!("{path}: no '# verdict-source:' line"));
-        }
-        let e = file_entries(path, &text)?;
-        if e.is_empty() {
-            return Err(format!("{path}: no '# verdict:' line"));
-        }
-        out.extend(e);
-    }
+    let mut out = cited_entries(root, &files)?;
     let list =
         std::fs::read_to_string(dir.join("paper.list")).map_err(|e| format!("paper.list: {e}"))?;
     for (i, line) in list.lines().enumerate() {
@@ -137,17 +131,8 @@ pub fn entries(root: &Path) -> Result<Vec<Entry>, String> {
 /// optional (`verdict-source: none`): such an entry has `Verdict::default()` (neither rank nor
 /// variables cited) and is timed but not judged.
 pub fn si_jl_entries(root: &Path) -> Result<Vec<Entry>, String> {
-    let dir = root.join("systems/benchmarks/si-jl");
-    let mut files: Vec<String> = std::fs::read_dir(&dir)
-        .map_err(|e| format!("{}: {e}", dir.display()))?
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".sys"))
-        .map(|n| format!("systems/benchmarks/si-jl/{n}"))
-        .collect();
-    files.sort();
     let mut out = Vec::new();
-    for path in &files {
+    for path in &model_files(root, "systems/benchmarks/si-jl")? {
         let text = std::fs::read_to_string(root.join(path)).map_err(|e| format!("{path}: {e}"))?;
         if !text.lines().any(|l| l.starts_with("# Source: ")) {
             return Err(format!("{path}: no '# Source:' line"));
@@ -190,4 +175,43 @@ pub fn si_jl_published(root: &Path) -> Result<Vec<(String, String, String)>, Str
         }
     }
     Ok(out)
+}
+
+/// The unknown-input models, systems/benchmarks/unknown-inputs/*.sys: each cites its source
+/// and at least one verdict (derived by hand in the file or from the SymPy oracle
+/// benches/peers/unknown_inputs.py), with the reconstructable inputs.
+pub fn unknown_input_entries(root: &Path) -> Result<Vec<Entry>, String> {
+    cited_entries(root, &model_files(root, "systems/benchmarks/unknown-inputs")?)
+}
+
+/// The entries of `files`, each of which must carry a `# verdict-source:` line and at least
+/// one `# verdict:` line.
+fn cited_entries(root: &Path, files: &[String]) -> Result<Vec<Entry>, String> {
+    let mut out = Vec::new();
+    for path in files {
+        let text = std::fs::read_to_string(root.join(path)).map_err(|e| format!("{path}: {e}"))?;
+        if !text.lines().any(|l| l.starts_with("# verdict-source: ")) {
+            return Err(format!("{path}: no '# verdict-source:' line"));
+        }
+        let e = file_entries(path, &text)?;
+        if e.is_empty() {
+            return Err(format!("{path}: no '# verdict:' line"));
+        }
+        out.extend(e);
+    }
+    Ok(out)
+}
+
+/// The `.sys` files of the folder `dir` (relative to `root`), as paths relative to `root`, sorted.
+fn model_files(root: &Path, dir: &str) -> Result<Vec<String>, String> {
+    let full = root.join(dir);
+    let mut files: Vec<String> = std::fs::read_dir(&full)
+        .map_err(|e| format!("{}: {e}", full.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".sys"))
+        .map(|n| format!("{dir}/{n}"))
+        .collect();
+    files.sort();
+    Ok(files)
 }

@@ -4,8 +4,8 @@
 //! `# verdict:` line, which quotes its source; it is never obsan's own output.
 
 use crate::suite_entries::{
-    entries as entries_in, file_entries, parse_verdict, si_jl_entries, si_jl_published, Entry,
-    Verdict,
+    entries as entries_in, file_entries, parse_verdict, si_jl_entries, si_jl_published,
+    unknown_input_entries, Entry, Verdict,
 };
 use crate::util::*;
 use serde_json::Value;
@@ -155,5 +155,49 @@ fn si_jl_verdicts_match_the_cited_ones() {
         checked += 1;
     }
     assert!(checked >= 64, "only {checked} SI.jl verdicts checked");
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The unknown-input models (systems/benchmarks/unknown-inputs/): each cites a verdict,
+/// derived by hand in its file or by the SymPy oracle (benches/peers/unknown_inputs.py), with
+/// the reconstructable inputs; `obsan rank` must agree on every one.
+#[test]
+fn unknown_input_verdicts_match_the_cited_ones() {
+    let v = parse_verdict("unobservable x2; rank 3; reconstructable none").unwrap();
+    assert_eq!(v.reconstructable, Some(BTreeSet::new()));
+    let v = parse_verdict("observable; rank 2; reconstructable w").unwrap();
+    assert_eq!(v.reconstructable, Some(BTreeSet::from(["w".to_string()])));
+    assert!(parse_verdict("rank 2; reconstructable").is_err());
+    let all = unknown_input_entries(std::path::Path::new(env!("CARGO_MANIFEST_DIR")))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(all.len() >= 17, "{} unknown-input models", all.len());
+    let mut failures = Vec::new();
+    for e in &all {
+        let v: Value = serde_json::from_str(&ok(&["rank", e.path.as_str(), "--json"])).unwrap();
+        let set = |key: &str, field: Option<&str>| -> BTreeSet<String> {
+            v[key]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| field.map_or(x, |f| &x[f]).as_str().unwrap().to_string())
+                .collect()
+        };
+        let (rank, un, rec) = (
+            v["rank"].as_u64().unwrap(),
+            set("unobservable_variables", None),
+            set("reconstructable_inputs", Some("name")),
+        );
+        let c = &e.verdict;
+        if c.rank.is_some_and(|r| r != rank)
+            || c.unobservable.as_ref().is_some_and(|w| *w != un)
+            || c.reconstructable.as_ref().is_some_and(|w| *w != rec)
+        {
+            failures.push(format!(
+                "{}: cited {c:?}, obsan rank {rank}, unobservable {un:?}, reconstructable {rec:?}",
+                e.path
+            ));
+        }
+        assert!(c.reconstructable.is_some(), "{}: no reconstructable cited", e.path);
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
