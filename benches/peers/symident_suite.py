@@ -3,7 +3,8 @@
 
 Usage, from the repository root after `cargo build --release`:
 
-    python3 benches/peers/symident_suite.py [--timeout S] [--obsan PATH] [--si-jl] [--repeat K] [FILTER ...]
+    python3 benches/peers/symident_suite.py [--timeout S] [--obsan PATH] [--si-jl] [--repeat K]
+        [--inprocess FILE] [FILTER ...]
 
 --si-jl runs the StructuralIdentifiability.jl models (systems/benchmarks/si-jl/) instead of the
 suite; models without a cited verdict are compared by rank only. The last column is the CPU
@@ -11,6 +12,9 @@ ratio: symident's detect() CPU time over the obsan process's CPU time (user + sy
 --repeat K runs each tool K times per model and keeps each one's least CPU time (and least wall
 time): a CPU time measured once on a shared machine is inflated by whatever else runs, more so
 for a 3 ms process than for a 1 s one, so one run understates the ratio.
+--inprocess FILE (written by `cargo bench --bench rank_inprocess -- --tsv FILE`) adds the
+like-for-like column: symident's detect() CPU time (in a running interpreter) over obsan's rank
+CPU time in-process (no process start), and its median.
 
 Each suite entry (systems/benchmarks/*.sys, systems/vins.sys, systems/benchmarks/paper.list) is
 translated mechanically from .sys: states get ODEs, params stay free symbols (symident's
@@ -37,6 +41,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 # The smallest obsan CPU time a ratio divides by (a run of obsan takes about 2 ms
 # of CPU to start the process alone, so this only guards a division by zero).
 CPU_FLOOR = 0.001
+# The floor of an in-process time (0.01 ms: below any rank test measured, a guard only).
+IN_FLOOR = 0.00001
 
 FUNCS = {"sin", "cos", "tan", "atan", "atan2", "exp", "log", "sqrt", "pi"}
 
@@ -226,6 +232,7 @@ def judge(rank, n, un, cited):
 
 def main():
     args = sys.argv[1:]
+    inproc = {}
     if args[:1] == ["--one"]:
         run_one(args[1], args[2] if len(args) > 2 and args[2] else None)
         return
@@ -245,14 +252,23 @@ def main():
         elif args[i] == "--obsan":
             obsan = args[i + 1]
             i += 2
+        elif args[i] == "--inprocess":
+            # path<TAB>least CPU seconds, from `cargo bench --bench rank_inprocess -- --tsv FILE`.
+            for line in open(args[i + 1]):
+                if line.strip():
+                    k, v = line.rstrip("\n").split("\t")
+                    inproc[k] = float(v)
+            i += 2
         else:
             filt.append(args[i])
             i += 1
     import symident
 
+    extra = " in-process ratio |" if inproc else ""
     print("| model | n | obsan rank | obsan verdict | obsan s | symident rank | symident verdict "
-          "| symident s | CPU ratio |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "| symident s | CPU ratio |" + extra)
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if inproc else ""))
+    in_ratios = []
     score = {"obsan": 0, "symident": 0, "total": 0, "faster": 0, "both": 0}
     ratios = []
     for path, restriction, cited in suite():
@@ -280,7 +296,7 @@ def main():
                 overdict = "no cited verdict"
         else:
             n, orank, overdict = "-", "-", f"exit {p.returncode}"
-        ratio = "-"
+        ratio, in_ratio = "-", "-"
         try:
             s = None
             for k in range(repeat if p.returncode == 0 else 1):
@@ -309,6 +325,10 @@ def main():
                     r = s["cpu"] / max(ocpu, CPU_FLOOR)
                     ratios.append(r)
                     ratio = f"{r:.0f}x"
+                if path in inproc and restriction is None and "cpu" in s:
+                    r2 = s["cpu"] / max(inproc[path], IN_FLOOR)
+                    in_ratios.append(r2)
+                    in_ratio = f"{r2:.0f}x"
             else:
                 lines = q.stderr.strip().splitlines() or ["no output"]
                 err = next((ln for ln in lines if re.match(r"^\w+(Error|Exception):", ln)), lines[-1])
@@ -325,7 +345,7 @@ def main():
             score["both"] += 1
             score["faster"] += osecs < timeout
         print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} "
-              f"| {ratio} |", flush=True)
+              f"| {ratio} |" + (f" {in_ratio} |" if inproc else ""), flush=True)
     print()
     if ratios:
         ratios.sort()
@@ -334,6 +354,13 @@ def main():
         print(f"CPU ratio (symident detect() CPU / obsan process CPU, obsan's floored at 1 ms) on the "
               f"{k} models both answered: median {med:.0f}x, min {ratios[0]:.1f}x, max {ratios[-1]:.0f}x"
               f" (least of {repeat} runs each)")
+    if in_ratios:
+        in_ratios.sort()
+        k = len(in_ratios)
+        med = in_ratios[k // 2] if k % 2 else (in_ratios[k // 2 - 1] + in_ratios[k // 2]) / 2
+        print(f"In-process ratio (symident detect() CPU / obsan's rank in-process CPU, "
+              f"benches/rank_inprocess.rs, its least of its runs) on {k} models: median {med:.0f}x, "
+              f"min {in_ratios[0]:.1f}x, max {in_ratios[-1]:.0f}x")
     print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, "
           f"symident {score['symident']}; obsan faster on {score['faster']} of the {score['both']} "
           f"that both answered or symident timed out; symident "
