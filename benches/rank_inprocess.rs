@@ -34,13 +34,22 @@ fn main() {
     let (mut filter, mut repeat, mut tsv) = ("si-jl".to_string(), 20usize, None::<String>);
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--repeat" => repeat = args.next().and_then(|k| k.parse().ok()).expect("--repeat K"),
+            "--repeat" => {
+                repeat = args
+                    .next()
+                    .and_then(|k| k.parse().ok())
+                    .expect("--repeat K")
+            }
             "--tsv" => tsv = args.next(),
             _ => filter = a,
         }
     }
     let mut files: Vec<String> = Vec::new();
-    for dir in ["systems/benchmarks", "systems/benchmarks/si-jl", "systems/benchmarks/unknown-inputs"] {
+    for dir in [
+        "systems/benchmarks",
+        "systems/benchmarks/si-jl",
+        "systems/benchmarks/unknown-inputs",
+    ] {
         let mut fs: Vec<String> = std::fs::read_dir(dir)
             .expect("the suite's folders")
             .filter_map(|e| e.ok())

@@ -181,7 +181,10 @@ pub fn si_jl_published(root: &Path) -> Result<Vec<(String, String, String)>, Str
 /// and at least one verdict (derived by hand in the file or from the SymPy oracle
 /// benches/peers/unknown_inputs.py), with the reconstructable inputs.
 pub fn unknown_input_entries(root: &Path) -> Result<Vec<Entry>, String> {
-    cited_entries(root, &model_files(root, "systems/benchmarks/unknown-inputs")?)
+    cited_entries(
+        root,
+        &model_files(root, "systems/benchmarks/unknown-inputs")?,
+    )
 }
 
 /// The entries of `files`, each of which must carry a `# verdict-source:` line and at least

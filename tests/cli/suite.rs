@@ -197,7 +197,11 @@ fn unknown_input_verdicts_match_the_cited_ones() {
                 e.path
             ));
         }
-        assert!(c.reconstructable.is_some(), "{}: no reconstructable cited", e.path);
+        assert!(
+            c.reconstructable.is_some(),
+            "{}: no reconstructable cited",
+            e.path
+        );
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
