@@ -34,7 +34,7 @@ use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
 use crate::unknown_input_joint as joint;
 use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
-use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun, SplitMix};
+use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun};
 use obsan_model::NormalForm;
 
 /// How an unknown input enters the reduced system.
@@ -161,6 +161,12 @@ pub fn unknown_input_modes(
             inputs,
         });
     }
+    // The unknown inputs' columns are projected below: the derivation's
+    // closure (and its exchange of modes) is judged without them.
+    let derive = &DeriveOptions {
+        projected: nf.unknown_inputs.clone(),
+        ..derive.clone()
+    };
     let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
     let mut inputs = Vec::new();
     let mut rescaled = false;
@@ -428,15 +434,8 @@ fn independent_inputs(
         }
     }
     let r = d.modes.len();
-    let mut rng = SplitMix(seed ^ 0x7569_6d6f_6465_7321);
     let mut ok = vec![false; cols.len()];
-    for _ in 0..2 {
-        let Ok(pt) = view.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
-        };
-        let Ok(v) = view.ctx.eval_fp(&roots, &pt) else {
-            continue;
-        };
+    for v in joint::values_at_random_points(view, &roots, seed ^ 0x7569_6d6f_6465_7321, 2) {
         // Columns one by one: does each raise the rank of those before it?
         // (Column rank is row rank: each column is inserted as a row.)
         let mut taken = FpEchelon::default();
@@ -474,15 +473,8 @@ pub fn inputs_driving_modes(nf: &mut NormalForm, vectors: &[Vec<RatFun>], seed: 
         roots.extend(g);
     }
     let k = vectors.len();
-    let mut rng = SplitMix(seed ^ 0x6472_6976_6573);
     let mut out = vec![false; nf.unknown_fields.len()];
-    for _ in 0..2 {
-        let Ok(pt) = nf.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
-        };
-        let Ok(v) = nf.ctx.eval_fp(&roots, &pt) else {
-            continue;
-        };
+    for v in joint::values_at_random_points(nf, &roots, seed ^ 0x6472_6976_6573, 2) {
         let cols: Vec<Vec<Fp>> = v.chunks(n).map(|c| c.to_vec()).collect();
         // The symmetries' span, then whether each g_j raises its rank.
         let span = FpEchelon::of_rows(FpField, cols[..k].to_vec());
