@@ -26,7 +26,9 @@
 //!
 //! Layout: `crate::fp_linalg` (F_p null spaces, rational reconstruction, monomials),
 //! `ansatz` (the invariant ansatz and its F_p screens), `blocks` (blocks read
-//! off the fields), `reduced` (the reduced system, its files and its proof).
+//! off the fields), `reduced` (the reduced system, its files and its proof),
+//! `exchange` (a mode exchanged for an output, derivative or generator the
+//! reduced system needs when it does not close).
 
 mod ansatz;
 mod blocks;
