@@ -116,7 +116,7 @@ pub fn unknown_input_view(
     let sym = SymmetryReport {
         n: s.report.n,
         rank: s.report.rank,
-        vectors: s.vectors.clone(),
+        vectors: s.vectors.iter().map(|v| primitive(&nf.ctx, v)).collect(),
         free: vec![],
         exact: true,
         rows_checked: s.identities,
@@ -125,6 +125,41 @@ pub fn unknown_input_view(
         undecided,
     };
     Ok((s, view, rr, sym))
+}
+
+/// `v` times a function: polynomial entries without a common factor (the
+/// yaw rotation divided by `vy`, as the symmetry search prints it, becomes
+/// the rotation itself). The same direction, so the same first integrals
+/// (eq. 11), in the affine form the cross-section reads (`derive/frame.rs`).
+fn primitive(ctx: &obsan_expr::Ctx, v: &[RatFun]) -> Vec<RatFun> {
+    let mut out = v.to_vec();
+    // Each pass makes at least one more entry a polynomial.
+    for _ in 0..v.len() {
+        let Some(d) = out
+            .iter()
+            .map(RatFun::denominator)
+            .find(|d| !d.is_constant())
+            .cloned()
+        else {
+            break;
+        };
+        let m = RatFun::from_poly(d);
+        out = out.iter().map(|c| ctx.rf_mul(c, &m)).collect();
+    }
+    let mut g: Option<obsan_expr::Poly> = None;
+    for c in out.iter().filter(|c| !c.is_zero()) {
+        g = Some(match g {
+            None => c.numerator().clone(),
+            Some(g) => obsan_expr::gcds::gcd(&g, c.numerator()),
+        });
+    }
+    if let Some(inv) = g
+        .filter(|g| !g.is_constant())
+        .and_then(|g| ctx.rf_inv(&RatFun::from_poly(g)))
+    {
+        out = out.iter().map(|c| ctx.rf_mul(c, &inv)).collect();
+    }
+    out
 }
 
 /// The modes and reduced system of a model with unknown inputs (module

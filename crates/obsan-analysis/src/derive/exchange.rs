@@ -38,7 +38,7 @@ pub(super) fn needed_functions(
     }
     for (k, row) in red.derivatives.iter().enumerate() {
         for (i, d) in row.iter().enumerate() {
-            if d.is_none() && !opts.projected.contains(&fnames[i]) {
+            if d.is_none() && !red.variant[k][i] && !opts.projected.contains(&fnames[i]) {
                 let t = lie(nf, modes[k].expr, &sp.fields[i]);
                 out.push((t, ModeKind::LieDerivative));
             }

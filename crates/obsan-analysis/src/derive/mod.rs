@@ -270,6 +270,7 @@ fn derive_dense(
         derivatives,
         outputs,
         timed_out,
+        ..
     } = red;
     Ok(Derivation {
         n,
@@ -683,18 +684,27 @@ pub(super) struct Reduced {
     pub(super) derivatives: Vec<Vec<Option<String>>>,
     pub(super) outputs: Vec<(String, Option<String>)>,
     pub(super) timed_out: bool,
+    /// `variant[k][i]`: `L_{f_i} g_k` proven not invariant (a non-zero
+    /// `w(t)` at a point), so a function of no modes; with unknown inputs
+    /// the projection, not an exchange, deals with it.
+    pub(super) variant: Vec<Vec<bool>>,
 }
 
 impl Reduced {
-    /// Every output and every derivative found, but along the fields named
-    /// in `projected` (`fnames`: the columns' names).
+    /// Every output and every derivative that could be a function of
+    /// modes found, but along the fields named in `projected` (`fnames`:
+    /// the columns' names).
     pub(super) fn closed_except(&self, fnames: &[String], projected: &[String]) -> bool {
         let counted = |i: usize| !projected.contains(&fnames[i]);
-        self.derivatives.iter().all(|row| {
-            row.iter()
-                .enumerate()
-                .all(|(i, d)| d.is_some() || !counted(i))
-        }) && self.outputs.iter().all(|o| o.1.is_some())
+        self.derivatives
+            .iter()
+            .zip(&self.variant)
+            .all(|(row, var)| {
+                row.iter()
+                    .enumerate()
+                    .all(|(i, d)| d.is_some() || !counted(i) || var[i])
+            })
+            && self.outputs.iter().all(|o| o.1.is_some())
     }
 }
 
@@ -754,18 +764,31 @@ pub(super) fn reduce(
         r => r,
     };
     let mut derivatives = Vec::new();
+    let mut variant = Vec::new();
     for m in modes {
         let mut row = Vec::new();
+        let mut var = Vec::new();
         for f in sp.fields {
+            let mut not_invariant = false;
             let e = if check_deadline(opts, "the reduced dynamics", modes.len()).is_err() {
                 soft(Err(AnalysisError::Timeout(String::new())))?
             } else {
                 let t = lie(nf, m.expr, f);
-                soft(in_modes(nf, t, &zb, &znames, modes, rng, opts))?
+                // A function of the modes satisfies eq. (11): `w(t)` not zero
+                // at a point (exact) rules a form out before any search (the
+                // drift of vins with amz unknown carries the lost baz).
+                not_invariant = matches!(screen_mode(nf, sp.w_ids, t, opts.seed), Ok(false));
+                if not_invariant {
+                    None
+                } else {
+                    soft(in_modes(nf, t, &zb, &znames, modes, rng, opts))?
+                }
             };
             row.push(e);
+            var.push(not_invariant);
         }
         derivatives.push(row);
+        variant.push(var);
     }
     let mut outputs = Vec::new();
     for (oname, h) in nf.outputs.clone() {
@@ -782,5 +805,6 @@ pub(super) fn reduce(
         derivatives,
         outputs,
         timed_out,
+        variant,
     })
 }
