@@ -4,8 +4,10 @@
 //! The modes are a basis of first integrals of the certified unknown-input
 //! symmetries `xi_a` ([`unknown_input_symmetries`]): the derivation of the
 //! known-input case (`derive/`, eq. 11 `dm . xi_a = 0`) run on the *view*, the
-//! model with the unknown inputs read as inputs, against those vectors and the
-//! unknown-input rank. Their dynamics `dm/dt = dm (f0 + sum f_i u_i + sum g_j w_j)`
+//! model with the unknown inputs read as inputs, against those vectors (in
+//! primitive polynomial form, so a rotation scaled by a function is seen as
+//! the rotation) and the unknown-input rank; its closure is judged without
+//! the unknown inputs' columns, which are projected afterwards. Their dynamics `dm/dt = dm (f0 + sum f_i u_i + sum g_j w_j)`
 //! are then written in the modes, the known inputs and, for each `w_j` some
 //! mode's derivative needs:
 //! - `w_j` itself when every `L_{g_j} m_k` is a function of the modes; it must

@@ -212,4 +212,78 @@ mod tests {
         assert_eq!(nf.ctx.canon(m2[1].expr), nf.ctx.canon(want));
         assert_eq!(m2[0].expr, modes[0].expr);
     }
+
+    /// The planar vehicle pushed by an unknown force (vio_planar_force.sys,
+    /// wx and wy read as inputs and projected afterwards): `x^2 + y^2`,
+    /// `-x vy + y vx`, `x vx + y vy` and `z4 = -x sin(theta) + y cos(theta)`
+    /// are independent invariants of the rotation `(-y, x, -vy, vx, 1)`, but
+    /// the output `zx = -(x cos(theta) + y sin(theta))` and `L_omega z4 = -zx`
+    /// are `+-sqrt(z1 - z4^2)` in them. By hand, with the output in place of
+    /// `x^2 + y^2` everything is rational: `p . v` and `p x v` with `R^T p =
+    /// -(zx, -z4)` give the body velocity `R^T v` over `zx^2 + z4^2`, and
+    /// `zx' = -(R^T v)_x - omega z4`, `z4' = (R^T v)_y + omega zx`. The
+    /// output is offered first and taken; the unknown inputs' columns (`L_wx
+    /// (x vx + y vy) = x`, not invariant) do not count.
+    #[test]
+    fn exchange_takes_a_needed_output_first() {
+        let src = "system v\nstate x, y, vx, vy, theta\ninput omega, ax, ay, wx, wy\n\
+                   x' = vx\ny' = vy\nvx' = cos(theta)*ax - sin(theta)*ay + wx\n\
+                   vy' = sin(theta)*ax + cos(theta)*ay + wy\ntheta' = omega\n\
+                   output zx = -(cos(theta)*x + sin(theta)*y)\n\
+                   output zy = sin(theta)*x - cos(theta)*y\n";
+        let sys = System::parse(src, "v.sys").unwrap();
+        let mut nf = sys.normal_form(None, &[]).unwrap();
+        let (names, fields) = crate::fields::field_names(&mut nf);
+        let w: Vec<Vec<Id>> = vec![["-y", "x", "-vy", "vx", "1"]
+            .iter()
+            .map(|t| nf.parse_expr(t, false).unwrap())
+            .collect()];
+        let texts = [
+            ("z1", "x^2 + y^2"),
+            ("z2", "-x*vy + y*vx"),
+            ("z3", "x*vx + y*vy"),
+            ("z4", "-x*sin(theta) + y*cos(theta)"),
+        ];
+        let modes: Vec<DerivedMode> = texts
+            .iter()
+            .map(|(n, t)| DerivedMode {
+                name: n.to_string(),
+                expr: nf.parse_expr(t, false).unwrap(),
+                text: t.to_string(),
+                kind: ModeKind::Polynomial,
+                angle: false,
+                domain: "everywhere".into(),
+            })
+            .collect();
+        let sp = ModeSpace {
+            fields: &fields,
+            consts: &[],
+            used_vars: &[],
+            w_ids: &w,
+        };
+        let opts = DeriveOptions {
+            projected: vec!["wx".into(), "wy".into()],
+            ..DeriveOptions::default()
+        };
+        let mut rng = SplitMix(5);
+        let open = |r: &Reduced| !r.closed_except(&names, &opts.projected);
+        let red = reduce(&mut nf, &sp, &modes, &mut rng, &opts).unwrap();
+        assert!(
+            red.outputs[0].1.is_none() && open(&red),
+            "{:?}",
+            red.outputs
+        );
+        let cands = needed_functions(&mut nf, &[], &sp, &modes, &red, &names, &opts);
+        let zx = nf.outputs[0].1;
+        assert_eq!(cands[0], (zx, ModeKind::Output));
+        let (m2, r2) = exchange(&mut nf, &sp, &modes, &cands, &mut rng, &opts, &open)
+            .unwrap()
+            .expect("an exchange closes");
+        assert!(!open(&r2), "{:?}", r2.derivatives);
+        assert_eq!(m2[0].expr, zx, "x^2 + y^2 is the mode exchanged");
+        assert_eq!(
+            m2[1..].iter().map(|m| m.expr).collect::<Vec<_>>(),
+            modes[1..].iter().map(|m| m.expr).collect::<Vec<_>>()
+        );
+    }
 }
