@@ -604,3 +604,154 @@ fn the_toggle_switch_reduced_system_closes() {
         assert!(d["rhs"].is_string(), "{d}");
     }
 }
+
+/// `sum_i field_i d e / d vars_i`, taken here (independently of obsan's
+/// output), as a node.
+fn along(
+    ctx: &mut obsan_expr::Ctx,
+    e: obsan_expr::Id,
+    vars: &[&str],
+    field: &[&str],
+) -> obsan_expr::Id {
+    let mut terms = Vec::new();
+    for (x, c) in vars.iter().zip(field) {
+        let var = ctx.symbol(x).var;
+        let d = ctx.diff(e, var);
+        let c = ctx.parse(c).unwrap();
+        terms.push(ctx.mul(&[c, d]));
+    }
+    ctx.add(&terms)
+}
+
+/// The determinant of a small square matrix of nodes (Laplace, first row).
+fn det(ctx: &mut obsan_expr::Ctx, m: &[Vec<obsan_expr::Id>]) -> obsan_expr::Id {
+    if m.len() == 1 {
+        return m[0][0];
+    }
+    let mut terms = Vec::new();
+    for c in 0..m.len() {
+        let minor: Vec<Vec<obsan_expr::Id>> = m[1..]
+            .iter()
+            .map(|row| (0..row.len()).filter(|&k| k != c).map(|k| row[k]).collect())
+            .collect();
+        let d = det(ctx, &minor);
+        let t = ctx.mul(&[m[0][c], d]);
+        terms.push(if c % 2 == 0 { t } else { ctx.neg(t) });
+    }
+    ctx.add(&terms)
+}
+
+#[test]
+fn vio_planar_force_modes_close_in_the_outputs_and_the_body_velocity() {
+    // By hand (vio_planar_force.sys): the rotation about the landmark R =
+    // (-y, x, -vy, vx, 1) on (x, y, vx, vy, theta) is the one lost direction
+    // (rank 4 of 5). With c, s = cos, sin(theta), the outputs zx = -(c x + s
+    // y), zy = s x - c y and the body-frame velocity bvx = c vx + s vy, bvy =
+    // -s vx + c vy are four invariants of R with independent gradients, and
+    // everything is rational in them: zx' = -bvx + omega zy, zy' = -bvy -
+    // omega zx, bv' = (ax, ay) + R(theta)^T w - omega J bv (J the rotation by
+    // 90 degrees), the unknown part R^T w a reconstructable combination. So
+    // the modes span the same differentials (each printed mode annihilated
+    // by R, four of them independent) and a rational reduced system exists;
+    // x^2 + y^2 in place of zx left c x + s y = +-sqrt(x^2 + y^2 - zy^2).
+    let vars = ["x", "y", "vx", "vy", "theta"];
+    let rot = ["-y", "x", "-vy", "vx", "1"];
+    let field = [
+        "vx",
+        "vy",
+        "cos(theta)*ax - sin(theta)*ay + wx",
+        "sin(theta)*ax + cos(theta)*ay + wy",
+        "omega",
+    ];
+    let hand = [
+        ("zx", "-(cos(theta)*x + sin(theta)*y)"),
+        ("zy", "sin(theta)*x - cos(theta)*y"),
+        ("bvx", "cos(theta)*vx + sin(theta)*vy"),
+        ("bvy", "-sin(theta)*vx + cos(theta)*vy"),
+    ];
+    let hand_dot = [
+        "-bvx + omega*zy",
+        "-bvy - omega*zx",
+        "ax + omega*bvy + cos(theta)*wx + sin(theta)*wy",
+        "ay - omega*bvx - sin(theta)*wx + cos(theta)*wy",
+    ];
+    let mut ctx = obsan_expr::Ctx::new();
+    let hmap: Vec<(obsan_expr::Var, obsan_expr::Id)> = hand
+        .iter()
+        .map(|(n, e)| (ctx.symbol(n).var, ctx.parse(e).unwrap()))
+        .collect();
+    for ((_, e), want) in hand.iter().zip(hand_dot) {
+        assert!(annihilates(e, &vars, &rot), "{e}");
+        let id = ctx.parse(e).unwrap();
+        let got = along(&mut ctx, id, &vars, &field);
+        let want = ctx.parse(want).unwrap();
+        let want = ctx.substitute(want, &hmap).unwrap();
+        assert_eq!(ctx.canon(got), ctx.canon(want), "{e}'");
+    }
+
+    let f = "systems/benchmarks/unknown-inputs/vio_planar_force.sys";
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", f])).unwrap();
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(4), Some(5)));
+    assert_eq!(v["reduced"]["closed"], true, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 4, "{v}");
+    let mut map = Vec::new();
+    for m in modes {
+        let e = m["expr"].as_str().unwrap();
+        assert!(annihilates(e, &vars, &rot), "{e}");
+        let name = m["name"].as_str().unwrap();
+        map.push((ctx.symbol(name).var, ctx.parse(e).unwrap()));
+    }
+    // Independent: the minor of the Jacobian on (x, y, vx, vy) is not zero.
+    let jac: Vec<Vec<obsan_expr::Id>> = map
+        .iter()
+        .map(|&(_, e)| {
+            vars[..4]
+                .iter()
+                .map(|x| {
+                    let var = ctx.symbol(x).var;
+                    ctx.diff(e, var)
+                })
+                .collect()
+        })
+        .collect();
+    let d = det(&mut ctx, &jac);
+    assert!(!ctx.canon(d).is_zero(), "dependent modes: {v}");
+    // Each reduced input is factor * w + offset, in the model's names.
+    for ri in v["reduced_inputs"].as_array().unwrap() {
+        let text = format!(
+            "({})*{} + ({})",
+            ri["factor"].as_str().unwrap(),
+            ri["input"].as_str().unwrap(),
+            ri["offset"].as_str().unwrap_or("0")
+        );
+        let name = ri["name"].as_str().unwrap();
+        map.push((ctx.symbol(name).var, ctx.parse(&text).unwrap()));
+    }
+    // The reduced system is the model rewritten: each mode's right-hand side,
+    // the modes and combinations written out, is its derivative along the
+    // model's field (taken here), and each output is what the model says.
+    for (dy, m) in v["reduced"]["dynamics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(modes)
+    {
+        assert_eq!(dy["name"], m["name"], "{v}");
+        let rhs = ctx.parse(dy["rhs"].as_str().unwrap()).unwrap();
+        let rhs = ctx.substitute(rhs, &map).unwrap();
+        let e = ctx.parse(m["expr"].as_str().unwrap()).unwrap();
+        let want = along(&mut ctx, e, &vars, &field);
+        assert_eq!(ctx.canon(rhs), ctx.canon(want), "{dy}");
+    }
+    for o in v["reduced"]["outputs"].as_array().unwrap() {
+        let got = ctx.parse(o["expr"].as_str().unwrap()).unwrap();
+        let got = ctx.substitute(got, &map).unwrap();
+        let name = o["name"].as_str().unwrap();
+        let want = ctx
+            .parse(hand.iter().find(|h| h.0 == name).unwrap().1)
+            .unwrap();
+        assert_eq!(ctx.canon(got), ctx.canon(want), "{o}");
+    }
+}

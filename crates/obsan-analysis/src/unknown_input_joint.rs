@@ -10,7 +10,7 @@
 //! and `b = 0`: each `L_{F'} m_l` is invariant, a function of the modes.
 
 use crate::derive::{lie_along, Derivation};
-use obsan_expr::{FpEchelon, Id, SplitMix};
+use obsan_expr::{Fp, FpEchelon, Id, SplitMix};
 use obsan_model::NormalForm;
 
 /// The modes paired with the unknown inputs `slots` (view input indices):
@@ -31,14 +31,7 @@ pub(crate) fn pair_modes(
             roots.push(lie_along(view, m.expr, &g));
         }
     }
-    let mut rng = SplitMix(seed ^ 0x006a_6f69_6e74);
-    for _ in 0..2 {
-        let Ok(pt) = view.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
-        };
-        let Ok(v) = view.ctx.eval_fp(&roots, &pt) else {
-            continue;
-        };
+    for v in values_at_random_points(view, &roots, seed ^ 0x006a_6f69_6e74, 2) {
         let mut taken = FpEchelon::default();
         let mut k = Vec::new();
         for (i, row) in v.chunks(slots.len()).enumerate() {
@@ -53,6 +46,43 @@ pub(crate) fn pair_modes(
     None
 }
 
+/// The values of `roots` at `points` random F_p points drawn from `seed`; a
+/// point where they cannot be evaluated (a pole) is skipped, so fewer
+/// may come back.
+pub(crate) fn values_at_random_points(
+    nf: &mut NormalForm,
+    roots: &[Id],
+    seed: u64,
+    points: usize,
+) -> Vec<Vec<Fp>> {
+    let mut rng = SplitMix(seed);
+    let mut out = Vec::with_capacity(points);
+    for _ in 0..points {
+        let Ok(pt) = nf.ctx.random_fp_point(&mut rng, &|_| None) else {
+            continue;
+        };
+        if let Ok(v) = nf.ctx.eval_fp(roots, &pt) {
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// `b` without its row `i` and column `j`.
+fn minor(b: &[Vec<Id>], i: usize, j: usize) -> Vec<Vec<Id>> {
+    b.iter()
+        .enumerate()
+        .filter(|(r, _)| *r != i)
+        .map(|(_, row)| {
+            row.iter()
+                .enumerate()
+                .filter(|(k, _)| *k != j)
+                .map(|(_, &x)| x)
+                .collect()
+        })
+        .collect()
+}
+
 /// The determinant of a small square matrix of expressions (Laplace along
 /// the first row: `m'` is the number of unknown inputs, a handful).
 fn det(view: &mut NormalForm, b: &[Vec<Id>]) -> Id {
@@ -62,17 +92,7 @@ fn det(view: &mut NormalForm, b: &[Vec<Id>]) -> Id {
     }
     let mut terms = Vec::with_capacity(n);
     for c in 0..n {
-        let minor: Vec<Vec<Id>> = b[1..]
-            .iter()
-            .map(|row| {
-                row.iter()
-                    .enumerate()
-                    .filter(|(k, _)| *k != c)
-                    .map(|(_, &x)| x)
-                    .collect()
-            })
-            .collect();
-        let m = det(view, &minor);
+        let m = det(view, &minor(b, 0, c));
         let t = view.ctx.mul(&[b[0][c], m]);
         terms.push(if c % 2 == 0 { t } else { view.ctx.neg(t) });
     }
@@ -89,19 +109,7 @@ pub(crate) fn inverse(view: &mut NormalForm, b: &[Vec<Id>]) -> Vec<Vec<Id>> {
             let cof = if n == 1 {
                 view.ctx.int(1)
             } else {
-                let minor: Vec<Vec<Id>> = b
-                    .iter()
-                    .enumerate()
-                    .filter(|(r, _)| *r != i)
-                    .map(|(_, row)| {
-                        row.iter()
-                            .enumerate()
-                            .filter(|(k, _)| *k != j)
-                            .map(|(_, &x)| x)
-                            .collect()
-                    })
-                    .collect();
-                det(view, &minor)
+                det(view, &minor(b, i, j))
             };
             let cof = if (i + j) % 2 == 0 {
                 cof

@@ -4,8 +4,10 @@
 //! The modes are a basis of first integrals of the certified unknown-input
 //! symmetries `xi_a` ([`unknown_input_symmetries`]): the derivation of the
 //! known-input case (`derive/`, eq. 11 `dm . xi_a = 0`) run on the *view*, the
-//! model with the unknown inputs read as inputs, against those vectors and the
-//! unknown-input rank. Their dynamics `dm/dt = dm (f0 + sum f_i u_i + sum g_j w_j)`
+//! model with the unknown inputs read as inputs, against those vectors (in
+//! primitive polynomial form, so a rotation scaled by a function is seen as
+//! the rotation) and the unknown-input rank; its closure is judged without
+//! the unknown inputs' columns, which are projected afterwards. Their dynamics `dm/dt = dm (f0 + sum f_i u_i + sum g_j w_j)`
 //! are then written in the modes, the known inputs and, for each `w_j` some
 //! mode's derivative needs:
 //! - `w_j` itself when every `L_{g_j} m_k` is a function of the modes; it must
@@ -34,7 +36,7 @@ use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
 use crate::unknown_input_joint as joint;
 use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
-use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun, SplitMix};
+use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun};
 use obsan_model::NormalForm;
 
 /// How an unknown input enters the reduced system.
@@ -116,7 +118,7 @@ pub fn unknown_input_view(
     let sym = SymmetryReport {
         n: s.report.n,
         rank: s.report.rank,
-        vectors: s.vectors.clone(),
+        vectors: s.vectors.iter().map(|v| primitive(&nf.ctx, v)).collect(),
         free: vec![],
         exact: true,
         rows_checked: s.identities,
@@ -125,6 +127,41 @@ pub fn unknown_input_view(
         undecided,
     };
     Ok((s, view, rr, sym))
+}
+
+/// `v` times a function: polynomial entries without a common factor (the
+/// yaw rotation divided by `vy`, as the symmetry search prints it, becomes
+/// the rotation itself). The same direction, so the same first integrals
+/// (eq. 11), in the affine form the cross-section reads (`derive/frame.rs`).
+fn primitive(ctx: &obsan_expr::Ctx, v: &[RatFun]) -> Vec<RatFun> {
+    let mut out = v.to_vec();
+    // Each pass makes at least one more entry a polynomial.
+    for _ in 0..v.len() {
+        let Some(d) = out
+            .iter()
+            .map(RatFun::denominator)
+            .find(|d| !d.is_constant())
+            .cloned()
+        else {
+            break;
+        };
+        let m = RatFun::from_poly(d);
+        out = out.iter().map(|c| ctx.rf_mul(c, &m)).collect();
+    }
+    let mut g: Option<obsan_expr::Poly> = None;
+    for c in out.iter().filter(|c| !c.is_zero()) {
+        g = Some(match g {
+            None => c.numerator().clone(),
+            Some(g) => obsan_expr::gcds::gcd(&g, c.numerator()),
+        });
+    }
+    if let Some(inv) = g
+        .filter(|g| !g.is_constant())
+        .and_then(|g| ctx.rf_inv(&RatFun::from_poly(g)))
+    {
+        out = out.iter().map(|c| ctx.rf_mul(c, &inv)).collect();
+    }
+    out
 }
 
 /// The modes and reduced system of a model with unknown inputs (module
@@ -161,6 +198,12 @@ pub fn unknown_input_modes(
             inputs,
         });
     }
+    // The unknown inputs' columns are projected below: the derivation's
+    // closure (and its exchange of modes) is judged without them.
+    let derive = &DeriveOptions {
+        projected: nf.unknown_inputs.clone(),
+        ..derive.clone()
+    };
     let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
     let mut inputs = Vec::new();
     let mut rescaled = false;
@@ -428,15 +471,8 @@ fn independent_inputs(
         }
     }
     let r = d.modes.len();
-    let mut rng = SplitMix(seed ^ 0x7569_6d6f_6465_7321);
     let mut ok = vec![false; cols.len()];
-    for _ in 0..2 {
-        let Ok(pt) = view.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
-        };
-        let Ok(v) = view.ctx.eval_fp(&roots, &pt) else {
-            continue;
-        };
+    for v in joint::values_at_random_points(view, &roots, seed ^ 0x7569_6d6f_6465_7321, 2) {
         // Columns one by one: does each raise the rank of those before it?
         // (Column rank is row rank: each column is inserted as a row.)
         let mut taken = FpEchelon::default();
@@ -474,15 +510,8 @@ pub fn inputs_driving_modes(nf: &mut NormalForm, vectors: &[Vec<RatFun>], seed: 
         roots.extend(g);
     }
     let k = vectors.len();
-    let mut rng = SplitMix(seed ^ 0x6472_6976_6573);
     let mut out = vec![false; nf.unknown_fields.len()];
-    for _ in 0..2 {
-        let Ok(pt) = nf.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
-        };
-        let Ok(v) = nf.ctx.eval_fp(&roots, &pt) else {
-            continue;
-        };
+    for v in joint::values_at_random_points(nf, &roots, seed ^ 0x6472_6976_6573, 2) {
         let cols: Vec<Vec<Fp>> = v.chunks(n).map(|c| c.to_vec()).collect();
         // The symmetries' span, then whether each g_j raises its rank.
         let span = FpEchelon::of_rows(FpField, cols[..k].to_vec());

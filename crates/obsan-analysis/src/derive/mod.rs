@@ -26,10 +26,13 @@
 //!
 //! Layout: `crate::fp_linalg` (F_p null spaces, rational reconstruction, monomials),
 //! `ansatz` (the invariant ansatz and its F_p screens), `blocks` (blocks read
-//! off the fields), `reduced` (the reduced system, its files and its proof).
+//! off the fields), `reduced` (the reduced system, its files and its proof),
+//! `exchange` (a mode exchanged for an output, derivative or generator the
+//! reduced system needs when it does not close).
 
 mod ansatz;
 mod blocks;
+mod exchange;
 mod frame;
 mod monomial;
 
@@ -62,6 +65,10 @@ pub struct DeriveOptions {
     pub max_mode_degree: usize,
     /// Highest total degree of `P` and `Q` when writing a derivative in the modes.
     pub max_closure_degree: usize,
+    /// Inputs whose fields the caller projects afterwards (the unknown
+    /// inputs of a view): their columns count neither for the closure that
+    /// decides an exchange of modes nor as its candidates.
+    pub projected: Vec<String>,
 }
 
 impl Default for DeriveOptions {
@@ -71,6 +78,7 @@ impl Default for DeriveOptions {
             deadline: None,
             max_mode_degree: 3,
             max_closure_degree: 6,
+            projected: Vec::new(),
         }
     }
 }
@@ -244,9 +252,14 @@ fn derive_dense(
     } = found;
     let mut red = reduce(nf, &space, &modes, &mut rng, opts)?;
     // Modes whose dynamics have no rational form (x^2 c and y^2 c, where the
-    // fields need x y c = sqrt(z1 z2)): exchange one for a missing derivative.
-    if !red.closed() && !red.timed_out && modes.len() == rank {
-        if let Some((m2, r2)) = exchange(nf, &space, &modes, &red, &mut rng, opts)? {
+    // fields need x y c = sqrt(z1 z2)): exchange one for a needed function.
+    let open = |red: &Reduced| !red.closed_except(&lay.fnames, &opts.projected);
+    if open(&red) && !red.timed_out && modes.len() == rank {
+        let gens = generators(nf, report);
+        let cands = exchange::needed_functions(nf, &gens, &space, &modes, &red, &lay.fnames, opts);
+        if let Some((m2, r2)) =
+            exchange::exchange(nf, &space, &modes, &cands, &mut rng, opts, &open)?
+        {
             modes = m2;
             red = r2;
         }
@@ -257,6 +270,7 @@ fn derive_dense(
         derivatives,
         outputs,
         timed_out,
+        ..
     } = red;
     Ok(Derivation {
         n,
@@ -613,6 +627,20 @@ fn outputs_and_lie_derivatives(
     Ok(())
 }
 
+/// The generators of the rank test's codistribution: the basis Lie
+/// derivatives of the outputs.
+fn generators(nf: &mut NormalForm, report: &RankReport) -> Vec<Id> {
+    let mut out = Vec::new();
+    for w in &report.basis {
+        let mut g = nf.outputs[w.output].1;
+        for &k in &w.fields {
+            g = lie(nf, g, &report.fields.vectors[k]);
+        }
+        out.push(g);
+    }
+    out
+}
+
 /// The names of derived modes: z1, z2, ... skipping names the system uses.
 pub(super) struct Names {
     used: Vec<String>,
@@ -644,23 +672,38 @@ pub(super) fn vars_id(nf: &mut NormalForm, name: &str) -> Id {
 }
 
 /// What the reduced system is written over.
-struct ModeSpace<'a> {
-    fields: &'a [Vec<Id>],
-    consts: &'a [String],
-    used_vars: &'a [u32],
-    w_ids: &'a [Vec<Id>],
+pub(super) struct ModeSpace<'a> {
+    pub(super) fields: &'a [Vec<Id>],
+    pub(super) consts: &'a [String],
+    pub(super) used_vars: &'a [u32],
+    pub(super) w_ids: &'a [Vec<Id>],
 }
 
 /// The reduced system of one choice of modes (`None`: no form found).
-struct Reduced {
-    derivatives: Vec<Vec<Option<String>>>,
-    outputs: Vec<(String, Option<String>)>,
-    timed_out: bool,
+pub(super) struct Reduced {
+    pub(super) derivatives: Vec<Vec<Option<String>>>,
+    pub(super) outputs: Vec<(String, Option<String>)>,
+    pub(super) timed_out: bool,
+    /// `variant[k][i]`: `L_{f_i} g_k` proven not invariant (a non-zero
+    /// `w(t)` at a point), so a function of no modes; with unknown inputs
+    /// the projection, not an exchange, deals with it.
+    pub(super) variant: Vec<Vec<bool>>,
 }
 
 impl Reduced {
-    fn closed(&self) -> bool {
-        self.derivatives.iter().flatten().all(|d| d.is_some())
+    /// Every output and every derivative that could be a function of
+    /// modes found, but along the fields named in `projected` (`fnames`:
+    /// the columns' names).
+    pub(super) fn closed_except(&self, fnames: &[String], projected: &[String]) -> bool {
+        let counted = |i: usize| !projected.contains(&fnames[i]);
+        self.derivatives
+            .iter()
+            .zip(&self.variant)
+            .all(|(row, var)| {
+                row.iter()
+                    .enumerate()
+                    .all(|(i, d)| d.is_some() || !counted(i) || var[i])
+            })
             && self.outputs.iter().all(|o| o.1.is_some())
     }
 }
@@ -668,7 +711,7 @@ impl Reduced {
 /// Each `L_f g_k` and each output written in the modes (and cos/sin of the
 /// angle-valued ones, log of the variables the system takes the log of, and
 /// the generic constants).
-fn reduce(
+pub(super) fn reduce(
     nf: &mut NormalForm,
     sp: &ModeSpace,
     modes: &[DerivedMode],
@@ -721,18 +764,31 @@ fn reduce(
         r => r,
     };
     let mut derivatives = Vec::new();
+    let mut variant = Vec::new();
     for m in modes {
         let mut row = Vec::new();
+        let mut var = Vec::new();
         for f in sp.fields {
+            let mut not_invariant = false;
             let e = if check_deadline(opts, "the reduced dynamics", modes.len()).is_err() {
                 soft(Err(AnalysisError::Timeout(String::new())))?
             } else {
                 let t = lie(nf, m.expr, f);
-                soft(in_modes(nf, t, &zb, &znames, modes, rng, opts))?
+                // A function of the modes satisfies eq. (11): `w(t)` not zero
+                // at a point (exact) rules a form out before any search (the
+                // drift of vins with amz unknown carries the lost baz).
+                not_invariant = matches!(screen_mode(nf, sp.w_ids, t, opts.seed), Ok(false));
+                if not_invariant {
+                    None
+                } else {
+                    soft(in_modes(nf, t, &zb, &znames, modes, rng, opts))?
+                }
             };
             row.push(e);
+            var.push(not_invariant);
         }
         derivatives.push(row);
+        variant.push(var);
     }
     let mut outputs = Vec::new();
     for (oname, h) in nf.outputs.clone() {
@@ -749,151 +805,6 @@ fn reduce(
         derivatives,
         outputs,
         timed_out,
+        variant,
     })
-}
-
-/// Most exchanges tried (each one a whole reduced system).
-const MAX_EXCHANGES: usize = 8;
-
-/// Independent invariants need not generate the rational invariants the
-/// dynamics need (`x^2 c`, `y^2 c` leave `x y c` only as `sqrt(z1 z2)`). A
-/// derivative `L_f g_k` with no form is itself an invariant (the fields
-/// commute with the symmetries): one mode (the last non-variable first) is
-/// exchanged for it, its rational content stripped, when the set stays
-/// independent, and the exchange is kept when the reduced system then closes.
-fn exchange(
-    nf: &mut NormalForm,
-    sp: &ModeSpace,
-    modes: &[DerivedMode],
-    red: &Reduced,
-    rng: &mut SplitMix,
-    opts: &DeriveOptions,
-) -> Result<Option<(Vec<DerivedMode>, Reduced)>, AnalysisError> {
-    let mut cands: Vec<Id> = Vec::new();
-    for (k, row) in red.derivatives.iter().enumerate() {
-        for (i, d) in row.iter().enumerate() {
-            if d.is_none() && cands.len() < 3 {
-                cands.push(lie(nf, modes[k].expr, &sp.fields[i]));
-            }
-        }
-    }
-    let mut tries = 0;
-    for t in cands {
-        let c = nf.ctx.canon(t);
-        if c.is_zero() || c.as_q().is_some() || nf.ctx.is_angle_valued(t) {
-            continue;
-        }
-        // Without its rational content: 2 x y c becomes x y c.
-        let (pn, pd) = (c.numerator().content(), c.denominator().content());
-        let q = Q::new(pd, pn);
-        let qn = nf.ctx.num(q);
-        let g0 = nf.ctx.from_canonical(&c);
-        let g = nf.ctx.mul(&[qn, g0]);
-        let gc = nf.ctx.canon(g);
-        let g = nf.ctx.from_canonical(&gc);
-        if !screen_mode(nf, sp.w_ids, g, opts.seed)? {
-            continue;
-        }
-        for j in (0..modes.len()).rev() {
-            if modes[j].kind == ModeKind::Variable || modes[j].angle {
-                continue;
-            }
-            if tries >= MAX_EXCHANGES {
-                return Ok(None);
-            }
-            // Soft, like the reduced system's own deadline: the modes found
-            // stand, reported as not closed.
-            match check_deadline(opts, "the mode exchange", modes.len()) {
-                Err(AnalysisError::Timeout(_)) => return Ok(None),
-                r => r?,
-            }
-            let mut indep = Indep {
-                grads: Vec::new(),
-                seed: opts.seed ^ 0x6578_6368,
-            };
-            let mut ok = true;
-            for (l, m) in modes.iter().enumerate() {
-                if l != j {
-                    ok &= indep.raises_rank(nf, m.expr)?;
-                }
-            }
-            if !ok || !indep.raises_rank(nf, g)? {
-                continue;
-            }
-            tries += 1;
-            let den = gc.denominator().clone();
-            let mut m2 = modes.to_vec();
-            m2[j] = DerivedMode {
-                name: modes[j].name.clone(),
-                expr: g,
-                text: nf.ctx.ratfun_text_factored(&gc),
-                kind: ModeKind::LieDerivative,
-                angle: false,
-                domain: if den.is_constant() {
-                    "everywhere".into()
-                } else {
-                    format!("where {} != 0", nf.ctx.poly_text(&den))
-                },
-            };
-            let r2 = reduce(nf, sp, &m2, rng, opts)?;
-            if r2.closed() {
-                return Ok(Some((m2, r2)));
-            }
-            if r2.timed_out {
-                return Ok(None);
-            }
-        }
-    }
-    Ok(None)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use obsan_model::System;
-
-    /// `x^2 c` and `y^2 c` are independent invariants of the scaling
-    /// `(x, y, c) -> (l x, l y, c / l^2)`, but `L_u (x^2 c) = 2 c x y` is
-    /// `±2 sqrt(z1 z2)` in them: no rational form. Exchanging `z2` for that
-    /// derivative without its content (`c x y`) closes the system, by hand:
-    /// `z1' = 2 u z2`, `z2' = u c (y^2 - x^2) = u (z2^2/z1 - z1)`, `h = z1`.
-    #[test]
-    fn exchange_replaces_a_mode_the_dynamics_cannot_use() {
-        let src = "system t\nstate x, y\nparam c\ninput u\nx' = u*y\ny' = -u*x\noutput h = c*x^2\n";
-        let sys = System::parse(src, "t.sys").unwrap();
-        let mut nf = sys.normal_form(None, &[]).unwrap();
-        let (_, fields) = crate::fields::field_names(&mut nf);
-        let w: Vec<Vec<Id>> = vec![["x", "y", "-2*c"]
-            .iter()
-            .map(|t| nf.parse_expr(t, false).unwrap())
-            .collect()];
-        let modes: Vec<DerivedMode> = [("z1", "x^2*c"), ("z2", "y^2*c")]
-            .iter()
-            .map(|(n, t)| DerivedMode {
-                name: n.to_string(),
-                expr: nf.parse_expr(t, false).unwrap(),
-                text: t.to_string(),
-                kind: ModeKind::Polynomial,
-                angle: false,
-                domain: "everywhere".into(),
-            })
-            .collect();
-        let sp = ModeSpace {
-            fields: &fields,
-            consts: &[],
-            used_vars: &[],
-            w_ids: &w,
-        };
-        let opts = DeriveOptions::default();
-        let mut rng = SplitMix(5);
-        let red = reduce(&mut nf, &sp, &modes, &mut rng, &opts).unwrap();
-        assert!(red.derivatives[0][0].is_none() && !red.closed());
-        let (m2, r2) = exchange(&mut nf, &sp, &modes, &red, &mut rng, &opts)
-            .unwrap()
-            .expect("an exchange closes");
-        assert!(r2.closed(), "{:?}", r2.derivatives);
-        let want = nf.parse_expr("c*x*y", false).unwrap();
-        assert_eq!(nf.ctx.canon(m2[1].expr), nf.ctx.canon(want));
-        assert_eq!(m2[0].expr, modes[0].expr);
-    }
 }
