@@ -10,11 +10,18 @@ evaluated exactly at a random integer point (entries 2..1000): a rank below the 
 happens only on a proper algebraic subset, i.e. with small probability; a variable is
 observable when its unit vector lies in the row span. Prints one '# verdict:' line per file.
 
-Usage: python3 benches/peers/sg_verdicts.py systems/benchmarks/strike-goldd/*.sys
+Usage: python3 benches/peers/sg_verdicts.py [--list] [--timeout S] systems/benchmarks/strike-goldd/*.sys
+
+--list prints `NAME<TAB>SPEC` lines for verdicts.list instead; --timeout S gives up on a file
+after S seconds of SymPy (wall clock), and then prints `NAME<TAB>none: ...` in place of a
+verdict (the suite file then says `verdict-source: none`; never a verdict from obsan).
 """
 
+import keyword
+import os
 import random
 import re
+import signal
 import sys
 
 import sympy as sp
@@ -39,7 +46,11 @@ def read_sys(path):
         if m:
             eqs[m.group(1)] = m.group(2)
     names = {n: sp.Symbol(n) for k in decl for n in decl[k]}
-    parse = lambda s: sp.sympify(s.replace("^", "**"), locals=names)
+    # A model name that is a Python keyword (`lambda`) is parsed under an alias.
+    kw = {n for n in names if keyword.iskeyword(n)}
+    local = {(f"{n}_kw_" if n in kw else n): v for n, v in names.items()}
+    alias = lambda s: re.sub(r"\b(\w+)\b", lambda m: f"{m[1]}_kw_" if m[1] in kw else m[1], s)
+    parse = lambda s: sp.sympify(alias(s).replace("^", "**"), locals=local)
     x = [names[n] for n in decl["state"]]
     p = [names[n] for n in decl["param"]]
     u = [names[n] for n in decl["input"]]
@@ -82,6 +93,41 @@ def verdict(path, seed=1):
     return f"observable; rank {rank}"
 
 
+class Timeout(Exception):
+    pass
+
+
+def on_alarm(_sig, _frame):
+    raise Timeout()
+
+
+def main(args):
+    listing, timeout = False, 0
+    while args and args[0].startswith("--"):
+        if args[0] == "--list":
+            listing, args = True, args[1:]
+        elif args[0] == "--timeout" and len(args) > 1:
+            timeout, args = int(args[1]), args[2:]
+        else:
+            sys.exit(f"unknown option {args[0]}")
+    signal.signal(signal.SIGALRM, on_alarm)
+    for path in args:
+        name = os.path.basename(path)[: -len(".sys")]
+        signal.alarm(timeout)
+        try:
+            spec = verdict(path)
+        except Timeout:
+            spec = None
+        signal.alarm(0)
+        if listing and spec is None:
+            print(f"{name}\tnone: SymPy did not finish within {timeout} s", flush=True)
+        elif listing:
+            print(f"{name}\t{spec}", flush=True)
+        elif spec is None:
+            print(f"{path}\t# verdict-source: none (SymPy did not finish within {timeout} s)", flush=True)
+        else:
+            print(f"{path}\t# verdict: {spec}", flush=True)
+
+
 if __name__ == "__main__":
-    for path in sys.argv[1:]:
-        print(f"{path}\t# verdict: {verdict(path)}", flush=True)
+    main(sys.argv[1:])
