@@ -5,7 +5,8 @@ For each .sys file given, reads the states, params, inputs, equations and output
 subset the importers write), and computes the observability-identifiability rank with the
 inputs free: the span of the gradients (in states and params) of the outputs' Lie derivatives
 along every word of the fields f0, f_1..f_m (the input-affine form, f_i = d rhs / d u_i),
-level by level until a level adds no rank (then no later level does). The Jacobian is
+level by level until a level adds no rank (then no later level does); only the functions
+that raised the rank are carried to the next level (see verdict()). The Jacobian is
 evaluated exactly at a random integer point (entries 2..1000): a rank below the generic one
 happens only on a proper algebraic subset, i.e. with small probability; a variable is
 observable when its unit vector lies in the row span. Prints one '# verdict:' line per file.
@@ -60,28 +61,31 @@ def read_sys(path):
 
 
 def verdict(path, seed=1):
+    """Rank of the observability codistribution at a random integer point, and the variables
+    whose unit covector lies outside it. Only the functions whose gradient raised the rank are
+    differentiated further: if dphi lies in the span of kept gradients (coefficients functions
+    c_i), L_f(sum c_i dphi_i) = sum (L_f c_i) dphi_i + c_i d(L_f phi_i) lies in the span of the
+    kept ones and their Lie derivatives, so the next level needs only the new functions."""
     decl, x, p, u, rhs, h, consts = read_sys(path)
     z = x + p
     f0 = [r.subs({ui: 0 for ui in u}) for r in rhs]
     fields = [f0] + [[sp.diff(r, ui) for r in rhs] for ui in u]
     rng = random.Random(seed)
     point = {s: sp.Integer(rng.randint(2, 1000)) for s in z + consts}
-    level = list(h)
-    rows = [[sp.diff(g, v).subs(point) for v in z] for g in level]
-    rank = sp.Matrix(rows).rank()
-    for _ in range(len(z)):
+    rows, level = [], []
+    for g in h:
+        if keep(rows, [sp.diff(g, v).subs(point) for v in z]):
+            level.append(g)
+    while level and len(rows) < len(z):
         nxt = []
         for g in level:
             for fld in fields:
-                nxt.append(sp.expand(sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))))
+                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
+                if lg != 0 and keep(rows, [sp.diff(lg, v).subs(point) for v in z]):
+                    nxt.append(lg)
         level = nxt
-        rows += [[sp.diff(g, v).subs(point) for v in z] for g in level]
-        r = sp.Matrix(rows).rank()
-        if r == rank or r == len(z):
-            rank = r
-            break
-        rank = r
-    m = sp.Matrix(rows)
+    rank = len(rows)
+    m = sp.Matrix(rows) if rows else sp.zeros(0, len(z))
     unobs = []
     for j, v in enumerate(z):
         e = [0] * len(z)
@@ -91,6 +95,14 @@ def verdict(path, seed=1):
     if unobs:
         return f"unobservable {' '.join(unobs)}; rank {rank}"
     return f"observable; rank {rank}"
+
+
+def keep(rows, row):
+    """Append row to rows (exact rationals) when it raises their rank; say whether it did."""
+    if sp.Matrix(rows + [row]).rank() > len(rows):
+        rows.append(row)
+        return True
+    return False
 
 
 class Timeout(Exception):
