@@ -51,7 +51,8 @@ def read_sys(path):
     kw = {n for n in names if keyword.iskeyword(n)}
     local = {(f"{n}_kw_" if n in kw else n): v for n, v in names.items()}
     alias = lambda s: re.sub(r"\b(\w+)\b", lambda m: f"{m[1]}_kw_" if m[1] in kw else m[1], s)
-    parse = lambda s: sp.sympify(alias(s).replace("^", "**"), locals=local)
+    # rational=True: a decimal such as 2.265 is read as the exact 453/200, so the rank is exact.
+    parse = lambda s: sp.sympify(alias(s).replace("^", "**"), locals=local, rational=True)
     x = [names[n] for n in decl["state"]]
     p = [names[n] for n in decl["param"]]
     u = [names[n] for n in decl["input"]]
