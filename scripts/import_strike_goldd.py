@@ -7,7 +7,10 @@ in the file; no STRIKE-GOLDD text, which is GPL-3, is used). This runs
 the source line and the verdict of verdicts.list (made by benches/peers/sg_verdicts.py, SymPy,
 never obsan) at the top of NAME.sys.
 
-Usage: cargo build --release && python3 scripts/import_strike_goldd.py
+A verdicts.list line `NAME<TAB>none: REASON` (SymPy did not finish) gives the header
+`# verdict-source: none (REASON)` and no verdict line.
+
+Usage: cargo build --release -p obsan && python3 scripts/import_strike_goldd.py
 """
 
 import os
@@ -36,11 +39,15 @@ def main():
             sys.exit(out.stderr)
         if name not in verdicts:
             sys.exit(f"{name}: no line in verdicts.list")
-        header = [
-            f"# Source: src/{m}, written for obsan from the model's equations (reference in that file).",
-            "# verdict-source: independent (SymPy: rank of the Lie-derivative Jacobian at a random integer point, benches/peers/sg_verdicts.py)",
-            f"# verdict: {verdicts[name]}",
-        ]
+        header = [f"# Source: src/{m}, written for obsan from the model's equations (reference in that file)."]
+        if verdicts[name].startswith("none: "):
+            # SymPy gave no verdict in time: the file says so and cites none (never obsan's).
+            header.append(f"# verdict-source: none ({verdicts[name][len('none: '):]})")
+        else:
+            header += [
+                "# verdict-source: independent (SymPy: rank of the Lie-derivative Jacobian at a random integer point, benches/peers/sg_verdicts.py)",
+                f"# verdict: {verdicts[name]}",
+            ]
         with open(os.path.join(DIR, f"{name}.sys"), "w", encoding="utf-8") as f:
             f.write("\n".join(header) + "\n" + out.stdout)
         print(f"{name}.sys")

@@ -5,16 +5,24 @@ For each .sys file given, reads the states, params, inputs, equations and output
 subset the importers write), and computes the observability-identifiability rank with the
 inputs free: the span of the gradients (in states and params) of the outputs' Lie derivatives
 along every word of the fields f0, f_1..f_m (the input-affine form, f_i = d rhs / d u_i),
-level by level until a level adds no rank (then no later level does). The Jacobian is
+level by level until a level adds no rank (then no later level does); only the functions
+that raised the rank are carried to the next level (see verdict()). The Jacobian is
 evaluated exactly at a random integer point (entries 2..1000): a rank below the generic one
 happens only on a proper algebraic subset, i.e. with small probability; a variable is
 observable when its unit vector lies in the row span. Prints one '# verdict:' line per file.
 
-Usage: python3 benches/peers/sg_verdicts.py systems/benchmarks/strike-goldd/*.sys
+Usage: python3 benches/peers/sg_verdicts.py [--list] [--timeout S] systems/benchmarks/strike-goldd/*.sys
+
+--list prints `NAME<TAB>SPEC` lines for verdicts.list instead; --timeout S gives up on a file
+after S seconds of SymPy (wall clock), and then prints `NAME<TAB>none: ...` in place of a
+verdict (the suite file then says `verdict-source: none`; never a verdict from obsan).
 """
 
+import keyword
+import os
 import random
 import re
+import signal
 import sys
 
 import sympy as sp
@@ -39,7 +47,12 @@ def read_sys(path):
         if m:
             eqs[m.group(1)] = m.group(2)
     names = {n: sp.Symbol(n) for k in decl for n in decl[k]}
-    parse = lambda s: sp.sympify(s.replace("^", "**"), locals=names)
+    # A model name that is a Python keyword (`lambda`) is parsed under an alias.
+    kw = {n for n in names if keyword.iskeyword(n)}
+    local = {(f"{n}_kw_" if n in kw else n): v for n, v in names.items()}
+    alias = lambda s: re.sub(r"\b(\w+)\b", lambda m: f"{m[1]}_kw_" if m[1] in kw else m[1], s)
+    # rational=True: a decimal such as 2.265 is read as the exact 453/200, so the rank is exact.
+    parse = lambda s: sp.sympify(alias(s).replace("^", "**"), locals=local, rational=True)
     x = [names[n] for n in decl["state"]]
     p = [names[n] for n in decl["param"]]
     u = [names[n] for n in decl["input"]]
@@ -49,28 +62,31 @@ def read_sys(path):
 
 
 def verdict(path, seed=1):
+    """Rank of the observability codistribution at a random integer point, and the variables
+    whose unit covector lies outside it. Only the functions whose gradient raised the rank are
+    differentiated further: if dphi lies in the span of kept gradients (coefficients functions
+    c_i), L_f(sum c_i dphi_i) = sum (L_f c_i) dphi_i + c_i d(L_f phi_i) lies in the span of the
+    kept ones and their Lie derivatives, so the next level needs only the new functions."""
     decl, x, p, u, rhs, h, consts = read_sys(path)
     z = x + p
     f0 = [r.subs({ui: 0 for ui in u}) for r in rhs]
     fields = [f0] + [[sp.diff(r, ui) for r in rhs] for ui in u]
     rng = random.Random(seed)
     point = {s: sp.Integer(rng.randint(2, 1000)) for s in z + consts}
-    level = list(h)
-    rows = [[sp.diff(g, v).subs(point) for v in z] for g in level]
-    rank = sp.Matrix(rows).rank()
-    for _ in range(len(z)):
+    rows, level = [], []
+    for g in h:
+        if keep(rows, [sp.diff(g, v).subs(point) for v in z]):
+            level.append(g)
+    while level and len(rows) < len(z):
         nxt = []
         for g in level:
             for fld in fields:
-                nxt.append(sp.expand(sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))))
+                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
+                if lg != 0 and keep(rows, [sp.diff(lg, v).subs(point) for v in z]):
+                    nxt.append(lg)
         level = nxt
-        rows += [[sp.diff(g, v).subs(point) for v in z] for g in level]
-        r = sp.Matrix(rows).rank()
-        if r == rank or r == len(z):
-            rank = r
-            break
-        rank = r
-    m = sp.Matrix(rows)
+    rank = len(rows)
+    m = sp.Matrix(rows) if rows else sp.zeros(0, len(z))
     unobs = []
     for j, v in enumerate(z):
         e = [0] * len(z)
@@ -82,6 +98,49 @@ def verdict(path, seed=1):
     return f"observable; rank {rank}"
 
 
+def keep(rows, row):
+    """Append row to rows (exact rationals) when it raises their rank; say whether it did."""
+    if sp.Matrix(rows + [row]).rank() > len(rows):
+        rows.append(row)
+        return True
+    return False
+
+
+class Timeout(Exception):
+    pass
+
+
+def on_alarm(_sig, _frame):
+    raise Timeout()
+
+
+def main(args):
+    listing, timeout = False, 0
+    while args and args[0].startswith("--"):
+        if args[0] == "--list":
+            listing, args = True, args[1:]
+        elif args[0] == "--timeout" and len(args) > 1:
+            timeout, args = int(args[1]), args[2:]
+        else:
+            sys.exit(f"unknown option {args[0]}")
+    signal.signal(signal.SIGALRM, on_alarm)
+    for path in args:
+        name = os.path.basename(path)[: -len(".sys")]
+        signal.alarm(timeout)
+        try:
+            spec = verdict(path)
+        except Timeout:
+            spec = None
+        signal.alarm(0)
+        if listing and spec is None:
+            print(f"{name}\tnone: SymPy did not finish within {timeout} s", flush=True)
+        elif listing:
+            print(f"{name}\t{spec}", flush=True)
+        elif spec is None:
+            print(f"{path}\t# verdict-source: none (SymPy did not finish within {timeout} s)", flush=True)
+        else:
+            print(f"{path}\t# verdict: {spec}", flush=True)
+
+
 if __name__ == "__main__":
-    for path in sys.argv[1:]:
-        print(f"{path}\t# verdict: {verdict(path)}", flush=True)
+    main(sys.argv[1:])

@@ -227,6 +227,10 @@ fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
     );
 }
 
+/// How many files of systems/benchmarks/strike-goldd/ may say `verdict-source: none` (SymPy
+/// did not finish on them; docs/benchmarks.md names them).
+const MAX_UNJUDGED: usize = 14;
+
 /// systems/benchmarks/strike-goldd/: each NAME.sys is `obsan import strike-goldd` of
 /// its src/z_create_NAME.m (written for obsan from the model's equations) under a header, and
 /// obsan's rank agrees with the verdict the file cites (SymPy, benches/peers/sg_verdicts.py).
@@ -239,7 +243,8 @@ fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
         .filter(|n| n.starts_with("z_create_") && n.ends_with(".m"))
         .collect();
     names.sort();
-    assert!(names.len() >= 6, "{names:?}");
+    assert!(names.len() >= 49, "{names:?}");
+    let mut unjudged = 0;
     for m in &names {
         let name = &m["z_create_".len()..m.len() - 2];
         let path = format!("{dir}/{name}.sys");
@@ -253,6 +258,16 @@ fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
             .collect();
         assert_eq!(body, run.stdout, "{path} is not the import of src/{m}");
         let entries = crate::suite_entries::file_entries(&path, &text).unwrap();
+        if entries.is_empty() {
+            // SymPy gave no verdict in time: the file must say so, and cites none.
+            assert!(
+                text.lines()
+                    .any(|l| l.starts_with("# verdict-source: none (")),
+                "{path}: neither a verdict nor 'verdict-source: none'"
+            );
+            unjudged += 1;
+            continue;
+        }
         assert_eq!(entries.len(), 1, "{path}");
         let v: Value = serde_json::from_str(&ok(&["rank", &path, "--json"])).unwrap();
         let want = &entries[0].verdict;
@@ -265,6 +280,11 @@ fn strike_goldd_suite_is_the_import_of_its_sources_and_matches_its_verdicts() {
             .collect();
         assert_eq!(want.unobservable.as_ref(), Some(&un), "{path}");
     }
+    // The files without a SymPy verdict are the few largest models (docs/benchmarks.md).
+    assert!(
+        unjudged <= MAX_UNJUDGED,
+        "{unjudged} files without a verdict"
+    );
 }
 
 /// With `--all`, a model past the term budget is refused alone: the models
