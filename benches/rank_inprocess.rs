@@ -10,8 +10,11 @@
 //! through `obsan_cli::run_json` (the entry point the Python package uses). Prints one Markdown
 //! row per model with the least and the median CPU time of the K runs (the process's CPU clock,
 //! `CLOCK_PROCESS_CPUTIME_ID`: every thread, nothing else; the bench thread waits blocked while
-//! the command's thread runs) and the least wall time; `--tsv FILE` also writes `path<TAB>least
-//! CPU seconds` lines, which `symident_suite.py --inprocess FILE` divides symident's time by.
+//! the command's thread runs) and the least wall time, and the least CPU time of the computation
+//! alone on a model parsed beforehand (normal form, rank, undecided atoms: what symident's
+//! `detect()` does with its `Model` built); `--tsv FILE` also writes `path<TAB>command
+//! seconds<TAB>computation seconds` lines, which `symident_suite.py --inprocess FILE` divides
+//! symident's time by.
 
 use std::path::Path;
 use std::time::Instant;
@@ -20,6 +23,27 @@ use std::time::Instant;
 fn cpu_seconds() -> f64 {
     let t = rustix::time::clock_gettime(rustix::time::ClockId::ProcessCPUTime);
     t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+}
+
+/// The rank test's computation alone, on a model parsed beforehand (as symident's `detect()`
+/// gets its `Model` built): the normal form, `obsan_analysis::rank` and the undecided-atoms
+/// check, no argument parsing, file reading or JSON.
+fn compute_once(sys: &obsan_model::System) -> Option<usize> {
+    let mut nf = sys.normal_form(None, &[]).ok()?;
+    let r = obsan_analysis::rank(&mut nf, obsan_analysis::RankOptions::default()).ok()?;
+    std::hint::black_box(obsan_analysis::certify::undecided_atoms_of(&mut nf, &[]));
+    Some(r.rank)
+}
+
+/// The least CPU time of `repeat` runs of `f`.
+fn least_cpu(repeat: usize, mut f: impl FnMut()) -> f64 {
+    (0..repeat)
+        .map(|_| {
+            let c0 = cpu_seconds();
+            f();
+            cpu_seconds() - c0
+        })
+        .fold(f64::INFINITY, f64::min)
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -61,8 +85,9 @@ fn main() {
         fs.sort();
         files.extend(fs);
     }
-    println!("| model | least CPU ms | median CPU ms | least wall ms |");
-    println!("|---|---|---|---|");
+    println!("| model | least CPU ms | median CPU ms | least wall ms | computation alone, least CPU ms |");
+    println!("|---|---|---|---|---|");
+    let mut compute_all = Vec::new();
     let mut lines = String::new();
     let mut least_all = Vec::new();
     for f in &files {
@@ -82,20 +107,31 @@ fn main() {
         }
         let least = cpu.iter().copied().fold(f64::INFINITY, f64::min);
         let least_wall = wall.iter().copied().fold(f64::INFINITY, f64::min);
+        let text = std::fs::read_to_string(f).expect("read once already");
+        let sys = obsan_model::System::parse(&text, f).expect("parsed once already");
+        let compute = least_cpu(repeat, || {
+            std::hint::black_box(compute_once(&sys));
+        });
         println!(
-            "| {f} | {:.3} | {:.3} | {:.3} |",
+            "| {f} | {:.3} | {:.3} | {:.3} | {:.3} |",
             least * 1e3,
             median(&mut cpu) * 1e3,
-            least_wall * 1e3
+            least_wall * 1e3,
+            compute * 1e3
         );
-        lines.push_str(&format!("{f}\t{least:.9}\n"));
+        lines.push_str(&format!("{f}\t{least:.9}\t{compute:.9}\n"));
         least_all.push(least);
+        compute_all.push(compute);
     }
     if !least_all.is_empty() {
         println!(
             "\n{} models, {repeat} runs each: median of the least CPU times {:.3} ms",
             least_all.len(),
             median(&mut least_all) * 1e3
+        );
+        println!(
+            "the computation alone (model parsed beforehand, no JSON): median of the least CPU times {:.3} ms",
+            median(&mut compute_all) * 1e3
         );
     }
     if let Some(p) = tsv {

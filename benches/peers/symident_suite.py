@@ -256,19 +256,19 @@ def main():
             # path<TAB>least CPU seconds, from `cargo bench --bench rank_inprocess -- --tsv FILE`.
             for line in open(args[i + 1]):
                 if line.strip():
-                    k, v = line.rstrip("\n").split("\t")
-                    inproc[k] = float(v)
+                    k, v, c = line.rstrip("\n").split("\t")
+                    inproc[k] = (float(v), float(c))
             i += 2
         else:
             filt.append(args[i])
             i += 1
     import symident
 
-    extra = " in-process ratio |" if inproc else ""
+    extra = " in-process ratio | computation ratio |" if inproc else ""
     print("| model | n | obsan rank | obsan verdict | obsan s | symident rank | symident verdict "
           "| symident s | CPU ratio |" + extra)
-    print("|---|---|---|---|---|---|---|---|---|" + ("---|" if inproc else ""))
-    in_ratios = []
+    print("|---|---|---|---|---|---|---|---|---|" + ("---|---|" if inproc else ""))
+    in_ratios, comp_ratios = [], []
     score = {"obsan": 0, "symident": 0, "total": 0, "faster": 0, "both": 0}
     ratios = []
     for path, restriction, cited in suite():
@@ -296,7 +296,7 @@ def main():
                 overdict = "no cited verdict"
         else:
             n, orank, overdict = "-", "-", f"exit {p.returncode}"
-        ratio, in_ratio = "-", "-"
+        ratio, in_ratio, comp_ratio = "-", "-", "-"
         try:
             s = None
             for k in range(repeat if p.returncode == 0 else 1):
@@ -326,9 +326,12 @@ def main():
                     ratios.append(r)
                     ratio = f"{r:.0f}x"
                 if path in inproc and restriction is None and "cpu" in s:
-                    r2 = s["cpu"] / max(inproc[path], IN_FLOOR)
+                    r2 = s["cpu"] / max(inproc[path][0], IN_FLOOR)
                     in_ratios.append(r2)
                     in_ratio = f"{r2:.0f}x"
+                    r3 = s["cpu"] / max(inproc[path][1], IN_FLOOR)
+                    comp_ratios.append(r3)
+                    comp_ratio = f"{r3:.0f}x"
             else:
                 lines = q.stderr.strip().splitlines() or ["no output"]
                 err = next((ln for ln in lines if re.match(r"^\w+(Error|Exception):", ln)), lines[-1])
@@ -345,7 +348,7 @@ def main():
             score["both"] += 1
             score["faster"] += osecs < timeout
         print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} "
-              f"| {ratio} |" + (f" {in_ratio} |" if inproc else ""), flush=True)
+              f"| {ratio} |" + (f" {in_ratio} | {comp_ratio} |" if inproc else ""), flush=True)
     print()
     if ratios:
         ratios.sort()
@@ -354,13 +357,14 @@ def main():
         print(f"CPU ratio (symident detect() CPU / obsan process CPU, obsan's floored at 1 ms) on the "
               f"{k} models both answered: median {med:.0f}x, min {ratios[0]:.1f}x, max {ratios[-1]:.0f}x"
               f" (least of {repeat} runs each)")
-    if in_ratios:
-        in_ratios.sort()
-        k = len(in_ratios)
-        med = in_ratios[k // 2] if k % 2 else (in_ratios[k // 2 - 1] + in_ratios[k // 2]) / 2
-        print(f"In-process ratio (symident detect() CPU / obsan's rank in-process CPU, "
-              f"benches/rank_inprocess.rs, its least of its runs) on {k} models: median {med:.0f}x, "
-              f"min {in_ratios[0]:.1f}x, max {in_ratios[-1]:.0f}x")
+    for rs, what in ((in_ratios, "obsan's whole rank command in-process"),
+                     (comp_ratios, "obsan's rank computation alone, the model parsed beforehand")):
+        if rs:
+            rs.sort()
+            k = len(rs)
+            med = rs[k // 2] if k % 2 else (rs[k // 2 - 1] + rs[k // 2]) / 2
+            print(f"Ratio symident detect() CPU / {what} (benches/rank_inprocess.rs, least of its "
+                  f"runs) on {k} models: median {med:.0f}x, min {rs[0]:.1f}x, max {rs[-1]:.0f}x")
     print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, "
           f"symident {score['symident']}; obsan faster on {score['faster']} of the {score['both']} "
           f"that both answered or symident timed out; symident "
