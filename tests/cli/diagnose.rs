@@ -139,6 +139,52 @@ fn diagnose_says_consistent_with_noise_on_clean_data() {
     );
 }
 
+/// Residuals far below the stated noise are a finding, never "consistent
+/// with noise", in the verdict paragraph too. Clean circles without encoder
+/// noise (`--k 0`, so the residual is the bearing noise alone) with the
+/// bearing noise stated twice its simulated 1 degree: the whitened residuals
+/// have variance 1/4, so the chi-square is about dof/4, and its z, (dof/4 -
+/// dof) / sqrt(2 dof) = -0.53 sqrt(dof), is about -15 for the circles'
+/// ~800 bearings: far below -3.5.
+#[test]
+fn diagnose_calls_residuals_far_below_the_stated_noise_a_finding() {
+    let data = tmp_dir("overstated");
+    ok(&["simulate", "--out", &data, "--seed", "11", "--k", "0"]);
+    let p = format!("{data}/dataset.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    let noise = j["noise"].as_object_mut().unwrap();
+    noise.remove("encoder_k");
+    let stated = 2.0 * 1f64.to_radians();
+    noise.insert("beta".into(), stated.into());
+    std::fs::write(&p, j.to_string()).unwrap();
+    let out = ok(&refs(&diag(&data, &[])));
+    assert!(out.contains("named: none"), "{out}");
+    let verdict = out.lines().nth(1).unwrap_or("");
+    assert!(verdict.starts_with("verdict: nothing named"), "{out}");
+    assert!(!verdict.contains("consistent"), "{out}");
+    // The verdict lists the level test with its (negative) z.
+    let z: f64 = verdict
+        .split("chi2 (z ")
+        .nth(1)
+        .and_then(|r| r.split(')').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("no chi2 z in the verdict: {out}"));
+    assert!(z < -3.5, "{out}");
+    let dof: f64 = out
+        .split("degrees of freedom")
+        .next()
+        .and_then(|h| h.rsplit(" on ").next())
+        .and_then(|x| x.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no degrees of freedom: {out}"));
+    // The chi-square of dof unit-variance residuals scaled by 1/4 has sd
+    // sqrt(2 dof)/4 around dof/4: in z units 1/4, so 2 z units is 8 sds.
+    let want = -0.75 * dof / (2.0 * dof).sqrt();
+    assert!((z - want).abs() < 2.0, "z {z} against {want}: {out}");
+    assert!(out.contains("residual level far below the stated noise"), "{out}");
+    assert!(!out.contains("consistent with noise"), "{out}");
+}
+
 #[test]
 fn diagnose_rejects_bad_input_with_positions() {
     let data = tmp_dir("bad");
