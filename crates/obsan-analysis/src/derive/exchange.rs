@@ -165,6 +165,21 @@ mod tests {
     use crate::derive::{reduce, ModeSpace};
     use obsan_model::System;
 
+    /// Polynomial modes named and written as given.
+    fn polynomial_modes(nf: &mut NormalForm, texts: &[(&str, &str)]) -> Vec<DerivedMode> {
+        texts
+            .iter()
+            .map(|(n, t)| DerivedMode {
+                name: n.to_string(),
+                expr: nf.parse_expr(t, false).unwrap(),
+                text: t.to_string(),
+                kind: ModeKind::Polynomial,
+                angle: false,
+                domain: "everywhere".into(),
+            })
+            .collect()
+    }
+
     /// `x^2 c` and `y^2 c` are independent invariants of the scaling
     /// `(x, y, c) -> (l x, l y, c / l^2)`, but `L_u (x^2 c) = 2 c x y` is
     /// `±2 sqrt(z1 z2)` in them: no rational form. Exchanging `z2` for that
@@ -180,17 +195,7 @@ mod tests {
             .iter()
             .map(|t| nf.parse_expr(t, false).unwrap())
             .collect()];
-        let modes: Vec<DerivedMode> = [("z1", "x^2*c"), ("z2", "y^2*c")]
-            .iter()
-            .map(|(n, t)| DerivedMode {
-                name: n.to_string(),
-                expr: nf.parse_expr(t, false).unwrap(),
-                text: t.to_string(),
-                kind: ModeKind::Polynomial,
-                angle: false,
-                domain: "everywhere".into(),
-            })
-            .collect();
+        let modes = polynomial_modes(&mut nf, &[("z1", "x^2*c"), ("z2", "y^2*c")]);
         let sp = ModeSpace {
             fields: &fields,
             consts: &[],
@@ -244,17 +249,7 @@ mod tests {
             ("z3", "x*vx + y*vy"),
             ("z4", "-x*sin(theta) + y*cos(theta)"),
         ];
-        let modes: Vec<DerivedMode> = texts
-            .iter()
-            .map(|(n, t)| DerivedMode {
-                name: n.to_string(),
-                expr: nf.parse_expr(t, false).unwrap(),
-                text: t.to_string(),
-                kind: ModeKind::Polynomial,
-                angle: false,
-                domain: "everywhere".into(),
-            })
-            .collect();
+        let modes = polynomial_modes(&mut nf, &texts);
         let sp = ModeSpace {
             fields: &fields,
             consts: &[],
