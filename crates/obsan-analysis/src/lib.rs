@@ -100,12 +100,13 @@ pub mod unknown_inputs {
     pub use crate::unknown_input::{
         unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
     };
+    pub use crate::unknown_input_feedthrough::unknown_input_symmetries;
     pub use crate::unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
     pub use crate::unknown_input_modes::{
         inputs_driving_modes, unknown_input_modes, unknown_input_view, ReducedInput,
         UnknownInputModes,
     };
-    pub use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
+    pub use crate::unknown_input_symmetry::UnknownInputSymmetries;
 }
 
 /// Certificates: the random-point check of reconstructed symmetries, and the atoms whose

@@ -25,8 +25,24 @@ use crate::unknown_input_symmetry::{symmetries_without_feedthrough, UnknownInput
 use obsan_expr::{Id, RatFun};
 use obsan_model::NormalForm;
 
+/// The symmetries of a normal form with unknown inputs (module docs):
+/// `Err(Invalid)` with the reason when a candidate is not certified or the
+/// two rank routes disagree. Outputs holding an unknown input go through
+/// the system with that input made a state (module docs). It lives here, not
+/// in unknown_input_symmetry.rs, so that the module graph stays acyclic.
+pub fn unknown_input_symmetries(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<UnknownInputSymmetries, AnalysisError> {
+    let through = feedthrough_inputs(nf);
+    if !through.is_empty() {
+        return feedthrough_symmetries(nf, &through, opts);
+    }
+    symmetries_without_feedthrough(nf, opts)
+}
+
 /// The unknown inputs the outputs contain.
-pub(crate) fn feedthrough_inputs(nf: &mut NormalForm) -> Vec<usize> {
+fn feedthrough_inputs(nf: &mut NormalForm) -> Vec<usize> {
     let outs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
     let mut through = Vec::new();
     for (j, &v) in nf.unknown_input_vars.clone().iter().enumerate() {
@@ -84,7 +100,7 @@ fn extended(nf: &NormalForm, through: &[usize]) -> NormalForm {
 
 /// Symmetries of `nf` (with feedthrough inputs `through`) from those of the
 /// extended system (module docs).
-pub(crate) fn feedthrough_symmetries(
+fn feedthrough_symmetries(
     nf: &mut NormalForm,
     through: &[usize],
     opts: UnknownInputOptions,

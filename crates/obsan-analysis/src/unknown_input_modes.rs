@@ -34,8 +34,9 @@ use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
 use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
+use crate::unknown_input_feedthrough::unknown_input_symmetries;
 use crate::unknown_input_joint as joint;
-use crate::unknown_input_symmetry::{unknown_input_symmetries, UnknownInputSymmetries};
+use crate::unknown_input_symmetry::UnknownInputSymmetries;
 use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun};
 use obsan_model::NormalForm;
 

@@ -35,7 +35,6 @@
 
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
-use crate::unknown_input_feedthrough::{feedthrough_inputs, feedthrough_symmetries};
 use obsan_expr::{
     lie::Coord, lie::LieJets, Ctx, Fp, Id, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P,
 };
@@ -62,22 +61,8 @@ pub struct UnknownInputSymmetries {
     pub made_states: Vec<String>,
 }
 
-/// The symmetries of a normal form with unknown inputs (module docs):
-/// `Err(Invalid)` with the reason when a candidate is not certified or the
-/// two rank routes disagree. Outputs holding an unknown input go through
-/// the system with that input made a state (unknown_input_feedthrough.rs).
-pub fn unknown_input_symmetries(
-    nf: &mut NormalForm,
-    opts: UnknownInputOptions,
-) -> Result<UnknownInputSymmetries, AnalysisError> {
-    let through = feedthrough_inputs(nf);
-    if !through.is_empty() {
-        return feedthrough_symmetries(nf, &through, opts);
-    }
-    symmetries_without_feedthrough(nf, opts)
-}
-
-/// [`unknown_input_symmetries`] of a system whose outputs are functions of
+/// `unknown_input_symmetries` (unknown_input_feedthrough.rs) of a system
+/// whose outputs are functions of
 /// the state.
 pub(crate) fn symmetries_without_feedthrough(
     nf: &mut NormalForm,
