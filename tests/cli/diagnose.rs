@@ -181,7 +181,10 @@ fn diagnose_calls_residuals_far_below_the_stated_noise_a_finding() {
     // sqrt(2 dof)/4 around dof/4: in z units 1/4, so 2 z units is 8 sds.
     let want = -0.75 * dof / (2.0 * dof).sqrt();
     assert!((z - want).abs() < 2.0, "z {z} against {want}: {out}");
-    assert!(out.contains("residual level far below the stated noise"), "{out}");
+    assert!(
+        out.contains("residual level far below the stated noise"),
+        "{out}"
+    );
     assert!(!out.contains("consistent with noise"), "{out}");
 }
 
