@@ -33,13 +33,36 @@ impl Basis {
     /// The standard monomials (a basis of the quotient), if the ideal is
     /// zero-dimensional and there are at most `cap` of them.
     pub fn standard_monomials(&self, cap: usize) -> Result<Vec<Mono>, GbError> {
+        self.standard_monomials_in(&vec![1; self.ring.n], cap)
+    }
+
+    /// The standard monomials of the subring `F_p[x_0^s_0, x_1^s_1, ...]`
+    /// (`steps[v] = s_v >= 1`), for a basis whose every polynomial lies in
+    /// that subring (checked: else `Err(Budget("basis outside the
+    /// subring"))`). A basis of the ideal `I'` obtained from `I` by the
+    /// substitution `x_v -> x_v^s_v` (the reduced basis of `I'` is the image of
+    /// the reduced basis of `I` under the weighted grevlex order, so it lies in
+    /// the subring) has these as a basis of the subring's quotient, which is
+    /// `R/I` again: dimension `dim R/I`, not `prod s_v` times it.
+    pub fn standard_monomials_in(&self, steps: &[u32], cap: usize) -> Result<Vec<Mono>, GbError> {
+        let n = self.ring.n;
+        if steps.len() != n || steps.contains(&0) {
+            return Err(GbError::Budget("one step >= 1 per variable"));
+        }
+        let in_subring = |m: &Mono| m.exponents().iter().zip(steps).all(|(e, s)| e % s == 0);
+        if !self
+            .polys
+            .iter()
+            .all(|p| p.terms.iter().all(|(m, _)| in_subring(m)))
+        {
+            return Err(GbError::Budget("basis outside the subring"));
+        }
         if !self.is_zero_dimensional() {
             return Err(GbError::NotZeroDimensional);
         }
         if self.is_unit() {
             return Ok(Vec::new());
         }
-        let n = self.ring.n;
         let lms = self.leading_monomials();
         // Each monomial seen is held in `seen` (a hash slot at 7/8 load),
         // a standard one in `out` too, and up to n children on the stack.
@@ -64,8 +87,8 @@ impl Basis {
                     )
                 }));
             }
-            for v in 0..n {
-                stack.push(m.mul(&Mono::var(n, v, 1))?);
+            for (v, &st) in steps.iter().enumerate() {
+                stack.push(m.mul(&Mono::var(n, v, st))?);
             }
         }
         Ok(out)
@@ -75,7 +98,21 @@ impl Basis {
     /// coefficients, constant term first), for a zero-dimensional ideal.
     /// Its distinct roots are the distinct values `f` takes on the zeros.
     pub fn minimal_polynomial(&self, f: &Poly, cap: usize) -> Result<Vec<u64>, GbError> {
-        let std = self.standard_monomials(cap)?;
+        self.minimal_polynomial_in(f, &vec![1; self.ring.n], cap)
+    }
+
+    /// [`Basis::minimal_polynomial`] for `f` in the subring of
+    /// [`Basis::standard_monomials_in`]: normal forms of its powers stay in
+    /// the subring (each reduction step's multiplier is a quotient of two of
+    /// its monomials), so the quotient's basis there suffices; a normal form
+    /// outside it is an error, never a wrong count.
+    pub fn minimal_polynomial_in(
+        &self,
+        f: &Poly,
+        steps: &[u32],
+        cap: usize,
+    ) -> Result<Vec<u64>, GbError> {
+        let std = self.standard_monomials_in(steps, cap)?;
         let r = &self.ring;
         let fld = r.field;
         let col: HashMap<Mono, usize> = std

@@ -34,6 +34,7 @@ mod field;
 mod gb;
 mod mem;
 mod poly;
+mod presolve;
 mod select;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
@@ -41,6 +42,7 @@ pub use field::{is_prime, Field};
 pub use gb::{buchberger, Basis, GbBudget};
 pub use mem::term_bytes;
 pub use poly::{Mono, Order, Poly, Ring, MAX_DEGREE};
+pub use presolve::presolve_linear;
 pub use select::{f4, groebner};
 
 /// Why a computation stopped.

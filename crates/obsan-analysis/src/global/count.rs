@@ -4,9 +4,10 @@
 use super::model::ZModel;
 use super::run::Run;
 use super::types::{err, gb_err, GlobalOptions};
+use super::weights::{raise, sian_weights, z_weight};
 use crate::rank::AnalysisError;
 use obsan_expr::Poly as ZPoly;
-use obsan_groebner::{distinct_roots, groebner, GbBudget, Mono, Poly};
+use obsan_groebner::{distinct_roots, groebner, presolve_linear, GbBudget, Mono, Poly};
 use obsan_recon::fp::{Echelon, Zp};
 use std::time::Instant;
 
@@ -152,7 +153,7 @@ fn count_at(
     rank_order: usize,
 ) -> Result<Counts, AnalysisError> {
     let f = run.field;
-    let (mut eqs, unk) = run.equations(orders)?;
+    let (mut eqs, unk) = run.sian_equations(orders)?;
     let free: Vec<usize> = targets
         .iter()
         .zip(local)
@@ -175,7 +176,30 @@ fn count_at(
         }
         eqs.push(r.sub(&h, &r.constant(c0)));
     }
-    let (ring, gens) = run.to_unknown_ring(&eqs, &unk, 0)?;
+    // SIAN's weighted order (weights.rs): it changes the time, never a count.
+    let np = run.np;
+    let w = if opts.weighted {
+        sian_weights(run, &local[..np])
+    } else {
+        vec![1; run.ring.n]
+    };
+    let mut steps: Vec<u32> = unk.iter().map(|&v| w[v]).collect();
+    let mut degrees: Vec<u32> = eqs.iter().map(|e| degree_in(e, &unk)).collect();
+    // `z Q - 1` (sian.rs), `z` one more variable after the unknowns.
+    let q = run.cleared.q.clone();
+    degrees.push(degree_in(&q, &unk) + 1);
+    eqs.push(q);
+    let (ring, mut gens) = run.to_unknown_ring(&eqs, &unk, 1)?;
+    steps.push(z_weight(&w, run));
+    let zq = gens.pop().unwrap_or_default();
+    gens.push(ring.sub(
+        &ring.mul(&zq, &ring.var(ring.n - 1)).map_err(gb_err)?,
+        &ring.constant(1),
+    ));
+    // Linear generators solved first (the outputs fix many unknowns to
+    // numbers), then the weights: presolve needs degree 1 to mean linear.
+    let gens = presolve_linear(&ring, &gens, opts.max_bytes).map_err(gb_err)?;
+    let gens = raise(&ring, &gens, &steps).map_err(gb_err)?;
     let tpos: Vec<usize> = targets
         .iter()
         .map(|v| unk.iter().position(|u| u == v).unwrap_or(0))
@@ -197,8 +221,9 @@ fn count_at(
             per_var.push(None);
             continue;
         }
+        let xt = ring.from_terms([(Mono::var(ring.n, t, steps[t]), 1)]);
         let m = b
-            .minimal_polynomial(&ring.var(t), opts.max_solutions)
+            .minimal_polynomial_in(&xt, &steps, opts.max_solutions)
             .map_err(gb_err)?;
         per_var.push(Some(distinct_roots(f, &m)));
     }
@@ -208,12 +233,12 @@ fn count_at(
     let mut terms = Vec::new();
     for (i, &t) in tpos.iter().enumerate() {
         if local[i] {
-            terms.push((Mono::var(ring.n, t, 1), run.rng.elem(&f)));
+            terms.push((Mono::var(ring.n, t, steps[t]), run.rng.elem(&f)));
         }
     }
     let lf = ring.from_terms(terms);
     let m = b
-        .minimal_polynomial(&lf, opts.max_solutions)
+        .minimal_polynomial_in(&lf, &steps, opts.max_solutions)
         .map_err(gb_err)?;
     let joint = Some(distinct_roots(f, &m));
     Ok(Counts {
@@ -223,7 +248,7 @@ fn count_at(
         rank_order,
         unknowns: unk.len(),
         equations: eqs.len(),
-        degrees: gens.iter().map(|g| g.degree()).collect(),
+        degrees,
         n_local: local.iter().filter(|&&l| l).count(),
     })
 }
@@ -271,4 +296,14 @@ pub(super) fn error_bounds(m: &ZModel, runs: &[Counts], primes: &[u64; 2]) -> (f
         probs.push((total / p as f64).min(1.0));
     }
     (d1, worst_log, probs.iter().product())
+}
+
+/// The total degree of `p` in the variables `unk` (the others are numbers at
+/// the point): SIAN's Bezout product counts the unweighted degrees.
+fn degree_in(p: &Poly, unk: &[usize]) -> u32 {
+    p.terms()
+        .iter()
+        .map(|(m, _)| unk.iter().map(|&v| m.exponents()[v]).sum::<u32>())
+        .max()
+        .unwrap_or(0)
 }

@@ -19,8 +19,10 @@ mod count;
 mod maps;
 mod model;
 mod run;
+mod sian;
 mod trig;
 mod types;
+mod weights;
 
 use count::{count_once, error_bounds};
 use maps::{find_maps, group_order};

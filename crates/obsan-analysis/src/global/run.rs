@@ -2,6 +2,7 @@
 //! the states' and inputs' derivatives modulo one prime, at one random point.
 
 use super::model::ZModel;
+use super::sian::Cleared;
 use super::types::{err, gb_err, too_large};
 use crate::rank::AnalysisError;
 use obsan_expr::{Int, Poly as ZPoly, SplitMix, Var};
@@ -55,6 +56,9 @@ pub(super) struct Run {
     pub(super) out_d: Vec<Vec<Poly>>,
     /// Polynomials that vanish on the point at order 0 (`z * den - 1`).
     pub(super) inits: Vec<Poly>,
+    /// SIAN's system with the denominators cleared (sian.rs): what the
+    /// Gröbner basis is computed on.
+    pub(super) cleared: Cleared,
     /// The point: values of every derivation-ring variable (filled by order).
     pub(super) point: Vec<u64>,
     pub(super) point_order: usize,
@@ -92,6 +96,7 @@ impl Run {
             rhs_d: Vec::new(),
             out_d: Vec::new(),
             inits: Vec::new(),
+            cleared: Cleared::default(),
             point: vec![0; n],
             point_order: 0,
             rng: Rng::new(0),
@@ -148,6 +153,16 @@ impl Run {
         for (k, (num, den)) in m.outputs.iter().enumerate() {
             outs.push(self.with_den(conv, num, den, dens.outputs[k])?);
         }
+        let mut state_parts = Vec::with_capacity(nx);
+        for (num, den) in &m.rhs {
+            state_parts.push((conv.poly(self, num)?, conv.poly(self, den)?));
+        }
+        let mut out_parts = Vec::with_capacity(m.outputs.len());
+        for (num, den) in &m.outputs {
+            out_parts.push((conv.poly(self, num)?, conv.poly(self, den)?));
+        }
+        let dens0: Vec<&Poly> = den_p.iter().map(|(d, _)| d).collect();
+        self.cleared = Cleared::new(self, &state_parts, &out_parts, &dens0)?;
         self.rhs_d = rhs.into_iter().map(|f| vec![f]).collect();
         self.out_d = outs.into_iter().map(|f| vec![f]).collect();
         Ok(den_p)
@@ -313,78 +328,6 @@ impl Run {
             ));
         }
         Ok(held)
-    }
-
-    /// The system of the proven truncation: output `y` up to order
-    /// `orders[y]` (inclusive), and the state equations `x^(k) = D^(k-1) f`
-    /// for exactly the derivatives those rows use (a closure: each added row
-    /// uses only lower orders). Returns `(equations in the derivation ring,
-    /// unknowns)`, the unknowns highest derivatives first (grevlex then treats
-    /// them as the largest variables), params last.
-    pub(super) fn equations(
-        &mut self,
-        orders: &[usize],
-    ) -> Result<(Vec<Poly>, Vec<usize>), AnalysisError> {
-        let top = orders.iter().copied().max().unwrap_or(0);
-        self.prepare(top)?;
-        let r = &self.ring;
-        let mut used = vec![false; r.n];
-        let mark = |p: &Poly, used: &mut Vec<bool>| {
-            for (m, _) in p.terms() {
-                for (v, &e) in m.exponents().iter().enumerate() {
-                    if e > 0 {
-                        used[v] = true;
-                    }
-                }
-            }
-        };
-        let mut eqs = self.inits.clone();
-        for e in &eqs {
-            mark(e, &mut used);
-        }
-        for (y, &d) in orders.iter().enumerate() {
-            for j in 0..=d {
-                let c = r.eval(&self.out_d[y][j], &self.point);
-                let e = r.sub(&self.out_d[y][j], &r.constant(c));
-                mark(&e, &mut used);
-                eqs.push(e);
-            }
-        }
-        for k in (1..=top).rev() {
-            for s in 0..self.ns {
-                let v = self.sv(s, k);
-                if used[v] {
-                    let e = r.sub(&r.var(v), &self.rhs_d[s][k - 1]);
-                    mark(&e, &mut used);
-                    eqs.push(e);
-                }
-            }
-        }
-        let bytes: usize = eqs.iter().map(|p| p.stored_bytes(r.n)).sum();
-        if bytes > self.max_bytes {
-            return Err(too_large(
-                bytes as u128,
-                self.max_bytes as u128,
-                &format!(
-                    "the Taylor system ({} equations to order {top}, in {} variables)",
-                    eqs.len(),
-                    r.n
-                ),
-            ));
-        }
-        let mut unknowns = Vec::new();
-        for k in (1..=top).rev() {
-            for s in 0..self.ns {
-                if used[self.sv(s, k)] {
-                    unknowns.push(self.sv(s, k));
-                }
-            }
-        }
-        for s in 0..self.ns {
-            unknowns.push(self.sv(s, 0));
-        }
-        unknowns.extend(0..self.np);
-        Ok((eqs, unknowns))
     }
 
     /// The equations in the ring of the unknowns (inputs substituted), with

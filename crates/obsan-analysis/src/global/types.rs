@@ -21,6 +21,9 @@ pub struct GlobalOptions {
     /// (the engine's memory budget: `--max-terms` times
     /// `obsan_expr::Budget::BYTES_PER_TERM`).
     pub max_bytes: usize,
+    /// SIAN's weighted order (weights.rs): on by default; it changes the
+    /// time of the Gröbner basis, never a count (the tests compare both).
+    pub weighted: bool,
 }
 
 impl Default for GlobalOptions {
@@ -32,6 +35,7 @@ impl Default for GlobalOptions {
             max_basis: 20_000,
             max_solutions: 100_000,
             max_bytes: memory_budget(obsan_expr::Budget::DEFAULT_MAX_TERMS),
+            weighted: true,
         }
     }
 }
