@@ -111,7 +111,19 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     } else {
         "values of the locally identifiable variables"
     };
+    let any_local = r
+        .variables
+        .iter()
+        .any(|v| v.verdict != Identifiability::NotIdentifiable);
     match r.solutions {
+        // Nothing to count jointly: say so rather than "1 values of none".
+        Some(_) if !any_local => {
+            o.push_str("no variable is locally identifiable: each takes infinitely many values\n")
+        }
+        Some(1) => o.push_str(&format!(
+            "1 {scope} gives the output of a generic one\n",
+            scope = scope.replacen("values", "value", 1)
+        )),
         Some(k) => o.push_str(&format!("{k} {scope} give the output of a generic one\n")),
         None => o.push_str(&format!("infinitely many {scope} give the same output\n")),
     }

@@ -181,3 +181,33 @@ fn the_memory_budget_stops_the_groebner_stage() {
     );
     assert!(e.contains("raise it with --max-terms"), "{e}");
 }
+
+#[test]
+fn range_only_unicycles() {
+    // Derived by hand in the files. Turning: bx = -y'/(2v), by from y''
+    // (w != 0): one solution. Straight: by known only up to sign, and the
+    // mirror by -> -by maps the model to itself.
+    let v = global_json("systems/global/range_only_unicycle.sys");
+    assert_eq!(var(&v, "bx"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "by"), ("global".into(), Some(1)));
+    assert_eq!(v["solutions"], 1);
+    let v = global_json("systems/global/range_only_straight.sys");
+    assert_eq!(var(&v, "bx"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "by"), ("local".into(), Some(2)));
+    assert_eq!(v["solutions"], 2);
+    assert_eq!(v["maps"][0], "by -> -by");
+    assert_eq!(v["group_order"], 2);
+    // World frame: the rotation about the beacon leaves nothing identifiable;
+    // a compass (cos and sin of the heading) breaks it and fixes p0 linearly.
+    let v = global_json("systems/global/range_only_world.sys");
+    for x in ["x", "y", "theta"] {
+        assert_eq!(var(&v, x), ("not identifiable".into(), None), "{x}");
+    }
+    let t = ok(&["global", "systems/global/range_only_world.sys"]);
+    assert!(t.contains("no variable is locally identifiable"), "{t}");
+    let v = global_json("systems/global/range_compass_world.sys");
+    for x in ["x", "y", "theta"] {
+        assert_eq!(var(&v, x), ("global".into(), Some(1)), "{x}");
+    }
+    assert_eq!(v["solutions"], 1);
+}
