@@ -27,7 +27,7 @@ use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 use crate::relation::{input_check, InputCheck};
 use crate::report::{CandidateResult, Competing, Diagnosis, Named, Refit, Rival, ORIGIN_FILE};
 use crate::screen::{file_stand_in, score, Outcome, Scored, SCREEN_SAFETY};
-use crate::settle::{extended_model, name_relations, rivals, settle};
+use crate::settle::{extended_model, mark_stand_ins, name_relations, rivals, settle};
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -130,6 +130,13 @@ pub fn diagnose(
     };
 
     settle(&mut named, &rounds, &current, &gen);
+    mark_stand_ins(
+        &mut named,
+        &all_candidates,
+        &current,
+        &outputs,
+        &levels.sigma,
+    );
     // Pairs fixed only in combination (item 7 of the never-confidently-
     // wrong rules): among the named effects, and among the suggested ones
     // fitted together.
@@ -810,6 +817,8 @@ impl<'a> Rounds<'a> {
             p_value: res.p_value,
             rivals,
             correlated: vec![],
+            stand_in: false,
+            curvature: None,
         });
     }
 
