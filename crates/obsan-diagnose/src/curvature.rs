@@ -164,3 +164,97 @@ pub(crate) fn curvature(
         correlation_factor: factor,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One series of `output` with predicted values spread evenly over
+    /// [1, 3] and residual `(b2 P2(x) + sigma_true N(0, 1)) / sigma`.
+    fn series(
+        output: &str,
+        n: usize,
+        b2: f64,
+        (sigma, sigma_true): (f64, f64),
+        rng: &mut obsan_fit::Rng,
+    ) -> ResidualSeries {
+        let predicted: Vec<f64> = (0..n)
+            .map(|i| 1.0 + 2.0 * i as f64 / (n - 1) as f64)
+            .collect();
+        let e = predicted
+            .iter()
+            .map(|y| {
+                let x = y - 2.0;
+                (b2 * (1.5 * x * x - 0.5) + sigma_true * rng.normal()) / sigma
+            })
+            .collect();
+        ResidualSeries {
+            trajectory: "t".into(),
+            output: output.into(),
+            t: (0..n).map(|i| i as f64).collect(),
+            e,
+            predicted,
+            angular: false,
+            inputs: vec![],
+            input_integrals: vec![],
+            whiten: None,
+        }
+    }
+
+    fn test(s: &[ResidualSeries], sigma: f64) -> Option<Curvature> {
+        let n = s.iter().map(|s| s.e.len()).sum();
+        curvature(s, (0, n), &["y".into()], &|_| Some(sigma))
+    }
+
+    /// White noise of the right form: z is Student's t on n - 3 = 197
+    /// degrees of freedom, whose variance is 197/195 = 1.010; the mean of
+    /// 2000 squares has sd sqrt(2/2000) = 0.032 (the fourth moment a little
+    /// above the normal's), so 0.15 is over four sds.
+    #[test]
+    fn white_noise_gives_a_unit_variance_z() {
+        let mut rng = obsan_fit::Rng::new(7);
+        let mut sum = 0.0;
+        let runs = 2000;
+        for _ in 0..runs {
+            let c = test(&[series("y", 200, 0.0, (1.0, 1.0), &mut rng)], 1.0).unwrap();
+            sum += c.z * c.z;
+        }
+        let mean = sum / runs as f64;
+        assert!((mean - 1.010).abs() < 0.15, "mean z^2 {mean}");
+    }
+
+    /// A known curvature comes back in the outputs' units whatever the
+    /// stated level (here four times the true one: the studentised sd does
+    /// not read it), with z about b2 / (sigma / |P2|): |P2|^2 = n/5 over an
+    /// even grid on [-1, 1], so 0.02 / (0.05 / sqrt(80)) = 3.6 per series,
+    /// pooled over 4 series of 400: 7.2.
+    #[test]
+    fn a_known_curvature_is_measured_in_the_outputs_units() {
+        let mut rng = obsan_fit::Rng::new(3);
+        let s: Vec<ResidualSeries> = (0..4)
+            .map(|_| series("y", 400, 0.02, (0.2, 0.05), &mut rng))
+            .collect();
+        let c = test(&s, 0.2).unwrap();
+        assert!((c.coefficient - 0.02).abs() < 4.0 * c.sd, "{c:?}");
+        assert!(
+            (c.sd - 0.05 / (1600.0f64 / 5.0).sqrt()).abs() < 0.2 * c.sd,
+            "{c:?}"
+        );
+        assert!(c.z > Z_STAND_IN, "{c:?}");
+        assert_eq!(c.outputs, ["y"]);
+        assert_eq!(c.span, [1.0, 3.0]);
+    }
+
+    /// Too few residuals, or predicted values without a span: no test.
+    #[test]
+    fn too_little_to_test_gives_none() {
+        let mut rng = obsan_fit::Rng::new(1);
+        let few = series("y", MIN_STAND_IN_RESIDUALS - 1, 0.0, (1.0, 1.0), &mut rng);
+        assert!(test(&[few], 1.0).is_none());
+        let mut flat = series("y", 200, 0.0, (1.0, 1.0), &mut rng);
+        flat.predicted.iter_mut().for_each(|y| *y = 2.0);
+        assert!(test(&[flat], 1.0).is_none());
+        let other = series("z", 200, 0.0, (1.0, 1.0), &mut rng);
+        assert!(test(&[other], 1.0).is_none());
+    }
+}
