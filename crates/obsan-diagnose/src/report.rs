@@ -113,7 +113,7 @@ impl CandidateResult {
 }
 
 /// One named effect.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Named {
     pub effect: String,
     pub description: String,

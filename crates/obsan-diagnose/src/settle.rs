@@ -57,17 +57,16 @@ pub(crate) fn settle(
 }
 
 /// Each named effect that rewrites outputs gets its curvature test, and is
-/// marked a stand-in when the test fires. `sigma` are the noise levels of
-/// `outputs`, as in the final fit.
+/// marked a stand-in when the test fires. `sigma` are the output noise
+/// levels of the final fit, in the order of its outputs (`fit.rms`).
 pub(crate) fn mark_stand_ins(
     named: &mut [Named],
     effects: &[&Effect],
     fit: &ModelFit,
-    outputs: &[String],
     sigma: &[f64],
 ) {
     let level = |o: &str| {
-        let i = outputs.iter().position(|x| x == o)?;
+        let i = fit.rms.iter().position(|x| x.0 == o)?;
         sigma.get(i).copied().filter(|s| s.is_finite() && *s > 0.0)
     };
     for n in named.iter_mut() {
@@ -182,10 +181,7 @@ pub(crate) fn name_relations(
             rms_after: vec![],
             lr: c.z * c.z,
             p_value: c.p_value,
-            rivals: vec![],
-            correlated: vec![],
-            stand_in: false,
-            curvature: None,
+            ..Named::default()
         });
         *extended_sys = with_relation(extended_sys, e, &c.estimates);
     }
