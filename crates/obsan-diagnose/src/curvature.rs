@@ -98,7 +98,7 @@ pub(crate) fn curvature(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), y| {
             (a.min(y), b.max(y))
         });
-    if n < MIN_STAND_IN_RESIDUALS || !(hi > lo) || !(hi - lo).is_finite() {
+    if n < MIN_STAND_IN_RESIDUALS || hi <= lo || !(hi - lo).is_finite() {
         return None;
     }
     let (centre, half) = (0.5 * (hi + lo), 0.5 * (hi - lo));
@@ -127,7 +127,8 @@ pub(crate) fn curvature(
     let mut u = a2.clone();
     remove(&mut u, &basis);
     let uu = dot(&u, &u);
-    if !(uu > 1e-12 * dot(&a2, &a2)) {
+    // A direction the constant and the slope span (or NaN): nothing to test.
+    if uu.is_nan() || uu <= 1e-12 * dot(&a2, &a2) {
         return None;
     }
     let b2 = dot(&u, &w) / uu;
