@@ -487,6 +487,17 @@ fn named_text(d: &Diagnosis, s: &mut String) {
                 rv.effect, rv.delta_bic
             );
         }
+        if let Some(c) = n.curvature.as_ref().filter(|_| n.stand_in) {
+            let _ = writeln!(
+                s,
+                "  stand-in: {} over [{:.4e}, {:.4e}]; {} is what this form absorbs of an effect \
+                 of another form",
+                curvature_text(c),
+                c.span[0],
+                c.span[1],
+                n.effect
+            );
+        }
         // Once per pair, under the later of the two named effects; the
         // user's model's params are in --json only.
         for (c, other) in d.correlated_with_earlier(k) {
@@ -494,6 +505,24 @@ fn named_text(d: &Diagnosis, s: &mut String) {
             let _ = writeln!(s, "  caution: {text}");
         }
     }
+}
+
+/// The curvature left in the outputs a stand-in rewrites, in words.
+fn curvature_text(c: &obsan_diagnose::Curvature) -> String {
+    let outs = match c.outputs.as_slice() {
+        [a] => a.clone(),
+        [a, b] => format!("{a}, {b}"),
+        [a, b, ..] => format!("{a}, {b}, ... ({} outputs)", c.outputs.len()),
+        [] => "its outputs".into(),
+    };
+    format!(
+        "the residuals of {outs} still curve in the predicted value ({:.2e} ± {:.1e} at the \
+         span's ends, z {:.1}, critical {:.1})",
+        c.coefficient,
+        c.sd,
+        c.z,
+        obsan_diagnose::Z_STAND_IN
+    )
 }
 
 /// The pairs fixed only in combination, with the combination the data fix.
@@ -679,6 +708,28 @@ fn verdict(d: &Diagnosis, s: &mut String) {
             })
             .collect();
         parts.push(format!("named {}", named.join("; ")));
+    }
+    // Named effects whose outputs still curve: stand-ins, grouped by the
+    // outputs they rewrite (a scale and a bias of one sensor share them).
+    let mut stand_ins: Vec<(Vec<&str>, &obsan_diagnose::Curvature)> = Vec::new();
+    for n in d.named.iter().filter(|n| n.stand_in) {
+        let Some(c) = &n.curvature else { continue };
+        match stand_ins.iter_mut().find(|g| g.1.outputs == c.outputs) {
+            Some(g) => g.0.push(&n.effect),
+            None => stand_ins.push((vec![&n.effect], c)),
+        }
+    }
+    for (names, c) in stand_ins {
+        let verb = if names.len() == 1 {
+            "is a stand-in"
+        } else {
+            "are stand-ins"
+        };
+        parts.push(format!(
+            "{} {verb} for an effect of another form: {}",
+            names.join(" and "),
+            curvature_text(c)
+        ));
     }
     if !d.suggested.is_empty() {
         let sug: Vec<String> = d

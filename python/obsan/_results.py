@@ -710,14 +710,53 @@ class CramerRao(Result):
         return cls(raw=raw, sd=sd, sd_with_encoder_noise=enc, units=units)
 
 
+class Curvature(NamedTuple):
+    """The curvature test of the outputs a named effect rewrites: the whitened
+    residual, pooled over those ``outputs``, regressed on the Legendre
+    polynomials 1, x, (3x^2 - 1)/2 of the predicted value scaled to x in [-1, 1]
+    over ``span``; ``coefficient`` (in the outputs' units, left at both ends of
+    the span) with its studentised ``sd`` and ``z`` (a stand-in above 3.5)."""
+
+    outputs: List[str]
+    n: int
+    span: Tuple[float, float]
+    coefficient: float
+    sd: float
+    z: float
+    correlation_factor: float
+
+
+def _curvature(c: Optional[Mapping[str, Any]]) -> Optional[Curvature]:
+    if c is None:
+        return None
+
+    def num(x: Any) -> float:
+        return math.nan if x is None else float(x)
+
+    span = c.get("span") or [None, None]
+    return Curvature(
+        [str(o) for o in c.get("outputs") or []],
+        int(c.get("n", 0)),
+        (num(span[0]), num(span[1])),
+        num(c.get("coefficient")),
+        num(c.get("sd")),
+        num(c.get("z")),
+        num(c.get("correlation_factor")),
+    )
+
+
 class NamedEffect(NamedTuple):
     """An effect ``diagnose`` named: its params as :class:`Estimate` s and its
-    likelihood-ratio statistic."""
+    likelihood-ratio statistic; ``stand_in``: the outputs it rewrites still curve
+    in their predicted value in the final fit (:class:`Curvature`), so it stands in
+    for an effect of another form (always ``False`` for a suggested one)."""
 
     effect: str
     origin: str
     estimates: Dict[str, Estimate]
     lr: float
+    stand_in: bool = False
+    curvature: Optional[Curvature] = None
 
 
 class Combination(NamedTuple):
@@ -839,6 +878,8 @@ class Diagnosis(Result):
                     n.get("origin", ""),
                     {e[0]: Estimate(e[1], e[2]) for e in n.get("estimates") or []},
                     float(n.get("lr") or 0.0),
+                    bool(n.get("stand_in", False)),
+                    _curvature(n.get("curvature")),
                 )
                 for n in raw.get(key) or []
             ]

@@ -265,7 +265,9 @@ fit left its start), joint_levels (weighed at levels estimated with it) and stru
 residual tests its fit leaves, [test, z]), candidates that rewrite angle
 outputs their heading-free check common_mode {applies, note, full, differences, z, limit,
 vetoed, ...}, named effects their correlations with the final fit's other params at |r| >= 0.9
-correlated [{param, with, with_effect, r}]; pairs fixed only in combination (two named effects,
+correlated [{param, with, with_effect, r}] and stand_in (the outputs the effect rewrites still curve
+in their predicted value: it stands in for an effect of another form) with that test's curvature
+{outputs, n, span, coefficient, sd, z, correlation_factor}; pairs fixed only in combination (two named effects,
 or two suggested ones fitted together) are combinations [{params, effects, values, sds, r,
 robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
 params[0] + weight params[1], the smallest-variance direction of the pair. A generated winner

@@ -257,6 +257,32 @@ pub struct Named {
     pub rivals: Vec<Rival>,
     /// Its params' strong correlations with the final model's other params.
     pub correlated: Vec<Correlation>,
+    /// A stand-in for an effect of another form: the outputs it rewrites still curve in their
+    /// predicted value in the final fit (`|curvature.z|` above 3.5).
+    pub stand_in: bool,
+    /// The curvature test of the outputs it rewrites; null: it rewrites none, or too few residuals.
+    pub curvature: Option<Curvature>,
+}
+
+/// The curvature test of the outputs a named effect rewrites: the whitened residual regressed on
+/// the Legendre polynomials 1, x, (3x^2 - 1)/2 of the predicted value scaled to x in [-1, 1].
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Curvature {
+    /// The outputs pooled.
+    pub outputs: Vec<String>,
+    /// The number of residuals pooled.
+    pub n: usize,
+    /// The predicted values' span [lo, hi], mapped to x in [-1, 1] (angles wrapped first).
+    pub span: [Num; 2],
+    /// The coefficient b2 of (3x^2 - 1)/2 in the outputs' units (b2 left at both ends of the span).
+    pub coefficient: Num,
+    /// Its sd (studentised, inflated by `correlation_factor`).
+    pub sd: Num,
+    /// coefficient / sd.
+    pub z: Num,
+    /// The long-run variance factor of the residual after the regression (at least 1).
+    pub correlation_factor: Num,
 }
 
 /// A candidate that explains the data about as well as a named effect.

@@ -133,6 +133,16 @@ fn named(n: &lib::Named) -> v::Named {
                 r: num(c.r),
             })
             .collect(),
+        stand_in: n.stand_in,
+        curvature: n.curvature.as_ref().map(|c| v::Curvature {
+            outputs: c.outputs.clone(),
+            n: c.n,
+            span: [num(c.span[0]), num(c.span[1])],
+            coefficient: num(c.coefficient),
+            sd: num(c.sd),
+            z: num(c.z),
+            correlation_factor: num(c.correlation_factor),
+        }),
     }
 }
 

@@ -25,6 +25,7 @@ mod combine;
 mod common_mode;
 mod compete;
 mod correlation;
+mod curvature;
 mod error;
 mod generate;
 mod identify;
@@ -43,6 +44,7 @@ mod workflow;
 // The root keeps the workflow, its options and its report; the identifiability and
 // statistical checks are behind public modules, so the root stays small (at most 40
 // names, checked by scripts/module_dag.py --exports).
+pub use curvature::{Curvature, MIN_STAND_IN_RESIDUALS, Z_STAND_IN};
 pub use error::DiagnoseError;
 pub use generate::{generate, levels, Generated, Generation, FILE_SHARE, ORIGIN_GENERATED};
 pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};

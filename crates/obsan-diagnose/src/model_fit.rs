@@ -478,14 +478,17 @@ pub fn fit_model(
 /// the start on some trajectory), a continuation replaces the start: fits on
 /// each trajectory's first eighth, quarter and half of its outputs, each
 /// from the last, then the whole data. A start from which a trajectory
-/// diverges is never the answer. The note says what was done.
+/// diverges is never the answer. `own` gives the data's own start (without
+/// the values the user gave by name), tried as one more route: a user's
+/// start that diverges must not keep the search away from the basin the data
+/// themselves point to. The note says what was done.
 pub(crate) fn first_fit(
     sys: &System,
     prepared: &Dataset,
     start: &Start,
-    sigma: &[f64],
-    noise: &[(String, f64)],
+    (sigma, noise): (&[f64], &[(String, f64)]),
     o: &DiagnoseOptions,
+    own: &dyn Fn() -> Option<Start>,
 ) -> Result<(ModelFit, Option<String>), DiagnoseError> {
     let err = match fit_model(sys, prepared, &start.0, &start.1, sigma, noise, o) {
         Ok(f) => return Ok((f, None)),
@@ -529,6 +532,15 @@ pub(crate) fn first_fit(
             let how = format!(
                 "a fit without trajectory '{}', whose params started the whole data",
                 prepared.trajectories[k].name
+            );
+            routes.push((f, how));
+        }
+    }
+    if let Some(s) = own() {
+        if let Ok(f) = fit_model(sys, prepared, &s.0, &s.1, sigma, noise, o) {
+            let how = format!(
+                "the data's own start without the values given by name: {}",
+                s.2
             );
             routes.push((f, how));
         }
@@ -594,7 +606,7 @@ pub(crate) fn output_levels(
     prepared: &Dataset,
     start: &Start,
     mut sigma: Vec<f64>,
-    o: &DiagnoseOptions,
+    (o, own): (&DiagnoseOptions, &dyn Fn() -> Option<Start>),
 ) -> Result<(Vec<f64>, bool), DiagnoseError> {
     if !sigma.iter().any(|s| s.is_nan()) {
         return Ok((sigma, false));
@@ -603,7 +615,7 @@ pub(crate) fn output_levels(
         .iter()
         .map(|s| if s.is_nan() { 1.0 } else { *s })
         .collect();
-    let (f, _) = first_fit(sys, prepared, start, &ones, &[], o)?;
+    let (f, _) = first_fit(sys, prepared, start, (&ones, &[]), o, own)?;
     let scale = (f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0)).sqrt();
     for (s, r) in sigma.iter_mut().zip(&f.rms) {
         if s.is_nan() {

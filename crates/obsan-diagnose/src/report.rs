@@ -4,6 +4,7 @@
 
 use crate::common_mode::CommonModeCheck;
 use crate::correlation::{Combination, Correlation};
+use crate::curvature::Curvature;
 use crate::generate::ORIGIN_GENERATED;
 use crate::model_fit::ModelFit;
 use crate::relation::InputCheck;
@@ -112,7 +113,7 @@ impl CandidateResult {
 }
 
 /// One named effect.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct Named {
     pub effect: String,
     pub description: String,
@@ -137,6 +138,13 @@ pub struct Named {
     /// change correlates with calib.sys's delta at 0.999). Empty for an
     /// input relation, which is not in the fit.
     pub correlated: Vec<Correlation>,
+    /// A stand-in for an effect of another form: it rewrites outputs whose
+    /// residuals in the final fit still curve in the predicted value
+    /// (`|curvature.z| >` [`crate::Z_STAND_IN`]).
+    pub stand_in: bool,
+    /// The curvature test of the outputs it rewrites; `None`: it rewrites
+    /// none, or too few residuals to test.
+    pub curvature: Option<Curvature>,
 }
 
 /// The current model refitted before a round's comparison: a candidate's

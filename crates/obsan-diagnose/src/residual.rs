@@ -82,9 +82,19 @@ impl ResidualReport {
     }
 }
 
-/// Squared norm of the projection of `e` on the span of `cols` (Gram–Schmidt,
-/// dropping columns that are dependent to 1e-9) and the rank used.
+/// Squared norm of the projection of `e` on the span of `cols` and the rank used.
 fn projection(e: &[f64], cols: &[Vec<f64>]) -> (f64, usize) {
+    let basis = orthonormal(cols);
+    let q = basis
+        .iter()
+        .map(|b| b.iter().zip(e).map(|(x, y)| x * y).sum::<f64>().powi(2))
+        .sum();
+    (q, basis.len())
+}
+
+/// An orthonormal basis of the span of `cols` (Gram–Schmidt, dropping
+/// columns that are dependent to 1e-9 of their norm).
+pub(crate) fn orthonormal(cols: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let mut basis: Vec<Vec<f64>> = Vec::new();
     for c in cols {
         let mut v = c.clone();
@@ -106,16 +116,41 @@ fn projection(e: &[f64], cols: &[Vec<f64>]) -> (f64, usize) {
             basis.push(v);
         }
     }
-    let q = basis
-        .iter()
-        .map(|b| b.iter().zip(e).map(|(x, y)| x * y).sum::<f64>().powi(2))
-        .sum();
-    (q, basis.len())
+    basis
 }
 
 fn centred(v: &[f64]) -> Vec<f64> {
     let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
     v.iter().map(|x| x - m).collect()
+}
+
+/// Serial correlation within each series longer than 30 at lags 1..=10,
+/// pooled: the Ljung–Box statistic and its degrees of freedom, and the
+/// long-run variance factor `1 + 2 sum_k (1 - k/11) rho_k` (Bartlett),
+/// weighted by length and at least 1 (1 when no series is long enough).
+pub(crate) fn serial_correlation<'a>(series: impl Iterator<Item = &'a [f64]>) -> (f64, f64, f64) {
+    let (mut q, mut k) = (0.0, 0.0);
+    let (mut lr_sum, mut lr_w) = (0.0, 0.0);
+    for w in series.filter(|w| w.len() > 30) {
+        let e = centred(w);
+        let m = e.len() as f64;
+        let c0: f64 = e.iter().map(|x| x * x).sum::<f64>().max(1e-300);
+        let mut f = 1.0;
+        for lag in 1..=10 {
+            let r: f64 = e.iter().zip(&e[lag..]).map(|(a, b)| a * b).sum::<f64>() / c0;
+            q += m * (m + 2.0) * r * r / (m - lag as f64);
+            k += 1.0;
+            f += 2.0 * (1.0 - lag as f64 / 11.0) * r;
+        }
+        lr_sum += f * m;
+        lr_w += m;
+    }
+    let factor = if lr_w > 0.0 {
+        (lr_sum / lr_w).max(1.0)
+    } else {
+        1.0
+    };
+    (q, k, factor)
 }
 
 /// Run the tests; `n_fitted` unknowns were fitted to these residuals.
@@ -149,28 +184,7 @@ pub fn analyse(series: &[ResidualSeries], n_fitted: usize) -> ResidualReport {
             significant: z > Z_STRUCTURE,
         });
     };
-    // Ljung–Box over lags 1..=10 within each series, pooled.
-    let (mut q, mut k) = (0.0, 0.0);
-    let (mut lr_sum, mut lr_w) = (0.0, 0.0);
-    for w in white.iter().filter(|w| w.len() > 30) {
-        let e = centred(w);
-        let m = e.len() as f64;
-        let c0: f64 = e.iter().map(|x| x * x).sum::<f64>().max(1e-300);
-        let mut f = 1.0;
-        for lag in 1..=10 {
-            let r: f64 = e.iter().zip(&e[lag..]).map(|(a, b)| a * b).sum::<f64>() / c0;
-            q += m * (m + 2.0) * r * r / (m - lag as f64);
-            k += 1.0;
-            f += 2.0 * (1.0 - lag as f64 / 11.0) * r;
-        }
-        lr_sum += f * m;
-        lr_w += m;
-    }
-    let correlation_factor = if lr_w > 0.0 {
-        (lr_sum / lr_w).max(1.0)
-    } else {
-        1.0
-    };
+    let (q, k, correlation_factor) = serial_correlation(white.iter().map(Vec::as_slice));
     push(
         "whiteness",
         "autocorrelation at lags 1-10 (Ljung-Box)".into(),

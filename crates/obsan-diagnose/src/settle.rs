@@ -1,10 +1,12 @@
 //! What was named, settled against the final fit (step 5 of the workflow):
 //! rivals the next round found confounded, refined estimates, correlations,
-//! a generated effect's words; and the extended model's text (step 6),
+//! a generated effect's words, whether an effect rewriting outputs is a
+//! stand-in (`curvature.rs`); and the extended model's text (step 6),
 //! input relations included.
 
 use crate::candidate::Fitted;
 use crate::correlation::{correlated, CORRELATION_CAUTION};
+use crate::curvature::{curvature, Z_STAND_IN};
 use crate::generate::{Generation, ORIGIN_GENERATED};
 use crate::model_fit::ModelFit;
 use crate::relation::{with_relation, InputCheck};
@@ -51,6 +53,32 @@ pub(crate) fn settle(
         if let Some(g) = gen.candidates.iter().find(|g| g.effect.name == n.effect) {
             n.description = g.words(n.estimates.first().map_or(0.0, |x| x.1));
         }
+    }
+}
+
+/// Each named effect that rewrites outputs gets its curvature test, and is
+/// marked a stand-in when the test fires. `sigma` are the output noise
+/// levels of the final fit, in the order of its outputs (`fit.rms`).
+pub(crate) fn mark_stand_ins(
+    named: &mut [Named],
+    effects: &[&Effect],
+    fit: &ModelFit,
+    sigma: &[f64],
+) {
+    let level = |o: &str| {
+        let i = fit.rms.iter().position(|x| x.0 == o)?;
+        sigma.get(i).copied().filter(|s| s.is_finite() && *s > 0.0)
+    };
+    for n in named.iter_mut() {
+        let Some(e) = effects.iter().find(|e| e.name == n.effect) else {
+            continue;
+        };
+        let rewritten: Vec<String> = e.outputs.iter().map(|o| o.0.clone()).collect();
+        if rewritten.is_empty() {
+            continue;
+        }
+        n.curvature = curvature(&fit.series, (fit.n_fitted, fit.n), &rewritten, &level);
+        n.stand_in = n.curvature.as_ref().is_some_and(|c| c.z.abs() > Z_STAND_IN);
     }
 }
 
@@ -153,8 +181,7 @@ pub(crate) fn name_relations(
             rms_after: vec![],
             lr: c.z * c.z,
             p_value: c.p_value,
-            rivals: vec![],
-            correlated: vec![],
+            ..Named::default()
         });
         *extended_sys = with_relation(extended_sys, e, &c.estimates);
     }

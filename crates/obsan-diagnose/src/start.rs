@@ -417,6 +417,13 @@ fn integrable<'a>(
     ))
 }
 
+/// The data's own start, without the values given by name, when it differs
+/// from `start`: a route for a start that cannot be fitted.
+pub(crate) fn own_start(sys: &System, data: &Dataset, start: &Start) -> Option<Start> {
+    let own = start_values(sys, data, &BTreeMap::new()).ok()?;
+    (own.0 != start.0 || own.1 != start.1).then_some(own)
+}
+
 /// Start values (params, per trajectory the dynamic state) for `sys` on
 /// `data`, with how they were found; `given` overrides by name (a state's
 /// value applies to every trajectory).

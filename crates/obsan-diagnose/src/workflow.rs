@@ -27,7 +27,8 @@ use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 use crate::relation::{input_check, InputCheck};
 use crate::report::{CandidateResult, Competing, Diagnosis, Named, Refit, Rival, ORIGIN_FILE};
 use crate::screen::{file_stand_in, score, Outcome, Scored, SCREEN_SAFETY};
-use crate::settle::{extended_model, name_relations, rivals, settle};
+use crate::settle::{extended_model, mark_stand_ins, name_relations, rivals, settle};
+use crate::start::own_start;
 use crate::stats::{chi2_critical, normal_critical};
 use obsan_data::Dataset;
 use obsan_model::{Effect, EffectLibrary, System};
@@ -49,7 +50,8 @@ pub fn diagnose(
     let sigma = given_levels(&outputs, data, o);
     let prepared = prepare(sys, data)?;
     progress("fitting the nominal model");
-    let (sigma, sigma_estimated) = output_levels(sys, &prepared, start, sigma, o)?;
+    let own = || own_start(sys, data, start);
+    let (sigma, sigma_estimated) = output_levels(sys, &prepared, start, sigma, (o, &own))?;
     let (levels, nominal) = nominal_fit(
         sys,
         data,
@@ -130,6 +132,7 @@ pub fn diagnose(
     };
 
     settle(&mut named, &rounds, &current, &gen);
+    mark_stand_ins(&mut named, &all_candidates, &current, &levels.sigma);
     // Pairs fixed only in combination (item 7 of the never-confidently-
     // wrong rules): among the named effects, and among the suggested ones
     // fitted together.
@@ -231,7 +234,8 @@ fn nominal_fit(
         InputNoise::Stated | InputNoise::Auto => stated,
         InputNoise::Estimate | InputNoise::None => vec![],
     };
-    let (nominal, replaced) = first_fit(sys, prepared, start, &sigma, &noise, o)?;
+    let own = || own_start(sys, data, start);
+    let (nominal, replaced) = first_fit(sys, prepared, start, (&sigma, &noise), o, &own)?;
     let mut levels = Levels {
         sigma,
         sigma_estimated,
@@ -809,7 +813,7 @@ impl<'a> Rounds<'a> {
             lr: res.lr,
             p_value: res.p_value,
             rivals,
-            correlated: vec![],
+            ..Named::default()
         });
     }
 
