@@ -185,17 +185,23 @@ fn count_at(
     };
     let mut steps: Vec<u32> = unk.iter().map(|&v| w[v]).collect();
     let mut degrees: Vec<u32> = eqs.iter().map(|e| degree_in(e, &unk)).collect();
-    // `z Q - 1` (sian.rs), `z` one more variable after the unknowns.
+    // `z Q - 1` (sian.rs), `z` one more variable after the unknowns, when
+    // there is a denominator (Q = 1 otherwise).
     let q = run.cleared.q.clone();
-    degrees.push(degree_in(&q, &unk) + 1);
-    eqs.push(q);
-    let (ring, mut gens) = run.to_unknown_ring(&eqs, &unk, 1)?;
-    steps.push(z_weight(&w, run));
-    let zq = gens.pop().unwrap_or_default();
-    gens.push(ring.sub(
-        &ring.mul(&zq, &ring.var(ring.n - 1)).map_err(gb_err)?,
-        &ring.constant(1),
-    ));
+    let with_z = q.degree() > 0;
+    if with_z {
+        degrees.push(degree_in(&q, &unk) + 1);
+        eqs.push(q);
+    }
+    let (ring, mut gens) = run.to_unknown_ring(&eqs, &unk, usize::from(with_z))?;
+    if with_z {
+        steps.push(z_weight(&w, run));
+        let zq = gens.pop().unwrap_or_default();
+        gens.push(ring.sub(
+            &ring.mul(&zq, &ring.var(ring.n - 1)).map_err(gb_err)?,
+            &ring.constant(1),
+        ));
+    }
     // Linear generators solved first (the outputs fix many unknowns to
     // numbers), then the weights: presolve needs degree 1 to mean linear.
     let gens = presolve_linear(&ring, &gens, opts.max_bytes).map_err(gb_err)?;
@@ -246,7 +252,7 @@ fn count_at(
         joint,
         orders: orders.to_vec(),
         rank_order,
-        unknowns: unk.len(),
+        unknowns: ring.n,
         equations: eqs.len(),
         degrees,
         n_local: local.iter().filter(|&&l| l).count(),
