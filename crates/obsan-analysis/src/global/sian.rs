@@ -127,7 +127,19 @@ impl Run {
     ) -> Result<(Vec<Poly>, Vec<usize>), AnalysisError> {
         let r = &self.ring;
         let f = &self.field;
-        let mut held = 0usize;
+        // Held beside the explicit system's derivatives (prepare counts
+        // those) and the cleared ones of earlier orders.
+        let n = r.n;
+        let mut held: usize = self
+            .rhs_d
+            .iter()
+            .chain(&self.out_d)
+            .chain(&c.state)
+            .chain(&c.num)
+            .chain(&c.den)
+            .flatten()
+            .map(|p| p.stored_bytes(n))
+            .sum();
         let mut used = vec![false; r.n];
         let mark = |p: &Poly, used: &mut Vec<bool>| {
             for (m, _) in p.terms() {
