@@ -1,6 +1,6 @@
 //! SIAN's weighted ordering (Bessonov, Ilmer, Konstantinova, Ovchinnikov,
 //! Pogudin, Soto, "Faster global identifiability testing via weighted
-//! orderings", ISSAC 2024 / arXiv 2302.XXXX as cited in docs/engine.md): a
+//! orderings", 2023, as cited in docs/engine.md): a
 //! state first seen in the `L`-th derivative of the outputs gets weight
 //! `L + 1`, on every one of its Taylor orders; a locally identifiable
 //! parameter first seen at the deepest level `M` gets `M + 1`; the
