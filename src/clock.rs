@@ -23,7 +23,7 @@ thread_local! {
 }
 
 /// The commands that handle explicit time.
-const HANDLED: [&str; 4] = ["show", "rank", "symmetries", "simulate"];
+const HANDLED: [&str; 6] = ["show", "rank", "symmetries", "simulate", "modes", "verify"];
 
 /// Note the command being run on this thread (see [`refuse_time`]).
 pub fn set_command(name: &'static str) {

@@ -41,6 +41,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         },
     )
     .map_err(|e| Failure(e.to_string()))?;
+    // With explicit time the clock `t` is an analysed state and a mode
+    // (src/clock.rs): counted out of every rank, n and mode list shown.
+    let clk = usize::from(nf.clock().is_some());
     let title = match &nf.restriction {
         Some(q) => format!("{} (input {q})", nf.name),
         None => nf.name.clone(),
@@ -59,6 +62,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             let modes = nf
                 .state
                 .iter()
+                .filter(|s| clk == 0 || s.as_str() != obsan_model::TIME)
                 .map(|s| json::VariableMode {
                     expr: s.clone(),
                     kind: "variable".into(),
@@ -70,8 +74,8 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
                 decided,
                 full_rank: decided.then_some(true),
                 modes,
-                n: r.n,
-                rank: r.rank,
+                n: r.n - clk,
+                rank: r.rank - clk,
                 reduced: None,
                 restriction: nf.restriction.clone(),
                 system: nf.name.clone(),
@@ -80,14 +84,14 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         } else if decided {
             outln!(
                 "{title}: rank {} of {}: every variable is observable; the modes are the variables",
-                r.rank,
-                r.n
+                r.rank - clk,
+                r.n - clk
             );
         } else {
             outln!(
                 "{title}: rank {} of {} with the atoms independent\n{certificate}",
-                r.rank,
-                r.n
+                r.rank - clk,
+                r.n - clk
             );
         }
         // Nothing to reduce: the reduced system would be the system itself.
@@ -182,16 +186,17 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     let closure = checks.as_ref().is_some_and(|c| d.closure_proves(c));
     let certificate = if closure {
         format!(
-            "exact by closure: {} modes with independent gradients (a non-zero minor at a point); their dynamics along every field and every output written in the modes and proven by exact substitution ({} decomposition checks); so the observable codistribution is their span, the rank is exactly {} and each mode satisfies eq. (11) for every symmetry (the PDE also checked exactly against the {nsym} symmetr{}: {sym_cert})",
-            d.modes.len(),
+            "exact by closure: {} modes with independent gradients (a non-zero minor at a point); their dynamics along every field and every output written in the modes and proven by exact substitution ({} decomposition checks); so the observable codistribution is their span, the rank is exactly {} and each mode satisfies eq. (11) for every symmetry (the PDE also checked exactly against the {nsym} symmetr{}: {sym_cert}){}",
+            d.modes.len() - clk,
             checks.as_ref().map_or(0, |c| c.len()),
-            d.rank,
+            d.rank - clk,
             plural(nsym),
+            if clk == 1 { "; with the clock t, a mode of every system with explicit time, in the checks" } else { "" },
         )
     } else if !decided {
         format!(
             "{} mode(s), each satisfies eq. (11) exactly (canonical forms) for the {nsym} symmetr{} found ({sym_cert}); {}; {}",
-            d.modes.len(),
+            d.modes.len() - clk,
             plural(nsym),
             match &checks {
                 Some(_) if verified => "the reduced system writes every output and field in the modes (exact substitution)".to_string(),
@@ -203,9 +208,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     } else {
         format!(
             "{} mode(s), each satisfies eq. (11) exactly (canonical forms) for the {nsym} symmetr{} ({sym_cert}); gradients independent (a non-zero minor at a point, exact); {} = rank{}{}",
-            d.modes.len(),
+            d.modes.len() - clk,
             plural(nsym),
-            d.mode_report.independent_count,
+            d.mode_report.independent_count.saturating_sub(clk),
             if sym.exact { " (exact)" } else { " (the rank test's, exact only as a lower bound)" },
             match &checks {
                 Some(_) => "; reduced system: a decomposition check FAILED".to_string(),
@@ -219,8 +224,9 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     }
     if a.out.json {
         let modes = d
-            .modes
-            .iter()
+            .shown()
+            .into_iter()
+            .map(|k| &d.modes[k])
             .map(|m| json::DerivedMode {
                 angle: m.angle,
                 domain: m.domain.clone(),
@@ -229,15 +235,16 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
                 name: m.name.clone(),
             })
             .collect();
-        let dynamics = (0..d.modes.len())
+        let dynamics = d
+            .shown()
+            .into_iter()
             .map(|k| json::ReducedDynamics {
                 name: d.modes[k].name.clone(),
                 rhs: d.dynamics(k),
             })
             .collect();
         let outputs = d
-            .outputs
-            .iter()
+            .shown_outputs()
             .map(|(n, e)| json::ReducedOutput {
                 expr: e.clone(),
                 name: n.clone(),
@@ -270,8 +277,8 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             decided,
             full_rank: false,
             modes,
-            n: n_full,
-            rank: d.rank,
+            n: n_full - clk,
+            rank: d.rank - clk,
             reduced: json::Reduced {
                 closed: d.closed(),
                 dynamics,
@@ -289,11 +296,11 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     } else {
         let mut o = format!(
             "{title}: rank {} of {}, {} symmetr{}; {} observable modes:\n",
-            d.rank,
-            n_full,
+            d.rank - clk,
+            n_full - clk,
             nsym,
             plural(nsym),
-            d.modes.len()
+            d.modes.len() - clk
         );
         if !unreached.is_empty() {
             o.push_str(&format!(
@@ -303,7 +310,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
                 unreached.join(", ")
             ));
         }
-        for m in &d.modes {
+        for m in d.shown().into_iter().map(|k| &d.modes[k]) {
             let e = if a.out.latex {
                 nf.ctx.to_latex(m.expr)
             } else {

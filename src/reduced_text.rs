@@ -17,14 +17,14 @@ pub(crate) fn push_mode(o: &mut String, m: &DerivedMode, expr: &str) {
 /// modes; "(not found)" where the derivation has no form for a part.
 pub(crate) fn push_reduced(o: &mut String, d: &Derivation) {
     o.push_str("reduced system:\n");
-    for k in 0..d.modes.len() {
+    for k in d.shown() {
         o.push_str(&format!(
             "  {}' = {}\n",
             d.modes[k].name,
             d.dynamics(k).unwrap_or_else(|| "(not found)".into())
         ));
     }
-    for (name, e) in &d.outputs {
+    for (name, e) in d.shown_outputs() {
         o.push_str(&format!(
             "  {name} = {}\n",
             e.as_deref().unwrap_or("(not found)")

@@ -390,3 +390,57 @@ fn modes_over_decided_atoms_stay_exact() {
     assert_eq!(v["certificate"]["exact"], true);
     assert_eq!(v["certificate"]["complete"], true);
 }
+
+/// Explicit time in `obsan modes` (issue 33): a time-varying gain.
+/// By hand: `x' = a x`, `y = c x t`; `(x, c) -> (l x, c/l)` leaves `y`
+/// unchanged, and `y = t (c x)`, `y' = (c x)(1 + a t)` give `c x` and then
+/// `a`: rank 2 of the user's 3 variables, modes `a` and `z = c x` with
+/// `z' = a z`, `y = t z`. The clock `t` (`t' = 1`, the known output `t`) is the
+/// analysis' coordinate, never a printed mode nor a written state.
+#[test]
+fn modes_with_explicit_time() {
+    let src = "system tg\nstate x\nparam a, c\nx' = a*x\noutput y = c*x*t\n";
+    let sys = temp_file("modes_time_gain.sys", src);
+    let v = modes_json(&[&sys]);
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(2), Some(3)));
+    let modes: Vec<&str> = v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["expr"].as_str().unwrap())
+        .collect();
+    assert_eq!(modes.len(), 2, "{modes:?}");
+    assert!(modes.iter().all(|e| *e != "t"), "{modes:?}");
+    // One mode is a, the other a constant multiple of c x.
+    assert!(modes.contains(&"a"), "{modes:?}");
+    let other = modes.iter().find(|e| **e != "a").unwrap();
+    let ratio = format!("({other})/(c*x)");
+    let mut ctx = obsan_expr::Ctx::new();
+    let id = ctx.parse(&ratio).unwrap();
+    assert!(ctx.canon(id).as_q().is_some(), "{other}");
+    assert_eq!(v["certificate"]["exact"], true);
+    let outs = v["reduced"]["outputs"].as_array().unwrap();
+    assert_eq!(outs.len(), 1, "no clock output: {outs:?}");
+    // The written pair: `t` stays time (never declared) and the reduced
+    // system is observable (rank 2 of 2); the .dec verifies.
+    let dir = fresh_dir("modes_time");
+    let prefix = format!("{dir}/red");
+    ok(&["modes", &sys, "--out", &prefix]);
+    let red = std::fs::read_to_string(format!("{prefix}.sys")).unwrap();
+    assert!(
+        !red.contains("state t") && !red.contains("output t"),
+        "{red}"
+    );
+    let r: Value =
+        serde_json::from_str(&ok(&["rank", &format!("{prefix}.sys"), "--json"])).unwrap();
+    assert_eq!((r["rank"].as_u64(), r["n"].as_u64()), (Some(2), Some(2)));
+    let out = ok(&["verify", &format!("{prefix}.dec")]);
+    assert!(out.contains("decomposition verified (exact)"), "{out}");
+    // A decomposition written by hand, without the clock, verifies too.
+    let dec = temp_file(
+        "modes_time_gain.dec",
+        &format!("system {sys}\nlet z = c*x\nstate a, z\na' = 0\nz' = a*z\noutput y = t*z\n"),
+    );
+    let out = ok(&["verify", &dec]);
+    assert!(out.contains("decomposition verified (exact)"), "{out}");
+}

@@ -293,8 +293,9 @@ fn commands_without_a_clock_refuse_time_at_its_place() {
         "system g\nstate x\ninput u\nx' = u\noutput y = x*t\n",
     );
     let place = format!("{f}:5:14: explicit time 't'");
+    // `modes` handles it since session 25 (tests/cli/modes.rs,
+    // `modes_with_explicit_time`).
     for (cmd, extra) in [
-        ("modes", vec![]),
         ("global", vec![]),
         ("lie", vec!["--order", "1"]),
         ("check", vec!["--mode", "x"]),

@@ -221,6 +221,27 @@ impl Decomposition {
                 .all(|(n, _)| self.outputs.iter().any(|o| &o.0 == n))
     }
 
+    /// With explicit time the clock `t` (`t' = 1`, observable through its
+    /// known output) is a mode of every decomposition, so a file need not
+    /// name it (`obsan modes` never writes it, `t` being time, never
+    /// declared): it is added, with its equation `t' = 1` appended to the
+    /// source so that every offset stays valid.
+    fn with_clock(&self) -> Decomposition {
+        let t = obsan_model::TIME;
+        if self.new_state.iter().any(|s| s == t) {
+            return self.clone();
+        }
+        let mut d = self.clone();
+        let line = format!("\n{t}' = 1\n");
+        let at = d.src.len() + line.len() - 2;
+        d.src.push_str(&line);
+        if let Ok(one) = parse_ast("1") {
+            d.new_state.push(t.to_string());
+            d.dynamics.push((t.to_string(), one, at));
+        }
+        d
+    }
+
     fn at(&self, offset: usize, msg: impl Into<String>) -> AnalysisError {
         err(&self.origin, &self.src, offset, msg)
     }
@@ -245,6 +266,14 @@ pub fn verify_decomposition_with(
     seed: u64,
     known: Option<(&RankReport, &SymmetryReport)>,
 ) -> Result<Vec<Check>, AnalysisError> {
+    let with_clock;
+    let d = match nf.clock() {
+        Some(_) => {
+            with_clock = d.with_clock();
+            &with_clock
+        }
+        None => d,
+    };
     let new = NewState::build(nf, d)?;
     let mut checks = mode_and_rank_checks(nf, d, &new.g, seed, known)?;
     for (k, s) in d.new_state.iter().enumerate() {
@@ -395,7 +424,15 @@ fn mode_and_rank_checks(
         undecided: if indep == g.len() { own } else { Vec::new() },
     });
     checks.push(Check {
-        name: format!("they are complete (rank of the system is {})", report.rank),
+        name: format!(
+            "they are complete (rank of the system is {}{})",
+            report.rank,
+            if nf.clock().is_some() {
+                ", the clock t counted"
+            } else {
+                ""
+            }
+        ),
         pass: indep == report.rank,
         detail: if indep == report.rank {
             String::new()

@@ -109,6 +109,27 @@ impl Derivation {
             .all(|d| d.as_deref() == Some("0"))
     }
 
+    /// Whether mode `k` is the clock of a system with explicit time: the
+    /// variable `t` (observable through the clock's output `t`), a mode of
+    /// every such system, which the files and the text leave implicit
+    /// (`t` is time, never declared; docs/sys-format.md, "Explicit time").
+    pub fn is_clock(&self, k: usize) -> bool {
+        let m = &self.modes[k];
+        m.kind == ModeKind::Variable && m.name == obsan_model::TIME
+    }
+
+    /// The modes the user sees: every one but the clock.
+    pub fn shown(&self) -> Vec<usize> {
+        (0..self.modes.len())
+            .filter(|&k| !self.is_clock(k))
+            .collect()
+    }
+
+    /// The outputs the user sees: every one but the clock's output `t`.
+    pub fn shown_outputs(&self) -> impl Iterator<Item = &(String, Option<String>)> {
+        self.outputs.iter().filter(|o| o.0 != obsan_model::TIME)
+    }
+
     /// A decomposition file (docs/decomposition-format.md) stating the result.
     pub fn decomposition_text(
         &self,
@@ -130,7 +151,12 @@ impl Derivation {
                 o.push_str(&format!("let {} = {}\n", m.name, m.text));
             }
         }
-        let names: Vec<&str> = self.modes.iter().map(|m| m.name.as_str()).collect();
+        // The clock stays implicit: the decomposition reader adds it.
+        let names: Vec<&str> = self
+            .shown()
+            .into_iter()
+            .map(|k| self.modes[k].name.as_str())
+            .collect();
         o.push_str(&format!("state {}\n", names.join(", ")));
         self.push_equations(&mut o, |_| true)?;
         Some(o)
@@ -138,15 +164,16 @@ impl Derivation {
 
     /// The dynamics of the modes `keep` selects, then the outputs, as `.sys`
     /// lines (shared by the decomposition and the reduced system).
+    /// The clock's `t' = 1` and output `t` are never written.
     fn push_equations(&self, o: &mut String, keep: impl Fn(usize) -> bool) -> Option<()> {
-        for k in (0..self.modes.len()).filter(|&k| keep(k)) {
+        for k in self.shown().into_iter().filter(|&k| keep(k)) {
             o.push_str(&format!(
                 "{}' = {}\n",
                 self.modes[k].name,
                 self.dynamics(k)?
             ));
         }
-        for (name, e) in &self.outputs {
+        for (name, e) in self.shown_outputs() {
             o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
         }
         Some(())
@@ -159,14 +186,19 @@ impl Derivation {
         );
         o.push_str(&format!("system {name}_modes\n"));
         o.push_str(&format!("description {description}\n"));
-        for m in &self.modes {
+        for k in self.shown() {
+            let m = &self.modes[k];
             o.push_str(&format!("# {} = {}\n", m.name, m.text));
         }
-        let states: Vec<&str> = (0..self.modes.len())
+        let states: Vec<&str> = self
+            .shown()
+            .into_iter()
             .filter(|&k| !self.is_constant(k))
             .map(|k| self.modes[k].name.as_str())
             .collect();
-        let params: Vec<&str> = (0..self.modes.len())
+        let params: Vec<&str> = self
+            .shown()
+            .into_iter()
             .filter(|&k| self.is_constant(k))
             .map(|k| self.modes[k].name.as_str())
             .collect();
