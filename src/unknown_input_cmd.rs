@@ -449,12 +449,6 @@ pub type WritePair = fn(&str, bool, &str, &str) -> Result<(), Failure>;
 /// input combinations (docs/engine.md, "Modes with unknown inputs").
 /// `write` writes PREFIX.sys and PREFIX.dec as `obsan modes --out` does.
 pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<ExitCode, Failure> {
-    if nf.clock().is_some() {
-        return Err(Failure(format!(
-            "{}: `obsan modes` with unknown inputs does not handle explicit time yet (`obsan rank` and `obsan symmetries` do)",
-            a.sys.system
-        )));
-    }
     let deadline = crate::cli::deadline_after(Instant::now(), a.timeout);
     let opts = DeriveOptions {
         seed: a.seed,
@@ -472,7 +466,10 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     )
     .map_err(|e| Failure(format!("{}: {e}", a.sys.system)))?;
     let r = &m.symmetries.report;
-    let (rank, n, bound) = (r.rank, r.n, r.error_bound);
+    // With explicit time the clock `t` is an analysed state and a mode
+    // (src/clock.rs): counted out of the rank, n and modes shown.
+    let clk = usize::from(nf.clock().is_some());
+    let (rank, n, bound) = (r.rank - clk.min(r.rank), r.n - clk, r.error_bound);
     let nsym = m.symmetries.vectors.len();
     let view = &mut m.view;
     let (sys_path, sets) = crate::reduced_text::dec_source(&a.sys);
@@ -535,6 +532,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
         None => nf
             .state
             .iter()
+            .filter(|s| clk == 0 || s.as_str() != obsan_model::TIME)
             .map(|s| json::DerivedMode {
                 angle: false,
                 domain: "everywhere".into(),
@@ -544,8 +542,9 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             })
             .collect(),
         Some(d) => d
-            .modes
-            .iter()
+            .shown()
+            .into_iter()
+            .map(|k| &d.modes[k])
             .map(|m| json::DerivedMode {
                 angle: m.angle,
                 domain: m.domain.clone(),
@@ -570,7 +569,9 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     if a.out.json {
         let reduced = m.derivation.as_ref().map(|d| json::Reduced {
             closed: d.closed(),
-            dynamics: (0..d.modes.len())
+            dynamics: d
+                .shown()
+                .into_iter()
                 .map(|k| json::ReducedDynamics {
                     name: d.modes[k].name.clone(),
                     rhs: d.dynamics(k),
@@ -579,8 +580,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             inputs: nf.inputs.clone(),
             missing: d.missing(),
             outputs: d
-                .outputs
-                .iter()
+                .shown_outputs()
                 .map(|(n, e)| json::ReducedOutput {
                     expr: e.clone(),
                     name: n.clone(),
@@ -619,15 +619,23 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     } else {
         let latex: Vec<String> = match (&m.derivation, a.out.latex) {
             (Some(d), true) => d
-                .modes
-                .iter()
-                .map(|x| m.view.ctx.to_latex(x.expr))
+                .shown()
+                .into_iter()
+                .map(|k| m.view.ctx.to_latex(d.modes[k].expr))
                 .collect(),
             _ => modes.iter().map(|x| x.expr.clone()).collect(),
         };
         out!(
             "{}",
-            ui_modes_text(a, nf, &m, &title, &latex, &reduced_inputs, &certificate)
+            ui_modes_text(
+                a,
+                nf,
+                &m,
+                (&title, (rank, n)),
+                &latex,
+                &reduced_inputs,
+                &certificate
+            )
         );
     }
     if full {
@@ -682,7 +690,7 @@ fn ui_modes_certificate(
     };
     format!(
         "{} mode(s){}; {sym}; as many independent modes as the rank with unknown inputs (a non-zero minor, exact; the rank: wrong with probability <= {bound:.1e}); {reduced}",
-        d.modes.len(),
+        d.shown().len(),
         if modes_ok {
             ", each satisfying eq. (11) exactly (canonical forms) for every symmetry"
         } else {
@@ -696,18 +704,15 @@ fn ui_modes_text(
     a: &ModesArgs,
     nf: &NormalForm,
     m: &UnknownInputModes,
-    title: &str,
+    (title, (rank, n)): (&str, (usize, usize)),
     exprs: &[String],
     inputs: &[json::ReducedUnknownInput],
     certificate: &str,
 ) -> String {
-    let r = &m.symmetries.report;
     let k = m.symmetries.vectors.len();
     let mut o = format!(
-        "{title}: unknown inputs [{}]; rank {} of {} with unknown inputs, {k} symmetr{}",
+        "{title}: unknown inputs [{}]; rank {rank} of {n} with unknown inputs, {k} symmetr{}",
         nf.unknown_inputs.join(", "),
-        r.rank,
-        r.n,
         if k == 1 { "y" } else { "ies" }
     );
     match &m.derivation {
@@ -715,12 +720,13 @@ fn ui_modes_text(
             ": every variable is observable; the modes are the variables and the reduced system is the model itself\n",
         ),
         Some(d) => {
-            let k = d.modes.len();
+            let shown = d.shown();
+            let k = shown.len();
             o.push_str(&format!(
                 "; {k} observable mode{}:\n",
                 if k == 1 { "" } else { "s" }
             ));
-            for (e, md) in exprs.iter().zip(&d.modes) {
+            for (e, md) in exprs.iter().zip(shown.iter().map(|&j| &d.modes[j])) {
                 crate::reduced_text::push_mode(&mut o, md, e);
             }
             crate::reduced_text::push_reduced(&mut o, d);

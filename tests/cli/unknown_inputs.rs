@@ -756,3 +756,43 @@ fn vio_planar_force_modes_close_in_the_outputs_and_the_body_velocity() {
         assert_eq!(ctx.canon(got), ctx.canon(want), "{o}");
     }
 }
+
+/// `obsan modes` with unknown inputs and explicit time (issue 33). In
+/// time_offset.sys (`x' = w`, `y = x + b*t`, w unknown) the symmetry is
+/// `-t d/dx + d/db` (derived in the file): rank 1 of the user's 2 variables,
+/// and the one mode shown satisfies eq. (11), `-t dz/dx + dz/db = 0`, checked
+/// here by the engine; the clock is never a printed mode. time_gain.sys is
+/// observable (rank 2 of 2: `y = t x1`, `y' = x1 + t x2`).
+#[test]
+fn modes_with_unknown_inputs_and_explicit_time() {
+    let f = "systems/benchmarks/unknown-inputs/time_offset.sys";
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", f])).unwrap();
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(1), Some(2)));
+    let modes = v["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 1, "{modes:?}");
+    let e = modes[0]["expr"].as_str().unwrap();
+    let mut ctx = obsan_expr::Ctx::new();
+    let z = ctx.parse(e).unwrap();
+    let t = ctx.parse("t").unwrap();
+    let (x, b) = (ctx.symbol("x").var, ctx.symbol("b").var);
+    let (dx, db) = (ctx.diff(z, x), ctx.diff(z, b));
+    let tdx = ctx.mul(&[t, dx]);
+    let pde = ctx.sub(db, tdx);
+    assert!(ctx.canon(pde).is_zero(), "{e} is not invariant");
+    assert!(!ctx.canon(db).is_zero(), "{e} does not depend on b");
+    let dyn_names: Vec<&str> = v["reduced"]["dynamics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["name"].as_str().unwrap())
+        .collect();
+    assert!(!dyn_names.contains(&"t"), "{dyn_names:?}");
+    let g: Value = serde_json::from_str(&ok(&[
+        "modes",
+        "--json",
+        "systems/benchmarks/unknown-inputs/time_gain.sys",
+    ]))
+    .unwrap();
+    assert_eq!((g["rank"].as_u64(), g["n"].as_u64()), (Some(2), Some(2)));
+    assert_eq!(g["full_rank"], true);
+}
