@@ -67,12 +67,14 @@ fn structural_identifiability_jl_readme() {
 
 #[test]
 fn global_refuses_what_it_cannot_count() {
-    // The pendulum's output is the angle itself (y = th): not rational in
-    // the half-angle view t = tan(th/2).
-    bad(
-        &["global", "systems/benchmarks/pendulum.sys"],
-        "occurs outside sin/cos",
+    // An angle outside sin/cos elsewhere than as a whole output (here in a
+    // product with a state): not rational in the half-angle view. (An output
+    // that is the angle itself is counted: `angles_measured_directly`.)
+    let bare = temp_file(
+        "global_bare_angle.sys",
+        "system b\nstate th, x\ninput om\nth' = om\nx' = cos(th)\noutput y = x*th\n",
     );
+    bad(&["global", &bare], "occurs outside sin/cos");
     let half = temp_file(
         "global_half_angle.sys",
         "system h\nstate x\nparam k, th\nx' = -k*x\noutput y = x*sin(th/2)\n",
@@ -259,4 +261,27 @@ fn structural_identifiability_jl_test_verdicts() {
     // Goodwin and SIWR need more than the default memory budget
     // (docs/performance.md, "Seventh round").
     assert!(answered >= 8, "{answered} of {} answered", files.len());
+}
+
+/// An output that is an integer combination of angles (a compass, a joint
+/// encoder) is counted through the half-angle tangent of its part divided by
+/// the multiples' gcd (docs/engine.md); each expectation is derived by hand
+/// in its file.
+#[test]
+fn angles_measured_directly() {
+    // The pendulum of the benchmark suite, y = th: om = y', and
+    // om' = -a sin(th) - c om + e u is linear in (a, c, e) with generic
+    // regressors: everything has 1 value.
+    let v = global_json("systems/benchmarks/pendulum.sys");
+    for n in ["a", "c", "e", "th", "om"] {
+        assert_eq!(var(&v, n), ("global".into(), Some(1)), "{n}");
+    }
+    let v = global_json("systems/global/double_angle_encoder.sys");
+    assert_eq!(var(&v, "theta"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "x"), ("global".into(), Some(1)));
+    let v = global_json("systems/global/relative_angle.sys");
+    assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "w2"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "th1").0, "not identifiable");
+    assert_eq!(var(&v, "th2").0, "not identifiable");
 }

@@ -79,6 +79,18 @@ pub(super) fn half_angle_view(
     for r in rhs.iter_mut().chain(outputs.iter_mut()) {
         *r = ctx.to_tan_half(&th, r);
     }
+    // An output that is an integer combination of angles (`y = theta`, a
+    // compass or a joint encoder; `y = theta1 - theta2`) is known, so
+    // `tan(y/(2g))` is (`g` the gcd of the multiples; see
+    // `tan_half_of_angle_sum`), and it is rational in the half-angle
+    // tangents: the output is replaced by it. The model sees its angles only
+    // through sin/cos, i.e. modulo 2 pi, and that knowledge fixes them modulo
+    // 2 pi exactly as the real `y` does: every count is unchanged.
+    for r in outputs.iter_mut() {
+        if let Some(tan) = tan_half_of_angle_sum(ctx, r, vars, &t_of) {
+            *r = tan;
+        }
+    }
     for (i, t) in t_of.iter().enumerate() {
         let Some(t) = *t else { continue };
         let theta = vars[i];
@@ -99,6 +111,65 @@ pub(super) fn half_angle_view(
         angle[i] = true;
     }
     Ok(angle)
+}
+
+/// Largest multiple `k theta` of an angle read in an output: `tan(k theta/2)`
+/// has degree `|k|` in `t`.
+const MAX_ANGLE_MULTIPLE: i64 = 12;
+
+/// `tan(y/(2g))` in the half-angle tangents when `y = sum k_i theta_i` with
+/// integer `k_i` and every `theta_i` an angle (`t_of` set), by
+/// `tan((a + b)/2) = (A + B)/(1 - A B)` and `tan(-a/2) = -A`; `None` for any
+/// other output (a constant term, a non-angle variable, a fraction).
+fn tan_half_of_angle_sum(
+    ctx: &Ctx,
+    y: &RatFun,
+    vars: &[Var],
+    t_of: &[Option<Var>],
+) -> Option<RatFun> {
+    if !y.denominator().is_one() || y.numerator().is_zero() {
+        return None;
+    }
+    let add = |a: &RatFun, b: &RatFun| -> Option<RatFun> {
+        let num = ctx.rf_add(a, b);
+        let den = ctx.rf_sub(&RatFun::one(), &ctx.rf_mul(a, b));
+        Some(ctx.rf_mul(&num, &ctx.rf_inv(&den)?))
+    };
+    let mut terms: Vec<(RatFun, i64)> = Vec::new();
+    for (m, c) in y.numerator().terms() {
+        let pairs: Vec<(Var, u32)> = m.iter().collect();
+        let [(v, 1)] = pairs[..] else { return None };
+        let i = vars.iter().position(|&x| x == v)?;
+        let k = i64::try_from(c).ok()?;
+        if k.abs() > MAX_ANGLE_MULTIPLE {
+            return None;
+        }
+        terms.push((RatFun::var(t_of[i]?), k));
+    }
+    // `y` is a real number, not one modulo 2 pi: with `g` the gcd of the
+    // `k_i`, `y/g = sum (k_i/g) theta_i` is known too, and fixes the angles
+    // modulo 2 pi exactly as `y` does (a second solution needs
+    // `sum k_i d_i` in `2 pi g Z` for shifts `d_i` of the angles, i.e.
+    // `sum (k_i/g) d_i` in `2 pi Z`), where `tan(y/2)` alone would lose it
+    // (`y = 2 theta` fixes theta, `tan(theta)` only theta modulo pi).
+    let g = terms.iter().fold(0i64, |g, &(_, k)| gcd(g, k.abs()));
+    let mut acc = RatFun::zero();
+    for (t, k) in terms {
+        let k = k / g;
+        let step = if k > 0 { t } else { t.neg() };
+        for _ in 0..k.abs() {
+            acc = add(&acc, &step)?;
+        }
+    }
+    Some(acc)
+}
+
+fn gcd(a: i64, b: i64) -> i64 {
+    if b == 0 {
+        a
+    } else {
+        gcd(b, a % b)
+    }
 }
 
 /// `dt/dtheta = (1 + t^2)/2` for `t = tan(theta/2)`.
