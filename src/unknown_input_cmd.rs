@@ -744,6 +744,14 @@ fn ui_modes_text(
                     i.input,
                     order_text(i.order)
                 ),
+                Some(f) if i.order == Some(0) => format!(
+                    "{} = ({f})*{}{} (a combination: the output {} reads it, no mode sees {})",
+                    i.name,
+                    i.input,
+                    i.offset.as_ref().map(|o| format!(" + {o}")).unwrap_or_default(),
+                    i.mode,
+                    i.input
+                ),
                 Some(f) => format!(
                     "{} = ({f})*{}{} (a combination; reconstructable from the first derivative of {})",
                     i.name,

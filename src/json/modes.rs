@@ -67,7 +67,8 @@ pub struct ReducedUnknownInput {
     pub factor: Option<String>,
     /// The model's unknown input.
     pub input: String,
-    /// The first mode whose derivative needs it.
+    /// The first mode whose derivative needs it; for a combination an output reads directly
+    /// (no mode sees the input; `order` 0), that output.
     pub mode: String,
     /// Its name in the reduced system.
     pub name: String,
@@ -75,8 +76,9 @@ pub struct ReducedUnknownInput {
     /// not functions of the modes and, for inputs projected jointly, the other unknown inputs'
     /// terms (the combination is then that mode's time derivative).
     pub offset: Option<String>,
-    /// The output-derivative order it is reconstructable from (the rank test's); null for a
-    /// combination, recovered from the modes' first derivatives.
+    /// The output-derivative order it is reconstructable from (the rank test's; 0 for a
+    /// combination an output reads directly); null for a combination recovered from the modes'
+    /// first derivatives.
     pub order: Option<usize>,
 }
 

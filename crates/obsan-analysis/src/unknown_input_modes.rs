@@ -50,16 +50,25 @@ pub struct ReducedInput {
     /// `None`: the input itself; else the factor `beta(S)` of the combination
     /// `beta(S) w` (the derivative of `mode` along the input's field).
     pub factor: Option<String>,
-    /// The first mode whose derivative needs it.
+    /// The first mode whose derivative needs it; for a combination an output
+    /// reads directly (no mode sees the input), that output.
     pub mode: String,
     /// For a combination whose mode's drift or known-input terms are not
     /// functions of the modes: `alpha0 + sum alpha_i u_i`, added to
     /// `factor * w` (those terms of the mode's derivative, moved into the input).
     pub offset: Option<String>,
     /// The output-derivative order it is reconstructable from (the rank
-    /// route's, for an input itself); `None` for a combination, recovered
-    /// from the modes' first derivatives.
+    /// route's, for an input itself; 0 for a combination an output reads
+    /// directly); `None` for a combination recovered from the modes' first
+    /// derivatives.
     pub order: Option<usize>,
+}
+
+impl ReducedInput {
+    /// A combination an output reads directly (`mode` names that output).
+    pub fn output_held(&self) -> bool {
+        self.factor.is_some() && self.order == Some(0)
+    }
 }
 
 /// The modes and reduced system with unknown inputs.
@@ -263,7 +272,7 @@ pub fn unknown_input_modes(
         let beta = crate::derive::lie_along(&mut view, mode.expr, &g);
         let beta_c = view.ctx.canon(beta);
         let beta = view.ctx.from_canonical(&beta_c);
-        let offset = project(
+        let moved = project(
             &mut view,
             &d,
             std::mem::take(&mut to_project),
@@ -273,8 +282,24 @@ pub fn unknown_input_modes(
         );
         view.fields[known + j] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
         let name = fresh_name(&view, &format!("{w}_{}", mode.name));
+        let old = view.input_vars[known + j];
         view.inputs[known + j] = name.clone();
         view.input_vars[known + j] = view.ctx.symbol(&name).var;
+        // An output reading w_j (feedthrough, 2dof's y2 = F2/m2 + ...) reads
+        // the combination: w_j = (w~ - moved)/beta.
+        let wt = view.ctx.symbol(&name).id;
+        let num = match &moved {
+            Some((_, m)) => view.ctx.sub(wt, *m),
+            None => wt,
+        };
+        let back = view.ctx.div(num, beta);
+        for k in 0..view.outputs.len() {
+            let h = view.outputs[k].1;
+            view.outputs[k].1 = view.ctx.substitute(h, &[(old, back)]).map_err(|e| {
+                AnalysisError::Invalid(format!("an output in the combination {name}: {}", e.0))
+            })?;
+        }
+        let offset = moved.map(|m| m.0);
         inputs.push(ReducedInput {
             name,
             input: w.clone(),
@@ -285,6 +310,7 @@ pub fn unknown_input_modes(
         });
         rescaled = true;
     }
+    rescaled |= output_held(nf, &mut view, &mut inputs)?;
     if rescaled {
         d = reduce_in_modes(&mut view, &sym, &d, derive)?;
         independent_inputs(&mut view, &d, &inputs, derive.seed)?;
@@ -297,6 +323,69 @@ pub fn unknown_input_modes(
         derivation: Some(d),
         inputs,
     })
+}
+
+/// An unknown input no mode's derivative needs but an output reads (a
+/// feedthrough, 2dof_2ui's `y2 = F2/m2 + ...` with F2 moving only the
+/// unobservable `dx2`): no mode sees it, so that output is not a function of
+/// the modes and known inputs, and it becomes the combination itself,
+/// `w~ = h = beta w + offset` with `beta = dh/dw`, measured (order 0). Its
+/// field is divided by `beta` (no mode's derivative changes: `L_g m = 0`),
+/// and the outputs read `w = (w~ - offset)/beta`. Returns whether any was.
+fn output_held(
+    nf: &NormalForm,
+    view: &mut NormalForm,
+    inputs: &mut Vec<ReducedInput>,
+) -> Result<bool, AnalysisError> {
+    let known = nf.inputs.len();
+    let mut any = false;
+    for (j, w) in nf.unknown_inputs.iter().enumerate() {
+        if inputs.iter().any(|ri| &ri.input == w) {
+            continue;
+        }
+        let slot = known + j;
+        let wv = view.input_vars[slot];
+        let Some(k) = (0..view.outputs.len())
+            .find(|&k| view.ctx.canon(view.outputs[k].1).vars().contains(&wv))
+        else {
+            continue;
+        };
+        let h = view.outputs[k].1;
+        let beta = view.ctx.diff(h, wv);
+        let beta_c = view.ctx.canon(beta);
+        if beta_c.is_zero() || beta_c.vars().contains(&wv) {
+            continue; // not affine in w: left for the reduction to report
+        }
+        let wid = view.ctx.symbol(w).id;
+        let bw = view.ctx.mul(&[beta, wid]);
+        let offset = view.ctx.sub(h, bw);
+        let off_c = view.ctx.canon(offset);
+        let oname = view.outputs[k].0.clone();
+        let name = fresh_name(view, &format!("{w}_{oname}"));
+        let g = view.fields[slot].clone();
+        view.fields[slot] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
+        view.inputs[slot] = name.clone();
+        view.input_vars[slot] = view.ctx.symbol(&name).var;
+        let wt = view.ctx.symbol(&name).id;
+        let num = view.ctx.sub(wt, offset);
+        let back = view.ctx.div(num, beta);
+        for o in 0..view.outputs.len() {
+            let ho = view.outputs[o].1;
+            view.outputs[o].1 = view.ctx.substitute(ho, &[(wv, back)]).map_err(|e| {
+                AnalysisError::Invalid(format!("an output in the combination {name}: {}", e.0))
+            })?;
+        }
+        inputs.push(ReducedInput {
+            name,
+            input: w.clone(),
+            factor: Some(view.ctx.ratfun_text_factored(&beta_c)),
+            offset: (!off_c.is_zero()).then(|| view.ctx.ratfun_text_factored(&off_c)),
+            mode: oname,
+            order: Some(0),
+        });
+        any = true;
+    }
+    Ok(any)
 }
 
 /// The joint projection along the inputs `needs` (module docs of
@@ -380,7 +469,8 @@ fn plain(
 /// The fields `cols` (drift or known inputs, by the derivation's column)
 /// projected along `g` onto the kernel of `dm`: `f - (L_f m / beta) g`, `beta
 /// = L_g m`. Returns the terms moved into the combination input,
-/// `sum L_f m u_f` (`u_f = 1` for the drift), as text; `None` when none.
+/// `sum L_f m u_f` (`u_f = 1` for the drift), as text and as an expression;
+/// `None` when none.
 fn project(
     view: &mut NormalForm,
     d: &Derivation,
@@ -388,7 +478,7 @@ fn project(
     m: Id,
     g: &[Id],
     beta: Id,
-) -> Option<String> {
+) -> Option<(String, Id)> {
     let mut terms = Vec::new();
     for i in cols {
         let name = d.field_names[i].clone();
@@ -424,7 +514,7 @@ fn project(
     }
     let sum = view.ctx.add(&terms);
     let c = view.ctx.canon(sum);
-    Some(view.ctx.ratfun_text_factored(&c))
+    Some((view.ctx.ratfun_text_factored(&c), sum))
 }
 
 /// A name for a combination that the view does not use yet.
@@ -456,7 +546,9 @@ fn independent_inputs(
     seed: u64,
 ) -> Result<(), AnalysisError> {
     let mut cols: Vec<(usize, &ReducedInput)> = Vec::new();
-    for ri in inputs {
+    // An output-held combination (`output_held`) drives no mode: it is
+    // measured, not recovered from the modes' derivatives.
+    for ri in inputs.iter().filter(|ri| !ri.output_held()) {
         if let Some(i) = view.inputs.iter().position(|x| *x == ri.name) {
             cols.push((i, ri));
         }

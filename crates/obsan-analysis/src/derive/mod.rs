@@ -794,6 +794,34 @@ pub(super) fn reduce(
     for (oname, h) in nf.outputs.clone() {
         let e = if let Some(m) = modes.iter().find(|m| m.expr == h) {
             Some(m.name.clone())
+        } else if let Some((h0, parts)) = reduced::split_inputs(nf, h) {
+            // An output reading inputs (an unknown input's feedthrough, or
+            // its combination's): `h0 + sum c_u u`, each part in the modes.
+            let mut text = match soft(reduced::output_in_modes(
+                nf, h0, &zb, &znames, modes, rng, opts,
+            ))? {
+                Some(t) if t == "0" => String::new(),
+                Some(t) => t,
+                None => {
+                    outputs.push((oname, None));
+                    continue;
+                }
+            };
+            let mut found = true;
+            for (u, c) in parts {
+                match soft(in_modes(nf, c, &zb, &znames, modes, rng, opts))? {
+                    Some(ct) => {
+                        let term = if ct == "1" { u } else { format!("({ct})*{u}") };
+                        if text.is_empty() {
+                            text = term;
+                        } else {
+                            text = format!("{text} + {term}");
+                        }
+                    }
+                    None => found = false,
+                }
+            }
+            found.then_some(text)
         } else {
             soft(reduced::output_in_modes(
                 nf, h, &zb, &znames, modes, rng, opts,

@@ -574,6 +574,39 @@ fn split_by_variable(
 /// branch, up to a multiple of 2 pi), else `atan(Im Z / Re Z)` (up to a
 /// multiple of pi). The decomposition checks prove each form up to a
 /// constant, which is what the closure certificate needs.
+/// An output that reads inputs, split as `h0 + sum c_u u` with no input in
+/// `h0` or any `c_u` (outputs are affine in the inputs they read: a
+/// feedthrough); `None` when `h` reads no input or is not affine in them.
+pub(super) fn split_inputs(nf: &mut NormalForm, h: Id) -> Option<(Id, Vec<(String, Id)>)> {
+    let vars = nf.ctx.canon(h).vars();
+    let read: Vec<usize> = (0..nf.input_vars.len())
+        .filter(|&i| vars.contains(&nf.input_vars[i]))
+        .collect();
+    if read.is_empty() {
+        return None;
+    }
+    let mut h0 = h;
+    let mut parts = Vec::new();
+    for i in read {
+        let u = nf.input_vars[i];
+        let c = nf.ctx.diff(h, u);
+        let cv = nf.ctx.canon(c).vars();
+        if nf.input_vars.iter().any(|v| cv.contains(v)) {
+            return None;
+        }
+        let uid = nf.ctx.symbol(&nf.inputs[i].clone()).id;
+        let t = nf.ctx.mul(&[c, uid]);
+        h0 = nf.ctx.sub(h0, t);
+        parts.push((nf.inputs[i].clone(), c));
+    }
+    let h0c = nf.ctx.canon(h0);
+    if nf.input_vars.iter().any(|v| h0c.vars().contains(v)) {
+        return None;
+    }
+    let h0 = nf.ctx.from_canonical(&h0c);
+    Some((h0, parts))
+}
+
 pub(super) fn output_in_modes(
     nf: &mut NormalForm,
     h: Id,
