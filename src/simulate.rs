@@ -164,6 +164,16 @@ pub fn sim_options(a: &SimFlags, set: &[String]) -> Result<SimOptions, Failure> 
     Ok(o)
 }
 
+/// The watchdog's message when the deadline has passed.
+fn past(deadline: Option<std::time::Instant>, secs: Option<f64>) -> Result<(), Failure> {
+    match (deadline, secs) {
+        (Some(d), Some(s)) if std::time::Instant::now() > d => {
+            Err(Failure(format!("timed out after {s} s (--timeout)")))
+        }
+        _ => Ok(()),
+    }
+}
+
 pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
     if let Some(model) = &a.model {
         return crate::simulate_sys::run(model, a);
@@ -177,9 +187,15 @@ pub fn run(a: &SimulateArgs) -> Result<ExitCode, Failure> {
     let reads: Vec<&str> = a.sim.inputs.iter().map(String::as_str).collect();
     crate::fsio::check_outside(out, &reads)?;
     let o = sim_options(&a.sim, &a.sys.set)?;
+    // The simulation and the CSV text do not poll a clock; between them the
+    // deadline is checked, so a short --timeout stops before anything is
+    // written instead of finishing within the watchdog's grace.
+    let deadline = crate::cli::deadline_after(std::time::Instant::now(), a.timeout);
     let (data, truth) = simulate(&o).map_err(Failure::from)?;
+    past(deadline, a.timeout)?;
     let truth_json = serde_json::to_string_pretty(&truth)? + "\n";
     let files = dataset_files(&data, &[("truth.json", truth_json)])?;
+    past(deadline, a.timeout)?;
     write_folder_atomically(out, a.force, &reads, &files)?;
     let summary: Vec<String> = data
         .trajectories

@@ -780,8 +780,10 @@ fn long_commands_stop_at_their_timeout_and_leave_nothing() {
             args[2] = sys.clone();
         }
         // simulate's 3 x 10^6 bearings and 97 MB write take about 1 s on an idle machine of
-        // this kind (6 s under load): 0.2 s leaves it five times short on the fastest; every
-        // other run here is an estimator over the same size, tens of seconds at the least.
+        // this kind (6 s under load): it checks --timeout between its stages, so 0.2 s stops
+        // it before the write (it used to finish within the watchdog's second of grace when
+        // idle: regression, session 25); every other run here is an estimator over the same
+        // size, tens of seconds at the least.
         let secs = if args[0] == "simulate" { "0.2" } else { "1" };
         args.extend(["--timeout".to_string(), secs.to_string()]);
         let a: Vec<&str> = args.iter().map(String::as_str).collect();
