@@ -8,7 +8,8 @@ the source line and the verdict of verdicts.list (made by benches/peers/sg_verdi
 never obsan) at the top of NAME.sys.
 
 A verdicts.list line `NAME<TAB>none: REASON` (SymPy did not finish) gives the header
-`# verdict-source: none (REASON)` and no verdict line.
+`# verdict-source: none (REASON)` and no verdict line; `NAME<TAB>symident VERSION: SPEC`
+(benches/peers/sg_symident_verdicts.py, for models SymPy did not finish) cites symident.
 
 Usage: cargo build --release -p obsan && python3 scripts/import_strike_goldd.py
 """
@@ -43,6 +44,13 @@ def main():
         if verdicts[name].startswith("none: "):
             # SymPy gave no verdict in time: the file says so and cites none (never obsan's).
             header.append(f"# verdict-source: none ({verdicts[name][len('none: '):]})")
+        elif verdicts[name].startswith("symident "):
+            # SymPy gave none; symident did (benches/peers/sg_symident_verdicts.py).
+            who, spec = verdicts[name].split(": ", 1)
+            header += [
+                f"# verdict-source: independent ({who} detect(): rank of the output derivatives' Jacobian and the support of its kernel directions, benches/peers/sg_symident_verdicts.py)",
+                f"# verdict: {spec}",
+            ]
         else:
             header += [
                 "# verdict-source: independent (SymPy: rank of the Lie-derivative Jacobian at a random integer point, benches/peers/sg_verdicts.py)",
