@@ -187,7 +187,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     let certificate = if closure {
         format!(
             "exact by closure: {} modes with independent gradients (a non-zero minor at a point); their dynamics along every field and every output written in the modes and proven by exact substitution ({} decomposition checks); so the observable codistribution is their span, the rank is exactly {} and each mode satisfies eq. (11) for every symmetry (the PDE also checked exactly against the {nsym} symmetr{}: {sym_cert}){}",
-            d.modes.len() - clk,
+            d.shown().len(),
             checks.as_ref().map_or(0, |c| c.len()),
             d.rank - clk,
             plural(nsym),
@@ -196,7 +196,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     } else if !decided {
         format!(
             "{} mode(s), each satisfies eq. (11) exactly (canonical forms) for the {nsym} symmetr{} found ({sym_cert}); {}; {}",
-            d.modes.len() - clk,
+            d.shown().len(),
             plural(nsym),
             match &checks {
                 Some(_) if verified => "the reduced system writes every output and field in the modes (exact substitution)".to_string(),
@@ -208,7 +208,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
     } else {
         format!(
             "{} mode(s), each satisfies eq. (11) exactly (canonical forms) for the {nsym} symmetr{} ({sym_cert}); gradients independent (a non-zero minor at a point, exact); {} = rank{}{}",
-            d.modes.len() - clk,
+            d.shown().len(),
             plural(nsym),
             d.mode_report.independent_count.saturating_sub(clk),
             if sym.exact { " (exact)" } else { " (the rank test's, exact only as a lower bound)" },
@@ -300,7 +300,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
             n_full - clk,
             nsym,
             plural(nsym),
-            d.modes.len() - clk
+            d.shown().len()
         );
         if !unreached.is_empty() {
             o.push_str(&format!(
