@@ -167,7 +167,7 @@ impl Work<'_> {
             }));
         }
         // New pairs (h, g) for active g.
-        let mut c: Vec<Pair> = Vec::new();
+        let mut c: Vec<Pair> = Vec::with_capacity(hi);
         for g in 0..hi {
             if !self.active[g] {
                 continue;
@@ -184,15 +184,19 @@ impl Work<'_> {
             });
         }
         // Criterion M/F: drop (h, g) if another new pair's lcm divides its lcm
-        // (keeping coprime ones for the product criterion below).
-        // This is quadratic in the basis size, so a divisor-mask test (a
-        // necessary condition) screens each comparison before `divides`.
+        // (keeping coprime ones for the product criterion below); a
+        // divisor-mask test (a necessary condition) screens each comparison
+        // before `divides`. By ascending lcm degree, a pair is compared only with the pairs
+        // kept before it: a divisor has no larger degree, and a dropped
+        // divisor's own kept divisor divides too (divisibility is transitive),
+        // so the minimal lcms survive, one pair each, as before; the kept set
+        // is far smaller than all pairs (Fujita: this loop was 36% of the run).
+        c.sort_by_key(|p| p.lcm.degree());
         let mut d: Vec<Pair> = Vec::new();
-        while let Some(p) = c.pop() {
+        for p in c {
             let coprime = lh.coprime(&self.lm[p.i]);
-            let dominated = c
+            let dominated = d
                 .iter()
-                .chain(d.iter())
                 .any(|q| q.mask & !p.mask == 0 && q.lcm.divides(&p.lcm));
             if coprime || !dominated {
                 d.push(p);
