@@ -282,23 +282,15 @@ pub fn unknown_input_modes(
         );
         view.fields[known + j] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
         let name = fresh_name(&view, &format!("{w}_{}", mode.name));
-        let old = view.input_vars[known + j];
-        view.inputs[known + j] = name.clone();
-        view.input_vars[known + j] = view.ctx.symbol(&name).var;
         // An output reading w_j (feedthrough, 2dof's y2 = F2/m2 + ...) reads
-        // the combination: w_j = (w~ - moved)/beta.
-        let wt = view.ctx.symbol(&name).id;
-        let num = match &moved {
-            Some((_, m)) => view.ctx.sub(wt, *m),
-            None => wt,
-        };
-        let back = view.ctx.div(num, beta);
-        for k in 0..view.outputs.len() {
-            let h = view.outputs[k].1;
-            view.outputs[k].1 = view.ctx.substitute(h, &[(old, back)]).map_err(|e| {
-                AnalysisError::Invalid(format!("an output in the combination {name}: {}", e.0))
-            })?;
-        }
+        // the combination.
+        rename_in_outputs(
+            &mut view,
+            known + j,
+            &name,
+            moved.as_ref().map(|m| m.1),
+            beta,
+        )?;
         let offset = moved.map(|m| m.0);
         inputs.push(ReducedInput {
             name,
@@ -364,17 +356,7 @@ fn output_held(
         let name = fresh_name(view, &format!("{w}_{oname}"));
         let g = view.fields[slot].clone();
         view.fields[slot] = g.iter().map(|&c| view.ctx.div(c, beta)).collect();
-        view.inputs[slot] = name.clone();
-        view.input_vars[slot] = view.ctx.symbol(&name).var;
-        let wt = view.ctx.symbol(&name).id;
-        let num = view.ctx.sub(wt, offset);
-        let back = view.ctx.div(num, beta);
-        for o in 0..view.outputs.len() {
-            let ho = view.outputs[o].1;
-            view.outputs[o].1 = view.ctx.substitute(ho, &[(wv, back)]).map_err(|e| {
-                AnalysisError::Invalid(format!("an output in the combination {name}: {}", e.0))
-            })?;
-        }
+        rename_in_outputs(view, slot, &name, Some(offset), beta)?;
         inputs.push(ReducedInput {
             name,
             input: w.clone(),
@@ -386,6 +368,34 @@ fn output_held(
         any = true;
     }
     Ok(any)
+}
+
+/// The view's input `slot`, `w`, renamed to the combination
+/// `name = beta w + offset` (offset `None`: 0), and every output that reads
+/// `w` rewritten with `w = (name - offset)/beta`.
+fn rename_in_outputs(
+    view: &mut NormalForm,
+    slot: usize,
+    name: &str,
+    offset: Option<Id>,
+    beta: Id,
+) -> Result<(), AnalysisError> {
+    let old = view.input_vars[slot];
+    view.inputs[slot] = name.to_string();
+    view.input_vars[slot] = view.ctx.symbol(name).var;
+    let wt = view.ctx.symbol(name).id;
+    let num = match offset {
+        Some(m) => view.ctx.sub(wt, m),
+        None => wt,
+    };
+    let back = view.ctx.div(num, beta);
+    for k in 0..view.outputs.len() {
+        let h = view.outputs[k].1;
+        view.outputs[k].1 = view.ctx.substitute(h, &[(old, back)]).map_err(|e| {
+            AnalysisError::Invalid(format!("an output in the combination {name}: {}", e.0))
+        })?;
+    }
+    Ok(())
 }
 
 /// The joint projection along the inputs `needs` (module docs of
