@@ -16,7 +16,6 @@ replace the `none:` lines of verdicts.list, and scripts/import_strike_goldd.py t
 """
 
 import importlib.metadata
-import json
 import os
 import subprocess
 import sys
@@ -26,17 +25,8 @@ DIR = os.path.join(ROOT, "systems", "benchmarks", "strike-goldd")
 LIST = os.path.join(DIR, "verdicts.list")
 
 
-def detect(path, timeout):
-    r = subprocess.run([sys.executable, os.path.join(ROOT, "benches/peers/symident_suite.py"),
-                        "--one", path, ""], capture_output=True, text=True, timeout=timeout)
-    lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
-    return json.loads(lines[-1]) if lines else {"error": r.stderr.strip()[-300:]}
-
-
-def spec(res):
-    un = res["unobservable"]
-    head = "observable" if not un else "unobservable " + " ".join(un)
-    return f"{head}; rank {res['rank']}"
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from sijl_symident_verdicts import detect, spec  # noqa: E402 (the same translation and spec)
 
 
 def main():
@@ -74,4 +64,5 @@ def main():
         open(LIST, "w", encoding="utf-8").write("\n".join(out))
 
 
-main()
+if __name__ == "__main__":
+    main()

@@ -90,4 +90,5 @@ def main():
         open(path, "w").write("\n".join(lines))
 
 
-main()
+if __name__ == "__main__":
+    main()
