@@ -90,11 +90,18 @@ def test_rank_with_explicit_time() -> None:
     assert g.observable == ["x"]
 
 
-def test_modes_refuse_explicit_time_at_its_place() -> None:
+def test_modes_with_explicit_time_and_global_refusing_it() -> None:
+    # x' = a x, y = c x t: (x, c) -> (l x, c/l) leaves y unchanged; y = t (c x) and
+    # y' = (c x)(1 + a t) give c x, then a: rank 2, modes a and c x. The clock t is the
+    # analysis' coordinate, never a mode (session 25: modes handles explicit time).
+    m = obsan.loads("system tg\nstate x\nparam a, c\nx' = a*x\noutput y = c*x*t\n").modes()
+    assert m.rank == 2
+    assert len(m.modes) == 2 and "t" not in m.modes and "a" in m.modes
+    # `obsan global` still refuses it at its place.
     try:
-        obsan.loads("system g\nstate x\nx' = 0\noutput y = x*t\n").modes()
+        obsan.loads("system g\nstate x\nx' = 0\noutput y = x*t\n").global_identifiability()
     except obsan.ObsanError as e:
         assert "<string>:4:14: explicit time 't'" in str(e)
-        assert "`obsan modes`" in str(e)
+        assert "`obsan global`" in str(e)
     else:
-        raise AssertionError("modes accepted a model with explicit time")
+        raise AssertionError("global accepted a model with explicit time")
