@@ -227,6 +227,87 @@ fn strike_goldd_import_then_rank_gives_the_derived_verdict() {
     );
 }
 
+/// `syms C(t)` declares a function of time: a known input. Model: x' = -k x + C(t) + d x, with
+/// `d` declared plain first and then re-declared `syms d(t)` (MATLAB: `d` in `p`, assigned
+/// before, stays the old plain symbol; the `d(t)` of `f` is the function, the input `d_t`).
+/// y = x: y' = (d_t - k) y + C, so k = d_t + (C - y')/y: x and k observable; d enters nothing, so
+/// n = 3 (x, k, d), rank 2, d unobservable. `E(t)`, used bare in `f` and listed in no role, is
+/// a known input too: y' = (d_t - k) y + C + E leaves the same verdict.
+#[test]
+fn strike_goldd_functions_of_time_are_inputs() {
+    let src = temp_file(
+        "z_create_ft.m",
+        "syms x k d\nx = x;\np = [k; d];\nsyms C(t) d(t) E(t)\nu = [C(t) d(t)];\n\
+         f = -k*x + C(t) + d(t)*x + E;\nh = x;\n",
+    );
+    let out = ok(&["import", "strike-goldd", &src]);
+    assert!(out.contains("param k, d\ninput C, d_t, E\n"), "{out}");
+    assert!(out.contains("x' = -k*x + C + d_t*x + E\n"), "{out}");
+    let dir = fresh_dir("sg-ft");
+    let sys = format!("{dir}/ft.sys");
+    ok(&["import", "strike-goldd", &src, "--out", &sys]);
+    let v: Value = serde_json::from_str(&ok(&["rank", &sys, "--json"])).unwrap();
+    assert_eq!((v["n"].as_u64(), v["rank"].as_u64()), (Some(3), Some(2)));
+    assert_eq!(v["unobservable_variables"], serde_json::json!(["d"]));
+    // A function of time is called at t only, and is no state or parameter.
+    let at2 = temp_file(
+        "z_create_at2.m",
+        "syms x k C(t)\nx = x;\np = k;\nf = -k*x + C(2);\nh = x;\n",
+    );
+    bad(
+        &["import", "strike-goldd", &at2],
+        "z_create_at2.m:4:5: 'C' is a function of time (syms C(t)): write C(t)",
+    );
+    let as_p = temp_file(
+        "z_create_asp.m",
+        "syms x C(t)\nx = x;\np = C(t);\nf = -C*x;\nh = x;\n",
+    );
+    bad(
+        &["import", "strike-goldd", &as_p],
+        "z_create_asp.m:3:5: 'C' is a function of time (syms ...(t)): an input, not a parameter",
+    );
+}
+
+/// MATLAB/Fortran `D` exponents are numbers: 1.5D-3 = 0.0015, 2d1 = 20. x' = -(1.5D-3) x, y =
+/// 2d1 x. Both as written (lower-case e), so the rank is that of x' = -c x, y = 20 x with c
+/// known: x observable, n = rank = 1.
+#[test]
+fn strike_goldd_reads_d_exponents() {
+    let src = temp_file(
+        "z_create_dexp.m",
+        "syms x\nx = x;\nf = -1.5D-3*x;\nh = 2d1*x;\n",
+    );
+    let out = ok(&["import", "strike-goldd", &src]);
+    assert!(out.contains("x' = -1.5e-3*x\noutput y1 = 2e1*x\n"), "{out}");
+}
+
+/// What the reader does not follow is refused at its place, never skipped: a loop filling
+/// `f`, an element assignment, an array of symbols.
+#[test]
+fn strike_goldd_unread_matlab_is_refused_at_its_place() {
+    let cases = [
+        (
+            "syms x1 x2 k\nx = [x1; x2];\nf = [0; 0];\nfor i = 1:2\n  f(i) = -k*x(i);\nend\nh = x1;\n",
+            "4:1: 'for' (MATLAB control flow) is not read",
+        ),
+        (
+            "syms x1 k\nx = x1;\nf = 0;\nf(1) = -k*x1;\nh = x1;\n",
+            "4:1: 'f(1) = ...' sets an element",
+        ),
+        (
+            "x = sym('x', [3 1]);\nf = -x;\nh = x(1);\n",
+            "1:5: sym(...) (an array of symbols) is not read",
+        ),
+    ];
+    for (k, (text, want)) in cases.iter().enumerate() {
+        let src = temp_file(&format!("z_create_unread{k}.m"), text);
+        bad(
+            &["import", "strike-goldd", &src],
+            &format!("z_create_unread{k}.m:{want}"),
+        );
+    }
+}
+
 /// How many files of systems/benchmarks/strike-goldd/ may say `verdict-source: none`: SymPy
 /// did not finish and symident gave none (goodwin: its rank a lower bound; microbial_community:
 /// its engine refuses a term); docs/benchmarks.md names them.

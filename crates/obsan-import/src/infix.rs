@@ -80,7 +80,12 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
             if c.get(j) == Some(&'.') && !dot_op {
                 j = digits(j + 1);
             }
-            if matches!(c.get(j), Some('e' | 'E')) {
+            // MATLAB also takes Fortran's `d`/`D` exponent marker (`1.5D-3`).
+            let marker = match d {
+                Dialect::Matlab => &['e', 'E', 'd', 'D'][..],
+                Dialect::Petab => &['e', 'E'][..],
+            };
+            if c.get(j).is_some_and(|m| marker.contains(m)) {
                 let k = if matches!(c.get(j + 1), Some('+' | '-')) {
                     j + 2
                 } else {
@@ -92,8 +97,9 @@ fn tokenize(src: &[(char, (usize, usize))], d: Dialect) -> Result<Vec<Tok>, Impo
             }
             take = j - i;
             let s: String = c[i..j].iter().collect();
+            let e = s.replace(['d', 'D'], "e");
             out.push(Tok {
-                t: T::Num(normal_number(&s).ok_or_else(|| {
+                t: T::Num(normal_number(&e).ok_or_else(|| {
                     ImportError::at(here.0, here.1, format!("'{s}' is not a number"))
                 })?),
                 at: here,
@@ -422,6 +428,10 @@ mod tests {
         assert_eq!(text("a*(b - ...\n c)", Dialect::Matlab), "a*(b - c)");
         assert_eq!(text("log10(x)", Dialect::Petab), "log(x)/log(10)");
         assert_eq!(text("x^-1", Dialect::Matlab), "x^(-1)");
+        assert_eq!(
+            text("1.5D-3*x + 2d2 + .5D+1", Dialect::Matlab),
+            "1.5e-3*x + 2e2 + 0.5e1"
+        );
         let e = parse("a + b)", (3, 5), Dialect::Petab).unwrap_err();
         assert_eq!((e.line, e.col), (3, 10));
         let e = parse("a +\n  #", (3, 5), Dialect::Matlab).unwrap_err();

@@ -176,17 +176,19 @@ fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
         if p.is_empty() {
             continue;
         }
-        // `[x1 x2 x3]`: blanks separate elements when each is a name or number.
+        // `[x1 x2 x3]`: blanks separate elements when each is a name or number
+        // (or a function of time, `[C(t) theta(t)]`).
         let words: Vec<&[(char, At)]> = p
             .split(|c| c.0.is_whitespace())
             .filter(|w| !w.is_empty())
             .collect();
-        if words.len() > 1
-            && words.iter().all(|w| {
-                w.iter()
-                    .all(|c| c.0.is_ascii_alphanumeric() || matches!(c.0, '_' | '.'))
-            })
-        {
+        let simple = |w: &[(char, At)]| {
+            let w = string(w);
+            let w = w.strip_suffix("(t)").unwrap_or(&w);
+            w.chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '.'))
+        };
+        if words.len() > 1 && words.iter().all(|w| simple(w)) {
             out.extend(words);
         } else {
             out.push(p);
@@ -200,12 +202,41 @@ fn is_name(s: &str) -> bool {
         && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
-/// Substitute the single-valued assignments made so far, and indexing
-/// `v(k)` into an assigned vector.
-fn subst(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
+/// What the statements so far have defined: assignments, and the symbolic
+/// functions of time (`syms C(t)`), each with the input name it becomes.
+#[derive(Default)]
+struct Scope {
+    vars: BTreeMap<String, Vector>,
+    /// MATLAB name -> (the input's `.sys` name, its declaration's place).
+    funcs: BTreeMap<String, (String, At)>,
+}
+
+/// The input standing for a function of time `name`, written at `at`.
+fn timed(name: &str, at: At) -> Ex {
+    Ex::Name {
+        name: name.to_string(),
+        timed: true,
+        at,
+    }
+}
+
+/// Substitute the single-valued assignments made so far, indexing `v(k)`
+/// into an assigned vector, and `C(t)` (or bare `C`) of a function of time.
+fn subst(e: &Ex, sc: &Scope, at: At) -> Result<Ex, ImportError> {
+    let vars = &sc.vars;
     Ok(match e {
         Ex::Call(g, args) if g.starts_with(infix::INDEX) => {
             let v = &g[infix::INDEX.len()..];
+            if let Some((input, _)) = sc.funcs.get(v) {
+                return match args.as_slice() {
+                    [Ex::Name { name, .. }] if name == "t" => Ok(timed(input, at)),
+                    _ => Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("'{v}' is a function of time (syms {v}(t)): write {v}(t)"),
+                    )),
+                };
+            }
             let k = match args.as_slice() {
                 [Ex::Num(k)] => k.parse::<usize>().ok(),
                 _ => None,
@@ -234,26 +265,30 @@ fn subst(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportEr
                 }
             }
         }
-        e => subst_plain(e, vars, at)?,
+        e => subst_plain(e, sc, at)?,
     })
 }
 
-fn subst_plain(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, ImportError> {
+fn subst_plain(e: &Ex, sc: &Scope, at: At) -> Result<Ex, ImportError> {
     Ok(match e {
-        Ex::Name { name, .. } => match vars.get(name).map(|v| v.0.as_slice()) {
+        Ex::Name { name, at: nat, .. } => match sc.vars.get(name).map(|v| v.0.as_slice()) {
             Some([x]) => x.0.clone(),
-            _ => e.clone(),
+            // A bare symbolic function is its value at t, as MATLAB computes with it.
+            _ => match sc.funcs.get(name) {
+                Some((input, _)) => timed(input, *nat),
+                None => e.clone(),
+            },
         },
-        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, vars, at)?)),
+        Ex::Neg(a) => Ex::Neg(Box::new(subst(a, sc, at)?)),
         Ex::Bin(op, a, b) => Ex::Bin(
             *op,
-            Box::new(subst(a, vars, at)?),
-            Box::new(subst(b, vars, at)?),
+            Box::new(subst(a, sc, at)?),
+            Box::new(subst(b, sc, at)?),
         ),
         Ex::Call(g, args) => Ex::Call(
             g.clone(),
             args.iter()
-                .map(|a| subst(a, vars, at))
+                .map(|a| subst(a, sc, at))
                 .collect::<Result<_, _>>()?,
         ),
         Ex::Num(_) => e.clone(),
@@ -265,7 +300,7 @@ fn subst_plain(e: &Ex, vars: &BTreeMap<String, Vector>, at: At) -> Result<Ex, Im
 /// under another name with `save('NAME', ...)`).
 pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, ImportError> {
     // Every assignment, in order; a later one replaces an earlier one.
-    let mut vars: BTreeMap<String, Vector> = BTreeMap::new();
+    let mut sc = Scope::default();
     let mut syms: Vec<(String, At)> = Vec::new();
     let mut saved: Option<String> = None;
     for st in statements(text)? {
@@ -274,7 +309,9 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
         // `syms a b real`: a role (x, u, ...) declared and never assigned is that one symbol.
         if let Some(rest) = t.strip_prefix("syms") {
             if rest.is_empty() || rest.starts_with(char::is_whitespace) {
-                syms.extend(rest.split_whitespace().map(|w| (w.to_string(), st[0].1)));
+                for (w, at) in words(&st[4..]) {
+                    declare(&mut sc, &mut syms, w, at)?;
+                }
                 continue;
             }
         }
@@ -288,6 +325,7 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
             }
             continue;
         }
+        refuse_unread(st, &t)?;
         // An assignment NAME = RHS (not ==).
         let Some(eq) = st.iter().position(|c| c.0 == '=') else {
             continue;
@@ -296,26 +334,46 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
             continue;
         }
         let lhs = string(trim(&st[..eq]));
+        if let Some((v, _)) = lhs.split_once('(').filter(|(v, _)| is_name(v.trim_end())) {
+            // `M(i,j) = ...`: an element set by the script, which this reader does not follow.
+            if !matches!(v.trim_end(), "ics" | "known_ics") {
+                let at = st[0].1;
+                return Err(ImportError::at(
+                    at.0,
+                    at.1,
+                    format!("'{lhs} = ...' sets an element: not read (assign whole vectors)"),
+                ));
+            }
+        }
         if !is_name(&lhs) || matches!(lhs.as_str(), "ics" | "known_ics") {
             continue;
         }
         let mut items = Vec::new();
         for el in elements(&st[eq + 1..]) {
+            if string(el).starts_with("sym(") {
+                // `sym('x', [34 1])`: an array of symbols, indexed later (`x(3)`).
+                return Err(ImportError::at(
+                    el[0].1 .0,
+                    el[0].1 .1,
+                    "sym(...) (an array of symbols) is not read: declare each symbol with syms",
+                ));
+            }
             let e = infix::parse_placed(el, Dialect::Matlab)?;
             // A name standing for a whole vector (`h = x`) is that vector.
             if let Ex::Name { name, .. } = &e {
-                if let Some((v, _)) = vars.get(name).filter(|v| v.0.len() != 1) {
+                if let Some((v, _)) = sc.vars.get(name).filter(|v| v.0.len() != 1) {
                     items.extend(v.iter().cloned());
                     continue;
                 }
             }
-            items.push((subst(&e, &vars, el[0].1)?, el[0].1));
+            items.push((subst(&e, &sc, el[0].1)?, el[0].1));
         }
-        vars.insert(lhs, (items, st[0].1));
+        sc.funcs.remove(&lhs);
+        sc.vars.insert(lhs, (items, st[0].1));
     }
     let mut roles: BTreeMap<&str, Vector> = BTreeMap::new();
     for r in ["x", "p", "u", "w", "f", "h"] {
-        if let Some(v) = vars.get(r) {
+        if let Some(v) = sc.vars.get(r) {
             roles.insert(r, v.clone());
         } else if let Some((_, at)) = syms.iter().find(|s| s.0 == r) {
             let e = Ex::Name {
@@ -327,7 +385,79 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
         }
     }
     let syms: Vec<String> = syms.into_iter().map(|s| s.0).collect();
-    convert(roles, &syms, saved, origin)
+    convert(roles, &syms, &sc.funcs, saved, origin)
+}
+
+/// The blank-separated words of a `syms` line, with their places.
+fn words(s: &[(char, At)]) -> Vec<(String, At)> {
+    s.split(|c| c.0.is_whitespace())
+        .filter(|w| !w.is_empty())
+        .map(|w| (string(w), w[0].1))
+        .collect()
+}
+
+/// One word of `syms`: a plain symbol, or `C(t)`, a symbolic function of
+/// time: a known input, named `C` if the name is free, else `C_t` (a `syms
+/// theta` or an assignment to `theta` came first and keeps that name).
+fn declare(
+    sc: &mut Scope,
+    syms: &mut Vec<(String, At)>,
+    w: String,
+    at: At,
+) -> Result<(), ImportError> {
+    let Some((name, args)) = w.strip_suffix(')').and_then(|r| r.split_once('(')) else {
+        if !is_name(&w) {
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{w}' in syms: not read (declare plain names, or functions NAME(t))"),
+            ));
+        }
+        // A plain re-declaration ends the function of that name.
+        sc.funcs.remove(&w);
+        syms.push((w, at));
+        return Ok(());
+    };
+    if !is_name(name) || args.trim() != "t" {
+        return Err(ImportError::at(
+            at.0,
+            at.1,
+            format!("'{w}' in syms: only functions of time alone, NAME(t), are read"),
+        ));
+    }
+    let taken = |n: &str, sc: &Scope| {
+        syms.iter().any(|s| s.0 == n)
+            || sc.vars.contains_key(n)
+            || sc.funcs.iter().any(|(k, v)| k != name && v.0 == n)
+    };
+    let mut input = name.to_string();
+    while taken(&input, sc) {
+        input.push_str("_t");
+    }
+    sc.vars.remove(name);
+    sc.funcs.insert(name.to_string(), (input, at));
+    Ok(())
+}
+
+/// MATLAB this reader does not follow (loops, branches, functions) is
+/// refused at its place rather than skipped: skipping a loop that fills `f`
+/// would convert a different model.
+fn refuse_unread(st: &[(char, At)], t: &str) -> Result<(), ImportError> {
+    let first = t.split(|c: char| !c.is_ascii_alphanumeric() && c != '_').next();
+    if let Some(k) = first.filter(|k| {
+        matches!(
+            *k,
+            "for" | "while" | "if" | "switch" | "function" | "parfor" | "try"
+        )
+    }) {
+        let at = st.first().map_or((1, 1), |c| c.1);
+        return Err(ImportError::at(
+            at.0,
+            at.1,
+            format!("'{k}' (MATLAB control flow) is not read: write the model's vectors out"),
+        ));
+    }
+    Ok(())
 }
 
 fn names_of(
@@ -547,10 +677,49 @@ fn write_sys(m: &Model, consts: &[String], name: String, origin: &str) -> Conver
 fn convert(
     roles: BTreeMap<&str, Vector>,
     syms: &[String],
+    funcs: &BTreeMap<String, (String, At)>,
     saved: Option<String>,
     origin: &str,
 ) -> Result<Converted, ImportError> {
-    let m = checked_roles(&roles)?;
+    let mut m = checked_roles(&roles)?;
+    timed_inputs(&roles, &mut m, funcs)?;
     let consts = constants(&m, syms)?;
     Ok(write_sys(&m, &consts, system_name(saved, origin), origin))
+}
+
+/// Functions of time (`syms C(t)`) are known inputs: refused as states or
+/// parameters, and added to the inputs when used in `f` or `h` but listed in
+/// neither `u` nor `w`.
+fn timed_inputs(
+    roles: &BTreeMap<&str, Vector>,
+    m: &mut Model,
+    funcs: &BTreeMap<String, (String, At)>,
+) -> Result<(), ImportError> {
+    for (key, what) in [("x", "state"), ("p", "parameter")] {
+        let items = roles.get(key).map_or(&[][..], |v| v.0.as_slice());
+        if let Some((Ex::Name { name, .. }, at)) = items
+            .iter()
+            .find(|(e, _)| matches!(e, Ex::Name { timed: true, .. }))
+        {
+            return Err(ImportError::at(
+                at.0,
+                at.1,
+                format!("'{name}' is a function of time (syms ...(t)): an input, not a {what}"),
+            ));
+        }
+    }
+    let inputs: Vec<&str> = funcs.values().map(|v| v.0.as_str()).collect();
+    let mut extra = Vec::new();
+    for (e, _) in m.f.iter().chain(&m.h) {
+        walk_names_at(e, &mut |n, at| {
+            if inputs.contains(&n)
+                && !m.declared().contains(&n)
+                && !extra.iter().any(|x: &(String, At)| x.0 == n)
+            {
+                extra.push((n.to_string(), at));
+            }
+        });
+    }
+    m.inputs.extend(extra);
+    Ok(())
 }
