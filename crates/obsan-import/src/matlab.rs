@@ -443,7 +443,9 @@ fn declare(
 /// refused at its place rather than skipped: skipping a loop that fills `f`
 /// would convert a different model.
 fn refuse_unread(st: &[(char, At)], t: &str) -> Result<(), ImportError> {
-    let first = t.split(|c: char| !c.is_ascii_alphanumeric() && c != '_').next();
+    let first = t
+        .split(|c: char| !c.is_ascii_alphanumeric() && c != '_')
+        .next();
     if let Some(k) = first.filter(|k| {
         matches!(
             *k,
