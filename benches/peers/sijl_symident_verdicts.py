@@ -39,7 +39,7 @@ def source_line(status):
 
 def detect(path, timeout):
     r = subprocess.run([sys.executable, os.path.join(ROOT, "benches/peers/symident_suite.py"),
-                        "--one", path, ""], capture_output=True, text=True, timeout=timeout)
+                        "--one-verdict", path, ""], capture_output=True, text=True, timeout=timeout)
     lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
     return json.loads(lines[-1]) if lines else {"error": r.stderr.strip()[-300:]}
 
