@@ -4,7 +4,9 @@ use crate::cli::GlobalArgs;
 use crate::json;
 use crate::show::load_normal_form;
 use crate::Failure;
-use obsan_analysis::global_id::{global_identifiability, GlobalOptions, Identifiability};
+use obsan_analysis::global_id::{
+    global_identifiability, GlobalOptions, Identifiability, OutputForm,
+};
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
@@ -30,7 +32,26 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         Identifiability::Local(k) => (json::Verdict::Local, Some(k)),
         Identifiability::NotIdentifiable => (json::Verdict::NotIdentifiable, None),
     };
-    let maps: Vec<String> = r.maps.iter().map(|m| m.to_string()).collect();
+    // Maps that keep every output (exact symmetries of the model as
+    // written), and those proven only on the angle outputs' tangents: each
+    // turns an angle output by pi, or is not decided on the angles.
+    let maps: Vec<String> = r
+        .maps
+        .iter()
+        .filter(|m| m.keeps_angles == Some(true))
+        .map(|m| m.to_string())
+        .collect();
+    let maps_pi: Vec<(String, bool)> = r
+        .maps
+        .iter()
+        .filter(|m| m.keeps_angles != Some(true))
+        .map(|m| (m.to_string(), m.keeps_angles == Some(false)))
+        .collect();
+    let form_text = |f: &OutputForm| match f {
+        OutputForm::Direct => "direct".to_string(),
+        OutputForm::Argument(k) => format!("{k} argument"),
+        OutputForm::Tangent => "tangent".to_string(),
+    };
     if a.out.json {
         let variables = r
             .variables
@@ -42,6 +63,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
                 } else {
                     json::VariableKind::State
                 },
+                at_most: v.at_most,
                 name: v.name.clone(),
                 values: verdict(v.verdict).1,
                 verdict: verdict(v.verdict).0,
@@ -64,13 +86,23 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             group_order: r.group_order,
             log10_degree_bound_global: r.log10_delta_global,
             maps,
+            maps_modulo_pi: maps_pi.iter().map(|m| m.0.clone()).collect(),
             method: "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into(),
             order: r.order,
+            output_forms: r
+                .output_forms
+                .iter()
+                .map(|(o, f)| json::OutputFormJson {
+                    counted_as: form_text(f),
+                    output: o.clone(),
+                })
+                .collect(),
             output_orders,
             primes: r.primes.to_vec(),
             rank_order: r.rank_order,
             restriction: nf.restriction.clone(),
             solutions: r.solutions,
+            solutions_at_most: r.solutions_at_most,
             system: nf.name.clone(),
             unknowns: r.unknowns,
             variables,
@@ -90,11 +122,26 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         r.unknowns,
         r.equations
     ));
+    // How an output not read as written is counted (outputs.rs).
+    for (name, f) in &r.output_forms {
+        match f {
+            OutputForm::Direct => {}
+            OutputForm::Argument(k) => o.push_str(&format!(
+                "output {name} is counted through the argument of its {k} (one-to-one: the same values)\n"
+            )),
+            OutputForm::Tangent => o.push_str(&format!(
+                "output {name} is an angle, counted through its tangent: modulo pi, so a count above 1 is an upper bound unless the symmetries settle it\n"
+            )),
+        }
+    }
     let w = r.variables.iter().map(|v| v.name.len()).max().unwrap_or(0);
     for v in &r.variables {
         let kind = if v.param { "param" } else { "state" };
         let text = match v.verdict {
             Identifiability::Global => "globally identifiable".to_string(),
+            Identifiability::Local(k) if v.at_most => {
+                format!("locally identifiable, at most {k} values")
+            }
             Identifiability::Local(k) => format!("locally identifiable, {k} values"),
             Identifiability::NotIdentifiable => "not identifiable".to_string(),
         };
@@ -124,6 +171,9 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             "1 {scope} gives the output of a generic one\n",
             scope = scope.replacen("values", "value", 1)
         )),
+        Some(k) if r.solutions_at_most => o.push_str(&format!(
+            "at most {k} {scope} give the output of a generic one\n"
+        )),
         Some(k) => o.push_str(&format!("{k} {scope} give the output of a generic one\n")),
         None => o.push_str(&format!("infinitely many {scope} give the same output\n")),
     }
@@ -132,6 +182,19 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         for m in &maps {
             o.push_str(&format!("  {m}\n"));
         }
+    }
+    if !maps_pi.is_empty() {
+        o.push_str("symmetries of the angle outputs' tangents only (not of the angles as read):\n");
+        for (m, turns) in &maps_pi {
+            let why = if *turns {
+                "turns an angle output by pi"
+            } else {
+                "not decided on the angles themselves"
+            };
+            o.push_str(&format!("  {m}  ({why})\n"));
+        }
+    }
+    if !r.maps.is_empty() && maps_pi.is_empty() {
         let all = r.solutions == Some(r.group_order);
         o.push_str(&format!(
             "they generate a group of order {}{}\n",
@@ -140,6 +203,15 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
                 ": it maps the generic point onto every solution"
             } else {
                 ""
+            }
+        ));
+    } else if !r.maps.is_empty() {
+        o.push_str(&format!(
+            "all the maps above generate a group of order {} (the tangents' solutions{})\n",
+            r.group_order,
+            match (r.solutions_at_most, r.solutions) {
+                (false, Some(k)) => format!("; the outputs as read keep {k} of them"),
+                _ => String::new(),
             }
         ));
     }

@@ -312,6 +312,9 @@ class Identifiability(NamedTuple):
     values: Optional[int]
     angle: bool = False
     """An angle entering only through sin/cos, counted modulo 2 pi."""
+    at_most: bool = False
+    """``values`` is an upper bound: an angle output was read through its tangent
+    (modulo pi) and the symmetries found do not settle the count."""
 
 
 class MapImage(NamedTuple):
@@ -374,6 +377,11 @@ class Global(Result):
     variables: List[Identifiability]
     solutions: Optional[int]
     maps: List[DiscreteMap]
+    solutions_at_most: bool = False
+    """``solutions`` is an upper bound (an angle output read modulo pi)."""
+    maps_modulo_pi: List[DiscreteMap] = field(default_factory=list)
+    """Symmetries of the angle outputs' tangents only: each turns an angle output
+    by pi or is not decided on the angles; not symmetries of the model."""
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Global":
@@ -387,11 +395,14 @@ class Global(Result):
                     v.get("verdict", ""),
                     v.get("values"),
                     bool(v.get("angle", False)),
+                    bool(v.get("at_most", False)),
                 )
                 for v in raw.get("variables") or []
             ],
             solutions=raw.get("solutions"),
             maps=[DiscreteMap.parse(str(m)) for m in raw.get("maps") or []],
+            solutions_at_most=bool(raw.get("solutions_at_most", False)),
+            maps_modulo_pi=[DiscreteMap.parse(str(m)) for m in raw.get("maps_modulo_pi") or []],
         )
 
 

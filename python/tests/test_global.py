@@ -43,3 +43,25 @@ def test_map_parse_reads_every_printed_form():
     assert obsan.DiscreteMap.parse("a -> -a").apply({"a": 2.0}) == {"a": -2.0}
     with pytest.raises(ValueError):
         obsan.DiscreteMap.parse("a")
+
+
+def test_angle_outputs_read_through_their_tangent():
+    # Hand derivation in the file: bearing (atan2) and range fix the landmark;
+    # over the bearing's tangent l and -l agree, and the map turns the bearing by pi.
+    g = obsan.load(SYSTEMS / "global" / "landmark_polar.sys").global_identifiability()
+    assert g.solutions == 1 and not g.solutions_at_most
+    assert {v.name: (v.values, v.at_most) for v in g.variables} == {
+        "lx": (1, False),
+        "ly": (1, False),
+    }
+    assert g.maps == []
+    assert [str(m) for m in g.maps_modulo_pi] == ["(lx, ly) -> (-lx, -ly)"]
+    p = {"lx": 0.3, "ly": -1.2}
+    q = g.maps_modulo_pi[0].apply(p)
+    assert math.atan2(q["ly"], q["lx"]) != pytest.approx(math.atan2(p["ly"], p["lx"]))
+    assert q["ly"] / q["lx"] == pytest.approx(p["ly"] / p["lx"], rel=1e-12)
+    # x -> -1 - x is no signed permutation: the count over the tangent stays a bound.
+    g = obsan.load(SYSTEMS / "global" / "bearing_of_a_quadratic.sys").global_identifiability()
+    x = next(v for v in g.variables if v.name == "x")
+    assert (x.values, x.at_most) == (2, True)
+    assert g.solutions_at_most

@@ -21,12 +21,18 @@ pub struct Global {
     pub group_order: usize,
     /// log10 of the degree bound of the global test.
     pub log10_degree_bound_global: f64,
-    /// The discrete symmetries, as text.
+    /// The discrete symmetries, as text: each keeps every output as written.
     pub maps: Vec<String>,
+    /// Symmetries of the angle outputs' tangents only (outputs counted as
+    /// `tangent`): each turns an angle output by pi, or is not decided on
+    /// the angles; not symmetries of the model as written.
+    pub maps_modulo_pi: Vec<String>,
     /// How the answer was found, in words.
     pub method: String,
     /// The Taylor order used.
     pub order: usize,
+    /// How each output is counted.
+    pub output_forms: Vec<OutputFormJson>,
     /// Each output's order.
     pub output_orders: Vec<OutputOrder>,
     /// The two primes.
@@ -37,12 +43,27 @@ pub struct Global {
     pub restriction: Option<String>,
     /// The number of solutions, or null when not counted.
     pub solutions: Option<usize>,
+    /// `solutions` is an upper bound: an angle output was read through its
+    /// tangent (modulo pi) and the symmetries found do not settle the count.
+    pub solutions_at_most: bool,
     /// The system's name.
     pub system: String,
     /// The number of unknowns.
     pub unknowns: usize,
     /// Each variable's verdict.
     pub variables: Vec<GlobalVariable>,
+}
+
+/// How the count reads one output.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct OutputFormJson {
+    /// `direct` (a rational function, angles in sin/cos), `sqrt argument`
+    /// or `atan argument` (the function is one-to-one: the same count), or
+    /// `tangent` (an angle modulo pi: counts above 1 are upper bounds).
+    pub counted_as: String,
+    /// The output.
+    pub output: String,
 }
 
 /// An output's Taylor order.
@@ -61,6 +82,8 @@ pub struct OutputOrder {
 pub struct GlobalVariable {
     /// It is an angle (values modulo 2 pi).
     pub angle: bool,
+    /// `values` is an upper bound (an angle output read modulo pi).
+    pub at_most: bool,
     /// `param` or `state`.
     pub kind: VariableKind,
     /// Its name.

@@ -80,9 +80,10 @@ fn global_refuses_what_it_cannot_count() {
         "system h\nstate x\nparam k, th\nx' = -k*x\noutput y = x*sin(th/2)\n",
     );
     bad(&["global", &half], "unit other than 1");
+    // A function of a state times a state: no one-to-one reading.
     let at = temp_file(
         "global_atan.sys",
-        "system a\nstate x\nparam k\nx' = -k*x\noutput y = atan(x)\n",
+        "system a\nstate x\nparam k\nx' = -k*x\noutput y = x*atan(x)\n",
     );
     bad(&["global", &at], "not a plain symbol");
     bad(&["global", "systems/global/missing.sys"], "missing.sys");
@@ -284,4 +285,54 @@ fn angles_measured_directly() {
     assert_eq!(var(&v, "w2"), ("global".into(), Some(1)));
     assert_eq!(var(&v, "th1").0, "not identifiable");
     assert_eq!(var(&v, "th2").0, "not identifiable");
+}
+
+#[test]
+fn outputs_through_sqrt_atan_and_atan2() {
+    // atan and sqrt are one-to-one: y = atan(x) of x' = -k x fixes x(0) = tan
+    // y(0) and k = -x'/x, as y = x would: both global (counted through the
+    // argument).
+    let at = temp_file(
+        "global_atan_ok.sys",
+        "system a\nstate x\nparam k\nx' = -k*x\noutput y = atan(x)\n",
+    );
+    let v = global_json(&at);
+    assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "x"), ("global".into(), Some(1)));
+    assert_eq!(v["output_forms"][0]["counted_as"], "atan argument");
+    // Hand derivations in the files.
+    let v = global_json("systems/global/landmark_polar.sys");
+    for n in ["lx", "ly"] {
+        assert_eq!(var(&v, n), ("global".into(), Some(1)), "{n}");
+    }
+    assert_eq!(v["solutions"], 1);
+    assert_eq!(v["solutions_at_most"], false);
+    assert_eq!(v["output_forms"][0]["counted_as"], "tangent");
+    assert_eq!(v["output_forms"][1]["counted_as"], "sqrt argument");
+    // l -> -l keeps the tangent and turns the bearing by pi.
+    assert_eq!(v["maps"].as_array().unwrap().len(), 0);
+    assert_eq!(v["maps_modulo_pi"][0], "(lx, ly) -> (-lx, -ly)");
+    let v = global_json("systems/global/bearing_atan2_compass_mod_pi.sys");
+    for n in ["x", "y", "theta"] {
+        assert_eq!(var(&v, n), ("local".into(), Some(2)), "{n}");
+    }
+    assert_eq!(v["solutions"], 2);
+    assert_eq!(v["solutions_at_most"], false);
+    assert_eq!(v["maps"][0], "(x, y, theta) -> (-x, -y, theta + pi)");
+    let t = ok(&["global", "systems/global/bearing_atan2_compass_mod_pi.sys"]);
+    assert!(t.contains("x      state  locally identifiable, 2 values"), "{t}");
+    let v = global_json("systems/global/bearing_of_a_quadratic.sys");
+    assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "s"), ("global".into(), Some(1)));
+    assert_eq!(var(&v, "x"), ("local".into(), Some(2)));
+    let x = v["variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["name"] == "x")
+        .unwrap();
+    assert_eq!(x["at_most"], true);
+    assert_eq!(v["solutions_at_most"], true);
+    let t = ok(&["global", "systems/global/bearing_of_a_quadratic.sys"]);
+    assert!(t.contains("at most 2 values"), "{t}");
 }

@@ -18,6 +18,7 @@ use obsan_model::NormalForm;
 mod count;
 mod maps;
 mod model;
+mod outputs;
 mod run;
 mod sian;
 mod trig;
@@ -29,6 +30,7 @@ use maps::{find_maps, group_order};
 use model::zmodel;
 use run::Run;
 use types::err;
+pub use outputs::OutputForm;
 pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability};
 
 /// Global identifiability of every parameter and initial state (SIAN's
@@ -75,9 +77,11 @@ pub fn global_identifiability(
                 Some(1) => Identifiability::Global,
                 Some(k) => Identifiability::Local(*k),
             },
+            at_most: false,
         })
         .collect();
     let all_local = a.per_var.iter().all(|c| c.is_some());
+    let tangents = !m.angle_outputs.is_empty();
     // Multi-valued variables in model order (states then params).
     let mut multi = vec![false; nx + np];
     for (i, c) in a.per_var.iter().enumerate() {
@@ -90,24 +94,76 @@ pub fn global_identifiability(
         Vec::new()
     };
     let group = group_order(&maps, nx + np, 100_000);
+    // With outputs read through an angle's tangent, each map is checked on
+    // the angle itself (outputs.rs): the sign it gives each such output.
+    let signs: Vec<Vec<Option<i8>>> = maps
+        .iter()
+        .map(|s| {
+            if tangents {
+                outputs::map_signs(&mut nf.ctx, &m.angle_outputs, &m.symbols, &m.angle, s)
+            } else {
+                Vec::new()
+            }
+        })
+        .collect();
+    // When the maps reach every solution (the orbit of the generic point is
+    // the whole fibre of the tangents) and each map's sign on every angle
+    // output is proven, the real fibre is the subgroup keeping every angle:
+    // the kernel of `g -> (sign_j(g))_j` (signs multiply along compositions,
+    // each being a constant), of order `group / 2^rank` with the rank of the
+    // generators' sign vectors over F_2. All of it: the counts stand; only
+    // the generic point: every variable is global; else the joint count is
+    // the kernel's order and the per-variable counts stay upper bounds.
+    // (More than 64 angle outputs: not settled, the bound stays.)
+    let settled = a.joint == Some(group)
+        && m.angle_outputs.len() <= 64
+        && signs.iter().flatten().all(|x| x.is_some());
+    let kernel = settled.then(|| group >> sign_rank(&signs));
+    let exact = !tangents || kernel == Some(group);
+    let all_global = tangents && kernel == Some(1);
     let all_names: Vec<&str> = nf.state.iter().map(|s| s.as_str()).collect();
     let maps_out = maps
         .iter()
-        .map(|s| DiscreteMap {
+        .zip(&signs)
+        .map(|(s, sg)| DiscreteMap {
             images: s
                 .iter()
                 .enumerate()
                 .filter(|(v, im)| *v != im.var || im.sign < 0 || im.exp < 0)
                 .map(|(v, im)| im.named(all_names[v], &all_names))
                 .collect(),
+            keeps_angles: if sg.iter().all(|&x| x == Some(1)) {
+                Some(true)
+            } else if sg.iter().any(|&x| x == Some(-1)) {
+                Some(false)
+            } else {
+                None
+            },
+        })
+        .collect();
+    let variables: Vec<GlobalVariable> = variables
+        .into_iter()
+        .map(|mut v| {
+            if all_global && matches!(v.verdict, Identifiability::Local(_)) {
+                v.verdict = Identifiability::Global;
+            }
+            v.at_most = !exact && matches!(v.verdict, Identifiability::Local(_));
+            v
         })
         .collect();
     Ok(GlobalReport {
         variables,
-        solutions: a.joint,
+        solutions: if tangents { kernel.or(a.joint) } else { a.joint },
         all_local,
         maps: maps_out,
         group_order: group,
+        solutions_at_most: kernel.is_none() && !exact && a.joint.is_some_and(|k| k > 1),
+        output_forms: nf
+            .outputs
+            .iter()
+            .zip(&m.forms)
+            .map(|(o, f)| (o.0.clone(), f.clone()))
+            .collect(),
         order: a.orders.iter().copied().max().unwrap_or(0),
         rank_order: a.rank_order,
         output_orders: nf
@@ -123,6 +179,34 @@ pub fn global_identifiability(
         equations: a.equations,
         primes,
     })
+}
+
+/// Rank over F_2 of the maps' sign vectors (`-1` as 1), each map's signs on
+/// the angle outputs (all proven, at most 64 outputs).
+fn sign_rank(signs: &[Vec<Option<i8>>]) -> u32 {
+    let mut rows: Vec<u64> = signs
+        .iter()
+        .map(|s| {
+            s.iter()
+                .enumerate()
+                .filter(|(_, x)| **x == Some(-1))
+                .fold(0u64, |acc, (j, _)| acc | (1u64 << j))
+        })
+        .collect();
+    let mut rank = 0;
+    for bit in 0..64 {
+        let Some(p) = rows.iter().position(|r| r >> bit & 1 == 1) else {
+            continue;
+        };
+        let pivot = rows.swap_remove(p);
+        for r in rows.iter_mut() {
+            if *r >> bit & 1 == 1 {
+                *r ^= pivot;
+            }
+        }
+        rank += 1;
+    }
+    rank
 }
 
 #[cfg(test)]

@@ -1,6 +1,7 @@
 //! The model over Z, as the count sees it: rational right-hand sides and
 //! outputs, angles in their half-angle view (trig.rs).
 
+use super::outputs::{self, AngleOutput, OutputForm};
 use super::trig;
 use super::types::err;
 use crate::rank::AnalysisError;
@@ -18,6 +19,12 @@ pub(super) struct ZModel {
     pub(super) const_vars: Vec<Var>,
     pub(super) rhs: Vec<(ZPoly, ZPoly)>,
     pub(super) outputs: Vec<(ZPoly, ZPoly)>,
+    /// How each output is read (outputs.rs), and the angle outputs read
+    /// through their tangent.
+    pub(super) forms: Vec<OutputForm>,
+    pub(super) angle_outputs: Vec<AngleOutput>,
+    /// The model's own symbols (states then params), before the half-angle view.
+    pub(super) symbols: Vec<Var>,
 }
 
 pub(super) fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
@@ -49,11 +56,9 @@ pub(super) fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
         let id = nf.ctx.add(&parts);
         rhs.push(nf.ctx.try_canon(id).map_err(limit)?);
     }
-    let mut outputs = Vec::new();
-    for k in 0..nf.outputs.len() {
-        let id = nf.outputs[k].1;
-        outputs.push(nf.ctx.try_canon(id).map_err(limit)?);
-    }
+    // Outputs through sqrt, atan or an angle's tangent (outputs.rs).
+    let prepared = outputs::prepare(&mut nf.ctx, &nf.outputs)?;
+    let mut outputs = prepared.outputs;
     // Angles in sin/cos become their half-angle tangents (trig.rs).
     let mut vars = nf.state_vars.clone();
     let angle = trig::half_angle_view(&mut nf.ctx, &mut vars, &mut rhs, &mut outputs)?;
@@ -80,6 +85,9 @@ pub(super) fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
         }
     }
     Ok(ZModel {
+        symbols: nf.state_vars.clone(),
+        forms: prepared.forms,
+        angle_outputs: prepared.angles,
         angle,
         dyn_vars,
         param_vars,

@@ -60,6 +60,9 @@ pub struct GlobalVariable {
     /// 2 pi (as its half-angle tangent `tan(theta/2)`).
     pub angle: bool,
     pub verdict: Identifiability,
+    /// The count `k > 1` is an upper bound: an output was read through its
+    /// angle's tangent (outputs.rs), which fixes the angle modulo pi only.
+    pub at_most: bool,
 }
 
 /// A discrete symmetry: each moved variable and its image. Checked exactly:
@@ -68,6 +71,11 @@ pub struct GlobalVariable {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DiscreteMap {
     pub images: Vec<MapImage>,
+    /// With outputs read through an angle's tangent: whether the map keeps
+    /// every such angle itself (`Some(true)`), turns one by pi
+    /// (`Some(false)`: a symmetry of the tangents only), or neither is
+    /// proven (`None`). `Some(true)` without such outputs.
+    pub keeps_angles: Option<bool>,
 }
 
 /// `var -> sign * image`, plus pi when `plus_pi` (angles only: `theta ->
@@ -119,6 +127,11 @@ pub struct GlobalReport {
     pub maps: Vec<DiscreteMap>,
     /// Size of the group the maps generate (an orbit of a generic point).
     pub group_order: usize,
+    /// `solutions` is an upper bound (an output read through its tangent,
+    /// and the maps do not settle the count; outputs.rs).
+    pub solutions_at_most: bool,
+    /// Per output, how the count reads it.
+    pub output_forms: Vec<(String, super::outputs::OutputForm)>,
     /// Highest Taylor order used, and the highest order of a row that
     /// raised the Jacobian's rank.
     pub order: usize,
