@@ -25,7 +25,9 @@ pub use analysis::{
     Certification, Check, Constant, DecompositionCheck, Formula, ModeCheck, Rank, Show,
     SymCertificate, Symmetries, Verify,
 };
-pub use global::{Global, GlobalVariable, OutputFormJson, OutputOrder, SimulateSys, VariableKind, Verdict};
+pub use global::{
+    Global, GlobalVariable, OutputFormJson, OutputOrder, SimulateSys, VariableKind, Verdict,
+};
 pub use import::{Import, ImportedModel};
 pub use modes::{
     DerivedMode, Modes, ModesCertificate, ModesDerived, ModesFullRank, ModesUnknownInputs,

@@ -320,7 +320,10 @@ fn outputs_through_sqrt_atan_and_atan2() {
     assert_eq!(v["solutions_at_most"], false);
     assert_eq!(v["maps"][0], "(x, y, theta) -> (-x, -y, theta + pi)");
     let t = ok(&["global", "systems/global/bearing_atan2_compass_mod_pi.sys"]);
-    assert!(t.contains("x      state  locally identifiable, 2 values"), "{t}");
+    assert!(
+        t.contains("x      state  locally identifiable, 2 values"),
+        "{t}"
+    );
     let v = global_json("systems/global/bearing_of_a_quadratic.sys");
     assert_eq!(var(&v, "k"), ("global".into(), Some(1)));
     assert_eq!(var(&v, "s"), ("global".into(), Some(1)));

@@ -290,6 +290,45 @@ fn shape_c_bearing_from_an_offset_sensor_closes() {
     assert_eq!(v["symmetries"], 3);
 }
 
+/// Shape d: StructuralIdentifiability.jl's KD1999 (a jacketed CSTR, Kravaris-
+/// Daoutidis 1999): six scalings of the params and of Ca, Arr; the mode
+/// z = Ca Arr k0 has the drift `-k0 Arr_p z - E/R z/T^2 (z DH/(ro cp) + UA (Tj -
+/// T)/(V ro cp))`, a quotient of degree 5 in 8 modes, past the dense ansatz:
+/// it is written through the cross-section of the scalings (pivots set to 1,
+/// the other variables to their invariant monomials). By hand, with z1 = k0
+/// Arr_p, z3 = DH/UA, z4 = E/R, z6 = ro cp/DH: `L_f0 z = -z1 z - z4 z (V z3 z
+/// + Tj - T)/(T^2 V z3 z6)`; the test checks the written system by the chain
+/// rule at rational points, whichever modes are chosen.
+#[test]
+fn shape_d_a_cstr_closes_through_the_cross_section_of_its_scalings() {
+    let m = model(
+        &[
+            ("Ca", "u1*(Ca0 - Ca)/V - k0*Arr_p*Ca"),
+            ("Cb", "-u1*Cb/V + k0*Arr*Ca"),
+            (
+                "T",
+                "u1*(Ta - T)/V - (k0*Arr*Ca*DH + UA*(Tj - T)/V)/(ro*cp)",
+            ),
+            ("Tj", "u2*(Th - Tj)/Vh - UA/(roh*cph)*(Tj - T)/Vh"),
+            (
+                "Arr",
+                "E*Arr/(R*T^2)*(u1*(Ta - T)/V - (k0*Arr*Ca*DH + UA*(Tj - T)/V)/(ro*cp))",
+            ),
+        ],
+        &[
+            "Ca0", "V", "k0", "Arr_p", "Ta", "DH", "UA", "ro", "cp", "Th", "Vh", "roh", "cph", "E",
+            "R",
+        ],
+        &["u1", "u2"],
+        &[],
+        &[],
+        &[("y1", "Cb"), ("y2", "T")],
+    );
+    let v = assert_closes(&m, "shape_d", 17);
+    // The independent verdict of systems/benchmarks/si-jl/KD1999.sys (symident): rank 14.
+    assert_eq!(v["rank"], 14);
+}
+
 /// A random polynomial of degree <= 2 in `vars` (text), small integer
 /// coefficients, at least one non-constant term.
 fn random_poly(rng: &mut SplitMix, vars: &[String]) -> String {

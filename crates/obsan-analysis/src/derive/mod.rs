@@ -37,6 +37,7 @@ mod frame;
 mod monomial;
 
 mod reduced;
+mod section;
 
 use crate::fp_linalg::{mono_deriv, mono_value, monomials, rat_recon};
 use ansatz::{build_poly, invariant_ansatz, lie, point_for, poly_text, screen_mode, Indep};
@@ -828,6 +829,41 @@ pub(super) fn reduce(
             ))?
         };
         outputs.push((oname, e));
+    }
+    // What the search left: through the cross-section of the scalings
+    // (section.rs), computed once, when some invariant derivative is missing.
+    let missing = derivatives
+        .iter()
+        .zip(&variant)
+        .any(|(row, var)| row.iter().zip(var).any(|(d, v)| d.is_none() && !v))
+        || outputs
+            .iter()
+            .any(|o: &(String, Option<String>)| o.1.is_none());
+    if missing && check_deadline(opts, "the reduced dynamics", modes.len()).is_ok() {
+        let sec = match section::scaling_section(nf, sp.w_ids, &zb, &znames, modes, rng, opts) {
+            Err(AnalysisError::Timeout(m)) => {
+                soft(Err(AnalysisError::Timeout(m)))?;
+                None
+            }
+            r => r?,
+        };
+        if let Some(sec) = sec {
+            for (k, m) in modes.iter().enumerate() {
+                for (i, f) in sp.fields.iter().enumerate() {
+                    if derivatives[k][i].is_none() && !variant[k][i] {
+                        let t = lie(nf, m.expr, f);
+                        derivatives[k][i] = sec.form(nf, t, &znames);
+                    }
+                }
+            }
+            // An output reading no input is an invariant too.
+            let hs = nf.outputs.clone();
+            for (o, (_, h)) in outputs.iter_mut().zip(hs) {
+                if o.1.is_none() && reduced::split_inputs(nf, h).is_none() {
+                    o.1 = sec.form(nf, h, &znames);
+                }
+            }
+        }
     }
     Ok(Reduced {
         derivatives,

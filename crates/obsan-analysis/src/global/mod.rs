@@ -28,9 +28,9 @@ mod weights;
 use count::{count_once, error_bounds};
 use maps::{find_maps, group_order};
 use model::zmodel;
+pub use outputs::OutputForm;
 use run::Run;
 use types::err;
-pub use outputs::OutputForm;
 pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability};
 
 /// Global identifiability of every parameter and initial state (SIAN's
@@ -153,7 +153,11 @@ pub fn global_identifiability(
         .collect();
     Ok(GlobalReport {
         variables,
-        solutions: if tangents { kernel.or(a.joint) } else { a.joint },
+        solutions: if tangents {
+            kernel.or(a.joint)
+        } else {
+            a.joint
+        },
         all_local,
         maps: maps_out,
         group_order: group,

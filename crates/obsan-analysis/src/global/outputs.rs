@@ -67,7 +67,8 @@ pub(super) fn prepare(ctx: &mut Ctx, outputs: &[(String, Id)]) -> Result<Prepare
                 out.forms.push(OutputForm::Argument(kind));
             }
             Shape::Angle => {
-                let engine = |e: obsan_expr::EngineError| err(format!("global: output {name}: {e}"));
+                let engine =
+                    |e: obsan_expr::EngineError| err(format!("global: output {name}: {e}"));
                 let sin = ctx.sin(*id).map_err(engine)?;
                 let cos = ctx.cos(*id).map_err(engine)?;
                 let s = ctx.try_canon(sin).map_err(limit)?;
