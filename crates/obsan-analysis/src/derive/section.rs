@@ -164,27 +164,32 @@ fn rank_of(w: &[Vec<Q>], cols: &[usize]) -> usize {
         .iter()
         .map(|row| cols.iter().map(|&k| row[k].clone()).collect())
         .collect();
-    let (rows, ncols) = (m.len(), cols.len());
     let mut rank = 0;
-    for c in 0..ncols {
-        let Some(p) = (rank..rows).find(|&r| !m[r][c].is_zero()) else {
+    for c in 0..cols.len() {
+        let Some(p) = (rank..m.len()).find(|&r| !m[r][c].is_zero()) else {
             continue;
         };
         m.swap(rank, p);
-        for r in 0..rows {
-            if r != rank && !m[r][c].is_zero() {
-                let Some(f) = m[r][c].div(&m[rank][c]) else {
-                    continue;
-                };
-                for k in 0..ncols {
-                    let d = f.mul(&m[rank][k]);
-                    m[r][k] = m[r][k].sub(&d);
-                }
-            }
-        }
+        eliminate(&mut m, rank, c, 0);
         rank += 1;
     }
     rank
+}
+
+/// Clears column `c` in every row but `p` with row `p` (entries from `from` on).
+fn eliminate(m: &mut [Vec<Q>], p: usize, c: usize, from: usize) {
+    let pivot = m[p].clone();
+    for (r, row) in m.iter_mut().enumerate() {
+        if r == p || row[c].is_zero() {
+            continue;
+        }
+        let Some(f) = row[c].div(&pivot[c]) else {
+            continue;
+        };
+        for (x, y) in row.iter_mut().zip(&pivot).skip(from) {
+            *x = x.sub(&f.mul(y));
+        }
+    }
 }
 
 /// `x` with `sum_k cols[k] x_k = rhs` (a square, invertible system over Q).
@@ -193,7 +198,7 @@ fn solve_square(cols: &[Vec<Q>], rhs: &[Q]) -> Option<Vec<Q>> {
     // Augmented rows: equation r is sum_k cols[k][r] x_k = rhs[r].
     let mut m: Vec<Vec<Q>> = (0..n)
         .map(|r| {
-            let mut row: Vec<Q> = (0..n).map(|k| cols[k][r].clone()).collect();
+            let mut row: Vec<Q> = cols.iter().map(|col| col[r].clone()).collect();
             row.push(rhs[r].clone());
             row
         })
@@ -202,18 +207,10 @@ fn solve_square(cols: &[Vec<Q>], rhs: &[Q]) -> Option<Vec<Q>> {
         let p = (c..n).find(|&r| !m[r][c].is_zero())?;
         m.swap(c, p);
         let inv = m[c][c].inv()?;
-        for k in c..=n {
-            m[c][k] = m[c][k].mul(&inv);
+        for x in m[c].iter_mut().skip(c) {
+            *x = x.mul(&inv);
         }
-        for r in 0..n {
-            if r != c && !m[r][c].is_zero() {
-                let f = m[r][c].clone();
-                for k in c..=n {
-                    let d = f.mul(&m[c][k]);
-                    m[r][k] = m[r][k].sub(&d);
-                }
-            }
-        }
+        eliminate(&mut m, c, c, c);
     }
-    Some((0..n).map(|r| m[r][n].clone()).collect())
+    Some(m.iter().map(|row| row[n].clone()).collect())
 }

@@ -134,7 +134,7 @@ pub fn global_identifiability(
                 .collect(),
             keeps_angles: if sg.iter().all(|&x| x == Some(1)) {
                 Some(true)
-            } else if sg.iter().any(|&x| x == Some(-1)) {
+            } else if sg.contains(&Some(-1)) {
                 Some(false)
             } else {
                 None
