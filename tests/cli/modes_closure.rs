@@ -296,9 +296,10 @@ fn shape_c_bearing_from_an_offset_sensor_closes() {
 /// T)/(V ro cp))`, a quotient of degree 5 in 8 modes, past the dense ansatz:
 /// it is written through the cross-section of the scalings (pivots set to 1,
 /// the other variables to their invariant monomials). By hand, with z1 = k0
-/// Arr_p, z3 = DH/UA, z4 = E/R, z6 = ro cp/DH: `L_f0 z = -z1 z - z4 z (V z3 z
-/// + Tj - T)/(T^2 V z3 z6)`; the test checks the written system by the chain
-/// rule at rational points, whichever modes are chosen.
+/// Arr_p, z3 = DH/UA, z4 = E/R, z6 = ro cp/DH:
+/// `L_f0 z = -z1 z - z4 z (V z3 z + Tj - T)/(T^2 V z3 z6)`; the test checks
+/// the written system by the chain rule at rational points, whichever modes
+/// are chosen.
 #[test]
 fn shape_d_a_cstr_closes_through_the_cross_section_of_its_scalings() {
     let m = model(
