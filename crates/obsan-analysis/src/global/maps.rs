@@ -9,8 +9,9 @@
 //! `tan((phi + pi)/2) = -cot(phi/2)`) and `pi - phi` (`1/t`).
 
 use super::model::ZModel;
+use super::outputs::AngleOutput;
 use super::types::MapImage;
-use obsan_expr::{Int, Mono as ZMono, Poly as ZPoly, Var};
+use obsan_expr::{Ctx, Id, Int, Mono as ZMono, Poly as ZPoly, RatFun, Var};
 use std::collections::HashMap;
 
 /// One variable's image in the half-angle coordinates: `x_v -> sign * x_var^exp`.
@@ -231,4 +232,60 @@ pub(super) fn group_order(maps: &[Candidate], n: usize, cap: usize) -> usize {
         k += 1;
     }
     elems.len()
+}
+
+/// Per angle output, whether the map keeps `(sin, cos)` (`Some(1)`), turns it
+/// by pi (`Some(-1)`), or neither is proven (`None`). `symbols` are the
+/// model's variables (states then params) in the candidates' order; an angle
+/// variable's image in the angle's own terms is `sign * phi (+ pi)`.
+pub(super) fn map_signs(
+    ctx: &mut Ctx,
+    angles: &[AngleOutput],
+    symbols: &[Var],
+    angle: &[bool],
+    map: &Candidate,
+) -> Vec<Option<i8>> {
+    let mut subst: Vec<(Var, Id)> = Vec::new();
+    for (v, im) in map.iter().enumerate() {
+        // t -> -1/t is phi + pi; t -> 1/t is pi - phi (maps.rs).
+        let (sign, plus_pi) = if angle[v] && im.exp < 0 {
+            (-im.sign, true)
+        } else {
+            (im.sign, false)
+        };
+        if im.var == v && sign > 0 && !plus_pi {
+            continue;
+        }
+        let Some(name) = ctx.symbol_name(symbols[im.var]).map(str::to_string) else {
+            return vec![None; angles.len()];
+        };
+        let w = ctx.symbol(&name).id;
+        let mut node = if sign < 0 { ctx.neg(w) } else { w };
+        if plus_pi {
+            let pi = ctx.pi();
+            node = ctx.add(&[node, pi]);
+        }
+        subst.push((symbols[v], node));
+    }
+    let mut signs = Vec::with_capacity(angles.len());
+    for a in angles {
+        let mut one = |id: Id| -> Option<(RatFun, RatFun)> {
+            let moved = ctx.substitute(id, &subst).ok()?;
+            Some((ctx.try_canon(id).ok()?, ctx.try_canon(moved).ok()?))
+        };
+        let sign = match (one(a.sin), one(a.cos)) {
+            (Some((s, s2)), Some((c, c2))) => {
+                if s == s2 && c == c2 {
+                    Some(1)
+                } else if s.neg() == s2 && c.neg() == c2 {
+                    Some(-1)
+                } else {
+                    None
+                }
+            }
+            _ => None,
+        };
+        signs.push(sign);
+    }
+    signs
 }

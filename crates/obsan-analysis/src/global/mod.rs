@@ -26,7 +26,7 @@ mod types;
 mod weights;
 
 use count::{count_once, error_bounds};
-use maps::{find_maps, group_order};
+use maps::{find_maps, group_order, map_signs};
 use model::zmodel;
 pub use outputs::OutputForm;
 use run::Run;
@@ -100,7 +100,7 @@ pub fn global_identifiability(
         .iter()
         .map(|s| {
             if tangents {
-                outputs::map_signs(&mut nf.ctx, &m.angle_outputs, &m.symbols, &m.angle, s)
+                map_signs(&mut nf.ctx, &m.angle_outputs, &m.symbols, &m.angle, s)
             } else {
                 Vec::new()
             }

@@ -19,7 +19,6 @@
 //!   `cos(beta)` themselves (`sign`): `+1` keeps the reading, `-1` turns it
 //!   by pi.
 
-use super::maps::Candidate;
 use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Ctx, Id, RatFun, Var};
@@ -141,60 +140,4 @@ fn classify(ctx: &Ctx, r: &RatFun) -> Shape {
         return Shape::Angle;
     }
     Shape::Other
-}
-
-/// Per angle output, whether the map keeps `(sin, cos)` (`Some(1)`), turns it
-/// by pi (`Some(-1)`), or neither is proven (`None`). `symbols` are the
-/// model's variables (states then params) in the candidates' order; an angle
-/// variable's image in the angle's own terms is `sign * phi (+ pi)`.
-pub(super) fn map_signs(
-    ctx: &mut Ctx,
-    angles: &[AngleOutput],
-    symbols: &[Var],
-    angle: &[bool],
-    map: &Candidate,
-) -> Vec<Option<i8>> {
-    let mut subst: Vec<(Var, Id)> = Vec::new();
-    for (v, im) in map.iter().enumerate() {
-        // t -> -1/t is phi + pi; t -> 1/t is pi - phi (maps.rs).
-        let (sign, plus_pi) = if angle[v] && im.exp < 0 {
-            (-im.sign, true)
-        } else {
-            (im.sign, false)
-        };
-        if im.var == v && sign > 0 && !plus_pi {
-            continue;
-        }
-        let Some(name) = ctx.symbol_name(symbols[im.var]).map(str::to_string) else {
-            return vec![None; angles.len()];
-        };
-        let w = ctx.symbol(&name).id;
-        let mut node = if sign < 0 { ctx.neg(w) } else { w };
-        if plus_pi {
-            let pi = ctx.pi();
-            node = ctx.add(&[node, pi]);
-        }
-        subst.push((symbols[v], node));
-    }
-    let mut signs = Vec::with_capacity(angles.len());
-    for a in angles {
-        let mut one = |id: Id| -> Option<(RatFun, RatFun)> {
-            let moved = ctx.substitute(id, &subst).ok()?;
-            Some((ctx.try_canon(id).ok()?, ctx.try_canon(moved).ok()?))
-        };
-        let sign = match (one(a.sin), one(a.cos)) {
-            (Some((s, s2)), Some((c, c2))) => {
-                if s == s2 && c == c2 {
-                    Some(1)
-                } else if s.neg() == s2 && c.neg() == c2 {
-                    Some(-1)
-                } else {
-                    None
-                }
-            }
-            _ => None,
-        };
-        signs.push(sign);
-    }
-    signs
 }
