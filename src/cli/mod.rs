@@ -307,9 +307,13 @@ state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp
 Memory: the Taylor system, the Gröbner basis and its F4 matrices may hold 2048 bytes per
 --max-terms unit (about 195 MiB by default); past it, exit 2 with the stage named ('too large:
 the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms').
+Outputs through sqrt or atan are counted through their argument; an angle output (an atan2
+bearing) through its tangent, modulo pi: a count above 1 is then 'at most' unless the maps'
+signs on the angle settle it.
 --json prints {system, restriction, variables: [{name, kind (param | state), angle,
-verdict (global | local | not identifiable), values}], solutions, all_local, maps, group_order,
-order, rank_order, output_orders: [{output, order}], error_bound, degree_bound_local,
+verdict (global | local | not identifiable), values, at_most}], solutions, solutions_at_most,
+all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
+counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
 log10_degree_bound_global, unknowns, equations, primes, exact: false, method}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
