@@ -62,6 +62,11 @@ impl Ctx {
         }
     }
 
+    /// Whether a denominator holds a root leaf (only q > 2 can stay there).
+    fn kept_root(&self, d: &Poly) -> bool {
+        !d.is_constant() && d.vars().iter().any(|&v| self.root_index(v).is_some())
+    }
+
     /// The degree from which a relation leaf is reduced (2 for `sin`, q for roots).
     fn relation_degree(&self, v: Var) -> u32 {
         self.root_index(v).unwrap_or(2)
@@ -204,6 +209,12 @@ impl Ctx {
         if b.is_zero() {
             return a.clone();
         }
+        if self.kept_root(&a.den) || self.kept_root(&b.den) {
+            // Cross products with a root kept in a denominator leave the
+            // numerator unreduced: reduce it (the zero test reads it).
+            let num = a.num.mul(&b.den).add(&b.num.mul(&a.den));
+            return self.normalize(num, a.den.mul(&b.den));
+        }
         if a.den == b.den {
             let num = a.num.add(&b.num);
             if a.den.is_one() || num.is_zero() {
@@ -262,12 +273,11 @@ impl Ctx {
         // A product of two reduced numerators may need the relations again.
         let av = an.vars();
         // A q-th root kept in a denominator may reach degree q there.
-        let kept_root = |d: &Poly| d.vars().iter().any(|&v| self.root_index(v).is_some());
         let needs = bn
             .vars()
             .iter()
             .any(|v| self.has_relation(*v) && av.contains(v))
-            || kept_root(&den);
+            || self.kept_root(&den);
         if needs {
             self.normalize(num, den)
         } else {

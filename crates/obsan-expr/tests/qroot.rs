@@ -98,3 +98,72 @@ fn refused() {
     // Exponent range: the numerator is a power-node exponent.
     assert!(ctx.parse("x^(10000000000/3)").is_err());
 }
+
+#[test]
+fn denominators_with_roots() {
+    // (1 + r)(1 - r + r^2) = 1 + r^3 = 1 + x for r^3 = x.
+    assert!(is_zero("1/(1 + x^(1/3)) - (1 - x^(1/3) + x^(2/3))/(1 + x)"));
+    assert!(is_zero("(1 + x^(1/3)) * (1/(1 + x^(1/3))) - 1"));
+    // 1/x^(1/3) = x^(2/3)/x (monomial denominators are rationalised).
+    assert!(is_zero("1/x^(1/3) - x^(2/3)/x"));
+    assert_eq!(text("1/x^(1/3)"), text("x^(2/3)/x"));
+    // The derivative of the quotient, by hand: d/dx 1/(1 + r) = -r'/(1 + r)^2,
+    // r' = r/(3x).
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("1/(1 + x^(1/3))").unwrap();
+    let x = ctx.symbol("x").var;
+    let d = ctx.diff(e, x);
+    let want = ctx.parse("-(x^(1/3)/(3*x))/(1 + x^(1/3))^2").unwrap();
+    let diff = ctx.sub(d, want);
+    assert!(ctx.is_identically_zero(diff));
+    let r = ctx.canon(e);
+    let dr = ctx.rf_diff(&r, x);
+    let w = ctx.canon(want);
+    assert!(ctx.rf_sub(&dr, &w).is_zero());
+}
+
+#[test]
+fn independence() {
+    // x^(1/3) y^(1/3) stays two atoms; (x y)^(1/3) is a third, related one:
+    // the zero test answers "not decided", never a false "nonzero".
+    let mut ctx = Ctx::new();
+    let e = ctx.parse("x^(1/3) * y^(1/3)").unwrap();
+    let r = ctx.canon(e);
+    assert_eq!(r.vars().len(), 2, "two root atoms: {}", ctx.ratfun_text(&r));
+    assert!(ctx.undecided_atoms(&r).is_empty());
+    for (src, decided) in [
+        ("(x*y)^(1/3) - x^(1/3)*y^(1/3)", false),
+        // sqrt(x) = x^(2/4): one radicand at two indices sharing a factor.
+        ("x^(1/2) - x^(1/4)^2", false),
+        ("(x^2 + y^2)^(1/3) + x^(1/5)", true),
+        // Constants: 2^(1/2) and 2^(1/4) are related, 2^(1/3) and 3^(1/3) not.
+        ("2^(1/2) - 2^(1/4)^2", false),
+        ("2^(1/3) + 3^(1/3)", true),
+        ("2^(1/2) + 2^(1/3)", true),
+    ] {
+        let e = ctx.parse(src).unwrap();
+        let r = ctx.canon(e);
+        let atoms = ctx.undecided_atom_texts(&r);
+        assert_eq!(atoms.is_empty(), decided, "{src}: {atoms:?}");
+        assert!(!decided || !r.is_zero(), "{src}");
+    }
+}
+
+#[test]
+fn fp_roots() {
+    use obsan_expr::Fp;
+    // p - 1 = 2 3^2 5^2 7 11 13 31 41 61 151 331 1321: q = 17 is prime to it
+    // (every element has one root), 3, 10, 9 are not (a fraction 1/g has).
+    for q in [3u32, 9, 10, 17, 25, 1000] {
+        let mut found = 0;
+        for x in 2..200u64 {
+            let u = Fp::new(x).pow(q as u64);
+            let r = u.root(q).expect("a q-th power has a root");
+            assert_eq!(r.pow(q as u64), u);
+            found += usize::from(Fp::new(x).root(q).is_some());
+        }
+        if q == 17 {
+            assert_eq!(found, 198);
+        }
+    }
+}
