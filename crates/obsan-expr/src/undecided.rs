@@ -306,6 +306,7 @@ impl Ctx {
     /// that every product of a subset has an irreducible factor to an odd power.
     fn sqrts_independent(&self, sqrts: &[(Var, u32)]) -> bool {
         let mut parts: Vec<Poly> = Vec::new();
+        let mut groups: Vec<(RatFun, Vec<u32>)> = Vec::new();
         for &(v, q) in sqrts {
             let Some(r) = self.radicand(v) else {
                 return false;
@@ -328,6 +329,17 @@ impl Ctx {
                     return false;
                 }
             }
+            // Roots of one radicand at pairwise coprime indices generate its
+            // root of their product (no l-th power for any l dividing it), so
+            // the radicand counts once below.
+            if let Some(g) = groups.iter_mut().find(|g| &g.0 == r) {
+                if g.1.iter().any(|&k| gcd_u32(k, q) > 1) {
+                    return false;
+                }
+                g.1.push(q);
+                continue;
+            }
+            groups.push((r.clone(), vec![q]));
             let p = r.num.mul(&r.den);
             let c = p.content();
             let Some(prim) = p.div_exact(&Poly::constant(c)) else {

@@ -136,6 +136,9 @@ fn independence() {
         // sqrt(x) = x^(2/4): one radicand at two indices sharing a factor.
         ("x^(1/2) - x^(1/4)^2", false),
         ("(x^2 + y^2)^(1/3) + x^(1/5)", true),
+        // x^(1/3), x^(1/10): coprime indices, together x^(1/30), degree 30.
+        ("x^(1/3) + x^(1/10)", true),
+        ("x^(1/2) + x^(1/3) + y^(1/5)", true),
         // Constants: 2^(1/2) and 2^(1/4) are related, 2^(1/3) and 3^(1/3) not.
         ("2^(1/2) - 2^(1/4)^2", false),
         ("2^(1/3) + 3^(1/3)", true),

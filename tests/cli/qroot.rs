@@ -1,0 +1,61 @@
+//! Rational exponents (issue 32): `x^1.7` is `x root_10(x)^7`, exact
+//! (docs/engine.md, "Roots"). Verdicts derived by hand beside each model.
+
+use crate::util::*;
+use serde_json::Value;
+
+fn rank_json(name: &str, text: &str) -> Value {
+    let sys = temp_file(name, text);
+    serde_json::from_str(&ok(&["rank", &sys, "--json"])).expect("json")
+}
+
+/// x' = -k x^1.7, y = x: d y = (1, 0), d L_f y = d(-k x^1.7) =
+/// (-1.7 k x^0.7, -x^1.7): independent where x != 0, rank 2 of 2, exact
+/// (one root atom, decided).
+#[test]
+fn rank_with_a_rational_exponent_is_exact() {
+    let v = rank_json(
+        "qroot_pow17.sys",
+        "system pow17\nstate x\nparam k\nx' = -k*x^1.7\noutput y = x\n",
+    );
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(2), Some(2)), "{v}");
+    assert_eq!(v["exact"], true, "{v}");
+    assert_eq!(v["weakly_locally_observable"], true, "{v}");
+}
+
+/// x' = -k1 k2 x^1.7: every Lie derivative depends on k1, k2 through k1 k2
+/// only, so k1 d/dk1 - k2 d/dk2 is a symmetry: rank 2 of 3.
+#[test]
+fn rank_with_a_rational_exponent_finds_the_product_symmetry() {
+    let v = rank_json(
+        "qroot_pow17c.sys",
+        "system pow17c\nstate x\nparam k1, k2\nx' = -k1*k2*x^1.7\noutput y = x\n",
+    );
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(2), Some(3)), "{v}");
+}
+
+/// An output through a cube root and a field with x^1.7: the atoms x^(1/10)
+/// and x^(1/3) have coprime indices (together x^(1/30)), so they are decided.
+/// h = x^(1/3) has gradient (x^(-2/3)/3, 0, 0) in (x, k, c), so the rank is
+/// 1 + that of the (c, k) partials of L_f h = (c x^(-2/3) - k x^(31/30))/3 and
+/// L_f^2 h = (-2/3 c x^(-5/3) - 31/30 k x^(1/30)) (c - k x^1.7)/3. At x = 1,
+/// c = 1, k = 0: rows (1/3, -1/3) and (-4/9, -11/90), minor -51/270 != 0:
+/// rank 3 of 3.
+#[test]
+fn rank_with_roots_of_one_radicand_at_coprime_indices() {
+    let v = rank_json(
+        "qroot_pow17b.sys",
+        "system pow17b\nstate x\nparam k, c\nx' = -k*x^1.7 + c\noutput y = x^(1/3)\n",
+    );
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(3), Some(3)), "{v}");
+    assert_eq!(v["decided"], true, "{v}");
+}
+
+#[test]
+fn rational_exponents_simplify_and_differentiate() {
+    assert_eq!(ok(&["simplify", "x^1.7*x^0.3"]).trim(), "x^2");
+    assert_eq!(ok(&["simplify", "(x^(1/3))^3 - x"]).trim(), "0");
+    // d/dx x^(5/3) = 5/3 x^(2/3)
+    assert_eq!(ok(&["diff", "x^(5/3)", "x"]).trim(), "5*(x^(1/3))^2/3");
+    bad(&["simplify", "x^(1/1001)"], "above 1000");
+}
