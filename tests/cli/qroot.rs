@@ -18,7 +18,11 @@ fn rank_with_a_rational_exponent_is_exact() {
         "qroot_pow17.sys",
         "system pow17\nstate x\nparam k\nx' = -k*x^1.7\noutput y = x\n",
     );
-    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(2), Some(2)), "{v}");
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(2)),
+        "{v}"
+    );
     assert_eq!(v["exact"], true, "{v}");
     assert_eq!(v["weakly_locally_observable"], true, "{v}");
 }
@@ -31,7 +35,11 @@ fn rank_with_a_rational_exponent_finds_the_product_symmetry() {
         "qroot_pow17c.sys",
         "system pow17c\nstate x\nparam k1, k2\nx' = -k1*k2*x^1.7\noutput y = x\n",
     );
-    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(2), Some(3)), "{v}");
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(3)),
+        "{v}"
+    );
 }
 
 /// An output through a cube root and a field with x^1.7: the atoms x^(1/10)
@@ -47,7 +55,11 @@ fn rank_with_roots_of_one_radicand_at_coprime_indices() {
         "qroot_pow17b.sys",
         "system pow17b\nstate x\nparam k, c\nx' = -k*x^1.7 + c\noutput y = x^(1/3)\n",
     );
-    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(3), Some(3)), "{v}");
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(3), Some(3)),
+        "{v}"
+    );
     assert_eq!(v["decided"], true, "{v}");
 }
 

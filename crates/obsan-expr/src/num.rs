@@ -322,9 +322,9 @@ impl Fp {
         let mut h = g;
         let mut d = 2;
         while h > 1 {
-            if h % d == 0 {
+            if h.is_multiple_of(d) {
                 primes.push(d);
-                while h % d == 0 {
+                while h.is_multiple_of(d) {
                     h /= d;
                 }
                 while n2 % d == 0 {

@@ -85,10 +85,12 @@ impl Ctx {
                 return Ok(self.mul(&[out, r]));
             }
         }
-        if q % 4 == 0 {
+        if q.is_multiple_of(4) {
             let p = inner.num.mul(&inner.den.pow(3)).neg();
             let four = Poly::constant(int(4));
-            if p.div_exact(&four).is_some_and(|w| poly_root(&w, 4).is_some()) {
+            if p.div_exact(&four)
+                .is_some_and(|w| poly_root(&w, 4).is_some())
+            {
                 return err(format!(
                     "a root of index {q} of -4 w^4 is not supported (it is not real where w != 0)"
                 ));

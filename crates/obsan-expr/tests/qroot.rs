@@ -64,7 +64,12 @@ fn derivative() {
 #[test]
 fn printing_reads_back_and_evaluates() {
     // The printed form parses back to the same form.
-    for src in ["x^1.7", "x^(-2/3) + y", "(x + 1)^(1/3) * x^(2/3)", "2^(1/3)"] {
+    for src in [
+        "x^1.7",
+        "x^(-2/3) + y",
+        "(x + 1)^(1/3) * x^(2/3)",
+        "2^(1/3)",
+    ] {
         let t = text(src);
         assert!(is_zero(&format!("({src}) - ({t})")), "{src} printed {t}");
     }
