@@ -71,3 +71,46 @@ fn rational_exponents_simplify_and_differentiate() {
     assert_eq!(ok(&["diff", "x^(5/3)", "x"]).trim(), "5*(x^(1/3))^2/3");
     bad(&["simplify", "x^(1/1001)"], "above 1000");
 }
+
+/// 3 is no square mod 2^61 - 1 ((3/p) = (p/3)(-1)^((p-1)/2) = (1/3)(-1) = -1,
+/// p = 1 mod 3, p = 3 mod 4), so no F_p point gives sqrt(3) its value: the
+/// rank test takes the roots free (an upper bound on the rank) and says so.
+/// The formal rank of x' = -k sqrt(3) x, y = x is 2 of 2 (gradients (1, 0),
+/// (-sqrt(3) k, -sqrt(3) x)); it is not certified.
+#[test]
+fn rank_with_roots_no_point_satisfies_is_an_upper_bound() {
+    let v = rank_json(
+        "qroot_sqrt3.sys",
+        "system s3\nstate x\nparam k\nx' = -k*sqrt(3)*x\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(2)),
+        "{v}"
+    );
+    assert_eq!(v["exact"], false, "{v}");
+    assert_eq!(v["weakly_locally_observable"], Value::Null, "{v}");
+    assert_eq!(v["undecided_atoms"][0], "sqrt(3)", "{v}");
+}
+
+/// STRIKE-GOLDD's BIG terms: (8.4/x)^1.7 has the atom (42/(5x))^(1/10) =
+/// (42 5^9/x)^(1/10)/5 and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2. A point needs
+/// 42 5^9/x a 10th power (so a square: 42 5 x modulo squares) and 5x/6 a
+/// square; their product is 7 modulo squares, and 7 is no square mod p
+/// (p = 1 mod 7, p = 3 mod 4: (7/p) = -(p/7) = -1). k1, k2 enter only as
+/// k1 k2, so k1 d/dk1 - k2 d/dk2 is a symmetry: rank 2 of 3, and the
+/// "not observable" verdict stands over the free roots.
+#[test]
+fn rank_with_the_big_model_terms_keeps_the_unobservable_verdict() {
+    let v = rank_json(
+        "qroot_big.sys",
+        "system big\nstate x\nparam k1, k2\nx' = -k1*k2*((8.4/x)^1.7 + (x/4.8)^8.5)\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(3)),
+        "{v}"
+    );
+    assert_eq!(v["weakly_locally_observable"], false, "{v}");
+    assert_eq!(v["decided"], false, "{v}");
+}

@@ -287,6 +287,14 @@ impl FpPoint {
     }
 }
 
+/// What a random point gives the root leaves.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum RootValues {
+    Zero,
+    Roots,
+    Free,
+}
+
 impl Ctx {
     /// A random point; `fixed` gives values of some symbols (others are uniform).
     pub fn random_fp_point(
@@ -297,6 +305,21 @@ impl Ctx {
         self.random_point(rng, fixed, true)
     }
 
+    /// A random point where every root leaf (`sqrt`, `root_q`) takes a free
+    /// uniform value instead of a root of its radicand: values of the system
+    /// with the roots independent of their radicands (a constant multiple of
+    /// each root, `r = mu root_q(u)`, is one such family; the derivative rule
+    /// `r' = r u'/(q u)` holds for all of it), whose generic rank bounds the
+    /// true one from above. For radicands no point satisfies together mod p
+    /// (`sqrt(3) x`: 3 is no square mod 2^61 - 1).
+    pub fn random_fp_point_free_roots(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+    ) -> Result<FpPoint, BadPoint> {
+        self.random_point_mode(rng, fixed, RootValues::Free)
+    }
+
     /// A random point; with `roots` false every `sqrt` leaf is 0 (for roots
     /// that reach no square root: a non-square radicand is then no `BadPoint`).
     pub(crate) fn random_point(
@@ -304,6 +327,20 @@ impl Ctx {
         rng: &mut SplitMix,
         fixed: &dyn Fn(Var) -> Option<Fp>,
         roots: bool,
+    ) -> Result<FpPoint, BadPoint> {
+        let mode = if roots {
+            RootValues::Roots
+        } else {
+            RootValues::Zero
+        };
+        self.random_point_mode(rng, fixed, mode)
+    }
+
+    fn random_point_mode(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+        mode: RootValues,
     ) -> Result<FpPoint, BadPoint> {
         let mut values = vec![Fp::ZERO; self.leaves.len()];
         let mut done = vec![false; self.leaves.len()];
@@ -326,7 +363,8 @@ impl Ctx {
                     values[p] = if is_sin { c } else { s };
                     done[p] = true;
                 }
-                LeafKind::Root(..) if !roots => values[v] = Fp::ZERO,
+                LeafKind::Root(..) if mode == RootValues::Zero => values[v] = Fp::ZERO,
+                LeafKind::Root(..) if mode == RootValues::Free => values[v] = rng.fp(),
                 LeafKind::Root(_, q) => {
                     let r = self.radicand(v as Var).ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];
