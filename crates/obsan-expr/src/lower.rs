@@ -673,8 +673,12 @@ impl Ctx {
     }
 
     /// The leaf `root_q(inner)` (relation `r^q = inner`) for a radicand whose
-    /// relation the caller has made irreducible.
+    /// relation the caller has made irreducible; through a root of the same
+    /// radicand at an index dividing or divided by `q` when there is one.
     pub(crate) fn root_leaf(&mut self, inner: RatFun, q: u32) -> Id {
+        if let Some(r) = self.related_root(&inner, q) {
+            return r;
+        }
         let id = self.from_canonical(&inner);
         let v = self.leaf(LeafKind::Root(id, q));
         self.memo.radicands.insert(v, inner);

@@ -40,6 +40,75 @@ impl Ctx {
         }
     }
 
+    /// `root_q(u)` as atoms of prime-power index, through the existing roots
+    /// of the same radicand: roots of one radicand at powers of one prime are
+    /// then a tower (each the `l^b`-th root of the one below), so every
+    /// relation among them is the tower's own and `x^(1/2)`, `x^(1/4)`,
+    /// `x^(1/6)`, `x^(1/3)` have one form in any order of appearance.
+    /// - `q = prod l^a` not a prime power: `u^(1/q) = u^n prod root_(l^a)(u)^c`
+    ///   with `1/q = n + sum c/l^a` (partial fractions, `0 <= c < l^a`);
+    /// - a root of `u` of effective index `l^b` exists with `b >= a`: its power
+    ///   `l^(b-a)`; with `b < a` (the largest): the `l^(a-b)`-th root of it
+    ///   (irreducible: `x^q - u` is, so `[K(root_q u) : K(root_(l^b) u)] = l^(a-b)`).
+    ///
+    /// `None`: make the leaf `root_q(u)` itself.
+    pub(crate) fn related_root(&mut self, u: &RatFun, q: u32) -> Option<Id> {
+        let primes = prime_factors(q);
+        if primes.len() > 1 {
+            // 1/q = n + sum_i c_i / l_i^a_i, c_i = (q / l_i^a_i)^-1 mod l_i^a_i.
+            let mut fs = Vec::new();
+            let mut acc: i64 = 0; // sum_i c_i q / l_i^a_i
+            for l in primes {
+                let mut pa = 1u32;
+                while q % (pa * l) == 0 {
+                    pa *= l;
+                }
+                let rest = (q / pa) as i64;
+                let c = (1..pa as i64).find(|c| (c * rest) % pa as i64 == 1)?;
+                acc += c * rest;
+                let r = self.root_leaf(u.clone(), pa);
+                fs.push(self.pow(r, c));
+            }
+            // n q = 1 - acc
+            let n = (1 - acc) / q as i64;
+            let b = self.from_canonical(u);
+            fs.push(self.pow(b, n));
+            return Some(self.mul(&fs));
+        }
+        let mut best: Option<(Var, u32)> = None;
+        for v in 0..self.leaves.len() as Var {
+            let Some((base, eff)) = self.root_base(v) else {
+                continue;
+            };
+            if eff == q || &base != u || (eff % q != 0 && q % eff != 0) {
+                continue;
+            }
+            if eff % q == 0 {
+                let node = self.leaf_node(v);
+                return Some(self.pow(node, (eff / q) as i64));
+            }
+            if best.is_none_or(|b| b.1 < eff) {
+                best = Some((v, eff));
+            }
+        }
+        let (v, eff) = best?;
+        Some(self.root_leaf(RatFun::var(v), q / eff))
+    }
+
+    /// The radicand at the bottom of a root leaf's tower and its effective
+    /// index (the product of the indices on the way down).
+    fn root_base(&self, v: Var) -> Option<(RatFun, u32)> {
+        let (_, k) = self.root_arg(v)?;
+        let r = self.radicand(v)?;
+        match tower_parent(r).filter(|&w| self.root_arg(w).is_some()) {
+            Some(w) => {
+                let (base, e) = self.root_base(w)?;
+                Some((base, e.checked_mul(k)?))
+            }
+            None => Some((r.clone(), k)),
+        }
+    }
+
     fn root_general(&mut self, u: Id, q: u32) -> R<Id> {
         let c = self.canon_ok(u)?;
         if c.is_zero() {
@@ -136,6 +205,19 @@ fn gcd_u64(mut a: u64, mut b: u64) -> u64 {
         (a, b) = (b, a % b);
     }
     a
+}
+
+/// The leaf `w` when a radicand is exactly `w` (a tower over another root).
+pub(crate) fn tower_parent(r: &RatFun) -> Option<Var> {
+    if !r.den.is_one() || r.num.len() != 1 {
+        return None;
+    }
+    let (m, c) = r.num.leading()?;
+    let mut it = m.iter();
+    match (it.next(), it.next()) {
+        (Some((w, 1)), None) if c.is_one() => Some(w),
+        _ => None,
+    }
 }
 
 /// The distinct primes of `q`.

@@ -14,7 +14,7 @@ use crate::memo::Ctx;
 use crate::num::{Fp, SplitMix};
 use crate::poly::{Poly, Var};
 use crate::ratfun::RatFun;
-use crate::root::{poly_root, prime_factors};
+use crate::root::{poly_root, prime_factors, tower_parent};
 use rustc_hash::FxHashSet;
 
 /// The role of one leaf in the independence argument.
@@ -189,6 +189,13 @@ impl Ctx {
                 baker: true,
             },
             LeafKind::Root(a, k) => {
+                // A tower over another root (root.rs, `related_root`): its
+                // relation is irreducible by construction and it generates
+                // nothing beyond its base's root of the product index.
+                let base = self.canon(a);
+                if tower_parent(&base).is_some_and(|w| self.root_arg(w).is_some()) {
+                    return Role::Free;
+                }
                 let Some(f) = self.symbols_only(a) else {
                     return Role::Undecided;
                 };
