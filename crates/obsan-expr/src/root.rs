@@ -36,6 +36,7 @@ impl Ctx {
             1 => Ok(u),
             2 => self.sqrt(u),
             _ if q > ROOT_MAX => err(format!("root index {q} is above {ROOT_MAX}")),
+            _ if prime_factors(q).len() > 1 => self.root_composite(u, q),
             _ => self.root_general(u, q),
         }
     }
@@ -53,27 +54,9 @@ impl Ctx {
     ///
     /// `None`: make the leaf `root_q(u)` itself.
     pub(crate) fn related_root(&mut self, u: &RatFun, q: u32) -> Option<Id> {
-        let primes = prime_factors(q);
-        if primes.len() > 1 {
-            // 1/q = n + sum_i c_i / l_i^a_i, c_i = (q / l_i^a_i)^-1 mod l_i^a_i.
-            let mut fs = Vec::new();
-            let mut acc: i64 = 0; // sum_i c_i q / l_i^a_i
-            for l in primes {
-                let mut pa = 1u32;
-                while q % (pa * l) == 0 {
-                    pa *= l;
-                }
-                let rest = (q / pa) as i64;
-                let c = (1..pa as i64).find(|c| (c * rest) % pa as i64 == 1)?;
-                acc += c * rest;
-                let r = self.root_leaf(u.clone(), pa);
-                fs.push(self.pow(r, c));
-            }
-            // n q = 1 - acc
-            let n = (1 - acc) / q as i64;
-            let b = self.from_canonical(u);
-            fs.push(self.pow(b, n));
-            return Some(self.mul(&fs));
+        if prime_factors(q).len() > 1 {
+            let id = self.from_canonical(u);
+            return self.root_composite(id, q).ok();
         }
         let mut best: Option<(Var, u32)> = None;
         for v in 0..self.leaves.len() as Var {
@@ -93,6 +76,33 @@ impl Ctx {
         }
         let (v, eff) = best?;
         Some(self.root_leaf(RatFun::var(v), q / eff))
+    }
+
+    /// `u^(1/q)` for `q` with several primes: `u^n prod root_(l^a)(u)^c` with
+    /// `1/q = n + sum c/l^a` (partial fractions, `c = (q/l^a)^-1 mod l^a`), each
+    /// root of prime-power index made by [`Ctx::root`] (its own content split).
+    fn root_composite(&mut self, u: Id, q: u32) -> R<Id> {
+        if self.canon_ok(u)?.is_zero() {
+            return Ok(self.zero());
+        }
+        let mut fs = Vec::new();
+        let mut acc: i64 = 0; // sum c q / l^a
+        for l in prime_factors(q) {
+            let mut pa = 1u32;
+            while q.is_multiple_of(pa * l) {
+                pa *= l;
+            }
+            let rest = (q / pa) as i64;
+            let Some(c) = (1..pa as i64).find(|c| (c * rest) % pa as i64 == 1) else {
+                return err(format!("no partial fraction of 1/{q} at {pa}"));
+            };
+            acc += c * rest;
+            let r = self.root(u, pa)?;
+            fs.push(self.pow(r, c));
+        }
+        // n q = 1 - acc exactly.
+        fs.push(self.pow(u, (1 - acc) / q as i64));
+        Ok(self.mul(&fs))
     }
 
     /// The radicand at the bottom of a root leaf's tower and its effective

@@ -354,9 +354,17 @@ impl Ctx {
             };
             parts.push(prim.normalize_sign());
         }
+        // Kummer theory splits by primes: roots whose indices share no prime
+        // never interact (sqrt(u), v^(1/5) generate a field of degree 10 for any
+        // non-square u and non-5th-power v), so only those that share one need
+        // coprime radicands.
         for (i, a) in parts.iter().enumerate() {
-            for b in &parts[i + 1..] {
-                if !gcd(a, b).is_constant() {
+            for (j, b) in parts.iter().enumerate().skip(i + 1) {
+                let share = groups[i]
+                    .1
+                    .iter()
+                    .any(|&x| groups[j].1.iter().any(|&y| gcd_u32(x, y) > 1));
+                if share && !gcd(a, b).is_constant() {
                     return false;
                 }
             }

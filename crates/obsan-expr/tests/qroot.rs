@@ -161,6 +161,11 @@ fn independence() {
         ("(x*y)^(1/3) - x^(1/3)*y^(1/3)", false),
         // x^(1/4) + x^(1/6): prime-power atoms sqrt(x), its square root, x^(1/3).
         ("x^(1/4) + x^(1/6)", true),
+        // Indices sharing no prime never interact: (x y)^(1/3) with sqrt(x).
+        ("(x*y)^(1/3) + sqrt(x)", true),
+        ("(8.4/x)^1.7", true),
+        // ... but sqrt(42/(5x)) (from the 1.7) and sqrt(5x/6) multiply to sqrt(7).
+        ("(8.4/x)^1.7 + (x/4.8)^8.5", false),
         ("(x^2 + y^2)^(1/3) + x^(1/5)", true),
         // x^(1/3), x^(1/10): coprime indices, together x^(1/30), degree 30.
         ("x^(1/3) + x^(1/10)", true),
