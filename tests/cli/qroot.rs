@@ -42,8 +42,9 @@ fn rank_with_a_rational_exponent_finds_the_product_symmetry() {
     );
 }
 
-/// An output through a cube root and a field with x^1.7: the atoms x^(1/10)
-/// and x^(1/3) have coprime indices (together x^(1/30)), so they are decided.
+/// An output through a cube root and a field with x^1.7 = x sqrt(x) x^(1/5):
+/// the atoms sqrt(x), x^(1/5), x^(1/3) of one radicand have coprime indices
+/// (together x^(1/30)), so they are decided.
 /// h = x^(1/3) has gradient (x^(-2/3)/3, 0, 0) in (x, k, c), so the rank is
 /// 1 + that of the (c, k) partials of L_f h = (c x^(-2/3) - k x^(31/30))/3 and
 /// L_f^2 h = (-2/3 c x^(-5/3) - 31/30 k x^(1/30)) (c - k x^1.7)/3. At x = 1,
@@ -93,13 +94,13 @@ fn rank_with_roots_no_point_satisfies_is_an_upper_bound() {
     assert_eq!(v["undecided_atoms"][0], "sqrt(3)", "{v}");
 }
 
-/// STRIKE-GOLDD's BIG terms: (8.4/x)^1.7 has the atom (42/(5x))^(1/10) =
-/// (42 5^9/x)^(1/10)/5 and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2. A point needs
-/// 42 5^9/x a 10th power (so a square: 42 5 x modulo squares) and 5x/6 a
-/// square; their product is 7 modulo squares, and 7 is no square mod p
-/// (p = 1 mod 7, p = 3 mod 4: (7/p) = -(p/7) = -1). k1, k2 enter only as
-/// k1 k2, so k1 d/dk1 - k2 d/dk2 is a symmetry: rank 2 of 3, and the
-/// "not observable" verdict stands over the free roots.
+/// STRIKE-GOLDD's BIG terms: (8.4/x)^1.7 = (42/(5x))^(1 + 1/2 + 1/5) brings
+/// sqrt(42/(5x)) and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2 brings sqrt(5x/6).
+/// Their product is sqrt(7) (a relation the form does not see: not decided),
+/// and a point needs 42/(5x) and 5x/6 both squares, so 7 a square mod p, which
+/// it is not (p = 1 mod 7, p = 3 mod 4: (7/p) = -(p/7) = -1): the roots take
+/// free values. k1, k2 enter only as k1 k2, so k1 d/dk1 - k2 d/dk2 is a
+/// symmetry: rank 2 of 3, and the "not observable" verdict stands.
 #[test]
 fn rank_with_the_big_model_terms_keeps_the_unobservable_verdict() {
     let v = rank_json(
