@@ -708,12 +708,12 @@ impl Ctx {
             return Ok(self.pow(b, e));
         }
         let k = match u32::try_from(q.den()) {
-            Ok(k) if k <= crate::root::ROOT_MAX => k,
+            Ok(k) if k <= budget::ROOT_MAX => k,
             _ => {
                 return err(format!(
                     "exponent {q} is not supported: the root index {} is above {}",
                     q.den(),
-                    crate::root::ROOT_MAX
+                    budget::ROOT_MAX
                 ))
             }
         };

@@ -12,7 +12,7 @@
 //! Constants get one atom per prime and reduced index: `4^(1/6) = 2^(1/3)`,
 //! `(1/2)^(1/3) = 2^(2/3)/2`, so that powers of one prime have one form.
 
-use crate::budget;
+use crate::budget::{self, ROOT_MAX};
 use crate::graph::Id;
 use crate::lower::{err, stop, R};
 use crate::memo::Ctx;
@@ -21,11 +21,6 @@ use crate::poly::{Mono, Poly, Var};
 use crate::ratfun::RatFun;
 use dashu_int::ops::{BitTest, UnsignedAbs};
 use dashu_int::{IBig, Sign, UBig};
-
-/// The largest root index (`x^(p/q)` with `q` above it is refused): the F_p
-/// root ([`crate::num::Fp::root`]) searches a subgroup whose order grows with
-/// the primes of `q`, and the relation's reductions with `q`.
-pub(crate) const ROOT_MAX: u32 = 1000;
 
 impl Ctx {
     /// The real `q`-th root of `u` (`q = 2`: [`Ctx::sqrt`]); defined for
@@ -63,7 +58,7 @@ impl Ctx {
             let Some((base, eff)) = self.root_base(v) else {
                 continue;
             };
-            if eff == q || &base != u || (eff % q != 0 && q % eff != 0) {
+            if eff == q || &base != u || (!eff.is_multiple_of(q) && !q.is_multiple_of(eff)) {
                 continue;
             }
             if eff % q == 0 {
