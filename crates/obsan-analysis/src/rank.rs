@@ -605,10 +605,13 @@ fn rank_point(
     free: bool,
 ) -> Result<(FpPoint, u64, bool), AnalysisError> {
     if !free {
-        match random_point_counted(ctx, rng) {
-            Ok((p, k)) => return Ok((p, k, false)),
-            Err(AnalysisError::NoPoint) if has_roots(ctx) => {}
-            Err(e) => return Err(e),
+        if !has_roots(ctx) {
+            return random_point_counted(ctx, rng).map(|(p, k)| (p, k, false));
+        }
+        for k in 1..=exact_draws(ctx) {
+            if let Ok(p) = ctx.random_fp_point(rng, &|_| None) {
+                return Ok((p, k, false));
+            }
         }
     }
     for k in 1..=(1u64 << 22) {
@@ -617,6 +620,24 @@ fn rank_point(
         }
     }
     Err(AnalysisError::NoPoint)
+}
+
+/// Draws before the roots are taken free: a radicand is a q-th power mod p
+/// for a fraction `1/g`, `g = gcd(q, p - 1)`, of the values, so where points on
+/// all the relations exist they have density at least `1/prod g` (the index
+/// of the subgroup the conditions cut out); 64 times that many failures happen
+/// by chance with probability below e^-64. At most 2^22, as for square roots.
+fn exact_draws(ctx: &Ctx) -> u64 {
+    let gcd = |mut a: u64, mut b: u64| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let inverse_density = (0..ctx.leaf_count())
+        .filter_map(|v| ctx.root_arg(v as Var))
+        .fold(1u64, |d, (_, q)| d.saturating_mul(gcd(q as u64, P - 1)));
+    inverse_density.saturating_mul(64).min(1 << 22)
 }
 
 fn has_roots(ctx: &Ctx) -> bool {
