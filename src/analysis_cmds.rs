@@ -55,6 +55,14 @@ fn run_rank(
     report.map_err(|e| Failure(e.to_string()))
 }
 
+/// The root leaves (`sqrt`, `u^(1/q)`) of the system, as text.
+fn root_atom_texts(nf: &NormalForm) -> Vec<String> {
+    let roots: Vec<obsan_expr::Var> = (0..nf.ctx.leaf_count() as obsan_expr::Var)
+        .filter(|&v| nf.ctx.root_arg(v).is_some())
+        .collect();
+    nf.ctx.atom_texts(&roots)
+}
+
 fn word_text(nf: &NormalForm, fields: &Fields, w: &LieWord) -> String {
     let outs: Vec<String> = nf.outputs.iter().map(|o| o.0.clone()).collect();
     w.display(&fields.names, &outs)
@@ -97,7 +105,14 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     // The ranks are of the formal field in which the atoms are independent;
     // a relation among them can only lower the true rank, so full rank is
     // certified only over independent atoms.
-    let undecided = obsan_analysis::certify::undecided_atoms_of(&mut nf, &[]);
+    let mut undecided = obsan_analysis::certify::undecided_atoms_of(&mut nf, &[]);
+    if r.free_roots {
+        // The roots took free values (no point satisfies their relations mod
+        // p): the rank is an upper bound, as over undecided atoms.
+        undecided.extend(root_atom_texts(&nf));
+        undecided.sort();
+        undecided.dedup();
+    }
     // Explicit time: report the user's states, not the clock.
     crate::clock::hide_in_rank(&nf, &mut r);
     let nf = crate::clock::user_view(&nf).unwrap_or(nf);
@@ -188,6 +203,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     };
     o.push_str(&format!("observable on their own: {}\n", list(&obs)));
     o.push_str(&format!("not observable on their own: {}\n", list(&unobs)));
+    if r.free_roots {
+        o.push_str("no point mod 2^61-1 satisfies the roots' relations together (their radicands multiply to a constant that is no power there): the roots took free values\n");
+    }
     if !undecided.is_empty() {
         o.push_str(&format!(
             "not decided: the atoms {} may be related in ways the engine does not detect; the rank above is that of the system with them independent, an upper bound on the true rank: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",

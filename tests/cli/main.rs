@@ -15,6 +15,7 @@ mod json_schema;
 mod modes;
 mod modes_closure;
 mod montecarlo;
+mod qroot;
 mod sbml_piecewise;
 mod show;
 mod simulate;

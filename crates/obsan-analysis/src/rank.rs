@@ -135,6 +135,11 @@ pub struct RankReport {
     pub fields: Fields,
     /// The seed the points were drawn from.
     pub seed: u64,
+    /// No point mod p satisfies the root leaves' relations together (their
+    /// radicands multiply to a constant that is no power mod p), so the roots
+    /// took free values ([`Ctx::random_fp_point_free_roots`]): the rank is an
+    /// upper bound, as over undecided atoms.
+    pub free_roots: bool,
 }
 
 /// Row echelon basis over F_p: obsan-recon's one elimination on the
@@ -489,7 +494,7 @@ fn rank_with(
     let fields = Fields::of(nf);
     let n = nf.state.len();
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_0b5a_0b5a_0b5a);
-    let (p1, k1) = random_point_counted(&mut nf.ctx, &mut rng)?;
+    let (p1, k1, free_roots) = rank_point(&mut nf.ctx, &mut rng, false)?;
     // Only the variables the outputs reach through the fields get columns:
     // every other column is zero in every row, exactly (reached_states), so
     // an unused parameter costs nothing (12,000 of them
@@ -555,7 +560,7 @@ fn rank_with(
         }
     };
     let r1 = grow_at(nf, p1, &mut opts)?;
-    let (p2, k2) = random_point_counted(&mut nf.ctx, &mut rng)?;
+    let (p2, k2, _) = rank_point(&mut nf.ctx, &mut rng, free_roots)?;
     let r2 = grow_at(nf, p2, &mut opts)?;
     // Density correction of the sampling (see random_point_counted).
     let draws = k1.max(k2) as f64;
@@ -588,5 +593,53 @@ fn rank_with(
         error_bound: per_point * per_point,
         fields,
         seed: opts.seed,
+        free_roots,
     })
+}
+
+/// A point for the rank test: on the roots' relations when one exists, else
+/// (and at once with `free`) with free root values (`RankReport::free_roots`).
+fn rank_point(
+    ctx: &mut Ctx,
+    rng: &mut SplitMix,
+    free: bool,
+) -> Result<(FpPoint, u64, bool), AnalysisError> {
+    if !free {
+        if !has_roots(ctx) {
+            return random_point_counted(ctx, rng).map(|(p, k)| (p, k, false));
+        }
+        for k in 1..=exact_draws(ctx) {
+            if let Ok(p) = ctx.random_fp_point(rng, &|_| None) {
+                return Ok((p, k, false));
+            }
+        }
+    }
+    for k in 1..=(1u64 << 22) {
+        if let Ok(p) = ctx.random_fp_point_free_roots(rng, &|_| None) {
+            return Ok((p, k, true));
+        }
+    }
+    Err(AnalysisError::NoPoint)
+}
+
+/// Draws before the roots are taken free: a radicand is a q-th power mod p
+/// for a fraction `1/g`, `g = gcd(q, p - 1)`, of the values, so where points on
+/// all the relations exist they have density at least `1/prod g` (the index
+/// of the subgroup the conditions cut out); 64 times that many failures happen
+/// by chance with probability below e^-64. At most 2^22, as for square roots.
+fn exact_draws(ctx: &Ctx) -> u64 {
+    let gcd = |mut a: u64, mut b: u64| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let inverse_density = (0..ctx.leaf_count())
+        .filter_map(|v| ctx.root_arg(v as Var))
+        .fold(1u64, |d, (_, q)| d.saturating_mul(gcd(q as u64, P - 1)));
+    inverse_density.saturating_mul(64).min(1 << 22)
+}
+
+fn has_roots(ctx: &Ctx) -> bool {
+    (0..ctx.leaf_count()).any(|v| ctx.root_arg(v as Var).is_some())
 }

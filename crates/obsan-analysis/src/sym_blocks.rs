@@ -252,6 +252,7 @@ pub fn rank_by_blocks(
         error_bound: 0.0,
         fields: fields.clone(),
         seed: opts.seed,
+        free_roots: false,
     };
     for (level, (vars, outs)) in sp.blocks.iter().enumerate() {
         let (mut sub, kept) = sub_system(nf, &fields.vectors, &fields.names, vars, outs);

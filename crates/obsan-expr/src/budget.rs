@@ -26,6 +26,11 @@ pub const EXP_MAX: u32 = u32::MAX;
 /// Largest exponent of a power node in the expression graph.
 pub const POW_MAX: i64 = i32::MAX as i64;
 
+/// The largest root index (`x^(p/q)` with `q` above it is refused): the F_p
+/// root (`Fp::root`) searches a subgroup whose order grows with the primes
+/// of `q`, and the relation's reductions grow with `q`.
+pub const ROOT_MAX: u32 = 1000;
+
 /// Largest number of bits of a rational power `q^e` of the graph: 65536
 /// bits (about 20,000 digits). At 2^24 the fuzzer found
 /// `sqrt((lx0 - x/66666666661^66602)^3)`, a 2.4-million-bit number whose

@@ -3,9 +3,10 @@
 //! An expression is a fraction `num / den` of integer polynomials in the
 //! leaves, where
 //! - `num` has degree at most 1 in every `sin` leaf (`s^2 -> 1 - c^2`) and in
-//!   every `sqrt` leaf (`r^2 -> radicand`);
+//!   every `sqrt` leaf (`r^2 -> radicand`), below q in a `root_q` leaf;
 //! - `den` contains no `sin` and no `sqrt` leaf (made so by multiplying with
-//!   the conjugate, `(b0 + s b1)(b0 - s b1) = b0^2 - (1 - c^2) b1^2`);
+//!   the conjugate, `(b0 + s b1)(b0 - s b1) = b0^2 - (1 - c^2) b1^2`), and a
+//!   `root_q` leaf only where it is not a monomial in it (engine.md, "Roots");
 //! - `gcd(num, den) = 1` and the leading coefficient of `den` is positive.
 //!
 //! Two expressions are equal as functions iff their forms are identical (up
@@ -27,8 +28,8 @@ const BALANCE_MIN: usize = 64;
 enum Relation<'a> {
     /// `s^2 = 1 - c^2`.
     Sin(Var),
-    /// `r^2 = radicand`.
-    Sqrt(&'a RatFun),
+    /// `r^q = radicand`.
+    Root(&'a RatFun, u32),
 }
 
 impl Ctx {
@@ -36,7 +37,7 @@ impl Ctx {
         let leaf = &self.leaves[v as usize];
         match leaf.kind {
             LeafKind::Sin(_) => leaf.partner.map(Relation::Sin),
-            LeafKind::Sqrt(_) => self.radicand(v).map(Relation::Sqrt),
+            LeafKind::Root(_, q) => self.radicand(v).map(|r| Relation::Root(r, q)),
             _ => None,
         }
     }
@@ -49,11 +50,30 @@ impl Ctx {
     fn has_relation(&self, v: Var) -> bool {
         matches!(
             self.leaves[v as usize].kind,
-            LeafKind::Sin(_) | LeafKind::Sqrt(_)
+            LeafKind::Sin(_) | LeafKind::Root(..)
         )
     }
 
-    /// Reduce all relation leaves to degree <= 1: returns `(n, m)` with `p = n / m`.
+    /// The index `q` of a root leaf.
+    fn root_index(&self, v: Var) -> Option<u32> {
+        match self.leaves[v as usize].kind {
+            LeafKind::Root(_, q) => Some(q),
+            _ => None,
+        }
+    }
+
+    /// Whether a denominator holds a root leaf (only q > 2 can stay there).
+    fn kept_root(&self, d: &Poly) -> bool {
+        !d.is_constant() && d.vars().iter().any(|&v| self.root_index(v).is_some())
+    }
+
+    /// The degree from which a relation leaf is reduced (2 for `sin`, q for roots).
+    fn relation_degree(&self, v: Var) -> u32 {
+        self.root_index(v).unwrap_or(2)
+    }
+
+    /// Reduce all relation leaves (`sin`, `sqrt` to degree <= 1, `root_q` to
+    /// degree < q): returns `(n, m)` with `p = n / m`.
     pub(crate) fn reduce_poly(&self, p: Poly) -> (Poly, Poly) {
         let mut num = p;
         let mut den = Poly::one();
@@ -63,7 +83,7 @@ impl Ctx {
                 .vars()
                 .into_iter()
                 .rev()
-                .find(|&v| self.has_relation(v) && num.degree(v) >= 2);
+                .find(|&v| self.has_relation(v) && num.degree(v) >= self.relation_degree(v));
             let Some(v) = v else { break };
             let cs = num.coeffs_in(v);
             let Some(rel) = self.relation(v) else {
@@ -84,18 +104,19 @@ impl Ctx {
                     }
                     num = acc;
                 }
-                Relation::Sqrt(rad) => {
-                    let half = cs[0].0 / 2;
+                Relation::Root(rad, q) => {
+                    // r^e = r^(e mod q) (N/D)^(e div q), over the common D^top.
+                    let top = cs[0].0 / q;
                     let mut acc = Poly::zero();
                     for (e, k) in cs {
                         let t = k
-                            .mul_term(&Mono::var(v, e % 2), &int(1))
-                            .mul(&rad.num.pow(e / 2))
-                            .mul(&rad.den.pow(half - e / 2));
+                            .mul_term(&Mono::var(v, e % q), &int(1))
+                            .mul(&rad.num.pow(e / q))
+                            .mul(&rad.den.pow(top - e / q));
                         acc = acc.add(&t);
                     }
                     num = acc;
-                    den = den.mul(&rad.den.pow(half));
+                    den = den.mul(&rad.den.pow(top));
                 }
             }
         }
@@ -118,12 +139,33 @@ impl Ctx {
         let (d, m2) = self.reduce_poly(den);
         den = d;
         num = num.mul(&m2);
-        // Rationalise: remove relation leaves from the denominator, highest first.
-        while let Some(v) = den.vars().into_iter().rev().find(|&v| self.has_relation(v)) {
+        // Rationalise: remove relation leaves from the denominator, highest
+        // first; a q-th root (q > 2) only where the denominator is a monomial
+        // in it (engine.md, "Roots": the others stay, reduced).
+        let mut kept: Vec<Var> = Vec::new();
+        while let Some(v) = den
+            .vars()
+            .into_iter()
+            .rev()
+            .find(|&v| self.has_relation(v) && !kept.contains(&v))
+        {
             if !budget::poll() {
                 return RatFun::zero();
             }
             let cs = den.coeffs_in(v);
+            if let Some(q) = self.root_index(v).filter(|&q| q > 2) {
+                if let [(e, _)] = cs[..] {
+                    // d r^e (e < q) times r^(q - e) is d u.
+                    let r = Poly::var(v).pow(q - e);
+                    let (n2, m3) = self.reduce_poly(num.mul(&r));
+                    let (d2, m4) = self.reduce_poly(den.mul(&r));
+                    num = n2.mul(&m4);
+                    den = d2.mul(&m3);
+                } else {
+                    kept.push(v);
+                }
+                continue;
+            }
             let d1 = cs
                 .iter()
                 .find(|c| c.0 == 1)
@@ -166,6 +208,12 @@ impl Ctx {
         }
         if b.is_zero() {
             return a.clone();
+        }
+        if self.kept_root(&a.den) || self.kept_root(&b.den) {
+            // Cross products with a root kept in a denominator leave the
+            // numerator unreduced: reduce it (the zero test reads it).
+            let num = a.num.mul(&b.den).add(&b.num.mul(&a.den));
+            return self.normalize(num, a.den.mul(&b.den));
         }
         if a.den == b.den {
             let num = a.num.add(&b.num);
@@ -224,10 +272,12 @@ impl Ctx {
         let den = ad.mul(&bd);
         // A product of two reduced numerators may need the relations again.
         let av = an.vars();
+        // A q-th root kept in a denominator may reach degree q there.
         let needs = bn
             .vars()
             .iter()
-            .any(|v| self.has_relation(*v) && av.contains(v));
+            .any(|v| self.has_relation(*v) && av.contains(v))
+            || self.kept_root(&den);
         if needs {
             self.normalize(num, den)
         } else {
@@ -244,7 +294,7 @@ impl Ctx {
         if vars.iter().any(|v| self.has_relation(*v)) {
             let sqrt = vars
                 .iter()
-                .any(|v| matches!(self.leaves[*v as usize].kind, LeafKind::Sqrt(_)));
+                .any(|v| matches!(self.leaves[*v as usize].kind, LeafKind::Root(..)));
             if sqrt {
                 return Some(self.normalize(a.den.clone(), a.num.clone()));
             }

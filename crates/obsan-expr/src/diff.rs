@@ -143,7 +143,7 @@ impl Ctx {
                 }
                 self.div(du, u)
             }
-            LeafKind::Sqrt(u) => {
+            LeafKind::Root(u, 2) => {
                 let du = self.d(u, x);
                 if self.is_zero(du) {
                     return self.zero();
@@ -151,6 +151,16 @@ impl Ctx {
                 let half = self.num(Q::new(1.into(), 2.into()));
                 let inv = self.pow(node, -1);
                 self.mul(&[half, du, inv])
+            }
+            LeafKind::Root(u, q) => {
+                // r^q = u: q r^(q-1) r' = u', so r' = r u' / (q u).
+                let du = self.d(u, x);
+                if self.is_zero(du) {
+                    return self.zero();
+                }
+                let k = self.num(Q::new(1.into(), (q as i64).into()));
+                let inv_u = self.pow(u, -1);
+                self.mul(&[k, du, node, inv_u])
             }
         }
     }

@@ -27,6 +27,8 @@ enum Op {
     Atan2(u32, u32),
     Log(u32),
     Sqrt(u32),
+    /// `u^(1/q)` (`powf`, NaN below 0 as `sqrt`), with `1/q`.
+    Root(u32, f64),
 }
 
 /// A compiled f64 evaluator for a set of expressions.
@@ -103,7 +105,8 @@ impl Tape {
                     LeafKind::Atan(u) => Op::Atan(s(*u)),
                     LeafKind::Atan2(y, x) => Op::Atan2(s(*y), s(*x)),
                     LeafKind::Log(u) => Op::Log(s(*u)),
-                    LeafKind::Sqrt(u) => Op::Sqrt(s(*u)),
+                    LeafKind::Root(u, 2) => Op::Sqrt(s(*u)),
+                    LeafKind::Root(u, q) => Op::Root(s(*u), 1.0 / *q as f64),
                 },
             };
             ops.push(op);
@@ -178,7 +181,8 @@ impl Tape {
                 | Op::Exp(a, _)
                 | Op::Atan(a)
                 | Op::Log(a)
-                | Op::Sqrt(a) => depends[*a as usize],
+                | Op::Sqrt(a)
+                | Op::Root(a, _) => depends[*a as usize],
                 Op::Atan2(y, x) => depends[*y as usize] || depends[*x as usize],
             };
             depends[i] = d;
@@ -217,6 +221,7 @@ impl Op {
             Op::Atan2(y, x) => v(y).atan2(v(x)),
             Op::Log(a) => v(a).ln(),
             Op::Sqrt(a) => v(a).sqrt(),
+            Op::Root(a, k) => v(a).powf(*k),
         }
     }
 }
@@ -282,6 +287,14 @@ impl FpPoint {
     }
 }
 
+/// What a random point gives the root leaves.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum RootValues {
+    Zero,
+    Roots,
+    Free,
+}
+
 impl Ctx {
     /// A random point; `fixed` gives values of some symbols (others are uniform).
     pub fn random_fp_point(
@@ -292,6 +305,21 @@ impl Ctx {
         self.random_point(rng, fixed, true)
     }
 
+    /// A random point where every root leaf (`sqrt`, `root_q`) takes a free
+    /// uniform value instead of a root of its radicand: values of the system
+    /// with the roots independent of their radicands (a constant multiple of
+    /// each root, `r = mu root_q(u)`, is one such family; the derivative rule
+    /// `r' = r u'/(q u)` holds for all of it), whose generic rank bounds the
+    /// true one from above. For radicands no point satisfies together mod p
+    /// (`sqrt(3) x`: 3 is no square mod 2^61 - 1).
+    pub fn random_fp_point_free_roots(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+    ) -> Result<FpPoint, BadPoint> {
+        self.random_point_mode(rng, fixed, RootValues::Free)
+    }
+
     /// A random point; with `roots` false every `sqrt` leaf is 0 (for roots
     /// that reach no square root: a non-square radicand is then no `BadPoint`).
     pub(crate) fn random_point(
@@ -299,6 +327,20 @@ impl Ctx {
         rng: &mut SplitMix,
         fixed: &dyn Fn(Var) -> Option<Fp>,
         roots: bool,
+    ) -> Result<FpPoint, BadPoint> {
+        let mode = if roots {
+            RootValues::Roots
+        } else {
+            RootValues::Zero
+        };
+        self.random_point_mode(rng, fixed, mode)
+    }
+
+    fn random_point_mode(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+        mode: RootValues,
     ) -> Result<FpPoint, BadPoint> {
         let mut values = vec![Fp::ZERO; self.leaves.len()];
         let mut done = vec![false; self.leaves.len()];
@@ -321,14 +363,15 @@ impl Ctx {
                     values[p] = if is_sin { c } else { s };
                     done[p] = true;
                 }
-                LeafKind::Sqrt(_) if !roots => values[v] = Fp::ZERO,
-                LeafKind::Sqrt(_) => {
+                LeafKind::Root(..) if mode == RootValues::Zero => values[v] = Fp::ZERO,
+                LeafKind::Root(..) if mode == RootValues::Free => values[v] = rng.fp(),
+                LeafKind::Root(_, q) => {
                     let r = self.radicand(v as Var).ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];
                     let n = r.num.eval_fp(&val);
                     let d = r.den.eval_fp(&val);
                     let u = n.mul(d.inv().ok_or(BadPoint)?);
-                    values[v] = u.sqrt().ok_or(BadPoint)?;
+                    values[v] = u.root(*q).ok_or(BadPoint)?;
                 }
                 _ => values[v] = rng.fp(),
             }
@@ -420,14 +463,15 @@ pub fn degree_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(u64, u64)> {
             Node::Num(_) => (0, 0),
             Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
                 LeafKind::Sin(_) | LeafKind::Cos(_) => (2, 2),
-                LeafKind::Sqrt(_) => {
+                LeafKind::Root(_, q) => {
+                    let q = *q as u64;
                     let Some(r) = ctx.radicand(*v) else {
                         return vec![(u64::MAX, u64::MAX); roots.len()];
                     };
                     let leaf_deg = |p: &crate::poly::Poly| {
                         p.terms()
                             .iter()
-                            .map(|(m, _)| m.iter().map(|(_, e)| 2 * e as u64).sum::<u64>())
+                            .map(|(m, _)| m.iter().map(|(_, e)| q * e as u64).sum::<u64>())
                             .max()
                             .unwrap_or(0)
                     };

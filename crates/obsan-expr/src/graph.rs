@@ -62,7 +62,9 @@ pub(crate) enum LeafKind {
     Atan(Id),
     Atan2(Id, Id),
     Log(Id),
-    Sqrt(Id),
+    /// The real q-th root `root_q(u)`, `q >= 2` (`q = 2` is `sqrt`), with the
+    /// relation `r^q = u`.
+    Root(Id, u32),
 }
 
 #[derive(Clone, Debug)]
@@ -200,10 +202,19 @@ impl Arena {
         }
     }
 
-    /// The radicand of a `sqrt` leaf; `None` for any other leaf.
+    /// The radicand of a `sqrt` leaf; `None` for any other leaf (q-th roots
+    /// with `q > 2` included: see [`Arena::root_arg`]).
     pub fn sqrt_arg(&self, v: Var) -> Option<Id> {
         match self.leaves.get(v as usize)?.kind {
-            LeafKind::Sqrt(u) => Some(u),
+            LeafKind::Root(u, 2) => Some(u),
+            _ => None,
+        }
+    }
+
+    /// The radicand and index `q` of a root leaf `root_q(u)` (`sqrt` is `q = 2`).
+    pub fn root_arg(&self, v: Var) -> Option<(Id, u32)> {
+        match self.leaves.get(v as usize)?.kind {
+            LeafKind::Root(u, q) => Some((u, q)),
             _ => None,
         }
     }
@@ -249,7 +260,7 @@ impl Arena {
             LeafKind::Sin(Angle::Generic(a))
             | LeafKind::Cos(Angle::Generic(a))
             | LeafKind::Exp(Angle::Generic(a)) => vec![*a],
-            LeafKind::Atan(a) | LeafKind::Log(a) | LeafKind::Sqrt(a) => vec![*a],
+            LeafKind::Atan(a) | LeafKind::Log(a) | LeafKind::Root(a, _) => vec![*a],
             LeafKind::Atan2(y, x) => vec![*y, *x],
             LeafKind::Sin(Angle::Symbol { sym, .. })
             | LeafKind::Cos(Angle::Symbol { sym, .. })

@@ -44,6 +44,7 @@ mod parse;
 mod poly;
 mod print;
 mod ratfun;
+mod root;
 mod subst;
 mod tanhalf;
 pub mod tutorial;

@@ -6,7 +6,8 @@
 //! - `exp` likewise into per-symbol leaves `exp(x_i)` times an atom for the rest;
 //! - `atan`, `atan2`, `log`, `sqrt`: one atom per canonical argument, after
 //!   normalisation (odd symmetry of atan, square factors out of sqrt);
-//! - `tan = sin / cos`, `a^(n/2) = sqrt(a)^n`, `a^b = exp(b log a)`.
+//! - `tan = sin / cos`, `a^(n/2) = sqrt(a)^n`, `a^(p/q) = root_q(a)^p`
+//!   (root.rs), `a^b = exp(b log a)`.
 //!
 //! A symbol's angles must be integer multiples of one unit (`x` and `2x`, or
 //! `x/2` and `3x/2`); mixing `sin(x)` with `sin(x/3)` is refused with an error,
@@ -32,9 +33,9 @@ impl fmt::Display for EngineError {
 }
 impl std::error::Error for EngineError {}
 
-type R<T> = Result<T, EngineError>;
+pub(crate) type R<T> = Result<T, EngineError>;
 
-fn err<T>(msg: impl Into<String>) -> R<T> {
+pub(crate) fn err<T>(msg: impl Into<String>) -> R<T> {
     Err(EngineError(msg.into()))
 }
 
@@ -45,7 +46,7 @@ impl From<crate::budget::Limit> for EngineError {
 }
 
 /// An error if the budget has tripped: no leaf may be made from a placeholder.
-fn stop() -> R<()> {
+pub(crate) fn stop() -> R<()> {
     if budget::tripped() {
         let why = budget::reason().map_or_else(|| "engine limit".to_string(), |l| l.to_string());
         return err(why);
@@ -62,7 +63,7 @@ struct Linear {
 
 impl Ctx {
     /// The canonical form, or an error if computing it hit the budget.
-    fn canon_ok(&mut self, u: Id) -> R<RatFun> {
+    pub(crate) fn canon_ok(&mut self, u: Id) -> R<RatFun> {
         let c = self.canon(u);
         stop()?;
         Ok(c)
@@ -668,13 +669,25 @@ impl Ctx {
 
     /// The leaf `sqrt(inner)` for a radicand with its square factors removed.
     fn sqrt_leaf(&mut self, inner: RatFun) -> Id {
+        self.root_leaf(inner, 2)
+    }
+
+    /// The leaf `root_q(inner)` (relation `r^q = inner`) for a radicand whose
+    /// relation the caller has made irreducible; through a root of the same
+    /// radicand at an index dividing or divided by `q` when there is one.
+    pub(crate) fn root_leaf(&mut self, inner: RatFun, q: u32) -> Id {
+        if let Some(r) = self.related_root(&inner, q) {
+            return r;
+        }
         let id = self.from_canonical(&inner);
-        let v = self.leaf(LeafKind::Sqrt(id));
+        let v = self.leaf(LeafKind::Root(id, q));
         self.memo.radicands.insert(v, inner);
         self.leaf_node(v)
     }
 
-    /// `b^q` for a rational exponent: integers and halves.
+    /// `b^(p/q)` for a rational exponent in lowest terms: `b^p` for an
+    /// integer, else `root_q(b)^p` (`sqrt` for `q = 2`), which the relation
+    /// `r^q = b` reduces to `b^floor(p/q) root_q(b)^(p mod q)`.
     pub fn pow_q(&mut self, b: Id, q: &Q) -> R<Id> {
         // Only a negative power needs the zero test (and its canonical form).
         let zero = if q.is_negative() {
@@ -682,39 +695,43 @@ impl Ctx {
         } else {
             false
         };
-        // b^n, or sqrt(b)^n for a half-integer n/2.
-        if q.is_integer() || q.den() == &int(2) {
-            let e = i64::try_from(q.num())
-                .ok()
-                .filter(|e| e.abs() <= budget::POW_MAX);
-            let Some(e) = e else {
-                return err(format!("exponent {q} is too large"));
-            };
-            if zero && e < 0 {
-                return err("division by zero: 0 raised to a negative power");
-            }
-            if q.is_integer() {
-                return Ok(self.pow(b, e));
-            }
-            // A number to a half-integer power is raised after its square root,
-            // where the graph's check on a number's power no longer sees a bare
-            // number: check the value's size (`e / 2` times the number's) here.
-            if let Node::Num(n) = self.node(b) {
-                let size = power_bits(n, e.unsigned_abs() as u128) / 2;
-                if size > budget::NUM_BITS_MAX {
-                    return Err(budget::Limit::Number {
-                        bits: size,
-                        max: budget::NUM_BITS_MAX,
-                    }
-                    .into());
-                }
-            }
-            let r = self.sqrt(b)?;
-            return Ok(self.pow(r, e));
+        let e = i64::try_from(q.num())
+            .ok()
+            .filter(|e| e.abs() <= budget::POW_MAX);
+        let Some(e) = e else {
+            return err(format!("exponent {q} is too large"));
+        };
+        if zero && e < 0 {
+            return err("division by zero: 0 raised to a negative power");
         }
-        err(format!(
-            "exponent {q} is not supported: use an integer or half-integer exponent"
-        ))
+        if q.is_integer() {
+            return Ok(self.pow(b, e));
+        }
+        let k = match u32::try_from(q.den()) {
+            Ok(k) if k <= budget::ROOT_MAX => k,
+            _ => {
+                return err(format!(
+                    "exponent {q} is not supported: the root index {} is above {}",
+                    q.den(),
+                    budget::ROOT_MAX
+                ))
+            }
+        };
+        // A number to a fractional power is raised after its root, where the
+        // graph's check on a number's power no longer sees a bare number:
+        // check the value's size (`e / k` times the number's) here.
+        if let Node::Num(n) = self.node(b) {
+            let size = power_bits(n, e.unsigned_abs() as u128) / k as u128;
+            if size > budget::NUM_BITS_MAX {
+                return Err(budget::Limit::Number {
+                    bits: size,
+                    max: budget::NUM_BITS_MAX,
+                }
+                .into());
+            }
+        }
+        let r = self.root(b, k)?;
+        Ok(self.pow(r, e))
     }
 
     /// `b^e`: a constant exponent goes to [`Ctx::pow_q`], any other is `exp(e log b)`.

@@ -296,6 +296,74 @@ impl Fp {
     pub fn null_space(rows: Vec<Vec<Fp>>, ncols: usize) -> Vec<Vec<Fp>> {
         fp::null_space(FpField, rows, ncols)
     }
+    /// A `q`-th root if one exists (`q >= 1`; any root: each satisfies
+    /// `r^q = u`, which is all the relation asks). With `n = p - 1 = n1 n2`,
+    /// `n1` the part of `n` on the primes of `gcd(q, n)`: `u = u1 u2` in the
+    /// subgroups of orders `n1` and `n2`; `q` is invertible mod `n2`, so `u2`
+    /// has the one root `u2^(q^-1 mod n2)`; the root of `u1` is found among the
+    /// `n1` elements of its subgroup (`n1 <= 2 * 9 * 25 * ...`, small for the
+    /// indices obsan accepts). `None` when `u` is no q-th power (then `u^(n/g)
+    /// != 1`, `g = gcd(q, n)`: a fraction `1 - 1/g` of the units).
+    pub fn root(self, q: u32) -> Option<Fp> {
+        if q == 2 {
+            return self.sqrt();
+        }
+        if self.0 == 0 || q == 1 {
+            return Some(self);
+        }
+        let n = P - 1;
+        let q64 = q as u64;
+        let g = gcd64(q64, n);
+        if self.pow(n / g) != Fp::ONE {
+            return None;
+        }
+        let (mut n1, mut n2) = (1u64, n);
+        let mut primes = Vec::new();
+        let mut h = g;
+        let mut d = 2;
+        while h > 1 {
+            if h.is_multiple_of(d) {
+                primes.push(d);
+                while h.is_multiple_of(d) {
+                    h /= d;
+                }
+                while n2 % d == 0 {
+                    n2 /= d;
+                    n1 *= d;
+                }
+            }
+            d += 1;
+        }
+        // a = 1 mod n1, 0 mod n2: u1 = u^a, u2 = u^(1 - a).
+        let a = mulmod(n2, inv_mod(n2 % n1, n1)?, n);
+        let u1 = self.pow(a);
+        let u2 = self.pow((1 + n - a) % n);
+        let r2 = u2.pow(inv_mod(q64 % n2, n2)?);
+        let mut r1 = Fp::ONE;
+        if n1 > 1 {
+            // A generator of the subgroup of order n1: x^n2 of exact order n1.
+            let gen = (2..1000u64)
+                .map(|x| Fp::new(x).pow(n2))
+                .find(|h| primes.iter().all(|&l| h.pow(n1 / l) != Fp::ONE))?;
+            let step = gen.pow(q64);
+            let (mut cur, mut cand) = (Fp::ONE, Fp::ONE);
+            let mut found = false;
+            for _ in 0..n1 {
+                if cur == u1 {
+                    found = true;
+                    break;
+                }
+                cur = cur.mul(step);
+                cand = cand.mul(gen);
+            }
+            if !found {
+                return None;
+            }
+            r1 = cand;
+        }
+        let r = r1.mul(r2);
+        (r.pow(q64) == self).then_some(r)
+    }
     /// A square root if one exists (Tonelli–Shanks; p - 1 = 2 * odd * ...).
     pub fn sqrt(self) -> Option<Fp> {
         if self.0 == 0 {
@@ -430,6 +498,32 @@ impl SplitMix {
     pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * ((self.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
     }
+}
+
+fn gcd64(mut a: u64, mut b: u64) -> u64 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+fn mulmod(a: u64, b: u64, m: u64) -> u64 {
+    ((a as u128 * b as u128) % m as u128) as u64
+}
+
+/// `a^-1 mod m` (`m >= 1`; `Some(0)` for `m = 1`), `None` when not coprime.
+fn inv_mod(a: u64, m: u64) -> Option<u64> {
+    if m == 1 {
+        return Some(0);
+    }
+    let (mut r0, mut r1) = (m as i128, a as i128);
+    let (mut t0, mut t1) = (0i128, 1i128);
+    while r1 != 0 {
+        let k = r0 / r1;
+        (r0, r1) = (r1, r0 - k * r1);
+        (t0, t1) = (t1, t0 - k * t1);
+    }
+    (r0 == 1).then(|| t0.rem_euclid(m as i128) as u64)
 }
 
 #[cfg(test)]

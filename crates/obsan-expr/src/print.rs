@@ -239,6 +239,10 @@ impl Ctx {
                 let base = self.fmt_leaf(v, st);
                 match (e, st) {
                     (1, _) => base,
+                    // A root's text is itself a power: `(x^(1/3))^2`.
+                    (_, Style::Text) if self.root_arg(v).is_some_and(|r| r.1 > 2) => {
+                        format!("({base})^{e}")
+                    }
                     (_, Style::Text) => format!("{base}^{e}"),
                     (_, Style::Latex) => {
                         // \sin^{2}(\gamma) reads better than (\sin(\gamma))^{2}.
@@ -382,8 +386,20 @@ impl Ctx {
             }
             (LeafKind::Log(u), Style::Text) => format!("log({})", self.arg(*u, st)),
             (LeafKind::Log(u), Style::Latex) => format!("\\log\\left({}\\right)", self.arg(*u, st)),
-            (LeafKind::Sqrt(u), Style::Text) => format!("sqrt({})", self.arg(*u, st)),
-            (LeafKind::Sqrt(u), Style::Latex) => format!("\\sqrt{{{}}}", self.arg(*u, st)),
+            (LeafKind::Root(u, 2), Style::Text) => format!("sqrt({})", self.arg(*u, st)),
+            (LeafKind::Root(u, 2), Style::Latex) => format!("\\sqrt{{{}}}", self.arg(*u, st)),
+            // `x^(1/3)`, `(x + 1)^(1/3)`: reads back as the same root.
+            (LeafKind::Root(u, q), Style::Text) => {
+                let a = self.arg(*u, st);
+                if a.chars().all(|c| c.is_alphanumeric() || c == '_') {
+                    format!("{a}^(1/{q})")
+                } else {
+                    format!("({a})^(1/{q})")
+                }
+            }
+            (LeafKind::Root(u, q), Style::Latex) => {
+                format!("\\sqrt[{q}]{{{}}}", self.arg(*u, st))
+            }
         }
     }
 

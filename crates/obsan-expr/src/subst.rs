@@ -96,7 +96,7 @@ impl Ctx {
             LeafKind::Atan(u) => self.atan(get(&u)),
             LeafKind::Atan2(y, x) => self.atan2(get(&y), get(&x)),
             LeafKind::Log(u) => self.log(get(&u)),
-            LeafKind::Sqrt(u) => self.sqrt(get(&u)),
+            LeafKind::Root(u, q) => self.root(get(&u), q),
         }
     }
 }

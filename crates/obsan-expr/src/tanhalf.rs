@@ -22,11 +22,11 @@ pub struct TanHalf {
 }
 
 impl TanHalf {
-    /// Whether the view covers every relation of the context (no sqrt leaf).
+    /// Whether the view covers every relation of the context (no root leaf).
     pub fn complete(&self, ctx: &Ctx) -> bool {
         !ctx.leaves
             .iter()
-            .any(|l| matches!(l.kind, LeafKind::Sqrt(_)))
+            .any(|l| matches!(l.kind, LeafKind::Root(..)))
     }
 }
 

@@ -1,7 +1,7 @@
 //! When a nonzero canonical form proves "this expression is not zero".
 //!
 //! The canonical form is unique in the formal field of the leaves (with
-//! `s^2 + c^2 = 1` and `r^2 = u` only). It says "nonzero" truthfully only when
+//! `s^2 + c^2 = 1` and `r^q = u` only). It says "nonzero" truthfully only when
 //! the leaves it contains satisfy no other algebraic relation. This module
 //! decides a sufficient condition for that (docs/engine.md, "Decided and not
 //! decided", gives the argument) and names the atoms that break it.
@@ -14,12 +14,13 @@ use crate::memo::Ctx;
 use crate::num::{Fp, SplitMix};
 use crate::poly::{Poly, Var};
 use crate::ratfun::RatFun;
+use crate::root::{poly_root, prime_factors, tower_parent};
 use rustc_hash::FxHashSet;
 
 /// The role of one leaf in the independence argument.
 enum Role {
     /// Independent by construction (symbols, per-symbol angles and exponentials,
-    /// square roots of proven primes).
+    /// the roots of proven primes are `PrimeRoot`).
     Free,
     /// A transcendental constant; `baker` for `pi` and the arctangent atoms of
     /// Gaussian primes (logarithms of algebraic numbers, Baker's theorem). The
@@ -29,8 +30,11 @@ enum Role {
     /// and `cos u` share one) and its exponent (the argument of `exp`/`sin`,
     /// the atom itself for `log`, `atan`, `atan2`).
     Class(Class, Var, Id),
-    /// A square root of a rational function of the symbols.
-    FunctionSqrt,
+    /// A q-th root of a rational function of the symbols (`sqrt`: q = 2).
+    FunctionRoot(u32),
+    /// `root_q(p)` of a proven prime `p`: independent unless another root of
+    /// the same prime has an index sharing a factor with `q`.
+    PrimeRoot(u64, u32),
     /// Not provably independent of anything else.
     Undecided,
 }
@@ -62,13 +66,15 @@ impl Ctx {
         let mut bad: FxHashSet<Var> = FxHashSet::default();
         let mut trans: Vec<(Var, Var, bool)> = Vec::new();
         let mut classes: Vec<(Class, Var, Var, Id)> = Vec::new();
-        let mut sqrts: Vec<Var> = Vec::new();
+        let mut sqrts: Vec<(Var, u32)> = Vec::new();
+        let mut prime_roots: Vec<(Var, u64, u32)> = Vec::new();
         for &v in &leaves {
             match self.role(v) {
                 Role::Free => {}
                 Role::Transcendental { key, baker } => trans.push((v, key, baker)),
                 Role::Class(c, key, e) => classes.push((c, key, v, e)),
-                Role::FunctionSqrt => sqrts.push(v),
+                Role::FunctionRoot(q) => sqrts.push((v, q)),
+                Role::PrimeRoot(p, q) => prime_roots.push((v, p, q)),
                 Role::Undecided => {
                     bad.insert(v);
                 }
@@ -89,7 +95,18 @@ impl Ctx {
             }
         }
         if !self.sqrts_independent(&sqrts) {
-            bad.extend(sqrts.iter().copied());
+            bad.extend(sqrts.iter().map(|s| s.0));
+        }
+        // Roots of distinct primes are independent (Besicovitch), and so are
+        // p^(1/a), p^(1/b) with gcd(a, b) = 1 (they generate p^(1/ab), of
+        // degree ab by Eisenstein); p^(1/2), p^(1/4) are not.
+        for &(v, p, q) in &prime_roots {
+            let shared = prime_roots
+                .iter()
+                .any(|&(w, p2, q2)| w != v && p2 == p && gcd_u32(q, q2) > 1);
+            if shared {
+                bad.insert(v);
+            }
         }
         if !constants_independent(forms, &trans, linear_ok) {
             bad.extend(trans.iter().map(|t| t.0));
@@ -171,18 +188,25 @@ impl Ctx {
                 key: v,
                 baker: true,
             },
-            LeafKind::Sqrt(a) => {
+            LeafKind::Root(a, k) => {
+                // A tower over another root (root.rs, `related_root`): its
+                // relation is irreducible by construction and it generates
+                // nothing beyond its base's root of the product index.
+                let base = self.canon(a);
+                if tower_parent(&base).is_some_and(|w| self.root_arg(w).is_some()) {
+                    return Role::Free;
+                }
                 let Some(f) = self.symbols_only(a) else {
                     return Role::Undecided;
                 };
                 match f.as_q() {
-                    // An atom per prime (lower.rs): a cofactor that is not
-                    // proven prime may share a square class with a product.
+                    // An atom per prime (lower.rs, root.rs): a cofactor that is
+                    // not proven prime may share a power class with a product.
                     Some(q) => match u64::try_from(q.num()) {
-                        Ok(n) if q.is_integer() && is_prime(n) => Role::Free,
+                        Ok(n) if q.is_integer() && is_prime(n) => Role::PrimeRoot(n, k),
                         _ => Role::Undecided,
                     },
-                    None => Role::FunctionSqrt,
+                    None => Role::FunctionRoot(k),
                 }
             }
             LeafKind::Atan(a) => match self.argument_over(a, true) {
@@ -287,32 +311,73 @@ impl Ctx {
     /// sufficient, each radicand's primitive part (numerator times denominator,
     /// content and sign removed) is not a square and any two are coprime, so
     /// that every product of a subset has an irreducible factor to an odd power.
-    fn sqrts_independent(&self, sqrts: &[Var]) -> bool {
+    fn sqrts_independent(&self, sqrts: &[(Var, u32)]) -> bool {
         let mut parts: Vec<Poly> = Vec::new();
-        for &v in sqrts {
+        let mut groups: Vec<(RatFun, Vec<u32>)> = Vec::new();
+        for &(v, q) in sqrts {
             let Some(r) = self.radicand(v) else {
                 return false;
             };
+            // N/D is an l-th power over C iff the primitive part of N D^(l-1)
+            // (sign and content removed) is one in Z[x].
+            for l in prime_factors(q) {
+                let p = r.num.mul(&r.den.pow(l - 1));
+                let c = p.content();
+                let Some(prim) = p.div_exact(&Poly::constant(c)) else {
+                    return false;
+                };
+                let prim = prim.normalize_sign();
+                let power = if l == 2 {
+                    is_square_poly(&prim)
+                } else {
+                    poly_root(&prim, l).is_some()
+                };
+                if power {
+                    return false;
+                }
+            }
+            // Roots of one radicand at pairwise coprime indices generate its
+            // root of their product (no l-th power for any l dividing it), so
+            // the radicand counts once below.
+            if let Some(g) = groups.iter_mut().find(|g| &g.0 == r) {
+                if g.1.iter().any(|&k| gcd_u32(k, q) > 1) {
+                    return false;
+                }
+                g.1.push(q);
+                continue;
+            }
+            groups.push((r.clone(), vec![q]));
             let p = r.num.mul(&r.den);
             let c = p.content();
             let Some(prim) = p.div_exact(&Poly::constant(c)) else {
                 return false;
             };
-            let prim = prim.normalize_sign();
-            if is_square_poly(&prim) {
-                return false;
-            }
-            parts.push(prim);
+            parts.push(prim.normalize_sign());
         }
+        // Kummer theory splits by primes: roots whose indices share no prime
+        // never interact (sqrt(u), v^(1/5) generate a field of degree 10 for any
+        // non-square u and non-5th-power v), so only those that share one need
+        // coprime radicands.
         for (i, a) in parts.iter().enumerate() {
-            for b in &parts[i + 1..] {
-                if !gcd(a, b).is_constant() {
+            for (j, b) in parts.iter().enumerate().skip(i + 1) {
+                let share = groups[i]
+                    .1
+                    .iter()
+                    .any(|&x| groups[j].1.iter().any(|&y| gcd_u32(x, y) > 1));
+                if share && !gcd(a, b).is_constant() {
                     return false;
                 }
             }
         }
         true
     }
+}
+
+fn gcd_u32(mut a: u32, mut b: u32) -> u32 {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// Numbers built from the transcendental constants are decided when there is

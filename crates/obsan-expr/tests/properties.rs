@@ -430,7 +430,10 @@ fn errors_name_the_place() {
         ("2x", "followed by a letter"),
         ("sqrt(-4)", "negative constant"),
         ("log(0)", "undefined"),
-        ("x^(1/3)", "not supported"),
+        // Rational exponents are q-th roots (root.rs) up to the index 1000.
+        ("x^(1/1001)", "not supported"),
+        ("(-8)^(1/3)", "negative constant"),
+        ("(x^2)^(1/4)", "perfect square"),
         ("sqrt(x^2)", "perfect square"),
         ("x y", "missing operator"),
     ];

@@ -178,7 +178,7 @@ impl Bounds<'_> {
                         self.add(&self.constant(d0.clone()), &self.series(&z))
                     }
                 }
-                Op::Log(_, u, idx) | Op::Sqrt(_, u, idx) => {
+                Op::Log(_, u, idx) | Op::Root(_, u, idx, _) => {
                     let uj = at(u);
                     if uj.fl.is_const() {
                         self.constant(d0.clone())

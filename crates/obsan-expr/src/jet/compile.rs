@@ -100,9 +100,9 @@ pub(super) enum Op {
     Atan(Var, u32, usize),
     /// `atan2(y, x)`, with the bound index of `1/(x^2 + y^2)`.
     Atan2(Var, u32, u32, usize),
-    /// `log(u)`, `sqrt(u)`, with the bound index of `1/u`.
+    /// `log(u)`, `root_q(u)` (`sqrt`: q = 2), with the bound index of `1/u`.
     Log(Var, u32, usize),
-    Sqrt(Var, u32, usize),
+    Root(Var, u32, usize, u32),
 }
 
 /// A compiled set of roots.
@@ -278,18 +278,18 @@ impl Compiler<'_> {
                 let d = deg0[l(*u) as usize].clone();
                 (Op::Log(v, l(*u), self.inverse(&d)), Deg::poly(1))
             }
-            LeafKind::Sqrt(u) => {
-                // The convention of `degree_bounds` for a square root.
+            LeafKind::Root(u, q) => {
+                // The convention of `degree_bounds` for a root.
                 let count = |p: &crate::poly::Poly| {
                     p.terms()
                         .iter()
-                        .map(|(m, _)| m.iter().map(|(_, e)| 2 * e as u64).sum::<u64>())
+                        .map(|(m, _)| m.iter().map(|(_, e)| *q as u64 * e as u64).sum::<u64>())
                         .max()
                         .unwrap_or(0)
                 };
                 let n = ctx.radicand(v).map_or(0, |r| count(&r.num) + count(&r.den));
                 let d = deg0[l(*u) as usize].clone();
-                (Op::Sqrt(v, l(*u), self.inverse(&d)), Deg::poly(n))
+                (Op::Root(v, l(*u), self.inverse(&d), *q), Deg::poly(n))
             }
         }
     }

@@ -30,7 +30,7 @@ pub fn height_bounds(ctx: &Ctx, roots: &[Id]) -> Vec<(f64, f64)> {
             Node::Num(q) => (q.num().bit_len() as f64, q.den().bit_len() as f64),
             Node::Leaf(v) => match &ctx.leaves[*v as usize].kind {
                 LeafKind::Sin(_) | LeafKind::Cos(_) => (1.0, 1.0),
-                LeafKind::Sqrt(_) => (f64::INFINITY, f64::INFINITY),
+                LeafKind::Root(..) => (f64::INFINITY, f64::INFINITY),
                 _ => (0.0, 0.0),
             },
             Node::Add(cs) => {
@@ -122,7 +122,7 @@ impl Ctx {
             }
             let v = v as Var;
             match leaf.kind {
-                LeafKind::Sqrt(_) => return None,
+                LeafKind::Root(..) => return None,
                 LeafKind::Sin(_) | LeafKind::Cos(_) => {
                     let &(sin, cos, t) = self
                         .half_angles
@@ -375,9 +375,15 @@ impl Ctx {
                             let uv = t[get(&t, *u)?];
                             chain(&mut t, *u, invq(uv, q).ok_or(BadPoint)?)?;
                         }
-                        LeafKind::Sqrt(u) => {
+                        LeafKind::Root(u, 2) => {
                             let fac = invq(mulq(2, lv, q), q).ok_or(BadPoint)?;
                             chain(&mut t, *u, fac)?;
+                        }
+                        LeafKind::Root(u, k) => {
+                            // d r = r du / (k u)
+                            let uv = t[get(&t, *u)?];
+                            let inv = invq(mulq(*k as u64 % q, uv, q), q).ok_or(BadPoint)?;
+                            chain(&mut t, *u, mulq(lv, inv, q))?;
                         }
                         LeafKind::Atan2(y, x) => {
                             let (oy, ox) = (get(&t, *y)?, get(&t, *x)?);

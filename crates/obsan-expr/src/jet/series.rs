@@ -225,6 +225,12 @@ pub(super) fn sqrt_coeff(k: u64) -> Fp {
     (0..k).fold(Fp::ONE, |a, i| a * (half - Fp::new(i)) * inv_small(i + 1))
 }
 
+/// `(1 + M)^(1/q)`: binomial(1/q, k).
+pub(super) fn root_coeff(q: u32, k: u64) -> Fp {
+    let inv_q = inv_small(q as u64);
+    (0..k).fold(Fp::ONE, |a, i| a * (inv_q - Fp::new(i)) * inv_small(i + 1))
+}
+
 /// What is structurally known of a series (the same at every point).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) struct Fl {
@@ -835,7 +841,7 @@ impl Vals<'_> {
                         fo
                     }
                 }
-                Op::Log(v, u, _) | Op::Sqrt(v, u, _) => {
+                Op::Log(v, u, _) | Op::Root(v, u, _, _) => {
                     let (uj, fu) = (at(u), fat(u));
                     if fu.is_const() {
                         Self::set_const(out, pv(*v))
@@ -849,8 +855,16 @@ impl Vals<'_> {
                             out[0] = out[0] + pv(*v);
                             fo
                         } else {
-                            // sqrt U = s0 sqrt(1 + M)
-                            let fo = self.series(s, out, &m, fu, &sqrt_coeff);
+                            // root_q U = r0 (1 + M)^(1/q)
+                            let q = match op {
+                                Op::Root(.., q) => *q,
+                                _ => 2,
+                            };
+                            let fo = if q == 2 {
+                                self.series(s, out, &m, fu, &sqrt_coeff)
+                            } else {
+                                self.series(s, out, &m, fu, &|k| root_coeff(q, k))
+                            };
                             Self::scale(out, pv(*v));
                             fo
                         };

@@ -1,0 +1,117 @@
+//! Rational exponents (issue 32): `x^1.7` is `x root_10(x)^7`, exact
+//! (docs/engine.md, "Roots"). Verdicts derived by hand beside each model.
+
+use crate::util::*;
+use serde_json::Value;
+
+fn rank_json(name: &str, text: &str) -> Value {
+    let sys = temp_file(name, text);
+    serde_json::from_str(&ok(&["rank", &sys, "--json"])).expect("json")
+}
+
+/// x' = -k x^1.7, y = x: d y = (1, 0), d L_f y = d(-k x^1.7) =
+/// (-1.7 k x^0.7, -x^1.7): independent where x != 0, rank 2 of 2, exact
+/// (one root atom, decided).
+#[test]
+fn rank_with_a_rational_exponent_is_exact() {
+    let v = rank_json(
+        "qroot_pow17.sys",
+        "system pow17\nstate x\nparam k\nx' = -k*x^1.7\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(2)),
+        "{v}"
+    );
+    assert_eq!(v["exact"], true, "{v}");
+    assert_eq!(v["weakly_locally_observable"], true, "{v}");
+}
+
+/// x' = -k1 k2 x^1.7: every Lie derivative depends on k1, k2 through k1 k2
+/// only, so k1 d/dk1 - k2 d/dk2 is a symmetry: rank 2 of 3.
+#[test]
+fn rank_with_a_rational_exponent_finds_the_product_symmetry() {
+    let v = rank_json(
+        "qroot_pow17c.sys",
+        "system pow17c\nstate x\nparam k1, k2\nx' = -k1*k2*x^1.7\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(3)),
+        "{v}"
+    );
+}
+
+/// An output through a cube root and a field with x^1.7 = x sqrt(x) x^(1/5):
+/// the atoms sqrt(x), x^(1/5), x^(1/3) of one radicand have coprime indices
+/// (together x^(1/30)), so they are decided.
+/// h = x^(1/3) has gradient (x^(-2/3)/3, 0, 0) in (x, k, c), so the rank is
+/// 1 + that of the (c, k) partials of L_f h = (c x^(-2/3) - k x^(31/30))/3 and
+/// L_f^2 h = (-2/3 c x^(-5/3) - 31/30 k x^(1/30)) (c - k x^1.7)/3. At x = 1,
+/// c = 1, k = 0: rows (1/3, -1/3) and (-4/9, -11/90), minor -51/270 != 0:
+/// rank 3 of 3.
+#[test]
+fn rank_with_roots_of_one_radicand_at_coprime_indices() {
+    let v = rank_json(
+        "qroot_pow17b.sys",
+        "system pow17b\nstate x\nparam k, c\nx' = -k*x^1.7 + c\noutput y = x^(1/3)\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(3), Some(3)),
+        "{v}"
+    );
+    assert_eq!(v["decided"], true, "{v}");
+}
+
+#[test]
+fn rational_exponents_simplify_and_differentiate() {
+    assert_eq!(ok(&["simplify", "x^1.7*x^0.3"]).trim(), "x^2");
+    assert_eq!(ok(&["simplify", "(x^(1/3))^3 - x"]).trim(), "0");
+    // d/dx x^(5/3) = 5/3 x^(2/3)
+    assert_eq!(ok(&["diff", "x^(5/3)", "x"]).trim(), "5*(x^(1/3))^2/3");
+    bad(&["simplify", "x^(1/1001)"], "above 1000");
+}
+
+/// 3 is no square mod 2^61 - 1 ((3/p) = (p/3)(-1)^((p-1)/2) = (1/3)(-1) = -1,
+/// p = 1 mod 3, p = 3 mod 4), so no F_p point gives sqrt(3) its value: the
+/// rank test takes the roots free (an upper bound on the rank) and says so.
+/// The formal rank of x' = -k sqrt(3) x, y = x is 2 of 2 (gradients (1, 0),
+/// (-sqrt(3) k, -sqrt(3) x)); it is not certified.
+#[test]
+fn rank_with_roots_no_point_satisfies_is_an_upper_bound() {
+    let v = rank_json(
+        "qroot_sqrt3.sys",
+        "system s3\nstate x\nparam k\nx' = -k*sqrt(3)*x\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(2)),
+        "{v}"
+    );
+    assert_eq!(v["exact"], false, "{v}");
+    assert_eq!(v["weakly_locally_observable"], Value::Null, "{v}");
+    assert_eq!(v["undecided_atoms"][0], "sqrt(3)", "{v}");
+}
+
+/// STRIKE-GOLDD's BIG terms: (8.4/x)^1.7 = (42/(5x))^(1 + 1/2 + 1/5) brings
+/// sqrt(42/(5x)) and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2 brings sqrt(5x/6).
+/// Their product is sqrt(7) (a relation the form does not see: not decided),
+/// and a point needs 42/(5x) and 5x/6 both squares, so 7 a square mod p, which
+/// it is not (p = 1 mod 7, p = 3 mod 4: (7/p) = -(p/7) = -1): the roots take
+/// free values. k1, k2 enter only as k1 k2, so k1 d/dk1 - k2 d/dk2 is a
+/// symmetry: rank 2 of 3, and the "not observable" verdict stands.
+#[test]
+fn rank_with_the_big_model_terms_keeps_the_unobservable_verdict() {
+    let v = rank_json(
+        "qroot_big.sys",
+        "system big\nstate x\nparam k1, k2\nx' = -k1*k2*((8.4/x)^1.7 + (x/4.8)^8.5)\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(3)),
+        "{v}"
+    );
+    assert_eq!(v["weakly_locally_observable"], false, "{v}");
+    assert_eq!(v["decided"], false, "{v}");
+}
