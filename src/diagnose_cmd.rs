@@ -253,7 +253,10 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "output noise: {} ({}); input class: {}",
         sig.join(", "),
         if d.sigma_estimated {
-            "estimated from the residuals: the level test is void"
+            match d.relevels.iter().any(|r| r.replaced) {
+                true => "estimated from the residuals, again after each naming (these are the last): the level test is void",
+                false => "estimated from the residuals: the level test is void",
+            }
         } else {
             "stated"
         },
@@ -662,6 +665,11 @@ fn rounds_text(d: &Diagnosis, s: &mut String) {
                 hidden.join(", ")
             );
         }
+        for r in d.relevels.iter().filter(|r| r.round == i + 1) {
+            crate::diagnose_levels::after_round(r)
+                .iter()
+                .for_each(|l| s.push_str(&format!("{l}\n")));
+        }
     }
 }
 
@@ -759,6 +767,7 @@ fn verdict(d: &Diagnosis, s: &mut String) {
             obsan_diagnose::statistics::competing_text(c)
         ));
     }
+    parts.extend(crate::diagnose_levels::weak_part(d));
     if !d.nominal_converged {
         parts.push("the nominal fit from the start had not converged and was refitted".into());
     }
