@@ -99,7 +99,12 @@ impl After<'_> {
         let estimated = self.levels.estimate || self.levels.sigma_estimated;
         if self.levels.estimate {
             self.input_levels(white, white_won, progress)?;
-        } else if self.levels.sigma_estimated {
+        }
+        // At white input noise (none estimated, or the estimate rejected
+        // after the naming) the output levels are the residuals' own: the
+        // white end's levels were the nominal fit's, the effect's misfit in
+        // them.
+        if self.levels.noise.is_empty() && self.levels.sigma_estimated {
             progress("estimating the noise levels");
             self.output_levels();
         }
