@@ -749,7 +749,9 @@ class NamedEffect(NamedTuple):
     """An effect ``diagnose`` named: its params as :class:`Estimate` s and its
     likelihood-ratio statistic; ``stand_in``: the outputs it rewrites still curve
     in their predicted value in the final fit (:class:`Curvature`), so it stands in
-    for an effect of another form (always ``False`` for a suggested one)."""
+    for an effect of another form (always ``False`` for a suggested one);
+    ``weak_under_final_levels``: named under earlier noise levels, its LR at the
+    final ones (``lr_final``) is below its critical value (the naming stands)."""
 
     effect: str
     origin: str
@@ -757,6 +759,8 @@ class NamedEffect(NamedTuple):
     lr: float
     stand_in: bool = False
     curvature: Optional[Curvature] = None
+    weak_under_final_levels: bool = False
+    lr_final: Optional[float] = None
 
 
 class Combination(NamedTuple):
@@ -880,6 +884,8 @@ class Diagnosis(Result):
                     float(n.get("lr") or 0.0),
                     bool(n.get("stand_in", False)),
                     _curvature(n.get("curvature")),
+                    bool(n.get("weak_under_final_levels", False)),
+                    None if n.get("lr_final") is None else float(n["lr_final"]),
                 )
                 for n in raw.get(key) or []
             ]
