@@ -79,8 +79,8 @@ fn an_effect_the_first_levels_hid_is_named_once_they_are_estimated_again() {
         );
     }
     // After round 1 the level was estimated again, near the truth: the
-    // residual RMS of some 3000 bearings has a relative sd of 1/sqrt(2n),
-    // about 1.3 %; 10 % leaves room for the unmodelled scale's share.
+    // residual RMS of some 800 bearings has a relative sd of 1/sqrt(2n),
+    // about 2.5 %; 10 % leaves room for the unmodelled scale's share.
     let first = &r.relevels[0];
     assert!(first.replaced && first.source == "estimated", "{first:?}");
     let (before, after) = (first.sigma_before[0].1, first.sigma_after[0].1);
@@ -114,7 +114,7 @@ fn an_effect_the_first_levels_hid_is_named_once_they_are_estimated_again() {
 /// (b) Stated levels are never replaced. The bearing noise stated twice
 /// its true value: once the distortion is named the whitened residuals
 /// have variance 1/4, the level test's z about `-0.53 sqrt(dof)` (far
-/// below -3.5 for thousands of bearings), and the record carries the level
+/// below -3.5 for hundreds of bearings), and the record carries the level
 /// the data give (near the true one) while the stated one stays in use.
 #[test]
 fn stated_levels_the_residuals_contradict_are_kept_with_a_note() {
