@@ -239,6 +239,7 @@ fn nominal_fit(
         sigma,
         sigma_estimated,
         estimated_outputs: estimated_outputs.iter().map(|s| s.is_nan()).collect(),
+        groups: crate::relevel::sensor_groups(sys),
         noise,
         estimate,
         noise_lr: Vec::new(),
