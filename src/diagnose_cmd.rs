@@ -294,7 +294,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     let unseparated: Vec<_> = d
         .competing
         .iter()
-        .filter(|c| c.established.is_none())
+        .filter(|c| c.established.is_none() && c.named_form.is_none())
         .collect();
     if d.named.is_empty() && unseparated.is_empty() {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
@@ -313,6 +313,17 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             c.round,
             obsan_diagnose::statistics::competing_text(c)
         );
+    }
+    for c in d.competing.iter().filter(|c| c.established.is_none()) {
+        if let Some(n) = &c.named_form {
+            let _ = writeln!(
+                s,
+                "one effect in two forms, not separated by these data (round {}, {n} named, the \
+                 stronger together): {}",
+                c.round,
+                obsan_diagnose::statistics::competing_text(c)
+            );
+        }
     }
     for c in &d.suggested {
         let _ = writeln!(
@@ -761,11 +772,18 @@ fn verdict(d: &Diagnosis, s: &mut String) {
         ));
     }
     for c in d.competing.iter().filter(|c| c.established.is_none()) {
-        parts.push(format!(
-            "competing explanations, not separated by these data: {}; what they explain remains \
-             unexplained (neither is in the final model)",
-            obsan_diagnose::statistics::competing_text(c)
-        ));
+        parts.push(match &c.named_form {
+            None => format!(
+                "competing explanations, not separated by these data: {}; what they explain \
+                 remains unexplained (neither is in the final model)",
+                obsan_diagnose::statistics::competing_text(c)
+            ),
+            Some(n) => format!(
+                "one effect in two forms, not separated by these data: {}; {n} is named (the \
+                 stronger together), its form not established",
+                obsan_diagnose::statistics::competing_text(c)
+            ),
+        });
     }
     parts.extend(crate::diagnose_levels::weak_part(d));
     if !d.nominal_converged {

@@ -819,7 +819,9 @@ class Competing(NamedTuple):
     each one's LR alone, the joint fit's estimates, each one's Wald z beside the
     other against its critical value, the residual structure each one's own fit
     leaves (``[test, z]``), and the one still ``established`` (named), or
-    ``None``: competing explanations, not separated by these data."""
+    ``None``: competing explanations, not separated by these data; then
+    ``named_form``, when each was significant alone (one effect in two
+    forms), is the one named, the stronger together."""
 
     round: int
     effects: Tuple[str, str]
@@ -829,6 +831,7 @@ class Competing(NamedTuple):
     wald_z_critical: Tuple[float, float]
     structure: Tuple[List[Tuple[str, float]], List[Tuple[str, float]]]
     established: Optional[str]
+    named_form: Optional[str] = None
 
 
 def _competing(c: Mapping[str, Any]) -> Competing:
@@ -853,6 +856,7 @@ def _competing(c: Mapping[str, Any]) -> Competing:
         pair(c.get("wald_z_critical")),
         (tests(st[0]), tests(st[1])),
         None if est is None else str(est),
+        None if c.get("named_form") is None else str(c["named_form"]),
     )
 
 

@@ -407,6 +407,9 @@ pub struct Competing {
     /// The one still established with the other present (it is named); null: neither is
     /// named, competing explanations not separated by these data.
     pub established: Option<String>,
+    /// Neither established, each significant alone (one effect in two forms): the form named,
+    /// the stronger in the joint fit, and the search went on; null otherwise.
+    pub named_form: Option<String>,
 }
 
 /// An effect on the measured inputs (a `compare` relation).

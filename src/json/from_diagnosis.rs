@@ -178,6 +178,7 @@ fn competing(c: &lib::Competing) -> v::Competing {
         wald_z_critical: two(c.wald_z_critical),
         structure: [pairs(&c.structure[0]), pairs(&c.structure[1])],
         established: c.established.clone(),
+        named_form: c.named_form.clone(),
     }
 }
 

@@ -117,6 +117,21 @@ pub(crate) fn fit_together(
         (true, true) => Some(gen.effect.clone()),
         (false, false) => None,
     };
+    // Neither established beside the other while each alone is
+    // significant: each removes what the other would (else it would stay
+    // established), one effect in two forms (MRCLAM robot 1's lag as
+    // omega_lag* and actuator_lag, joint z 2.3 and 0.4). Stopping the
+    // search there leaves that effect, established whichever form carries
+    // it, out of the model, and every later effect unweighed. The stronger
+    // form, its joint Wald z against its line, is named and the rounds go
+    // on; the pair is reported as not separated.
+    let named_form = match established {
+        None if gen.significant && file.significant => {
+            let k = usize::from(z[1] / zc[1] > z[0] / zc[0]);
+            Some([&gen.effect, &file.effect][k].clone())
+        }
+        _ => None,
+    };
     Ok(Competing {
         round,
         effects: [gen.effect.clone(), file.effect.clone()],
@@ -127,6 +142,7 @@ pub(crate) fn fit_together(
         wald_z_critical: zc,
         structure: [gen.structure.clone(), file.structure.clone()],
         established,
+        named_form,
     })
 }
 

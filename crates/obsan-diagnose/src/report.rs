@@ -217,6 +217,10 @@ pub struct Competing {
     /// The one still established with the other present (it is named), or
     /// `None`: competing explanations, not separated by these data.
     pub established: Option<String>,
+    /// Neither established, each significant alone (one effect in two
+    /// forms): the form named, the stronger in the joint fit; the search
+    /// goes on. `None` otherwise.
+    pub named_form: Option<String>,
 }
 
 /// The levels after one round's naming: those the round was weighed under,

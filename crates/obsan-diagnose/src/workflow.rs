@@ -536,7 +536,7 @@ impl<'a> Rounds<'a> {
                 round + 1,
                 self.o,
             ) {
-                let who = c.established.clone();
+                let who = c.established.clone().or_else(|| c.named_form.clone());
                 self.competing.push(c);
                 match who {
                     None => return Ok(false),
