@@ -404,8 +404,8 @@ pub struct Competing {
     pub wald_z_critical: [Num; 2],
     /// The residual tests each one's own fit leaves, [test, z].
     pub structure: [Vec<NameValue>; 2],
-    /// The one still established with the other present (it is named); null: neither is
-    /// named, competing explanations not separated by these data.
+    /// The one still established with the other present (it is named); null: competing
+    /// explanations not separated by these data (named_form: whether one form is named).
     pub established: Option<String>,
     /// Neither established, each significant alone (one effect in two forms): the form named,
     /// the stronger in the joint fit, and the search went on; null otherwise.

@@ -215,7 +215,8 @@ pub struct Competing {
     /// The residual tests each one's own fit leaves, `[test, z]`.
     pub structure: [Vec<(String, f64)>; 2],
     /// The one still established with the other present (it is named), or
-    /// `None`: competing explanations, not separated by these data.
+    /// `None`: competing explanations, not separated by these data
+    /// (`named_form` says whether one form is named).
     pub established: Option<String>,
     /// Neither established, each significant alone (one effect in two
     /// forms): the form named, the stronger in the joint fit; the search
