@@ -67,9 +67,9 @@ pub(crate) fn sensor_groups(sys: &System) -> Vec<usize> {
     sys.output_names()
         .iter()
         .map(|y| {
-            let key = sys.rhs_text(y).map_or_else(|| format!("output {y}"), |t| {
-                shape(t, &consts)
-            });
+            let key = sys
+                .rhs_text(y)
+                .map_or_else(|| format!("output {y}"), |t| shape(t, &consts));
             keys.iter().position(|k| *k == key).unwrap_or_else(|| {
                 keys.push(key);
                 keys.len() - 1
@@ -303,11 +303,14 @@ impl After<'_> {
             // coupling of tests/diagb_generated.rs, no noise simulated: c_v
             // 1.0000002e-12 with LR 58, the output levels' share).
             let floor = 10.0 * obsan_fit::NoiseOptions::default().min_intensity;
-            let from = |f: &ModelFit| estimate_levels(self.sys, &prep, f, &s0, lv.sigma_estimated, o);
+            let from =
+                |f: &ModelFit| estimate_levels(self.sys, &prep, f, &s0, lv.sigma_estimated, o);
             let again = fit_model(self.sys, &prep, &pv, &states, &s0, &c0, o)
                 .ok()
                 .and_then(|f| from(&f).ok().map(|e| (f, e)))
-                .filter(|(_, (_, c, l))| *l > normal_critical(o.alpha).powi(2) && c.iter().any(|x| x.1 > floor))
+                .filter(|(_, (_, c, l))| {
+                    *l > normal_critical(o.alpha).powi(2) && c.iter().any(|x| x.1 > floor)
+                })
                 .and_then(|(f, (s, c, l))| {
                     let pv: Vec<f64> = f.params.iter().map(|p| p.1).collect();
                     let g = fit_model(self.sys, &prep, &pv, &f.initial_states, &s, &c, o);
