@@ -109,8 +109,9 @@ fn data_levels(f: &ModelFit, sigma: &[f64], which: &[bool], groups: &[usize]) ->
     let scale = f.n as f64 / (f.n as f64 - f.n_fitted as f64).max(1.0);
     let mut count = vec![0usize; sigma.len()];
     for s in f.series.iter() {
-        if let Some(i) = f.rms.iter().position(|r| r.0 == s.output) {
-            count.get_mut(i).map(|c| *c += s.e.len());
+        let i = f.rms.iter().position(|r| r.0 == s.output);
+        if let Some(c) = i.and_then(|i| count.get_mut(i)) {
+            *c += s.e.len();
         }
     }
     let usable = |i: usize| {
