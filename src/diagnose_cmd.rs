@@ -253,7 +253,10 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "output noise: {} ({}); input class: {}",
         sig.join(", "),
         if d.sigma_estimated {
-            "estimated from the residuals: the level test is void"
+            match d.relevels.iter().any(|r| r.replaced) {
+                true => "estimated from the residuals, again after each naming (these are the last): the level test is void",
+                false => "estimated from the residuals: the level test is void",
+            }
         } else {
             "stated"
         },
@@ -291,7 +294,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
     let unseparated: Vec<_> = d
         .competing
         .iter()
-        .filter(|c| c.established.is_none())
+        .filter(|c| c.established.is_none() && c.named_form.is_none())
         .collect();
     if d.named.is_empty() && unseparated.is_empty() {
         let _ = writeln!(s, "named: none: no candidate effect is significant");
@@ -310,6 +313,17 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             c.round,
             obsan_diagnose::statistics::competing_text(c)
         );
+    }
+    for c in d.competing.iter().filter(|c| c.established.is_none()) {
+        if let Some(n) = &c.named_form {
+            let _ = writeln!(
+                s,
+                "one effect in two forms, not separated by these data (round {}, {n} named, the \
+                 stronger together): {}",
+                c.round,
+                obsan_diagnose::statistics::competing_text(c)
+            );
+        }
     }
     for c in &d.suggested {
         let _ = writeln!(
@@ -662,6 +676,11 @@ fn rounds_text(d: &Diagnosis, s: &mut String) {
                 hidden.join(", ")
             );
         }
+        for r in d.relevels.iter().filter(|r| r.round == i + 1) {
+            crate::diagnose_levels::after_round(r)
+                .iter()
+                .for_each(|l| s.push_str(&format!("{l}\n")));
+        }
     }
 }
 
@@ -753,12 +772,20 @@ fn verdict(d: &Diagnosis, s: &mut String) {
         ));
     }
     for c in d.competing.iter().filter(|c| c.established.is_none()) {
-        parts.push(format!(
-            "competing explanations, not separated by these data: {}; what they explain remains \
-             unexplained (neither is in the final model)",
-            obsan_diagnose::statistics::competing_text(c)
-        ));
+        parts.push(match &c.named_form {
+            None => format!(
+                "competing explanations, not separated by these data: {}; what they explain \
+                 remains unexplained (neither is in the final model)",
+                obsan_diagnose::statistics::competing_text(c)
+            ),
+            Some(n) => format!(
+                "one effect in two forms, not separated by these data: {}; {n} is named (the \
+                 stronger together), its form not established",
+                obsan_diagnose::statistics::competing_text(c)
+            ),
+        });
     }
+    parts.extend(crate::diagnose_levels::weak_part(d));
     if !d.nominal_converged {
         parts.push("the nominal fit from the start had not converged and was refitted".into());
     }

@@ -29,6 +29,7 @@ mod cli;
 mod clock;
 mod design_cmd;
 mod diagnose_cmd;
+mod diagnose_levels;
 mod diagnose_report;
 mod estimate_cmds;
 mod experiments_cmd;

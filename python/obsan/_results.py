@@ -760,7 +760,9 @@ class NamedEffect(NamedTuple):
     """An effect ``diagnose`` named: its params as :class:`Estimate` s and its
     likelihood-ratio statistic; ``stand_in``: the outputs it rewrites still curve
     in their predicted value in the final fit (:class:`Curvature`), so it stands in
-    for an effect of another form (always ``False`` for a suggested one)."""
+    for an effect of another form (always ``False`` for a suggested one);
+    ``weak_under_final_levels``: named under earlier noise levels, its LR at the
+    final ones (``lr_final``) is below its critical value (the naming stands)."""
 
     effect: str
     origin: str
@@ -768,6 +770,8 @@ class NamedEffect(NamedTuple):
     lr: float
     stand_in: bool = False
     curvature: Optional[Curvature] = None
+    weak_under_final_levels: bool = False
+    lr_final: Optional[float] = None
 
 
 class Combination(NamedTuple):
@@ -826,7 +830,9 @@ class Competing(NamedTuple):
     each one's LR alone, the joint fit's estimates, each one's Wald z beside the
     other against its critical value, the residual structure each one's own fit
     leaves (``[test, z]``), and the one still ``established`` (named), or
-    ``None``: competing explanations, not separated by these data."""
+    ``None``: competing explanations, not separated by these data; then
+    ``named_form``, when each was significant alone (one effect in two
+    forms), is the one named, the stronger together."""
 
     round: int
     effects: Tuple[str, str]
@@ -836,6 +842,7 @@ class Competing(NamedTuple):
     wald_z_critical: Tuple[float, float]
     structure: Tuple[List[Tuple[str, float]], List[Tuple[str, float]]]
     established: Optional[str]
+    named_form: Optional[str] = None
 
 
 def _competing(c: Mapping[str, Any]) -> Competing:
@@ -860,6 +867,7 @@ def _competing(c: Mapping[str, Any]) -> Competing:
         pair(c.get("wald_z_critical")),
         (tests(st[0]), tests(st[1])),
         None if est is None else str(est),
+        None if c.get("named_form") is None else str(c["named_form"]),
     )
 
 
@@ -891,6 +899,8 @@ class Diagnosis(Result):
                     float(n.get("lr") or 0.0),
                     bool(n.get("stand_in", False)),
                     _curvature(n.get("curvature")),
+                    bool(n.get("weak_under_final_levels", False)),
+                    None if n.get("lr_final") is None else float(n["lr_final"]),
                 )
                 for n in raw.get(key) or []
             ]

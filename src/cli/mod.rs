@@ -272,8 +272,9 @@ or two suggested ones fitted together) are combinations [{params, effects, value
 robust_covariance, weight, estimate, sd, robust_sd, wald_z, wald_z_alone, named, established}]:
 params[0] + weight params[1], the smallest-variance direction of the pair. A generated winner
 fitted together with a competing file candidate is in competing [{round, effects, lr_alone,
-estimates, robust_sd, wald_z, wald_z_critical, structure, established}] (established null: neither
-named, competing explanations not separated by these data). Candidates generated from the model's structure are
+estimates, robust_sd, wald_z, wald_z_critical, structure, established, named_form}] (established null:
+not separated by these data; named_form: each significant alone, one effect in two forms, the
+stronger together named and the search goes on, else neither named). Candidates generated from the model's structure are
 tried too (--no-generated: the effects file's alone). --report writes report.md (verdict, estimates,
 residuals pooled per output before and after, candidate scores), PNG and SVG charts, extended.sys
 and diagnosis.json (docs/diagnose.md).")]

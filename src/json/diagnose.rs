@@ -67,6 +67,38 @@ pub struct Diagnose {
     pub generated_dropped: Vec<(String, String)>,
     /// Generated candidates whose score is below this are not fitted; null: no screen.
     pub screen_threshold: Num,
+    /// After each round that named an effect: the levels it was weighed under and those the next
+    /// round uses (re-estimated where obsan estimated them; stated levels are kept).
+    pub relevels: Vec<Relevel>,
+}
+
+/// The noise levels after one round's naming.
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Relevel {
+    /// The round (1-based) that named `named`.
+    pub round: usize,
+    /// The effect it named.
+    pub named: String,
+    /// `estimated` (re-estimated under the extended model) or `stated` (kept).
+    pub source: String,
+    /// Per output, the sd the round was weighed under.
+    pub sigma_before: Vec<NameValue>,
+    /// Per measured input, the noise intensity the round was weighed under.
+    pub input_noise_before: Vec<NameValue>,
+    /// Per output, the sd re-estimated (the next round's when `replaced`); stated: the sd the
+    /// residuals give (RMS corrected for the fitted unknowns).
+    pub sigma_after: Vec<NameValue>,
+    /// Per measured input, the intensity the next round uses.
+    pub input_noise_after: Vec<NameValue>,
+    /// The level test's chi-square z of the extended model's fit under the levels before.
+    pub chi2_z_before: Num,
+    /// And under the levels the next round uses.
+    pub chi2_z_after: Num,
+    /// The next round is weighed under the levels after.
+    pub replaced: bool,
+    /// Stated levels the residuals contradict (|chi2_z_after| above 3.5): the text notes it.
+    pub note: bool,
 }
 
 /// A fitted model and its residuals.
@@ -262,6 +294,12 @@ pub struct Named {
     pub stand_in: bool,
     /// The curvature test of the outputs it rewrites; null: it rewrites none, or too few residuals.
     pub curvature: Option<Curvature>,
+    /// Its LR at the final levels (the final model without it against the final fit); null when
+    /// the levels never moved after round 1, or that fit failed.
+    pub lr_final: Num,
+    /// Named under earlier levels, it would not pass under the final ones (`lr_final` at or below
+    /// its critical value); the naming stands.
+    pub weak_under_final_levels: bool,
 }
 
 /// The curvature test of the outputs a named effect rewrites: the whitened residual regressed on
@@ -366,9 +404,12 @@ pub struct Competing {
     pub wald_z_critical: [Num; 2],
     /// The residual tests each one's own fit leaves, [test, z].
     pub structure: [Vec<NameValue>; 2],
-    /// The one still established with the other present (it is named); null: neither is
-    /// named, competing explanations not separated by these data.
+    /// The one still established with the other present (it is named); null: competing
+    /// explanations not separated by these data (named_form: whether one form is named).
     pub established: Option<String>,
+    /// Neither established, each significant alone (one effect in two forms): the form named,
+    /// the stronger in the joint fit, and the search went on; null otherwise.
+    pub named_form: Option<String>,
 }
 
 /// An effect on the measured inputs (a `compare` relation).

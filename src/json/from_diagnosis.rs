@@ -143,6 +143,8 @@ fn named(n: &lib::Named) -> v::Named {
             z: num(c.z),
             correlation_factor: num(c.correlation_factor),
         }),
+        lr_final: n.lr_final.and_then(num),
+        weak_under_final_levels: n.weak_under_final_levels,
     }
 }
 
@@ -176,6 +178,7 @@ fn competing(c: &lib::Competing) -> v::Competing {
         wald_z_critical: two(c.wald_z_critical),
         structure: [pairs(&c.structure[0]), pairs(&c.structure[1])],
         established: c.established.clone(),
+        named_form: c.named_form.clone(),
     }
 }
 
@@ -239,6 +242,23 @@ impl From<&lib::Diagnosis> for v::Diagnose {
             lr_critical_generated: num(d.lr_critical_generated),
             generated_dropped: d.generated_dropped.clone(),
             screen_threshold: num(d.screen_threshold),
+            relevels: d.relevels.iter().map(relevel).collect(),
         }
+    }
+}
+
+fn relevel(r: &lib::Relevel) -> v::Relevel {
+    v::Relevel {
+        round: r.round,
+        named: r.named.clone(),
+        source: r.source.clone(),
+        sigma_before: pairs(&r.sigma_before),
+        input_noise_before: pairs(&r.input_noise_before),
+        sigma_after: pairs(&r.sigma_after),
+        input_noise_after: pairs(&r.input_noise_after),
+        chi2_z_before: num(r.chi2_z_before),
+        chi2_z_after: num(r.chi2_z_after),
+        replaced: r.replaced,
+        note: r.note,
     }
 }

@@ -51,9 +51,16 @@ pub(crate) fn pair(
     let levels = (at.sigma, !at.noise.is_empty(), at.o.max_step);
     // A prediction that fails here (it did not in the fit) leaves the
     // robust sd unknown, not the diagnosis failed.
+    // Under input noise the sandwich here cannot whiten: the fitter's own
+    // robust covariance (whitened scores) gives the pair's block.
+    let own = || {
+        let v = |a: usize, b: usize| f.params_robust_cov.get(a)?.get(b).copied();
+        Some(vec![vec![v(i, i)?, v(i, j)?], vec![v(j, i)?, v(j, j)?]])
+    };
     let rob = robust_covariance(sys, prepared, f, levels, &[i, j])
         .ok()
-        .flatten();
+        .flatten()
+        .or_else(own);
     let robust = match rob {
         Some(v) => [[v[0][0], v[0][1]], [v[1][0], v[1][1]]],
         None => [[f64::NAN; 2]; 2],

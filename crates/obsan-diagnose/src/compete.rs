@@ -117,6 +117,15 @@ pub(crate) fn fit_together(
         (true, true) => Some(gen.effect.clone()),
         (false, false) => None,
     };
+    // Neither established beside the other while each alone is
+    // significant: each removes what the other would (else it would stay
+    // established), one effect in two forms (MRCLAM robot 1's lag as
+    // omega_lag* and actuator_lag, joint z 2.3 and 0.4). Stopping the
+    // search there leaves that effect, established whichever form carries
+    // it, out of the model, and every later effect unweighed. The stronger
+    // form, its joint Wald z against its line, is named and the rounds go
+    // on; the pair is reported as not separated.
+    let named_form = stronger_form(established.is_some(), [gen, file], z, zc);
     Ok(Competing {
         round,
         effects: [gen.effect.clone(), file.effect.clone()],
@@ -127,7 +136,25 @@ pub(crate) fn fit_together(
         wald_z_critical: zc,
         structure: [gen.structure.clone(), file.structure.clone()],
         established,
+        named_form,
     })
+}
+
+/// Of a pair neither of which is `established` beside the other, the one
+/// named as the stronger form of one effect: both significant alone, the
+/// larger Wald z over its line (the winner, first, on a tie); `None`
+/// otherwise.
+fn stronger_form(
+    established: bool,
+    pair: [&CandidateResult; 2],
+    z: [f64; 2],
+    zc: [f64; 2],
+) -> Option<String> {
+    if established || !pair.iter().all(|c| c.significant) {
+        return None;
+    }
+    let k = usize::from(z[1] / zc[1] > z[0] / zc[0]);
+    Some(pair[k].effect.clone())
 }
 
 /// A later round's winner `res` against the effects already named: the
@@ -233,6 +260,30 @@ mod tests {
         c.estimates = vec![("p".into(), 1.0, 0.1)];
         c.structure = structure.iter().map(|s| (s.to_string(), 5.0)).collect();
         c
+    }
+
+    /// MRCLAM robot 1's round 2 (omega_lag* z 2.27 of 3.62, actuator_lag
+    /// 0.43 of 3.42, both significant alone): the generated form is named;
+    /// the file's when its ratio is the larger; none when one was not
+    /// significant alone or one is established.
+    #[test]
+    fn the_stronger_of_two_forms_is_named_only_when_both_are_significant_alone() {
+        let (mut g, mut f) = (cand(true, false, &[]), cand(true, false, &[]));
+        (g.effect, f.effect) = ("omega_lag".into(), "actuator_lag".into());
+        let zc = [3.62, 3.42];
+        let named =
+            |g: &CandidateResult, f: &CandidateResult, z, est| stronger_form(est, [g, f], z, zc);
+        assert_eq!(
+            named(&g, &f, [2.27, 0.43], false).as_deref(),
+            Some("omega_lag")
+        );
+        assert_eq!(
+            named(&g, &f, [0.43, 2.27], false).as_deref(),
+            Some("actuator_lag")
+        );
+        assert_eq!(named(&g, &f, [2.27, 0.43], true), None);
+        f.significant = false;
+        assert_eq!(named(&g, &f, [2.27, 0.43], false), None);
     }
 
     #[test]

@@ -32,6 +32,7 @@ mod identify;
 mod model_fit;
 mod options;
 mod relation;
+mod relevel;
 mod report;
 mod residual;
 mod sandwich;
@@ -51,7 +52,7 @@ pub use model_fit::{fit_model, input_noise, prepare, ModelFit, Start};
 pub use options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 pub use relation::{InputCheck, TrajectoryCheck};
 pub use report::{
-    CandidateResult, Competing, Diagnosis, Named, Refit, Rival, MOVED_SD, ORIGIN_FILE,
+    CandidateResult, Competing, Diagnosis, Named, Refit, Relevel, Rival, MOVED_SD, ORIGIN_FILE,
     ORIGIN_RELATION, RIVAL_BIC,
 };
 pub use residual::{analyse, ResidualReport, ResidualSeries, Structure, Z_STRUCTURE};

@@ -20,6 +20,10 @@ pub struct ModelFit {
     /// Per param: the cluster-robust sd, trajectories as clusters (right
     /// whatever the correlation within a trajectory; NaN with one).
     pub params_robust_sd: Vec<f64>,
+    /// Their whole cluster-robust covariance (the fitter's, whitened under
+    /// input noise).
+    #[serde(skip)]
+    pub params_robust_cov: Vec<Vec<f64>>,
     /// Per trajectory: initial dynamic state.
     pub initial_states: Vec<Vec<f64>>,
     /// Sum of squared normalised residuals, their number, unknowns fitted.
@@ -456,6 +460,7 @@ pub fn fit_model(
             .map(|(n, (v, s))| (n.clone(), *v, *s))
             .collect(),
         params_robust_sd: r.params_sd_robust.clone(),
+        params_robust_cov: r.params_cov_robust.clone(),
         initial_states: r.initial_states.clone(),
         cost: r.cost,
         log_det,

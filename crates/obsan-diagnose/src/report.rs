@@ -145,6 +145,13 @@ pub struct Named {
     /// The curvature test of the outputs it rewrites; `None`: it rewrites
     /// none, or too few residuals to test.
     pub curvature: Option<Curvature>,
+    /// Its LR at the final levels: the final model without it, fitted under
+    /// them, against the final fit (`None`: the levels never moved after
+    /// round 1, or that fit failed; see `relevel::weak_under_final`).
+    pub lr_final: Option<f64>,
+    /// `lr_final` is at or below its critical value: named under earlier
+    /// levels, it would not pass under the final ones (the naming stands).
+    pub weak_under_final_levels: bool,
 }
 
 /// The current model refitted before a round's comparison: a candidate's
@@ -208,8 +215,44 @@ pub struct Competing {
     /// The residual tests each one's own fit leaves, `[test, z]`.
     pub structure: [Vec<(String, f64)>; 2],
     /// The one still established with the other present (it is named), or
-    /// `None`: competing explanations, not separated by these data.
+    /// `None`: competing explanations, not separated by these data
+    /// (`named_form` says whether one form is named).
     pub established: Option<String>,
+    /// Neither established, each significant alone (one effect in two
+    /// forms): the form named, the stronger in the joint fit; the search
+    /// goes on. `None` otherwise.
+    pub named_form: Option<String>,
+}
+
+/// The levels after one round's naming: those the round was weighed under,
+/// those the next round is weighed under (or, stated, those the data give),
+/// and the level test of the extended model's fit under each.
+#[derive(Clone, Debug, Serialize)]
+pub struct Relevel {
+    /// The round (1-based) that named `named`.
+    pub round: usize,
+    pub named: String,
+    /// `estimated`: obsan estimated the levels and re-estimated them here;
+    /// `stated`: they were given and are kept (`*_after` is what the data
+    /// give, for the note).
+    pub source: String,
+    /// The levels round `round` was weighed under.
+    pub sigma_before: Vec<(String, f64)>,
+    pub input_noise_before: Vec<(String, f64)>,
+    /// Re-estimated (round `round + 1` is weighed under them when
+    /// `replaced`), or, stated, each output's RMS corrected for the fitted
+    /// unknowns.
+    pub sigma_after: Vec<(String, f64)>,
+    pub input_noise_after: Vec<(String, f64)>,
+    /// The level test's chi-square z of the extended model's fit under the
+    /// levels before and under those round `round + 1` uses.
+    pub chi2_z_before: f64,
+    pub chi2_z_after: f64,
+    /// The next round is weighed under `*_after`.
+    pub replaced: bool,
+    /// Stated levels the residuals contradict (|`chi2_z_after`| above
+    /// [`crate::Z_STRUCTURE`]): the text prints a note.
+    pub note: bool,
 }
 
 /// The whole outcome.
@@ -275,6 +318,9 @@ pub struct Diagnosis {
     /// fitted (`lr_critical_generated / SCREEN_SAFETY`; infinite: no screen,
     /// as under input noise, which the score does not weigh).
     pub screen_threshold: f64,
+    /// After each round that named an effect, the levels before and after
+    /// (re-estimated, or stated with what the data give).
+    pub relevels: Vec<Relevel>,
 }
 
 impl Diagnosis {

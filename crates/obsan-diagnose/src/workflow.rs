@@ -25,6 +25,7 @@ use crate::model_fit::{
 };
 use crate::options::{DiagnoseOptions, InputNoise, AUTO_ESTIMATE_BELOW};
 use crate::relation::{input_check, InputCheck};
+use crate::relevel::{weak_under_final, After, Levels};
 use crate::report::{CandidateResult, Competing, Diagnosis, Named, Refit, Rival, ORIGIN_FILE};
 use crate::screen::{file_stand_in, score, Outcome, Scored, SCREEN_SAFETY};
 use crate::settle::{extended_model, mark_stand_ins, name_relations, rivals, settle};
@@ -118,6 +119,7 @@ pub fn diagnose(
         nominal_refit,
         competing,
         with_named,
+        relevels,
         ..
     } = rounds;
     // What the last round found above its critical value but not by its
@@ -132,6 +134,20 @@ pub fn diagnose(
     };
 
     settle(&mut named, &rounds, &current, &gen);
+    if relevels.iter().any(|r| r.replaced) {
+        let crit = |n: &str| limits.named(n, &gen, data.trajectories.len());
+        let lv = (&levels.sigma[..], &levels.noise[..]);
+        weak_under_final(
+            sys,
+            &mut named,
+            &all_candidates,
+            &current,
+            data,
+            lv,
+            &crit,
+            o,
+        );
+    }
     mark_stand_ins(&mut named, &all_candidates, &current, &levels.sigma);
     // Pairs fixed only in combination (item 7 of the never-confidently-
     // wrong rules): among the named effects, and among the suggested ones
@@ -187,27 +203,8 @@ pub fn diagnose(
         lr_critical_generated: limits.crit_gen,
         generated_dropped: gen.dropped,
         screen_threshold,
+        relevels,
     })
-}
-
-/// The noise model in use, carried from round to round.
-struct Levels {
-    /// Output noise levels.
-    sigma: Vec<f64>,
-    sigma_estimated: bool,
-    /// Measured inputs' noise intensities; empty: none.
-    noise: Vec<(String, f64)>,
-    /// The input noise is estimated (and again after every named effect).
-    estimate: bool,
-    /// Each estimate's likelihood-ratio statistic against white noise.
-    noise_lr: Vec<f64>,
-    /// Under `auto` with the estimate kept: the white-noise end of the
-    /// family, its output levels and the current model's fit there (every
-    /// candidate is weighed at both, see `candidate`).
-    white_sigma: Option<Vec<f64>>,
-    white_fit: Option<ModelFit>,
-    /// Why the start was replaced, when the fit could not be made from it.
-    start_replaced: Option<String>,
 }
 
 /// The nominal fit under the input noise the options choose: stated, or
@@ -236,9 +233,13 @@ fn nominal_fit(
     };
     let own = || own_start(sys, data, start);
     let (nominal, replaced) = first_fit(sys, prepared, start, (&sigma, &noise), o, &own)?;
+    let outputs: Vec<String> = sys.output_names().iter().map(|s| s.to_string()).collect();
+    let estimated_outputs = given_levels(&outputs, data, o);
     let mut levels = Levels {
         sigma,
         sigma_estimated,
+        estimated_outputs: estimated_outputs.iter().map(|s| s.is_nan()).collect(),
+        groups: crate::relevel::sensor_groups(sys),
         noise,
         estimate,
         noise_lr: Vec::new(),
@@ -323,6 +324,20 @@ impl Limits {
             self.crit
         }
     }
+
+    /// The critical value of a named or candidate effect: a generated one
+    /// with more than one param or states of its own has a degree of
+    /// freedom per param and per free initial value (`k` trajectories).
+    fn named(&self, name: &str, gen: &Generation, k: usize) -> f64 {
+        match gen.candidates.iter().find(|g| g.effect.name == name) {
+            Some(g) if !g.effect.states.is_empty() || g.effect.params.len() > 1 => {
+                let df = g.effect.params.len() + g.effect.states.len() * k;
+                chi2_critical(self.a_gen, df as f64)
+            }
+            Some(_) => self.crit_gen,
+            None => self.crit,
+        }
+    }
 }
 
 /// The effects file's input relations, each tested on the measured inputs.
@@ -383,6 +398,8 @@ struct Rounds<'a> {
     competing: Vec<Competing>,
     /// A later round's winner fixed only in combination with a named effect.
     with_named: Vec<crate::correlation::Combination>,
+    /// The levels after each naming.
+    relevels: Vec<crate::report::Relevel>,
 }
 
 impl<'a> Rounds<'a> {
@@ -423,6 +440,7 @@ impl<'a> Rounds<'a> {
             warm: HashMap::new(),
             competing: Vec::new(),
             with_named: Vec::new(),
+            relevels: Vec::new(),
         }
     }
 
@@ -518,7 +536,7 @@ impl<'a> Rounds<'a> {
                 round + 1,
                 self.o,
             ) {
-                let who = c.established.clone();
+                let who = c.established.clone().or_else(|| c.named_form.clone());
                 self.competing.push(c);
                 match who {
                     None => return Ok(false),
@@ -554,9 +572,15 @@ impl<'a> Rounds<'a> {
         let white_won = fitted.white_won;
         self.current_sys = fitted.sys;
         self.current = fitted.fit;
-        if self.levels.estimate {
-            self.reestimate(white, white_won, &round_data, progress)?;
-        }
+        let mut after = After {
+            sys: &self.current_sys,
+            data: self.data,
+            current: &mut self.current,
+            levels: &mut self.levels,
+            o: self.o,
+        };
+        let r = after.relevel((round + 1, &res.effect), (white, white_won), progress)?;
+        self.relevels.push(r);
         Ok(true)
     }
 
@@ -617,14 +641,10 @@ impl<'a> Rounds<'a> {
             // A generated candidate must also clear the critical value in
             // cluster-robust sds; one that adds states is tested with a
             // degree of freedom per free initial value (K per state).
-            let (c, origin) = match g {
-                Some(g) if !g.effect.states.is_empty() || g.effect.params.len() > 1 => {
-                    let k = data.trajectories.len();
-                    let df = g.effect.params.len() + g.effect.states.len() * k;
-                    (chi2_critical(lim.a_gen, df as f64), ORIGIN_GENERATED)
-                }
-                Some(_) => (lim.crit_gen, ORIGIN_GENERATED),
-                None => (lim.crit, self.lib.map_or("effects", |l| l.origin.as_str())),
+            let c = lim.named(&e.name, self.gen, data.trajectories.len());
+            let origin = match g {
+                Some(_) => ORIGIN_GENERATED,
+                None => self.lib.map_or("effects", |l| l.origin.as_str()),
             };
             // Every candidate's Wald z at its side's one-degree critical
             // value: the same rule for file and generated candidates.
@@ -815,71 +835,6 @@ impl<'a> Rounds<'a> {
             rivals,
             ..Named::default()
         });
-    }
-
-    /// After an effect is named under estimated input noise: which end of
-    /// the noise family the next round starts from, the levels estimated
-    /// again, and the extended model refitted under them. `white` and
-    /// `white_won` are the named candidate's fit at white input noise and
-    /// whether it won there.
-    fn reestimate(
-        &mut self,
-        white: Option<ModelFit>,
-        white_won: bool,
-        data: &Dataset,
-        progress: &(dyn Fn(&str) + Sync),
-    ) -> Result<(), DiagnoseError> {
-        let o = self.o;
-        let lv = &mut self.levels;
-        // An effect that won at white input noise explains what the
-        // estimated noise had absorbed: the rounds go on at white noise
-        // unless the levels, estimated again under the extended model,
-        // reject it (the rule of the nominal fit).
-        if white_won {
-            lv.sigma = lv
-                .white_sigma
-                .clone()
-                .unwrap_or(std::mem::take(&mut lv.sigma));
-            lv.noise = vec![];
-        }
-        lv.white_fit = if lv.noise.is_empty() {
-            Some(self.current.clone())
-        } else {
-            white
-        };
-        // The named effect takes its share of the drift: the levels
-        // again, and the extended model refitted under them (the next
-        // round's candidates are compared with that fit).
-        progress("estimating the noise levels");
-        let prep = prepare(&self.current_sys, data)?;
-        let est = estimate_levels(
-            &self.current_sys,
-            &prep,
-            &self.current,
-            &lv.sigma,
-            lv.sigma_estimated,
-            o,
-        );
-        if let Ok((s, c, l)) = est {
-            let keep = o.input_noise == InputNoise::Estimate
-                || !lv.noise.is_empty()
-                || l > normal_critical(o.alpha).powi(2);
-            let pv: Vec<f64> = self.current.params.iter().map(|p| p.1).collect();
-            let states = self.current.initial_states.clone();
-            if let Some(f) = keep
-                .then(|| fit_model(&self.current_sys, &prep, &pv, &states, &s, &c, o).ok())
-                .flatten()
-            {
-                (lv.sigma, lv.noise) = (s, c);
-                lv.noise_lr.push(l);
-                self.current = f;
-            }
-        }
-        // The white side follows the model (none where its fit failed).
-        if lv.noise.is_empty() {
-            lv.white_fit = None;
-        }
-        Ok(())
     }
 }
 

@@ -29,6 +29,10 @@ pub struct FitResult {
     /// the residuals within a trajectory, since trajectories are
     /// independent (see [`clustered_sd`]). NaN with fewer than two.
     pub params_sd_robust: Vec<f64>,
+    /// Their whole cluster-robust covariance (params x params), whose
+    /// diagonal is `params_sd_robust` squared: a combination of correlated
+    /// params needs the cross terms (NaN with fewer than two trajectories).
+    pub params_cov_robust: Vec<Vec<f64>>,
     pub initial_states_sd: Vec<Vec<f64>>,
     /// The whole covariance, params first, then each trajectory's initial state.
     pub covariance: Vec<Vec<f64>>,
@@ -49,23 +53,30 @@ pub struct FitResult {
 /// trajectory `k` (Liang and Zeger, Biometrika 1986; the small-sample factor
 /// of Hansen 2007). Each trajectory's own initial state sets its part of
 /// `g_k` to zero at the optimum, so with `K` trajectories the variance has
-/// about `K - 1` degrees of freedom whatever the number of residuals.
-fn clustered_sd(cov: &[Vec<f64>], score: &[Vec<f64>], lay: &Layout) -> Vec<f64> {
+/// about `K - 1` degrees of freedom whatever the number of residuals. With
+/// input noise `J` and `r` are the whitened ones, so this is the one robust
+/// covariance available there (obsan-diagnose's own sandwich is ordinary
+/// least squares only).
+fn clustered_cov(cov: &[Vec<f64>], score: &[Vec<f64>], lay: &Layout) -> Vec<Vec<f64>> {
     let (k, n_params) = (score.len(), lay.n_params);
     if k < 2 {
-        return vec![f64::NAN; n_params];
+        return vec![vec![f64::NAN; n_params]; n_params];
     }
-    // For each param i: var_i = sum_k (row i of cov . g_k)^2 * K/(K-1).
-    let mut var = vec![0.0; n_params];
+    // v_ij = sum_k c_ki c_kj K/(K-1), c_k = rows of cov . g_k.
+    let f = k as f64 / (k as f64 - 1.0);
+    let mut v = vec![vec![0.0; n_params]; n_params];
     for (t, g) in score.iter().enumerate() {
         let idx = lay.columns(t);
-        for (i, v) in var.iter_mut().enumerate() {
-            let c: f64 = idx.iter().zip(g).map(|(&j, gj)| cov[i][j] * gj).sum();
-            *v += c * c;
+        let c: Vec<f64> = (0..n_params)
+            .map(|i| idx.iter().zip(g).map(|(&j, gj)| cov[i][j] * gj).sum())
+            .collect();
+        for (i, row) in v.iter_mut().enumerate() {
+            for (j, x) in row.iter_mut().enumerate() {
+                *x += c[i] * c[j] * f;
+            }
         }
     }
-    let f = k as f64 / (k as f64 - 1.0);
-    var.iter().map(|v| (v * f).sqrt()).collect()
+    v
 }
 
 /// The fit stops when an iteration needed its damping raised (its first
@@ -369,7 +380,10 @@ pub(crate) fn fit_with(
     // Covariance: (J^T J)^-1 (residuals are already normalised by sigma).
     let covariance = inverse(&jtj).unwrap_or_else(|| vec![vec![f64::NAN; n]; n]);
     let cov_diag: Vec<f64> = (0..n).map(|i| covariance[i][i].max(0.0).sqrt()).collect();
-    let params_sd_robust = clustered_sd(&covariance, &score, lay);
+    let params_cov_robust = clustered_cov(&covariance, &score, lay);
+    let params_sd_robust = (0..n_params)
+        .map(|i| params_cov_robust[i][i].sqrt())
+        .collect();
     let residual_rms = sq_sum
         .iter()
         .zip(&counts)
@@ -382,6 +396,7 @@ pub(crate) fn fit_with(
             .collect(),
         params_sd: cov_diag[..n_params].to_vec(),
         params_sd_robust,
+        params_cov_robust,
         initial_states_sd: (0..trajs.len())
             .map(|k| cov_diag[n_params + k * lay.n_dyn..n_params + (k + 1) * lay.n_dyn].to_vec())
             .collect(),
