@@ -28,7 +28,10 @@ pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Q)>, Failure> {
         let id = ctx
             .parse(v.trim())
             .map_err(|e| Failure(format!("--set {s}: {e}")))?;
-        let Some(q) = ctx.canon(id).as_q() else {
+        let r = ctx
+            .try_canon(id)
+            .map_err(|l| Failure(format!("--set {s}: {l}")))?;
+        let Some(q) = r.as_q() else {
             return Err(Failure(format!(
                 "--set {s}: the value must be a rational number"
             )));

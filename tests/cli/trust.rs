@@ -1166,3 +1166,34 @@ fn import_checks_the_written_model_under_the_term_budget() {
     let sys = ok(&["import", "sbml", &path]);
     assert!(sys.contains("state x"), "{sys}");
 }
+
+/// The fuzzer's `.dec` (CI, session 26): a `set` value `81.0...0973347445^0.705`
+/// (205 zeros) is a root of index 200 of a 720-bit number, whose 141st power has
+/// about 101,662 bits: past the engine's number limit. The readers' number values
+/// (`.dec` set, `.sys` const, `--set`) took the unbudgeted canonical form and
+/// panicked; each is now an error at its place, exit 2.
+#[test]
+fn a_root_of_a_long_decimal_is_an_error_in_every_reader() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let big = format!("81.{}973347445^0.705", "0".repeat(205));
+    let dec = temp_file(
+        "root_value.dec",
+        &format!(
+            "system {root}/systems/localization.sys\nset A = {big}\nlet theta = thetaR - phiR\n\
+             state D, theta\nD' = v*cos(theta)\ntheta' = omega - v*sin(theta)/D\noutput y = D\n"
+        ),
+    );
+    let e = bad(&["verify", &dec], "number too large");
+    assert!(e.contains("root_value.dec:2:"), "{e}");
+    let sys = temp_file(
+        "root_value.sys",
+        &format!("system s\nconst c = {big}\nstate x\nx' = -c*x\noutput y = x\n"),
+    );
+    let e = bad(&["rank", &sys], "number too large");
+    assert!(e.contains("root_value.sys:2:"), "{e}");
+    let set = format!("q={big}");
+    bad(
+        &["rank", "systems/calib.sys", "--input", "q", "--set", &set],
+        "number too large",
+    );
+}

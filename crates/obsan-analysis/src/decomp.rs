@@ -138,7 +138,14 @@ impl Decomposition {
                                     ))
                                 })
                                 .ok()
-                                .and_then(|id| c.canon(id).as_q());
+                                .map(|id| c.try_canon(id));
+                            // The budgeted canonical form: a value past the engine's
+                            // number limit (`973347445^0.705...` with a root of index
+                            // 200) is an error at its place, never a panic.
+                            if let Some(Err(l)) = &q {
+                                return Err(err(origin, src, eat, format!("a value: {l}")));
+                            }
+                            let q = q.and_then(|r| r.ok()).and_then(|r| r.as_q());
                             let Some(q) = q else {
                                 return Err(err(
                                     origin,

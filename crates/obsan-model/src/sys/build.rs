@@ -133,7 +133,11 @@ impl Reader<'_> {
                 ))
             })
             .map_err(|e| self.parse_err(map, e))?;
-        tmp.canon(id).as_q().ok_or_else(|| {
+        // Budgeted: a number past the engine's limits is an error at its place.
+        let r = tmp
+            .try_canon(id)
+            .map_err(|l| self.parse_err(map, ParseError::new(format!("{what}: {l}"), ast.span)))?;
+        r.as_q().ok_or_else(|| {
             self.parse_err(
                 map,
                 ParseError::new(format!("{what} must be a rational number"), ast.span),
