@@ -258,7 +258,7 @@ run's values as IEEE-754 bits) for `obsan montecarlo merge`. The run time goes t
 --json prints {model, start, sigma, sigma_estimated, input_noise, input_noise_source,
 input_noise_lr, input_class, nominal, nominal_converged, refits, rounds, named, suggested,
 combinations, competing, input_checks, final_fit, hidden, extended_sys, lr_critical, lr_critical_generated,
-generated_dropped, screen_threshold} (every field: obsan schema diagnose; a float that cannot be
+generated_dropped, screen_threshold, relevels} (every field: obsan schema diagnose; a float that cannot be
 formed, such as a robust sd on one trajectory, is null); candidates and named effects carry origin (\"effects file\", \"generated\", \"input
 relation\"), generated candidates their score and screened_out, every candidate moved (its
 fit left its start), joint_levels (weighed at levels estimated with it) and structure (the
