@@ -74,6 +74,7 @@ pub fn restrict_to_reached(nf: &mut NormalForm) -> Option<Reached> {
         unknown_inputs: nf.unknown_inputs.clone(),
         unknown_input_vars: nf.unknown_input_vars.clone(),
         unknown_fields: nf.unknown_fields.iter().map(|f| pick(f)).collect(),
+        written: nf.written.clone(),
     };
     Some(Reached {
         nf: sub,

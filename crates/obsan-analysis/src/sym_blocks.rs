@@ -218,6 +218,7 @@ fn sub_system(
         outputs: outs.iter().map(|&o| nf.outputs[o].clone()).collect(),
         restriction: nf.restriction.clone(),
         delay: None,
+        written: Vec::new(),
     };
     (sub, kept)
 }

@@ -281,6 +281,11 @@ impl Arena {
         }
     }
 
+    /// Whether `id` is a sum node (as written: `N - A - I` in a field).
+    pub fn is_sum(&self, id: Id) -> bool {
+        matches!(self.node(id), Node::Add(_))
+    }
+
     /// All nodes reachable from `roots`, in increasing id order (children first).
     pub fn reachable(&self, roots: &[Id]) -> Vec<Id> {
         self.reachable_with(roots, true)

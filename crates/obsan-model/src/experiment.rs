@@ -162,6 +162,8 @@ impl System {
             outputs: st.outputs,
             restriction: None,
             delay,
+            // Stacked copies: sub-expressions per copy are not tracked.
+            written: Vec::new(),
         })
     }
 

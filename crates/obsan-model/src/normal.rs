@@ -49,6 +49,10 @@ pub struct NormalForm {
     /// `unknown_fields[j]` is the field `g_j` multiplying unknown input `j`.
     /// The outputs may contain the `w_j` (direct feedthrough).
     pub unknown_fields: Vec<Vec<Id>>,
+    /// The right-hand sides and outputs as written (after constants and the
+    /// restriction), before they are expanded: their sub-expressions
+    /// (`N - A - I - H`) are candidate blocks of invariants. May be empty.
+    pub written: Vec<Id>,
 }
 
 impl NormalForm {
@@ -128,12 +132,19 @@ impl System {
             &unknown_syms,
             state_decls.len(),
         )?;
+        let mut written = Vec::new();
+        for loc in &self.dynamics {
+            if let Ok(e) = ctx.substitute(loc.id, &subst) {
+                written.push(e);
+            }
+        }
         let mut outputs = Vec::new();
         for (n, loc) in &self.outputs {
             let h = ctx
                 .substitute(loc.id, &subst)
                 .map_err(|e| self.err_at(loc, &e.0))?;
             outputs.push((n.clone(), h));
+            written.push(h);
         }
         let mut nf = NormalForm {
             ctx,
@@ -156,6 +167,7 @@ impl System {
             unknown_inputs,
             unknown_input_vars: unknown_syms.iter().map(|s| s.var).collect(),
             unknown_fields,
+            written,
         };
         if self.uses_time() {
             nf.append_clock();

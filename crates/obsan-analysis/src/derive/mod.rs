@@ -240,6 +240,16 @@ fn derive_dense(
         &mut found.rng,
     )?;
     let consts = rational_invariants(nf, &lay, &search, &mut found)?;
+    // 3b. Products with the sums as written that the symmetries scale.
+    monomial::written_sum_invariants(
+        nf,
+        &search,
+        &lay.fields,
+        &mut found.modes,
+        &mut found.indep,
+        &mut found.fresh,
+        &mut found.rng,
+    )?;
     outputs_and_lie_derivatives(nf, report, &search, &mut found)?;
 
     let space = ModeSpace {

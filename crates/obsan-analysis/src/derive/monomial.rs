@@ -240,30 +240,9 @@ pub(super) fn monomial_invariants(
     }
     let blocks = monomial_blocks(nf, fields);
     let nb = blocks.len();
-    let mut roots: Vec<Id> = blocks.iter().map(|b| b.0).collect();
-    for w in s.w_ids {
-        for b in &blocks {
-            roots.push(lie(nf, b.0, w));
-        }
-    }
-    // Rows: lambda_jk at enough points that a varying column cannot cancel.
-    let npts = nb / nsym + 3;
-    let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
-    let mut tries = 0;
-    while rows.len() < npts * nsym {
-        tries += 1;
-        if tries > 4 * npts + 16 {
-            return Ok(());
-        }
-        let (_, v) = point_for(nf, rng, &roots)?;
-        let Some(inv) = v[..nb].iter().map(|x| x.inv()).collect::<Option<Vec<Fp>>>() else {
-            continue;
-        };
-        for j in 0..nsym {
-            let off = nb * (j + 1);
-            rows.push((0..nb).map(|k| v[off + k] * inv[k]).collect());
-        }
-    }
+    let Some(rows) = ratio_rows(nf, s, &blocks, rng)? else {
+        return Ok(());
+    };
     // Only blocks some symmetry moves take part.
     let live: Vec<usize> = (0..nb)
         .filter(|&k| rows.iter().any(|r| !r[k].is_zero()))
@@ -327,6 +306,154 @@ pub(super) fn monomial_invariants(
             break;
         }
         accept(nf, s, &blocks, &c, modes, indep, fresh)?;
+    }
+    Ok(())
+}
+
+/// Rows of the ratios `lambda_jk = w_j(b_k) / b_k` at enough random points
+/// that a varying column cannot cancel; `None` when no such points were found.
+fn ratio_rows(
+    nf: &mut NormalForm,
+    s: &Search,
+    blocks: &[(Id, String)],
+    rng: &mut SplitMix,
+) -> Result<Option<Vec<Vec<Fp>>>, AnalysisError> {
+    let (nb, nsym) = (blocks.len(), s.w_ids.len());
+    let mut roots: Vec<Id> = blocks.iter().map(|b| b.0).collect();
+    for w in s.w_ids {
+        for b in blocks {
+            roots.push(lie(nf, b.0, w));
+        }
+    }
+    let npts = nb / nsym + 3;
+    let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(npts * nsym);
+    let mut tries = 0;
+    while rows.len() < npts * nsym {
+        tries += 1;
+        if tries > 4 * npts + 16 {
+            return Ok(None);
+        }
+        let (_, v) = point_for(nf, rng, &roots)?;
+        let Some(inv) = v[..nb].iter().map(|x| x.inv()).collect::<Option<Vec<Fp>>>() else {
+            continue;
+        };
+        for j in 0..nsym {
+            let off = nb * (j + 1);
+            rows.push((0..nb).map(|k| v[off + k] * inv[k]).collect());
+        }
+    }
+    Ok(Some(rows))
+}
+
+/// Most sums as written taken as blocks, and most terms in one.
+const MAX_SUMS: usize = 16;
+const MAX_SUM_TERMS: usize = 12;
+
+/// Relative invariants among the sums as written (EAIHRD's `N - A - I - H -
+/// R - D - E`, the population not yet infected, which the symmetries scale
+/// by `a`): a sum `g` with `w(g) = lambda g` enters the lattice search as a
+/// block, and `a c1 (N - A - I - H - R - D - E)` is a monomial invariant over
+/// `a, c1, g` though no product of variables is. Tried after the other
+/// searches, with one sum per monomial, only while modes are missing: a
+/// short relative-invariant product in place of a long Lie derivative, whose
+/// derivative closes where the Lie derivative's has no form of low degree.
+pub(super) fn written_sum_invariants(
+    nf: &mut NormalForm,
+    s: &Search,
+    fields: &[Vec<Id>],
+    modes: &mut Vec<DerivedMode>,
+    indep: &mut Indep,
+    fresh: &mut Names,
+    rng: &mut SplitMix,
+) -> Result<(), AnalysisError> {
+    if s.w_ids.is_empty() || modes.len() >= s.rank || nf.written.is_empty() {
+        return Ok(());
+    }
+    let mut blocks = monomial_blocks(nf, fields);
+    let nv = blocks.len();
+    let allowed: Vec<u32> = nf
+        .state_vars
+        .iter()
+        .copied()
+        .chain(nf.consts.iter().filter(|c| c.1.is_none()).filter_map(|c| nf.ctx.lookup(&c.0).map(|s| s.var)))
+        .collect();
+    let mut seen: Vec<RatFun> = blocks.iter().map(|b| nf.ctx.canon(b.0)).collect();
+    let mut sums: Vec<(usize, Id, String)> = Vec::new();
+    let written = nf.written.clone();
+    for id in nf.ctx.reachable(&written) {
+        if !nf.ctx.is_sum(id) || nf.ctx.is_angle_valued(id) {
+            continue;
+        }
+        let c = nf.ctx.canon(id);
+        let terms = c.numerator().len();
+        if c.as_q().is_some()
+            || !c.denominator().is_constant()
+            || terms < 2
+            || terms > MAX_SUM_TERMS
+            || !c.vars().iter().all(|v| allowed.contains(v))
+        {
+            continue;
+        }
+        // One block per sum up to a constant factor.
+        let unit = nf.ctx.num(Q::new(c.denominator().content(), c.numerator().content()));
+        let g0 = nf.ctx.from_canonical(&c);
+        let g = nf.ctx.mul(&[unit, g0]);
+        let gc = nf.ctx.canon(g);
+        let minus = nf.ctx.neg(g);
+        let neg = nf.ctx.canon(minus);
+        if seen.contains(&gc) || seen.contains(&neg) {
+            continue;
+        }
+        seen.push(gc.clone());
+        let g = nf.ctx.from_canonical(&gc);
+        let text = nf.ctx.to_text(g);
+        sums.push((terms, g, text));
+    }
+    sums.sort_by_key(|x| x.0);
+    sums.truncate(MAX_SUMS);
+    if sums.is_empty() {
+        return Ok(());
+    }
+    blocks.extend(sums.into_iter().map(|(_, g, t)| (g, t)));
+    let Some(rows) = ratio_rows(nf, s, &blocks, rng)? else {
+        return Ok(());
+    };
+    let live = |k: usize| rows.iter().any(|r| !r[k].is_zero());
+    let vars: Vec<usize> = (0..nv).filter(|&k| live(k)).collect();
+    let mut cands: Vec<Cand> = Vec::new();
+    let mut budget = MAX_SUBSETS;
+    for g in (nv..blocks.len()).filter(|&k| live(k)) {
+        for size in 1..MAX_SUPPORT.min(vars.len() + 1) {
+            subsets(vars.len(), size, |sub| {
+                if budget == 0 {
+                    return false;
+                }
+                budget -= 1;
+                let mut cols: Vec<usize> = sub.iter().map(|&i| vars[i]).collect();
+                cols.push(g);
+                let m: Vec<Vec<Fp>> = rows
+                    .iter()
+                    .map(|r| cols.iter().map(|&c| r[c]).collect())
+                    .collect();
+                let ns = Fp::null_space(m, cols.len());
+                if ns.len() == 1 && ns[0].iter().all(|x| !x.is_zero()) {
+                    if let Some(e) = primitive(&ns[0]) {
+                        let neg = e.iter().filter(|&&x| x < 0).count();
+                        let tot: i64 = e.iter().map(|x| x.abs()).sum();
+                        cands.push((cols.len(), neg, tot, cols, e));
+                    }
+                }
+                true
+            });
+        }
+    }
+    cands.sort_by_key(|c| (c.0, c.1, c.2));
+    for c in &cands {
+        if modes.len() >= s.rank {
+            break;
+        }
+        check_deadline(s.opts, "the invariants over written sums", modes.len())?;
+        accept(nf, s, &blocks, c, modes, indep, fresh)?;
     }
     Ok(())
 }
