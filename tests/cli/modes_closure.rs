@@ -33,7 +33,9 @@ impl Model {
         if !self.consts.is_empty() {
             o.push_str(&format!("const {}\n", self.consts.join(", ")));
         }
-        o.push_str(&format!("input {}\n", self.inputs.join(", ")));
+        if !self.inputs.is_empty() {
+            o.push_str(&format!("input {}\n", self.inputs.join(", ")));
+        }
         for (x, f) in &self.state {
             o.push_str(&format!("{x}' = {f}\n"));
         }
