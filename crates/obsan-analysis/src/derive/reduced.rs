@@ -339,8 +339,14 @@ pub(super) fn in_modes(
     if nf.ctx.is_zero(t) {
         return Ok(Some("0".into()));
     }
+    if let Some(s) = angle_in_modes(nf, t, modes) {
+        return Ok(Some(s));
+    }
     if nf.ctx.is_angle_valued(t) {
         return Ok(None);
+    }
+    if let Some(s) = in_variable_modes(nf, t, modes) {
+        return Ok(Some(s));
     }
     let Some(need) = needed_modes(nf, t, modes, rng)? else {
         return Ok(None);
@@ -404,6 +410,90 @@ pub(super) fn in_modes(
         return Ok(Some(s));
     }
     split_by_variable(nf, t, zb_all, znames_all, modes, &need, rng, opts)
+}
+
+/// An angle `t` linear in the angles (`th1 - th2`, an encoder difference)
+/// as `sum c_k z_k + c` over the angle modes: the coefficients solve the
+/// linear system of the constant partial derivatives modulo p, are lifted to
+/// rationals and proven exactly (`t - sum c_k z_k` a number in canonical form).
+fn angle_in_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Option<String> {
+    let angles: Vec<&DerivedMode> = modes.iter().filter(|m| m.angle).collect();
+    if angles.is_empty() || nf.ctx.canon(t).as_q().is_some() {
+        return None;
+    }
+    let k = angles.len();
+    // One row per variable: (d z_1/dx, .., d z_k/dx, dt/dx), each a number.
+    let mut rows: Vec<Vec<Fp>> = Vec::new();
+    for x in nf.state_vars.clone() {
+        let mut row = Vec::with_capacity(k + 1);
+        for e in angles.iter().map(|m| m.expr).chain([t]) {
+            let d = nf.ctx.diff(e, x);
+            row.push(nf.ctx.canon(d).as_q()?.to_fp()?);
+        }
+        rows.push(row);
+    }
+    let ns = Fp::null_space(rows, k + 1);
+    let v = ns.iter().find(|v| !v[k].is_zero())?;
+    let scale = (-v[k]).inv()?;
+    let cs: Vec<Q> = v[..k]
+        .iter()
+        .map(|&c| rat_recon(c * scale))
+        .collect::<Option<_>>()?;
+    let mut terms = vec![t];
+    for (m, c) in angles.iter().zip(&cs) {
+        let cn = nf.ctx.num(c.neg());
+        let term = nf.ctx.mul(&[cn, m.expr]);
+        terms.push(term);
+    }
+    let rest = nf.ctx.add(&terms);
+    let c0 = nf.ctx.canon(rest).as_q()?;
+    // Printed directly: the mode names are no symbols of the context.
+    let mut text = String::new();
+    let terms = angles.iter().zip(&cs).filter(|(_, c)| !c.is_zero());
+    for (m, c) in terms.map(|(m, c)| (m.name.clone(), c.clone())).chain(
+        (!c0.is_zero()).then(|| (String::new(), c0)),
+    ) {
+        let neg = c.is_negative();
+        let a = if neg { c.neg() } else { c };
+        let body = match (m.is_empty(), a == Q::from_i64(1)) {
+            (true, _) => format!("{a}"),
+            (false, true) => m,
+            (false, false) => format!("{a}*{m}"),
+        };
+        text.push_str(match (text.is_empty(), neg) {
+            (true, true) => "-",
+            (true, false) => "",
+            (false, true) => " - ",
+            (false, false) => " + ",
+        });
+        text.push_str(&body);
+    }
+    (!text.is_empty()).then_some(text)
+}
+
+/// `t` as written when it depends on variables that are modes themselves
+/// and on no other (exact: `dt/dx` is zero in canonical form for every
+/// other variable). Atoms the ansatz cannot use stay as they are: Richards'
+/// growth `lambda V (1 - (V/K)^theta)` with `V, lambda, K, theta` modes.
+fn in_variable_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Option<String> {
+    let own: Vec<&str> = modes
+        .iter()
+        .filter(|m| m.kind == ModeKind::Variable && !m.angle)
+        .map(|m| m.name.as_str())
+        .collect();
+    if own.is_empty() {
+        return None;
+    }
+    for (name, &x) in nf.state.clone().iter().zip(&nf.state_vars.clone()) {
+        if own.contains(&name.as_str()) {
+            continue;
+        }
+        let d = nf.ctx.diff(t, x);
+        if !nf.ctx.is_identically_zero(d) {
+            return None;
+        }
+    }
+    Some(nf.ctx.to_text(t))
 }
 
 /// `t = prod z_k^{e_k} R` with `R` free of those modes (`z3 z1 T'(x)/T(x)^2`
