@@ -590,6 +590,9 @@ fn an_angle_output_is_a_combination_of_the_angle_modes() {
         .find(|o| o["name"] == "y")
         .expect("y");
     let text = y["expr"].as_str().unwrap();
-    assert!(!text.contains("sin") && !text.contains("atan"), "y = {text}");
+    assert!(
+        !text.contains("sin") && !text.contains("atan"),
+        "y = {text}"
+    );
     assert!(same_after_substitution(&v, text, "th1 - th2"), "y = {text}");
 }

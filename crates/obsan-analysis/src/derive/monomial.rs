@@ -375,7 +375,12 @@ pub(super) fn written_sum_invariants(
         .state_vars
         .iter()
         .copied()
-        .chain(nf.consts.iter().filter(|c| c.1.is_none()).filter_map(|c| nf.ctx.lookup(&c.0).map(|s| s.var)))
+        .chain(
+            nf.consts
+                .iter()
+                .filter(|c| c.1.is_none())
+                .filter_map(|c| nf.ctx.lookup(&c.0).map(|s| s.var)),
+        )
         .collect();
     let mut seen: Vec<RatFun> = blocks.iter().map(|b| nf.ctx.canon(b.0)).collect();
     let mut sums: Vec<(usize, Id, String)> = Vec::new();
@@ -388,14 +393,15 @@ pub(super) fn written_sum_invariants(
         let terms = c.numerator().len();
         if c.as_q().is_some()
             || !c.denominator().is_constant()
-            || terms < 2
-            || terms > MAX_SUM_TERMS
+            || !(2..=MAX_SUM_TERMS).contains(&terms)
             || !c.vars().iter().all(|v| allowed.contains(v))
         {
             continue;
         }
         // One block per sum up to a constant factor.
-        let unit = nf.ctx.num(Q::new(c.denominator().content(), c.numerator().content()));
+        let unit = nf
+            .ctx
+            .num(Q::new(c.denominator().content(), c.numerator().content()));
         let g0 = nf.ctx.from_canonical(&c);
         let g = nf.ctx.mul(&[unit, g0]);
         let gc = nf.ctx.canon(g);

@@ -450,9 +450,10 @@ fn angle_in_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Option<S
     // Printed directly: the mode names are no symbols of the context.
     let mut text = String::new();
     let terms = angles.iter().zip(&cs).filter(|(_, c)| !c.is_zero());
-    for (m, c) in terms.map(|(m, c)| (m.name.clone(), c.clone())).chain(
-        (!c0.is_zero()).then(|| (String::new(), c0)),
-    ) {
+    for (m, c) in terms
+        .map(|(m, c)| (m.name.clone(), c.clone()))
+        .chain((!c0.is_zero()).then(|| (String::new(), c0)))
+    {
         let neg = c.is_negative();
         let a = if neg { c.neg() } else { c };
         let body = match (m.is_empty(), a == Q::from_i64(1)) {
