@@ -472,10 +472,12 @@ fn angle_in_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Option<S
     (!text.is_empty()).then_some(text)
 }
 
-/// `t` as written when it depends on variables that are modes themselves
-/// and on no other (exact: `dt/dx` is zero in canonical form for every
-/// other variable). Atoms the ansatz cannot use stay as they are: Richards'
-/// growth `lambda V (1 - (V/K)^theta)` with `V, lambda, K, theta` modes.
+/// `t` as written when it uses variables that are modes themselves and no
+/// other: its canonical form is unchanged when any other variable is set to
+/// a number (so no atom's argument holds one either: `log(x y) - log(y)`
+/// stays out, though it is a function of `x` alone). Atoms the ansatz cannot
+/// use stay as they are: Richards' growth `lambda V (1 - (V/K)^theta)` with
+/// `V, lambda, K, theta` modes.
 fn in_variable_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Option<String> {
     let own: Vec<&str> = modes
         .iter()
@@ -485,16 +487,19 @@ fn in_variable_modes(nf: &mut NormalForm, t: Id, modes: &[DerivedMode]) -> Optio
     if own.is_empty() {
         return None;
     }
+    let c = nf.ctx.canon(t);
+    let g = nf.ctx.from_canonical(&c);
+    let two = nf.ctx.int(2);
     for (name, &x) in nf.state.clone().iter().zip(&nf.state_vars.clone()) {
         if own.contains(&name.as_str()) {
             continue;
         }
-        let d = nf.ctx.diff(t, x);
-        if !nf.ctx.is_identically_zero(d) {
+        let moved = nf.ctx.substitute(g, &[(x, two)]).ok()?;
+        if nf.ctx.canon(moved) != c {
             return None;
         }
     }
-    Some(nf.ctx.to_text(t))
+    Some(nf.ctx.to_text(g))
 }
 
 /// `t = prod z_k^{e_k} R` with `R` free of those modes (`z3 z1 T'(x)/T(x)^2`
