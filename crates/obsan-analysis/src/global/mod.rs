@@ -16,6 +16,7 @@ use crate::rank::AnalysisError;
 use obsan_model::NormalForm;
 
 mod count;
+mod io;
 mod maps;
 mod model;
 mod outputs;

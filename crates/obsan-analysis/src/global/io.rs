@@ -1,0 +1,435 @@
+//! Input-output equations modulo p (issue 36's second route, measured here
+//! first): for each output `y_i`, the minimal polynomial relation among the
+//! outputs' jets at one numeric parameter point, found as the kernel of an
+//! ansatz of monomials evaluated at jets from random initial states.
+//!
+//! The ranking is the elimination one, `y_1 < y_2 < ...`: `k_i` is the first
+//! order at which `y_i^(k_i)` is algebraically dependent (Jacobian in the
+//! initial state, rank over F_p) on `T_i = {y_l^(j) : l <= i, j < k_l}`; the
+//! relation of `y_i` is the minimal polynomial of `y_i^(k_i)` over `T_i`
+//! (inputs' jets `u^(j)`, `j <= max k`, join every relation's variables as
+//! free). For a generic parameter point the variety of jets
+//! `(T_i, y_i^(k_i))` is an irreducible hypersurface, so at the first total
+//! degree with a non-zero kernel the kernel is one line: the relation up to
+//! scale (Dong, Goodbrake, Harrington, Pogudin 2023: such relations form a
+//! characteristic presentation of the input-output ideal).
+//!
+//! Jets are truncated power series over F_p carrying, beside each value,
+//! its gradient in the initial state (forward mode), so no symbolic
+//! derivative is ever formed: the cost is polynomial in the order whatever
+//! the expression swell of the Taylor route.
+
+use super::model::ZModel;
+use super::run::Rng;
+use super::types::err;
+use crate::rank::AnalysisError;
+use obsan_expr::{Int, Poly as ZPoly, Var};
+use obsan_recon::fp::{self, Echelon, Zp};
+
+/// A polynomial over F_p in the series variables (states then inputs), each
+/// coefficient a polynomial in the parameters kept apart so the parameter
+/// point can change: terms `(coef, param exponents, series exponents)`.
+#[derive(Clone, Debug, Default)]
+struct SPoly(Vec<(u64, Vec<u32>, Vec<u32>)>);
+
+/// The model as series arithmetic sees it, modulo one prime.
+pub(super) struct IoModel {
+    p: u64,
+    np: usize,
+    nx: usize,
+    nu: usize,
+    rhs: Vec<(SPoly, SPoly)>,
+    outputs: Vec<(SPoly, SPoly)>,
+}
+
+fn int_mod(c: &Int, p: u64) -> u64 {
+    let pp = Int::from(p);
+    let r = ((c % &pp) + &pp) % &pp;
+    u64::try_from(&r).unwrap_or(0)
+}
+
+impl IoModel {
+    /// `m` modulo `p`, known constants given values drawn from `rng`.
+    pub(super) fn new(m: &ZModel, p: u64, rng: &mut Rng) -> Result<IoModel, AnalysisError> {
+        let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
+        let consts: Vec<(Var, u64)> = m
+            .const_vars
+            .iter()
+            .map(|&v| (v, elem(rng, p)))
+            .collect();
+        let conv = |q: &ZPoly| -> Result<SPoly, AnalysisError> {
+            let mut out = Vec::new();
+            for (mono, c) in q.terms() {
+                let mut coef = int_mod(c, p);
+                let mut pe = vec![0u32; np];
+                let mut se = vec![0u32; nx + nu];
+                for (v, e) in mono.iter() {
+                    if let Some(i) = m.param_vars.iter().position(|&x| x == v) {
+                        pe[i] = e;
+                    } else if let Some(i) = m.dyn_vars.iter().position(|&x| x == v) {
+                        se[i] = e;
+                    } else if let Some(i) = m.input_vars.iter().position(|&x| x == v) {
+                        se[nx + i] = e;
+                    } else if let Some((_, val)) = consts.iter().find(|(x, _)| *x == v) {
+                        coef = fp::mul(coef, fp::pow(*val, e as u64, p), p);
+                    } else {
+                        return Err(err("global (io): a symbol outside the model"));
+                    }
+                }
+                out.push((coef, pe, se));
+            }
+            Ok(SPoly(out))
+        };
+        let pair = |(n, d): &(ZPoly, ZPoly)| -> Result<(SPoly, SPoly), AnalysisError> {
+            Ok((conv(n)?, conv(d)?))
+        };
+        Ok(IoModel {
+            p,
+            np,
+            nx,
+            nu,
+            rhs: m.rhs.iter().map(pair).collect::<Result<_, _>>()?,
+            outputs: m.outputs.iter().map(pair).collect::<Result<_, _>>()?,
+        })
+    }
+
+    pub(super) fn n_params(&self) -> usize {
+        self.np
+    }
+}
+
+fn elem(rng: &mut Rng, p: u64) -> u64 {
+    loop {
+        let x = rng.next() % p;
+        if x > 1 {
+            return x;
+        }
+    }
+}
+
+/// Truncated power series whose coefficients are dual vectors of length
+/// `g` (value, then gradient in the initial state when `g > 1`).
+type Ser = Vec<Vec<u64>>;
+
+struct Arith {
+    p: u64,
+    g: usize,
+    len: usize,
+}
+
+impl Arith {
+    fn zero(&self) -> Ser {
+        vec![vec![0; self.g]; self.len]
+    }
+    fn dmul(&self, a: &[u64], b: &[u64], out: &mut [u64]) {
+        let p = self.p;
+        out[0] = fp::add(out[0], fp::mul(a[0], b[0], p), p);
+        for i in 1..self.g {
+            let t = fp::add(fp::mul(a[0], b[i], p), fp::mul(a[i], b[0], p), p);
+            out[i] = fp::add(out[i], t, p);
+        }
+    }
+    /// Cauchy product truncated to `len`.
+    fn mul(&self, a: &Ser, b: &Ser) -> Ser {
+        let mut out = self.zero();
+        for i in 0..self.len {
+            if a[i].iter().all(|&x| x == 0) {
+                continue;
+            }
+            for j in 0..self.len - i {
+                self.dmul(&a[i], &b[j], &mut out[i + j]);
+            }
+        }
+        out
+    }
+    fn add_scaled(&self, acc: &mut Ser, a: &Ser, c: u64) {
+        let p = self.p;
+        for (x, y) in acc.iter_mut().zip(a) {
+            for (u, v) in x.iter_mut().zip(y) {
+                *u = fp::add(*u, fp::mul(*v, c, p), p);
+            }
+        }
+    }
+    /// `a / b`; `None` when `b(0)` vanishes.
+    fn div(&self, a: &Ser, b: &Ser) -> Option<Ser> {
+        let p = self.p;
+        let b0 = &b[0];
+        let iv = fp::inv(b0[0], p)?;
+        // Dual inverse of b0: (1/v, -g/v^2).
+        let mut inv0 = vec![0u64; self.g];
+        inv0[0] = iv;
+        let iv2 = fp::mul(iv, iv, p);
+        for i in 1..self.g {
+            inv0[i] = fp::sub(0, fp::mul(b0[i], iv2, p), p);
+        }
+        let mut q: Ser = Vec::with_capacity(self.len);
+        for k in 0..self.len {
+            let mut r = a[k].clone();
+            for i in 1..=k {
+                let mut t = vec![0u64; self.g];
+                self.dmul(&b[i], &q[k - i], &mut t);
+                for (x, y) in r.iter_mut().zip(&t) {
+                    *x = fp::sub(*x, *y, p);
+                }
+            }
+            let mut qk = vec![0u64; self.g];
+            self.dmul(&r, &inv0, &mut qk);
+            q.push(qk);
+        }
+        Some(q)
+    }
+    /// `poly` at the series `vars`, its parameter part at `theta`.
+    fn eval(&self, poly: &SPoly, theta: &[u64], vars: &[Ser]) -> Ser {
+        let p = self.p;
+        let mut acc = self.zero();
+        for (c, pe, se) in &poly.0 {
+            let mut k = *c;
+            for (t, &e) in theta.iter().zip(pe) {
+                if e > 0 {
+                    k = fp::mul(k, fp::pow(*t, e as u64, p), p);
+                }
+            }
+            if k == 0 {
+                continue;
+            }
+            let mut term: Option<Ser> = None;
+            for (v, &e) in vars.iter().zip(se) {
+                for _ in 0..e {
+                    term = Some(match term {
+                        None => v.clone(),
+                        Some(t) => self.mul(&t, v),
+                    });
+                }
+            }
+            match term {
+                None => acc[0][0] = fp::add(acc[0][0], k, p),
+                Some(t) => self.add_scaled(&mut acc, &t, k),
+            }
+        }
+        acc
+    }
+}
+
+/// One sample: per output, the derivatives `y^(j)(0)`, `j < len`, each as a
+/// dual vector; per input, its derivatives (values only).
+struct Jets {
+    y: Vec<Vec<Vec<u64>>>,
+    u: Vec<Vec<u64>>,
+}
+
+impl IoModel {
+    /// Jets of the outputs to order `len - 1` at parameters `theta`, initial
+    /// state and inputs' Taylor coefficients from `rng`; with `grad`, each
+    /// carries its gradient in the initial state. `None` at a pole.
+    fn jets(&self, theta: &[u64], len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
+        let p = self.p;
+        let g = if grad { 1 + self.nx } else { 1 };
+        let a = Arith { p, g, len };
+        let mut vars: Vec<Ser> = Vec::with_capacity(self.nx + self.nu);
+        for s in 0..self.nx {
+            let mut x = a.zero();
+            x[0][0] = elem(rng, p);
+            if grad {
+                x[0][1 + s] = 1;
+            }
+            vars.push(x);
+        }
+        for _ in 0..self.nu {
+            let mut u = a.zero();
+            for c in u.iter_mut() {
+                c[0] = elem(rng, p);
+            }
+            vars.push(u);
+        }
+        // x_{k+1} = [t^k] f(x) / (k + 1), the series of f recomputed on
+        // the coefficients known so far (those above k do not reach t^k).
+        for k in 0..len.saturating_sub(1) {
+            for s in 0..self.nx {
+                let (n, d) = &self.rhs[s];
+                let q = a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?;
+                let inv = fp::inv((k as u64 + 1) % p, p)?;
+                let c: Vec<u64> = q[k].iter().map(|&v| fp::mul(v, inv, p)).collect();
+                vars[s][k + 1] = c;
+            }
+        }
+        // Taylor coefficients to derivatives: y^(j) = j! [t^j] y.
+        let mut fact = vec![1u64; len];
+        for j in 1..len {
+            fact[j] = fp::mul(fact[j - 1], j as u64 % p, p);
+        }
+        let mut y = Vec::with_capacity(self.outputs.len());
+        for (n, d) in &self.outputs {
+            let q = a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?;
+            y.push(
+                q.iter()
+                    .zip(&fact)
+                    .map(|(c, &f)| c.iter().map(|&v| fp::mul(v, f, p)).collect())
+                    .collect(),
+            );
+        }
+        let u = vars[self.nx..]
+            .iter()
+            .map(|s| s.iter().zip(&fact).map(|(c, &f)| fp::mul(c[0], f, p)).collect())
+            .collect();
+        Some(Jets { y, u })
+    }
+
+    /// The orders `k_i` of the elimination ranking (module doc), from the
+    /// Jacobian of the outputs' jets in the initial state at `theta`.
+    pub(super) fn orders(&self, theta: &[u64], rng: &mut Rng) -> Result<Vec<usize>, AnalysisError> {
+        let len = self.nx + 2;
+        let j = self
+            .jets(theta, len, true, rng)
+            .ok_or_else(|| err("global (io): a pole at the random point"))?;
+        let mut ech = Echelon::new(Zp(self.p));
+        let mut orders = Vec::new();
+        for yi in &j.y {
+            let mut k = 0;
+            while k < len && ech.insert(yi[k][1..].to_vec()) {
+                k += 1;
+            }
+            orders.push(k);
+        }
+        Ok(orders)
+    }
+}
+
+/// The relation of one output: its variables (`(output, order)` or
+/// `(input, order)`), the monomials of its support and their coefficients
+/// (normalised: the last monomial's coefficient is 1).
+#[derive(Clone, Debug)]
+pub(super) struct IoRelation {
+    pub(super) vars: Vec<IoVar>,
+    pub(super) degree: u32,
+    /// Monomials tried in the ansatz at `degree`.
+    pub(super) ansatz: usize,
+    pub(super) support: Vec<Vec<u32>>,
+    pub(super) coeffs: Vec<u64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum IoVar {
+    Y(usize, usize),
+    U(usize, usize),
+}
+
+/// All exponent vectors in `n` variables of total degree at most `d`.
+fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
+    let mut out = vec![vec![0u32; n]];
+    for v in 0..n {
+        let mut next = Vec::new();
+        for m in &out {
+            let used: u32 = m.iter().sum();
+            for e in 0..=(d - used) {
+                let mut m2 = m.clone();
+                m2[v] = e;
+                next.push(m2);
+            }
+        }
+        out = next;
+    }
+    out
+}
+
+impl IoModel {
+    /// The relation of output `i` at `theta`, given the orders; `None` when
+    /// no relation of total degree at most `max_degree` fits in
+    /// `max_monomials` ansatz monomials.
+    pub(super) fn relation(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        max_degree: u32,
+        max_monomials: usize,
+        rng: &mut Rng,
+    ) -> Result<Option<IoRelation>, AnalysisError> {
+        let kmax = orders.iter().copied().max().unwrap_or(0);
+        let mut vars = Vec::new();
+        for (l, &k) in orders.iter().enumerate().take(i) {
+            vars.extend((0..k).map(|j| IoVar::Y(l, j)));
+        }
+        vars.extend((0..=orders[i]).map(|j| IoVar::Y(i, j)));
+        for u in 0..self.nu {
+            vars.extend((0..=kmax).map(|j| IoVar::U(u, j)));
+        }
+        let len = kmax + 1;
+        let p = self.p;
+        for d in 1..=max_degree {
+            let monos = monomials(vars.len(), d);
+            if monos.len() > max_monomials {
+                return Ok(None);
+            }
+            let mut ech = Echelon::new(Zp(p));
+            let mut tries = 0;
+            // Rows until the rank stops growing for a few samples.
+            let mut stale = 0;
+            while stale < 4 && ech.rank() < monos.len() {
+                tries += 1;
+                if tries > 2 * monos.len() + 64 {
+                    return Err(err("global (io): too many poles sampling the jets"));
+                }
+                let Some(j) = self.jets(theta, len, false, rng) else {
+                    continue;
+                };
+                let vals: Vec<u64> = vars
+                    .iter()
+                    .map(|v| match *v {
+                        IoVar::Y(l, k) => j.y[l][k][0],
+                        IoVar::U(u, k) => j.u[u][k],
+                    })
+                    .collect();
+                let row: Vec<u64> = monos
+                    .iter()
+                    .map(|m| {
+                        m.iter().zip(&vals).fold(1u64, |acc, (&e, &v)| {
+                            if e == 0 {
+                                acc
+                            } else {
+                                fp::mul(acc, fp::pow(v, e as u64, p), p)
+                            }
+                        })
+                    })
+                    .collect();
+                if ech.insert(row) {
+                    stale = 0;
+                } else {
+                    stale += 1;
+                }
+            }
+            let ker = ech.null_space(monos.len());
+            if ker.is_empty() {
+                continue;
+            }
+            if ker.len() > 1 {
+                return Err(err(format!(
+                    "global (io): the kernel at degree {d} has dimension {} (a non-generic point)",
+                    ker.len()
+                )));
+            }
+            let v = &ker[0];
+            let last = v.iter().rposition(|&c| c != 0).unwrap_or(0);
+            let inv = fp::inv(v[last], p).unwrap_or(1);
+            let mut support = Vec::new();
+            let mut coeffs = Vec::new();
+            for (m, &c) in monos.iter().zip(v) {
+                if c != 0 {
+                    support.push(m.clone());
+                    coeffs.push(fp::mul(c, inv, p));
+                }
+            }
+            return Ok(Some(IoRelation {
+                vars,
+                degree: d,
+                ansatz: monos.len(),
+                support,
+                coeffs,
+            }));
+        }
+        Ok(None)
+    }
+}
+
+#[cfg(test)]
+#[path = "io_tests.rs"]
+mod tests;
