@@ -24,7 +24,36 @@ use super::run::Rng;
 use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Int, Poly as ZPoly, Var};
-use obsan_recon::fp::{self, Echelon, Zp};
+use obsan_expr::{Fp, FpField};
+use obsan_recon::fp::{Echelon, PrimeField, Zp};
+
+/// Arithmetic modulo `p`, with the rank test's shift-and-add products when
+/// `p = 2^61 - 1` (the dense kernels dominate the time; `u128 %` is slow).
+mod fp {
+    pub(super) use obsan_recon::fp::{add, sub};
+    #[inline]
+    pub(super) fn mul(a: u64, b: u64, p: u64) -> u64 {
+        if p == obsan_expr::P {
+            (super::Fp(a) * super::Fp(b)).0
+        } else {
+            obsan_recon::fp::mul(a, b, p)
+        }
+    }
+    pub(super) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
+        let mut r = 1 % p;
+        while e > 0 {
+            if e & 1 == 1 {
+                r = mul(r, a, p);
+            }
+            a = mul(a, a, p);
+            e >>= 1;
+        }
+        r
+    }
+    pub(super) fn inv(a: u64, p: u64) -> Option<u64> {
+        obsan_recon::fp::inv(a, p)
+    }
+}
 
 /// A polynomial over F_p in the series variables (states then inputs), each
 /// coefficient a polynomial in the parameters kept apart so the parameter
@@ -313,6 +342,33 @@ pub(super) enum IoVar {
     U(usize, usize),
 }
 
+/// The right kernel of the rows `sample` draws, drawn until the rank stops
+/// growing for 4 rows in a row (a dependent row of a random point on the
+/// variety: probability at most `deg / p` each) or is full.
+fn kernel<F: PrimeField>(
+    field: F,
+    to: impl Fn(u64) -> F::Elem,
+    back: impl Fn(F::Elem) -> u64,
+    sample: &mut dyn FnMut() -> Result<Vec<u64>, AnalysisError>,
+    ncols: usize,
+) -> Result<Vec<Vec<u64>>, AnalysisError> {
+    let mut ech = Echelon::new(field);
+    let mut stale = 0;
+    while stale < 4 && ech.rank() < ncols {
+        let row: Vec<F::Elem> = sample()?.into_iter().map(&to).collect();
+        if ech.insert(row) {
+            stale = 0;
+        } else {
+            stale += 1;
+        }
+    }
+    Ok(ech
+        .null_space(ncols)
+        .into_iter()
+        .map(|v| v.into_iter().map(&back).collect())
+        .collect())
+}
+
 /// All exponent vectors in `n` variables of total degree at most `d`.
 fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
     let mut out = vec![vec![0u32; n]];
@@ -332,18 +388,8 @@ fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
 }
 
 impl IoModel {
-    /// The relation of output `i` at `theta`, given the orders; `None` when
-    /// no relation of total degree at most `max_degree` fits in
-    /// `max_monomials` ansatz monomials.
-    pub(super) fn relation(
-        &self,
-        theta: &[u64],
-        orders: &[usize],
-        i: usize,
-        max_degree: u32,
-        max_monomials: usize,
-        rng: &mut Rng,
-    ) -> Result<Option<IoRelation>, AnalysisError> {
+    /// The variables of output `i`'s relation (module doc).
+    fn relation_vars(&self, orders: &[usize], i: usize) -> Vec<IoVar> {
         let kmax = orders.iter().copied().max().unwrap_or(0);
         let mut vars = Vec::new();
         for (l, &k) in orders.iter().enumerate().take(i) {
@@ -353,18 +399,23 @@ impl IoModel {
         for u in 0..self.nu {
             vars.extend((0..=kmax).map(|j| IoVar::U(u, j)));
         }
-        let len = kmax + 1;
+        vars
+    }
+
+    /// The kernel of the monomials `monos` in `vars` evaluated at jets of
+    /// random initial states (and inputs) at `theta`.
+    fn fit(
+        &self,
+        theta: &[u64],
+        vars: &[IoVar],
+        len: usize,
+        monos: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> Result<Vec<Vec<u64>>, AnalysisError> {
         let p = self.p;
-        for d in 1..=max_degree {
-            let monos = monomials(vars.len(), d);
-            if monos.len() > max_monomials {
-                return Ok(None);
-            }
-            let mut ech = Echelon::new(Zp(p));
-            let mut tries = 0;
-            // Rows until the rank stops growing for a few samples.
-            let mut stale = 0;
-            while stale < 4 && ech.rank() < monos.len() {
+        let mut tries = 0;
+        let mut sample = || -> Result<Vec<u64>, AnalysisError> {
+            loop {
                 tries += 1;
                 if tries > 2 * monos.len() + 64 {
                     return Err(err("global (io): too many poles sampling the jets"));
@@ -379,7 +430,7 @@ impl IoModel {
                         IoVar::U(u, k) => j.u[u][k],
                     })
                     .collect();
-                let row: Vec<u64> = monos
+                return Ok(monos
                     .iter()
                     .map(|m| {
                         m.iter().zip(&vals).fold(1u64, |acc, (&e, &v)| {
@@ -390,14 +441,36 @@ impl IoModel {
                             }
                         })
                     })
-                    .collect();
-                if ech.insert(row) {
-                    stale = 0;
-                } else {
-                    stale += 1;
-                }
+                    .collect());
             }
-            let ker = ech.null_space(monos.len());
+        };
+        if p == obsan_expr::P {
+            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len())
+        } else {
+            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len())
+        }
+    }
+
+    /// The relation of output `i` at `theta`, given the orders; `None` when
+    /// no relation of total degree at most `max_degree` fits in
+    /// `max_monomials` ansatz monomials.
+    pub(super) fn relation(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        max_degree: u32,
+        max_monomials: usize,
+        rng: &mut Rng,
+    ) -> Result<Option<IoRelation>, AnalysisError> {
+        let vars = self.relation_vars(orders, i);
+        let len = orders.iter().copied().max().unwrap_or(0) + 1;
+        for d in 1..=max_degree {
+            let monos = monomials(vars.len(), d);
+            if monos.len() > max_monomials {
+                return Ok(None);
+            }
+            let ker = self.fit(theta, &vars, len, &monos, rng)?;
             if ker.is_empty() {
                 continue;
             }
@@ -408,16 +481,13 @@ impl IoModel {
                 )));
             }
             let v = &ker[0];
-            let last = v.iter().rposition(|&c| c != 0).unwrap_or(0);
-            let inv = fp::inv(v[last], p).unwrap_or(1);
-            let mut support = Vec::new();
-            let mut coeffs = Vec::new();
-            for (m, &c) in monos.iter().zip(v) {
-                if c != 0 {
-                    support.push(m.clone());
-                    coeffs.push(fp::mul(c, inv, p));
-                }
-            }
+            let support: Vec<Vec<u32>> = monos
+                .iter()
+                .zip(v)
+                .filter(|(_, &c)| c != 0)
+                .map(|(m, _)| m.clone())
+                .collect();
+            let coeffs = self.normalise(v.iter().copied().filter(|&c| c != 0).collect());
             return Ok(Some(IoRelation {
                 vars,
                 degree: d,
@@ -427,6 +497,37 @@ impl IoModel {
             }));
         }
         Ok(None)
+    }
+
+    /// The coefficients of the relation at `theta` on a known support (that
+    /// of a generic point): a kernel of `support.len()` columns only.
+    /// `None` when the kernel is not one line (a non-generic `theta`).
+    pub(super) fn on_support(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        support: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> Result<Option<Vec<u64>>, AnalysisError> {
+        let vars = self.relation_vars(orders, i);
+        let len = orders.iter().copied().max().unwrap_or(0) + 1;
+        let ker = self.fit(theta, &vars, len, support, rng)?;
+        if ker.len() != 1 || ker[0].contains(&0) {
+            return Ok(None);
+        }
+        Ok(Some(self.normalise(ker[0].clone())))
+    }
+
+    /// Scaled so that the last coefficient is 1.
+    fn normalise(&self, mut v: Vec<u64>) -> Vec<u64> {
+        let p = self.p;
+        if let Some(inv) = v.last().and_then(|&c| fp::inv(c, p)) {
+            for c in v.iter_mut() {
+                *c = fp::mul(*c, inv, p);
+            }
+        }
+        v
     }
 }
 
