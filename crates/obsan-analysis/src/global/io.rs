@@ -71,7 +71,7 @@ pub(super) struct IoModel {
     outputs: Vec<(SPoly, SPoly)>,
 }
 
-fn int_mod(c: &Int, p: u64) -> u64 {
+pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
     let pp = Int::from(p);
     let r = ((c % &pp) + &pp) % &pp;
     u64::try_from(&r).unwrap_or(0)

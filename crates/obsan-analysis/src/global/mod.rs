@@ -17,6 +17,7 @@ use obsan_model::NormalForm;
 
 mod count;
 mod io;
+mod io_count;
 mod maps;
 mod model;
 mod outputs;
