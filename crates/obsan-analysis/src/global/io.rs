@@ -64,6 +64,7 @@ struct SPoly(Vec<(u64, Vec<u32>, Vec<u32>)>);
 /// The model as series arithmetic sees it, modulo one prime.
 pub(super) struct IoModel {
     p: u64,
+    #[cfg_attr(not(test), allow(dead_code))]
     np: usize,
     nx: usize,
     nu: usize,
@@ -122,6 +123,7 @@ impl IoModel {
         })
     }
 
+    #[cfg(test)]
     pub(super) fn n_params(&self) -> usize {
         self.np
     }
@@ -333,6 +335,7 @@ pub(super) struct IoRelation {
     /// Monomials tried in the ansatz at `degree`.
     pub(super) ansatz: usize,
     pub(super) support: Vec<Vec<u32>>,
+    #[cfg_attr(not(test), allow(dead_code))]
     pub(super) coeffs: Vec<u64>,
 }
 

@@ -35,6 +35,8 @@ pub struct IoSize {
     pub points: u64,
     pub terms: usize,
     pub max_degree: u32,
+    /// Schwartz-Zippel bound of the reconstruction's check at fresh points.
+    pub recon_error_bound: f64,
 }
 
 /// The route's answer on the parameters.
@@ -43,8 +45,8 @@ pub(super) struct IoCounts {
     pub(super) per_param: Vec<Option<usize>>,
     pub(super) joint: Option<usize>,
     pub(super) sizes: Vec<IoSize>,
-    /// Largest Schwartz-Zippel bound of the reconstructions' checks.
-    pub(super) recon_bound: f64,
+    /// The primes of the two counts (which agree).
+    pub(super) primes: [u64; 2],
 }
 
 /// Largest ansatz (monomials) one relation's first kernel may use: its
@@ -63,7 +65,6 @@ pub(super) fn io_count(
     let orders = io.orders(&theta, &mut rng)?;
     let mut fns: Vec<Rational> = Vec::new();
     let mut sizes = Vec::new();
-    let mut recon_bound: f64 = 0.0;
     for i in 0..orders.len() {
         let rel: IoRelation = io
             .relation(&theta, &orders, i, 60, MAX_ANSATZ, &mut rng)?
@@ -74,7 +75,6 @@ pub(super) fn io_count(
                 ))
             })?;
         let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
-        recon_bound = recon_bound.max(r.certificate.error_bound);
         sizes.push(IoSize {
             order: orders[i],
             variables: rel.vars.len(),
@@ -93,15 +93,24 @@ pub(super) fn io_count(
                 .map(|f| f.num().degree().max(f.den().degree()))
                 .max()
                 .unwrap_or(0),
+            recon_error_bound: r.certificate.error_bound,
         });
         fns.extend(r.functions);
     }
-    let (per_param, joint) = count(&fns, np, opts, seed)?;
+    // Two independent points and primes must agree, as on the Taylor route.
+    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
+    let (per_param, joint) = count(&fns, np, opts, seed, primes[0])?;
+    let again = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
+    if again != (per_param.clone(), joint) {
+        return Err(err(
+            "global (io): two independent random points disagree on the counts (a non-generic point); try another --seed",
+        ));
+    }
     Ok(IoCounts {
         per_param,
         joint,
         sizes,
-        recon_bound,
+        primes,
     })
 }
 
@@ -177,8 +186,8 @@ fn count(
     np: usize,
     opts: &GlobalOptions,
     seed: u64,
+    q: u64,
 ) -> Result<(Vec<Option<usize>>, Option<usize>), AnalysisError> {
-    let q = obsan_recon::PRIMES[0];
     let field = Field::new(q).ok_or_else(|| err("global (io): bad prime"))?;
     let ring = Ring::new(field, np + 1, Order::Grevlex);
     let mut rng = Rng::new(seed ^ 0xc0u64);
