@@ -252,7 +252,15 @@ impl IoModel {
     /// Jets of the outputs to order `len - 1` at parameters `theta`, initial
     /// state and inputs' Taylor coefficients from `rng`; with `grad`, each
     /// carries its gradient in the initial state. `None` at a pole.
-    fn jets(&self, theta: &[u64], len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
+    /// The outputs' and inputs' Taylor coefficients (`[t^j]`, `j < len`),
+    /// each a dual vector with `grad`.
+    fn taylor(
+        &self,
+        theta: &[u64],
+        len: usize,
+        grad: bool,
+        rng: &mut Rng,
+    ) -> Option<(Vec<Ser>, Vec<Ser>)> {
         let p = self.p;
         let g = if grad { 1 + self.nx } else { 1 };
         let a = Arith { p, g, len };
@@ -283,28 +291,105 @@ impl IoModel {
                 vars[s][k + 1] = c;
             }
         }
+        let mut y = Vec::with_capacity(self.outputs.len());
+        for (n, d) in &self.outputs {
+            y.push(a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?);
+        }
+        Some((y, vars.split_off(self.nx)))
+    }
+
+    fn jets(&self, theta: &[u64], len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
+        let p = self.p;
+        let (ys, us) = self.taylor(theta, len, grad, rng)?;
         // Taylor coefficients to derivatives: y^(j) = j! [t^j] y.
         let mut fact = vec![1u64; len];
         for j in 1..len {
             fact[j] = fp::mul(fact[j - 1], j as u64 % p, p);
         }
-        let mut y = Vec::with_capacity(self.outputs.len());
-        for (n, d) in &self.outputs {
-            let q = a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?;
-            y.push(
+        let y = ys
+            .iter()
+            .map(|q| {
                 q.iter()
                     .zip(&fact)
                     .map(|(c, &f)| c.iter().map(|&v| fp::mul(v, f, p)).collect())
-                    .collect(),
-            );
-        }
-        let u = vars[self.nx..]
+                    .collect()
+            })
+            .collect();
+        let u = us
             .iter()
             .map(|s| s.iter().zip(&fact).map(|(c, &f)| fp::mul(c[0], f, p)).collect())
             .collect();
         Some(Jets { y, u })
     }
 
+    /// Whether the relation is the only linear dependence over the
+    /// constants among its monomials `support`, as functions of time along
+    /// one output of the model at `theta` from a random initial state: their
+    /// first `support.len() + 2` Taylor coefficients have rank
+    /// `support.len() - 1` (any `N - 1` of them then have a Wronskian not
+    /// identically zero). Then the relation's coefficients, up to scale,
+    /// are the only ones that output satisfies: a single experiment fixes
+    /// them. `false` proves nothing.
+    pub(super) fn independent_along(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        support: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> bool {
+        let p = self.p;
+        let vars = self.relation_vars(orders, i);
+        let kmax = orders.iter().copied().max().unwrap_or(0);
+        let l = support.len() + 2;
+        let Some((ys, us)) = self.taylor(theta, l + kmax + 1, false, rng) else {
+            return false;
+        };
+        let a = Arith { p, g: 1, len: l };
+        // The series of D^j of a series c: [t^m] = c[m + j] (m+1)...(m+j).
+        let deriv = |c: &Ser, j: usize| -> Ser {
+            (0..l)
+                .map(|m| {
+                    let mut v = c[m + j][0];
+                    for r in 1..=j {
+                        v = fp::mul(v, (m + r) as u64 % p, p);
+                    }
+                    vec![v]
+                })
+                .collect()
+        };
+        let series: Vec<Ser> = vars
+            .iter()
+            .map(|v| match *v {
+                IoVar::Y(o, j) => deriv(&ys[o], j),
+                IoVar::U(u, j) => deriv(&us[u], j),
+            })
+            .collect();
+        let mut ech = Echelon::new(FpField);
+        let mut dependent = 0;
+        for m in support {
+            let mut acc: Option<Ser> = None;
+            for (s, &e) in series.iter().zip(m) {
+                for _ in 0..e {
+                    acc = Some(match acc {
+                        None => s.clone(),
+                        Some(t) => a.mul(&t, s),
+                    });
+                }
+            }
+            let row: Vec<Fp> = match acc {
+                None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
+                Some(t) => t.iter().map(|c| Fp(c[0])).collect(),
+            };
+            if !ech.insert(row) {
+                dependent += 1;
+            }
+        }
+        dependent == 1
+    }
+}
+
+impl IoModel {
     /// The orders `k_i` of the elimination ranking (module doc), from the
     /// Jacobian of the outputs' jets in the initial state at `theta`.
     pub(super) fn orders(&self, theta: &[u64], rng: &mut Rng) -> Result<Vec<usize>, AnalysisError> {

@@ -5,13 +5,14 @@
 //! solved by a Gröbner basis over F_q and counted per parameter.
 //!
 //! What the count means (docs/engine.md, "Input-output route"): the
-//! parameter values whose relations equal those of `theta*`. The relations'
-//! coefficients generate the field of multi-experiment identifiable
-//! functions (Ovchinnikov, Pillay, Pogudin, Scanlon 2021), so a parameter
-//! counted once is globally identifiable; a count above 1 equals the
-//! single-experiment count when the relations' monomials have a non-zero
-//! Wronskian along a generic output (Ovchinnikov, Pogudin, Thompson 2023),
-//! which this module does not check yet: such counts are upper bounds.
+//! parameter values whose relations equal those of `theta*`, i.e. the
+//! multi-experiment count (the coefficients generate the field of
+//! multi-experiment identifiable functions: Ovchinnikov, Pillay, Pogudin,
+//! Scanlon 2021). It is the single-experiment count when one output fixes
+//! the coefficients: the relation's monomials are linearly independent
+//! along a generic output (a non-zero Wronskian; Ovchinnikov, Pogudin,
+//! Thompson 2023), checked here (io.rs, `independent_along`); the route
+//! refuses otherwise.
 
 use super::io::{IoModel, IoRelation};
 use super::model::ZModel;
@@ -74,6 +75,13 @@ pub(super) fn io_count(
                     i + 1
                 ))
             })?;
+        // One output's coefficients are then fixed by that output alone.
+        if !io.independent_along(&theta, &orders, i, &rel.support, &mut rng) {
+            return Err(err(format!(
+                "global (io): the monomials of output {}'s relation satisfy more than one linear relation along an output (zero Wronskian): its coefficients would count multi-experiment identifiability only",
+                i + 1
+            )));
+        }
         let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
         sizes.push(IoSize {
             order: orders[i],
