@@ -70,6 +70,8 @@ pub(super) struct IoModel {
     nu: usize,
     rhs: Vec<(SPoly, SPoly)>,
     outputs: Vec<(SPoly, SPoly)>,
+    /// Checked at every sampled row of a kernel.
+    pub(super) deadline: Option<std::time::Instant>,
 }
 
 pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
@@ -120,6 +122,7 @@ impl IoModel {
             nu,
             rhs: m.rhs.iter().map(pair).collect::<Result<_, _>>()?,
             outputs: m.outputs.iter().map(pair).collect::<Result<_, _>>()?,
+            deadline: None,
         })
     }
 
@@ -504,6 +507,11 @@ impl IoModel {
         let mut tries = 0;
         let mut sample = || -> Result<Vec<u64>, AnalysisError> {
             loop {
+                if self.deadline.is_some_and(|d| std::time::Instant::now() > d) {
+                    return Err(AnalysisError::Timeout(
+                        "the input-output relations (global, --route io)".into(),
+                    ));
+                }
                 tries += 1;
                 if tries > 2 * monos.len() + 64 {
                     return Err(err("global (io): too many poles sampling the jets"));

@@ -51,8 +51,9 @@ pub(super) struct IoCounts {
 }
 
 /// Largest ansatz (monomials) one relation's first kernel may use: its
-/// dense elimination is cubic in it (measured: 792 monomials, 1.0 s).
-pub(super) const MAX_ANSATZ: usize = 3000;
+/// dense elimination is cubic in it (measured, docs/performance.md: 792
+/// monomials 1.0 s; 3003 monomials 245 s on a loaded machine).
+pub(super) const MAX_ANSATZ: usize = 1000;
 
 pub(super) fn io_count(
     m: &ZModel,
@@ -61,7 +62,8 @@ pub(super) fn io_count(
 ) -> Result<IoCounts, AnalysisError> {
     let np = m.param_vars.len();
     let mut rng = Rng::new(seed);
-    let io = IoModel::new(m, obsan_expr::P, &mut rng)?;
+    let mut io = IoModel::new(m, obsan_expr::P, &mut rng)?;
+    io.deadline = opts.deadline;
     let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
     let orders = io.orders(&theta, &mut rng)?;
     let mut fns: Vec<Rational> = Vec::new();
@@ -147,7 +149,9 @@ fn reconstruct(
         calls += 1;
         if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
             let mut rng = Rng::new(seed ^ p);
-            e.insert((IoModel::new(m, p, &mut rng)?, rng));
+            let mut io = IoModel::new(m, p, &mut rng)?;
+            io.deadline = opts.deadline;
+            e.insert((io, rng));
         }
         let Some((io, rng)) = models.get_mut(&p) else {
             return Ok(None);
