@@ -3,12 +3,14 @@
 //! outputs' jets at one numeric parameter point, found as the kernel of an
 //! ansatz of monomials evaluated at jets from random initial states.
 //!
-//! The ranking is the elimination one, `y_1 < y_2 < ...`: `k_i` is the first
-//! order at which `y_i^(k_i)` is algebraically dependent (Jacobian in the
-//! initial state, rank over F_p) on `T_i = {y_l^(j) : l <= i, j < k_l}`; the
-//! relation of `y_i` is the minimal polynomial of `y_i^(k_i)` over `T_i`
-//! (inputs' jets `u^(j)`, `j <= max k`, join every relation's variables as
-//! free). For a generic parameter point the variety of jets
+//! The ranking is orderly (order first, then output: SIAN's interleaving,
+//! which balances the orders; the elimination ranking `y_1 < y_2 < ...`
+//! put all of MAPK's order 12 on `y_1`): `k_i` is the first order at which
+//! `y_i^(k_i)` is algebraically dependent (Jacobian in the initial state,
+//! rank over F_p) on the jets kept before it, `T_i = {y_l^(j) : j < k_l,
+//! and j < k_i or (j = k_i and l < i)}`; the relation of `y_i` is the
+//! minimal polynomial of `y_i^(k_i)` over `T_i` (inputs' jets `u^(j)`,
+//! `j <= max k`, join every relation's variables as free). For a generic parameter point the variety of jets
 //! `(T_i, y_i^(k_i))` is an irreducible hypersurface, so at the first total
 //! degree with a non-zero kernel the kernel is one line: the relation up to
 //! scale (Dong, Goodbrake, Harrington, Pogudin 2023: such relations form a
@@ -393,7 +395,7 @@ impl IoModel {
 }
 
 impl IoModel {
-    /// The orders `k_i` of the elimination ranking (module doc), from the
+    /// The orders `k_i` of the orderly ranking (module doc), from the
     /// Jacobian of the outputs' jets in the initial state at `theta`.
     pub(super) fn orders(&self, theta: &[u64], rng: &mut Rng) -> Result<Vec<usize>, AnalysisError> {
         let len = self.nx + 2;
@@ -401,13 +403,19 @@ impl IoModel {
             .jets(theta, len, true, rng)
             .ok_or_else(|| err("global (io): a pole at the random point"))?;
         let mut ech = Echelon::new(Zp(self.p));
-        let mut orders = Vec::new();
-        for yi in &j.y {
-            let mut k = 0;
-            while k < len && ech.insert(yi[k][1..].to_vec()) {
-                k += 1;
+        let m = j.y.len();
+        let mut orders = vec![0; m];
+        let mut open = vec![true; m];
+        for k in 0..len {
+            for i in 0..m {
+                if open[i] && !ech.insert(j.y[i][k][1..].to_vec()) {
+                    open[i] = false;
+                    orders[i] = k;
+                }
             }
-            orders.push(k);
+        }
+        if open.iter().any(|&o| o) {
+            return Err(err("global (io): an output's jets stay independent past the state dimension"));
         }
         Ok(orders)
     }
@@ -483,10 +491,14 @@ impl IoModel {
     fn relation_vars(&self, orders: &[usize], i: usize) -> Vec<IoVar> {
         let kmax = orders.iter().copied().max().unwrap_or(0);
         let mut vars = Vec::new();
-        for (l, &k) in orders.iter().enumerate().take(i) {
-            vars.extend((0..k).map(|j| IoVar::Y(l, j)));
+        for j in 0..=orders[i] {
+            for (l, &k) in orders.iter().enumerate() {
+                if j < k && (j < orders[i] || l < i) {
+                    vars.push(IoVar::Y(l, j));
+                }
+            }
         }
-        vars.extend((0..=orders[i]).map(|j| IoVar::Y(i, j)));
+        vars.push(IoVar::Y(i, orders[i]));
         for u in 0..self.nu {
             vars.extend((0..=kmax).map(|j| IoVar::U(u, j)));
         }

@@ -52,7 +52,7 @@ fn decay_with_input() {
 }
 
 #[test]
-fn two_outputs_elimination_orders() {
+fn two_outputs_orderly_orders() {
     // x1' = -a x1, x2' = x1 - b x2, y1 = x1, y2 = x2: y1' + a y1 = 0
     // (order 1); y2' = y1 - b y2 is order 1 in y2 with y1 in T_2.
     let m = model(
