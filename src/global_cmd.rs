@@ -134,8 +134,10 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         .collect();
     if r.route == Route::InputOutput {
         if let Some(why) = &r.fallback {
-            o.push_str(&format!("the Taylor route did not answer ({why})
-"));
+            o.push_str(&format!(
+                "the Taylor route did not answer ({why})
+"
+            ));
         }
         let sizes: Vec<String> = r
             .output_orders
@@ -161,7 +163,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             "their coefficients reconstructed over Q and verified at fresh points (wrong with probability <= {bound:.1e})\n"
         ));
     } else {
-    o.push_str(&format!(
+        o.push_str(&format!(
         "Taylor orders {} (each the first whose row of the Jacobian is dependent: proven sufficient, docs/engine.md), {} unknowns, {} equations\n",
         orders.join(", "),
         r.unknowns,

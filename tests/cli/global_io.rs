@@ -25,7 +25,13 @@ fn two_decays_by_io() {
     // y = x1 e^{-a t} + x2 e^{-b t}: y'' + (a + b) y' + a b y = 0, whose
     // coefficients give {a, b} as an unordered pair: 2 values each, 2
     // joint values (the swap).
-    let out = ok(&["global", "systems/global/two_decays.sys", "--route", "io", "--json"]);
+    let out = ok(&[
+        "global",
+        "systems/global/two_decays.sys",
+        "--route",
+        "io",
+        "--json",
+    ]);
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["route"], "input-output");
     assert!(v["fallback"].is_null());
@@ -57,7 +63,12 @@ fn goodwin_falls_back_on_io() {
     for n in ["alpha", "gama"] {
         assert_eq!(get(n), "not identifiable", "{n}");
     }
-    let t = ok(&["global", "systems/global/sijl_tests/goodwin.sys", "--route", "io"]);
+    let t = ok(&[
+        "global",
+        "systems/global/sijl_tests/goodwin.sys",
+        "--route",
+        "io",
+    ]);
     assert!(t.contains("route: input-output relations"), "{t}");
     assert!(t.contains("initial states not assessed"), "{t}");
 }

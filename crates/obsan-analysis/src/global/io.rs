@@ -25,8 +25,8 @@ use super::model::ZModel;
 use super::run::Rng;
 use super::types::err;
 use crate::rank::AnalysisError;
-use obsan_expr::{Int, Poly as ZPoly, Var};
 use obsan_expr::{Fp, FpField};
+use obsan_expr::{Int, Poly as ZPoly, Var};
 use obsan_recon::fp::{Echelon, PrimeField, Zp};
 
 /// Arithmetic modulo `p`, with the rank test's shift-and-add products when
@@ -86,11 +86,7 @@ impl IoModel {
     /// `m` modulo `p`, known constants given values drawn from `rng`.
     pub(super) fn new(m: &ZModel, p: u64, rng: &mut Rng) -> Result<IoModel, AnalysisError> {
         let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
-        let consts: Vec<(Var, u64)> = m
-            .const_vars
-            .iter()
-            .map(|&v| (v, elem(rng, p)))
-            .collect();
+        let consts: Vec<(Var, u64)> = m.const_vars.iter().map(|&v| (v, elem(rng, p))).collect();
         let conv = |q: &ZPoly| -> Result<SPoly, AnalysisError> {
             let mut out = Vec::new();
             for (mono, c) in q.terms() {
@@ -322,7 +318,12 @@ impl IoModel {
             .collect();
         let u = us
             .iter()
-            .map(|s| s.iter().zip(&fact).map(|(c, &f)| fp::mul(c[0], f, p)).collect())
+            .map(|s| {
+                s.iter()
+                    .zip(&fact)
+                    .map(|(c, &f)| fp::mul(c[0], f, p))
+                    .collect()
+            })
             .collect();
         Some(Jets { y, u })
     }
@@ -415,7 +416,9 @@ impl IoModel {
             }
         }
         if open.iter().any(|&o| o) {
-            return Err(err("global (io): an output's jets stay independent past the state dimension"));
+            return Err(err(
+                "global (io): an output's jets stay independent past the state dimension",
+            ));
         }
         Ok(orders)
     }

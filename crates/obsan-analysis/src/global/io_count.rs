@@ -169,7 +169,9 @@ fn reconstruct(
     let r = reconstruct_vec(m.param_vars.len(), support.len() - 1, &mut bb, &ropts).map_err(
         |e| match e {
             obsan_recon::ReconError::BlackBox(e) => e,
-            e => err(format!("global (io): reconstructing the relations' coefficients: {e}")),
+            e => err(format!(
+                "global (io): reconstructing the relations' coefficients: {e}"
+            )),
         },
     )?;
     Ok((r, calls))

@@ -38,11 +38,19 @@ fn decay_with_input() {
     let a = 123_456_789u64;
     let orders = io.orders(&[a], &mut rng).unwrap();
     assert_eq!(orders, vec![1]);
-    let r = io.relation(&[a], &orders, 0, 4, 1000, &mut rng).unwrap().unwrap();
+    let r = io
+        .relation(&[a], &orders, 0, 4, 1000, &mut rng)
+        .unwrap()
+        .unwrap();
     assert_eq!(r.degree, 1);
     assert_eq!(
         r.vars,
-        vec![IoVar::Y(0, 0), IoVar::Y(0, 1), IoVar::U(0, 0), IoVar::U(0, 1)]
+        vec![
+            IoVar::Y(0, 0),
+            IoVar::Y(0, 1),
+            IoVar::U(0, 0),
+            IoVar::U(0, 1)
+        ]
     );
     assert_eq!(r.support.len(), 3);
     let c1 = coeff(&r, &[0, 1, 0, 0]);
@@ -65,7 +73,10 @@ fn two_outputs_orderly_orders() {
     let th = [5u64, 11];
     let orders = io.orders(&th, &mut rng).unwrap();
     assert_eq!(orders, vec![1, 1]);
-    let r = io.relation(&th, &orders, 1, 4, 1000, &mut rng).unwrap().unwrap();
+    let r = io
+        .relation(&th, &orders, 1, 4, 1000, &mut rng)
+        .unwrap()
+        .unwrap();
     // Variables (y1, y2, y2'): y2' - y1 + b y2 = 0.
     assert_eq!(r.degree, 1);
     let c = coeff(&r, &[0, 0, 1]);
@@ -80,10 +91,12 @@ fn two_outputs_orderly_orders() {
 #[test]
 #[ignore]
 fn io_sizes() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../systems/benchmarks/si-jl");
-    let names = std::env::var("IO_MODELS").unwrap_or_else(|_| {
-        "Goodwin HIV SIWR_orig SIWR_multiout Pharm SEAIJRC MAPK_5out".into()
-    });
+    let dir = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/benchmarks/si-jl"
+    );
+    let names = std::env::var("IO_MODELS")
+        .unwrap_or_else(|_| "Goodwin HIV SIWR_orig SIWR_multiout Pharm SEAIJRC MAPK_5out".into());
     let max_mono: usize = std::env::var("IO_MAX_MONO")
         .ok()
         .and_then(|s| s.parse().ok())
@@ -98,13 +111,23 @@ fn io_sizes() {
         let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
         let t0 = Instant::now();
         let orders = io.orders(&th, &mut rng).unwrap();
-        println!("{name}: nx {} np {} orders {orders:?} ({:.3} s)", m.dyn_vars.len(), io.n_params(), t0.elapsed().as_secs_f64());
+        println!(
+            "{name}: nx {} np {} orders {orders:?} ({:.3} s)",
+            m.dyn_vars.len(),
+            io.n_params(),
+            t0.elapsed().as_secs_f64()
+        );
         for i in 0..orders.len() {
             let t0 = Instant::now();
-            let r = io.relation(&th, &orders, i, 40, max_mono, &mut rng).unwrap();
+            let r = io
+                .relation(&th, &orders, i, 40, max_mono, &mut rng)
+                .unwrap();
             let dt = t0.elapsed().as_secs_f64();
             let Some(r) = r else {
-                println!("  y{}: no relation within {max_mono} ansatz monomials ({dt:.3} s)", i + 1);
+                println!(
+                    "  y{}: no relation within {max_mono} ansatz monomials ({dt:.3} s)",
+                    i + 1
+                );
                 continue;
             };
             let per_var: Vec<u32> = (0..r.vars.len())
@@ -132,8 +155,15 @@ fn io_sizes() {
             let mut t = 1u64;
             let mut kernels = 0;
             while th_s.iter().any(|x| !x.done()) {
-                let pt: Vec<u64> = a.iter().zip(&b).map(|(&x, &y)| fp::add(x, fp::mul(t, y, p), p)).collect();
-                let Some(ct) = io.on_support(&pt, &orders, i, &r.support, &mut rng).unwrap() else {
+                let pt: Vec<u64> = a
+                    .iter()
+                    .zip(&b)
+                    .map(|(&x, &y)| fp::add(x, fp::mul(t, y, p), p))
+                    .collect();
+                let Some(ct) = io
+                    .on_support(&pt, &orders, i, &r.support, &mut rng)
+                    .unwrap()
+                else {
                     panic!("no relation on the support at a line point");
                 };
                 kernels += 1;
@@ -155,9 +185,10 @@ fn io_sizes() {
     }
 }
 
-/// Multivariate reconstruction of the normalised coefficients (the last is
-/// 1) as rational functions of the parameters, one kernel per point: the
-/// black box of step 2 of the route; prints points, primes, sizes, time.
+/// Multivariate reconstruction of the normalised coefficients (the last
+/// one is fixed at one) as rational functions of the parameters, one kernel
+/// per point: the black box of step 2 of the route; prints points, primes,
+/// sizes, time.
 fn recon(m: &ZModel, orders: &[usize], i: usize, support: &[Vec<u32>]) {
     use std::collections::HashMap;
     let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
@@ -169,7 +200,9 @@ fn recon(m: &ZModel, orders: &[usize], i: usize, support: &[Vec<u32>]) {
             let mut rng = Rng::new(p ^ 0x10);
             (IoModel::new(m, p, &mut rng).unwrap(), rng)
         });
-        let c = io.on_support(pt, orders, i, support, rng).map_err(|e| e.to_string())?;
+        let c = io
+            .on_support(pt, orders, i, support, rng)
+            .map_err(|e| e.to_string())?;
         Ok(c.map(|mut v| {
             v.pop();
             v
@@ -183,8 +216,17 @@ fn recon(m: &ZModel, orders: &[usize], i: usize, support: &[Vec<u32>]) {
     let np = m.param_vars.len();
     match obsan_recon::reconstruct_vec(np, ncoef, &mut bb, &opts) {
         Ok(r) => {
-            let terms: usize = r.functions.iter().map(|f| f.num().terms().len() + f.den().terms().len()).sum();
-            let maxdeg = r.functions.iter().map(|f| f.num().degree().max(f.den().degree())).max().unwrap_or(0);
+            let terms: usize = r
+                .functions
+                .iter()
+                .map(|f| f.num().terms().len() + f.den().terms().len())
+                .sum();
+            let maxdeg = r
+                .functions
+                .iter()
+                .map(|f| f.num().degree().max(f.den().degree()))
+                .max()
+                .unwrap_or(0);
             println!(
                 "    reconstruction: {} functions, {terms} terms in all, max degree {maxdeg}, {} points, {} primes, {:.2} s, error bound {:.1e}",
                 r.functions.len(),

@@ -29,15 +29,13 @@ mod types;
 mod weights;
 
 use count::{count_once, error_bounds};
+pub use io_count::IoSize;
 use maps::{find_maps, group_order, map_signs};
 use model::zmodel;
 pub use outputs::OutputForm;
 use run::Run;
 use types::err;
-pub use io_count::IoSize;
-pub use types::{
-    DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route,
-};
+pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
 
 /// Global identifiability of every parameter and initial state (SIAN's
 /// route; the certificate and the bounds are in docs/engine.md): two
@@ -53,9 +51,8 @@ pub fn global_identifiability(
         Route::InputOutput => io_report::io_route(nf, opts, None),
         Route::Auto => match taylor_route(nf, opts) {
             Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
-                io_report::io_route(nf, opts, Some(why.clone())).map_err(|e| {
-                    err(format!("{why}; the input-output route: {e}"))
-                })
+                io_report::io_route(nf, opts, Some(why.clone()))
+                    .map_err(|e| err(format!("{why}; the input-output route: {e}")))
             }
             r => r,
         },
@@ -63,10 +60,7 @@ pub fn global_identifiability(
 }
 
 /// SIAN's route.
-fn taylor_route(
-    nf: &mut NormalForm,
-    opts: &GlobalOptions,
-) -> Result<GlobalReport, AnalysisError> {
+fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let kmax = opts.max_order + 2;
