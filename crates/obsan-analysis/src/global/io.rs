@@ -83,10 +83,20 @@ pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
 }
 
 impl IoModel {
-    /// `m` modulo `p`, known constants given values drawn from `rng`.
-    pub(super) fn new(m: &ZModel, p: u64, rng: &mut Rng) -> Result<IoModel, AnalysisError> {
+    /// `m` modulo `p`.
+    pub(super) fn new(m: &ZModel, p: u64) -> Result<IoModel, AnalysisError> {
         let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
-        let consts: Vec<(Var, u64)> = m.const_vars.iter().map(|&v| (v, elem(rng, p))).collect();
+        // Known constants: one random integer each, the same modulo every
+        // prime (the coefficients are reconstructed over Q across primes).
+        let consts: Vec<(Var, u64)> = m
+            .const_vars
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| {
+                let mut st = 0x10c0_57a7 + k as u64;
+                (v, (obsan_recon::splitmix64(&mut st) >> 34) + 2)
+            })
+            .collect();
         let conv = |q: &ZPoly| -> Result<SPoly, AnalysisError> {
             let mut out = Vec::new();
             for (mono, c) in q.terms() {

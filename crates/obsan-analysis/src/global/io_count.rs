@@ -62,7 +62,7 @@ pub(super) fn io_count(
 ) -> Result<IoCounts, AnalysisError> {
     let np = m.param_vars.len();
     let mut rng = Rng::new(seed);
-    let mut io = IoModel::new(m, obsan_expr::P, &mut rng)?;
+    let mut io = IoModel::new(m, obsan_expr::P)?;
     io.deadline = opts.deadline;
     let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
     let orders = io.orders(&theta, &mut rng)?;
@@ -148,8 +148,8 @@ fn reconstruct(
     let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
         calls += 1;
         if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
-            let mut rng = Rng::new(seed ^ p);
-            let mut io = IoModel::new(m, p, &mut rng)?;
+            let rng = Rng::new(seed ^ p);
+            let mut io = IoModel::new(m, p)?;
             io.deadline = opts.deadline;
             e.insert((io, rng));
         }

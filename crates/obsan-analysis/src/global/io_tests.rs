@@ -34,7 +34,7 @@ fn decay_with_input() {
     );
     let p = obsan_expr::P;
     let mut rng = Rng::new(7);
-    let io = IoModel::new(&m, p, &mut rng).unwrap();
+    let io = IoModel::new(&m, p).unwrap();
     let a = 123_456_789u64;
     let orders = io.orders(&[a], &mut rng).unwrap();
     assert_eq!(orders, vec![1]);
@@ -69,7 +69,7 @@ fn two_outputs_orderly_orders() {
     );
     let p = obsan_expr::P;
     let mut rng = Rng::new(9);
-    let io = IoModel::new(&m, p, &mut rng).unwrap();
+    let io = IoModel::new(&m, p).unwrap();
     let th = [5u64, 11];
     let orders = io.orders(&th, &mut rng).unwrap();
     assert_eq!(orders, vec![1, 1]);
@@ -107,7 +107,7 @@ fn io_sizes() {
         let m = model(&src, &path);
         let p = obsan_expr::P;
         let mut rng = Rng::new(1);
-        let io = IoModel::new(&m, p, &mut rng).unwrap();
+        let io = IoModel::new(&m, p).unwrap();
         let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
         let t0 = Instant::now();
         let orders = io.orders(&th, &mut rng).unwrap();
@@ -197,8 +197,8 @@ fn recon(m: &ZModel, orders: &[usize], i: usize, support: &[Vec<u32>]) {
     let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, String> {
         calls += 1;
         let (io, rng) = models.entry(p).or_insert_with(|| {
-            let mut rng = Rng::new(p ^ 0x10);
-            (IoModel::new(m, p, &mut rng).unwrap(), rng)
+            let rng = Rng::new(p ^ 0x10);
+            (IoModel::new(m, p).unwrap(), rng)
         });
         let c = io
             .on_support(pt, orders, i, support, rng)
