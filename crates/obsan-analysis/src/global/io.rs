@@ -74,6 +74,8 @@ pub(super) struct IoModel {
     outputs: Vec<(SPoly, SPoly)>,
     /// Checked at every sampled row of a kernel.
     pub(super) deadline: Option<std::time::Instant>,
+    /// Bytes a kernel's dense rows may hold (the memory budget).
+    pub(super) max_bytes: usize,
 }
 
 pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
@@ -131,6 +133,7 @@ impl IoModel {
             rhs: m.rhs.iter().map(pair).collect::<Result<_, _>>()?,
             outputs: m.outputs.iter().map(pair).collect::<Result<_, _>>()?,
             deadline: None,
+            max_bytes: usize::MAX,
         })
     }
 
@@ -529,6 +532,18 @@ impl IoModel {
         rng: &mut Rng,
     ) -> Result<Vec<Vec<u64>>, AnalysisError> {
         let p = self.p;
+        // The echelon holds up to `n` rows of `n` field elements.
+        let bytes = (monos.len() as u128).pow(2) * 8;
+        if bytes > self.max_bytes as u128 {
+            return Err(super::types::too_large(
+                bytes,
+                self.max_bytes as u128,
+                &format!(
+                    "the input-output relation's kernel ({} monomials)",
+                    monos.len()
+                ),
+            ));
+        }
         let mut tries = 0;
         let mut sample = || -> Result<Vec<u64>, AnalysisError> {
             loop {

@@ -64,6 +64,7 @@ pub(super) fn io_count(
     let mut rng = Rng::new(seed);
     let mut io = IoModel::new(m, obsan_expr::P)?;
     io.deadline = opts.deadline;
+    io.max_bytes = opts.max_bytes;
     let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
     let orders = io.orders(&theta, &mut rng)?;
     let mut fns: Vec<Rational> = Vec::new();
@@ -151,6 +152,7 @@ fn reconstruct(
             let rng = Rng::new(seed ^ p);
             let mut io = IoModel::new(m, p)?;
             io.deadline = opts.deadline;
+            io.max_bytes = opts.max_bytes;
             e.insert((io, rng));
         }
         let Some((io, rng)) = models.get_mut(&p) else {
