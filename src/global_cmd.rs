@@ -5,7 +5,7 @@ use crate::json;
 use crate::show::load_normal_form;
 use crate::Failure;
 use obsan_analysis::global_id::{
-    global_identifiability, GlobalOptions, Identifiability, OutputForm,
+    global_identifiability, GlobalOptions, Identifiability, OutputForm, Route,
 };
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -24,8 +24,14 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             (a.an.max_terms as u128).saturating_mul(obsan_expr::Budget::BYTES_PER_TERM),
         )
         .unwrap_or(usize::MAX),
+        route: match a.route.as_str() {
+            "taylor" => Route::Taylor,
+            "io" => Route::InputOutput,
+            _ => Route::Auto,
+        },
         ..GlobalOptions::default()
     };
+
     let r = global_identifiability(&mut nf, &opts).map_err(|e| Failure(e.to_string()))?;
     let verdict = |v: Identifiability| match v {
         Identifiability::Global => (json::Verdict::Global, Some(1)),
@@ -87,7 +93,11 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             log10_degree_bound_global: r.log10_delta_global,
             maps,
             maps_modulo_pi: maps_pi.iter().map(|m| m.0.clone()).collect(),
-            method: "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into(),
+            method: if r.route == Route::InputOutput {
+                "input-output relations: kernels of monomials in the outputs' jets at numeric parameters, coefficients reconstructed over Q and verified, Gröbner basis over F_p of c(theta) = c(theta*); two independent points and primes agree".into()
+            } else {
+                "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into()
+            },
             order: r.order,
             output_forms: r
                 .output_forms
@@ -101,6 +111,12 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             primes: r.primes.to_vec(),
             rank_order: r.rank_order,
             restriction: nf.restriction.clone(),
+            route: if r.route == Route::InputOutput {
+                "input-output".into()
+            } else {
+                "taylor".into()
+            },
+            fallback: r.fallback.clone(),
             solutions: r.solutions,
             solutions_at_most: r.solutions_at_most,
             system: nf.name.clone(),
@@ -116,12 +132,44 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         .iter()
         .map(|(n, k)| format!("{n} to order {k}"))
         .collect();
-    o.push_str(&format!(
+    if r.route == Route::InputOutput {
+        if let Some(why) = &r.fallback {
+            o.push_str(&format!(
+                "the Taylor route did not answer ({why})
+"
+            ));
+        }
+        let sizes: Vec<String> = r
+            .output_orders
+            .iter()
+            .zip(&r.io_sizes)
+            .map(|((n, _), s)| {
+                format!(
+                    "{n}: order {}, degree {} in {} jets, {} monomials",
+                    s.order, s.degree, s.variables, s.support
+                )
+            })
+            .collect();
+        o.push_str(&format!(
+            "route: input-output relations ({}); parameters only, initial states not assessed\n",
+            sizes.join("; ")
+        ));
+        let bound = r
+            .io_sizes
+            .iter()
+            .map(|s| s.recon_error_bound)
+            .fold(0.0, f64::max);
+        o.push_str(&format!(
+            "their coefficients reconstructed over Q and verified at fresh points (wrong with probability <= {bound:.1e})\n"
+        ));
+    } else {
+        o.push_str(&format!(
         "Taylor orders {} (each the first whose row of the Jacobian is dependent: proven sufficient, docs/engine.md), {} unknowns, {} equations\n",
         orders.join(", "),
         r.unknowns,
         r.equations
     ));
+    }
     // How an output not read as written is counted (outputs.rs).
     for (name, f) in &r.output_forms {
         match f {
@@ -153,7 +201,9 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         };
         o.push_str(&format!("  {:w$}  {kind}  {text}{angle}\n", v.name));
     }
-    let scope = if r.all_local {
+    let scope = if r.route == Route::InputOutput && r.all_local {
+        "parameter values"
+    } else if r.all_local {
         "(params, initial states)"
     } else {
         "values of the locally identifiable variables"
@@ -219,16 +269,20 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         "counted over the complex numbers at two independent random points modulo {} and {}, which agree\n",
         r.primes[0], r.primes[1]
     ));
-    let bound = if r.error_bound < 1.0 {
-        format!("wrong with probability <= {:.1e}", r.error_bound)
+    if r.route == Route::InputOutput {
+        o.push_str("each relation's monomials are linearly independent along an output (non-zero Wronskian), so one experiment fixes its coefficients: these are single-experiment counts\nprobabilistic: the counts are the agreement of the two runs (no degree bound on the random points yet; docs/engine.md, \"Input-output route\")\n");
     } else {
-        "without a useful bound (SIAN's degree bound exceeds the prime)".to_string()
-    };
-    o.push_str(&format!(
-        "probabilistic: the verdicts (global / local / not identifiable) are {bound} (SIAN's degree bounds {:.1e} and 10^{:.1} at each point, Schwartz-Zippel; both runs would have to err); a count k > 1 is the agreement of the two runs\n",
-        r.delta_local,
-        if r.log10_delta_global.is_finite() { r.log10_delta_global } else { 0.0 }
-    ));
+        let bound = if r.error_bound < 1.0 {
+            format!("wrong with probability <= {:.1e}", r.error_bound)
+        } else {
+            "without a useful bound (SIAN's degree bound exceeds the prime)".to_string()
+        };
+        o.push_str(&format!(
+            "probabilistic: the verdicts (global / local / not identifiable) are {bound} (SIAN's degree bounds {:.1e} and 10^{:.1} at each point, Schwartz-Zippel; both runs would have to err); a count k > 1 is the agreement of the two runs\n",
+            r.delta_local,
+            if r.log10_delta_global.is_finite() { r.log10_delta_global } else { 0.0 }
+        ));
+    }
     outln!("{}", o.trim_end());
     Ok(ExitCode::SUCCESS)
 }

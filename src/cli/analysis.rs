@@ -21,6 +21,11 @@ pub struct SchemaArgs {
 pub struct GlobalArgs {
     #[command(flatten)]
     pub sys: SystemArgs,
+    /// `taylor` (SIAN's Taylor system), `io` (input-output relations:
+    /// parameters only), or `auto`: taylor, then io when the Taylor system
+    /// passes a budget (docs/engine.md, "Input-output route").
+    #[arg(long, default_value = "auto", value_parser = ["auto", "taylor", "io"])]
+    pub route: String,
     #[command(flatten)]
     pub an: AnalysisArgs,
     #[command(flatten)]

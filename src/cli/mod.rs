@@ -307,7 +307,9 @@ independent random points modulo two primes must agree. Rational models, and sin
 state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp/log/sqrt.
 Memory: the Taylor system, the Gröbner basis and its F4 matrices may hold 2048 bytes per
 --max-terms unit (about 195 MiB by default); past it, exit 2 with the stage named ('too large:
-the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms').
+the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms')
+unless --route auto (the default) answers by the input-output relations: the parameters only,
+with the reason in `fallback` (--route io: that route alone; --route taylor: SIAN's alone).
 Outputs through sqrt or atan are counted through their argument; an angle output (an atan2
 bearing) through its tangent, modulo pi: a count above 1 is then 'at most' unless the maps'
 signs on the angle settle it.
@@ -315,7 +317,8 @@ signs on the angle settle it.
 verdict (global | local | not identifiable), values, at_most}], solutions, solutions_at_most,
 all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
 counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
-log10_degree_bound_global, unknowns, equations, primes, exact: false, method}.")]
+log10_degree_bound_global, unknowns, equations, primes, exact: false, method, route
+(taylor | input-output), fallback}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,

@@ -17,6 +17,9 @@ pub struct Global {
     pub error_bound: f64,
     /// Always false: the answer is probabilistic (`error_bound`).
     pub exact: bool,
+    /// Why the Taylor route did not answer, when `route` fell back on
+    /// `input-output`; else null.
+    pub fallback: Option<String>,
     /// The order of the group of discrete symmetries found.
     pub group_order: usize,
     /// log10 of the degree bound of the global test.
@@ -41,6 +44,10 @@ pub struct Global {
     pub rank_order: usize,
     /// The input restriction applied, or null.
     pub restriction: Option<String>,
+    /// The route that answered: `taylor` (SIAN's Taylor system: parameters
+    /// and initial states) or `input-output` (the outputs' input-output
+    /// relations: parameters only, `variables` lists no state).
+    pub route: String,
     /// The number of solutions, or null when not counted.
     pub solutions: Option<usize>,
     /// `solutions` is an upper bound: an angle output was read through its

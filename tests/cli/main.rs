@@ -9,6 +9,7 @@ mod experiments;
 mod expr;
 mod feedthrough;
 mod global;
+mod global_io;
 mod global_maps;
 mod import;
 mod json_schema;

@@ -90,7 +90,7 @@ pub mod multi_experiment {
 pub mod global_id {
     pub use crate::global::{
         global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
-        Identifiability, OutputForm,
+        Identifiability, IoSize, OutputForm, Route,
     };
 }
 

@@ -16,6 +16,9 @@ use crate::rank::AnalysisError;
 use obsan_model::NormalForm;
 
 mod count;
+mod io;
+mod io_count;
+mod io_report;
 mod maps;
 mod model;
 mod outputs;
@@ -26,20 +29,38 @@ mod types;
 mod weights;
 
 use count::{count_once, error_bounds};
+pub use io_count::IoSize;
 use maps::{find_maps, group_order, map_signs};
 use model::zmodel;
 pub use outputs::OutputForm;
 use run::Run;
 use types::err;
-pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability};
+pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
 
 /// Global identifiability of every parameter and initial state (SIAN's
 /// route; the certificate and the bounds are in docs/engine.md): two
-/// independent runs (different primes and random points) must agree.
+/// independent runs (different primes and random points) must agree. With
+/// [`Route::Auto`], a Taylor system past a budget falls back on the
+/// input-output relations (io_report.rs), which count the parameters only.
 pub fn global_identifiability(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
+    match opts.route {
+        Route::Taylor => taylor_route(nf, opts),
+        Route::InputOutput => io_report::io_route(nf, opts, None),
+        Route::Auto => match taylor_route(nf, opts) {
+            Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
+                io_report::io_route(nf, opts, Some(why.clone()))
+                    .map_err(|e| err(format!("{why}; the input-output route: {e}")))
+            }
+            r => r,
+        },
+    }
+}
+
+/// SIAN's route.
+fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let kmax = opts.max_order + 2;
@@ -182,6 +203,9 @@ pub fn global_identifiability(
         unknowns: a.unknowns,
         equations: a.equations,
         primes,
+        route: Route::Taylor,
+        fallback: None,
+        io_sizes: Vec::new(),
     })
 }
 

@@ -165,8 +165,10 @@ fn a_small_memory_budget_stops_the_count() {
     )
     .unwrap();
     let mut nf = sys.normal_form(None, &[]).unwrap();
+    // The Taylor route's budget (auto would fall back on the io route).
     let opts = GlobalOptions {
         max_bytes: 4 << 10,
+        route: Route::Taylor,
         ..GlobalOptions::default()
     };
     let e = global_identifiability(&mut nf, &opts)

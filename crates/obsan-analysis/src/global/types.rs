@@ -24,6 +24,21 @@ pub struct GlobalOptions {
     /// SIAN's weighted order (weights.rs): on by default; it changes the
     /// time of the Gröbner basis, never a count (the tests compare both).
     pub weighted: bool,
+    /// Which route counts (docs/engine.md, "Input-output route").
+    pub route: Route,
+}
+
+/// The route of `obsan global`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Route {
+    /// SIAN's Taylor system; the input-output relations (parameters only)
+    /// when it passes a budget.
+    #[default]
+    Auto,
+    /// SIAN's Taylor system only.
+    Taylor,
+    /// The input-output relations only: parameters, no initial states.
+    InputOutput,
 }
 
 impl Default for GlobalOptions {
@@ -36,6 +51,7 @@ impl Default for GlobalOptions {
             max_solutions: 100_000,
             max_bytes: memory_budget(obsan_expr::Budget::DEFAULT_MAX_TERMS),
             weighted: true,
+            route: Route::Auto,
         }
     }
 }
@@ -155,6 +171,13 @@ pub struct GlobalReport {
     pub equations: usize,
     /// The primes of the two independent runs.
     pub primes: [u64; 2],
+    /// The route that answered ([`Route::Taylor`] or
+    /// [`Route::InputOutput`]: then `variables` holds the parameters only),
+    /// and why the Taylor route did not when it fell back.
+    pub route: Route,
+    pub fallback: Option<String>,
+    /// The input-output relations' sizes (that route only).
+    pub io_sizes: Vec<super::io_count::IoSize>,
 }
 
 /// The memory budget of a term budget, as every engine stage counts it.

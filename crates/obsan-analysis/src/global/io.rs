@@ -1,0 +1,672 @@
+//! Input-output equations modulo p (issue 36's second route, measured here
+//! first): for each output `y_i`, the minimal polynomial relation among the
+//! outputs' jets at one numeric parameter point, found as the kernel of an
+//! ansatz of monomials evaluated at jets from random initial states.
+//!
+//! The ranking is orderly (order first, then output: SIAN's interleaving,
+//! which balances the orders; the elimination ranking `y_1 < y_2 < ...`
+//! put all of MAPK's order 12 on `y_1`): `k_i` is the first order at which
+//! `y_i^(k_i)` is algebraically dependent (Jacobian in the initial state,
+//! rank over F_p) on the jets kept before it, `T_i = {y_l^(j) : j < k_l,
+//! and j < k_i or (j = k_i and l < i)}`; the relation of `y_i` is the
+//! minimal polynomial of `y_i^(k_i)` over `T_i` (inputs' jets `u^(j)`,
+//! `j <= max k`, join every relation's variables as free). For a generic parameter point the variety of jets
+//! `(T_i, y_i^(k_i))` is an irreducible hypersurface, so at the first total
+//! degree with a non-zero kernel the kernel is one line: the relation up to
+//! scale (Dong, Goodbrake, Harrington, Pogudin 2023: such relations form a
+//! characteristic presentation of the input-output ideal).
+//!
+//! Jets are truncated power series over F_p carrying, beside each value,
+//! its gradient in the initial state (forward mode), so no symbolic
+//! derivative is ever formed: the cost is polynomial in the order whatever
+//! the expression swell of the Taylor route.
+
+use super::model::ZModel;
+use super::run::Rng;
+use super::types::err;
+use crate::rank::AnalysisError;
+use obsan_expr::{Fp, FpField};
+use obsan_expr::{Int, Poly as ZPoly, Var};
+use obsan_recon::fp::{Echelon, PrimeField, Zp};
+
+/// Arithmetic modulo `p`, with the rank test's shift-and-add products when
+/// `p = 2^61 - 1` (the dense kernels dominate the time; `u128 %` is slow).
+mod fp {
+    pub(super) use obsan_recon::fp::{add, sub};
+    #[inline]
+    pub(super) fn mul(a: u64, b: u64, p: u64) -> u64 {
+        if p == obsan_expr::P {
+            (super::Fp(a) * super::Fp(b)).0
+        } else {
+            obsan_recon::fp::mul(a, b, p)
+        }
+    }
+    pub(super) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
+        let mut r = 1 % p;
+        while e > 0 {
+            if e & 1 == 1 {
+                r = mul(r, a, p);
+            }
+            a = mul(a, a, p);
+            e >>= 1;
+        }
+        r
+    }
+    pub(super) fn inv(a: u64, p: u64) -> Option<u64> {
+        obsan_recon::fp::inv(a, p)
+    }
+}
+
+/// A polynomial over F_p in the series variables (states then inputs), each
+/// coefficient a polynomial in the parameters kept apart so the parameter
+/// point can change: terms `(coef, param exponents, series exponents)`.
+#[derive(Clone, Debug, Default)]
+struct SPoly(Vec<(u64, Vec<u32>, Vec<u32>)>);
+
+/// The model as series arithmetic sees it, modulo one prime.
+pub(super) struct IoModel {
+    p: u64,
+    #[cfg_attr(not(test), allow(dead_code))]
+    np: usize,
+    nx: usize,
+    nu: usize,
+    rhs: Vec<(SPoly, SPoly)>,
+    outputs: Vec<(SPoly, SPoly)>,
+    /// Checked at every sampled row of a kernel.
+    pub(super) deadline: Option<std::time::Instant>,
+    /// Bytes a kernel's dense rows may hold (the memory budget).
+    pub(super) max_bytes: usize,
+}
+
+pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
+    let pp = Int::from(p);
+    let r = ((c % &pp) + &pp) % &pp;
+    u64::try_from(&r).unwrap_or(0)
+}
+
+impl IoModel {
+    /// `m` modulo `p`.
+    pub(super) fn new(m: &ZModel, p: u64) -> Result<IoModel, AnalysisError> {
+        let (np, nx, nu) = (m.param_vars.len(), m.dyn_vars.len(), m.input_vars.len());
+        // Known constants: one random integer each, the same modulo every
+        // prime (the coefficients are reconstructed over Q across primes).
+        let consts: Vec<(Var, u64)> = m
+            .const_vars
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| {
+                let mut st = 0x10c0_57a7 + k as u64;
+                (v, (obsan_recon::splitmix64(&mut st) >> 34) + 2)
+            })
+            .collect();
+        let conv = |q: &ZPoly| -> Result<SPoly, AnalysisError> {
+            let mut out = Vec::new();
+            for (mono, c) in q.terms() {
+                let mut coef = int_mod(c, p);
+                let mut pe = vec![0u32; np];
+                let mut se = vec![0u32; nx + nu];
+                for (v, e) in mono.iter() {
+                    if let Some(i) = m.param_vars.iter().position(|&x| x == v) {
+                        pe[i] = e;
+                    } else if let Some(i) = m.dyn_vars.iter().position(|&x| x == v) {
+                        se[i] = e;
+                    } else if let Some(i) = m.input_vars.iter().position(|&x| x == v) {
+                        se[nx + i] = e;
+                    } else if let Some((_, val)) = consts.iter().find(|(x, _)| *x == v) {
+                        coef = fp::mul(coef, fp::pow(*val, e as u64, p), p);
+                    } else {
+                        return Err(err("global (io): a symbol outside the model"));
+                    }
+                }
+                out.push((coef, pe, se));
+            }
+            Ok(SPoly(out))
+        };
+        let pair = |(n, d): &(ZPoly, ZPoly)| -> Result<(SPoly, SPoly), AnalysisError> {
+            Ok((conv(n)?, conv(d)?))
+        };
+        Ok(IoModel {
+            p,
+            np,
+            nx,
+            nu,
+            rhs: m.rhs.iter().map(pair).collect::<Result<_, _>>()?,
+            outputs: m.outputs.iter().map(pair).collect::<Result<_, _>>()?,
+            deadline: None,
+            max_bytes: usize::MAX,
+        })
+    }
+
+    #[cfg(test)]
+    pub(super) fn n_params(&self) -> usize {
+        self.np
+    }
+}
+
+fn elem(rng: &mut Rng, p: u64) -> u64 {
+    loop {
+        let x = rng.next() % p;
+        if x > 1 {
+            return x;
+        }
+    }
+}
+
+/// Truncated power series whose coefficients are dual vectors of length
+/// `g` (value, then gradient in the initial state when `g > 1`).
+type Ser = Vec<Vec<u64>>;
+
+struct Arith {
+    p: u64,
+    g: usize,
+    len: usize,
+}
+
+impl Arith {
+    fn zero(&self) -> Ser {
+        vec![vec![0; self.g]; self.len]
+    }
+    fn dmul(&self, a: &[u64], b: &[u64], out: &mut [u64]) {
+        let p = self.p;
+        out[0] = fp::add(out[0], fp::mul(a[0], b[0], p), p);
+        for i in 1..self.g {
+            let t = fp::add(fp::mul(a[0], b[i], p), fp::mul(a[i], b[0], p), p);
+            out[i] = fp::add(out[i], t, p);
+        }
+    }
+    /// Cauchy product truncated to `len`.
+    fn mul(&self, a: &Ser, b: &Ser) -> Ser {
+        let mut out = self.zero();
+        for i in 0..self.len {
+            if a[i].iter().all(|&x| x == 0) {
+                continue;
+            }
+            for j in 0..self.len - i {
+                self.dmul(&a[i], &b[j], &mut out[i + j]);
+            }
+        }
+        out
+    }
+    fn add_scaled(&self, acc: &mut Ser, a: &Ser, c: u64) {
+        let p = self.p;
+        for (x, y) in acc.iter_mut().zip(a) {
+            for (u, v) in x.iter_mut().zip(y) {
+                *u = fp::add(*u, fp::mul(*v, c, p), p);
+            }
+        }
+    }
+    /// `a / b`; `None` when `b(0)` vanishes.
+    fn div(&self, a: &Ser, b: &Ser) -> Option<Ser> {
+        let p = self.p;
+        let b0 = &b[0];
+        let iv = fp::inv(b0[0], p)?;
+        // Dual inverse of b0: (1/v, -g/v^2).
+        let mut inv0 = vec![0u64; self.g];
+        inv0[0] = iv;
+        let iv2 = fp::mul(iv, iv, p);
+        for i in 1..self.g {
+            inv0[i] = fp::sub(0, fp::mul(b0[i], iv2, p), p);
+        }
+        let mut q: Ser = Vec::with_capacity(self.len);
+        for k in 0..self.len {
+            let mut r = a[k].clone();
+            for i in 1..=k {
+                let mut t = vec![0u64; self.g];
+                self.dmul(&b[i], &q[k - i], &mut t);
+                for (x, y) in r.iter_mut().zip(&t) {
+                    *x = fp::sub(*x, *y, p);
+                }
+            }
+            let mut qk = vec![0u64; self.g];
+            self.dmul(&r, &inv0, &mut qk);
+            q.push(qk);
+        }
+        Some(q)
+    }
+    /// `poly` at the series `vars`, its parameter part at `theta`.
+    fn eval(&self, poly: &SPoly, theta: &[u64], vars: &[Ser]) -> Ser {
+        let p = self.p;
+        let mut acc = self.zero();
+        for (c, pe, se) in &poly.0 {
+            let mut k = *c;
+            for (t, &e) in theta.iter().zip(pe) {
+                if e > 0 {
+                    k = fp::mul(k, fp::pow(*t, e as u64, p), p);
+                }
+            }
+            if k == 0 {
+                continue;
+            }
+            let mut term: Option<Ser> = None;
+            for (v, &e) in vars.iter().zip(se) {
+                for _ in 0..e {
+                    term = Some(match term {
+                        None => v.clone(),
+                        Some(t) => self.mul(&t, v),
+                    });
+                }
+            }
+            match term {
+                None => acc[0][0] = fp::add(acc[0][0], k, p),
+                Some(t) => self.add_scaled(&mut acc, &t, k),
+            }
+        }
+        acc
+    }
+}
+
+/// One sample: per output, the derivatives `y^(j)(0)`, `j < len`, each as a
+/// dual vector; per input, its derivatives (values only).
+struct Jets {
+    y: Vec<Vec<Vec<u64>>>,
+    u: Vec<Vec<u64>>,
+}
+
+impl IoModel {
+    /// Jets of the outputs to order `len - 1` at parameters `theta`, initial
+    /// state and inputs' Taylor coefficients from `rng`; with `grad`, each
+    /// carries its gradient in the initial state. `None` at a pole.
+    /// The outputs' and inputs' Taylor coefficients (`[t^j]`, `j < len`),
+    /// each a dual vector with `grad`.
+    fn taylor(
+        &self,
+        theta: &[u64],
+        len: usize,
+        grad: bool,
+        rng: &mut Rng,
+    ) -> Option<(Vec<Ser>, Vec<Ser>)> {
+        let p = self.p;
+        let g = if grad { 1 + self.nx } else { 1 };
+        let a = Arith { p, g, len };
+        let mut vars: Vec<Ser> = Vec::with_capacity(self.nx + self.nu);
+        for s in 0..self.nx {
+            let mut x = a.zero();
+            x[0][0] = elem(rng, p);
+            if grad {
+                x[0][1 + s] = 1;
+            }
+            vars.push(x);
+        }
+        for _ in 0..self.nu {
+            let mut u = a.zero();
+            for c in u.iter_mut() {
+                c[0] = elem(rng, p);
+            }
+            vars.push(u);
+        }
+        // x_{k+1} = [t^k] f(x) / (k + 1), the series of f recomputed on
+        // the coefficients known so far (those above k do not reach t^k).
+        for k in 0..len.saturating_sub(1) {
+            for s in 0..self.nx {
+                let (n, d) = &self.rhs[s];
+                let q = a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?;
+                let inv = fp::inv((k as u64 + 1) % p, p)?;
+                let c: Vec<u64> = q[k].iter().map(|&v| fp::mul(v, inv, p)).collect();
+                vars[s][k + 1] = c;
+            }
+        }
+        let mut y = Vec::with_capacity(self.outputs.len());
+        for (n, d) in &self.outputs {
+            y.push(a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?);
+        }
+        Some((y, vars.split_off(self.nx)))
+    }
+
+    fn jets(&self, theta: &[u64], len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
+        let p = self.p;
+        let (ys, us) = self.taylor(theta, len, grad, rng)?;
+        // Taylor coefficients to derivatives: y^(j) = j! [t^j] y.
+        let mut fact = vec![1u64; len];
+        for j in 1..len {
+            fact[j] = fp::mul(fact[j - 1], j as u64 % p, p);
+        }
+        let y = ys
+            .iter()
+            .map(|q| {
+                q.iter()
+                    .zip(&fact)
+                    .map(|(c, &f)| c.iter().map(|&v| fp::mul(v, f, p)).collect())
+                    .collect()
+            })
+            .collect();
+        let u = us
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .zip(&fact)
+                    .map(|(c, &f)| fp::mul(c[0], f, p))
+                    .collect()
+            })
+            .collect();
+        Some(Jets { y, u })
+    }
+
+    /// Whether the relation is the only linear dependence over the
+    /// constants among its monomials `support`, as functions of time along
+    /// one output of the model at `theta` from a random initial state: their
+    /// first `support.len() + 2` Taylor coefficients have rank
+    /// `support.len() - 1` (any `N - 1` of them then have a Wronskian not
+    /// identically zero). Then the relation's coefficients, up to scale,
+    /// are the only ones that output satisfies: a single experiment fixes
+    /// them. `false` proves nothing.
+    pub(super) fn independent_along(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        support: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> bool {
+        let p = self.p;
+        let vars = self.relation_vars(orders, i);
+        let kmax = orders.iter().copied().max().unwrap_or(0);
+        let l = support.len() + 2;
+        let Some((ys, us)) = self.taylor(theta, l + kmax + 1, false, rng) else {
+            return false;
+        };
+        let a = Arith { p, g: 1, len: l };
+        // The series of D^j of a series c: [t^m] = c[m + j] (m+1)...(m+j).
+        let deriv = |c: &Ser, j: usize| -> Ser {
+            (0..l)
+                .map(|m| {
+                    let mut v = c[m + j][0];
+                    for r in 1..=j {
+                        v = fp::mul(v, (m + r) as u64 % p, p);
+                    }
+                    vec![v]
+                })
+                .collect()
+        };
+        let series: Vec<Ser> = vars
+            .iter()
+            .map(|v| match *v {
+                IoVar::Y(o, j) => deriv(&ys[o], j),
+                IoVar::U(u, j) => deriv(&us[u], j),
+            })
+            .collect();
+        let mut ech = Echelon::new(FpField);
+        let mut dependent = 0;
+        for m in support {
+            let mut acc: Option<Ser> = None;
+            for (s, &e) in series.iter().zip(m) {
+                for _ in 0..e {
+                    acc = Some(match acc {
+                        None => s.clone(),
+                        Some(t) => a.mul(&t, s),
+                    });
+                }
+            }
+            let row: Vec<Fp> = match acc {
+                None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
+                Some(t) => t.iter().map(|c| Fp(c[0])).collect(),
+            };
+            if !ech.insert(row) {
+                dependent += 1;
+            }
+        }
+        dependent == 1
+    }
+}
+
+impl IoModel {
+    /// The orders `k_i` of the orderly ranking (module doc), from the
+    /// Jacobian of the outputs' jets in the initial state at `theta`.
+    pub(super) fn orders(&self, theta: &[u64], rng: &mut Rng) -> Result<Vec<usize>, AnalysisError> {
+        let len = self.nx + 2;
+        let j = self
+            .jets(theta, len, true, rng)
+            .ok_or_else(|| err("global (io): a pole at the random point"))?;
+        let mut ech = Echelon::new(Zp(self.p));
+        let m = j.y.len();
+        let mut orders = vec![0; m];
+        let mut open = vec![true; m];
+        for k in 0..len {
+            for i in 0..m {
+                if open[i] && !ech.insert(j.y[i][k][1..].to_vec()) {
+                    open[i] = false;
+                    orders[i] = k;
+                }
+            }
+        }
+        if open.iter().any(|&o| o) {
+            return Err(err(
+                "global (io): an output's jets stay independent past the state dimension",
+            ));
+        }
+        Ok(orders)
+    }
+}
+
+/// The relation of one output: its variables (`(output, order)` or
+/// `(input, order)`), the monomials of its support and their coefficients
+/// (normalised: the last monomial's coefficient is 1).
+#[derive(Clone, Debug)]
+pub(super) struct IoRelation {
+    pub(super) vars: Vec<IoVar>,
+    pub(super) degree: u32,
+    /// Monomials tried in the ansatz at `degree`.
+    pub(super) ansatz: usize,
+    pub(super) support: Vec<Vec<u32>>,
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(super) coeffs: Vec<u64>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum IoVar {
+    Y(usize, usize),
+    U(usize, usize),
+}
+
+/// The right kernel of the rows `sample` draws, drawn until the rank stops
+/// growing for 4 rows in a row (a dependent row of a random point on the
+/// variety: probability at most `deg / p` each) or is full.
+fn kernel<F: PrimeField>(
+    field: F,
+    to: impl Fn(u64) -> F::Elem,
+    back: impl Fn(F::Elem) -> u64,
+    sample: &mut dyn FnMut() -> Result<Vec<u64>, AnalysisError>,
+    ncols: usize,
+) -> Result<Vec<Vec<u64>>, AnalysisError> {
+    let mut ech = Echelon::new(field);
+    let mut stale = 0;
+    while stale < 4 && ech.rank() < ncols {
+        let row: Vec<F::Elem> = sample()?.into_iter().map(&to).collect();
+        if ech.insert(row) {
+            stale = 0;
+        } else {
+            stale += 1;
+        }
+    }
+    Ok(ech
+        .null_space(ncols)
+        .into_iter()
+        .map(|v| v.into_iter().map(&back).collect())
+        .collect())
+}
+
+/// All exponent vectors in `n` variables of total degree at most `d`.
+fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
+    let mut out = vec![vec![0u32; n]];
+    for v in 0..n {
+        let mut next = Vec::new();
+        for m in &out {
+            let used: u32 = m.iter().sum();
+            for e in 0..=(d - used) {
+                let mut m2 = m.clone();
+                m2[v] = e;
+                next.push(m2);
+            }
+        }
+        out = next;
+    }
+    out
+}
+
+impl IoModel {
+    /// The variables of output `i`'s relation (module doc).
+    fn relation_vars(&self, orders: &[usize], i: usize) -> Vec<IoVar> {
+        let kmax = orders.iter().copied().max().unwrap_or(0);
+        let mut vars = Vec::new();
+        for j in 0..=orders[i] {
+            for (l, &k) in orders.iter().enumerate() {
+                if j < k && (j < orders[i] || l < i) {
+                    vars.push(IoVar::Y(l, j));
+                }
+            }
+        }
+        vars.push(IoVar::Y(i, orders[i]));
+        for u in 0..self.nu {
+            vars.extend((0..=kmax).map(|j| IoVar::U(u, j)));
+        }
+        vars
+    }
+
+    /// The kernel of the monomials `monos` in `vars` evaluated at jets of
+    /// random initial states (and inputs) at `theta`.
+    fn fit(
+        &self,
+        theta: &[u64],
+        vars: &[IoVar],
+        len: usize,
+        monos: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> Result<Vec<Vec<u64>>, AnalysisError> {
+        let p = self.p;
+        // The echelon holds up to `n` rows of `n` field elements.
+        let bytes = (monos.len() as u128).pow(2) * 8;
+        if bytes > self.max_bytes as u128 {
+            return Err(super::types::too_large(
+                bytes,
+                self.max_bytes as u128,
+                &format!(
+                    "the input-output relation's kernel ({} monomials)",
+                    monos.len()
+                ),
+            ));
+        }
+        let mut tries = 0;
+        let mut sample = || -> Result<Vec<u64>, AnalysisError> {
+            loop {
+                if self.deadline.is_some_and(|d| std::time::Instant::now() > d) {
+                    return Err(AnalysisError::Timeout(
+                        "the input-output relations (global, --route io)".into(),
+                    ));
+                }
+                tries += 1;
+                if tries > 2 * monos.len() + 64 {
+                    return Err(err("global (io): too many poles sampling the jets"));
+                }
+                let Some(j) = self.jets(theta, len, false, rng) else {
+                    continue;
+                };
+                let vals: Vec<u64> = vars
+                    .iter()
+                    .map(|v| match *v {
+                        IoVar::Y(l, k) => j.y[l][k][0],
+                        IoVar::U(u, k) => j.u[u][k],
+                    })
+                    .collect();
+                return Ok(monos
+                    .iter()
+                    .map(|m| {
+                        m.iter().zip(&vals).fold(1u64, |acc, (&e, &v)| {
+                            if e == 0 {
+                                acc
+                            } else {
+                                fp::mul(acc, fp::pow(v, e as u64, p), p)
+                            }
+                        })
+                    })
+                    .collect());
+            }
+        };
+        if p == obsan_expr::P {
+            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len())
+        } else {
+            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len())
+        }
+    }
+
+    /// The relation of output `i` at `theta`, given the orders; `None` when
+    /// no relation of total degree at most `max_degree` fits in
+    /// `max_monomials` ansatz monomials.
+    pub(super) fn relation(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        max_degree: u32,
+        max_monomials: usize,
+        rng: &mut Rng,
+    ) -> Result<Option<IoRelation>, AnalysisError> {
+        let vars = self.relation_vars(orders, i);
+        let len = orders.iter().copied().max().unwrap_or(0) + 1;
+        for d in 1..=max_degree {
+            let monos = monomials(vars.len(), d);
+            if monos.len() > max_monomials {
+                return Ok(None);
+            }
+            let ker = self.fit(theta, &vars, len, &monos, rng)?;
+            if ker.is_empty() {
+                continue;
+            }
+            if ker.len() > 1 {
+                return Err(err(format!(
+                    "global (io): the kernel at degree {d} has dimension {} (a non-generic point)",
+                    ker.len()
+                )));
+            }
+            let v = &ker[0];
+            let support: Vec<Vec<u32>> = monos
+                .iter()
+                .zip(v)
+                .filter(|(_, &c)| c != 0)
+                .map(|(m, _)| m.clone())
+                .collect();
+            let coeffs = self.normalise(v.iter().copied().filter(|&c| c != 0).collect());
+            return Ok(Some(IoRelation {
+                vars,
+                degree: d,
+                ansatz: monos.len(),
+                support,
+                coeffs,
+            }));
+        }
+        Ok(None)
+    }
+
+    /// The coefficients of the relation at `theta` on a known support (that
+    /// of a generic point): a kernel of `support.len()` columns only.
+    /// `None` when the kernel is not one line (a non-generic `theta`).
+    pub(super) fn on_support(
+        &self,
+        theta: &[u64],
+        orders: &[usize],
+        i: usize,
+        support: &[Vec<u32>],
+        rng: &mut Rng,
+    ) -> Result<Option<Vec<u64>>, AnalysisError> {
+        let vars = self.relation_vars(orders, i);
+        let len = orders.iter().copied().max().unwrap_or(0) + 1;
+        let ker = self.fit(theta, &vars, len, support, rng)?;
+        if ker.len() != 1 || ker[0].contains(&0) {
+            return Ok(None);
+        }
+        Ok(Some(self.normalise(ker[0].clone())))
+    }
+
+    /// Scaled so that the last coefficient is 1.
+    fn normalise(&self, mut v: Vec<u64>) -> Vec<u64> {
+        let p = self.p;
+        if let Some(inv) = v.last().and_then(|&c| fp::inv(c, p)) {
+            for c in v.iter_mut() {
+                *c = fp::mul(*c, inv, p);
+            }
+        }
+        v
+    }
+}
+
+#[cfg(test)]
+#[path = "io_tests.rs"]
+mod tests;

@@ -1,0 +1,327 @@
+//! The parameters' counts from the input-output relations (io.rs): each
+//! relation's coefficients, normalised, reconstructed as rational functions
+//! of the parameters over Q (obsan-recon, one kernel per point, verified at
+//! fresh points), then `c_i(theta) = c_i(theta*)` at a random `theta*`
+//! solved by a Gröbner basis over F_q and counted per parameter.
+//!
+//! What the count means (docs/engine.md, "Input-output route"): the
+//! parameter values whose relations equal those of `theta*`, i.e. the
+//! multi-experiment count (the coefficients generate the field of
+//! multi-experiment identifiable functions: Ovchinnikov, Pillay, Pogudin,
+//! Scanlon 2021). It is the single-experiment count when one output fixes
+//! the coefficients: the relation's monomials are linearly independent
+//! along a generic output (a non-zero Wronskian; Ovchinnikov, Pogudin,
+//! Thompson 2023), checked here (io.rs, `independent_along`); the route
+//! refuses otherwise.
+
+use super::io::{IoModel, IoRelation};
+use super::model::ZModel;
+use super::run::Rng;
+use super::types::{err, gb_err, GlobalOptions};
+use crate::rank::AnalysisError;
+use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, Mono, Order, Poly, Ring};
+use obsan_recon::fp::{Echelon, Zp};
+use obsan_recon::{reconstruct_vec, Options, Rational};
+use std::collections::HashMap;
+
+/// Sizes of one output's relation, as measured (docs/performance.md).
+#[derive(Clone, Debug)]
+pub struct IoSize {
+    pub order: usize,
+    pub variables: usize,
+    pub degree: u32,
+    pub ansatz: usize,
+    pub support: usize,
+    /// Black-box points of the reconstruction, and its terms.
+    pub points: u64,
+    pub terms: usize,
+    pub max_degree: u32,
+    /// Schwartz-Zippel bound of the reconstruction's check at fresh points.
+    pub recon_error_bound: f64,
+}
+
+/// The route's answer on the parameters.
+pub(super) struct IoCounts {
+    /// Per parameter: its number of values (`None`: infinitely many).
+    pub(super) per_param: Vec<Option<usize>>,
+    pub(super) joint: Option<usize>,
+    pub(super) sizes: Vec<IoSize>,
+    /// The primes of the two counts (which agree).
+    pub(super) primes: [u64; 2],
+}
+
+/// Largest ansatz (monomials) one relation's first kernel may use: its
+/// dense elimination is cubic in it (measured, docs/performance.md: 792
+/// monomials 1.0 s; 3003 monomials 245 s on a loaded machine).
+pub(super) const MAX_ANSATZ: usize = 1000;
+
+pub(super) fn io_count(
+    m: &ZModel,
+    opts: &GlobalOptions,
+    seed: u64,
+) -> Result<IoCounts, AnalysisError> {
+    let np = m.param_vars.len();
+    let mut rng = Rng::new(seed);
+    let mut io = IoModel::new(m, obsan_expr::P)?;
+    io.deadline = opts.deadline;
+    io.max_bytes = opts.max_bytes;
+    let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
+    let orders = io.orders(&theta, &mut rng)?;
+    let mut fns: Vec<Rational> = Vec::new();
+    let mut sizes = Vec::new();
+    for i in 0..orders.len() {
+        let rel: IoRelation = io
+            .relation(&theta, &orders, i, 60, MAX_ANSATZ, &mut rng)?
+            .ok_or_else(|| {
+                err(format!(
+                    "global (io): the input-output relation of output {} needs more than {MAX_ANSATZ} ansatz monomials",
+                    i + 1
+                ))
+            })?;
+        // One output's coefficients are then fixed by that output alone.
+        if !io.independent_along(&theta, &orders, i, &rel.support, &mut rng) {
+            return Err(err(format!(
+                "global (io): the monomials of output {}'s relation satisfy more than one linear relation along an output (zero Wronskian): its coefficients would count multi-experiment identifiability only",
+                i + 1
+            )));
+        }
+        let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
+        sizes.push(IoSize {
+            order: orders[i],
+            variables: rel.vars.len(),
+            degree: rel.degree,
+            ansatz: rel.ansatz,
+            support: rel.support.len(),
+            points,
+            terms: r
+                .functions
+                .iter()
+                .map(|f| f.num().terms().len() + f.den().terms().len())
+                .sum(),
+            max_degree: r
+                .functions
+                .iter()
+                .map(|f| f.num().degree().max(f.den().degree()))
+                .max()
+                .unwrap_or(0),
+            recon_error_bound: r.certificate.error_bound,
+        });
+        fns.extend(r.functions);
+    }
+    // Two independent points and primes must agree, as on the Taylor route.
+    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
+    let (per_param, joint) = count(&fns, np, opts, seed, primes[0])?;
+    let again = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
+    if again != (per_param.clone(), joint) {
+        return Err(err(
+            "global (io): two independent random points disagree on the counts (a non-generic point); try another --seed",
+        ));
+    }
+    Ok(IoCounts {
+        per_param,
+        joint,
+        sizes,
+        primes,
+    })
+}
+
+fn elem(rng: &mut Rng, p: u64) -> u64 {
+    loop {
+        let x = rng.next() % p;
+        if x > 1 {
+            return x;
+        }
+    }
+}
+
+/// The normalised coefficients of output `i`'s relation (the last one is 1,
+/// left out) as rational functions of the parameters.
+fn reconstruct(
+    m: &ZModel,
+    orders: &[usize],
+    i: usize,
+    support: &[Vec<u32>],
+    opts: &GlobalOptions,
+    seed: u64,
+) -> Result<(obsan_recon::Reconstruction, u64), AnalysisError> {
+    let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
+    let mut calls = 0u64;
+    let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+        calls += 1;
+        if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
+            let rng = Rng::new(seed ^ p);
+            let mut io = IoModel::new(m, p)?;
+            io.deadline = opts.deadline;
+            io.max_bytes = opts.max_bytes;
+            e.insert((io, rng));
+        }
+        let Some((io, rng)) = models.get_mut(&p) else {
+            return Ok(None);
+        };
+        Ok(io.on_support(pt, orders, i, support, rng)?.map(|mut v| {
+            v.pop();
+            v
+        }))
+    };
+    let ropts = Options {
+        deadline: opts.deadline,
+        seed: seed ^ 0x10c0,
+        ..Options::default()
+    };
+    let r = reconstruct_vec(m.param_vars.len(), support.len() - 1, &mut bb, &ropts).map_err(
+        |e| match e {
+            obsan_recon::ReconError::BlackBox(e) => e,
+            e => err(format!(
+                "global (io): reconstructing the relations' coefficients: {e}"
+            )),
+        },
+    )?;
+    Ok((r, calls))
+}
+
+fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisError> {
+    let n = ring.n;
+    let mut terms = Vec::with_capacity(p.terms().len());
+    for t in p.terms() {
+        let mut e = t.exps.clone();
+        e.resize(n, 0);
+        terms.push((
+            Mono::from_exponents(e).map_err(gb_err)?,
+            super::io::int_mod(&t.coeff, q),
+        ));
+    }
+    Ok(ring.from_terms(terms))
+}
+
+/// `c_i(theta) = c_i(theta*)` at a random `theta*` over `F_q`, the
+/// denominators kept non-zero by `z L(theta) = 1`; the parameters that are
+/// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
+#[allow(clippy::type_complexity)]
+fn count(
+    fns: &[Rational],
+    np: usize,
+    opts: &GlobalOptions,
+    seed: u64,
+    q: u64,
+) -> Result<(Vec<Option<usize>>, Option<usize>), AnalysisError> {
+    let field = Field::new(q).ok_or_else(|| err("global (io): bad prime"))?;
+    let ring = Ring::new(field, np + 1, Order::Grevlex);
+    let mut rng = Rng::new(seed ^ 0xc0u64);
+    let mut star = vec![0u64; np + 1];
+    let mut eqs = Vec::new();
+    let mut dens: Vec<Poly> = Vec::new();
+    for _ in 0..16 {
+        for s in star.iter_mut().take(np) {
+            *s = elem(&mut rng, q);
+        }
+        eqs.clear();
+        dens.clear();
+        let mut ok = true;
+        for f in fns {
+            let (n, d) = (to_fp(f.num(), &ring, q)?, to_fp(f.den(), &ring, q)?);
+            let (nv, dv) = (ring.eval(&n, &star), ring.eval(&d, &star));
+            if dv == 0 {
+                ok = false;
+                break;
+            }
+            eqs.push(ring.sub(&ring.scale(&n, dv), &ring.scale(&d, nv)));
+            if d.degree() > 0 && !dens.contains(&d) {
+                dens.push(d);
+            }
+        }
+        if ok {
+            break;
+        }
+    }
+    // Local identifiability: the Jacobian of the equations at theta*.
+    let mut ech = Echelon::new(Zp(q));
+    for e in &eqs {
+        let row: Vec<u64> = (0..np)
+            .map(|v| ring.eval(&ring.derivative(e, v), &star))
+            .collect();
+        ech.insert(row);
+    }
+    let local: Vec<bool> = (0..np).map(|t| ech.contains_unit(t, np)).collect();
+    // Slice: non-local parameters fixed until the rank is full (count.rs's
+    // transcendence slice, on the parameters alone).
+    let mut gens = eqs.clone();
+    for t in 0..np {
+        if ech.rank() == np {
+            break;
+        }
+        if local[t] {
+            continue;
+        }
+        let mut u = vec![0u64; np];
+        u[t] = 1;
+        if ech.insert(u) {
+            gens.push(ring.sub(&ring.var(t), &ring.constant(star[t])));
+        }
+    }
+    // z * lcm-ish of the denominators - 1 (monomial denominators: their lcm).
+    let mut l = ring.constant(1);
+    let mut mono_lcm: Option<Mono> = Some(Mono::one(np + 1));
+    for d in &dens {
+        match (d.terms(), &mono_lcm) {
+            ([(mo, _)], Some(acc)) => mono_lcm = Some(acc.lcm(mo)),
+            _ => {
+                mono_lcm = None;
+            }
+        }
+    }
+    match mono_lcm {
+        Some(mo) => l = ring.from_terms([(mo, 1)]),
+        None => {
+            for d in &dens {
+                l = ring.mul(&l, d).map_err(gb_err)?;
+            }
+        }
+    }
+    if l.degree() > 0 {
+        let zl = ring.mul(&l, &ring.var(np)).map_err(gb_err)?;
+        gens.push(ring.sub(&zl, &ring.constant(1)));
+    } else {
+        gens.push(ring.var(np));
+    }
+    let budget = GbBudget {
+        max_basis: opts.max_basis,
+        max_bytes: opts.max_bytes,
+        deadline: opts.deadline,
+        ..GbBudget::default()
+    };
+    let b = groebner(&ring, &gens, budget).map_err(gb_err)?;
+    if b.is_unit() || !b.is_zero_dimensional() {
+        return Err(err(
+            "global (io): the coefficients' system at the random point is degenerate; try another --seed",
+        ));
+    }
+    let steps = vec![1u32; np + 1];
+    let mut per = Vec::with_capacity(np);
+    for (t, &loc) in local.iter().enumerate() {
+        if !loc {
+            per.push(None);
+            continue;
+        }
+        let xt = ring.var(t);
+        let mp = b
+            .minimal_polynomial_in(&xt, &steps, opts.max_solutions)
+            .map_err(gb_err)?;
+        per.push(Some(distinct_roots(field, &mp)));
+    }
+    let mut terms = Vec::new();
+    for (t, &loc) in local.iter().enumerate() {
+        if loc {
+            terms.push((Mono::var(np + 1, t, 1), elem(&mut rng, q)));
+        }
+    }
+    let joint = if terms.is_empty() {
+        None
+    } else {
+        let lf = ring.from_terms(terms);
+        let mp = b
+            .minimal_polynomial_in(&lf, &steps, opts.max_solutions)
+            .map_err(gb_err)?;
+        Some(distinct_roots(field, &mp))
+    };
+    Ok((per, joint))
+}
