@@ -352,6 +352,7 @@ pub(crate) fn weak_under_final(
     crit: &dyn Fn(&str) -> f64,
     o: &DiagnoseOptions,
 ) {
+    use rayon::prelude::*;
     let in_model: Vec<&Effect> = named
         .iter()
         .filter(|n| n.origin != ORIGIN_RELATION)
@@ -359,36 +360,50 @@ pub(crate) fn weak_under_final(
         .collect();
     let inflation = final_fit.inflation();
     let final_states: Vec<String> = state_names(&extend(base, &in_model).ok());
-    for n in named.iter_mut().filter(|n| n.origin != ORIGIN_RELATION) {
-        let others: Vec<&Effect> = in_model
-            .iter()
-            .copied()
-            .filter(|e| e.name != n.effect)
-            .collect();
-        let lr = (|| -> Option<f64> {
-            let sys = extend(base, &others).ok()?;
-            let prep = prepare(&sys, data).ok()?;
-            let pv: Vec<f64> = sys
-                .decls_of(Kind::Param)
-                .map(|d| final_fit.param(&d.name).map_or(0.0, |p| p.0))
-                .collect();
-            let names = state_names(&Some(sys.clone()));
-            let sv: Vec<Vec<f64>> = final_fit
-                .initial_states
+    // One fit per named effect, each independent of the others: in
+    // parallel (MRCLAM robot 1: seven fits, 2.1 s CPU).
+    let cancel = obsan_expr::cancel_flag();
+    let lrs: Vec<Option<f64>> = named
+        .par_iter()
+        .map(|n| {
+            if n.origin == ORIGIN_RELATION {
+                return None;
+            }
+            let others: Vec<&Effect> = in_model
                 .iter()
-                .map(|x| {
-                    names
-                        .iter()
-                        .map(|s| {
-                            let i = final_states.iter().position(|f| f == s);
-                            i.and_then(|i| x.get(i).copied()).unwrap_or(0.0)
-                        })
-                        .collect()
-                })
+                .copied()
+                .filter(|e| e.name != n.effect)
                 .collect();
-            let f = fit_model(&sys, &prep, &pv, &sv, sigma, noise, o).ok()?;
-            Some((f.m2ll() - final_fit.m2ll()).max(0.0) / inflation)
-        })();
+            obsan_expr::with_cancel(cancel.clone(), || {
+                let sys = extend(base, &others).ok()?;
+                let prep = prepare(&sys, data).ok()?;
+                let pv: Vec<f64> = sys
+                    .decls_of(Kind::Param)
+                    .map(|d| final_fit.param(&d.name).map_or(0.0, |p| p.0))
+                    .collect();
+                let names = state_names(&Some(sys.clone()));
+                let sv: Vec<Vec<f64>> = final_fit
+                    .initial_states
+                    .iter()
+                    .map(|x| {
+                        names
+                            .iter()
+                            .map(|s| {
+                                let i = final_states.iter().position(|f| f == s);
+                                i.and_then(|i| x.get(i).copied()).unwrap_or(0.0)
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let f = fit_model(&sys, &prep, &pv, &sv, sigma, noise, o).ok()?;
+                Some((f.m2ll() - final_fit.m2ll()).max(0.0) / inflation)
+            })
+        })
+        .collect();
+    for (n, lr) in named.iter_mut().zip(lrs) {
+        if n.origin == ORIGIN_RELATION {
+            continue;
+        }
         n.lr_final = lr;
         n.weak_under_final_levels = lr.is_some_and(|l| l <= crit(&n.effect));
     }
