@@ -423,27 +423,13 @@ fn state_names(sys: &Option<System>) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model_fit::test_fit;
 
     /// The estimator of the first levels: RMS 0.1 with 10 of 110 residuals'
     /// unknowns fitted is 0.1 sqrt(110/100); a stated output is kept.
     #[test]
     fn data_levels_correct_for_the_fitted_unknowns_and_keep_stated_ones() {
-        let f = ModelFit {
-            model: "m".into(),
-            params: vec![],
-            params_robust_sd: vec![],
-            params_robust_cov: vec![],
-            initial_states: vec![],
-            cost: 0.0,
-            log_det: 0.0,
-            n: 110,
-            n_fitted: 10,
-            iterations: 0,
-            rms: vec![("a".into(), 0.1), ("b".into(), 0.2)],
-            residuals: crate::residual::analyse(&[], 0),
-            series: Default::default(),
-            covariance: vec![],
-        };
+        let f = test_fit(110, 10, &[("a", 0.1), ("b", 0.2)], vec![]);
         let s = data_levels(&f, &[1.0, 1.0], &[true, false], &[0, 1]);
         assert!((s[0] - 0.1 * 1.1f64.sqrt()).abs() < 1e-12, "{s:?}");
         assert_eq!(s[1], 1.0);
@@ -466,22 +452,12 @@ mod tests {
             input_integrals: vec![],
             whiten: None,
         };
-        let f = ModelFit {
-            model: "m".into(),
-            params: vec![],
-            params_robust_sd: vec![],
-            params_robust_cov: vec![],
-            initial_states: vec![],
-            cost: 0.0,
-            log_det: 0.0,
-            n: 450,
-            n_fitted: 0,
-            iterations: 0,
-            rms: vec![("a".into(), 0.2), ("b".into(), 0.1), ("c".into(), 0.3)],
-            residuals: crate::residual::analyse(&[], 0),
-            series: std::sync::Arc::new(vec![series("a", 300), series("b", 100), series("c", 50)]),
-            covariance: vec![],
-        };
+        let f = test_fit(
+            450,
+            0,
+            &[("a", 0.2), ("b", 0.1), ("c", 0.3)],
+            vec![series("a", 300), series("b", 100), series("c", 50)],
+        );
         let s = data_levels(&f, &[0.4, 0.1, 1.0], &[true; 3], &[0, 0, 1]);
         let k = 0.4375f64.sqrt();
         assert!((s[0] - 0.4 * k).abs() < 1e-12, "{s:?}");
