@@ -111,8 +111,11 @@ fn channel_lag(j: &serde_json::Value, channel: &str) -> Vec<(f64, f64)> {
     fitted
 }
 
+/// An estimate and its robust sd.
+type Sd = (f64, f64);
+
 /// Every pair of one side's alternatives and the other's, with its z.
-fn pairs(x: &[(f64, f64)], y: &[(f64, f64)]) -> Vec<((f64, f64), (f64, f64), f64)> {
+fn pairs(x: &[Sd], y: &[Sd]) -> Vec<(Sd, Sd, f64)> {
     x.iter()
         .flat_map(|&a| y.iter().map(move |&b| (a, b, z(a, b))))
         .collect()
