@@ -84,7 +84,7 @@ const STEP: &str = "outside: bias_step";
 /// it came with a confounded rival, whether a generated effect was named,
 /// whether the final fit leaves structure unexplained, and whether a wrong
 /// effect was named with the final fit called consistent with noise.
-type Run = (Vec<String>, bool, bool, bool, bool, bool);
+type Run = (Vec<String>, bool, bool, bool, bool, bool, bool);
 
 /// Applies an effect outside the file to the measured bearings (the
 /// simulated noise included, as a sensor's distortion of its own reading).
@@ -152,10 +152,10 @@ fn confusion(
         "bearing_bias",
     ];
     println!(
-        "| hidden | design | value | runs | {} | generated | magnitude within 3 sd | named with a confounded rival | unexplained left | wrong name, fit called consistent |",
+        "| hidden | design | value | runs | {} | generated | magnitude within 3 sd | named with a confounded rival | unexplained left | wrong name, fit called consistent | suggested, not established |",
         cols.join(" | ")
     );
-    println!("|{}", "---|".repeat(cols.len() + 9));
+    println!("|{}", "---|".repeat(cols.len() + 10));
     for (hidden, design, v) in rows {
         let outside = hidden == SIN3 || hidden == STEP;
         if only_outside && !outside {
@@ -179,6 +179,7 @@ fn confusion(
                 let Ok(start) = start_values(sys, &data, &Default::default()) else {
                     return (
                         vec!["start failed".into()],
+                        false,
                         false,
                         false,
                         false,
@@ -211,7 +212,9 @@ fn confusion(
                 // What the verdict calls unexplained: the final fit's residual structure.
                 let left = !d.final_fit.residuals.structure().is_empty();
                 let wrong = d.named.iter().any(|n| n.effect != hidden) && !left;
-                (names, within, confounded, generated, left, wrong)
+                // Above its critical value but not established by its Wald z.
+                let suggested = !d.suggested.is_empty();
+                (names, within, confounded, generated, left, wrong, suggested)
             })
             .collect();
         let count = |c: &str| {
@@ -231,8 +234,9 @@ fn confusion(
         let generated = res.iter().filter(|r| r.3).count();
         let left = res.iter().filter(|r| r.4).count();
         let wrong = res.iter().filter(|r| r.5).count();
+        let suggested = res.iter().filter(|r| r.6).count();
         println!(
-            "| {hidden} | {design} | {v} | {} | {} | {generated} | {} | {confounded} | {left} | {wrong} |",
+            "| {hidden} | {design} | {v} | {} | {} | {generated} | {} | {confounded} | {left} | {wrong} | {suggested} |",
             res.len(),
             cells.join(" | "),
             if hidden == "none" || outside {

@@ -5,6 +5,7 @@ mod calibrate;
 mod classic;
 mod design;
 mod diagnose;
+mod diagnose_vicon;
 mod experiments;
 mod expr;
 mod feedthrough;

@@ -46,6 +46,33 @@ pub struct ModelFit {
     pub covariance: Vec<Vec<f64>>,
 }
 
+/// A fit for unit tests: `n` residuals with `n_fitted` unknowns, each
+/// output's RMS and the residual series; every other field empty.
+#[cfg(test)]
+pub(crate) fn test_fit(
+    n: usize,
+    n_fitted: usize,
+    rms: &[(&str, f64)],
+    series: Vec<ResidualSeries>,
+) -> ModelFit {
+    ModelFit {
+        model: "m".into(),
+        params: vec![],
+        params_robust_sd: vec![],
+        params_robust_cov: vec![],
+        initial_states: vec![],
+        cost: 0.0,
+        log_det: 0.0,
+        n,
+        n_fitted,
+        iterations: 0,
+        rms: rms.iter().map(|(y, r)| (y.to_string(), *r)).collect(),
+        residuals: crate::residual::analyse(&[], 0),
+        series: std::sync::Arc::new(series),
+        covariance: vec![],
+    }
+}
+
 impl ModelFit {
     pub fn param(&self, name: &str) -> Option<(f64, f64)> {
         self.params.iter().find(|p| p.0 == name).map(|p| (p.1, p.2))

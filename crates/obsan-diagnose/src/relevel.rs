@@ -352,6 +352,7 @@ pub(crate) fn weak_under_final(
     crit: &dyn Fn(&str) -> f64,
     o: &DiagnoseOptions,
 ) {
+    use rayon::prelude::*;
     let in_model: Vec<&Effect> = named
         .iter()
         .filter(|n| n.origin != ORIGIN_RELATION)
@@ -359,36 +360,50 @@ pub(crate) fn weak_under_final(
         .collect();
     let inflation = final_fit.inflation();
     let final_states: Vec<String> = state_names(&extend(base, &in_model).ok());
-    for n in named.iter_mut().filter(|n| n.origin != ORIGIN_RELATION) {
-        let others: Vec<&Effect> = in_model
-            .iter()
-            .copied()
-            .filter(|e| e.name != n.effect)
-            .collect();
-        let lr = (|| -> Option<f64> {
-            let sys = extend(base, &others).ok()?;
-            let prep = prepare(&sys, data).ok()?;
-            let pv: Vec<f64> = sys
-                .decls_of(Kind::Param)
-                .map(|d| final_fit.param(&d.name).map_or(0.0, |p| p.0))
-                .collect();
-            let names = state_names(&Some(sys.clone()));
-            let sv: Vec<Vec<f64>> = final_fit
-                .initial_states
+    // One fit per named effect, each independent of the others: in
+    // parallel (MRCLAM robot 1: seven fits, 2.1 s CPU).
+    let cancel = obsan_expr::cancel_flag();
+    let lrs: Vec<Option<f64>> = named
+        .par_iter()
+        .map(|n| {
+            if n.origin == ORIGIN_RELATION {
+                return None;
+            }
+            let others: Vec<&Effect> = in_model
                 .iter()
-                .map(|x| {
-                    names
-                        .iter()
-                        .map(|s| {
-                            let i = final_states.iter().position(|f| f == s);
-                            i.and_then(|i| x.get(i).copied()).unwrap_or(0.0)
-                        })
-                        .collect()
-                })
+                .copied()
+                .filter(|e| e.name != n.effect)
                 .collect();
-            let f = fit_model(&sys, &prep, &pv, &sv, sigma, noise, o).ok()?;
-            Some((f.m2ll() - final_fit.m2ll()).max(0.0) / inflation)
-        })();
+            obsan_expr::with_cancel(cancel.clone(), || {
+                let sys = extend(base, &others).ok()?;
+                let prep = prepare(&sys, data).ok()?;
+                let pv: Vec<f64> = sys
+                    .decls_of(Kind::Param)
+                    .map(|d| final_fit.param(&d.name).map_or(0.0, |p| p.0))
+                    .collect();
+                let names = state_names(&Some(sys.clone()));
+                let sv: Vec<Vec<f64>> = final_fit
+                    .initial_states
+                    .iter()
+                    .map(|x| {
+                        names
+                            .iter()
+                            .map(|s| {
+                                let i = final_states.iter().position(|f| f == s);
+                                i.and_then(|i| x.get(i).copied()).unwrap_or(0.0)
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let f = fit_model(&sys, &prep, &pv, &sv, sigma, noise, o).ok()?;
+                Some((f.m2ll() - final_fit.m2ll()).max(0.0) / inflation)
+            })
+        })
+        .collect();
+    for (n, lr) in named.iter_mut().zip(lrs) {
+        if n.origin == ORIGIN_RELATION {
+            continue;
+        }
         n.lr_final = lr;
         n.weak_under_final_levels = lr.is_some_and(|l| l <= crit(&n.effect));
     }
@@ -408,27 +423,13 @@ fn state_names(sys: &Option<System>) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model_fit::test_fit;
 
     /// The estimator of the first levels: RMS 0.1 with 10 of 110 residuals'
     /// unknowns fitted is 0.1 sqrt(110/100); a stated output is kept.
     #[test]
     fn data_levels_correct_for_the_fitted_unknowns_and_keep_stated_ones() {
-        let f = ModelFit {
-            model: "m".into(),
-            params: vec![],
-            params_robust_sd: vec![],
-            params_robust_cov: vec![],
-            initial_states: vec![],
-            cost: 0.0,
-            log_det: 0.0,
-            n: 110,
-            n_fitted: 10,
-            iterations: 0,
-            rms: vec![("a".into(), 0.1), ("b".into(), 0.2)],
-            residuals: crate::residual::analyse(&[], 0),
-            series: Default::default(),
-            covariance: vec![],
-        };
+        let f = test_fit(110, 10, &[("a", 0.1), ("b", 0.2)], vec![]);
         let s = data_levels(&f, &[1.0, 1.0], &[true, false], &[0, 1]);
         assert!((s[0] - 0.1 * 1.1f64.sqrt()).abs() < 1e-12, "{s:?}");
         assert_eq!(s[1], 1.0);
@@ -451,22 +452,12 @@ mod tests {
             input_integrals: vec![],
             whiten: None,
         };
-        let f = ModelFit {
-            model: "m".into(),
-            params: vec![],
-            params_robust_sd: vec![],
-            params_robust_cov: vec![],
-            initial_states: vec![],
-            cost: 0.0,
-            log_det: 0.0,
-            n: 450,
-            n_fitted: 0,
-            iterations: 0,
-            rms: vec![("a".into(), 0.2), ("b".into(), 0.1), ("c".into(), 0.3)],
-            residuals: crate::residual::analyse(&[], 0),
-            series: std::sync::Arc::new(vec![series("a", 300), series("b", 100), series("c", 50)]),
-            covariance: vec![],
-        };
+        let f = test_fit(
+            450,
+            0,
+            &[("a", 0.2), ("b", 0.1), ("c", 0.3)],
+            vec![series("a", 300), series("b", 100), series("c", 50)],
+        );
         let s = data_levels(&f, &[0.4, 0.1, 1.0], &[true; 3], &[0, 0, 1]);
         let k = 0.4375f64.sqrt();
         assert!((s[0] - 0.4 * k).abs() < 1e-12, "{s:?}");
