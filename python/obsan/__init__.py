@@ -377,10 +377,13 @@ class System:
         seed: Optional[int] = None,
         timeout: Optional[float] = None,
         max_terms: Optional[int] = None,
+        route: Optional[str] = None,
     ) -> Global:
         """``obsan global``: per param and initial state, global / local with k values /
-        not identifiable; the joint count and the exact discrete symmetries."""
-        f = self._flags("global", input, set).integer("--seed", seed)
+        not identifiable; the joint count and the exact discrete symmetries. ``route``:
+        ``"auto"`` (default: the Taylor system, else the input-output relations),
+        ``"taylor"`` or ``"io"``; ``Global.route`` says which answered."""
+        f = self._flags("global", input, set).integer("--seed", seed).text("--route", route)
         return Global.of(self._get(_limits(f, timeout, max_terms)))
 
     def lie(

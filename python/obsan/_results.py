@@ -382,6 +382,11 @@ class Global(Result):
     maps_modulo_pi: List[DiscreteMap] = field(default_factory=list)
     """Symmetries of the angle outputs' tangents only: each turns an angle output
     by pi or is not decided on the angles; not symmetries of the model."""
+    route: str = "taylor"
+    """``"taylor"`` (parameters and initial states) or ``"input-output"`` (the
+    outputs' input-output relations: parameters only)."""
+    fallback: Optional[str] = None
+    """Why the Taylor route did not answer, when ``route`` fell back; else None."""
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Global":
@@ -403,6 +408,8 @@ class Global(Result):
             maps=[DiscreteMap.parse(str(m)) for m in raw.get("maps") or []],
             solutions_at_most=bool(raw.get("solutions_at_most", False)),
             maps_modulo_pi=[DiscreteMap.parse(str(m)) for m in raw.get("maps_modulo_pi") or []],
+            route=str(raw.get("route") or "taylor"),
+            fallback=raw.get("fallback"),
         )
 
 

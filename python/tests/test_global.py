@@ -65,3 +65,14 @@ def test_angle_outputs_read_through_their_tangent():
     x = next(v for v in g.variables if v.name == "x")
     assert (x.values, x.at_most) == (2, True)
     assert g.solutions_at_most
+
+
+def test_the_input_output_route_counts_two_summed_decays():
+    # By hand: y = x1 + x2 with x1' = -a x1, x2' = -b x2 has the relation
+    # y'' + (a + b) y' + a b y = 0, whose coefficients fix {a, b} as an unordered
+    # pair: 2 values each (the swap), and the route says it counted params only.
+    src = "system d\nstate x1, x2\nparam a, b\nx1' = -a*x1\nx2' = -b*x2\noutput y = x1 + x2\n"
+    g = obsan.loads(src).global_identifiability(route="io")
+    assert g.route == "input-output" and g.fallback is None
+    values = {v.name: v.values for v in g.variables}
+    assert values == {"a": 2, "b": 2}, g.variables
