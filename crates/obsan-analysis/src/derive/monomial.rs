@@ -224,6 +224,23 @@ fn saturated(rows: &[Vec<i64>]) -> bool {
 /// A candidate: support size, negative exponents, total degree, columns, exponents.
 type Cand = (usize, usize, i64, Vec<usize>, Vec<i64>);
 
+/// The monomial over `cols` whose ratios vanish in every row, when the null
+/// space is one vector with every entry non-zero and small rational exponents.
+fn candidate(rows: &[Vec<Fp>], cols: Vec<usize>) -> Option<Cand> {
+    let m: Vec<Vec<Fp>> = rows
+        .iter()
+        .map(|r| cols.iter().map(|&c| r[c]).collect())
+        .collect();
+    let ns = Fp::null_space(m, cols.len());
+    if ns.len() != 1 || ns[0].iter().any(|x| x.is_zero()) {
+        return None;
+    }
+    let e = primitive(&ns[0])?;
+    let neg = e.iter().filter(|&&x| x < 0).count();
+    let tot: i64 = e.iter().map(|x| x.abs()).sum();
+    Some((cols.len(), neg, tot, cols, e))
+}
+
 /// Monomial invariants, accepted while they raise the rank.
 pub(super) fn monomial_invariants(
     nf: &mut NormalForm,
@@ -266,18 +283,7 @@ pub(super) fn monomial_invariants(
             }
             budget -= 1;
             let cols: Vec<usize> = sub.iter().map(|&i| live[i]).collect();
-            let m: Vec<Vec<Fp>> = rows
-                .iter()
-                .map(|r| cols.iter().map(|&c| r[c]).collect())
-                .collect();
-            let ns = Fp::null_space(m, size);
-            if ns.len() == 1 && ns[0].iter().all(|x| !x.is_zero()) {
-                if let Some(e) = primitive(&ns[0]) {
-                    let neg = e.iter().filter(|&&x| x < 0).count();
-                    let tot: i64 = e.iter().map(|x| x.abs()).sum();
-                    cands.push((size, neg, tot, cols, e));
-                }
-            }
+            cands.extend(candidate(&rows, cols));
             true
         });
         // Smaller supports first; within one, fewer denominators, lower degree.
@@ -437,18 +443,7 @@ pub(super) fn written_sum_invariants(
                 budget -= 1;
                 let mut cols: Vec<usize> = sub.iter().map(|&i| vars[i]).collect();
                 cols.push(g);
-                let m: Vec<Vec<Fp>> = rows
-                    .iter()
-                    .map(|r| cols.iter().map(|&c| r[c]).collect())
-                    .collect();
-                let ns = Fp::null_space(m, cols.len());
-                if ns.len() == 1 && ns[0].iter().all(|x| !x.is_zero()) {
-                    if let Some(e) = primitive(&ns[0]) {
-                        let neg = e.iter().filter(|&&x| x < 0).count();
-                        let tot: i64 = e.iter().map(|x| x.abs()).sum();
-                        cands.push((cols.len(), neg, tot, cols, e));
-                    }
-                }
+                cands.extend(candidate(&rows, cols));
                 true
             });
         }
