@@ -31,12 +31,14 @@ mod budget;
 mod canon;
 mod diff;
 mod eval;
+mod ext;
 mod float_eval;
 mod gauss;
 mod gcd;
 mod gcd_modular;
 mod graph;
 mod jet;
+mod kummer;
 mod lower;
 mod memo;
 mod num;
@@ -79,6 +81,7 @@ pub mod evaluate {
     pub use crate::eval::{
         degree_bounds, rational_angle, BadPoint, EvalQError, FpPoint, UnboundSymbol,
     };
+    pub use crate::ext::{Ext, ExtField, ExtPoint, EXT_MAX};
 }
 
 /// Multivariate polynomial gcds: the engine's choice ([`crate::gcds::gcd`]) and each method

@@ -94,7 +94,7 @@ impl Ctx {
                 bad.extend(classes.iter().filter(|e| part.contains(&e.0)).map(|e| e.2));
             }
         }
-        if !self.sqrts_independent(&sqrts) {
+        if !self.sqrts_independent(&sqrts) && !self.roots_independent_over_q(&sqrts, &prime_roots) {
             bad.extend(sqrts.iter().map(|s| s.0));
         }
         // Roots of distinct primes are independent (Besicovitch), and so are

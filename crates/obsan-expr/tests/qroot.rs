@@ -164,8 +164,20 @@ fn independence() {
         // Indices sharing no prime never interact: (x y)^(1/3) with sqrt(x).
         ("(x*y)^(1/3) + sqrt(x)", true),
         ("(8.4/x)^1.7", true),
-        // ... but sqrt(42/(5x)) (from the 1.7) and sqrt(5x/6) multiply to sqrt(7).
-        ("(8.4/x)^1.7 + (x/4.8)^8.5", false),
+        // sqrt(42/(5x)) (from the 1.7) and sqrt(5x/6) are related over C, not
+        // over Q: modulo squares 2 3 5 7 x and 2 3 5 x are independent (Kummer)...
+        ("(8.4/x)^1.7 + (x/4.8)^8.5", true),
+        // ... but with sqrt(7), their product, they are not.
+        ("(8.4/x)^1.7 + (x/4.8)^8.5 + sqrt(7)", false),
+        ("sqrt(42/(5*x))*sqrt(5*x/6) - sqrt(7)", false),
+        ("sqrt(x) + sqrt(2*x)", true),
+        ("sqrt(x) + sqrt(2*x) + sqrt(2)", false),
+        // x, 2 x, 3 x are independent modulo squares; x y, 2 x, 2 y are not (product 4 x^2 y^2).
+        ("sqrt(x) + sqrt(2*x) + sqrt(3*x)", true),
+        ("sqrt(x + 1) + sqrt(3*x + 3) + sqrt(3*x)", true),
+        ("sqrt(x*y) + sqrt(2*x) + sqrt(2*y)", false),
+        // -1 is an l-th power for odd l only: x^(1/3), (-x)^(1/3) are one class.
+        ("x^(1/5) + (2*x)^(1/5)", true),
         ("(x^2 + y^2)^(1/3) + x^(1/5)", true),
         // x^(1/3), x^(1/10): coprime indices, together x^(1/30), degree 30.
         ("x^(1/3) + x^(1/10)", true),
