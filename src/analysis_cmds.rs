@@ -159,6 +159,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             observable_variables: obs.into_iter().cloned().collect(),
             rank: r.rank,
             restriction: nf.restriction.clone(),
+            roots_field_degree: r.roots_field,
             seed: r.seed,
             state: nf.state.clone(),
             system: nf.name.clone(),
@@ -203,6 +204,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     };
     o.push_str(&format!("observable on their own: {}\n", list(&obs)));
     o.push_str(&format!("not observable on their own: {}\n", list(&unobs)));
+    if let Some(k) = r.roots_field {
+        o.push_str(&format!("no point mod p = 2^61-1 satisfies the roots' relations together (their radicands multiply to a constant that is no power there): the rank was certified at a point of the field of p^{k} elements, where every root has its value\n"));
+    }
     if r.free_roots {
         o.push_str("no point mod 2^61-1 satisfies the roots' relations together (their radicands multiply to a constant that is no power there): the roots took free values\n");
     }

@@ -84,6 +84,9 @@ pub struct Rank {
     pub rank: usize,
     /// The input restriction applied, or null.
     pub restriction: Option<String>,
+    /// `k` when no point mod p satisfied the roots' relations and the rank was certified at
+    /// a point of the field of p^k elements where every root has its value; else null.
+    pub roots_field_degree: Option<u32>,
     /// Seed of the random evaluation points.
     pub seed: u64,
     /// The analysed variables (states and params; not the clock of explicit time).

@@ -74,12 +74,13 @@ fn rational_exponents_simplify_and_differentiate() {
 }
 
 /// 3 is no square mod 2^61 - 1 ((3/p) = (p/3)(-1)^((p-1)/2) = (1/3)(-1) = -1,
-/// p = 1 mod 3, p = 3 mod 4), so no F_p point gives sqrt(3) its value: the
-/// rank test takes the roots free (an upper bound on the rank) and says so.
-/// The formal rank of x' = -k sqrt(3) x, y = x is 2 of 2 (gradients (1, 0),
-/// (-sqrt(3) k, -sqrt(3) x)); it is not certified.
+/// p = 1 mod 3, p = 3 mod 4), so no F_p point gives sqrt(3) its value; in the
+/// field of p^2 elements every element of F_p has a square root, and there
+/// the rank is certified. x' = -k sqrt(3) x, y = x: gradients (1, 0) and
+/// (-sqrt(3) k, -sqrt(3) x), determinant -sqrt(3) x, not zero: rank 2 of 2,
+/// exact. (Before the extension field: an upper bound, "not decided".)
 #[test]
-fn rank_with_roots_no_point_satisfies_is_an_upper_bound() {
+fn rank_with_roots_no_point_satisfies_is_certified_in_an_extension() {
     let v = rank_json(
         "qroot_sqrt3.sys",
         "system s3\nstate x\nparam k\nx' = -k*sqrt(3)*x\noutput y = x\n",
@@ -89,20 +90,25 @@ fn rank_with_roots_no_point_satisfies_is_an_upper_bound() {
         (Some(2), Some(2)),
         "{v}"
     );
-    assert_eq!(v["exact"], false, "{v}");
-    assert_eq!(v["weakly_locally_observable"], Value::Null, "{v}");
-    assert_eq!(v["undecided_atoms"][0], "sqrt(3)", "{v}");
+    assert_eq!(v["exact"], true, "{v}");
+    assert_eq!(v["weakly_locally_observable"], true, "{v}");
+    assert_eq!(v["roots_field_degree"], 2, "{v}");
+    assert_eq!(v["undecided_atoms"], serde_json::json!([]), "{v}");
 }
 
 /// STRIKE-GOLDD's BIG terms: (8.4/x)^1.7 = (42/(5x))^(1 + 1/2 + 1/5) brings
-/// sqrt(42/(5x)) and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2 brings sqrt(5x/6).
-/// Their product is sqrt(7) (a relation the form does not see: not decided),
-/// and a point needs 42/(5x) and 5x/6 both squares, so 7 a square mod p, which
-/// it is not (p = 1 mod 7, p = 3 mod 4: (7/p) = -(p/7) = -1): the roots take
-/// free values. k1, k2 enter only as k1 k2, so k1 d/dk1 - k2 d/dk2 is a
-/// symmetry: rank 2 of 3, and the "not observable" verdict stands.
+/// sqrt(42/(5x)) and (26250/x)^(1/5), and (x/4.8)^8.5 = (5x/24)^8 sqrt(5x/6)/2
+/// brings sqrt(5x/6). Over C the two square roots are related (both are
+/// constants times sqrt(x)); over Q they are not: modulo squares of Q(x),
+/// 42/(5x) = 2 3 5 7 x and 5x/6 = 2 3 5 x (exponents mod 2), independent
+/// (Kummer), so the form over them is canonical and the rank decided. A point
+/// needs 7 a square mod p (their product is sqrt(7); (7/p) = -(p/7) = -1 for
+/// p = 1 mod 7, p = 3 mod 4): the roots are given their values in the field of
+/// p^10 elements (lcm of the indices 2 and 5). k1, k2 enter only as k1 k2, so
+/// k1 d/dk1 - k2 d/dk2 is a symmetry: rank 2 of 3, y and L_f0 y independent
+/// (the drift is not zero), so exactly 2.
 #[test]
-fn rank_with_the_big_model_terms_keeps_the_unobservable_verdict() {
+fn rank_with_the_big_model_terms_is_decided_in_an_extension() {
     let v = rank_json(
         "qroot_big.sys",
         "system big\nstate x\nparam k1, k2\nx' = -k1*k2*((8.4/x)^1.7 + (x/4.8)^8.5)\noutput y = x\n",
@@ -113,5 +119,28 @@ fn rank_with_the_big_model_terms_keeps_the_unobservable_verdict() {
         "{v}"
     );
     assert_eq!(v["weakly_locally_observable"], false, "{v}");
-    assert_eq!(v["decided"], false, "{v}");
+    assert_eq!(v["decided"], true, "{v}");
+    assert_eq!(v["roots_field_degree"], 10, "{v}");
+}
+
+/// sqrt(x) and sqrt(4 x) would be related over Q too (4 is a square): the
+/// engine writes sqrt(4 x) = 2 sqrt(x), one atom. sqrt(x) and sqrt(2 x) are
+/// related over C (ratio sqrt(2)) but not over Q: x and 2 x are independent
+/// modulo squares. x' = -k (sqrt(x) + sqrt(2 x)), y = x: the drift is
+/// -k (1 + sqrt(2)) sqrt(x), so (y, L_f0 y) has gradients (1, 0) and
+/// (*, -(1 + sqrt(2)) sqrt(x)): rank 2 of 2, exact, decided, at a point of
+/// F_p (2 is a square mod p: points where x is one exist).
+#[test]
+fn rank_with_square_roots_related_over_c_only_is_decided() {
+    let v = rank_json(
+        "qroot_2x.sys",
+        "system r2\nstate x\nparam k\nx' = -k*(sqrt(x) + sqrt(2*x))\noutput y = x\n",
+    );
+    assert_eq!(
+        (v["rank"].as_u64(), v["n"].as_u64()),
+        (Some(2), Some(2)),
+        "{v}"
+    );
+    assert_eq!(v["decided"], true, "{v}");
+    assert_eq!(v["exact"], true, "{v}");
 }

@@ -29,6 +29,7 @@ mod fp_linalg;
 mod global;
 mod modes;
 mod rank;
+mod rank_roots;
 mod reach;
 pub mod structure;
 mod sym_blocks;

@@ -101,7 +101,7 @@ impl fmt::Display for AnalysisError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             AnalysisError::Timeout(s) => write!(f, "timed out: {s}"),
-            AnalysisError::NoPoint => f.write_str("no random point avoided the poles of the system (is a denominator identically zero on the domain?)"),
+            AnalysisError::NoPoint => f.write_str("no random point avoided the poles of the system and satisfied its roots' relations mod p = 2^61-1 (is a denominator identically zero on the domain, or do radicands multiply to a constant with no root mod p, as sqrt(42/(5x)) sqrt(5x/6) = sqrt(7)? `obsan rank` certifies such roots in an extension field; this command needs points mod p)"),
             AnalysisError::Invalid(s) => f.write_str(s),
             AnalysisError::Cancelled => f.write_str("interrupted"),
         }
@@ -140,6 +140,10 @@ pub struct RankReport {
     /// took free values ([`Ctx::random_fp_point_free_roots`]): the rank is an
     /// upper bound, as over undecided atoms.
     pub free_roots: bool,
+    /// `Some(k)`: no point of F_p satisfied the roots' relations, and the
+    /// rank was certified at a point of F_(p^k) where every root is a root
+    /// of its radicand (rank_roots.rs); `free_roots` is then false.
+    pub roots_field: Option<u32>,
 }
 
 /// Row echelon basis over F_p: obsan-recon's one elimination on the
@@ -581,7 +585,7 @@ fn rank_with(
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);
     let max_order = best.basis.iter().map(|w| w.order()).max().unwrap_or(0);
-    Ok(RankReport {
+    let mut report = RankReport {
         n,
         rank,
         max_order,
@@ -594,7 +598,19 @@ fn rank_with(
         fields,
         seed: opts.seed,
         free_roots,
-    })
+        roots_field: None,
+    };
+    if free_roots {
+        let basis = report.basis.clone();
+        let funcs = report.words_on_graph(nf, &basis);
+        if let Some(c) = crate::rank_roots::certify_in_extension(nf, &funcs, rank, opts.seed) {
+            report.observable = c.observable;
+            report.pivots = c.pivots;
+            report.free_roots = false;
+            report.roots_field = Some(c.degree);
+        }
+    }
+    Ok(report)
 }
 
 /// A point for the rank test: on the roots' relations when one exists, else

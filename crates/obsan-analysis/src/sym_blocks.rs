@@ -254,6 +254,7 @@ pub fn rank_by_blocks(
         fields: fields.clone(),
         seed: opts.seed,
         free_roots: false,
+        roots_field: None,
     };
     for (level, (vars, outs)) in sp.blocks.iter().enumerate() {
         let (mut sub, kept) = sub_system(nf, &fields.vectors, &fields.names, vars, outs);
