@@ -9,7 +9,9 @@ never obsan) at the top of NAME.sys.
 
 A verdicts.list line `NAME<TAB>none: REASON` (SymPy did not finish) gives the header
 `# verdict-source: none (REASON)` and no verdict line; `NAME<TAB>symident VERSION: SPEC`
-(benches/peers/sg_symident_verdicts.py, for models SymPy did not finish) cites symident.
+(benches/peers/sg_symident_verdicts.py, for models SymPy did not finish) cites symident;
+`NAME<TAB>mpmath DIGITS: SPEC` (sg_verdicts.py --digits, for radicals SymPy cannot rank exactly in
+time) cites the floating-point evaluation.
 
 Usage: cargo build --release -p obsan && python3 scripts/import_strike_goldd.py
 """
@@ -49,6 +51,14 @@ def main():
             who, spec = verdicts[name].split(": ", 1)
             header += [
                 f"# verdict-source: independent ({who} detect(): rank of the output derivatives' Jacobian and the support of its kernel directions, benches/peers/sg_symident_verdicts.py)",
+                f"# verdict: {spec}",
+            ]
+        elif verdicts[name].startswith("mpmath "):
+            # SymPy's exact rank did not finish (radicals): its Lie derivatives in floating point.
+            who, spec = verdicts[name].split(": ", 1)
+            digits = who.split()[1]
+            header += [
+                f"# verdict-source: independent (SymPy's Lie derivatives, their Jacobian in mpmath at {digits} digits at a random integer point, benches/peers/sg_verdicts.py --digits {digits}; numerical, every kept singular value far above every dropped one)",
                 f"# verdict: {spec}",
             ]
         else:

@@ -13,6 +13,13 @@ observable when its unit vector lies in the row span. Prints one '# verdict:' li
 
 Usage: python3 benches/peers/sg_verdicts.py [--list] [--timeout S] systems/benchmarks/strike-goldd/*.sys
 
+--digits D evaluates the Jacobian in floating point with D significant digits (mpmath) instead
+of exactly, for models whose exact algebraic numbers SymPy cannot rank in time (the BIG models'
+rational exponents: `(8.4/x1)^1.7` at an integer point is a product of radicals): the roots
+take their real positive values, and a singular value below 10^(-D/3) of the largest counts
+as zero; the gap between the two is printed to stderr, so a verdict resting on a small gap can
+be seen. An independent computation (symbolic Lie derivatives, real arithmetic), not a proof.
+
 --list prints `NAME<TAB>SPEC` lines for verdicts.list instead; --timeout S gives up on a file
 after S seconds of SymPy (wall clock), and then prints `NAME<TAB>none: ...` in place of a
 verdict (the suite file then says `verdict-source: none`; never a verdict from obsan).
@@ -61,6 +68,24 @@ def read_sys(path):
     return decl, x, p, u, rhs, h, [names[n] for n in decl["const"]]
 
 
+DIGITS = 0
+
+
+def numeric_rank(rows):
+    """Numerical rank of mpmath rows at DIGITS digits, the smallest kept and the largest dropped
+    singular value, each relative to the largest."""
+    import mpmath
+
+    if not rows:
+        return 0, None, None
+    sv = sorted(mpmath.svd_r(mpmath.matrix(rows), compute_uv=False), reverse=True)
+    tol = sv[0] * mpmath.mpf(10) ** (-(DIGITS // 3))
+    r = sum(1 for v in sv if v > tol)
+    kept = sv[r - 1] / sv[0] if r else None
+    dropped = sv[r] / sv[0] if r < len(sv) else None
+    return r, kept, dropped
+
+
 def verdict(path, seed=1):
     """Rank of the observability codistribution at a random integer point, and the variables
     whose unit covector lies outside it. Only the functions whose gradient raised the rank are
@@ -73,6 +98,8 @@ def verdict(path, seed=1):
     fields = [f0] + [[sp.diff(r, ui) for r in rhs] for ui in u]
     rng = random.Random(seed)
     point = {s: sp.Integer(rng.randint(2, 1000)) for s in z + consts}
+    if DIGITS:
+        return numeric_verdict(x, z, consts, fields, h, point)
     rows, level = [], []
     for g in h:
         if keep(rows, [sp.diff(g, v).subs(point) for v in z]):
@@ -93,6 +120,65 @@ def verdict(path, seed=1):
         e[j] = 1
         if m.col_join(sp.Matrix([e])).rank() > rank:
             unobs.append(str(v))
+    if unobs:
+        return f"unobservable {' '.join(unobs)}; rank {rank}"
+    return f"observable; rank {rank}"
+
+
+def numeric_verdict(x, z, consts, fields, h, point):
+    """verdict() with every gradient evaluated in floating point at DIGITS digits."""
+    import mpmath
+
+    mpmath.mp.dps = DIGITS
+    syms = z + consts
+    vals = [mpmath.mpf(int(point[s])) for s in syms]
+
+    def row(g):
+        grad = [sp.diff(g, v) for v in z]
+        return [mpmath.mpf(v) for v in sp.lambdify(syms, grad, "mpmath")(*vals)]
+
+    worst = {"kept": mpmath.mpf(1), "dropped": mpmath.mpf(0)}
+
+    def note(kept, dropped):
+        if kept is not None:
+            worst["kept"] = min(worst["kept"], kept)
+        if dropped is not None:
+            worst["dropped"] = max(worst["dropped"], dropped)
+
+    def keep_n(rows, r):
+        k, kept, dropped = numeric_rank(rows + [r])
+        note(kept, dropped)
+        if k > len(rows):
+            rows.append(r)
+            return True
+        return False
+
+    rows, level = [], []
+    for g in h:
+        if keep_n(rows, row(g)):
+            level.append(g)
+    while level and len(rows) < len(z):
+        nxt = []
+        for g in level:
+            for fld in fields:
+                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
+                if lg != 0 and keep_n(rows, row(lg)):
+                    nxt.append(lg)
+        level = nxt
+    rank = len(rows)
+    unobs = []
+    for j, v in enumerate(z):
+        e = [mpmath.mpf(0)] * len(z)
+        e[j] = mpmath.mpf(1)
+        r, kept, dropped = numeric_rank(rows + [e])
+        note(kept, dropped)
+        if r > rank:
+            unobs.append(str(v))
+    print(
+        f"  rank {rank}: smallest singular value kept {mpmath.nstr(worst['kept'], 3)}, "
+        f"largest dropped {mpmath.nstr(worst['dropped'], 3)} (relative to the largest)",
+        file=sys.stderr,
+    )
     if unobs:
         return f"unobservable {' '.join(unobs)}; rank {rank}"
     return f"observable; rank {rank}"
@@ -119,6 +205,9 @@ def main(args):
     while args and args[0].startswith("--"):
         if args[0] == "--list":
             listing, args = True, args[1:]
+        elif args[0] == "--digits" and len(args) > 1:
+            global DIGITS
+            DIGITS, args = int(args[1]), args[2:]
         elif args[0] == "--timeout" and len(args) > 1:
             timeout, args = int(args[1]), args[2:]
         else:
@@ -134,6 +223,8 @@ def main(args):
         signal.alarm(0)
         if listing and spec is None:
             print(f"{name}\tnone: SymPy did not finish within {timeout} s", flush=True)
+        elif listing and DIGITS:
+            print(f"{name}\tmpmath {DIGITS}: {spec}", flush=True)
         elif listing:
             print(f"{name}\t{spec}", flush=True)
         elif spec is None:
