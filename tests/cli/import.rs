@@ -281,6 +281,36 @@ fn strike_goldd_reads_d_exponents() {
     assert!(out.contains("x' = -1.5e-3*x\noutput y1 = 2e1*x\n"), "{out}");
 }
 
+/// STRIKE-GOLDD's CHO models write arrays of symbols (`sym('x', [34 1])`), elements set one by
+/// one (`f = sym('f'); f(1) = ...`), index lists with ranges (`p([1:47,49:56,58:end])`) and
+/// `f.'`. Model (derived by hand): x1' = -k1 x1 + k2 x2, x2' = k1 x1 - k2 x2, y = x1, with k3
+/// unknown and unused. x1 + x2 = c is constant, so y' = k2 c - (k1 + k2) y: y determines x1,
+/// k1 + k2 and k2 c only, and (k2, x2, k1) -> (l k2, c/l - x1, k1 + k2 - l k2) keeps them: 5
+/// variables, rank 3, x2, k1, k2, k3 unobservable.
+#[test]
+fn strike_goldd_reads_symbol_arrays_and_elements() {
+    let src = temp_file(
+        "z_create_arrays.m",
+        "x = sym('x', [2 1]);\nk = sym('k', [3 1]);\np = k([1, 2:end]);\nu = [];\n\
+         f = sym('f');\nf(1) = -k(1)*x(1) + k(2)*x(2);\nf(2) = k(1)*x(1) - k(2)*x(2);\nf = f.';\n\
+         h = x([1]);\n",
+    );
+    let out = ok(&["import", "strike-goldd", &src]);
+    assert!(out.contains("state x1, x2\nparam k1, k2, k3\n"), "{out}");
+    let sys = temp_file("arrays.sys", &out);
+    let v: Value = serde_json::from_str(&ok(&["rank", &sys, "--json"])).unwrap();
+    assert_eq!(
+        (v["n"].as_u64(), v["rank"].as_u64()),
+        (Some(5), Some(3)),
+        "{v}"
+    );
+    assert_eq!(
+        v["unobservable_variables"],
+        serde_json::json!(["x2", "k1", "k2", "k3"]),
+        "{v}"
+    );
+}
+
 /// What the reader does not follow is refused at its place, never skipped: a loop filling
 /// `f`, an element assignment, an array of symbols.
 #[test]
@@ -291,12 +321,12 @@ fn strike_goldd_unread_matlab_is_refused_at_its_place() {
             "4:1: 'for' (MATLAB control flow) is not read",
         ),
         (
-            "syms x1 k\nx = x1;\nf = 0;\nf(1) = -k*x1;\nh = x1;\n",
-            "4:1: 'f(1) = ...' sets an element",
+            "syms x1 k\nx = x1;\nf = 0;\nf(3) = -k*x1;\nh = x1;\n",
+            "4:1: 'f(3) = ...': element 3 of a vector of 1",
         ),
         (
-            "x = sym('x', [3 1]);\nf = -x;\nh = x(1);\n",
-            "1:5: sym(...) (an array of symbols) is not read",
+            "x = sym('x', [3 3]);\nf = -x;\nh = x(1);\n",
+            "1:5: 'sym('x', [3 3])': only vectors of symbols",
         ),
     ];
     for (k, (text, want)) in cases.iter().enumerate() {

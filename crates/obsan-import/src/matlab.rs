@@ -134,7 +134,12 @@ fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
     let mut r = trim(rhs);
     // A trailing transpose.
     while let Some(((c, _), rest)) = r.split_last() {
-        if *c == '\'' || (*c == '.' && rest.last().is_some_and(|x| x.0 == ']')) {
+        if *c == '\''
+            || (*c == '.'
+                && rest
+                    .last()
+                    .is_some_and(|x| x.0 == ']' || x.0.is_ascii_alphanumeric()))
+        {
             r = trim(rest);
         } else {
             break;
@@ -334,9 +339,43 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
             continue;
         }
         let lhs = string(trim(&st[..eq]));
-        if let Some((v, _)) = lhs.split_once('(').filter(|(v, _)| is_name(v.trim_end())) {
+        if let Some((v, k)) = lhs.split_once('(').filter(|(v, _)| is_name(v.trim_end())) {
+            let (v, at) = (v.trim_end(), st[0].1);
+            // `f(3) = ...`: one element of a vector assigned before, replaced or appended.
+            let k = k
+                .strip_suffix(')')
+                .and_then(|k| k.trim().parse::<usize>().ok());
+            if let (Some(k), Some(len)) = (k, sc.vars.get(v).map(|x| x.0.len())) {
+                let rhs = elements(&st[eq + 1..]);
+                let [el] = rhs.as_slice() else {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("'{lhs} = ...' sets one element to several"),
+                    ));
+                };
+                let e = infix::parse_placed(el, Dialect::Matlab)?;
+                let e = (subst(&e, &sc, el[0].1)?, el[0].1);
+                let items = &mut sc
+                    .vars
+                    .get_mut(v)
+                    .ok_or_else(|| ImportError::at(at.0, at.1, "unreachable"))?
+                    .0;
+                match k {
+                    _ if k >= 1 && k <= len => items[k - 1] = e,
+                    _ if k == len + 1 => items.push(e),
+                    _ => return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!(
+                            "'{lhs} = ...': element {k} of a vector of {len} (set them in order)"
+                        ),
+                    )),
+                }
+                continue;
+            }
             // `M(i,j) = ...`: an element set by the script, which this reader does not follow.
-            if !matches!(v.trim_end(), "ics" | "known_ics") {
+            if !matches!(v, "ics" | "known_ics") {
                 let at = st[0].1;
                 return Err(ImportError::at(
                     at.0,
@@ -350,13 +389,28 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
         }
         let mut items = Vec::new();
         for el in elements(&st[eq + 1..]) {
+            let at = el[0].1;
             if string(el).starts_with("sym(") {
-                // `sym('x', [34 1])`: an array of symbols, indexed later (`x(3)`).
-                return Err(ImportError::at(
-                    el[0].1 .0,
-                    el[0].1 .1,
-                    "sym(...) (an array of symbols) is not read: declare each symbol with syms",
-                ));
+                // `sym('x', [34 1])`: the symbols x1..x34, indexed later (`x(3)`).
+                for name in sym_array(&string(el), at)? {
+                    declare(&mut sc, &mut syms, name.clone(), at)?;
+                    let e = Ex::Name {
+                        name,
+                        timed: false,
+                        at,
+                    };
+                    items.push((e, at));
+                }
+                continue;
+            }
+            // `x([5 4 3])`: elements of a vector assigned before, in that order.
+            let len = |v: &str| sc.vars.get(v).map_or(0, |x| x.0.len());
+            if let Some((v, ks)) = index_list(&string(el), len) {
+                for k in ks {
+                    let e = Ex::Call(format!("{}{v}", infix::INDEX), vec![Ex::Num(k.to_string())]);
+                    items.push((subst(&e, &sc, at)?, at));
+                }
+                continue;
             }
             let e = infix::parse_placed(el, Dialect::Matlab)?;
             // A name standing for a whole vector (`h = x`) is that vector.
@@ -386,6 +440,80 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
     }
     let syms: Vec<String> = syms.into_iter().map(|s| s.0).collect();
     convert(roles, &syms, &sc.funcs, saved, origin)
+}
+
+/// The names of `sym('x', [n 1])` (or `[1 n]`, or `n`): `x1`..`xn`, as MATLAB
+/// names them.
+fn sym_array(t: &str, at: At) -> Result<Vec<String>, ImportError> {
+    let bad = || {
+        ImportError::at(
+            at.0,
+            at.1,
+            format!("'{t}': only vectors of symbols, sym('x', [n 1]), are read"),
+        )
+    };
+    let inner = t
+        .strip_prefix("sym(")
+        .and_then(|r| r.trim_end().strip_suffix(')'))
+        .ok_or_else(bad)?;
+    let (name, size) = inner.split_once(',').unwrap_or((inner, "1"));
+    let name = name
+        .trim()
+        .strip_prefix('\'')
+        .and_then(|n| n.strip_suffix('\''))
+        .filter(|n| is_name(n))
+        .ok_or_else(bad)?;
+    let dims: Vec<usize> = size
+        .trim()
+        .trim_start_matches('[')
+        .trim_end_matches(']')
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse::<usize>().map_err(|_| bad()))
+        .collect::<Result<_, _>>()?;
+    let n = match dims.as_slice() {
+        [n] | [n, 1] | [1, n] => *n,
+        _ => return Err(bad()),
+    };
+    // A bound well above the library's largest (117): an error, never a huge allocation.
+    if n == 0 || n > 100_000 {
+        return Err(bad());
+    }
+    Ok((1..=n).map(|k| format!("{name}{k}")).collect())
+}
+
+/// `v([5 4 3])` (blank- or comma-separated numbers, ranges `a:b`, `end` and `a:end`): the
+/// vector's name and its indices, `len` standing for `end`.
+fn index_list(t: &str, len: impl Fn(&str) -> usize) -> Option<(String, Vec<usize>)> {
+    let (v, rest) = t.split_once("([")?;
+    let list = rest.trim_end().strip_suffix("])")?;
+    let v = v.trim();
+    if !is_name(v) {
+        return None;
+    }
+    let end = len(v);
+    let num = |x: &str| match x {
+        "end" => Some(end),
+        _ => x.parse::<usize>().ok(),
+    };
+    let mut ks: Vec<usize> = Vec::new();
+    for w in list
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|w| !w.is_empty())
+    {
+        match w.split_once(':') {
+            // A range past the library's sizes is no index list (then refused as a formula).
+            Some((a, b)) => {
+                let (a, b) = (num(a)?, num(b)?);
+                if a > b || b - a > 100_000 {
+                    return None;
+                }
+                ks.extend(a..=b);
+            }
+            None => ks.push(num(w)?),
+        }
+    }
+    (!ks.is_empty()).then(|| (v.to_string(), ks))
 }
 
 /// The blank-separated words of a `syms` line, with their places.
