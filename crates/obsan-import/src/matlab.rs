@@ -364,13 +364,15 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
                 match k {
                     _ if k >= 1 && k <= len => items[k - 1] = e,
                     _ if k == len + 1 => items.push(e),
-                    _ => return Err(ImportError::at(
-                        at.0,
-                        at.1,
-                        format!(
+                    _ => {
+                        return Err(ImportError::at(
+                            at.0,
+                            at.1,
+                            format!(
                             "'{lhs} = ...': element {k} of a vector of {len} (set them in order)"
                         ),
-                    )),
+                        ))
+                    }
                 }
                 continue;
             }
