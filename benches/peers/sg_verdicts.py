@@ -98,98 +98,93 @@ def verdict(path, seed=1):
     fields = [f0] + [[sp.diff(r, ui) for r in rhs] for ui in u]
     rng = random.Random(seed)
     point = {s: sp.Integer(rng.randint(2, 1000)) for s in z + consts}
-    if DIGITS:
-        return numeric_verdict(x, z, consts, fields, h, point)
+    arith = Numeric(z, consts, point) if DIGITS else Exact(z, point)
     rows, level = [], []
     for g in h:
-        if keep(rows, [sp.diff(g, v).subs(point) for v in z]):
+        if arith.keep(rows, arith.row(g)):
             level.append(g)
     while level and len(rows) < len(z):
         nxt = []
         for g in level:
             for fld in fields:
                 lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
-                if lg != 0 and keep(rows, [sp.diff(lg, v).subs(point) for v in z]):
+                if lg != 0 and arith.keep(rows, arith.row(lg)):
                     nxt.append(lg)
         level = nxt
     rank = len(rows)
-    m = sp.Matrix(rows) if rows else sp.zeros(0, len(z))
-    unobs = []
-    for j, v in enumerate(z):
-        e = [0] * len(z)
-        e[j] = 1
-        if m.col_join(sp.Matrix([e])).rank() > rank:
-            unobs.append(str(v))
+    unobs = [str(v) for j, v in enumerate(z) if arith.rank(rows + [arith.unit(j)]) > rank]
+    arith.report(rank)
     if unobs:
         return f"unobservable {' '.join(unobs)}; rank {rank}"
     return f"observable; rank {rank}"
 
 
-def numeric_verdict(x, z, consts, fields, h, point):
-    """verdict() with every gradient evaluated in floating point at DIGITS digits."""
-    import mpmath
+class Exact:
+    """Gradients at the point in exact rationals (SymPy)."""
 
-    mpmath.mp.dps = DIGITS
-    syms = z + consts
-    vals = [mpmath.mpf(int(point[s])) for s in syms]
+    def __init__(self, z, point):
+        self.z, self.point = z, point
 
-    def row(g):
-        grad = [sp.diff(g, v) for v in z]
-        return [mpmath.mpf(v) for v in sp.lambdify(syms, grad, "mpmath")(*vals)]
+    def row(self, g):
+        return [sp.diff(g, v).subs(self.point) for v in self.z]
 
-    worst = {"kept": mpmath.mpf(1), "dropped": mpmath.mpf(0)}
+    def unit(self, j):
+        return [1 if k == j else 0 for k in range(len(self.z))]
 
-    def note(kept, dropped):
-        if kept is not None:
-            worst["kept"] = min(worst["kept"], kept)
-        if dropped is not None:
-            worst["dropped"] = max(worst["dropped"], dropped)
+    def rank(self, rows):
+        return sp.Matrix(rows).rank() if rows else 0
 
-    def keep_n(rows, r):
-        k, kept, dropped = numeric_rank(rows + [r])
-        note(kept, dropped)
-        if k > len(rows):
-            rows.append(r)
+    def keep(self, rows, row):
+        """Append row to rows when it raises their rank; say whether it did."""
+        if self.rank(rows + [row]) > len(rows):
+            rows.append(row)
             return True
         return False
 
-    rows, level = [], []
-    for g in h:
-        if keep_n(rows, row(g)):
-            level.append(g)
-    while level and len(rows) < len(z):
-        nxt = []
-        for g in level:
-            for fld in fields:
-                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
-                if lg != 0 and keep_n(rows, row(lg)):
-                    nxt.append(lg)
-        level = nxt
-    rank = len(rows)
-    unobs = []
-    for j, v in enumerate(z):
-        e = [mpmath.mpf(0)] * len(z)
-        e[j] = mpmath.mpf(1)
-        r, kept, dropped = numeric_rank(rows + [e])
-        note(kept, dropped)
-        if r > rank:
-            unobs.append(str(v))
-    print(
-        f"  rank {rank}: smallest singular value kept {mpmath.nstr(worst['kept'], 3)}, "
-        f"largest dropped {mpmath.nstr(worst['dropped'], 3)} (relative to the largest)",
-        file=sys.stderr,
-    )
-    if unobs:
-        return f"unobservable {' '.join(unobs)}; rank {rank}"
-    return f"observable; rank {rank}"
+    def report(self, rank):
+        pass
 
 
-def keep(rows, row):
-    """Append row to rows (exact rationals) when it raises their rank; say whether it did."""
-    if sp.Matrix(rows + [row]).rank() > len(rows):
-        rows.append(row)
-        return True
-    return False
+class Numeric(Exact):
+    """Gradients at the point in mpmath at DIGITS digits; ranks by singular values, the worst
+    gap seen reported on stderr."""
+
+    def __init__(self, z, consts, point):
+        import mpmath
+
+        mpmath.mp.dps = DIGITS
+        super().__init__(z, point)
+        self.syms = z + consts
+        self.vals = [mpmath.mpf(int(point[s])) for s in self.syms]
+        self.kept, self.dropped = mpmath.mpf(1), mpmath.mpf(0)
+
+    def row(self, g):
+        import mpmath
+
+        grad = [sp.diff(g, v) for v in self.z]
+        return [mpmath.mpf(v) for v in sp.lambdify(self.syms, grad, "mpmath")(*self.vals)]
+
+    def unit(self, j):
+        import mpmath
+
+        return [mpmath.mpf(1 if k == j else 0) for k in range(len(self.z))]
+
+    def rank(self, rows):
+        r, kept, dropped = numeric_rank(rows)
+        if kept is not None:
+            self.kept = min(self.kept, kept)
+        if dropped is not None:
+            self.dropped = max(self.dropped, dropped)
+        return r
+
+    def report(self, rank):
+        import mpmath
+
+        print(
+            f"  rank {rank}: smallest singular value kept {mpmath.nstr(self.kept, 3)}, "
+            f"largest dropped {mpmath.nstr(self.dropped, 3)} (relative to the largest)",
+            file=sys.stderr,
+        )
 
 
 class Timeout(Exception):
