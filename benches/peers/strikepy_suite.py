@@ -144,20 +144,8 @@ def main():
         if filt and not any(f in path for f in filt):
             continue
         label = path + (f" --input {restriction}" if restriction else "")
-        cmd = [obsan, "rank", path, "--json", "--timeout", str(int(timeout))]
-        if restriction:
-            cmd += ["--input", restriction]
-        ru = resource.getrusage(resource.RUSAGE_CHILDREN)
-        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-        rv = resource.getrusage(resource.RUSAGE_CHILDREN)
-        ocpu = (rv.ru_utime - ru.ru_utime) + (rv.ru_stime - ru.ru_stime)
+        n, orank, overdict, _, ocpu, answered = suite.run_obsan(obsan, path, restriction, cited, timeout)
         judged = cited["rank"] is not None or cited["unobservable"] is not None
-        if p.returncode == 0:
-            v = json.loads(p.stdout)
-            n, orank = v["n"], v["rank"]
-            overdict = suite.judge(orank, n, v["unobservable_variables"], cited) if judged else "no cited verdict"
-        else:
-            n, orank, overdict = "-", "-", f"exit {p.returncode}"
         ratio = "-"
         ru = resource.getrusage(resource.RUSAGE_CHILDREN)
         try:
@@ -181,14 +169,14 @@ def main():
                     sverdict = "no cited verdict"
                 ssecs = f"{scpu:.2f}"
                 score["answered"] += 1
-                if p.returncode == 0:
+                if answered:
                     r = scpu / max(ocpu, CPU_FLOOR)
                     ratios.append(r)
                     ratio = f"{r:.0f}x"
                     score["faster"] += ocpu < scpu
         except subprocess.TimeoutExpired:
             srank, sverdict, ssecs = "-", f"no answer in {timeout:.0f} s", f">{timeout:.0f}"
-            score["faster"] += p.returncode == 0
+            score["faster"] += answered
         score["total"] += 1
         score["obsan"] += overdict == "agrees"
         score["strikepy"] += sverdict == "agrees"

@@ -241,6 +241,31 @@ def entries():
     return out
 
 
+def run_obsan(obsan, path, restriction, cited, timeout, repeat=1):
+    """`obsan rank --json` on one entry, the least of `repeat` runs: (n, rank, verdict against
+    the cited one, wall s, CPU s of the process, whether it answered)."""
+    cmd = [obsan, "rank", path, "--json", "--timeout", str(int(timeout))]
+    if restriction:
+        cmd += ["--input", restriction]
+    osecs, ocpu = float("inf"), float("inf")
+    for _ in range(repeat):
+        t, ru = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
+        p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        osecs = min(osecs, time.perf_counter() - t)
+        rv = resource.getrusage(resource.RUSAGE_CHILDREN)
+        # obsan's CPU time (user + system of the child), the machine's load left out;
+        # getrusage counts microseconds (os.times() counts 10 ms clock ticks, coarser
+        # than most obsan runs).
+        ocpu = min(ocpu, (rv.ru_utime - ru.ru_utime) + (rv.ru_stime - ru.ru_stime))
+    if p.returncode != 0:
+        return "-", "-", f"exit {p.returncode}", osecs, ocpu, False
+    v = json.loads(p.stdout)
+    overdict = judge(v["rank"], v["n"], v["unobservable_variables"], cited)
+    if cited["rank"] is None and cited["unobservable"] is None:
+        overdict = "no cited verdict"
+    return v["n"], v["rank"], overdict, osecs, ocpu, True
+
+
 def judge(rank, n, un, cited):
     if rank is None:
         return "no answer"
@@ -301,31 +326,11 @@ def main():
         if filt and not any(f in path for f in filt):
             continue
         label = path + (f" --input {restriction}" if restriction else "")
-        cmd = [obsan, "rank", path, "--json", "--timeout", str(int(timeout))]
-        if restriction:
-            cmd += ["--input", restriction]
-        osecs, ocpu = float("inf"), float("inf")
-        for _ in range(repeat):
-            t, ru = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-            p = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
-            osecs = min(osecs, time.perf_counter() - t)
-            rv = resource.getrusage(resource.RUSAGE_CHILDREN)
-            # obsan's CPU time (user + system of the child), the machine's load left out;
-            # getrusage counts microseconds (os.times() counts 10 ms clock ticks, coarser
-            # than most obsan runs).
-            ocpu = min(ocpu, (rv.ru_utime - ru.ru_utime) + (rv.ru_stime - ru.ru_stime))
-        if p.returncode == 0:
-            v = json.loads(p.stdout)
-            n, orank = v["n"], v["rank"]
-            overdict = judge(orank, n, v["unobservable_variables"], cited)
-            if cited["rank"] is None and cited["unobservable"] is None:
-                overdict = "no cited verdict"
-        else:
-            n, orank, overdict = "-", "-", f"exit {p.returncode}"
+        n, orank, overdict, osecs, ocpu, ok = run_obsan(obsan, path, restriction, cited, timeout, repeat)
         ratio, in_ratio, comp_ratio = "-", "-", "-"
         try:
             s = None
-            for k in range(repeat if p.returncode == 0 else 1):
+            for k in range(repeat if ok else 1):
                 q = subprocess.run([sys.executable, __file__, "--one", path, restriction or ""],
                                    cwd=ROOT, capture_output=True, text=True, timeout=timeout)
                 if q.returncode != 0 or not q.stdout.strip():
@@ -347,7 +352,7 @@ def main():
                 if s.get("status") and s["status"] != "proven":
                     sverdict += f" ({s['status']})"
                 ssecs = f"{s['secs']:.2f}"
-                if p.returncode == 0 and "cpu" in s:
+                if ok and "cpu" in s:
                     r = s["cpu"] / max(ocpu, CPU_FLOOR)
                     ratios.append(r)
                     ratio = f"{r:.0f}x"
@@ -367,10 +372,10 @@ def main():
         score["total"] += 1
         score["obsan"] += overdict == "agrees"
         score["symident"] += sverdict.startswith("agrees")
-        if ssecs != "-" and not ssecs.startswith(">") and p.returncode == 0:
+        if ssecs != "-" and not ssecs.startswith(">") and ok:
             score["both"] += 1
             score["faster"] += osecs < float(ssecs)
-        elif ssecs.startswith(">") and p.returncode == 0:
+        elif ssecs.startswith(">") and ok:
             score["both"] += 1
             score["faster"] += osecs < timeout
         print(f"| {label} | {n} | {orank} | {overdict} | {osecs:.2f} | {srank} | {sverdict} | {ssecs} "
