@@ -44,6 +44,7 @@ def child(path, restriction):
     import math
     import types
 
+    import numpy
     import sympy
 
     m = suite.read_sys(os.path.join(ROOT, path))
@@ -67,8 +68,9 @@ def child(path, restriction):
     model.x = column([s(x) for x in states])
     model.f = column([expr(kw["odes"][x]) for x in states])
     model.h = [expr(e) for e in kw["observables"].values()]
-    model.u = [s(u) for u in kw["known_inputs"]]
-    model.p = [[s(p)] for p in kw["parameters"]]
+    model.u = column([s(u) for u in kw["known_inputs"]])
+    # Parameters always a column, none an empty one (it is stacked below the states).
+    model.p = [[s(p)] for p in kw["parameters"]] or numpy.empty((0, 1), dtype=object)
     model.w = []
     opts = types.ModuleType("StrikePy.custom_options.options_obsan_model")
     opts.modelname = "obsan_model"
