@@ -281,7 +281,7 @@ fn strike_goldd_reads_d_exponents() {
     assert!(out.contains("x' = -1.5e-3*x\noutput y1 = 2e1*x\n"), "{out}");
 }
 
-/// STRIKE-GOLDD's CHO models write arrays of symbols (`sym('x', [34 1])`), elements set one by
+/// STRIKE-GOLDD's CHO models write arrays of symbols (`sym('x', [34 1])`, `sym(char(x), [28 1])`), elements set one by
 /// one (`f = sym('f'); f(1) = ...`), index lists with ranges (`p([1:47,49:56,58:end])`) and
 /// `f.'`. Model (derived by hand): x1' = -k1 x1 + k2 x2, x2' = k1 x1 - k2 x2, y = x1, with k3
 /// unknown and unused. x1 + x2 = c is constant, so y' = k2 c - (k1 + k2) y: y determines x1,
@@ -291,7 +291,7 @@ fn strike_goldd_reads_d_exponents() {
 fn strike_goldd_reads_symbol_arrays_and_elements() {
     let src = temp_file(
         "z_create_arrays.m",
-        "x = sym('x', [2 1]);\nk = sym('k', [3 1]);\np = k([1, 2:end]);\nu = [];\n\
+        "syms x\nx = sym(char(x), [2 1]);\nk = sym('k', [3 1]);\np = k([1, 2:end]);\nu = [];\n\
          f = sym('f');\nf(1) = -k(1)*x(1) + k(2)*x(2);\nf(2) = k(1)*x(1) - k(2)*x(2);\nf = f.';\n\
          h = x([1]);\n",
     );

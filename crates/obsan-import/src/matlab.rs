@@ -459,10 +459,13 @@ fn sym_array(t: &str, at: At) -> Result<Vec<String>, ImportError> {
         .and_then(|r| r.trim_end().strip_suffix(')'))
         .ok_or_else(bad)?;
     let (name, size) = inner.split_once(',').unwrap_or((inner, "1"));
+    // The name quoted, or `char(x)` of a symbol `x` (its own name).
+    let name = name.trim();
     let name = name
-        .trim()
         .strip_prefix('\'')
         .and_then(|n| n.strip_suffix('\''))
+        .or_else(|| name.strip_prefix("char(").and_then(|n| n.strip_suffix(')')))
+        .map(str::trim)
         .filter(|n| is_name(n))
         .ok_or_else(bad)?;
     let dims: Vec<usize> = size
