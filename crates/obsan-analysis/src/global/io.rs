@@ -41,16 +41,12 @@ mod fp {
             obsan_recon::fp::mul(a, b, p)
         }
     }
-    pub(super) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
-        let mut r = 1 % p;
-        while e > 0 {
-            if e & 1 == 1 {
-                r = mul(r, a, p);
-            }
-            a = mul(a, a, p);
-            e >>= 1;
+    pub(super) fn pow(a: u64, e: u64, p: u64) -> u64 {
+        if p == obsan_expr::P {
+            super::Fp(a).pow(e).0
+        } else {
+            obsan_recon::fp::pow(a, e, p)
         }
-        r
     }
     pub(super) fn inv(a: u64, p: u64) -> Option<u64> {
         obsan_recon::fp::inv(a, p)
@@ -143,7 +139,8 @@ impl IoModel {
     }
 }
 
-fn elem(rng: &mut Rng, p: u64) -> u64 {
+/// A random element of F_p outside {0, 1}.
+pub(super) fn elem(rng: &mut Rng, p: u64) -> u64 {
     loop {
         let x = rng.next() % p;
         if x > 1 {

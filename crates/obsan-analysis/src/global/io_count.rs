@@ -14,7 +14,7 @@
 //! Thompson 2023), checked here (io.rs, `independent_along`); the route
 //! refuses otherwise.
 
-use super::io::{IoModel, IoRelation};
+use super::io::{elem, IoModel, IoRelation};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::{err, gb_err, GlobalOptions};
@@ -125,15 +125,6 @@ pub(super) fn io_count(
     })
 }
 
-fn elem(rng: &mut Rng, p: u64) -> u64 {
-    loop {
-        let x = rng.next() % p;
-        if x > 1 {
-            return x;
-        }
-    }
-}
-
 /// The normalised coefficients of output `i`'s relation (the last one is 1,
 /// left out) as rational functions of the parameters.
 fn reconstruct(
@@ -173,7 +164,7 @@ fn reconstruct(
                 .zip(&alpha)
                 .map(|(&c, a)| {
                     a.iter().zip(pt).fold(c, |acc, (&e, &x)| {
-                        obsan_recon::fp::mul(acc, obsan_recon::fp::pow(x, e as u64, p), p)
+                        obsan_recon::fp::mul(acc, obsan_recon::fp::pow(x, u64::from(e), p), p)
                     })
                 })
                 .collect()
@@ -238,6 +229,9 @@ fn monomial_denominators(
         for (a, x) in alpha.iter_mut().zip(&th) {
             let (n, d) = x.rational();
             a[k] = (ord(&d) - ord(&n)).max(0) as u32;
+        }
+        if std::env::var("IO_DEBUG").is_ok() {
+            eprintln!("pole orders in parameter {k}: {} points", t - 1);
         }
     }
     Ok(alpha)
