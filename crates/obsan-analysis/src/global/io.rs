@@ -624,15 +624,16 @@ impl IoModel {
     ///
     /// The ansatz is searched over the sets `S(d, c, l)`: total degree
     /// `<= d`, degree `<= c` in the penultimate jet `y_i^(k_i - 1)` and
-    /// `<= l` in the leader `y_i^(k_i)`; three phases, each by increasing
-    /// `d`: `S(d, 1, 1)`, `S(d, d, 1)`, then the full `S(d, d, d)` (the
+    /// `<= l` in the leader `y_i^(k_i)`, of three kinds, all tried by
+    /// increasing size: `S(d, 1, 1)`, `S(d, d, 1)` and the full `S(d, d, d)` (the
     /// relation is linear in the leader when the states are rational
     /// functions of the outputs' lower jets, and low in the jet below:
     /// Goodwin's per-jet degrees are 6, 7, 3, 1, 1). Exact whatever the
     /// phase: every polynomial vanishing on the jets is `P R` (`P` the
     /// irreducible relation) and each degree of `P R` bounds that of `P`, so
-    /// a non-zero kernel at `d` and none at `d - 1` in the same phase is
-    /// `P`'s line alone (`R` constant).
+    /// if `R` were not constant `P` would lie in `S(d - deg R, ..)` of the
+    /// same kind, a strict subset, smaller, tried before with a zero kernel:
+    /// the first non-zero kernel is `P`'s line alone.
     pub(super) fn relation(
         &self,
         theta: &[u64],
@@ -648,7 +649,7 @@ impl IoModel {
         let pen = (orders[i] > 0)
             .then(|| vars.iter().position(|&v| v == IoVar::Y(i, orders[i] - 1)))
             .flatten();
-        let mut sets: Vec<(u32, u32, u32)> = Vec::new();
+        let mut sets: Vec<(usize, u32, u32, u32)> = Vec::new();
         // Without a penultimate jet, phase 0 is phase 1.
         for phase in u32::from(pen.is_none())..3 {
             for d in 1..=max_degree {
@@ -657,13 +658,18 @@ impl IoModel {
                     1 => (d, 1),
                     _ => (d, d),
                 };
-                if count_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l)) > max_monomials {
+                let n = count_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
+                if n > max_monomials {
                     break;
                 }
-                sets.push((d, c, l));
+                sets.push((n, d, c.min(d), l.min(d)));
             }
         }
-        for (d, c, l) in sets {
+        // All phases by size: a phase whose guess is wrong then costs at
+        // most as much as the sets of the right one below the relation.
+        sets.sort_unstable();
+        sets.dedup();
+        for (_, d, c, l) in sets {
             let monos = monomials_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
             let ker = self.fit(theta, &vars, len, &monos, rng)?;
             if ker.is_empty() {
