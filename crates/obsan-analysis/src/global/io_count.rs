@@ -85,6 +85,22 @@ pub(super) fn io_count(
                 i + 1
             )));
         }
+        if rel.support.len() == 1 {
+            // A monomial relation (`y' = 0`: Treatment's constant N) has no
+            // coefficient to reconstruct and constrains no parameter.
+            sizes.push(IoSize {
+                order: orders[i],
+                variables: rel.vars.len(),
+                degree: rel.degree,
+                ansatz: rel.ansatz,
+                support: 1,
+                points: 0,
+                terms: 0,
+                max_degree: 0,
+                recon_error_bound: 0.0,
+            });
+            continue;
+        }
         let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
         sizes.push(IoSize {
             order: orders[i],
