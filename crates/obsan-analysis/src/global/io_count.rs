@@ -203,6 +203,9 @@ fn reconstruct(
     Ok((r, calls))
 }
 
+/// The coefficients at a point modulo a prime; `None` at a bad point.
+type BlackBox<'a> = dyn FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, AnalysisError> + 'a;
+
 /// Per function of the black box `bb` (`m` values at a point of `np`
 /// parameters), the exponents `a` of a monomial `theta^a` dividing its
 /// denominator: for each parameter `k`, the order of the pole at
@@ -213,7 +216,7 @@ fn reconstruct(
 fn monomial_denominators(
     np: usize,
     m: usize,
-    bb: &mut dyn FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, AnalysisError>,
+    bb: &mut BlackBox<'_>,
     seed: u64,
 ) -> Result<Vec<Vec<u32>>, AnalysisError> {
     let p = obsan_recon::PRIMES[0];
