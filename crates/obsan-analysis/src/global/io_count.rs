@@ -249,9 +249,6 @@ fn monomial_denominators(
             let (n, d) = x.rational();
             a[k] = (ord(&d) - ord(&n)).max(0) as u32;
         }
-        if std::env::var("IO_DEBUG").is_ok() {
-            eprintln!("pole orders in parameter {k}: {} points", t - 1);
-        }
     }
     Ok(alpha)
 }
