@@ -173,6 +173,65 @@ impl Rational {
     pub(crate) fn from_parts(num: Poly, den: Poly) -> Rational {
         Rational { num, den }
     }
+
+    /// `self / x^exps`, the monomial common to the numerator and the new
+    /// denominator cancelled (callers that scaled a black box by `x^exps`
+    /// to make it a polynomial undo it here). The canonical form is kept:
+    /// a monomial factor changes neither the coefficients nor the order of
+    /// the terms.
+    pub fn over_monomial(&self, exps: &[u32]) -> Rational {
+        let n = exps.len().max(
+            self.num
+                .terms
+                .iter()
+                .chain(&self.den.terms)
+                .map(|t| t.exps.len())
+                .max()
+                .unwrap_or(0),
+        );
+        let padded = |e: &[u32]| -> Vec<u32> {
+            let mut v = e.to_vec();
+            v.resize(n, 0);
+            v
+        };
+        let den_e = padded(exps);
+        // The smallest exponent of each variable over the denominator's
+        // terms, once scaled, and over the numerator's.
+        let low = |p: &Poly, add: &[u32]| -> Vec<u32> {
+            (0..n)
+                .map(|k| {
+                    p.terms
+                        .iter()
+                        .map(|t| t.exps.get(k).copied().unwrap_or(0) + add[k])
+                        .min()
+                        .unwrap_or(0)
+                })
+                .collect()
+        };
+        let zero = vec![0u32; n];
+        let common: Vec<u32> = low(&self.num, &zero)
+            .iter()
+            .zip(low(&self.den, &den_e))
+            .map(|(&a, b)| a.min(b))
+            .collect();
+        let shift = |p: &Poly, add: &[u32]| -> Poly {
+            Poly::from_terms(p.terms.iter().map(|t| {
+                Term {
+                    exps: padded(&t.exps)
+                        .iter()
+                        .zip(add)
+                        .zip(&common)
+                        .map(|((&e, &a), &c)| e + a - c)
+                        .collect(),
+                    coeff: t.coeff.clone(),
+                }
+            }))
+        };
+        Rational {
+            num: shift(&self.num, &zero),
+            den: shift(&self.den, &den_e),
+        }
+    }
 }
 
 struct Shown<'a> {
@@ -279,6 +338,21 @@ pub(crate) fn rat_recon(a: &UBig, m: &UBig) -> Option<(IBig, UBig)> {
 mod tests {
     use super::*;
     use crate::field::PRIMES;
+
+    #[test]
+    fn over_monomial_cancels() {
+        // (x^2 y + 3 x) / 1 over x y^2 = (x y + 3) / y^2.
+        let t = |e: &[u32], c: i64| Term {
+            exps: e.to_vec(),
+            coeff: IBig::from(c),
+        };
+        let r = Rational::from_parts(
+            Poly::from_terms([t(&[2, 1], 1), t(&[1, 0], 3)]),
+            Poly::from_terms([t(&[0, 0], 1)]),
+        );
+        let q = r.over_monomial(&[1, 2]);
+        assert_eq!(q.display(&["x", "y"]).to_string(), "(x*y + 3)/y^2");
+    }
 
     #[test]
     fn crt_then_reconstruction_recovers_fractions() {

@@ -41,16 +41,12 @@ mod fp {
             obsan_recon::fp::mul(a, b, p)
         }
     }
-    pub(super) fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
-        let mut r = 1 % p;
-        while e > 0 {
-            if e & 1 == 1 {
-                r = mul(r, a, p);
-            }
-            a = mul(a, a, p);
-            e >>= 1;
+    pub(super) fn pow(a: u64, e: u64, p: u64) -> u64 {
+        if p == obsan_expr::P {
+            super::Fp(a).pow(e).0
+        } else {
+            obsan_recon::fp::pow(a, e, p)
         }
-        r
     }
     pub(super) fn inv(a: u64, p: u64) -> Option<u64> {
         obsan_recon::fp::inv(a, p)
@@ -143,7 +139,8 @@ impl IoModel {
     }
 }
 
-fn elem(rng: &mut Rng, p: u64) -> u64 {
+/// A random element of F_p outside {0, 1}.
+pub(super) fn elem(rng: &mut Rng, p: u64) -> u64 {
     loop {
         let x = rng.next() % p;
         if x > 1 {
@@ -484,14 +481,25 @@ fn kernel<F: PrimeField>(
         .collect())
 }
 
-/// All exponent vectors in `n` variables of total degree at most `d`.
-fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
+/// Per-variable caps: `c` on the penultimate jet, `l` on the leader.
+fn caps(n: usize, lead: usize, pen: Option<usize>, c: u32, l: u32) -> Vec<u32> {
+    let mut caps = vec![u32::MAX; n];
+    caps[lead] = l;
+    if let Some(q) = pen {
+        caps[q] = c;
+    }
+    caps
+}
+
+/// All exponent vectors in `n` variables of total degree at most `d` and
+/// degree at most `caps[v]` in variable `v`.
+fn monomials_capped(n: usize, d: u32, caps: &[u32]) -> Vec<Vec<u32>> {
     let mut out = vec![vec![0u32; n]];
     for v in 0..n {
         let mut next = Vec::new();
         for m in &out {
             let used: u32 = m.iter().sum();
-            for e in 0..=(d - used) {
+            for e in 0..=(d - used).min(caps[v]) {
                 let mut m2 = m.clone();
                 m2[v] = e;
                 next.push(m2);
@@ -500,6 +508,29 @@ fn monomials(n: usize, d: u32) -> Vec<Vec<u32>> {
         out = next;
     }
     out
+}
+
+/// `monomials_capped(n, d, caps).len()`, without listing them: the number
+/// of vectors of the first `v` variables of each total degree, variable by
+/// variable.
+fn count_capped(n: usize, d: u32, caps: &[u32]) -> usize {
+    let d = d as usize;
+    let mut ways = vec![0usize; d + 1];
+    ways[0] = 1;
+    for &cap in caps.iter().take(n) {
+        let cap = (cap as usize).min(d);
+        let mut next = vec![0usize; d + 1];
+        for (s, &w) in ways.iter().enumerate() {
+            if w == 0 {
+                continue;
+            }
+            for e in 0..=cap.min(d - s) {
+                next[s + e] = next[s + e].saturating_add(w);
+            }
+        }
+        ways = next;
+    }
+    ways.iter().fold(0usize, |a, &w| a.saturating_add(w))
 }
 
 impl IoModel {
@@ -590,6 +621,19 @@ impl IoModel {
     /// The relation of output `i` at `theta`, given the orders; `None` when
     /// no relation of total degree at most `max_degree` fits in
     /// `max_monomials` ansatz monomials.
+    ///
+    /// The ansatz is searched over the sets `S(d, c, l)`: total degree
+    /// `<= d`, degree `<= c` in the penultimate jet `y_i^(k_i - 1)` and
+    /// `<= l` in the leader `y_i^(k_i)`, of three kinds, all tried by
+    /// increasing size: `S(d, 1, 1)`, `S(d, d, 1)` and the full `S(d, d, d)` (the
+    /// relation is linear in the leader when the states are rational
+    /// functions of the outputs' lower jets, and low in the jet below:
+    /// Goodwin's per-jet degrees are 6, 7, 3, 1, 1). Exact whatever the
+    /// phase: every polynomial vanishing on the jets is `P R` (`P` the
+    /// irreducible relation) and each degree of `P R` bounds that of `P`, so
+    /// if `R` were not constant `P` would lie in `S(d - deg R, ..)` of the
+    /// same kind, a strict subset, smaller, tried before with a zero kernel:
+    /// the first non-zero kernel is `P`'s line alone.
     pub(super) fn relation(
         &self,
         theta: &[u64],
@@ -601,11 +645,32 @@ impl IoModel {
     ) -> Result<Option<IoRelation>, AnalysisError> {
         let vars = self.relation_vars(orders, i);
         let len = orders.iter().copied().max().unwrap_or(0) + 1;
-        for d in 1..=max_degree {
-            let monos = monomials(vars.len(), d);
-            if monos.len() > max_monomials {
-                return Ok(None);
+        let lead = vars.len() - 1 - self.nu * len;
+        let pen = (orders[i] > 0)
+            .then(|| vars.iter().position(|&v| v == IoVar::Y(i, orders[i] - 1)))
+            .flatten();
+        let mut sets: Vec<(usize, u32, u32, u32)> = Vec::new();
+        // Without a penultimate jet, phase 0 is phase 1.
+        for phase in u32::from(pen.is_none())..3 {
+            for d in 1..=max_degree {
+                let (c, l) = match phase {
+                    0 => (1, 1),
+                    1 => (d, 1),
+                    _ => (d, d),
+                };
+                let n = count_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
+                if n > max_monomials {
+                    break;
+                }
+                sets.push((n, d, c.min(d), l.min(d)));
             }
+        }
+        // All phases by size: a phase whose guess is wrong then costs at
+        // most as much as the sets of the right one below the relation.
+        sets.sort_unstable();
+        sets.dedup();
+        for (_, d, c, l) in sets {
+            let monos = monomials_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
             let ker = self.fit(theta, &vars, len, &monos, rng)?;
             if ker.is_empty() {
                 continue;
@@ -623,10 +688,11 @@ impl IoModel {
                 .filter(|(_, &c)| c != 0)
                 .map(|(m, _)| m.clone())
                 .collect();
+            let degree = support.iter().map(|m| m.iter().sum()).max().unwrap_or(0);
             let coeffs = self.normalise(v.iter().copied().filter(|&c| c != 0).collect());
             return Ok(Some(IoRelation {
                 vars,
-                degree: d,
+                degree,
                 ansatz: monos.len(),
                 support,
                 coeffs,

@@ -14,14 +14,14 @@
 //! Thompson 2023), checked here (io.rs, `independent_along`); the route
 //! refuses otherwise.
 
-use super::io::{IoModel, IoRelation};
+use super::io::{elem, IoModel, IoRelation};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::{err, gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
-use obsan_recon::{reconstruct_vec, Options, Rational};
+use obsan_recon::{reconstruct_vec, Options, Rational, Thiele};
 use std::collections::HashMap;
 
 /// Sizes of one output's relation, as measured (docs/performance.md).
@@ -85,6 +85,22 @@ pub(super) fn io_count(
                 i + 1
             )));
         }
+        if rel.support.len() == 1 {
+            // A monomial relation (`y' = 0`: Treatment's constant N) has no
+            // coefficient to reconstruct and constrains no parameter.
+            sizes.push(IoSize {
+                order: orders[i],
+                variables: rel.vars.len(),
+                degree: rel.degree,
+                ansatz: rel.ansatz,
+                support: 1,
+                points: 0,
+                terms: 0,
+                max_degree: 0,
+                recon_error_bound: 0.0,
+            });
+            continue;
+        }
         let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
         sizes.push(IoSize {
             order: orders[i],
@@ -125,15 +141,6 @@ pub(super) fn io_count(
     })
 }
 
-fn elem(rng: &mut Rng, p: u64) -> u64 {
-    loop {
-        let x = rng.next() % p;
-        if x > 1 {
-            return x;
-        }
-    }
-}
-
 /// The normalised coefficients of output `i`'s relation (the last one is 1,
 /// left out) as rational functions of the parameters.
 fn reconstruct(
@@ -146,7 +153,7 @@ fn reconstruct(
 ) -> Result<(obsan_recon::Reconstruction, u64), AnalysisError> {
     let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
     let mut calls = 0u64;
-    let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+    let mut coeffs = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
         calls += 1;
         if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
             let rng = Rng::new(seed ^ p);
@@ -163,20 +170,87 @@ fn reconstruct(
             v
         }))
     };
+    let np = m.param_vars.len();
+    let alpha = monomial_denominators(np, support.len() - 1, &mut coeffs, seed)?;
+    // Scaled by their monomial denominators the coefficients are (mostly)
+    // polynomials, which need far fewer points than rational functions.
+    let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+        Ok(coeffs(pt, p)?.map(|v| {
+            v.iter()
+                .zip(&alpha)
+                .map(|(&c, a)| {
+                    a.iter().zip(pt).fold(c, |acc, (&e, &x)| {
+                        obsan_recon::fp::mul(acc, obsan_recon::fp::pow(x, u64::from(e), p), p)
+                    })
+                })
+                .collect()
+        }))
+    };
     let ropts = Options {
         deadline: opts.deadline,
         seed: seed ^ 0x10c0,
         ..Options::default()
     };
-    let r = reconstruct_vec(m.param_vars.len(), support.len() - 1, &mut bb, &ropts).map_err(
-        |e| match e {
-            obsan_recon::ReconError::BlackBox(e) => e,
-            e => err(format!(
-                "global (io): reconstructing the relations' coefficients: {e}"
-            )),
-        },
-    )?;
+    let mut r = reconstruct_vec(np, support.len() - 1, &mut bb, &ropts).map_err(|e| match e {
+        obsan_recon::ReconError::BlackBox(e) => e,
+        e => err(format!(
+            "global (io): reconstructing the relations' coefficients: {e}"
+        )),
+    })?;
+    for (f, a) in r.functions.iter_mut().zip(&alpha) {
+        *f = f.over_monomial(a);
+    }
     Ok((r, calls))
+}
+
+/// The coefficients at a point modulo a prime; `None` at a bad point.
+type BlackBox<'a> = dyn FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, AnalysisError> + 'a;
+
+/// Per function of the black box `bb` (`m` values at a point of `np`
+/// parameters), the exponents `a` of a monomial `theta^a` dividing its
+/// denominator: for each parameter `k`, the order of the pole at
+/// `theta_k = 0` along the line `theta_k = t` (the other parameters at a
+/// random point; one Thiele interpolation per function). A wrong guess
+/// (a non-generic line) costs points only: the scaled functions are still
+/// reconstructed exactly and verified.
+fn monomial_denominators(
+    np: usize,
+    m: usize,
+    bb: &mut BlackBox<'_>,
+    seed: u64,
+) -> Result<Vec<Vec<u32>>, AnalysisError> {
+    let p = obsan_recon::PRIMES[0];
+    let mut rng = Rng::new(seed ^ 0xde40);
+    let base: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+    let mut alpha = vec![vec![0u32; np]; m];
+    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
+    for k in 0..np {
+        let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, 2)).collect();
+        let mut t = 1u64;
+        let mut misses = 0;
+        while th.iter().any(|x| !x.done()) {
+            let mut pt = base.clone();
+            pt[k] = t;
+            t += 1;
+            let Some(v) = bb(&pt, p)? else {
+                misses += 1;
+                if misses > 8 {
+                    return Ok(vec![vec![0u32; np]; m]);
+                }
+                continue;
+            };
+            for (x, &c) in th.iter_mut().zip(&v) {
+                if !x.done() {
+                    x.add(pt[k], c);
+                }
+            }
+        }
+        for (a, x) in alpha.iter_mut().zip(&th) {
+            let (n, d) = x.rational();
+            a[k] = (ord(&d) - ord(&n)).max(0) as u32;
+        }
+    }
+    Ok(alpha)
 }
 
 fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisError> {

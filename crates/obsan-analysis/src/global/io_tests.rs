@@ -348,3 +348,19 @@ fn io_count_goodwin() {
     assert_eq!(c.per_param[4], None);
     assert_eq!(c.per_param[5], Some(2));
 }
+
+#[test]
+fn capped_monomials_counted() {
+    // Listing and counting agree; with no caps, C(n + d, d) monomials
+    // (C(7, 3) = 35 in 4 variables of degree <= 3); the leader capped at 1
+    // in 3 variables of degree <= 2: 6 of the 10, less x3^2 = 9.
+    let free = [u32::MAX; 4];
+    assert_eq!(monomials_capped(4, 3, &free).len(), 35);
+    assert_eq!(count_capped(4, 3, &free), 35);
+    assert_eq!(count_capped(3, 2, &[u32::MAX, u32::MAX, 1]), 9);
+    let caps = [2, u32::MAX, 1, 3, 1];
+    assert_eq!(
+        monomials_capped(5, 6, &caps).len(),
+        count_capped(5, 6, &caps)
+    );
+}
