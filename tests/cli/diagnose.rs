@@ -188,6 +188,41 @@ fn diagnose_calls_residuals_far_below_the_stated_noise_a_finding() {
     assert!(!out.contains("consistent with noise"), "{out}");
 }
 
+/// Failure 8 of issue 37, its last clause: never "stated" for a level the
+/// dataset does not state. The simulator's clean circles with the whole
+/// `noise` block removed from dataset.json: every level obsan uses is then
+/// its own estimate, so the output-noise line must say estimated, no line
+/// may call a level stated, and (no effect simulated) nothing is named.
+/// The verdict still leads, on the line after the title.
+#[test]
+fn diagnose_never_calls_a_level_stated_when_the_data_state_none() {
+    let data = tmp_dir("unstated");
+    ok(&["simulate", "--out", &data, "--seed", "11"]);
+    let p = format!("{data}/dataset.json");
+    let mut j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+    j["noise"] = serde_json::json!({});
+    std::fs::write(&p, j.to_string()).unwrap();
+    let out = ok(&refs(&diag(&data, &[])));
+    assert!(
+        out.lines()
+            .nth(1)
+            .unwrap_or("")
+            .starts_with("verdict: nothing named"),
+        "{out}"
+    );
+    let levels = out
+        .lines()
+        .find(|l| l.starts_with("output noise:"))
+        .unwrap_or_else(|| panic!("no output noise line: {out}"));
+    assert!(levels.contains("estimated from the residuals"), "{out}");
+    for l in out.lines() {
+        let l = l.to_lowercase();
+        let called = l.contains("stated") && (l.contains("noise") || l.contains("sigma"));
+        assert!(!called, "a level called stated: {l}\n{out}");
+    }
+}
+
 #[test]
 fn diagnose_rejects_bad_input_with_positions() {
     let data = tmp_dir("bad");

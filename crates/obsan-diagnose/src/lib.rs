@@ -31,6 +31,7 @@ mod generate;
 mod identify;
 mod model_fit;
 mod options;
+mod phase;
 mod relation;
 mod relevel;
 mod report;

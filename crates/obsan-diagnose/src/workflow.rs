@@ -52,17 +52,19 @@ pub fn diagnose(
     let prepared = prepare(sys, data)?;
     progress("fitting the nominal model");
     let own = || own_start(sys, data, start);
-    let (sigma, sigma_estimated) = output_levels(sys, &prepared, start, sigma, (o, &own))?;
-    let (levels, nominal) = nominal_fit(
-        sys,
-        data,
-        &prepared,
-        start,
-        sigma,
-        sigma_estimated,
-        o,
-        progress,
-    )?;
+    let (levels, nominal) = crate::phase::time("levels, nominal fit", || {
+        let (sigma, sigma_estimated) = output_levels(sys, &prepared, start, sigma, (o, &own))?;
+        nominal_fit(
+            sys,
+            data,
+            &prepared,
+            start,
+            sigma,
+            sigma_estimated,
+            o,
+            progress,
+        )
+    })?;
 
     let effects: Vec<&Effect> = lib.map(|l| l.effects.iter().collect()).unwrap_or_default();
     let file_effects: Vec<&Effect> = effects
@@ -133,22 +135,26 @@ pub fn diagnose(
         None => start.2.clone(),
     };
 
-    settle(&mut named, &rounds, &current, &gen);
+    crate::phase::time("settle", || settle(&mut named, &rounds, &current, &gen));
     if relevels.iter().any(|r| r.replaced) {
         let crit = |n: &str| limits.named(n, &gen, data.trajectories.len());
         let lv = (&levels.sigma[..], &levels.noise[..]);
-        weak_under_final(
-            sys,
-            &mut named,
-            &all_candidates,
-            &current,
-            data,
-            lv,
-            &crit,
-            o,
-        );
+        crate::phase::time("final-levels refits", || {
+            weak_under_final(
+                sys,
+                &mut named,
+                &all_candidates,
+                &current,
+                data,
+                lv,
+                &crit,
+                o,
+            )
+        });
     }
-    mark_stand_ins(&mut named, &all_candidates, &current, &levels.sigma);
+    crate::phase::time("stand-ins", || {
+        mark_stand_ins(&mut named, &all_candidates, &current, &levels.sigma)
+    });
     // Pairs fixed only in combination (item 7 of the never-confidently-
     // wrong rules): among the named effects, and among the suggested ones
     // fitted together.
@@ -162,8 +168,11 @@ pub fn diagnose(
         o,
     };
     progress("combinations of correlated effects");
-    let mut combinations = of_named(&named, &at, &crit)?;
-    combinations.extend(of_suggested(&suggested, &all_candidates, &at, &crit));
+    let mut combinations = crate::phase::time("combinations", || -> Result<_, DiagnoseError> {
+        let mut c = of_named(&named, &at, &crit)?;
+        c.extend(of_suggested(&suggested, &all_candidates, &at, &crit));
+        Ok(c)
+    })?;
     combinations.extend(with_named);
     let mut extended_sys = extended_model(&named, &current_sys);
     name_relations(&mut named, &mut extended_sys, &input_checks, &effects);
@@ -171,6 +180,7 @@ pub fn diagnose(
         true => limits.screen_threshold,
         false => f64::INFINITY,
     };
+    crate::phase::report();
     Ok(Diagnosis {
         model: sys.name.clone(),
         start: start_text,
@@ -470,13 +480,16 @@ impl<'a> Rounds<'a> {
         // columns present; on MRCLAM they were 9 % of the run once the
         // couplings were named).
         let round_data = prepare(&self.current_sys, self.data)?;
-        let mut results = self.weigh(round, &remaining, &round_data);
+        let mut results =
+            crate::phase::time("weigh", || self.weigh(round, &remaining, &round_data));
         // An LR is only meaningful against a converged fit:
         // where a candidate's point, its params at 0, fits better than the
         // current fit, the current fit had stopped short; it is refitted and
         // the round weighed again.
         for _ in 0..MAX_REFITS {
-            let Some((fit, from)) = self.refit(&results, &round_data) else {
+            let Some((fit, from)) =
+                crate::phase::time("refit check", || self.refit(&results, &round_data))
+            else {
                 break;
             };
             self.refits.push(Refit {
@@ -489,10 +502,14 @@ impl<'a> Rounds<'a> {
                 self.nominal_refit = Some(fit.clone());
             }
             self.current = fit;
-            results = self.weigh(round, &remaining, &round_data);
+            results = crate::phase::time("weigh again after refit", || {
+                self.weigh(round, &remaining, &round_data)
+            });
         }
         if round == 0 {
-            self.first_round(&remaining, &round_data, &mut results)?;
+            crate::phase::time("first-round ranks", || {
+                self.first_round(&remaining, &round_data, &mut results)
+            })?;
         }
         let best = results
             .iter()
@@ -527,15 +544,18 @@ impl<'a> Rounds<'a> {
             };
             let at = (&self.current_sys, &self.current, &round_data);
             let crit = [self.limits.crit_gen, self.limits.crit];
-            if let Ok(c) = fit_together(
-                at,
-                (&res, eff),
-                (&fres, fe),
-                levels,
-                crit,
-                round + 1,
-                self.o,
-            ) {
+            let together = crate::phase::time("generated vs file", || {
+                fit_together(
+                    at,
+                    (&res, eff),
+                    (&fres, fe),
+                    levels,
+                    crit,
+                    round + 1,
+                    self.o,
+                )
+            });
+            if let Ok(c) = together {
                 let who = c.established.clone().or_else(|| c.named_form.clone());
                 self.competing.push(c);
                 match who {
@@ -562,7 +582,10 @@ impl<'a> Rounds<'a> {
                 o: self.o,
             };
             let crit = |origin: &str| self.limits.of(origin);
-            if let Some(c) = against_named(&at, &res, &self.named, &crit)? {
+            let against = crate::phase::time("against named", || {
+                against_named(&at, &res, &self.named, &crit)
+            });
+            if let Some(c) = against? {
                 self.with_named.push(c);
                 return Ok(false);
             }
@@ -579,7 +602,9 @@ impl<'a> Rounds<'a> {
             levels: &mut self.levels,
             o: self.o,
         };
-        let r = after.relevel((round + 1, &res.effect), (white, white_won), progress)?;
+        let r = crate::phase::time("re-estimate levels", || {
+            after.relevel((round + 1, &res.effect), (white, white_won), progress)
+        })?;
         self.relevels.push(r);
         Ok(true)
     }
