@@ -328,6 +328,11 @@ fn strike_goldd_unread_matlab_is_refused_at_its_place() {
             "x = sym('x', [3 3]);\nf = -x;\nh = x(1);\n",
             "1:5: 'sym('x', [3 3])': only vectors of symbols",
         ),
+        // Found by the fuzzer (CI, session 28): an empty right-hand side panicked the reader.
+        (
+            "syms x k\nx = x;\nu =; [k];\nf = -k*x;\nh = x;\n",
+            "3:3: nothing to read after '='",
+        ),
     ];
     for (k, (text, want)) in cases.iter().enumerate() {
         let src = temp_file(&format!("z_create_unread{k}.m"), text);

@@ -355,7 +355,8 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
                     ));
                 };
                 let e = infix::parse_placed(el, Dialect::Matlab)?;
-                let e = (subst(&e, &sc, el[0].1)?, el[0].1);
+                let el_at = el.first().map_or(at, |c| c.1);
+                let e = (subst(&e, &sc, el_at)?, el_at);
                 let items = &mut sc
                     .vars
                     .get_mut(v)
@@ -391,7 +392,11 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
         }
         let mut items = Vec::new();
         for el in elements(&st[eq + 1..]) {
-            let at = el[0].1;
+            // An empty element (`x = [a;;b]`, `x = `) is the parser's error, at the '='.
+            let Some(&(_, at)) = el.first() else {
+                let at = st[eq].1;
+                return Err(ImportError::at(at.0, at.1, "nothing to read after '='"));
+            };
             if string(el).starts_with("sym(") {
                 // `sym('x', [34 1])`: the symbols x1..x34, indexed later (`x(3)`).
                 for name in sym_array(&string(el), at)? {
