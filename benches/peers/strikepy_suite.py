@@ -186,11 +186,8 @@ def main():
               flush=True)
     print()
     if ratios:
-        ratios.sort()
-        k = len(ratios)
-        med = ratios[k // 2] if k % 2 else (ratios[k // 2 - 1] + ratios[k // 2]) / 2
-        print(f"CPU ratio (StrikePy child CPU, interpreter start included / obsan process CPU) on the {k} "
-              f"models StrikePy answered: median {med:.0f}x, min {ratios[0]:.1f}x, max {ratios[-1]:.0f}x")
+        print(f"CPU ratio (StrikePy child CPU, interpreter start included / obsan process CPU) on the "
+              f"{len(ratios)} models StrikePy answered: {suite.ratio_summary(ratios)}")
     print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, StrikePy "
           f"{score['strikepy']}; StrikePy answered {score['answered']}; obsan faster on {score['faster']}; "
           f"StrikePy {version}, timeout {timeout:.0f} s")

@@ -266,6 +266,14 @@ def run_obsan(obsan, path, restriction, cited, timeout, repeat=1):
     return v["n"], v["rank"], overdict, osecs, ocpu, True
 
 
+def ratio_summary(rs):
+    """`median Mx, min mx, max Xx` of the ratios `rs` (not empty)."""
+    rs = sorted(rs)
+    k = len(rs)
+    med = rs[k // 2] if k % 2 else (rs[k // 2 - 1] + rs[k // 2]) / 2
+    return f"median {med:.0f}x, min {rs[0]:.1f}x, max {rs[-1]:.0f}x"
+
+
 def judge(rank, n, un, cited):
     if rank is None:
         return "no answer"
@@ -382,20 +390,13 @@ def main():
               f"| {ratio} |" + (f" {in_ratio} | {comp_ratio} |" if inproc else ""), flush=True)
     print()
     if ratios:
-        ratios.sort()
-        k = len(ratios)
-        med = ratios[k // 2] if k % 2 else (ratios[k // 2 - 1] + ratios[k // 2]) / 2
         print(f"CPU ratio (symident detect() CPU / obsan process CPU, obsan's floored at 1 ms) on the "
-              f"{k} models both answered: median {med:.0f}x, min {ratios[0]:.1f}x, max {ratios[-1]:.0f}x"
-              f" (least of {repeat} runs each)")
+              f"{len(ratios)} models both answered: {ratio_summary(ratios)} (least of {repeat} runs each)")
     for rs, what in ((in_ratios, "obsan's whole rank command in-process"),
                      (comp_ratios, "obsan's rank computation alone, the model parsed beforehand")):
         if rs:
-            rs.sort()
-            k = len(rs)
-            med = rs[k // 2] if k % 2 else (rs[k // 2 - 1] + rs[k // 2]) / 2
             print(f"Ratio symident detect() CPU / {what} (benches/rank_inprocess.rs, least of its "
-                  f"runs) on {k} models: median {med:.0f}x, min {rs[0]:.1f}x, max {rs[-1]:.0f}x")
+                  f"runs) on {len(rs)} models: {ratio_summary(rs)}")
     print(f"{score['total']} entries; cited verdict matched: obsan {score['obsan']}, "
           f"symident {score['symident']}; obsan faster on {score['faster']} of the {score['both']} "
           f"that both answered or symident timed out; symident "
