@@ -202,8 +202,21 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
         }
     };
-    o.push_str(&format!("observable on their own: {}\n", list(&obs)));
-    o.push_str(&format!("not observable on their own: {}\n", list(&unobs)));
+    // Over undecided atoms the per-variable verdicts are those of the system
+    // with the atoms independent: a relation among them restricts the
+    // Jacobian to a subvariety, which bounds the rank but can move a unit
+    // vector into or out of the row space (`cos(2 pi/5) - (sqrt 5 - 1)/4`
+    // is 0, so `x1 + (that) x2` reads x1 alone).
+    let qual = if undecided.is_empty() {
+        ""
+    } else {
+        " (with the atoms below independent; not certified)"
+    };
+    o.push_str(&format!("observable on their own{qual}: {}\n", list(&obs)));
+    o.push_str(&format!(
+        "not observable on their own{qual}: {}\n",
+        list(&unobs)
+    ));
     if let Some(k) = r.roots_field {
         o.push_str(&format!("no point mod p = 2^61-1 satisfies the roots' relations together (their radicands multiply to a constant that is no power there): the rank was certified at a point of the field of p^{k} elements, where every root has its value\n"));
     }
@@ -212,7 +225,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     }
     if !undecided.is_empty() {
         o.push_str(&format!(
-            "not decided: the atoms {} may be related in ways the engine does not detect; the rank above is that of the system with them independent, an upper bound on the true rank: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",
+            "not decided: the atoms {} may be related in ways the engine does not detect; the rank above is that of the system with them independent, an upper bound on the true rank (a rank below n proves the system not weakly locally observable); which variables are observable on their own is certified neither way, a relation can change it\n",
             undecided.join(", ")
         ));
     }

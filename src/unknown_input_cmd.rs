@@ -241,7 +241,17 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         nf.state.join(", "),
         nf.unknown_inputs.join(", ")
     ));
-    let verdict = if r.rank == r.n {
+    // Over undecided atoms the ranks are upper bounds: a full one proves
+    // nothing, and the per-variable verdicts are certified neither way (see
+    // analysis_cmds.rs, `rank`).
+    let qual = if undecided_atoms.is_empty() {
+        ""
+    } else {
+        " (with the atoms below independent; not certified)"
+    };
+    let verdict = if r.rank == r.n && !undecided_atoms.is_empty() {
+        "weakly locally observable with unknown inputs if the atoms below are independent (not decided)"
+    } else if r.rank == r.n {
         "weakly locally observable with unknown inputs"
     } else {
         "not weakly locally observable with unknown inputs"
@@ -250,14 +260,14 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         "rank {} of {} (output derivatives up to order {}): {verdict}\n",
         r.rank, r.n, r.max_order
     ));
-    o.push_str(&format!("observable: {}\n", with_order(&obs)));
-    o.push_str(&format!("not observable: {}\n", list(&unobs)));
+    o.push_str(&format!("observable{qual}: {}\n", with_order(&obs)));
+    o.push_str(&format!("not observable{qual}: {}\n", list(&unobs)));
     o.push_str(&format!(
-        "unknown inputs reconstructable: {}\n",
+        "unknown inputs reconstructable{qual}: {}\n",
         with_order(&rec)
     ));
     o.push_str(&format!(
-        "unknown inputs not reconstructable: {}\n",
+        "unknown inputs not reconstructable{qual}: {}\n",
         list(&unrec)
     ));
     o.push_str("order by order (rank in the extended space / of the state part):");
@@ -320,7 +330,7 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
     ));
     if !undecided_atoms.is_empty() {
         o.push_str(&format!(
-            "not decided: the atoms {} may be related in ways the engine does not detect; the ranks above are those of the system with them independent, upper bounds on the true ones: \"not observable\" verdicts stand, \"observable\" ones are certified only if the atoms are independent\n",
+            "not decided: the atoms {} may be related in ways the engine does not detect; the ranks above are those of the system with them independent, upper bounds on the true ones (a rank below n proves the system not weakly locally observable); the per-variable and per-input verdicts are certified neither way, a relation can change them\n",
             undecided_atoms.join(", ")
         ));
     }

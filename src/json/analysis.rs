@@ -62,7 +62,8 @@ pub struct Rank {
     /// The Lie words of a basis of the codistribution.
     pub basis: Vec<BasisWord>,
     /// False when the atoms listed in `undecided_atoms` may be related: then the rank is an
-    /// upper bound and full rank is not proven.
+    /// upper bound, full rank is not proven, and the per-variable lists (those of the system
+    /// with the atoms independent) are certified neither way.
     pub decided: bool,
     /// The Schwartz-Zippel degree bound of the rank test.
     pub degree_bound: u64,
@@ -78,7 +79,7 @@ pub struct Rank {
     pub max_order: usize,
     /// The number of analysed variables.
     pub n: usize,
-    /// The variables observable on their own.
+    /// The variables observable on their own (not certified when `decided` is false).
     pub observable_variables: Vec<String>,
     /// The generic rank.
     pub rank: usize,
@@ -95,7 +96,7 @@ pub struct Rank {
     pub system: String,
     /// The atoms (e.g. `log(x*y)`, `log(x)`) that may be related; empty when decided.
     pub undecided_atoms: Vec<String>,
-    /// The variables not observable on their own.
+    /// The variables not observable on their own (not certified when `decided` is false).
     pub unobservable_variables: Vec<String>,
     /// rank = n; null when full rank rests on undecided atoms.
     pub weakly_locally_observable: Option<bool>,

@@ -32,7 +32,8 @@ pub struct RankUnknownInputs {
     pub max_order: usize,
     /// The number of analysed variables.
     pub n: usize,
-    /// The observable variables, each with the lowest order that shows it.
+    /// The observable variables, each with the lowest order that shows it (not certified
+    /// when `undecided_atoms` is not empty).
     pub observable_variables: Vec<NamedOrder>,
     /// The dimension of the observable codistribution in the state.
     pub rank: usize,
@@ -52,7 +53,8 @@ pub struct RankUnknownInputs {
     pub undecided_atoms: Vec<String>,
     /// The unknown inputs.
     pub unknown_inputs: Vec<String>,
-    /// The variables not observable up to `max_order`.
+    /// The variables not observable up to `max_order` (not certified when `undecided_atoms`
+    /// is not empty).
     pub unobservable_variables: Vec<String>,
     /// The unknown inputs not reconstructable up to `max_order`.
     pub unreconstructable_inputs: Vec<String>,

@@ -144,3 +144,38 @@ fn rank_with_square_roots_related_over_c_only_is_decided() {
     assert_eq!(v["decided"], true, "{v}");
     assert_eq!(v["exact"], true, "{v}");
 }
+
+/// Regression (session 29): over an undecided atom the per-variable verdicts
+/// are certified neither way. `cos(2 pi/5) = (sqrt(5) - 1)/4` (the regular
+/// pentagon: `2 cos(2 pi/5)` is the root `(sqrt 5 - 1)/2` of `t^2 + t - 1`),
+/// so `y = x1 + (cos(2 pi/5) - (sqrt(5) - 1)/4) x2` is `x1`: x1 is observable
+/// and x2 not. The engine does not decide `cos(2 pi/5)`; with it independent
+/// the one row `(1, c)` leaves `dx1` out. Before, the text said "not
+/// observable" verdicts stand, listing x1 among them. Now: the rank (1 < 2)
+/// still proves the system not weakly locally observable, the lists are
+/// marked not certified, and no text claims a verdict stands.
+#[test]
+fn rank_over_undecided_atoms_certifies_no_variable_either_way() {
+    let text = "system pentagon\nstate x1, x2\nx1' = 0\nx2' = 0\noutput y = x1 + (cos(2*pi/5) - (sqrt(5) - 1)/4)*x2\n";
+    let v = rank_json("qroot_pentagon.sys", text);
+    assert_eq!(v["decided"], false, "{v}");
+    assert_eq!(v["weakly_locally_observable"], false, "{v}");
+    let sys = temp_file("qroot_pentagon_t.sys", text);
+    let out = ok(&["rank", &sys]);
+    assert!(!out.contains("verdicts stand"), "{out}");
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("not observable on their own"))
+        .expect("the list");
+    assert!(line.contains("not certified"), "{out}");
+    // The same with an unknown input: its lists are marked too.
+    let ui = "system pentagon_ui\nstate x1, x2\nunknown input w\nx1' = 0\nx2' = w\noutput y = x1 + (cos(2*pi/5) - (sqrt(5) - 1)/4)*x2\n";
+    let sys = temp_file("qroot_pentagon_ui.sys", ui);
+    let out = ok(&["rank", &sys]);
+    assert!(!out.contains("verdicts stand"), "{out}");
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("not observable"))
+        .expect("the list");
+    assert!(line.contains("not certified"), "{out}");
+}
