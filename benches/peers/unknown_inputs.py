@@ -30,6 +30,7 @@ verdict differs.
 
 import glob
 import json
+import keyword
 import os
 import random
 import re
@@ -96,7 +97,13 @@ def oracle(path, order):
     time_t = sp.Symbol("time_t")
     loc["t"] = time_t
 
+    # A .sys name that is a Python keyword (`lambda`) cannot reach sympify's
+    # tokenizer: rename it to its fresh symbol's name in the text first.
+    kw = {n for n in names if keyword.iskeyword(n)}
+
     def parse(e):
+        for n in kw:
+            e = re.sub(rf"\b{n}\b", sym[n].name, e)
         return sp.sympify(e.replace("^", "**"), locals=loc)
 
     states = [sym[n] for n in m["state"] + m["param"]]
