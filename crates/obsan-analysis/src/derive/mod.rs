@@ -36,6 +36,7 @@ mod exchange;
 mod frame;
 mod monomial;
 
+mod free_section;
 mod reduced;
 mod section;
 
@@ -856,6 +857,12 @@ pub(super) fn reduce(
                 None
             }
             r => r?,
+        };
+        // Symmetries that are not all scalings: the slice of their free
+        // columns (free_section.rs).
+        let sec = match sec {
+            Some(s) => Some(s),
+            None => free_section::free_section(nf, sp.w_ids, modes, opts.seed)?,
         };
         if let Some(sec) = sec {
             for (k, m) in modes.iter().enumerate() {

@@ -130,6 +130,15 @@ pub(super) fn scaling_section(
 }
 
 impl Section {
+    /// A section given by the images of every state variable
+    /// (free_section.rs).
+    pub(super) fn from_images(images: Vec<(Var, Id)>) -> Section {
+        Section {
+            images,
+            names: Vec::new(),
+        }
+    }
+
     /// `t` in the modes through the section, as text; `None` when the
     /// substitution leaves a variable that is not a mode or a constant.
     pub(super) fn form(&self, nf: &mut NormalForm, t: Id, znames: &[String]) -> Option<String> {
