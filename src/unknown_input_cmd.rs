@@ -328,6 +328,9 @@ pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
         "probabilistic: exact arithmetic mod 2^61-1 at random points (2 for the orders, 1 plus 1 per extension in Martinelli's algorithm; seed {}); a verdict is wrong with probability <= {:.1e} (Schwartz-Zippel, degree bound {})\n",
         r.seed, r.error_bound, r.degree_bound
     ));
+    if let Some(k) = r.roots_field {
+        o.push_str(&format!("no point mod p = 2^61-1 satisfies the roots' relations together (their radicands multiply to a constant that is no power there): both routes ran where the roots take free values, and every decision that does not carry over from there (a value not zero, a rank) was proven at a point of the field of p^{k} elements, where every root has its value\n"));
+    }
     if !undecided_atoms.is_empty() {
         o.push_str(&format!(
             "not decided: the atoms {} may be related in ways the engine does not detect; the ranks above are those of the system with them independent, upper bounds on the true ones (a rank below n proves the system not weakly locally observable); the per-variable and per-input verdicts are certified neither way, a relation can change them\n",
@@ -403,7 +406,7 @@ fn rank_json(
     };
     let outs: Vec<&String> = nf.outputs.iter().map(|o| &o.0).collect();
     // The ranks are of the formal field in which the atoms are independent; a relation
-    // among them can only lower the true rank: "not observable" stands, full rank does not.
+    // among them can only lower the true rank: a rank below n stands, full rank does not.
     let full = r.rank == r.n;
     let weakly_locally_observable = (undecided.is_empty() || !full).then_some(full);
     json::RankUnknownInputs {
@@ -431,6 +434,7 @@ fn rank_json(
         rank: r.rank,
         reconstructable_inputs: orders(&nf.unknown_inputs, &r.reconstructable),
         restriction: nf.restriction.clone(),
+        roots_field_degree: r.roots_field,
         seed: r.seed,
         state: nf.state.clone(),
         steps: r

@@ -90,7 +90,9 @@ unknown_inputs, n, rank, weakly_locally_observable, decided, undecided_atoms,
 observable_variables ([{name, order}]: the lowest output derivative order that shows each),
 unobservable_variables, reconstructable_inputs ([{name, order}]), unreconstructable_inputs, steps,
 max_order, converged, agree, martinelli (Martinelli's algorithm's proven verdicts), complete,
-basis, evaluated, error_bound, degree_bound, seed} (docs/engine.md). A model may use time
+basis, evaluated, error_bound, degree_bound, seed, roots_field_degree (k when no point mod p
+satisfies the roots' relations and every decision taken at free root values was proven in the
+field of p^k elements; else null)} (docs/engine.md). A model may use time
 t explicitly: it is known along the trajectory (a clock t' = 1), and state, n, rank and basis
 leave the clock out (docs/sys-format.md, \"Explicit time\"); --along, --known and --experiments
 refuse it.

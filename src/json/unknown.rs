@@ -41,6 +41,9 @@ pub struct RankUnknownInputs {
     pub reconstructable_inputs: Vec<NamedOrder>,
     /// The input restriction applied, or null.
     pub restriction: Option<String>,
+    /// When no point mod p satisfies the roots' relations: the degree k of the field of p^k
+    /// elements where every decision taken at free root values was proven; else null.
+    pub roots_field_degree: Option<u32>,
     /// Seed of the random evaluation points.
     pub seed: u64,
     /// The analysed variables.

@@ -173,3 +173,71 @@ fn rank_over_undecided_atoms_certifies_no_variable_either_way() {
         assert!(line.contains("not certified"), "{out}");
     }
 }
+
+/// Unknown inputs over a root with no value mod p (session 29): `sqrt(3)`
+/// (3 is no square mod 2^61 - 1) takes free values, and every decision that
+/// does not carry over is proven in F_(p^2). By hand: y = x1, y' = sqrt(3)
+/// x2 (x2 from order 1), y'' = sqrt(3) w (w reconstructable from order 2).
+#[test]
+fn unknown_inputs_over_a_root_with_no_value_mod_p_are_proven_in_an_extension() {
+    let v = rank_json(
+        "qroot_ui_sqrt3.sys",
+        "system s3ui\nstate x1, x2\nunknown input w\nx1' = sqrt(3)*x2\nx2' = w\noutput y = x1\n",
+    );
+    assert_eq!(v["rank"], 2, "{v}");
+    assert_eq!(v["roots_field_degree"], 2, "{v}");
+    assert_eq!(v["decided"], true, "{v}");
+    let orders: Vec<(String, u64)> = v["observable_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .chain(v["reconstructable_inputs"].as_array().unwrap())
+        .map(|o| {
+            (
+                o["name"].as_str().unwrap().to_string(),
+                o["order"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    let want = [("x1", 0), ("x2", 1), ("w", 2)].map(|(n, o)| (n.to_string(), o));
+    assert_eq!(orders, want, "{v}");
+}
+
+/// A decision the free roots get wrong is caught, never printed: y1 =
+/// sqrt(3) x1 + 3 x2 = sqrt(3) y2 with y2 = x1 + sqrt(3) x2, so only
+/// x1 + sqrt(3) x2 is seen (rank 1 of 2 by hand), but with sqrt(3) free the
+/// rows (r, 3) and (1, r) are independent (r^2 != 3). The claim "rank 2" fails
+/// at the true point: exit 2, saying so, no verdict.
+#[test]
+fn unknown_inputs_over_roots_never_print_a_decision_the_true_point_refutes() {
+    let sys = temp_file(
+        "qroot_ui_refuted.sys",
+        "system s3rel\nstate x1, x2\nunknown input w\nx1' = w\nx2' = 0\noutput y1 = sqrt(3)*x1 + 3*x2\noutput y2 = x1 + sqrt(3)*x2\n",
+    );
+    let r = obsan(&["rank", &sys]);
+    assert_eq!(r.code, 2, "{}{}", r.stdout, r.stderr);
+    assert!(r.stderr.contains("could not be proven"), "{}", r.stderr);
+    assert!(!r.stdout.contains("observable"), "{}", r.stdout);
+}
+
+/// STRIKE-GOLDD's BIG model with the meal unmeasured, its powers as written
+/// (`(8.4/G)^1.7`, `(G/4.8)^8.5`: `sqrt(42/(5G)) sqrt(5G/24) = sqrt(7)/2`, no
+/// point mod p): the verdict of systems/benchmarks/unknown-inputs/big.sys (the
+/// SymPy oracle: G alone observable, the meal not reconstructable), proven in
+/// F_(p^10) and decided (the Kummer test).
+#[test]
+fn big_with_its_meal_unknown_is_proven_in_an_extension() {
+    let v = rank_json(
+        "qroot_big_ui.sys",
+        "system big_ui\nstate G, beta, I\nparam p1, si, gamma, c, alpha\nunknown input meal\nG' = meal - (c + si*I)*G\nbeta' = beta*(0.021/1440/(1 + (8.4/G)^1.7) - 0.025/1440/(1 + (G/4.8)^8.5))\nI' = p1*beta*G^2/(alpha^2 + G^2) - gamma*I\noutput y = G\n",
+    );
+    assert_eq!(v["rank"], 1, "{v}");
+    assert_eq!(v["roots_field_degree"], 10, "{v}");
+    assert_eq!(v["decided"], true, "{v}");
+    assert_eq!(v["observable_variables"][0]["name"], "G", "{v}");
+    assert_eq!(
+        v["reconstructable_inputs"].as_array().unwrap().len(),
+        0,
+        "{v}"
+    );
+}

@@ -41,6 +41,7 @@ mod unknown_input_feedthrough;
 mod unknown_input_joint;
 mod unknown_input_martinelli;
 mod unknown_input_modes;
+mod unknown_input_roots;
 mod unknown_input_symmetry;
 
 // The root keeps what most users need (rank, symmetries, modes, decompositions); the

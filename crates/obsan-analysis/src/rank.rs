@@ -615,7 +615,7 @@ fn rank_with(
 
 /// A point for the rank test: on the roots' relations when one exists, else
 /// (and at once with `free`) with free root values (`RankReport::free_roots`).
-fn rank_point(
+pub(crate) fn rank_point(
     ctx: &mut Ctx,
     rng: &mut SplitMix,
     free: bool,

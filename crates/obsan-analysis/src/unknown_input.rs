@@ -37,8 +37,9 @@
 //! itself stopped: every state and input found, or a level added nothing,
 //! `O` then invariant under `F` and the `f_i` in the whole jet space.)
 
-use crate::rank::{random_point_counted, AnalysisError, Echelon, Fields, LieWord};
+use crate::rank::{rank_point, AnalysisError, Echelon, Fields, LieWord};
 use crate::unknown_input_martinelli::{martinelli, MartinelliReport};
+use crate::unknown_input_roots::{prove, Claims};
 use obsan_expr::{evaluate::FpPoint, lie::LieJets, Ctx, Fp, Id, SplitMix, Var, P};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
@@ -111,6 +112,10 @@ pub struct UnknownInputReport {
     /// Probability that some verdict is wrong (union over the two points).
     pub error_bound: f64,
     pub seed: u64,
+    /// Degree `k` of the field `F_(p^k)` where the decisions taken at free
+    /// root values were proven (unknown_input_roots.rs), when no point mod p
+    /// satisfies the roots' relations; `None` otherwise.
+    pub roots_field: Option<u32>,
 }
 
 impl UnknownInputReport {
@@ -387,6 +392,7 @@ pub fn unknown_input_rank(
                 degree_bound: ext.degree_bound,
                 error_bound: (ext.error_bound + mart.error_bound).min(1.0),
                 seed: opts.seed,
+                roots_field: ext.roots_field.or(mart.roots_field),
                 martinelli: mart,
             });
         }
@@ -406,6 +412,7 @@ struct ExtReport {
     evaluated: usize,
     degree_bound: u64,
     error_bound: f64,
+    roots_field: Option<u32>,
 }
 
 /// The extended-state route up to output derivative order `max_order`, by
@@ -425,14 +432,20 @@ fn extended_route(
     let jets = LieJets::new(&ext.ctx, &ext.vars, &ext.fields.vectors, &ext.outputs);
     let mut rng = SplitMix(opts.seed ^ 0x0b5a_5e1f_0b5a_5e1f);
     let mut degrees = HashMap::new();
-    let (p1, k1) = random_point_counted(&mut ext.ctx, &mut rng)?;
+    let (p1, k1, free) = rank_point(&mut ext.ctx, &mut rng, false)?;
     let r1 = grow(&ext, &jets, &mut degrees, &p1, n, max_order, opts)?;
-    let (p2, k2) = random_point_counted(&mut ext.ctx, &mut rng)?;
+    let (p2, k2, _) = rank_point(&mut ext.ctx, &mut rng, free)?;
     let r2 = grow(&ext, &jets, &mut degrees, &p2, n, max_order, opts)?;
     // The run with the larger ranks (lexicographically by order): ranks at a
     // point are never above the generic ones.
     let key = |r: &Run| r.steps.iter().map(|s| s.rank).collect::<Vec<_>>();
     let best = if key(&r2) > key(&r1) { r2 } else { r1 };
+    let roots_field = if free {
+        let claims = growth_claims(&mut ext, &best, n);
+        Some(prove(&mut ext.ctx, &claims, opts.seed)?)
+    } else {
+        None
+    };
     let draws = k1.max(k2) as f64;
     let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);
@@ -447,5 +460,63 @@ fn extended_route(
         degree_bound,
         error_bound: (2.0 * per_point).min(1.0),
         steps: best.steps,
+        roots_field,
     })
+}
+
+/// What a growth at free root values decided that a true point must confirm
+/// (unknown_input_roots.rs): order by order, the rank of the basis rows so
+/// far and of their projection on the unknown-input columns, and for each
+/// variable and input not yet in the span at an order, that it is not
+/// (its unit row raises the rank). Memberships, rejected rows and the
+/// growth's end are dependences, which carry over.
+fn growth_claims(ext: &mut Extended, run: &Run, n: usize) -> Claims {
+    let mut claims = Claims {
+        active: true,
+        list: Vec::new(),
+    };
+    let len = ext.unknown_cols;
+    let cols: Vec<Var> = ext.vars[..len].to_vec();
+    let (zero, one) = (ext.ctx.zero(), ext.ctx.one());
+    // The basis functions y^(m), built along the one drift.
+    let drift = ext.fields.vectors[0].clone();
+    let mut funcs: Vec<(usize, Id)> = Vec::new();
+    for w in &run.basis {
+        let mut f = ext.outputs[w.output];
+        for _ in &w.fields {
+            f = ext.ctx.lie_derivative(f, &ext.vars, &drift);
+        }
+        funcs.push((w.order(), f));
+    }
+    let unit =
+        |c: usize| -> Vec<Id> { (0..len).map(|i| if i == c { one } else { zero }).collect() };
+    for s in &run.steps {
+        let upto: Vec<Id> = funcs
+            .iter()
+            .filter(|(o, _)| *o <= s.order)
+            .map(|p| p.1)
+            .collect();
+        let rows: Vec<Vec<Id>> = upto
+            .iter()
+            .map(|&f| cols.iter().map(|&v| ext.ctx.diff(f, v)).collect())
+            .collect();
+        claims.rank(rows.clone(), s.rank);
+        let wrows: Vec<Vec<Id>> = rows.iter().map(|r| r[ext.first_w..].to_vec()).collect();
+        claims.rank(wrows, s.rank - s.state_rank);
+        let outside = |first: &Option<usize>| first.is_none_or(|m| m > s.order);
+        let mut units: Vec<usize> = (0..n).filter(|&i| outside(&run.observable[i])).collect();
+        units.extend(
+            ext.w_cols
+                .iter()
+                .zip(&run.reconstructable)
+                .filter(|(_, r)| outside(r))
+                .map(|(&c, _)| c),
+        );
+        for c in units {
+            let mut with = rows.clone();
+            with.push(unit(c));
+            claims.rank(with, s.rank + 1);
+        }
+    }
+    claims
 }

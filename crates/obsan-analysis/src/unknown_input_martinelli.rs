@@ -51,7 +51,8 @@
 //! `u^(D)` (then the truncation `u^(D)' = 0` was never used); otherwise it is
 //! repeated with `D` doubled.
 
-use crate::rank::{random_point_counted, AnalysisError, Echelon};
+use crate::rank::{rank_point, AnalysisError, Echelon};
+use crate::unknown_input_roots::Claims;
 use obsan_expr::{evaluate::degree_bounds, evaluate::FpPoint, Ctx, Fp, Id, SplitMix, Var};
 use obsan_model::NormalForm;
 use std::time::Instant;
@@ -93,6 +94,10 @@ pub struct MartinelliReport {
     pub input_jets: usize,
     /// Probability that some decision is wrong (Schwartz–Zippel, module docs).
     pub error_bound: f64,
+    /// Degree `k` of the field `F_(p^k)` where the decisions taken at free
+    /// root values were proven (unknown_input_roots.rs); `None` when the
+    /// points satisfied the roots' relations.
+    pub roots_field: Option<u32>,
 }
 
 struct St {
@@ -114,6 +119,11 @@ struct St {
     /// Longest word of Lie derivatives evaluated by jets.
     max_word: usize,
     deadline: Option<Instant>,
+    /// The points give the roots free values: decisions to prove
+    /// (unknown_input_roots.rs).
+    free: bool,
+    claims: Claims,
+    seed: u64,
 }
 
 fn row_degree(d: &[(u64, u64)]) -> u64 {
@@ -143,7 +153,7 @@ impl St {
         Ok(())
     }
     fn redraw(&mut self) -> Result<(), AnalysisError> {
-        let (p, k) = random_point_counted(&mut self.ctx, &mut self.rng)?;
+        let (p, k, _) = rank_point(&mut self.ctx, &mut self.rng, self.free)?;
         self.point = p;
         self.draws = self.draws.max(k);
         Ok(())
@@ -164,7 +174,14 @@ impl St {
             self.err_deg += degree_bounds(&self.ctx, &[f])[0].0 as f64;
             return Ok(true);
         }
+        self.claims.nonzero(f);
         Ok(false)
+    }
+    /// `L_field f` for a claim only (not among `built`, whose jets decide
+    /// whether the run is valid).
+    fn lie_claim(&mut self, f: Id, field: &[Id]) -> Id {
+        let all = self.all();
+        self.ctx.lie_derivative(f, &all, field)
     }
     fn lie(&mut self, f: Id, field: &[Id]) -> Id {
         let all = self.all();
@@ -242,6 +259,8 @@ struct Growth {
     found: Option<(Id, usize)>,
     /// The generators kept, as (index in `hobs`, word of fields).
     gens: Vec<(usize, Vec<usize>)>,
+    /// With free roots, the codistribution's functions built (claims).
+    syms: Vec<Id>,
 }
 
 /// The smallest codistribution containing `d hobs`, grown along `fields`
@@ -281,12 +300,21 @@ fn grow(
             // No bound: the top coefficient is structurally zero.
             Ok((r.value, g, r.degree.unwrap_or(0)))
         };
+    // With free roots, each kept generator's function, built (claims).
+    let mut syms: Vec<Id> = Vec::new();
     for o in 0..st.hobs.len() {
         let (_, g, d) = row(st, o, &[])?;
         if cod.insert(st, g, d) {
             gens.push((o, vec![], o));
+            if st.claims.active {
+                syms.push(st.hobs[o]);
+            }
         }
     }
+    let claim_rows = |st: &mut St, syms: &[Id]| {
+        let cols = st.unknown.clone();
+        st.claims.gradients(&mut st.ctx, syms, &cols, syms.len());
+    };
     let mut old = 0;
     let mut rounds = 0;
     // At full rank nothing more is derived, but every generator is still
@@ -308,6 +336,10 @@ fn grow(
                 if v.is_zero() {
                     st.err_deg += d as f64;
                 } else {
+                    if st.claims.active {
+                        let m = st.lie_claim(syms[i], &residual[k]);
+                        st.claims.nonzero(m);
+                    }
                     moved = true;
                     break;
                 }
@@ -315,17 +347,19 @@ fn grow(
             if moved {
                 match mode {
                     Mode::Stop => {
+                        claim_rows(st, &syms);
                         return Ok(Growth {
                             cod,
                             rounds,
                             found: Some((st.hobs[root], rounds)),
                             gens: vec![],
-                        })
+                            syms,
+                        });
                     }
                     Mode::Skip => continue,
                 }
             }
-            for f in 0..nf_ {
+            for (f, field) in all_fields.iter().enumerate().take(nf_) {
                 if cod.ech.rank() == full {
                     break;
                 }
@@ -337,17 +371,23 @@ fn grow(
                 let (_, g, d) = row(st, out, &w)?;
                 if cod.insert(st, g, d) {
                     gens.push((out, w, root));
+                    if st.claims.active {
+                        let m = st.lie_claim(syms[i], field);
+                        syms.push(m);
+                    }
                 }
             }
         }
         old = new;
         rounds += 1;
     }
+    claim_rows(st, &syms);
     Ok(Growth {
         cod,
         rounds,
         found: None,
         gens: gens.into_iter().map(|(o, w, _)| (o, w)).collect(),
+        syms,
     })
 }
 
@@ -358,6 +398,7 @@ fn reconstructability(st: &mut St) -> Result<(Vec<Id>, Vec<usize>), AnalysisErro
     let mut rows = Echelon::default();
     let mut picked = Vec::new();
     let mut picked_vals: Vec<Vec<Fp>> = Vec::new();
+    let mut picked_ids: Vec<Vec<Id>> = Vec::new();
     let mut deg_sum = 0u64;
     for h in st.hobs.clone() {
         let ids: Vec<Id> = (0..mw)
@@ -374,6 +415,7 @@ fn reconstructability(st: &mut St) -> Result<(Vec<Id>, Vec<usize>), AnalysisErro
         if rows.insert(vals.clone()) {
             picked.push(h);
             picked_vals.push(vals);
+            picked_ids.push(ids);
             deg_sum = deg_sum.saturating_add(d);
         } else {
             st.err_deg += deg_sum.saturating_add(d) as f64;
@@ -389,6 +431,12 @@ fn reconstructability(st: &mut St) -> Result<(Vec<Id>, Vec<usize>), AnalysisErro
             chosen.push(k);
         }
     }
+    // The chosen m x m minor is not zero (free roots: to be proven).
+    let minor: Vec<Vec<Id>> = picked_ids
+        .iter()
+        .map(|r| chosen.iter().map(|&k| r[k]).collect())
+        .collect();
+    st.claims.rank(minor, chosen.len());
     Ok((picked, chosen))
 }
 
@@ -421,6 +469,7 @@ fn inverse(st: &mut St, a: &[Vec<Id>]) -> Result<Vec<Vec<Id>>, AnalysisError> {
         e.swap(c, p);
         v.swap(c, p);
         let piv = e[c][c];
+        st.claims.nonzero(piv);
         let pinv = v[c][c].inv().ok_or(AnalysisError::NoPoint)?;
         for k in 0..2 * m {
             e[c][k] = st.ctx.div(e[c][k], piv);
@@ -532,7 +581,7 @@ fn setup(
         })
         .collect();
     let mut rng = SplitMix(seed ^ 0x3a27_1e11_5eed_0b5a);
-    let (point, draws) = random_point_counted(&mut ctx, &mut rng)?;
+    let (point, draws, free) = rank_point(&mut ctx, &mut rng, false)?;
     let st = St {
         ctx,
         unknown,
@@ -547,6 +596,12 @@ fn setup(
         built: Vec::new(),
         max_word: 0,
         deadline,
+        free,
+        claims: Claims {
+            active: free,
+            list: Vec::new(),
+        },
+        seed,
     };
     Ok((st, top))
 }
@@ -604,6 +659,9 @@ fn run(
         for h in st.hobs.clone() {
             c.try_add(&mut st, h)?;
         }
+        let cols = st.unknown.clone();
+        st.claims
+            .gradients(&mut st.ctx, &c.funcs, &cols, c.funcs.len());
         st.hobs = c.funcs;
         let (ht, cols) = reconstructability(&mut st)?;
         let m = cols.len();

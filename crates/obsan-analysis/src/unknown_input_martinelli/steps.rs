@@ -166,12 +166,32 @@ pub(super) fn verdicts(
     // Verdicts from the final codistribution.
     let cod = growth.cod;
     let len = st.unknown.len();
+    // With free roots: the codistribution's gradient rows, built, for the
+    // claims that a unit row lies outside it and of its projection's rank.
+    let sym_rows: Vec<Vec<Id>> = if st.claims.active {
+        let cols = st.unknown.clone();
+        growth
+            .syms
+            .iter()
+            .map(|&f| cols.iter().map(|&v| st.ctx.diff(f, v)).collect())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let (zero, one) = (st.ctx.zero(), st.ctx.one());
+    let unit_row = |c: usize, w: usize| -> Vec<Id> {
+        (0..w).map(|i| if i == c { one } else { zero }).collect()
+    };
     let unit = |st: &mut St, col: usize| -> bool {
         let mut v = vec![Fp::ZERO; len];
         v[col] = Fp::ONE;
         let inside = cod.ech.reduce(v).iter().all(|x| x.is_zero());
         if inside {
             st.err_deg += cod.deg_sum as f64;
+        } else {
+            let mut rows = sym_rows.clone();
+            rows.push(unit_row(col, len));
+            st.claims.rank(rows, cod.ech.rank() + 1);
         }
         inside
     };
@@ -198,6 +218,7 @@ pub(super) fn verdicts(
             ids.push(row);
         }
         let mut rows = Echelon::default();
+        let mut kept: Vec<Vec<Id>> = Vec::new();
         let mut deg = 0u64;
         for r in &ids {
             let v = st
@@ -207,10 +228,12 @@ pub(super) fn verdicts(
             let d = row_degree(&degree_bounds(&st.ctx, r));
             if rows.insert(v) {
                 deg = deg.saturating_add(d);
+                kept.push(r.clone());
             } else {
                 st.err_deg += deg.saturating_add(d) as f64;
             }
         }
+        st.claims.rank(kept.clone(), kept.len());
         for (j, r) in reconstructable.iter_mut().enumerate() {
             if r.is_none() {
                 let mut v = vec![Fp::ZERO; mw];
@@ -218,6 +241,10 @@ pub(super) fn verdicts(
                 let inside = rows.reduce(v).iter().all(|x| x.is_zero());
                 if inside {
                     st.err_deg += deg as f64;
+                } else {
+                    let mut with = kept.clone();
+                    with.push(unit_row(j, mw));
+                    st.claims.rank(with, kept.len() + 1);
                 }
                 *r = Some(inside);
             }
@@ -228,6 +255,8 @@ pub(super) fn verdicts(
     for r in &cod.rows {
         proj.insert(r[n..].to_vec());
     }
+    let proj_rows: Vec<Vec<Id>> = sym_rows.iter().map(|r| r[n..].to_vec()).collect();
+    st.claims.rank(proj_rows, proj.rank());
     st.err_deg += cod.deg_sum as f64;
     let rank = cod.ech.rank() - proj.rank();
     // The highest known-input jet in any expression built, plus the longest
@@ -243,6 +272,16 @@ pub(super) fn verdicts(
         .unwrap_or(0);
     let used_top = top.is_some() && highest + st.max_word + 1 >= jets;
     let error_bound = (st.err_deg * st.draws as f64 / P as f64).min(1.0);
+    let roots_field = if st.claims.active {
+        let seed = st.seed;
+        Some(crate::unknown_input_roots::prove(
+            &mut st.ctx,
+            &st.claims,
+            seed,
+        )?)
+    } else {
+        None
+    };
     Ok((
         MartinelliReport {
             n,
@@ -255,6 +294,7 @@ pub(super) fn verdicts(
             codistribution_rank: cod.ech.rank(),
             input_jets: jets,
             error_bound,
+            roots_field,
         },
         used_top,
     ))
