@@ -218,19 +218,22 @@ fn product(l: Val, r: Val, sign: i32) -> Val {
     match (l, r) {
         (Val::Any, _) | (_, Val::Any) => Val::Any,
         (Val::Known(a), Val::Known(b)) => a.times_pow(&b, sign).map_or(Val::Unknown, Val::Known),
-        (Val::Known(a), Val::Pending(k, v, e)) => match a.times_pow(&k, sign) {
-            Some(k) => Val::Pending(k, v, e * sign),
-            None => Val::Unknown,
-        },
+        (Val::Known(a), Val::Pending(k, v, e)) => {
+            match (a.times_pow(&k, sign), e.checked_mul(sign)) {
+                (Some(k), Some(e)) => Val::Pending(k, v, e),
+                _ => Val::Unknown,
+            }
+        }
         (Val::Pending(k, v, e), Val::Known(b)) => match k.times_pow(&b, sign) {
             Some(k) => Val::Pending(k, v, e),
             None => Val::Unknown,
         },
         (Val::Pending(k1, v1, e1), Val::Pending(k2, v2, e2)) if v1 == v2 => {
-            match k1.times_pow(&k2, sign) {
-                Some(k) if e1 + sign * e2 != 0 => Val::Pending(k, v1, e1 + sign * e2),
-                Some(k) => Val::Known(k),
-                None => Val::Unknown,
+            let e = e2.checked_mul(sign).and_then(|e2| e1.checked_add(e2));
+            match (k1.times_pow(&k2, sign), e) {
+                (Some(k), Some(0)) => Val::Known(k),
+                (Some(k), Some(e)) => Val::Pending(k, v1, e),
+                _ => Val::Unknown,
             }
         }
         _ => Val::Unknown,
@@ -362,10 +365,20 @@ pub fn param_units(
         .collect();
     let file = lib.map(|l| l.effects.iter().map(|e| (e, false)));
     let gen = generated.iter().map(|g| (&g.effect, true));
+    // Two effects may each have a param `k` (each extends the nominal
+    // model alone): a name given two units has none.
+    let mut two: BTreeSet<String> = BTreeSet::new();
     for (e, g) in file.into_iter().flatten().chain(gen) {
         for (p, u) in effect_units(sys, e, g, declared, angular) {
-            if let Some(u) = u {
-                out.insert(p, u);
+            match (u, out.get(&p)) {
+                (Some(u), Some(old)) if *old == u => {}
+                (Some(u), None) if !two.contains(&p) => {
+                    out.insert(p, u);
+                }
+                _ => {
+                    out.remove(&p);
+                    two.insert(p);
+                }
             }
         }
     }

@@ -66,7 +66,11 @@ impl Unit {
     pub fn times_pow(&self, other: &Unit, p: i32) -> Option<Unit> {
         let mut m = self.0.clone();
         for (b, e) in &other.0 {
-            let x = m.get(b).copied().unwrap_or(0) + e.checked_mul(p)?;
+            let x = m
+                .get(b)
+                .copied()
+                .unwrap_or(0)
+                .checked_add(e.checked_mul(p)?)?;
             if x.abs() > MAX_UNIT_EXPONENT {
                 return None;
             }

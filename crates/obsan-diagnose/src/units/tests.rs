@@ -200,3 +200,24 @@ fn generated_candidates_of_calib_have_their_forms_units() {
     // calib.sys has no delay of its own; its params have no units.
     assert_eq!(get("xi"), None);
 }
+
+/// Two effects with a param of one name: the name has a unit only when
+/// both give it the same one.
+#[test]
+fn a_param_name_two_effects_give_two_units_has_none() {
+    let s = sys();
+    let read = |text: &str| EffectLibrary::parse(text, "t.eff").expect("valid");
+    let a = "effect a\nparam k\noutput beta = beta + k\n";
+    let b = "effect b\nparam k\nsubst v = (1 + k)*v\n";
+    let c = "effect c\nparam k\noutput beta = beta + 2*k\n";
+    let units = |t: &str| param_units(&s, Some(&read(t)), &[], &angular(&s));
+    assert_eq!(units(&format!("{a}{b}")).get("k"), None);
+    assert_eq!(units(&format!("{b}{a}{b}")).get("k"), None);
+    assert_eq!(
+        units(&format!("{a}{c}"))
+            .get("k")
+            .map(|u| u.to_string())
+            .as_deref(),
+        Some("rad")
+    );
+}
