@@ -212,7 +212,15 @@ fn a_param_name_two_effects_give_two_units_has_none() {
     let c = "effect c\nparam k\noutput beta = beta + 2*k\n";
     let units = |t: &str| param_units(&s, Some(&read(t)), &[], &angular(&s));
     assert_eq!(units(&format!("{a}{b}")).get("k"), None);
-    assert_eq!(units(&format!("{b}{a}{b}")).get("k"), None);
+    let d = "effect d\nparam k\nsubst omega = (1 + k)*omega\n";
+    assert_eq!(units(&format!("{b}{a}{d}")).get("k"), None);
+    assert_eq!(
+        units(&format!("{b}{d}"))
+            .get("k")
+            .map(|u| u.to_string())
+            .as_deref(),
+        Some("1")
+    );
     assert_eq!(
         units(&format!("{a}{c}"))
             .get("k")
