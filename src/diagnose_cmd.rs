@@ -303,7 +303,7 @@ pub fn render_text(d: &Diagnosis, data: &str, u: &Units) -> String {
         );
     }
     named_text(d, &mut s, u);
-    combinations_text(d, &mut s);
+    combinations_text(d, &mut s, u);
     for c in &unseparated {
         let _ = writeln!(
             s,
@@ -538,14 +538,14 @@ fn curvature_text(c: &obsan_diagnose::Curvature) -> String {
 }
 
 /// The pairs fixed only in combination, with the combination the data fix.
-fn combinations_text(d: &Diagnosis, s: &mut String) {
+fn combinations_text(d: &Diagnosis, s: &mut String, u: &Units) {
     for c in &d.combinations {
-        let _ = writeln!(s, "{}", combination_line(c));
+        let _ = writeln!(s, "{}", combination_line(c, u));
     }
 }
 
 /// One pair fixed only in combination, as one line.
-fn combination_line(c: &Combination) -> String {
+fn combination_line(c: &Combination, u: &Units) -> String {
     let (head, tail) = match (c.named, c.established) {
         (true, true) => ("fixed in combination", "each alone is an extrapolation"),
         (true, false) => (
@@ -565,7 +565,7 @@ fn combination_line(c: &Combination) -> String {
         "{head}: {} and {}: {}; Wald z {:.1} (alone {:.1} and {:.1}): {tail}",
         c.effects[0],
         c.effects[1],
-        c.text(),
+        u.combination(c),
         c.wald_z,
         c.wald_z_alone[0],
         c.wald_z_alone[1]
@@ -766,7 +766,7 @@ fn verdict(d: &Diagnosis, s: &mut String, u: &Units) {
             "{} and {} {what}: {}",
             c.effects[0],
             c.effects[1],
-            c.text()
+            u.combination(c)
         ));
     }
     for c in d.competing.iter().filter(|c| c.established.is_none()) {

@@ -58,6 +58,21 @@ impl Units {
         }
     }
 
+    /// A combination's text, `(in the units of p0: rad; ...)` where p0's
+    /// unit is known.
+    pub fn combination(&self, c: &obsan_diagnose::statistics::Combination) -> String {
+        let p0 = &c.params[0];
+        let t = c.text();
+        match self.of.get(p0) {
+            None => t,
+            Some(_) => t.replacen(
+                &format!("(in the units of {p0};"),
+                &format!("(in the units of {p0}: {};", self.label(p0)),
+                1,
+            ),
+        }
+    }
+
     /// `v ± sd UNIT (the same in deg or %)`; without a unit, `v ± sd`.
     pub fn pm(&self, param: &str, v: f64, sd: f64) -> String {
         let base = format!("{v:.4e} ± {sd:.1e}");
