@@ -229,3 +229,31 @@ fn a_param_name_two_effects_give_two_units_has_none() {
         Some("rad")
     );
 }
+
+/// mrclam.eff with its declared units (ranges in m, v in m/s, omega in
+/// rad/s): each effect's param in the unit its form gives.
+#[test]
+fn mrclam_effects_have_their_units() {
+    let read = |p: &str| {
+        std::fs::read_to_string(format!("{}/../../{p}", env!("CARGO_MANIFEST_DIR"))).expect(p)
+    };
+    let s = System::parse(&read("systems/mrclam.sys"), "mrclam.sys").expect("valid");
+    let lib = EffectLibrary::parse(&read("systems/mrclam.eff"), "mrclam.eff").expect("valid");
+    lib.check(&s).expect("checked");
+    let u = param_units(&s, Some(&lib), &[], &angular(&s));
+    let get = |p: &str| u.get(p).map(|u| u.to_string());
+    // kv, kw, kr scale; bw is added to omega; bb to the bearings (atan2);
+    // br to the ranges; tau a delay; T the lag's time constant.
+    for (p, want) in [
+        ("kv", "1"),
+        ("kw", "1"),
+        ("kr", "1"),
+        ("bw", "rad/s"),
+        ("bb", "rad"),
+        ("br", "m"),
+        ("tau", "s"),
+        ("T", "s"),
+    ] {
+        assert_eq!(get(p).as_deref(), Some(want), "{p}: {u:?}");
+    }
+}
