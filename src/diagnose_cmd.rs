@@ -2,6 +2,7 @@
 //! diagnosis, writing the report folder.
 
 use crate::cli::{DiagnoseArgs, MrclamArgs};
+use crate::diagnose_units::Units;
 use crate::estimate_cmds::read_dataset;
 use crate::fsio::write_folder_atomically;
 use crate::show::load_system;
@@ -117,9 +118,10 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
     let progress = |m: &str| bar.set_message(m);
     let d = diagnose(&sys, lib.as_ref(), &data, &start, &opts, &progress)?;
     drop(bar);
-    let text = render_text(&d, a.data());
+    let units = Units::new(&sys, lib.as_ref(), opts.generate, &d);
+    let text = render_text(&d, a.data(), &units);
     if a.json {
-        crate::json::print(&crate::json::Diagnose::from(&d))?;
+        crate::json::print(&crate::json::diagnose(&d, &units))?;
     } else {
         out!("{text}");
     }
@@ -128,17 +130,13 @@ pub fn run(a: &DiagnoseArgs) -> Result<ExitCode, Failure> {
             dir,
             a.force,
             &reads,
-            &crate::diagnose_report::report_files(&d, &text),
+            &crate::diagnose_report::report_files(&d, &text, &units),
         )?;
         if !a.json {
             outln!("report written to {dir}/report.md");
         }
     }
     Ok(ExitCode::SUCCESS)
-}
-
-fn pm(v: f64, s: f64) -> String {
-    format!("{v:.4e} ± {s:.1e}")
 }
 
 fn white_rms(f: &ModelFit) -> f64 {
@@ -219,21 +217,21 @@ fn hidden_text(c: &CandidateResult) -> String {
     }
 }
 
-/// `name = value ± sd [± robust]`: the robust sd (trajectories as
+/// `name = value ± sd unit [± robust]`: the robust sd (trajectories as
 /// clusters) where there is one.
-fn with_robust(est: &[(String, f64, f64)], robust: &[f64]) -> Vec<String> {
+fn with_robust(est: &[(String, f64, f64)], robust: &[f64], u: &Units) -> Vec<String> {
     est.iter()
         .enumerate()
         .map(
             |(i, (n, v, sd))| match robust.get(i).filter(|r| r.is_finite()) {
-                Some(r) => format!("{n} = {} [± {r:.1e}]", pm(*v, *sd)),
-                None => format!("{n} = {}", pm(*v, *sd)),
+                Some(r) => format!("{n} = {} [± {r:.1e}]", u.pm(n, *v, *sd)),
+                None => format!("{n} = {}", u.pm(n, *v, *sd)),
             },
         )
         .collect()
 }
 
-pub fn render_text(d: &Diagnosis, data: &str) -> String {
+pub fn render_text(d: &Diagnosis, data: &str, u: &Units) -> String {
     let mut s = String::new();
     let n_traj = d.nominal.initial_states.len();
     let _ = writeln!(
@@ -241,7 +239,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         "obsan diagnose: model {} on {data} ({n_traj} trajectories, {} output samples)",
         d.model, d.nominal.n
     );
-    verdict(d, &mut s);
+    verdict(d, &mut s, u);
     let _ = writeln!(s, "\nstart: {}", d.start);
     let sig: Vec<String> = d
         .sigma
@@ -289,7 +287,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         white_rms(&d.nominal)
     );
     structure_text(&d.nominal, &mut s);
-    rounds_text(d, &mut s);
+    rounds_text(d, &mut s, u);
     let _ = writeln!(s);
     let unseparated: Vec<_> = d
         .competing
@@ -304,8 +302,8 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             "named: none: the best candidates compete, not separated by these data"
         );
     }
-    named_text(d, &mut s);
-    combinations_text(d, &mut s);
+    named_text(d, &mut s, u);
+    combinations_text(d, &mut s, u);
     for c in &unseparated {
         let _ = writeln!(
             s,
@@ -331,7 +329,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
             "suggested, not established: {}: {} (LR {:.1} above its critical value, but {:.1} sds \
              from 0 with the larger of the model's and the cluster-robust sd: not named)",
             mark(c),
-            with_robust(&c.estimates, &c.robust_sd).join(", "),
+            with_robust(&c.estimates, &c.robust_sd, u).join(", "),
             c.lr,
             c.wald_z
         );
@@ -354,7 +352,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
         let est: Vec<String> = c
             .estimates
             .iter()
-            .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+            .map(|(p, v, sd)| format!("{p} = {}", u.pm(p, *v, *sd)))
             .collect();
         let _ = writeln!(
             s,
@@ -378,7 +376,7 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
                 let est: Vec<String> = t
                     .estimates
                     .iter()
-                    .map(|(p, v, sd)| format!("{p} = {}", pm(*v, *sd)))
+                    .map(|(p, v, sd)| format!("{p} = {}", u.pm(p, *v, *sd)))
                     .collect();
                 let _ = writeln!(
                     s,
@@ -427,9 +425,9 @@ pub fn render_text(d: &Diagnosis, data: &str) -> String {
 }
 
 /// Every named effect with its residuals and cautions.
-fn named_text(d: &Diagnosis, s: &mut String) {
+fn named_text(d: &Diagnosis, s: &mut String, u: &Units) {
     for (k, n) in d.named.iter().enumerate() {
-        let est = with_robust(&n.estimates, &n.robust_sd);
+        let est = with_robust(&n.estimates, &n.robust_sd, u);
         if n.origin == obsan_diagnose::ORIGIN_RELATION {
             let _ = writeln!(
                 s,
@@ -540,14 +538,14 @@ fn curvature_text(c: &obsan_diagnose::Curvature) -> String {
 }
 
 /// The pairs fixed only in combination, with the combination the data fix.
-fn combinations_text(d: &Diagnosis, s: &mut String) {
+fn combinations_text(d: &Diagnosis, s: &mut String, u: &Units) {
     for c in &d.combinations {
-        let _ = writeln!(s, "{}", combination_line(c));
+        let _ = writeln!(s, "{}", combination_line(c, u));
     }
 }
 
 /// One pair fixed only in combination, as one line.
-fn combination_line(c: &Combination) -> String {
+fn combination_line(c: &Combination, u: &Units) -> String {
     let (head, tail) = match (c.named, c.established) {
         (true, true) => ("fixed in combination", "each alone is an extrapolation"),
         (true, false) => (
@@ -567,7 +565,7 @@ fn combination_line(c: &Combination) -> String {
         "{head}: {} and {}: {}; Wald z {:.1} (alone {:.1} and {:.1}): {tail}",
         c.effects[0],
         c.effects[1],
-        c.text(),
+        u.combination(c),
         c.wald_z,
         c.wald_z_alone[0],
         c.wald_z_alone[1]
@@ -575,7 +573,7 @@ fn combination_line(c: &Combination) -> String {
 }
 
 /// The refit notes and every round's table of candidates.
-fn rounds_text(d: &Diagnosis, s: &mut String) {
+fn rounds_text(d: &Diagnosis, s: &mut String, u: &Units) {
     for r in &d.refits {
         let _ = writeln!(
             s,
@@ -637,7 +635,7 @@ fn rounds_text(d: &Diagnosis, s: &mut String) {
             } else if !c.identifiable {
                 hidden.push(mark(c));
             } else {
-                let est = with_robust(&c.estimates, &c.robust_sd);
+                let est = with_robust(&c.estimates, &c.robust_sd, u);
                 let _ = writeln!(
                     s,
                     "  {:<20} {:<28} LR {:>8.2}  p {:.1e}  dBIC {:>8.1}{}",
@@ -710,7 +708,7 @@ fn unfitted_file_candidates(d: &Diagnosis) -> Vec<String> {
 /// magnitude, what is only suggested, whether the nominal fit had to be
 /// refitted, and what remains unexplained: a reader sees the answer before
 /// the tables.
-fn verdict(d: &Diagnosis, s: &mut String) {
+fn verdict(d: &Diagnosis, s: &mut String, u: &Units) {
     let mut parts: Vec<String> = Vec::new();
     if d.named.is_empty() {
         parts.push("nothing named".into());
@@ -722,7 +720,7 @@ fn verdict(d: &Diagnosis, s: &mut String) {
                 format!(
                     "{} ({})",
                     named_mark(n),
-                    with_robust(&n.estimates, &n.robust_sd).join(", ")
+                    with_robust(&n.estimates, &n.robust_sd, u).join(", ")
                 )
             })
             .collect();
@@ -768,7 +766,7 @@ fn verdict(d: &Diagnosis, s: &mut String) {
             "{} and {} {what}: {}",
             c.effects[0],
             c.effects[1],
-            c.text()
+            u.combination(c)
         ));
     }
     for c in d.competing.iter().filter(|c| c.established.is_none()) {

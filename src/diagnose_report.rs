@@ -194,16 +194,16 @@ fn residual_figures(d: &Diagnosis, files: &mut Vec<(PathBuf, Vec<u8>)>) -> Strin
 }
 
 /// The markdown tables: estimates, and residual RMS before and after.
-fn tables(d: &Diagnosis) -> String {
+fn tables(d: &Diagnosis, u: &crate::diagnose_units::Units) -> String {
     let mut md = String::new();
     let after = !d.named.is_empty();
     let _ = writeln!(md, "## Estimates\n");
     let _ = writeln!(
         md,
-        "| param | nominal model | {}robust sd |",
+        "| param | nominal model | {}robust sd | unit |",
         if after { "with named effects | " } else { "" }
     );
-    let _ = writeln!(md, "|---|---|{}---|", if after { "---|" } else { "" });
+    let _ = writeln!(md, "|---|---|{}---|---|", if after { "---|" } else { "" });
     let f = if after { &d.final_fit } else { &d.nominal };
     for (k, (name, v, sd)) in f.params.iter().enumerate() {
         let nominal = d
@@ -215,17 +215,25 @@ fn tables(d: &Diagnosis) -> String {
             .get(k)
             .filter(|x| x.is_finite())
             .map_or("-".to_string(), |x| format!("{x:.3e}"));
+        let unit = u.label(name);
         if after {
-            let _ = writeln!(md, "| {name} | {nominal} | {} | {robust} |", pm(*v, *sd));
+            let _ = writeln!(
+                md,
+                "| {name} | {nominal} | {} | {robust} | {unit} |",
+                pm(*v, *sd)
+            );
         } else {
-            let _ = writeln!(md, "| {name} | {nominal} | {robust} |");
+            let _ = writeln!(md, "| {name} | {nominal} | {robust} | {unit} |");
         }
     }
     let _ = writeln!(
         md,
         "\nValues ± the model's sd; the robust sd treats trajectories as clusters (none with one \
-         trajectory). Units are the model's: `.sys` declares none; datasets are in SI units with \
-         angles in rad (docs/data-format.md).\n"
+         trajectory). Units: datasets are in SI units with angles in rad \
+         (docs/data-format.md); an effect's param takes the unit of where it enters (a bias its \
+         output's, a scale none: 1, a time constant s), `unit NAME = UNIT` in the effects file \
+         wins, and \"-\" is a unit nobody declared and none could be derived \
+         (docs/diagnose.md, Units).\n"
     );
     let _ = writeln!(md, "## Residual RMS per output\n");
     let _ = writeln!(
@@ -422,7 +430,11 @@ fn fit_figures(d: &Diagnosis, files: &mut Vec<(PathBuf, Vec<u8>)>) -> String {
 }
 
 /// Every file of the report folder.
-pub(crate) fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)> {
+pub(crate) fn report_files(
+    d: &Diagnosis,
+    text: &str,
+    u: &crate::diagnose_units::Units,
+) -> Vec<(PathBuf, Vec<u8>)> {
     let mut files = vec![
         (
             PathBuf::from("extended.sys"),
@@ -430,7 +442,7 @@ pub(crate) fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)>
         ),
         (
             PathBuf::from("diagnosis.json"),
-            serde_json::to_string_pretty(&crate::json::Diagnose::from(d))
+            serde_json::to_string_pretty(&crate::json::diagnose(d, u))
                 .unwrap_or_default()
                 .into_bytes(),
         ),
@@ -444,7 +456,7 @@ pub(crate) fn report_files(d: &Diagnosis, text: &str) -> Vec<(PathBuf, Vec<u8>)>
         .take_while(|l| !l.trim().is_empty())
         .collect();
     let _ = writeln!(md, "{}\n", verdict.join("\n"));
-    md.push_str(&tables(d));
+    md.push_str(&tables(d, u));
     let _ =
         writeln!(
         md,

@@ -31,6 +31,7 @@ mod design_cmd;
 mod diagnose_cmd;
 mod diagnose_levels;
 mod diagnose_report;
+mod diagnose_units;
 mod estimate_cmds;
 mod experiments_cmd;
 mod expr_cmds;

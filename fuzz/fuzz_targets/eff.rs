@@ -2,7 +2,9 @@
 //! then each effect applied to systems/calib.sys (`System::extend`) and the
 //! library checked against it. Oracles: no panic; every rejection names the
 //! file; an extended system is a valid system (its normal form exists), and
-//! `check` passes only if every effect extends.
+//! `check` passes only if every effect extends. A checked library's params
+//! get their units (obsan-diagnose's dimensional analysis) without a panic,
+//! a declared param its declaration.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
@@ -46,6 +48,15 @@ fn run(calib: &System, data: &[u8]) {
     let checked = lib.check(calib);
     if let Err(e) = &checked {
         assert!(e.to_string().starts_with(ORIGIN), "{e}");
+    }
+    if checked.is_ok() {
+        let units =
+            obsan_diagnose::dimensions::param_units(calib, Some(&lib), &[], &|y| y == "beta");
+        for d in &lib.units {
+            if let Some(u) = units.get(&d.name) {
+                assert_eq!(*u, d.unit, "declared unit of {}", d.name);
+            }
+        }
     }
     for e in &lib.effects {
         match calib.extend(&[e], ORIGIN) {

@@ -109,6 +109,9 @@ pub struct Fit {
     pub model: String,
     /// Per param: [name, estimate, sd].
     pub params: Vec<NameEstimateSd>,
+    /// Per param: its unit (`rad`, `s`, `1/s`, `m`; `1` a pure number; `[y]` the unit of
+    /// column y of the data; docs/diagnose.md, Units), null where none could be derived.
+    pub params_units: Vec<Option<String>>,
     /// Per param: the cluster-robust sd (trajectories as clusters; null with one).
     pub params_robust_sd: Vec<Num>,
     /// Per trajectory: the initial dynamic state.
@@ -193,6 +196,9 @@ pub struct Candidate {
     pub symmetry: Vec<NameValue>,
     /// Its fitted new params: [name, estimate, sd].
     pub estimates: Vec<NameEstimateSd>,
+    /// Per estimate: its unit (`rad`, `s`, `1/s`, `m`; `1` a pure number; `[y]` the unit of
+    /// column y of the data; docs/diagnose.md, Units), null where none could be derived.
+    pub units: Vec<Option<String>>,
     /// Their cluster-robust sds.
     pub robust_sd: Vec<Num>,
     /// The likelihood-ratio statistic.
@@ -275,6 +281,9 @@ pub struct Named {
     pub origin: String,
     /// Its params: [name, estimate, sd].
     pub estimates: Vec<NameEstimateSd>,
+    /// Per estimate: its unit (`rad`, `s`, `1/s`, `m`; `1` a pure number; `[y]` the unit of
+    /// column y of the data; docs/diagnose.md, Units), null where none could be derived.
+    pub units: Vec<Option<String>>,
     /// Their cluster-robust sds.
     pub robust_sd: Vec<Num>,
     /// Per output: the residual RMS before naming it.
@@ -396,6 +405,9 @@ pub struct Competing {
     pub lr_alone: [Num; 2],
     /// The joint fit's estimates of both effects' params: [name, estimate, sd].
     pub estimates: Vec<NameEstimateSd>,
+    /// Per estimate: its unit (`rad`, `s`, `1/s`, `m`; `1` a pure number; `[y]` the unit of
+    /// column y of the data; docs/diagnose.md, Units), null where none could be derived.
+    pub units: Vec<Option<String>>,
     /// Their cluster-robust sds.
     pub robust_sd: Vec<Num>,
     /// Each effect's Wald z in the joint fit (the other present).
@@ -422,6 +434,9 @@ pub struct InputCheck {
     pub description: String,
     /// The relation's params: [name, estimate, sd].
     pub estimates: Vec<NameEstimateSd>,
+    /// Per estimate: its unit (`rad`, `s`, `1/s`, `m`; `1` a pure number; `[y]` the unit of
+    /// column y of the data; docs/diagnose.md, Units), null where none could be derived.
+    pub units: Vec<Option<String>>,
     /// The largest |estimate / sd|.
     pub z: Num,
     /// Two-sided p-value of z.

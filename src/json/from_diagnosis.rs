@@ -2,6 +2,7 @@
 
 use super::diagnose as v;
 use super::finite as num;
+use crate::diagnose_units::Units;
 use obsan_diagnose as lib;
 
 fn pairs(p: &[(String, f64)]) -> Vec<v::NameValue> {
@@ -14,6 +15,11 @@ fn triples(p: &[(String, f64, f64)]) -> Vec<v::NameEstimateSd> {
         .collect()
 }
 
+/// The unit of each estimate's param.
+fn units(p: &[(String, f64, f64)], u: &Units) -> Vec<Option<String>> {
+    p.iter().map(|e| u.json(&e.0)).collect()
+}
+
 fn nums(p: &[f64]) -> Vec<v::Num> {
     p.iter().map(|x| num(*x)).collect()
 }
@@ -22,11 +28,12 @@ fn two(p: [f64; 2]) -> [v::Num; 2] {
     [num(p[0]), num(p[1])]
 }
 
-fn fit(f: &lib::ModelFit) -> v::Fit {
+fn fit(f: &lib::ModelFit, u: &Units) -> v::Fit {
     let r = &f.residuals;
     v::Fit {
         model: f.model.clone(),
         params: triples(&f.params),
+        params_units: units(&f.params, u),
         params_robust_sd: nums(&f.params_robust_sd),
         initial_states: f.initial_states.iter().map(|s| nums(s)).collect(),
         cost: num(f.cost),
@@ -73,7 +80,7 @@ fn common_mode(c: &lib::statistics::CommonModeCheck) -> v::CommonMode {
     }
 }
 
-fn candidate(c: &lib::CandidateResult) -> v::Candidate {
+fn candidate(c: &lib::CandidateResult, u: &Units) -> v::Candidate {
     v::Candidate {
         effect: c.effect.clone(),
         description: c.description.clone(),
@@ -83,6 +90,7 @@ fn candidate(c: &lib::CandidateResult) -> v::Candidate {
         rank: c.rank,
         symmetry: pairs(&c.symmetry),
         estimates: triples(&c.estimates),
+        units: units(&c.estimates, u),
         robust_sd: nums(&c.robust_sd),
         lr: num(c.lr),
         p_value: num(c.p_value),
@@ -103,12 +111,13 @@ fn candidate(c: &lib::CandidateResult) -> v::Candidate {
     }
 }
 
-fn named(n: &lib::Named) -> v::Named {
+fn named(n: &lib::Named, u: &Units) -> v::Named {
     v::Named {
         effect: n.effect.clone(),
         description: n.description.clone(),
         origin: n.origin.clone(),
         estimates: triples(&n.estimates),
+        units: units(&n.estimates, u),
         robust_sd: nums(&n.robust_sd),
         rms_before: pairs(&n.rms_before),
         rms_after: pairs(&n.rms_after),
@@ -167,12 +176,13 @@ fn combination(c: &lib::statistics::Combination) -> v::Combination {
     }
 }
 
-fn competing(c: &lib::Competing) -> v::Competing {
+fn competing(c: &lib::Competing, u: &Units) -> v::Competing {
     v::Competing {
         round: c.round,
         effects: c.effects.clone(),
         lr_alone: two(c.lr_alone),
         estimates: triples(&c.estimates),
+        units: units(&c.estimates, u),
         robust_sd: nums(&c.robust_sd),
         wald_z: two(c.wald_z),
         wald_z_critical: two(c.wald_z_critical),
@@ -182,11 +192,12 @@ fn competing(c: &lib::Competing) -> v::Competing {
     }
 }
 
-fn input_check(c: &lib::InputCheck) -> v::InputCheck {
+fn input_check(c: &lib::InputCheck, u: &Units) -> v::InputCheck {
     v::InputCheck {
         effect: c.effect.clone(),
         description: c.description.clone(),
         estimates: triples(&c.estimates),
+        units: units(&c.estimates, u),
         z: num(c.z),
         p_value: num(c.p_value),
         significant: c.significant,
@@ -205,9 +216,10 @@ fn input_check(c: &lib::InputCheck) -> v::InputCheck {
     }
 }
 
-impl From<&lib::Diagnosis> for v::Diagnose {
-    fn from(d: &lib::Diagnosis) -> v::Diagnose {
-        let candidates = |cs: &[lib::CandidateResult]| cs.iter().map(candidate).collect();
+/// The diagnosis as JSON, each estimate with its unit.
+pub fn diagnose(d: &lib::Diagnosis, u: &Units) -> v::Diagnose {
+    {
+        let candidates = |cs: &[lib::CandidateResult]| cs.iter().map(|c| candidate(c, u)).collect();
         v::Diagnose {
             model: d.model.clone(),
             start: d.start.clone(),
@@ -217,7 +229,7 @@ impl From<&lib::Diagnosis> for v::Diagnose {
             input_noise_source: d.input_noise_source.clone(),
             input_noise_lr: nums(&d.input_noise_lr),
             input_class: d.input_class.clone(),
-            nominal: fit(&d.nominal),
+            nominal: fit(&d.nominal, u),
             nominal_converged: d.nominal_converged,
             refits: d
                 .refits
@@ -230,12 +242,12 @@ impl From<&lib::Diagnosis> for v::Diagnose {
                 })
                 .collect(),
             rounds: d.rounds.iter().map(|r| candidates(r)).collect(),
-            named: d.named.iter().map(named).collect(),
+            named: d.named.iter().map(|n| named(n, u)).collect(),
             suggested: candidates(&d.suggested),
             combinations: d.combinations.iter().map(combination).collect(),
-            competing: d.competing.iter().map(competing).collect(),
-            input_checks: d.input_checks.iter().map(input_check).collect(),
-            final_fit: fit(&d.final_fit),
+            competing: d.competing.iter().map(|c| competing(c, u)).collect(),
+            input_checks: d.input_checks.iter().map(|c| input_check(c, u)).collect(),
+            final_fit: fit(&d.final_fit, u),
             hidden: candidates(&d.hidden),
             extended_sys: d.extended_sys.clone(),
             lr_critical: num(d.lr_critical),

@@ -14,6 +14,7 @@ mod docs;
 mod estimate;
 mod expr;
 mod from_diagnosis;
+pub use from_diagnosis::diagnose;
 mod global;
 mod import;
 mod modes;

@@ -50,6 +50,19 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
         second.starts_with("verdict: named bearing_distortion (a2 = "),
         "{out}"
     );
+    // With its unit: a2 multiplies sin(2 beta), a pure number, and is
+    // added to beta = atan2(...) - psi, an angle: rad, also shown in deg
+    // (x rad = 180 x / pi deg, to 3 significant digits).
+    let rest = &second["verdict: named bearing_distortion (a2 = ".len()..];
+    let words: Vec<&str> = rest.split_whitespace().collect();
+    assert_eq!((words[1], words[3]), ("±", "rad"), "{second}");
+    let a2: f64 = words[0].parse().unwrap();
+    let deg: f64 = words[4].trim_start_matches('(').parse().unwrap();
+    assert_eq!(words[5], "deg)", "{second}");
+    assert!(
+        (deg - a2.to_degrees()).abs() <= 0.005 * deg.abs(),
+        "{second}"
+    );
     assert!(out.contains("bearing_bias: absorbed by psi"), "{out}");
     for f in [
         "report.md",
@@ -76,6 +89,8 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
         "{md}"
     );
     assert!(md.contains("| a2 | (not in the model) | 0.0"), "{md}");
+    let a2_row = md.lines().find(|l| l.starts_with("| a2 |")).unwrap();
+    assert!(a2_row.ends_with("| rad |"), "{a2_row}");
     let rms = md
         .lines()
         .find(|l| l.starts_with("| beta |"))
@@ -95,19 +110,46 @@ fn diagnose_names_a_hidden_distortion_and_writes_the_report() {
         r.contains("state [mu, gamma, phi, psi, eta, delta, xi, a2]"),
         "{r}"
     );
-    // JSON: the named effect with its estimate and sd (truth 0.06).
+    // JSON: the named effect with its estimate and sd (truth 0.06), and
+    // each estimate's unit. The wheel speeds declared in rad/s (calib.eff
+    // with one more line), the generated coupling wR (1 + c |wL|) has c in
+    // s/rad (c |wL| a pure number) and the drift wR (1 + d t) d in 1/s.
+    let calib = std::fs::read_to_string("systems/calib.eff").unwrap();
+    let eff = temp_file(
+        "units.eff",
+        &format!("{calib}\nunit wR = rad/s, wL = rad/s\n"),
+    );
     let j: serde_json::Value = serde_json::from_str(&ok(&[
         "diagnose",
         "--model",
         "systems/calib.sys",
         "--data",
         &data,
+        "--effects",
+        &eff,
         "--json",
     ]))
     .unwrap();
     let est = &j["named"][0]["estimates"][0];
     let (v, sd) = (est[1].as_f64().unwrap(), est[2].as_f64().unwrap());
     assert!((v - 0.06).abs() < 3.0 * sd, "{v} ± {sd}");
+    assert_eq!(j["named"][0]["units"], serde_json::json!(["rad"]));
+    let unit_of = |effect: &str| {
+        let c = j["rounds"][0]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["effect"] == effect);
+        c.map(|c| c["units"].clone())
+    };
+    assert_eq!(
+        unit_of("wR_with_abs_wL"),
+        Some(serde_json::json!(["s/rad"]))
+    );
+    assert_eq!(unit_of("wR_drift"), Some(serde_json::json!(["1/s"])));
+    assert_eq!(unit_of("bearing_scale"), Some(serde_json::json!(["1"])));
+    // calib.sys's q has no unit: the commanded ratio's dq has none either.
+    assert_eq!(j["input_checks"][0]["units"], serde_json::json!([null]));
     // One effect named: no other named effect to be confounded with, so no
     // correlation caution; --json carries the (here empty of named) list.
     assert!(!out.contains("correlate at r"), "{out}");
@@ -242,6 +284,15 @@ fn diagnose_rejects_bad_input_with_positions() {
     bad(&refs(&diag(&data, &["--effects", &eff])), "bad.eff:2");
     let eff = temp_file("bad2.eff", "effect x\nfrob\n");
     bad(&refs(&diag(&data, &["--effects", &eff])), "bad2.eff:2:1");
+    // Unit declarations: an unreadable unit, a name of nothing.
+    let body = "effect x\nparam k\noutput beta = beta + k\n";
+    let eff = temp_file("bad3.eff", &format!("unit beta = m/\n{body}"));
+    bad(&refs(&diag(&data, &["--effects", &eff])), "bad3.eff:1:15");
+    let eff = temp_file("bad4.eff", &format!("{body}unit k = rad, zz = m\n"));
+    bad(
+        &refs(&diag(&data, &["--effects", &eff])),
+        "bad4.eff:4:15: unit of 'zz'",
+    );
     bad(
         &refs(&diag(&data, &["--init", "phi"])),
         "expected NAME=VALUE",

@@ -41,6 +41,7 @@ mod screen;
 mod settle;
 mod start;
 mod stats;
+mod units;
 mod workflow;
 
 // The root keeps the workflow, its options and its report; the identifiability and
@@ -80,4 +81,10 @@ pub mod statistics {
     pub use crate::correlation::{
         correlated, correlation, Combination, Correlation, CORRELATION_CAUTION,
     };
+}
+
+/// The units of the effects' params: a small dimensional analysis of where
+/// each enters, declarations first (docs/diagnose.md, Units).
+pub mod dimensions {
+    pub use crate::units::{effect_units, param_units};
 }

@@ -17,6 +17,7 @@
 
 use crate::error::{normalize_text, ModelError};
 use crate::sys::{Kind, System};
+use crate::unit::{Unit, UnitDecl};
 
 /// One named model extension.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,6 +58,9 @@ pub struct EffectLibrary {
     /// The system name the effects are written for (`model NAME`), if given.
     pub model: Option<String>,
     pub effects: Vec<Effect>,
+    /// `unit NAME = UNIT` declarations (anywhere in the file; they name the
+    /// model's outputs, inputs and params or the effects' new names).
+    pub units: Vec<UnitDecl>,
     pub origin: String,
 }
 
@@ -144,6 +148,7 @@ impl EffectLibrary {
         let src: &str = &src;
         let mut model = None;
         let mut effects: Vec<Effect> = Vec::new();
+        let mut units: Vec<UnitDecl> = Vec::new();
         let mut line_start = 0;
         for (ln, raw) in src.split('\n').enumerate() {
             let line_no = ln + 1;
@@ -165,6 +170,10 @@ impl EffectLibrary {
                     return Err(err("'model' needs one system name: model NAME".into()));
                 }
                 model = Some(rest.to_string());
+                continue;
+            }
+            if word == "unit" || word == "units" {
+                units_statement(origin, src, lead + word.len(), &t[word.len()..], &mut units)?;
                 continue;
             }
             if word == "effect" {
@@ -282,7 +291,7 @@ impl EffectLibrary {
                 }
                 _ => {
                     return Err(err(format!(
-                        "expected one of model, effect, description, param, state, const, input, subst, output, compare, delay, x' = ..., found '{word}'"
+                        "expected one of model, effect, unit, description, param, state, const, input, subst, output, compare, delay, x' = ..., found '{word}'"
                     )))
                 }
             }
@@ -296,6 +305,7 @@ impl EffectLibrary {
         Ok(EffectLibrary {
             model,
             effects,
+            units,
             origin: origin.to_string(),
         })
     }
@@ -345,8 +355,87 @@ impl EffectLibrary {
             }
             sys.extend(&[e], &self.origin)?;
         }
+        self.check_units(sys)
+    }
+
+    /// Every `unit` declaration names an output, input, param, state or
+    /// constant of `sys` or of one of the effects.
+    fn check_units(&self, sys: &System) -> Result<(), ModelError> {
+        for u in &self.units {
+            let n = u.name.as_str();
+            let known = sys.decls.iter().any(|d| d.name == n)
+                || sys.outputs.iter().any(|o| o.0 == n)
+                || self.effects.iter().any(|e| {
+                    (e.params.iter().chain(&e.states).chain(&e.consts)).any(|x| x == n)
+                        || e.inputs.iter().any(|i| i.0 == n)
+                });
+            if !known {
+                return Err(ModelError::placed(
+                    &self.origin,
+                    u.line,
+                    u.col,
+                    format!(
+                        "unit of '{n}', which is no output, input, param, state or constant of {} or of these effects",
+                        sys.name
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
+}
+
+/// `unit r = m, wR = rad/s` (after the word, `body` starting at byte `at`
+/// of `src`): each name once in the file, each unit readable.
+fn units_statement(
+    origin: &str,
+    src: &str,
+    at: usize,
+    body: &str,
+    units: &mut Vec<UnitDecl>,
+) -> Result<(), ModelError> {
+    let mut off = at;
+    for item in body.split(',') {
+        let here = off;
+        off += item.len() + 1;
+        let lead = here + (item.len() - item.trim_start().len());
+        let at = |a: usize, b: usize, m: String| ModelError::at(origin, src, a, b, m);
+        let err = |a: usize, b: usize, m: String| Err(at(a, b, m));
+        let Some((n, v)) = item.split_once('=') else {
+            return err(
+                lead,
+                here + item.len(),
+                "expected NAME = UNIT, e.g. unit r = m".into(),
+            );
+        };
+        let name = n.trim();
+        if !is_ident(name) {
+            return err(
+                lead,
+                lead + n.len(),
+                format!("'{name}' is not a valid name in a 'unit' list"),
+            );
+        }
+        if units.iter().any(|u| u.name == name) {
+            return err(
+                lead,
+                lead + name.len(),
+                format!("the unit of '{name}' is declared twice"),
+            );
+        }
+        let v_at = here + n.len() + 1;
+        let v_lead = v_at + (v.len() - v.trim_start().len());
+        let unit = Unit::parse(v.trim())
+            .map_err(|(k, m)| at(v_lead + k, v_lead + k + 1, format!("unit of '{name}': {m}")))?;
+        let (line, col) = ModelError::at(origin, src, lead, lead, "").place();
+        units.push(UnitDecl {
+            name: name.to_string(),
+            unit,
+            line,
+            col,
+        });
+    }
+    Ok(())
 }
 
 impl Effect {
@@ -513,5 +602,48 @@ mod tests {
             substitute("u*x + ux + 1.5e-3*u", &m),
             "(u - t*du)*(y) + ux + 1.5e-3*(u - t*du)"
         );
+    }
+
+    /// Each bad `unit` statement is an error at its file:line:col.
+    #[test]
+    fn unit_declarations_read_and_bad_ones_are_placed_errors() {
+        let head = "effect b\nparam b\noutput beta = beta + b\n";
+        let lib = EffectLibrary::parse(
+            &format!("unit beta = rad\n{head}unit b = rad, wR = rad/s\n"),
+            "u.eff",
+        )
+        .expect("valid units");
+        let shown: Vec<String> = lib
+            .units
+            .iter()
+            .map(|u| format!("{}={}@{}:{}", u.name, u.unit, u.line, u.col))
+            .collect();
+        assert_eq!(shown, ["beta=rad@1:6", "b=rad@5:6", "wR=rad/s@5:15"]);
+        for (text, place, what) in [
+            ("unit beta\n", "u.eff:1:6", "expected NAME = UNIT"),
+            ("unit 2x = m\n", "u.eff:1:6", "not a valid name"),
+            ("unit r = m\nunit r = m\n", "u.eff:2:6", "declared twice"),
+            ("unit r = m/\n", "u.eff:1:12", "expected a unit symbol"),
+            ("unit r = m^x\n", "u.eff:1:12", "nonzero integer exponent"),
+            ("unit r = m s\n", "u.eff:1:12", "expected '*', '/'"),
+        ] {
+            let e = EffectLibrary::parse(&format!("{text}{head}"), "u.eff")
+                .expect_err(text)
+                .to_string();
+            assert!(e.starts_with(place) && e.contains(what), "{text}: {e}");
+        }
+        // A name of neither the model nor the effects: placed by `check`.
+        let sys = System::parse(
+            "system s\nstate x\ninput u\nx' = u\noutput beta = atan(x)\n",
+            "s.sys",
+        )
+        .expect("valid system");
+        let lib = EffectLibrary::parse(&format!("{head}unit b = rad, u = m/s\n"), "u.eff")
+            .expect("valid");
+        assert_eq!(lib.check(&sys), Ok(()));
+        let lib =
+            EffectLibrary::parse(&format!("{head}\n  unit zz = m\n"), "u.eff").expect("valid");
+        let e = lib.check(&sys).expect_err("zz is no name").to_string();
+        assert!(e.starts_with("u.eff:5:8: unit of 'zz'"), "{e}");
     }
 }

@@ -93,6 +93,27 @@ impl ModelError {
         }
     }
 
+    /// An error at a known line and column, without the line's text.
+    pub(crate) fn placed(
+        origin: &str,
+        line: usize,
+        col: usize,
+        message: impl Into<String>,
+    ) -> ModelError {
+        ModelError {
+            origin: origin.into(),
+            line: Some(line),
+            col: Some(col),
+            message: message.into(),
+            snippet: None,
+        }
+    }
+
+    /// Its line and column (1, 1 without a place).
+    pub(crate) fn place(&self) -> (usize, usize) {
+        (self.line.unwrap_or(1), self.col.unwrap_or(1))
+    }
+
     /// An error without a place in a file (a flag, a whole-file problem).
     pub fn general(origin: &str, message: impl Into<String>) -> ModelError {
         ModelError {

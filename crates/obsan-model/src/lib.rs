@@ -21,9 +21,11 @@ mod error;
 mod experiment;
 mod normal;
 mod sys;
+mod unit;
 
 pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
 pub use error::{decode_text, normalize_text, ModelError};
 pub use experiment::{experiment_name, Experiment};
 pub use normal::NormalForm;
 pub use sys::{Decl, Kind, Restriction, Start, System, TIME};
+pub use unit::{Unit, UnitDecl, MAX_UNIT_EXPONENT};
