@@ -32,6 +32,31 @@
 //! observable) is the rank test's verdict, with its probability bound.
 //! A candidate failing (b) is reported as such: the lost directions then
 //! depend on the input's history and have no certificate of this form.
+//!
+//! **Directions that move with the inputs.** The kernel may depend on the
+//! fixed values (CSTR: `y' = delta1 qc (u3 - Tc) + 3 (Tr - Tc)` loses
+//! `xi_Tr = -qc (u3 - Tc)/3 xi_delta1`); the black box is then no function of
+//! the state alone. At the first random point, `Omega` is recomputed with (b)
+//! the unknown inputs' jets, then (a) the known inputs' coefficients and
+//! clock, redrawn (unknown_input_jets.rs). If (b) moves it, the command
+//! refuses: no field on the state spans the kernel. If (a) moves it, the
+//! known inputs' jets `u_i^(l)` (clock at `t = 0`, so `c_il = u_i^(l)/l!`)
+//! are coordinates of the reconstruction too, printed `u`, `u'`, `u''`, and
+//! the certificate is, with `F = f0 + sum f_i u_i` (inputs as symbols) and
+//! `d_t xi = sum_{i,l} u_i^(l+1) d xi / d u_i^(l)`:
+//! (a) `L_xi h = 0` per output, and (b') `[F, xi_a] + d_t xi_a` and
+//! `[g_j, xi_a]` in `span(xi, g)` over the rational functions of the state
+//! and the jets. Proof: along a trajectory with inputs `u(t)`, `w(t)`, put
+//! `X_a(t, S) = xi_a(S, u(t), u'(t), ...)`, so `d/dt X_a(t, S(t)) = d_t xi_a
+//! + D xi_a . S'`. For `dS = sum c_a X_a`, `dS' - D(F + G w) dS = sum c_a' X_a
+//! + c_a ([F, xi_a] + d_t xi_a + sum_j w_j [g_j, xi_a])` (`w` does not depend
+//! on S), which by (b') is `sum_a (c_a' + sum_b c_b M_ba) X_a + G dw` with `M`
+//! the span coefficients and `dw` their `g` part: `c' = -M^T c` (a linear ODE
+//! whose coefficients are known functions of time) makes `dS` solve the
+//! linearised dynamics with the input variation `dw`, and (a) keeps `y`. As
+//! above, every variable a vector moves is unobservable, for every unknown
+//! input and the known one applied. (b') is an identity in the jets, so it
+//! holds for every input; the jet `u^(L+1)` it introduces is a symbol.
 
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
@@ -223,6 +248,9 @@ fn candidates(
         Vec::new()
     };
     let nx = xcoords.len();
+    if std::env::var("UISYM_DEBUG").is_ok() {
+        eprintln!("DEBUG ujets {:?} kinds {:?} nx {nx} m0 {m0} piv? r {r}", ujets, kinds);
+    }
     let mut piv: Vec<usize> = Vec::new();
     for c in (0..n).rev() {
         let mut t = piv.clone();
@@ -258,6 +286,7 @@ fn candidates(
             rows_at(ctx, &vals[..nx], &f)
         };
         let Some(s) = s else {
+            if std::env::var("UISYM_DEBUG").is_ok() { eprintln!("DEBUG none rank"); }
             return Ok(None);
         };
         // Columns reordered pivots first: the echelon kernel then has its
@@ -268,6 +297,7 @@ fn candidates(
             .collect();
         let ker = Fp::null_space(sp, n);
         if ker.len() != k || ker.iter().enumerate().any(|(j, v)| v[r + j] != Fp::ONE) {
+            if std::env::var("UISYM_DEBUG").is_ok() { eprintln!("DEBUG none ker"); }
             return Ok(None);
         }
         Ok(Some(
@@ -280,7 +310,7 @@ fn candidates(
     // stop gives a wrong candidate, which the exact certificate rejects.
     let opts = Options {
         primes: Some(vec![P]),
-        agree: 1,
+        agree: std::env::var("UISYM_AGREE").ok().and_then(|s| s.parse().ok()).unwrap_or(1),
         deadline,
         seed: seed ^ 0x0b5a_0033,
         ..Options::default()
