@@ -162,7 +162,7 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
                 jets.join(", ")
             ));
             o.push_str(&format!(
-                "exact: each symmetry leaves every output invariant, and [F, w] + d_t w, with F = f0 + sum f_i u_i and d_t w = sum u^(l+1) dw/du^(l), and the bracket of every unknown input's field with it lie in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
+                "exact: each symmetry xi leaves every output invariant, and [F, xi] + d_t xi, with F = f0 + sum f_i u_i and d_t xi = sum u^(l+1) dxi/du^(l), and the bracket of every unknown input's field with it lie in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
                 s.identities, r.rank, r.error_bound
             ));
         } else {

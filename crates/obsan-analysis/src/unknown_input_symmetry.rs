@@ -248,9 +248,6 @@ fn candidates(
         Vec::new()
     };
     let nx = xcoords.len();
-    if std::env::var("UISYM_DEBUG").is_ok() {
-        eprintln!("DEBUG ujets {:?} kinds {:?} nx {nx} m0 {m0} piv? r {r}", ujets, kinds);
-    }
     let mut piv: Vec<usize> = Vec::new();
     for c in (0..n).rev() {
         let mut t = piv.clone();
@@ -286,7 +283,6 @@ fn candidates(
             rows_at(ctx, &vals[..nx], &f)
         };
         let Some(s) = s else {
-            if std::env::var("UISYM_DEBUG").is_ok() { eprintln!("DEBUG none rank"); }
             return Ok(None);
         };
         // Columns reordered pivots first: the echelon kernel then has its
@@ -297,7 +293,6 @@ fn candidates(
             .collect();
         let ker = Fp::null_space(sp, n);
         if ker.len() != k || ker.iter().enumerate().any(|(j, v)| v[r + j] != Fp::ONE) {
-            if std::env::var("UISYM_DEBUG").is_ok() { eprintln!("DEBUG none ker"); }
             return Ok(None);
         }
         Ok(Some(
@@ -310,7 +305,7 @@ fn candidates(
     // stop gives a wrong candidate, which the exact certificate rejects.
     let opts = Options {
         primes: Some(vec![P]),
-        agree: std::env::var("UISYM_AGREE").ok().and_then(|s| s.parse().ok()).unwrap_or(1),
+        agree: 1,
         deadline,
         seed: seed ^ 0x0b5a_0033,
         ..Options::default()
