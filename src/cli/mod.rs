@@ -127,7 +127,7 @@ with unknown inputs\"); with unknown inputs --json prints {system, restriction, 
 n, rank, symmetries, observable_variables, unobservable_variables (moved by a symmetry: exact),
 reconstructable_inputs, exact, certificate (unknown_input_invariance), identities, made_states
 (the unknown inputs an output holds: made states for the certificate), input_dependent (the
-vectors move with the known inputs), input_jets (the jets u, u', ... their components hold),
+vectors move with the known inputs), input_jets (the known inputs' jets the components hold: u' the derivative of u),
 error_bound (of the rank test for the observable ones), seed}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
