@@ -166,7 +166,7 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
                 s.identities, r.rank, r.error_bound
             ));
         } else {
-        o.push_str(&format!(
+            o.push_str(&format!(
             "exact: each symmetry leaves every output invariant, and the bracket of every field (f0, the known and the unknown inputs' fields) with it lies in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
             s.identities, r.rank, r.error_bound
         ));

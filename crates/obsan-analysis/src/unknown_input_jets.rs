@@ -148,7 +148,12 @@ pub(crate) fn time_derivative(
 /// `F = f0 + sum f_i u_i`, the inputs as symbols, in canonical form.
 pub(crate) fn drift_with_inputs(nf: &mut NormalForm) -> Vec<RatFun> {
     let n = nf.state.len();
-    let us: Vec<_> = nf.inputs.clone().iter().map(|u| nf.ctx.symbol(u).id).collect();
+    let us: Vec<_> = nf
+        .inputs
+        .clone()
+        .iter()
+        .map(|u| nf.ctx.symbol(u).id)
+        .collect();
     (0..n)
         .map(|k| {
             let mut terms = vec![nf.f0[k]];
