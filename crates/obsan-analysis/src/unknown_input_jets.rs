@@ -89,10 +89,13 @@ pub(crate) fn at_jets(fixed: &[Fp], kinds: &[Fixed], jets: &[(usize, usize)], u:
         .map(|(k, &v)| match *k {
             Fixed::Clock => Fp::ZERO,
             Fixed::Coeff(i, l) => {
-                let a = jets.iter().position(|&p| p == (i, l)).expect("listed");
                 let fact = (1..=l as u64).fold(Fp::ONE, |f, m| f * Fp::new(m));
-                // l! is non-zero modulo p for every order the route reaches.
-                u[a] * fact.inv().unwrap_or(Fp::ONE)
+                // l! is non-zero modulo p for every order the route reaches;
+                // every coefficient is in `jets` (jet_coords lists them all).
+                let inv = fact.inv().unwrap_or(Fp::ONE);
+                jets.iter()
+                    .position(|&p| p == (i, l))
+                    .map_or(Fp::ZERO, |a| u[a] * inv)
             }
             Fixed::Unknown => v,
         })

@@ -159,13 +159,17 @@ fn state_rows(ext_rows: &[Vec<Fp>], len: usize, n: usize) -> Vec<Vec<Fp>> {
     Fp::null_space(proj, n)
 }
 
+/// The candidate vectors, their free columns and the known inputs' jets
+/// `(input, order)` they depend on.
+type Candidates = (Vec<Vec<RatFun>>, Vec<usize>, Vec<(usize, usize)>);
+
 /// Candidate kernel vectors by reconstruction (module docs).
 fn candidates(
     nf: &mut NormalForm,
     report: &UnknownInputReport,
     seed: u64,
     deadline: Option<Instant>,
-) -> Result<(Vec<Vec<RatFun>>, Vec<usize>, Vec<(usize, usize)>), AnalysisError> {
+) -> Result<Candidates, AnalysisError> {
     let n = report.n;
     let r = report.rank;
     // The first order whose state part has the final rank: its rows span
