@@ -58,6 +58,15 @@ fn a_lost_direction_that_moves_with_the_known_input() {
         &["modes", &f],
         "modes that move with the input are not derived",
     );
+    // verify goes through the same certified symmetries: refused the same way.
+    let dec = temp_file(
+        "small_input_dependent.dec",
+        &format!("system {f}\nstate x1\nx1' = w\noutput y = x1\n"),
+    );
+    bad(
+        &["verify", &dec],
+        "modes that move with the input are not derived",
+    );
 }
 
 /// STRIKE-GOLDD's CSTR observer (cstr_observer.sys; rank 3 of 4, derived in
