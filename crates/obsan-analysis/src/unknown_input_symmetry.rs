@@ -68,7 +68,7 @@ use obsan_expr::{
     lie::Coord, lie::LieJets, Ctx, Fp, Id, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P,
 };
 use obsan_model::NormalForm;
-use obsan_recon::{reconstruct_vec, Options, ReconError};
+use obsan_recon::{reconstruct_vec, Limit, Options, ReconError};
 use std::time::Instant;
 
 /// Symmetries of a system with unknown inputs, with their exact certificate.
@@ -317,7 +317,14 @@ fn candidates(
     let rec = match reconstruct_vec(nx + ujets.len(), k * r, &mut bb, &opts) {
         Ok(x) => x,
         Err(_) if obsan_expr::cancel_requested() => return Err(AnalysisError::Cancelled),
-        Err(e @ ReconError::Budget { .. }) => {
+        // Only the deadline is a timeout; a degree, term, point or prime
+        // budget is a limit of the reconstruction, said as such.
+        Err(
+            e @ ReconError::Budget {
+                limit: Limit::Deadline,
+                ..
+            },
+        ) => {
             return Err(AnalysisError::Timeout(format!(
                 "reconstructing the symmetries with unknown inputs: {e}"
             )))
