@@ -76,12 +76,20 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
         .filter(|p| p.1.is_some())
         .map(|p| p.0.clone())
         .collect();
+    // The jets' symbols: `u`, `u'`, `u''` (unknown_input_jets.rs).
+    let jets: Vec<String> = s
+        .input_jets
+        .iter()
+        .map(|&(i, l)| format!("{}{}", nf.inputs[i], "'".repeat(l)))
+        .collect();
     if a.out.json {
         crate::json::print(&json::SymmetriesUnknownInputs {
             certificate: "unknown_input_invariance".into(),
             error_bound: r.error_bound,
             exact: true,
             identities: s.identities,
+            input_dependent: s.input_dependent(),
+            input_jets: jets,
             made_states: s.made_states.clone(),
             n: r.n,
             observable_variables: observable,
@@ -148,10 +156,21 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
                 if s.made_states.len() == 1 { "it" } else { "each" }
             ));
         }
-        o.push_str(&format!(
+        if s.input_dependent() {
+            o.push_str(&format!(
+                "the symmetries move with the known inputs: {} in the components are the inputs' values and time derivatives along the trajectory\n",
+                jets.join(", ")
+            ));
+            o.push_str(&format!(
+                "exact: each symmetry xi leaves every output invariant, and [F, xi] + d_t xi, with F = f0 + sum f_i u_i and d_t xi = sum u^(l+1) dxi/du^(l), and the bracket of every unknown input's field with it lie in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
+                s.identities, r.rank, r.error_bound
+            ));
+        } else {
+            o.push_str(&format!(
             "exact: each symmetry leaves every output invariant, and the bracket of every field (f0, the known and the unknown inputs' fields) with it lies in the span of the symmetries and the unknown inputs' fields ({} identities checked in canonical form); so every variable a symmetry moves is unobservable whatever the unknown inputs, and the rank is at most {}. That it is not lower (the variables no symmetry moves are observable) is the rank test's verdict: wrong with probability <= {:.1e}\n",
             s.identities, r.rank, r.error_bound
         ));
+        }
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)

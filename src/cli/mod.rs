@@ -128,8 +128,9 @@ gives the kernel of its observable codistribution, certified exactly (docs/engin
 with unknown inputs\"); with unknown inputs --json prints {system, restriction, state, unknown_inputs,
 n, rank, symmetries, observable_variables, unobservable_variables (moved by a symmetry: exact),
 reconstructable_inputs, exact, certificate (unknown_input_invariance), identities, made_states
-(the unknown inputs an output holds: made states for the certificate), error_bound (of the rank
-test for the observable ones), seed}.")]
+(the unknown inputs an output holds: made states for the certificate), input_dependent (the
+vectors move with the known inputs), input_jets (the known inputs' jets the components hold: u' the derivative of u),
+error_bound (of the rank test for the observable ones), seed}.")]
     Symmetries(SymArgs),
     /// The Lie derivatives of the outputs up to an order, in canonical form.
     #[command(after_help = "Examples:

@@ -147,6 +147,11 @@ pub struct SymmetriesUnknownInputs {
     pub exact: bool,
     /// How many identities were checked exactly.
     pub identities: usize,
+    /// The symmetries depend on the known inputs' values: their components hold the jets in
+    /// `input_jets` (docs/engine.md, "Symmetries with unknown inputs").
+    pub input_dependent: bool,
+    /// The known inputs' jets the components hold: `u` the input, `u'`, `u''` its derivatives.
+    pub input_jets: Vec<String>,
     /// The unknown inputs an output holds (direct feedthrough), made states `w' = v` for the
     /// certificate; the symmetries are the state part of the extended system's (docs/engine.md).
     pub made_states: Vec<String>,

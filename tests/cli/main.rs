@@ -29,5 +29,6 @@ mod surface;
 mod symmetry_invariance;
 mod trust;
 mod tutorial;
+mod unknown_input_jets;
 mod unknown_inputs;
 mod util;

@@ -38,6 +38,7 @@ mod sym_report;
 mod symmetry;
 mod unknown_input;
 mod unknown_input_feedthrough;
+mod unknown_input_jets;
 mod unknown_input_joint;
 mod unknown_input_martinelli;
 mod unknown_input_modes;

@@ -129,6 +129,12 @@ fn feedthrough_symmetries(
     // A vector whose free column is an input made a state moves that input
     // alone among the free columns: its S-part is another direction, not in
     // the normalised form.
+    // The jets' symbols live in the extended system's context, not in nf's.
+    if es.input_dependent() {
+        return Err(refuse(
+            "the lost directions move with the known inputs, which is not handled with an input made a state",
+        ));
+    }
     if es.free.iter().any(|&c| c >= n) {
         return Err(refuse(
             "a lost direction of the extended system is free on an input made a state",
@@ -150,5 +156,6 @@ fn feedthrough_symmetries(
             .iter()
             .map(|&j| nf.unknown_inputs[j].clone())
             .collect(),
+        input_jets: Vec::new(),
     })
 }

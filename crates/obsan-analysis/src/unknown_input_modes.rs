@@ -108,6 +108,11 @@ pub fn unknown_input_view(
     let deadline = opts.deadline;
     let seed = opts.seed;
     let s = unknown_input_symmetries(nf, opts)?;
+    if s.input_dependent() {
+        return Err(AnalysisError::Invalid(
+            "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): modes that move with the input are not derived".into(),
+        ));
+    }
     let mut view = nf.clone();
     view.inputs.append(&mut view.unknown_inputs);
     view.input_vars.append(&mut view.unknown_input_vars);

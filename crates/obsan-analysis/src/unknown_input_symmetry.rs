@@ -32,14 +32,43 @@
 //! observable) is the rank test's verdict, with its probability bound.
 //! A candidate failing (b) is reported as such: the lost directions then
 //! depend on the input's history and have no certificate of this form.
+//!
+//! **Directions that move with the inputs.** The kernel may depend on the
+//! fixed values (CSTR: `y' = delta1 qc (u3 - Tc) + 3 (Tr - Tc)` loses
+//! `xi_Tr = -qc (u3 - Tc)/3 xi_delta1`); the black box is then no function of
+//! the state alone. At the first random point, `Omega` is recomputed with (b)
+//! the unknown inputs' jets, then (a) the known inputs' coefficients and
+//! clock, redrawn (unknown_input_jets.rs). If (b) moves it, the command
+//! refuses: no field on the state spans the kernel. If (a) moves it, the
+//! known inputs' jets `u_i^(l)` (clock at `t = 0`, so `c_il = u_i^(l)/l!`)
+//! are coordinates of the reconstruction too, printed `u`, `u'`, `u''`, and
+//! the certificate is, with `F = f0 + sum f_i u_i` (inputs as symbols) and
+//! `d_t xi = sum_{i,l} u_i^(l+1) d xi / d u_i^(l)`:
+//! (a) `L_xi h = 0` per output, and (b') `[F, xi_a] + d_t xi_a` and
+//! `[g_j, xi_a]` in `span(xi, g)` over the rational functions of the state
+//! and the jets. Proof: along a trajectory with inputs `u(t)`, `w(t)`, put
+//! `X_a(t, S) = xi_a(S, u(t), u'(t), ...)`, so `d/dt X_a(t, S(t)) = d_t xi_a
+//! + D xi_a . S'`. For `dS = sum c_a X_a`, `dS' - D(F + G w) dS = sum c_a' X_a
+//! + c_a ([F, xi_a] + d_t xi_a + sum_j w_j [g_j, xi_a])` (`w` does not depend
+//! on S), which by (b') is `sum_a (c_a' + sum_b c_b M_ba) X_a + G dw` with `M`
+//! the span coefficients and `dw` their `g` part: `c' = -M^T c` (a linear ODE
+//! whose coefficients are known functions of time) makes `dS` solve the
+//! linearised dynamics with the input variation `dw`, and (a) keeps `y`. As
+//! above, every variable a vector moves is unobservable, for every unknown
+//! input and the known one applied. (b') is an identity in the jets, so it
+//! holds for every input; the jet `u^(L+1)` it introduces is a symbol.
 
 use crate::rank::AnalysisError;
 use crate::unknown_input::{extend, unknown_input_rank, UnknownInputOptions, UnknownInputReport};
+use crate::unknown_input_jets::{
+    at_jets, classify, drift_with_inputs, jet_coords, jet_name, redraw, time_derivative,
+    unknown_history, used_jets, Fixed, Span,
+};
 use obsan_expr::{
     lie::Coord, lie::LieJets, Ctx, Fp, Id, Mono, Poly, RatFun, SplitMix, TanHalf, Var, P,
 };
 use obsan_model::NormalForm;
-use obsan_recon::{reconstruct_vec, Options, ReconError};
+use obsan_recon::{reconstruct_vec, Limit, Options, ReconError};
 use std::time::Instant;
 
 /// Symmetries of a system with unknown inputs, with their exact certificate.
@@ -59,6 +88,17 @@ pub struct UnknownInputSymmetries {
     /// certificate is that of the system with them made states
     /// (unknown_input_feedthrough.rs). Empty otherwise.
     pub made_states: Vec<String>,
+    /// The known inputs' jets `(input, order)` the vectors depend on (their
+    /// symbols `u`, `u'`, `u''`, ...); empty when the symmetries do not move
+    /// with the known inputs.
+    pub input_jets: Vec<(usize, usize)>,
+}
+
+impl UnknownInputSymmetries {
+    /// The vectors depend on the known inputs' values (module docs).
+    pub fn input_dependent(&self) -> bool {
+        !self.input_jets.is_empty()
+    }
 }
 
 /// `unknown_input_symmetries` (unknown_input_feedthrough.rs) of a system
@@ -79,8 +119,8 @@ pub(crate) fn symmetries_without_feedthrough(
     }
     let n = report.n;
     let r = report.rank;
-    let (vectors, free) = if r == n {
-        (vec![], vec![])
+    let (vectors, free, input_jets) = if r == n {
+        (vec![], vec![], vec![])
     } else if r == 0 {
         // Nothing is observable: every unit vector.
         let units = (0..n)
@@ -96,17 +136,18 @@ pub(crate) fn symmetries_without_feedthrough(
                     .collect()
             })
             .collect();
-        (units, (0..n).collect())
+        (units, (0..n).collect(), vec![])
     } else {
         candidates(nf, &report, seed, deadline)?
     };
-    let identities = certify(nf, &vectors)?;
+    let identities = certify(nf, &vectors, &input_jets)?;
     Ok(UnknownInputSymmetries {
         report,
         vectors,
         free,
         identities,
         made_states: Vec::new(),
+        input_jets,
     })
 }
 
@@ -118,13 +159,17 @@ fn state_rows(ext_rows: &[Vec<Fp>], len: usize, n: usize) -> Vec<Vec<Fp>> {
     Fp::null_space(proj, n)
 }
 
+/// The candidate vectors, their free columns and the known inputs' jets
+/// `(input, order)` they depend on.
+type Candidates = (Vec<Vec<RatFun>>, Vec<usize>, Vec<(usize, usize)>);
+
 /// Candidate kernel vectors by reconstruction (module docs).
 fn candidates(
     nf: &mut NormalForm,
     report: &UnknownInputReport,
     seed: u64,
     deadline: Option<Instant>,
-) -> Result<(Vec<Vec<RatFun>>, Vec<usize>), AnalysisError> {
+) -> Result<Candidates, AnalysisError> {
     let n = report.n;
     let r = report.rank;
     // The first order whose state part has the final rank: its rows span
@@ -163,11 +208,12 @@ fn candidates(
         .free_coords(&ext_roots, &[])
         .ok_or_else(unsupported)?;
     let extra: Vec<Coord> = all.into_iter().filter(|c| !xcoords.contains(c)).collect();
+    let kinds = classify(&ext.ctx, &nf.inputs, m0, &extra);
     let mut rng = SplitMix(seed ^ 0x51e0_7a11_c0de_0033);
     let fixed: Vec<Fp> = extra.iter().map(|_| rng.fp()).collect();
     let coords: Vec<Coord> = xcoords.iter().chain(&extra).cloned().collect();
-    let rows_at = |ctx: &Ctx, x: &[Fp]| -> Option<Vec<Vec<Fp>>> {
-        let vals: Vec<Fp> = x.iter().chain(&fixed).copied().collect();
+    let rows_at = |ctx: &Ctx, x: &[Fp], fixed: &[Fp]| -> Option<Vec<Vec<Fp>>> {
+        let vals: Vec<Fp> = x.iter().chain(fixed).copied().collect();
         let pt = ctx.fp_point_at(&coords, &vals).ok()?;
         let mut rows = Vec::new();
         for (o, &m) in tops.iter().enumerate() {
@@ -186,7 +232,26 @@ fn candidates(
     // Pivots from the last column back at a random point, so that the free
     // columns are the earliest unobservable variables.
     let x0: Vec<Fp> = xcoords.iter().map(|_| rng.fp()).collect();
-    let s0 = rows_at(&ext.ctx, &x0).ok_or(AnalysisError::NoPoint)?;
+    let s0 = rows_at(&ext.ctx, &x0, &fixed).ok_or(AnalysisError::NoPoint)?;
+    // Does Omega at x0 move when the unknown inputs' jets, then the known
+    // inputs' coefficients and clock, are redrawn? (Same rank r: equal iff
+    // the stacked rows keep rank r.) A wrong "no" (probability of a zero of
+    // a minor) only sends the reconstruction on as before, where it fails.
+    let moves = |s: Option<Vec<Vec<Fp>>>| {
+        s.is_some_and(|s| Fp::matrix_rank(s0.iter().cloned().chain(s).collect()) != r)
+    };
+    let unknown = redraw(&fixed, &kinds, |k| k == Fixed::Unknown, || rng.fp());
+    if moves(rows_at(&ext.ctx, &x0, &unknown)) {
+        return Err(unknown_history(&nf.unknown_inputs));
+    }
+    let known = redraw(&fixed, &kinds, |k| k != Fixed::Unknown, || rng.fp());
+    // The known inputs' jets become coordinates of the black box (clock at 0).
+    let ujets = if moves(rows_at(&ext.ctx, &x0, &known)) {
+        jet_coords(&kinds)
+    } else {
+        Vec::new()
+    };
+    let nx = xcoords.len();
     let mut piv: Vec<usize> = Vec::new();
     for c in (0..n).rev() {
         let mut t = piv.clone();
@@ -215,7 +280,13 @@ fn candidates(
             return Err("interrupted".into());
         }
         let vals: Vec<Fp> = x.iter().map(|&v| Fp::new(v)).collect();
-        let Some(s) = rows_at(ctx, &vals) else {
+        let s = if ujets.is_empty() {
+            rows_at(ctx, &vals, &fixed)
+        } else {
+            let f = at_jets(&fixed, &kinds, &ujets, &vals[nx..]);
+            rows_at(ctx, &vals[..nx], &f)
+        };
+        let Some(s) = s else {
             return Ok(None);
         };
         // Columns reordered pivots first: the echelon kernel then has its
@@ -243,10 +314,17 @@ fn candidates(
         seed: seed ^ 0x0b5a_0033,
         ..Options::default()
     };
-    let rec = match reconstruct_vec(xcoords.len(), k * r, &mut bb, &opts) {
+    let rec = match reconstruct_vec(nx + ujets.len(), k * r, &mut bb, &opts) {
         Ok(x) => x,
         Err(_) if obsan_expr::cancel_requested() => return Err(AnalysisError::Cancelled),
-        Err(e @ ReconError::Budget { .. }) => {
+        // Only the deadline is a timeout; a degree, term, point or prime
+        // budget is a limit of the reconstruction, said as such.
+        Err(
+            e @ ReconError::Budget {
+                limit: Limit::Deadline,
+                ..
+            },
+        ) => {
             return Err(AnalysisError::Timeout(format!(
                 "reconstructing the symmetries with unknown inputs: {e}"
             )))
@@ -258,10 +336,17 @@ fn candidates(
         }
     };
     // The coordinates are nf's own leaves (the extended context is a clone
-    // with the jets appended), so the forms are built in nf's context.
+    // with the jets appended), so the forms are built in nf's context; the
+    // known inputs' jets get their symbols there (`u`, `u'`, ...).
+    let mut vcoords = xcoords.clone();
+    for &(i, l) in &ujets {
+        let v = nf.ctx.symbol(&jet_name(&nf.inputs[i], l)).var;
+        vcoords.push(Coord::Leaf(v));
+    }
     let th = nf.ctx.tan_half();
-    let vectors = to_vectors(&mut nf.ctx, &th, &xcoords, &rec.functions, &piv, &free, n)?;
-    Ok((vectors, free))
+    let vectors = to_vectors(&mut nf.ctx, &th, &vcoords, &rec.functions, &piv, &free, n)?;
+    let input_jets = used_jets(&mut nf.ctx, &nf.inputs, &ujets, &vectors);
+    Ok((vectors, free, input_jets))
 }
 
 /// The reconstructed entries as canonical forms in sin/cos.
@@ -307,51 +392,26 @@ fn to_vectors(
     Ok(vectors)
 }
 
-/// An echelon basis of vectors of canonical forms in the half-angle view,
-/// where a form is zero iff it is the zero function (exact membership).
-struct Span {
-    rows: Vec<(usize, Vec<RatFun>)>,
-}
-
-impl Span {
-    fn reduce(&self, ctx: &Ctx, mut v: Vec<RatFun>) -> Vec<RatFun> {
-        for (p, row) in &self.rows {
-            if v[*p].is_zero() {
-                continue;
-            }
-            // row[p] is 1.
-            let f = v[*p].clone();
-            for (x, y) in v.iter_mut().zip(row) {
-                if !y.is_zero() {
-                    let t = ctx.rf_mul(&f, y);
-                    *x = ctx.rf_sub(x, &t);
-                }
-            }
-        }
-        v
-    }
-
-    /// Adds `v` (in the half-angle view); `false` if it was in the span.
-    fn insert(&mut self, ctx: &Ctx, v: Vec<RatFun>) -> bool {
-        let v = self.reduce(ctx, v);
-        let Some(p) = v.iter().position(|x| !x.is_zero()) else {
-            return false;
-        };
-        let Some(inv) = ctx.rf_inv(&v[p]) else {
-            return false;
-        };
-        let v: Vec<RatFun> = v.iter().map(|x| ctx.rf_mul(x, &inv)).collect();
-        self.rows.push((p, v));
-        true
-    }
-}
-
-/// The exact certificate (a) and (b) of the module docs; the number of
-/// identities checked, or the reason a candidate fails.
-fn certify(nf: &mut NormalForm, vectors: &[Vec<RatFun>]) -> Result<usize, AnalysisError> {
+/// The exact certificate (a) and (b) of the module docs (with `d_t xi`
+/// over the known inputs' jets `jets` when the vectors depend on them); the
+/// number of identities checked, or the reason a candidate fails.
+fn certify(
+    nf: &mut NormalForm,
+    vectors: &[Vec<RatFun>],
+    jets: &[(usize, usize)],
+) -> Result<usize, AnalysisError> {
     if vectors.is_empty() {
         return Ok(0);
     }
+    // Built before the half-angle view, which then knows the jets' symbols.
+    let dts: Vec<Vec<RatFun>> = if jets.is_empty() {
+        Vec::new()
+    } else {
+        vectors
+            .iter()
+            .map(|xi| time_derivative(nf, jets, xi))
+            .collect()
+    };
     let th = nf.ctx.tan_half();
     if !th.complete(&nf.ctx) {
         return Err(AnalysisError::Invalid(
@@ -361,10 +421,20 @@ fn certify(nf: &mut NormalForm, vectors: &[Vec<RatFun>]) -> Result<usize, Analys
     let vars: Vec<Var> = nf.state_vars.clone();
     let canon_vec =
         |ctx: &mut Ctx, f: &[Id]| -> Vec<RatFun> { f.iter().map(|&e| ctx.canon(e)).collect() };
-    let mut fields: Vec<(String, Vec<RatFun>)> =
-        vec![("f0".into(), canon_vec(&mut nf.ctx, &nf.f0.clone()))];
-    for (name, f) in nf.inputs.clone().iter().zip(nf.fields.clone()) {
-        fields.push((format!("the field of {name}"), canon_vec(&mut nf.ctx, &f)));
+    // Input-dependent vectors: one field with the inputs as symbols, whose
+    // bracket gains d_t xi (module docs); otherwise f0 and each f_i alone.
+    let mut fields: Vec<(String, Vec<RatFun>)> = if jets.is_empty() {
+        vec![("f0".into(), canon_vec(&mut nf.ctx, &nf.f0.clone()))]
+    } else {
+        vec![(
+            "f0 + sum f_i u_i (with d_t xi)".into(),
+            drift_with_inputs(nf),
+        )]
+    };
+    if jets.is_empty() {
+        for (name, f) in nf.inputs.clone().iter().zip(nf.fields.clone()) {
+            fields.push((format!("the field of {name}"), canon_vec(&mut nf.ctx, &f)));
+        }
     }
     let mut gs = Vec::new();
     for (name, g) in nf
@@ -396,13 +466,16 @@ fn certify(nf: &mut NormalForm, vectors: &[Vec<RatFun>]) -> Result<usize, Analys
         let t: Vec<RatFun> = v.iter().map(|e| nf.ctx.to_tan_half(&th, e)).collect();
         span.insert(&nf.ctx, t);
     }
-    for (fname, f) in &fields {
+    for (fi, (fname, f)) in fields.iter().enumerate() {
         for (a, xi) in vectors.iter().enumerate() {
             let mut b = Vec::with_capacity(vars.len());
             for i in 0..vars.len() {
                 let p = nf.ctx.rf_lie_derivative(&xi[i], &vars, f);
                 let q = nf.ctx.rf_lie_derivative(&f[i], &vars, xi);
-                let d = nf.ctx.rf_sub(&p, &q);
+                let mut d = nf.ctx.rf_sub(&p, &q);
+                if fi == 0 && !dts.is_empty() {
+                    d = nf.ctx.rf_add(&d, &dts[a][i]);
+                }
                 b.push(nf.ctx.to_tan_half(&th, &d));
             }
             if span.reduce(&nf.ctx, b).iter().any(|x| !x.is_zero()) {

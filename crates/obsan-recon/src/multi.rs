@@ -681,9 +681,19 @@ where
             let dk = caps.iter().copied().max().unwrap_or(0);
             let mut table = vec![Vec::with_capacity(dk + 1); t];
             let mut streaks = vec![0usize; t];
+            // Each coefficient's values at the points y_i = bases^(i+1), not
+            // from i = 0: at the point of all ones two variables move
+            // together along the line, and a form with their difference as
+            // a factor in both numerator and denominator (CSTR's `xi_Tr`,
+            // `Tr (u3 - Tc) / D` with `D` holding `(u3 - Tc)`) loses degree
+            // there on every prime (as in `on_skeleton`).
+            let inv_node: Vec<u64> = node
+                .iter()
+                .map(|&v| inv(v, p).ok_or(Fail::Unlucky))
+                .collect::<Result<_, _>>()?;
             for j in 0..=dk {
                 let mut ys = Vec::with_capacity(t);
-                let mut pw = vec![1u64; k];
+                let mut pw = self.bases[..k].to_vec();
                 for _ in 0..t {
                     let mut y = self.anchors.clone();
                     y[..k].copy_from_slice(&pw);
@@ -693,9 +703,10 @@ where
                         *w = mul(*w, b, p);
                     }
                 }
+                // ys[i] = sum_j (a_j v_j) v_j^i: the system gives a_j v_j.
                 let sol = vandermonde_t(&node, &ys, p).ok_or(Fail::Unlucky)?;
-                for (row, s) in table.iter_mut().zip(sol) {
-                    row.push(s);
+                for ((row, s), &vi) in table.iter_mut().zip(sol).zip(&inv_node) {
+                    row.push(mul(s, vi, p));
                 }
                 // Every coefficient is complete at its cap, or earlier once
                 // `agree` values in a row were predicted (racing termination).

@@ -654,3 +654,60 @@ fn forms_vanishing_at_all_ones_reconstruct() {
         assert!(is_canonical(&r.functions[0]));
     }
 }
+
+/// CSTR's lost direction (tests/cli/unknown_input_jets.rs, derived there):
+/// with D = u3' - Tr - (Cr + d qc)(u3 - Tc), the kernel entries Tr (u3 - Tc)/D,
+/// 0 and -Tr/(qc D). Numerator and denominator forms share the factor
+/// u3 - Tc, which vanishes where both variables take the value 1: Zippel's
+/// stages once began their points at all ones and failed on every try.
+#[test]
+fn forms_sharing_a_difference_of_variables_reconstruct() {
+    // Variables: Cr Tr Tc d qc u3 u3'.
+    let e = |v: &[(usize, u32)]| {
+        let mut x = vec![0u32; 7];
+        for &(i, k) in v {
+            x[i] = k;
+        }
+        x
+    };
+    let d: Terms = vec![
+        t(&e(&[(6, 1)]), 1),
+        t(&e(&[(1, 1)]), -1),
+        t(&e(&[(0, 1), (5, 1)]), -1),
+        t(&e(&[(0, 1), (2, 1)]), 1),
+        t(&e(&[(3, 1), (4, 1), (5, 1)]), -1),
+        t(&e(&[(3, 1), (4, 1), (2, 1)]), 1),
+    ];
+    let qc_d: Terms = d
+        .iter()
+        .map(|(ex, c)| {
+            let mut ex = ex.clone();
+            ex[4] += 1;
+            (ex, c.clone())
+        })
+        .collect();
+    let fs = vec![
+        (
+            vec![t(&e(&[(1, 1), (5, 1)]), 1), t(&e(&[(1, 1), (2, 1)]), -1)],
+            d,
+        ),
+        (vec![], vec![t(&e(&[]), 1)]),
+        (vec![t(&e(&[(1, 1)]), -1)], qc_d),
+    ];
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+        fs.iter()
+            .map(|(n, d)| eval(n, d, x, p))
+            .collect::<Option<Vec<u64>>>()
+            .map_or(Ok(None), |v| Ok(Some(v)))
+    };
+    // As the analysis calls it: the engine's prime, one agreeing value.
+    let opts = Options {
+        primes: Some(vec![(1u64 << 61) - 1]),
+        agree: 1,
+        ..Options::default()
+    };
+    let r = reconstruct_vec(7, fs.len(), &mut bb, &opts).unwrap();
+    for (f, (n, d)) in r.functions.iter().zip(&fs) {
+        assert!(same_function(f, n, d), "{f}");
+    }
+}
