@@ -241,3 +241,31 @@ fn big_with_its_meal_unknown_is_proven_in_an_extension() {
         "{v}"
     );
 }
+
+/// Its symmetries (session 29): the observable G alone spans the
+/// codistribution (rank 1), so the kernel is the unit vectors of the seven
+/// others, certified exactly in canonical form over the decided roots (no
+/// point mod p needed); the unobservable set is the oracle's
+/// (systems/benchmarks/unknown-inputs/big.sys).
+#[test]
+fn big_with_its_meal_unknown_has_the_unit_symmetries_of_its_lost_variables() {
+    let v: Value = serde_json::from_str(&ok(&[
+        "symmetries",
+        "systems/benchmarks/unknown-inputs/big.sys",
+        "--json",
+    ]))
+    .expect("json");
+    assert_eq!(v["exact"], true, "{v}");
+    let lost: Vec<&str> = v["unobservable_variables"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        lost,
+        ["beta", "I", "p1", "si", "gamma", "c", "alpha"],
+        "{v}"
+    );
+    assert_eq!(v["symmetries"].as_array().unwrap().len(), 7, "{v}");
+}

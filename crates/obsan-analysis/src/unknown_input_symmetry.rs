@@ -121,10 +121,15 @@ pub(crate) fn symmetries_without_feedthrough(
     let r = report.rank;
     let (vectors, free, input_jets) = if r == n {
         (vec![], vec![], vec![])
-    } else if r == 0 {
-        // Nothing is observable: every unit vector.
-        let units = (0..n)
-            .map(|j| {
+    } else if report.observable.iter().filter(|o| o.is_some()).count() == r {
+        // The observable variables alone span the codistribution (r of them
+        // independent, rank r): its kernel is spanned by the unit vectors of
+        // the others, with no reconstruction (which needs points mod p: the
+        // BIG model's roots have none). Nothing observable is the case r = 0.
+        let lost: Vec<usize> = (0..n).filter(|&j| report.observable[j].is_none()).collect();
+        let units = lost
+            .iter()
+            .map(|&j| {
                 (0..n)
                     .map(|i| {
                         if i == j {
@@ -136,7 +141,7 @@ pub(crate) fn symmetries_without_feedthrough(
                     .collect()
             })
             .collect();
-        (units, (0..n).collect(), vec![])
+        (units, lost, vec![])
     } else {
         candidates(nf, &report, seed, deadline)?
     };
@@ -413,11 +418,24 @@ fn certify(
             .collect()
     };
     let th = nf.ctx.tan_half();
-    if !th.complete(&nf.ctx) {
+    // Roots: with no angle and every atom decided, the canonical forms are
+    // elements of the field Q(x)(roots) written uniquely (docs/engine.md,
+    // "Decided and not decided"), so the checks run on them as they are (a
+    // zero is zero, a pivot not zero is not zero). With angles too, the
+    // half-angle view does not carry the roots' relations: refused.
+    let plain = !th.complete(&nf.ctx);
+    if plain && (!th.is_empty() || !crate::decided::undecided_atoms_of(nf, &[]).is_empty()) {
         return Err(AnalysisError::Invalid(
-            "symmetries with unknown inputs: a square root in the system is not supported".into(),
+            "symmetries with unknown inputs: a root beside an angle or an undecided atom is not supported".into(),
         ));
     }
+    let view = |ctx: &Ctx, e: &RatFun| -> RatFun {
+        if plain {
+            e.clone()
+        } else {
+            ctx.to_tan_half(&th, e)
+        }
+    };
     let vars: Vec<Var> = nf.state_vars.clone();
     let canon_vec =
         |ctx: &mut Ctx, f: &[Id]| -> Vec<RatFun> { f.iter().map(|&e| ctx.canon(e)).collect() };
@@ -452,7 +470,7 @@ fn certify(
         let h = nf.ctx.canon(h);
         for (a, xi) in vectors.iter().enumerate() {
             let d = nf.ctx.rf_lie_derivative(&h, &vars, xi);
-            if !nf.ctx.to_tan_half(&th, &d).is_zero() {
+            if !view(&nf.ctx, &d).is_zero() {
                 return Err(AnalysisError::Invalid(format!(
                     "kernel vector {} of the observable codistribution changes output {name}: the rank test was unlucky; run again with another --seed",
                     a + 1
@@ -463,7 +481,7 @@ fn certify(
     }
     let mut span = Span { rows: vec![] };
     for v in vectors.iter().chain(&gs) {
-        let t: Vec<RatFun> = v.iter().map(|e| nf.ctx.to_tan_half(&th, e)).collect();
+        let t: Vec<RatFun> = v.iter().map(|e| view(&nf.ctx, e)).collect();
         span.insert(&nf.ctx, t);
     }
     for (fi, (fname, f)) in fields.iter().enumerate() {
@@ -476,7 +494,7 @@ fn certify(
                 if fi == 0 && !dts.is_empty() {
                     d = nf.ctx.rf_add(&d, &dts[a][i]);
                 }
-                b.push(nf.ctx.to_tan_half(&th, &d));
+                b.push(view(&nf.ctx, &d));
             }
             if span.reduce(&nf.ctx, b).iter().any(|x| !x.is_zero()) {
                 return Err(AnalysisError::Invalid(format!(

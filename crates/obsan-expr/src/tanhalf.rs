@@ -22,6 +22,11 @@ pub struct TanHalf {
 }
 
 impl TanHalf {
+    /// No sin/cos pair: the view is the identity.
+    pub fn is_empty(&self) -> bool {
+        self.pairs.is_empty()
+    }
+
     /// Whether the view covers every relation of the context (no root leaf).
     pub fn complete(&self, ctx: &Ctx) -> bool {
         !ctx.leaves
