@@ -357,12 +357,21 @@ fn strike_goldd_unrolls_for_loops() {
     let out = ok(&["import", "strike-goldd", &src]);
     assert!(out.contains("x1' = -k*x1\nx2' = -k*x2\n"), "{out}");
     let cases = [
-        ("syms x k n\nx = x;\nf = -k*x;\nfor i = 1:n\nend\nh = x;\n", "4:11: 'n': a loop's bounds"),
-        ("syms x k\nx = x;\nf = -k*x;\nfor i = 1:20000\nend\nh = x;\n", "4:1: this loop runs 20000 times"),
+        (
+            "syms x k n\nx = x;\nf = -k*x;\nfor i = 1:n\nend\nh = x;\n",
+            "4:11: 'n': a loop's bounds",
+        ),
+        (
+            "syms x k\nx = x;\nf = -k*x;\nfor i = 1:20000\nend\nh = x;\n",
+            "4:1: this loop runs 20000 times",
+        ),
     ];
     for (k, (text, want)) in cases.iter().enumerate() {
         let src = temp_file(&format!("z_create_loop{k}.m"), text);
-        bad(&["import", "strike-goldd", &src], &format!("z_create_loop{k}.m:{want}"));
+        bad(
+            &["import", "strike-goldd", &src],
+            &format!("z_create_loop{k}.m:{want}"),
+        );
     }
 }
 

@@ -13,6 +13,8 @@ use crate::infix::{self, Dialect, Placed};
 use crate::ImportError;
 
 type At = (usize, usize);
+/// A variable's entries, if assigned (what index and bound evaluation look up).
+type Entries<'a> = Option<&'a [(Ex, At)]>;
 
 /// Most iterations of one loop (the library's one loop runs 26 times).
 pub(crate) const MAX_ITERATIONS: i64 = 10_000;
@@ -226,12 +228,12 @@ fn head(st: &[(char, At)], at: At, ex: &impl Exec) -> Result<(String, Vec<i64>),
 
 /// `e` as a whole number of magnitude at most 10^12: numbers, names whose
 /// value is one, `numel(v)` of a vector, and + - * / of them.
-pub(crate) fn integer<'a>(e: &Ex, value: &dyn Fn(&str) -> Option<&'a [(Ex, At)]>) -> Option<i64> {
+pub(crate) fn integer<'a>(e: &Ex, value: &dyn Fn(&str) -> Entries<'a>) -> Option<i64> {
     let v = number(e, value, 0)?;
     (v.fract() == 0.0 && v.abs() <= 1e12).then_some(v as i64)
 }
 
-fn number<'a>(e: &Ex, value: &dyn Fn(&str) -> Option<&'a [(Ex, At)]>, depth: usize) -> Option<f64> {
+fn number<'a>(e: &Ex, value: &dyn Fn(&str) -> Entries<'a>, depth: usize) -> Option<f64> {
     // A bound on recursion: values are substituted, but `a = a` of a symbol names itself.
     if depth > 64 {
         return None;
@@ -266,7 +268,7 @@ fn number<'a>(e: &Ex, value: &dyn Fn(&str) -> Option<&'a [(Ex, At)]>, depth: usi
 pub(crate) fn zeros<'a>(
     t: &str,
     at: At,
-    value: &dyn Fn(&str) -> Option<&'a [(Ex, At)]>,
+    value: &dyn Fn(&str) -> Entries<'a>,
 ) -> Result<Option<Vec<(Ex, At)>>, ImportError> {
     let t = t.trim();
     let t = t
