@@ -160,51 +160,75 @@ fn loops_zeros_indexed_assignment_and_reassigned_roles() {
     assert!(s.contains("output y1 = x4\noutput y2 = x3\n"), "{s}");
 }
 
-#[test]
-fn loop_limits_and_mistakes_are_refused_at_their_place() {
-    let e = |src: &str| strike_goldd_to_sys(src, "z_create_m.m").unwrap_err();
+/// The refusal of a model file followed by `extra` (the model: 5 lines, so `extra` starts on line 6).
+fn refused_after_model(extra: &str) -> obsan_import::ImportError {
     let model = "syms x1 k\nx = x1;\np = k;\nf = -k*x1;\nh = x1;\n";
-    // An unbounded loop (10^9 iterations): refused at the `for`, before it runs.
-    let r = e(&format!("{model}  for i = 1:1e9\n a = i;\nend\n"));
+    strike_goldd_to_sys(&format!("{model}{extra}"), "z_create_m.m").unwrap_err()
+}
+
+#[test]
+fn unbounded_loop_is_refused_at_its_for_before_it_runs() {
+    // 10^9 iterations, past the limit of 10^4.
+    let r = refused_after_model("  for i = 1:1e9\n a = i;\nend\n");
     assert_eq!((r.line, r.col), (6, 3), "{r}");
     assert!(r.message.contains("1000000000 times"), "{r}");
-    // `for` without `end`.
-    let r = e(&format!("{model}for i = 1:3\n a = i;\n"));
+}
+
+#[test]
+fn for_without_end_is_refused_at_the_for() {
+    let r = refused_after_model("for i = 1:3\n a = i;\n");
     assert_eq!((r.line, r.col), (6, 1), "{r}");
     assert!(r.message.contains("no matching 'end'"), "{r}");
-    // An `end` closing nothing.
-    let r = e(&format!("{model}a = 1;\nend\n"));
+    // And an `end` closing nothing, at the `end`.
+    let r = refused_after_model("a = 1;\nend\n");
     assert_eq!((r.line, r.col), (7, 1), "{r}");
-    // An index out of range in a loop body: at the indexing element.
-    let r = e("syms x1 x2 k\nx = [x1; x2];\np = k;\nh = x1;\nf = [];\n\
-               for i = 1:3\n  f = [f; -k*x(i)];\nend\n");
+}
+
+#[test]
+fn index_out_of_range_in_a_loop_is_refused_at_the_element() {
+    // x has 2 entries; the third iteration reads x(3). `-k*x(i)` starts at line 7, column 11.
+    let r = strike_goldd_to_sys(
+        "syms x1 x2 k\nx = [x1; x2];\np = k;\nh = x1;\nf = [];\n\
+         for i = 1:3\n  f = [f; -k*x(i)];\nend\n",
+        "z_create_m.m",
+    )
+    .unwrap_err();
     assert_eq!((r.line, r.col), (7, 11), "{r}");
     assert!(r.message.contains("from 1 to 2"), "{r}");
-    // A non-numeric range (a symbol; `length` of a matrix is not read): at the bound.
-    let r = e(&format!("syms n\n{model}for i = 1:n\nend\n"));
+}
+
+#[test]
+fn non_numeric_range_is_refused_at_the_bound() {
+    // A symbol bound (`syms n` shifts the model one line down: the `for` is on line 7).
+    let r = strike_goldd_to_sys(
+        "syms n\nsyms x1 k\nx = x1;\np = k;\nf = -k*x1;\nh = x1;\nfor i = 1:n\nend\n",
+        "z_create_m.m",
+    )
+    .unwrap_err();
     assert_eq!((r.line, r.col), (7, 11), "{r}");
     assert!(r.message.contains("whole numbers"), "{r}");
-    let r = e(&format!(
-        "{model}M = [1 2; 3 4];\nfor i = 1:length(M)\n a = i;\nend\n"
-    ));
+    // `length` of a matrix is not read (the reader keeps no shapes): the Markov files' refusal.
+    let r = refused_after_model("M = [1 2; 3 4];\nfor i = 1:length(M)\n a = i;\nend\n");
     assert_eq!((r.line, r.col), (7, 11), "{r}");
     // A step of 0.
-    let r = e(&format!("{model}for i = 1:0:3\nend\n"));
+    let r = refused_after_model("for i = 1:0:3\nend\n");
     assert!(r.message.contains("step is 0"), "{r}");
+}
+
+#[test]
+fn unrolled_statements_and_nesting_are_bounded() {
     // Nested loops running more statements than the file's limit: at the inner `for`,
     // once the earlier iterations have used the budget (100 000 statements).
-    let r = e(&format!(
-        "{model}for i = 1:1000\n for j = 1:1000\n  a = j;\n end\nend\n"
-    ));
+    let r = refused_after_model("for i = 1:1000\n for j = 1:1000\n  a = j;\n end\nend\n");
     assert_eq!((r.line, r.col), (7, 2), "{r}");
     assert!(r.message.contains("100000"), "{r}");
     // Loops nested 17 deep.
     let deep = format!(
-        "{model}{}a = 1;\n{}",
+        "{}a = 1;\n{}",
         "for i = 1:1\n".repeat(17),
         "end\n".repeat(17)
     );
-    assert!(e(&deep).message.contains("nested"));
+    assert!(refused_after_model(&deep).message.contains("nested"));
 }
 
 #[test]
