@@ -464,40 +464,56 @@ pub(crate) fn lie_jets(nf: &NormalForm, fields: &Fields) -> LieJets {
 
 impl RankReport {
     /// The basis Lie derivatives as expressions on the graph (built here,
-    /// prefixes shared; the rank test itself never builds them).
-    pub fn basis_functions(&self, nf: &mut NormalForm) -> Vec<Id> {
+    /// prefixes shared; the rank test itself never builds them), within the
+    /// context's node budget.
+    pub fn basis_functions(&self, nf: &mut NormalForm) -> Result<Vec<Id>, AnalysisError> {
         self.words_on_graph(nf, &self.basis)
     }
 
     /// Lie derivatives along `words` on the expression graph (never
-    /// canonicalised), prefixes shared.
-    pub(crate) fn words_on_graph(&self, nf: &mut NormalForm, words: &[LieWord]) -> Vec<Id> {
-        let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> = Default::default();
+    /// canonicalised), prefixes shared. Their graphs grow with the order
+    /// (each derivative differentiates the last), so they are built under the
+    /// context's budget: past its node limit, a "too large" error, never an
+    /// unbounded allocation.
+    pub(crate) fn words_on_graph(
+        &self,
+        nf: &mut NormalForm,
+        words: &[LieWord],
+    ) -> Result<Vec<Id>, AnalysisError> {
         let vars = nf.state_vars.clone();
-        words
+        let outputs: Vec<Id> = nf.outputs.iter().map(|o| o.1).collect();
+        // The fields as written (obsan-expr written.rs): the same functions,
+        // a far smaller graph.
+        let fields: Vec<Vec<Id>> = self
+            .fields
+            .vectors
             .iter()
-            .map(|w| {
-                let mut g = nf.outputs[w.output].1;
-                for (i, &k) in w.fields.iter().enumerate() {
-                    let key = (w.output, w.fields[..=i].to_vec());
-                    g = match memo.get(&key) {
-                        Some(&x) => x,
-                        None => {
-                            // The fields as written (obsan-expr written.rs):
-                            // the same functions, a far smaller graph.
-                            let f: Vec<Id> = self.fields.vectors[k]
-                                .iter()
-                                .map(|&c| nf.ctx.written_form(c))
-                                .collect();
-                            let x = nf.ctx.lie_derivative(g, &vars, &f);
-                            memo.insert(key, x);
-                            x
+            .map(|f| f.iter().map(|&c| nf.ctx.written_form(c)).collect())
+            .collect();
+        nf.ctx
+            .within_budget(|ctx| {
+                let mut memo: std::collections::HashMap<(usize, Vec<usize>), Id> =
+                    Default::default();
+                words
+                    .iter()
+                    .map(|w| {
+                        let mut g = outputs[w.output];
+                        for (i, &k) in w.fields.iter().enumerate() {
+                            let key = (w.output, w.fields[..=i].to_vec());
+                            g = match memo.get(&key) {
+                                Some(&x) => x,
+                                None => {
+                                    let x = ctx.lie_derivative(g, &vars, &fields[k]);
+                                    memo.insert(key, x);
+                                    x
+                                }
+                            };
                         }
-                    };
-                }
-                g
+                        g
+                    })
+                    .collect()
             })
-            .collect()
+            .map_err(|l| AnalysisError::Invalid(format!("the Lie derivatives on the graph: {l}")))
     }
 }
 
@@ -650,7 +666,7 @@ fn rank_with(
     };
     if free_roots {
         let basis = report.basis.clone();
-        let funcs = report.words_on_graph(nf, &basis);
+        let funcs = report.words_on_graph(nf, &basis)?;
         if let Some(c) = crate::rank_roots::certify_in_extension(nf, &funcs, rank, opts.seed) {
             report.observable = c.observable;
             report.pivots = c.pivots;

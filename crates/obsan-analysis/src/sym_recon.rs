@@ -318,7 +318,7 @@ pub fn certify_symmetries(
 ) -> Result<Option<RandomCheck>, AnalysisError> {
     let n = report.n;
     let words = closure_words(nf, report);
-    let lies = report.words_on_graph(nf, &words);
+    let lies = report.words_on_graph(nf, &words)?;
     let vars = nf.state_vars.clone();
     let comps: Vec<Vec<Id>> = vectors
         .iter()

@@ -420,7 +420,7 @@ fn hidden_symmetries(
     // (d/dx_j, exactly), so the gradients and the SVD are sized by what
     // the outputs reach, not by the number of params (an
     // effect with 6,000 params made a 6,000^2 SVD).
-    let ids = report.basis_functions(nf);
+    let ids = report.basis_functions(nf).map_err(DiagnoseError::Rank)?;
     let reached = obsan_expr::lie::reached_states(&nf.ctx, &nf.state_vars, &[], &ids);
     if reached.len() > MAX_NULL_COLUMNS {
         return Err(DiagnoseError::TooManyReached {

@@ -33,7 +33,7 @@ impl Ctx {
         if with_relation {
             return;
         }
-        let mut rng = SplitMix(0x5eed_0f_0b5a_u64 ^ u64::from(canonical.0));
+        let mut rng = SplitMix(0x005e_ed0f_0b5a_u64 ^ u64::from(canonical.0));
         let Ok(point) = self.random_fp_point(&mut rng, &|_| None) else {
             return;
         };
