@@ -105,6 +105,7 @@ fn run(k: usize, shared: bool) -> (usize, usize, usize, f64, f64, f64, String) {
         Certificate::Random(c) => format!("random, error <= {:.0e}", c.error_bound),
         Certificate::Invariance(_) => "invariance".into(),
         Certificate::Closure => "closure".into(),
+        Certificate::Span => "span".into(),
     };
     (
         r.n,
