@@ -12,6 +12,7 @@ pub fn load_system(path: &str) -> Result<System, Failure> {
     let src = crate::fsio::read_text(path)?;
     let sys = System::parse(&src, path).map_err(|e| Failure(e.to_string()))?;
     crate::clock::refuse_time(&sys)?;
+    crate::clock::refuse_measured(&sys)?;
     Ok(sys)
 }
 

@@ -150,6 +150,8 @@ fn predictor(model: &str, a: &SimulateArgs) -> Result<(Predictor, Drive), Failur
     let text = crate::fsio::read_text(model)?;
     let sys = System::parse(&text, model).map_err(|e| Failure(e.to_string()))?;
     crate::clock::refuse_time(&sys)?;
+    // The predictor's outputs are functions of the state alone.
+    crate::clock::refuse_measured(&sys)?;
     let mut nf = sys
         .normal_form(None, &[])
         .map_err(|e| Failure(format!("{model}: {e}")))?;

@@ -53,6 +53,10 @@ pub struct NormalForm {
     /// restriction), before they are expanded: their sub-expressions
     /// (`N - A - I - H`) are candidate blocks of invariants. May be empty.
     pub written: Vec<Id>,
+    /// The known inputs some output reads, made measured coordinates
+    /// (`measured.rs`): each is a dynamic state and an output of its own
+    /// name, and the input of that index is now its derivative `u'`.
+    pub measured_inputs: Vec<String>,
 }
 
 impl NormalForm {
@@ -104,6 +108,7 @@ impl System {
         set: &[(String, Q)],
     ) -> Result<NormalForm, ModelError> {
         self.check_set(set)?;
+        self.check_measured()?;
         let mut ctx = self.ctx.clone();
         // Constant values: from the file, then from --set.
         let (mut subst, consts) = self.const_values(&mut ctx, set);
@@ -168,7 +173,9 @@ impl System {
             unknown_input_vars: unknown_syms.iter().map(|s| s.var).collect(),
             unknown_fields,
             written,
+            measured_inputs: Vec::new(),
         };
+        nf.measure_inputs();
         if self.uses_time() {
             nf.append_clock();
         }
