@@ -50,7 +50,9 @@ pub fn refuse_time(sys: &System) -> Result<(), Failure> {
 
 /// The commands that handle outputs reading known inputs (the normal form
 /// measures those inputs: docs/sys-format.md, "Outputs that read inputs").
-const HANDLED_MEASURED: [&str; 6] = ["show", "rank", "symmetries", "modes", "verify", "global"];
+/// `modes` and `verify` refuse: their reduced systems and decomposition files
+/// would carry the measured coordinates as modes, not yet specified.
+const HANDLED_MEASURED: [&str; 4] = ["show", "rank", "symmetries", "global"];
 
 /// A located refusal (at the first input an output reads, exit code 2) when
 /// the command being run does not handle outputs that read known inputs.
@@ -66,10 +68,30 @@ pub fn refuse_measured(sys: &System) -> Result<(), Failure> {
     };
     match sys.input_output_refusal(&what) {
         Some(e) => Err(Failure(format!(
-            "{e}\n(`obsan rank`, `symmetries`, `modes`, `verify`, `global` and `show` handle them)"
+            "{e}\n(`obsan rank`, `symmetries`, `global` and `show` handle them)"
         ))),
         None => Ok(()),
     }
+}
+
+/// The line saying which known inputs the outputs read and what the
+/// analysis assumes of them; `None` when no output reads one.
+pub fn measured_note(nf: &NormalForm) -> Option<String> {
+    let m = &nf.measured_inputs;
+    if m.is_empty() {
+        return None;
+    }
+    let d: Vec<String> = m
+        .iter()
+        .map(|u| format!("{u}{}", obsan_model::DERIVATIVE_MARK))
+        .collect();
+    Some(format!(
+        "outputs read the known input{} {}: measured, with {} known too (each input a coordinate \
+         known from its own output, its derivative a known input; verdicts about the other variables)",
+        if m.len() == 1 { "" } else { "s" },
+        m.join(", "),
+        d.join(", ")
+    ))
 }
 
 /// The analysis' own coordinates in a normal form: the clock and the known

@@ -163,6 +163,9 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     if clock.is_some() {
         out.push_str("time: the fields or outputs use t explicitly; analysed with the clock t' = 1 and the known output t (not a state of the model)\n");
     }
+    if let Some(note) = crate::clock::measured_note(&nf) {
+        out.push_str(&format!("{note}\n"));
+    }
     out.push_str(&format!("analysed state S = [{}]\n", nf.state.join(", ")));
     let mut fields: Vec<(String, Vec<Id>)> = vec![("f0".to_string(), nf.f0.clone())];
     for (i, f) in nf.fields.iter().enumerate() {

@@ -295,7 +295,13 @@ impl Reader<'_> {
                 self,
                 decls,
                 // Known inputs too: the normal form measures them (normal_measured.rs).
-                &[Kind::State, Kind::Param, Kind::Const, Kind::Unknown, Kind::Input],
+                &[
+                    Kind::State,
+                    Kind::Param,
+                    Kind::Const,
+                    Kind::Unknown,
+                    Kind::Input,
+                ],
                 &format!("output {nm}"),
             )?;
             outputs.push((
