@@ -17,7 +17,7 @@
 //! derivatives. So the codistribution, restricted to the original variables
 //! and with the rows `du_i` added, is the original one: the rank over the
 //! original `n` is the augmented rank minus the number of measured inputs
-//! (docs/engine.md, "Outputs that read known inputs").
+//! (docs/engine.md, "Outputs that read known inputs", has the full argument).
 
 use crate::error::ModelError;
 use crate::normal::NormalForm;
