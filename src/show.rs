@@ -69,12 +69,13 @@ fn expr_json(ctx: &mut Ctx, id: Id) -> crate::json::Formula {
 pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     let (sys, mut nf) = load_normal_form(&a.sys)?;
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
-    // The user's states: the clock of explicit time is the analysis' own.
+    // The user's states: the clock of explicit time and the measured inputs
+    // are the analysis' own.
     let clock = nf.clock();
     let states: Vec<String> = nf.state[..nf.n_dynamic]
         .iter()
         .enumerate()
-        .filter(|(k, _)| Some(*k) != clock)
+        .filter(|(k, s)| Some(*k) != clock && !nf.measured_inputs.contains(s))
         .map(|(_, s)| s.clone())
         .collect();
     if a.out.json {
