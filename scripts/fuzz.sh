@@ -41,7 +41,11 @@ seed() {
     sbml) [ -d fuzz/seeds/sbml ] && cp fuzz/seeds/sbml/* "$dir/" 2>/dev/null || true ;;
     si_jl) [ -d fuzz/seeds/si_jl ] && cp fuzz/seeds/si_jl/* "$dir/" 2>/dev/null || true ;;
     petab) [ -d fuzz/seeds/petab ] && cp fuzz/seeds/petab/* "$dir/" 2>/dev/null || true ;;
-    strike_goldd) cp systems/benchmarks/strike-goldd/src/*.m "$dir/" 2>/dev/null || true ;;
+    strike_goldd)
+      cp systems/benchmarks/strike-goldd/src/*.m "$dir/" 2>/dev/null || true
+      # Loops, zeros and indexed assignment, and their limits.
+      [ -d fuzz/seeds/strike_goldd ] && cp fuzz/seeds/strike_goldd/* "$dir/" 2>/dev/null || true
+      ;;
     dataset)
       # A dataset's files framed as the target reads them (see fuzz_targets/dataset.rs).
       [ -d fuzz/seeds/dataset ] && cp fuzz/seeds/dataset/* "$dir/" 2>/dev/null || true

@@ -237,6 +237,10 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
         o.push_str("exact: a non-singular minor of full rank was found (a non-zero value at a point proves it)\n");
     } else if full {
         o.push_str("a non-singular minor of full rank was found at a point where the atoms above take independent values\n");
+    } else if r.degree_bound == 0 && undecided.is_empty() {
+        // The rank equals the number of variables the outputs reach: the
+        // others have zero columns exactly, so the minor proves the rank.
+        o.push_str("exact: a non-singular minor over every variable the outputs reach was found (a non-zero value at a point proves the rank); the other variables are in no Lie derivative\n");
     } else {
         o.push_str(&format!(
             "probabilistic: exact arithmetic mod 2^61-1 at 2 random points (seed {}); the rank is never too high, and too low with probability <= {:.1e} (Schwartz-Zippel, degree bound {}); `obsan symmetries --exact` proves it exactly\n",

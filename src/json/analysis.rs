@@ -65,7 +65,7 @@ pub struct Rank {
     /// upper bound, full rank is not proven, and the per-variable lists (those of the system
     /// with the atoms independent) are certified neither way.
     pub decided: bool,
-    /// The Schwartz-Zippel degree bound of the rank test.
+    /// The Schwartz-Zippel degree bound of the rank test; 0 when the rank equals the number of variables the outputs reach (exact: a non-zero minor proves it, and no second point is drawn).
     pub degree_bound: u64,
     /// 0 when exact, else the probability bound that the rank is too low.
     pub error_bound: f64,

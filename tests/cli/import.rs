@@ -316,9 +316,11 @@ fn strike_goldd_reads_symbol_arrays_and_elements() {
 #[test]
 fn strike_goldd_unread_matlab_is_refused_at_its_place() {
     let cases = [
+        // (A `for` over a whole-number range is read since session 30: see the next test.)
         (
-            "syms x1 x2 k\nx = [x1; x2];\nf = [0; 0];\nfor i = 1:2\n  f(i) = -k*x(i);\nend\nh = x1;\n",
-            "4:1: 'for' (MATLAB control flow) is not read",
+            "syms x1 x2 k\nx = [x1; x2];\nf = [0; 0];\ni = 1;\nwhile i <= 2\n  f(i) = -k*x(i);\n  \
+             i = i + 1;\nend\nh = x1;\n",
+            "5:1: 'while' (MATLAB control flow) is not read",
         ),
         (
             "syms x1 k\nx = x1;\nf = 0;\nf(3) = -k*x1;\nh = x1;\n",
@@ -339,6 +341,36 @@ fn strike_goldd_unread_matlab_is_refused_at_its_place() {
         bad(
             &["import", "strike-goldd", &src],
             &format!("z_create_unread{k}.m:{want}"),
+        );
+    }
+}
+
+/// A `for` loop over a whole-number range is unrolled (session 30): `f(i) = -k*x(i)` for i = 1, 2
+/// gives x1' = -k x1, x2' = -k x2 (read off the source). A bound that is no number, or a loop
+/// past the iteration limit, is refused at its place with exit 2.
+#[test]
+fn strike_goldd_unrolls_for_loops() {
+    let src = temp_file(
+        "z_create_loop.m",
+        "syms x1 x2 k\nx = [x1; x2];\nf = [0; 0];\nfor i = 1:2\n  f(i) = -k*x(i);\nend\nh = x1;\n",
+    );
+    let out = ok(&["import", "strike-goldd", &src]);
+    assert!(out.contains("x1' = -k*x1\nx2' = -k*x2\n"), "{out}");
+    let cases = [
+        (
+            "syms x k n\nx = x;\nf = -k*x;\nfor i = 1:n\nend\nh = x;\n",
+            "4:11: 'n': a loop's bounds",
+        ),
+        (
+            "syms x k\nx = x;\nf = -k*x;\nfor i = 1:20000\nend\nh = x;\n",
+            "4:1: this loop runs 20000 times",
+        ),
+    ];
+    for (k, (text, want)) in cases.iter().enumerate() {
+        let src = temp_file(&format!("z_create_loop{k}.m"), text);
+        bad(
+            &["import", "strike-goldd", &src],
+            &format!("z_create_loop{k}.m:{want}"),
         );
     }
 }

@@ -260,6 +260,9 @@ struct JetRows<'a> {
     /// The longest word the growth can ask for (it stops once every level
     /// has raised the rank: at most m - 1 fields for m columns).
     cap: usize,
+    /// Whether to compute degree bounds (not needed when the rank is full:
+    /// a non-zero minor proves it). Off, every degree reads 0.
+    track: bool,
 }
 
 impl JetRows<'_> {
@@ -287,7 +290,8 @@ impl JetRows<'_> {
                 "the jets of the rank test",
             )
             .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
-            let track = (1..=len).any(|j| !self.degrees.contains_key(&(output, vec![field; j])));
+            let track = self.track
+                && (1..=len).any(|j| !self.degrees.contains_key(&(output, vec![field; j])));
             let rows = self
                 .jets
                 .run_rows(output, field, len, point, track)
@@ -333,10 +337,17 @@ impl Rows for JetRows<'_> {
         .map_err(|l| AnalysisError::Invalid(l.to_string()))?;
         let row = self
             .jets
-            .row(word.output, &word.fields, point, known.is_none())
+            .row(
+                word.output,
+                &word.fields,
+                point,
+                self.track && known.is_none(),
+            )
             .map_err(|BadPoint| AnalysisError::NoPoint)?;
         let degree = known.or(row.degree).unwrap_or(0);
-        self.degrees.insert(key, degree);
+        if self.track {
+            self.degrees.insert(key, degree);
+        }
         Ok((row.gradient, degree))
     }
     fn extend(&mut self, _: &mut NormalForm, word: &LieWord, _: &(), k: usize) -> Option<()> {
@@ -529,49 +540,66 @@ fn rank_with(
     }
     let jets = (!symbolic).then(|| LieJets::new(&nf.ctx, &r_vars, &r_vectors, &outputs));
     let mut degrees = HashMap::new();
-    let mut grow_at = |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions| match &jets {
-        Some(jets) => {
-            let mut rows = JetRows {
-                jets,
-                degrees: &mut degrees,
-                runs: HashMap::new(),
-                cap: m.saturating_sub(1).max(1),
-            };
-            grow(
-                nf,
-                &mut rows,
-                vec![(); nf.outputs.len()],
-                &fields,
-                p,
-                opts,
-                m,
-            )
-        }
-        None => {
-            let roots = nf.outputs.iter().map(|o| o.1).collect();
-            grow(
-                nf,
-                &mut SymbolicRows {
-                    vars: &r_vars,
-                    vectors: &r_vectors,
-                },
-                roots,
-                &fields,
-                p,
-                opts,
-                m,
-            )
-        }
-    };
-    let r1 = grow_at(nf, p1, &mut opts)?;
-    let (p2, k2, _) = rank_point(&mut nf.ctx, &mut rng, free_roots)?;
-    let r2 = grow_at(nf, p2, &mut opts)?;
-    // Density correction of the sampling (see random_point_counted).
-    let draws = k1.max(k2) as f64;
-    let best = if r2.echelon.rank() > r1.echelon.rank() {
-        r2
+    let mut grow_at =
+        |nf: &mut NormalForm, p: FpPoint, opts: &mut RankOptions, track: bool| match &jets {
+            Some(jets) => {
+                let mut rows = JetRows {
+                    jets,
+                    degrees: &mut degrees,
+                    runs: HashMap::new(),
+                    cap: m.saturating_sub(1).max(1),
+                    track,
+                };
+                grow(
+                    nf,
+                    &mut rows,
+                    vec![(); nf.outputs.len()],
+                    &fields,
+                    p,
+                    opts,
+                    m,
+                )
+            }
+            None => {
+                let roots = nf.outputs.iter().map(|o| o.1).collect();
+                grow(
+                    nf,
+                    &mut SymbolicRows {
+                        vars: &r_vars,
+                        vectors: &r_vectors,
+                    },
+                    roots,
+                    &fields,
+                    p,
+                    opts,
+                    m,
+                )
+            }
+        };
+    // The first point without degree bounds: a full rank there is exact (a
+    // non-zero minor proves it), and needs neither a bound nor a second
+    // point. Otherwise the second point runs with bounds, and so does the
+    // first again in the rare case it gave the higher rank. (At free roots
+    // a full rank is only an upper bound: both points, as before.)
+    let r1 = grow_at(nf, p1.clone(), &mut opts, free_roots)?;
+    let full = r1.echelon.rank() == m && !free_roots;
+    let (best, draws) = if full {
+        (r1, 0.0)
     } else {
-        r1
+        let (p2, k2, _) = rank_point(&mut nf.ctx, &mut rng, free_roots)?;
+        let r2 = grow_at(nf, p2, &mut opts, true)?;
+        // Density correction of the sampling (see random_point_counted).
+        let draws = k1.max(k2) as f64;
+        if r1.echelon.rank() > r2.echelon.rank() {
+            let r1 = if free_roots {
+                r1
+            } else {
+                grow_at(nf, p1, &mut opts, true)?
+            };
+            (r1, draws)
+        } else {
+            (r2, draws)
+        }
     };
     let rank = best.echelon.rank();
     // Single variables: e_i in the span at the point (never for a variable
@@ -582,7 +610,12 @@ fn rank_with(
     }
     let mut pivots: Vec<usize> = best.echelon.pivots().map(|p| reach[p]).collect();
     pivots.sort_unstable();
-    let degree_bound = best.degree.saturating_add(best.worst_rejected).max(1);
+    // 0 at a full rank: exact, no bound involved.
+    let degree_bound = if full {
+        0
+    } else {
+        best.degree.saturating_add(best.worst_rejected).max(1)
+    };
     let per_point = (degree_bound as f64 * draws / P as f64).min(1.0);
     let max_order = best.basis.iter().map(|w| w.order()).max().unwrap_or(0);
     let mut report = RankReport {

@@ -47,7 +47,7 @@ impl Ctx {
         !r.num.vars().iter().any(|&v| self.has_relation(v))
     }
 
-    fn has_relation(&self, v: Var) -> bool {
+    pub(crate) fn has_relation(&self, v: Var) -> bool {
         matches!(
             self.leaves[v as usize].kind,
             LeafKind::Sin(_) | LeafKind::Root(..)

@@ -51,6 +51,7 @@ mod subst;
 mod tanhalf;
 pub mod tutorial;
 mod undecided;
+mod written;
 
 // The root keeps what most users need; the rest is behind public modules, so the root
 // stays small (at most 40 names, checked by scripts/module_dag.py --exports).

@@ -51,6 +51,9 @@ pub(crate) struct Memo {
     pub diff: FxHashMap<(Id, Var), Id>,
     /// The canonical radicand of each `sqrt` leaf: its relation `r^2 = radicand`.
     pub radicands: FxHashMap<Var, RatFun>,
+    /// An equal, smaller form of a node built from a canonical form
+    /// (written.rs).
+    pub written: FxHashMap<Id, Id>,
 }
 
 impl Ctx {

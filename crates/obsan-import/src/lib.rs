@@ -24,6 +24,7 @@ mod ex;
 mod infix;
 mod julia;
 mod matlab;
+mod matlab_exec;
 mod petab;
 mod sbml;
 mod sbml_inputs;

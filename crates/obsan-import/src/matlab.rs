@@ -7,11 +7,19 @@
 //! are skipped. Vectors are `[a; b]`, `[a, b]` or `[a b]` (elements split at
 //! blanks only when every element is a name or number), a trailing `'`
 //! (transpose) is ignored. `%` starts a comment, `...` continues a line.
+//! Vectors may start as `zeros(n,1)` (or `sym(zeros(numel(x),1))`) or `[]`
+//! and grow element by element (`xdot(3) = ...`, `f = [f; xdot(i)]`); `for`
+//! loops over whole-number ranges are unrolled (matlab_exec.rs). A role
+//! re-assigned later (`u = [x(1); x(2)]` after `f` was written in `x(1)`)
+//! takes its last value: MATLAB's `save` stores the last one.
 //! The format is read from its description in STRIKE-GOLDD's documentation;
 //! no STRIKE-GOLDD text (GPL-3) is used.
 
 use crate::ex::{show, sys_identifier, Ex, RESERVED};
 use crate::infix::{self, Dialect, Placed};
+use crate::matlab_exec::{
+    index_list, integer, is_name, nodes, run, string, sym_array, trim, zeros, Exec, MAX_NODES,
+};
 use crate::sbml::{one_line, walk_names_at};
 use crate::{Converted, ImportError};
 use std::collections::BTreeMap;
@@ -113,22 +121,6 @@ fn statements(text: &str) -> Result<Vec<Placed>, ImportError> {
     Ok(out)
 }
 
-fn trim(s: &[(char, At)]) -> &[(char, At)] {
-    let a = s
-        .iter()
-        .position(|c| !c.0.is_whitespace())
-        .unwrap_or(s.len());
-    let b = s
-        .iter()
-        .rposition(|c| !c.0.is_whitespace())
-        .map_or(a, |k| k + 1);
-    &s[a..b.max(a)]
-}
-
-fn string(s: &[(char, At)]) -> String {
-    s.iter().map(|c| c.0).collect()
-}
-
 /// The elements of a right-hand side: `[a; b]` as a list, otherwise one.
 fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
     let mut r = trim(rhs);
@@ -202,11 +194,6 @@ fn elements(rhs: &[(char, At)]) -> Vec<&[(char, At)]> {
     out
 }
 
-fn is_name(s: &str) -> bool {
-    s.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
-        && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-}
-
 /// What the statements so far have defined: assignments, and the symbolic
 /// functions of time (`syms C(t)`), each with the input name it becomes.
 #[derive(Default)]
@@ -242,8 +229,10 @@ fn subst(e: &Ex, sc: &Scope, at: At) -> Result<Ex, ImportError> {
                     )),
                 };
             }
+            // A whole number: `x(3)`, or the loop variable's `x(i)`, `x(2*i - 1)`.
             let k = match args.as_slice() {
-                [Ex::Num(k)] => k.parse::<usize>().ok(),
+                [k] => integer(k, &|n| vars.get(n).map(|v| v.0.as_slice()))
+                    .and_then(|k| usize::try_from(k).ok()),
                 _ => None,
             };
             match (vars.get(v), k) {
@@ -305,133 +294,14 @@ fn subst_plain(e: &Ex, sc: &Scope, at: At) -> Result<Ex, ImportError> {
 /// under another name with `save('NAME', ...)`).
 pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, ImportError> {
     // Every assignment, in order; a later one replaces an earlier one.
-    let mut sc = Scope::default();
-    let mut syms: Vec<(String, At)> = Vec::new();
-    let mut saved: Option<String> = None;
-    for st in statements(text)? {
-        let st = trim(&st);
-        let t = string(st);
-        // `syms a b real`: a role (x, u, ...) declared and never assigned is that one symbol.
-        if let Some(rest) = t.strip_prefix("syms") {
-            if rest.is_empty() || rest.starts_with(char::is_whitespace) {
-                for (w, at) in words(&st[4..]) {
-                    declare(&mut sc, &mut syms, w, at)?;
-                }
-                continue;
-            }
-        }
-        if let Some(rest) = t.strip_prefix("save(") {
-            let name = rest
-                .trim_start()
-                .strip_prefix('\'')
-                .and_then(|r| r.split('\'').next());
-            if let Some(n) = name.filter(|n| is_name(n)) {
-                saved = Some(n.to_string());
-            }
-            continue;
-        }
-        refuse_unread(st, &t)?;
-        // An assignment NAME = RHS (not ==).
-        let Some(eq) = st.iter().position(|c| c.0 == '=') else {
-            continue;
-        };
-        if st.get(eq + 1).map(|c| c.0) == Some('=') {
-            continue;
-        }
-        let lhs = string(trim(&st[..eq]));
-        if let Some((v, k)) = lhs.split_once('(').filter(|(v, _)| is_name(v.trim_end())) {
-            let (v, at) = (v.trim_end(), st[0].1);
-            // `f(3) = ...`: one element of a vector assigned before, replaced or appended.
-            let k = k
-                .strip_suffix(')')
-                .and_then(|k| k.trim().parse::<usize>().ok());
-            if let (Some(k), Some(len)) = (k, sc.vars.get(v).map(|x| x.0.len())) {
-                let rhs = elements(&st[eq + 1..]);
-                let [el] = rhs.as_slice() else {
-                    return Err(ImportError::at(
-                        at.0,
-                        at.1,
-                        format!("'{lhs} = ...' sets one element to several"),
-                    ));
-                };
-                let e = infix::parse_placed(el, Dialect::Matlab)?;
-                let el_at = el.first().map_or(at, |c| c.1);
-                let e = (subst(&e, &sc, el_at)?, el_at);
-                let items = &mut sc
-                    .vars
-                    .get_mut(v)
-                    .ok_or_else(|| ImportError::at(at.0, at.1, "unreachable"))?
-                    .0;
-                match k {
-                    _ if k >= 1 && k <= len => items[k - 1] = e,
-                    _ if k == len + 1 => items.push(e),
-                    _ => {
-                        return Err(ImportError::at(
-                            at.0,
-                            at.1,
-                            format!(
-                            "'{lhs} = ...': element {k} of a vector of {len} (set them in order)"
-                        ),
-                        ))
-                    }
-                }
-                continue;
-            }
-            // `M(i,j) = ...`: an element set by the script, which this reader does not follow.
-            if !matches!(v, "ics" | "known_ics") {
-                let at = st[0].1;
-                return Err(ImportError::at(
-                    at.0,
-                    at.1,
-                    format!("'{lhs} = ...' sets an element: not read (assign whole vectors)"),
-                ));
-            }
-        }
-        if !is_name(&lhs) || matches!(lhs.as_str(), "ics" | "known_ics") {
-            continue;
-        }
-        let mut items = Vec::new();
-        for el in elements(&st[eq + 1..]) {
-            // An empty element (`x = [a;;b]`, `x = `) is the parser's error, at the '='.
-            let Some(&(_, at)) = el.first() else {
-                let at = st[eq].1;
-                return Err(ImportError::at(at.0, at.1, "nothing to read after '='"));
-            };
-            if string(el).starts_with("sym(") {
-                // `sym('x', [34 1])`: the symbols x1..x34, indexed later (`x(3)`).
-                for name in sym_array(&string(el), at)? {
-                    declare(&mut sc, &mut syms, name.clone(), at)?;
-                    let e = Ex::Name {
-                        name,
-                        timed: false,
-                        at,
-                    };
-                    items.push((e, at));
-                }
-                continue;
-            }
-            // `x([5 4 3])`: elements of a vector assigned before, in that order.
-            let len = |v: &str| sc.vars.get(v).map_or(0, |x| x.0.len());
-            if let Some((v, ks)) = index_list(&string(el), len) {
-                for k in ks {
-                    let e = Ex::Call(format!("{}{v}", infix::INDEX), vec![Ex::Num(k.to_string())]);
-                    items.push((subst(&e, &sc, at)?, at));
-                }
-                continue;
-            }
-            let e = infix::parse_placed(el, Dialect::Matlab)?;
-            // A name standing for a whole vector (`h = x`) is that vector.
-            if let Ex::Name { name, .. } = &e {
-                if let Some((v, _)) = sc.vars.get(name).filter(|v| v.0.len() != 1) {
-                    items.extend(v.iter().cloned());
-                    continue;
-                }
-            }
-            items.push((subst(&e, &sc, el[0].1)?, el[0].1));
-        }
-        sc.funcs.remove(&lhs);
-        sc.vars.insert(lhs, (items, st[0].1));
-    }
+    let mut state = State {
+        work: MAX_NODES,
+        ..State::default()
+    };
+    run(&statements(text)?, &mut state)?;
+    let State {
+        sc, syms, saved, ..
+    } = state;
     let mut roles: BTreeMap<&str, Vector> = BTreeMap::new();
     for r in ["x", "p", "u", "w", "f", "h"] {
         if let Some(v) = sc.vars.get(r) {
@@ -449,81 +319,163 @@ pub fn strike_goldd_to_sys(text: &str, origin: &str) -> Result<Converted, Import
     convert(roles, &syms, &sc.funcs, saved, origin)
 }
 
-/// The names of `sym('x', [n 1])` (or `[1 n]`, or `n`): `x1`..`xn`, as MATLAB
-/// names them.
-fn sym_array(t: &str, at: At) -> Result<Vec<String>, ImportError> {
-    let bad = || {
-        ImportError::at(
-            at.0,
-            at.1,
-            format!("'{t}': only vectors of symbols, sym('x', [n 1]), are read"),
-        )
-    };
-    let inner = t
-        .strip_prefix("sym(")
-        .and_then(|r| r.trim_end().strip_suffix(')'))
-        .ok_or_else(bad)?;
-    let (name, size) = inner.split_once(',').unwrap_or((inner, "1"));
-    // The name quoted, or `char(x)` of a symbol `x` (its own name).
-    let name = name.trim();
-    let name = name
-        .strip_prefix('\'')
-        .and_then(|n| n.strip_suffix('\''))
-        .or_else(|| name.strip_prefix("char(").and_then(|n| n.strip_suffix(')')))
-        .map(str::trim)
-        .filter(|n| is_name(n))
-        .ok_or_else(bad)?;
-    let dims: Vec<usize> = size
-        .trim()
-        .trim_start_matches('[')
-        .trim_end_matches(']')
-        .split(|c: char| c.is_whitespace() || c == ',')
-        .filter(|w| !w.is_empty())
-        .map(|w| w.parse::<usize>().map_err(|_| bad()))
-        .collect::<Result<_, _>>()?;
-    let n = match dims.as_slice() {
-        [n] | [n, 1] | [1, n] => *n,
-        _ => return Err(bad()),
-    };
-    // A bound well above the library's largest (117): an error, never a huge allocation.
-    if n == 0 || n > 100_000 {
-        return Err(bad());
-    }
-    Ok((1..=n).map(|k| format!("{name}{k}")).collect())
+/// The reader's state as the statements run.
+#[derive(Default)]
+struct State {
+    sc: Scope,
+    syms: Vec<(String, At)>,
+    saved: Option<String>,
+    /// Expression nodes the assignments may still build (MAX_NODES in all).
+    work: usize,
 }
 
-/// `v([5 4 3])` (blank- or comma-separated numbers, ranges `a:b`, `end` and `a:end`): the
-/// vector's name and its indices, `len` standing for `end`.
-fn index_list(t: &str, len: impl Fn(&str) -> usize) -> Option<(String, Vec<usize>)> {
-    let (v, rest) = t.split_once("([")?;
-    let list = rest.trim_end().strip_suffix("])")?;
-    let v = v.trim();
-    if !is_name(v) {
-        return None;
+impl Exec for State {
+    fn value(&self, name: &str) -> Option<&[(Ex, At)]> {
+        self.sc.vars.get(name).map(|v| v.0.as_slice())
     }
-    let end = len(v);
-    let num = |x: &str| match x {
-        "end" => Some(end),
-        _ => x.parse::<usize>().ok(),
-    };
-    let mut ks: Vec<usize> = Vec::new();
-    for w in list
-        .split(|c: char| c.is_whitespace() || c == ',')
-        .filter(|w| !w.is_empty())
-    {
-        match w.split_once(':') {
-            // A range past the library's sizes is no index list (then refused as a formula).
-            Some((a, b)) => {
-                let (a, b) = (num(a)?, num(b)?);
-                if a > b || b - a > 100_000 {
-                    return None;
+
+    fn assign(&mut self, name: &str, items: Vec<(Ex, At)>, at: At) {
+        self.sc.funcs.remove(name);
+        self.sc.vars.insert(name.to_string(), (items, at));
+    }
+
+    fn statement(&mut self, st: &[(char, At)]) -> Result<(), ImportError> {
+        let State {
+            sc,
+            syms,
+            saved,
+            work,
+        } = self;
+        let t = string(st);
+        // `syms a b real`: a role (x, u, ...) declared and never assigned is that one symbol.
+        if let Some(rest) = t.strip_prefix("syms") {
+            if rest.is_empty() || rest.starts_with(char::is_whitespace) {
+                for (w, at) in words(&st[4..]) {
+                    declare(sc, syms, w, at)?;
                 }
-                ks.extend(a..=b);
+                return Ok(());
             }
-            None => ks.push(num(w)?),
         }
+        if let Some(rest) = t.strip_prefix("save(") {
+            let name = rest
+                .trim_start()
+                .strip_prefix('\'')
+                .and_then(|r| r.split('\'').next());
+            if let Some(n) = name.filter(|n| is_name(n)) {
+                *saved = Some(n.to_string());
+            }
+            return Ok(());
+        }
+        refuse_unread(st, &t)?;
+        // An assignment NAME = RHS (not ==).
+        let Some(eq) = st.iter().position(|c| c.0 == '=') else {
+            return Ok(());
+        };
+        if st.get(eq + 1).map(|c| c.0) == Some('=') {
+            return Ok(());
+        }
+        let lhs = string(trim(&st[..eq]));
+        if let Some((v, k)) = lhs.split_once('(').filter(|(v, _)| is_name(v.trim_end())) {
+            let (v, at) = (v.trim_end(), st[0].1);
+            // `f(3) = ...`, `xdot(i) = ...`: one element of a vector assigned before,
+            // replaced or appended.
+            let k = k
+                .strip_suffix(')')
+                .and_then(|k| infix::parse(k, at, Dialect::Matlab).ok())
+                .and_then(|k| integer(&k, &|n| sc.vars.get(n).map(|v| v.0.as_slice())));
+            if let (Some(k), Some(len)) = (k, sc.vars.get(v).map(|x| x.0.len())) {
+                let rhs = elements(&st[eq + 1..]);
+                let [el] = rhs.as_slice() else {
+                    return Err(ImportError::at(
+                        at.0,
+                        at.1,
+                        format!("'{lhs} = ...' sets one element to several"),
+                    ));
+                };
+                let e = infix::parse_placed(el, Dialect::Matlab)?;
+                let el_at = el.first().map_or(at, |c| c.1);
+                let e = (subst(&e, sc, el_at)?, el_at);
+                spend(work, std::slice::from_ref(&e), at)?;
+                let Some((items, _)) = sc.vars.get_mut(v) else {
+                    return Ok(());
+                };
+                match k {
+                    _ if k >= 1 && k <= len as i64 => items[k as usize - 1] = e,
+                    _ if k == len as i64 + 1 => items.push(e),
+                    _ => {
+                        return Err(ImportError::at(
+                            at.0,
+                            at.1,
+                            format!(
+                        "'{lhs} = ...': element {k} of a vector of {len} (set them in order)"
+                    ),
+                        ))
+                    }
+                }
+                return Ok(());
+            }
+            // `M(i,j) = ...`: an element set by the script, which this reader does not follow.
+            if !matches!(v, "ics" | "known_ics") {
+                let at = st[0].1;
+                return Err(ImportError::at(
+                    at.0,
+                    at.1,
+                    format!("'{lhs} = ...' sets an element: not read (assign whole vectors)"),
+                ));
+            }
+        }
+        if !is_name(&lhs) || matches!(lhs.as_str(), "ics" | "known_ics") {
+            return Ok(());
+        }
+        let mut items = Vec::new();
+        for el in elements(&st[eq + 1..]) {
+            // An empty element (`x = [a;;b]`, `x = `) is the parser's error, at the '='.
+            let Some(&(_, at)) = el.first() else {
+                let at = st[eq].1;
+                return Err(ImportError::at(at.0, at.1, "nothing to read after '='"));
+            };
+            // `zeros(n,1)`, `sym(zeros(numel(x),1))`: n zeros, set element by element later.
+            if let Some(z) = zeros(&string(el), at, &|n| sc.vars.get(n).map(|v| v.0.as_slice()))? {
+                items.extend(z);
+                continue;
+            }
+            if string(el).starts_with("sym(") {
+                // `sym('x', [34 1])`: the symbols x1..x34, indexed later (`x(3)`).
+                for name in sym_array(&string(el), at)? {
+                    declare(sc, syms, name.clone(), at)?;
+                    let e = Ex::Name {
+                        name,
+                        timed: false,
+                        at,
+                    };
+                    items.push((e, at));
+                }
+                continue;
+            }
+            // `x([5 4 3])`: elements of a vector assigned before, in that order.
+            let len = |v: &str| sc.vars.get(v).map_or(0, |x| x.0.len());
+            if let Some((v, ks)) = index_list(&string(el), len) {
+                for k in ks {
+                    let e = Ex::Call(format!("{}{v}", infix::INDEX), vec![Ex::Num(k.to_string())]);
+                    items.push((subst(&e, sc, at)?, at));
+                }
+                continue;
+            }
+            let e = infix::parse_placed(el, Dialect::Matlab)?;
+            // A name standing for a whole vector (`h = x`) is that vector.
+            if let Ex::Name { name, .. } = &e {
+                if let Some((v, _)) = sc.vars.get(name).filter(|v| v.0.len() != 1) {
+                    items.extend(v.iter().cloned());
+                    continue;
+                }
+            }
+            items.push((subst(&e, sc, el[0].1)?, el[0].1));
+        }
+        spend(work, &items, st[0].1)?;
+        sc.funcs.remove(&lhs);
+        sc.vars.insert(lhs, (items, st[0].1));
+        Ok(())
     }
-    (!ks.is_empty()).then(|| (v.to_string(), ks))
 }
 
 /// The blank-separated words of a `syms` line, with their places.
@@ -594,7 +546,10 @@ fn refuse_unread(st: &[(char, At)], t: &str) -> Result<(), ImportError> {
         return Err(ImportError::at(
             at.0,
             at.1,
-            format!("'{k}' (MATLAB control flow) is not read: write the model's vectors out"),
+            format!(
+                "'{k}' (MATLAB control flow) is not read: write the model's vectors out (loops \
+                 'for i = a:b' are read)"
+            ),
         ));
     }
     Ok(())
@@ -861,5 +816,22 @@ fn timed_inputs(
         });
     }
     m.inputs.extend(extra);
+    Ok(())
+}
+
+/// Take an assignment's nodes from the file's budget (MAX_NODES).
+fn spend(work: &mut usize, items: &[(Ex, At)], at: At) -> Result<(), ImportError> {
+    let n = nodes(items, *work);
+    if n > *work {
+        return Err(ImportError::at(
+            at.0,
+            at.1,
+            format!(
+                "the assignments up to here build more than {MAX_NODES} expression nodes: \
+                 a limit of this reader (each assignment copies what it substitutes)"
+            ),
+        ));
+    }
+    *work -= n;
     Ok(())
 }

@@ -309,6 +309,15 @@ impl System {
                 ctx.try_canon(id)
                     .map_err(|l| self.err_at(loc, &l.to_string()))
             };
+            // The written forms of f0 and of each field (written.rs in
+            // obsan-expr): e with every input and unknown input set to 0, and
+            // its derivatives likewise; e is affine in them jointly.
+            let zeros: Vec<(Var, Id)> = input_vars
+                .iter()
+                .chain(unknown_syms.iter().map(|w| &w.var))
+                .map(|&v| (v, zero))
+                .collect();
+            let written_at_zero = |ctx: &mut Ctx, id: Id| ctx.substitute(id, &zeros).ok();
             // e is affine in the inputs (checked when read; restrictions are affine too).
             let mut rest = e;
             for (i, &u) in input_vars.iter().enumerate() {
@@ -321,7 +330,11 @@ impl System {
                     }),
                     "affine"
                 );
+                let fi_written = written_at_zero(ctx, fi);
                 let fi = ctx.from_canonical(&c);
+                if let Some(w) = fi_written {
+                    ctx.note_written_form(fi, w);
+                }
                 let term = ctx.mul(&[fi, input_syms[i].id]);
                 rest = ctx.sub(rest, term);
                 fields[i].push(fi);
@@ -331,13 +344,21 @@ impl System {
             for (j, w) in unknown_syms.iter().enumerate() {
                 let gj = ctx.diff(e, w.var);
                 let c = canon_at(ctx, gj)?;
+                let gj_written = written_at_zero(ctx, gj);
                 let gj = ctx.from_canonical(&c);
+                if let Some(w) = gj_written {
+                    ctx.note_written_form(gj, w);
+                }
                 let term = ctx.mul(&[gj, w.id]);
                 rest = ctx.sub(rest, term);
                 unknown_fields[j].push(gj);
             }
             let c = canon_at(ctx, rest)?;
-            f0.push(ctx.from_canonical(&c));
+            let f0k = ctx.from_canonical(&c);
+            if let Some(w) = written_at_zero(ctx, e) {
+                ctx.note_written_form(f0k, w);
+            }
+            f0.push(f0k);
         }
         Ok((f0, fields, unknown_fields))
     }

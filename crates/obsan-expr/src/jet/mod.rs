@@ -103,7 +103,16 @@ impl LieJets {
             inverses: Vec::new(),
             sin_base: FxHashMap::default(),
         };
-        let fields_p: Vec<Program> = fields.iter().map(|f| c.compile(f)).collect();
+        // Evaluated in their written forms (written.rs): the same functions,
+        // often far fewer ops than the expanded canonical forms. Supports
+        // and zero tests below stay on the canonical forms (exact).
+        let fields_p: Vec<Program> = fields
+            .iter()
+            .map(|f| {
+                let w: Vec<Id> = f.iter().map(|&x| ctx.written_form(x)).collect();
+                c.compile(&w)
+            })
+            .collect();
         let outputs_p: Vec<Program> = outputs.iter().map(|&h| c.compile(&[h])).collect();
         let support = |id: Id| -> Vec<bool> {
             let mut s = vec![false; states.len()];
