@@ -126,6 +126,17 @@ fn what_does_not_handle_them_refuses_at_the_input() {
             "{e}"
         );
     }
+    // `verify` reads the system its decomposition names.
+    let dec = f.replace("offset_refused.sys", "offset_refused.dec");
+    std::fs::write(
+        &dec,
+        "system offset_refused.sys\nstate x, c\noutput y = x + c*u\n",
+    )
+    .unwrap();
+    bad(
+        &["verify", &dec],
+        ":6:18: an output reads the known input 'u': `obsan verify` does not handle",
+    );
     // Combinations refused by the model itself.
     let d = temp_file("offset_delay.sys", &format!("{OFFSET}delay c\n"));
     bad(
