@@ -294,7 +294,7 @@ impl Reader<'_> {
                 map,
                 self,
                 decls,
-                // Known inputs too: the normal form measures them (normal_measured.rs).
+                // Known inputs too: the normal form measures them (measured.rs).
                 &[
                     Kind::State,
                     Kind::Param,
