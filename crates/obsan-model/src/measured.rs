@@ -108,3 +108,43 @@ impl System {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::System;
+
+    #[test]
+    fn a_read_input_becomes_a_state_driven_by_its_derivative() {
+        // x' = -a x + b u + v, y = x + u: u is read, v is not. By hand: state
+        // [x, u, a, b] (u the last dynamic state), drift (-a x + b u, 0, 0, 0),
+        // inputs [u', v] with fields e_u and (1, 0, 0, 0), outputs [u, y].
+        let src =
+            "system m\nstate x\nparam a, b\ninput u, v\nx' = -a*x + b*u + v\noutput y = x + u\n";
+        let mut nf = System::parse(src, "m.sys")
+            .unwrap()
+            .normal_form(None, &[])
+            .unwrap();
+        assert_eq!(nf.state, ["x", "u", "a", "b"]);
+        assert_eq!(nf.n_dynamic, 2);
+        assert_eq!(nf.inputs, ["u'", "v"]);
+        assert_eq!(nf.measured_inputs, ["u"]);
+        let text = |nf: &mut crate::NormalForm, v: &[obsan_expr::Id]| -> Vec<String> {
+            v.iter().map(|&e| nf.ctx.to_text(e)).collect()
+        };
+        let (f0, f_du, f_v) = (nf.f0.clone(), nf.fields[0].clone(), nf.fields[1].clone());
+        assert_eq!(text(&mut nf, &f0), ["-a*x + b*u", "0", "0", "0"]);
+        assert_eq!(text(&mut nf, &f_du), ["0", "1", "0", "0"]);
+        assert_eq!(text(&mut nf, &f_v), ["1", "0", "0", "0"]);
+        let outs: Vec<&str> = nf.outputs.iter().map(|o| o.0.as_str()).collect();
+        assert_eq!(outs, ["u", "y"]);
+        // An output free of inputs changes nothing.
+        let plain = src.replace("output y = x + u", "output y = x");
+        let nf = System::parse(&plain, "p.sys")
+            .unwrap()
+            .normal_form(None, &[])
+            .unwrap();
+        assert_eq!(nf.state, ["x", "a", "b"]);
+        assert_eq!(nf.inputs, ["u", "v"]);
+        assert!(nf.measured_inputs.is_empty());
+    }
+}
