@@ -52,7 +52,8 @@ pub fn refuse_time(sys: &System) -> Result<(), Failure> {
 /// measures those inputs: docs/sys-format.md, "Outputs that read inputs").
 /// `modes` and `verify` refuse: their reduced systems and decomposition files
 /// would carry the measured coordinates as modes, not yet specified.
-const HANDLED_MEASURED: [&str; 4] = ["show", "rank", "symmetries", "global"];
+/// `simulate` evaluates `h(x, u(t))` (`sim_drive.rs`).
+const HANDLED_MEASURED: [&str; 5] = ["show", "rank", "symmetries", "global", "simulate"];
 
 /// A located refusal (at the first input an output reads, exit code 2) when
 /// the command being run does not handle outputs that read known inputs.
@@ -68,7 +69,7 @@ pub fn refuse_measured(sys: &System) -> Result<(), Failure> {
     };
     match sys.input_output_refusal(&what) {
         Some(e) => Err(Failure(format!(
-            "{e}\n(`obsan rank`, `symmetries`, `global` and `show` handle them)"
+            "{e}\n(`obsan rank`, `symmetries`, `global`, `show` and `simulate MODEL.sys` handle them)"
         ))),
         None => Ok(()),
     }

@@ -104,12 +104,39 @@ fn a_restriction_comes_first_then_the_inputs_it_leaves_are_measured() {
 }
 
 #[test]
+fn simulate_evaluates_the_output_at_the_input_of_its_time() {
+    // x' = u, y = x + c u, c = 2, x(0) = 0. With u = t: x = t^2/2, y = t^2/2 + 2t:
+    // (0, 0), (0.5, 1.125), (1, 2.5). With the table u = 1 + 2t (rows (0, 1), (1, 3)):
+    // x = t + t^2, y = x + 2 u: (0, 2), (0.5, 4.75), (1, 8). RK4 is exact on these
+    // polynomials of degree 2, so the values compare to 1e-12.
+    let f = temp_file("offset_sim.sys", OFFSET);
+    let table = temp_file("offset_u.csv", "t,u\n0,1\n1,3\n");
+    let common = [
+        "--until", "1", "--every", "0.5", "--set", "c=2", "--init", "x=0",
+    ];
+    for (drive, want) in [
+        (vec!["--input", "u=t"], [0.0, 1.125, 2.5]),
+        (vec!["--inputs", table.as_str()], [2.0, 4.75, 8.0]),
+    ] {
+        let mut args = vec!["simulate", f.as_str()];
+        args.extend_from_slice(&common);
+        args.extend_from_slice(&drive);
+        let csv = ok(&args);
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines[0], "time,x,y", "{csv}");
+        for (row, w) in lines[1..].iter().zip(want) {
+            let y: f64 = row.split(',').nth(2).unwrap().parse().unwrap();
+            assert!((y - w).abs() < 1e-12, "{drive:?}: {row} against y = {w}");
+        }
+    }
+}
+
+#[test]
 fn what_does_not_handle_them_refuses_at_the_input() {
     // The output `y = x + c*u` is line 6; `u` at column 18.
     let f = temp_file("offset_refused.sys", OFFSET);
     for args in [
         vec!["modes", f.as_str()],
-        vec!["simulate", f.as_str(), "--until", "1", "--every", "0.1"],
         vec!["lie", f.as_str(), "--order", "1"],
         vec![
             "rank",

@@ -107,6 +107,27 @@ impl System {
         restriction: Option<&str>,
         set: &[(String, Q)],
     ) -> Result<NormalForm, ModelError> {
+        self.normal_form_with(restriction, set, true)
+    }
+
+    /// The normal form with outputs that read known inputs kept as written
+    /// (`h(S, u)`, no input measured): for evaluating the model along given
+    /// inputs (`obsan simulate` substitutes `u(t)` in the outputs too), never
+    /// for an analysis.
+    pub fn normal_form_as_written(
+        &self,
+        restriction: Option<&str>,
+        set: &[(String, Q)],
+    ) -> Result<NormalForm, ModelError> {
+        self.normal_form_with(restriction, set, false)
+    }
+
+    fn normal_form_with(
+        &self,
+        restriction: Option<&str>,
+        set: &[(String, Q)],
+        measure: bool,
+    ) -> Result<NormalForm, ModelError> {
         self.check_set(set)?;
         self.check_measured()?;
         let mut ctx = self.ctx.clone();
@@ -175,7 +196,9 @@ impl System {
             written,
             measured_inputs: Vec::new(),
         };
-        nf.measure_inputs();
+        if measure {
+            nf.measure_inputs();
+        }
         if self.uses_time() {
             nf.append_clock();
         }
