@@ -182,6 +182,7 @@ pub fn run(a: &ModesArgs) -> Result<ExitCode, Failure> {
         ),
         Certificate::Invariance(_) => "cheap structure, proven exactly by invariance".into(),
         Certificate::Closure => "exact Gauss-Jordan, proven by the exact closure check".into(),
+        Certificate::Span => "reconstructed, proven exactly by the span certificate".into(),
     };
     let closure = checks.as_ref().is_some_and(|c| d.closure_proves(c));
     let certificate = if closure {

@@ -195,7 +195,8 @@ class Symmetries(Result):
     """``obsan symmetries``: a basis of the continuous symmetries, each a vector
     (variable -> component as text), plus ``free``: the variables no output reaches,
     each direction d/dx a symmetry too; ``certificate`` is what it rests on
-    (``closure`` exact, ``random`` with ``certification["error_bound"]``). With unknown
+    (``closure``, ``invariance`` and ``span`` exact, ``random`` with
+    ``certification["error_bound"]``). With unknown
     inputs: the kernel of the observable codistribution, ``certificate``
     ``unknown_input_invariance`` (exact; docs/engine.md). ``decided`` false: the
     atoms in ``undecided_atoms`` may be related, so each vector is still proven to

@@ -113,6 +113,8 @@ pub enum SymCertificate {
     Closure,
     /// Cheap structure, proven by invariance.
     Invariance,
+    /// Reconstruction modulo a prime, proven exactly: outputs invariant, brackets with the fields in the span.
+    Span,
     /// Reconstruction modulo primes, certified at random points (`certification`).
     Random,
 }

@@ -796,3 +796,28 @@ fn modes_with_unknown_inputs_and_explicit_time() {
     assert_eq!((g["rank"].as_u64(), g["n"].as_u64()), (Some(2), Some(2)));
     assert_eq!(g["full_rank"], true);
 }
+
+#[test]
+fn big_with_its_meal_unknown_has_its_glucose_mode_over_roots_no_point_satisfies() {
+    // systems/benchmarks/unknown-inputs/big.sys: its seven symmetries are the
+    // unit vectors of beta, I and the five params (session 29), so the one
+    // mode is G; G' = meal - (c + si I) G needs c, si and I, which are not
+    // functions of G: the reduced input is meal_G = 1*meal - (c + si I) G
+    // (= y'), and the reduced system G' = meal_G, y = G. Its roots
+    // (sqrt(42/(5G)) sqrt(5G/24) = sqrt(7)/2) have no joint value mod p, and
+    // none of these expressions reaches them: they are evaluated at points
+    // where the roots have no value (exactly). Before: "no random point".
+    let f = "systems/benchmarks/unknown-inputs/big.sys";
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", f])).unwrap();
+    assert_eq!(names(&v["modes"]), ["G"], "{v}");
+    let ri = &v["reduced_inputs"][0];
+    assert_eq!(ri["input"], "meal", "{ri}");
+    assert!(same_function(ri["factor"].as_str().unwrap(), "1"), "{ri}");
+    assert!(
+        same_function(ri["offset"].as_str().unwrap(), "-(c + si*I)*G"),
+        "{ri}"
+    );
+    let name = ri["name"].as_str().unwrap();
+    assert_eq!(v["reduced"]["dynamics"][0]["rhs"], name, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
+}

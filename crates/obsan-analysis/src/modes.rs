@@ -65,7 +65,16 @@ pub(crate) fn gradient_rank(
     let mut rng = SplitMix(seed ^ 0x6d6f_6465);
     let mut best = 0;
     for _ in 0..2 {
-        let pt = random_point(&mut nf.ctx, &mut rng)?;
+        // Roots no point mod p satisfies: the gradients may still avoid
+        // them, and then evaluate exactly where the roots have no value.
+        let pt = match random_point(&mut nf.ctx, &mut rng) {
+            Ok(pt) => pt,
+            Err(AnalysisError::NoPoint) => nf
+                .ctx
+                .random_fp_point_root_free(&mut rng, &|_| None)
+                .map_err(|_| AnalysisError::NoPoint)?,
+            Err(e) => return Err(e),
+        };
         let mut m: Vec<Vec<Fp>> = Vec::new();
         for g in &rows {
             m.push(nf.ctx.eval_fp(g, &pt).map_err(|_| AnalysisError::NoPoint)?);

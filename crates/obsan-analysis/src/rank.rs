@@ -160,11 +160,20 @@ pub(crate) fn random_point(ctx: &mut Ctx, rng: &mut SplitMix) -> Result<FpPoint,
 /// up to 2^22 are tried. The accepted point is uniform on the points where
 /// every radicand is a square, a set of density about 1/draws, so the
 /// Schwartz–Zippel bound D/p of a bad point grows by that factor at most.
+/// With roots, [`exact_draws`] bounds the tries (the rank's count: where
+/// points exist, that many failures have probability below e^-64), so a
+/// system no point satisfies (BIG's `sqrt(7)`) fails in a moment, not 2^22
+/// draws later.
 pub(crate) fn random_point_counted(
     ctx: &mut Ctx,
     rng: &mut SplitMix,
 ) -> Result<(FpPoint, u64), AnalysisError> {
-    for k in 1..=(1u64 << 22) {
+    let tries = if has_roots(ctx) {
+        exact_draws(ctx)
+    } else {
+        1u64 << 22
+    };
+    for k in 1..=tries {
         if let Ok(p) = ctx.random_fp_point(rng, &|_| None) {
             return Ok((p, k));
         }
@@ -474,7 +483,13 @@ impl RankReport {
                     g = match memo.get(&key) {
                         Some(&x) => x,
                         None => {
-                            let x = nf.ctx.lie_derivative(g, &vars, &self.fields.vectors[k]);
+                            // The fields as written (obsan-expr written.rs):
+                            // the same functions, a far smaller graph.
+                            let f: Vec<Id> = self.fields.vectors[k]
+                                .iter()
+                                .map(|&c| nf.ctx.written_form(c))
+                                .collect();
+                            let x = nf.ctx.lie_derivative(g, &vars, &f);
                             memo.insert(key, x);
                             x
                         }

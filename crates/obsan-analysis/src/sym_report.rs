@@ -51,6 +51,12 @@ pub enum Certificate {
     /// output invariant and commutes with every field (canonical forms), so
     /// it annihilates every Lie derivative; the kinds, one per vector.
     Invariance(Vec<SymmetryKind>),
+    /// Found by reconstruction and proven exactly (canonical forms): each
+    /// vector leaves every output invariant and its bracket with every field
+    /// lies in the span of the vectors, so the span is invariant and
+    /// annihilates every Lie derivative (docs/engine.md, "The span
+    /// certificate"). Used where the closure words are too deep to build.
+    Span,
     /// Found by reconstruction (`sym_recon.rs`) and certified by the
     /// closure identities evaluated exactly over Q at random integer points;
     /// correct except with the stated probability.

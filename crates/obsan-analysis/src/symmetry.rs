@@ -25,6 +25,11 @@ use obsan_expr::{Ctx, Fp, FpEchelon, FpField, RatFun, SplitMix};
 use obsan_model::NormalForm;
 use std::collections::HashMap;
 
+/// From this Lie-derivative order on, reconstructed symmetries are proven by
+/// the span certificate before the random one is tried (its closure words
+/// are built on the graph, exponentially in the order).
+const SPAN_FIRST_ORDER: usize = 10;
+
 /// Canonical Lie derivatives by word, sharing prefixes.
 pub struct LieCache {
     fields: Vec<Vec<RatFun>>,
@@ -353,6 +358,26 @@ pub(crate) fn symmetries_inner(
                     .iter()
                     .map(|v| normalize_vector(&mut nf.ctx, v))
                     .collect();
+                // Deep bases: the random certificate builds every closure
+                // word on the graph, whose size grows exponentially with the
+                // order (MSMI, order 25: gigabytes); the span certificate
+                // works on the canonical fields and is exact. Tried first
+                // there; if it does not apply, the random one decides.
+                if report.max_order >= SPAN_FIRST_ORDER {
+                    if let Ok(rows) = crate::unknown_input_symmetry::certify_span(nf, &vectors) {
+                        return Ok(SymmetryReport {
+                            n,
+                            rank: r,
+                            vectors,
+                            exact: true,
+                            rows_checked: rows,
+                            certificate: Certificate::Span,
+                            blocks: 1,
+                            free: Vec::new(),
+                            undecided: Vec::new(),
+                        });
+                    }
+                }
                 return match certify_symmetries(nf, report, &vectors, opts.deadline)? {
                     Some(c) => Ok(SymmetryReport {
                         n,
@@ -459,6 +484,9 @@ fn symmetries_reached(
                 Certificate::Closure
             }
         }
+        // The brackets were checked on the reached variables only; the
+        // vectors still annihilate every Lie derivative (closure's claim).
+        Certificate::Span => Certificate::Closure,
         c => c,
     };
     Ok(SymmetryReport {

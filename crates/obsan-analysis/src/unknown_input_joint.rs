@@ -58,8 +58,14 @@ pub(crate) fn values_at_random_points(
     let mut rng = SplitMix(seed);
     let mut out = Vec::with_capacity(points);
     for _ in 0..points {
-        let Ok(pt) = nf.ctx.random_fp_point(&mut rng, &|_| None) else {
-            continue;
+        // A root-free point when the roots have no joint value mod p (the
+        // expressions that evaluate there avoid them, exactly).
+        let pt = match nf.ctx.random_fp_point(&mut rng, &|_| None) {
+            Ok(pt) => pt,
+            Err(_) => match nf.ctx.random_fp_point_root_free(&mut rng, &|_| None) {
+                Ok(pt) => pt,
+                Err(_) => continue,
+            },
         };
         if let Ok(v) = nf.ctx.eval_fp(roots, &pt) {
             out.push(v);

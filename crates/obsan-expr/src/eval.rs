@@ -279,11 +279,24 @@ impl std::error::Error for BadPoint {}
 #[derive(Clone, Debug)]
 pub struct FpPoint {
     pub(crate) values: Vec<Fp>,
+    /// Leaves with no value at this point ([`Ctx::random_fp_point_root_free`]):
+    /// `eval_fp` and the jets fail on an expression that reaches one. Empty
+    /// for every other point.
+    pub(crate) forbidden: Vec<bool>,
 }
 
 impl FpPoint {
+    /// The value of leaf `v`. At a root-free point a root leaf reads 0 here:
+    /// evaluate through [`Ctx::eval_fp`] or the jets, which refuse it.
     pub fn value(&self, v: Var) -> Fp {
         self.values[v as usize]
+    }
+    /// Whether some leaf has no value ([`Ctx::random_fp_point_root_free`]).
+    pub fn has_forbidden(&self) -> bool {
+        self.forbidden.iter().any(|&f| f)
+    }
+    fn forbids(&self, v: Var) -> bool {
+        self.forbidden.get(v as usize).copied().unwrap_or(false)
     }
 }
 
@@ -293,6 +306,8 @@ enum RootValues {
     Zero,
     Roots,
     Free,
+    /// No value: the point knows the other leaves only.
+    Forbidden,
 }
 
 impl Ctx {
@@ -320,6 +335,19 @@ impl Ctx {
         self.random_point_mode(rng, fixed, RootValues::Free)
     }
 
+    /// A random point where every root leaf has no value: [`Ctx::eval_fp`]
+    /// (and the jets) fail with `BadPoint` on any expression that reaches
+    /// one, so what does evaluate is exact and free of the roots. For
+    /// radicands no point satisfies together mod p (BIG's `sqrt(7)`), where
+    /// the expressions a computation needs avoid the roots.
+    pub fn random_fp_point_root_free(
+        &mut self,
+        rng: &mut SplitMix,
+        fixed: &dyn Fn(Var) -> Option<Fp>,
+    ) -> Result<FpPoint, BadPoint> {
+        self.random_point_mode(rng, fixed, RootValues::Forbidden)
+    }
+
     /// A random point; with `roots` false every `sqrt` leaf is 0 (for roots
     /// that reach no square root: a non-square radicand is then no `BadPoint`).
     pub(crate) fn random_point(
@@ -343,6 +371,7 @@ impl Ctx {
         mode: RootValues,
     ) -> Result<FpPoint, BadPoint> {
         let mut values = vec![Fp::ZERO; self.leaves.len()];
+        let mut forbidden = Vec::new();
         let mut done = vec![false; self.leaves.len()];
         for v in 0..self.leaves.len() {
             if done[v] {
@@ -365,6 +394,10 @@ impl Ctx {
                 }
                 LeafKind::Root(..) if mode == RootValues::Zero => values[v] = Fp::ZERO,
                 LeafKind::Root(..) if mode == RootValues::Free => values[v] = rng.fp(),
+                LeafKind::Root(..) if mode == RootValues::Forbidden => {
+                    forbidden.resize(self.leaves.len(), false);
+                    forbidden[v] = true;
+                }
                 LeafKind::Root(_, q) => {
                     let r = self.radicand(v as Var).ok_or(BadPoint)?;
                     let val = |x: Var| values[x as usize];
@@ -377,7 +410,7 @@ impl Ctx {
             }
             done[v] = true;
         }
-        Ok(FpPoint { values })
+        Ok(FpPoint { values, forbidden })
     }
 
     /// Values of `roots` at an F_p point.
@@ -387,6 +420,7 @@ impl Ctx {
         for id in order {
             let x = match self.node(id) {
                 Node::Num(q) => q.to_fp().ok_or(BadPoint)?,
+                Node::Leaf(v) if point.forbids(*v) => return Err(BadPoint),
                 Node::Leaf(v) => point.value(*v),
                 Node::Add(cs) => cs.iter().fold(Fp::ZERO, |a, c| a.add(val[c.index()])),
                 Node::Mul(cs) => cs.iter().fold(Fp::ONE, |a, c| a.mul(val[c.index()])),

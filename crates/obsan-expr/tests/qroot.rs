@@ -254,3 +254,24 @@ mod props {
         }
     }
 }
+
+/// A root-free point gives no value to the roots: an expression reaching one
+/// fails (BadPoint), one that avoids them evaluates to its exact value. Used
+/// where no point satisfies the roots' relations mod p (`sqrt(3) sqrt(7)`
+/// here: 3 and 7 are non-squares mod 2^61 - 1, so only their product, 21,
+/// is a square).
+#[test]
+fn a_root_free_point_refuses_the_roots_and_evaluates_the_rest() {
+    let mut ctx = obsan_expr::Ctx::new();
+    let with = ctx.parse("sqrt(3)*x + sqrt(7)*y").unwrap();
+    let without = ctx.parse("x^2 + 3*y").unwrap();
+    let mut rng = obsan_expr::SplitMix(7);
+    let pt = ctx.random_fp_point_root_free(&mut rng, &|_| None).unwrap();
+    assert!(pt.has_forbidden());
+    assert!(ctx.eval_fp(&[with], &pt).is_err());
+    let x = ctx.symbol("x").var;
+    let y = ctx.symbol("y").var;
+    let (vx, vy) = (pt.value(x), pt.value(y));
+    let v = ctx.eval_fp(&[without], &pt).unwrap()[0];
+    assert_eq!(v, vx * vx + obsan_expr::Fp::new(3) * vy);
+}

@@ -103,6 +103,15 @@ pub(super) fn point_for(
             }
         }
     }
+    // Roots no point mod p satisfies (BIG's sqrt(7)): expressions that avoid
+    // them evaluate exactly at a point where the roots have no value.
+    for _ in 0..64 {
+        if let Ok(pt) = nf.ctx.random_fp_point_root_free(rng, &|_| None) {
+            if let Ok(v) = nf.ctx.eval_fp(roots, &pt) {
+                return Ok((pt, v));
+            }
+        }
+    }
     Err(AnalysisError::NoPoint)
 }
 

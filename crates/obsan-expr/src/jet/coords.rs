@@ -154,7 +154,10 @@ impl Ctx {
                 }
             }
         }
-        Ok(FpPoint { values: out })
+        Ok(FpPoint {
+            values: out,
+            forbidden: Vec::new(),
+        })
     }
 
     /// Exact leaf values at the rational point with these coordinate values

@@ -272,6 +272,11 @@ impl LieJets {
     /// `word`'s runs at `point`, left in the scratch (`h`, `runs`); returns
     /// the index of the word's shape there.
     fn sweep(&self, output: usize, word: &[usize], point: &FpPoint) -> Result<usize, BadPoint> {
+        // A root-free point (no value for the roots): the programs read leaf
+        // values directly, so refuse it whole rather than check each read.
+        if point.has_forbidden() {
+            return Err(BadPoint);
+        }
         let mut guard = self.scratch.borrow_mut();
         let sw = &mut *guard;
         // Runs of one field, first applied first: (field, length).
