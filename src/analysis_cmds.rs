@@ -155,6 +155,7 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
             exact,
             experiments: experiments.map(|e| e.0),
             max_order: r.max_order,
+            measured_inputs: nf.measured_inputs.clone(),
             n: r.n,
             observable_variables: obs.into_iter().cloned().collect(),
             rank: r.rank,
@@ -187,6 +188,9 @@ pub fn rank(a: &RankArgs) -> Result<ExitCode, Failure> {
     } else {
         "not weakly locally observable"
     };
+    if let Some(note) = crate::clock::measured_note(&nf) {
+        o.push_str(&format!("{note}\n"));
+    }
     o.push_str(&format!("rank {} of {}: {verdict}\n", r.rank, r.n));
     o.push_str(&format!(
         "basis of the codistribution (Lie derivatives up to order {}; L_a L_b h = L_a(L_b(h))):\n",
@@ -390,6 +394,10 @@ pub fn symmetries(a: &SymArgs) -> Result<ExitCode, Failure> {
         }
     );
     o.push_str(&format!("state order: [{}]\n", nf.state.join(", ")));
+    if let Some(note) = crate::clock::measured_note(&nf) {
+        // Each such input is an output: every symmetry leaves it fixed.
+        o.push_str(&format!("{note}; no symmetry moves them\n"));
+    }
     for (k, v) in s.vectors.iter().enumerate() {
         let comps: Vec<String> = v.iter().map(|e| fmt_rf(&nf, e, &a.out)).collect();
         o.push_str(&format!("w{} = [{}]\n", k + 1, comps.join(", ")));

@@ -48,36 +48,101 @@ pub fn refuse_time(sys: &System) -> Result<(), Failure> {
     }
 }
 
-/// Where the clock sits in a normal form: its state index and its output.
-#[derive(Clone, Copy, Debug)]
+/// The commands that handle outputs reading known inputs (the normal form
+/// measures those inputs: docs/sys-format.md, "Outputs that read inputs").
+/// `modes` and `verify` refuse: their reduced systems and decomposition files
+/// would carry the measured coordinates as modes, not yet specified.
+/// `simulate` evaluates `h(x, u(t))` (`sim_drive.rs`).
+const HANDLED_MEASURED: [&str; 5] = ["show", "rank", "symmetries", "global", "simulate"];
+
+/// A located refusal (at the first input an output reads, exit code 2) when
+/// the command being run does not handle outputs that read known inputs.
+pub fn refuse_measured(sys: &System) -> Result<(), Failure> {
+    let command = COMMAND.with(Cell::get);
+    if HANDLED_MEASURED.contains(&command) {
+        return Ok(());
+    }
+    let what = if command.is_empty() {
+        "this command".to_string()
+    } else {
+        format!("`obsan {command}`")
+    };
+    match sys.input_output_refusal(&what) {
+        Some(e) => Err(Failure(format!(
+            "{e}\n(`obsan rank`, `symmetries`, `global`, `show` and `simulate MODEL.sys` handle them)"
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The line saying which known inputs the outputs read and what the
+/// analysis assumes of them; `None` when no output reads one.
+pub fn measured_note(nf: &NormalForm) -> Option<String> {
+    let m = &nf.measured_inputs;
+    if m.is_empty() {
+        return None;
+    }
+    let d: Vec<String> = m
+        .iter()
+        .map(|u| format!("{u}{}", obsan_model::DERIVATIVE_MARK))
+        .collect();
+    Some(format!(
+        "outputs read the known input{} {}: measured, with {} known too (each input a coordinate \
+         known from its own output, its derivative a known input; verdicts about the other variables)",
+        if m.len() == 1 { "" } else { "s" },
+        m.join(", "),
+        d.join(", ")
+    ))
+}
+
+/// The analysis' own coordinates in a normal form: the clock and the known
+/// inputs that outputs read (measured coordinates, obsan-model's
+/// `measured.rs`): each a dynamic state with an output of its own name whose
+/// order-0 row opens the basis. Their state indices (ascending) and outputs.
+#[derive(Clone, Debug)]
 pub struct Clock {
-    pub state: usize,
-    pub output: usize,
+    pub states: Vec<usize>,
+    pub outputs: Vec<usize>,
 }
 
 impl Clock {
     pub fn of(nf: &NormalForm) -> Option<Clock> {
-        let state = nf.clock()?;
-        let output = nf.outputs.iter().position(|o| o.0 == obsan_model::TIME)?;
-        Some(Clock { state, output })
+        let mut names: Vec<&str> = nf.measured_inputs.iter().map(String::as_str).collect();
+        if nf.clock().is_some() {
+            names.push(obsan_model::TIME);
+        }
+        let mut states = Vec::new();
+        let mut outputs = Vec::new();
+        for n in names {
+            let k = nf.state[..nf.n_dynamic].iter().position(|s| s == n)?;
+            states.push(k);
+            outputs.push(nf.outputs.iter().position(|o| o.0 == n)?);
+        }
+        states.sort_unstable();
+        (!states.is_empty()).then_some(Clock { states, outputs })
     }
 
-    /// `v` (one entry per analysed variable) without the clock's entry.
+    /// `v` (one entry per analysed variable) without the hidden entries.
     pub fn drop<T: Clone>(&self, v: &[T]) -> Vec<T> {
         v.iter()
             .enumerate()
-            .filter(|(i, _)| *i != self.state)
+            .filter(|(i, _)| !self.states.contains(i))
             .map(|(_, x)| x.clone())
             .collect()
     }
 
-    /// The clock's own row: its output at order 0.
-    fn is_row(&self, w: &LieWord) -> bool {
-        w.output == self.output && w.order() == 0
+    /// Index `j` of a kept variable in the list without the hidden ones.
+    fn shift(&self, j: usize) -> usize {
+        j - self.states.iter().filter(|&&k| k < j).count()
     }
 
-    /// What both reports hold alike: the clock's row out of the basis (and
-    /// the rank), its state out of `n` and of the per-variable verdicts.
+    /// A hidden coordinate's own row: its output at order 0.
+    fn is_row(&self, w: &LieWord) -> bool {
+        self.outputs.contains(&w.output) && w.order() == 0
+    }
+
+    /// What both reports hold alike: the hidden rows out of the basis (and
+    /// the rank), their states out of `n` and of the per-variable verdicts.
     /// The rows dropped.
     fn hide<T: Clone>(
         &self,
@@ -90,7 +155,7 @@ impl Clock {
         basis.retain(|w| !self.is_row(w));
         let dropped = before - basis.len();
         *rank -= dropped.min(*rank);
-        *n -= 1;
+        *n -= self.states.len();
         *observable = self.drop(observable);
         dropped
     }
@@ -102,11 +167,9 @@ impl Clock {
 pub fn hide_in_rank(nf: &NormalForm, r: &mut RankReport) {
     let Some(c) = Clock::of(nf) else { return };
     c.hide(&mut r.basis, &mut r.rank, &mut r.n, &mut r.observable);
-    r.pivots.retain(|&p| p != c.state);
+    r.pivots.retain(|p| !c.states.contains(p));
     for p in r.pivots.iter_mut() {
-        if *p > c.state {
-            *p -= 1;
-        }
+        *p = c.shift(*p);
     }
 }
 
@@ -120,10 +183,11 @@ pub fn hide_in_unknown_input(nf: &NormalForm, r: &mut UnknownInputReport) {
         s.state_rank -= dropped.min(s.state_rank);
     }
     let m = &mut r.martinelli;
-    m.rank = m.rank.saturating_sub(1);
-    m.n = m.n.saturating_sub(1);
-    m.dimension = m.dimension.saturating_sub(1);
-    m.codistribution_rank = m.codistribution_rank.saturating_sub(1);
+    let h = c.states.len();
+    m.rank = m.rank.saturating_sub(h);
+    m.n = m.n.saturating_sub(h);
+    m.dimension = m.dimension.saturating_sub(h);
+    m.codistribution_rank = m.codistribution_rank.saturating_sub(h);
     m.observable = c.drop(&m.observable);
 }
 
@@ -135,7 +199,7 @@ pub fn user_view(nf: &NormalForm) -> Option<NormalForm> {
     let mut v = nf.clone();
     v.state = c.drop(&nf.state);
     v.state_vars = c.drop(&nf.state_vars);
-    v.n_dynamic -= 1;
+    v.n_dynamic -= c.states.len();
     Some(v)
 }
 
@@ -145,12 +209,12 @@ pub fn user_view(nf: &NormalForm) -> Option<NormalForm> {
 pub fn hide_in_symmetries(nf: &NormalForm, r: &mut RankReport, s: &mut SymmetryReport) {
     let Some(c) = Clock::of(nf) else { return };
     hide_in_rank(nf, r);
-    s.n -= 1;
-    s.rank = s.rank.saturating_sub(1);
+    s.n -= c.states.len();
+    s.rank = s.rank.saturating_sub(c.states.len());
     for v in s.vectors.iter_mut() {
         *v = c.drop(v);
     }
-    let shift = |j: usize| if j > c.state { j - 1 } else { j };
+    let shift = |j: usize| c.shift(j);
     s.free = s.free.iter().map(|&j| shift(j)).collect();
     if let Certificate::Invariance(kinds) = &mut s.certificate {
         for k in kinds.iter_mut() {
@@ -168,9 +232,5 @@ pub fn hide_in_unknown_input_symmetries(nf: &NormalForm, s: &mut UnknownInputSym
     for v in s.vectors.iter_mut() {
         *v = c.drop(v);
     }
-    s.free = s
-        .free
-        .iter()
-        .map(|&j| if j > c.state { j - 1 } else { j })
-        .collect();
+    s.free = s.free.iter().map(|&j| c.shift(j)).collect();
 }

@@ -170,6 +170,9 @@ fn read_candidates(
     if let Some(e) = sys.time_refusal("`obsan design`") {
         return Err(relocate(e));
     }
+    if let Some(e) = sys.input_output_refusal("`obsan design`") {
+        return Err(relocate(e));
+    }
     Ok((sys, cands))
 }
 
@@ -203,6 +206,7 @@ pub fn run(a: &DesignArgs) -> Result<ExitCode, Failure> {
     let src = crate::fsio::read_text(&a.system)?;
     let model = System::parse(&src, &a.system).map_err(|e| Failure(e.to_string()))?;
     crate::clock::refuse_time(&model)?;
+    crate::clock::refuse_measured(&model)?;
     let sets = parse_sets(&a.set)?;
     if a.candidates.is_none() && !a.target.is_empty() {
         return Err(Failure(

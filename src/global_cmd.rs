@@ -32,7 +32,11 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         ..GlobalOptions::default()
     };
 
-    let r = global_identifiability(&mut nf, &opts).map_err(|e| Failure(e.to_string()))?;
+    let mut r = global_identifiability(&mut nf, &opts).map_err(|e| Failure(e.to_string()))?;
+    // A measured input's initial value is its own output at time 0
+    // (globally identifiable, fixed by every map): not a variable of the user's.
+    r.variables
+        .retain(|v| v.param || !nf.measured_inputs.contains(&v.name));
     let verdict = |v: Identifiability| match v {
         Identifiability::Global => (json::Verdict::Global, Some(1)),
         Identifiability::Local(k) => (json::Verdict::Local, Some(k)),
@@ -127,6 +131,9 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     }
     let mut o = String::new();
     o.push_str(&format!("system {}: global identifiability\n", nf.name));
+    if let Some(note) = crate::clock::measured_note(&nf) {
+        o.push_str(&format!("{note}\n"));
+    }
     let orders: Vec<String> = r
         .output_orders
         .iter()

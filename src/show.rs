@@ -12,6 +12,7 @@ pub fn load_system(path: &str) -> Result<System, Failure> {
     let src = crate::fsio::read_text(path)?;
     let sys = System::parse(&src, path).map_err(|e| Failure(e.to_string()))?;
     crate::clock::refuse_time(&sys)?;
+    crate::clock::refuse_measured(&sys)?;
     Ok(sys)
 }
 
@@ -68,12 +69,13 @@ fn expr_json(ctx: &mut Ctx, id: Id) -> crate::json::Formula {
 pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     let (sys, mut nf) = load_normal_form(&a.sys)?;
     let params: Vec<String> = sys.decls_of(Kind::Param).map(|d| d.name.clone()).collect();
-    // The user's states: the clock of explicit time is the analysis' own.
+    // The user's states: the clock of explicit time and the measured inputs
+    // are the analysis' own.
     let clock = nf.clock();
     let states: Vec<String> = nf.state[..nf.n_dynamic]
         .iter()
         .enumerate()
-        .filter(|(k, _)| Some(*k) != clock)
+        .filter(|(k, s)| Some(*k) != clock && !nf.measured_inputs.contains(s))
         .map(|(_, s)| s.clone())
         .collect();
     if a.out.json {
@@ -161,6 +163,9 @@ pub fn run(a: &ShowArgs) -> Result<ExitCode, Failure> {
     }
     if clock.is_some() {
         out.push_str("time: the fields or outputs use t explicitly; analysed with the clock t' = 1 and the known output t (not a state of the model)\n");
+    }
+    if let Some(note) = crate::clock::measured_note(&nf) {
+        out.push_str(&format!("{note}\n"));
     }
     out.push_str(&format!("analysed state S = [{}]\n", nf.state.join(", ")));
     let mut fields: Vec<(String, Vec<Id>)> = vec![("f0".to_string(), nf.f0.clone())];

@@ -169,7 +169,7 @@ pub fn drive(
             .into_iter()
             .map(|v| v.unwrap_or(zero))
             .collect::<Vec<Id>>(),
-    );
+    )?;
     Ok(Drive {
         clock,
         table,
@@ -178,8 +178,10 @@ pub fn drive(
     })
 }
 
-/// `f0 += sum_i f_i u_i`, then the model has no known inputs left.
-fn substitute(nf: &mut NormalForm, value: &[Id]) {
+/// `f0 += sum_i f_i u_i`, and `u_i(t)` in the outputs that read inputs
+/// (`h(x, u(t))`, the input at each output time); then the model has no
+/// known inputs left.
+fn substitute(nf: &mut NormalForm, value: &[Id]) -> Result<(), Failure> {
     for k in 0..nf.f0.len() {
         let mut terms = vec![nf.f0[k]];
         for (f, &u) in nf.fields.iter().zip(value) {
@@ -187,9 +189,22 @@ fn substitute(nf: &mut NormalForm, value: &[Id]) {
         }
         nf.f0[k] = nf.ctx.add(&terms);
     }
+    let map: Vec<_> = nf
+        .input_vars
+        .iter()
+        .copied()
+        .zip(value.iter().copied())
+        .collect();
+    for o in nf.outputs.iter_mut() {
+        o.1 = nf
+            .ctx
+            .substitute(o.1, &map)
+            .map_err(|e| Failure(format!("output {}: {}", o.0, e.0)))?;
+    }
     nf.inputs.clear();
     nf.input_vars.clear();
     nf.fields.clear();
+    Ok(())
 }
 
 impl Drive {

@@ -150,8 +150,9 @@ fn predictor(model: &str, a: &SimulateArgs) -> Result<(Predictor, Drive), Failur
     let text = crate::fsio::read_text(model)?;
     let sys = System::parse(&text, model).map_err(|e| Failure(e.to_string()))?;
     crate::clock::refuse_time(&sys)?;
+    // Outputs that read inputs stay h(x, u): the drive substitutes u(t).
     let mut nf = sys
-        .normal_form(None, &[])
+        .normal_form_as_written(None, &[])
         .map_err(|e| Failure(format!("{model}: {e}")))?;
     if let Some(w) = nf.unknown_inputs.first() {
         return Err(Failure(format!(
@@ -207,6 +208,9 @@ fn integrate(
     let mut x = s.x0.clone();
     let mut consts = s.consts.clone();
     let t0 = stops[0].0;
+    // The table's first piece, so that outputs reading an input see u(t0).
+    let t1 = stops.get(1).map_or(t0, |s| s.0);
+    d.set_piece(p, &mut consts, t0, t1);
     let first = p
         .predict(&x, &consts, &steps_of(t0, t0, 1), &[t0])
         .map_err(Failure::from)?;

@@ -3,7 +3,7 @@
 
 For each .sys file given, reads the states, params, inputs, equations and outputs (the plain
 subset the importers write), and computes the observability-identifiability rank with the
-inputs free: the span of the gradients (in states and params) of the outputs' Lie derivatives
+inputs free (an input an output reads is measured, its derivative known: see verdict()): the span of the gradients (in states and params) of the outputs' Lie derivatives
 along every word of the fields f0, f_1..f_m (the input-affine form, f_i = d rhs / d u_i),
 level by level until a level adds no rank (then no later level does); only the functions
 that raised the rank are carried to the next level (see verdict()). The Jacobian is
@@ -93,26 +93,42 @@ def verdict(path, seed=1):
     c_i), L_f(sum c_i dphi_i) = sum (L_f c_i) dphi_i + c_i d(L_f phi_i) lies in the span of the
     kept ones and their Lie derivatives, so the next level needs only the new functions."""
     decl, x, p, u, rhs, h, consts = read_sys(path)
-    z = x + p
-    f0 = [r.subs({ui: 0 for ui in u}) for r in rhs]
-    fields = [f0] + [[sp.diff(r, ui) for r in rhs] for ui in u]
+    # Inputs read by an output: each is taken as measured with its derivative known (as
+    # STRIKE-GOLDD's nnzDerU = 1): the input is a coordinate v with v' = dv, dv a new free
+    # input whose field is the unit vector of v, the terms f_v v stay in the drift, and v is
+    # an extra output (its gradient dv is then in the span). The verdict is about x and p:
+    # the rank minus one per such input, the unobservable list over x and p only.
+    read = [ui for ui in u if any(g.has(ui) for g in h)]
+    free = [ui for ui in u if ui not in read]
+    xa = x + read
+    z = xa + p
+    pad = [sp.Integer(0)] * len(read)
+    f0 = [r.subs({ui: 0 for ui in free}) for r in rhs] + pad
+    fields = [f0] + [[sp.diff(r, ui) for r in rhs] + pad for ui in free]
+    for i in range(len(read)):
+        unit = [sp.Integer(1) if k == i else sp.Integer(0) for k in range(len(read))]
+        fields.append([sp.Integer(0)] * len(rhs) + unit)
     rng = random.Random(seed)
     point = {s: sp.Integer(rng.randint(2, 1000)) for s in z + consts}
     arith = Numeric(z, consts, point) if DIGITS else Exact(z, point)
     rows, level = [], []
-    for g in h:
+    for g in list(read) + h:
         if arith.keep(rows, arith.row(g)):
             level.append(g)
     while level and len(rows) < len(z):
         nxt = []
         for g in level:
             for fld in fields:
-                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(x, fld))
+                lg = sum(sp.diff(g, xi) * fi for xi, fi in zip(xa, fld))
                 if lg != 0 and arith.keep(rows, arith.row(lg)):
                     nxt.append(lg)
         level = nxt
-    rank = len(rows)
-    unobs = [str(v) for j, v in enumerate(z) if arith.rank(rows + [arith.unit(j)]) > rank]
+    rank = len(rows) - len(read)
+    unobs = [
+        str(v)
+        for j, v in enumerate(z)
+        if v not in read and arith.rank(rows + [arith.unit(j)]) > len(rows)
+    ]
     arith.report(rank)
     if unobs:
         return f"unobservable {' '.join(unobs)}; rank {rank}"

@@ -177,3 +177,20 @@ def test_rank_along_circles(tmp_path):
         assert len(s.lost) == 3 and s.matches_symmetries
     assert r.stretches[0].input_relations in (["wL = 0.9*wR"], ["wL = 0"], ["wL = -wR"])
     assert (r.dataset_rank, r.dataset_n) == (11, 11)
+
+
+def test_an_output_reading_a_known_input_measures_it(cli, tmp_path):
+    # y = x + c u, x' = u: y' = u + c u' with u and u' known gives c = (y' - u)/u', then
+    # x = y - c u: rank 2 of 2 over (x, c); u is measured, not a variable (docs/sys-format.md).
+    text = "system offset\nstate x\nparam c\ninput u\nx' = u\noutput y = x + c*u\n"
+    r = obsan.loads(text).rank()
+    assert (r["rank"], r["n"]) == (2, 2)
+    assert r["state"] == ["x", "c"]
+    assert r["measured_inputs"] == ["u"]
+    assert r["exact"] is True
+    # The library and the CLI take the same entry.
+    f = tmp_path / "offset.sys"
+    f.write_text(text)
+    code, out, _ = cli("rank", f, "--json")
+    assert code == 0
+    assert json.loads(out)["measured_inputs"] == ["u"]

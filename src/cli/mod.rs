@@ -83,8 +83,10 @@ undecided_atoms); a zero form is always decided.")]
 weakly_locally_observable (null when full rank rests on undecided atoms), decided,
 undecided_atoms (atoms that may be related), observable_variables, unobservable_variables, exact,
 error_bound, degree_bound, seed, basis (Lie words with their order), max_order, evaluated, experiments (the
-stacked experiments, or null), roots_field_degree (k when the roots took their values in the
-field of p^k elements, no point mod p satisfying their relations; else null)}. --known/--known-generic and --experiments auto print their own
+stacked experiments, or null), measured_inputs (the known inputs outputs read: measured, their
+derivatives known, left out of state, n and rank; docs/sys-format.md), roots_field_degree (k when
+the roots took their values in the field of p^k elements, no point mod p satisfying their
+relations; else null)}. --known/--known-generic and --experiments auto print their own
 objects (docs/experiments.md). With unknown inputs, --json prints {system, restriction, state,
 unknown_inputs, n, rank, weakly_locally_observable, decided, undecided_atoms,
 observable_variables ([{name, order}]: the lowest output derivative order that shows each),

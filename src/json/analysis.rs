@@ -77,6 +77,9 @@ pub struct Rank {
     pub experiments: Option<Vec<Experiment>>,
     /// The highest order of Lie derivative examined.
     pub max_order: usize,
+    /// The known inputs that outputs read: each analysed as a measured coordinate with its
+    /// derivative a known input, and left out of `n`, `rank`, `state` and the lists.
+    pub measured_inputs: Vec<String>,
     /// The number of analysed variables.
     pub n: usize,
     /// The variables observable on their own (not certified when `decided` is false).

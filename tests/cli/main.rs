@@ -14,6 +14,7 @@ mod global_io;
 mod global_maps;
 mod import;
 mod json_schema;
+mod measured_inputs;
 mod modes;
 mod modes_closure;
 mod montecarlo;

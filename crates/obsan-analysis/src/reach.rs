@@ -75,6 +75,7 @@ pub fn restrict_to_reached(nf: &mut NormalForm) -> Option<Reached> {
         unknown_input_vars: nf.unknown_input_vars.clone(),
         unknown_fields: nf.unknown_fields.iter().map(|f| pick(f)).collect(),
         written: nf.written.clone(),
+        measured_inputs: nf.measured_inputs.clone(),
     };
     Some(Reached {
         nf: sub,

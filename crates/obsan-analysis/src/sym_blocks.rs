@@ -219,6 +219,7 @@ fn sub_system(
         restriction: nf.restriction.clone(),
         delay: None,
         written: Vec::new(),
+        measured_inputs: nf.measured_inputs.clone(),
     };
     (sub, kept)
 }

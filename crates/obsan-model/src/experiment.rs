@@ -164,6 +164,8 @@ impl System {
             delay,
             // Stacked copies: sub-expressions per copy are not tracked.
             written: Vec::new(),
+            // Refused by `refuse_stacking`.
+            measured_inputs: Vec::new(),
         })
     }
 
@@ -189,6 +191,9 @@ impl System {
             ));
         }
         if let Some(e) = self.time_refusal("several experiments (`--experiment`)") {
+            return Err(e);
+        }
+        if let Some(e) = self.input_output_refusal("several experiments (`--experiment`)") {
             return Err(e);
         }
         for x in exps {

@@ -19,6 +19,7 @@
 mod effect;
 mod error;
 mod experiment;
+mod measured;
 mod normal;
 mod sys;
 mod unit;
@@ -26,6 +27,7 @@ mod unit;
 pub use effect::{substitute as substitute_names, Effect, EffectLibrary};
 pub use error::{decode_text, normalize_text, ModelError};
 pub use experiment::{experiment_name, Experiment};
+pub use measured::DERIVATIVE_MARK;
 pub use normal::NormalForm;
 pub use sys::{Decl, Kind, Restriction, Start, System, TIME};
 pub use unit::{Unit, UnitDecl, MAX_UNIT_EXPONENT};

@@ -53,6 +53,10 @@ pub struct NormalForm {
     /// restriction), before they are expanded: their sub-expressions
     /// (`N - A - I - H`) are candidate blocks of invariants. May be empty.
     pub written: Vec<Id>,
+    /// The known inputs some output reads, made measured coordinates
+    /// (`measured.rs`): each is a dynamic state and an output of its own
+    /// name, and the input of that index is now its derivative `u'`.
+    pub measured_inputs: Vec<String>,
 }
 
 impl NormalForm {
@@ -103,7 +107,29 @@ impl System {
         restriction: Option<&str>,
         set: &[(String, Q)],
     ) -> Result<NormalForm, ModelError> {
+        self.normal_form_with(restriction, set, true)
+    }
+
+    /// The normal form with outputs that read known inputs kept as written
+    /// (`h(S, u)`, no input measured): for evaluating the model along given
+    /// inputs (`obsan simulate` substitutes `u(t)` in the outputs too), never
+    /// for an analysis.
+    pub fn normal_form_as_written(
+        &self,
+        restriction: Option<&str>,
+        set: &[(String, Q)],
+    ) -> Result<NormalForm, ModelError> {
+        self.normal_form_with(restriction, set, false)
+    }
+
+    fn normal_form_with(
+        &self,
+        restriction: Option<&str>,
+        set: &[(String, Q)],
+        measure: bool,
+    ) -> Result<NormalForm, ModelError> {
         self.check_set(set)?;
+        self.check_measured()?;
         let mut ctx = self.ctx.clone();
         // Constant values: from the file, then from --set.
         let (mut subst, consts) = self.const_values(&mut ctx, set);
@@ -168,7 +194,11 @@ impl System {
             unknown_input_vars: unknown_syms.iter().map(|s| s.var).collect(),
             unknown_fields,
             written,
+            measured_inputs: Vec::new(),
         };
+        if measure {
+            nf.measure_inputs();
+        }
         if self.uses_time() {
             nf.append_clock();
         }

@@ -186,12 +186,6 @@ fn expression_errors() {
         10,
         "identically zero",
     );
-    check(
-        &edit("output h = x", "output h = x + u"),
-        8,
-        16,
-        "uses the input 'u'",
-    );
     check(&edit("output h = x", "output x = x"), 8, 8, "already used");
     check(
         &edit("output h = x", "output h = x\noutput h = y"),

@@ -288,19 +288,20 @@ impl Reader<'_> {
                 ));
             }
             let ast = parse_ast(&o.rhs).map_err(|e| self.parse_err(map, e))?;
-            for (id_name, span) in ast.idents() {
-                if find(id_name).is_some_and(|d| d.kind == Kind::Input) {
-                    let (a, b) = span_in(map, span);
-                    return Err(self.err_src(a, b, format!("output '{nm}' uses the input '{id_name}': outputs must be functions of states, params and constants")));
-                }
-            }
             let id = build_checked(
                 ctx,
                 &ast,
                 map,
                 self,
                 decls,
-                &[Kind::State, Kind::Param, Kind::Const, Kind::Unknown],
+                // Known inputs too: the normal form measures them (measured.rs).
+                &[
+                    Kind::State,
+                    Kind::Param,
+                    Kind::Const,
+                    Kind::Unknown,
+                    Kind::Input,
+                ],
                 &format!("output {nm}"),
             )?;
             outputs.push((

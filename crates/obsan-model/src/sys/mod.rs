@@ -133,6 +133,8 @@ pub struct System {
     pub(crate) texts: Texts,
     /// Source offset of the first use of time `t` in the dynamics or outputs.
     pub(crate) time_at: Option<usize>,
+    /// Source span of the first known input read by an output.
+    pub(crate) input_read_at: Option<(usize, usize)>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -187,8 +189,20 @@ impl System {
                     .collect::<Vec<_>>()
             })
             .min();
+        let input_read_at = outputs
+            .iter()
+            .flat_map(|(_, l)| {
+                l.ast
+                    .idents()
+                    .into_iter()
+                    .filter(|(n, _)| decls.iter().any(|d| d.kind == Kind::Input && d.name == *n))
+                    .map(|(_, s)| l.src_span(s))
+                    .collect::<Vec<_>>()
+            })
+            .min();
         Ok(System {
             time_at,
+            input_read_at,
             name,
             description: raw.description.join(" ").trim().to_string(),
             ctx,
@@ -313,6 +327,29 @@ impl System {
             at + TIME.len(),
             format!(
                 "explicit time 't' is not supported by {what} yet (`obsan rank`, `obsan symmetries`, `obsan show` and `obsan simulate` handle it)"
+            ),
+        ))
+    }
+
+    /// `true` if an output reads a known input (`output y = x*(1 + k*u)`).
+    pub fn outputs_read_inputs(&self) -> bool {
+        self.input_read_at.is_some()
+    }
+
+    /// A located refusal of outputs that read known inputs by a route that
+    /// cannot handle them yet (`what` names it): at the first such input, or
+    /// `None` when no output reads one.
+    pub fn input_output_refusal(&self, what: &str) -> Option<ModelError> {
+        let (a, b) = self.input_read_at?;
+        Some(ModelError::at(
+            &self.origin,
+            &self.src,
+            a,
+            b,
+            format!(
+                "an output reads the known input '{}': {what} does not handle outputs that read \
+                 known inputs yet",
+                &self.src[a..b]
             ),
         ))
     }
