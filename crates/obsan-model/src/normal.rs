@@ -313,6 +313,15 @@ impl System {
         let mut f0 = Vec::new();
         let mut fields = vec![Vec::new(); input_syms.len()];
         let zero = ctx.int(0);
+        // The written forms of f0 and of each field (written.rs in
+        // obsan-expr): each right-hand side with every input and unknown
+        // input set to 0, and its derivatives likewise; it is affine in them
+        // jointly, so these are the same functions as the canonical forms.
+        let zeros: Vec<(Var, Id)> = input_vars
+            .iter()
+            .chain(unknown_syms.iter().map(|w| &w.var))
+            .map(|&v| (v, zero))
+            .collect();
         for k in 0..n_states {
             if k >= n_dynamic {
                 f0.push(zero);
@@ -332,14 +341,6 @@ impl System {
                 ctx.try_canon(id)
                     .map_err(|l| self.err_at(loc, &l.to_string()))
             };
-            // The written forms of f0 and of each field (written.rs in
-            // obsan-expr): e with every input and unknown input set to 0, and
-            // its derivatives likewise; e is affine in them jointly.
-            let zeros: Vec<(Var, Id)> = input_vars
-                .iter()
-                .chain(unknown_syms.iter().map(|w| &w.var))
-                .map(|&v| (v, zero))
-                .collect();
             let written_at_zero = |ctx: &mut Ctx, id: Id| ctx.substitute(id, &zeros).ok();
             // e is affine in the inputs (checked when read; restrictions are affine too).
             let mut rest = e;
