@@ -234,6 +234,11 @@ impl Bounds<'_> {
                         | Op::Add(_)
                         | Op::Mul(..)
                         | Op::Inv(..)
+                        | Op::Log(..)
+                        | Op::Root(..)
+                        | Op::Exp(..)
+                        | Op::Sin(..)
+                        | Op::Cos(..)
                 )
             })
         };
@@ -278,7 +283,10 @@ impl<'p> Limit<'p> {
                 Op::State(_) => false,
                 Op::Add(cs) => cs.iter().all(|&c| konst[c as usize]),
                 Op::Mul(a, b) => konst[*a as usize] && konst[*b as usize],
-                Op::Inv(b, _) => konst[*b as usize],
+                Op::Inv(b, _) | Op::Log(_, b, _) | Op::Root(_, b, _, _) => konst[*b as usize],
+                Op::Exp(_, a, _) | Op::Sin(_, _, a, _) | Op::Cos(_, _, a, _) => konst[*a as usize],
+                Op::Atan(_, a, _) => konst[*a as usize],
+                Op::Atan2(_, a, b, _) => konst[*a as usize] && konst[*b as usize],
                 _ => true,
             };
             konst.push(k);
@@ -297,7 +305,13 @@ impl<'p> Limit<'p> {
             let d0 = &self.prog.deg0[i];
             if g == 0 {
                 self.vals[i][0] = Some(d0.clone());
-                if let Op::Inv(..) = op {
+                if let Op::Inv(..)
+                | Op::Log(..)
+                | Op::Root(..)
+                | Op::Exp(..)
+                | Op::Sin(..)
+                | Op::Cos(..) = op
+                {
                     self.aux[i][0] = Some(Deg::poly(0));
                 }
                 continue;
@@ -329,9 +343,48 @@ impl<'p> Limit<'p> {
                     self.aux[i][g] = s;
                     r
                 }
+                // The series `S = sum_k N^k` of [`Bounds::run`], `S = 1 + N S` by
+                // grade as for the inverse: `log u = log u0 + S(N)` and
+                // `root_q u = root_q(u0) S(N)` with `N = (u - u0)/u0`; `exp`,
+                // `sin`, `cos` of `a`: `d0 S(N)` with `N = a - a0` (the sum of
+                // the two series of sin and cos joins equal bounds).
+                Op::Log(_, u, idx) | Op::Root(_, u, idx, _) if !self.konst[*u as usize] => {
+                    let id = &b.inverses[*idx];
+                    let u = &self.vals[*u as usize];
+                    let s = Self::series_grade(b, &mut self.aux[i], g, |j| {
+                        u[j].as_ref().map(|x| b.bases.mul(x, id))
+                    });
+                    match op {
+                        Op::Log(..) => s,
+                        _ => s.map(|s| b.bases.mul(&s, d0)),
+                    }
+                }
+                Op::Exp(_, a, _) | Op::Sin(_, _, a, _) | Op::Cos(_, _, a, _)
+                    if !self.konst[*a as usize] =>
+                {
+                    let a = &self.vals[*a as usize];
+                    let s = Self::series_grade(b, &mut self.aux[i], g, |j| a[j].clone());
+                    s.map(|s| b.bases.mul(&s, d0))
+                }
                 _ => None,
             };
             self.vals[i][g] = v;
         }
+    }
+
+    /// Grade `g >= 1` of `S = 1 + N S` (kept in `aux`, an op's row), from
+    /// the grades `n(j)`, `1 <= j <= g`, of the nilpotent `N`.
+    fn series_grade(
+        b: &Bounds,
+        aux: &mut [Option<Deg>],
+        g: usize,
+        n: impl Fn(usize) -> Option<Deg>,
+    ) -> Option<Deg> {
+        let s = (1..=g).fold(None, |acc, j| match (n(j), &aux[g - j]) {
+            (Some(u), Some(v)) => b.join(&acc, &Some(b.bases.mul(&u, v))),
+            _ => acc,
+        });
+        aux[g] = s.clone();
+        s
     }
 }
