@@ -305,9 +305,51 @@ impl LieJets {
             xf,
             h,
             vals,
+            flow_word,
+            flow_point,
+            flow_ok,
             ..
         } = sw;
         let sh = &shapes[pos].1;
+        let len = sh.size * sh.w;
+        let reuse = *flow_ok && flow_word.as_slice() == word && *flow_point == point.values;
+        if !reuse {
+            // Invalid until this flow is complete (a bad point leaves it so).
+            *flow_ok = false;
+            Self::flow(self, sh, runs, x, x0f, xf, vals, point)?;
+            flow_word.clear();
+            flow_word.extend_from_slice(word);
+            flow_point.clone_from(&point.values);
+            *flow_ok = true;
+        }
+        let ar = Vals {
+            sh,
+            v: sh.full(),
+            fresh: sh.all(),
+            len,
+            point,
+        };
+        let prog = &self.outputs[output];
+        ar.run(vals, prog, x, xf)?;
+        let (hv, _) = ar.root(vals, prog.roots[0]);
+        h.clear();
+        h.extend_from_slice(hv);
+        Ok(pos)
+    }
+
+    /// The flows of the word's runs at `point`, from the last applied
+    /// (innermost) outwards, into `x` (series of the states) and `xf`.
+    #[allow(clippy::too_many_arguments)]
+    fn flow(
+        &self,
+        sh: &Shape,
+        runs: &[(usize, usize)],
+        x: &mut Vec<Fp>,
+        x0f: &mut Vec<Fl>,
+        xf: &mut Vec<Fl>,
+        vals: &mut Scratch,
+        point: &FpPoint,
+    ) -> Result<(), BadPoint> {
         let len = sh.size * sh.w;
         // x + eps, then the flows from the last applied (innermost) outwards.
         x.clear();
@@ -348,19 +390,7 @@ impl LieJets {
                 }
             }
         }
-        let ar = Vals {
-            sh,
-            v: sh.full(),
-            fresh: sh.all(),
-            len,
-            point,
-        };
-        let prog = &self.outputs[output];
-        ar.run(vals, prog, x, xf)?;
-        let (hv, _) = ar.root(vals, prog.roots[0]);
-        h.clear();
-        h.extend_from_slice(hv);
-        Ok(pos)
+        Ok(())
     }
 
     /// The rows of `L_field^j h_output` for j = 0 to k (the prefixes of the
@@ -478,4 +508,10 @@ struct Sweep {
     /// The series of the output after the last sweep.
     h: Vec<Fp>,
     vals: Scratch,
+    /// The word and point whose flow `x`, `xf` hold (`flow_ok`): a sweep of
+    /// another output along the same word at the same point reuses it, so
+    /// a level of the rank test computes each flow once for all outputs.
+    flow_word: Vec<usize>,
+    flow_point: Vec<Fp>,
+    flow_ok: bool,
 }
