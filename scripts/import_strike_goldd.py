@@ -11,7 +11,9 @@ A verdicts.list line `NAME<TAB>none: REASON` (SymPy did not finish) gives the he
 `# verdict-source: none (REASON)` and no verdict line; `NAME<TAB>symident VERSION: SPEC`
 (benches/peers/sg_symident_verdicts.py, for models SymPy did not finish) cites symident;
 `NAME<TAB>mpmath DIGITS: SPEC` (sg_verdicts.py --digits, for radicals SymPy cannot rank exactly in
-time) cites the floating-point evaluation.
+time) cites the floating-point evaluation; `NAME<TAB>taylor[ (NOTE)]: SPEC` cites
+benches/peers/taylor_rank.py (models too large for symbolic Lie derivatives), NOTE saying how a
+rank below n is bounded from above.
 
 Usage: cargo build --release -p obsan && python3 scripts/import_strike_goldd.py
 """
@@ -61,6 +63,18 @@ def main():
                 f"# verdict-source: independent (SymPy's Lie derivatives, their Jacobian in mpmath at {digits} digits at a random integer point, benches/peers/sg_verdicts.py --digits {digits}; numerical, every kept singular value far above every dropped one)",
                 f"# verdict: {spec}",
             ]
+        elif verdicts[name].startswith("taylor"):
+            # Too large for symbolic Lie derivatives: the Taylor-coefficient oracle
+            # (benches/peers/taylor_rank.py); `taylor (NOTE): SPEC` adds how a rank below n is
+            # bounded from above (the oracle's rank at a point is a lower bound only).
+            who, spec = verdicts[name].rsplit(": ", 1)
+            note = who[len("taylor"):].strip().strip("()")
+            src = "benches/peers/taylor_rank.py: the Jacobian of the outputs' Taylor coefficients in (x(0), params), NumPy modulo 2^31 - 1 at a random point"
+            if note:
+                src += f"; {note}"
+            else:
+                src += ", full rank there: exact"
+            header += [f"# verdict-source: independent ({src})", f"# verdict: {spec}"]
         else:
             header += [
                 "# verdict-source: independent (SymPy: rank of the Lie-derivative Jacobian at a random integer point, benches/peers/sg_verdicts.py)",
