@@ -516,7 +516,8 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
         undecided.extend(d.mode_report.undecided.iter().cloned());
         // A combination input has no name in the model: the decomposition
         // file (read against the model) is written only without them.
-        let plain = m.inputs.iter().all(|i| i.factor.is_none());
+        // Nor with input jets: the file would name the view's coordinates.
+        let plain = m.inputs.iter().all(|i| i.factor.is_none()) && m.jets.is_empty();
         dec = d
             .decomposition_text(&sys_path, nf.restriction.as_deref(), &sets)
             .filter(|_| plain);
@@ -537,6 +538,14 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
                 undecided.extend(c.undecided.iter().cloned());
             }
             checks = Some(cs);
+        }
+    }
+    // Checked over the view's names: now the jets as shown (`u3'`).
+    m.show_input_jets();
+    if let Some(cs) = checks.as_mut() {
+        for c in cs.iter_mut() {
+            c.name = m.show(&c.name);
+            c.detail = m.show(&c.detail);
         }
     }
     undecided.sort();
@@ -610,7 +619,12 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
                     rhs: d.dynamics(k),
                 })
                 .collect(),
-            inputs: nf.inputs.clone(),
+            inputs: nf
+                .inputs
+                .iter()
+                .cloned()
+                .chain(m.input_derivatives())
+                .collect(),
             missing: d.missing(),
             outputs: d
                 .shown_outputs()
@@ -679,7 +693,11 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             );
         }
     } else if a.out_prefix.is_some() && dec.is_none() {
-        eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
+        if m.jets.is_empty() {
+            eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
+        } else {
+            eprintln!("note: nothing written: the reduced system reads the known inputs' derivatives ({}), which a .sys or .dec file cannot name", m.input_derivatives().join(", "));
+        }
     }
     if !modes_ok || !verified {
         return Ok(ExitCode::from(1));
@@ -721,8 +739,23 @@ fn ui_modes_certificate(
             d.missing().join(", ")
         ),
     };
+    let jets = if m.jets.is_empty() {
+        String::new()
+    } else {
+        let shown: Vec<&str> = m
+            .jets
+            .iter()
+            .filter(|j| j.state)
+            .map(|j| j.shown.as_str())
+            .collect();
+        format!(
+            "; the symmetries move with the known inputs: the modes are first integrals over the state and the inputs' jets {0} (coordinates no symmetry moves, so the decomposition checks count {0} among the new variables and the rank), and the reduced system reads the known inputs' time derivatives {1}",
+            shown.join(", "),
+            m.input_derivatives().join(", ")
+        )
+    };
     format!(
-        "{} mode(s){}; {sym}; as many independent modes as the rank with unknown inputs (a non-zero minor, exact; the rank: wrong with probability <= {bound:.1e}); {reduced}",
+        "{} mode(s){}; {sym}{jets}; as many independent modes as the rank with unknown inputs (a non-zero minor, exact; the rank: wrong with probability <= {bound:.1e}); {reduced}",
         d.shown().len(),
         if modes_ok {
             ", each satisfying eq. (11) exactly (canonical forms) for every symmetry"
@@ -763,6 +796,12 @@ fn ui_modes_text(
                 crate::reduced_text::push_mode(&mut o, md, e);
             }
             crate::reduced_text::push_reduced(&mut o, d);
+            if !m.jets.is_empty() {
+                o.push_str(&format!(
+                    "the modes and the reduced system move with the known inputs: the reduced system reads their time derivatives along the trajectory ({}), known inputs too\n",
+                    m.input_derivatives().join(", ")
+                ));
+            }
         }
     }
     if inputs.is_empty() {
@@ -801,7 +840,10 @@ fn ui_modes_text(
     }
     o.push_str(&format!("certificate: {certificate}\n"));
     if let Some(p) = &a.out_prefix {
-        if m.derivation.is_some() && m.inputs.iter().all(|i| i.factor.is_none()) {
+        if m.derivation.is_some()
+            && m.inputs.iter().all(|i| i.factor.is_none())
+            && m.jets.is_empty()
+        {
             o.push_str(&format!("wrote {p}.sys and {p}.dec\n"));
         }
     }

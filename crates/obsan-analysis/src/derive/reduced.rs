@@ -118,16 +118,33 @@ impl Derivation {
         m.kind == ModeKind::Variable && m.name == obsan_model::TIME
     }
 
-    /// The modes the user sees: every one but the clock.
+    /// Whether mode `k` is a known input's jet of the view (`jets`).
+    pub fn is_jet(&self, k: usize) -> bool {
+        let m = &self.modes[k];
+        m.kind == ModeKind::Variable && self.jets.contains(&m.name)
+    }
+
+    /// The modes the user sees: every one but the clock and the jets.
     pub fn shown(&self) -> Vec<usize> {
         (0..self.modes.len())
-            .filter(|&k| !self.is_clock(k))
+            .filter(|&k| !self.is_clock(k) && !self.is_jet(k))
             .collect()
     }
 
-    /// The outputs the user sees: every one but the clock's output `t`.
+    /// The outputs the user sees: every one but the clock's output `t` and
+    /// the jets'.
     pub fn shown_outputs(&self) -> impl Iterator<Item = &(String, Option<String>)> {
-        self.outputs.iter().filter(|o| o.0 != obsan_model::TIME)
+        self.outputs
+            .iter()
+            .filter(|o| o.0 != obsan_model::TIME && !self.jets.contains(&o.0))
+    }
+
+    /// The modes the files state: every one but the clock (the jets are
+    /// coordinates of the decomposition checks).
+    fn filed(&self) -> Vec<usize> {
+        (0..self.modes.len())
+            .filter(|&k| !self.is_clock(k))
+            .collect()
     }
 
     /// A decomposition file (docs/decomposition-format.md) stating the result.
@@ -153,7 +170,7 @@ impl Derivation {
         }
         // The clock stays implicit: the decomposition reader adds it.
         let names: Vec<&str> = self
-            .shown()
+            .filed()
             .into_iter()
             .map(|k| self.modes[k].name.as_str())
             .collect();
@@ -166,21 +183,26 @@ impl Derivation {
     /// lines (shared by the decomposition and the reduced system).
     /// The clock's `t' = 1` and output `t` are never written.
     fn push_equations(&self, o: &mut String, keep: impl Fn(usize) -> bool) -> Option<()> {
-        for k in self.shown().into_iter().filter(|&k| keep(k)) {
+        for k in self.filed().into_iter().filter(|&k| keep(k)) {
             o.push_str(&format!(
                 "{}' = {}\n",
                 self.modes[k].name,
                 self.dynamics(k)?
             ));
         }
-        for (name, e) in self.shown_outputs() {
+        for (name, e) in self.outputs.iter().filter(|o| o.0 != obsan_model::TIME) {
             o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
         }
         Some(())
     }
 
     /// A `.sys` file of the reduced system.
+    /// `None` with input jets: the reduced system reads the inputs'
+    /// derivatives, which a `.sys` file cannot name as such.
     pub fn sys_text(&self, name: &str, description: &str) -> Option<String> {
+        if !self.jets.is_empty() {
+            return None;
+        }
         let mut o = format!(
             "# The reduced system of {name} in its observable modes (derived by `obsan modes`).\n"
         );
@@ -261,6 +283,7 @@ pub fn reduce_in_modes(
         outputs: red.outputs,
         consts: d.consts.clone(),
         reduced_timed_out: red.timed_out,
+        jets: d.jets.clone(),
     })
 }
 
