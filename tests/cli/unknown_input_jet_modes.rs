@@ -183,10 +183,7 @@ fn modes_that_move_with_the_known_input_small() {
         .map(|m| parse(&mut ctx, m["expr"].as_str().unwrap()))
         .collect();
     // The same functions as {x1, x2 + u p}, over the state with u frozen.
-    let hand = [
-        parse(&mut ctx, "x1"),
-        parse(&mut ctx, "x2 + u*p"),
-    ];
+    let hand = [parse(&mut ctx, "x1"), parse(&mut ctx, "x2 + u*p")];
     assert!(independent(&mut ctx, &ms, &vars), "{v}");
     for &h in &hand {
         assert!(depends_on(&mut ctx, h, &ms, &vars), "{v}");

@@ -123,10 +123,16 @@ impl UnknownInputModes {
             }
             d.field_names.iter_mut().for_each(show);
             d.derivatives.iter_mut().flatten().flatten().for_each(show);
-            d.outputs.iter_mut().filter_map(|o| o.1.as_mut()).for_each(show);
+            d.outputs
+                .iter_mut()
+                .filter_map(|o| o.1.as_mut())
+                .for_each(show);
         }
         for ri in &mut self.inputs {
-            ri.factor.iter_mut().chain(ri.offset.iter_mut()).for_each(show);
+            ri.factor
+                .iter_mut()
+                .chain(ri.offset.iter_mut())
+                .for_each(show);
         }
     }
 
@@ -310,7 +316,11 @@ pub fn unknown_input_modes(
         ..derive.clone()
     };
     let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
-    d.jets = jets.iter().filter(|j| j.state).map(|j| j.internal.clone()).collect();
+    d.jets = jets
+        .iter()
+        .filter(|j| j.state)
+        .map(|j| j.internal.clone())
+        .collect();
     if let Some(j) = d.jets.iter().find(|j| {
         !d.modes
             .iter()
