@@ -34,15 +34,24 @@ pub struct JetName {
     pub state: bool,
 }
 
+/// The model with the jets made states ([`jet_view`]).
+pub(crate) struct JetView {
+    pub(crate) view: NormalForm,
+    /// The symmetries over the view: zero on the jets.
+    pub(crate) vectors: Vec<Vec<RatFun>>,
+    pub(crate) names: Vec<JetName>,
+    /// The jets' state indices in the view.
+    pub(crate) rows: Vec<usize>,
+}
+
 /// `nf` (the model, unknown inputs apart) with the jets `jets` (`(input,
-/// order)`, as [`UnknownInputSymmetries::input_jets`]) made states, and the
-/// vectors over it (zero on the jets, the jets' symbols renamed). Returns
-/// the view, the vectors, the jets' names and their state indices.
+/// order)`, as `UnknownInputSymmetries::input_jets`) made states, and the
+/// vectors over it (zero on the jets, the jets' symbols renamed).
 pub(crate) fn jet_view(
     nf: &NormalForm,
     jets: &[(usize, usize)],
     vectors: &[Vec<RatFun>],
-) -> Result<(NormalForm, Vec<Vec<RatFun>>, Vec<JetName>, Vec<usize>), AnalysisError> {
+) -> Result<JetView, AnalysisError> {
     if nf.delay.is_some() {
         return Err(AnalysisError::Invalid(
             "modes that move with the known inputs are not derived with `delay`".into(),
@@ -157,7 +166,12 @@ pub(crate) fn jet_view(
         }
         out.push(e);
     }
-    Ok((v, out, names, rows))
+    Ok(JetView {
+        view: v,
+        vectors: out,
+        names,
+        rows,
+    })
 }
 
 /// A state `name` (variable `var`, no drift, moved by no field) at index `at`.

@@ -35,7 +35,7 @@ use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
 use crate::unknown_input_feedthrough::unknown_input_symmetries;
-use crate::unknown_input_jet_view::{jet_view, show_jets, JetName};
+use crate::unknown_input_jet_view::{jet_view, show_jets, JetName, JetView};
 use crate::unknown_input_joint as joint;
 use crate::unknown_input_symmetry::UnknownInputSymmetries;
 use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun};
@@ -170,38 +170,47 @@ pub fn unknown_input_view(
     AnalysisError,
 > {
     let v = unknown_input_view_with_jets(nf, opts)?;
-    if !v.4.is_empty() {
+    if !v.jets.is_empty() {
         return Err(AnalysisError::Invalid(
             "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): a decomposition file cannot name the inputs' derivatives, so `obsan verify` does not check one; `obsan modes` derives and checks the modes that move with the inputs".into(),
         ));
     }
-    Ok((v.0, v.1, v.2, v.3))
+    Ok((v.symmetries, v.view, v.rank, v.sym))
+}
+
+/// The view of [`unknown_input_view_with_jets`].
+struct View {
+    symmetries: UnknownInputSymmetries,
+    view: NormalForm,
+    rank: RankReport,
+    sym: SymmetryReport,
+    jets: Vec<JetName>,
 }
 
 /// [`unknown_input_view`], and when the symmetries move with the known
 /// inputs the view with their jets made states (unknown_input_jet_view.rs),
 /// whose names are returned (empty otherwise).
-#[allow(clippy::type_complexity)]
-pub fn unknown_input_view_with_jets(
+fn unknown_input_view_with_jets(
     nf: &mut NormalForm,
     opts: UnknownInputOptions,
-) -> Result<
-    (
-        UnknownInputSymmetries,
-        NormalForm,
-        RankReport,
-        SymmetryReport,
-        Vec<JetName>,
-    ),
-    AnalysisError,
-> {
+) -> Result<View, AnalysisError> {
     let deadline = opts.deadline;
     let seed = opts.seed;
     let s = unknown_input_symmetries(nf, opts)?;
-    let (mut view, vectors, jets, rows) = if s.input_dependent() {
+    let JetView {
+        mut view,
+        vectors,
+        names: jets,
+        rows,
+    } = if s.input_dependent() {
         jet_view(nf, &s.input_jets, &s.vectors)?
     } else {
-        (nf.clone(), s.vectors.clone(), Vec::new(), Vec::new())
+        JetView {
+            view: nf.clone(),
+            vectors: s.vectors.clone(),
+            names: Vec::new(),
+            rows: Vec::new(),
+        }
     };
     view.inputs.append(&mut view.unknown_inputs);
     view.input_vars.append(&mut view.unknown_input_vars);
@@ -234,7 +243,13 @@ pub fn unknown_input_view_with_jets(
         blocks: 1,
         undecided,
     };
-    Ok((s, view, rr, sym, jets))
+    Ok(View {
+        symmetries: s,
+        view,
+        rank: rr,
+        sym,
+        jets,
+    })
 }
 
 /// `v` times a function: polynomial entries without a common factor (the
@@ -280,7 +295,13 @@ pub fn unknown_input_modes(
     opts: UnknownInputOptions,
     derive: &DeriveOptions,
 ) -> Result<UnknownInputModes, AnalysisError> {
-    let (s, mut view, rr, sym, jets) = unknown_input_view_with_jets(nf, opts)?;
+    let View {
+        symmetries: s,
+        mut view,
+        rank: rr,
+        sym,
+        jets,
+    } = unknown_input_view_with_jets(nf, opts)?;
     let (n, r) = (s.report.n, s.report.rank);
     // The view's known inputs (the jets' top orders in place of the inputs
     // made states), then the unknown ones.
