@@ -33,6 +33,7 @@
 mod ansatz;
 mod blocks;
 mod exchange;
+mod files;
 mod frame;
 mod monomial;
 
