@@ -185,6 +185,14 @@ fn modes_that_move_with_the_known_input_small() {
     // The same functions as {x1, x2 + u p}, over the state with u frozen.
     let hand = [parse(&mut ctx, "x1"), parse(&mut ctx, "x2 + u*p")];
     assert!(independent(&mut ctx, &ms, &vars), "{v}");
+    // Each mode annihilated by xi = (0, -u, 1) (eq. 11, u held).
+    let xi = [ctx.int(0), parse(&mut ctx, "-u"), ctx.int(1)];
+    for &m in &ms {
+        let g = grad(&mut ctx, m, &vars);
+        let terms: Vec<Id> = g.iter().zip(&xi).map(|(&a, &b)| ctx.mul(&[a, b])).collect();
+        let sum = ctx.add(&terms);
+        assert!(ctx.canon(sum).is_zero(), "{v}");
+    }
     for &h in &hand {
         assert!(depends_on(&mut ctx, h, &ms, &vars), "{v}");
     }
@@ -241,6 +249,20 @@ fn cstr_observer_modes_move_with_the_coolant_feed() {
     ];
     assert!(independent(&mut ctx, &hand, &vars));
     assert!(independent(&mut ctx, &ms, &vars), "{v}");
+    // Each mode is annihilated by the symmetry `obsan symmetries` prints
+    // (w1 = [1, a, 0, b]; eq. 11 taken here, the jets held).
+    let s: Value = serde_json::from_str(&ok(&["symmetries", "--json", f])).unwrap();
+    let w: Vec<Id> = vars
+        .iter()
+        .map(|x| parse(&mut ctx, s["symmetries"][0][x]["text"].as_str().unwrap()))
+        .collect();
+    assert!(ctx.canon(w[2]).is_zero(), "{s}");
+    for &m in &ms {
+        let g = grad(&mut ctx, m, &vars);
+        let terms: Vec<Id> = g.iter().zip(&w).map(|(&a, &b)| ctx.mul(&[a, b])).collect();
+        let sum = ctx.add(&terms);
+        assert!(ctx.canon(sum).is_zero(), "{v}");
+    }
     for &h in &hand {
         assert!(depends_on(&mut ctx, h, &ms, &vars), "{v}");
     }
