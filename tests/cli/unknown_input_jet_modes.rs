@@ -292,3 +292,63 @@ fn cstr_observer_modes_move_with_the_coolant_feed() {
     let out = ok(&["modes", f]);
     assert!(out.contains("u3'"), "{out}");
 }
+
+/// Two unknown inputs, one reconstructable: by hand, y2 = x4 gives w1 =
+/// y2' - y2 (order 1); x2 and p enter only as x2 + u p (y1' = p u + x2), and
+/// w2 is new at every order, so xi = (0, -u, 1, 0) over (x1, x2, p, x4)
+/// (x2 + u p and x1, x4 invariant): modes x1, x4, x2 + u p, rank 3 of 4.
+/// Reduced: x1' = z1, x4' = x4 + w1 (w1 itself), z1' = w2 + p u' (a
+/// combination; p u' no function of the modes). The known inputs' term
+/// p u' is projected along w2, the input that moves the open mode, not
+/// along w1, the first one any mode sees.
+const MIXED: &str = "system mixed
+state x1, x2, x4
+param p
+input u
+unknown input w1, w2
+x1' = p*u + x2
+x2' = w2
+x4' = w1 + x4
+output y1 = x1
+output y2 = x4
+";
+
+#[test]
+fn a_reconstructable_input_beside_modes_that_move_with_the_known_input() {
+    let f = temp_file("mixed_input_dependent.sys", MIXED);
+    let v: Value = serde_json::from_str(&ok(&["modes", "--json", &f])).unwrap();
+    assert_eq!((v["rank"].as_u64(), v["n"].as_u64()), (Some(3), Some(4)));
+    let vars = ["x1", "x2", "p", "x4"];
+    let mut ctx = Ctx::new();
+    let ms: Vec<Id> = v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| parse(&mut ctx, m["expr"].as_str().unwrap()))
+        .collect();
+    assert_eq!(ms.len(), 3, "{v}");
+    let hand = [
+        parse(&mut ctx, "x1"),
+        parse(&mut ctx, "x4"),
+        parse(&mut ctx, "x2 + u*p"),
+    ];
+    assert!(independent(&mut ctx, &ms, &vars), "{v}");
+    for &h in &hand {
+        assert!(depends_on(&mut ctx, h, &ms, &vars), "{v}");
+    }
+    for &m in &ms {
+        assert!(depends_on(&mut ctx, m, &hand, &vars), "{v}");
+    }
+    assert_eq!(v["reduced"]["closed"], true, "{v}");
+    assert_eq!(v["verified"], true, "{v}");
+    let ri = v["reduced_inputs"].as_array().unwrap();
+    let w1 = ri.iter().find(|r| r["input"] == "w1").unwrap();
+    assert!(w1["factor"].is_null(), "{v}");
+    assert_eq!(w1["order"], 1, "{v}");
+    reduced_equations_hold(
+        &v,
+        &vars,
+        &["p*u + x2", "w2", "0", "w1 + x4"],
+        &[("u", "u'")],
+    );
+}

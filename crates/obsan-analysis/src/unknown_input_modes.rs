@@ -395,10 +395,28 @@ pub fn unknown_input_modes(
         let Some(first) = col.iter().position(|c| *c != Some("0")) else {
             continue; // no mode sees w_j
         };
+        // Rows whose derivative along a field still to project is not found.
+        let open = |k: usize| to_project.iter().any(|&i| d.derivatives[k][i].is_none());
         let k0 = match col.iter().position(Option::is_none) {
             None if to_project.is_empty() => {
                 inputs.push(plain(&s, j, w, &d.modes[first].name)?);
                 continue;
+            }
+            // With several unknown inputs, projecting along one that moves
+            // none of the open rows leaves them open (the one-input argument
+            // needs the other inputs' terms gone): take a mode it moves that
+            // is open, else keep the fields for another input and enter w_j
+            // itself when it is reconstructable (`x4' = w1 + x4` beside
+            // `z1' = w2 + p u'`).
+            None if nf.unknown_inputs.len() >= 2 && !open(first) => {
+                match (0..col.len()).find(|&k| col[k] != Some("0") && open(k)) {
+                    Some(k) => k,
+                    None if s.report.reconstructable[j].is_some() => {
+                        inputs.push(plain(&s, j, w, &d.modes[first].name)?);
+                        continue;
+                    }
+                    None => first,
+                }
             }
             None => first,
             Some(k0) => k0,
