@@ -50,6 +50,7 @@ mod sim_drive;
 mod simulate;
 mod simulate_sys;
 mod unknown_input_cmd;
+mod unknown_input_modes_text;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -4,12 +4,12 @@
 
 use crate::cli::{ModesArgs, RankArgs, SymArgs, VerifyArgs};
 use crate::json;
+use crate::unknown_input_modes_text::{order_text, ui_modes_certificate, ui_modes_text};
 use crate::Failure;
 use obsan_analysis::{
     unknown_inputs::unknown_input_modes,
     unknown_inputs::unknown_input_rank,
     unknown_inputs::unknown_input_symmetries,
-    unknown_inputs::UnknownInputModes,
     unknown_inputs::UnknownInputOptions,
     unknown_inputs::UnknownInputReport,
     unknown_inputs::{inputs_driving_modes, unknown_input_view},
@@ -174,14 +174,6 @@ pub fn symmetries(a: &SymArgs, nf: &mut NormalForm) -> Result<ExitCode, Failure>
     }
     out!("{o}");
     Ok(ExitCode::SUCCESS)
-}
-
-fn order_text(o: Option<usize>) -> String {
-    match o {
-        Some(0) => "from the outputs".to_string(),
-        Some(m) => format!("from output derivatives of order {m}"),
-        None => String::new(),
-    }
 }
 
 pub fn rank(a: &RankArgs, nf: &NormalForm) -> Result<ExitCode, Failure> {
@@ -516,7 +508,8 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
         undecided.extend(d.mode_report.undecided.iter().cloned());
         // A combination input has no name in the model: the decomposition
         // file (read against the model) is written only without them.
-        let plain = m.inputs.iter().all(|i| i.factor.is_none());
+        // Nor with input jets: the file would name the view's coordinates.
+        let plain = m.inputs.iter().all(|i| i.factor.is_none()) && m.jets.is_empty();
         dec = d
             .decomposition_text(&sys_path, nf.restriction.as_deref(), &sets)
             .filter(|_| plain);
@@ -537,6 +530,14 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
                 undecided.extend(c.undecided.iter().cloned());
             }
             checks = Some(cs);
+        }
+    }
+    // Checked over the view's names: now the jets as shown (`u3'`).
+    m.show_input_jets();
+    if let Some(cs) = checks.as_mut() {
+        for c in cs.iter_mut() {
+            c.name = m.show(&c.name);
+            c.detail = m.show(&c.detail);
         }
     }
     undecided.sort();
@@ -610,7 +611,12 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
                     rhs: d.dynamics(k),
                 })
                 .collect(),
-            inputs: nf.inputs.clone(),
+            inputs: nf
+                .inputs
+                .iter()
+                .cloned()
+                .chain(m.input_derivatives())
+                .collect(),
             missing: d.missing(),
             outputs: d
                 .shown_outputs()
@@ -679,133 +685,16 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             );
         }
     } else if a.out_prefix.is_some() && dec.is_none() {
-        eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
+        if m.jets.is_empty() {
+            eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
+        } else {
+            eprintln!("note: nothing written: the reduced system reads the known inputs' derivatives ({}), which a .sys or .dec file cannot name", m.input_derivatives().join(", "));
+        }
     }
     if !modes_ok || !verified {
         return Ok(ExitCode::from(1));
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// What proves the modes and the reduced system with unknown inputs.
-fn ui_modes_certificate(
-    m: &UnknownInputModes,
-    full: bool,
-    verified: bool,
-    modes_ok: bool,
-    checks: &Option<Vec<obsan_analysis::Check>>,
-    bound: f64,
-) -> String {
-    let sym = format!(
-        "{} symmetr{} certified exactly ({} identities: each leaves the outputs invariant, its brackets with the fields in the span of the symmetries and the unknown inputs' fields)",
-        m.symmetries.vectors.len(),
-        if m.symmetries.vectors.len() == 1 { "y" } else { "ies" },
-        m.symmetries.identities
-    );
-    if full {
-        return format!(
-            "every variable observable with unknown inputs (the rank test: wrong with probability <= {bound:.1e}); the reduced system is the model, each unknown input its fields move reconstructable (the rank test's order)"
-        );
-    }
-    let Some(d) = &m.derivation else {
-        return String::new();
-    };
-    let reduced = match checks {
-        Some(c) if verified => format!(
-            "the reduced system writes every output and every field (the known inputs', and each unknown input's or its combination's) in the modes, proven by exact substitution ({} checks)",
-            c.len()
-        ),
-        Some(_) => "reduced system: a decomposition check FAILED".to_string(),
-        None => format!(
-            "reduced system not closed: no form in the modes found for {}",
-            d.missing().join(", ")
-        ),
-    };
-    format!(
-        "{} mode(s){}; {sym}; as many independent modes as the rank with unknown inputs (a non-zero minor, exact; the rank: wrong with probability <= {bound:.1e}); {reduced}",
-        d.shown().len(),
-        if modes_ok {
-            ", each satisfying eq. (11) exactly (canonical forms) for every symmetry"
-        } else {
-            ": a mode check FAILED"
-        }
-    )
-}
-
-/// The text report of [`modes`].
-fn ui_modes_text(
-    a: &ModesArgs,
-    nf: &NormalForm,
-    m: &UnknownInputModes,
-    (title, (rank, n)): (&str, (usize, usize)),
-    exprs: &[String],
-    inputs: &[json::ReducedUnknownInput],
-    certificate: &str,
-) -> String {
-    let k = m.symmetries.vectors.len();
-    let mut o = format!(
-        "{title}: unknown inputs [{}]; rank {rank} of {n} with unknown inputs, {k} symmetr{}",
-        nf.unknown_inputs.join(", "),
-        if k == 1 { "y" } else { "ies" }
-    );
-    match &m.derivation {
-        None => o.push_str(
-            ": every variable is observable; the modes are the variables and the reduced system is the model itself\n",
-        ),
-        Some(d) => {
-            let shown = d.shown();
-            let k = shown.len();
-            o.push_str(&format!(
-                "; {k} observable mode{}:\n",
-                if k == 1 { "" } else { "s" }
-            ));
-            for (e, md) in exprs.iter().zip(shown.iter().map(|&j| &d.modes[j])) {
-                crate::reduced_text::push_mode(&mut o, md, e);
-            }
-            crate::reduced_text::push_reduced(&mut o, d);
-        }
-    }
-    if inputs.is_empty() {
-        o.push_str("unknown inputs in the reduced system: (none)\n");
-    } else {
-        let items: Vec<String> = inputs
-            .iter()
-            .map(|i| match &i.factor {
-                None => format!(
-                    "{} ({}, reconstructable {})",
-                    i.name,
-                    i.input,
-                    order_text(i.order)
-                ),
-                Some(f) if i.order == Some(0) => format!(
-                    "{} = ({f})*{}{} (a combination: the output {} reads it, no mode sees {})",
-                    i.name,
-                    i.input,
-                    i.offset.as_ref().map(|o| format!(" + {o}")).unwrap_or_default(),
-                    i.mode,
-                    i.input
-                ),
-                Some(f) => format!(
-                    "{} = ({f})*{}{} (a combination; reconstructable from the first derivative of {})",
-                    i.name,
-                    i.input,
-                    i.offset.as_ref().map(|o| format!(" + {o}")).unwrap_or_default(),
-                    i.mode
-                ),
-            })
-            .collect();
-        o.push_str(&format!(
-            "unknown inputs in the reduced system: {}\n",
-            items.join("; ")
-        ));
-    }
-    o.push_str(&format!("certificate: {certificate}\n"));
-    if let Some(p) = &a.out_prefix {
-        if m.derivation.is_some() && m.inputs.iter().all(|i| i.factor.is_none()) {
-            o.push_str(&format!("wrote {p}.sys and {p}.dec\n"));
-        }
-    }
-    o
 }
 
 /// `obsan verify` with unknown inputs: the decomposition's checks over the

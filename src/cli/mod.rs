@@ -185,7 +185,10 @@ A model with unknown inputs (obsan modes systems/benchmarks/unknown-inputs/unicy
 gets the first integrals of its certified symmetries as modes and a reduced system driven by the
 known inputs and the reconstructable unknown inputs, or combinations factor*w of them
 (docs/engine.md, \"Modes with unknown inputs\"); exit 2 naming the mode and the input when it
-would need one that is not reconstructable. With unknown inputs --json prints {system,
+would need one that is not reconstructable. When the symmetries move with the known inputs
+(cstr_observer.sys: u3, u3' in them) the modes are functions of the state and those jets, and
+the reduced system reads the inputs' time derivatives (u3', u3'': reduced.inputs; no files
+written). With unknown inputs --json prints {system,
 restriction, n, rank, full_rank, unknown_inputs, symmetries, modes, reduced (null at full rank),
 reduced_inputs ([{name, input, factor (null: the input itself), offset (drift and known-input
 terms added), mode, order (of the output

@@ -179,7 +179,8 @@ pub struct Reduced {
     pub closed: bool,
     /// Each mode's dynamics.
     pub dynamics: Vec<ReducedDynamics>,
-    /// The known inputs.
+    /// The known inputs; with unknown inputs whose symmetries move with the known inputs,
+    /// then the known inputs' time derivatives the reduced system reads (`u3'`, `u3''`).
     pub inputs: Vec<String>,
     /// What could not be written in the modes.
     pub missing: Vec<String>,

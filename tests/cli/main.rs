@@ -30,6 +30,7 @@ mod surface;
 mod symmetry_invariance;
 mod trust;
 mod tutorial;
+mod unknown_input_jet_modes;
 mod unknown_input_jets;
 mod unknown_inputs;
 mod util;

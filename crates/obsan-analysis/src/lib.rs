@@ -38,6 +38,7 @@ mod sym_report;
 mod symmetry;
 mod unknown_input;
 mod unknown_input_feedthrough;
+mod unknown_input_jet_view;
 mod unknown_input_jets;
 mod unknown_input_joint;
 mod unknown_input_martinelli;
@@ -104,6 +105,7 @@ pub mod unknown_inputs {
         unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
     };
     pub use crate::unknown_input_feedthrough::unknown_input_symmetries;
+    pub use crate::unknown_input_jet_view::JetName;
     pub use crate::unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
     pub use crate::unknown_input_modes::{
         inputs_driving_modes, unknown_input_modes, unknown_input_view, ReducedInput,

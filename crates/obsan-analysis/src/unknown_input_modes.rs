@@ -30,11 +30,12 @@
 //!   system reported not closed, never wrong.
 
 use crate::decided::undecided_atoms_of;
-use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions};
+use crate::derive::{derive_modes, reduce_in_modes, Derivation, DeriveOptions, ModeKind};
 use crate::rank::{rank, AnalysisError, RankOptions, RankReport};
 use crate::sym_report::{Certificate, SymmetryReport};
 use crate::unknown_input::UnknownInputOptions;
 use crate::unknown_input_feedthrough::unknown_input_symmetries;
+use crate::unknown_input_jet_view::{jet_view, show_jets, JetName, JetView};
 use crate::unknown_input_joint as joint;
 use crate::unknown_input_symmetry::UnknownInputSymmetries;
 use obsan_expr::{Fp, FpEchelon, FpField, Id, RatFun};
@@ -89,10 +90,73 @@ pub struct UnknownInputModes {
     pub derivation: Option<Derivation>,
     /// The unknown inputs (or combinations) the reduced system needs.
     pub inputs: Vec<ReducedInput>,
+    /// The known inputs' jets the view made coordinates, when the symmetries
+    /// move with the known inputs (unknown_input_jet_view.rs); empty otherwise.
+    pub jets: Vec<JetName>,
+}
+
+impl UnknownInputModes {
+    /// What is shown: the jets' internal names (`u3_d1`) replaced by their
+    /// shown ones (`u3'`) in the modes' texts and forms, the reduced system
+    /// and the combinations. The decomposition checks read the internal
+    /// names: call this after them.
+    pub fn show_input_jets(&mut self) {
+        if self.jets.is_empty() {
+            return;
+        }
+        let jets = &self.jets;
+        let ctx = &mut self.view.ctx;
+        let map: Vec<(obsan_expr::Var, Id)> = jets
+            .iter()
+            .filter_map(|j| {
+                let v = ctx.lookup(&j.internal)?.var;
+                Some((v, ctx.symbol(&j.shown).id))
+            })
+            .collect();
+        let show = |t: &mut String| *t = show_jets(t, jets);
+        if let Some(d) = &mut self.derivation {
+            for m in &mut d.modes {
+                show(&mut m.text);
+                if let Ok(e) = ctx.substitute(m.expr, &map) {
+                    m.expr = e;
+                }
+            }
+            d.field_names.iter_mut().for_each(show);
+            d.derivatives.iter_mut().flatten().flatten().for_each(show);
+            d.outputs
+                .iter_mut()
+                .filter_map(|o| o.1.as_mut())
+                .for_each(show);
+        }
+        for ri in &mut self.inputs {
+            ri.factor
+                .iter_mut()
+                .chain(ri.offset.iter_mut())
+                .for_each(show);
+        }
+    }
+
+    /// `text` (a check of the view) with the jets as shown.
+    pub fn show(&self, text: &str) -> String {
+        show_jets(text, &self.jets)
+    }
+
+    /// The known inputs' derivatives the reduced system reads, as shown
+    /// (`u3'`, `u3''`; the values `u3` are the model's inputs).
+    pub fn input_derivatives(&self) -> Vec<String> {
+        self.jets
+            .iter()
+            .filter(|j| j.shown.ends_with('\''))
+            .map(|j| j.shown.clone())
+            .collect()
+    }
 }
 
 /// The view, its rank report and the symmetries as the known-input
-/// derivation and checks read them (module docs).
+/// derivation and checks read them (module docs). Symmetries that move with
+/// the known inputs are refused here (`obsan verify`: a decomposition file
+/// cannot name the inputs' derivatives); `obsan modes` reads them through
+/// [`unknown_input_view_with_jets`].
 pub fn unknown_input_view(
     nf: &mut NormalForm,
     opts: UnknownInputOptions,
@@ -105,15 +169,49 @@ pub fn unknown_input_view(
     ),
     AnalysisError,
 > {
+    let v = unknown_input_view_with_jets(nf, opts)?;
+    if !v.jets.is_empty() {
+        return Err(AnalysisError::Invalid(
+            "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): a decomposition file cannot name the inputs' derivatives, so `obsan verify` does not check one; `obsan modes` derives and checks the modes that move with the inputs".into(),
+        ));
+    }
+    Ok((v.symmetries, v.view, v.rank, v.sym))
+}
+
+/// The view of [`unknown_input_view_with_jets`].
+struct View {
+    symmetries: UnknownInputSymmetries,
+    view: NormalForm,
+    rank: RankReport,
+    sym: SymmetryReport,
+    jets: Vec<JetName>,
+}
+
+/// [`unknown_input_view`], and when the symmetries move with the known
+/// inputs the view with their jets made states (unknown_input_jet_view.rs),
+/// whose names are returned (empty otherwise).
+fn unknown_input_view_with_jets(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<View, AnalysisError> {
     let deadline = opts.deadline;
     let seed = opts.seed;
     let s = unknown_input_symmetries(nf, opts)?;
-    if s.input_dependent() {
-        return Err(AnalysisError::Invalid(
-            "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): modes that move with the input are not derived".into(),
-        ));
-    }
-    let mut view = nf.clone();
+    let JetView {
+        mut view,
+        vectors,
+        names: jets,
+        rows,
+    } = if s.input_dependent() {
+        jet_view(nf, &s.input_jets, &s.vectors)?
+    } else {
+        JetView {
+            view: nf.clone(),
+            vectors: s.vectors.clone(),
+            names: Vec::new(),
+            rows: Vec::new(),
+        }
+    };
     view.inputs.append(&mut view.unknown_inputs);
     view.input_vars.append(&mut view.unknown_input_vars);
     view.fields.append(&mut view.unknown_fields);
@@ -126,14 +224,18 @@ pub fn unknown_input_view(
         },
     )?;
     // The view treats the unknown inputs as known: its rank is an upper bound;
-    // the modes are counted by the unknown-input rank.
-    rr.rank = s.report.rank;
+    // the modes are counted by the unknown-input rank (plus the jets, each
+    // observable and moved by no symmetry).
+    rr.rank = s.report.rank + rows.len();
     rr.observable = s.report.observable.iter().map(Option::is_some).collect();
+    for &r in &rows {
+        rr.observable.insert(r, true);
+    }
     let undecided = undecided_atoms_of(nf, &[]);
     let sym = SymmetryReport {
-        n: s.report.n,
-        rank: s.report.rank,
-        vectors: s.vectors.iter().map(|v| primitive(&nf.ctx, v)).collect(),
+        n: s.report.n + rows.len(),
+        rank: s.report.rank + rows.len(),
+        vectors: vectors.iter().map(|v| primitive(&view.ctx, v)).collect(),
         free: vec![],
         exact: true,
         rows_checked: s.identities,
@@ -141,7 +243,13 @@ pub fn unknown_input_view(
         blocks: 1,
         undecided,
     };
-    Ok((s, view, rr, sym))
+    Ok(View {
+        symmetries: s,
+        view,
+        rank: rr,
+        sym,
+        jets,
+    })
 }
 
 /// `v` times a function: polynomial entries without a common factor (the
@@ -187,9 +295,17 @@ pub fn unknown_input_modes(
     opts: UnknownInputOptions,
     derive: &DeriveOptions,
 ) -> Result<UnknownInputModes, AnalysisError> {
-    let (s, mut view, rr, sym) = unknown_input_view(nf, opts)?;
+    let View {
+        symmetries: s,
+        mut view,
+        rank: rr,
+        sym,
+        jets,
+    } = unknown_input_view_with_jets(nf, opts)?;
     let (n, r) = (s.report.n, s.report.rank);
-    let known = nf.inputs.len();
+    // The view's known inputs (the jets' top orders in place of the inputs
+    // made states), then the unknown ones.
+    let known = view.inputs.len() - nf.unknown_inputs.len();
     if r == 0 {
         return Err(AnalysisError::Invalid(
             "nothing is observable with the unknown inputs (rank 0): there is no mode".into(),
@@ -211,6 +327,7 @@ pub fn unknown_input_modes(
             sym,
             derivation: None,
             inputs,
+            jets,
         });
     }
     // The unknown inputs' columns are projected below: the derivation's
@@ -220,6 +337,20 @@ pub fn unknown_input_modes(
         ..derive.clone()
     };
     let mut d = derive_modes(&mut view, &rr, &sym, derive)?;
+    d.jets = jets
+        .iter()
+        .filter(|j| j.state)
+        .map(|j| j.internal.clone())
+        .collect();
+    if let Some(j) = d.jets.iter().find(|j| {
+        !d.modes
+            .iter()
+            .any(|m| m.kind == ModeKind::Variable && &m.name == *j)
+    }) {
+        return Err(AnalysisError::Invalid(format!(
+            "internal: the modes that move with the known inputs lost the input jet {j} as a coordinate: not derived"
+        )));
+    }
     let mut inputs = Vec::new();
     let mut rescaled = false;
     // The drift and known fields whose derivatives are not functions of the
@@ -240,7 +371,7 @@ pub fn unknown_input_modes(
         })
         .collect();
     let joint = if needs.len() >= 2 {
-        joint_inputs(nf, &mut view, &d, &needs, &to_project, derive.seed)?
+        joint_inputs(nf, known, &mut view, &d, &needs, &to_project, derive.seed)?
     } else {
         None
     };
@@ -264,10 +395,28 @@ pub fn unknown_input_modes(
         let Some(first) = col.iter().position(|c| *c != Some("0")) else {
             continue; // no mode sees w_j
         };
+        // Rows whose derivative along a field still to project is not found.
+        let open = |k: usize| to_project.iter().any(|&i| d.derivatives[k][i].is_none());
         let k0 = match col.iter().position(Option::is_none) {
             None if to_project.is_empty() => {
                 inputs.push(plain(&s, j, w, &d.modes[first].name)?);
                 continue;
+            }
+            // With several unknown inputs, projecting along one that moves
+            // none of the open rows leaves them open (the one-input argument
+            // needs the other inputs' terms gone): take a mode it moves that
+            // is open, else keep the fields for another input and enter w_j
+            // itself when it is reconstructable (`x4' = w1 + x4` beside
+            // `z1' = w2 + p u'`).
+            None if nf.unknown_inputs.len() >= 2 && !open(first) => {
+                match (0..col.len()).find(|&k| col[k] != Some("0") && open(k)) {
+                    Some(k) => k,
+                    None if s.report.reconstructable[j].is_some() => {
+                        inputs.push(plain(&s, j, w, &d.modes[first].name)?);
+                        continue;
+                    }
+                    None => first,
+                }
             }
             None => first,
             Some(k0) => k0,
@@ -307,7 +456,7 @@ pub fn unknown_input_modes(
         });
         rescaled = true;
     }
-    rescaled |= output_held(nf, &mut view, &mut inputs)?;
+    rescaled |= output_held(nf, known, &mut view, &mut inputs)?;
     if rescaled {
         d = reduce_in_modes(&mut view, &sym, &d, derive)?;
         independent_inputs(&mut view, &d, &inputs, derive.seed)?;
@@ -319,6 +468,7 @@ pub fn unknown_input_modes(
         sym,
         derivation: Some(d),
         inputs,
+        jets,
     })
 }
 
@@ -331,10 +481,10 @@ pub fn unknown_input_modes(
 /// and the outputs read `w = (w~ - offset)/beta`. Returns whether any was.
 fn output_held(
     nf: &NormalForm,
+    known: usize,
     view: &mut NormalForm,
     inputs: &mut Vec<ReducedInput>,
 ) -> Result<bool, AnalysisError> {
-    let known = nf.inputs.len();
     let mut any = false;
     for (j, w) in nf.unknown_inputs.iter().enumerate() {
         if inputs.iter().any(|ri| &ri.input == w) {
@@ -408,13 +558,13 @@ fn rename_in_outputs(
 /// w_b + moved terms`; `None` when the modes cannot be paired with them.
 fn joint_inputs(
     nf: &NormalForm,
+    known: usize,
     view: &mut NormalForm,
     d: &Derivation,
     needs: &[usize],
     to_project: &[usize],
     seed: u64,
 ) -> Result<Option<Vec<ReducedInput>>, AnalysisError> {
-    let known = nf.inputs.len();
     let slots: Vec<usize> = needs.iter().map(|j| known + j).collect();
     let Some(k) = joint::pair_modes(view, d, &slots, seed) else {
         return Ok(None);

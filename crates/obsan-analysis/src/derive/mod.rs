@@ -33,6 +33,7 @@
 mod ansatz;
 mod blocks;
 mod exchange;
+mod files;
 mod frame;
 mod monomial;
 
@@ -144,6 +145,10 @@ pub struct Derivation {
     pub consts: Vec<String>,
     /// The search for the reduced system stopped at the deadline.
     pub reduced_timed_out: bool,
+    /// States of the view that are known inputs' jets (modes that move with
+    /// the inputs, unknown_input_jet_view.rs): modes and outputs of the
+    /// derivation and its checks, hidden from what is shown like the clock.
+    pub jets: Vec<String>,
 }
 
 pub(super) fn check_deadline(
@@ -294,6 +299,7 @@ fn derive_dense(
         outputs,
         consts,
         reduced_timed_out: timed_out,
+        jets: Vec::new(),
     })
 }
 

@@ -108,116 +108,6 @@ impl Derivation {
             .iter()
             .all(|d| d.as_deref() == Some("0"))
     }
-
-    /// Whether mode `k` is the clock of a system with explicit time: the
-    /// variable `t` (observable through the clock's output `t`), a mode of
-    /// every such system, which the files and the text leave implicit
-    /// (`t` is time, never declared; docs/sys-format.md, "Explicit time").
-    pub fn is_clock(&self, k: usize) -> bool {
-        let m = &self.modes[k];
-        m.kind == ModeKind::Variable && m.name == obsan_model::TIME
-    }
-
-    /// The modes the user sees: every one but the clock.
-    pub fn shown(&self) -> Vec<usize> {
-        (0..self.modes.len())
-            .filter(|&k| !self.is_clock(k))
-            .collect()
-    }
-
-    /// The outputs the user sees: every one but the clock's output `t`.
-    pub fn shown_outputs(&self) -> impl Iterator<Item = &(String, Option<String>)> {
-        self.outputs.iter().filter(|o| o.0 != obsan_model::TIME)
-    }
-
-    /// A decomposition file (docs/decomposition-format.md) stating the result.
-    pub fn decomposition_text(
-        &self,
-        system_path: &str,
-        restriction: Option<&str>,
-        set: &[(String, String)],
-    ) -> Option<String> {
-        let mut o =
-            String::from("# Observable modes and reduced dynamics derived by `obsan modes`.\n");
-        o.push_str(&format!("system {system_path}\n"));
-        if let Some(r) = restriction {
-            o.push_str(&format!("input {r}\n"));
-        }
-        for (k, v) in set {
-            o.push_str(&format!("set {k} = {v}\n"));
-        }
-        for m in &self.modes {
-            if m.kind != ModeKind::Variable {
-                o.push_str(&format!("let {} = {}\n", m.name, m.text));
-            }
-        }
-        // The clock stays implicit: the decomposition reader adds it.
-        let names: Vec<&str> = self
-            .shown()
-            .into_iter()
-            .map(|k| self.modes[k].name.as_str())
-            .collect();
-        o.push_str(&format!("state {}\n", names.join(", ")));
-        self.push_equations(&mut o, |_| true)?;
-        Some(o)
-    }
-
-    /// The dynamics of the modes `keep` selects, then the outputs, as `.sys`
-    /// lines (shared by the decomposition and the reduced system).
-    /// The clock's `t' = 1` and output `t` are never written.
-    fn push_equations(&self, o: &mut String, keep: impl Fn(usize) -> bool) -> Option<()> {
-        for k in self.shown().into_iter().filter(|&k| keep(k)) {
-            o.push_str(&format!(
-                "{}' = {}\n",
-                self.modes[k].name,
-                self.dynamics(k)?
-            ));
-        }
-        for (name, e) in self.shown_outputs() {
-            o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
-        }
-        Some(())
-    }
-
-    /// A `.sys` file of the reduced system.
-    pub fn sys_text(&self, name: &str, description: &str) -> Option<String> {
-        let mut o = format!(
-            "# The reduced system of {name} in its observable modes (derived by `obsan modes`).\n"
-        );
-        o.push_str(&format!("system {name}_modes\n"));
-        o.push_str(&format!("description {description}\n"));
-        for k in self.shown() {
-            let m = &self.modes[k];
-            o.push_str(&format!("# {} = {}\n", m.name, m.text));
-        }
-        let states: Vec<&str> = self
-            .shown()
-            .into_iter()
-            .filter(|&k| !self.is_constant(k))
-            .map(|k| self.modes[k].name.as_str())
-            .collect();
-        let params: Vec<&str> = self
-            .shown()
-            .into_iter()
-            .filter(|&k| self.is_constant(k))
-            .map(|k| self.modes[k].name.as_str())
-            .collect();
-        if !states.is_empty() {
-            o.push_str(&format!("state {}\n", states.join(", ")));
-        }
-        if !params.is_empty() {
-            o.push_str(&format!("param {}\n", params.join(", ")));
-        }
-        if !self.consts.is_empty() {
-            o.push_str(&format!("const {}\n", self.consts.join(", ")));
-        }
-        let inputs = self.inputs();
-        if !inputs.is_empty() {
-            o.push_str(&format!("input {}\n", inputs.join(", ")));
-        }
-        self.push_equations(&mut o, |k| !self.is_constant(k))?;
-        Some(o)
-    }
 }
 
 /// `L_field g` (the derivation's Lie derivative, for callers outside it).
@@ -261,6 +151,7 @@ pub fn reduce_in_modes(
         outputs: red.outputs,
         consts: d.consts.clone(),
         reduced_timed_out: red.timed_out,
+        jets: d.jets.clone(),
     })
 }
 
