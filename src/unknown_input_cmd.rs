@@ -12,7 +12,9 @@ use obsan_analysis::{
     unknown_inputs::unknown_input_symmetries,
     unknown_inputs::UnknownInputOptions,
     unknown_inputs::UnknownInputReport,
-    unknown_inputs::{inputs_driving_modes, unknown_input_view},
+    unknown_inputs::{
+        combination_checks, inputs_driving_modes, is_jet_check, unknown_input_view_jets,
+    },
     verify_decomposition_with, Check, Decomposition, DeriveOptions, RankReport, SymmetryReport,
 };
 use obsan_model::NormalForm;
@@ -506,26 +508,32 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     let (mut dec, mut sys_text, mut checks) = (None, None, None);
     if let Some(d) = &m.derivation {
         undecided.extend(d.mode_report.undecided.iter().cloned());
-        // A combination input has no name in the model: the decomposition
-        // file (read against the model) is written only without them.
-        // Nor with input jets: the file would name the view's coordinates.
-        let plain = m.inputs.iter().all(|i| i.factor.is_none()) && m.jets.is_empty();
+        // A combination input has no name in the model: the file read
+        // against the model defines it (`combination d_z2 = ...`), and
+        // declares the inputs' derivatives it reads (`derivative u3_d1 = u3'`).
         dec = d
             .decomposition_text(&sys_path, nf.restriction.as_deref(), &sets)
-            .filter(|_| plain);
+            .map(|t| with_combinations(&t, &m.inputs));
         sys_text = d
             .sys_text(&nf.name, &format!("observable modes of {title}"))
             .map(|t| unknown_inputs_declared(&t, &nf.inputs));
+        // Checked over the view the derivation ran on (a combination is an
+        // input there), the jets added as the reader adds them.
         let text = d.decomposition_text(&sys_path, nf.restriction.as_deref(), &sets);
         if let Some(t) = &text {
-            let cs = obsan_analysis::verify_derivation(
+            let internal = |e: obsan_analysis::AnalysisError| {
+                Failure(format!("internal: the derived decomposition: {e}"))
+            };
+            let dj = Decomposition::parse(t, "derived decomposition")
+                .and_then(|x| x.with_input_jets(view, &m.jets))
+                .map_err(internal)?;
+            let cs = obsan_analysis::verify_decomposition_with(
                 view,
-                t,
-                "derived decomposition",
+                &dj,
                 a.seed,
-                (&m.rank, &m.sym),
+                Some((&m.rank, &m.sym)),
             )
-            .map_err(|e| Failure(format!("internal: the derived decomposition: {e}")))?;
+            .map_err(internal)?;
             for c in &cs {
                 undecided.extend(c.undecided.iter().cloned());
             }
@@ -711,7 +719,7 @@ pub fn verify_checks(
     let deadline =
         a.an.timeout
             .map(|s| Instant::now() + Duration::from_secs_f64(s.max(0.0)));
-    let (s, mut view, rr, sym) = unknown_input_view(
+    let (s, mut view, rr, sym, jets) = unknown_input_view_jets(
         nf,
         UnknownInputOptions {
             seed: a.an.seed,
@@ -720,11 +728,24 @@ pub fn verify_checks(
         },
     )
     .map_err(|e| Failure(format!("{}: {e}", a.file)))?;
+    let d = &d
+        .with_input_jets(&view, &jets)
+        .map_err(|e| Failure(e.to_string()))?;
     let mut checks = verify_decomposition_with(&mut view, d, a.an.seed, Some((&rr, &sym)))
         .map_err(|e| Failure(e.to_string()))?;
+    for c in checks.iter_mut().filter(|c| is_jet_check(c, &jets)) {
+        c.name = format!(
+            "{} (a known input's jet: a mode of every such decomposition)",
+            c.name
+        );
+    }
+    // An unknown input a combination reads is recovered through it.
+    let (combos, covered) =
+        combination_checks(&mut view, d, &nf.unknown_inputs).map_err(|e| Failure(e.to_string()))?;
+    checks.extend(combos);
     let drives = inputs_driving_modes(nf, &s.vectors, a.an.seed);
     for (j, w) in nf.unknown_inputs.iter().enumerate() {
-        if !drives[j] {
+        if !drives[j] || covered.contains(w) {
             continue;
         }
         let order = s.report.reconstructable[j];
@@ -747,6 +768,31 @@ pub fn verify_checks(
     Ok((rr, sym, checks, bound))
 }
 
+/// The decomposition text with each unknown-input combination the reduced
+/// system reads defined (`combination w_z2 = (factor)*w + (offset)`, the
+/// view's names), before the `state` line.
+fn with_combinations(
+    text: &str,
+    inputs: &[obsan_analysis::unknown_inputs::ReducedInput],
+) -> String {
+    let mut defs = String::new();
+    for i in inputs {
+        let Some(f) = &i.factor else { continue };
+        let off = match i.offset.as_deref() {
+            Some(o) if o != "0" => format!(" + ({o})"),
+            _ => String::new(),
+        };
+        defs.push_str(&format!(
+            "combination {} = ({f})*{}{off}\n",
+            i.name, i.input
+        ));
+    }
+    match text.find("\nstate ") {
+        Some(k) => format!("{}{defs}{}", &text[..=k], &text[k + 1..]),
+        None => format!("{text}{defs}"),
+    }
+}
+
 /// The reduced `.sys` text with the inputs that are not the model's known
 /// ones (the unknown inputs and their combinations) declared `unknown input`.
 fn unknown_inputs_declared(text: &str, known: &[String]) -> String {
@@ -755,8 +801,10 @@ fn unknown_inputs_declared(text: &str, known: &[String]) -> String {
         match line.strip_prefix("input ") {
             Some(list) => {
                 let names: Vec<&str> = list.split(',').map(str::trim).collect();
-                let (k, u): (Vec<&str>, Vec<&str>) =
-                    names.iter().partition(|n| known.iter().any(|x| x == *n));
+                // A derived input (`u3_d1 = rate(u3)`) is known.
+                let (k, u): (Vec<&str>, Vec<&str>) = names
+                    .iter()
+                    .partition(|n| n.contains('=') || known.iter().any(|x| x == *n));
                 if !k.is_empty() {
                     o.push_str(&format!("input {}\n", k.join(", ")));
                 }

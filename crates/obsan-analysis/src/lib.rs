@@ -21,6 +21,7 @@ mod along_report;
 mod along_sym;
 mod decided;
 mod decomp;
+mod decomp_jets;
 mod derive;
 mod design;
 mod experiments;
@@ -101,6 +102,8 @@ pub mod global_id {
 /// Observability with unknown inputs: the extended rank test, Martinelli's algorithm and
 /// the symmetries of a system with unknown inputs.
 pub mod unknown_inputs {
+    pub use crate::decomp::combination_checks;
+    pub use crate::decomp_jets::is_jet_check;
     pub use crate::unknown_input::{
         unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
     };
@@ -108,8 +111,8 @@ pub mod unknown_inputs {
     pub use crate::unknown_input_jet_view::JetName;
     pub use crate::unknown_input_martinelli::{martinelli, MartinelliReport, MartinelliStep};
     pub use crate::unknown_input_modes::{
-        inputs_driving_modes, unknown_input_modes, unknown_input_view, ReducedInput,
-        UnknownInputModes,
+        inputs_driving_modes, unknown_input_modes, unknown_input_view, unknown_input_view_jets,
+        ReducedInput, UnknownInputModes,
     };
     pub use crate::unknown_input_symmetry::UnknownInputSymmetries;
 }

@@ -178,6 +178,28 @@ pub fn unknown_input_view(
     Ok((v.symmetries, v.view, v.rank, v.sym))
 }
 
+/// [`unknown_input_view`] that also accepts symmetries moving with the
+/// known inputs: the view then has their jets as states (named by the
+/// returned [`JetName`]s), as `obsan verify` reads a decomposition that
+/// declares the inputs' derivatives (decomp_jets.rs).
+#[allow(clippy::type_complexity)]
+pub fn unknown_input_view_jets(
+    nf: &mut NormalForm,
+    opts: UnknownInputOptions,
+) -> Result<
+    (
+        UnknownInputSymmetries,
+        NormalForm,
+        RankReport,
+        SymmetryReport,
+        Vec<JetName>,
+    ),
+    AnalysisError,
+> {
+    let v = unknown_input_view_with_jets(nf, opts)?;
+    Ok((v.symmetries, v.view, v.rank, v.sym, v.jets))
+}
+
 /// The view of [`unknown_input_view_with_jets`].
 struct View {
     symmetries: UnknownInputSymmetries,
@@ -341,6 +363,10 @@ pub fn unknown_input_modes(
         .iter()
         .filter(|j| j.state)
         .map(|j| j.internal.clone())
+        .collect();
+    d.jet_names = jets
+        .iter()
+        .map(|j| (j.internal.clone(), j.shown.clone()))
         .collect();
     if let Some(j) = d.jets.iter().find(|j| {
         !d.modes

@@ -35,11 +35,24 @@ impl Derivation {
             .filter(|o| o.0 != obsan_model::TIME && !self.jets.contains(&o.0))
     }
 
-    /// The modes the files state: every one but the clock (the jets are
-    /// coordinates of the decomposition checks).
+    /// The modes the files state: every one but the clock and the jets,
+    /// which the decomposition reader adds (decomp_jets.rs).
     fn filed(&self) -> Vec<usize> {
         (0..self.modes.len())
-            .filter(|&k| !self.is_clock(k))
+            .filter(|&k| !self.is_clock(k) && !self.is_jet(k))
+            .collect()
+    }
+
+    /// The inputs' derivatives the files declare, `(name, input, order)`:
+    /// every jet of order >= 1 (`u3_d1`, `u3`, 1).
+    fn declared_derivatives(&self) -> Vec<(&str, &str, usize)> {
+        self.jet_names
+            .iter()
+            .filter_map(|(name, shown)| {
+                let input = shown.trim_end_matches('\'');
+                let order = shown.len() - input.len();
+                (order > 0).then_some((name.as_str(), input, order))
+            })
             .collect()
     }
 
@@ -59,12 +72,18 @@ impl Derivation {
         for (k, v) in set {
             o.push_str(&format!("set {k} = {v}\n"));
         }
+        for (name, input, order) in self.declared_derivatives() {
+            o.push_str(&format!(
+                "derivative {name} = {input}{}\n",
+                "'".repeat(order)
+            ));
+        }
         for m in &self.modes {
             if m.kind != ModeKind::Variable {
                 o.push_str(&format!("let {} = {}\n", m.name, m.text));
             }
         }
-        // The clock stays implicit: the decomposition reader adds it.
+        // The clock and the jets stay implicit: the decomposition reader adds them.
         let names: Vec<&str> = self
             .filed()
             .into_iter()
@@ -86,19 +105,20 @@ impl Derivation {
                 self.dynamics(k)?
             ));
         }
-        for (name, e) in self.outputs.iter().filter(|o| o.0 != obsan_model::TIME) {
+        for (name, e) in self
+            .outputs
+            .iter()
+            .filter(|o| o.0 != obsan_model::TIME && !self.jets.contains(&o.0))
+        {
             o.push_str(&format!("output {name} = {}\n", e.as_deref()?));
         }
         Some(())
     }
 
-    /// A `.sys` file of the reduced system.
-    /// `None` with input jets: the reduced system reads the inputs'
-    /// derivatives, which a `.sys` file cannot name as such.
+    /// A `.sys` file of the reduced system. With input jets the inputs'
+    /// derivatives it reads are derived inputs (`input u3_d1 = rate(u3)`),
+    /// the input itself a known input (docs/sys-format.md).
     pub fn sys_text(&self, name: &str, description: &str) -> Option<String> {
-        if !self.jets.is_empty() {
-            return None;
-        }
         let mut o = format!(
             "# The reduced system of {name} in its observable modes (derived by `obsan modes`).\n"
         );
@@ -129,9 +149,31 @@ impl Derivation {
         if !self.consts.is_empty() {
             o.push_str(&format!("const {}\n", self.consts.join(", ")));
         }
-        let inputs = self.inputs();
+        let derived = self.declared_derivatives();
+        let mut inputs: Vec<String> = self
+            .jet_names
+            .iter()
+            .filter(|(_, shown)| !shown.ends_with('\''))
+            .map(|(n, _)| n.clone())
+            .collect();
+        inputs.extend(
+            self.inputs()
+                .into_iter()
+                .filter(|i| !derived.iter().any(|d| d.0 == i)),
+        );
         if !inputs.is_empty() {
             o.push_str(&format!("input {}\n", inputs.join(", ")));
+        }
+        for (name, input, order) in &derived {
+            let of = match order {
+                1 => input.to_string(),
+                _ => self
+                    .jet_names
+                    .iter()
+                    .find(|(_, s)| *s == format!("{input}{}", "'".repeat(order - 1)))
+                    .map(|(n, _)| n.clone())?,
+            };
+            o.push_str(&format!("input {name} = rate({of})\n"));
         }
         self.push_equations(&mut o, |k| !self.is_constant(k))?;
         Some(o)

@@ -149,6 +149,10 @@ pub struct Derivation {
     /// the inputs, unknown_input_jet_view.rs): modes and outputs of the
     /// derivation and its checks, hidden from what is shown like the clock.
     pub jets: Vec<String>,
+    /// Every jet of the view (its states and the top-order inputs) as
+    /// `(name in the view, as shown)`: `("u3_d1", "u3'")`. The files declare
+    /// the derivatives by these names (`derivative u3_d1 = u3'`).
+    pub jet_names: Vec<(String, String)>,
 }
 
 pub(super) fn check_deadline(
@@ -300,6 +304,7 @@ fn derive_dense(
         consts,
         reduced_timed_out: timed_out,
         jets: Vec::new(),
+        jet_names: Vec::new(),
     })
 }
 

@@ -152,6 +152,7 @@ pub fn reduce_in_modes(
         consts: d.consts.clone(),
         reduced_timed_out: red.timed_out,
         jets: d.jets.clone(),
+        jet_names: d.jet_names.clone(),
     })
 }
 

@@ -1,0 +1,126 @@
+//! Decompositions whose modes move with the known inputs, and those driven
+//! by an unknown-input combination (docs/decomposition-format.md, "Inputs'
+//! derivatives and combinations").
+//!
+//! The file names a known input's derivative by a declared name
+//! (`derivative u_d1 = u'`), as the reduced `.sys` declares it (`input u_d1 =
+//! rate(u)`). The checks run over the view of unknown_input_jet_view.rs, in
+//! which the jets `u, u', ...` the symmetries read are states and the next
+//! order an input: like the clock, the jets are modes of every such
+//! decomposition, so the file leaves them implicit and they are added here
+//! with their equations `u^(l)' = u^(l+1)` and outputs (the input is known).
+
+use crate::decomp::{Check, Decomposition};
+use crate::rank::AnalysisError;
+use crate::unknown_input_jet_view::JetName;
+use obsan_expr::{line_col, parse_ast};
+use obsan_model::NormalForm;
+
+/// A jet's input and order, from its shown name (`u3''` -> (`u3`, 2)).
+fn input_order(j: &JetName) -> (&str, usize) {
+    let base = j.shown.trim_end_matches('\'');
+    (base, j.shown.len() - base.len())
+}
+
+impl Decomposition {
+    /// The decomposition over the view `nf` whose jets are `jets`: each
+    /// declared derivative resolved to its jet (an error at its line when
+    /// the model's symmetries do not read it), and the jets added as new
+    /// variables with their equations and outputs.
+    pub fn with_input_jets(
+        &self,
+        nf: &NormalForm,
+        jets: &[JetName],
+    ) -> Result<Decomposition, AnalysisError> {
+        let mut d = self.clone();
+        for (name, input, order, at) in &self.derivatives {
+            let shown = format!("{input}{}", "'".repeat(*order));
+            let Some(j) = jets.iter().find(|j| j.shown == shown) else {
+                let read: Vec<&str> = jets.iter().map(|j| j.shown.as_str()).collect();
+                let why = if read.is_empty() {
+                    "the model's lost directions do not move with the known inputs, so no derivative is read".to_string()
+                } else {
+                    format!("the model's modes read {}", read.join(", "))
+                };
+                return Err(self.located(
+                    *at,
+                    format!("'{shown}' is not an input derivative of this model's modes ({why})"),
+                ));
+            };
+            let clash = (nf.state.contains(name)
+                || nf.inputs.contains(name)
+                || nf.consts.iter().any(|c| &c.0 == name))
+                && *name != j.internal;
+            if clash {
+                return Err(
+                    self.located(*at, format!("'{name}' is already a variable of the system"))
+                );
+            }
+            d.aliases.push((name.clone(), j.internal.clone()));
+        }
+        for j in jets.iter().filter(|j| j.state) {
+            let (input, order) = input_order(j);
+            if !d.new_state.contains(&j.internal) {
+                d.new_state.push(j.internal.clone());
+            }
+            if !d.dynamics.iter().any(|x| x.0 == j.internal) {
+                let next = jets
+                    .iter()
+                    .find(|k| input_order(k) == (input, order + 1))
+                    .map(|k| k.internal.clone())
+                    .ok_or_else(|| {
+                        AnalysisError::Invalid(format!(
+                            "internal: no jet after {} in the view",
+                            j.shown
+                        ))
+                    })?;
+                d.push_line(&format!("{}' = {next}", j.internal), true)?;
+            }
+            let id = nf.ctx.lookup(&j.internal).map(|s| s.id);
+            for (oname, oid) in &nf.outputs {
+                if Some(*oid) == id && !d.outputs.iter().any(|o| &o.0 == oname) {
+                    d.push_line(&format!("output {oname} = {}", j.internal), false)?;
+                }
+            }
+        }
+        Ok(d)
+    }
+
+    /// Append a dynamics or output line to the source (so offsets stay
+    /// valid) and record it.
+    fn push_line(&mut self, line: &str, dynamics: bool) -> Result<(), AnalysisError> {
+        let (lhs, rhs) = line.split_once(" = ").unwrap_or((line, ""));
+        let text = format!("\n{line}\n");
+        let at = self.src.len() + 1 + lhs.len() + 3;
+        self.src.push_str(&text);
+        let ast = parse_ast(rhs).map_err(|e| AnalysisError::Invalid(format!("internal: {e:?}")))?;
+        if dynamics {
+            self.dynamics
+                .push((lhs.trim_end_matches('\'').to_string(), ast, at));
+        } else {
+            let name = lhs.trim_start_matches("output ").to_string();
+            self.outputs.push((name, ast, at));
+        }
+        Ok(())
+    }
+
+    fn located(&self, at: usize, msg: String) -> AnalysisError {
+        let (l, c) = line_col(&self.src, at);
+        AnalysisError::Invalid(format!("{}:{l}:{c}: {msg}", self.origin))
+    }
+
+    /// The names of the unknown-input combinations the file declares.
+    pub fn combination_names(&self) -> Vec<String> {
+        self.combinations.iter().map(|c| c.0.clone()).collect()
+    }
+}
+
+/// Whether each check is about a jet the decomposition added (its equation
+/// or output), so that the checks list can say so.
+pub fn is_jet_check(c: &Check, jets: &[JetName]) -> bool {
+    jets.iter().any(|j| {
+        j.state
+            && (c.name.starts_with(&format!("{}' = ", j.internal))
+                || c.name.starts_with(&format!("output {} = ", j.internal)))
+    })
+}
