@@ -13,6 +13,7 @@ mod global;
 mod global_io;
 mod global_maps;
 mod import;
+mod jet_decompositions;
 mod json_schema;
 mod measured_inputs;
 mod modes;

@@ -106,7 +106,7 @@ impl Reader<'_> {
                 ));
             }
             if let (Some((text, map)), Kind::Input | Kind::State) = (&p.value, p.kind) {
-                check_derived(self, text, map, &decls, p.kind)?;
+                check_derived(self, text, map, &decls, (p.kind, p.at))?;
             }
         }
         if !decls
@@ -506,7 +506,7 @@ fn check_derived(
     text: &str,
     map: &[usize],
     decls: &[Decl],
-    kind: Kind,
+    (kind, at): (Kind, usize),
 ) -> Result<(), ModelError> {
     let what = if kind == Kind::State {
         "a state's start value"
@@ -519,8 +519,21 @@ fn check_derived(
             .any(|d| d.name == n && d.kind == Kind::Input && d.derived.is_none())
     };
     let t = text.trim();
+    // A rate of an earlier rate is a higher derivative (`input u_d2 =
+    // rate(u_d1)`, as `obsan modes --out` declares them): the data layer
+    // computes the derived inputs in order.
+    let earlier_rate = |n: &str| {
+        decls.iter().any(|d| {
+            d.name == n
+                && d.kind == Kind::Input
+                && d.at < at
+                && d.derived
+                    .as_deref()
+                    .is_some_and(|x| x.trim().starts_with("rate("))
+        })
+    };
     if let Some(inner) = t.strip_prefix("rate(").and_then(|r| r.strip_suffix(')')) {
-        if measured(inner.trim()) {
+        if measured(inner.trim()) || (kind == Kind::Input && earlier_rate(inner.trim())) {
             return Ok(());
         }
         let lead = text.len() - text.trim_start().len();
@@ -528,7 +541,10 @@ fn check_derived(
         return Err(rd.err_src(
             a,
             b,
-            format!("rate(...) takes one measured input, not '{}'", inner.trim()),
+            format!(
+                "rate(...) takes one measured input or an earlier rate(...), not '{}'",
+                inner.trim()
+            ),
         ));
     }
     let ast = parse_ast(text).map_err(|e| rd.parse_err(map, e))?;
