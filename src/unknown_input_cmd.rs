@@ -13,7 +13,7 @@ use obsan_analysis::{
     unknown_inputs::UnknownInputOptions,
     unknown_inputs::UnknownInputReport,
     unknown_inputs::{
-        combination_checks, inputs_driving_modes, is_jet_check, unknown_input_view_jets,
+        combination_checks, inputs_driving_modes, jet_check_text, unknown_input_view_jets,
     },
     verify_decomposition_with, Check, Decomposition, DeriveOptions, RankReport, SymmetryReport,
 };
@@ -544,7 +544,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
     m.show_input_jets();
     if let Some(cs) = checks.as_mut() {
         for c in cs.iter_mut() {
-            c.name = m.show(&c.name);
+            c.name = jet_check_text(&c.name, &m.jets).unwrap_or_else(|| m.show(&c.name));
             c.detail = m.show(&c.detail);
         }
     }
@@ -733,11 +733,10 @@ pub fn verify_checks(
         .map_err(|e| Failure(e.to_string()))?;
     let mut checks = verify_decomposition_with(&mut view, d, a.an.seed, Some((&rr, &sym)))
         .map_err(|e| Failure(e.to_string()))?;
-    for c in checks.iter_mut().filter(|c| is_jet_check(c, &jets)) {
-        c.name = format!(
-            "{} (a known input's jet: a mode of every such decomposition)",
-            c.name
-        );
+    for c in checks.iter_mut() {
+        if let Some(t) = jet_check_text(&c.name, &jets) {
+            c.name = t;
+        }
     }
     // An unknown input a combination reads is recovered through it.
     let (combos, covered) =

@@ -54,16 +54,22 @@ fn a_lost_direction_that_moves_with_the_known_input() {
     assert!(out.contains("move with the known inputs"), "{out}");
     assert!(out.contains("[F, xi] + d_t xi"), "{out}");
     // The modes move with the input: derived since session 31
-    // (unknown_input_jet_modes.rs). A decomposition file cannot name the
-    // input's derivatives, so verify refuses rather than checks a wrong one.
+    // (unknown_input_jet_modes.rs), and verify checks a decomposition over
+    // the same jet view (jet_decompositions.rs): this one misses the mode
+    // x2 + p u and claims x1' = w (the true x1' is p u + x2), so it fails.
     let dec = temp_file(
         "small_input_dependent.dec",
         &format!("system {f}\nstate x1\nx1' = w\noutput y = x1\n"),
     );
-    bad(
-        &["verify", &dec],
-        "a decomposition file cannot name the inputs' derivatives",
+    let r = obsan(&["verify", &dec]);
+    assert_eq!(r.code, 1, "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stdout
+            .contains("FAIL they are complete (rank of the system is 3)"),
+        "{}",
+        r.stdout
     );
+    assert!(r.stdout.contains("FAIL x1' = w"), "{}", r.stdout);
 }
 
 /// STRIKE-GOLDD's CSTR observer (cstr_observer.sys; rank 3 of 4, derived in

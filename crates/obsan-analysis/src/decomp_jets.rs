@@ -10,7 +10,7 @@
 //! decomposition, so the file leaves them implicit and they are added here
 //! with their equations `u^(l)' = u^(l+1)` and outputs (the input is known).
 
-use crate::decomp::{Check, Decomposition};
+use crate::decomp::Decomposition;
 use crate::rank::AnalysisError;
 use crate::unknown_input_jet_view::JetName;
 use obsan_expr::{line_col, parse_ast};
@@ -115,12 +115,43 @@ impl Decomposition {
     }
 }
 
-/// Whether each check is about a jet the decomposition added (its equation
-/// or output), so that the checks list can say so.
-pub fn is_jet_check(c: &Check, jets: &[JetName]) -> bool {
-    jets.iter().any(|j| {
-        j.state
-            && (c.name.starts_with(&format!("{}' = ", j.internal))
-                || c.name.starts_with(&format!("output {} = ", j.internal)))
-    })
+/// The checks list's wording for a check the reader added for a jet (its
+/// equation `u3_d1' = u3_d2` or its output): what it states, in the jets'
+/// shown names (`u3' has the derivative u3''`), instead of a line that
+/// would read `u3'' = u3''`. `None` for every other check.
+pub fn jet_check_text(name: &str, jets: &[JetName]) -> Option<String> {
+    let shown = |n: &str| {
+        jets.iter()
+            .find(|j| j.internal == n)
+            .map_or(n.to_string(), |j| j.shown.clone())
+    };
+    let counted: Vec<&str> = jets
+        .iter()
+        .filter(|j| j.state)
+        .map(|j| j.shown.as_str())
+        .collect();
+    let is_count = name.starts_with("the ") && name.ends_with(" new variables are independent")
+        || name.starts_with("they are complete (rank of the system is ");
+    if is_count && !counted.is_empty() {
+        return Some(format!(
+            "{name}, the known inputs' jets {} counted",
+            counted.join(", ")
+        ));
+    }
+    for j in jets.iter().filter(|j| j.state) {
+        if let Some(next) = name.strip_prefix(&format!("{}' = ", j.internal)) {
+            return Some(format!(
+                "{} has the time derivative {} (a known input's jet: known, a mode of every such decomposition)",
+                j.shown,
+                shown(next.trim())
+            ));
+        }
+        if name.starts_with("output ") && name.contains(&format!(" = {} (", j.internal)) {
+            return Some(format!(
+                "{} is known (a known input's jet: an output of the analysis)",
+                j.shown
+            ));
+        }
+    }
+    None
 }

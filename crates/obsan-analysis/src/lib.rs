@@ -103,7 +103,7 @@ pub mod global_id {
 /// the symmetries of a system with unknown inputs.
 pub mod unknown_inputs {
     pub use crate::decomp::combination_checks;
-    pub use crate::decomp_jets::is_jet_check;
+    pub use crate::decomp_jets::jet_check_text;
     pub use crate::unknown_input::{
         unknown_input_rank, OrderStep, UnknownInputOptions, UnknownInputReport,
     };
