@@ -745,6 +745,8 @@ pub fn verify(a: &VerifyArgs) -> Result<ExitCode, Failure> {
     // With unknown inputs: the checks over the model with them as inputs,
     // against the certified symmetries; the rank (the modes' count) has a bound.
     let (checks, s, rank_bound) = if nf.unknown_inputs.is_empty() {
+        d.without_jets_or_combinations()
+            .map_err(|e| Failure(e.to_string()))?;
         let (r, s) = compute_symmetries(&mut nf, &a.an, a.exact)?;
         let checks = verify_decomposition_with(&mut nf, &d, a.an.seed, Some((&r, &s)))
             .map_err(|e| Failure(e.to_string()))?;

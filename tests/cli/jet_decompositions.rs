@@ -155,4 +155,19 @@ fn a_derivative_the_modes_do_not_read_is_a_located_error() {
         );
         bad(&["verify", &dec], want);
     }
+    // Without unknown inputs neither statement has a meaning.
+    let k = temp_file(
+        "known_only.sys",
+        "system k\nstate x\ninput u\nx' = u\noutput y = x\n",
+    );
+    for (line, want) in [
+        ("derivative du = u'", "known_only.dec:2:17:"),
+        ("combination c = x", "known_only.dec:2:17:"),
+    ] {
+        let dec = temp_file(
+            "known_only.dec",
+            &format!("system {k}\n{line}\nstate x\nx' = u\noutput y = x\n"),
+        );
+        bad(&["verify", &dec], want);
+    }
 }

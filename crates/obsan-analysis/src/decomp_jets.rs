@@ -86,6 +86,21 @@ impl Decomposition {
         Ok(d)
     }
 
+    /// A model without unknown inputs has no jets in its modes and no
+    /// combination: a file declaring either is refused at its line.
+    pub fn without_jets_or_combinations(&self) -> Result<(), AnalysisError> {
+        if let Some(&(_, ref input, order, at)) = self.derivatives.first() {
+            return Err(self.located(at, format!("'{input}{}' is not an input derivative of this model's modes (its modes are functions of the state: the analysis with known inputs alone never reads the inputs' derivatives)", "'".repeat(order))));
+        }
+        if let Some((name, _, at)) = self.combinations.first() {
+            return Err(self.located(
+                *at,
+                format!("the combination '{name}' needs unknown inputs, and the system has none"),
+            ));
+        }
+        Ok(())
+    }
+
     /// Append a dynamics or output line to the source (so offsets stay
     /// valid) and record it.
     fn push_line(&mut self, line: &str, dynamics: bool) -> Result<(), AnalysisError> {
