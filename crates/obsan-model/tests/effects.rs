@@ -126,6 +126,11 @@ fn derived_inputs_are_checked() {
         ("input a = sqrt(u^2)*u\n", true),
         ("input du = rate(x)\n", false),
         ("input a = x*u\n", false),
+        // A rate of an earlier rate input is the next derivative; of a later
+        // one, or of an expression input, it is refused.
+        ("input du = rate(u)\ninput ddu = rate(du)\n", true),
+        ("input ddu = rate(du)\ninput du = rate(u)\n", false),
+        ("input a = 2*u\ninput b = rate(a)\n", false),
     ] {
         let r = System::parse(&format!("{base}{decl}"), "d.sys");
         assert_eq!(r.is_ok(), ok, "{decl}: {r:?}");

@@ -44,6 +44,8 @@ fn derived_inputs_take_the_real_root_and_the_known_constants() {
         ("a".to_string(), "sqrt(u^2)".to_string()),
         ("b".to_string(), "k*u + log(u)".to_string()),
         ("r".to_string(), "rate(u)".to_string()),
+        // A rate of an earlier rate (`obsan modes --out` declares u'' so).
+        ("rr".to_string(), "rate(r)".to_string()),
     ];
     add_derived_inputs(&mut s, &defs, &consts).unwrap();
     assert_eq!(s.column("a").unwrap(), &[Some(2.0), Some(3.0), Some(0.5)]);
@@ -51,4 +53,6 @@ fn derived_inputs_take_the_real_root_and_the_known_constants() {
     assert_eq!(s.column("b").unwrap()[0], None);
     assert_eq!(s.column("b").unwrap()[1], Some(30.0 + 3f64.ln()));
     assert_eq!(s.column("r").unwrap(), &[Some(5.0), Some(-3.5), Some(0.0)]);
+    // (-3.5 - 5)/1 and (0 - (-3.5))/1, 0 on the last row.
+    assert_eq!(s.column("rr").unwrap(), &[Some(-8.5), Some(3.5), Some(0.0)]);
 }
