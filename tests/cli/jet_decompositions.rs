@@ -81,9 +81,7 @@ fn cstr_observer_round_trip_through_modes_out_and_verify() {
     );
     // A wrong claim fails: twice the combination.
     let dir = fresh_dir("jet-dec-cstr-wrong");
-    let wrong = dec
-        .replace("z2' = d_z2", "z2' = 2*d_z2")
-        .replace("system /", "system /");
+    let wrong = dec.replace("z2' = d_z2", "z2' = 2*d_z2");
     let w = format!("{dir}/wrong.dec");
     std::fs::write(&w, wrong).unwrap();
     let r = obsan(&["verify", &w]);
