@@ -693,11 +693,7 @@ pub fn modes(a: &ModesArgs, nf: &mut NormalForm, write: WritePair) -> Result<Exi
             );
         }
     } else if a.out_prefix.is_some() && dec.is_none() {
-        if m.jets.is_empty() {
-            eprintln!("note: nothing written: the reduced system is not closed or is driven by an input combination the model does not name");
-        } else {
-            eprintln!("note: nothing written: the reduced system reads the known inputs' derivatives ({}), which a .sys or .dec file cannot name", m.input_derivatives().join(", "));
-        }
+        eprintln!("note: nothing written: the reduced system is not closed");
     }
     if !modes_ok || !verified {
         return Ok(ExitCode::from(1));

@@ -153,10 +153,10 @@ impl UnknownInputModes {
 }
 
 /// The view, its rank report and the symmetries as the known-input
-/// derivation and checks read them (module docs). Symmetries that move with
-/// the known inputs are refused here (`obsan verify`: a decomposition file
-/// cannot name the inputs' derivatives); `obsan modes` reads them through
-/// [`unknown_input_view_with_jets`].
+/// derivation and checks read them (module docs), for callers that have no
+/// names for the inputs' jets: symmetries that move with the known inputs
+/// are refused here; `obsan modes` and `obsan verify` read them through
+/// [`unknown_input_view_jets`].
 pub fn unknown_input_view(
     nf: &mut NormalForm,
     opts: UnknownInputOptions,
@@ -172,7 +172,7 @@ pub fn unknown_input_view(
     let v = unknown_input_view_with_jets(nf, opts)?;
     if !v.jets.is_empty() {
         return Err(AnalysisError::Invalid(
-            "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): a decomposition file cannot name the inputs' derivatives, so `obsan verify` does not check one; `obsan modes` derives and checks the modes that move with the inputs".into(),
+            "the lost directions move with the known inputs (`obsan symmetries` prints them with the inputs' jets): this view has no names for their jets (`obsan modes` and `obsan verify` read them through the jet view)".into(),
         ));
     }
     Ok((v.symmetries, v.view, v.rank, v.sym))
