@@ -143,7 +143,7 @@ pub(super) fn io_count(
 
 /// The normalised coefficients of output `i`'s relation (the last one is 1,
 /// left out) as rational functions of the parameters.
-fn reconstruct(
+pub(super) fn reconstruct(
     m: &ZModel,
     orders: &[usize],
     i: usize,
@@ -172,6 +172,9 @@ fn reconstruct(
     };
     let np = m.param_vars.len();
     let alpha = monomial_denominators(np, support.len() - 1, &mut coeffs, seed)?;
+    if std::env::var("IO_TRACE").is_ok() {
+        eprintln!("alpha {alpha:?}");
+    }
     // Scaled by their monomial denominators the coefficients are (mostly)
     // polynomials, which need far fewer points than rational functions.
     let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
