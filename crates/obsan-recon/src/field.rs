@@ -73,6 +73,42 @@ pub fn mul(a: u64, b: u64, p: u64) -> u64 {
     ((a as u128 * b as u128) % p as u128) as u64
 }
 
+/// Products by one fixed residue `c` without a division (Shoup's method,
+/// V. Shoup, NTL): with `c' = floor(c 2^64 / p)` precomputed, `q =
+/// floor(c' y / 2^64)` is `floor(c y / p)` or one less, so `c y - q p` lies
+/// in `0..2p` (p < 2^63) and one subtraction reduces it. For loops that
+/// multiply many values by one scalar (elimination rows, Cauchy products).
+#[derive(Clone, Copy, Debug)]
+pub struct Shoup {
+    c: u64,
+    pre: u64,
+    p: u64,
+}
+
+impl Shoup {
+    /// For `c` in `0..p`, `p < 2^63`.
+    #[inline]
+    pub fn new(c: u64, p: u64) -> Shoup {
+        Shoup {
+            c,
+            pre: (((c as u128) << 64) / p as u128) as u64,
+            p,
+        }
+    }
+
+    /// `c y mod p` for any `y < 2^64`.
+    #[inline]
+    pub fn mul(self, y: u64) -> u64 {
+        let q = ((self.pre as u128 * y as u128) >> 64) as u64;
+        let r = self.c.wrapping_mul(y).wrapping_sub(q.wrapping_mul(self.p));
+        if r >= self.p {
+            r - self.p
+        } else {
+            r
+        }
+    }
+}
+
 pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     let mut r = 1 % p;
     while e > 0 {
@@ -174,6 +210,39 @@ mod tests {
             assert!(!is_prime(n));
         }
         assert!(is_prime(18_446_744_073_709_551_557)); // largest u64 prime
+    }
+
+    #[test]
+    fn shoup_products_agree_with_u128_remainders() {
+        // Against the naive `(c y) % p` in u128, at the edges (0, 1, p - 1,
+        // y up to 2^64 - 1) and at random residues, for the list's primes,
+        // the Mersenne prime 2^61 - 1, a small prime and one just below 2^63.
+        let mut st = 0x5eed_u64;
+        let mut next = || crate::rng::splitmix64(&mut st);
+        for p in [
+            PRIMES[0],
+            PRIMES[23],
+            (1 << 61) - 1,
+            65_537,
+            0x7fff_ffff_ffff_ffe7,
+        ] {
+            assert!(is_prime(p));
+            let mut cs = vec![0, 1, 2, p - 1, p / 2];
+            cs.extend((0..40).map(|_| next() % p));
+            let mut ys = vec![0, 1, p - 1, p, u64::MAX, u64::MAX - 1];
+            ys.extend((0..40).map(|_| next() % p));
+            ys.extend((0..10).map(|_| next()));
+            for &c in &cs {
+                let s = Shoup::new(c, p);
+                for &y in &ys {
+                    assert_eq!(
+                        s.mul(y),
+                        ((c as u128 * y as u128) % p as u128) as u64,
+                        "{c} {y} {p}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
