@@ -43,6 +43,17 @@ pub trait PrimeField: Copy {
             *a = self.mul(*a, c);
         }
     }
+    /// `v` reduced by `rows` in row echelon form, sorted by pivot (each 1
+    /// at its pivot and 0 before it): in order, each row times `v`'s entry
+    /// at its pivot is subtracted ([`RowEchelon::insert`]).
+    fn reduce_sorted(self, v: &mut [Self::Elem], rows: &[(usize, Vec<Self::Elem>)]) {
+        for (p, r) in rows {
+            let c = v[*p];
+            if c != self.zero() {
+                self.sub_scaled(&mut v[*p..], c, &r[*p..]);
+            }
+        }
+    }
 }
 
 /// The field of residues `0..p` modulo a prime `p < 2^63`, with this crate's
@@ -83,6 +94,37 @@ impl PrimeField for Zp {
         let s = field::Shoup::new(c, self.0);
         for a in x.iter_mut() {
             *a = s.mul(*a);
+        }
+    }
+    /// Delayed reduction: the entries are summed in `u128` (each product
+    /// below `(p - 1)^2`) and reduced once every `max_adds` rows, not once
+    /// per product; each row's multiplier is reduced when its pivot is
+    /// reached (the rows before it never touch that column again).
+    fn reduce_sorted(self, v: &mut [u64], rows: &[(usize, Vec<u64>)]) {
+        let p = self.0;
+        let (pw, pm) = (p as u128, (p - 1) as u128);
+        // Entries stay below p + (max_adds + 1) (p - 1)^2 <= u128::MAX.
+        let max_adds = ((u128::MAX / (pm * pm).max(1)).min(1 << 20) as usize).saturating_sub(2);
+        let mut acc: Vec<u128> = v.iter().map(|&x| x as u128).collect();
+        let mut adds = 0;
+        for (piv, r) in rows {
+            let c = (acc[*piv] % pw) as u64;
+            acc[*piv] = 0;
+            if c == 0 {
+                continue;
+            }
+            if adds >= max_adds {
+                acc[*piv..].iter_mut().for_each(|a| *a %= pw);
+                adds = 0;
+            }
+            let nc = (p - c) as u128;
+            for (a, &y) in acc[*piv + 1..].iter_mut().zip(&r[*piv + 1..]) {
+                *a += nc * y as u128;
+            }
+            adds += 1;
+        }
+        for (x, a) in v.iter_mut().zip(&acc) {
+            *x = (*a % pw) as u64;
         }
     }
 }
@@ -249,12 +291,7 @@ impl<F: PrimeField> RowEchelon<F> {
         let zero = f.zero();
         // In pivot order each row clears its pivot and leaves the earlier
         // pivots cleared (it is zero before its own).
-        for (p, r) in &self.rows {
-            let c = v[*p];
-            if c != zero {
-                f.sub_scaled(&mut v[*p..], c, &r[*p..]);
-            }
-        }
+        f.reduce_sorted(&mut v, &self.rows);
         let Some(p) = v.iter().position(|x| *x != zero) else {
             return false;
         };
@@ -444,6 +481,19 @@ mod tests {
             F.scale(&mut a, c);
             Naive(P).scale(&mut b, c);
             assert_eq!(a, b);
+        }
+        // Delayed reduction against the generic loop: more rows than one
+        // u128 holds products of (every prime of the list is near 2^62,
+        // 14 products per reduction), and a prime near 2^63 (1 product).
+        for q in [P, 0x7fff_ffff_ffff_ffe7] {
+            for n in [1usize, 5, 40, 70] {
+                let (mut fast, mut slow) = (RowEchelon::new(Zp(q)), RowEchelon::new(Naive(q)));
+                for _ in 0..n + 3 {
+                    let row: Vec<u64> = (0..n).map(|_| rng.nonzero(q) - 1).collect();
+                    assert_eq!(fast.insert(row.clone()), slow.insert(row));
+                }
+                assert_eq!(fast.rows, slow.rows);
+            }
         }
     }
 

@@ -121,17 +121,19 @@ pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     r
 }
 
-/// Inverse modulo p (extended Euclid); `None` for zero.
+/// Inverse modulo p (extended Euclid); `None` for zero. The remainders
+/// are `u64` (64-bit divisions); only the Bezout coefficient, bounded by
+/// `p` in size, is kept in `i128`.
 pub fn inv(a: u64, p: u64) -> Option<u64> {
     if a == 0 {
         return None;
     }
-    let (mut r0, mut r1) = (p as i128, a as i128);
+    let (mut r0, mut r1) = (p, a % p);
     let (mut s0, mut s1) = (0i128, 1i128);
     while r1 != 0 {
         let q = r0 / r1;
         (r0, r1) = (r1, r0 - q * r1);
-        (s0, s1) = (s1, s0 - q * s1);
+        (s0, s1) = (s1, s0 - q as i128 * s1);
     }
     // r0 = gcd(p, a); 1 for a prime p and 0 < a < p.
     if r0 != 1 {
@@ -259,6 +261,17 @@ mod tests {
             a = mul(a, 0x9e37_79b9_7f4a_7c15 % p, p);
         }
         assert_eq!(inv(0, p), None);
+        // Against Fermat's a^(p-2) at random residues of several primes.
+        let mut st = 3u64;
+        for q in [PRIMES[5], (1 << 61) - 1, 65_537, 0x7fff_ffff_ffff_ffe7] {
+            for _ in 0..200 {
+                let x = crate::rng::splitmix64(&mut st) % q;
+                if x != 0 {
+                    assert_eq!(inv(x, q), Some(pow(x, q - 2, q)));
+                }
+            }
+            assert_eq!(inv(1, q), Some(1));
+        }
         assert_eq!(inv(p - 1, p), Some(p - 1));
     }
 }
