@@ -102,19 +102,20 @@ impl PrimeField for Zp {
     /// reached (the rows before it never touch that column again).
     fn reduce_sorted(self, v: &mut [u64], rows: &[(usize, Vec<u64>)]) {
         let p = self.0;
-        let (pw, pm) = (p as u128, (p - 1) as u128);
+        let pm = (p - 1) as u128;
         // Entries stay below p + (max_adds + 1) (p - 1)^2 <= u128::MAX.
         let max_adds = ((u128::MAX / (pm * pm).max(1)).min(1 << 20) as usize).saturating_sub(2);
+        let m = field::Rem128::new(p);
         let mut acc: Vec<u128> = v.iter().map(|&x| x as u128).collect();
         let mut adds = 0;
         for (piv, r) in rows {
-            let c = (acc[*piv] % pw) as u64;
+            let c = m.rem(acc[*piv]);
             acc[*piv] = 0;
             if c == 0 {
                 continue;
             }
             if adds >= max_adds {
-                acc[*piv..].iter_mut().for_each(|a| *a %= pw);
+                acc[*piv..].iter_mut().for_each(|a| *a = m.rem(*a) as u128);
                 adds = 0;
             }
             let nc = (p - c) as u128;
@@ -124,7 +125,7 @@ impl PrimeField for Zp {
             adds += 1;
         }
         for (x, a) in v.iter_mut().zip(&acc) {
-            *x = (*a % pw) as u64;
+            *x = m.rem(*a);
         }
     }
 }

@@ -109,6 +109,35 @@ impl Shoup {
     }
 }
 
+/// Remainders of any `u128` modulo `p < 2^63` without a division: `x =
+/// x_1 2^64 + x_0` is `x_1 (2^64 mod p) + x_0` modulo p, each term one
+/// [`Shoup`] product (`x_0 = 1 * x_0`; Shoup's bound holds for any
+/// multiplicand below 2^64). For sums of products reduced late.
+#[derive(Clone, Copy, Debug)]
+pub struct Rem128 {
+    hi: Shoup,
+    lo: Shoup,
+}
+
+impl Rem128 {
+    pub fn new(p: u64) -> Rem128 {
+        let r = (u64::MAX % p + 1) % p;
+        Rem128 {
+            hi: Shoup::new(r, p),
+            lo: Shoup::new(1 % p, p),
+        }
+    }
+
+    #[inline]
+    pub fn rem(self, x: u128) -> u64 {
+        add(
+            self.hi.mul((x >> 64) as u64),
+            self.lo.mul(x as u64),
+            self.hi.p,
+        )
+    }
+}
+
 pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     let mut r = 1 % p;
     while e > 0 {
@@ -243,6 +272,37 @@ mod tests {
                         "{c} {y} {p}"
                     );
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn u128_remainders_without_division_agree_with_the_naive_ones() {
+        let mut st = 0x12_u64;
+        let mut next = || crate::rng::splitmix64(&mut st);
+        for p in [
+            PRIMES[0],
+            PRIMES[17],
+            (1 << 61) - 1,
+            65_537,
+            3,
+            0x7fff_ffff_ffff_ffe7,
+        ] {
+            let r = Rem128::new(p);
+            let mut xs: Vec<u128> = vec![
+                0,
+                1,
+                p as u128,
+                u128::MAX,
+                u128::MAX - 1,
+                (p as u128) * (p as u128) - 1,
+                1 << 64,
+                (1 << 64) - 1,
+            ];
+            xs.extend((0..200).map(|_| ((next() as u128) << 64) | next() as u128));
+            xs.extend((0..50).map(|_| (next() % p) as u128 * (next() % p) as u128 * 15));
+            for &x in &xs {
+                assert_eq!(r.rem(x), (x % p as u128) as u64, "{x} mod {p}");
             }
         }
     }

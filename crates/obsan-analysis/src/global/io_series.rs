@@ -91,9 +91,14 @@ impl Arith {
 
     /// `a / b`; `None` when `b(0)` vanishes.
     pub(super) fn div(&self, a: &[u64], b: &[u64]) -> Option<Ser> {
+        self.div_with(a, b, fp::inv(b[0], self.p)?)
+    }
+
+    /// `a / b` given `iv = 1 / b(0)` (a Taylor recursion divides by series
+    /// sharing their value at 0: one inversion, not one per order).
+    pub(super) fn div_with(&self, a: &[u64], b: &[u64], iv: u64) -> Option<Ser> {
         let (p, g) = (self.p, self.g);
         let b0 = self.at(b, 0);
-        let iv = fp::inv(b0[0], p)?;
         if b[g..].iter().all(|&x| x == 0) && b0[1..].iter().all(|&x| x == 0) {
             // A constant denominator (every polynomial model's).
             let mut q = a.to_vec();
@@ -184,6 +189,27 @@ mod tests {
     }
 
     #[test]
+    fn cached_remainders_agree_with_u128_ones_across_primes() {
+        // io.rs's fp::mul keeps the last prime's constants: alternate primes
+        // (the Mersenne one takes its own path) and compare with `%`.
+        let mut st = 5u64;
+        let primes = [P, obsan_recon::PRIMES[7], obsan_expr::P, P, 65_537];
+        for i in 0..2000 {
+            let p = primes[i % primes.len()];
+            let (a, b) = (
+                obsan_recon::splitmix64(&mut st) % p,
+                obsan_recon::splitmix64(&mut st) % p,
+            );
+            assert_eq!(
+                fp::mul(a, b, p),
+                ((a as u128 * b as u128) % p as u128) as u64
+            );
+            let e = i as u64 % 40;
+            assert_eq!(fp::pow(a, e, p), obsan_recon::fp::pow(a, e, p));
+        }
+    }
+
+    #[test]
     fn flat_products_and_quotients_agree_with_the_nested_naive_ones() {
         let mut st = 17u64;
         let mut next = || obsan_recon::splitmix64(&mut st) % P;
@@ -202,6 +228,8 @@ mod tests {
             // (x y) / y = x wherever y(0) != 0.
             if y[0][0] != 0 {
                 assert_eq!(a.div(&prod, &flat(&y)).unwrap(), flat(&x));
+                let iv = fp::inv(y[0][0], P).unwrap();
+                assert_eq!(a.div_with(&prod, &flat(&y), iv).unwrap(), flat(&x));
             }
             // Division by a constant series.
             let mut c = vec![vec![0u64; g]; len];
