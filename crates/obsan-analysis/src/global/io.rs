@@ -425,17 +425,18 @@ pub(super) enum IoVar {
 
 /// The right kernel of the rows `sample` draws, drawn until the rank stops
 /// growing for 4 rows in a row (a dependent row of a random point on the
-/// variety: probability at most `deg / p` each) or is full.
+/// variety: probability at most `deg / p` each) or reaches `stop`.
 fn kernel<F: PrimeField>(
     field: F,
     to: impl Fn(u64) -> F::Elem,
     back: impl Fn(F::Elem) -> u64,
     sample: &mut dyn FnMut() -> Result<Vec<u64>, AnalysisError>,
     ncols: usize,
+    stop: usize,
 ) -> Result<Vec<Vec<u64>>, AnalysisError> {
     let mut ech = RowEchelon::new(field);
     let mut stale = 0;
-    while stale < 4 && ech.rank() < ncols {
+    while stale < 4 && ech.rank() < stop {
         let row: Vec<F::Elem> = sample()?.into_iter().map(&to).collect();
         if ech.insert(row) {
             stale = 0;
@@ -522,13 +523,15 @@ impl IoModel {
     }
 
     /// The kernel of the monomials `monos` in `vars` evaluated at jets of
-    /// random initial states (and inputs) at `theta`.
+    /// random initial states (and inputs) at `theta`, sampled until the rank
+    /// reaches `stop` or stalls ([`kernel`]).
     fn fit(
         &self,
         theta: &[u64],
         vars: &[IoVar],
         len: usize,
         monos: &[Vec<u32>],
+        stop: usize,
         rng: &mut Rng,
     ) -> Result<Vec<Vec<u64>>, AnalysisError> {
         let p = self.p;
@@ -598,9 +601,9 @@ impl IoModel {
             }
         };
         if p == obsan_expr::P {
-            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len())
+            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len(), stop)
         } else {
-            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len())
+            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len(), stop)
         }
     }
 
@@ -657,7 +660,7 @@ impl IoModel {
         sets.dedup();
         for (_, d, c, l) in sets {
             let monos = monomials_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
-            let ker = self.fit(theta, &vars, len, &monos, rng)?;
+            let ker = self.fit(theta, &vars, len, &monos, monos.len(), rng)?;
             if ker.is_empty() {
                 continue;
             }
@@ -700,7 +703,9 @@ impl IoModel {
     ) -> Result<Option<Vec<u64>>, AnalysisError> {
         let vars = self.relation_vars(orders, i);
         let len = orders.iter().copied().max().unwrap_or(0) + 1;
-        let ker = self.fit(theta, &vars, len, support, rng)?;
+        // The relation's vector c(theta) vanishes on every sample, so rank
+        // `N - 1` leaves exactly its line: no stale rows to wait for.
+        let ker = self.fit(theta, &vars, len, support, support.len() - 1, rng)?;
         if ker.len() != 1 || ker[0].contains(&0) {
             return Ok(None);
         }
