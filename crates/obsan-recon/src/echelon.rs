@@ -86,14 +86,14 @@ impl PrimeField for Zp {
     fn sub_scaled(self, x: &mut [u64], c: u64, y: &[u64]) {
         let s = field::Shoup::new(c, self.0);
         for (a, &b) in x.iter_mut().zip(y) {
-            *a = field::sub(*a, s.mul(b), self.0);
+            *a = field::sub(*a, s.times(b), self.0);
         }
     }
     #[inline]
     fn scale(self, x: &mut [u64], c: u64) {
         let s = field::Shoup::new(c, self.0);
         for a in x.iter_mut() {
-            *a = s.mul(*a);
+            *a = s.times(*a);
         }
     }
     /// Delayed reduction: the entries are summed in `u128` (each product
@@ -109,13 +109,15 @@ impl PrimeField for Zp {
         let mut acc: Vec<u128> = v.iter().map(|&x| x as u128).collect();
         let mut adds = 0;
         for (piv, r) in rows {
-            let c = m.rem(acc[*piv]);
+            let c = m.reduce(acc[*piv]);
             acc[*piv] = 0;
             if c == 0 {
                 continue;
             }
             if adds >= max_adds {
-                acc[*piv..].iter_mut().for_each(|a| *a = m.rem(*a) as u128);
+                acc[*piv..]
+                    .iter_mut()
+                    .for_each(|a| *a = m.reduce(*a) as u128);
                 adds = 0;
             }
             let nc = (p - c) as u128;
@@ -125,7 +127,7 @@ impl PrimeField for Zp {
             adds += 1;
         }
         for (x, a) in v.iter_mut().zip(&acc) {
-            *x = m.rem(*a);
+            *x = m.reduce(*a);
         }
     }
 }

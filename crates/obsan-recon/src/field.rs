@@ -98,7 +98,7 @@ impl Shoup {
 
     /// `c y mod p` for any `y < 2^64`.
     #[inline]
-    pub fn mul(self, y: u64) -> u64 {
+    pub fn times(self, y: u64) -> u64 {
         let q = ((self.pre as u128 * y as u128) >> 64) as u64;
         let r = self.c.wrapping_mul(y).wrapping_sub(q.wrapping_mul(self.p));
         if r >= self.p {
@@ -129,10 +129,10 @@ impl Rem128 {
     }
 
     #[inline]
-    pub fn rem(self, x: u128) -> u64 {
+    pub fn reduce(self, x: u128) -> u64 {
         add(
-            self.hi.mul((x >> 64) as u64),
-            self.lo.mul(x as u64),
+            self.hi.times((x >> 64) as u64),
+            self.lo.times(x as u64),
             self.hi.p,
         )
     }
@@ -267,7 +267,7 @@ mod tests {
                 let s = Shoup::new(c, p);
                 for &y in &ys {
                     assert_eq!(
-                        s.mul(y),
+                        s.times(y),
                         ((c as u128 * y as u128) % p as u128) as u64,
                         "{c} {y} {p}"
                     );
@@ -302,7 +302,7 @@ mod tests {
             xs.extend((0..200).map(|_| ((next() as u128) << 64) | next() as u128));
             xs.extend((0..50).map(|_| (next() % p) as u128 * (next() % p) as u128 * 15));
             for &x in &xs {
-                assert_eq!(r.rem(x), (x % p as u128) as u64, "{x} mod {p}");
+                assert_eq!(r.reduce(x), (x % p as u128) as u64, "{x} mod {p}");
             }
         }
     }

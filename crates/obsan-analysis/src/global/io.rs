@@ -56,7 +56,7 @@ pub(super) mod fp {
                 m
             }
         });
-        m.rem(a as u128 * b as u128)
+        m.reduce(a as u128 * b as u128)
     }
     pub(in crate::global) fn pow(a: u64, mut e: u64, p: u64) -> u64 {
         if p == obsan_expr::P {

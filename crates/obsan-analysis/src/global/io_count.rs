@@ -258,6 +258,10 @@ struct Axes<'a, 'b> {
     misses: usize,
 }
 
+/// A univariate fraction modulo p: numerator and denominator coefficients,
+/// lowest degree first (Thiele's reduced form).
+type Fraction = (Vec<u64>, Vec<u64>);
+
 /// Samples per axis before a probe gives up (the coefficients' degrees
 /// along a line are 14 for Goodwin, 12 for SIWR_multiout).
 const MAX_AXIS_SAMPLES: usize = 400;
@@ -265,11 +269,7 @@ const MAX_AXIS_SAMPLES: usize = 400;
 impl Axes<'_, '_> {
     /// Along axis `k`, the reduced fractions `v_m / v_j` (`m != j`), `v` the
     /// black box's vector; `None` when the samples run out.
-    fn fractions(
-        &mut self,
-        k: usize,
-        j: usize,
-    ) -> Result<Option<Vec<(Vec<u64>, Vec<u64>)>>, AnalysisError> {
+    fn fractions(&mut self, k: usize, j: usize) -> Result<Option<Vec<Fraction>>, AnalysisError> {
         let p = obsan_recon::PRIMES[0];
         let mut th: Option<Vec<Thiele>> = None;
         let mut idx = 0;
@@ -343,7 +343,7 @@ fn normalisation(
         };
         by_last.push(f);
     }
-    let alpha_of = |fr: &[Vec<(Vec<u64>, Vec<u64>)>]| -> Vec<Vec<u32>> {
+    let alpha_of = |fr: &[Vec<Fraction>]| -> Vec<Vec<u32>> {
         (0..n - 1)
             .map(|m| {
                 fr.iter()
@@ -352,8 +352,7 @@ fn normalisation(
             })
             .collect()
     };
-    let monomial_dens =
-        |fr: &[Vec<(Vec<u64>, Vec<u64>)>]| fr.iter().flatten().all(|(_, d)| is_monomial(d));
+    let monomial_dens = |fr: &[Vec<Fraction>]| fr.iter().flatten().all(|(_, d)| is_monomial(d));
     if monomial_dens(&by_last) {
         return Ok((n - 1, alpha_of(&by_last)));
     }

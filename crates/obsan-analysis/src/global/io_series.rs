@@ -57,7 +57,7 @@ impl Arith {
                 }
                 let s = Shoup::new(ai, p);
                 for (o, &bj) in out[i..].iter_mut().zip(b) {
-                    *o = fp::add(*o, s.mul(bj), p);
+                    *o = fp::add(*o, s.times(bj), p);
                 }
             }
             return;
@@ -85,7 +85,7 @@ impl Arith {
         let p = self.p;
         let s = Shoup::new(c, p);
         for (x, &y) in acc.iter_mut().zip(a) {
-            *x = fp::add(*x, s.mul(y), p);
+            *x = fp::add(*x, s.times(y), p);
         }
     }
 
@@ -103,7 +103,7 @@ impl Arith {
             // A constant denominator (every polynomial model's).
             let mut q = a.to_vec();
             let s = Shoup::new(iv, p);
-            q.iter_mut().for_each(|x| *x = s.mul(*x));
+            q.iter_mut().for_each(|x| *x = s.times(*x));
             return Some(q);
         }
         // Dual inverse of b0: (1/v, -g/v^2).
