@@ -219,9 +219,19 @@ pub(super) fn reconstruct(
             .iter()
             .map(|f| f.num().terms().len() + f.den().terms().len())
             .max();
+        let vd: Vec<u32> = (0..np)
+            .map(|k| {
+                r.functions
+                    .iter()
+                    .flat_map(|f| f.num().terms().iter().chain(f.den().terms()))
+                    .map(|t| t.exps.get(k).copied().unwrap_or(0))
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect();
         eprintln!(
-            "recon stats {:?}; max degree {md:?}, max terms {mt:?}",
-            r.stats
+            "recon points {} primes {}; max degree {md:?}, max terms {mt:?}, per variable {vd:?}",
+            r.stats.points, r.stats.primes
         );
     }
     for (f, a) in r.functions.iter_mut().zip(&alpha) {
