@@ -170,12 +170,6 @@ pub(super) fn reconstruct(
     };
     let np = m.param_vars.len();
     let (j, alpha) = normalisation(np, support.len(), &mut coeffs, seed)?;
-    if std::env::var("IO_TRACE").is_ok() {
-        eprintln!(
-            "normalised by coefficient {j} of {}; alpha {alpha:?}",
-            support.len()
-        );
-    }
     // Divided by a coefficient that is a monomial in the parameters and
     // scaled by their monomial denominators, the coefficients are (mostly)
     // polynomials, which need far fewer points than rational functions.
@@ -208,32 +202,6 @@ pub(super) fn reconstruct(
             "global (io): reconstructing the relations' coefficients: {e}"
         )),
     })?;
-    if std::env::var("IO_TRACE").is_ok() {
-        let md = r
-            .functions
-            .iter()
-            .map(|f| f.num().degree().max(f.den().degree()))
-            .max();
-        let mt = r
-            .functions
-            .iter()
-            .map(|f| f.num().terms().len() + f.den().terms().len())
-            .max();
-        let vd: Vec<u32> = (0..np)
-            .map(|k| {
-                r.functions
-                    .iter()
-                    .flat_map(|f| f.num().terms().iter().chain(f.den().terms()))
-                    .map(|t| t.exps.get(k).copied().unwrap_or(0))
-                    .max()
-                    .unwrap_or(0)
-            })
-            .collect();
-        eprintln!(
-            "recon points {} primes {}; max degree {md:?}, max terms {mt:?}, per variable {vd:?}",
-            r.stats.points, r.stats.primes
-        );
-    }
     for (f, a) in r.functions.iter_mut().zip(&alpha) {
         *f = f.over_monomial(a);
     }
