@@ -92,10 +92,16 @@ pub(crate) fn cheap_symmetries(
         .iter()
         .map(|&(g, _)| vars.iter().map(|&x| nf.ctx.diff(g, x)).collect())
         .collect();
-    let points = 3.max((n + 4).div_ceil(comps.len().max(1)));
+    // Enough points that each component's gradients can span its support
+    // (a component in s variables gives at most one row per point): too
+    // few, and the kernel holds spurious vectors that hide the true ones
+    // (CHO's rates in up to 30 variables: 39 kernel vectors at 4 points).
+    let mut points = 3.max((n + 4).div_ceil(comps.len().max(1)));
     let mut trans_rows: Vec<Vec<Fp>> = Vec::new();
     let mut scale_rows: Vec<Vec<Fp>> = Vec::new();
-    for _ in 0..points {
+    let mut taken = 0;
+    while taken < points {
+        taken += 1;
         let pt = random_point(&mut nf.ctx, &mut rng)?;
         let xs: Vec<Fp> = vars.iter().map(|&v| pt.value(v)).collect();
         for (gi, &(g, j)) in comps.iter().enumerate() {
@@ -108,6 +114,10 @@ pub(crate) fn cheap_symmetries(
             let mut s: Vec<Fp> = d.iter().zip(&xs).map(|(&a, &x)| a * x).collect();
             if let Some(j) = j {
                 s[j] = s[j] - val[0];
+            }
+            if taken == 1 {
+                let support = d.iter().filter(|a| **a != Fp::ZERO).count();
+                points = points.max((support + 1).min(n + 4));
             }
             trans_rows.push(d);
             scale_rows.push(s);

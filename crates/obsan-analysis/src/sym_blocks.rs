@@ -346,6 +346,19 @@ pub(crate) fn symmetries_by_blocks(
     let Some(sp) = split(nf, &report.fields.vectors) else {
         return Ok(None);
     };
+    // With shared variables, blocks whose bases are all cheap structure give
+    // way to the whole system's cheap route (below): when that route alone
+    // accounts for the deficiency, solving every block first is wasted (the
+    // CHO model's 13 overlapping outputs: a rank test per block, minutes).
+    if !sp.shared.is_empty()
+        && opts.route != crate::sym_report::Route::Reconstruct
+        && crate::structure::cheap_symmetries(nf, report)
+            .ok()
+            .flatten()
+            .is_some()
+    {
+        return Ok(None);
+    }
     let n = report.n;
     let mut solved = Vec::with_capacity(sp.blocks.len());
     for (vars, outs) in &sp.blocks {

@@ -73,6 +73,71 @@ pub fn mul(a: u64, b: u64, p: u64) -> u64 {
     ((a as u128 * b as u128) % p as u128) as u64
 }
 
+/// Products by one fixed residue `c` without a division (Shoup's method,
+/// V. Shoup, NTL): with `c' = floor(c 2^64 / p)` precomputed, `q =
+/// floor(c' y / 2^64)` is `floor(c y / p)` or one less, so `c y - q p` lies
+/// in `0..2p` (p < 2^63) and one subtraction reduces it. For loops that
+/// multiply many values by one scalar (elimination rows, Cauchy products).
+#[derive(Clone, Copy, Debug)]
+pub struct Shoup {
+    c: u64,
+    pre: u64,
+    p: u64,
+}
+
+impl Shoup {
+    /// For `c` in `0..p`, `p < 2^63`.
+    #[inline]
+    pub fn new(c: u64, p: u64) -> Shoup {
+        Shoup {
+            c,
+            pre: (((c as u128) << 64) / p as u128) as u64,
+            p,
+        }
+    }
+
+    /// `c y mod p` for any `y < 2^64`.
+    #[inline]
+    pub fn times(self, y: u64) -> u64 {
+        let q = ((self.pre as u128 * y as u128) >> 64) as u64;
+        let r = self.c.wrapping_mul(y).wrapping_sub(q.wrapping_mul(self.p));
+        if r >= self.p {
+            r - self.p
+        } else {
+            r
+        }
+    }
+}
+
+/// Remainders of any `u128` modulo `p < 2^63` without a division: `x =
+/// x_1 2^64 + x_0` is `x_1 (2^64 mod p) + x_0` modulo p, each term one
+/// [`Shoup`] product (`x_0 = 1 * x_0`; Shoup's bound holds for any
+/// multiplicand below 2^64). For sums of products reduced late.
+#[derive(Clone, Copy, Debug)]
+pub struct Rem128 {
+    hi: Shoup,
+    lo: Shoup,
+}
+
+impl Rem128 {
+    pub fn new(p: u64) -> Rem128 {
+        let r = (u64::MAX % p + 1) % p;
+        Rem128 {
+            hi: Shoup::new(r, p),
+            lo: Shoup::new(1 % p, p),
+        }
+    }
+
+    #[inline]
+    pub fn reduce(self, x: u128) -> u64 {
+        add(
+            self.hi.times((x >> 64) as u64),
+            self.lo.times(x as u64),
+            self.hi.p,
+        )
+    }
+}
+
 pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     let mut r = 1 % p;
     while e > 0 {
@@ -85,17 +150,19 @@ pub fn pow(mut a: u64, mut e: u64, p: u64) -> u64 {
     r
 }
 
-/// Inverse modulo p (extended Euclid); `None` for zero.
+/// Inverse modulo p (extended Euclid); `None` for zero. The remainders
+/// are `u64` (64-bit divisions); only the Bezout coefficient, bounded by
+/// `p` in size, is kept in `i128`.
 pub fn inv(a: u64, p: u64) -> Option<u64> {
     if a == 0 {
         return None;
     }
-    let (mut r0, mut r1) = (p as i128, a as i128);
+    let (mut r0, mut r1) = (p, a % p);
     let (mut s0, mut s1) = (0i128, 1i128);
     while r1 != 0 {
         let q = r0 / r1;
         (r0, r1) = (r1, r0 - q * r1);
-        (s0, s1) = (s1, s0 - q * s1);
+        (s0, s1) = (s1, s0 - q as i128 * s1);
     }
     // r0 = gcd(p, a); 1 for a prime p and 0 < a < p.
     if r0 != 1 {
@@ -177,6 +244,70 @@ mod tests {
     }
 
     #[test]
+    fn shoup_products_agree_with_u128_remainders() {
+        // Against the naive `(c y) % p` in u128, at the edges (0, 1, p - 1,
+        // y up to 2^64 - 1) and at random residues, for the list's primes,
+        // the Mersenne prime 2^61 - 1, a small prime and one just below 2^63.
+        let mut st = 0x5eed_u64;
+        let mut next = || crate::rng::splitmix64(&mut st);
+        for p in [
+            PRIMES[0],
+            PRIMES[23],
+            (1 << 61) - 1,
+            65_537,
+            0x7fff_ffff_ffff_ffe7,
+        ] {
+            assert!(is_prime(p));
+            let mut cs = vec![0, 1, 2, p - 1, p / 2];
+            cs.extend((0..40).map(|_| next() % p));
+            let mut ys = vec![0, 1, p - 1, p, u64::MAX, u64::MAX - 1];
+            ys.extend((0..40).map(|_| next() % p));
+            ys.extend((0..10).map(|_| next()));
+            for &c in &cs {
+                let s = Shoup::new(c, p);
+                for &y in &ys {
+                    assert_eq!(
+                        s.times(y),
+                        ((c as u128 * y as u128) % p as u128) as u64,
+                        "{c} {y} {p}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn u128_remainders_without_division_agree_with_the_naive_ones() {
+        let mut st = 0x12_u64;
+        let mut next = || crate::rng::splitmix64(&mut st);
+        for p in [
+            PRIMES[0],
+            PRIMES[17],
+            (1 << 61) - 1,
+            65_537,
+            3,
+            0x7fff_ffff_ffff_ffe7,
+        ] {
+            let r = Rem128::new(p);
+            let mut xs: Vec<u128> = vec![
+                0,
+                1,
+                p as u128,
+                u128::MAX,
+                u128::MAX - 1,
+                (p as u128) * (p as u128) - 1,
+                1 << 64,
+                (1 << 64) - 1,
+            ];
+            xs.extend((0..200).map(|_| ((next() as u128) << 64) | next() as u128));
+            xs.extend((0..50).map(|_| (next() % p) as u128 * (next() % p) as u128 * 15));
+            for &x in &xs {
+                assert_eq!(r.reduce(x), (x % p as u128) as u64, "{x} mod {p}");
+            }
+        }
+    }
+
+    #[test]
     fn inverse_and_power_identities() {
         let p = PRIMES[0];
         let mut a = 12345u64;
@@ -190,6 +321,17 @@ mod tests {
             a = mul(a, 0x9e37_79b9_7f4a_7c15 % p, p);
         }
         assert_eq!(inv(0, p), None);
+        // Against Fermat's a^(p-2) at random residues of several primes.
+        let mut st = 3u64;
+        for q in [PRIMES[5], (1 << 61) - 1, 65_537, 0x7fff_ffff_ffff_ffe7] {
+            for _ in 0..200 {
+                let x = crate::rng::splitmix64(&mut st) % q;
+                if x != 0 {
+                    assert_eq!(inv(x, q), Some(pow(x, q - 2, q)));
+                }
+            }
+            assert_eq!(inv(1, q), Some(1));
+        }
         assert_eq!(inv(p - 1, p), Some(p - 1));
     }
 }

@@ -21,34 +21,58 @@
 //! derivative is ever formed: the cost is polynomial in the order whatever
 //! the expression swell of the Taylor route.
 
+use super::io_series::{Arith, IPoly, Ser};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Fp, FpField};
 use obsan_expr::{Int, Poly as ZPoly, Var};
-use obsan_recon::fp::{Echelon, PrimeField, Zp};
+use obsan_recon::fp::{Echelon, PrimeField, RowEchelon, Zp};
 
 /// Arithmetic modulo `p`, with the rank test's shift-and-add products when
-/// `p = 2^61 - 1` (the dense kernels dominate the time; `u128 %` is slow).
-mod fp {
-    pub(super) use obsan_recon::fp::{add, sub};
+/// `p = 2^61 - 1`, and otherwise (the reconstruction's primes) products
+/// reduced by obsan-recon's `Rem128`, its constants kept per thread for the
+/// last prime seen: `u128 %` was a fifth of the black box's time.
+pub(super) mod fp {
+    use obsan_recon::fp::Rem128;
+    pub(in crate::global) use obsan_recon::fp::{add, sub};
+    use std::cell::Cell;
+
+    thread_local! {
+        static REM: Cell<(u64, Option<Rem128>)> = const { Cell::new((0, None)) };
+    }
+
     #[inline]
-    pub(super) fn mul(a: u64, b: u64, p: u64) -> u64 {
+    pub(in crate::global) fn mul(a: u64, b: u64, p: u64) -> u64 {
         if p == obsan_expr::P {
-            (super::Fp(a) * super::Fp(b)).0
-        } else {
-            obsan_recon::fp::mul(a, b, p)
+            return (super::Fp(a) * super::Fp(b)).0;
         }
+        let m = REM.with(|c| match c.get() {
+            (q, Some(m)) if q == p => m,
+            _ => {
+                let m = Rem128::new(p);
+                c.set((p, Some(m)));
+                m
+            }
+        });
+        m.reduce(a as u128 * b as u128)
     }
-    pub(super) fn pow(a: u64, e: u64, p: u64) -> u64 {
+    pub(in crate::global) fn pow(a: u64, mut e: u64, p: u64) -> u64 {
         if p == obsan_expr::P {
-            super::Fp(a).pow(e).0
-        } else {
-            obsan_recon::fp::pow(a, e, p)
+            return super::Fp(a).pow(e).0;
         }
+        let (mut r, mut a) = (1 % p, a);
+        while e > 0 {
+            if e & 1 == 1 {
+                r = mul(r, a, p);
+            }
+            a = mul(a, a, p);
+            e >>= 1;
+        }
+        r
     }
-    pub(super) fn inv(a: u64, p: u64) -> Option<u64> {
+    pub(in crate::global) fn inv(a: u64, p: u64) -> Option<u64> {
         obsan_recon::fp::inv(a, p)
     }
 }
@@ -149,109 +173,6 @@ pub(super) fn elem(rng: &mut Rng, p: u64) -> u64 {
     }
 }
 
-/// Truncated power series whose coefficients are dual vectors of length
-/// `g` (value, then gradient in the initial state when `g > 1`).
-type Ser = Vec<Vec<u64>>;
-
-struct Arith {
-    p: u64,
-    g: usize,
-    len: usize,
-}
-
-impl Arith {
-    fn zero(&self) -> Ser {
-        vec![vec![0; self.g]; self.len]
-    }
-    fn dmul(&self, a: &[u64], b: &[u64], out: &mut [u64]) {
-        let p = self.p;
-        out[0] = fp::add(out[0], fp::mul(a[0], b[0], p), p);
-        for i in 1..self.g {
-            let t = fp::add(fp::mul(a[0], b[i], p), fp::mul(a[i], b[0], p), p);
-            out[i] = fp::add(out[i], t, p);
-        }
-    }
-    /// Cauchy product truncated to `len`.
-    fn mul(&self, a: &Ser, b: &Ser) -> Ser {
-        let mut out = self.zero();
-        for i in 0..self.len {
-            if a[i].iter().all(|&x| x == 0) {
-                continue;
-            }
-            for j in 0..self.len - i {
-                self.dmul(&a[i], &b[j], &mut out[i + j]);
-            }
-        }
-        out
-    }
-    fn add_scaled(&self, acc: &mut Ser, a: &Ser, c: u64) {
-        let p = self.p;
-        for (x, y) in acc.iter_mut().zip(a) {
-            for (u, v) in x.iter_mut().zip(y) {
-                *u = fp::add(*u, fp::mul(*v, c, p), p);
-            }
-        }
-    }
-    /// `a / b`; `None` when `b(0)` vanishes.
-    fn div(&self, a: &Ser, b: &Ser) -> Option<Ser> {
-        let p = self.p;
-        let b0 = &b[0];
-        let iv = fp::inv(b0[0], p)?;
-        // Dual inverse of b0: (1/v, -g/v^2).
-        let mut inv0 = vec![0u64; self.g];
-        inv0[0] = iv;
-        let iv2 = fp::mul(iv, iv, p);
-        for i in 1..self.g {
-            inv0[i] = fp::sub(0, fp::mul(b0[i], iv2, p), p);
-        }
-        let mut q: Ser = Vec::with_capacity(self.len);
-        for k in 0..self.len {
-            let mut r = a[k].clone();
-            for i in 1..=k {
-                let mut t = vec![0u64; self.g];
-                self.dmul(&b[i], &q[k - i], &mut t);
-                for (x, y) in r.iter_mut().zip(&t) {
-                    *x = fp::sub(*x, *y, p);
-                }
-            }
-            let mut qk = vec![0u64; self.g];
-            self.dmul(&r, &inv0, &mut qk);
-            q.push(qk);
-        }
-        Some(q)
-    }
-    /// `poly` at the series `vars`, its parameter part at `theta`.
-    fn eval(&self, poly: &SPoly, theta: &[u64], vars: &[Ser]) -> Ser {
-        let p = self.p;
-        let mut acc = self.zero();
-        for (c, pe, se) in &poly.0 {
-            let mut k = *c;
-            for (t, &e) in theta.iter().zip(pe) {
-                if e > 0 {
-                    k = fp::mul(k, fp::pow(*t, e as u64, p), p);
-                }
-            }
-            if k == 0 {
-                continue;
-            }
-            let mut term: Option<Ser> = None;
-            for (v, &e) in vars.iter().zip(se) {
-                for _ in 0..e {
-                    term = Some(match term {
-                        None => v.clone(),
-                        Some(t) => self.mul(&t, v),
-                    });
-                }
-            }
-            match term {
-                None => acc[0][0] = fp::add(acc[0][0], k, p),
-                Some(t) => self.add_scaled(&mut acc, &t, k),
-            }
-        }
-        acc
-    }
-}
-
 /// One sample: per output, the derivatives `y^(j)(0)`, `j < len`, each as a
 /// dual vector; per input, its derivatives (values only).
 struct Jets {
@@ -259,59 +180,106 @@ struct Jets {
     u: Vec<Vec<u64>>,
 }
 
+/// The model's polynomials with the parameters evaluated at one point
+/// (shared by every sample of a kernel).
+pub(super) struct Inst {
+    rhs: Vec<(IPoly, IPoly)>,
+    outputs: Vec<(IPoly, IPoly)>,
+}
+
 impl IoModel {
-    /// Jets of the outputs to order `len - 1` at parameters `theta`, initial
-    /// state and inputs' Taylor coefficients from `rng`; with `grad`, each
-    /// carries its gradient in the initial state. `None` at a pole.
-    /// The outputs' and inputs' Taylor coefficients (`[t^j]`, `j < len`),
-    /// each a dual vector with `grad`.
+    /// The model at parameters `theta`.
+    pub(super) fn at(&self, theta: &[u64]) -> Inst {
+        let p = self.p;
+        let one = |q: &SPoly| -> IPoly {
+            q.0.iter()
+                .filter_map(|(c, pe, se)| {
+                    let k = theta
+                        .iter()
+                        .zip(pe)
+                        .filter(|(_, &e)| e > 0)
+                        .fold(*c, |k, (t, &e)| fp::mul(k, fp::pow(*t, u64::from(e), p), p));
+                    let vars = se
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, &e)| e > 0)
+                        .map(|(v, &e)| (v, e))
+                        .collect();
+                    (k != 0).then_some((k, vars))
+                })
+                .collect()
+        };
+        let pair = |(n, d): &(SPoly, SPoly)| (one(n), one(d));
+        Inst {
+            rhs: self.rhs.iter().map(pair).collect(),
+            outputs: self.outputs.iter().map(pair).collect(),
+        }
+    }
+
+    /// Jets of the outputs to order `len - 1` at the parameters of `inst`,
+    /// initial state and inputs' Taylor coefficients from `rng`; with
+    /// `grad`, each carries its gradient in the initial state. `None` at a
+    /// pole. The outputs' and inputs' Taylor coefficients (`[t^j]`,
+    /// `j < len`), flat series of dual vectors (io_series.rs).
     fn taylor(
         &self,
-        theta: &[u64],
+        inst: &Inst,
         len: usize,
         grad: bool,
         rng: &mut Rng,
-    ) -> Option<(Vec<Ser>, Vec<Ser>)> {
+    ) -> Option<(Arith, Vec<Ser>, Vec<Ser>)> {
         let p = self.p;
         let g = if grad { 1 + self.nx } else { 1 };
         let a = Arith { p, g, len };
         let mut vars: Vec<Ser> = Vec::with_capacity(self.nx + self.nu);
         for s in 0..self.nx {
             let mut x = a.zero();
-            x[0][0] = elem(rng, p);
+            x[0] = elem(rng, p);
             if grad {
-                x[0][1 + s] = 1;
+                x[1 + s] = 1;
             }
             vars.push(x);
         }
         for _ in 0..self.nu {
             let mut u = a.zero();
-            for c in u.iter_mut() {
-                c[0] = elem(rng, p);
+            for k in 0..len {
+                u[k * g] = elem(rng, p);
             }
             vars.push(u);
         }
+        let (mut t1, mut t2) = (a.zero(), a.zero());
         // x_{k+1} = [t^k] f(x) / (k + 1), the series of f recomputed on
         // the coefficients known so far (those above k do not reach t^k).
+        // 1 / D(x(0)) per state: the value at 0 of its denominator's series.
+        let mut ivs: Vec<u64> = Vec::with_capacity(self.nx);
         for k in 0..len.saturating_sub(1) {
+            let inv = fp::inv((k as u64 + 1) % p, p)?;
             for s in 0..self.nx {
-                let (n, d) = &self.rhs[s];
-                let q = a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?;
-                let inv = fp::inv((k as u64 + 1) % p, p)?;
-                let c: Vec<u64> = q[k].iter().map(|&v| fp::mul(v, inv, p)).collect();
-                vars[s][k + 1] = c;
+                let (n, d) = &inst.rhs[s];
+                let den = a.eval(d, &vars, &mut t1, &mut t2);
+                if k == 0 {
+                    ivs.push(fp::inv(den[0], p)?);
+                }
+                let q = a.div_with(&a.eval(n, &vars, &mut t1, &mut t2), &den, ivs[s])?;
+                for (x, &v) in a.at_mut(&mut vars[s], k + 1).iter_mut().zip(a.at(&q, k)) {
+                    *x = fp::mul(v, inv, p);
+                }
             }
         }
-        let mut y = Vec::with_capacity(self.outputs.len());
-        for (n, d) in &self.outputs {
-            y.push(a.div(&a.eval(n, theta, &vars), &a.eval(d, theta, &vars))?);
+        let mut y = Vec::with_capacity(inst.outputs.len());
+        for (n, d) in &inst.outputs {
+            y.push(a.div(
+                &a.eval(n, &vars, &mut t1, &mut t2),
+                &a.eval(d, &vars, &mut t1, &mut t2),
+            )?);
         }
-        Some((y, vars.split_off(self.nx)))
+        let u = vars.split_off(self.nx);
+        Some((a, y, u))
     }
 
-    fn jets(&self, theta: &[u64], len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
+    fn jets(&self, inst: &Inst, len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {
         let p = self.p;
-        let (ys, us) = self.taylor(theta, len, grad, rng)?;
+        let (a, ys, us) = self.taylor(inst, len, grad, rng)?;
         // Taylor coefficients to derivatives: y^(j) = j! [t^j] y.
         let mut fact = vec![1u64; len];
         for j in 1..len {
@@ -320,18 +288,18 @@ impl IoModel {
         let y = ys
             .iter()
             .map(|q| {
-                q.iter()
-                    .zip(&fact)
-                    .map(|(c, &f)| c.iter().map(|&v| fp::mul(v, f, p)).collect())
+                fact.iter()
+                    .enumerate()
+                    .map(|(k, &f)| a.at(q, k).iter().map(|&v| fp::mul(v, f, p)).collect())
                     .collect()
             })
             .collect();
         let u = us
             .iter()
             .map(|s| {
-                s.iter()
-                    .zip(&fact)
-                    .map(|(c, &f)| fp::mul(c[0], f, p))
+                fact.iter()
+                    .enumerate()
+                    .map(|(k, &f)| fp::mul(a.at(s, k)[0], f, p))
                     .collect()
             })
             .collect();
@@ -358,7 +326,8 @@ impl IoModel {
         let vars = self.relation_vars(orders, i);
         let kmax = orders.iter().copied().max().unwrap_or(0);
         let l = support.len() + 2;
-        let Some((ys, us)) = self.taylor(theta, l + kmax + 1, false, rng) else {
+        let inst = self.at(theta);
+        let Some((_, ys, us)) = self.taylor(&inst, l + kmax + 1, false, rng) else {
             return false;
         };
         let a = Arith { p, g: 1, len: l };
@@ -366,11 +335,11 @@ impl IoModel {
         let deriv = |c: &Ser, j: usize| -> Ser {
             (0..l)
                 .map(|m| {
-                    let mut v = c[m + j][0];
+                    let mut v = c[m + j];
                     for r in 1..=j {
                         v = fp::mul(v, (m + r) as u64 % p, p);
                     }
-                    vec![v]
+                    v
                 })
                 .collect()
         };
@@ -395,7 +364,7 @@ impl IoModel {
             }
             let row: Vec<Fp> = match acc {
                 None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
-                Some(t) => t.iter().map(|c| Fp(c[0])).collect(),
+                Some(t) => t.iter().map(|&c| Fp(c)).collect(),
             };
             if !ech.insert(row) {
                 dependent += 1;
@@ -411,7 +380,7 @@ impl IoModel {
     pub(super) fn orders(&self, theta: &[u64], rng: &mut Rng) -> Result<Vec<usize>, AnalysisError> {
         let len = self.nx + 2;
         let j = self
-            .jets(theta, len, true, rng)
+            .jets(&self.at(theta), len, true, rng)
             .ok_or_else(|| err("global (io): a pole at the random point"))?;
         let mut ech = Echelon::new(Zp(self.p));
         let m = j.y.len();
@@ -456,17 +425,18 @@ pub(super) enum IoVar {
 
 /// The right kernel of the rows `sample` draws, drawn until the rank stops
 /// growing for 4 rows in a row (a dependent row of a random point on the
-/// variety: probability at most `deg / p` each) or is full.
+/// variety: probability at most `deg / p` each) or reaches `stop`.
 fn kernel<F: PrimeField>(
     field: F,
     to: impl Fn(u64) -> F::Elem,
     back: impl Fn(F::Elem) -> u64,
     sample: &mut dyn FnMut() -> Result<Vec<u64>, AnalysisError>,
     ncols: usize,
+    stop: usize,
 ) -> Result<Vec<Vec<u64>>, AnalysisError> {
-    let mut ech = Echelon::new(field);
+    let mut ech = RowEchelon::new(field);
     let mut stale = 0;
-    while stale < 4 && ech.rank() < ncols {
+    while stale < 4 && ech.rank() < stop {
         let row: Vec<F::Elem> = sample()?.into_iter().map(&to).collect();
         if ech.insert(row) {
             stale = 0;
@@ -553,13 +523,15 @@ impl IoModel {
     }
 
     /// The kernel of the monomials `monos` in `vars` evaluated at jets of
-    /// random initial states (and inputs) at `theta`.
+    /// random initial states (and inputs) at `theta`, sampled until the rank
+    /// reaches `stop` or stalls ([`kernel`]).
     fn fit(
         &self,
         theta: &[u64],
         vars: &[IoVar],
         len: usize,
         monos: &[Vec<u32>],
+        stop: usize,
         rng: &mut Rng,
     ) -> Result<Vec<Vec<u64>>, AnalysisError> {
         let p = self.p;
@@ -576,6 +548,10 @@ impl IoModel {
             ));
         }
         let mut tries = 0;
+        let inst = self.at(theta);
+        let top: Vec<u32> = (0..vars.len())
+            .map(|v| monos.iter().map(|m| m[v]).max().unwrap_or(0))
+            .collect();
         let mut sample = || -> Result<Vec<u64>, AnalysisError> {
             loop {
                 if self.deadline.is_some_and(|d| std::time::Instant::now() > d) {
@@ -587,7 +563,7 @@ impl IoModel {
                 if tries > 2 * monos.len() + 64 {
                     return Err(err("global (io): too many poles sampling the jets"));
                 }
-                let Some(j) = self.jets(theta, len, false, rng) else {
+                let Some(j) = self.jets(&inst, len, false, rng) else {
                     continue;
                 };
                 let vals: Vec<u64> = vars
@@ -597,14 +573,27 @@ impl IoModel {
                         IoVar::U(u, k) => j.u[u][k],
                     })
                     .collect();
+                // Powers of each jet up to its largest exponent, then one
+                // product per factor of each monomial.
+                let pows: Vec<Vec<u64>> = vals
+                    .iter()
+                    .zip(&top)
+                    .map(|(&v, &t)| {
+                        let mut w = vec![1u64; t as usize + 1];
+                        for e in 1..w.len() {
+                            w[e] = fp::mul(w[e - 1], v, p);
+                        }
+                        w
+                    })
+                    .collect();
                 return Ok(monos
                     .iter()
                     .map(|m| {
-                        m.iter().zip(&vals).fold(1u64, |acc, (&e, &v)| {
+                        m.iter().zip(&pows).fold(1u64, |acc, (&e, w)| {
                             if e == 0 {
                                 acc
                             } else {
-                                fp::mul(acc, fp::pow(v, e as u64, p), p)
+                                fp::mul(acc, w[e as usize], p)
                             }
                         })
                     })
@@ -612,9 +601,9 @@ impl IoModel {
             }
         };
         if p == obsan_expr::P {
-            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len())
+            kernel(FpField, Fp, |x| x.0, &mut sample, monos.len(), stop)
         } else {
-            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len())
+            kernel(Zp(p), |x| x, |x| x, &mut sample, monos.len(), stop)
         }
     }
 
@@ -671,7 +660,7 @@ impl IoModel {
         sets.dedup();
         for (_, d, c, l) in sets {
             let monos = monomials_capped(vars.len(), d, &caps(vars.len(), lead, pen, c, l));
-            let ker = self.fit(theta, &vars, len, &monos, rng)?;
+            let ker = self.fit(theta, &vars, len, &monos, monos.len(), rng)?;
             if ker.is_empty() {
                 continue;
             }
@@ -714,7 +703,9 @@ impl IoModel {
     ) -> Result<Option<Vec<u64>>, AnalysisError> {
         let vars = self.relation_vars(orders, i);
         let len = orders.iter().copied().max().unwrap_or(0) + 1;
-        let ker = self.fit(theta, &vars, len, support, rng)?;
+        // The relation's vector c(theta) vanishes on every sample, so rank
+        // `N - 1` leaves exactly its line: no stale rows to wait for.
+        let ker = self.fit(theta, &vars, len, support, support.len() - 1, rng)?;
         if ker.len() != 1 || ker[0].contains(&0) {
             return Ok(None);
         }

@@ -143,7 +143,7 @@ pub(super) fn io_count(
 
 /// The normalised coefficients of output `i`'s relation (the last one is 1,
 /// left out) as rational functions of the parameters.
-fn reconstruct(
+pub(super) fn reconstruct(
     m: &ZModel,
     orders: &[usize],
     i: usize,
@@ -153,6 +153,7 @@ fn reconstruct(
 ) -> Result<(obsan_recon::Reconstruction, u64), AnalysisError> {
     let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
     let mut calls = 0u64;
+    // The kernel normalised by its last coefficient (which is 1).
     let mut coeffs = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
         calls += 1;
         if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
@@ -165,26 +166,30 @@ fn reconstruct(
         let Some((io, rng)) = models.get_mut(&p) else {
             return Ok(None);
         };
-        Ok(io.on_support(pt, orders, i, support, rng)?.map(|mut v| {
-            v.pop();
-            v
-        }))
+        io.on_support(pt, orders, i, support, rng)
     };
     let np = m.param_vars.len();
-    let alpha = monomial_denominators(np, support.len() - 1, &mut coeffs, seed)?;
-    // Scaled by their monomial denominators the coefficients are (mostly)
+    let (j, alpha) = normalisation(np, support.len(), &mut coeffs, seed)?;
+    // Divided by a coefficient that is a monomial in the parameters and
+    // scaled by their monomial denominators, the coefficients are (mostly)
     // polynomials, which need far fewer points than rational functions.
     let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
-        Ok(coeffs(pt, p)?.map(|v| {
-            v.iter()
+        let Some(v) = coeffs(pt, p)? else {
+            return Ok(None);
+        };
+        let Some(iv) = obsan_recon::fp::inv(v[j], p) else {
+            return Ok(None);
+        };
+        Ok(Some(
+            others(&v, j)
                 .zip(&alpha)
-                .map(|(&c, a)| {
-                    a.iter().zip(pt).fold(c, |acc, (&e, &x)| {
-                        obsan_recon::fp::mul(acc, obsan_recon::fp::pow(x, u64::from(e), p), p)
+                .map(|(c, a)| {
+                    a.iter().zip(pt).fold(fmul(c, iv, p), |acc, (&e, &x)| {
+                        fmul(acc, obsan_recon::fp::pow(x, u64::from(e), p), p)
                     })
                 })
-                .collect()
-        }))
+                .collect(),
+        ))
     };
     let ropts = Options {
         deadline: opts.deadline,
@@ -206,51 +211,143 @@ fn reconstruct(
 /// The coefficients at a point modulo a prime; `None` at a bad point.
 type BlackBox<'a> = dyn FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, AnalysisError> + 'a;
 
-/// Per function of the black box `bb` (`m` values at a point of `np`
-/// parameters), the exponents `a` of a monomial `theta^a` dividing its
-/// denominator: for each parameter `k`, the order of the pole at
-/// `theta_k = 0` along the line `theta_k = t` (the other parameters at a
-/// random point; one Thiele interpolation per function). A wrong guess
-/// (a non-generic line) costs points only: the scaled functions are still
-/// reconstructed exactly and verified.
-fn monomial_denominators(
-    np: usize,
-    m: usize,
-    bb: &mut BlackBox<'_>,
-    seed: u64,
-) -> Result<Vec<Vec<u32>>, AnalysisError> {
-    let p = obsan_recon::PRIMES[0];
-    let mut rng = Rng::new(seed ^ 0xde40);
-    let base: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
-    let mut alpha = vec![vec![0u32; np]; m];
-    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
-    for k in 0..np {
-        let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, 2)).collect();
-        let mut t = 1u64;
-        let mut misses = 0;
-        while th.iter().any(|x| !x.done()) {
-            let mut pt = base.clone();
-            pt[k] = t;
-            t += 1;
-            let Some(v) = bb(&pt, p)? else {
-                misses += 1;
-                if misses > 8 {
-                    return Ok(vec![vec![0u32; np]; m]);
+use obsan_recon::fp::mul as fmul;
+
+/// The entries of `v` but the `j`-th, in order.
+fn others(v: &[u64], j: usize) -> impl Iterator<Item = u64> + '_ {
+    v.iter()
+        .enumerate()
+        .filter(move |&(m, _)| m != j)
+        .map(|(_, &c)| c)
+}
+
+fn is_monomial(v: &[u64]) -> bool {
+    v.iter().filter(|&&c| c != 0).count() == 1
+}
+
+/// Samples of the black box along the axis lines `theta_k = t` (the other
+/// parameters at one random point), kept so that every normalisation tried
+/// reuses them.
+struct Axes<'a, 'b> {
+    bb: &'a mut BlackBox<'b>,
+    base: Vec<u64>,
+    samples: Vec<Vec<(u64, Vec<u64>)>>,
+    next_t: Vec<u64>,
+    misses: usize,
+}
+
+/// A univariate fraction modulo p: numerator and denominator coefficients,
+/// lowest degree first (Thiele's reduced form).
+type Fraction = (Vec<u64>, Vec<u64>);
+
+/// Samples per axis before a probe gives up (the coefficients' degrees
+/// along a line are 14 for Goodwin, 12 for SIWR_multiout).
+const MAX_AXIS_SAMPLES: usize = 400;
+
+impl Axes<'_, '_> {
+    /// Along axis `k`, the reduced fractions `v_m / v_j` (`m != j`), `v` the
+    /// black box's vector; `None` when the samples run out.
+    fn fractions(&mut self, k: usize, j: usize) -> Result<Option<Vec<Fraction>>, AnalysisError> {
+        let p = obsan_recon::PRIMES[0];
+        let mut th: Option<Vec<Thiele>> = None;
+        let mut idx = 0;
+        while th.as_ref().is_none_or(|th| th.iter().any(|x| !x.done())) {
+            while self.samples[k].len() <= idx {
+                if self.misses > 8 || idx >= MAX_AXIS_SAMPLES {
+                    return Ok(None);
                 }
+                let mut pt = self.base.clone();
+                pt[k] = self.next_t[k];
+                self.next_t[k] += 1;
+                match (self.bb)(&pt, p)? {
+                    Some(v) => self.samples[k].push((pt[k], v)),
+                    None => self.misses += 1,
+                }
+            }
+            let (t, v) = &self.samples[k][idx];
+            idx += 1;
+            let Some(iv) = obsan_recon::fp::inv(v[j], p) else {
                 continue;
             };
-            for (x, &c) in th.iter_mut().zip(&v) {
+            let th = th.get_or_insert_with(|| (1..v.len()).map(|_| Thiele::new(p, 2)).collect());
+            for (x, c) in th.iter_mut().zip(others(v, j)) {
                 if !x.done() {
-                    x.add(pt[k], c);
+                    x.add(*t, fmul(c, iv, p));
                 }
             }
         }
-        for (a, x) in alpha.iter_mut().zip(&th) {
-            let (n, d) = x.rational();
-            a[k] = (ord(&d) - ord(&n)).max(0) as u32;
+        Ok(th.map(|th| th.iter().map(Thiele::rational).collect()))
+    }
+}
+
+/// Which of the `n` coefficients to divide the others by, and per quotient
+/// the exponents `a` of a monomial `theta^a` dividing its denominator.
+///
+/// Along each axis line `theta_k = t` (the other parameters at a random
+/// point) one Thiele interpolation per quotient gives its pole order at
+/// `theta_k = 0`. The last coefficient is tried first; if some quotient's
+/// denominator along some axis is not a power of `t`, a coefficient `c_j`
+/// that is a monomial in the parameters is looked for: then `c_m / c_j` has
+/// a monomial denominator for every `m`, and conversely (the coefficients
+/// have no common factor, so along a generic line `c_j(t)` dividing every
+/// `c_m(t) t^b` is a power of `t`). A candidate is a `j` whose quotient by
+/// the last one has a monomial numerator on every axis (`c_j / c_last =
+/// n / d` reduced, `n` divides `c_j`); it is kept when every quotient by it
+/// has a monomial denominator on every axis. A wrong choice (a non-generic
+/// line) costs points only: the scaled functions are still rational
+/// functions, reconstructed exactly and verified.
+fn normalisation(
+    np: usize,
+    n: usize,
+    bb: &mut BlackBox<'_>,
+    seed: u64,
+) -> Result<(usize, Vec<Vec<u32>>), AnalysisError> {
+    let p = obsan_recon::PRIMES[0];
+    let mut rng = Rng::new(seed ^ 0xde40);
+    let mut axes = Axes {
+        bb,
+        base: (0..np).map(|_| elem(&mut rng, p)).collect(),
+        samples: vec![Vec::new(); np],
+        next_t: vec![1; np],
+        misses: 0,
+    };
+    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
+    let fallback = (n - 1, vec![vec![0u32; np]; n - 1]);
+    // Per axis, the quotients by the last coefficient.
+    let mut by_last = Vec::with_capacity(np);
+    for k in 0..np {
+        let Some(f) = axes.fractions(k, n - 1)? else {
+            return Ok(fallback);
+        };
+        by_last.push(f);
+    }
+    let alpha_of = |fr: &[Vec<Fraction>]| -> Vec<Vec<u32>> {
+        (0..n - 1)
+            .map(|m| {
+                fr.iter()
+                    .map(|f| (ord(&f[m].1) - ord(&f[m].0)).max(0) as u32)
+                    .collect()
+            })
+            .collect()
+    };
+    let monomial_dens = |fr: &[Vec<Fraction>]| fr.iter().flatten().all(|(_, d)| is_monomial(d));
+    if monomial_dens(&by_last) {
+        return Ok((n - 1, alpha_of(&by_last)));
+    }
+    let candidates = (0..n - 1).filter(|&j| by_last.iter().all(|f| is_monomial(&f[j].0)));
+    for j in candidates.take(4) {
+        let mut fr = Vec::with_capacity(np);
+        for k in 0..np {
+            match axes.fractions(k, j)? {
+                Some(f) => fr.push(f),
+                None => break,
+            }
+        }
+        if fr.len() == np && monomial_dens(&fr) {
+            return Ok((j, alpha_of(&fr)));
         }
     }
-    Ok(alpha)
+    Ok((n - 1, alpha_of(&by_last)))
 }
 
 fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisError> {

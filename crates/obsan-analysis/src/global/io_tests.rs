@@ -364,3 +364,49 @@ fn capped_monomials_counted() {
         count_capped(5, 6, &caps)
     );
 }
+
+/// Trace of the route's reconstruction (`IO_MODELS=.. cargo test --release
+/// -p obsan-analysis --lib io_recon_trace -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn io_recon_trace() {
+    let dir = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/benchmarks/si-jl"
+    );
+    let names = std::env::var("IO_MODELS").unwrap_or_else(|_| "Goodwin".into());
+    for name in names.split_whitespace() {
+        let path = format!("{dir}/{name}.sys");
+        let m = model(&std::fs::read_to_string(&path).unwrap(), &path);
+        let p = obsan_expr::P;
+        let mut rng = Rng::new(1);
+        let io = IoModel::new(&m, p).unwrap();
+        let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
+        let orders = io.orders(&th, &mut rng).unwrap();
+        for i in 0..orders.len() {
+            let t0 = Instant::now();
+            let r = io
+                .relation(&th, &orders, i, 40, 1000, &mut rng)
+                .unwrap()
+                .unwrap();
+            let t1 = t0.elapsed().as_secs_f64();
+            if r.support.len() < 2 {
+                continue;
+            }
+            let opts = crate::global::GlobalOptions::default();
+            let (rec, calls) =
+                super::super::io_count::reconstruct(&m, &orders, i, &r.support, &opts, 1).unwrap();
+            let terms: usize = rec
+                .functions
+                .iter()
+                .map(|f| f.num().terms().len() + f.den().terms().len())
+                .sum();
+            println!(
+                "{name} y{}: support {}, relation {t1:.3} s, {calls} points, {terms} terms, total {:.3} s",
+                i + 1,
+                r.support.len(),
+                t0.elapsed().as_secs_f64()
+            );
+        }
+    }
+}

@@ -19,6 +19,7 @@ mod count;
 mod io;
 mod io_count;
 mod io_report;
+mod io_series;
 mod maps;
 mod model;
 mod outputs;
