@@ -20,6 +20,7 @@ mod io;
 mod io_count;
 mod io_report;
 mod io_series;
+mod lie;
 mod maps;
 mod model;
 mod outputs;
@@ -48,26 +49,52 @@ pub fn global_identifiability(
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
     match opts.route {
-        Route::Taylor => taylor_route(nf, opts),
+        Route::Taylor => taylor_route(nf, opts, false),
+        Route::Lie => taylor_route(nf, opts, true),
         Route::InputOutput => io_report::io_route(nf, opts, None),
-        Route::Auto => match taylor_route(nf, opts) {
+        Route::Auto => match taylor_route(nf, opts, false) {
             Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
-                io_report::io_route(nf, opts, Some(why.clone()))
-                    .map_err(|e| err(format!("{why}; the input-output route: {e}")))
+                match io_report::io_route(nf, opts, Some(why.clone())) {
+                    Ok(r) => Ok(r),
+                    // Then the Lie route (lie.rs): no Taylor unknowns, and
+                    // initial states counted too.
+                    Err(e) => {
+                        let why = format!("{why}; the input-output route: {e}");
+                        match taylor_route(nf, opts, true) {
+                            Ok(mut r) => {
+                                r.fallback = Some(why);
+                                Ok(r)
+                            }
+                            Err(e) => Err(err(format!("{why}; the Lie route: {e}"))),
+                        }
+                    }
+                }
             }
             r => r,
         },
     }
 }
 
-/// SIAN's route.
-fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
+/// SIAN's route, or (`lie`) the Lie route (lie.rs): the same counts and
+/// report on another polynomial system.
+fn taylor_route(
+    nf: &mut NormalForm,
+    opts: &GlobalOptions,
+    lie: bool,
+) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let kmax = opts.max_order + 2;
     let mut results = Vec::new();
+    if lie {
+        results = lie::lie_counts(&m, &mut nf.ctx, &primes, opts)?;
+    }
     for (r, &p) in primes.iter().enumerate() {
-        let mut run = Run::new(&m, p, opts.seed.wrapping_add(r as u64), kmax)?;
+        if lie {
+            break;
+        }
+        let seed = opts.seed.wrapping_add(r as u64);
+        let mut run = Run::new(&m, p, seed, kmax)?;
         run.max_bytes = opts.max_bytes;
         results.push(count_once(&mut run, opts)?);
     }
@@ -79,7 +106,13 @@ fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalRepor
     }
     let nx = m.dyn_vars.len();
     let np = m.param_vars.len();
-    let bounds = error_bounds(&m, &results, &primes);
+    // SIAN's degree bounds are of its Taylor system; the Lie route has none
+    // derived (1: no bound), as the input-output route.
+    let bounds = if lie {
+        (0.0, 0.0, 1.0)
+    } else {
+        error_bounds(&m, &results, &primes)
+    };
     // Names: params then states, as the counts are ordered.
     let names: Vec<(String, bool)> = nf.state[nx..]
         .iter()
@@ -204,7 +237,7 @@ fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalRepor
         unknowns: a.unknowns,
         equations: a.equations,
         primes,
-        route: Route::Taylor,
+        route: if lie { Route::Lie } else { Route::Taylor },
         fallback: None,
         io_sizes: Vec::new(),
     })
