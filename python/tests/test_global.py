@@ -76,3 +76,14 @@ def test_the_input_output_route_counts_two_summed_decays():
     assert g.route == "input-output" and g.fallback is None
     values = {v.name: v.values for v in g.variables}
     assert values == {"a": 2, "b": 2}, g.variables
+
+
+def test_the_lie_route_counts_a_cart_for_every_input():
+    # By hand (systems/global/squared_range_gain.sys): h = x^2, L_u h = 2 a x,
+    # L_u L_u h = 2 a^2 fix (x, a) up to a common sign, for every input.
+    g = obsan.load(SYSTEMS / "global" / "squared_range_gain.sys").global_identifiability(
+        route="lie"
+    )
+    assert g.route == "lie" and g.fallback is None
+    assert {v.name: v.values for v in g.variables} == {"a": 2, "x": 2}
+    assert g.solutions == 2
