@@ -1,52 +1,294 @@
 //! F4 (Faugère, "A new efficient algorithm for computing Gröbner bases
 //! (F4)", J. Pure Appl. Algebra 139, 1999): the critical pairs of lowest lcm
 //! degree (the normal selection strategy) are reduced together as one sparse
-//! Macaulay matrix over F_p. Symbolic preprocessing adds, for every monomial
-//! of the matrix divisible by a leading monomial of the basis, one multiple
-//! of that element as a pivot row; Gaussian elimination of the S-polynomial
-//! rows by the pivots (and by each other) leaves rows whose leading
-//! monomials are new, and they join the basis through the same
-//! Gebauer–Möller update as Buchberger's algorithm (`gb.rs`).
+//! Macaulay matrix over F_p (`f4mat.rs`), and the new rows join the basis
+//! through the Gebauer–Möller update, as in Buchberger's algorithm (`gb.rs`).
+//!
+//! The basis, its pairs and each matrix hold monomials once, in a
+//! [`Table`] (`table.rs`): an element is a vector of monomial ids and one of
+//! coefficients. The generators enter through `gb.rs`'s [`start`] (each
+//! reduced by those before), and the final elements leave as `Poly`s through
+//! its [`finish`] (tails fully reduced), so the result is the same `Basis`.
 
-use crate::gb::{finish, start, unit, Basis, GbBudget, Pair, Work};
-use crate::mem::{block, mono_bytes, over, term_bytes};
-use crate::poly::{Mono, Poly, Ring};
+use crate::f4mat::reduce_pairs;
+use crate::gb::{elem_slot_bytes, finish, start, unit, Basis, GbBudget, Work};
+use crate::mem::{block, over, poly_bytes};
+use crate::poly::{Poly, Ring};
+use crate::table::{Exp, Table};
 use crate::GbError;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 use std::mem::size_of;
 use std::time::Instant;
 
-/// The multiplicative hash of rustc (FxHash): monomials are keyed by
-/// program-made exponents, never by input an adversary chooses, so SipHash's
-/// flood resistance buys nothing and cost a measured 6% of a large F4 run.
-#[derive(Default)]
-struct Fx(u64);
-
-impl Hasher for Fx {
-    fn write(&mut self, bytes: &[u8]) {
-        // A monomial's exponents arrive as one byte slice: eight at a time.
-        for ch in bytes.chunks(8) {
-            let mut w = [0u8; 8];
-            w[..ch.len()].copy_from_slice(ch);
-            self.write_u64(u64::from_le_bytes(w));
-        }
-    }
-    fn write_u32(&mut self, x: u32) {
-        self.write_u64(x as u64);
-    }
-    fn write_u64(&mut self, x: u64) {
-        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    fn write_usize(&mut self, x: usize) {
-        self.write_u64(x as u64);
-    }
-    fn finish(&self) -> u64 {
-        self.0
-    }
+/// A critical pair: elements `i < j` and their lcm's id in the basis table.
+#[derive(Clone, Copy)]
+pub(crate) struct Pair {
+    pub(crate) i: u32,
+    pub(crate) j: u32,
+    pub(crate) lcm: u32,
+    pub(crate) sugar: u32,
 }
 
-type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<Fx>>;
+/// An element: monomial ids of the basis table (leading first), coefficients.
+pub(crate) struct Elem {
+    pub(crate) ids: Vec<u32>,
+    pub(crate) cfs: Vec<u64>,
+}
+
+/// F4's state: the basis so far (in the basis table), its pairs, the limits.
+pub(crate) struct St<'a> {
+    pub(crate) ring: &'a Ring,
+    pub(crate) budget: GbBudget,
+    pub(crate) t: Table,
+    pub(crate) el: Vec<Elem>,
+    pub(crate) sugar: Vec<u32>,
+    pub(crate) active: Vec<bool>,
+    pub(crate) pairs: Vec<Pair>,
+    /// Bytes of the elements and their slots; the pairs and the table are
+    /// counted by [`St::held`].
+    elem_bytes: usize,
+}
+
+/// Bytes of an element of `len` terms and its slots (the `Elem`, its sugar
+/// and active flag): 12 bytes a term, against a `Poly`'s 32 + 4 n.
+pub(crate) fn elem_bytes(len: usize) -> usize {
+    size_of::<Elem>() + block(4 * len) + block(8 * len) + 4 + 1
+}
+
+impl<'a> St<'a> {
+    /// Bytes held by the basis, its pairs and its table.
+    pub(crate) fn held(&self) -> usize {
+        self.elem_bytes + self.pairs.len() * size_of::<Pair>() + self.t.bytes()
+    }
+
+    /// Refuses `extra` more bytes past the budget (`what` names the stage).
+    pub(crate) fn room(&self, extra: usize, what: impl FnOnce() -> String) -> Result<(), GbError> {
+        let need = self.held() + extra;
+        if need > self.budget.max_bytes {
+            return Err(over(need, self.budget.max_bytes, what));
+        }
+        Ok(())
+    }
+
+    fn check(&self, len: usize) -> Result<(), GbError> {
+        if len > self.budget.max_terms {
+            return Err(GbError::Budget("terms of a polynomial"));
+        }
+        if let Some(d) = self.budget.deadline {
+            if Instant::now() > d {
+                return Err(GbError::Budget("deadline"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The work of `gb.rs`'s [`start`] in the table's terms.
+    fn from_work(w: Work<'a>) -> Result<St<'a>, GbError> {
+        let ring = w.ring;
+        let mut s = St {
+            ring,
+            budget: w.budget,
+            t: Table::new(ring.n, crate::table::weights(ring.n)),
+            el: Vec::new(),
+            sugar: w.sugar.clone(),
+            active: w.active.clone(),
+            pairs: Vec::new(),
+            elem_bytes: 0,
+        };
+        let base = w.held();
+        let what = || "the Groebner basis (its generators in the F4 table)".to_string();
+        for p in &w.polys {
+            s.room(base + elem_bytes(p.len()), what)?;
+            let mut ids = Vec::with_capacity(p.len());
+            for (m, _) in p.terms() {
+                let extra = base + s.held();
+                let max = s.budget.max_bytes;
+                ids.push(s.t.insert_mono(m, |g| {
+                    if extra + g > max {
+                        return Err(over(extra + g, max, what));
+                    }
+                    Ok(())
+                })?);
+            }
+            s.elem_bytes += elem_bytes(p.len());
+            s.el.push(Elem {
+                ids,
+                cfs: p.terms().iter().map(|t| t.1).collect(),
+            });
+        }
+        for p in &w.pairs {
+            let extra = base + s.held() + size_of::<Pair>();
+            let max = s.budget.max_bytes;
+            let lcm = s.t.insert_mono(&p.lcm, |g| {
+                if extra + g > max {
+                    return Err(over(extra + g, max, what));
+                }
+                Ok(())
+            })?;
+            s.pairs.push(Pair {
+                i: p.i as u32,
+                j: p.j as u32,
+                lcm,
+                sugar: p.sugar,
+            });
+        }
+        s.elem_bytes += s.el.len() * (size_of::<u32>() + 1);
+        Ok(s)
+    }
+
+    fn lm(&self, k: usize) -> u32 {
+        self.el[k].ids[0]
+    }
+
+    /// Adds a monic element with its sugar: Gebauer–Möller UPDATE (Becker
+    /// and Weispfenning), as `gb.rs`'s `Work::update`, on table ids.
+    pub(crate) fn update(&mut self, h: Elem, sugar: u32) -> Result<(), GbError> {
+        let hi = self.el.len();
+        if hi >= self.budget.max_basis {
+            return Err(GbError::Budget("basis size"));
+        }
+        let n = self.ring.n;
+        let lh = h.ids[0];
+        // The new element, at most one new pair per active element beside
+        // the old ones until criterion B has run, and the candidates' lcms
+        // (exponents, degree, mask) before the kept ones enter the table.
+        let grow = elem_bytes(h.ids.len());
+        let cand = 2 * n + 4 + 8;
+        let extra = grow + hi * (2 * size_of::<Pair>() + cand);
+        self.room(extra, || {
+            format!(
+                "the Groebner basis ({} elements, {} critical pairs, {} variables)",
+                hi + 1,
+                self.pairs.len() + hi,
+                n
+            )
+        })?;
+        let t = &self.t;
+        let eh = t.exps(lh).to_vec();
+        // New pairs (h, g) for active g: lcm exponents in `le`.
+        let mut le: Vec<Exp> = Vec::with_capacity(hi * n);
+        let mut c: Vec<(u32, u32, u64, u32)> = Vec::with_capacity(hi); // g, degree, mask, sugar
+        for g in 0..hi {
+            if !self.active[g] {
+                continue;
+            }
+            let lg = self.lm(g);
+            let k = c.len();
+            le.extend(eh.iter().zip(t.exps(lg)).map(|(a, b)| *a.max(b)));
+            let e = &le[k * n..];
+            let d: u32 = e.iter().map(|&x| x as u32).sum();
+            let mut m = 0u64;
+            for (v, &x) in e.iter().enumerate() {
+                if x > 0 {
+                    m |= 1 << (v % 64);
+                }
+            }
+            let s = (sugar + d - t.deg(lh)).max(self.sugar[g] + d - t.deg(lg));
+            c.push((g as u32, d, m, s));
+        }
+        let lce = |k: usize| &le[k * n..(k + 1) * n];
+        let coprime = |a: &[Exp], b: &[Exp]| a.iter().zip(b).all(|(x, y)| *x == 0 || *y == 0);
+        let divides = |a: &[Exp], b: &[Exp]| a.iter().zip(b).all(|(x, y)| x <= y);
+        // Criterion M/F (see gb.rs): by ascending lcm degree, a candidate is
+        // compared with the ones kept before it.
+        let mut order: Vec<usize> = (0..c.len()).collect();
+        order.sort_by_key(|&k| c[k].1);
+        let mut d: Vec<usize> = Vec::new();
+        for k in order {
+            let cop = coprime(&eh, t.exps(self.lm(c[k].0 as usize)));
+            let dominated = d
+                .iter()
+                .any(|&q| c[q].2 & !c[k].2 == 0 && divides(lce(q), lce(k)));
+            if cop || !dominated {
+                d.push(k);
+            }
+        }
+        // Criterion B on old pairs.
+        let hm = t.mask(lh);
+        let lcm_is = |a: &[Exp], b: &[Exp], l: &[Exp]| {
+            a.iter()
+                .zip(b)
+                .zip(l)
+                .all(|((x, y), z)| *x.max(y) == *z)
+        };
+        let old = std::mem::take(&mut self.pairs);
+        for p in old {
+            let l = t.exps(p.lcm);
+            let dropped = hm & !t.mask(p.lcm) == 0
+                && divides(&eh, l)
+                && !lcm_is(&eh, t.exps(self.lm(p.i as usize)), l)
+                && !lcm_is(&eh, t.exps(self.lm(p.j as usize)), l);
+            if !dropped {
+                self.pairs.push(p);
+            }
+        }
+        // Product criterion: coprime leading monomials reduce to zero.
+        for k in d {
+            let (g, deg, _, s) = c[k];
+            if coprime(&eh, self.t.exps(self.lm(g as usize))) {
+                continue;
+            }
+            let e = lce(k);
+            let hash = self.t.hash_of(e);
+            let base = self.held() + extra;
+            let max = self.budget.max_bytes;
+            let lcm = self.t.insert(e, deg, hash, |g| {
+                if base + g > max {
+                    return Err(over(base + g, max, || {
+                        format!("the Groebner basis (a table of {hi} elements' pairs)")
+                    }));
+                }
+                Ok(())
+            })?;
+            self.pairs.push(Pair {
+                i: g,
+                j: hi as u32,
+                lcm,
+                sugar: s,
+            });
+        }
+        for g in 0..hi {
+            if self.active[g] && self.t.divides(lh, &self.t, self.lm(g)) {
+                self.active[g] = false;
+            }
+        }
+        self.el.push(h);
+        self.sugar.push(sugar);
+        self.active.push(true);
+        self.elem_bytes += grow;
+        Ok(())
+    }
+
+    /// The active elements as `Poly`s with their sugars (the table's bytes
+    /// are released by the caller; the polynomials are counted first).
+    fn into_polys(self) -> Result<(Vec<Poly>, Vec<u32>), GbError> {
+        let n = self.ring.n;
+        let keep: Vec<usize> = (0..self.el.len()).filter(|&k| self.active[k]).collect();
+        let need: usize = self.held()
+            + keep
+                .iter()
+                .map(|&k| poly_bytes(self.el[k].ids.len(), n) + elem_slot_bytes(n))
+                .sum::<usize>();
+        if need > self.budget.max_bytes {
+            return Err(over(need, self.budget.max_bytes, || {
+                format!(
+                    "the Groebner basis (its {} elements as polynomials)",
+                    keep.len()
+                )
+            }));
+        }
+        let mut polys = Vec::with_capacity(keep.len());
+        for &k in &keep {
+            let e = &self.el[k];
+            let mut terms = Vec::with_capacity(e.ids.len());
+            for (&id, &c) in e.ids.iter().zip(&e.cfs) {
+                terms.push((self.t.mono(id)?, c));
+            }
+            polys.push(Poly { terms });
+        }
+        let sugar = keep.iter().map(|&k| self.sugar[k]).collect();
+        Ok((polys, sugar))
+    }
+}
 
 /// The reduced Gröbner basis of the ideal generated by `gens`, by F4. Meant
 /// for graded orders (grevlex): under lex the unreduced tails of F4's rows
@@ -54,321 +296,36 @@ type FxMap<K, V> = HashMap<K, V, BuildHasherDefault<Fx>>;
 /// past 2000 for a basis of degree 16), so `groebner` sends lex and block
 /// orders to Buchberger's algorithm.
 pub(crate) fn f4(ring: &Ring, gens: &[Poly], budget: GbBudget) -> Result<Basis, GbError> {
-    let mut w = match start(ring, gens, budget)? {
+    let w = match start(ring, gens, budget)? {
         Ok(w) => w,
         Err(u) => return Ok(u),
     };
+    let mut s = St::from_work(w)?;
     let mut selected = 0usize;
-    while !w.pairs.is_empty() {
+    while !s.pairs.is_empty() {
         // Normal strategy: every pair whose lcm has the lowest degree.
-        let d = w.pairs.iter().map(|p| p.lcm.degree()).min().unwrap_or(0);
-        let (sel, rest): (Vec<Pair>, Vec<Pair>) = std::mem::take(&mut w.pairs)
+        let d = s.pairs.iter().map(|p| s.t.deg(p.lcm)).min().unwrap_or(0);
+        let (sel, rest): (Vec<Pair>, Vec<Pair>) = std::mem::take(&mut s.pairs)
             .into_iter()
-            .partition(|p| p.lcm.degree() == d);
-        w.pairs = rest;
+            .partition(|p| s.t.deg(p.lcm) == d);
+        s.pairs = rest;
         selected += sel.len();
         if selected > budget.max_pairs {
             return Err(GbError::Budget("pairs reduced"));
         }
         let sugar = sel.iter().map(|p| p.sugar).max().unwrap_or(0);
-        let new = reduce_pairs(&w, &sel)?;
+        let new = reduce_pairs(&mut s, &sel)?;
         // Largest leading monomial first: an element whose leading monomial
-        // divides an earlier one's then retires it (`Work::update`), so the
+        // divides an earlier one's then retires it (`St::update`), so the
         // active set stays minimal.
         for h in new {
-            if h.terms[0].0.is_one() {
+            if s.t.deg(h.ids[0]) == 0 {
                 return Ok(unit(ring, budget.max_bytes));
             }
-            w.check(&h)?;
-            w.update(h, sugar)?;
+            s.check(h.ids.len())?;
+            s.update(h, sugar)?;
         }
     }
-    finish(&w)
-}
-
-/// A row of the Macaulay matrix before the columns are sorted: `mult * g_k`
-/// as column ids in the order of g_k's terms.
-struct Row {
-    cols: Vec<u32>,
-    poly: usize,
-}
-
-/// Symbolic preprocessing: the monomials met so far (column ids in order of
-/// appearance), the rows, and for each column the row that is its pivot.
-struct Sym<'w, 'a> {
-    w: &'w Work<'a>,
-    ids: FxMap<Mono, u32>,
-    monos: Vec<Mono>,
-    pivot: Vec<Option<usize>>,
-    rows: Vec<Row>,
-    queue: Vec<u32>,
-    /// The active basis elements (fixed while one matrix is built).
-    act: Vec<usize>,
-    /// Bytes the matrix will hold through its elimination ([`col_bytes`],
-    /// [`row_bytes`]), beside `base` held by the basis and its pairs.
-    bytes: usize,
-    base: usize,
-}
-
-/// Bytes of one column, from symbolic preprocessing to the end of the
-/// elimination: its monomial twice (the hash map's key and `monos`), the
-/// hash slot (a (Mono, u32) and a control byte, at the map's 7/8 load),
-/// its pivot and queue entries, then `by_order`, `rank`, the pivot slot,
-/// the u128 accumulator and a bit of `nz`.
-fn col_bytes(n: usize) -> usize {
-    2 * mono_bytes(n)
-        + (size_of::<(Mono, u32)>() + 1) * 8 / 7
-        + size_of::<Option<usize>>()
-        + 4
-        + 4
-        + 4
-        + size_of::<Option<(Vec<u32>, Vec<u64>)>>()
-        + 16
-        + 1
-}
-
-/// Bytes of one row of `len` entries: its column ids, and in the
-/// elimination its copy as a pivot (ids and coefficients) or the transient
-/// copies of a row being reduced (the same sizes).
-fn row_bytes(len: usize) -> usize {
-    size_of::<Row>() + 2 * block(4 * len) + block(8 * len)
-}
-
-/// Bytes of one entry of a new (reduced) row: the result, its pivot copy,
-/// the output row and the polynomial term it becomes.
-fn new_entry_bytes(n: usize) -> usize {
-    size_of::<(u32, u64)>() + 4 + 8 + size_of::<(u32, u64)>() + term_bytes(n)
-}
-
-impl Sym<'_, '_> {
-    /// Counts `extra` more bytes, or refuses if the budget would pass.
-    fn grow(&mut self, extra: usize) -> Result<(), GbError> {
-        let need = self.base + self.bytes + extra;
-        let max = self.w.budget.max_bytes;
-        if need > max {
-            let (r, c) = (self.rows.len(), self.monos.len());
-            return Err(over(need, max, || {
-                format!("the Groebner basis (F4 matrix of {r} rows x {c} columns)")
-            }));
-        }
-        self.bytes += extra;
-        Ok(())
-    }
-
-    fn column(&mut self, m: Mono) -> Result<u32, GbError> {
-        if let Some(&c) = self.ids.get(&m) {
-            return Ok(c);
-        }
-        if self.monos.len() >= self.w.budget.max_terms {
-            return Err(GbError::Budget("columns of the F4 matrix"));
-        }
-        self.grow(col_bytes(self.w.ring.n))?;
-        let c = self.monos.len() as u32;
-        self.ids.insert(m.clone(), c);
-        self.monos.push(m);
-        self.pivot.push(None);
-        self.queue.push(c);
-        Ok(c)
-    }
-
-    /// Adds the row `mult * g_k`; returns its index.
-    fn add_row(&mut self, mult: &Mono, k: usize) -> Result<usize, GbError> {
-        let w = self.w;
-        self.grow(row_bytes(w.polys[k].len()))?;
-        let mut cols = Vec::with_capacity(w.polys[k].len());
-        for (m, _) in w.polys[k].terms() {
-            let c = self.column(mult.mul(m)?)?;
-            cols.push(c);
-        }
-        self.rows.push(Row { cols, poly: k });
-        Ok(self.rows.len() - 1)
-    }
-
-    /// The active basis element with the fewest terms whose leading monomial
-    /// divides `m`.
-    fn reducer(&self, m: &Mono) -> Option<usize> {
-        let w = self.w;
-        let mm = m.mask();
-        self.act
-            .iter()
-            .copied()
-            .filter(|&k| w.masks[k] & !mm == 0 && w.lm[k].divides(m))
-            .min_by_key(|&k| w.polys[k].len())
-    }
-}
-
-/// Reduces the S-polynomials of `sel` together; returns the new basis
-/// elements (monic, largest leading monomial first), whose leading monomials
-/// no active leading monomial divides.
-fn reduce_pairs(w: &Work, sel: &[Pair]) -> Result<Vec<Poly>, GbError> {
-    let mut s = Sym {
-        w,
-        ids: FxMap::default(),
-        monos: Vec::new(),
-        pivot: Vec::new(),
-        rows: Vec::new(),
-        queue: Vec::new(),
-        act: (0..w.polys.len()).filter(|&k| w.active[k]).collect(),
-        bytes: 0,
-        base: w.held(),
-    };
-    // Each pair gives two multiples with the same leading monomial (its lcm):
-    // one becomes the pivot of that column (if none is yet), the other a row
-    // to reduce. A multiple met twice is entered once.
-    let mut seen: FxMap<(usize, Mono), ()> = FxMap::default();
-    let mut todo: Vec<usize> = Vec::new();
-    for p in sel {
-        for k in [p.i, p.j] {
-            let key = (k, p.lcm.clone());
-            if seen.contains_key(&key) {
-                continue;
-            }
-            s.grow((size_of::<(usize, Mono)>() + 1) * 8 / 7 + mono_bytes(w.ring.n))?;
-            seen.insert(key, ());
-            let mult = w.lm[k].quotient(&p.lcm);
-            let r = s.add_row(&mult, k)?;
-            let lead = s.rows[r].cols[0] as usize;
-            if s.pivot[lead].is_none() {
-                s.pivot[lead] = Some(r);
-            } else {
-                todo.push(r);
-            }
-        }
-    }
-    // Symbolic preprocessing: a pivot for every reducible monomial.
-    while let Some(c) = s.queue.pop() {
-        let c = c as usize;
-        if s.pivot[c].is_some() {
-            continue;
-        }
-        let m = s.monos[c].clone();
-        if let Some(k) = s.reducer(&m) {
-            let mult = w.lm[k].quotient(&m);
-            let r = s.add_row(&mult, k)?;
-            s.pivot[c] = Some(r);
-        }
-    }
-    eliminate(w, s, &todo)
-}
-
-/// Gaussian elimination of the rows `todo` by the pivots, left to right on a
-/// dense accumulator; each non-zero result becomes a pivot for the rows after
-/// it.
-/// Not obsan-recon's dense `fp::Echelon`: Macaulay rows are sparse over
-/// 10^4-10^5 columns and only the new pivots are wanted, so rows are kept
-/// sparse and reduced with delayed modular folding (below).
-fn eliminate(w: &Work, s: Sym, todo: &[usize]) -> Result<Vec<Poly>, GbError> {
-    let fld = w.ring.field;
-    let p = fld.modulus();
-    let order = w.ring.order;
-    let ncols = s.monos.len();
-    // Columns sorted largest monomial first; rows keep their order (a
-    // monomial order is compatible with multiplication).
-    let mut by_order: Vec<u32> = (0..ncols as u32).collect();
-    by_order.sort_by(|&a, &b| order.cmp(&s.monos[b as usize], &s.monos[a as usize]));
-    let mut rank = vec![0u32; ncols];
-    for (i, &c) in by_order.iter().enumerate() {
-        rank[c as usize] = i as u32;
-    }
-    let coeffs = |r: &Row| -> Vec<u64> { w.polys[r.poly].terms().iter().map(|t| t.1).collect() };
-    let cols = |r: &Row| -> Vec<u32> { r.cols.iter().map(|&c| rank[c as usize]).collect() };
-    let mut piv: Vec<Option<(Vec<u32>, Vec<u64>)>> = vec![None; ncols];
-    for (c, r) in s.pivot.iter().enumerate() {
-        if let Some(r) = r {
-            let row = &s.rows[*r];
-            piv[rank[c] as usize] = Some((cols(row), coeffs(row)));
-        }
-    }
-    // Delayed reduction: products of residues below p < 2^63 stay below
-    // 2^126, so the accumulator is a u128 folded modulo p only when it
-    // passes 2^127 (before two more products could overflow it) and once
-    // when its column is read: one division per non-zero column instead of
-    // one per product.
-    const FOLD: u128 = 1 << 127;
-    let p128 = p as u128;
-    let mut acc = vec![0u128; ncols];
-    // Bit c of `nz` is set when acc[c] may be non-zero: the scan jumps
-    // between set bits instead of reading every column right of the lead
-    // (rows are short against the 10^4-10^5 columns of a large matrix).
-    let mut nz = vec![0u64; ncols.div_ceil(64)];
-    let mut out: Vec<(u32, Vec<(u32, u64)>)> = Vec::new();
-    let mut new_bytes = 0usize;
-    for (n, &t) in todo.iter().enumerate() {
-        if n % 64 == 0 {
-            if let Some(d) = w.budget.deadline {
-                if Instant::now() > d {
-                    return Err(GbError::Budget("deadline"));
-                }
-            }
-        }
-        let row = &s.rows[t];
-        let rc = cols(row);
-        for (&c, &v) in rc.iter().zip(coeffs(row).iter()) {
-            acc[c as usize] = v as u128;
-            nz[c as usize / 64] |= 1 << (c % 64);
-        }
-        let mut res: Vec<(u32, u64)> = Vec::new();
-        let mut wi = rc[0] as usize / 64;
-        while wi < nz.len() {
-            let word = nz[wi];
-            if word == 0 {
-                wi += 1;
-                continue;
-            }
-            // Pivot rows only reach columns right of their lead, so bits
-            // set while column c is cleared lie ahead of the scan.
-            let b = word.trailing_zeros() as usize;
-            nz[wi] &= !(1u64 << b);
-            let c = wi * 64 + b;
-            let a = (acc[c] % p128) as u64;
-            acc[c] = 0;
-            if a == 0 {
-                continue;
-            }
-            match &piv[c] {
-                // Pivots are monic: adding (p - a) * pivot clears column c.
-                Some((pc, pv)) => {
-                    let m = (p - a) as u128;
-                    for (&x, &y) in pc[1..].iter().zip(&pv[1..]) {
-                        nz[x as usize / 64] |= 1 << (x % 64);
-                        let e = &mut acc[x as usize];
-                        *e += m * y as u128;
-                        if *e >= FOLD {
-                            *e %= p128;
-                        }
-                    }
-                }
-                None => res.push((c as u32, a)),
-            }
-        }
-        let Some(&(lead, lc)) = res.first() else {
-            continue;
-        };
-        new_bytes += res.len() * new_entry_bytes(w.ring.n);
-        let need = s.base + s.bytes + new_bytes;
-        if need > w.budget.max_bytes {
-            let (r, c) = (s.rows.len(), ncols);
-            return Err(over(need, w.budget.max_bytes, || {
-                format!(
-                    "the Groebner basis (F4 matrix of {r} rows x {c} columns, {} new rows)",
-                    out.len() + 1
-                )
-            }));
-        }
-        let inv = fld.inv(lc).ok_or(GbError::Budget("zero pivot"))?;
-        let pc: Vec<u32> = res.iter().map(|t| t.0).collect();
-        let pv: Vec<u64> = res.iter().map(|t| fld.mul(t.1, inv)).collect();
-        out.push((lead, pc.iter().copied().zip(pv.iter().copied()).collect()));
-        piv[lead as usize] = Some((pc, pv));
-    }
-    out.sort_by_key(|(lead, _)| *lead);
-    Ok(out
-        .into_iter()
-        .map(|(_, terms)| Poly {
-            terms: terms
-                .into_iter()
-                .map(|(c, v)| (s.monos[by_order[c as usize] as usize].clone(), v))
-                .collect(),
-        })
-        .collect())
+    let (polys, sugar) = s.into_polys()?;
+    finish(&Work::assembled(ring, budget, polys, sugar))
 }

@@ -45,6 +45,11 @@ impl Poly {
     }
 }
 
+/// The bytes [`Poly::stored_bytes`] gives a polynomial of `len` terms.
+pub(crate) fn poly_bytes(len: usize, n: usize) -> usize {
+    block(len * size_of::<(Mono, u64)>()) + len * mono_heap(n)
+}
+
 /// Bytes past a budget: the error's fields, `what` naming the stage.
 pub(crate) fn over(held: usize, max: usize, what: impl FnOnce() -> String) -> crate::GbError {
     crate::GbError::Memory {
