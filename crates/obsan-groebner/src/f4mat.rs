@@ -9,7 +9,7 @@
 //! element is monic, so is every multiple). The new rows' monomials enter
 //! the basis table at the end.
 
-use crate::f4::{Elem, Pair, St};
+use crate::f4state::{Elem, Pair, St};
 use crate::mem::{block, over};
 use crate::table::{Scratch, Table};
 use crate::GbError;
@@ -118,14 +118,16 @@ impl Sym<'_, '_> {
             let max = s.budget.max_bytes;
             let used = self.base + self.bytes + self.sym.bytes() + col_bytes();
             let (r, c) = (self.rows.len(), before);
-            let col = self.sym.insert(&self.prod.e, self.prod.deg, self.prod.hash, |g| {
-                if used + g > max {
-                    return Err(over(used + g, max, || {
-                        format!("the Groebner basis (F4 matrix of {r} rows x {c} columns)")
-                    }));
-                }
-                Ok(())
-            })?;
+            let col = self
+                .sym
+                .insert(&self.prod.e, self.prod.deg, self.prod.hash, |g| {
+                    if used + g > max {
+                        return Err(over(used + g, max, || {
+                            format!("the Groebner basis (F4 matrix of {r} rows x {c} columns)")
+                        }));
+                    }
+                    Ok(())
+                })?;
             if self.sym.len() > before {
                 if before >= s.budget.max_terms {
                     return Err(GbError::Budget("columns of the F4 matrix"));
@@ -135,7 +137,10 @@ impl Sym<'_, '_> {
             }
             cols.push(col);
         }
-        self.rows.push(Row { cols, poly: k as u32 });
+        self.rows.push(Row {
+            cols,
+            poly: k as u32,
+        });
         Ok(self.rows.len() - 1)
     }
 

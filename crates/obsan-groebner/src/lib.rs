@@ -31,6 +31,7 @@
 mod count;
 mod f4;
 mod f4mat;
+mod f4state;
 mod field;
 mod gb;
 mod mem;

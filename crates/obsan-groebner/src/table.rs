@@ -155,9 +155,9 @@ impl Table {
 
     /// The hash of exponents `e` (as the table computes it).
     pub(crate) fn hash_of(&self, e: &[Exp]) -> u64 {
-        e.iter()
-            .zip(&self.w)
-            .fold(0u64, |h, (&x, &w)| h.wrapping_add((x as u64).wrapping_mul(w)))
+        e.iter().zip(&self.w).fold(0u64, |h, (&x, &w)| {
+            h.wrapping_add((x as u64).wrapping_mul(w))
+        })
     }
 
     #[inline]
