@@ -84,7 +84,7 @@ pub(crate) fn pair_bytes(n: usize) -> usize {
 
 /// Bytes of one basis element's slots beside its polynomial: its `Poly`
 /// value, sugar, leading monomial, mask and active flag.
-fn elem_slot_bytes(n: usize) -> usize {
+pub(crate) fn elem_slot_bytes(n: usize) -> usize {
     size_of::<Poly>() + size_of::<u32>() + mono_bytes(n) + size_of::<u64>() + 1
 }
 
@@ -232,6 +232,36 @@ impl Work<'_> {
         self.active.push(true);
         self.elem_bytes += grow;
         Ok(())
+    }
+}
+
+impl<'a> Work<'a> {
+    /// A pair-free work holding the monic `polys` with their sugars, all
+    /// active: F4 (`f4.rs`) hands its final elements to [`finish`] so. The
+    /// caller has counted their bytes ([`poly_bytes`](crate::mem::poly_bytes)).
+    pub(crate) fn assembled(
+        ring: &'a Ring,
+        budget: GbBudget,
+        polys: Vec<Poly>,
+        sugar: Vec<u32>,
+    ) -> Work<'a> {
+        let n = ring.n;
+        let lm: Vec<Mono> = polys.iter().map(|p| p.terms[0].0.clone()).collect();
+        let elem_bytes = polys
+            .iter()
+            .map(|p| p.stored_bytes(n) + elem_slot_bytes(n))
+            .sum();
+        Work {
+            ring,
+            masks: lm.iter().map(Mono::mask).collect(),
+            lm,
+            active: vec![true; polys.len()],
+            polys,
+            sugar,
+            pairs: Vec::new(),
+            budget,
+            elem_bytes,
+        }
     }
 }
 

@@ -30,12 +30,15 @@
 
 mod count;
 mod f4;
+mod f4mat;
+mod f4state;
 mod field;
 mod gb;
 mod mem;
 mod poly;
 mod presolve;
 mod select;
+mod table;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
 pub use field::{is_prime, Field};

@@ -7,6 +7,17 @@
 //! at least 32. A term `(Mono, u64)` is 32 bytes inline in its polynomial's
 //! buffer plus one such block for the monomial's `4 n` bytes of exponents
 //! (tests/memory.rs checks the count against a counting allocator).
+//!
+//! F4 (`f4.rs`, `f4mat.rs`) holds each monomial once, in a table
+//! ([`table_bytes`](crate::table::table_bytes): `2 n` bytes of 16-bit
+//! exponents, a u32 degree, u64 mask and hash, each vector's capacity
+//! counted as it doubles, and 4-byte hash slots at most half full), so a
+//! term of its basis is a u32 id and a u64 coefficient in two buffers
+//! (`f4state::elem_bytes`: 12 bytes, against 32 + `block(4 n)` above), a pair 16
+//! bytes (its lcm an id), a matrix row 4 bytes an entry (its coefficients are
+//! its basis element's), a column 33 bytes beside its table entry
+//! (`f4mat::col_bytes`). Only the final basis is converted back to `Poly`s,
+//! counted by [`poly_bytes`] before it is built.
 
 use crate::poly::{Mono, Poly};
 use std::mem::size_of;
@@ -43,6 +54,11 @@ impl Poly {
     pub fn stored_bytes(&self, n: usize) -> usize {
         block(self.len() * size_of::<(Mono, u64)>()) + self.len() * mono_heap(n)
     }
+}
+
+/// The bytes [`Poly::stored_bytes`] gives a polynomial of `len` terms.
+pub(crate) fn poly_bytes(len: usize, n: usize) -> usize {
+    block(len * size_of::<(Mono, u64)>()) + len * mono_heap(n)
 }
 
 /// Bytes past a budget: the error's fields, `what` naming the stage.

@@ -159,3 +159,35 @@ fn cyclic_6_has_156_solutions() {
     let b = f4(&r, &cyclic(&r, 6), GbBudget::default()).unwrap();
     assert_eq!(b.standard_monomials(1000).unwrap().len(), 156);
 }
+
+/// F4 stores exponents packed in 16 bits: one that would not fit is
+/// `GbError::Degree`, never a wrapped exponent (Buchberger, with 32-bit
+/// exponents, is not bound by that width).
+/// Derivation: for f1 = y^2 - x and f2 = x^a y - 1 (leading monomials y^2
+/// and x^a y under grevlex, a >= 2), the only pair has lcm x^a y^2 and its
+/// row x^a * f1 holds x^(a+1); the S-polynomial x^(a+1) - y then joins the
+/// basis, whose monomials stay within exponent a + 1 (its remaining pair is
+/// coprime or reduces to zero). So the run needs exponent a + 1 exactly:
+/// Degree for a + 1 > 65535, Buchberger's basis otherwise; a generator
+/// exponent past 65535 (a >= 65536) is refused on entry.
+mod packed_width {
+    use super::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
+        #[test]
+        fn exponents_past_16_bits_are_a_degree_error(a in 65_520u32..=65_560) {
+            let r = Ring::new(Field::new(P).unwrap(), 2, Order::Grevlex);
+            let f1 = lin(&r, &[(vec![0, 2], 1), (vec![1, 0], -1)]);
+            let f2 = lin(&r, &[(vec![a, 1], 1), (vec![0, 0], -1)]);
+            let gens = [f1, f2];
+            let got = f4(&r, &gens, GbBudget::default());
+            if a + 1 > u16::MAX as u32 {
+                prop_assert_eq!(got.err(), Some(obsan_groebner::GbError::Degree));
+            } else {
+                let b = buchberger(&r, &gens, GbBudget::default()).unwrap();
+                prop_assert_eq!(&got.unwrap().polys, &b.polys);
+            }
+        }
+    }
+}
