@@ -100,6 +100,16 @@ impl LieForms {
             .iter()
             .map(|p| ratfun(ctx, p))
             .collect::<Result<_, _>>()?;
+        // Lie derivatives of h(x): an output reading an input would need its
+        // derivatives too (the Taylor route has them).
+        if outputs
+            .iter()
+            .any(|o| o.vars().iter().any(|v| m.input_vars.contains(v)))
+        {
+            return Err(err(
+                "global (lie): an output reads an input; the Lie route takes outputs of the states and params only (use --route taylor)",
+            ));
+        }
         let tangent: Vec<bool> = m.forms.iter().map(|f| *f == OutputForm::Tangent).collect();
         let mut base: Vec<ZPoly> = Vec::new();
         let add = |d: &ZPoly, base: &mut Vec<ZPoly>| {
