@@ -17,6 +17,7 @@ use obsan_model::NormalForm;
 
 mod count;
 mod io;
+mod io_choice;
 mod io_count;
 mod io_report;
 mod io_series;
@@ -47,6 +48,13 @@ pub fn global_identifiability(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
+    if std::env::var_os("OBSAN_SIZE_DEBUG").is_some() {
+        let m = zmodel(nf)?;
+        let t0 = std::time::Instant::now();
+        let s = io_choice::taylor_size(&m, opts);
+        eprintln!("SIZE {:?} {:?}", s, t0.elapsed());
+        std::process::exit(0);
+    }
     match opts.route {
         Route::Taylor => taylor_route(nf, opts),
         Route::InputOutput => io_report::io_route(nf, opts, None),
