@@ -48,24 +48,53 @@ pub fn global_identifiability(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
-    if std::env::var_os("OBSAN_SIZE_DEBUG").is_some() {
-        let m = zmodel(nf)?;
-        let t0 = std::time::Instant::now();
-        let s = io_choice::taylor_size(&m, opts);
-        eprintln!("SIZE {:?} {:?}", s, t0.elapsed());
-        std::process::exit(0);
-    }
     match opts.route {
         Route::Taylor => taylor_route(nf, opts),
         Route::InputOutput => io_report::io_route(nf, opts, None),
-        Route::Auto => match taylor_route(nf, opts) {
-            Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
-                io_report::io_route(nf, opts, Some(why.clone()))
-                    .map_err(|e| err(format!("{why}; the input-output route: {e}")))
-            }
-            r => r,
-        },
+        Route::Auto => auto_route(nf, opts),
     }
+}
+
+/// `--route auto` (issue 36): the Taylor route first under a fraction of
+/// the memory budget ([`io_choice::EARLY_BUDGET`]); past it, the
+/// input-output route; only when that one does not answer, the Taylor
+/// route again under the whole budget (as before), so the early stop costs
+/// at most the initial states' verdicts of a system whose Gröbner basis
+/// needs between the fraction and the whole budget while the io route
+/// answers (none of the 64 SI.jl benchmarks: io_choice.rs).
+fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
+    let early = GlobalOptions {
+        max_bytes: io_choice::early_budget(opts.max_bytes),
+        ..opts.clone()
+    };
+    let why = match taylor_route(nf, &early) {
+        Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
+        r => return r,
+    };
+    let stopped = early.max_bytes < opts.max_bytes;
+    let reason = if stopped {
+        reason_again(&why, &early, opts)
+    } else {
+        why.clone()
+    };
+    let io_err = match io_report::io_route(nf, opts, Some(reason)) {
+        Ok(r) => return Ok(r),
+        Err(e) => e,
+    };
+    if !stopped || matches!(io_err, AnalysisError::Timeout(_)) {
+        let why = if stopped { reason_again(&why, &early, opts) } else { why };
+        return Err(err(format!("{why}; the input-output route: {io_err}")));
+    }
+    match taylor_route(nf, opts) {
+        Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => Err(err(format!(
+            "{why}; the input-output route: {io_err}"
+        ))),
+        r => r,
+    }
+}
+
+fn reason_again(why: &str, early: &GlobalOptions, opts: &GlobalOptions) -> String {
+    io_choice::early_reason(why, early.max_bytes, opts.max_bytes)
 }
 
 /// SIAN's route.
