@@ -254,13 +254,16 @@ impl IoModel {
         let mut ivs: Vec<u64> = Vec::with_capacity(self.nx);
         for k in 0..len.saturating_sub(1) {
             let inv = fp::inv((k as u64 + 1) % p, p)?;
+            // Order k reads the series truncated after t^k (products of
+            // `k + 1` coefficients, not `len`: about a third of the work).
+            let ak = Arith { p, g, len: k + 1 };
             for s in 0..self.nx {
                 let (n, d) = &inst.rhs[s];
-                let den = a.eval(d, &vars, &mut t1, &mut t2);
+                let den = ak.eval(d, &vars, &mut t1, &mut t2);
                 if k == 0 {
                     ivs.push(fp::inv(den[0], p)?);
                 }
-                let q = a.div_with(&a.eval(n, &vars, &mut t1, &mut t2), &den, ivs[s])?;
+                let q = ak.div_with(&ak.eval(n, &vars, &mut t1, &mut t2), &den, ivs[s])?;
                 for (x, &v) in a.at_mut(&mut vars[s], k + 1).iter_mut().zip(a.at(&q, k)) {
                     *x = fp::mul(v, inv, p);
                 }
