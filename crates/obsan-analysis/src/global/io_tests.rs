@@ -41,7 +41,9 @@ fn jets_match_the_closed_form() {
     let len = 7;
     let mut r = Rng::new(11);
     let (x10, x20) = (elem(&mut r, p), elem(&mut r, p));
-    let j = io.jets(&io.at(&[a]), len, false, &mut Rng::new(11)).unwrap();
+    let j = io
+        .jets(&io.at(&[a]), len, false, &mut Rng::new(11))
+        .unwrap();
     assert_eq!(j.y[0][0][0], x20);
     let mut fact = 1u64;
     for k in 0..len - 1 {

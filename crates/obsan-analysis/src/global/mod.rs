@@ -82,13 +82,17 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         Err(e) => e,
     };
     if !stopped || matches!(io_err, AnalysisError::Timeout(_)) {
-        let why = if stopped { reason_again(&why, &early, opts) } else { why };
+        let why = if stopped {
+            reason_again(&why, &early, opts)
+        } else {
+            why
+        };
         return Err(err(format!("{why}; the input-output route: {io_err}")));
     }
     match taylor_route(nf, opts) {
-        Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => Err(err(format!(
-            "{why}; the input-output route: {io_err}"
-        ))),
+        Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
+            Err(err(format!("{why}; the input-output route: {io_err}")))
+        }
         r => r,
     }
 }
