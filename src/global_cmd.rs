@@ -27,6 +27,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         route: match a.route.as_str() {
             "taylor" => Route::Taylor,
             "io" => Route::InputOutput,
+            "lie" => Route::Lie,
             _ => Route::Auto,
         },
         ..GlobalOptions::default()
@@ -99,6 +100,8 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             maps_modulo_pi: maps_pi.iter().map(|m| m.0.clone()).collect(),
             method: if r.route == Route::InputOutput {
                 "input-output relations: kernels of monomials in the outputs' jets at numeric parameters, coefficients reconstructed over Q and verified, Gröbner basis over F_p of c(theta) = c(theta*); two independent points and primes agree".into()
+            } else if r.route == Route::Lie {
+                "Lie derivatives: exact iterated Lie derivatives of the outputs along the drift and each input's field (indistinguishable for every input, Hermann-Krener), equated at a random point, Gröbner basis over F_p; two independent points and primes agree".into()
             } else {
                 "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into()
             },
@@ -117,6 +120,8 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             restriction: nf.restriction.clone(),
             route: if r.route == Route::InputOutput {
                 "input-output".into()
+            } else if r.route == Route::Lie {
+                "lie".into()
             } else {
                 "taylor".into()
             },
@@ -168,6 +173,26 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             .fold(0.0, f64::max);
         o.push_str(&format!(
             "their coefficients reconstructed over Q and verified at fresh points (wrong with probability <= {bound:.1e})\n"
+        ));
+    } else if r.route == Route::Lie {
+        if let Some(why) = &r.fallback {
+            o.push_str(&format!("the Taylor route did not answer ({why})\n"));
+        }
+        let words: Vec<String> = r
+            .output_orders
+            .iter()
+            .map(|(n, k)| format!("{n} to length {k}"))
+            .collect();
+        o.push_str(&format!(
+            "route: Lie derivatives along the drift and each input's field: indistinguishable for every input (Hermann-Krener){}\nwords {} (the first length at which no derivative raises the rank: proven sufficient, docs/engine.md, \"Lie route\"), {} unknowns, {} equations\n",
+            if nf.inputs.is_empty() {
+                ", here the same question as one experiment (no inputs)"
+            } else {
+                "; one generic experiment can leave more values"
+            },
+            words.join(", "),
+            r.unknowns,
+            r.equations
         ));
     } else {
         o.push_str(&format!(
@@ -276,7 +301,9 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         "counted over the complex numbers at two independent random points modulo {} and {}, which agree\n",
         r.primes[0], r.primes[1]
     ));
-    if r.route == Route::InputOutput {
+    if r.route == Route::Lie {
+        o.push_str("probabilistic: the counts are the agreement of the two runs (no degree bound on the random points for this route yet; docs/engine.md, \"Lie route\")\n");
+    } else if r.route == Route::InputOutput {
         o.push_str("each relation's monomials are linearly independent along an output (non-zero Wronskian), so one experiment fixes its coefficients: these are single-experiment counts\nprobabilistic: the counts are the agreement of the two runs (no degree bound on the random points yet; docs/engine.md, \"Input-output route\")\n");
     } else {
         let bound = if r.error_bound < 1.0 {

@@ -381,8 +381,9 @@ class System:
     ) -> Global:
         """``obsan global``: per param and initial state, global / local with k values /
         not identifiable; the joint count and the exact discrete symmetries. ``route``:
-        ``"auto"`` (default: the Taylor system, else the input-output relations),
-        ``"taylor"`` or ``"io"``; ``Global.route`` says which answered."""
+        ``"auto"`` (default: the Taylor system, else the input-output relations, else
+        the Lie derivatives), ``"taylor"``, ``"io"`` or ``"lie"`` (indistinguishable for
+        every input); ``Global.route`` says which answered."""
         f = self._flags("global", input, set).integer("--seed", seed).text("--route", route)
         return Global.of(self._get(_limits(f, timeout, max_terms)))
 

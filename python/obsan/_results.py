@@ -384,8 +384,9 @@ class Global(Result):
     """Symmetries of the angle outputs' tangents only: each turns an angle output
     by pi or is not decided on the angles; not symmetries of the model."""
     route: str = "taylor"
-    """``"taylor"`` (parameters and initial states) or ``"input-output"`` (the
-    outputs' input-output relations: parameters only)."""
+    """``"taylor"`` (parameters and initial states), ``"input-output"`` (the
+    outputs' input-output relations: parameters only) or ``"lie"`` (the iterated
+    Lie derivatives: indistinguishable for every input)."""
     fallback: Optional[str] = None
     """Why the Taylor route did not answer, when ``route`` fell back; else None."""
 

@@ -22,9 +22,11 @@ pub struct GlobalArgs {
     #[command(flatten)]
     pub sys: SystemArgs,
     /// `taylor` (SIAN's Taylor system), `io` (input-output relations:
-    /// parameters only), or `auto`: taylor, then io when the Taylor system
-    /// passes a budget (docs/engine.md, "Input-output route").
-    #[arg(long, default_value = "auto", value_parser = ["auto", "taylor", "io"])]
+    /// parameters only), `lie` (iterated Lie derivatives: indistinguishable
+    /// for every input), or `auto`: taylor, then io when the Taylor system
+    /// passes a budget, then lie (docs/engine.md, "Input-output route", "Lie
+    /// route").
+    #[arg(long, default_value = "auto", value_parser = ["auto", "taylor", "io", "lie"])]
     pub route: String,
     #[command(flatten)]
     pub an: AnalysisArgs,

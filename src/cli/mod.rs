@@ -317,8 +317,12 @@ state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp
 Memory: the Taylor system, the Gröbner basis and its F4 matrices may hold 2048 bytes per
 --max-terms unit (about 195 MiB by default); past it, exit 2 with the stage named ('too large:
 the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms')
-unless --route auto (the default) answers by the input-output relations: the parameters only,
-with the reason in `fallback` (--route io: that route alone; --route taylor: SIAN's alone).
+unless --route auto (the default) answers by the input-output relations (the parameters only),
+else by the Lie route, with the reason in `fallback` (--route io, --route lie: that route
+alone; --route taylor: SIAN's alone). The Lie route (docs/engine.md) equates the outputs'
+iterated Lie derivatives along the drift and each input's field: parameters and initial
+states indistinguishable for every input (Hermann-Krener, the paper's notion); without inputs
+the same question as one experiment, with inputs one generic experiment may leave more values.
 Outputs through sqrt or atan are counted through their argument; an angle output (an atan2
 bearing) through its tangent, modulo pi: a count above 1 is then 'at most' unless the maps'
 signs on the angle settle it.
@@ -327,7 +331,7 @@ verdict (global | local | not identifiable), values, at_most}], solutions, solut
 all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
 counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
 log10_degree_bound_global, unknowns, equations, primes, exact: false, method, route
-(taylor | input-output), fallback}.")]
+(taylor | input-output | lie), fallback}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,

@@ -18,7 +18,7 @@ pub struct Global {
     /// Always false: the answer is probabilistic (`error_bound`).
     pub exact: bool,
     /// Why the Taylor route did not answer, when `route` fell back on
-    /// `input-output`; else null.
+    /// `input-output` or `lie`; else null.
     pub fallback: Option<String>,
     /// The order of the group of discrete symmetries found.
     pub group_order: usize,
@@ -45,8 +45,10 @@ pub struct Global {
     /// The input restriction applied, or null.
     pub restriction: Option<String>,
     /// The route that answered: `taylor` (SIAN's Taylor system: parameters
-    /// and initial states) or `input-output` (the outputs' input-output
-    /// relations: parameters only, `variables` lists no state).
+    /// and initial states), `input-output` (the outputs' input-output
+    /// relations: parameters only, `variables` lists no state) or `lie` (the
+    /// iterated Lie derivatives: parameters and initial states
+    /// indistinguishable for every input; `order` the longest word).
     pub route: String,
     /// The number of solutions, or null when not counted.
     pub solutions: Option<usize>,

@@ -11,6 +11,7 @@ mod expr;
 mod feedthrough;
 mod global;
 mod global_io;
+mod global_lie;
 mod global_maps;
 mod import;
 mod jet_decompositions;

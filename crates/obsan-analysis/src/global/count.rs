@@ -2,12 +2,12 @@
 //! the Gröbner basis and the number of values of each variable; SIAN's bounds.
 
 use super::model::ZModel;
-use super::run::Run;
+use super::run::{Rng, Run};
 use super::types::{err, gb_err, GlobalOptions};
 use super::weights::{raise, sian_weights, z_weight};
 use crate::rank::AnalysisError;
 use obsan_expr::Poly as ZPoly;
-use obsan_groebner::{distinct_roots, groebner, presolve_linear, GbBudget, Mono, Poly};
+use obsan_groebner::{distinct_roots, groebner, presolve_linear, GbBudget, Mono, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use std::time::Instant;
 
@@ -149,7 +149,7 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
 /// points, and the locally identifiable variables are constant on each.
 /// Fixing coordinates keeps the system sparse (the presolve substitutes
 /// numbers), where a random hyperplane spreads one variable over all of them.
-fn transcendence_slice(
+pub(super) fn transcendence_slice(
     ech: &Echelon<Zp>,
     local: &[bool],
     np: usize,
@@ -195,7 +195,6 @@ fn count_at(
     opts: &GlobalOptions,
     rank_order: usize,
 ) -> Result<Counts, AnalysisError> {
-    let f = run.field;
     let (mut eqs, unk) = run.sian_equations(orders)?;
     // The slice: each chosen variable fixed to its value at the point.
     for &t in slice {
@@ -210,33 +209,98 @@ fn count_at(
     } else {
         vec![1; run.ring.n]
     };
+    let q = run.cleared.q.clone();
+    let (per_var, joint, unknowns, degrees) =
+        count_system(run, &eqs, &unk, targets, local, &w, Some(q), budget, opts)?;
+    Ok(Counts {
+        per_var,
+        joint,
+        orders: orders.to_vec(),
+        rank_order,
+        unknowns,
+        equations: eqs.len() + usize::from(run.cleared.q.degree() > 0),
+        degrees,
+        n_local: local.iter().filter(|&&l| l).count(),
+    })
+}
+
+/// The counts on a polynomial system `eqs` (in the run's ring) in the
+/// unknowns `unk`: the Gröbner basis after the linear presolve and the
+/// weights `w` (per ring variable), then each target's minimal polynomial
+/// and the joint count of the locally identifiable ones. With `zq`, one more
+/// unknown `z` and the generator `z Q - 1` (sian.rs). Returns the per-target
+/// counts, the joint count, the number of unknowns and the equations'
+/// degrees in them (SIAN's Bezout product).
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+pub(super) fn count_system(
+    run: &mut Run,
+    eqs: &[Poly],
+    unk: &[usize],
+    targets: &[usize],
+    local: &[bool],
+    w: &[u32],
+    zq: Option<Poly>,
+    budget: GbBudget,
+    opts: &GlobalOptions,
+) -> Result<(Vec<Option<usize>>, Option<usize>, usize, Vec<u32>), AnalysisError> {
+    let mut eqs = eqs.to_vec();
     let mut steps: Vec<u32> = unk.iter().map(|&v| w[v]).collect();
-    let mut degrees: Vec<u32> = eqs.iter().map(|e| degree_in(e, &unk)).collect();
+    let mut degrees: Vec<u32> = eqs.iter().map(|e| degree_in(e, unk)).collect();
     // `z Q - 1` (sian.rs), `z` one more variable after the unknowns, when
     // there is a denominator (Q = 1 otherwise).
-    let q = run.cleared.q.clone();
+    let q = zq.unwrap_or_else(|| run.ring.constant(1));
     let with_z = q.degree() > 0;
     if with_z {
-        degrees.push(degree_in(&q, &unk) + 1);
+        degrees.push(degree_in(&q, unk) + 1);
         eqs.push(q);
     }
-    let (ring, mut gens) = run.to_unknown_ring(&eqs, &unk, usize::from(with_z))?;
+    let (ring, mut gens) = run.to_unknown_ring(&eqs, unk, usize::from(with_z))?;
     if with_z {
-        steps.push(z_weight(&w, run));
+        steps.push(z_weight(w, run));
         let zq = gens.pop().unwrap_or_default();
         gens.push(ring.sub(
             &ring.mul(&zq, &ring.var(ring.n - 1)).map_err(gb_err)?,
             &ring.constant(1),
         ));
     }
-    // Linear generators solved first (the outputs fix many unknowns to
-    // numbers), then the weights: presolve needs degree 1 to mean linear.
-    let gens = presolve_linear(&ring, &gens, opts.max_bytes).map_err(gb_err)?;
-    let gens = raise(&ring, &gens, &steps).map_err(gb_err)?;
     let tpos: Vec<usize> = targets
         .iter()
         .map(|v| unk.iter().position(|u| u == v).unwrap_or(0))
         .collect();
+    let (per_var, joint) = count_gens(
+        &ring,
+        gens,
+        &tpos,
+        local,
+        &steps,
+        &mut run.rng,
+        budget,
+        opts,
+    )?;
+    Ok((per_var, joint, ring.n, degrees))
+}
+
+/// The counts on generators `gens` in `ring` (its variables the unknowns,
+/// with weights `steps`): the linear presolve, the weights, the Gröbner
+/// basis, then each target's (at `tpos`) number of values from its minimal
+/// polynomial, and the joint count of the locally identifiable ones.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn count_gens(
+    ring: &Ring,
+    gens: Vec<Poly>,
+    tpos: &[usize],
+    local: &[bool],
+    steps: &[u32],
+    rng: &mut Rng,
+    budget: GbBudget,
+    opts: &GlobalOptions,
+) -> Result<(Vec<Option<usize>>, Option<usize>), AnalysisError> {
+    let f = ring.field;
+    let ring = ring.clone();
+    // Linear generators solved first (the outputs fix many unknowns to
+    // numbers), then the weights: presolve needs degree 1 to mean linear.
+    let gens = presolve_linear(&ring, &gens, opts.max_bytes).map_err(gb_err)?;
+    let gens = raise(&ring, &gens, steps).map_err(gb_err)?;
     let b = groebner(&ring, &gens, budget).map_err(gb_err)?;
     if b.is_unit() {
         return Err(err(
@@ -248,7 +312,7 @@ fn count_at(
             "global: the sliced system still has infinitely many solutions (a non-generic point); try another --seed",
         ));
     }
-    let mut per_var = Vec::with_capacity(targets.len());
+    let mut per_var = Vec::with_capacity(tpos.len());
     for (i, &t) in tpos.iter().enumerate() {
         if !local[i] {
             per_var.push(None);
@@ -256,7 +320,7 @@ fn count_at(
         }
         let xt = ring.from_terms([(Mono::var(ring.n, t, steps[t]), 1)]);
         let m = b
-            .minimal_polynomial_in(&xt, &steps, opts.max_solutions)
+            .minimal_polynomial_in(&xt, steps, opts.max_solutions)
             .map_err(gb_err)?;
         per_var.push(Some(distinct_roots(f, &m)));
     }
@@ -266,24 +330,15 @@ fn count_at(
     let mut terms = Vec::new();
     for (i, &t) in tpos.iter().enumerate() {
         if local[i] {
-            terms.push((Mono::var(ring.n, t, steps[t]), run.rng.elem(&f)));
+            terms.push((Mono::var(ring.n, t, steps[t]), rng.elem(&f)));
         }
     }
     let lf = ring.from_terms(terms);
     let m = b
-        .minimal_polynomial_in(&lf, &steps, opts.max_solutions)
+        .minimal_polynomial_in(&lf, steps, opts.max_solutions)
         .map_err(gb_err)?;
     let joint = Some(distinct_roots(f, &m));
-    Ok(Counts {
-        per_var,
-        joint,
-        orders: orders.to_vec(),
-        rank_order,
-        unknowns: ring.n,
-        equations: eqs.len(),
-        degrees,
-        n_local: local.iter().filter(|&&l| l).count(),
-    })
+    Ok((per_var, joint))
 }
 
 /// SIAN's bounds (Hong, Ovchinnikov, Pogudin, Yap 2020, Algorithm 1, steps

@@ -21,6 +21,7 @@ mod io_choice;
 mod io_count;
 mod io_report;
 mod io_series;
+mod lie;
 mod maps;
 mod model;
 mod outputs;
@@ -49,7 +50,8 @@ pub fn global_identifiability(
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
     match opts.route {
-        Route::Taylor => taylor_route(nf, opts),
+        Route::Taylor => taylor_route(nf, opts, false),
+        Route::Lie => taylor_route(nf, opts, true),
         Route::InputOutput => io_report::io_route(nf, opts, None),
         Route::Auto => auto_route(nf, opts),
     }
@@ -58,57 +60,69 @@ pub fn global_identifiability(
 /// `--route auto` (issue 36): the Taylor route first under a fraction of
 /// the memory budget ([`io_choice::EARLY_BUDGET`]); past it, the
 /// input-output route; only when that one does not answer, the Taylor
-/// route again under the whole budget (as before), so the early stop costs
-/// at most the initial states' verdicts of a system whose Gröbner basis
-/// needs between the fraction and the whole budget while the io route
-/// answers (none of the 64 SI.jl benchmarks: io_choice.rs).
+/// route again under the whole budget (as before), then the Lie route
+/// (lie.rs: no Taylor unknowns, initial states counted too). The early
+/// stop costs at most the initial states' verdicts of a system whose
+/// Gröbner basis needs between the fraction and the whole budget while the
+/// io route answers (none of the 64 SI.jl benchmarks: io_choice.rs).
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let early = GlobalOptions {
         max_bytes: io_choice::early_budget(opts.max_bytes),
         ..opts.clone()
     };
-    let why = match taylor_route(nf, &early) {
+    let why = match taylor_route(nf, &early, false) {
         Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
         r => return r,
     };
     let stopped = early.max_bytes < opts.max_bytes;
     let reason = if stopped {
-        reason_again(&why, &early, opts)
+        io_choice::early_reason(&why, early.max_bytes, opts.max_bytes)
     } else {
         why.clone()
     };
-    let io_err = match io_report::io_route(nf, opts, Some(reason)) {
+    let io_err = match io_report::io_route(nf, opts, Some(reason.clone())) {
         Ok(r) => return Ok(r),
         Err(e) => e,
     };
-    if !stopped || matches!(io_err, AnalysisError::Timeout(_)) {
-        let why = if stopped {
-            reason_again(&why, &early, opts)
-        } else {
-            why
-        };
-        return Err(err(format!("{why}; the input-output route: {io_err}")));
-    }
-    match taylor_route(nf, opts) {
-        Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => {
-            Err(err(format!("{why}; the input-output route: {io_err}")))
+    // The whole budget's Taylor attempt (the deadline passed: no time for it).
+    let why = if stopped && !matches!(io_err, AnalysisError::Timeout(_)) {
+        match taylor_route(nf, opts, false) {
+            Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
+            r => return r,
         }
-        r => r,
+    } else {
+        reason
+    };
+    let why = format!("{why}; the input-output route: {io_err}");
+    match taylor_route(nf, opts, true) {
+        Ok(mut r) => {
+            r.fallback = Some(why);
+            Ok(r)
+        }
+        Err(e) => Err(err(format!("{why}; the Lie route: {e}"))),
     }
 }
 
-fn reason_again(why: &str, early: &GlobalOptions, opts: &GlobalOptions) -> String {
-    io_choice::early_reason(why, early.max_bytes, opts.max_bytes)
-}
-
-/// SIAN's route.
-fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
+/// SIAN's route, or (`lie`) the Lie route (lie.rs): the same counts and
+/// report on another polynomial system.
+fn taylor_route(
+    nf: &mut NormalForm,
+    opts: &GlobalOptions,
+    lie: bool,
+) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let kmax = opts.max_order + 2;
     let mut results = Vec::new();
+    if lie {
+        results = lie::lie_counts(&m, &mut nf.ctx, &primes, opts)?;
+    }
     for (r, &p) in primes.iter().enumerate() {
-        let mut run = Run::new(&m, p, opts.seed.wrapping_add(r as u64), kmax)?;
+        if lie {
+            break;
+        }
+        let seed = opts.seed.wrapping_add(r as u64);
+        let mut run = Run::new(&m, p, seed, kmax)?;
         run.max_bytes = opts.max_bytes;
         results.push(count_once(&mut run, opts)?);
     }
@@ -120,7 +134,13 @@ fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalRepor
     }
     let nx = m.dyn_vars.len();
     let np = m.param_vars.len();
-    let bounds = error_bounds(&m, &results, &primes);
+    // SIAN's degree bounds are of its Taylor system; the Lie route has none
+    // derived (1: no bound), as the input-output route.
+    let bounds = if lie {
+        (0.0, 0.0, 1.0)
+    } else {
+        error_bounds(&m, &results, &primes)
+    };
     // Names: params then states, as the counts are ordered.
     let names: Vec<(String, bool)> = nf.state[nx..]
         .iter()
@@ -245,7 +265,7 @@ fn taylor_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalRepor
         unknowns: a.unknowns,
         equations: a.equations,
         primes,
-        route: Route::Taylor,
+        route: if lie { Route::Lie } else { Route::Taylor },
         fallback: None,
         io_sizes: Vec::new(),
     })

@@ -9,7 +9,7 @@ use obsan_expr::{Int, Poly as ZPoly, SplitMix, Var};
 use obsan_groebner::{Field, Mono, Order, Poly, Ring};
 use std::collections::HashMap;
 
-fn int_mod(f: &Field, c: &Int) -> u64 {
+pub(super) fn int_mod(f: &Field, c: &Int) -> u64 {
     let p = Int::from(f.modulus());
     let r = c % &p;
     match i64::try_from(&r) {

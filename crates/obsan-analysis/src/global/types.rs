@@ -39,6 +39,9 @@ pub enum Route {
     Taylor,
     /// The input-output relations only: parameters, no initial states.
     InputOutput,
+    /// Iterated Lie derivatives along the drift and each input's field
+    /// (lie.rs): indistinguishability for every input (Hermann–Krener).
+    Lie,
 }
 
 impl Default for GlobalOptions {
