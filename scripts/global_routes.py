@@ -6,6 +6,11 @@ parameters' verdicts and counts wherever both answer. Prints one line per
 model and exits 1 on a disagreement.
 
     python3 scripts/global_routes.py [--obsan target/release/obsan] [--timeout 10] [FILES...]
+
+With `--auto-against OTHER` it instead runs `--route auto` with both binaries
+and compares every variable's verdict (parameters and states): exit 1 when
+`--obsan` loses an answer OTHER gives or differs from it (session 32: the early
+Taylor attempt must lose nothing against main's binary).
 """
 import argparse, glob, json, subprocess, sys, time
 
@@ -23,13 +28,42 @@ def run(obsan, route, path, timeout):
     return params, dt, ""
 
 
+def auto_against(a, files):
+    lost = diff = 0
+    for f in files:
+        got = []
+        for b in (a.auto_against, a.obsan):
+            t0 = time.time()
+            p = subprocess.run([b, "global", f, "--json", "--timeout", str(a.timeout)],
+                               capture_output=True, text=True, timeout=a.timeout * 3 + 30)
+            v = json.loads(p.stdout) if p.returncode == 0 else None
+            got.append((v, time.time() - t0))
+        (o, to), (n, tn) = got
+        verdicts = lambda v: {x["name"]: (x["verdict"], x["values"]) for x in v["variables"]}
+        if o is None:
+            st = "both fail" if n is None else "new answer (" + n["route"] + ")"
+        elif n is None:
+            st, lost = "LOST", lost + 1
+        elif verdicts(o) != verdicts(n):
+            st, diff = "DIFFERENT", diff + 1
+        else:
+            st = "same (" + n["route"] + ")"
+        print(f"{f.split('/')[-1]:28} {st:28} other {to:6.2f} s  this {tn:6.2f} s")
+        sys.stdout.flush()
+    print(f"auto: {lost} lost, {diff} different")
+    sys.exit(1 if lost or diff else 0)
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--obsan", default="target/release/obsan")
     ap.add_argument("--timeout", type=float, default=10)
+    ap.add_argument("--auto-against", metavar="OTHER")
     ap.add_argument("files", nargs="*")
     a = ap.parse_args()
     files = a.files or sorted(glob.glob("systems/benchmarks/si-jl/*.sys"))
+    if a.auto_against:
+        auto_against(a, files)
     bad = both = 0
     for f in files:
         t, tt, tw = run(a.obsan, "taylor", f, a.timeout)

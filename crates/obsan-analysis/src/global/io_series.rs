@@ -131,9 +131,13 @@ impl Arith {
         Some(q)
     }
 
-    /// `poly` at the series `vars`; `t1`, `t2` are scratch series.
+    /// `poly` at the series `vars`; `t1`, `t2` are scratch series. The
+    /// series may be longer than `len`: their first `len` coefficients are
+    /// read (a Taylor recursion's order `k` needs `k + 1` of them).
     pub(super) fn eval(&self, poly: &IPoly, vars: &[Ser], t1: &mut Ser, t2: &mut Ser) -> Ser {
         let p = self.p;
+        let n = self.g * self.len;
+        let (mut t1, mut t2) = (&mut t1[..n], &mut t2[..n]);
         let mut acc = self.zero();
         for (k, se) in poly {
             // The product so far: none, one variable, or in t1.
@@ -145,10 +149,10 @@ impl Arith {
                         None => first = Some(v),
                         Some(f) => {
                             if in_t1 {
-                                self.mul_into(t1, &vars[v], t2);
-                                std::mem::swap(t1, t2);
+                                self.mul_into(t1, &vars[v][..n], t2);
+                                std::mem::swap(&mut t1, &mut t2);
                             } else {
-                                self.mul_into(&vars[f], &vars[v], t1);
+                                self.mul_into(&vars[f][..n], &vars[v][..n], t1);
                                 in_t1 = true;
                             }
                         }
@@ -158,7 +162,7 @@ impl Arith {
             match first {
                 None => acc[0] = fp::add(acc[0], *k, p),
                 Some(_) if in_t1 => self.add_scaled(&mut acc, t1, *k),
-                Some(f) => self.add_scaled(&mut acc, &vars[f], *k),
+                Some(f) => self.add_scaled(&mut acc, &vars[f][..n], *k),
             }
         }
         acc

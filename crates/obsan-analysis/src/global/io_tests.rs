@@ -24,6 +24,40 @@ fn coeff(r: &IoRelation, m: &[u32]) -> u64 {
 }
 
 #[test]
+fn jets_match_the_closed_form() {
+    // x1' = a x1^2 has x1 = x10 / (1 - a x10 t), so [t^k] x1 = a^k x10^(k+1);
+    // x2' = x1^2 / x1 (a denominator: the series division) integrates it:
+    // [t^(k+1)] x2 = a^k x10^(k+1) / (k+1), hence y = x2 has
+    // y^(k+1)(0) = (k+1)! [t^(k+1)] x2 = k! a^k x10^(k+1), and y(0) = x20.
+    // The recursion truncates order k's products after t^k: every order
+    // is checked against this closed form, independent of that code.
+    let m = model(
+        "system t\nstate x1, x2\nparam a\nx1' = a*x1^2\nx2' = x1^2/x1\noutput y = x2\n",
+        "t.sys",
+    );
+    let p = obsan_expr::P;
+    let io = IoModel::new(&m, p).unwrap();
+    let a = 987_654_321u64;
+    let len = 7;
+    let mut r = Rng::new(11);
+    let (x10, x20) = (elem(&mut r, p), elem(&mut r, p));
+    let j = io
+        .jets(&io.at(&[a]), len, false, &mut Rng::new(11))
+        .unwrap();
+    assert_eq!(j.y[0][0][0], x20);
+    let mut fact = 1u64;
+    for k in 0..len - 1 {
+        let want = fp::mul(
+            fp::mul(fact, fp::pow(a, k as u64, p), p),
+            fp::pow(x10, k as u64 + 1, p),
+            p,
+        );
+        assert_eq!(j.y[0][k + 1][0], want, "order {}", k + 1);
+        fact = fp::mul(fact, k as u64 + 1, p);
+    }
+}
+
+#[test]
 fn decay_with_input() {
     // x' = -a x + u, y = x: y' = -a y + u, so y' + a y - u = 0: order 1,
     // degree 1, in the variables (y, y', u, u'); up to scale, the
