@@ -156,16 +156,17 @@ fn the_memory_budget_stops_the_groebner_stage() {
     // llw1987 is answered under the default budget (p1, p3: 2 values, in
     // docs/performance.md), since the denominators are cleared as SIAN does
     // even at --max-terms 500 (1,000 KiB), and since the fibre is sliced by
-    // fixing coordinates even at 200 (400 KiB); at 100 the budget is 100 *
-    // 2,048 bytes, 200 KiB, and its F4 matrices are refused (counted in
-    // bytes, so the stage is named whatever the machine's speed). (The
-    // default route then answers by the Lie route, whose system is smaller.)
+    // fixing coordinates even at 200 (400 KiB), and since F4 holds each
+    // monomial once even at 100 (200 KiB); at 60 the budget is 60 * 2,048
+    // bytes, 120 KiB, and its F4 matrices are refused (counted in bytes, so
+    // the stage is named whatever the machine's speed). (The default route
+    // then answers by the Lie route, whose system is smaller.)
     let e = bad(
         &[
             "global",
             "systems/benchmarks/llw1987.sys",
             "--max-terms",
-            "100",
+            "60",
             "--route",
             "taylor",
         ],

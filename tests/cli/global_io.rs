@@ -46,12 +46,19 @@ fn two_decays_by_io() {
 fn goodwin_falls_back_on_io() {
     // SI.jl's published verdicts (its test of assess_identifiability; the
     // file's `# global:` line): b, c global; beta, delta local; alpha,
-    // gama not identifiable. The Taylor system passes the default budget
-    // (docs/performance.md), so `auto` answers by the io route and says why.
+    // gama not identifiable. The Taylor system's Gröbner basis needs far
+    // more work than auto's early bound (9.3e9 multiply-adds against 6e8,
+    // docs/performance.md), so `auto` answers by the io route and says why.
     let out = ok(&["global", "systems/global/sijl_tests/goodwin.sys", "--json"]);
     let v: Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["route"], "input-output");
-    assert!(v["fallback"].as_str().unwrap().contains("too large"), "{v}");
+    assert!(
+        v["fallback"]
+            .as_str()
+            .unwrap()
+            .contains("long for the early attempt"),
+        "{v}"
+    );
     let p = params(&v);
     let get = |n: &str| p.iter().find(|x| x.0 == n).map(|x| x.1.clone()).unwrap();
     for n in ["b", "c"] {

@@ -295,9 +295,16 @@ fn eliminate(m: &mut Sym, todo: &[usize]) -> Result<(Vec<(Vec<u32>, Vec<u64>)>, 
     let mut nz = vec![0u64; ncols.div_ceil(64)];
     let mut out: Vec<(Vec<u32>, Vec<u64>)> = Vec::new();
     let mut new_bytes = 0usize;
+    let mut work = s.work.get();
     for (n, &t) in todo.iter().enumerate() {
         if n % 64 == 0 {
             deadline(s)?;
+            s.work.set(work);
+            if work > s.budget.max_work {
+                return Err(GbError::Budget(
+                    "work (multiply-adds of the F4 eliminations)",
+                ));
+            }
         }
         let row = &rows[t];
         for (&c, &v) in row.cols.iter().zip(&el[row.poly as usize].cfs) {
@@ -336,6 +343,7 @@ fn eliminate(m: &mut Sym, todo: &[usize]) -> Result<(Vec<(Vec<u32>, Vec<u64>)>, 
             };
             // Pivots are monic: adding (p - a) * pivot clears column c.
             let mul = (p - a) as u128;
+            work += pc.len() as u64;
             for (&x, &y) in pc[1..].iter().zip(&pv[1..]) {
                 nz[x as usize / 64] |= 1 << (x % 64);
                 let e = &mut acc[x as usize];
@@ -365,6 +373,7 @@ fn eliminate(m: &mut Sym, todo: &[usize]) -> Result<(Vec<(Vec<u32>, Vec<u64>)>, 
         piv[lead as usize] = nrows + out.len() as u32;
         out.push((pc, pv));
     }
+    s.work.set(work);
     // Largest leading monomial (smallest rank) first, in symbolic ids.
     out.sort_by_key(|(c, _)| c[0]);
     for (c, _) in &mut out {

@@ -37,6 +37,8 @@ pub(crate) struct St<'a> {
     /// Bytes of the elements and their slots; the pairs and the table are
     /// counted by [`St::held`].
     elem_bytes: usize,
+    /// Multiply-adds of the eliminations so far (`GbBudget::max_work`).
+    pub(crate) work: std::cell::Cell<u64>,
 }
 
 /// Bytes of an element of `len` terms and its slots (the `Elem`, its sugar
@@ -84,6 +86,7 @@ impl<'a> St<'a> {
             active: w.active.clone(),
             pairs: Vec::new(),
             elem_bytes: 0,
+            work: std::cell::Cell::new(0),
         };
         let base = w.held();
         let what = || "the Groebner basis (its generators in the F4 table)".to_string();

@@ -25,6 +25,11 @@ pub struct GbBudget {
     /// counted), refused before an allocation would pass it. `usize::MAX`
     /// (the default): no bound but the others.
     pub max_bytes: usize,
+    /// Multiply-adds of F4's eliminations, all matrices together: a
+    /// deterministic measure of time (`GbError::Budget("work")` past it), for
+    /// a first attempt that should give way to another method rather than
+    /// grind. `u64::MAX` (the default): no bound.
+    pub max_work: u64,
     pub deadline: Option<Instant>,
 }
 
@@ -35,6 +40,7 @@ impl Default for GbBudget {
             max_terms: 2_000_000,
             max_pairs: 2_000_000,
             max_bytes: usize::MAX,
+            max_work: u64::MAX,
             deadline: None,
         }
     }

@@ -191,3 +191,27 @@ mod packed_width {
         }
     }
 }
+
+#[test]
+fn the_work_bound_stops_f4_and_never_changes_a_basis() {
+    // Cyclic-5 needs elimination work; a bound below it is an error naming
+    // the work, never a partial basis; a bound above it gives the unbounded
+    // basis term for term.
+    let f = Field::new(P).unwrap();
+    let r = Ring::new(f, 5, Order::Grevlex);
+    let gens = cyclic(&r, 5);
+    let full = f4(&r, &gens, GbBudget::default()).unwrap();
+    let tight = GbBudget {
+        max_work: 10,
+        ..GbBudget::default()
+    };
+    match f4(&r, &gens, tight) {
+        Err(obsan_groebner::GbError::Budget(w)) => assert!(w.starts_with("work"), "{w}"),
+        other => panic!("expected the work bound, got {other:?}"),
+    }
+    let loose = GbBudget {
+        max_work: 1 << 40,
+        ..GbBudget::default()
+    };
+    assert_eq!(f4(&r, &gens, loose).unwrap().polys, full.polys);
+}

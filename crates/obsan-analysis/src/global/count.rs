@@ -126,6 +126,7 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
     let budget = GbBudget {
         max_basis: opts.max_basis,
         max_bytes: opts.max_bytes,
+        max_work: opts.max_work,
         deadline: opts.deadline,
         ..GbBudget::default()
     };

@@ -380,6 +380,7 @@ fn lie_once(
     let budget = GbBudget {
         max_basis: opts.max_basis,
         max_bytes: opts.max_bytes,
+        max_work: opts.max_work,
         deadline: opts.deadline,
         ..GbBudget::default()
     };

@@ -21,6 +21,10 @@ pub struct GlobalOptions {
     /// (the engine's memory budget: `--max-terms` times
     /// `obsan_expr::Budget::BYTES_PER_TERM`).
     pub max_bytes: usize,
+    /// Multiply-adds the Gröbner stage's F4 eliminations may take
+    /// (`obsan_groebner::GbBudget::max_work`): `u64::MAX`, no bound, except
+    /// in `--route auto`'s first attempt.
+    pub max_work: u64,
     /// SIAN's weighted order (weights.rs): on by default; it changes the
     /// time of the Gröbner basis, never a count (the tests compare both).
     pub weighted: bool,
@@ -53,6 +57,7 @@ impl Default for GlobalOptions {
             max_basis: 20_000,
             max_solutions: 100_000,
             max_bytes: memory_budget(obsan_expr::Budget::DEFAULT_MAX_TERMS),
+            max_work: u64::MAX,
             weighted: true,
             route: Route::Auto,
         }
