@@ -57,70 +57,51 @@ pub fn global_identifiability(
     }
 }
 
-/// `--route auto` (issue 36): each route first under a bound on its
-/// Gröbner basis's work ([`io_choice::EARLY_WORK`]), in the order Taylor,
-/// input-output, Lie (lie.rs: no Taylor unknowns, initial states counted
-/// too, every input's question); only when none answers so, the routes a
-/// bound stopped run again without it (Taylor, then Lie), as before. The
+/// `--route auto` (issue 36): the Taylor route first under a bound on its
+/// Gröbner basis's work ([`io_choice::EARLY_WORK`]); past it, the
+/// input-output route; only when that one does not answer, the Taylor
+/// route again without the bound, then the Lie route (lie.rs: no Taylor
+/// unknowns, initial states counted too, every input's question). The
 /// early stop costs at most the initial states' verdicts of a system whose
 /// Gröbner basis needs more work than the bound while the io route answers
-/// (Goodwin among the 64 SI.jl benchmarks: its states by `--route taylor`,
-/// 49 s), or, with inputs, one experiment's question for every input's.
+/// (Goodwin, Lincomp1, Lincomp2 among the 64 SI.jl benchmarks: their
+/// states by `--route taylor`).
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let early = GlobalOptions {
         max_work: opts.max_work.min(io_choice::EARLY_WORK),
         ..opts.clone()
     };
-    let bounded = early.max_work < opts.max_work;
     let why = match taylor_route(nf, &early, false) {
         Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
         r => return r,
     };
-    let taylor_stopped = bounded && io_choice::stopped_early(&why);
-    let reason = if taylor_stopped {
+    let stopped = io_choice::stopped_early(&why) && early.max_work < opts.max_work;
+    let reason = if stopped {
         io_choice::early_reason(&why)
     } else {
-        why
+        why.clone()
     };
     let io_err = match io_report::io_route(nf, opts, Some(reason.clone())) {
         Ok(r) => return Ok(r),
         Err(e) => e,
     };
-    if let AnalysisError::Timeout(_) = io_err {
-        return Err(io_err);
-    }
-    let why = format!("{reason}; the input-output route: {io_err}");
-    let lie_why = match taylor_route(nf, &early, true) {
-        Ok(mut r) => {
-            r.fallback = Some(why);
-            return Ok(r);
-        }
-        Err(AnalysisError::Invalid(w)) => w,
-        Err(e) => return Err(e),
-    };
-    // The unbounded attempts, where the bound stopped them.
-    let mut why = format!("{why}; the Lie route: {lie_why}");
-    if taylor_stopped {
+    // The unbounded Taylor attempt (the deadline passed: no time for it).
+    let why = if stopped && !matches!(io_err, AnalysisError::Timeout(_)) {
         match taylor_route(nf, opts, false) {
-            Err(AnalysisError::Invalid(w)) if io_report::falls_back(&w) => {
-                why = format!("{why}; the unbounded Taylor route: {w}");
-            }
+            Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
             r => return r,
         }
+    } else {
+        reason
+    };
+    let why = format!("{why}; the input-output route: {io_err}");
+    match taylor_route(nf, opts, true) {
+        Ok(mut r) => {
+            r.fallback = Some(why);
+            Ok(r)
+        }
+        Err(e) => Err(err(format!("{why}; the Lie route: {e}"))),
     }
-    if bounded && io_choice::stopped_early(&lie_why) {
-        return match taylor_route(nf, opts, true) {
-            Ok(mut r) => {
-                r.fallback = Some(why);
-                Ok(r)
-            }
-            Err(AnalysisError::Invalid(e)) => {
-                Err(err(format!("{why}; the unbounded Lie route: {e}")))
-            }
-            Err(e) => Err(e),
-        };
-    }
-    Err(err(why))
 }
 
 /// SIAN's route, or (`lie`) the Lie route (lie.rs): the same counts and
