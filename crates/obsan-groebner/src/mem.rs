@@ -9,7 +9,7 @@
 //! (tests/memory.rs checks the count against a counting allocator).
 //!
 //! F4 (`f4.rs`, `f4mat.rs`) holds each monomial once, in a table
-//! ([`table_bytes`](crate::table::table_bytes): `2 n` bytes of 16-bit
+//! (`table.rs`, `table_bytes`: `2 n` bytes of 16-bit
 //! exponents, a u32 degree, u64 mask and hash, each vector's capacity
 //! counted as it doubles, and 4-byte hash slots at most half full), so a
 //! term of its basis is a u32 id and a u64 coefficient in two buffers

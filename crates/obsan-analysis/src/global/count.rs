@@ -112,9 +112,21 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
         }
         j += 1;
     }
-    let rank = ech.rank();
-    let fibre_dim = nt - rank;
-    // theta_t is locally identifiable iff e_t lies in the row space.
+    let (local, slice) = local_and_slice(&ech, nt, run.np)?;
+    let budget = opts.gb_budget();
+    count_at(
+        run, &orders, &targets, &local, &slice, budget, opts, rank_order,
+    )
+}
+
+/// From the outputs' Jacobian (rows in `ech`, `nt` targets, params first):
+/// which targets are locally identifiable (`e_t` in the row space) and the
+/// slice of the fibre (`transcendence_slice`).
+pub(super) fn local_and_slice(
+    ech: &Echelon<Zp>,
+    nt: usize,
+    np: usize,
+) -> Result<(Vec<bool>, Vec<usize>), AnalysisError> {
     let local: Vec<bool> = (0..nt)
         .map(|t| {
             let mut e = vec![0u64; nt];
@@ -122,17 +134,8 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
             ech.contains(e)
         })
         .collect();
-    let slice = transcendence_slice(&ech, &local, run.np, fibre_dim)?;
-    let budget = GbBudget {
-        max_basis: opts.max_basis,
-        max_bytes: opts.max_bytes,
-        max_work: opts.max_work,
-        deadline: opts.deadline,
-        ..GbBudget::default()
-    };
-    count_at(
-        run, &orders, &targets, &local, &slice, budget, opts, rank_order,
-    )
+    let slice = transcendence_slice(ech, &local, np, nt - ech.rank())?;
+    Ok((local, slice))
 }
 
 /// SIAN's slice of a fibre of positive dimension `d` (Hong, Ovchinnikov,
@@ -150,7 +153,7 @@ pub(super) fn count_once(run: &mut Run, opts: &GlobalOptions) -> Result<Counts, 
 /// points, and the locally identifiable variables are constant on each.
 /// Fixing coordinates keeps the system sparse (the presolve substitutes
 /// numbers), where a random hyperplane spreads one variable over all of them.
-pub(super) fn transcendence_slice(
+fn transcendence_slice(
     ech: &Echelon<Zp>,
     local: &[bool],
     np: usize,

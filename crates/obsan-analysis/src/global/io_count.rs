@@ -19,7 +19,7 @@ use super::model::ZModel;
 use super::run::Rng;
 use super::types::{err, gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
-use obsan_groebner::{distinct_roots, groebner, Field, GbBudget, Mono, Order, Poly, Ring};
+use obsan_groebner::{distinct_roots, groebner, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use obsan_recon::{reconstruct_vec, Options, Rational, Thiele};
 use std::collections::HashMap;
@@ -454,13 +454,7 @@ fn count(
     } else {
         gens.push(ring.var(np));
     }
-    let budget = GbBudget {
-        max_basis: opts.max_basis,
-        max_bytes: opts.max_bytes,
-        deadline: opts.deadline,
-        ..GbBudget::default()
-    };
-    let b = groebner(&ring, &gens, budget).map_err(gb_err)?;
+    let b = groebner(&ring, &gens, opts.gb_budget()).map_err(gb_err)?;
     if b.is_unit() || !b.is_zero_dimensional() {
         return Err(err(
             "global (io): the coefficients' system at the random point is degenerate; try another --seed",

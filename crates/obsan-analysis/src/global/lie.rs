@@ -31,14 +31,14 @@
 //! of the offsets a bearing carries): `Q(T, L_w beta)` is closed under the
 //! derivations as well (`L_f T = (1 + T^2) L_f beta`).
 
-use super::count::{count_gens, transcendence_slice, Counts};
+use super::count::{count_gens, local_and_slice, Counts};
 use super::model::ZModel;
 use super::outputs::OutputForm;
 use super::run::{int_mod, Rng};
 use super::types::{err, GlobalOptions};
 use crate::rank::AnalysisError;
 use obsan_expr::{Ctx, Poly as ZPoly, RatFun, Var};
-use obsan_groebner::{Field, GbBudget, Mono, Order, Poly, Ring};
+use obsan_groebner::{Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use std::collections::HashMap;
 use std::time::Instant;
@@ -359,15 +359,7 @@ fn lie_once(
             })
             .collect();
     }
-    let rank = ech.rank();
-    let local: Vec<bool> = (0..nt)
-        .map(|t| {
-            let mut e = vec![0u64; nt];
-            e[t] = 1;
-            ech.contains(e)
-        })
-        .collect();
-    let slice = transcendence_slice(&ech, &local, np, nt - rank)?;
+    let (local, slice) = local_and_slice(&ech, nt, np)?;
     let mut gens = eqs;
     degrees.push(qp.degree() + 1);
     gens.push(ring.sub(
@@ -377,13 +369,7 @@ fn lie_once(
     for &t in &slice {
         gens.push(ring.sub(&ring.var(t), &ring.constant(point[t])));
     }
-    let budget = GbBudget {
-        max_basis: opts.max_basis,
-        max_bytes: opts.max_bytes,
-        max_work: opts.max_work,
-        deadline: opts.deadline,
-        ..GbBudget::default()
-    };
+    let budget = opts.gb_budget();
     let equations = gens.len();
     let tpos: Vec<usize> = (0..nt).collect();
     let steps = vec![1u32; nt + 1];

@@ -2,7 +2,7 @@
 //! every step shares (the bottom of the module graph).
 
 use crate::rank::AnalysisError;
-use obsan_groebner::GbError;
+use obsan_groebner::{GbBudget, GbError};
 use std::time::Instant;
 
 /// Options of [`global_identifiability`](super::global_identifiability).
@@ -30,6 +30,19 @@ pub struct GlobalOptions {
     pub weighted: bool,
     /// Which route counts (docs/engine.md, "Input-output route").
     pub route: Route,
+}
+
+impl GlobalOptions {
+    /// The Gröbner stage's budget from these options.
+    pub(super) fn gb_budget(&self) -> GbBudget {
+        GbBudget {
+            max_basis: self.max_basis,
+            max_bytes: self.max_bytes,
+            max_work: self.max_work,
+            deadline: self.deadline,
+            ..GbBudget::default()
+        }
+    }
 }
 
 /// The route of `obsan global`.
