@@ -366,12 +366,36 @@ impl Ring {
         Ok(out)
     }
 
+    /// The product, by halves of the shorter factor: one term of `a` times
+    /// `b` is one merge into the running sum, so a term-by-term loop over
+    /// the longer factor costs `|a|` merges of a growing sum (quadratic in
+    /// `|a|` even for `b` a single variable, as a total derivative's
+    /// `dp/dv * v'`: 98 % of the Taylor route's time on calib.sys). Halving
+    /// instead costs `O(|a| |b| log |a|)` term moves.
     pub fn mul(&self, a: &Poly, b: &Poly) -> Result<Poly, GbError> {
-        let mut acc = Poly::zero();
-        for (m, c) in &a.terms {
-            acc = self.axpy(&acc, *c, m, b)?;
+        let (a, b) = if a.terms.len() <= b.terms.len() {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        self.mul_terms(&a.terms, b)
+    }
+
+    /// `sum(a) * b`, `a` a run of sorted terms.
+    fn mul_terms(&self, a: &[(Mono, u64)], b: &Poly) -> Result<Poly, GbError> {
+        /// Below this many terms, one merge per term of `a`.
+        const BY_TERM: usize = 8;
+        if a.len() <= BY_TERM {
+            let mut acc = Poly::zero();
+            for (m, c) in a {
+                acc = self.axpy(&acc, *c, m, b)?;
+            }
+            return Ok(acc);
         }
-        Ok(acc)
+        let (lo, hi) = a.split_at(a.len() / 2);
+        let lo = self.mul_terms(lo, b)?;
+        let hi = self.mul_terms(hi, b)?;
+        Ok(self.add(&lo, &hi))
     }
 
     pub fn pow(&self, a: &Poly, mut e: u32) -> Result<Poly, GbError> {

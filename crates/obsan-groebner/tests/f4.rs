@@ -121,6 +121,29 @@ fn arb_order() -> impl Strategy<Value = Order> {
 
 proptest! {
     #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    /// The product by halves (`Ring::mul`, past 8 terms) against the sum of
+    /// one-term products (`Ring::axpy`, one merge each) and against
+    /// evaluation at a point, under every order; commutative.
+    #[test]
+    fn products_by_halves_are_products(
+        a in arb_poly(3, 40, 3),
+        b in arb_poly(3, 40, 3),
+        x in prop::collection::vec(0u64..1 << 40, 3),
+        order in arb_order(),
+    ) {
+        let f = Field::new((1 << 61) - 1).unwrap();
+        let r = Ring::new(f, 3, order);
+        let (pa, pb) = (lin(&r, &a), lin(&r, &b));
+        let ab = r.mul(&pa, &pb).unwrap();
+        let mut by_term = Poly::zero();
+        for (m, c) in pa.terms() {
+            by_term = r.axpy(&by_term, *c, m, &pb).unwrap();
+        }
+        prop_assert_eq!(&ab, &by_term);
+        prop_assert_eq!(&ab, &r.mul(&pb, &pa).unwrap());
+        prop_assert_eq!(r.eval(&ab, &x), f.mul(r.eval(&pa, &x), r.eval(&pb, &x)));
+    }
+
     /// Grevlex (the order `obsan global` uses): exponents up to 2.
     #[test]
     fn random_ideals_agree_with_buchberger(
