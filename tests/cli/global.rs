@@ -153,14 +153,11 @@ fn bearing_only_mirror() {
 
 #[test]
 fn the_memory_budget_stops_the_groebner_stage() {
-    // llw1987's F4 matrices were the stage past the budget at --max-terms
-    // 60 until session 33, when SIAN's weights read on the cleared system
-    // shrank its basis below its Taylor system (no budget now stops llw1987
-    // in the Gröbner stage: at 42 its derivatives do not fit, at 45 it is
-    // answered). SI.jl's HIV: its Taylor system fits 1,000 units (2,000
-    // KiB), its F4 matrices do not (counted in bytes, so the stage is named
-    // whatever the machine's speed; each of the two parallel runs then
-    // retries alone with the whole budget, so the message names it).
+    // SI.jl's HIV: its Taylor system fits 1,000 units (2,000 KiB), its F4
+    // matrices do not (counted in bytes, so the stage is named whatever
+    // the machine's speed; each of the two parallel runs then retries alone
+    // with the whole budget, so the message names it). (llw1987 at 60 units
+    // was this test until session 33; HIV's basis is the larger, 0.05 s.)
     let e = bad(
         &[
             "global",

@@ -111,12 +111,11 @@ fn published_unobservable(list: &str, model: &str) -> Vec<String> {
 #[test]
 fn auto_answers_by_the_lie_route_where_the_others_stop() {
     // CGV1990, KD1999 and cLV2 (StructuralIdentifiability.jl's suite; the
-    // first two with one input each). On cLV2 the Taylor system's Gröbner
+    // first two with one input each). On each the Taylor system's Gröbner
     // basis passes auto's early work bound, then the memory budget, and no
-    // input-output relation fits the ansatz: auto answers by the Lie route
-    // (4 s). CGV1990 took the same path until session 33 (22 s); its Taylor
-    // route now answers under auto (10 s, the same counts), so it and
-    // KD1999 are asked of `--route lie` alone (0.04 s and 0.01 s). The
+    // input-output relation fits the ansatz: auto answers by the Lie route,
+    // checked on cLV2 (4 s; CGV1990 takes 22 s, KD1999 52 s, so these two
+    // are asked of `--route lie` alone: 0.04 s and 0.01 s). The
     // not-identifiable variables are exactly the published local verdicts
     // (SI.jl's results for CGV1990, symident's for KD1999 and cLV2).
     for (model, list) in [

@@ -59,20 +59,6 @@ impl Cleared {
     }
 }
 
-impl Cleared {
-    /// `E_s = den_s x_s' - num_s` of model state `s` (order 0).
-    pub(super) fn state0(&self, s: usize) -> Option<&Poly> {
-        self.state.get(s).and_then(|d| d.first())
-    }
-
-    /// Output `y`'s `num_y` and `den_y` (order 0).
-    pub(super) fn output0(&self, y: usize) -> impl Iterator<Item = &Poly> {
-        let n = self.num.get(y).and_then(|d| d.first());
-        let d = self.den.get(y).and_then(|d| d.first());
-        n.into_iter().chain(d)
-    }
-}
-
 /// `C(j, l)` modulo the field's prime (j is a Taylor order, far below p).
 fn binomial(run: &Run, j: usize, l: usize) -> u64 {
     let f = &run.field;

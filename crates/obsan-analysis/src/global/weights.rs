@@ -34,18 +34,12 @@ fn vars_of(p: &Poly, into: &mut Vec<usize>) {
 /// `local[i]` says whether param `i` is locally identifiable.
 pub(super) fn sian_weights(run: &Run, local_params: &[bool]) -> Vec<u32> {
     let n = run.ring.n;
-    // Which model state a derivation-ring variable at order 0 is. The
-    // levels are read on the cleared system (sian.rs), the one the basis is
-    // of, as SIAN reads them: `x1' = -b x1 + 1/(c + x4)` shows `x4` at level
-    // 1 through `E = (c + x4) x1' - ...`, where the explicit system shows it
-    // only at level 2, through `z = 1/(c + x4)` and `z'`.
-    let state_of = |v: usize| (0..run.nx).find(|&s| run.sv(s, 0) == v);
+    // Which state a derivation-ring variable at order 0 is.
+    let state_of = |v: usize| (0..run.ns).find(|&s| run.sv(s, 0) == v);
     let mut level: Vec<Option<u32>> = vec![None; n];
     let mut frontier = Vec::new();
-    for y in 0..run.out_d.len() {
-        for p in run.cleared.output0(y) {
-            vars_of(p, &mut frontier);
-        }
+    for out in &run.out_d {
+        vars_of(&out[0], &mut frontier);
     }
     let mut l = 0u32;
     let mut deepest = 0u32;
@@ -57,8 +51,8 @@ pub(super) fn sian_weights(run: &Run, local_params: &[bool]) -> Vec<u32> {
             }
             level[v] = Some(l);
             deepest = l;
-            if let Some(e) = state_of(v).and_then(|s| run.cleared.state0(s)) {
-                vars_of(e, &mut next);
+            if let Some(s) = state_of(v) {
+                vars_of(&run.rhs_d[s][0], &mut next);
             }
         }
         next.retain(|&v| level[v].is_none());
