@@ -124,9 +124,11 @@ impl Basis {
         let dim = std.len();
         // Dense: up to dim + 1 echelon rows [normal form of f^k | e_k] of
         // 2 dim + 1 entries each, beside the quotient's basis and its column
-        // map.
+        // map, and the normal forms of m f for the standard monomials m
+        // (dim entries each).
         let rows_bytes = (dim + 1) * (size_of::<(usize, Vec<u64>)>() + block(8 * (2 * dim + 1)));
-        let need = rows_bytes + dim * (2 * mono_bytes(r.n) + 2 * size_of::<usize>());
+        let times_bytes = dim * (size_of::<Option<Vec<u64>>>() + block(8 * dim));
+        let need = rows_bytes + times_bytes + dim * (2 * mono_bytes(r.n) + 2 * size_of::<usize>());
         if need > self.max_bytes {
             return Err(over(need, self.max_bytes, || {
                 format!("the count of solutions (a dense {dim} x {dim} matrix over the quotient)")
@@ -137,15 +139,27 @@ impl Basis {
         // first linear dependency of the powers.
         let mut ech = Echelon::new(Zp(fld.modulus()));
         let f = self.reduce(f)?;
-        let mut pw = self.reduce(&r.constant(1))?;
-        for k in 0..=dim {
-            let mut v = vec![0u64; 2 * dim + 1];
-            for (m, c) in pw.terms() {
+        let dense = |p: &Poly| -> Result<Vec<u64>, GbError> {
+            let mut v = vec![0u64; dim];
+            for (m, c) in p.terms() {
                 let i = *col
                     .get(m)
                     .ok_or(GbError::Budget("normal form outside the quotient"))?;
                 v[i] = *c;
             }
+            Ok(v)
+        };
+        // Multiplication by f on the quotient, one column per standard
+        // monomial, each the normal form of `m f` computed once when first
+        // needed: the normal form is linear, so `NF(g f) = sum_m g_m NF(m f)`
+        // for `g` a normal form, a dense combination where reducing `g f`
+        // itself repeated the division for every power (Lincomp1: 95 % of
+        // `obsan global` in `Basis::reduce`).
+        let mut times: Vec<Option<Vec<u64>>> = vec![None; dim];
+        let mut pw = dense(&self.reduce(&r.constant(1))?)?;
+        for k in 0..=dim {
+            let mut v = vec![0u64; 2 * dim + 1];
+            v[..dim].copy_from_slice(&pw);
             v[dim + k] = 1;
             let reduced = ech.reduce(v);
             if reduced[..dim].iter().all(|&x| x == 0) {
@@ -159,7 +173,22 @@ impl Basis {
             }
             ech.insert(reduced);
             if k < dim {
-                pw = self.reduce(&r.mul(&pw, &f)?)?;
+                let mut next = vec![0u64; dim];
+                for (i, &c) in pw.iter().enumerate() {
+                    if c == 0 {
+                        continue;
+                    }
+                    if times[i].is_none() {
+                        let mf = r.mul(&r.from_terms([(std[i].clone(), 1)]), &f)?;
+                        times[i] = Some(dense(&self.reduce(&mf)?)?);
+                    }
+                    if let Some(col) = &times[i] {
+                        for (a, &b) in next.iter_mut().zip(col) {
+                            *a = fld.add(*a, fld.mul(c, b));
+                        }
+                    }
+                }
+                pw = next;
             }
         }
         // dim + 1 vectors in a space of dimension dim are dependent.
