@@ -157,6 +157,15 @@ impl IoModel {
         })
     }
 
+    /// The numbers of states and of inputs.
+    pub(super) fn dims(&self) -> (usize, usize) {
+        (self.nx, self.nu)
+    }
+
+    pub(super) fn prime(&self) -> u64 {
+        self.p
+    }
+
     #[cfg(test)]
     pub(super) fn n_params(&self) -> usize {
         self.np
@@ -184,6 +193,18 @@ struct Jets {
 pub(super) struct Inst {
     rhs: Vec<(IPoly, IPoly)>,
     outputs: Vec<(IPoly, IPoly)>,
+}
+
+impl Inst {
+    /// Per state: the numerator and denominator of its right-hand side.
+    pub(super) fn rhs(&self) -> &[(IPoly, IPoly)] {
+        &self.rhs
+    }
+
+    /// Per output: its numerator and denominator.
+    pub(super) fn outputs(&self) -> &[(IPoly, IPoly)] {
+        &self.outputs
+    }
 }
 
 impl IoModel {
@@ -498,7 +519,7 @@ fn count_capped(n: usize, d: u32, caps: &[u32]) -> usize {
 
 impl IoModel {
     /// The variables of output `i`'s relation (module doc).
-    fn relation_vars(&self, orders: &[usize], i: usize) -> Vec<IoVar> {
+    pub(super) fn relation_vars(&self, orders: &[usize], i: usize) -> Vec<IoVar> {
         let kmax = orders.iter().copied().max().unwrap_or(0);
         let mut vars = Vec::new();
         for j in 0..=orders[i] {
@@ -713,7 +734,7 @@ impl IoModel {
     }
 
     /// Scaled so that the last coefficient is 1.
-    fn normalise(&self, mut v: Vec<u64>) -> Vec<u64> {
+    pub(super) fn normalise(&self, mut v: Vec<u64>) -> Vec<u64> {
         let p = self.p;
         if let Some(inv) = v.last().and_then(|&c| fp::inv(c, p)) {
             for c in v.iter_mut() {

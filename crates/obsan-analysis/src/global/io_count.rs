@@ -15,6 +15,7 @@
 //! refuses otherwise.
 
 use super::io::{elem, IoModel, IoRelation};
+use super::io_elim::relation_by_elimination;
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::{err, gb_err, GlobalOptions};
@@ -55,10 +56,26 @@ pub(super) struct IoCounts {
 /// monomials 1.0 s; 3003 monomials 245 s on a loaded machine).
 pub(super) const MAX_ANSATZ: usize = 1000;
 
+/// The counts, every relation's way tried (the unit tests' entry).
+#[cfg_attr(not(test), allow(dead_code))]
 pub(super) fn io_count(
     m: &ZModel,
     opts: &GlobalOptions,
     seed: u64,
+) -> Result<IoCounts, AnalysisError> {
+    io_count_with(m, opts, seed, true, MAX_ANSATZ)
+}
+
+/// [`io_count`], with the relations past the ansatz's cap (`cap`
+/// monomials: [`MAX_ANSATZ`] but in tests) found by elimination (io_elim.rs)
+/// only when `eliminate`: `--route auto` tries the other routes first, as a
+/// large relation may keep the reconstruction busy far longer than they take.
+pub(super) fn io_count_with(
+    m: &ZModel,
+    opts: &GlobalOptions,
+    seed: u64,
+    eliminate: bool,
+    cap: usize,
 ) -> Result<IoCounts, AnalysisError> {
     let np = m.param_vars.len();
     let mut rng = Rng::new(seed);
@@ -70,14 +87,31 @@ pub(super) fn io_count(
     let mut fns: Vec<Rational> = Vec::new();
     let mut sizes = Vec::new();
     for i in 0..orders.len() {
-        let rel: IoRelation = io
-            .relation(&theta, &orders, i, 60, MAX_ANSATZ, &mut rng)?
-            .ok_or_else(|| {
-                err(format!(
-                    "global (io): the input-output relation of output {} needs more than {MAX_ANSATZ} ansatz monomials",
-                    i + 1
-                ))
-            })?;
+        // The dense ansatz first (cheap for small relations, and the only
+        // way with inputs), then elimination (io_elim.rs).
+        let rel: IoRelation = match io.relation(&theta, &orders, i, 60, cap, &mut rng)? {
+            Some(r) => r,
+            None => {
+                let found = if eliminate {
+                    relation_by_elimination(&io, &theta, &orders, i, opts.gb_budget())?
+                } else {
+                    None
+                };
+                found.ok_or_else(|| {
+                    err(format!(
+                        "global (io): the input-output relation of output {} needs more than {cap} ansatz monomials{}",
+                        i + 1,
+                        if !eliminate {
+                            " (--route io finds it by elimination)"
+                        } else if io.dims().1 > 0 {
+                            " (with inputs: no elimination)"
+                        } else {
+                            ""
+                        }
+                    ))
+                })?
+            }
+        };
         // One output's coefficients are then fixed by that output alone.
         if !io.independent_along(&theta, &orders, i, &rel.support, &mut rng) {
             return Err(err(format!(

@@ -2,7 +2,7 @@
 //! parameters' counts as a [`GlobalReport`], used when the Taylor system
 //! passes a budget (or on request).
 
-use super::io_count::io_count;
+use super::io_count::{io_count_with, MAX_ANSATZ};
 use super::model::zmodel;
 use super::outputs::OutputForm;
 use super::types::{err, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
@@ -19,6 +19,7 @@ pub(super) fn io_route(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
     fallback: Option<String>,
+    eliminate: bool,
 ) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     if m.angle.iter().any(|&a| a) || m.forms.iter().any(|f| *f != OutputForm::Direct) {
@@ -26,7 +27,7 @@ pub(super) fn io_route(
             "global (io): angles, and outputs read through sqrt, atan or a tangent, are counted by the Taylor route only",
         ));
     }
-    let c = io_count(&m, opts, opts.seed)?;
+    let c = io_count_with(&m, opts, opts.seed, eliminate, MAX_ANSATZ)?;
     let nx = m.dyn_vars.len();
     let variables: Vec<GlobalVariable> = nf.state[nx..]
         .iter()

@@ -19,6 +19,7 @@ mod count;
 mod io;
 mod io_choice;
 mod io_count;
+mod io_elim;
 mod io_report;
 mod io_series;
 mod lie;
@@ -52,7 +53,7 @@ pub fn global_identifiability(
     match opts.route {
         Route::Taylor => taylor_route(nf, opts, false, true),
         Route::Lie => taylor_route(nf, opts, true, false),
-        Route::InputOutput => io_report::io_route(nf, opts, None),
+        Route::InputOutput => io_report::io_route(nf, opts, None, true),
         Route::Auto => auto_route(nf, opts),
     }
 }
@@ -65,7 +66,10 @@ pub fn global_identifiability(
 /// early stop costs at most the initial states' verdicts of a system whose
 /// Gröbner basis needs more work than the bound while the io route answers
 /// (Goodwin, Lincomp1, Lincomp2 among the 64 SI.jl benchmarks: their
-/// states by `--route taylor`).
+/// states by `--route taylor`). Its input-output route stops at the dense
+/// ansatz's cap: a relation past it (found by elimination under `--route
+/// io`, io_elim.rs) may keep the reconstruction busy for minutes, with no
+/// bound yet to stop it early and deterministically.
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let early = GlobalOptions {
         max_work: opts.max_work.min(io_choice::EARLY_WORK),
@@ -81,7 +85,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     } else {
         why.clone()
     };
-    let io_err = match io_report::io_route(nf, opts, Some(reason.clone())) {
+    let io_err = match io_report::io_route(nf, opts, Some(reason.clone()), false) {
         Ok(r) => return Ok(r),
         Err(e) => e,
     };
