@@ -515,8 +515,7 @@ where
         let mut pt = r.clone();
         let mut hole = false;
         while bms.iter().any(|b| !b.done()) {
-            if bms.iter().any(|b| b.l > tcap) || bms[0].seq.len() > 2 * tcap + EARLY_TERMINATION
-            {
+            if bms.iter().any(|b| b.l > tcap) || bms[0].seq.len() > 2 * tcap + EARLY_TERMINATION {
                 return Ok(None);
             }
             let Some(vals) = call(blackbox, &mut budget, m, &pt, p0)? else {
@@ -741,11 +740,7 @@ mod tests {
         let mut bm = Bm::new(P);
         let mut k = 0u64;
         while !bm.done() {
-            bm.push(add(
-                mul(3, pow(5, k, P), P),
-                mul(7, pow(11, k, P), P),
-                P,
-            ));
+            bm.push(add(mul(3, pow(5, k, P), P), mul(7, pow(11, k, P), P), P));
             k += 1;
         }
         assert_eq!(bm.l, 2);

@@ -181,9 +181,11 @@ fn bounds_too_large_for_the_prime() {
         per_var: vec![31, 20],
         total: None,
     };
-    assert!(interpolate_polys_vec(2, 1, &mut bb2, &Options::default(), &big)
-        .unwrap()
-        .is_none());
+    assert!(
+        interpolate_polys_vec(2, 1, &mut bb2, &Options::default(), &big)
+            .unwrap()
+            .is_none()
+    );
 }
 
 /// A polynomial whose degree exceeds the bounds it is given: `None` (a
