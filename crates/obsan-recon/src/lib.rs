@@ -50,6 +50,7 @@ mod linalg;
 mod multi;
 mod rational;
 mod rng;
+mod sparse;
 mod thiele;
 
 use std::collections::BTreeMap;
@@ -72,6 +73,7 @@ pub mod fp {
 }
 pub use rational::{Poly, Rational, Term};
 pub use rng::splitmix64;
+pub use sparse::{interpolate_polys_vec, DegreeBounds, EARLY_TERMINATION};
 pub use thiele::{Thiele, ThieleStep};
 
 use field::{inv, mul};
@@ -513,7 +515,7 @@ where
 }
 
 /// Chinese-remainder accumulation of normalised images.
-struct Acc {
+pub(crate) struct Acc {
     /// Per function, the denominator monomial normalised to 1.
     canon: Vec<Vec<u32>>,
     modulus: UBig,
@@ -522,7 +524,7 @@ struct Acc {
 }
 
 impl Acc {
-    fn new(image: &Image) -> Acc {
+    pub(crate) fn new(image: &Image) -> Acc {
         Acc {
             canon: image.iter().map(|(_, den)| lowest(den)).collect(),
             modulus: UBig::ONE,
@@ -535,7 +537,7 @@ impl Acc {
 
     /// Adds one image; false when it was skipped (an unlucky prime that
     /// kills the canonical term).
-    fn push(&mut self, image: &Image, p: u64) -> bool {
+    pub(crate) fn push(&mut self, image: &Image, p: u64) -> bool {
         // A lower denominator term than the chosen one means the chosen
         // term was an artefact of an earlier prime: start again from here.
         let lower = image
@@ -578,7 +580,7 @@ impl Acc {
 
     /// Rational reconstruction of every coefficient, as canonical integer
     /// forms; `None` while some coefficient is not determined.
-    fn lift(&self) -> Option<Vec<Rational>> {
+    pub(crate) fn lift(&self) -> Option<Vec<Rational>> {
         let mut out = Vec::with_capacity(self.coeffs.len());
         for slots in &self.coeffs {
             let mut rats: [Vec<(Vec<u32>, IBig, UBig)>; 2] = [Vec::new(), Vec::new()];
@@ -642,7 +644,7 @@ fn lowest(den: &multi::Terms) -> Vec<u32> {
         .unwrap_or_default()
 }
 
-fn verify<F, E>(
+pub(crate) fn verify<F, E>(
     n: usize,
     m: usize,
     bb: &mut F,

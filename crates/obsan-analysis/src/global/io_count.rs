@@ -22,7 +22,9 @@ use super::types::{err, gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
-use obsan_recon::{reconstruct_vec, Options, Rational, Thiele};
+use obsan_recon::{
+    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Rational, Thiele,
+};
 use std::collections::HashMap;
 
 /// Sizes of one output's relation, as measured (docs/performance.md).
@@ -203,7 +205,8 @@ pub(super) fn reconstruct(
         io.on_support(pt, orders, i, support, rng)
     };
     let np = m.param_vars.len();
-    let (j, alpha) = normalisation(np, support.len(), &mut coeffs, seed)?;
+    let (j, alpha, axes) = normalisation(np, support.len(), &mut coeffs, seed)?;
+    let bounds = axes.and_then(|fr| polynomial_bounds(&fr, &alpha));
     // Divided by a coefficient that is a monomial in the parameters and
     // scaled by their monomial denominators, the coefficients are (mostly)
     // polynomials, which need far fewer points than rational functions.
@@ -230,16 +233,62 @@ pub(super) fn reconstruct(
         seed: seed ^ 0x10c0,
         ..Options::default()
     };
-    let mut r = reconstruct_vec(np, support.len() - 1, &mut bb, &ropts).map_err(|e| match e {
+    let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
         obsan_recon::ReconError::BlackBox(e) => e,
         e => err(format!(
             "global (io): reconstructing the relations' coefficients: {e}"
         )),
-    })?;
+    };
+    // Polynomials on every axis: sparse interpolation first (about twice
+    // their terms in points), the rational reconstruction when it does not
+    // recognise them.
+    let sparse = match &bounds {
+        Some(b) => {
+            let sopts = Options {
+                max_terms: MAX_SPARSE_TERMS,
+                ..ropts.clone()
+            };
+            interpolate_polys_vec(np, support.len() - 1, &mut bb, &sopts, b).map_err(recon_err)?
+        }
+        None => None,
+    };
+    let mut r = match sparse {
+        Some(r) => r,
+        None => reconstruct_vec(np, support.len() - 1, &mut bb, &ropts).map_err(recon_err)?,
+    };
     for (f, a) in r.functions.iter_mut().zip(&alpha) {
         *f = f.over_monomial(a);
     }
     Ok((r, calls))
+}
+
+/// Terms per coefficient the sparse interpolation may find before the
+/// rational reconstruction takes over (a false guess of polynomials costs
+/// at most about twice this in points; SIWR_multiout's largest has 183).
+const MAX_SPARSE_TERMS: usize = 2000;
+
+/// Per-parameter degree bounds of the scaled quotients when every one has a
+/// constant denominator along every axis line (then each is taken for a
+/// polynomial; the sparse interpolation checks it): along axis `k` the
+/// quotient `n(t) / (c t^a)` times `t^alpha_k` has degree `deg n + alpha_k -
+/// a`, its degree in `theta_k` at a generic base point.
+fn polynomial_bounds(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Option<DegreeBounds> {
+    let deg = |v: &[u64]| v.iter().rposition(|&c| c != 0).unwrap_or(0) as i64;
+    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
+    let mut per_var = vec![0u32; axes.len()];
+    for (k, fr) in axes.iter().enumerate() {
+        for ((num, den), a) in fr.iter().zip(alpha) {
+            if !is_monomial(den) {
+                return None;
+            }
+            let d = deg(num) + i64::from(a[k]) - ord(den);
+            per_var[k] = per_var[k].max(u32::try_from(d.max(0)).ok()?);
+        }
+    }
+    Some(DegreeBounds {
+        per_var,
+        total: None,
+    })
 }
 
 /// The coefficients at a point modulo a prime; `None` at a bad point.
@@ -330,12 +379,16 @@ impl Axes<'_, '_> {
 /// has a monomial denominator on every axis. A wrong choice (a non-generic
 /// line) costs points only: the scaled functions are still rational
 /// functions, reconstructed exactly and verified.
+///
+/// With them, per axis, the quotients by the coefficient kept (`None` when
+/// the probes ran out or no normalisation gave monomial denominators).
+#[allow(clippy::type_complexity)]
 fn normalisation(
     np: usize,
     n: usize,
     bb: &mut BlackBox<'_>,
     seed: u64,
-) -> Result<(usize, Vec<Vec<u32>>), AnalysisError> {
+) -> Result<(usize, Vec<Vec<u32>>, Option<Vec<Vec<Fraction>>>), AnalysisError> {
     let p = obsan_recon::PRIMES[0];
     let mut rng = Rng::new(seed ^ 0xde40);
     let mut axes = Axes {
@@ -346,7 +399,7 @@ fn normalisation(
         misses: 0,
     };
     let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
-    let fallback = (n - 1, vec![vec![0u32; np]; n - 1]);
+    let fallback = (n - 1, vec![vec![0u32; np]; n - 1], None);
     // Per axis, the quotients by the last coefficient.
     let mut by_last = Vec::with_capacity(np);
     for k in 0..np {
@@ -366,7 +419,8 @@ fn normalisation(
     };
     let monomial_dens = |fr: &[Vec<Fraction>]| fr.iter().flatten().all(|(_, d)| is_monomial(d));
     if monomial_dens(&by_last) {
-        return Ok((n - 1, alpha_of(&by_last)));
+        let alpha = alpha_of(&by_last);
+        return Ok((n - 1, alpha, Some(by_last)));
     }
     let candidates = (0..n - 1).filter(|&j| by_last.iter().all(|f| is_monomial(&f[j].0)));
     for j in candidates.take(4) {
@@ -378,10 +432,11 @@ fn normalisation(
             }
         }
         if fr.len() == np && monomial_dens(&fr) {
-            return Ok((j, alpha_of(&fr)));
+            let alpha = alpha_of(&fr);
+            return Ok((j, alpha, Some(fr)));
         }
     }
-    Ok((n - 1, alpha_of(&by_last)))
+    Ok((n - 1, alpha_of(&by_last), None))
 }
 
 fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisError> {

@@ -444,3 +444,56 @@ fn io_recon_trace() {
         }
     }
 }
+
+/// Goodwin's quotients by its last coefficient are polynomials once scaled
+/// by their monomial denominators, so the route's reconstruction takes the
+/// sparse path (Ben-Or & Tiwari): the same functions as the rational
+/// reconstruction of the plain quotients (obsan-recon's `reconstruct_vec`,
+/// canonical forms compared exactly), in fewer black-box points.
+#[test]
+fn sparse_path_matches_the_rational_reconstruction() {
+    use std::collections::HashMap;
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/global/sijl_tests/goodwin.sys"
+    );
+    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let p = obsan_expr::P;
+    let mut rng = Rng::new(5);
+    let io = IoModel::new(&m, p).unwrap();
+    let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
+    let orders = io.orders(&th, &mut rng).unwrap();
+    let r = io
+        .relation(&th, &orders, 0, 40, 1000, &mut rng)
+        .unwrap()
+        .unwrap();
+    let opts = crate::global::GlobalOptions::default();
+    let (rec, calls) =
+        super::super::io_count::reconstruct(&m, &orders, 0, &r.support, &opts, 3).unwrap();
+    let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
+    let mut bb = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, String> {
+        let (io, rng) = models
+            .entry(q)
+            .or_insert_with(|| (IoModel::new(&m, q).unwrap(), Rng::new(q ^ 0x10)));
+        let c = io
+            .on_support(pt, &orders, 0, &r.support, rng)
+            .map_err(|e| e.to_string())?;
+        Ok(c.map(|mut v| {
+            v.pop();
+            v
+        }))
+    };
+    let dense = obsan_recon::reconstruct_vec(
+        m.param_vars.len(),
+        r.support.len() - 1,
+        &mut bb,
+        &Default::default(),
+    )
+    .unwrap();
+    assert_eq!(rec.functions, dense.functions);
+    assert!(
+        calls < dense.stats.points,
+        "sparse {calls} points, rational {}",
+        dense.stats.points
+    );
+}
