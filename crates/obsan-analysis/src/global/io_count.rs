@@ -239,6 +239,17 @@ pub(super) fn reconstruct(
             "global (io): reconstructing the relations' coefficients: {e}"
         )),
     };
+    // With the total degree along one generic line: the per-axis bounds
+    // alone put HIV's 10 parameters' largest monomial value `prod q_i^d_i`
+    // past the prime (7e20), their total degree (a few) far below it. A
+    // denominator along the line proves a quotient is no polynomial.
+    let bounds = match bounds {
+        Some(mut b) => line_degree(&mut bb, np, support.len() - 1, seed)?.map(|d| {
+            b.total = Some(d);
+            b
+        }),
+        None => None,
+    };
     // Polynomials on every axis: sparse interpolation first (about twice
     // their terms in points), the rational reconstruction when it does not
     // recognise them.
@@ -289,6 +300,53 @@ fn polynomial_bounds(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Option<Degre
         per_var,
         total: None,
     })
+}
+
+/// The largest total degree of the black box's `m` functions, from one
+/// Thiele interpolation each along a random line `a + t b` (a polynomial's
+/// degree along a generic line is its total degree); `None` when one has a
+/// denominator there (not a polynomial) or the samples run out.
+fn line_degree(
+    bb: &mut BlackBox<'_>,
+    np: usize,
+    m: usize,
+    seed: u64,
+) -> Result<Option<u32>, AnalysisError> {
+    let p = obsan_recon::PRIMES[0];
+    let mut rng = Rng::new(seed ^ 0x1e4e);
+    let a: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+    let b: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+    let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, 2)).collect();
+    let (mut t, mut misses) = (0u64, 0);
+    while th.iter().any(|x| !x.done()) {
+        t += 1;
+        if misses > 8 || t as usize > MAX_AXIS_SAMPLES {
+            return Ok(None);
+        }
+        let pt: Vec<u64> = a
+            .iter()
+            .zip(&b)
+            .map(|(&x, &y)| obsan_recon::fp::add(x, fmul(t, y, p), p))
+            .collect();
+        let Some(v) = bb(&pt, p)? else {
+            misses += 1;
+            continue;
+        };
+        for (x, c) in th.iter_mut().zip(v) {
+            if !x.done() {
+                x.add(t, c);
+            }
+        }
+    }
+    let mut deg = 0;
+    for x in &th {
+        let (num, den) = x.rational();
+        if den.iter().skip(1).any(|&c| c != 0) {
+            return Ok(None);
+        }
+        deg = deg.max(num.iter().rposition(|&c| c != 0).unwrap_or(0) as u32);
+    }
+    Ok(Some(deg))
 }
 
 /// The coefficients at a point modulo a prime; `None` at a bad point.
@@ -578,4 +636,31 @@ fn count(
         Some(distinct_roots(field, &mp))
     };
     Ok((per, joint))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The total degree along a line: `x^2 y^3 + x` (5) and `x y + 7` (2)
+    /// give 5; with `1 / (1 + x)` beside them, no degree (not polynomials).
+    #[test]
+    fn line_degree_is_the_total_degree() {
+        let f = |pt: &[u64], p: u64, rational: bool| -> Option<Vec<u64>> {
+            let (x, y) = (pt[0], pt[1]);
+            let pw = |a: u64, e: u64| obsan_recon::fp::pow(a, e, p);
+            let mut v = vec![
+                obsan_recon::fp::add(fmul(pw(x, 2), pw(y, 3), p), x, p),
+                obsan_recon::fp::add(fmul(x, y, p), 7, p),
+            ];
+            if rational {
+                v.push(obsan_recon::fp::inv(obsan_recon::fp::add(1, x, p), p)?);
+            }
+            Some(v)
+        };
+        let mut poly = |pt: &[u64], p: u64| Ok(f(pt, p, false));
+        assert_eq!(line_degree(&mut poly, 2, 2, 9).unwrap(), Some(5));
+        let mut rat = |pt: &[u64], p: u64| Ok(f(pt, p, true));
+        assert_eq!(line_degree(&mut rat, 2, 3, 9).unwrap(), None);
+    }
 }

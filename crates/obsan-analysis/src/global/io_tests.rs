@@ -419,10 +419,18 @@ fn io_recon_trace() {
         let orders = io.orders(&th, &mut rng).unwrap();
         for i in 0..orders.len() {
             let t0 = Instant::now();
-            let r = io
-                .relation(&th, &orders, i, 40, 1000, &mut rng)
+            let r = match io.relation(&th, &orders, i, 40, 1000, &mut rng).unwrap() {
+                Some(r) => r,
+                None => super::super::io_elim::relation_by_elimination(
+                    &io,
+                    &th,
+                    &orders,
+                    i,
+                    obsan_groebner::GbBudget::default(),
+                )
                 .unwrap()
-                .unwrap();
+                .unwrap(),
+            };
             let t1 = t0.elapsed().as_secs_f64();
             if r.support.len() < 2 {
                 continue;
