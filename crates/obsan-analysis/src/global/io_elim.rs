@@ -22,7 +22,7 @@
 
 use super::io::{IoModel, IoRelation};
 use super::io_series::IPoly;
-use super::types::{err, gb_err};
+use super::types::{err, gb_err, too_large};
 use crate::rank::AnalysisError;
 use obsan_groebner::{f4, Field, GbBudget, Mono, Order, Poly, Ring};
 
@@ -110,6 +110,7 @@ pub(super) fn relation_by_elimination(
     let mut sat = g.clone();
     let kmax = orders.iter().copied().max().unwrap_or(0);
     let mut jets: Vec<Vec<(Poly, u32, u32)>> = Vec::new();
+    let mut held = 0usize;
     let mut hs: Vec<Poly> = Vec::new();
     for (num, den) in inst.outputs() {
         let (mut num, mut h) = (conv(num)?, conv(den)?);
@@ -137,6 +138,19 @@ pub(super) fn relation_by_elimination(
             let next = ring.sub(&lead, &mul(&nj, &inner)?);
             let a2 = if h_const { 0 } else { a + 1 };
             let m2 = if g_const { 0 } else { m + 2 };
+            // The jets count against the memory budget, as the Taylor
+            // system's derivatives do (sian.rs).
+            held += next.stored_bytes(n);
+            if held > budget.max_bytes {
+                return Err(too_large(
+                    held as u128,
+                    budget.max_bytes as u128,
+                    &format!(
+                        "the outputs' jets as rational functions of the state (order {})",
+                        list.len()
+                    ),
+                ));
+            }
             list.push((next, a2, m2));
         }
         jets.push(list);
@@ -156,6 +170,14 @@ pub(super) fn relation_by_elimination(
     }
     if !is_const(&sat) {
         eqs.push(ring.sub(&mul(&ring.var(nx), &sat)?, &ring.constant(1)));
+    }
+    let bytes: usize = eqs.iter().map(|p| p.stored_bytes(n)).sum();
+    if bytes > budget.max_bytes {
+        return Err(too_large(
+            bytes as u128,
+            budget.max_bytes as u128,
+            "the elimination's equations",
+        ));
     }
     let basis = f4(&ring, &eqs, budget).map_err(gb_err)?;
     let jet_vars: Vec<usize> = (nx + 1..n).collect();
@@ -321,6 +343,32 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// A memory budget below the jets' stops with "too large", never a
+    /// partial relation.
+    #[test]
+    fn memory_budget_refuses() {
+        let p = obsan_expr::P;
+        let m = model(include_str!("../../../../systems/benchmarks/si-jl/HIV.sys"));
+        let io = IoModel::new(&m, p).unwrap();
+        let mut rng = Rng::new(5);
+        let theta: Vec<u64> = (0..m.param_vars.len()).map(|_| elem(&mut rng, p)).collect();
+        let orders = io.orders(&theta, &mut rng).unwrap();
+        // The jets pass 2 kB before the basis is begun; 60 kB holds them
+        // and stops the basis.
+        for (max_bytes, stage) in [(2_000, "jets"), (60_000, "Groebner basis")] {
+            let budget = GbBudget {
+                max_bytes,
+                ..GbBudget::default()
+            };
+            let e = relation_by_elimination(&io, &theta, &orders, 0, budget).unwrap_err();
+            let e = e.to_string();
+            assert!(
+                e.starts_with("too large") && e.contains(stage),
+                "{max_bytes}: {e}"
+            );
         }
     }
 
