@@ -457,6 +457,51 @@ fn monomial_value(r: &[u64], e: &[u32], p: u64) -> u64 {
         .fold(1u64, |acc, (&x, &k)| mul(acc, pow(x, u64::from(k), p), p))
 }
 
+/// The first prime's sequences at `r_i q_i^k`, one Berlekamp–Massey per
+/// component until all terminate: the random scales `r` and the
+/// recurrences, or `None` past `tcap` terms or after [`RESTARTS`] holes.
+#[allow(clippy::type_complexity)]
+fn first_sequences<F, E>(
+    blackbox: &mut F,
+    budget: &mut Budget,
+    rng: &mut Rng,
+    m: usize,
+    q: &[u64],
+    tcap: usize,
+) -> Result<Option<(Vec<u64>, Vec<Bm>)>, ReconError<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    let p0 = PRIMES[0];
+    for _ in 0..RESTARTS {
+        let r: Vec<u64> = (0..q.len()).map(|_| rng.nonzero(p0)).collect();
+        let mut bms: Vec<Bm> = (0..m).map(|_| Bm::new(p0)).collect();
+        let mut pt = r.clone();
+        let mut hole = false;
+        while bms.iter().any(|b| !b.done()) {
+            if bms.iter().any(|b| b.l > tcap) || bms[0].seq.len() > 2 * tcap + EARLY_TERMINATION {
+                return Ok(None);
+            }
+            let Some(vals) = call(blackbox, budget, m, &pt, p0)? else {
+                hole = true;
+                break;
+            };
+            // Every component reads the whole sequence so that all stay
+            // aligned; a finished one keeps checking its recurrence.
+            for (b, &v) in bms.iter_mut().zip(&vals) {
+                b.push(v);
+            }
+            for (x, &qi) in pt.iter_mut().zip(q) {
+                *x = mul(*x, qi, p0);
+            }
+        }
+        if !hole {
+            return Ok(Some((r, bms)));
+        }
+    }
+    Ok(None)
+}
+
 /// Sparse interpolation of `m` polynomials in `nvars` variables with
 /// rational coefficients, from a black box returning all `m` values at a
 /// point modulo a prime (`Ok(None)`: a bad point). `Ok(None)` when the
@@ -508,35 +553,7 @@ where
 
     // First prime: supports and coefficients.
     budget.stage = "sparse: Berlekamp-Massey (first prime)";
-    let mut seqs: Option<(Vec<u64>, Vec<Bm>)> = None;
-    for _ in 0..RESTARTS {
-        let r: Vec<u64> = (0..nvars).map(|_| rng.nonzero(p0)).collect();
-        let mut bms: Vec<Bm> = (0..m).map(|_| Bm::new(p0)).collect();
-        let mut pt = r.clone();
-        let mut hole = false;
-        while bms.iter().any(|b| !b.done()) {
-            if bms.iter().any(|b| b.l > tcap) || bms[0].seq.len() > 2 * tcap + EARLY_TERMINATION {
-                return Ok(None);
-            }
-            let Some(vals) = call(blackbox, &mut budget, m, &pt, p0)? else {
-                hole = true;
-                break;
-            };
-            // Every component reads the whole sequence so that all stay
-            // aligned; a finished one keeps checking its recurrence.
-            for (b, &v) in bms.iter_mut().zip(&vals) {
-                b.push(v);
-            }
-            for (x, &qi) in pt.iter_mut().zip(&q) {
-                *x = mul(*x, qi, p0);
-            }
-        }
-        if !hole {
-            seqs = Some((r, bms));
-            break;
-        }
-    }
-    let Some((r0, bms)) = seqs else {
+    let Some((r0, bms)) = first_sequences(blackbox, &mut budget, &mut rng, m, &q, tcap)? else {
         return Ok(None);
     };
     budget.stage = "sparse: roots and exponents (first prime)";
