@@ -30,6 +30,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             "lie" => Route::Lie,
             _ => Route::Auto,
         },
+        multi_experiment: a.multi_experiment,
         ..GlobalOptions::default()
     };
 
@@ -105,6 +106,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             } else {
                 "SIAN: Taylor coefficients of the outputs at a random point, Gröbner basis over F_p; two independent points and primes agree".into()
             },
+            multi_experiment: r.multi_experiment,
             order: r.order,
             output_forms: r
                 .output_forms
@@ -304,7 +306,25 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     if r.route == Route::Lie {
         o.push_str("probabilistic: the counts are the agreement of the two runs (no degree bound on the random points for this route yet; docs/engine.md, \"Lie route\")\n");
     } else if r.route == Route::InputOutput {
-        o.push_str("each relation's monomials are linearly independent along an output (non-zero Wronskian), so one experiment fixes its coefficients: these are single-experiment counts\nprobabilistic: the counts are the agreement of the two runs (no degree bound on the random points yet; docs/engine.md, \"Input-output route\")\n");
+        let dependent: Vec<&str> = r
+            .output_orders
+            .iter()
+            .zip(&r.io_sizes)
+            .filter(|(_, s)| !s.single)
+            .map(|((n, _), _)| n.as_str())
+            .collect();
+        if dependent.is_empty() {
+            o.push_str(&format!(
+                "each relation's monomials are linearly independent along an output (non-zero Wronskian), so one experiment fixes its coefficients: these are single-experiment counts{}\n",
+                if a.multi_experiment { " (and multi-experiment ones)" } else { "" }
+            ));
+        } else {
+            o.push_str(&format!(
+                "multi-experiment counts: the param values that give the same outputs in every one of enough independent experiments, each from its own generic initial state; the monomials of {}'s relation are dependent along an output (zero Wronskian), so one experiment may leave more values\n",
+                dependent.join(", ")
+            ));
+        }
+        o.push_str("probabilistic: the counts are the agreement of the two runs (no degree bound on the random points yet; docs/engine.md, \"Input-output route\")\n");
     } else {
         let bound = if r.error_bound < 1.0 {
             format!("wrong with probability <= {:.1e}", r.error_bound)

@@ -378,13 +378,18 @@ class System:
         timeout: Optional[float] = None,
         max_terms: Optional[int] = None,
         route: Optional[str] = None,
+        multi_experiment: bool = False,
     ) -> Global:
         """``obsan global``: per param and initial state, global / local with k values /
         not identifiable; the joint count and the exact discrete symmetries. ``route``:
         ``"auto"`` (default: the Taylor system, else the input-output relations, else
         the Lie derivatives), ``"taylor"``, ``"io"`` or ``"lie"`` (indistinguishable for
-        every input); ``Global.route`` says which answered."""
+        every input); ``Global.route`` says which answered. ``multi_experiment=True``
+        counts the params over enough independent experiments (the input-output
+        relations, also with a zero Wronskian); ``Global.multi_experiment`` says whether
+        the counts are of that kind only."""
         f = self._flags("global", input, set).integer("--seed", seed).text("--route", route)
+        f = f.switch("--multi-experiment", multi_experiment)
         return Global.of(self._get(_limits(f, timeout, max_terms)))
 
     def lie(

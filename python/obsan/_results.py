@@ -389,6 +389,9 @@ class Global(Result):
     Lie derivatives: indistinguishable for every input)."""
     fallback: Optional[str] = None
     """Why the Taylor route did not answer, when ``route`` fell back; else None."""
+    multi_experiment: bool = False
+    """The counts are of multi-experiment identifiability only (asked for, and some
+    input-output relation has a zero Wronskian: one experiment may leave more values)."""
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Global":
@@ -412,6 +415,7 @@ class Global(Result):
             maps_modulo_pi=[DiscreteMap.parse(str(m)) for m in raw.get("maps_modulo_pi") or []],
             route=str(raw.get("route") or "taylor"),
             fallback=raw.get("fallback"),
+            multi_experiment=bool(raw.get("multi_experiment", False)),
         )
 
 

@@ -78,6 +78,18 @@ def test_the_input_output_route_counts_two_summed_decays():
     assert values == {"a": 2, "b": 2}, g.variables
 
 
+def test_multi_experiment_counts_where_one_experiment_does_not_fix_the_relation():
+    # By hand (systems/global/forced_oscillator_offset.sys): one experiment shows
+    # b/omega^2 + c only; the relation y' y'' - y y''' + c y''' - b y' = 0 has a
+    # zero Wronskian, and its coefficients fix b and c over several experiments.
+    s = obsan.load(SYSTEMS / "global" / "forced_oscillator_offset.sys")
+    one = {v.name: v.verdict for v in s.global_identifiability().variables}
+    assert one["b"] == one["c"] == "not identifiable"
+    g = s.global_identifiability(multi_experiment=True)
+    assert g.route == "input-output" and g.multi_experiment
+    assert {v.name: v.values for v in g.variables} == {"b": 1, "c": 1}
+
+
 def test_the_lie_route_counts_a_cart_for_every_input():
     # By hand (systems/global/squared_range_gain.sys): h = x^2, L_u h = 2 a x,
     # L_u L_u h = 2 a^2 fix (x, a) up to a common sign, for every input.

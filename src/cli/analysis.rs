@@ -28,6 +28,14 @@ pub struct GlobalArgs {
     /// route").
     #[arg(long, default_value = "auto", value_parser = ["auto", "taylor", "io", "lie"])]
     pub route: String,
+    /// Count the params over enough independent experiments, each from its
+    /// own generic initial state (SI.jl's multi-experiment identifiability):
+    /// by the input-output relations' coefficients, also where one
+    /// experiment does not fix them (a zero Wronskian, which `--route io`
+    /// refuses). Params only; the answer says whether the counts are
+    /// single-experiment ones too.
+    #[arg(long, conflicts_with_all = ["experiment", "experiments"])]
+    pub multi_experiment: bool,
     #[command(flatten)]
     pub an: AnalysisArgs,
     #[command(flatten)]

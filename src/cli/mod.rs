@@ -310,6 +310,8 @@ written to --out and a one-line summary to stdout."
   obsan global systems/global/two_decays.sys      # every variable 2 values: the swap
   obsan global systems/classic/hiv.sys --json
   obsan global systems/global/angle_mod_pi.sys   # theta: 2 values (known modulo pi only)
+  obsan global systems/global/forced_oscillator_offset.sys --multi-experiment
+                                                  # b, c global over several experiments
 
 Counts are over the complex numbers, as SIAN and StructuralIdentifiability.jl count; two
 independent random points modulo two primes must agree. Rational models, and sin/cos of a
@@ -326,12 +328,17 @@ the same question as one experiment, with inputs one generic experiment may leav
 Outputs through sqrt or atan are counted through their argument; an angle output (an atan2
 bearing) through its tangent, modulo pi: a count above 1 is then 'at most' unless the maps'
 signs on the angle settle it.
+One experiment is counted; --multi-experiment counts the params over enough independent
+experiments (each from its own generic initial state; SI.jl's multi-experiment
+identifiability) by the input-output relations, also where a relation's monomials are
+dependent along an output (a zero Wronskian: one experiment does not fix its coefficients,
+and --route io refuses); multi_experiment says whether the counts are of that kind only.
 --json prints {system, restriction, variables: [{name, kind (param | state), angle,
 verdict (global | local | not identifiable), values, at_most}], solutions, solutions_at_most,
 all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
 counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
 log10_degree_bound_global, unknowns, equations, primes, exact: false, method, route
-(taylor | input-output | lie), fallback}.")]
+(taylor | input-output | lie), fallback, multi_experiment}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,

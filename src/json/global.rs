@@ -32,6 +32,11 @@ pub struct Global {
     pub maps_modulo_pi: Vec<String>,
     /// How the answer was found, in words.
     pub method: String,
+    /// The counts are of multi-experiment identifiability only (`--multi-experiment`,
+    /// and some output's input-output relation has a zero Wronskian, so one
+    /// experiment may leave more values); false when they are single-experiment
+    /// counts.
+    pub multi_experiment: bool,
     /// The Taylor order used.
     pub order: usize,
     /// How each output is counted.

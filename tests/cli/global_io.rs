@@ -112,3 +112,77 @@ fn hiv_relation_past_the_ansatz_by_elimination() {
     let auto: Value = serde_json::from_str(&ok(&["global", f, "--json"])).unwrap();
     assert_eq!(auto["route"], "taylor");
 }
+
+/// A relation whose monomials are dependent along every output (a zero
+/// Wronskian): the file's hand derivation gives b and c not identifiable
+/// from one experiment, globally identifiable from several. `--route io`
+/// refuses (its counts would be multi-experiment ones), `--multi-experiment`
+/// answers and says so, and the Taylor route on two stacked experiments
+/// (`--experiment '' --experiment ''`), an independent computation, agrees.
+#[test]
+fn zero_wronskian_counts_over_several_experiments() {
+    let f = "systems/global/forced_oscillator_offset.sys";
+    let one: Value = serde_json::from_str(&ok(&["global", f, "--json"])).unwrap();
+    assert_eq!(one["route"], "taylor");
+    assert_eq!(one["multi_experiment"], false);
+    let verdict = |v: &Value, n: &str| -> String {
+        v["variables"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|x| x["name"] == n)
+            .map(|x| x["verdict"].as_str().unwrap().to_string())
+            .unwrap()
+    };
+    for n in ["b", "c", "x1"] {
+        assert_eq!(verdict(&one, n), "not identifiable", "{n}");
+    }
+    for n in ["x2", "w2"] {
+        assert_eq!(verdict(&one, n), "global", "{n}");
+    }
+    let e = bad(&["global", f, "--route", "io"], "zero Wronskian");
+    assert!(e.contains("--multi-experiment"), "{e}");
+    let multi: Value =
+        serde_json::from_str(&ok(&["global", f, "--multi-experiment", "--json"])).unwrap();
+    assert_eq!(multi["route"], "input-output");
+    assert_eq!(multi["multi_experiment"], true);
+    assert_eq!(
+        params(&multi),
+        vec![
+            ("b".to_string(), "global".to_string(), Some(1)),
+            ("c".to_string(), "global".to_string(), Some(1)),
+        ]
+    );
+    let two: Value = serde_json::from_str(&ok(&[
+        "global",
+        f,
+        "--experiment",
+        "",
+        "--experiment",
+        "",
+        "--json",
+    ]))
+    .unwrap();
+    for n in ["b", "c"] {
+        assert_eq!(verdict(&two, n), "global", "{n}");
+    }
+    let t = ok(&["global", f, "--multi-experiment"]);
+    assert!(t.contains("multi-experiment counts"), "{t}");
+    // A relation with a non-zero Wronskian: the same counts, said to be
+    // single-experiment ones too.
+    let d: Value = serde_json::from_str(&ok(&[
+        "global",
+        "systems/global/two_decays.sys",
+        "--multi-experiment",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(d["multi_experiment"], false);
+    for (n, verdict, k) in params(&d) {
+        assert_eq!((verdict.as_str(), k), ("local", Some(2)), "{n}");
+    }
+    bad(
+        &["global", f, "--multi-experiment", "--route", "taylor"],
+        "input-output",
+    );
+}

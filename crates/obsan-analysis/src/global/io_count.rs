@@ -41,6 +41,9 @@ pub struct IoSize {
     pub max_degree: u32,
     /// Schwartz-Zippel bound of the reconstruction's check at fresh points.
     pub recon_error_bound: f64,
+    /// The relation's monomials are linearly independent along a generic
+    /// output (a non-zero Wronskian): one experiment fixes its coefficients.
+    pub single: bool,
 }
 
 /// The route's answer on the parameters.
@@ -114,10 +117,13 @@ pub(super) fn io_count_with(
                 })?
             }
         };
-        // One output's coefficients are then fixed by that output alone.
-        if !io.independent_along(&theta, &orders, i, &rel.support, &mut rng) {
+        // One output's coefficients are then fixed by that output alone;
+        // otherwise they count over several experiments only (OPPS 2021),
+        // which `--multi-experiment` asks for.
+        let single = io.independent_along(&theta, &orders, i, &rel.support, &mut rng);
+        if !single && !opts.multi_experiment {
             return Err(err(format!(
-                "global (io): the monomials of output {}'s relation satisfy more than one linear relation along an output (zero Wronskian): its coefficients would count multi-experiment identifiability only",
+                "global (io): the monomials of output {}'s relation satisfy more than one linear relation along an output (zero Wronskian): its coefficients count multi-experiment identifiability only (--multi-experiment counts it)",
                 i + 1
             )));
         }
@@ -134,6 +140,7 @@ pub(super) fn io_count_with(
                 terms: 0,
                 max_degree: 0,
                 recon_error_bound: 0.0,
+                single,
             });
             continue;
         }
@@ -157,6 +164,7 @@ pub(super) fn io_count_with(
                 .max()
                 .unwrap_or(0),
             recon_error_bound: r.certificate.error_bound,
+            single,
         });
         fns.extend(r.functions);
     }

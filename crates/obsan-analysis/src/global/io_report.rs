@@ -75,6 +75,7 @@ pub(super) fn io_route(
         primes: c.primes,
         route: Route::InputOutput,
         fallback,
+        multi_experiment: c.sizes.iter().any(|s| !s.single),
         io_sizes: c.sizes,
     })
 }

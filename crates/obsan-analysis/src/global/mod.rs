@@ -50,6 +50,17 @@ pub fn global_identifiability(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
 ) -> Result<GlobalReport, AnalysisError> {
+    if opts.multi_experiment {
+        // Several experiments share the parameters, not the initial states:
+        // the io relations' coefficients count them (io_count.rs), and
+        // elimination is asked for as by `--route io`.
+        return match opts.route {
+            Route::Auto | Route::InputOutput => io_report::io_route(nf, opts, None, true),
+            _ => Err(err(
+                "global: --multi-experiment counts by the input-output relations (--route io or auto)",
+            )),
+        };
+    }
     match opts.route {
         Route::Taylor => taylor_route(nf, opts, false, true),
         Route::Lie => taylor_route(nf, opts, true, false),
@@ -273,6 +284,7 @@ fn taylor_route(
         route: if lie { Route::Lie } else { Route::Taylor },
         fallback: None,
         io_sizes: Vec::new(),
+        multi_experiment: false,
     })
 }
 

@@ -30,6 +30,11 @@ pub struct GlobalOptions {
     pub weighted: bool,
     /// Which route counts (docs/engine.md, "Input-output route").
     pub route: Route,
+    /// Count the parameters over enough independent experiments (each from
+    /// its own generic initial state; SI.jl's multi-experiment
+    /// identifiability): the input-output relations' coefficients, also
+    /// where a relation's Wronskian is zero (io_count.rs). The io route only.
+    pub multi_experiment: bool,
 }
 
 impl GlobalOptions {
@@ -73,6 +78,7 @@ impl Default for GlobalOptions {
             max_work: u64::MAX,
             weighted: true,
             route: Route::Auto,
+            multi_experiment: false,
         }
     }
 }
@@ -199,6 +205,12 @@ pub struct GlobalReport {
     pub fallback: Option<String>,
     /// The input-output relations' sizes (that route only).
     pub io_sizes: Vec<super::io_count::IoSize>,
+    /// The counts are of multi-experiment identifiability only: asked for
+    /// (`GlobalOptions::multi_experiment`) and some relation's monomials are
+    /// dependent along an output (a zero Wronskian), so one experiment may
+    /// leave more values. False when every relation's Wronskian is non-zero
+    /// (the counts are then single-experiment ones too).
+    pub multi_experiment: bool,
 }
 
 /// The memory budget of a term budget, as every engine stage counts it.
