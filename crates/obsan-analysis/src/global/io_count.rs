@@ -14,13 +14,13 @@
 //! Thompson 2023), checked here (io.rs, `independent_along`); the route
 //! refuses otherwise.
 
-use super::io::{elem, IoModel, IoRelation};
-use super::io_elim::relation_by_elimination;
+use super::io::{elem, IoModel};
+use super::io_pres::presentation;
 use super::model::ZModel;
 use super::run::Rng;
-use super::types::{err, gb_err, GlobalOptions};
+use super::types::{err, gb_err, too_large, GlobalOptions};
 use crate::rank::AnalysisError;
-use obsan_groebner::{distinct_roots, groebner, Field, Mono, Order, Poly, Ring};
+use obsan_groebner::{distinct_roots, groebner, term_bytes, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use obsan_recon::{
     interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Rational, Thiele,
@@ -82,92 +82,69 @@ pub(super) fn io_count_with(
     eliminate: bool,
     cap: usize,
 ) -> Result<IoCounts, AnalysisError> {
+    io_count_under(m, opts, seed, (eliminate, cap), None)
+}
+
+/// [`io_count_with`] under the outputs' priority `only` (tests: every
+/// priority counts the same) or the one [`presentation`] chooses.
+pub(super) fn io_count_under(
+    m: &ZModel,
+    opts: &GlobalOptions,
+    seed: u64,
+    (eliminate, cap): (bool, usize),
+    only: Option<&[usize]>,
+) -> Result<IoCounts, AnalysisError> {
     let np = m.param_vars.len();
     let mut rng = Rng::new(seed);
-    let mut io = IoModel::new(m, obsan_expr::P)?;
-    io.deadline = opts.deadline;
-    io.max_bytes = opts.max_bytes;
     let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
-    let orders = io.orders(&theta, &mut rng)?;
+    let pres = presentation(m, opts, &theta, &mut rng, (eliminate, cap), only)?;
+    let (mp, perm) = (&pres.model, &pres.perm);
     let mut fns: Vec<Rational> = Vec::new();
-    let mut sizes = Vec::new();
-    for i in 0..orders.len() {
-        // The dense ansatz first (cheap for small relations, and the only
-        // way with inputs), then elimination (io_elim.rs).
-        let rel: IoRelation = match io.relation(&theta, &orders, i, 60, cap, &mut rng)? {
-            Some(r) => r,
-            None => {
-                let found = if eliminate {
-                    relation_by_elimination(&io, &theta, &orders, i, opts.gb_budget())?
-                } else {
-                    None
-                };
-                found.ok_or_else(|| {
-                    err(format!(
-                        "global (io): the input-output relation of output {} needs more than {cap} ansatz monomials{}",
-                        i + 1,
-                        if !eliminate {
-                            " (--route io finds it by elimination)"
-                        } else if io.dims().1 > 0 {
-                            " (with inputs: no elimination)"
-                        } else {
-                            ""
-                        }
-                    ))
-                })?
-            }
-        };
-        // One output's coefficients are then fixed by that output alone;
-        // otherwise they count over several experiments only (OPPS 2021),
-        // which `--multi-experiment` asks for.
-        let single = io.independent_along(&theta, &orders, i, &rel.support, &mut rng);
+    let mut sizes: Vec<(usize, IoSize)> = Vec::new();
+    for (i, (rel, &single)) in pres.rels.iter().zip(&pres.single).enumerate() {
+        let out = perm[i];
         if !single && !opts.multi_experiment {
             return Err(err(format!(
                 "global (io): the monomials of output {}'s relation satisfy more than one linear relation along an output (zero Wronskian): its coefficients count multi-experiment identifiability only (--multi-experiment counts it)",
-                i + 1
+                out + 1
             )));
         }
-        if rel.support.len() == 1 {
-            // A monomial relation (`y' = 0`: Treatment's constant N) has no
-            // coefficient to reconstruct and constrains no parameter.
-            sizes.push(IoSize {
-                order: orders[i],
-                variables: rel.vars.len(),
-                degree: rel.degree,
-                ansatz: rel.ansatz,
-                support: 1,
-                points: 0,
-                terms: 0,
-                max_degree: 0,
-                recon_error_bound: 0.0,
-                single,
-            });
-            continue;
-        }
-        let (r, points) = reconstruct(m, &orders, i, &rel.support, opts, seed)?;
-        sizes.push(IoSize {
-            order: orders[i],
+        let mut size = IoSize {
+            order: pres.orders[i],
             variables: rel.vars.len(),
             degree: rel.degree,
             ansatz: rel.ansatz,
             support: rel.support.len(),
-            points,
-            terms: r
+            points: 0,
+            terms: 0,
+            max_degree: 0,
+            recon_error_bound: 0.0,
+            single,
+        };
+        // A monomial relation (`y' = 0`: Treatment's constant N) has no
+        // coefficient to reconstruct and constrains no parameter.
+        if rel.support.len() > 1 {
+            let (r, points) = reconstruct(mp, &pres.orders, i, &rel.support, opts, seed)?;
+            size.points = points;
+            size.terms = r
                 .functions
                 .iter()
                 .map(|f| f.num().terms().len() + f.den().terms().len())
-                .sum(),
-            max_degree: r
+                .sum();
+            size.max_degree = r
                 .functions
                 .iter()
                 .map(|f| f.num().degree().max(f.den().degree()))
                 .max()
-                .unwrap_or(0),
-            recon_error_bound: r.certificate.error_bound,
-            single,
-        });
-        fns.extend(r.functions);
+                .unwrap_or(0);
+            size.recon_error_bound = r.certificate.error_bound;
+            fns.extend(r.functions);
+        }
+        sizes.push((out, size));
     }
+    // The sizes in the outputs' own order.
+    sizes.sort_by_key(|s| s.0);
+    let sizes: Vec<IoSize> = sizes.into_iter().map(|s| s.1).collect();
     // Two independent points and primes must agree, as on the Taylor route.
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let (per_param, joint) = count(&fns, np, opts, seed, primes[0])?;
@@ -598,7 +575,26 @@ fn count(
     match mono_lcm {
         Some(mo) => l = ring.from_terms([(mo, 1)]),
         None => {
+            // The equations and the product count against the memory
+            // budget: MAPK_6out's many denominators grew it past 5 GB.
+            let n = np + 1;
+            let held: usize = eqs.iter().map(|e| e.stored_bytes(n)).sum();
             for d in &dens {
+                let bound = l
+                    .len()
+                    .saturating_mul(d.len())
+                    .saturating_mul(term_bytes(n));
+                let need = held.saturating_add(l.stored_bytes(n)).saturating_add(bound);
+                if need > opts.max_bytes {
+                    return Err(too_large(
+                        need as u128,
+                        opts.max_bytes as u128,
+                        &format!(
+                            "the count's product of the coefficients' {} denominators",
+                            dens.len()
+                        ),
+                    ));
+                }
                 l = ring.mul(&l, d).map_err(gb_err)?;
             }
         }

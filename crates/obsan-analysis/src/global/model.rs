@@ -10,6 +10,7 @@ use obsan_model::NormalForm;
 
 /// The model over Z: dynamic states (with their derivative `num/den`), params,
 /// inputs, known constants (given random values), outputs.
+#[derive(Clone)]
 pub(super) struct ZModel {
     /// Per state then param: an angle counted as `t = tan(theta/2)`.
     pub(super) angle: Vec<bool>,

@@ -35,6 +35,7 @@ pub enum OutputForm {
 }
 
 /// An angle output's sine and cosine, as nodes, for the sign of a map.
+#[derive(Clone)]
 pub(super) struct AngleOutput {
     pub(super) sin: Id,
     pub(super) cos: Id,
