@@ -532,17 +532,7 @@ where
         return Ok(None);
     }
     let mut rng = Rng::new(opts.seed ^ 0x5ba7_5e00);
-    let mut budget = Budget {
-        points: 0,
-        primes: 0,
-        max_points: opts.max_points,
-        max_degree: opts.max_degree,
-        max_terms: opts.max_terms,
-        deadline: opts.deadline,
-        agree: opts.agree.max(1),
-        degrees: Vec::new(),
-        stage: "sparse: checking the degree bounds",
-    };
+    let mut budget = Budget::from_options(opts, "sparse: checking the degree bounds");
     let p0 = PRIMES[0];
     let q = assign_primes(&bounds.per_var);
     if largest_monomial_value(&q, bounds, p0).is_none() {
