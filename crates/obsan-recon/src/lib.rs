@@ -358,17 +358,7 @@ where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
     let mut rng = Rng::new(opts.seed);
-    let mut budget = Budget {
-        points: 0,
-        primes: 0,
-        max_points: opts.max_points,
-        max_degree: opts.max_degree,
-        max_terms: opts.max_terms,
-        deadline: opts.deadline,
-        agree: opts.agree.max(1),
-        degrees: Vec::new(),
-        stage: "finding degrees",
-    };
+    let mut budget = Budget::from_options(opts, "finding degrees");
     let mut degs: Option<Vec<(usize, usize)>> = None;
     let mut skeleton: Option<Skeleton> = None;
     let mut acc: Option<Acc> = None;

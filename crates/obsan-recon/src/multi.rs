@@ -22,7 +22,7 @@ use crate::field::{add, mul, pow, sub};
 use crate::linalg::{eval, newton, poly_add, poly_mul, vandermonde_t};
 use crate::rng::Rng;
 use crate::thiele::Thiele;
-use crate::{Limit, Progress, ReconError};
+use crate::{Limit, Options, Progress, ReconError};
 
 /// Terms of one mod-p polynomial: exponent vector and non-zero residue.
 pub(crate) type Terms = Vec<(Vec<u32>, u64)>;
@@ -66,6 +66,21 @@ pub(crate) struct Budget {
 }
 
 impl Budget {
+    /// Fresh counters with the budgets of `opts`, starting at `stage`.
+    pub(crate) fn from_options(opts: &Options, stage: &'static str) -> Budget {
+        Budget {
+            points: 0,
+            primes: 0,
+            max_points: opts.max_points,
+            max_degree: opts.max_degree,
+            max_terms: opts.max_terms,
+            deadline: opts.deadline,
+            agree: opts.agree.max(1),
+            degrees: Vec::new(),
+            stage,
+        }
+    }
+
     pub(crate) fn progress(&self) -> Progress {
         Progress {
             points: self.points,

@@ -1,15 +1,22 @@
 //! Sparse interpolation of a vector of polynomials sharing one black box
 //! (Ben-Or & Tiwari 1988, with early termination: Kaltofen & Lee 2003).
 //!
-//! Modulo the first prime `p0` the points are `theta_k = (r_1 q_1^k, ...,
-//! r_n q_n^k)`, `q_i` small distinct primes and `r_i` random non-zero (so the
-//! sequence does not start at the special point `(1, ..., 1)`). For a
-//! polynomial `f = sum_j c_j x^{e_j}` the values `v_k = f(theta_k) = sum_j
-//! (c_j r^{e_j}) (q^{e_j})^k` form a linearly recurrent sequence whose
-//! minimal polynomial (Berlekamp–Massey) has the roots `q^{e_j} mod p0`. When
-//! every monomial allowed by the degree bounds has `q^e < p0`, the integer
-//! value of a root is `q^e` itself, and trial division by the `q_i` gives
-//! `e`. The coefficients follow from one transposed Vandermonde system.
+//! Modulo the first prime `p0` the points are `theta_k = (r_1 a_1^k, ...,
+//! r_n a_n^k)`, `r_i` random non-zero (so the sequence does not start at the
+//! special point `(1, ..., 1)`). For a polynomial `f = sum_j c_j x^{e_j}`
+//! the values `v_k = f(theta_k) = sum_j (c_j r^{e_j}) (a^{e_j})^k` form a
+//! linearly recurrent sequence whose minimal polynomial (Berlekamp–Massey)
+//! has the roots `m_j = a^{e_j} mod p0`; one transposed Vandermonde system
+//! gives the weights `c_j r^{e_j}`. The exponents are read in one of two
+//! ways:
+//! - when every monomial allowed by the degree bounds has `q^e < p0` for
+//!   small distinct primes `q_i`, the ratios are `a_i = q_i`: the integer
+//!   value of a root is `q^e` itself, and trial division gives `e`;
+//! - otherwise the `a_i` are random and, per variable `i`, one more
+//!   sequence with `r_i` scaled by a random `c` has the same roots and
+//!   weights multiplied by `c^{e_ij}` (shifted sequences, `n T` more
+//!   points, [`shifted_exponents`]).
+//!
 //! Later primes know the supports: `T` shared points each (random geometric
 //! progressions), one transposed Vandermonde system per component, then
 //! Chinese remaindering and rational reconstruction as [`crate::reconstruct_vec`]
@@ -18,7 +25,7 @@
 //! Anything that does not fit a polynomial within the bounds (a linear
 //! complexity above the terms' bound, a minimal polynomial that does not
 //! split into distinct linear factors over F_p0, a root that is not a
-//! product of the `q_i` within the bounds, a failed verification) gives
+//! monomial within the bounds, a failed verification) gives
 //! `Ok(None)`: the caller falls back to the rational reconstruction.
 
 use crate::field::{add, inv, mul, pow, sub, Rem128, Shoup, MAX_RECON_PRIMES, PRIMES};
@@ -457,7 +464,8 @@ fn monomial_value(r: &[u64], e: &[u32], p: u64) -> u64 {
         .fold(1u64, |acc, (&x, &k)| mul(acc, pow(x, u64::from(k), p), p))
 }
 
-/// The first prime's sequences at `r_i q_i^k`, one Berlekamp–Massey per
+/// The first prime's sequences at `r_i a_i^k` (`a_i` the ratios: the small
+/// primes `q_i`, or random past the prime), one Berlekamp–Massey per
 /// component until all terminate: the random scales `r` and the
 /// recurrences, or `None` past `tcap` terms or after [`RESTARTS`] holes.
 #[allow(clippy::type_complexity)]
@@ -466,7 +474,7 @@ fn first_sequences<F, E>(
     budget: &mut Budget,
     rng: &mut Rng,
     m: usize,
-    q: &[u64],
+    a: &[u64],
     tcap: usize,
 ) -> Result<Option<(Vec<u64>, Vec<Bm>)>, ReconError<E>>
 where
@@ -474,7 +482,7 @@ where
 {
     let p0 = PRIMES[0];
     for _ in 0..RESTARTS {
-        let r: Vec<u64> = (0..q.len()).map(|_| rng.nonzero(p0)).collect();
+        let r: Vec<u64> = (0..a.len()).map(|_| rng.nonzero(p0)).collect();
         let mut bms: Vec<Bm> = (0..m).map(|_| Bm::new(p0)).collect();
         let mut pt = r.clone();
         let mut hole = false;
@@ -491,8 +499,8 @@ where
             for (b, &v) in bms.iter_mut().zip(&vals) {
                 b.push(v);
             }
-            for (x, &qi) in pt.iter_mut().zip(q) {
-                *x = mul(*x, qi, p0);
+            for (x, &ai) in pt.iter_mut().zip(a) {
+                *x = mul(*x, ai, p0);
             }
         }
         if !hole {
@@ -500,6 +508,260 @@ where
         }
     }
     Ok(None)
+}
+
+/// The black box's values at the points `start * ratio^k` (componentwise),
+/// `k < t`, per component; `None` at a hole.
+fn geometric_values<F, E>(
+    blackbox: &mut F,
+    budget: &mut Budget,
+    m: usize,
+    start: &[u64],
+    ratio: &[u64],
+    t: usize,
+    p: u64,
+) -> Result<Option<Vec<Vec<u64>>>, ReconError<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    let mut vals: Vec<Vec<u64>> = vec![Vec::with_capacity(t); m];
+    let mut pt = start.to_vec();
+    for _ in 0..t {
+        let Some(v) = call(blackbox, budget, m, &pt, p)? else {
+            return Ok(None);
+        };
+        for (col, x) in vals.iter_mut().zip(v) {
+            col.push(x);
+        }
+        for (x, &si) in pt.iter_mut().zip(ratio) {
+            *x = mul(*x, si, p);
+        }
+    }
+    Ok(Some(vals))
+}
+
+/// Per component, its monomials' exponent vectors.
+type Supports = Vec<Vec<Vec<u32>>>;
+
+/// Per component, the roots `m_j` and the weights `w_j`.
+type RootsWeights = Vec<(Vec<u64>, Vec<u64>)>;
+
+/// The first prime's sequence, read: the start `r`, the ratios `a`, and
+/// per component the roots `m_j = a^(e_j)` of its minimal polynomial with
+/// the weights `w_j = c_j r^(e_j)` (transposed Vandermonde).
+struct FirstPrime {
+    r: Vec<u64>,
+    a: Vec<u64>,
+    comps: RootsWeights,
+}
+
+/// Roots and weights of every component's sequence (`None`: a minimal
+/// polynomial with a zero root, or not a product of distinct linear
+/// factors over F_p0).
+fn roots_and_weights<E>(
+    bms: &[Bm],
+    budget: &Budget,
+    rng: &mut Rng,
+) -> Result<Option<RootsWeights>, ReconError<E>> {
+    let p0 = PRIMES[0];
+    let mut known: Vec<u64> = Vec::new();
+    let mut known_set = std::collections::HashSet::new();
+    let mut comps = Vec::with_capacity(bms.len());
+    for b in bms {
+        if let Some(d) = budget.deadline {
+            if std::time::Instant::now() >= d {
+                return Err(budget.limit(Limit::Deadline));
+            }
+        }
+        let lam = b.characteristic();
+        if lam.first() == Some(&0) && b.l > 0 {
+            return Ok(None);
+        }
+        let Some(roots) = split_roots(&lam, p0, &known, rng) else {
+            return Ok(None);
+        };
+        for &rho in &roots {
+            if known_set.insert(rho) {
+                known.push(rho);
+            }
+        }
+        let Some(w) = transposed_vandermonde(&roots, &b.seq, p0) else {
+            return Ok(None);
+        };
+        comps.push((roots, w));
+    }
+    Ok(Some(comps))
+}
+
+/// `c^0, .., c^bound` mod `p` as a table power -> exponent, `None` when
+/// two coincide (`c` of order at most `bound`).
+fn power_table(c: u64, bound: u32, p: u64) -> Option<std::collections::HashMap<u64, u32>> {
+    let mut table = std::collections::HashMap::with_capacity(bound as usize + 1);
+    let mut x = 1u64;
+    for e in 0..=bound {
+        if table.insert(x, e).is_some() {
+            return None;
+        }
+        x = mul(x, c, p);
+    }
+    Some(table)
+}
+
+/// Exponents past the prime (shifted sequences): for each variable `i`,
+/// the values at `(r_1 a_1^k, .., c r_i a_i^k, .., r_n a_n^k)`, `k < T`
+/// (`T` the largest number of roots of a component; the points are shared
+/// by all components), have the same roots `m_j` and the weights
+/// `w_j c^(e_ij)`: a transposed Vandermonde system on the known roots gives
+/// them, and `e_ij` is the `e <= bound_i` with `c^e = w'_j / w_j` (a table
+/// of `c^0..c^bound_i`, all distinct, else a new `c`). No match, a zero
+/// weight, exponents past the per-variable or total bounds, or a root
+/// `m_j` that is not `a^(e_j)`: `None`, never a guess.
+///
+/// A wrong support needs two monomials of one component with equal values
+/// `a^e = a^e'` (for random `a`, probability at most `C(T, 2) D / (p0 - 1)`
+/// by Schwartz–Zippel on `x^e - x^e'`, `D` the total degree bound), or a
+/// ratio matching another power `c^e` by accident (at most `T (bound + 1)
+/// / p0` per variable); either is then almost surely caught by the check
+/// `m_j = a^(e_j)`, by the later primes' stop rule, and in the end by the
+/// verification at fresh points modulo a prime never used (Schwartz–Zippel),
+/// which is what certifies the answer: a wrong support gives `Ok(None)`.
+fn shifted_exponents<F, E>(
+    blackbox: &mut F,
+    budget: &mut Budget,
+    rng: &mut Rng,
+    first: &FirstPrime,
+    per_var: &[u32],
+    max_total: u32,
+) -> Result<Option<Supports>, ReconError<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    let p0 = PRIMES[0];
+    let (m, n) = (first.comps.len(), first.a.len());
+    let t = first.comps.iter().map(|(roots, _)| roots.len()).max();
+    let mut exps: Supports = first
+        .comps
+        .iter()
+        .map(|(roots, _)| vec![vec![0u32; n]; roots.len()])
+        .collect();
+    let t = match t {
+        Some(t) if t > 0 => t,
+        _ => return Ok(Some(exps)),
+    };
+    for (i, &bound) in per_var.iter().enumerate() {
+        let mut shifted = None;
+        for _ in 0..RESTARTS {
+            let c = rng.nonzero(p0);
+            let Some(table) = power_table(c, bound.min(max_total), p0) else {
+                continue;
+            };
+            let mut start = first.r.clone();
+            start[i] = mul(start[i], c, p0);
+            if let Some(vals) = geometric_values(blackbox, budget, m, &start, &first.a, t, p0)? {
+                shifted = Some((table, vals));
+                break;
+            }
+        }
+        let Some((table, vals)) = shifted else {
+            return Ok(None);
+        };
+        for (((roots, w), v), es) in first.comps.iter().zip(&vals).zip(&mut exps) {
+            let Some(ws) = transposed_vandermonde(roots, v, p0) else {
+                return Ok(None);
+            };
+            for ((&wj, wsj), e) in w.iter().zip(ws).zip(es.iter_mut()) {
+                let Some(iw) = inv(wj, p0) else {
+                    return Ok(None);
+                };
+                let Some(&k) = table.get(&mul(wsj, iw, p0)) else {
+                    return Ok(None);
+                };
+                e[i] = k;
+            }
+        }
+    }
+    for ((roots, _), es) in first.comps.iter().zip(&exps) {
+        for (&rho, e) in roots.iter().zip(es) {
+            if e.iter().sum::<u32>() > max_total || monomial_value(&first.a, e, p0) != rho {
+                return Ok(None);
+            }
+        }
+    }
+    Ok(Some(exps))
+}
+
+/// The first prime's supports and image. When every monomial value `q^e`
+/// allowed by the bounds is below `p0` the ratios are the small primes and
+/// each root's exponents come by trial division (`2T + delta` points);
+/// past the prime the ratios are random and the exponents come from one
+/// shifted sequence per variable ([`shifted_exponents`], `n T` more).
+fn first_image<F, E>(
+    blackbox: &mut F,
+    budget: &mut Budget,
+    rng: &mut Rng,
+    m: usize,
+    bounds: &DegreeBounds,
+    max_total: u32,
+) -> Result<Option<(Supports, Image)>, ReconError<E>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
+{
+    let p0 = PRIMES[0];
+    let nvars = bounds.per_var.len();
+    let q = assign_primes(&bounds.per_var);
+    let small = largest_monomial_value(&q, bounds, p0).is_some();
+    let a = if small {
+        q.clone()
+    } else {
+        (0..nvars).map(|_| rng.nonzero(p0)).collect()
+    };
+    let tcap = budget.max_terms.min(monomials_within(bounds));
+    budget.stage = "sparse: Berlekamp-Massey (first prime)";
+    let Some((r, bms)) = first_sequences(blackbox, budget, rng, m, &a, tcap)? else {
+        return Ok(None);
+    };
+    budget.stage = "sparse: roots (first prime)";
+    let Some(comps) = roots_and_weights(&bms, budget, rng)? else {
+        return Ok(None);
+    };
+    let first = FirstPrime { r, a, comps };
+    let exps = if small {
+        first
+            .comps
+            .iter()
+            .map(|(roots, _)| {
+                roots
+                    .iter()
+                    .map(|&rho| exponents(rho, &q, &bounds.per_var, max_total))
+                    .collect::<Option<Vec<_>>>()
+            })
+            .collect::<Option<Vec<_>>>()
+    } else {
+        budget.stage = "sparse: shifted sequences (first prime)";
+        shifted_exponents(blackbox, budget, rng, &first, &bounds.per_var, max_total)?
+    };
+    let Some(exps) = exps else {
+        return Ok(None);
+    };
+    let mut supports: Supports = Vec::with_capacity(m);
+    let mut image: Image = Vec::with_capacity(m);
+    for ((_, w), es) in first.comps.iter().zip(exps) {
+        let mut terms: Terms = Vec::with_capacity(es.len());
+        for (e, &wj) in es.into_iter().zip(w) {
+            let Some(ir) = inv(monomial_value(&first.r, &e, p0), p0) else {
+                return Ok(None);
+            };
+            let c = mul(wj, ir, p0);
+            if c == 0 {
+                return Ok(None);
+            }
+            terms.push((e, c));
+        }
+        terms.sort();
+        supports.push(terms.iter().map(|(e, _)| e.clone()).collect());
+        image.push((terms, vec![(vec![0u32; nvars], 1)]));
+    }
+    Ok(Some((supports, image)))
 }
 
 /// Sparse interpolation of `m` polynomials in `nvars` variables with
@@ -532,76 +794,16 @@ where
         return Ok(None);
     }
     let mut rng = Rng::new(opts.seed ^ 0x5ba7_5e00);
-    let mut budget = Budget {
-        points: 0,
-        primes: 0,
-        max_points: opts.max_points,
-        max_degree: opts.max_degree,
-        max_terms: opts.max_terms,
-        deadline: opts.deadline,
-        agree: opts.agree.max(1),
-        degrees: Vec::new(),
-        stage: "sparse: checking the degree bounds",
-    };
+    let mut budget = Budget::from_options(opts, "sparse: checking the degree bounds");
     let p0 = PRIMES[0];
-    let q = assign_primes(&bounds.per_var);
-    if largest_monomial_value(&q, bounds, p0).is_none() {
-        return Ok(None);
-    }
-    let tcap = budget.max_terms.min(monomials_within(bounds));
     let max_total = bounds.total.unwrap_or(u32::MAX).min(budget.max_degree);
 
     // First prime: supports and coefficients.
-    budget.stage = "sparse: Berlekamp-Massey (first prime)";
-    let Some((r0, bms)) = first_sequences(blackbox, &mut budget, &mut rng, m, &q, tcap)? else {
+    let Some((supports, image)) =
+        first_image(blackbox, &mut budget, &mut rng, m, bounds, max_total)?
+    else {
         return Ok(None);
     };
-    budget.stage = "sparse: roots and exponents (first prime)";
-    let mut known: Vec<u64> = Vec::new();
-    let mut known_set = std::collections::HashSet::new();
-    let mut supports: Vec<Vec<Vec<u32>>> = Vec::with_capacity(m);
-    let mut image: Image = Vec::with_capacity(m);
-    for b in &bms {
-        if let Some(d) = budget.deadline {
-            if std::time::Instant::now() >= d {
-                return Err(budget.limit(Limit::Deadline));
-            }
-        }
-        let lam = b.characteristic();
-        if lam.first() == Some(&0) && b.l > 0 {
-            return Ok(None);
-        }
-        let Some(roots) = split_roots(&lam, p0, &known, &mut rng) else {
-            return Ok(None);
-        };
-        let mut exps = Vec::with_capacity(roots.len());
-        for &rho in &roots {
-            let Some(e) = exponents(rho, &q, &bounds.per_var, max_total) else {
-                return Ok(None);
-            };
-            exps.push(e);
-            if known_set.insert(rho) {
-                known.push(rho);
-            }
-        }
-        let Some(w) = transposed_vandermonde(&roots, &b.seq, p0) else {
-            return Ok(None);
-        };
-        let mut terms: Terms = Vec::with_capacity(roots.len());
-        for (e, wj) in exps.iter().zip(w) {
-            let Some(ir) = inv(monomial_value(&r0, e, p0), p0) else {
-                return Ok(None);
-            };
-            let c = mul(wj, ir, p0);
-            if c == 0 {
-                return Ok(None);
-            }
-            terms.push((e.clone(), c));
-        }
-        terms.sort();
-        supports.push(terms.iter().map(|(e, _)| e.clone()).collect());
-        image.push((terms, vec![(vec![0u32; nvars], 1)]));
-    }
     budget.degrees = supports
         .iter()
         .map(|s| (s.iter().map(|e| e.iter().sum()).max().unwrap_or(0), 0))
@@ -633,19 +835,9 @@ where
                     continue 'restart;
                 }
             }
-            let mut vals: Vec<Vec<u64>> = vec![Vec::with_capacity(tmax); m];
-            let mut pt = r.clone();
-            for _ in 0..tmax {
-                let Some(v) = call(blackbox, &mut budget, m, &pt, p)? else {
-                    continue 'restart;
-                };
-                for (col, x) in vals.iter_mut().zip(v) {
-                    col.push(x);
-                }
-                for (x, &si) in pt.iter_mut().zip(&s) {
-                    *x = mul(*x, si, p);
-                }
-            }
+            let Some(vals) = geometric_values(blackbox, &mut budget, m, &r, &s, tmax, p)? else {
+                continue 'restart;
+            };
             let mut out: Image = Vec::with_capacity(m);
             for ((sup, nd), v) in supports.iter().zip(&nodes).zip(&vals) {
                 let Some(w) = transposed_vandermonde(nd, v, p) else {

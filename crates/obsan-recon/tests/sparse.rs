@@ -1,7 +1,9 @@
 //! Sparse interpolation of polynomial vectors (`interpolate_polys_vec`):
 //! planted polynomials with rational coefficients recovered exactly, the
 //! same canonical form as `reconstruct_vec`'s; rational functions, holes in
-//! the black box and bounds too large never give a wrong answer.
+//! the black box and bounds too large never give a wrong answer; bounds
+//! whose largest monomial value `q^e` is past the first prime go by shifted
+//! sequences, with the same answers.
 
 mod common;
 
@@ -9,7 +11,7 @@ use common::{eval, eval_terms, is_canonical, same_function, Terms};
 use dashu_int::IBig;
 use obsan_recon::{interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options};
 use proptest::prelude::*;
-use proptest::test_runner::FileFailurePersistence;
+use proptest::test_runner::{FileFailurePersistence, TestCaseError};
 
 /// A sparse polynomial in `n` variables: up to `terms` terms, each exponent
 /// at most `deg`, coefficients small or up to ~2^100.
@@ -22,6 +24,38 @@ fn poly(n: usize, terms: usize, deg: u32) -> impl Strategy<Value = Terms> {
         ],
     );
     prop::collection::vec(term, 0..=terms)
+}
+
+/// Like [`poly`], with every term's total degree at most `total` (the
+/// largest exponents lowered one at a time until it fits) and coefficients
+/// up to ~2^100.
+fn poly_total(n: usize, terms: usize, deg: u32, total: u32) -> impl Strategy<Value = Terms> {
+    let term = (
+        prop::collection::vec(0..=deg, n),
+        prop_oneof![
+            1 => (-50i64..=50).prop_map(IBig::from),
+            2 => (any::<i64>(), any::<u64>(), any::<u32>())
+                .prop_map(|(a, b, c)| (IBig::from(a) << 96) + (IBig::from(b) << 32) + IBig::from(c)),
+        ],
+    )
+        .prop_map(move |(mut e, c)| {
+            while e.iter().sum::<u32>() > total {
+                let i = (0..e.len()).max_by_key(|&i| (e[i], i)).unwrap_or(0);
+                e[i] -= 1;
+            }
+            (e, c)
+        });
+    prop::collection::vec(term, 1..=terms)
+}
+
+/// Bounds of 8 variables, 12 each and total degree 30: the largest
+/// monomial value over the small primes, `19^12 17^12 13^6`, is far past
+/// the first prime (~2^62), so the exponents come from shifted sequences.
+fn past_prime_bounds() -> DegreeBounds {
+    DegreeBounds {
+        per_var: vec![12; 8],
+        total: Some(30),
+    }
 }
 
 /// Per variable the largest exponent of the terms with a non-zero
@@ -43,6 +77,48 @@ fn per_var(ps: &[Terms], n: usize) -> Vec<u32> {
         }
     }
     out
+}
+
+/// The black box of `nums` (integer coefficients) with a bad point at the
+/// calls numbered in `holes`: the right answer, or `None` only when every
+/// restart of some stage met a hole (at least three distinct ones).
+fn holes_give_the_answer_or_none(
+    n: usize,
+    nums: &[Terms],
+    holes: &[u64],
+    seed: u64,
+    bounds: &DegreeBounds,
+) -> Result<(), TestCaseError> {
+    let one: Terms = vec![(vec![0; n], IBig::ONE)];
+    let mut calls = 0u64;
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+        calls += 1;
+        if holes.contains(&calls) {
+            return Ok(None);
+        }
+        Ok(nums.iter().map(|a| eval(a, &one, x, p)).collect())
+    };
+    let opts = Options {
+        seed,
+        ..Options::default()
+    };
+    match interpolate_polys_vec(n, nums.len(), &mut bb, &opts, bounds).unwrap() {
+        Some(r) => {
+            for (f, a) in r.functions.iter().zip(nums) {
+                prop_assert!(same_function(f, a, &one), "{}", f);
+            }
+        }
+        None => {
+            prop_assert!(
+                holes
+                    .iter()
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len()
+                    >= 3
+            )
+        }
+    }
+    Ok(())
 }
 
 fn config() -> ProptestConfig {
@@ -118,35 +194,55 @@ proptest! {
         holes in prop::collection::vec(0u64..40, 1..4),
         seed in any::<u64>(),
     ) {
-        let m = nums.len();
-        let one: Terms = vec![(vec![0; n], IBig::ONE)];
-        let mut calls = 0u64;
-        let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
-            calls += 1;
-            if holes.contains(&calls) {
-                return Ok(None);
-            }
-            Ok(nums.iter().map(|a| eval(a, &one, x, p)).collect())
-        };
         let bounds = DegreeBounds { per_var: per_var(&nums, n), total: None };
+        holes_give_the_answer_or_none(n, &nums, &holes, seed, &bounds)?;
+    }
+
+    /// Past the prime (8 variables, total degree 30): planted polynomials
+    /// with coefficients up to ~2^100 over integers recovered exactly, in
+    /// canonical form, with the (slower) `reconstruct_vec`'s answer.
+    #[test]
+    fn past_the_prime_planted_vectors_are_recovered(
+        nums in prop::collection::vec(poly_total(8, 5, 12, 30), 1..=3),
+        dens in prop::collection::vec(prop_oneof![Just(1i64), 2i64..=1000, -1000i64..=-2], 3),
+        seed in any::<u64>(),
+    ) {
+        let (n, m) = (8, nums.len());
+        let den: Vec<Terms> = dens[..m].iter().map(|&d| vec![(vec![0; n], IBig::from(d))]).collect();
+        let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+            Ok(nums.iter().zip(&den).map(|(a, b)| eval(a, b, x, p)).collect())
+        };
         let opts = Options { seed, ..Options::default() };
-        match interpolate_polys_vec(n, m, &mut bb, &opts, &bounds).unwrap() {
-            Some(r) => {
-                for (f, a) in r.functions.iter().zip(&nums) {
-                    prop_assert!(same_function(f, a, &one), "{}", f);
-                }
-            }
-            // Only when every restart of some stage met a hole.
-            None => prop_assert!(holes.iter().collect::<std::collections::BTreeSet<_>>().len() >= 3),
+        let r = interpolate_polys_vec(n, m, &mut bb, &opts, &past_prime_bounds()).unwrap();
+        let r = r.expect("polynomials within the bounds are recognised");
+        for ((f, a), b) in r.functions.iter().zip(&nums).zip(&den) {
+            prop_assert!(same_function(f, a, b), "{}", f);
+            prop_assert!(is_canonical(f));
         }
+        prop_assert!(r.certificate.error_bound < 1e-60);
+        let dense = reconstruct_vec(n, m, &mut bb, &opts).unwrap();
+        prop_assert_eq!(&r.functions, &dense.functions);
+    }
+
+    /// Past the prime, holes anywhere (the first sequence, the shifted
+    /// ones, later primes, the checks): the right answer, or `None` when
+    /// every restart of some stage met one.
+    #[test]
+    fn past_the_prime_holes_restart_the_sequence(
+        nums in prop::collection::vec(poly_total(8, 4, 12, 30), 1..=2),
+        holes in prop::collection::vec(0u64..80, 1..4),
+        seed in any::<u64>(),
+    ) {
+        holes_give_the_answer_or_none(8, &nums, &holes, seed, &past_prime_bounds())?;
     }
 }
 
 /// Bounds whose largest monomial value `q^e` (here `2^62`) is not below
-/// the first prime: `None` before any black-box call.
+/// the first prime: the shifted sequences (one more per variable) find the
+/// exponents all the same.
 #[test]
-fn bounds_too_large_for_the_prime() {
-    let mut calls = 0;
+fn bounds_past_the_prime() {
+    let mut calls = 0u64;
     let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
         calls += 1;
         Ok(Some(vec![x[0] % p]))
@@ -155,11 +251,16 @@ fn bounds_too_large_for_the_prime() {
         per_var: vec![62],
         total: None,
     };
-    let r = interpolate_polys_vec(1, 1, &mut bb, &Options::default(), &bounds).unwrap();
-    assert!(r.is_none());
-    assert_eq!(calls, 0);
+    let r = interpolate_polys_vec(1, 1, &mut bb, &Options::default(), &bounds)
+        .unwrap()
+        .unwrap();
+    let x: Terms = vec![(vec![1], IBig::ONE)];
+    let one1: Terms = vec![(vec![0], IBig::ONE)];
+    assert!(same_function(&r.functions[0], &x, &one1));
+    assert_eq!(r.stats.points, calls);
     // With two variables of degree 31 and 19 it fits (2^31 3^19 ~ 2^61.1,
-    // the first prime is ~2^62), not with 31 and 20 (~2^62.7).
+    // the first prime is ~2^62), not with 31 and 20 (~2^62.7): the small
+    // primes' path, then the shifted one, the same answer at more points.
     let f: Terms = vec![
         (vec![31, 0], IBig::from(5)),
         (vec![0, 19], IBig::from(-3)),
@@ -181,11 +282,56 @@ fn bounds_too_large_for_the_prime() {
         per_var: vec![31, 20],
         total: None,
     };
-    assert!(
-        interpolate_polys_vec(2, 1, &mut bb2, &Options::default(), &big)
-            .unwrap()
-            .is_none()
-    );
+    let s = interpolate_polys_vec(2, 1, &mut bb2, &Options::default(), &big)
+        .unwrap()
+        .unwrap();
+    assert_eq!(s.functions, r.functions);
+    // 2 T + 3 points and the checks on the small primes' path, 2 T more
+    // (T = 3 terms, 2 variables) on the shifted one.
+    assert_eq!(s.stats.points, r.stats.points + 2 * 3);
+}
+
+/// Past the prime, a component with an exponent above its variable's
+/// bound, or a total degree above the total bound or `max_degree`: `None`
+/// (no power `c^e` within the bound matches, or the sum is checked), never
+/// a truncated answer.
+#[test]
+fn past_the_prime_degrees_above_the_bounds_are_refused() {
+    let bounds = past_prime_bounds();
+    let within: Terms = vec![
+        (vec![12, 12, 6, 0, 0, 0, 0, 0], IBig::from(3)),
+        (vec![0, 0, 0, 1, 0, 0, 0, 2], IBig::from(-1)),
+    ];
+    let per_var_above: Terms = vec![
+        (vec![13, 0, 0, 0, 0, 0, 0, 1], IBig::from(5)),
+        (vec![0, 1, 0, 0, 0, 0, 0, 0], IBig::ONE),
+    ];
+    let total_above: Terms = vec![
+        (vec![12, 12, 7, 0, 0, 0, 0, 0], IBig::from(5)),
+        (vec![0, 1, 0, 0, 0, 0, 0, 0], IBig::ONE),
+    ];
+    let one: Terms = vec![(vec![0; 8], IBig::ONE)];
+    for (bad, why) in [(&per_var_above, "per variable"), (&total_above, "total")] {
+        let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+            Ok(Some(vec![eval_terms(&within, x, p), eval_terms(bad, x, p)]))
+        };
+        let r = interpolate_polys_vec(8, 2, &mut bb, &Options::default(), &bounds).unwrap();
+        assert!(r.is_none(), "{why}");
+    }
+    let mut bb = |x: &[u64], p: u64| -> Result<Option<Vec<u64>>, ()> {
+        Ok(Some(vec![eval_terms(&within, x, p)]))
+    };
+    let r = interpolate_polys_vec(8, 1, &mut bb, &Options::default(), &bounds)
+        .unwrap()
+        .unwrap();
+    assert!(same_function(&r.functions[0], &within, &one));
+    let low = Options {
+        max_degree: 29,
+        ..Options::default()
+    };
+    assert!(interpolate_polys_vec(8, 1, &mut bb, &low, &bounds)
+        .unwrap()
+        .is_none());
 }
 
 /// A polynomial whose degree exceeds the bounds it is given: `None` (a
