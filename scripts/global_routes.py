@@ -9,8 +9,10 @@ model and exits 1 on a disagreement.
 
 With `--auto-against OTHER` it instead runs `--route auto` with both binaries
 and compares every variable's verdict (parameters and states): exit 1 when
-`--obsan` loses an answer OTHER gives or differs from it (session 32: the early
-Taylor attempt must lose nothing against main's binary).
+`--obsan` loses an answer (or a variable's verdict) OTHER gives or differs from
+it (session 32: the early Taylor attempt must lose nothing against main's
+binary); verdicts `--obsan` adds (session 36: the initial states after the io
+route) are reported as `same, more`.
 """
 import argparse, glob, json, subprocess, sys, time
 
@@ -44,8 +46,13 @@ def auto_against(a, files):
             st = "both fail" if n is None else "new answer (" + n["route"] + ")"
         elif n is None:
             st, lost = "LOST", lost + 1
-        elif verdicts(o) != verdicts(n):
+        elif any(verdicts(o)[k] != verdicts(n).get(k, verdicts(o)[k]) for k in verdicts(o)):
             st, diff = "DIFFERENT", diff + 1
+        elif not set(verdicts(o)) <= set(verdicts(n)):
+            st, lost = "LOST (variables)", lost + 1
+        elif set(verdicts(n)) != set(verdicts(o)):
+            # Session 36: auto counts the initial states after the io route.
+            st = "same, more (" + n["route"] + ")"
         else:
             st = "same (" + n["route"] + ")"
         print(f"{f.split('/')[-1]:28} {st:28} other {to:6.2f} s  this {tn:6.2f} s")

@@ -130,6 +130,25 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             fallback: r.fallback.clone(),
             solutions: r.solutions,
             solutions_at_most: r.solutions_at_most,
+            states_after_io: r
+                .states_after_io
+                .as_ref()
+                .map(|st| json::StatesAfterIoJson {
+                    counted: st.counted,
+                    equations: st.equations,
+                    error_bound: st.error_bound,
+                    fixed_params: st.fixed.clone(),
+                    output_orders: st
+                        .output_orders
+                        .iter()
+                        .map(|(n, k)| json::OutputOrder {
+                            order: *k,
+                            output: n.clone(),
+                        })
+                        .collect(),
+                    unknowns: st.unknowns,
+                    why_not: st.why_not.clone(),
+                }),
             system: nf.name.clone(),
             unknowns: r.unknowns,
             variables,
@@ -164,8 +183,39 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
                 )
             })
             .collect();
+        // Under --route auto the initial states follow (states_after_io).
+        let states = match &r.states_after_io {
+            Some(st) if st.counted => {
+                let orders: Vec<String> = st
+                    .output_orders
+                    .iter()
+                    .map(|(n, k)| format!("{n} to order {k}"))
+                    .collect();
+                format!(
+                    " for the parameters; the initial states by the Taylor route with {} known: orders {}, {} unknowns, {} equations",
+                    if st.fixed.is_empty() {
+                        "no parameter".to_string()
+                    } else {
+                        format!("the globally identifiable {}", st.fixed.join(", "))
+                    },
+                    orders.join(", "),
+                    st.unknowns,
+                    st.equations
+                )
+            }
+            Some(st) => format!(
+                "; parameters only, initial states not counted (the Taylor route{}: {})",
+                if st.fixed.is_empty() {
+                    String::new()
+                } else {
+                    format!(" with {} known", st.fixed.join(", "))
+                },
+                st.why_not.as_deref().unwrap_or("no answer")
+            ),
+            None => "; parameters only, initial states not assessed".to_string(),
+        };
         o.push_str(&format!(
-            "route: input-output relations ({}); parameters only, initial states not assessed\n",
+            "route: input-output relations ({}){states}\n",
             sizes.join("; ")
         ));
         let bound = r
@@ -235,7 +285,8 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         };
         o.push_str(&format!("  {:w$}  {kind}  {text}{angle}\n", v.name));
     }
-    let scope = if r.route == Route::InputOutput && r.all_local {
+    let states_counted = r.states_after_io.as_ref().is_some_and(|s| s.counted);
+    let scope = if r.route == Route::InputOutput && r.all_local && !states_counted {
         "parameter values"
     } else if r.all_local {
         "(params, initial states)"
@@ -325,6 +376,16 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             ));
         }
         o.push_str("probabilistic: the counts are the agreement of the two runs (no degree bound on the random points yet; docs/engine.md, \"Input-output route\")\n");
+        if let Some(st) = r.states_after_io.as_ref().filter(|s| s.counted) {
+            let bound = if st.error_bound < 1.0 {
+                format!("wrong with probability <= {:.1e}", st.error_bound)
+            } else {
+                "no useful bound".to_string()
+            };
+            o.push_str(&format!(
+                "the initial states' count: SIAN's degree bounds on the smaller Taylor system, {bound}, given the parameters' counts (a parameter found global is fixed at the point's value)\n"
+            ));
+        }
     } else {
         let bound = if r.error_bound < 1.0 {
             format!("wrong with probability <= {:.1e}", r.error_bound)

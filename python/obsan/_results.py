@@ -385,13 +385,21 @@ class Global(Result):
     by pi or is not decided on the angles; not symmetries of the model."""
     route: str = "taylor"
     """``"taylor"`` (parameters and initial states), ``"input-output"`` (the
-    outputs' input-output relations: parameters only) or ``"lie"`` (the iterated
-    Lie derivatives: indistinguishable for every input)."""
+    outputs' input-output relations: parameters, and the initial states when
+    ``states_counted_after_io``) or ``"lie"`` (the iterated Lie derivatives:
+    indistinguishable for every input)."""
     fallback: Optional[str] = None
     """Why the Taylor route did not answer, when ``route`` fell back; else None."""
     multi_experiment: bool = False
     """The counts are of multi-experiment identifiability only (asked for, and some
     input-output relation has a zero Wronskian: one experiment may leave more values)."""
+    states_counted_after_io: bool = False
+    """``route`` is ``"input-output"`` (under the default route) and the initial
+    states were counted after it, by the Taylor route with ``fixed_params`` known:
+    ``variables`` then lists them too."""
+    fixed_params: List[str] = field(default_factory=list)
+    """The parameters the input-output relations found globally identifiable, fixed at
+    the random point's values for the initial states' count."""
 
     @classmethod
     def of(cls, raw: Dict[str, Any]) -> "Global":
@@ -416,6 +424,8 @@ class Global(Result):
             route=str(raw.get("route") or "taylor"),
             fallback=raw.get("fallback"),
             multi_experiment=bool(raw.get("multi_experiment", False)),
+            states_counted_after_io=bool((raw.get("states_after_io") or {}).get("counted", False)),
+            fixed_params=[str(p) for p in (raw.get("states_after_io") or {}).get("fixed_params") or []],
         )
 
 

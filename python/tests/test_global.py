@@ -99,3 +99,18 @@ def test_the_lie_route_counts_a_cart_for_every_input():
     assert g.route == "lie" and g.fallback is None
     assert {v.name: v.values for v in g.variables} == {"a": 2, "x": 2}
     assert g.solutions == 2
+
+
+def test_the_default_route_counts_the_states_after_the_input_output_route():
+    # SI.jl's Goodwin oscillator (its own test's verdicts, in the file): the Taylor
+    # system is long, so the relations count the params; the initial states follow
+    # with b, c, sigma known. SI.jl's identifiable functions with states
+    # (benchmarking/IdentifiableFunctions/results/Goodwin oscillator) hold x1 and x4,
+    # and no function of x2 or x3 alone.
+    g = obsan.load(SYSTEMS / "global" / "sijl_tests" / "goodwin.sys").global_identifiability()
+    assert g.route == "input-output" and g.states_counted_after_io
+    assert g.fixed_params == ["b", "c", "sigma"]
+    verdicts = {(v.name, v.kind): v.verdict for v in g.variables}
+    assert verdicts[("x1", "state")] == verdicts[("x4", "state")] == "global"
+    assert verdicts[("x2", "state")] == verdicts[("x3", "state")] == "not identifiable"
+    assert verdicts[("beta", "param")] == "local"

@@ -51,21 +51,49 @@ pub struct Global {
     pub restriction: Option<String>,
     /// The route that answered: `taylor` (SIAN's Taylor system: parameters
     /// and initial states), `input-output` (the outputs' input-output
-    /// relations: parameters only, `variables` lists no state) or `lie` (the
-    /// iterated Lie derivatives: parameters and initial states
-    /// indistinguishable for every input; `order` the longest word).
+    /// relations: parameters; `variables` lists the states only when
+    /// `states_after_io.counted`) or `lie` (the iterated Lie derivatives:
+    /// parameters and initial states indistinguishable for every input;
+    /// `order` the longest word).
     pub route: String,
     /// The number of solutions, or null when not counted.
     pub solutions: Option<usize>,
     /// `solutions` is an upper bound: an angle output was read through its
     /// tangent (modulo pi) and the symmetries found do not settle the count.
     pub solutions_at_most: bool,
+    /// With `route` `input-output` under `--route auto`: the initial states
+    /// counted after it by the Taylor route with the parameters found
+    /// globally identifiable fixed; null on the other routes and under
+    /// `--route io`.
+    pub states_after_io: Option<StatesAfterIoJson>,
     /// The system's name.
     pub system: String,
     /// The number of unknowns.
     pub unknowns: usize,
     /// Each variable's verdict.
     pub variables: Vec<GlobalVariable>,
+}
+
+/// The initial states after the input-output route (`--route auto`).
+#[derive(Serialize, Deserialize, JsonSchema, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct StatesAfterIoJson {
+    /// The states were counted (`variables` lists them); else `why_not`.
+    pub counted: bool,
+    /// The number of equations of that Taylor system.
+    pub equations: usize,
+    /// SIAN's probability bound on that count, given the parameters'
+    /// verdicts (which carry none); 1 means no bound.
+    pub error_bound: f64,
+    /// The parameters fixed at the point's values: those the relations
+    /// found globally identifiable.
+    pub fixed_params: Vec<String>,
+    /// Each output's Taylor order in that system.
+    pub output_orders: Vec<OutputOrder>,
+    /// The number of unknowns of that Taylor system.
+    pub unknowns: usize,
+    /// Why the states were not counted, or null.
+    pub why_not: Option<String>,
 }
 
 /// How the count reads one output.

@@ -27,7 +27,8 @@ pub use analysis::{
     SymCertificate, Symmetries, Verify,
 };
 pub use global::{
-    Global, GlobalVariable, OutputFormJson, OutputOrder, SimulateSys, VariableKind, Verdict,
+    Global, GlobalVariable, OutputFormJson, OutputOrder, SimulateSys, StatesAfterIoJson,
+    VariableKind, Verdict,
 };
 pub use import::{Import, ImportedModel};
 pub use modes::{

@@ -95,7 +95,7 @@ pub mod multi_experiment {
 pub mod global_id {
     pub use crate::global::{
         global_identifiability, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable,
-        Identifiability, IoSize, OutputForm, Route,
+        Identifiability, IoSize, OutputForm, Route, StatesAfterIo,
     };
 }
 

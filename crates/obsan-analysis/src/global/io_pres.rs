@@ -87,13 +87,15 @@ impl Candidate {
 
 /// How one priority's relations are looked for: the ansatz up to `cap`
 /// monomials, then (when `eliminate`) elimination within `max_work`
-/// multiply-adds and `max_bytes`.
+/// multiply-adds and `max_bytes`, keeping a relation of at most
+/// `max_support` monomials.
 #[derive(Clone, Copy)]
 struct Attempt {
     eliminate: bool,
     cap: usize,
     max_work: u64,
     max_bytes: usize,
+    max_support: usize,
 }
 
 /// While priorities are compared: the ansatz's cap (a kernel near the full
@@ -138,6 +140,7 @@ fn relations_under(
                         ..opts.gb_budget()
                     };
                     relation_by_elimination(&io, theta, &orders, i, budget)?
+                        .filter(|r| r.support.len() <= t.max_support)
                 } else {
                     None
                 };
@@ -217,17 +220,28 @@ pub(super) fn presentation(
         cap,
         max_work: u64::MAX,
         max_bytes: usize::MAX,
+        max_support: usize::MAX,
     };
     if all.len() == 1 {
         // One output (or one priority asked for): nothing to compare.
         let c = relations_under(m, opts, theta, rng, full, &all[0])?;
         return Ok(c.done(theta, rng));
     }
+    // The search eliminates also when the caller does not (`--route
+    // auto`): its elimination is bounded, and a relation it finds is kept
+    // only within the small ansatz's size, so the reconstruction costs no
+    // more than the ansatz's relations would (HIV's reversed priority: 22 +
+    // 61 monomials, whose dense ansatz passes the cap).
     let search = Attempt {
-        eliminate,
+        eliminate: true,
         cap: cap.min(SEARCH_CAP),
         max_work: SEARCH_WORK,
         max_bytes: SEARCH_BYTES,
+        max_support: if eliminate {
+            usize::MAX
+        } else {
+            cap.min(SEARCH_CAP)
+        },
     };
     let mut found: Vec<Candidate> = Vec::new();
     for perm in all.iter().take(2) {

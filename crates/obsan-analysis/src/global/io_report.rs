@@ -77,5 +77,6 @@ pub(super) fn io_route(
         fallback,
         multi_experiment: c.sizes.iter().any(|s| !s.single),
         io_sizes: c.sizes,
+        states_after_io: None,
     })
 }

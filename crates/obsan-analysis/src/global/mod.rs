@@ -40,7 +40,9 @@ use model::zmodel;
 pub use outputs::OutputForm;
 use run::Run;
 use types::err;
-pub use types::{DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
+pub use types::{
+    DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route, StatesAfterIo,
+};
 
 /// Global identifiability of every parameter and initial state (SIAN's
 /// route; the certificate and the bounds are in docs/engine.md): two
@@ -63,42 +65,41 @@ pub fn global_identifiability(
         };
     }
     match opts.route {
-        Route::Taylor => taylor_route(nf, opts, false, true),
-        Route::Lie => taylor_route(nf, opts, true, false),
+        Route::Taylor => taylor_route(nf, opts, false, true, &[]),
+        Route::Lie => taylor_route(nf, opts, true, false, &[]),
         Route::InputOutput => io_report::io_route(nf, opts, None, true),
         Route::Auto => auto_route(nf, opts),
     }
 }
 
-/// `--route auto` (issue 36): the Taylor route first under a bound on its
-/// Gröbner basis's work ([`io_choice::EARLY_WORK`]); past it, the
-/// input-output route; only when that one does not answer, the Taylor
-/// route again without the bound, then the Lie route (lie.rs: no Taylor
-/// unknowns, initial states counted too, every input's question). The
-/// early stop costs at most the initial states' verdicts of a system whose
-/// Gröbner basis needs more work than the bound while the io route answers
-/// (Goodwin, Lincomp1, Lincomp2 among the 64 SI.jl benchmarks: their
-/// states by `--route taylor`). Its input-output route stops at the dense
-/// ansatz's cap: a relation past it (found by elimination under `--route
-/// io`, io_elim.rs) may keep the reconstruction busy for minutes, with no
-/// bound yet to stop it early and deterministically.
+/// `--route auto` (issue 36): the Taylor route first under a small bound on
+/// its Gröbner basis's work ([`io_choice::FIRST_WORK`]); past it, the
+/// input-output route, and when that one answers, the initial states by the
+/// Taylor route with the params it found global fixed (`states_after_io`,
+/// under [`io_choice::EARLY_WORK`]); only when the io route does not answer,
+/// the Taylor route again without the bound, then the Lie route (lie.rs: no
+/// Taylor unknowns, initial states counted too, every input's question).
+/// Its input-output route stops at the dense ansatz's cap: a relation past
+/// it (found by elimination under `--route io`, io_elim.rs) may keep the
+/// reconstruction busy for minutes, with no bound yet to stop it early and
+/// deterministically.
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
-    let early = GlobalOptions {
-        max_work: opts.max_work.min(io_choice::EARLY_WORK),
+    let first = GlobalOptions {
+        max_work: opts.max_work.min(io_choice::FIRST_WORK),
         ..opts.clone()
     };
-    let why = match taylor_route(nf, &early, false, true) {
+    let why = match taylor_route(nf, &first, false, true, &[]) {
         Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
         r => return r,
     };
-    let stopped = io_choice::stopped_early(&why) && early.max_work < opts.max_work;
+    let stopped = io_choice::stopped_early(&why) && first.max_work < opts.max_work;
     let reason = if stopped {
         io_choice::early_reason(&why)
     } else {
         why.clone()
     };
     let io_err = match io_report::io_route(nf, opts, Some(reason.clone()), false) {
-        Ok(r) => return Ok(r),
+        Ok(r) => return states_after_io(nf, opts, r, stopped),
         Err(e) => e,
     };
     // The unbounded Taylor attempt (the deadline passed: no time for it).
@@ -108,7 +109,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         // parallel attempt would only add its time to the refusal
         // (EAIHRD: 11.8 s -> 20.5 s); JAK_STAT, the one SI.jl model this
         // attempt answers, holds 43 MB.
-        match taylor_route(nf, opts, false, false) {
+        match taylor_route(nf, opts, false, false, &[]) {
             Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
             r => return r,
         }
@@ -116,7 +117,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         reason
     };
     let why = format!("{why}; the input-output route: {io_err}");
-    match taylor_route(nf, opts, true, false) {
+    match taylor_route(nf, opts, true, false, &[]) {
         Ok(mut r) => {
             r.fallback = Some(why);
             Ok(r)
@@ -125,23 +126,142 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     }
 }
 
+/// The initial states after the input-output route (`--route auto`): the
+/// Taylor route on the model whose globally identifiable params (by the
+/// relations) are known constants, given random values at the point as
+/// every constant. Why no solution is lost: on a generic fibre such a param
+/// takes one value, the point's, so the fibre lies in the slice where it
+/// equals it; the Taylor system of the smaller model at the same point is
+/// that slice. Its orders are that model's own (docs/engine.md, "Taylor
+/// orders", applied to it), lower than the whole model's (SI.jl's Goodwin:
+/// 18 unknowns instead of 43, answered in milliseconds where the whole
+/// system's basis needs 9.3e9 multiply-adds). The other params' counts must
+/// agree with the relations' (two routes, two independent computations);
+/// a disagreement is an error, never an answer. When the attempt does not
+/// answer within [`io_choice::EARLY_WORK`] (or `stopped` is false and
+/// nothing is fixed: the same system already failed), the io route's answer
+/// stands, saying why the states were not counted.
+fn states_after_io(
+    nf: &mut NormalForm,
+    opts: &GlobalOptions,
+    io: GlobalReport,
+    stopped: bool,
+) -> Result<GlobalReport, AnalysisError> {
+    let fixed: Vec<bool> = io
+        .variables
+        .iter()
+        .map(|v| v.verdict == Identifiability::Global)
+        .collect();
+    let names: Vec<String> = io
+        .variables
+        .iter()
+        .filter(|v| v.verdict == Identifiability::Global)
+        .map(|v| v.name.clone())
+        .collect();
+    let mut io = io;
+    let skipped = |mut io: GlobalReport, why: String| {
+        io.states_after_io = Some(StatesAfterIo {
+            fixed: names.clone(),
+            counted: false,
+            output_orders: Vec::new(),
+            unknowns: 0,
+            equations: 0,
+            error_bound: 1.0,
+            why_not: Some(why),
+        });
+        Ok(io)
+    };
+    if !stopped && names.is_empty() {
+        return skipped(
+            io,
+            "the Taylor system is the one that did not answer".into(),
+        );
+    }
+    let states_opts = GlobalOptions {
+        max_work: opts.max_work.min(io_choice::EARLY_WORK),
+        ..opts.clone()
+    };
+    let t = match taylor_route(nf, &states_opts, false, true, &fixed) {
+        Ok(t) => t,
+        Err(e) => return skipped(io, e.to_string()),
+    };
+    // The params: the relations' verdicts and the Taylor count's agree.
+    for (v, w) in io.variables.iter().zip(&t.variables) {
+        if v.name != w.name || v.verdict != w.verdict {
+            return Err(err(format!(
+                "global: the input-output relations and the Taylor count of the initial states disagree on `{}` (a non-generic point); try another --seed",
+                v.name
+            )));
+        }
+    }
+    io.states_after_io = Some(StatesAfterIo {
+        fixed: names,
+        counted: true,
+        output_orders: t.output_orders,
+        unknowns: t.unknowns,
+        equations: t.equations,
+        error_bound: t.error_bound,
+        why_not: None,
+    });
+    // The params' verdicts agree; the states', the joint count and the
+    // maps are the Taylor count's (over params and initial states). The
+    // error bound stays the io route's (none): the states' count assumes
+    // the params' verdicts.
+    io.variables = t.variables;
+    io.solutions = t.solutions;
+    io.all_local = t.all_local;
+    io.maps = t.maps;
+    io.group_order = t.group_order;
+    Ok(io)
+}
+
 /// SIAN's route, or (`lie`) the Lie route (lie.rs): the same counts and
-/// report on another polynomial system.
+/// report on another polynomial system. The params marked in `fixed` (the
+/// input-output route's global ones, `states_after_io`) are known constants
+/// of the Taylor system, each reported as taking one value.
 fn taylor_route(
     nf: &mut NormalForm,
     opts: &GlobalOptions,
     lie: bool,
     parallel: bool,
+    fixed: &[bool],
 ) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let kmax = opts.max_order + 2;
     let mut results = Vec::new();
+    let any_fixed = fixed.iter().any(|&f| f);
+    let fixed_model;
+    let mt = if any_fixed {
+        fixed_model = m.with_fixed_params(fixed);
+        &fixed_model
+    } else {
+        &m
+    };
     if lie {
         results = lie::lie_counts(&m, &mut nf.ctx, &primes, opts)?;
     }
     if !lie {
-        results = taylor_runs(&m, &primes, kmax, opts, parallel)?;
+        results = taylor_runs(mt, &primes, kmax, opts, parallel)?;
+    }
+    if any_fixed {
+        // Back to every param (params then states, as the counts are
+        // ordered): a fixed one takes its one value.
+        let np_t = mt.param_vars.len();
+        for r in results.iter_mut() {
+            let mut rest = r.per_var[..np_t].iter();
+            let mut per: Vec<Option<usize>> = (0..m.param_vars.len())
+                .map(|i| {
+                    if fixed.get(i).copied().unwrap_or(false) {
+                        Some(1)
+                    } else {
+                        rest.next().copied().flatten()
+                    }
+                })
+                .collect();
+            per.extend_from_slice(&r.per_var[np_t..]);
+            r.per_var = per;
+        }
     }
     let (a, b) = (&results[0], &results[1]);
     if a.per_var != b.per_var || a.joint != b.joint || a.orders != b.orders {
@@ -156,7 +276,7 @@ fn taylor_route(
     let bounds = if lie {
         (0.0, 0.0, 1.0)
     } else {
-        error_bounds(&m, &results, &primes)
+        error_bounds(mt, &results, &primes)
     };
     // Names: params then states, as the counts are ordered.
     let names: Vec<(String, bool)> = nf.state[nx..]
@@ -286,6 +406,7 @@ fn taylor_route(
         fallback: None,
         io_sizes: Vec::new(),
         multi_experiment: false,
+        states_after_io: None,
     })
 }
 

@@ -98,3 +98,27 @@ pub(super) fn zmodel(nf: &mut NormalForm) -> Result<ZModel, AnalysisError> {
         outputs,
     })
 }
+
+impl ZModel {
+    /// The model with the params marked in `fixed` made known constants
+    /// (given random values at the point, as every constant): the Taylor
+    /// system of the others, for the initial states' count after the
+    /// input-output route (mod.rs, `states_after_io`). A param that takes
+    /// one value on every generic fibre is constant on it, so fixing it at
+    /// the point's value removes no solution.
+    pub(super) fn with_fixed_params(&self, fixed: &[bool]) -> ZModel {
+        let mut m = self.clone();
+        let nx = self.dyn_vars.len();
+        m.param_vars.clear();
+        m.angle.truncate(nx);
+        for (i, &v) in self.param_vars.iter().enumerate() {
+            if fixed.get(i).copied().unwrap_or(false) {
+                m.const_vars.push(v);
+            } else {
+                m.param_vars.push(v);
+                m.angle.push(self.angle[nx + i]);
+            }
+        }
+        m
+    }
+}

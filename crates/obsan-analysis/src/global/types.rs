@@ -211,6 +211,32 @@ pub struct GlobalReport {
     /// leave more values. False when every relation's Wronskian is non-zero
     /// (the counts are then single-experiment ones too).
     pub multi_experiment: bool,
+    /// `--route auto` when the input-output route answered: the initial
+    /// states counted after it (mod.rs, `states_after_io`). None on the
+    /// other routes and under `--route io`.
+    pub states_after_io: Option<StatesAfterIo>,
+}
+
+/// The initial states after the input-output route (`--route auto`): the
+/// Taylor route on the model whose params the relations found globally
+/// identifiable are known constants at random values. Every generic fibre
+/// holds one value of each, so fixing them removes no solution, and the
+/// system is far smaller (SI.jl's Goodwin: 18 unknowns instead of 43).
+#[derive(Clone, Debug)]
+pub struct StatesAfterIo {
+    /// The params fixed (the relations' global ones), in the model's order.
+    pub fixed: Vec<String>,
+    /// The states were counted (`variables` lists them); else `why_not`.
+    pub counted: bool,
+    /// That Taylor system's order per output, its unknowns and equations.
+    pub output_orders: Vec<(String, usize)>,
+    pub unknowns: usize,
+    pub equations: usize,
+    /// SIAN's bound on that Taylor count (docs/engine.md), given the
+    /// params' verdicts, which carry none: 1 means no bound.
+    pub error_bound: f64,
+    /// Why the states were not counted (the Taylor attempt's error).
+    pub why_not: Option<String>,
 }
 
 /// The memory budget of a term budget, as every engine stage counts it.
