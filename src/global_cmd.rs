@@ -177,8 +177,19 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             .iter()
             .zip(&r.io_sizes)
             .map(|((n, _), s)| {
+                // A generating part of the coefficients settled the count
+                // (docs/engine.md, "Input-output route", step 3).
+                let part = if s.support > 1 && s.reconstructed + 1 < s.support {
+                    format!(
+                        ", {} of its {} coefficients reconstructed (a part that generates the parameters' field)",
+                        s.reconstructed,
+                        s.support - 1
+                    )
+                } else {
+                    String::new()
+                };
                 format!(
-                    "{n}: order {}, degree {} in {} jets, {} monomials",
+                    "{n}: order {}, degree {} in {} jets, {} monomials{part}",
                     s.order, s.degree, s.variables, s.support
                 )
             })

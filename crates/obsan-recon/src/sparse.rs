@@ -55,6 +55,14 @@ pub struct DegreeBounds {
     pub total: Option<u32>,
 }
 
+impl DegreeBounds {
+    /// How many monomials these bounds allow (saturating): an upper bound
+    /// on a polynomial's terms, and so on the points its interpolation takes.
+    pub fn monomials(&self) -> usize {
+        monomials_within(self)
+    }
+}
+
 /// The first `n` primes 2, 3, 5, ...
 fn small_primes(n: usize) -> Vec<u64> {
     let mut out: Vec<u64> = Vec::with_capacity(n);

@@ -44,6 +44,9 @@ pub struct IoSize {
     /// The relation's monomials are linearly independent along a generic
     /// output (a non-zero Wronskian): one experiment fixes its coefficients.
     pub single: bool,
+    /// Normalised coefficients reconstructed: `support - 1`, or fewer when
+    /// a generating part settled the count (io_count.rs, `generating_part`).
+    pub reconstructed: usize,
 }
 
 /// The route's answer on the parameters.
@@ -99,8 +102,10 @@ pub(super) fn io_count_under(
     let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
     let pres = presentation(m, opts, &theta, &mut rng, (eliminate, cap), only)?;
     let (mp, perm) = (&pres.model, &pres.perm);
-    let mut fns: Vec<Rational> = Vec::new();
     let mut sizes: Vec<(usize, IoSize)> = Vec::new();
+    // Per relation, its coefficients: first a generating part where one is
+    // far simpler than the whole (`Part::Generating`), else all of them.
+    let mut coeffs: Vec<Option<Coefficients>> = Vec::new();
     for (i, (rel, &single)) in pres.rels.iter().zip(&pres.single).enumerate() {
         let out = perm[i];
         if !single && !opts.multi_experiment {
@@ -109,51 +114,99 @@ pub(super) fn io_count_under(
                 out + 1
             )));
         }
-        let mut size = IoSize {
-            order: pres.orders[i],
-            variables: rel.vars.len(),
-            degree: rel.degree,
-            ansatz: rel.ansatz,
-            support: rel.support.len(),
-            points: 0,
-            terms: 0,
-            max_degree: 0,
-            recon_error_bound: 0.0,
-            single,
-        };
+        sizes.push((
+            out,
+            IoSize {
+                order: pres.orders[i],
+                variables: rel.vars.len(),
+                degree: rel.degree,
+                ansatz: rel.ansatz,
+                support: rel.support.len(),
+                points: 0,
+                terms: 0,
+                max_degree: 0,
+                recon_error_bound: 0.0,
+                single,
+                reconstructed: 0,
+            },
+        ));
         // A monomial relation (`y' = 0`: Treatment's constant N) has no
         // coefficient to reconstruct and constrains no parameter.
-        if rel.support.len() > 1 {
-            let (r, points) = reconstruct(mp, &pres.orders, i, &rel.support, opts, seed)?;
-            size.points = points;
-            size.terms = r
-                .functions
-                .iter()
-                .map(|f| f.num().terms().len() + f.den().terms().len())
-                .sum();
-            size.max_degree = r
-                .functions
-                .iter()
-                .map(|f| f.num().degree().max(f.den().degree()))
-                .max()
-                .unwrap_or(0);
-            size.recon_error_bound = r.certificate.error_bound;
-            fns.extend(r.functions);
+        if rel.support.len() < 2 {
+            coeffs.push(None);
+            continue;
         }
-        sizes.push((out, size));
+        let c = reconstruct(
+            mp,
+            &pres.orders,
+            i,
+            &rel.support,
+            opts,
+            seed,
+            Part::Generating,
+        )?;
+        coeffs.push(Some(c));
+    }
+    // Two independent points and primes must agree, as on the Taylor route.
+    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
+    let counts = |coeffs: &[Option<Coefficients>]| {
+        let fns: Vec<Rational> = coeffs
+            .iter()
+            .flatten()
+            .flat_map(|c| c.r.functions.iter().cloned())
+            .collect();
+        let a = count(&fns, np, opts, seed, primes[0])?;
+        let b = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
+        if a != b {
+            return Err(err(
+                "global (io): two independent random points disagree on the counts (a non-generic point); try another --seed",
+            ));
+        }
+        Ok(a)
+    };
+    let (mut per_param, mut joint) = counts(&coeffs)?;
+    // A part answers for the whole when every parameter is globally
+    // identifiable or not locally identifiable over it (`generating_part`);
+    // a count above 1 may be larger over a part: all the coefficients then.
+    let parted = coeffs.iter().flatten().any(|c| c.part.is_some());
+    if parted && per_param.iter().any(|k| matches!(k, Some(k) if *k > 1)) {
+        for (i, c) in coeffs.iter_mut().enumerate() {
+            if c.as_ref().is_some_and(|c| c.part.is_some()) {
+                let spent = c.as_ref().map_or(0, |c| c.points);
+                let mut all = reconstruct(
+                    mp,
+                    &pres.orders,
+                    i,
+                    &pres.rels[i].support,
+                    opts,
+                    seed,
+                    Part::All,
+                )?;
+                all.points += spent;
+                *c = Some(all);
+            }
+        }
+        (per_param, joint) = counts(&coeffs)?;
+    }
+    for ((_, size), c) in sizes.iter_mut().zip(&coeffs) {
+        let Some(c) = c else { continue };
+        let f = &c.r.functions;
+        size.points = c.points;
+        size.terms = f
+            .iter()
+            .map(|f| f.num().terms().len() + f.den().terms().len())
+            .sum();
+        size.max_degree = f
+            .iter()
+            .map(|f| f.num().degree().max(f.den().degree()))
+            .max()
+            .unwrap_or(0);
+        size.recon_error_bound = c.r.certificate.error_bound;
+        size.reconstructed = f.len();
     }
     // The sizes in the outputs' own order.
     sizes.sort_by_key(|s| s.0);
     let sizes: Vec<IoSize> = sizes.into_iter().map(|s| s.1).collect();
-    // Two independent points and primes must agree, as on the Taylor route.
-    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
-    let (per_param, joint) = count(&fns, np, opts, seed, primes[0])?;
-    let again = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
-    if again != (per_param.clone(), joint) {
-        return Err(err(
-            "global (io): two independent random points disagree on the counts (a non-generic point); try another --seed",
-        ));
-    }
     Ok(IoCounts {
         per_param,
         joint,
@@ -171,7 +224,8 @@ pub(super) fn reconstruct(
     support: &[Vec<u32>],
     opts: &GlobalOptions,
     seed: u64,
-) -> Result<(obsan_recon::Reconstruction, u64), AnalysisError> {
+    want: Part,
+) -> Result<Coefficients, AnalysisError> {
     let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
     let mut calls = 0u64;
     // The kernel normalised by its last coefficient (which is 1).
@@ -190,7 +244,14 @@ pub(super) fn reconstruct(
         io.on_support(pt, orders, i, support, rng)
     };
     let np = m.param_vars.len();
-    let (j, alpha, axes) = normalisation(np, support.len(), &mut coeffs, seed)?;
+    // The axis lines' base point (module `normalisation`).
+    let p0 = obsan_recon::PRIMES[0];
+    let mut base_rng = Rng::new(seed ^ 0xde40);
+    let base: Vec<u64> = (0..np).map(|_| elem(&mut base_rng, p0)).collect();
+    let (j, alpha, axes) = normalisation(np, support.len(), &mut coeffs, &base)?;
+    // The quotients' Jacobian at the base point, from the same axis samples.
+    let jac = axes.as_ref().and_then(|fr| axis_jacobian(fr, &base, p0));
+    let per_axis = axes.as_ref().map(|fr| axis_degrees(fr, &alpha));
     let bounds = axes.and_then(|fr| polynomial_bounds(&fr, &alpha));
     // Divided by a coefficient that is a monomial in the parameters and
     // scaled by their monomial denominators, the coefficients are (mostly)
@@ -228,13 +289,65 @@ pub(super) fn reconstruct(
     // alone put HIV's 10 parameters' largest monomial value `prod q_i^d_i`
     // past the prime (7e20), their total degree (a few) far below it. A
     // denominator along the line proves a quotient is no polynomial.
-    let bounds = match bounds {
-        Some(mut b) => line_degree(&mut bb, np, support.len() - 1, seed)?.map(|d| {
-            b.total = Some(d);
-            b
-        }),
+    let degs = match bounds {
+        Some(_) => line_degrees(&mut bb, np, support.len() - 1, seed)?,
         None => None,
     };
+    let bounds = match (bounds, &degs) {
+        (Some(mut b), Some(d)) => {
+            b.total = Some(d.iter().copied().max().unwrap_or(0));
+            Some(b)
+        }
+        _ => None,
+    };
+    // A part first (`Part::Generating`): the simplest quotients whose
+    // Jacobian has the whole one's rank, when they are far simpler.
+    let part: Option<Vec<usize>> = match (want, &bounds, &degs, &per_axis, &jac) {
+        (Part::Generating, Some(_), Some(d), Some(pa), Some(jac)) => {
+            let est: Vec<usize> = pa
+                .iter()
+                .zip(d)
+                .map(|(per, &t)| {
+                    DegreeBounds {
+                        per_var: per.clone(),
+                        total: Some(t),
+                    }
+                    .monomials()
+                })
+                .collect();
+            generating_part(&est, jac, p0)
+        }
+        _ => None,
+    };
+    // (No part chosen, or its interpolation not recognised: the whole, on
+    // the same probes.)
+    if let (Some(part), Some(per), Some(d)) = (&part, &per_axis, &degs) {
+        let bounds = DegreeBounds {
+            per_var: (0..np)
+                .map(|k| part.iter().map(|&q| per[q][k]).max().unwrap_or(0))
+                .collect(),
+            total: part.iter().map(|&q| d[q]).max(),
+        };
+        let mut bbp = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+            Ok(bb(pt, p)?.map(|v| part.iter().map(|&q| v[q]).collect()))
+        };
+        let sopts = Options {
+            max_terms: MAX_SPARSE_TERMS,
+            ..ropts.clone()
+        };
+        if let Some(mut r) =
+            interpolate_polys_vec(np, part.len(), &mut bbp, &sopts, &bounds).map_err(recon_err)?
+        {
+            for (f, &q) in r.functions.iter_mut().zip(part) {
+                *f = f.over_monomial(&alpha[q]);
+            }
+            return Ok(Coefficients {
+                r,
+                points: calls,
+                part: Some(part.clone()),
+            });
+        }
+    }
     // Polynomials on every axis: sparse interpolation first (about twice
     // their terms in points), the rational reconstruction when it does not
     // recognise them.
@@ -255,7 +368,123 @@ pub(super) fn reconstruct(
     for (f, a) in r.functions.iter_mut().zip(&alpha) {
         *f = f.over_monomial(a);
     }
-    Ok((r, calls))
+    Ok(Coefficients {
+        r,
+        points: calls,
+        part: None,
+    })
+}
+
+/// Which of a relation's normalised coefficients [`reconstruct`] recovers.
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+pub(super) enum Part {
+    /// Every one.
+    All,
+    /// Only a part whose Jacobian has the whole one's rank, when it is far
+    /// simpler than the whole ([`generating_part`]); else every one.
+    Generating,
+}
+
+/// A relation's coefficients as rational functions, the black-box points
+/// they took, and which quotients they are (`None`: all of them).
+pub(super) struct Coefficients {
+    pub(super) r: obsan_recon::Reconstruction,
+    pub(super) points: u64,
+    pub(super) part: Option<Vec<usize>>,
+}
+
+/// How much simpler (in monomials the bounds allow) the part must be than
+/// the whole for [`Part::Generating`] to be tried: a part that does not
+/// settle the count costs its points on top of the whole's.
+const PART_GAIN: usize = 16;
+
+/// The simplest quotients (by the monomials their degree bounds allow,
+/// `est`) whose Jacobian rows at the base point reach the rank of all of
+/// them, then every quotient no more complex than twice the last one taken
+/// (a larger field, more often all the parameters); `None` when that part
+/// is not [`PART_GAIN`] times simpler than the whole, or is the whole.
+///
+/// Why a part may answer for the whole (io_count_under): its coefficients
+/// generate a subfield `K'` of the field `K` of all of them. A parameter in
+/// `K'` is in `K` (globally identifiable); the Jacobians have the same rank,
+/// so `K'` and `K` have the same transcendence degree and the same
+/// parameters are locally identifiable. Only a count `k > 1` over `K'` may
+/// be larger than over `K`: then the whole is reconstructed.
+fn generating_part(est: &[usize], jac: &[Vec<u64>], p: u64) -> Option<Vec<usize>> {
+    let full = obsan_recon::fp::rank(Zp(p), jac.iter().cloned());
+    if full == 0 {
+        return None;
+    }
+    let mut order: Vec<usize> = (0..est.len()).collect();
+    order.sort_by_key(|&q| (est[q], q));
+    let mut ech = Echelon::new(Zp(p));
+    let mut last = 0;
+    for &q in &order {
+        ech.insert(jac[q].clone());
+        if ech.rank() == full {
+            last = est[q];
+            break;
+        }
+    }
+    let cap = last.saturating_mul(2).max(8);
+    let part: Vec<usize> = order.into_iter().filter(|&q| est[q] <= cap).collect();
+    let whole = est.iter().copied().max().unwrap_or(0);
+    if part.len() == est.len() || whole < cap.saturating_mul(PART_GAIN) {
+        return None;
+    }
+    let mut part = part;
+    part.sort_unstable();
+    Some(part)
+}
+
+/// Per quotient, its degree in each parameter along that parameter's axis
+/// line (`polynomial_bounds`, quotient by quotient).
+fn axis_degrees(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Vec<Vec<u32>> {
+    let deg = |v: &[u64]| v.iter().rposition(|&c| c != 0).unwrap_or(0) as i64;
+    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
+    (0..alpha.len())
+        .map(|q| {
+            axes.iter()
+                .enumerate()
+                .map(|(k, fr)| {
+                    let (num, den) = &fr[q];
+                    (deg(num) + i64::from(alpha[q][k]) - ord(den)).max(0) as u32
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The quotients' Jacobian at the axis lines' base point: row `q`, column
+/// `k` is the derivative of quotient `q`'s fraction along axis `k` at
+/// `base[k]`; `None` when a denominator vanishes there.
+fn axis_jacobian(axes: &[Vec<Fraction>], base: &[u64], p: u64) -> Option<Vec<Vec<u64>>> {
+    let n = axes.first().map_or(0, |fr| fr.len());
+    let mut jac = vec![vec![0u64; axes.len()]; n];
+    for (k, fr) in axes.iter().enumerate() {
+        for (q, (num, den)) in fr.iter().enumerate() {
+            jac[q][k] = fraction_derivative(num, den, base[k], p)?;
+        }
+    }
+    Some(jac)
+}
+
+/// `d/dt (num/den)` at `t0` modulo `p` (coefficients lowest degree first).
+fn fraction_derivative(num: &[u64], den: &[u64], t0: u64, p: u64) -> Option<u64> {
+    use obsan_recon::fp::{add, sub};
+    // Value and derivative by Horner.
+    let eval = |c: &[u64]| -> (u64, u64) {
+        let (mut v, mut d) = (0u64, 0u64);
+        for &a in c.iter().rev() {
+            d = add(fmul(d, t0, p), v, p);
+            v = add(fmul(v, t0, p), a, p);
+        }
+        (v, d)
+    };
+    let (n, dn) = eval(num);
+    let (d, dd) = eval(den);
+    let inv = obsan_recon::fp::inv(fmul(d, d, p), p)?;
+    Some(fmul(sub(fmul(dn, d, p), fmul(n, dd, p), p), inv, p))
 }
 
 /// Terms per coefficient the sparse interpolation may find before the
@@ -291,12 +520,23 @@ fn polynomial_bounds(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Option<Degre
 /// Thiele interpolation each along a random line `a + t b` (a polynomial's
 /// degree along a generic line is its total degree); `None` when one has a
 /// denominator there (not a polynomial) or the samples run out.
+#[cfg(test)]
 fn line_degree(
     bb: &mut BlackBox<'_>,
     np: usize,
     m: usize,
     seed: u64,
 ) -> Result<Option<u32>, AnalysisError> {
+    Ok(line_degrees(bb, np, m, seed)?.map(|d| d.into_iter().max().unwrap_or(0)))
+}
+
+/// Each of the black box's `m` functions' total degree ([`line_degree`]).
+fn line_degrees(
+    bb: &mut BlackBox<'_>,
+    np: usize,
+    m: usize,
+    seed: u64,
+) -> Result<Option<Vec<u32>>, AnalysisError> {
     let p = obsan_recon::PRIMES[0];
     let mut rng = Rng::new(seed ^ 0x1e4e);
     let a: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
@@ -323,15 +563,15 @@ fn line_degree(
             }
         }
     }
-    let mut deg = 0;
+    let mut degs = Vec::with_capacity(th.len());
     for x in &th {
         let (num, den) = x.rational();
         if den.iter().skip(1).any(|&c| c != 0) {
             return Ok(None);
         }
-        deg = deg.max(num.iter().rposition(|&c| c != 0).unwrap_or(0) as u32);
+        degs.push(num.iter().rposition(|&c| c != 0).unwrap_or(0) as u32);
     }
-    Ok(Some(deg))
+    Ok(Some(degs))
 }
 
 /// The coefficients at a point modulo a prime; `None` at a bad point.
@@ -430,13 +670,11 @@ fn normalisation(
     np: usize,
     n: usize,
     bb: &mut BlackBox<'_>,
-    seed: u64,
+    base: &[u64],
 ) -> Result<(usize, Vec<Vec<u32>>, Option<Vec<Vec<Fraction>>>), AnalysisError> {
-    let p = obsan_recon::PRIMES[0];
-    let mut rng = Rng::new(seed ^ 0xde40);
     let mut axes = Axes {
         bb,
-        base: (0..np).map(|_| elem(&mut rng, p)).collect(),
+        base: base.to_vec(),
         samples: vec![Vec::new(); np],
         next_t: vec![1; np],
         misses: 0,
@@ -645,6 +883,35 @@ fn count(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The derivative of a fraction: `(t^2 + 1) / (t + 2)` at `t = 3` is
+    /// `(2t (t + 2) - (t^2 + 1)) / (t + 2)^2 = 20 / 25` (by hand).
+    #[test]
+    fn fraction_derivative_by_hand() {
+        let p = obsan_recon::PRIMES[0];
+        let d = fraction_derivative(&[1, 0, 1], &[2, 1], 3, p).unwrap();
+        assert_eq!(fmul(d, 25, p), 20);
+        assert_eq!(fraction_derivative(&[1], &[p - 3, 1], 3, p), None);
+    }
+
+    /// The part reaches the whole Jacobian's rank with the simplest rows,
+    /// then takes every row up to twice the last one's size; none when it
+    /// is not far simpler than the whole. Rows: `e1` (size 3), `e1` again
+    /// (5), `e2` (9), `e1 + e2` (40), and one of size 10^4.
+    #[test]
+    fn the_generating_part_reaches_the_rank() {
+        let p = obsan_recon::PRIMES[0];
+        let jac = vec![vec![1, 0], vec![2, 0], vec![0, 1], vec![1, 1], vec![3, 5]];
+        let est = [3, 5, 9, 40, 10_000];
+        // The rank (2) is reached at the size-9 row; up to 18: rows 0, 1, 2.
+        assert_eq!(generating_part(&est, &jac, p), Some(vec![0, 1, 2]));
+        // The whole is not 16 times the cap (18): no part.
+        assert_eq!(generating_part(&[3, 5, 9, 40, 200], &jac, p), None);
+        // Rank 2 needs the size-40 row when `e2` is missing: the part is
+        // rows up to 80, which leaves out only the 10^4 one.
+        let jac2 = vec![vec![1, 0], vec![2, 0], vec![4, 0], vec![1, 1], vec![3, 5]];
+        assert_eq!(generating_part(&est, &jac2, p), Some(vec![0, 1, 2, 3]));
+    }
 
     /// The total degree along a line: `x^2 y^3 + x` (5) and `x y + 7` (2)
     /// give 5; with `1 / (1 + x)` beside them, no degree (not polynomials).

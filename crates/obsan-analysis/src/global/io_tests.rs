@@ -436,8 +436,18 @@ fn io_recon_trace() {
                 continue;
             }
             let opts = crate::global::GlobalOptions::default();
-            let (rec, calls) =
-                super::super::io_count::reconstruct(&m, &orders, i, &r.support, &opts, 1).unwrap();
+            // A generating part first, as the route (`IO_PART=all`: all).
+            use super::super::io_count::{reconstruct, Part};
+            let want = if std::env::var("IO_PART").is_ok_and(|v| v == "all") {
+                Part::All
+            } else {
+                Part::Generating
+            };
+            let c = reconstruct(&m, &orders, i, &r.support, &opts, 1, want).unwrap();
+            if let Some(part) = &c.part {
+                println!("{name} y{}: a part of {} quotients", i + 1, part.len());
+            }
+            let (rec, calls) = (c.r, c.points);
             let terms: usize = rec
                 .functions
                 .iter()
@@ -476,8 +486,17 @@ fn sparse_path_matches_the_rational_reconstruction() {
         .unwrap()
         .unwrap();
     let opts = crate::global::GlobalOptions::default();
-    let (rec, calls) =
-        super::super::io_count::reconstruct(&m, &orders, 0, &r.support, &opts, 3).unwrap();
+    let c = super::super::io_count::reconstruct(
+        &m,
+        &orders,
+        0,
+        &r.support,
+        &opts,
+        3,
+        super::super::io_count::Part::All,
+    )
+    .unwrap();
+    let (rec, calls) = (c.r, c.points);
     let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
     let mut bb = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, String> {
         let (io, rng) = models
@@ -538,8 +557,24 @@ fn every_priority_counts_the_same() {
     // Some global, some not identifiable (the Taylor route's verdicts,
     // tests/cli/global_io.rs): not a vacuous agreement.
     assert!(a.per_param.contains(&Some(1)) && a.per_param.contains(&None));
-    // As written: `w` to order 3 (328 monomials), `z` to order 2.
+    // As written: `w` to order 3 (328 monomials), `z` to order 2. Its
+    // coefficients are a part that generates the field (io_count.rs,
+    // `generating_part`): far fewer than the 327 quotients, and the counts
+    // are those of the other priority's, whose relations are reconstructed
+    // whole.
     assert_eq!(a.sizes[0].support, 328);
+    assert!(
+        a.sizes[0].reconstructed < 327,
+        "{}",
+        a.sizes[0].reconstructed
+    );
+    assert_eq!(
+        b.sizes
+            .iter()
+            .map(|s| s.reconstructed + 1)
+            .collect::<Vec<_>>(),
+        b.sizes.iter().map(|s| s.support).collect::<Vec<_>>()
+    );
     assert!(size(&b) < size(&a), "{} {}", size(&b), size(&a));
     assert_eq!(size(&chosen), size(&b));
 }
