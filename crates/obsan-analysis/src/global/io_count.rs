@@ -498,18 +498,13 @@ const MAX_SPARSE_TERMS: usize = 2000;
 /// quotient `n(t) / (c t^a)` times `t^alpha_k` has degree `deg n + alpha_k -
 /// a`, its degree in `theta_k` at a generic base point.
 fn polynomial_bounds(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Option<DegreeBounds> {
-    let deg = |v: &[u64]| v.iter().rposition(|&c| c != 0).unwrap_or(0) as i64;
-    let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
-    let mut per_var = vec![0u32; axes.len()];
-    for (k, fr) in axes.iter().enumerate() {
-        for ((num, den), a) in fr.iter().zip(alpha) {
-            if !is_monomial(den) {
-                return None;
-            }
-            let d = deg(num) + i64::from(a[k]) - ord(den);
-            per_var[k] = per_var[k].max(u32::try_from(d.max(0)).ok()?);
-        }
+    if !axes.iter().flatten().all(|(_, den)| is_monomial(den)) {
+        return None;
     }
+    let per_q = axis_degrees(axes, alpha);
+    let per_var = (0..axes.len())
+        .map(|k| per_q.iter().map(|d| d[k]).max().unwrap_or(0))
+        .collect();
     Some(DegreeBounds {
         per_var,
         total: None,
