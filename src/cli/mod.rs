@@ -319,8 +319,9 @@ state or param (an angle, counted modulo 2 pi through tan(theta/2)); no atan/exp
 Memory: the Taylor system, the Gröbner basis and its F4 matrices may hold 2048 bytes per
 --max-terms unit (about 195 MiB by default); past it, exit 2 with the stage named ('too large:
 the Groebner basis (F4 matrix of R rows x C columns) would need ...; raise it with --max-terms')
-unless --route auto (the default) answers by the input-output relations (the parameters only),
-else by the Lie route, with the reason in `fallback` (--route io, --route lie: that route
+unless --route auto (the default) answers by the input-output relations (the parameters; then
+the initial states by the Taylor route with the params they found global known:
+states_after_io), else by the Lie route, with the reason in `fallback` (--route io, --route lie: that route
 alone; --route taylor: SIAN's alone). The Lie route (docs/engine.md) equates the outputs'
 iterated Lie derivatives along the drift and each input's field: parameters and initial
 states indistinguishable for every input (Hermann-Krener, the paper's notion); without inputs
@@ -338,7 +339,8 @@ verdict (global | local | not identifiable), values, at_most}], solutions, solut
 all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
 counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
 log10_degree_bound_global, unknowns, equations, primes, exact: false, method, route
-(taylor | input-output | lie), fallback, multi_experiment}.")]
+(taylor | input-output | lie), fallback, multi_experiment, states_after_io: {counted,
+fixed_params, output_orders, unknowns, equations, error_bound, why_not} or null}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,
