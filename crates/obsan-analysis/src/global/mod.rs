@@ -134,7 +134,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
 /// equals it; the Taylor system of the smaller model at the same point is
 /// that slice. Its orders are that model's own (docs/engine.md, "Taylor
 /// orders", applied to it), lower than the whole model's (SI.jl's Goodwin:
-/// 18 unknowns instead of 43, answered in milliseconds where the whole
+/// 28 unknowns instead of 43, answered in milliseconds where the whole
 /// system's basis needs 9.3e9 multiply-adds). The other params' counts must
 /// agree with the relations' (two routes, two independent computations);
 /// a disagreement is an error, never an answer. When the attempt does not

@@ -221,7 +221,8 @@ pub struct GlobalReport {
 /// Taylor route on the model whose params the relations found globally
 /// identifiable are known constants at random values. Every generic fibre
 /// holds one value of each, so fixing them removes no solution, and the
-/// system is far smaller (SI.jl's Goodwin: 18 unknowns instead of 43).
+/// system is far smaller (SI.jl's Goodwin: 28 unknowns instead of 43, with
+/// b, c, sigma known).
 #[derive(Clone, Debug)]
 pub struct StatesAfterIo {
     /// The params fixed (the relations' global ones), in the model's order.
