@@ -92,8 +92,48 @@ fn run(name: &str, n: usize, fs: &[(Terms, Terms)], reps: usize) {
     );
 }
 
+/// The input-output route's kernels: `n - 1` random rows of `n` columns
+/// (rank `n - 1`, one null vector), inserted one by one and by blocks on
+/// one and two threads; the same null space every way.
+fn kernels(rng: &mut SplitMix) {
+    use obsan_recon::fp::{RowEchelon, Zp};
+    let p = obsan_recon::PRIMES[0];
+    for n in [200usize, 771] {
+        let rows: Vec<Vec<u64>> = (0..n - 1)
+            .map(|_| (0..n).map(|_| rng.next() % p).collect())
+            .collect();
+        let mut null = None;
+        let mut line = format!("dense kernel {n:>4} cols ");
+        for way in ["one by one", "blocks, 1 thread", "blocks, 2 threads"] {
+            let mut times = Vec::new();
+            for _ in 0..3 {
+                let t0 = Instant::now();
+                let mut e = RowEchelon::new(Zp(p));
+                match way {
+                    "one by one" => rows.iter().for_each(|r| {
+                        e.insert(r.clone());
+                    }),
+                    "blocks, 1 thread" => {
+                        e.insert_all(rows.clone(), 1);
+                    }
+                    _ => {
+                        e.insert_all(rows.clone(), 2);
+                    }
+                }
+                let ns = e.null_space(n);
+                times.push(t0.elapsed().as_secs_f64());
+                assert_eq!(*null.get_or_insert_with(|| ns.clone()), ns, "{way}");
+            }
+            times.sort_by(|a, b| a.total_cmp(b));
+            line += &format!(" | {way} {:>8.2} ms", times[1] * 1e3);
+        }
+        println!("{line}");
+    }
+}
+
 fn main() {
     let mut rng = SplitMix(2026);
+    kernels(&mut rng);
     let f3 = (
         random_poly(&mut rng, 3, 8, 6, 20),
         random_poly(&mut rng, 3, 6, 5, 20),

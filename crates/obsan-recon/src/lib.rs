@@ -68,7 +68,9 @@ pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
 /// ([`Echelon`](fp::Echelon): rank, null space, solve), generic over
 /// [`PrimeField`](fp::PrimeField) so the engine's own `Fp` uses it too.
 pub mod fp {
-    pub use crate::echelon::{null_space, rank, solve, Echelon, PrimeField, RowEchelon, Zp};
+    pub use crate::echelon::{
+        null_space, rank, solve, Echelon, PrimeField, RowEchelon, Zp, BLOCK, PARALLEL_WORK,
+    };
     pub use crate::field::{add, inv, mul, pow, sub, Rem128, Shoup};
 }
 pub use rational::{Poly, Rational, Term};
