@@ -50,6 +50,22 @@ impl Poly {
         Poly { terms: out }
     }
 
+    /// The product (a common denominator times a reduced one, for callers
+    /// that keep fractions unreduced). Exponent vectors of different
+    /// lengths are padded with zeros.
+    pub fn times(&self, other: &Poly) -> Poly {
+        Poly::from_terms(self.terms.iter().flat_map(|a| {
+            other.terms.iter().map(move |b| {
+                let n = a.exps.len().max(b.exps.len());
+                let at = |e: &[u32], i: usize| e.get(i).copied().unwrap_or(0);
+                Term {
+                    exps: (0..n).map(|i| at(&a.exps, i) + at(&b.exps, i)).collect(),
+                    coeff: &a.coeff * &b.coeff,
+                }
+            })
+        }))
+    }
+
     /// The terms, in the order described on [`Poly`].
     pub fn terms(&self) -> &[Term] {
         &self.terms
@@ -338,6 +354,33 @@ pub(crate) fn rat_recon(a: &UBig, m: &UBig) -> Option<(IBig, UBig)> {
 mod tests {
     use super::*;
     use crate::field::PRIMES;
+
+    #[test]
+    fn product_is_the_product_of_values() {
+        // (2 x - 3 y^2 + 1)(x y + 5) at points modulo a prime, against the
+        // product of the values, and like terms collected.
+        let t = |e: &[u32], c: i64| Term {
+            exps: e.to_vec(),
+            coeff: IBig::from(c),
+        };
+        let a = Poly::from_terms([t(&[1, 0], 2), t(&[0, 2], -3), t(&[0, 0], 1)]);
+        let b = Poly::from_terms([t(&[1, 1], 1), t(&[0, 0], 5)]);
+        let ab = a.times(&b);
+        let p = PRIMES[0];
+        for pt in [[3u64, 7], [p - 1, 2], [0, 11]] {
+            assert_eq!(
+                ab.eval_mod(&pt, p),
+                mul(a.eval_mod(&pt, p), b.eval_mod(&pt, p), p)
+            );
+        }
+        assert_eq!(ab.terms().len(), 6);
+        let sq = Poly::from_terms([t(&[1], 1), t(&[0], 1)]);
+        // (x + 1)(x + 1) = x^2 + 2 x + 1: the cross terms collected.
+        assert_eq!(
+            sq.times(&sq),
+            Poly::from_terms([t(&[2], 1), t(&[1], 2), t(&[0], 1)])
+        );
+    }
 
     #[test]
     fn over_monomial_cancels() {
