@@ -21,14 +21,14 @@
 //! derivative is ever formed: the cost is polynomial in the order whatever
 //! the expression swell of the Taylor route.
 
-use super::io_series::{Arith, IPoly, Ser};
+use super::io_series::{Arith, IPoly, Relaxed, Ser};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Fp, FpField};
 use obsan_expr::{Int, Poly as ZPoly, Var};
-use obsan_recon::fp::{Echelon, PrimeField, RowEchelon, Zp};
+use obsan_recon::fp::{Echelon, PrimeField, RowEchelon, Zp, BLOCK};
 
 /// Arithmetic modulo `p`, with the rank test's shift-and-add products when
 /// `p = 2^61 - 1`, and otherwise (the reconstruction's primes) products
@@ -248,6 +248,81 @@ impl IoModel {
         grad: bool,
         rng: &mut Rng,
     ) -> Option<(Arith, Vec<Ser>, Vec<Ser>)> {
+        if grad {
+            self.taylor_by_orders(inst, len, true, rng)
+        } else {
+            self.taylor_relaxed(inst, len, rng)
+        }
+    }
+
+    /// [`IoModel::taylor`] without the gradient, the same series (the same
+    /// draws from `rng`), by relaxed evaluation (io_series.rs `Relaxed`):
+    /// order `k` of each right-hand side and of its quotient costs `O(k)`
+    /// per product given the states' first `k + 1` coefficients.
+    fn taylor_relaxed(
+        &self,
+        inst: &Inst,
+        len: usize,
+        rng: &mut Rng,
+    ) -> Option<(Arith, Vec<Ser>, Vec<Ser>)> {
+        let p = self.p;
+        let a = Arith { p, g: 1, len };
+        let mut vars: Vec<Ser> = Vec::with_capacity(self.nx + self.nu);
+        for _ in 0..self.nx {
+            let mut x = a.zero();
+            x[0] = elem(rng, p);
+            vars.push(x);
+        }
+        for _ in 0..self.nu {
+            vars.push((0..len).map(|_| elem(rng, p)).collect());
+        }
+        let dot = super::io_series::Dot::new(p);
+        let mut rhs: Vec<(Relaxed, Relaxed)> = inst
+            .rhs
+            .iter()
+            .map(|(n, d)| (Relaxed::new(n, len, p), Relaxed::new(d, len, p)))
+            .collect();
+        // Per state, its right-hand side's denominator and quotient series.
+        let mut dens = vec![a.zero(); self.nx];
+        let mut quos = vec![a.zero(); self.nx];
+        let mut ivs = vec![0u64; self.nx];
+        for k in 0..len.saturating_sub(1) {
+            let inv = fp::inv((k as u64 + 1) % p, p)?;
+            for (s, (n, d)) in rhs.iter_mut().enumerate() {
+                let nk = n.coeff(k, &vars, &dot);
+                dens[s][k] = d.coeff(k, &vars, &dot);
+                if k == 0 {
+                    ivs[s] = fp::inv(dens[s][0], p)?;
+                }
+                // q_k = (n_k - sum_{i=1..k} d_i q_{k-i}) / d_0.
+                let carried = dot.rev(&dens[s][1..=k], &quos[s][..k]);
+                quos[s][k] = fp::mul(fp::sub(nk, carried, p), ivs[s], p);
+                // Order k reads coefficients up to k: setting k + 1 now
+                // changes no other state's order k.
+                vars[s][k + 1] = fp::mul(quos[s][k], inv, p);
+            }
+        }
+        let (mut t1, mut t2) = (a.zero(), a.zero());
+        let mut y = Vec::with_capacity(inst.outputs.len());
+        for (n, d) in &inst.outputs {
+            y.push(a.div(
+                &a.eval(n, &vars, &mut t1, &mut t2),
+                &a.eval(d, &vars, &mut t1, &mut t2),
+            )?);
+        }
+        let u = vars.split_off(self.nx);
+        Some((a, y, u))
+    }
+
+    /// The Taylor series by re-evaluating the truncated right-hand sides
+    /// at each order, with the gradient in the initial state when `grad`.
+    fn taylor_by_orders(
+        &self,
+        inst: &Inst,
+        len: usize,
+        grad: bool,
+        rng: &mut Rng,
+    ) -> Option<(Arith, Vec<Ser>, Vec<Ser>)> {
         let p = self.p;
         let g = if grad { 1 + self.nx } else { 1 };
         let a = Arith { p, g, len };
@@ -364,27 +439,50 @@ impl IoModel {
                 IoVar::U(u, j) => deriv(&us[u], j),
             })
             .collect();
-        let mut ech = Echelon::new(FpField);
-        let mut dependent = 0;
-        for m in support {
-            let mut acc: Option<Ser> = None;
-            for (s, &e) in series.iter().zip(m) {
-                for _ in 0..e {
-                    acc = Some(match acc {
-                        None => s.clone(),
-                        Some(t) => a.mul(&t, s),
-                    });
-                }
+        // The monomials as factor lists (variable indices, repeated, in
+        // order) sorted, so that consecutive ones share their prefix's
+        // product: a stack of partial products, one series product per
+        // factor past the shared prefix (SIWR_orig's 771 monomials of
+        // degree up to 10: a third of the products, each O(l^2)). The
+        // count of dependent rows does not depend on their order.
+        let mut lists: Vec<Vec<usize>> = support
+            .iter()
+            .map(|m| {
+                m.iter()
+                    .enumerate()
+                    .flat_map(|(v, &e)| std::iter::repeat_n(v, e as usize))
+                    .collect()
+            })
+            .collect();
+        lists.sort_unstable();
+        let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(lists.len());
+        let mut stack: Vec<(usize, Ser)> = Vec::new();
+        for f in &lists {
+            let shared = stack
+                .iter()
+                .zip(f)
+                .take_while(|((v, _), w)| v == *w)
+                .count();
+            stack.truncate(shared);
+            for &v in &f[shared..] {
+                let next = match stack.last() {
+                    None => series[v].clone(),
+                    Some((_, t)) => a.mul(t, &series[v]),
+                };
+                stack.push((v, next));
             }
-            let row: Vec<Fp> = match acc {
+            rows.push(match stack.last() {
                 None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
-                Some(t) => t.iter().map(|&c| Fp(c)).collect(),
-            };
-            if !ech.insert(row) {
-                dependent += 1;
-            }
+                Some((_, t)) => t.iter().map(|&c| Fp(c)).collect(),
+            });
         }
-        dependent == 1
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+        let mut ech = RowEchelon::new(FpField);
+        ech.insert_all(rows, threads)
+            .iter()
+            .filter(|&&new| !new)
+            .count()
+            == 1
     }
 }
 
@@ -437,25 +535,43 @@ pub(super) enum IoVar {
     U(usize, usize),
 }
 
-/// The right kernel of the rows `sample` draws, drawn until the rank stops
+/// The time a block of rows must take (measured on the rows drawn before
+/// it, on one thread) to be sampled on two: a thread's start takes tens of
+/// microseconds.
+const PARALLEL_ROWS: std::time::Duration = std::time::Duration::from_micros(500);
+
+/// The right kernel of the rows `sample` draws (a block at a time), drawn until the rank stops
 /// growing for 4 rows in a row (a dependent row of a random point on the
 /// variety: probability at most `deg / p` each) or reaches `stop`.
 fn kernel<F: PrimeField>(
     field: F,
     to: impl Fn(u64) -> F::Elem,
     back: impl Fn(F::Elem) -> u64,
-    sample: &mut dyn FnMut() -> Result<Vec<u64>, AnalysisError>,
+    sample: &mut dyn FnMut(usize) -> Result<Vec<Vec<u64>>, AnalysisError>,
     ncols: usize,
     stop: usize,
 ) -> Result<Vec<Vec<u64>>, AnalysisError> {
     let mut ech = RowEchelon::new(field);
     let mut stale = 0;
+    // Rows by blocks, each block reduced on two threads when the machine
+    // has them and the kernel is large (`RowEchelon::insert_all`): a
+    // stalled search draws at most a block past its last independent row.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+    // Blocks of about a sixteenth of the columns: a search that stalls
+    // draws past its rank at most that many rows.
+    let block = (ncols / 16).clamp(1, BLOCK);
     while stale < 4 && ech.rank() < stop {
-        let row: Vec<F::Elem> = sample()?.into_iter().map(&to).collect();
-        if ech.insert(row) {
-            stale = 0;
-        } else {
-            stale += 1;
+        let want = (stop - ech.rank()).clamp(1, block);
+        let rows: Vec<Vec<F::Elem>> = sample(want)?
+            .into_iter()
+            .map(|r| r.into_iter().map(&to).collect())
+            .collect();
+        for new in ech.insert_all(rows, threads) {
+            if new {
+                stale = 0;
+            } else {
+                stale += 1;
+            }
         }
     }
     Ok(ech
@@ -561,7 +677,7 @@ impl IoModel {
                 ),
             ));
         }
-        let mut tries = 0;
+        let tries = std::sync::atomic::AtomicUsize::new(0);
         let inst = self.at(theta);
         let mut fact = vec![1u64; len];
         for j in 1..len {
@@ -570,21 +686,24 @@ impl IoModel {
         let top: Vec<u32> = (0..vars.len())
             .map(|v| monos.iter().map(|m| m[v]).max().unwrap_or(0))
             .collect();
-        let mut sample = || -> Result<Vec<u64>, AnalysisError> {
+        // One row from its own generator (seeded from `rng` in order, so
+        // the rows, and the answer, do not depend on the threads).
+        let row = |seed: u64| -> Result<Vec<u64>, AnalysisError> {
+            let mut rng = Rng::new(seed);
             loop {
                 if self.deadline.is_some_and(|d| std::time::Instant::now() > d) {
                     return Err(AnalysisError::Timeout(
                         "the input-output relations (global, --route io)".into(),
                     ));
                 }
-                tries += 1;
-                if tries > 2 * monos.len() + 64 {
+                let t = tries.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                if t > 2 * monos.len() + 64 {
                     return Err(err("global (io): too many poles sampling the jets"));
                 }
                 // Values only (g = 1): read `k! [t^k]` straight from the
                 // series, without `jets`' nested vectors (one allocation
                 // per order: a fifth of the black box's time was malloc).
-                let Some((_, ys, us)) = self.taylor(&inst, len, false, rng) else {
+                let Some((_, ys, us)) = self.taylor(&inst, len, false, &mut rng) else {
                     continue;
                 };
                 let vals: Vec<u64> = vars
@@ -620,6 +739,40 @@ impl IoModel {
                     })
                     .collect());
             }
+        };
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+        // A block of rows, split between the threads when the block costs
+        // far more than starting them (the series' products: a third of
+        // SIWR_orig's time on one thread), by the rows drawn so far.
+        let (mut drawn, mut spent) = (0u32, std::time::Duration::ZERO);
+        let mut sample = |want: usize| -> Result<Vec<Vec<u64>>, AnalysisError> {
+            let seeds: Vec<u64> = (0..want).map(|_| rng.next()).collect();
+            let per_row = spent.checked_div(drawn).unwrap_or_default();
+            if threads < 2 || want < 2 || per_row * want as u32 <= PARALLEL_ROWS {
+                let t0 = std::time::Instant::now();
+                let rows = seeds.into_iter().map(&row).collect();
+                drawn += want as u32;
+                spent += t0.elapsed();
+                return rows;
+            }
+            let per = want.div_ceil(threads);
+            std::thread::scope(|s| {
+                let handles: Vec<_> = seeds
+                    .chunks(per)
+                    .map(|part| {
+                        let row = &row;
+                        s.spawn(move || part.iter().map(|&k| row(k)).collect::<Vec<_>>())
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .flat_map(|h| {
+                        h.join().unwrap_or_else(|_| {
+                            vec![Err(err("global (io): a sampling thread failed"))]
+                        })
+                    })
+                    .collect()
+            })
         };
         if p == obsan_expr::P {
             kernel(FpField, Fp, |x| x.0, &mut sample, monos.len(), stop)

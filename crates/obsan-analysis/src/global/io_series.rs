@@ -16,6 +16,99 @@ pub(super) type IPoly = Vec<(u64, Vec<(usize, u32)>)>;
 /// A series: `len` dual vectors of `g` residues, flat.
 pub(super) type Ser = Vec<u64>;
 
+/// Sums of products modulo `p` with one 128-bit remainder per
+/// [`Dot::max_adds`] products, not one per product.
+#[derive(Clone, Copy)]
+pub(super) struct Dot {
+    m: obsan_recon::fp::Rem128,
+    max_adds: usize,
+}
+
+impl Dot {
+    pub(super) fn new(p: u64) -> Dot {
+        let pm = u128::from(p.saturating_sub(1)).max(1);
+        // The sum stays below p + max_adds (p - 1)^2 <= u128::MAX.
+        let max_adds = ((u128::MAX / (pm * pm)).min(1 << 20) as usize)
+            .saturating_sub(2)
+            .max(1);
+        Dot {
+            m: obsan_recon::fp::Rem128::new(p),
+            max_adds,
+        }
+    }
+
+    /// `sum_i a[i] b[n - 1 - i]`, `n = a.len() = b.len()` (one coefficient
+    /// of a product of series).
+    pub(super) fn rev(&self, a: &[u64], b: &[u64]) -> u64 {
+        let mut acc = 0u128;
+        for (ca, cb) in a.chunks(self.max_adds).zip(b.rchunks(self.max_adds)) {
+            for (&x, &y) in ca.iter().zip(cb.iter().rev()) {
+                acc += x as u128 * y as u128;
+            }
+            acc = u128::from(self.m.reduce(acc));
+        }
+        acc as u64
+    }
+}
+
+/// A polynomial's series one coefficient at a time (values only, `g = 1`;
+/// "relaxed" evaluation): each term's partial products are kept, so
+/// coefficient `k` costs `O(k)` per factor given the variables' first
+/// `k + 1`. A Taylor recursion of length `len` then costs `O(len^2)`, not
+/// the `O(len^3)` of re-evaluating the truncated polynomial at each order
+/// (io.rs `taylor`; SIWR_orig's 773-term check along one output).
+pub(super) struct Relaxed {
+    p: u64,
+    /// Per term, its coefficient and its factors (variables, repeated).
+    terms: Vec<(u64, Vec<usize>)>,
+    /// Per term, the series of the products of its first 2, 3, .. factors.
+    partial: Vec<Vec<Ser>>,
+}
+
+impl Relaxed {
+    pub(super) fn new(poly: &IPoly, len: usize, p: u64) -> Relaxed {
+        let terms: Vec<(u64, Vec<usize>)> = poly
+            .iter()
+            .map(|(c, se)| {
+                let f = se
+                    .iter()
+                    .flat_map(|&(v, e)| std::iter::repeat_n(v, e as usize))
+                    .collect();
+                (*c, f)
+            })
+            .collect();
+        let partial = terms
+            .iter()
+            .map(|(_, f)| (1..f.len()).map(|_| vec![0u64; len]).collect())
+            .collect();
+        Relaxed { p, terms, partial }
+    }
+
+    /// Coefficient `k` at `vars`, whose coefficients `0..=k` are set; called
+    /// for `k = 0, 1, ..` in order (the partial products' earlier
+    /// coefficients are kept from the calls before).
+    pub(super) fn coeff(&mut self, k: usize, vars: &[Ser], dot: &Dot) -> u64 {
+        let p = self.p;
+        let mut acc = 0u64;
+        for ((c, f), part) in self.terms.iter().zip(self.partial.iter_mut()) {
+            let v = match f.len() {
+                0 => u64::from(k == 0),
+                1 => vars[f[0]][k],
+                n => {
+                    for j in 1..n {
+                        let (done, rest) = part.split_at_mut(j - 1);
+                        let left: &[u64] = if j == 1 { &vars[f[0]] } else { &done[j - 2] };
+                        rest[0][k] = dot.rev(&left[..=k], &vars[f[j]][..=k]);
+                    }
+                    part[n - 2][k]
+                }
+            };
+            acc = fp::add(acc, fp::mul(*c, v, p), p);
+        }
+        acc
+    }
+}
+
 pub(super) struct Arith {
     pub(super) p: u64,
     pub(super) g: usize,
