@@ -188,8 +188,18 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
                 } else {
                     String::new()
                 };
+                // No coefficient is a monomial: the quotients times their
+                // common denominator (docs/engine.md, step 3).
+                let den = if s.common_denominator > 0 {
+                    format!(
+                        ", over a common denominator of {} terms",
+                        s.common_denominator
+                    )
+                } else {
+                    String::new()
+                };
                 format!(
-                    "{n}: order {}, degree {} in {} jets, {} monomials{part}",
+                    "{n}: order {}, degree {} in {} jets, {} monomials{part}{den}",
                     s.order, s.degree, s.variables, s.support
                 )
             })

@@ -258,3 +258,36 @@ fn pivastatin_by_a_generating_part() {
     assert!(t.contains("252 monomials"), "{t}");
     assert!(t.contains("of its 251 coefficients reconstructed"), "{t}");
 }
+
+#[test]
+fn no_monomial_coefficient_over_a_common_denominator() {
+    // y1's relation (a + b) y1' + (a c + 1) y1 - (b + 1) u = 0 has no
+    // monomial coefficient: the quotients are multiplied by their common
+    // denominator (named in the text). Counts derived by hand in the files:
+    // all global; with c known up to sign (c^2), 2 values each and 2 joint.
+    for (file, want, joint) in [
+        (
+            "systems/global/common_denominator.sys",
+            ("global", Some(1)),
+            1,
+        ),
+        (
+            "systems/global/common_denominator_sign.sys",
+            ("local", Some(2)),
+            2,
+        ),
+    ] {
+        let v: Value =
+            serde_json::from_str(&ok(&["global", file, "--route", "io", "--json"])).unwrap();
+        assert_eq!(v["route"], "input-output", "{file}");
+        for (n, verdict, k) in params(&v) {
+            assert_eq!((verdict.as_str(), k), want, "{file}: {n}");
+        }
+        assert_eq!(v["solutions"], joint, "{file}");
+        let text = ok(&["global", file, "--route", "io"]);
+        assert!(
+            text.contains("y1: order 1, degree 1 in 5 jets, 3 monomials, over a common denominator of 2 terms"),
+            "{file}: {text}"
+        );
+    }
+}

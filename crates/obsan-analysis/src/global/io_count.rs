@@ -23,7 +23,7 @@ use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, term_bytes, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use obsan_recon::{
-    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Rational, Thiele,
+    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, Rational, Thiele,
 };
 use std::collections::HashMap;
 
@@ -47,6 +47,9 @@ pub struct IoSize {
     /// Normalised coefficients reconstructed: `support - 1`, or fewer when
     /// a generating part settled the count (io_count.rs, `generating_part`).
     pub reconstructed: usize,
+    /// Terms of the common denominator the quotients were multiplied by
+    /// when no coefficient is a monomial (`common_denominator`); 0 if none.
+    pub common_denominator: usize,
 }
 
 /// The route's answer on the parameters.
@@ -128,6 +131,7 @@ pub(super) fn io_count_under(
                 recon_error_bound: 0.0,
                 single,
                 reconstructed: 0,
+                common_denominator: 0,
             },
         ));
         // A monomial relation (`y' = 0`: Treatment's constant N) has no
@@ -150,10 +154,10 @@ pub(super) fn io_count_under(
     // Two independent points and primes must agree, as on the Taylor route.
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
     let counts = |coeffs: &[Option<Coefficients>]| {
-        let fns: Vec<Rational> = coeffs
+        let fns: Vec<(RPoly, RPoly)> = coeffs
             .iter()
             .flatten()
-            .flat_map(|c| c.r.functions.iter().cloned())
+            .flat_map(|c| c.fns.iter().cloned())
             .collect();
         let a = count(&fns, np, opts, seed, primes[0])?;
         let b = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
@@ -190,19 +194,20 @@ pub(super) fn io_count_under(
     }
     for ((_, size), c) in sizes.iter_mut().zip(&coeffs) {
         let Some(c) = c else { continue };
-        let f = &c.r.functions;
+        let f = &c.fns;
         size.points = c.points;
         size.terms = f
             .iter()
-            .map(|f| f.num().terms().len() + f.den().terms().len())
+            .map(|(n, d)| n.terms().len() + d.terms().len())
             .sum();
         size.max_degree = f
             .iter()
-            .map(|f| f.num().degree().max(f.den().degree()))
+            .map(|(n, d)| n.degree().max(d.degree()))
             .max()
             .unwrap_or(0);
-        size.recon_error_bound = c.r.certificate.error_bound;
+        size.recon_error_bound = c.error_bound;
         size.reconstructed = f.len();
+        size.common_denominator = c.denominator_terms;
     }
     // The sizes in the outputs' own order.
     sizes.sort_by_key(|s| s.0);
@@ -248,20 +253,65 @@ pub(super) fn reconstruct(
     let p0 = obsan_recon::PRIMES[0];
     let mut base_rng = Rng::new(seed ^ 0xde40);
     let base: Vec<u64> = (0..np).map(|_| elem(&mut base_rng, p0)).collect();
-    let (j, alpha, axes) = normalisation(np, support.len(), &mut coeffs, &base)?;
-    // The quotients' Jacobian at the base point, from the same axis samples.
-    let jac = axes.as_ref().and_then(|fr| axis_jacobian(fr, &base, p0));
-    let per_axis = axes.as_ref().map(|fr| axis_degrees(fr, &alpha));
-    let bounds = axes.and_then(|fr| polynomial_bounds(&fr, &alpha));
+    let norm = normalisation(np, support.len(), &mut coeffs, &base)?;
+    let (j, alpha) = (norm.j, norm.alpha);
+    let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
+        obsan_recon::ReconError::BlackBox(e) => e,
+        e => err(format!(
+            "global (io): reconstructing the relations' coefficients: {e}"
+        )),
+    };
+    let ropts = Options {
+        deadline: opts.deadline,
+        seed: seed ^ 0x10c0,
+        ..Options::default()
+    };
+    // Per quotient its degree in each parameter after the scaling, the
+    // bounds if every one is a polynomial, the quotients' Jacobian at the
+    // base point (from the same axis samples), and the common denominator
+    // when no coefficient is a monomial (`common_denominator`).
+    let (per_axis, bounds, jac, den) = match (&norm.axes, &norm.quotients) {
+        (Some(fr), _) => (
+            Some(axis_degrees(fr, &alpha)),
+            polynomial_bounds(fr, &alpha),
+            axis_jacobian(fr, &base, p0),
+            None,
+        ),
+        (None, Some(bl)) => {
+            match common_denominator(bl, &base, j, np, &mut coeffs, &ropts).map_err(recon_err)? {
+                Some((d, per)) => {
+                    let per_var = (0..np)
+                        .map(|k| per.iter().map(|q| q[k]).max().unwrap_or(0))
+                        .collect();
+                    (
+                        Some(per),
+                        Some(DegreeBounds {
+                            per_var,
+                            total: None,
+                        }),
+                        axis_jacobian(bl, &base, p0),
+                        Some(d),
+                    )
+                }
+                None => (None, None, None, None),
+            }
+        }
+        (None, None) => (None, None, None, None),
+    };
     // Divided by a coefficient that is a monomial in the parameters and
-    // scaled by their monomial denominators, the coefficients are (mostly)
-    // polynomials, which need far fewer points than rational functions.
+    // scaled by their monomial denominators, or times the common
+    // denominator, the coefficients are (mostly) polynomials, which need
+    // far fewer points than rational functions.
     let mut bb = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
         let Some(v) = coeffs(pt, p)? else {
             return Ok(None);
         };
         let Some(iv) = obsan_recon::fp::inv(v[j], p) else {
             return Ok(None);
+        };
+        let iv = match &den {
+            Some(d) => fmul(iv, d.eval_mod(pt, p), p),
+            None => iv,
         };
         Ok(Some(
             others(&v, j)
@@ -274,16 +324,16 @@ pub(super) fn reconstruct(
                 .collect(),
         ))
     };
-    let ropts = Options {
-        deadline: opts.deadline,
-        seed: seed ^ 0x10c0,
-        ..Options::default()
-    };
-    let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
-        obsan_recon::ReconError::BlackBox(e) => e,
-        e => err(format!(
-            "global (io): reconstructing the relations' coefficients: {e}"
-        )),
+    // The scaling undone: the monomial, or the common denominator (left
+    // unreduced, `Coefficients::fns`).
+    let unscale = |f: &Rational, a: &[u32]| -> (RPoly, RPoly) {
+        match &den {
+            Some(d) => (f.num().clone(), f.den().times(d)),
+            None => {
+                let g = f.over_monomial(a);
+                (g.num().clone(), g.den().clone())
+            }
+        }
     };
     // With the total degree along one generic line: the per-axis bounds
     // alone put HIV's 10 parameters' largest monomial value `prod q_i^d_i`
@@ -335,16 +385,20 @@ pub(super) fn reconstruct(
             max_terms: MAX_SPARSE_TERMS,
             ..ropts.clone()
         };
-        if let Some(mut r) =
+        if let Some(r) =
             interpolate_polys_vec(np, part.len(), &mut bbp, &sopts, &bounds).map_err(recon_err)?
         {
-            for (f, &q) in r.functions.iter_mut().zip(part) {
-                *f = f.over_monomial(&alpha[q]);
-            }
             return Ok(Coefficients {
-                r,
+                fns: r
+                    .functions
+                    .iter()
+                    .zip(part)
+                    .map(|(f, &q)| unscale(f, &alpha[q]))
+                    .collect(),
+                error_bound: r.certificate.error_bound,
                 points: calls,
                 part: Some(part.clone()),
+                denominator_terms: den.as_ref().map_or(0, |d| d.terms().len()),
             });
         }
     }
@@ -361,17 +415,21 @@ pub(super) fn reconstruct(
         }
         None => None,
     };
-    let mut r = match sparse {
+    let r = match sparse {
         Some(r) => r,
         None => reconstruct_vec(np, support.len() - 1, &mut bb, &ropts).map_err(recon_err)?,
     };
-    for (f, a) in r.functions.iter_mut().zip(&alpha) {
-        *f = f.over_monomial(a);
-    }
     Ok(Coefficients {
-        r,
+        fns: r
+            .functions
+            .iter()
+            .zip(&alpha)
+            .map(|(f, a)| unscale(f, a))
+            .collect(),
+        error_bound: r.certificate.error_bound,
         points: calls,
         part: None,
+        denominator_terms: den.as_ref().map_or(0, |d| d.terms().len()),
     })
 }
 
@@ -385,12 +443,19 @@ pub(super) enum Part {
     Generating,
 }
 
-/// A relation's coefficients as rational functions, the black-box points
-/// they took, and which quotients they are (`None`: all of them).
+/// A relation's coefficients as fractions, the black-box points they
+/// took, and which quotients they are (`None`: all of them).
 pub(super) struct Coefficients {
-    pub(super) r: obsan_recon::Reconstruction,
+    /// Per quotient, its numerator and denominator over Z; not always
+    /// coprime (over a common denominator, `common_denominator`): the count
+    /// saturates by the denominators, so a common factor adds no solution.
+    pub(super) fns: Vec<(RPoly, RPoly)>,
+    /// The bound of the reconstruction's check at fresh points.
+    pub(super) error_bound: f64,
     pub(super) points: u64,
     pub(super) part: Option<Vec<usize>>,
+    /// Terms of the common denominator (`common_denominator`), 0 if none.
+    pub(super) denominator_terms: usize,
 }
 
 /// How much simpler (in monomials the bounds allow) the part must be than
@@ -660,13 +725,12 @@ impl Axes<'_, '_> {
 ///
 /// With them, per axis, the quotients by the coefficient kept (`None` when
 /// the probes ran out or no normalisation gave monomial denominators).
-#[allow(clippy::type_complexity)]
 fn normalisation(
     np: usize,
     n: usize,
     bb: &mut BlackBox<'_>,
     base: &[u64],
-) -> Result<(usize, Vec<Vec<u32>>, Option<Vec<Vec<Fraction>>>), AnalysisError> {
+) -> Result<Normalised, AnalysisError> {
     let mut axes = Axes {
         bb,
         base: base.to_vec(),
@@ -675,7 +739,12 @@ fn normalisation(
         misses: 0,
     };
     let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
-    let fallback = (n - 1, vec![vec![0u32; np]; n - 1], None);
+    let fallback = Normalised {
+        j: n - 1,
+        alpha: vec![vec![0u32; np]; n - 1],
+        axes: None,
+        quotients: None,
+    };
     // Per axis, the quotients by the last coefficient.
     let mut by_last = Vec::with_capacity(np);
     for k in 0..np {
@@ -695,8 +764,12 @@ fn normalisation(
     };
     let monomial_dens = |fr: &[Vec<Fraction>]| fr.iter().flatten().all(|(_, d)| is_monomial(d));
     if monomial_dens(&by_last) {
-        let alpha = alpha_of(&by_last);
-        return Ok((n - 1, alpha, Some(by_last)));
+        return Ok(Normalised {
+            j: n - 1,
+            alpha: alpha_of(&by_last),
+            axes: Some(by_last),
+            quotients: None,
+        });
     }
     let candidates = (0..n - 1).filter(|&j| by_last.iter().all(|f| is_monomial(&f[j].0)));
     for j in candidates.take(4) {
@@ -708,11 +781,357 @@ fn normalisation(
             }
         }
         if fr.len() == np && monomial_dens(&fr) {
-            let alpha = alpha_of(&fr);
-            return Ok((j, alpha, Some(fr)));
+            return Ok(Normalised {
+                j,
+                alpha: alpha_of(&fr),
+                axes: Some(fr),
+                quotients: None,
+            });
         }
     }
-    Ok((n - 1, alpha_of(&by_last), None))
+    // No monomial coefficient: divide by the one of fewest monomials (its
+    // degrees along each axis read off the quotients by the last, whose
+    // denominators' lcm there is the last coefficient's restriction), which
+    // is then the quotients' common denominator (`common_denominator`).
+    let lcms: Vec<Vec<u64>> = by_last
+        .iter()
+        .map(|fr| fr.iter().fold(vec![1], |l, (_, d)| ulcm(&l, d, P0)))
+        .collect();
+    let size = |m: usize| -> usize {
+        by_last
+            .iter()
+            .zip(&lcms)
+            .map(|(fr, l)| match fr.get(m) {
+                Some((num, den)) => (udeg(num) + udeg(l)).saturating_sub(udeg(den)) + 1,
+                None => udeg(l) + 1,
+            })
+            .fold(1usize, usize::saturating_mul)
+    };
+    let j = (0..n).min_by_key(|&m| (size(m), n - m)).unwrap_or(n - 1);
+    let mut quotients = Vec::with_capacity(np);
+    if j != n - 1 {
+        for k in 0..np {
+            match axes.fractions(k, j)? {
+                Some(f) => quotients.push(f),
+                None => break,
+            }
+        }
+    }
+    if quotients.len() == np {
+        return Ok(Normalised {
+            j,
+            alpha: vec![vec![0u32; np]; n - 1],
+            axes: None,
+            quotients: Some(quotients),
+        });
+    }
+    Ok(Normalised {
+        j: n - 1,
+        alpha: vec![vec![0u32; np]; n - 1],
+        axes: None,
+        quotients: Some(by_last),
+    })
+}
+
+/// The first reconstruction prime (the axis probes' field).
+const P0: u64 = obsan_recon::PRIMES[0];
+
+/// A least common multiple of univariate polynomials modulo `p`.
+fn ulcm(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
+    let g = ugcd(a, b, p);
+    umul(&udiv(a, &g, p), b, p)
+}
+
+/// [`normalisation`]'s choice.
+struct Normalised {
+    /// The coefficient the others are divided by.
+    j: usize,
+    /// Per quotient, the monomial `theta^alpha` it is multiplied by.
+    alpha: Vec<Vec<u32>>,
+    /// Per axis, the quotients by `c_j` when every one has a monomial
+    /// denominator there; `None` otherwise.
+    axes: Option<Vec<Vec<Fraction>>>,
+    /// When no coefficient gave monomial denominators: per axis, the
+    /// quotients by `c_j` (`alpha` zero), for [`common_denominator`].
+    quotients: Option<Vec<Vec<Fraction>>>,
+}
+
+/// When no coefficient is a monomial (MAPK_5out's relations over several
+/// experiments): the quotients' common denominator `D`, exactly, and per
+/// quotient its degree in each parameter once multiplied by `D`.
+///
+/// The relation's coefficients have no common factor, so the least common
+/// multiple of the reduced quotients `c_m / c_last` is `c_last` itself up
+/// to a constant; along each axis line (generic) it is the lcm of their
+/// univariate denominators. A few quotients whose denominators are coprime
+/// along every axis and whose product is divisible by every other one's
+/// there are chosen (greedily, smallest numerators first among those that
+/// add the most degree), reconstructed alone as rational functions
+/// (`reconstruct_vec`, verified at fresh points), and the product of their
+/// denominators is `D`: generically the lcm. The quotients times `D` are
+/// then polynomials, interpolated sparsely with the degree bounds
+/// `deg n_m + deg D - deg d_m` per axis. A non-generic axis can only make
+/// the choice wrong, never the answer: the products are then no
+/// polynomials, the sparse interpolation does not recognise them and the
+/// rational reconstruction takes them (times `D`, undone exactly). `None`
+/// when no such choice exists.
+#[allow(clippy::type_complexity)]
+fn common_denominator(
+    quotients: &[Vec<Fraction>],
+    base: &[u64],
+    j: usize,
+    np: usize,
+    bb: &mut BlackBox<'_>,
+    ropts: &Options,
+) -> Result<Option<(RPoly, Vec<Vec<u32>>)>, obsan_recon::ReconError<AnalysisError>> {
+    let p = obsan_recon::PRIMES[0];
+    let nq = quotients.first().map_or(0, Vec::len);
+    // Per axis, the product of the chosen denominators so far (a multiple
+    // of their lcm there: enough to tell when every one divides it).
+    let mut cur: Vec<Vec<u64>> = vec![vec![1]; quotients.len()];
+    let mut chosen: Vec<usize> = Vec::new();
+    let covered = |cur: &[Vec<u64>]| {
+        quotients
+            .iter()
+            .zip(cur)
+            .all(|(fr, c)| fr.iter().all(|(_, d)| divides(d, c, p)))
+    };
+    while !covered(&cur) {
+        // The quotient of the smallest numerator (the monomials its
+        // degrees allow) whose denominator adds a factor on some axis; ties
+        // to the most degree added.
+        let best = (0..nq)
+            .filter(|m| !chosen.contains(m))
+            .filter_map(|m| {
+                let mut gain = 0;
+                for (fr, c) in quotients.iter().zip(&cur) {
+                    let d = &fr[m].1;
+                    gain += udeg(d) - udeg(&ugcd(d, c, p));
+                }
+                let num = quotients
+                    .iter()
+                    .map(|fr| udeg(&fr[m].0) + 1)
+                    .fold(1usize, usize::saturating_mul);
+                (gain > 0).then_some((std::cmp::Reverse(num), gain, m))
+            })
+            .max();
+        let Some((_, _, m)) = best else {
+            return Ok(None);
+        };
+        for (fr, c) in quotients.iter().zip(cur.iter_mut()) {
+            *c = umul(c, &fr[m].1, p);
+        }
+        chosen.push(m);
+    }
+    if chosen.is_empty() {
+        return Ok(None);
+    }
+    let mut one = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+        let Some(v) = bb(pt, q)? else {
+            return Ok(None);
+        };
+        let Some(iv) = obsan_recon::fp::inv(v[j], q) else {
+            return Ok(None);
+        };
+        let quo: Vec<u64> = others(&v, j).collect();
+        Ok(Some(chosen.iter().map(|&m| fmul(quo[m], iv, q)).collect()))
+    };
+    let r = reconstruct_vec(np, chosen.len(), &mut one, ropts)?;
+    let dens: Vec<&RPoly> = r.functions.iter().map(Rational::den).collect();
+    let (mono, mut rests) = factors(&dens, np);
+    // A factor shared by two denominators (a binomial dividing a larger
+    // one) is counted twice: dropped while the product, restricted to each
+    // axis line, stays divisible by every quotient's denominator there.
+    let covers = |rests: &[RPoly]| {
+        let d = product(&mono, rests);
+        quotients.iter().enumerate().all(|(k, fr)| {
+            let dk = restrict(&d, base, k, p);
+            fr.iter().all(|(_, den)| divides(den, &dk, p))
+        })
+    };
+    for i in (0..rests.len()).rev() {
+        let mut fewer = rests.clone();
+        fewer.remove(i);
+        if covers(&fewer) {
+            rests = fewer;
+        }
+    }
+    let d = product(&mono, &rests);
+    // Along axis k (generic base) D has its degree in theta_k.
+    let dk: Vec<usize> = (0..np)
+        .map(|k| {
+            d.terms()
+                .iter()
+                .map(|t| t.exps.get(k).copied().unwrap_or(0))
+                .max()
+                .unwrap_or(0) as usize
+        })
+        .collect();
+    let per = (0..nq)
+        .map(|m| {
+            quotients
+                .iter()
+                .zip(&dk)
+                .map(|(fr, &e)| (udeg(&fr[m].0) + e).saturating_sub(udeg(&fr[m].1)) as u32)
+                .collect()
+        })
+        .collect();
+    Ok(Some((d, per)))
+}
+
+/// `poly` on the axis line `theta_k = t` (the others at `base`), modulo
+/// `p`: its coefficients in `t`, lowest first.
+fn restrict(poly: &RPoly, base: &[u64], k: usize, p: u64) -> Vec<u64> {
+    let mut out = vec![0u64];
+    for t in poly.terms() {
+        let e = t.exps.get(k).copied().unwrap_or(0) as usize;
+        let mut rest = t.clone();
+        if let Some(x) = rest.exps.get_mut(k) {
+            *x = 0;
+        }
+        let v = RPoly::from_terms([rest]).eval_mod(base, p);
+        if out.len() <= e {
+            out.resize(e + 1, 0);
+        }
+        out[e] = obsan_recon::fp::add(out[e], v, p);
+    }
+    out
+}
+
+/// The monomial times the product of the factors.
+fn product(mono: &[u32], rests: &[RPoly]) -> RPoly {
+    let one = RPoly::from_terms([obsan_recon::Term {
+        exps: mono.to_vec(),
+        coeff: 1.into(),
+    }]);
+    rests.iter().fold(one, |acc, r| acc.times(r))
+}
+
+/// A common multiple of `dens`, close to their lcm without a multivariate
+/// gcd: the largest monomial factor of each, then the product of the
+/// remaining factors that differ up to a constant (any common multiple
+/// keeps the products polynomials, only larger; `common_denominator` drops
+/// the factors it can).
+#[cfg(test)]
+fn lcm_multiple(dens: &[&RPoly], np: usize) -> RPoly {
+    let (mono, rests) = factors(dens, np);
+    product(&mono, &rests)
+}
+
+/// [`lcm_multiple`]'s largest monomial and its other factors.
+fn factors(dens: &[&RPoly], np: usize) -> (Vec<u32>, Vec<RPoly>) {
+    use obsan_recon::Term;
+    let mut mono = vec![0u32; np];
+    let mut rests: Vec<RPoly> = Vec::new();
+    for d in dens {
+        let low: Vec<u32> = (0..np)
+            .map(|k| {
+                d.terms()
+                    .iter()
+                    .map(|t| t.exps.get(k).copied().unwrap_or(0))
+                    .min()
+                    .unwrap_or(0)
+            })
+            .collect();
+        for (m, &l) in mono.iter_mut().zip(&low) {
+            *m = (*m).max(l);
+        }
+        let rest = RPoly::from_terms(d.terms().iter().map(|t| {
+            Term {
+                exps: (0..np)
+                    .map(|k| t.exps.get(k).copied().unwrap_or(0) - low[k])
+                    .collect(),
+                coeff: t.coeff.clone(),
+            }
+        }));
+        let proportional = |a: &RPoly, b: &RPoly| {
+            a.terms().len() == b.terms().len()
+                && a.terms().iter().zip(b.terms()).all(|(x, y)| {
+                    x.exps == y.exps
+                        && &x.coeff * &b.terms()[0].coeff == &y.coeff * &a.terms()[0].coeff
+                })
+        };
+        if rest.terms().len() > 1 && !rests.iter().any(|r| proportional(r, &rest)) {
+            rests.push(rest);
+        }
+    }
+    (mono, rests)
+}
+
+/// The degree of a univariate polynomial (coefficients lowest first).
+fn udeg(a: &[u64]) -> usize {
+    a.iter().rposition(|&c| c != 0).unwrap_or(0)
+}
+
+/// The product of univariate polynomials modulo `p`.
+fn umul(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
+    let (a, b) = (&a[..=udeg(a)], &b[..=udeg(b)]);
+    let mut out = vec![0u64; a.len() + b.len() - 1];
+    for (i, &x) in a.iter().enumerate() {
+        for (j, &y) in b.iter().enumerate() {
+            out[i + j] = obsan_recon::fp::add(out[i + j], fmul(x, y, p), p);
+        }
+    }
+    out
+}
+
+/// A greatest common divisor of univariate polynomials modulo `p`
+/// (Euclid; up to a constant).
+fn ugcd(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
+    let (mut a, mut b) = (a.to_vec(), b.to_vec());
+    while b.iter().any(|&c| c != 0) {
+        let r = urem(&a, &b, p);
+        a = b;
+        b = r;
+    }
+    a
+}
+
+/// The quotient of `b` divided by `a` modulo `p` (`a` not zero; the
+/// remainder dropped).
+fn udiv(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+    use obsan_recon::fp::sub;
+    let da = udeg(a);
+    let il = obsan_recon::fp::inv(a[da], p).unwrap_or(0);
+    let mut r: Vec<u64> = b.to_vec();
+    let mut q = vec![0u64; udeg(b).saturating_sub(da) + 1];
+    while let Some(dr) = r.iter().rposition(|&c| c != 0) {
+        if dr < da {
+            break;
+        }
+        let c = fmul(r[dr], il, p);
+        q[dr - da] = c;
+        for (i, &ai) in a[..=da].iter().enumerate() {
+            let k = dr - da + i;
+            r[k] = sub(r[k], fmul(c, ai, p), p);
+        }
+    }
+    q
+}
+
+/// The remainder of `b` divided by `a` modulo `p` (`a` not zero).
+fn urem(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+    use obsan_recon::fp::sub;
+    let da = udeg(a);
+    let il = obsan_recon::fp::inv(a[da], p).unwrap_or(0);
+    let mut r: Vec<u64> = b.to_vec();
+    while let Some(dr) = r.iter().rposition(|&c| c != 0) {
+        if dr < da {
+            break;
+        }
+        let c = fmul(r[dr], il, p);
+        for (i, &ai) in a[..=da].iter().enumerate() {
+            let k = dr - da + i;
+            r[k] = sub(r[k], fmul(c, ai, p), p);
+        }
+    }
+    r
+}
+
+/// Whether `a` divides `b` modulo `p` (coefficients lowest degree first;
+/// `a` not zero).
+fn divides(a: &[u64], b: &[u64], p: u64) -> bool {
+    a.iter().any(|&c| c != 0) && urem(b, a, p).iter().all(|&c| c == 0)
 }
 
 fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisError> {
@@ -734,7 +1153,7 @@ fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisErr
 /// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
 #[allow(clippy::type_complexity)]
 fn count(
-    fns: &[Rational],
+    fns: &[(RPoly, RPoly)],
     np: usize,
     opts: &GlobalOptions,
     seed: u64,
@@ -753,14 +1172,18 @@ fn count(
         eqs.clear();
         dens.clear();
         let mut ok = true;
-        for f in fns {
-            let (n, d) = (to_fp(f.num(), &ring, q)?, to_fp(f.den(), &ring, q)?);
+        for (fn_, fd) in fns {
+            let (n, d) = (to_fp(fn_, &ring, q)?, to_fp(fd, &ring, q)?);
             let (nv, dv) = (ring.eval(&n, &star), ring.eval(&d, &star));
             if dv == 0 {
                 ok = false;
                 break;
             }
             eqs.push(ring.sub(&ring.scale(&n, dv), &ring.scale(&d, nv)));
+            // Up to a constant (a common denominator comes scaled by each
+            // fraction's own constant): the first coefficient made 1.
+            let lead = d.terms().first().map_or(1, |t| t.1);
+            let d = ring.scale(&d, obsan_recon::fp::inv(lead, q).unwrap_or(1));
             if d.degree() > 0 && !dens.contains(&d) {
                 dens.push(d);
             }
@@ -878,6 +1301,49 @@ fn count(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Univariate gcd, lcm, quotient and divisibility modulo p on planted
+    /// factors: a = f g, b = f h with f = (t + 3)(t - 5), g = t^2 + 7,
+    /// h = 2 t - 1 (by hand): gcd ~ f, lcm ~ f g h, a / f = g exactly.
+    #[test]
+    fn univariate_gcd_lcm_by_planted_factors() {
+        let p = P0;
+        let m = |c: i64| if c < 0 { p - (-c) as u64 } else { c as u64 };
+        let f = umul(&[3, 1], &[m(-5), 1], p);
+        let g = vec![7, 0, 1];
+        let h = vec![m(-1), 2];
+        let (a, b) = (umul(&f, &g, p), umul(&f, &h, p));
+        let gc = ugcd(&a, &b, p);
+        assert_eq!(udeg(&gc), 2);
+        assert!(divides(&gc, &f, p) && divides(&f, &gc, p));
+        let l = ulcm(&a, &b, p);
+        assert_eq!(udeg(&l), 5);
+        assert!(divides(&a, &l, p) && divides(&b, &l, p));
+        assert!(divides(&umul(&umul(&f, &g, p), &h, p), &l, p));
+        let q = udiv(&a, &f, p);
+        assert_eq!(&q[..=udeg(&q)], &g[..]);
+        assert!(!divides(&h, &g, p));
+        assert!(urem(&a, &f, p).iter().all(|&c| c == 0));
+    }
+
+    /// The common multiple of x^2 y (b + c), x (b + c) and 3 (x + 1) is
+    /// x^2 y (b + c)(x + 1): the largest monomial, each other factor once.
+    #[test]
+    fn common_multiple_of_monomials_and_binomials() {
+        use obsan_recon::Term;
+        let t = |e: [u32; 4], c: i64| Term {
+            exps: e.to_vec(),
+            coeff: c.into(),
+        };
+        // Variables x, y, b, c.
+        let d1 = RPoly::from_terms([t([2, 1, 1, 0], 1), t([2, 1, 0, 1], 1)]);
+        let d2 = RPoly::from_terms([t([1, 0, 1, 0], 2), t([1, 0, 0, 1], 2)]);
+        let d3 = RPoly::from_terms([t([1, 0, 0, 0], 3), t([0, 0, 0, 0], 3)]);
+        let l = lcm_multiple(&[&d1, &d2, &d3], 4);
+        let want = RPoly::from_terms([t([2, 1, 1, 0], 1), t([2, 1, 0, 1], 1)])
+            .times(&RPoly::from_terms([t([1, 0, 0, 0], 3), t([0, 0, 0, 0], 3)]));
+        assert_eq!(l, want);
+    }
 
     /// The derivative of a fraction: `(t^2 + 1) / (t + 2)` at `t = 3` is
     /// `(2t (t + 2) - (t^2 + 1)) / (t + 2)^2 = 20 / 25` (by hand).
