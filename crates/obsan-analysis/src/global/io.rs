@@ -455,9 +455,14 @@ impl IoModel {
             })
             .collect();
         lists.sort_unstable();
-        let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(lists.len());
+        // Rows inserted a block at a time: the echelon alone holds `N`
+        // rows (the memory the kernel's budget check allowed).
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+        let mut ech = RowEchelon::new(FpField);
+        let mut dependent = 0;
+        let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(BLOCK);
         let mut stack: Vec<(usize, Ser)> = Vec::new();
-        for f in &lists {
+        for (i, f) in lists.iter().enumerate() {
             let shared = stack
                 .iter()
                 .zip(f)
@@ -475,14 +480,16 @@ impl IoModel {
                 None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
                 Some((_, t)) => t.iter().map(|&c| Fp(c)).collect(),
             });
+            if rows.len() == BLOCK || i + 1 == lists.len() {
+                let block = std::mem::take(&mut rows);
+                dependent += ech
+                    .insert_all(block, threads)
+                    .iter()
+                    .filter(|&&n| !n)
+                    .count();
+            }
         }
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
-        let mut ech = RowEchelon::new(FpField);
-        ech.insert_all(rows, threads)
-            .iter()
-            .filter(|&&new| !new)
-            .count()
-            == 1
+        dependent == 1
     }
 }
 
