@@ -473,6 +473,25 @@ mod tests {
             .fold(0, |s, (&x, &y)| add(s, field::mul(x, y, P), P))
     }
 
+    /// The `m x n` product of random `m x k` and `k x n` factors (rank at
+    /// most `k`); the second's entries are `nonzero - shift` (`shift` 1:
+    /// zeros allowed).
+    fn planted(rng: &mut Rng, m: usize, n: usize, k: usize, shift: u64) -> Vec<Vec<u64>> {
+        let b: Vec<Vec<u64>> = (0..m)
+            .map(|_| (0..k).map(|_| rng.nonzero(P)).collect())
+            .collect();
+        let c: Vec<Vec<u64>> = (0..k)
+            .map(|_| (0..n).map(|_| rng.nonzero(P) - shift).collect())
+            .collect();
+        b.iter()
+            .map(|br| {
+                (0..n)
+                    .map(|j| dot(br, &c.iter().map(|cr| cr[j]).collect::<Vec<_>>()))
+                    .collect()
+            })
+            .collect()
+    }
+
     /// A random solution x and `m` augmented rows `[a | a.x]` in `n` unknowns.
     fn random_system(rng: &mut Rng, m: usize, n: usize) -> (Vec<u64>, Vec<Vec<u64>>) {
         let x: Vec<u64> = (0..n).map(|_| rng.nonzero(P)).collect();
@@ -598,20 +617,7 @@ mod tests {
         let mut rng = Rng::new(11);
         for case in 0..30 {
             let (m, n, k) = (2 + case % 9, 1 + case % 13, 1 + case % 5);
-            let b: Vec<Vec<u64>> = (0..m)
-                .map(|_| (0..k).map(|_| rng.nonzero(P)).collect())
-                .collect();
-            let c: Vec<Vec<u64>> = (0..k)
-                .map(|_| (0..n).map(|_| rng.nonzero(P) - 1).collect())
-                .collect();
-            let mut a: Vec<Vec<u64>> = b
-                .iter()
-                .map(|br| {
-                    (0..n)
-                        .map(|j| dot(br, &c.iter().map(|cr| cr[j]).collect::<Vec<_>>()))
-                        .collect()
-                })
-                .collect();
+            let mut a = planted(&mut rng, m, n, k, 1);
             // A zero column and a unit row, so that pivots are skipped.
             for r in a.iter_mut() {
                 r[n / 2] = 0;
@@ -642,20 +648,7 @@ mod tests {
         // reduction.
         let mut rng = Rng::new(5);
         for (m, n, k) in [(40, 30, 30), (400, 330, 250), (90, 120, 61)] {
-            let b: Vec<Vec<u64>> = (0..m)
-                .map(|_| (0..k).map(|_| rng.nonzero(P)).collect())
-                .collect();
-            let c: Vec<Vec<u64>> = (0..k)
-                .map(|_| (0..n).map(|_| rng.nonzero(P)).collect())
-                .collect();
-            let mut a: Vec<Vec<u64>> = b
-                .iter()
-                .map(|br| {
-                    (0..n)
-                        .map(|j| dot(br, &c.iter().map(|cr| cr[j]).collect::<Vec<_>>()))
-                        .collect()
-                })
-                .collect();
+            let mut a = planted(&mut rng, m, n, k, 0);
             a.insert(7, a[3].clone());
             for threads in [1, 2, 3] {
                 let mut one = RowEchelon::new(F);

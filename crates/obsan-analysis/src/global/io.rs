@@ -302,6 +302,17 @@ impl IoModel {
                 vars[s][k + 1] = fp::mul(quos[s][k], inv, p);
             }
         }
+        self.outputs(inst, a, vars)
+    }
+
+    /// The outputs' series from the states' and inputs' (`vars`, states
+    /// first), with the inputs split off: [`IoModel::taylor`]'s answer.
+    fn outputs(
+        &self,
+        inst: &Inst,
+        a: Arith,
+        mut vars: Vec<Ser>,
+    ) -> Option<(Arith, Vec<Ser>, Vec<Ser>)> {
         let (mut t1, mut t2) = (a.zero(), a.zero());
         let mut y = Vec::with_capacity(inst.outputs.len());
         for (n, d) in &inst.outputs {
@@ -364,15 +375,7 @@ impl IoModel {
                 }
             }
         }
-        let mut y = Vec::with_capacity(inst.outputs.len());
-        for (n, d) in &inst.outputs {
-            y.push(a.div(
-                &a.eval(n, &vars, &mut t1, &mut t2),
-                &a.eval(d, &vars, &mut t1, &mut t2),
-            )?);
-        }
-        let u = vars.split_off(self.nx);
-        Some((a, y, u))
+        self.outputs(inst, a, vars)
     }
 
     fn jets(&self, inst: &Inst, len: usize, grad: bool, rng: &mut Rng) -> Option<Jets> {

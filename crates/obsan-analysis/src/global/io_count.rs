@@ -1090,6 +1090,17 @@ fn ugcd(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
 /// The quotient of `b` divided by `a` modulo `p` (`a` not zero; the
 /// remainder dropped).
 fn udiv(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+    udivrem(b, a, p).0
+}
+
+/// The remainder of `b` divided by `a` modulo `p` (`a` not zero).
+fn urem(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+    udivrem(b, a, p).1
+}
+
+/// The quotient and remainder of `b` divided by `a` modulo `p` (`a` not
+/// zero; coefficients lowest degree first).
+fn udivrem(b: &[u64], a: &[u64], p: u64) -> (Vec<u64>, Vec<u64>) {
     use obsan_recon::fp::sub;
     let da = udeg(a);
     let il = obsan_recon::fp::inv(a[da], p).unwrap_or(0);
@@ -1106,26 +1117,7 @@ fn udiv(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
             r[k] = sub(r[k], fmul(c, ai, p), p);
         }
     }
-    q
-}
-
-/// The remainder of `b` divided by `a` modulo `p` (`a` not zero).
-fn urem(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
-    use obsan_recon::fp::sub;
-    let da = udeg(a);
-    let il = obsan_recon::fp::inv(a[da], p).unwrap_or(0);
-    let mut r: Vec<u64> = b.to_vec();
-    while let Some(dr) = r.iter().rposition(|&c| c != 0) {
-        if dr < da {
-            break;
-        }
-        let c = fmul(r[dr], il, p);
-        for (i, &ai) in a[..=da].iter().enumerate() {
-            let k = dr - da + i;
-            r[k] = sub(r[k], fmul(c, ai, p), p);
-        }
-    }
-    r
+    (q, r)
 }
 
 /// Whether `a` divides `b` modulo `p` (coefficients lowest degree first;
