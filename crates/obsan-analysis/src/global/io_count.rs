@@ -254,7 +254,7 @@ pub(super) fn reconstruct(
     let mut base_rng = Rng::new(seed ^ 0xde40);
     let base: Vec<u64> = (0..np).map(|_| elem(&mut base_rng, p0)).collect();
     let norm = normalisation(np, support.len(), &mut coeffs, &base)?;
-    let (j, alpha) = (norm.j, norm.alpha);
+    let (j, alpha) = (norm.j, norm.alpha.clone());
     let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
         obsan_recon::ReconError::BlackBox(e) => e,
         e => err(format!(
@@ -270,34 +270,8 @@ pub(super) fn reconstruct(
     // bounds if every one is a polynomial, the quotients' Jacobian at the
     // base point (from the same axis samples), and the common denominator
     // when no coefficient is a monomial (`common_denominator`).
-    let (per_axis, bounds, jac, den) = match (&norm.axes, &norm.quotients) {
-        (Some(fr), _) => (
-            Some(axis_degrees(fr, &alpha)),
-            polynomial_bounds(fr, &alpha),
-            axis_jacobian(fr, &base, p0),
-            None,
-        ),
-        (None, Some(bl)) => {
-            match common_denominator(bl, &base, j, np, &mut coeffs, &ropts).map_err(recon_err)? {
-                Some((d, per)) => {
-                    let per_var = (0..np)
-                        .map(|k| per.iter().map(|q| q[k]).max().unwrap_or(0))
-                        .collect();
-                    (
-                        Some(per),
-                        Some(DegreeBounds {
-                            per_var,
-                            total: None,
-                        }),
-                        axis_jacobian(bl, &base, p0),
-                        Some(d),
-                    )
-                }
-                None => (None, None, None, None),
-            }
-        }
-        (None, None) => (None, None, None, None),
-    };
+    let (per_axis, bounds, jac, den) =
+        scaling(&norm, &base, np, &mut coeffs, &ropts).map_err(recon_err)?;
     // Divided by a coefficient that is a monomial in the parameters and
     // scaled by their monomial denominators, or times the common
     // denominator, the coefficients are (mostly) polynomials, which need
@@ -430,6 +404,50 @@ pub(super) fn reconstruct(
         points: calls,
         part: None,
         denominator_terms: den.as_ref().map_or(0, |d| d.terms().len()),
+    })
+}
+
+/// Per quotient its degree in each parameter after the scaling, the bounds
+/// if every one is then a polynomial, the quotients' Jacobian at the base
+/// point, and the common denominator when no coefficient is a monomial.
+type Scaling = (
+    Option<Vec<Vec<u32>>>,
+    Option<DegreeBounds>,
+    Option<Vec<Vec<u64>>>,
+    Option<RPoly>,
+);
+
+/// [`reconstruct`]'s [`Scaling`] from the normalisation's axis probes: the
+/// monomial one, or [`common_denominator`]'s.
+fn scaling(
+    norm: &Normalised,
+    base: &[u64],
+    np: usize,
+    bb: &mut BlackBox<'_>,
+    ropts: &Options,
+) -> Result<Scaling, obsan_recon::ReconError<AnalysisError>> {
+    let p0 = obsan_recon::PRIMES[0];
+    Ok(match (&norm.axes, &norm.quotients) {
+        (Some(fr), _) => (
+            Some(axis_degrees(fr, &norm.alpha)),
+            polynomial_bounds(fr, &norm.alpha),
+            axis_jacobian(fr, base, p0),
+            None,
+        ),
+        (None, Some(q)) => match common_denominator(q, base, norm.j, np, bb, ropts)? {
+            Some((d, per)) => {
+                let per_var = (0..np)
+                    .map(|k| per.iter().map(|q| q[k]).max().unwrap_or(0))
+                    .collect();
+                let bounds = DegreeBounds {
+                    per_var,
+                    total: None,
+                };
+                (Some(per), Some(bounds), axis_jacobian(q, base, p0), Some(d))
+            }
+            None => (None, None, None, None),
+        },
+        (None, None) => (None, None, None, None),
     })
 }
 
