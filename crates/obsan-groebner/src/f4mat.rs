@@ -111,6 +111,9 @@ impl Sym<'_, '_> {
         let s = self.s;
         let g = &s.el[k];
         self.grow(row_bytes(g.ids.len()))?;
+        // Each product monomial is one unit of work (its exponents, hash
+        // and table lookup cost about a multiply-add's share of time).
+        s.work.set(s.work.get() + g.ids.len() as u64);
         let mut cols = Vec::with_capacity(g.ids.len());
         for &id in &g.ids {
             s.t.mul(q, id, &mut self.prod)?;
@@ -148,6 +151,8 @@ impl Sym<'_, '_> {
     /// divides column `c`.
     fn reducer(&self, c: u32) -> Option<usize> {
         let s = self.s;
+        // One unit of work per divisibility test.
+        s.work.set(s.work.get() + self.act.len() as u64);
         self.act
             .iter()
             .copied()
@@ -200,6 +205,7 @@ pub(crate) fn reduce_pairs(st: &mut St, sel: &[Pair]) -> Result<Vec<Elem>, GbErr
     while c < m.sym.len() {
         if c % 256 == 0 {
             deadline(s)?;
+            over_work(s)?;
         }
         if m.pivot[c] == NONE {
             if let Some(k) = m.reducer(c as u32) {
@@ -234,6 +240,17 @@ pub(crate) fn reduce_pairs(st: &mut St, sel: &[Pair]) -> Result<Vec<Elem>, GbErr
     }
     Ok(out)
 }
+
+/// Past `GbBudget::max_work` (checked between blocks of work).
+fn over_work(s: &St) -> Result<(), GbError> {
+    if s.work.get() > s.budget.max_work {
+        return Err(GbError::Budget(WORK));
+    }
+    Ok(())
+}
+
+/// The work bound's name in its error (callers match on it).
+const WORK: &str = "work (multiply-adds of the F4 eliminations)";
 
 fn deadline(s: &St) -> Result<(), GbError> {
     if let Some(d) = s.budget.deadline {
@@ -301,9 +318,7 @@ fn eliminate(m: &mut Sym, todo: &[usize]) -> Result<(Vec<(Vec<u32>, Vec<u64>)>, 
             deadline(s)?;
             s.work.set(work);
             if work > s.budget.max_work {
-                return Err(GbError::Budget(
-                    "work (multiply-adds of the F4 eliminations)",
-                ));
+                return Err(GbError::Budget(WORK));
             }
         }
         let row = &rows[t];
