@@ -59,7 +59,7 @@ fn goodwin_falls_back_on_io() {
     // SI.jl's published verdicts (its test of assess_identifiability; the
     // file's `# global:` line): b, c global; beta, delta local; alpha,
     // gama not identifiable. The Taylor system's Gröbner basis needs far
-    // more work than auto's first bound (9.3e9 multiply-adds against 6e7,
+    // more work than auto's bounds (9.3e9 multiply-adds against 5e6 and 6e7,
     // docs/performance.md), so `auto` answers by the io route and says why,
     // then counts the initial states by the Taylor route with b, c, sigma
     // known. SI.jl's identifiable functions with states (its

@@ -83,6 +83,14 @@ pub(super) mod fp {
 #[derive(Clone, Debug, Default)]
 struct SPoly(Vec<(u64, Vec<u32>, Vec<u32>)>);
 
+/// Threads for a kernel's blocks and rows: at most two, read once per
+/// process (`available_parallelism` reads the cgroup's quota from files on
+/// Linux: a tenth of St's time when asked at every black-box point).
+pub(super) fn threads() -> usize {
+    static THREADS: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *THREADS.get_or_init(|| std::thread::available_parallelism().map_or(1, |n| n.get().min(2)))
+}
+
 /// The model as series arithmetic sees it, modulo one prime.
 pub(super) struct IoModel {
     p: u64,
@@ -96,6 +104,13 @@ pub(super) struct IoModel {
     pub(super) deadline: Option<std::time::Instant>,
     /// Bytes a kernel's dense rows may hold (the memory budget).
     pub(super) max_bytes: usize,
+    /// Multiply-adds this model's kernels may take (`GlobalOptions::
+    /// max_work`: bounded in `--route auto`'s cheap attempt only, so that
+    /// it stops early and deterministically, io_choice.rs). A kernel of `n`
+    /// monomials is charged `n^3 / 2` before it runs (about `n` rows, each
+    /// reduced against up to `n` rows of `n` entries).
+    pub(super) max_work: u64,
+    work: std::sync::atomic::AtomicU64,
 }
 
 pub(super) fn int_mod(c: &Int, p: u64) -> u64 {
@@ -154,7 +169,15 @@ impl IoModel {
             outputs: m.outputs.iter().map(pair).collect::<Result<_, _>>()?,
             deadline: None,
             max_bytes: usize::MAX,
+            max_work: u64::MAX,
+            work: std::sync::atomic::AtomicU64::new(0),
         })
+    }
+
+    /// Multiply-adds charged to this model's kernels so far (`max_work`).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(super) fn work_spent(&self) -> u64 {
+        self.work.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// The numbers of states and of inputs.
@@ -460,7 +483,7 @@ impl IoModel {
         lists.sort_unstable();
         // Rows inserted a block at a time: the echelon alone holds `N`
         // rows (the memory the kernel's budget check allowed).
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+        let threads = threads();
         let mut ech = RowEchelon::new(FpField);
         let mut dependent = 0;
         let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(BLOCK);
@@ -566,7 +589,7 @@ fn kernel<F: PrimeField>(
     // Rows by blocks, each block reduced on two threads when the machine
     // has them and the kernel is large (`RowEchelon::insert_all`): a
     // stalled search draws at most a block past its last independent row.
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+    let threads = threads();
     // Blocks of about a sixteenth of the columns: a search that stalls
     // draws past its rank at most that many rows.
     let block = (ncols / 16).clamp(1, BLOCK);
@@ -687,6 +710,18 @@ impl IoModel {
                 ),
             ));
         }
+        let n = monos.len() as u64;
+        let work = self
+            .work
+            .load(std::sync::atomic::Ordering::Relaxed)
+            .saturating_add(n.saturating_pow(3) / 2);
+        if work > self.max_work {
+            return Err(err(format!(
+                "global (io): work budget exhausted: the relations' kernels would pass {:.1e} multiply-adds",
+                self.max_work as f64
+            )));
+        }
+        self.work.store(work, std::sync::atomic::Ordering::Relaxed);
         let tries = std::sync::atomic::AtomicUsize::new(0);
         let inst = self.at(theta);
         let mut fact = vec![1u64; len];
@@ -750,7 +785,7 @@ impl IoModel {
                     .collect());
             }
         };
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get().min(2));
+        let threads = threads();
         // A block of rows, split between the threads when the block costs
         // far more than starting them (the series' products: a third of
         // SIWR_orig's time on one thread), by the rows drawn so far.

@@ -241,6 +241,7 @@ pub(super) fn reconstruct(
             let mut io = IoModel::new(m, p)?;
             io.deadline = opts.deadline;
             io.max_bytes = opts.max_bytes;
+            io.max_work = opts.max_io_work;
             e.insert((io, rng));
         }
         let Some((io, rng)) = models.get_mut(&p) else {

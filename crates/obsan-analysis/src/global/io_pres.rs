@@ -125,6 +125,7 @@ fn relations_under(
     let mut io = IoModel::new(&mp, obsan_expr::P)?;
     io.deadline = opts.deadline;
     io.max_bytes = opts.max_bytes;
+    io.max_work = opts.max_io_work;
     let orders = io.orders(theta, rng)?;
     let mut rels = Vec::with_capacity(orders.len());
     for (i, &out) in perm.iter().enumerate().take(orders.len()) {
@@ -232,11 +233,19 @@ pub(super) fn presentation(
     // only within the small ansatz's size, so the reconstruction costs no
     // more than the ansatz's relations would (HIV's reversed priority: 22 +
     // 61 monomials, whose dense ansatz passes the cap).
+    // Not under a smaller work bound than its own (`--route auto`'s cheap
+    // attempt, io_choice.rs): F4's symbolic preprocessing, which the bound
+    // does not count, then costs more than the kernels (SIRC_forced).
     let search = Attempt {
         eliminate: true,
         cap: cap.min(SEARCH_CAP),
         max_work: SEARCH_WORK,
-        max_bytes: SEARCH_BYTES,
+        // Under a smaller work bound (`--route auto`'s cheap attempt,
+        // io_choice.rs), less memory in proportion: F4's symbolic
+        // preprocessing, which the work does not count, grows with its
+        // matrices (SIRC_forced's search: 0.3 s under 5e6 multiply-adds).
+        max_bytes: (SEARCH_BYTES as u128 * u128::from(opts.max_work.min(SEARCH_WORK))
+            / u128::from(SEARCH_WORK)) as usize,
         max_support: if eliminate {
             usize::MAX
         } else {

@@ -2,7 +2,8 @@
 //! parameters' counts as a [`GlobalReport`], used when the Taylor system
 //! passes a budget (or on request).
 
-use super::io_count::{io_count_with, MAX_ANSATZ};
+use super::io_count::io_count_with;
+pub(super) use super::io_count::MAX_ANSATZ;
 use super::model::zmodel;
 use super::outputs::OutputForm;
 use super::types::{err, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
@@ -20,6 +21,7 @@ pub(super) fn io_route(
     opts: &GlobalOptions,
     fallback: Option<String>,
     eliminate: bool,
+    cap: usize,
 ) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     if m.angle.iter().any(|&a| a) || m.forms.iter().any(|f| *f != OutputForm::Direct) {
@@ -27,7 +29,7 @@ pub(super) fn io_route(
             "global (io): angles, and outputs read through sqrt, atan or a tangent, are counted by the Taylor route only",
         ));
     }
-    let c = io_count_with(&m, opts, opts.seed, eliminate, MAX_ANSATZ)?;
+    let c = io_count_with(&m, opts, opts.seed, eliminate, cap)?;
     let nx = m.dyn_vars.len();
     let variables: Vec<GlobalVariable> = nf.state[nx..]
         .iter()

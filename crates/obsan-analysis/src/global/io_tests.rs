@@ -118,6 +118,35 @@ fn decay_with_input() {
     assert_eq!(fp::mul(coeff(&r, &[0, 0, 1, 0]), inv, p), p - 1);
 }
 
+/// The kernels' work bound (`--route auto`'s cheap attempt) is
+/// deterministic: the relation found within the work an unbounded search
+/// spent is found again within exactly that bound, and refused one
+/// multiply-add below it, naming the bound.
+#[test]
+fn kernel_work_bound_is_exact_and_deterministic() {
+    let m = model(
+        "system t\nstate x\nparam a\ninput u\nx' = -a*x^2 + u\noutput y = x\n",
+        "t.sys",
+    );
+    let p = obsan_expr::P;
+    let a = 123_456_789u64;
+    let find = |max_work: u64| {
+        let mut rng = Rng::new(7);
+        let mut io = IoModel::new(&m, p).unwrap();
+        io.max_work = max_work;
+        let orders = io.orders(&[a], &mut rng).unwrap();
+        let r = io.relation(&[a], &orders, 0, 4, 1000, &mut rng);
+        (r.map(|r| r.map(|r| r.support.len())), io.work_spent())
+    };
+    let (free, spent) = find(u64::MAX);
+    // y' + a y^2 - u = 0: three monomials.
+    assert_eq!(free.unwrap(), Some(3));
+    assert!(spent > 0);
+    assert_eq!(find(spent).0.unwrap(), Some(3));
+    let e = find(spent - 1).0.unwrap_err().to_string();
+    assert!(e.contains("work budget exhausted"), "{e}");
+}
+
 #[test]
 fn two_outputs_orderly_orders() {
     // x1' = -a x1, x2' = x1 - b x2, y1 = x1, y2 = x2: y1' + a y1 = 0

@@ -58,7 +58,7 @@ pub fn global_identifiability(
         // the io relations' coefficients count them (io_count.rs), and
         // elimination is asked for as by `--route io`.
         return match opts.route {
-            Route::Auto | Route::InputOutput => io_report::io_route(nf, opts, None, true),
+            Route::Auto | Route::InputOutput => io_report::io_route(nf, opts, None, true, io_report::MAX_ANSATZ),
             _ => Err(err(
                 "global: --multi-experiment counts by the input-output relations (--route io or auto)",
             )),
@@ -67,41 +67,68 @@ pub fn global_identifiability(
     match opts.route {
         Route::Taylor => taylor_route(nf, opts, false, true, &[]),
         Route::Lie => taylor_route(nf, opts, true, false, &[]),
-        Route::InputOutput => io_report::io_route(nf, opts, None, true),
+        Route::InputOutput => io_report::io_route(nf, opts, None, true, io_report::MAX_ANSATZ),
         Route::Auto => auto_route(nf, opts),
     }
 }
 
 /// `--route auto` (issue 36): the Taylor route first under a small bound on
-/// its Gröbner basis's work ([`io_choice::FIRST_WORK`]); past it, the
-/// input-output route, and when that one answers, the initial states by the
-/// Taylor route with the params it found global fixed (`states_after_io`,
-/// under [`io_choice::EARLY_WORK`]); only when the io route does not answer,
-/// the Taylor route again without the bound, then the Lie route (lie.rs: no
-/// Taylor unknowns, initial states counted too, every input's question).
-/// Its input-output route stops at the dense ansatz's cap: a relation past
-/// it (found by elimination under `--route io`, io_elim.rs) may keep the
+/// its Gröbner basis's work ([`io_choice::QUICK_WORK`]); past it, the
+/// input-output route on a small ansatz ([`io_choice::QUICK_ANSATZ`]); when
+/// that one does not answer, the Taylor route under a larger bound
+/// ([`io_choice::FIRST_WORK`]), then the input-output route on the full
+/// ansatz. When an io attempt answers, the initial states by the Taylor
+/// route with the params it found global fixed (`states_after_io`, under
+/// [`io_choice::EARLY_WORK`]); only when no io attempt answers, the Taylor
+/// route again without the bound, then the Lie route (lie.rs: no Taylor
+/// unknowns, initial states counted too, every input's question). Its
+/// input-output route stops at the dense ansatz's cap: a relation past it
+/// (found by elimination under `--route io`, io_elim.rs) may keep the
 /// reconstruction busy for minutes, with no bound yet to stop it early and
-/// deterministically.
+/// deterministically. Every step is deterministic (work and sizes, never
+/// time), so the same seed takes the same route.
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
-    let first = GlobalOptions {
-        max_work: opts.max_work.min(io_choice::FIRST_WORK),
+    let bounded = |work: u64| GlobalOptions {
+        max_work: opts.max_work.min(work),
         ..opts.clone()
     };
-    let why = match taylor_route(nf, &first, false, true, &[]) {
+    let quick = bounded(io_choice::QUICK_WORK);
+    let why = match taylor_route(nf, &quick, false, true, &[]) {
+        Err(AnalysisError::Invalid(why))
+            if io_choice::stopped_early(&why) && quick.max_work < opts.max_work =>
+        {
+            let reason = io_choice::early_reason(&why, quick.max_work);
+            let cheap = GlobalOptions {
+                max_io_work: opts.max_io_work.min(io_choice::QUICK_IO_WORK),
+                ..quick.clone()
+            };
+            match io_report::io_route(nf, &cheap, Some(reason), false, io_report::MAX_ANSATZ) {
+                Ok(r) => return states_after_io(nf, opts, r, true),
+                Err(AnalysisError::Timeout(e)) => return Err(AnalysisError::Timeout(e)),
+                // Larger relations, or none: the Taylor route goes on.
+                Err(_) => {}
+            }
+            match taylor_route(nf, &bounded(io_choice::FIRST_WORK), false, true, &[]) {
+                Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
+                r => return r,
+            }
+        }
+        // Past the memory budget: a larger work bound stops at the same place.
         Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
         r => return r,
     };
+    let first = bounded(io_choice::FIRST_WORK);
     let stopped = io_choice::stopped_early(&why) && first.max_work < opts.max_work;
     let reason = if stopped {
-        io_choice::early_reason(&why)
+        io_choice::early_reason(&why, first.max_work)
     } else {
         why.clone()
     };
-    let io_err = match io_report::io_route(nf, opts, Some(reason.clone()), false) {
-        Ok(r) => return states_after_io(nf, opts, r, stopped),
-        Err(e) => e,
-    };
+    let io_err =
+        match io_report::io_route(nf, opts, Some(reason.clone()), false, io_report::MAX_ANSATZ) {
+            Ok(r) => return states_after_io(nf, opts, r, stopped),
+            Err(e) => e,
+        };
     // The unbounded Taylor attempt (the deadline passed: no time for it).
     let why = if stopped && !matches!(io_err, AnalysisError::Timeout(_)) {
         // One run at a time: a system past the early bound is large, and

@@ -25,6 +25,10 @@ pub struct GlobalOptions {
     /// (`obsan_groebner::GbBudget::max_work`): `u64::MAX`, no bound, except
     /// in `--route auto`'s first attempt.
     pub max_work: u64,
+    /// Multiply-adds the input-output route's dense kernels may take, per
+    /// model and prime (io.rs, `IoModel::max_work`): `u64::MAX`, no bound,
+    /// except in `--route auto`'s cheap input-output attempt (io_choice.rs).
+    pub max_io_work: u64,
     /// SIAN's weighted order (weights.rs): on by default; it changes the
     /// time of the Gröbner basis, never a count (the tests compare both).
     pub weighted: bool,
@@ -76,6 +80,7 @@ impl Default for GlobalOptions {
             max_solutions: 100_000,
             max_bytes: memory_budget(obsan_expr::Budget::DEFAULT_MAX_TERMS),
             max_work: u64::MAX,
+            max_io_work: u64::MAX,
             weighted: true,
             route: Route::Auto,
             multi_experiment: false,
