@@ -105,7 +105,7 @@ pub(super) struct IoModel {
     /// Bytes a kernel's dense rows may hold (the memory budget).
     pub(super) max_bytes: usize,
     /// Multiply-adds this model's kernels may take (`GlobalOptions::
-    /// max_work`: bounded in `--route auto`'s cheap attempt only, so that
+    /// max_io_work`: bounded in `--route auto`'s cheap attempt only, so that
     /// it stops early and deterministically, io_choice.rs). A kernel of `n`
     /// monomials is charged `n^3 / 2` before it runs (about `n` rows, each
     /// reduced against up to `n` rows of `n` entries).

@@ -16,16 +16,19 @@
 //! Bilirubin 3.0e7, Fujita 1.2e7, SIRC_forced 1.3e7, the rest below 4e6.
 //! The bound leaves HIV a factor 2.
 
-/// Multiply-adds the first attempt's F4 eliminations may take (session 38):
-/// most SI.jl benchmarks the Taylor route answers take less (session 32:
-/// all but HIV, Goodwin, Bilirubin, Fujita and SIRC_forced below 4e6), and
-/// past it a cheap input-output attempt ([`QUICK_ANSATZ`]) answers Goodwin,
-/// HIV, SIWR_multiout and Bilirubin in a fraction of what [`FIRST_WORK`]
-/// alone cost them (Goodwin's 6e7 multiply-adds took 0.45 s of its 0.6 s).
+/// Work (`GbBudget::max_work`) the first attempt's F4 eliminations may take
+/// (session 38): most SI.jl benchmarks the Taylor route answers take less
+/// (MAPK_6out 9.1e5, MAPK_5out_bis 1.5e6, cLV1 3.3e6), and past it a cheap
+/// input-output attempt ([`QUICK_IO_WORK`]) answers Goodwin, HIV,
+/// SIWR_multiout and Bilirubin in a fraction of what [`FIRST_WORK`] alone
+/// cost them (Goodwin's 6e7 took 0.45 s of its 0.6 s). The same bound holds
+/// that attempt's bounded eliminations and its count's Gröbner basis.
 pub(super) const QUICK_WORK: u64 = 5_000_000;
 
-/// The multiply-adds of that cheap attempt's kernels (io.rs, `IoModel::
-/// max_work`; the same bound on its bounded eliminations).
+/// The multiply-adds of that cheap attempt's kernels
+/// (`GlobalOptions::max_io_work`, io.rs `IoModel::max_work`): Goodwin's,
+/// HIV's and SIWR_multiout's relations fit; past it (SIRC_forced, Fujita,
+/// St) the attempt stops within about a second.
 pub(super) const QUICK_IO_WORK: u64 = 200_000_000;
 
 /// Multiply-adds the second attempt's F4 eliminations may take (session 36):

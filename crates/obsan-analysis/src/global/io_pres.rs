@@ -233,17 +233,14 @@ pub(super) fn presentation(
     // only within the small ansatz's size, so the reconstruction costs no
     // more than the ansatz's relations would (HIV's reversed priority: 22 +
     // 61 monomials, whose dense ansatz passes the cap).
-    // Not under a smaller work bound than its own (`--route auto`'s cheap
-    // attempt, io_choice.rs): F4's symbolic preprocessing, which the bound
-    // does not count, then costs more than the kernels (SIRC_forced).
     let search = Attempt {
         eliminate: true,
         cap: cap.min(SEARCH_CAP),
         max_work: SEARCH_WORK,
         // Under a smaller work bound (`--route auto`'s cheap attempt,
-        // io_choice.rs), less memory in proportion: F4's symbolic
-        // preprocessing, which the work does not count, grows with its
-        // matrices (SIRC_forced's search: 0.3 s under 5e6 multiply-adds).
+        // io_choice.rs), less memory in proportion: measured before F4's
+        // work counted its symbolic preprocessing, SIRC_forced's search
+        // took 0.3 s under 5e6 multiply-adds, 0.13 s with 1.6 MB.
         max_bytes: (SEARCH_BYTES as u128 * u128::from(opts.max_work.min(SEARCH_WORK))
             / u128::from(SEARCH_WORK)) as usize,
         max_support: if eliminate {

@@ -74,7 +74,8 @@ pub fn global_identifiability(
 
 /// `--route auto` (issue 36): the Taylor route first under a small bound on
 /// its Gröbner basis's work ([`io_choice::QUICK_WORK`]); past it, the
-/// input-output route on a small ansatz ([`io_choice::QUICK_ANSATZ`]); when
+/// input-output route with its kernels bounded ([`io_choice::QUICK_IO_WORK`],
+/// no elimination past the ansatz); when
 /// that one does not answer, the Taylor route under a larger bound
 /// ([`io_choice::FIRST_WORK`]), then the input-output route on the full
 /// ansatz. When an io attempt answers, the initial states by the Taylor
