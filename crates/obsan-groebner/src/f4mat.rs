@@ -249,8 +249,9 @@ fn over_work(s: &St) -> Result<(), GbError> {
     Ok(())
 }
 
-/// The work bound's name in its error (callers match on it).
-const WORK: &str = "work (multiply-adds of the F4 eliminations)";
+/// The work bound's name in its error (callers match on it, and charge
+/// their own work against the same bound under it).
+pub const WORK: &str = "work (multiply-adds of the F4 eliminations)";
 
 fn deadline(s: &St) -> Result<(), GbError> {
     if let Some(d) = s.budget.deadline {

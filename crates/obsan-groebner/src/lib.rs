@@ -41,6 +41,7 @@ mod select;
 mod table;
 
 pub use count::{distinct_roots, eliminate_to, upoly_gcd};
+pub use f4mat::WORK as WORK_BUDGET;
 pub use field::{is_prime, Field};
 pub use gb::{buchberger, Basis, GbBudget};
 pub use mem::term_bytes;
