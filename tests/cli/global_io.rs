@@ -297,3 +297,32 @@ fn no_monomial_coefficient_over_a_common_denominator() {
         );
     }
 }
+
+#[test]
+fn siwr_orig_by_elimination_under_auto() {
+    // SI.jl's identifiable functions with states for SIWR_orig (its
+    // benchmarking/IdentifiableFunctions/results/SIWR original/
+    // result_(normalforms, 2)_with_states; the file's `# verdict-source:`
+    // line): every parameter and initial state globally identifiable. Its
+    // one relation (771 monomials) is past the dense ansatz and its Taylor
+    // system past the memory budget, so `auto` answers only by the rung that
+    // eliminates the relation (mod.rs `auto_route`, session 39); without it
+    // the model was refused.
+    let out = ok(&["global", "systems/benchmarks/si-jl/SIWR_orig.sys", "--json"]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["route"], "input-output");
+    assert!(
+        v["fallback"]
+            .as_str()
+            .unwrap()
+            .contains("finds it by elimination"),
+        "{v}"
+    );
+    assert_eq!(v["states_after_io"]["counted"], true, "{v}");
+    let all = variables(&v, false);
+    assert_eq!(all.len(), 11);
+    for (n, verdict, _) in all {
+        assert_eq!(verdict, "global", "{n}");
+    }
+    assert_eq!(v["solutions"], 1);
+}

@@ -31,6 +31,15 @@ pub(super) const QUICK_WORK: u64 = 5_000_000;
 /// St) the attempt stops within about a second.
 pub(super) const QUICK_IO_WORK: u64 = 200_000_000;
 
+/// The work of auto's last input-output attempt, the one that finds a
+/// relation past the ansatz by elimination (session 39): its Gröbner bases
+/// under about six times SIWR_orig's elimination (1.7e7 units; EAIHRD's
+/// 6.7e5), its kernels under twice SIWR_orig's (216 kernels of 771
+/// monomials, 5.0e10 as charged), so that a model no route answers is
+/// refused after a bounded time.
+pub(super) const ELIM_WORK: u64 = 100_000_000;
+pub(super) const ELIM_IO_WORK: u64 = 100_000_000_000;
+
 /// Multiply-adds the second attempt's F4 eliminations may take (session 36):
 /// twice Bilirubin's 3.0e7, the largest SI.jl benchmark the Taylor route
 /// answers but HIV and Goodwin, whose input-output relations answer first

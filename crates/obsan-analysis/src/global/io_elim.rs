@@ -76,7 +76,26 @@ pub(super) fn relation_by_elimination(
         }
         rhs.push((num, den));
     }
-    let mul = |a: &Poly, b: &Poly| ring.mul(a, b).map_err(gb_err);
+    // The products count against the elimination's work bound beside F4's
+    // own (`budget.max_work`), each pair of terms as many units as the ring
+    // has variables (its exponents added, its place found by comparisons):
+    // on TumorHu building the jets' equations took longer than the basis,
+    // about 50 ns per pair.
+    let spent = std::cell::Cell::new(0u64);
+    let mul = |a: &Poly, b: &Poly| -> Result<Poly, AnalysisError> {
+        let pairs = (a.len() as u64).saturating_mul(b.len() as u64);
+        let w = spent.get().saturating_add(pairs.saturating_mul(n as u64));
+        spent.set(w);
+        if w > budget.max_work {
+            return Err(gb_err(obsan_groebner::GbError::Budget(
+                obsan_groebner::WORK_BUDGET,
+            )));
+        }
+        ring.mul(a, b).map_err(gb_err)
+    };
+    let pow = |p: &Poly, e: u32| -> Result<Poly, AnalysisError> {
+        (0..e).try_fold(ring.constant(1), |acc, _| mul(&acc, p))
+    };
     let product = |ps: &[&Poly]| -> Result<Poly, AnalysisError> {
         ps.iter().try_fold(ring.constant(1), |acc, p| mul(&acc, p))
     };
@@ -161,10 +180,7 @@ pub(super) fn relation_by_elimination(
             return Ok(None);
         };
         let (nj, a, m) = &jets[l][j];
-        let den = mul(
-            &ring.pow(&hs[l], *a).map_err(gb_err)?,
-            &ring.pow(&g, *m).map_err(gb_err)?,
-        )?;
+        let den = mul(&pow(&hs[l], *a)?, &pow(&g, *m)?)?;
         let yv = ring.var(nx + 1 + k);
         eqs.push(ring.sub(&mul(&yv, &den)?, nj));
     }
@@ -179,6 +195,10 @@ pub(super) fn relation_by_elimination(
             "the elimination's equations",
         ));
     }
+    let budget = GbBudget {
+        max_work: budget.max_work - spent.get(),
+        ..budget
+    };
     let basis = f4(&ring, &eqs, budget).map_err(gb_err)?;
     let jet_vars: Vec<usize> = (nx + 1..n).collect();
     let free: Vec<&Poly> = basis

@@ -106,6 +106,10 @@ const SEARCH_CAP: usize = 330;
 const SEARCH_WORK: u64 = 50_000_000;
 const SEARCH_BYTES: usize = 16 << 20;
 
+/// The note on a relation past an ansatz searched without elimination
+/// (`--route auto` matches on it: mod.rs's elimination rung).
+pub(super) const PAST_ANSATZ: &str = " (--route io finds it by elimination)";
+
 /// Below this many monomials in all, a presentation one experiment fixes
 /// is kept without looking further.
 const SMALL: usize = 100;
@@ -151,7 +155,7 @@ fn relations_under(
                         out + 1,
                         t.cap,
                         if !t.eliminate {
-                            " (--route io finds it by elimination)"
+                            PAST_ANSATZ
                         } else if io.dims().1 > 0 {
                             " (with inputs: no elimination)"
                         } else {

@@ -4,6 +4,7 @@
 
 use super::io_count::io_count_with;
 pub(super) use super::io_count::MAX_ANSATZ;
+pub(super) use super::io_pres::PAST_ANSATZ;
 use super::model::zmodel;
 use super::outputs::OutputForm;
 use super::types::{err, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};

@@ -82,12 +82,13 @@ pub fn global_identifiability(
 /// route with the params it found global fixed (`states_after_io`, under
 /// [`io_choice::EARLY_WORK`]); only when no io attempt answers, the Taylor
 /// route again without the bound, then the Lie route (lie.rs: no Taylor
-/// unknowns, initial states counted too, every input's question). Its
-/// input-output route stops at the dense ansatz's cap: a relation past it
-/// (found by elimination under `--route io`, io_elim.rs) may keep the
-/// reconstruction busy for minutes, with no bound yet to stop it early and
-/// deterministically. Every step is deterministic (work and sizes, never
-/// time), so the same seed takes the same route.
+/// unknowns, initial states counted too, every input's question). Before
+/// the Lie route, for a model without inputs whose relation is past the
+/// dense ansatz's cap, the input-output route once more with that relation
+/// found by elimination (io_elim.rs, as `--route io` does), its Gröbner
+/// bases and kernels under work bounds ([`io_choice::ELIM_WORK`],
+/// [`io_choice::ELIM_IO_WORK`]). Every step is deterministic (work and
+/// sizes, never time), so the same seed takes the same route.
 fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport, AnalysisError> {
     let bounded = |work: u64| GlobalOptions {
         max_work: opts.max_work.min(work),
@@ -144,7 +145,29 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     } else {
         reason
     };
-    let why = format!("{why}; the input-output route: {io_err}");
+    // A relation past the ansatz, found by elimination as `--route io`
+    // does (io_elim.rs; models without inputs): after every attempt but the
+    // Lie route, as its reconstruction is long (SIWR_orig: 24 s), under
+    // deterministic bounds ([`io_choice::ELIM_WORK`],
+    // [`io_choice::ELIM_IO_WORK`]); before the Lie route, whose exact
+    // derivatives fill the expression budget the elimination's model needs
+    // (EAIHRD after them: "expression too large").
+    let past_ansatz = nf.input_vars.is_empty()
+        && !matches!(io_err, AnalysisError::Timeout(_))
+        && io_err.to_string().contains(io_report::PAST_ANSATZ);
+    let mut why = format!("{why}; the input-output route: {io_err}");
+    if past_ansatz {
+        let elim = GlobalOptions {
+            max_work: opts.max_work.min(io_choice::ELIM_WORK),
+            max_io_work: opts.max_io_work.min(io_choice::ELIM_IO_WORK),
+            ..opts.clone()
+        };
+        match io_report::io_route(nf, &elim, Some(why.clone()), true, io_report::MAX_ANSATZ) {
+            Ok(r) => return states_after_io(nf, opts, r, stopped),
+            Err(e @ AnalysisError::Timeout(_)) => return Err(e),
+            Err(e) => why = format!("{why}; the input-output route by elimination: {e}"),
+        }
+    }
     match taylor_route(nf, opts, true, false, &[]) {
         Ok(mut r) => {
             r.fallback = Some(why);
