@@ -65,8 +65,8 @@ pub fn global_identifiability(
         };
     }
     match opts.route {
-        Route::Taylor => taylor_route(nf, opts, false, true, &[]),
-        Route::Lie => taylor_route(nf, opts, true, false, &[]),
+        Route::Taylor => taylor_route(nf, opts, false, true, &[], &mut Prolonged::default()),
+        Route::Lie => taylor_route(nf, opts, true, false, &[], &mut Prolonged::default()),
         Route::InputOutput => io_report::io_route(nf, opts, None, true, io_report::MAX_ANSATZ),
         Route::Auto => auto_route(nf, opts),
     }
@@ -94,23 +94,41 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         max_work: opts.max_work.min(work),
         ..opts.clone()
     };
+    // The Taylor attempts' prolonged systems, kept from one to the next;
+    // the io attempts between them have the memory budget less what those
+    // hold.
+    let mut kept = Prolonged::default();
+    let beside = |kept: &Prolonged, o: &GlobalOptions| GlobalOptions {
+        max_bytes: o.max_bytes.saturating_sub(kept.held_bytes()),
+        ..o.clone()
+    };
     let quick = bounded(io_choice::QUICK_WORK);
-    let why = match taylor_route(nf, &quick, false, true, &[]) {
+    let why = match taylor_route(nf, &quick, false, true, &[], &mut kept) {
         Err(AnalysisError::Invalid(why))
             if io_choice::stopped_early(&why) && quick.max_work < opts.max_work =>
         {
             let reason = io_choice::early_reason(&why, quick.max_work);
             let cheap = GlobalOptions {
                 max_io_work: opts.max_io_work.min(io_choice::QUICK_IO_WORK),
-                ..quick.clone()
+                ..beside(&kept, &quick)
             };
             match io_report::io_route(nf, &cheap, Some(reason), false, io_report::MAX_ANSATZ) {
-                Ok(r) => return states_after_io(nf, opts, r, true),
+                Ok(r) => {
+                    drop(kept);
+                    return states_after_io(nf, opts, r, true);
+                }
                 Err(AnalysisError::Timeout(e)) => return Err(AnalysisError::Timeout(e)),
                 // Larger relations, or none: the Taylor route goes on.
                 Err(_) => {}
             }
-            match taylor_route(nf, &bounded(io_choice::FIRST_WORK), false, true, &[]) {
+            match taylor_route(
+                nf,
+                &bounded(io_choice::FIRST_WORK),
+                false,
+                true,
+                &[],
+                &mut kept,
+            ) {
                 Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
                 r => return r,
             }
@@ -126,11 +144,19 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     } else {
         why.clone()
     };
-    let io_err =
-        match io_report::io_route(nf, opts, Some(reason.clone()), false, io_report::MAX_ANSATZ) {
-            Ok(r) => return states_after_io(nf, opts, r, stopped),
-            Err(e) => e,
-        };
+    let io_err = match io_report::io_route(
+        nf,
+        &beside(&kept, opts),
+        Some(reason.clone()),
+        false,
+        io_report::MAX_ANSATZ,
+    ) {
+        Ok(r) => {
+            drop(kept);
+            return states_after_io(nf, opts, r, stopped);
+        }
+        Err(e) => e,
+    };
     // The unbounded Taylor attempt (the deadline passed: no time for it).
     let why = if stopped && !matches!(io_err, AnalysisError::Timeout(_)) {
         // One run at a time: a system past the early bound is large, and
@@ -138,7 +164,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         // parallel attempt would only add its time to the refusal
         // (EAIHRD: 11.8 s -> 20.5 s); JAK_STAT, the one SI.jl model this
         // attempt answers, holds 43 MB.
-        match taylor_route(nf, opts, false, false, &[]) {
+        match taylor_route(nf, opts, false, false, &[], &mut kept) {
             Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
             r => return r,
         }
@@ -155,6 +181,8 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     let past_ansatz = nf.input_vars.is_empty()
         && !matches!(io_err, AnalysisError::Timeout(_))
         && io_err.to_string().contains(io_report::PAST_ANSATZ);
+    // No Taylor attempt follows: what it kept goes.
+    drop(kept);
     let mut why = format!("{why}; the input-output route: {io_err}");
     if past_ansatz {
         let elim = GlobalOptions {
@@ -168,7 +196,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
             Err(e) => why = format!("{why}; the input-output route by elimination: {e}"),
         }
     }
-    match taylor_route(nf, opts, true, false, &[]) {
+    match taylor_route(nf, opts, true, false, &[], &mut Prolonged::default()) {
         Ok(mut r) => {
             r.fallback = Some(why);
             Ok(r)
@@ -232,7 +260,14 @@ fn states_after_io(
         max_work: opts.max_work.min(io_choice::EARLY_WORK),
         ..opts.clone()
     };
-    let t = match taylor_route(nf, &states_opts, false, true, &fixed) {
+    let t = match taylor_route(
+        nf,
+        &states_opts,
+        false,
+        true,
+        &fixed,
+        &mut Prolonged::default(),
+    ) {
         Ok(t) => t,
         Err(e) => return skipped(io, e.to_string()),
     };
@@ -276,6 +311,7 @@ fn taylor_route(
     lie: bool,
     parallel: bool,
     fixed: &[bool],
+    kept: &mut Prolonged,
 ) -> Result<GlobalReport, AnalysisError> {
     let m = zmodel(nf)?;
     let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
@@ -293,7 +329,7 @@ fn taylor_route(
         results = lie::lie_counts(&m, &mut nf.ctx, &primes, opts)?;
     }
     if !lie {
-        results = taylor_runs(mt, &primes, kmax, opts, parallel)?;
+        results = taylor_runs(mt, &primes, kmax, opts, parallel, kept)?;
     }
     if any_fixed {
         // Back to every param (params then states, as the counts are
@@ -475,12 +511,29 @@ fn taylor_runs(
     kmax: usize,
     opts: &GlobalOptions,
     parallel: bool,
+    kept: &mut Prolonged,
 ) -> Result<Vec<count::Counts>, AnalysisError> {
-    let one = |r: usize, o: &GlobalOptions| -> Result<count::Counts, AnalysisError> {
-        let mut run = Run::new(m, primes[r], opts.seed.wrapping_add(r as u64), kmax)?;
+    if kept.key != Some((opts.seed, kmax)) {
+        *kept = Prolonged {
+            key: Some((opts.seed, kmax)),
+            ..Prolonged::default()
+        };
+    }
+    let one = |slot: &mut Option<Run>,
+               r: usize,
+               o: &GlobalOptions|
+     -> Result<count::Counts, AnalysisError> {
+        let mut run = match slot.take() {
+            Some(run) => run,
+            None => Run::new(m, primes[r], opts.seed.wrapping_add(r as u64), kmax)?,
+        };
+        run.rewind();
         run.max_bytes = o.max_bytes;
-        count_once(&mut run, o)
+        let counts = count_once(&mut run, o);
+        *slot = Some(run);
+        counts
     };
+    let [s0, s1] = &mut kept.runs;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (mut a, mut b) = if parallel && cores >= 2 {
         let half = GlobalOptions {
@@ -488,8 +541,8 @@ fn taylor_runs(
             ..opts.clone()
         };
         std::thread::scope(|s| {
-            let second = s.spawn(|| one(1, &half));
-            let a = one(0, &half);
+            let second = s.spawn(|| one(s1, 1, &half));
+            let a = one(s0, 0, &half);
             let b = second
                 .join()
                 .unwrap_or_else(|_| Err(err("global: the second run's thread panicked")));
@@ -504,14 +557,34 @@ fn taylor_runs(
         Some(_) => false,
     };
     if over(&a) {
-        a = Some(one(0, opts));
+        a = Some(one(s0, 0, opts));
     }
     let a = a.unwrap_or_else(|| Err(err("global: no first run")))?;
     if over(&b) {
-        b = Some(one(1, opts));
+        b = Some(one(s1, 1, opts));
     }
     let b = b.unwrap_or_else(|| Err(err("global: no second run")))?;
     Ok(vec![a, b])
+}
+
+/// The Taylor runs' prolonged systems (their derivatives, functions of the
+/// model, the seed and the prepared order alone) kept across `--route
+/// auto`'s Taylor attempts on one model: each attempt rewinds a kept run
+/// (`Run::rewind`), so it counts exactly as a fresh one would, without
+/// deriving again (TranAlRadhawi derived its system in about 4 s per
+/// attempt). Never shared between models (the initial states' attempt with
+/// params fixed builds its own).
+#[derive(Default)]
+struct Prolonged {
+    /// The seed and the prepared order the runs were made for.
+    key: Option<(u64, usize)>,
+    runs: [Option<Run>; 2],
+}
+
+impl Prolonged {
+    fn held_bytes(&self) -> usize {
+        self.runs.iter().flatten().map(Run::held_bytes).sum()
+    }
 }
 
 /// Rank over F_2 of the maps' sign vectors (`-1` as 1), each map's signs on

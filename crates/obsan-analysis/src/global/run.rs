@@ -62,8 +62,10 @@ pub(super) struct Run {
     /// The point: values of every derivation-ring variable (filled by order).
     pub(super) point: Vec<u64>,
     pub(super) point_order: usize,
-    /// Random coefficient of the separating linear form.
+    /// Random coefficient of the separating linear form, and its seed
+    /// ([`Run::rewind`]).
     pub(super) rng: Rng,
+    rng_seed: u64,
     /// Bytes the derivatives and the system may hold (the memory budget).
     pub(super) max_bytes: usize,
 }
@@ -100,6 +102,7 @@ impl Run {
             point: vec![0; n],
             point_order: 0,
             rng: Rng::new(0),
+            rng_seed: 0,
             max_bytes: usize::MAX,
         };
         // Known constants: random values (they are known, hence fixed).
@@ -112,7 +115,8 @@ impl Run {
         let den_p = run.model_polys(m, &conv, &dens)?;
         for _ in 0..16 {
             if run.sample_point(&mut rng, &den_p)? {
-                run.rng = Rng::new(rng.next());
+                run.rng_seed = rng.next();
+                run.rng = Rng::new(run.rng_seed);
                 return Ok(run);
             }
         }
@@ -261,6 +265,28 @@ impl Run {
             }
         }
         Ok(out)
+    }
+
+    /// Back to the state of a fresh run for another count: what counts draw
+    /// (the separating form's coefficients) from the start again; the
+    /// derivatives computed so far, functions of the run's point alone, are
+    /// kept (`--route auto`'s Taylor attempts share them: mod.rs
+    /// `Prolonged`).
+    pub(super) fn rewind(&mut self) {
+        self.rng = Rng::new(self.rng_seed);
+    }
+
+    /// Bytes held by the derivatives computed so far (as `prepare` and
+    /// sian.rs count them).
+    pub(super) fn held_bytes(&self) -> usize {
+        let n = self.ring.n;
+        self.rhs_d
+            .iter()
+            .chain(&self.out_d)
+            .flatten()
+            .map(|p| p.stored_bytes(n))
+            .sum::<usize>()
+            + self.cleared.held_bytes(n)
     }
 
     /// `D^j` of every right-hand side (j < order) and output (j <= order),

@@ -32,6 +32,17 @@ pub(super) struct Cleared {
 }
 
 impl Cleared {
+    /// Bytes of the derivatives held (`q` aside, as the budget counts them).
+    pub(super) fn held_bytes(&self, n: usize) -> usize {
+        self.state
+            .iter()
+            .chain(&self.num)
+            .chain(&self.den)
+            .flatten()
+            .map(|p| p.stored_bytes(n))
+            .sum()
+    }
+
     /// From the states' and outputs' `(num, den)` in the derivation ring and
     /// the distinct non-constant denominators.
     pub(super) fn new(

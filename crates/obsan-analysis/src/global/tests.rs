@@ -231,3 +231,52 @@ fn weights_change_no_count() {
         assert_eq!(a.maps, b.maps, "{src}");
     }
 }
+
+#[test]
+fn kept_runs_count_as_fresh_ones() {
+    // `--route auto` keeps the Taylor runs' derivatives from one attempt to
+    // the next (`Prolonged`): an attempt stopped by the work bound after
+    // deriving, then an unbounded one on the kept runs, must count exactly
+    // as fresh runs do (Bilirubin's basis needs ~3e7 units, so 1e3 stops it).
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/benchmarks/si-jl/Bilirubin.sys"
+    );
+    let src = std::fs::read_to_string(path).unwrap();
+    let mut nf = System::parse(&src, path)
+        .unwrap()
+        .normal_form(None, &[])
+        .unwrap();
+    let m = zmodel(&mut nf).unwrap();
+    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
+    let opts = GlobalOptions::default();
+    let kmax = opts.max_order + 2;
+    let key = |c: &count::Counts| {
+        (
+            c.per_var.clone(),
+            c.joint,
+            c.orders.clone(),
+            c.unknowns,
+            c.equations,
+            c.degrees.clone(),
+        )
+    };
+    let fresh = taylor_runs(&m, &primes, kmax, &opts, false, &mut Prolonged::default()).unwrap();
+    let mut kept = Prolonged::default();
+    let small = GlobalOptions {
+        max_work: 1000,
+        ..opts.clone()
+    };
+    let stopped = taylor_runs(&m, &primes, kmax, &small, false, &mut kept);
+    assert!(
+        matches!(&stopped, Err(AnalysisError::Invalid(why)) if why.contains("work (multiply-adds")),
+        "{:?}",
+        stopped.err()
+    );
+    assert!(kept.held_bytes() > 0);
+    let again = taylor_runs(&m, &primes, kmax, &opts, false, &mut kept).unwrap();
+    assert_eq!(fresh.len(), again.len());
+    for (a, b) in fresh.iter().zip(&again) {
+        assert_eq!(key(a), key(b));
+    }
+}
