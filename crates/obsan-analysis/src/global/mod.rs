@@ -96,8 +96,16 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     };
     // The Taylor attempts' prolonged systems, kept from one to the next;
     // the io attempts between them have the memory budget less what those
-    // hold.
+    // hold. Kept only after an attempt the work bound stopped (past the
+    // memory budget no later attempt goes further) and while they hold at
+    // most a quarter of the budget (QY's held all of it, and the io
+    // attempt had none left).
     let mut kept = Prolonged::default();
+    let settle = |kept: &mut Prolonged, why: &str| {
+        if !io_choice::stopped_early(why) || kept.held_bytes() > opts.max_bytes / 4 {
+            *kept = Prolonged::default();
+        }
+    };
     let beside = |kept: &Prolonged, o: &GlobalOptions| GlobalOptions {
         max_bytes: o.max_bytes.saturating_sub(kept.held_bytes()),
         ..o.clone()
@@ -108,6 +116,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
             if io_choice::stopped_early(&why) && quick.max_work < opts.max_work =>
         {
             let reason = io_choice::early_reason(&why, quick.max_work);
+            settle(&mut kept, &why);
             let cheap = GlobalOptions {
                 max_io_work: opts.max_io_work.min(io_choice::QUICK_IO_WORK),
                 ..beside(&kept, &quick)
@@ -137,6 +146,7 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         Err(AnalysisError::Invalid(why)) if io_report::falls_back(&why) => why,
         r => return r,
     };
+    settle(&mut kept, &why);
     let first = bounded(io_choice::FIRST_WORK);
     let stopped = io_choice::stopped_early(&why) && first.max_work < opts.max_work;
     let reason = if stopped {
