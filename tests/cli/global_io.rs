@@ -326,3 +326,21 @@ fn siwr_orig_by_elimination_under_auto() {
     }
     assert_eq!(v["solutions"], 1);
 }
+
+#[test]
+fn auto_refusal_names_every_attempt_when_the_lie_route_trips_the_engine() {
+    // SI.jl's QY: the Taylor system passes the memory budget, the io route
+    // finds no usable point, and the Lie route's exact derivatives pass
+    // --max-terms, which trips the expression engine's thread budget. The
+    // binary reports a tripped budget alone unless the error names it (a
+    // bare "expression too large" said nothing of the attempts before):
+    // every attempt and its reason must be in the refusal (regression,
+    // session 39).
+    let e = bad(
+        &["global", "systems/benchmarks/si-jl/QY.sys"],
+        "the Lie route: expression too large",
+    );
+    assert!(e.contains("the Taylor system"), "{e}");
+    assert!(e.contains("the input-output route:"), "{e}");
+    assert!(e.contains("a Lie derivative of length"), "{e}");
+}

@@ -261,6 +261,13 @@ pub fn budget_tripped() -> bool {
     tripped()
 }
 
+/// The limit a budget armed on this thread was exceeded by, if any: for a
+/// caller that reports it with where it was reached (an error whose text
+/// holds the limit's own is kept by the binary over the bare limit).
+pub fn budget_reason() -> Option<Limit> {
+    reason()
+}
+
 /// The limit hit in the current scope, if any.
 pub(crate) fn reason() -> Option<Limit> {
     REASON.with(|r| r.borrow().clone())

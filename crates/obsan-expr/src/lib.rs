@@ -71,7 +71,8 @@ pub use tanhalf::TanHalf;
 /// per-thread budget's less common entry points ([`crate::Budget`] and [`crate::Limit`] are at the root).
 pub mod limits {
     pub use crate::budget::{
-        budget_tripped, check_memory, within_thread_budget_keep, EXP_MAX, NUM_BITS_MAX, POW_MAX,
+        budget_reason, budget_tripped, check_memory, within_thread_budget_keep, EXP_MAX,
+        NUM_BITS_MAX, POW_MAX,
     };
     pub use crate::parse::{MAX_DEPTH, MAX_DIGITS, MAX_HEIGHT};
 }

@@ -162,6 +162,16 @@ impl LieForms {
                 }
             }
         };
+        // The engine's budget tripped (its values are placeholders from
+        // here): the error says so with the limit's own text, which the
+        // binary keeps over the bare limit, so `--route auto` still says
+        // which attempts failed before and why.
+        if let Some(limit) = obsan_expr::limits::budget_reason() {
+            return Err(err(format!(
+                "{limit} (a Lie derivative of length {})",
+                word.len()
+            )));
+        }
         if r.term_count() > self.max_terms {
             return Err(err(format!(
                 "expression too large: a Lie derivative of length {} has {} terms, past --max-terms {} (the Lie route)",
