@@ -25,6 +25,16 @@ fn variables(v: &Value, params_only: bool) -> Vec<(String, String, Option<u64>)>
         .collect()
 }
 
+/// `obsan global FILE --json` under the default route: answered by the io
+/// route, its fallback reason containing `why`.
+fn auto_by_io(file: &str, why: &str) -> Value {
+    let out = ok(&["global", file, "--json"]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["route"], "input-output", "{v}");
+    assert!(v["fallback"].as_str().unwrap().contains(why), "{v}");
+    v
+}
+
 #[test]
 fn two_decays_by_io() {
     // y = x1 e^{-a t} + x2 e^{-b t}: y'' + (a + b) y' + a b y = 0, whose
@@ -67,15 +77,9 @@ fn goodwin_falls_back_on_io() {
     // result_(normalforms, 2)_with_states: x4, x1, sigma, c, b, delta*beta,
     // delta + beta, alpha*gama/x3, (gama*x2 + x3*beta)/x3): x1, x4 global;
     // x2, x3 not identifiable (a scaling of x2, x3, gama, alpha keeps them).
-    let out = ok(&["global", "systems/global/sijl_tests/goodwin.sys", "--json"]);
-    let v: Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(v["route"], "input-output");
-    assert!(
-        v["fallback"]
-            .as_str()
-            .unwrap()
-            .contains("long for the early attempt"),
-        "{v}"
+    let v = auto_by_io(
+        "systems/global/sijl_tests/goodwin.sys",
+        "long for the early attempt",
     );
     // Answered by the cheap io attempt after the first (5e6) Taylor
     // attempt, not after the second (6e7), which cost 0.45 s more.
@@ -308,15 +312,9 @@ fn siwr_orig_by_elimination_under_auto() {
     // system past the memory budget, so `auto` answers only by the rung that
     // eliminates the relation (mod.rs `auto_route`, session 39); without it
     // the model was refused.
-    let out = ok(&["global", "systems/benchmarks/si-jl/SIWR_orig.sys", "--json"]);
-    let v: Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(v["route"], "input-output");
-    assert!(
-        v["fallback"]
-            .as_str()
-            .unwrap()
-            .contains("finds it by elimination"),
-        "{v}"
+    let v = auto_by_io(
+        "systems/benchmarks/si-jl/SIWR_orig.sys",
+        "finds it by elimination",
     );
     assert_eq!(v["states_after_io"]["counted"], true, "{v}");
     let all = variables(&v, false);

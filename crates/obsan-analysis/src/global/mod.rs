@@ -566,11 +566,16 @@ fn taylor_runs(
         Some(Err(AnalysisError::Invalid(why))) => why.starts_with("too large"),
         Some(_) => false,
     };
+    // A run on its own takes the whole memory budget: the other's kept
+    // derivatives go first (one run held at a time, as before they were
+    // kept).
     if over(&a) {
+        *s1 = None;
         a = Some(one(s0, 0, opts));
     }
     let a = a.unwrap_or_else(|| Err(err("global: no first run")))?;
     if over(&b) {
+        *s0 = None;
         b = Some(one(s1, 1, opts));
     }
     let b = b.unwrap_or_else(|| Err(err("global: no second run")))?;
