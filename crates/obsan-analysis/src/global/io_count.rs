@@ -310,48 +310,38 @@ pub(super) fn reconstruct(
             }
         }
     };
-    // With the total degree along one generic line: the per-axis bounds
-    // alone put HIV's 10 parameters' largest monomial value `prod q_i^d_i`
-    // past the prime (7e20), their total degree (a few) far below it. A
-    // denominator along the line proves a quotient is no polynomial.
-    let degs = match bounds {
-        Some(_) => line_degrees(&mut bb, np, support.len() - 1, seed)?,
-        None => None,
-    };
-    let bounds = match (bounds, &degs) {
-        (Some(mut b), Some(d)) => {
-            b.total = Some(d.iter().copied().max().unwrap_or(0));
-            Some(b)
-        }
-        _ => None,
-    };
+    let mut line = Line::new(np, support.len() - 1, seed);
     // A part first (`Part::Generating`): the simplest quotients whose
-    // Jacobian has the whole one's rank, when they are far simpler.
-    let part: Option<Vec<usize>> = match (want, &bounds, &degs, &per_axis, &jac) {
-        (Part::Generating, Some(_), Some(d), Some(pa), Some(jac)) => {
-            let est: Vec<usize> = pa
-                .iter()
-                .zip(d)
-                .map(|(per, &t)| {
-                    DegreeBounds {
-                        per_var: per.clone(),
-                        total: Some(t),
-                    }
-                    .monomials()
-                })
-                .collect();
-            generating_part(&est, jac, p0)
-        }
+    // Jacobian has the whole one's rank, when they are far simpler. It is
+    // chosen as the line's samples come (`select_part`): once the part's
+    // quotients have their degrees and every other one is known to be past
+    // the part's cap (SIWR_orig: 67 quotients of total degree at most 6,
+    // where the largest of the 770 has 24 and took half the time).
+    let part: Option<Vec<usize>> = match (want, &bounds, &per_axis, &jac) {
+        (Part::Generating, Some(_), Some(pa), Some(jac)) => loop {
+            // A denominator along the line: no part (nor polynomial bounds
+            // for the whole, `Line::finish`).
+            if line.rational() {
+                break None;
+            }
+            if let Some(part) = select_part(&line.estimates(pa), jac, p0) {
+                break part;
+            }
+            if !line.step(&mut bb)? {
+                break None;
+            }
+        },
         _ => None,
     };
     // (No part chosen, or its interpolation not recognised: the whole, on
     // the same probes.)
-    if let (Some(part), Some(per), Some(d)) = (&part, &per_axis, &degs) {
+    if let (Some(part), Some(per)) = (&part, &per_axis) {
+        let d = line.degrees_of(part);
         let bounds = DegreeBounds {
             per_var: (0..np)
                 .map(|k| part.iter().map(|&q| per[q][k]).max().unwrap_or(0))
                 .collect(),
-            total: part.iter().map(|&q| d[q]).max(),
+            total: d.iter().copied().max(),
         };
         let mut bbp = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
             Ok(bb(pt, p)?.map(|v| part.iter().map(|&q| v[q]).collect()))
@@ -377,6 +367,17 @@ pub(super) fn reconstruct(
             });
         }
     }
+    // With the total degree along one generic line: the per-axis bounds
+    // alone put HIV's 10 parameters' largest monomial value `prod q_i^d_i`
+    // past the prime (7e20), their total degree (a few) far below it. A
+    // denominator along the line proves a quotient is no polynomial.
+    let bounds = match bounds {
+        Some(mut b) => line.finish(&mut bb)?.map(|d| {
+            b.total = Some(d.iter().copied().max().unwrap_or(0));
+            b
+        }),
+        None => None,
+    };
     // Polynomials on every axis: sparse interpolation first (about twice
     // their terms in points), the rational reconstruction when it does not
     // recognise them.
@@ -494,31 +495,72 @@ const PART_GAIN: usize = 16;
 /// so `K'` and `K` have the same transcendence degree and the same
 /// parameters are locally identifiable. Only a count `k > 1` over `K'` may
 /// be larger than over `K`: then the whole is reconstructed.
+#[cfg(test)]
 fn generating_part(est: &[usize], jac: &[Vec<u64>], p: u64) -> Option<Vec<usize>> {
+    let exact: Vec<Estimate> = est.iter().map(|&e| Estimate::Exact(e)).collect();
+    select_part(&exact, jac, p).flatten()
+}
+
+/// A quotient's size estimate (the monomials its degree bounds allow): its
+/// own, or a lower bound while its degree along the line is not known.
+#[derive(Clone, Copy, Debug)]
+enum Estimate {
+    Exact(usize),
+    AtLeast(usize),
+}
+
+impl Estimate {
+    fn low(self) -> usize {
+        match self {
+            Estimate::Exact(e) | Estimate::AtLeast(e) => e,
+        }
+    }
+}
+
+/// [`generating_part`] from estimates some of which are lower bounds:
+/// `Some(answer)` when the lower bounds already decide it (the answer the
+/// exact estimates would give), `None` while they do not. Why it is the
+/// same answer: the prefix that reaches the rank holds exact estimates
+/// only, and every inexact one is past the cap, hence past the prefix in the
+/// exact order too; the whole's size is at least the largest lower bound.
+fn select_part(est: &[Estimate], jac: &[Vec<u64>], p: u64) -> Option<Option<Vec<usize>>> {
     let full = obsan_recon::fp::rank(Zp(p), jac.iter().cloned());
     if full == 0 {
-        return None;
+        return Some(None);
     }
     let mut order: Vec<usize> = (0..est.len()).collect();
-    order.sort_by_key(|&q| (est[q], q));
+    order.sort_by_key(|&q| (est[q].low(), q));
     let mut ech = Echelon::new(Zp(p));
     let mut last = 0;
     for &q in &order {
+        let Estimate::Exact(e) = est[q] else {
+            return None;
+        };
         ech.insert(jac[q].clone());
         if ech.rank() == full {
-            last = est[q];
+            last = e;
             break;
         }
     }
     let cap = last.saturating_mul(2).max(8);
-    let part: Vec<usize> = order.into_iter().filter(|&q| est[q] <= cap).collect();
-    let whole = est.iter().copied().max().unwrap_or(0);
-    if part.len() == est.len() || whole < cap.saturating_mul(PART_GAIN) {
+    if est
+        .iter()
+        .any(|e| matches!(e, Estimate::AtLeast(l) if *l <= cap))
+    {
         return None;
+    }
+    let part: Vec<usize> = order.into_iter().filter(|&q| est[q].low() <= cap).collect();
+    let exact = est.iter().all(|e| matches!(e, Estimate::Exact(_)));
+    let whole = est.iter().map(|e| e.low()).max().unwrap_or(0);
+    if part.len() == est.len() {
+        return Some(None);
+    }
+    if whole < cap.saturating_mul(PART_GAIN) {
+        return if exact { Some(None) } else { None };
     }
     let mut part = part;
     part.sort_unstable();
-    Some(part)
+    Some(Some(part))
 }
 
 /// Per quotient, its degree in each parameter along that parameter's axis
@@ -610,47 +652,137 @@ fn line_degree(
 }
 
 /// Each of the black box's `m` functions' total degree ([`line_degree`]).
+#[cfg(test)]
 fn line_degrees(
     bb: &mut BlackBox<'_>,
     np: usize,
     m: usize,
     seed: u64,
 ) -> Result<Option<Vec<u32>>, AnalysisError> {
-    let p = obsan_recon::PRIMES[0];
-    let mut rng = Rng::new(seed ^ 0x1e4e);
-    let a: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
-    let b: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
-    let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, 2)).collect();
-    let (mut t, mut misses) = (0u64, 0);
-    while th.iter().any(|x| !x.done()) {
-        t += 1;
-        if misses > 8 || t as usize > MAX_AXIS_SAMPLES {
-            return Ok(None);
-        }
-        let pt: Vec<u64> = a
-            .iter()
-            .zip(&b)
-            .map(|(&x, &y)| obsan_recon::fp::add(x, fmul(t, y, p), p))
-            .collect();
-        let Some(v) = bb(&pt, p)? else {
-            misses += 1;
-            continue;
-        };
-        for (x, c) in th.iter_mut().zip(v) {
-            if !x.done() {
-                x.add(t, c);
-            }
+    Line::new(np, m, seed).finish(bb)
+}
+
+/// The black box's functions along one random line `a + t b`, sampled at
+/// `t = 1, 2, ...`, one Thiele interpolation each: their total degrees
+/// ([`line_degree`]), sampled only as far as a caller needs.
+struct Line {
+    a: Vec<u64>,
+    b: Vec<u64>,
+    th: Vec<Thiele>,
+    t: u64,
+    misses: usize,
+}
+
+impl Line {
+    fn new(np: usize, m: usize, seed: u64) -> Line {
+        let p = obsan_recon::PRIMES[0];
+        let mut rng = Rng::new(seed ^ 0x1e4e);
+        let a: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+        let b: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+        Line {
+            a,
+            b,
+            th: (0..m).map(|_| Thiele::new(p, 2)).collect(),
+            t: 0,
+            misses: 0,
         }
     }
-    let mut degs = Vec::with_capacity(th.len());
-    for x in &th {
+
+    /// One more sample, for the functions not yet done; false when the
+    /// samples have run out (too many bad points, or too many samples).
+    fn step(&mut self, bb: &mut BlackBox<'_>) -> Result<bool, AnalysisError> {
+        let p = obsan_recon::PRIMES[0];
+        loop {
+            self.t += 1;
+            if self.misses > 8 || self.t as usize > MAX_AXIS_SAMPLES {
+                return Ok(false);
+            }
+            let t = self.t;
+            let pt: Vec<u64> = self
+                .a
+                .iter()
+                .zip(&self.b)
+                .map(|(&x, &y)| obsan_recon::fp::add(x, fmul(t, y, p), p))
+                .collect();
+            let Some(v) = bb(&pt, p)? else {
+                self.misses += 1;
+                continue;
+            };
+            for (x, c) in self.th.iter_mut().zip(v) {
+                if !x.done() {
+                    x.add(t, c);
+                }
+            }
+            return Ok(true);
+        }
+    }
+
+    /// Function `q`'s degree once its interpolation is done: `Some(Ok(d))`
+    /// for a polynomial, `Some(Err(()))` when it has a denominator.
+    fn degree(&self, q: usize) -> Option<Result<u32, ()>> {
+        let x = &self.th[q];
+        if !x.done() {
+            return None;
+        }
         let (num, den) = x.rational();
         if den.iter().skip(1).any(|&c| c != 0) {
-            return Ok(None);
+            return Some(Err(()));
         }
-        degs.push(num.iter().rposition(|&c| c != 0).unwrap_or(0) as u32);
+        Some(Ok(num.iter().rposition(|&c| c != 0).unwrap_or(0) as u32))
     }
-    Ok(Some(degs))
+
+    /// Whether a function done so far has a denominator along the line.
+    fn rational(&self) -> bool {
+        (0..self.th.len()).any(|q| matches!(self.degree(q), Some(Err(()))))
+    }
+
+    /// Per function its size estimate under its per-axis degrees `per`: with
+    /// its degree when known, else with the least degree its samples allow
+    /// (a polynomial of degree `d` is a continued fraction of at most `2 d +
+    /// 1` terms, so `k` terms and not done mean `d >= (k - 1) / 2`). A
+    /// function with a denominator (the caller stops first: `rational`)
+    /// is left at its lower bound.
+    fn estimates(&self, per: &[Vec<u32>]) -> Vec<Estimate> {
+        (0..self.th.len())
+            .map(|q| {
+                let size = |t: u32| {
+                    DegreeBounds {
+                        per_var: per[q].clone(),
+                        total: Some(t),
+                    }
+                    .monomials()
+                };
+                match self.degree(q) {
+                    Some(Ok(d)) => Estimate::Exact(size(d)),
+                    _ => Estimate::AtLeast(size((self.th[q].len().saturating_sub(1) / 2) as u32)),
+                }
+            })
+            .collect()
+    }
+
+    /// The degrees of the functions in `part` (each done and a polynomial:
+    /// `select_part` took only exact estimates into a part).
+    fn degrees_of(&self, part: &[usize]) -> Vec<u32> {
+        part.iter()
+            .map(|&q| match self.degree(q) {
+                Some(Ok(d)) => d,
+                _ => 0,
+            })
+            .collect()
+    }
+
+    /// Every function's degree (sampling on until each is done), or `None`
+    /// when one has a denominator along the line or the samples run out.
+    fn finish(mut self, bb: &mut BlackBox<'_>) -> Result<Option<Vec<u32>>, AnalysisError> {
+        while self.th.iter().any(|x| !x.done()) {
+            if !self.step(bb)? {
+                return Ok(None);
+            }
+        }
+        Ok((0..self.th.len())
+            .map(|q| self.degree(q).and_then(Result::ok))
+            .collect())
+    }
 }
 
 /// The coefficients at a point modulo a prime; `None` at a bad point.
@@ -1383,6 +1515,34 @@ mod tests {
         // rows up to 80, which leaves out only the 10^4 one.
         let jac2 = vec![vec![1, 0], vec![2, 0], vec![4, 0], vec![1, 1], vec![3, 5]];
         assert_eq!(generating_part(&est, &jac2, p), Some(vec![0, 1, 2, 3]));
+    }
+
+    /// Lower bounds decide the part only when the exact sizes would give
+    /// the same one: every inexact size past the cap, the rank reached by
+    /// exact ones, the whole at least 16 times the cap.
+    #[test]
+    fn lower_bounds_decide_the_part_only_as_the_exact_sizes_would() {
+        use Estimate::{AtLeast, Exact};
+        let p = obsan_recon::PRIMES[0];
+        let jac = vec![vec![1, 0], vec![2, 0], vec![0, 1], vec![1, 1], vec![3, 5]];
+        // As the first case above, the last two known past the cap (18).
+        let est = [Exact(3), Exact(5), Exact(9), AtLeast(19), AtLeast(300)];
+        assert_eq!(select_part(&est, &jac, p), Some(Some(vec![0, 1, 2])));
+        // A lower bound within the cap: it may belong to the part.
+        let est = [Exact(3), Exact(5), Exact(9), AtLeast(18), AtLeast(300)];
+        assert_eq!(select_part(&est, &jac, p), None);
+        // An inexact size where the rank would be reached: undecided.
+        let est = [Exact(3), Exact(5), AtLeast(9), Exact(40), AtLeast(300)];
+        assert_eq!(select_part(&est, &jac, p), None);
+        // The whole not yet known to be 16 times the cap (288): undecided;
+        // once it is, the part.
+        let est = [Exact(3), Exact(5), Exact(9), AtLeast(40), AtLeast(200)];
+        assert_eq!(select_part(&est, &jac, p), None);
+        let est = [Exact(3), Exact(5), Exact(9), AtLeast(40), AtLeast(288)];
+        assert_eq!(select_part(&est, &jac, p), Some(Some(vec![0, 1, 2])));
+        // All exact and the whole too small: no part, decided.
+        let est = [Exact(3), Exact(5), Exact(9), Exact(40), Exact(200)];
+        assert_eq!(select_part(&est, &jac, p), Some(None));
     }
 
     /// The total degree along a line: `x^2 y^3 + x` (5) and `x y + 7` (2)
