@@ -26,6 +26,40 @@ use super::types::{err, gb_err, too_large};
 use crate::rank::AnalysisError;
 use obsan_groebner::{f4, Field, GbBudget, Mono, Order, Poly, Ring};
 
+/// Products in the elimination's ring charged against its work bound beside
+/// F4's own (`GbBudget::max_work`), each pair of terms as many units as the
+/// ring has variables (its exponents added, its place found by comparisons):
+/// on TumorHu building the jets' equations took longer than the basis,
+/// about 50 ns per pair.
+struct Charged<'r> {
+    ring: &'r Ring,
+    max: u64,
+    spent: std::cell::Cell<u64>,
+}
+
+impl Charged<'_> {
+    fn mul(&self, a: &Poly, b: &Poly) -> Result<Poly, AnalysisError> {
+        let pairs = (a.len() as u64).saturating_mul(b.len() as u64);
+        let w = (self.spent.get()).saturating_add(pairs.saturating_mul(self.ring.n as u64));
+        self.spent.set(w);
+        if w > self.max {
+            return Err(gb_err(obsan_groebner::GbError::Budget(
+                obsan_groebner::WORK_BUDGET,
+            )));
+        }
+        self.ring.mul(a, b).map_err(gb_err)
+    }
+
+    fn pow(&self, p: &Poly, e: u32) -> Result<Poly, AnalysisError> {
+        (0..e).try_fold(self.ring.constant(1), |acc, _| self.mul(&acc, p))
+    }
+
+    /// The work bound left for the Gröbner basis.
+    fn left(&self) -> u64 {
+        self.max.saturating_sub(self.spent.get())
+    }
+}
+
 /// The relation of output `i` at `theta` (io.rs's `relation`, same
 /// variables, support and normalisation), or `None` for a model with inputs
 /// (their jets are free variables of the relation; not built here).
@@ -76,26 +110,12 @@ pub(super) fn relation_by_elimination(
         }
         rhs.push((num, den));
     }
-    // The products count against the elimination's work bound beside F4's
-    // own (`budget.max_work`), each pair of terms as many units as the ring
-    // has variables (its exponents added, its place found by comparisons):
-    // on TumorHu building the jets' equations took longer than the basis,
-    // about 50 ns per pair.
-    let spent = std::cell::Cell::new(0u64);
-    let mul = |a: &Poly, b: &Poly| -> Result<Poly, AnalysisError> {
-        let pairs = (a.len() as u64).saturating_mul(b.len() as u64);
-        let w = spent.get().saturating_add(pairs.saturating_mul(n as u64));
-        spent.set(w);
-        if w > budget.max_work {
-            return Err(gb_err(obsan_groebner::GbError::Budget(
-                obsan_groebner::WORK_BUDGET,
-            )));
-        }
-        ring.mul(a, b).map_err(gb_err)
+    let charged = Charged {
+        ring: &ring,
+        max: budget.max_work,
+        spent: std::cell::Cell::new(0),
     };
-    let pow = |p: &Poly, e: u32| -> Result<Poly, AnalysisError> {
-        (0..e).try_fold(ring.constant(1), |acc, _| mul(&acc, p))
-    };
+    let mul = |a: &Poly, b: &Poly| charged.mul(a, b);
     let product = |ps: &[&Poly]| -> Result<Poly, AnalysisError> {
         ps.iter().try_fold(ring.constant(1), |acc, p| mul(&acc, p))
     };
@@ -180,7 +200,7 @@ pub(super) fn relation_by_elimination(
             return Ok(None);
         };
         let (nj, a, m) = &jets[l][j];
-        let den = mul(&pow(&hs[l], *a)?, &pow(&g, *m)?)?;
+        let den = mul(&charged.pow(&hs[l], *a)?, &charged.pow(&g, *m)?)?;
         let yv = ring.var(nx + 1 + k);
         eqs.push(ring.sub(&mul(&yv, &den)?, nj));
     }
@@ -196,7 +216,7 @@ pub(super) fn relation_by_elimination(
         ));
     }
     let budget = GbBudget {
-        max_work: budget.max_work - spent.get(),
+        max_work: charged.left(),
         ..budget
     };
     let basis = f4(&ring, &eqs, budget).map_err(gb_err)?;
