@@ -52,6 +52,7 @@ mod rational;
 mod rng;
 mod sparse;
 mod thiele;
+mod univariate;
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -77,6 +78,7 @@ pub use rational::{Poly, Rational, Term};
 pub use rng::splitmix64;
 pub use sparse::{interpolate_polys_vec, DegreeBounds, EARLY_TERMINATION};
 pub use thiele::{Thiele, ThieleStep};
+pub use univariate::Univariate;
 
 use field::{inv, mul};
 use multi::{Budget, Fail, Image, PrimeRun, Skeleton};

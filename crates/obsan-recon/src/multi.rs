@@ -21,7 +21,7 @@ use crate::field::inv;
 use crate::field::{add, mul, pow, sub};
 use crate::linalg::{eval, newton, poly_add, poly_mul, vandermonde_t};
 use crate::rng::Rng;
-use crate::thiele::Thiele;
+use crate::univariate::Univariate;
 use crate::{Limit, Options, Progress, ReconError};
 
 /// Terms of one mod-p polynomial: exponent vector and non-zero residue.
@@ -144,10 +144,11 @@ fn line_point(t: u64, z: &[u64], shift: &[u64], p: u64) -> Vec<u64> {
         .collect()
 }
 
-/// Thiele interpolation with early termination of every component along a
+/// Univariate rational interpolation with early termination of every
+/// component along a
 /// one-parameter family of points `at(t)`, t drawn at random: the degree
 /// probe of both [`PrimeRun::var_degrees`] and [`PrimeRun::degrees`].
-fn thiele_along<F, E>(
+fn interpolate_along<F, E>(
     bb: &mut F,
     rng: &mut Rng,
     budget: &mut Budget,
@@ -155,11 +156,11 @@ fn thiele_along<F, E>(
     p: u64,
     cap: usize,
     at: impl Fn(u64) -> Vec<u64>,
-) -> Result<Vec<Thiele>, Fail<E>>
+) -> Result<Vec<Univariate>, Fail<E>>
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    let mut th: Vec<Thiele> = (0..m).map(|_| Thiele::new(p, budget.agree)).collect();
+    let mut th: Vec<Univariate> = (0..m).map(|_| Univariate::new(p, budget.agree)).collect();
     let mut bad = 0;
     while th.iter().any(|t| !t.done()) {
         let t = rng.nonzero(p);
@@ -214,8 +215,8 @@ pub(crate) struct PrimeRun<'a, F> {
     /// Per component and part, the degree in each variable x_i, once probed
     /// ([`PrimeRun::var_degrees`]); empty when unknown.
     vdegs: Vec<[Vec<usize>; 2]>,
-    /// Per component, its denominator along the degree line (Thiele's
-    /// normalised form), from [`PrimeRun::degrees`].
+    /// Per component, its denominator along the degree line (the
+    /// interpolation's normalised form), from [`PrimeRun::degrees`].
     den_line: Vec<Vec<u64>>,
     /// Components taken to share one denominator (equal, of degree > 0, on
     /// the degree line), two or more per group: see [`PrimeRun::line`].
@@ -252,7 +253,7 @@ where
     }
 
     /// The degree of every component's numerator and denominator in each
-    /// variable: Thiele with early termination along `x_i = t`, the other
+    /// variable: univariate interpolation with early termination along `x_i = t`, the other
     /// variables at random values. These cap Zippel's stages (the degree of
     /// `N_r(z)` in `z_i` is at most that of N in `x_i`), so a stage needs
     /// `deg + 1` values of its variable instead of `deg + 1 + agree` or the
@@ -264,7 +265,7 @@ where
         let mut out: Vec<[Vec<usize>; 2]> = vec![[Vec::new(), Vec::new()]; self.m];
         for i in 0..self.n {
             let base: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
-            let th = thiele_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
+            let th = interpolate_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
                 let mut x = base.clone();
                 x[i] = t;
                 x
@@ -292,14 +293,14 @@ where
         line_point(t, z, &self.shift, self.p)
     }
 
-    /// Degrees of every component along one random line, by Thiele with
-    /// early termination; checks that the shift keeps `D(s) != 0`.
+    /// Degrees of every component along one random line, by univariate
+    /// interpolation with early termination; checks that the shift keeps `D(s) != 0`.
     pub(crate) fn degrees(&mut self, budget: &mut Budget) -> Result<Vec<(usize, usize)>, Fail<E>> {
         let p = self.p;
         let z: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
         let cap = 2 * budget.max_degree as usize + 2;
         let shift = &self.shift;
-        let th = thiele_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
+        let th = interpolate_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
             line_point(t, &z, shift, p)
         })?;
         let mut degs = Vec::with_capacity(self.m);

@@ -4,7 +4,7 @@ mod common;
 
 use common::{eval, is_canonical, same_function, Terms};
 use dashu_int::IBig;
-use obsan_recon::{reconstruct, reconstruct_vec, Options};
+use obsan_recon::{fp, reconstruct, reconstruct_vec, Options, Thiele, Univariate, PRIMES};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -92,5 +92,43 @@ proptest! {
             prop_assert!(same_function(f, a, b), "{}", f);
             prop_assert!(is_canonical(f));
         }
+    }
+
+    /// The Euclidean interpolation and Thiele's continued fraction are two
+    /// independent ways to the same reduced fraction; the first takes at
+    /// most `a + b + 2` points before its checks (`a`, `b` the degrees,
+    /// `a + 1` for a polynomial), never more than Thiele.
+    #[test]
+    fn univariate_interpolation_agrees_with_thiele_from_fewer_points(
+        num in prop::collection::vec(any::<u64>(), 0..=12),
+        den in prop::collection::vec(any::<u64>(), 1..=8),
+        low in 0usize..=3,
+        seed in any::<u64>(),
+    ) {
+        let p = PRIMES[2];
+        let num: Vec<u64> = num.iter().map(|c| c % p).collect();
+        // A denominator with a factor t^low (the io route's axis fractions).
+        let den: Vec<u64> = if den.iter().all(|c| c % p == 0) {
+            vec![1]
+        } else {
+            std::iter::repeat_n(0, low).chain(den.iter().map(|c| c % p)).collect()
+        };
+        let ev = |c: &[u64], t: u64| c.iter().rev().fold(0, |a, &x| fp::add(fp::mul(a, t, p), x, p));
+        let (mut u, mut th) = (Univariate::new(p, 2), Thiele::new(p, 2));
+        let mut t = seed % (p - 200) + 1;
+        let mut thiele_points = 0;
+        while !u.done() || !th.done() {
+            t += 1;
+            let Some(id) = fp::inv(ev(&den, t), p) else { continue };
+            let y = fp::mul(ev(&num, t), id, p);
+            if !u.done() { u.add(t, y); }
+            if !th.done() { th.add(t, y); thiele_points += 1; }
+        }
+        prop_assert_eq!(u.rational(), th.rational());
+        let (n, d) = u.rational();
+        let (a, b) = (n.len().saturating_sub(1), d.len().saturating_sub(1));
+        let most = if b == 0 { a + 3 } else { a + b + 4 };
+        prop_assert!(u.len() <= most, "{} points, at most {}", u.len(), most);
+        prop_assert!(u.len() <= thiele_points + 1);
     }
 }

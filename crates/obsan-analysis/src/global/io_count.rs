@@ -23,7 +23,8 @@ use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, term_bytes, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use obsan_recon::{
-    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, Rational, Thiele,
+    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, Rational,
+    Univariate,
 };
 use std::collections::HashMap;
 
@@ -638,7 +639,7 @@ fn polynomial_bounds(axes: &[Vec<Fraction>], alpha: &[Vec<u32>]) -> Option<Degre
 }
 
 /// The largest total degree of the black box's `m` functions, from one
-/// Thiele interpolation each along a random line `a + t b` (a polynomial's
+/// univariate interpolation each along a random line `a + t b` (a polynomial's
 /// degree along a generic line is its total degree); `None` when one has a
 /// denominator there (not a polynomial) or the samples run out.
 #[cfg(test)]
@@ -663,12 +664,12 @@ fn line_degrees(
 }
 
 /// The black box's functions along one random line `a + t b`, sampled at
-/// `t = 1, 2, ...`, one Thiele interpolation each: their total degrees
+/// `t = 1, 2, ...`, one univariate interpolation each: their total degrees
 /// ([`line_degree`]), sampled only as far as a caller needs.
 struct Line {
     a: Vec<u64>,
     b: Vec<u64>,
-    th: Vec<Thiele>,
+    th: Vec<Univariate>,
     t: u64,
     misses: usize,
 }
@@ -682,7 +683,7 @@ impl Line {
         Line {
             a,
             b,
-            th: (0..m).map(|_| Thiele::new(p, 2)).collect(),
+            th: (0..m).map(|_| Univariate::new(p, AGREE)).collect(),
             t: 0,
             misses: 0,
         }
@@ -738,8 +739,8 @@ impl Line {
 
     /// Per function its size estimate under its per-axis degrees `per`: with
     /// its degree when known, else with the least degree its samples allow
-    /// (a polynomial of degree `d` is a continued fraction of at most `2 d +
-    /// 1` terms, so `k` terms and not done mean `d >= (k - 1) / 2`). A
+    /// (a polynomial of degree `d` is done after `d + 1 + AGREE` samples, so
+    /// `k` samples and not done mean `d >= k - AGREE`). A
     /// function with a denominator (the caller stops first: `rational`)
     /// is left at its lower bound.
     fn estimates(&self, per: &[Vec<u32>]) -> Vec<Estimate> {
@@ -754,7 +755,7 @@ impl Line {
                 };
                 match self.degree(q) {
                     Some(Ok(d)) => Estimate::Exact(size(d)),
-                    _ => Estimate::AtLeast(size((self.th[q].len().saturating_sub(1) / 2) as u32)),
+                    _ => Estimate::AtLeast(size(self.th[q].len().saturating_sub(AGREE) as u32)),
                 }
             })
             .collect()
@@ -814,8 +815,12 @@ struct Axes<'a, 'b> {
 }
 
 /// A univariate fraction modulo p: numerator and denominator coefficients,
-/// lowest degree first (Thiele's reduced form).
+/// lowest degree first (`Univariate`'s reduced form).
 type Fraction = (Vec<u64>, Vec<u64>);
+
+/// Consecutive samples a univariate fraction must predict before it is
+/// taken for the function (`Univariate`'s early termination).
+const AGREE: usize = 2;
 
 /// Samples per axis before a probe gives up (the coefficients' degrees
 /// along a line are 14 for Goodwin, 12 for SIWR_multiout).
@@ -826,7 +831,7 @@ impl Axes<'_, '_> {
     /// black box's vector; `None` when the samples run out.
     fn fractions(&mut self, k: usize, j: usize) -> Result<Option<Vec<Fraction>>, AnalysisError> {
         let p = obsan_recon::PRIMES[0];
-        let mut th: Option<Vec<Thiele>> = None;
+        let mut th: Option<Vec<Univariate>> = None;
         let mut idx = 0;
         while th.as_ref().is_none_or(|th| th.iter().any(|x| !x.done())) {
             while self.samples[k].len() <= idx {
@@ -846,14 +851,15 @@ impl Axes<'_, '_> {
             let Some(iv) = obsan_recon::fp::inv(v[j], p) else {
                 continue;
             };
-            let th = th.get_or_insert_with(|| (1..v.len()).map(|_| Thiele::new(p, 2)).collect());
+            let th =
+                th.get_or_insert_with(|| (1..v.len()).map(|_| Univariate::new(p, AGREE)).collect());
             for (x, c) in th.iter_mut().zip(others(v, j)) {
                 if !x.done() {
                     x.add(*t, fmul(c, iv, p));
                 }
             }
         }
-        Ok(th.map(|th| th.iter().map(Thiele::rational).collect()))
+        Ok(th.map(|th| th.iter().map(Univariate::rational).collect()))
     }
 }
 
@@ -861,7 +867,7 @@ impl Axes<'_, '_> {
 /// the exponents `a` of a monomial `theta^a` dividing its denominator.
 ///
 /// Along each axis line `theta_k = t` (the other parameters at a random
-/// point) one Thiele interpolation per quotient gives its pole order at
+/// point) one univariate interpolation per quotient gives its pole order at
 /// `theta_k = 0`. The last coefficient is tried first; if some quotient's
 /// denominator along some axis is not a power of `t`, a coefficient `c_j`
 /// that is a monomial in the parameters is looked for: then `c_m / c_j` has
