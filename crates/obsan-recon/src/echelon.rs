@@ -110,9 +110,7 @@ impl PrimeField for Zp {
     /// reached (the rows before it never touch that column again).
     fn reduce_sorted(self, v: &mut [u64], rows: &[(usize, Vec<u64>)]) {
         let p = self.0;
-        let pm = (p - 1) as u128;
-        // Entries stay below p + (max_adds + 1) (p - 1)^2 <= u128::MAX.
-        let max_adds = ((u128::MAX / (pm * pm).max(1)).min(1 << 20) as usize).saturating_sub(2);
+        let (max_adds, shrink) = Shrink::new(p);
         let m = field::Rem128::new(p);
         let mut acc: Vec<u128> = v.iter().map(|&x| x as u128).collect();
         let mut adds = 0;
@@ -123,9 +121,7 @@ impl PrimeField for Zp {
                 continue;
             }
             if adds >= max_adds {
-                acc[*piv..]
-                    .iter_mut()
-                    .for_each(|a| *a = m.reduce(*a) as u128);
+                shrink.all(&mut acc[*piv..]);
                 adds = 0;
             }
             let nc = (p - c) as u128;
@@ -144,8 +140,7 @@ impl PrimeField for Zp {
     /// from memory per vector: SIWR_orig's 771-column kernels, 4.7 MB).
     fn reduce_block(self, vs: &mut [Vec<u64>], rows: &[(usize, Vec<u64>)]) {
         let p = self.0;
-        let pm = (p - 1) as u128;
-        let max_adds = ((u128::MAX / (pm * pm).max(1)).min(1 << 20) as usize).saturating_sub(2);
+        let (max_adds, shrink) = Shrink::new(p);
         let m = field::Rem128::new(p);
         let mut accs: Vec<(Vec<u128>, usize)> = vs
             .iter()
@@ -159,9 +154,7 @@ impl PrimeField for Zp {
                     continue;
                 }
                 if *adds >= max_adds {
-                    acc[*piv..]
-                        .iter_mut()
-                        .for_each(|a| *a = m.reduce(*a) as u128);
+                    shrink.all(&mut acc[*piv..]);
                     *adds = 0;
                 }
                 let nc = (p - c) as u128;
@@ -175,6 +168,37 @@ impl PrimeField for Zp {
             for (x, a) in v.iter_mut().zip(acc) {
                 *x = m.reduce(*a);
             }
+        }
+    }
+}
+
+/// The delayed reduction's periodic step: entries brought back below
+/// [`Fold::BOUND`](field::Fold) by a fold where the prime allows one, else
+/// below `p` by a remainder; with how many products (each below `(p -
+/// 1)^2`) may be added between two steps so that no entry passes
+/// `u128::MAX`.
+#[derive(Clone, Copy)]
+enum Shrink {
+    Fold(field::Fold),
+    Rem(field::Rem128),
+}
+
+impl Shrink {
+    fn new(p: u64) -> (usize, Shrink) {
+        let pm = u128::from(p - 1);
+        let (start, shrink) = match field::Fold::new(p) {
+            Some(f) => (field::Fold::BOUND, Shrink::Fold(f)),
+            None => (u128::from(p), Shrink::Rem(field::Rem128::new(p))),
+        };
+        // Entries stay below start + max_adds (p - 1)^2 <= u128::MAX.
+        let max_adds = ((u128::MAX - start) / (pm * pm).max(1)).min(1 << 20) as usize;
+        (max_adds, shrink)
+    }
+
+    fn all(self, acc: &mut [u128]) {
+        match self {
+            Shrink::Fold(f) => acc.iter_mut().for_each(|a| *a = f.fold(*a)),
+            Shrink::Rem(m) => acc.iter_mut().for_each(|a| *a = u128::from(m.reduce(*a))),
         }
     }
 }
@@ -597,8 +621,10 @@ mod tests {
         }
         // Delayed reduction against the generic loop: more rows than one
         // u128 holds products of (every prime of the list is near 2^62,
-        // 14 products per reduction), and a prime near 2^63 (1 product).
-        for q in [P, 0x7fff_ffff_ffff_ffe7] {
+        // 15 products per fold), a prime near 2^63 (3 products per fold),
+        // and one whose 2^64 mod p passes 2^32 (no fold: remainders, 16).
+        assert!(field::Fold::new(0x3fff_feff_ffff_fff9).is_none());
+        for q in [P, 0x7fff_ffff_ffff_ffe7, 0x3fff_feff_ffff_fff9] {
             for n in [1usize, 5, 40, 70] {
                 let (mut fast, mut slow) = (RowEchelon::new(Zp(q)), RowEchelon::new(Naive(q)));
                 for _ in 0..n + 3 {

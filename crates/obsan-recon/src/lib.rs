@@ -72,7 +72,7 @@ pub mod fp {
     pub use crate::echelon::{
         null_space, rank, solve, Echelon, PrimeField, RowEchelon, Zp, BLOCK, PARALLEL_WORK,
     };
-    pub use crate::field::{add, inv, mul, pow, sub, Rem128, Shoup};
+    pub use crate::field::{add, inv, mul, pow, sub, Fold, Rem128, Shoup};
 }
 pub use rational::{Poly, Rational, Term};
 pub use rng::splitmix64;
