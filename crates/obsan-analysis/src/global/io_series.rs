@@ -7,7 +7,7 @@
 //! reconstruction's black box (docs/performance.md, session 31).
 
 use super::io::fp;
-use obsan_recon::fp::Shoup;
+use obsan_recon::fp::{Fold, Rem128, Shoup};
 
 /// A polynomial in the series variables with its parameters already
 /// evaluated: terms `(coefficient, [(variable, exponent)])`.
@@ -109,6 +109,35 @@ impl Relaxed {
     }
 }
 
+/// `out = a b` truncated to `out.len()`, the products summed in `u128` and
+/// folded (`Fold`) once every `max_adds` rows instead of reduced one by
+/// one: SIWR_orig's monomial series, as many products per point as its
+/// kernel's elimination has multiply-adds.
+fn mul_folded(a: &[u64], b: &[u64], out: &mut [u64], p: u64, f: Fold) {
+    let pm = u128::from(p - 1).max(1);
+    // Entries stay below Fold::BOUND + max_adds (p - 1)^2 <= u128::MAX.
+    let max_adds = ((u128::MAX - Fold::BOUND) / (pm * pm)).min(1 << 20) as usize;
+    let mut acc = vec![0u128; out.len()];
+    let mut adds = 0;
+    for (i, &ai) in a.iter().enumerate().take(out.len()) {
+        if ai == 0 {
+            continue;
+        }
+        if adds >= max_adds {
+            acc[i..].iter_mut().for_each(|x| *x = f.fold(*x));
+            adds = 0;
+        }
+        for (o, &bj) in acc[i..].iter_mut().zip(b) {
+            *o += u128::from(ai) * u128::from(bj);
+        }
+        adds += 1;
+    }
+    let m = Rem128::new(p);
+    for (o, &x) in out.iter_mut().zip(&acc) {
+        *o = m.reduce(x);
+    }
+}
+
 pub(super) struct Arith {
     pub(super) p: u64,
     pub(super) g: usize,
@@ -144,6 +173,9 @@ impl Arith {
         let (p, g, len) = (self.p, self.g, self.len);
         out.fill(0);
         if g == 1 {
+            if let Some(f) = Fold::new(p) {
+                return mul_folded(a, b, out, p, f);
+            }
             for (i, &ai) in a.iter().enumerate() {
                 if ai == 0 {
                     continue;
@@ -310,7 +342,7 @@ mod tests {
     fn flat_products_and_quotients_agree_with_the_nested_naive_ones() {
         let mut st = 17u64;
         let mut next = || obsan_recon::splitmix64(&mut st) % P;
-        for (g, len) in [(1, 1), (1, 6), (3, 5), (5, 2), (1, 9)] {
+        for (g, len) in [(1, 1), (1, 6), (3, 5), (5, 2), (1, 9), (1, 40), (1, 100)] {
             let a = Arith { p: P, g, len };
             let nested = |next: &mut dyn FnMut() -> u64| -> Vec<Vec<u64>> {
                 (0..len).map(|_| (0..g).map(|_| next()).collect()).collect()
