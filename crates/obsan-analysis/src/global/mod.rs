@@ -167,6 +167,33 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
         }
         Err(e) => e,
     };
+    // A relation past the ansatz, found by elimination as `--route io`
+    // does (io_elim.rs; models without inputs), under deterministic bounds
+    // ([`io_choice::ELIM_WORK`], [`io_choice::ELIM_IO_WORK`]): before the
+    // unbounded Taylor attempt, which answers no such model of the SI.jl
+    // suite and took SIWR_orig 10 s to pass the memory budget, and before
+    // the Lie route, whose exact derivatives fill the expression budget the
+    // elimination's model needs (EAIHRD after them: "expression too large").
+    let past_ansatz = nf.input_vars.is_empty()
+        && !matches!(io_err, AnalysisError::Timeout(_))
+        && io_err.to_string().contains(io_report::PAST_ANSATZ);
+    let mut elim_err = None;
+    if past_ansatz {
+        let elim = GlobalOptions {
+            max_work: opts.max_work.min(io_choice::ELIM_WORK),
+            max_io_work: opts.max_io_work.min(io_choice::ELIM_IO_WORK),
+            ..beside(&kept, opts)
+        };
+        let why = format!("{reason}; the input-output route: {io_err}");
+        match io_report::io_route(nf, &elim, Some(why), true, io_report::MAX_ANSATZ) {
+            Ok(r) => {
+                drop(kept);
+                return states_after_io(nf, opts, r, stopped);
+            }
+            Err(e @ AnalysisError::Timeout(_)) => return Err(e),
+            Err(e) => elim_err = Some(e),
+        }
+    }
     // The unbounded Taylor attempt (the deadline passed: no time for it).
     let why = if stopped && !matches!(io_err, AnalysisError::Timeout(_)) {
         // One run at a time: a system past the early bound is large, and
@@ -181,30 +208,11 @@ fn auto_route(nf: &mut NormalForm, opts: &GlobalOptions) -> Result<GlobalReport,
     } else {
         reason
     };
-    // A relation past the ansatz, found by elimination as `--route io`
-    // does (io_elim.rs; models without inputs): after every attempt but the
-    // Lie route, as its reconstruction is long (SIWR_orig: 24 s), under
-    // deterministic bounds ([`io_choice::ELIM_WORK`],
-    // [`io_choice::ELIM_IO_WORK`]); before the Lie route, whose exact
-    // derivatives fill the expression budget the elimination's model needs
-    // (EAIHRD after them: "expression too large").
-    let past_ansatz = nf.input_vars.is_empty()
-        && !matches!(io_err, AnalysisError::Timeout(_))
-        && io_err.to_string().contains(io_report::PAST_ANSATZ);
     // No Taylor attempt follows: what it kept goes.
     drop(kept);
     let mut why = format!("{why}; the input-output route: {io_err}");
-    if past_ansatz {
-        let elim = GlobalOptions {
-            max_work: opts.max_work.min(io_choice::ELIM_WORK),
-            max_io_work: opts.max_io_work.min(io_choice::ELIM_IO_WORK),
-            ..opts.clone()
-        };
-        match io_report::io_route(nf, &elim, Some(why.clone()), true, io_report::MAX_ANSATZ) {
-            Ok(r) => return states_after_io(nf, opts, r, stopped),
-            Err(e @ AnalysisError::Timeout(_)) => return Err(e),
-            Err(e) => why = format!("{why}; the input-output route by elimination: {e}"),
-        }
+    if let Some(e) = elim_err {
+        why = format!("{why}; the input-output route by elimination: {e}");
     }
     match taylor_route(nf, opts, true, false, &[], &mut Prolonged::default()) {
         Ok(mut r) => {
