@@ -15,6 +15,7 @@
 //! refuses otherwise.
 
 use super::io::{elem, IoModel};
+use super::io_part;
 use super::io_pres::presentation;
 use super::model::ZModel;
 use super::run::Rng;
@@ -26,6 +27,7 @@ use obsan_recon::{
     interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, Rational,
     Univariate,
 };
+use std::cell::Cell;
 use std::collections::HashMap;
 
 /// Sizes of one output's relation, as measured (docs/performance.md).
@@ -232,31 +234,27 @@ pub(super) fn reconstruct(
     seed: u64,
     want: Part,
 ) -> Result<Coefficients, AnalysisError> {
-    let mut models: HashMap<u64, (IoModel, Rng)> = HashMap::new();
-    let mut calls = 0u64;
-    // The kernel normalised by its last coefficient (which is 1).
-    let mut coeffs = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
-        calls += 1;
-        if let std::collections::hash_map::Entry::Vacant(e) = models.entry(p) {
-            let rng = Rng::new(seed ^ p);
-            let mut io = IoModel::new(m, p)?;
-            io.deadline = opts.deadline;
-            io.max_bytes = opts.max_bytes;
-            io.max_work = opts.max_io_work;
-            e.insert((io, rng));
-        }
-        let Some((io, rng)) = models.get_mut(&p) else {
-            return Ok(None);
-        };
-        io.on_support(pt, orders, i, support, rng)
+    let (calls, remember) = (Cell::new(0u64), Cell::new(true));
+    let mut kernels = Kernels {
+        m,
+        orders,
+        i,
+        support,
+        opts,
+        seed,
+        calls: &calls,
+        remember: &remember,
+        models: HashMap::new(),
+        memo: HashMap::new(),
+        memo_bytes: 0,
     };
+    // The kernel normalised by its last coefficient (which is 1).
+    let mut coeffs = |pt: &[u64], p: u64| kernels.at(pt, p);
     let np = m.param_vars.len();
     // The axis lines' base point (module `normalisation`).
     let p0 = obsan_recon::PRIMES[0];
     let mut base_rng = Rng::new(seed ^ 0xde40);
     let base: Vec<u64> = (0..np).map(|_| elem(&mut base_rng, p0)).collect();
-    let norm = normalisation(np, support.len(), &mut coeffs, &base)?;
-    let (j, alpha) = (norm.j, norm.alpha.clone());
     let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
         obsan_recon::ReconError::BlackBox(e) => e,
         e => err(format!(
@@ -268,6 +266,21 @@ pub(super) fn reconstruct(
         seed: seed ^ 0x10c0,
         ..Options::default()
     };
+    // A part chosen before every quotient is probed (io_part.rs); the
+    // whole's probes below then reuse the samples (Kernels remembers them).
+    if want == Part::Generating {
+        let early =
+            io_part::early_part(&mut Axes::new(&mut coeffs, &base), np, support.len(), seed)?;
+        if let Some(e) = early {
+            if let Some(c) =
+                early_coefficients(&e, np, &mut coeffs, &ropts, &calls).map_err(recon_err)?
+            {
+                return Ok(c);
+            }
+        }
+    }
+    let norm = normalisation(np, support.len(), &mut Axes::new(&mut coeffs, &base))?;
+    let (j, alpha) = (norm.j, norm.alpha.clone());
     // Per quotient its degree in each parameter after the scaling, the
     // bounds if every one is a polynomial, the quotients' Jacobian at the
     // base point (from the same axis samples), and the common denominator
@@ -338,22 +351,12 @@ pub(super) fn reconstruct(
     // the same probes.)
     if let (Some(part), Some(per)) = (&part, &per_axis) {
         let d = line.degrees_of(part);
-        let bounds = DegreeBounds {
-            per_var: (0..np)
-                .map(|k| part.iter().map(|&q| per[q][k]).max().unwrap_or(0))
-                .collect(),
-            total: d.iter().copied().max(),
-        };
+        let per: Vec<Vec<u32>> = part.iter().map(|&q| per[q].clone()).collect();
         let mut bbp = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
             Ok(bb(pt, p)?.map(|v| part.iter().map(|&q| v[q]).collect()))
         };
-        let sopts = Options {
-            max_terms: MAX_SPARSE_TERMS,
-            ..ropts.clone()
-        };
-        if let Some(r) =
-            interpolate_polys_vec(np, part.len(), &mut bbp, &sopts, &bounds).map_err(recon_err)?
-        {
+        remember.set(false);
+        if let Some(r) = interpolate_part(np, &per, &d, &mut bbp, &ropts).map_err(recon_err)? {
             return Ok(Coefficients {
                 fns: r
                     .functions
@@ -362,9 +365,10 @@ pub(super) fn reconstruct(
                     .map(|(f, &q)| unscale(f, &alpha[q]))
                     .collect(),
                 error_bound: r.certificate.error_bound,
-                points: calls,
+                points: calls.get(),
                 part: Some(part.clone()),
                 denominator_terms: den.as_ref().map_or(0, |d| d.terms().len()),
+                divisor: j,
             });
         }
     }
@@ -381,7 +385,8 @@ pub(super) fn reconstruct(
     };
     // Polynomials on every axis: sparse interpolation first (about twice
     // their terms in points), the rational reconstruction when it does not
-    // recognise them.
+    // recognise them; on random points, no longer remembered.
+    remember.set(false);
     let sparse = match &bounds {
         Some(b) => {
             let sopts = Options {
@@ -404,10 +409,137 @@ pub(super) fn reconstruct(
             .map(|(f, a)| unscale(f, a))
             .collect(),
         error_bound: r.certificate.error_bound,
-        points: calls,
+        points: calls.get(),
         part: None,
         denominator_terms: den.as_ref().map_or(0, |d| d.terms().len()),
+        divisor: j,
     })
+}
+
+/// The relation's kernels at parameter points, one [`IoModel`] per prime;
+/// the probes' points (axes and line, sampled again when the whole follows
+/// a part chosen early) remembered while `remember` is set, up to
+/// [`MEMO_BYTES`].
+struct Kernels<'a> {
+    m: &'a ZModel,
+    orders: &'a [usize],
+    i: usize,
+    support: &'a [Vec<u32>],
+    opts: &'a GlobalOptions,
+    seed: u64,
+    /// Kernels computed (the points reported).
+    calls: &'a Cell<u64>,
+    remember: &'a Cell<bool>,
+    models: HashMap<u64, (IoModel, Rng)>,
+    memo: HashMap<(u64, Vec<u64>), Option<Vec<u64>>>,
+    memo_bytes: usize,
+}
+
+/// Bytes of kernels [`Kernels`] remembers (SIWR_orig's probes: 150 points
+/// of 771 entries, under a megabyte).
+const MEMO_BYTES: usize = 16 << 20;
+
+impl Kernels<'_> {
+    /// The kernel at `pt` modulo `p`, normalised by its last coefficient.
+    fn at(&mut self, pt: &[u64], p: u64) -> Result<Option<Vec<u64>>, AnalysisError> {
+        let key = (p, pt.to_vec());
+        if let Some(v) = self.memo.get(&key) {
+            return Ok(v.clone());
+        }
+        self.calls.set(self.calls.get() + 1);
+        if let std::collections::hash_map::Entry::Vacant(e) = self.models.entry(p) {
+            let rng = Rng::new(self.seed ^ p);
+            let mut io = IoModel::new(self.m, p)?;
+            io.deadline = self.opts.deadline;
+            io.max_bytes = self.opts.max_bytes;
+            io.max_work = self.opts.max_io_work;
+            e.insert((io, rng));
+        }
+        let Some((io, rng)) = self.models.get_mut(&p) else {
+            return Ok(None);
+        };
+        let v = io.on_support(pt, self.orders, self.i, self.support, rng)?;
+        let bytes = 8 * (pt.len() + v.as_ref().map_or(0, Vec::len));
+        if self.remember.get() && self.memo_bytes + bytes <= MEMO_BYTES {
+            self.memo_bytes += bytes;
+            self.memo.insert(key, v.clone());
+        }
+        Ok(v)
+    }
+}
+
+/// The coefficients of a part chosen early (io_part.rs): its quotients by
+/// `c_j`, times their monomials, interpolated sparsely within the probes'
+/// degree bounds; `None` when they are not recognised as polynomials.
+fn early_coefficients(
+    e: &io_part::Early,
+    np: usize,
+    coeffs: &mut BlackBox<'_>,
+    ropts: &Options,
+    calls: &Cell<u64>,
+) -> Result<Option<Coefficients>, obsan_recon::ReconError<AnalysisError>> {
+    let mut bbp = |pt: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+        let Some(v) = coeffs(pt, p)? else {
+            return Ok(None);
+        };
+        let Some(iv) = obsan_recon::fp::inv(v[e.j], p) else {
+            return Ok(None);
+        };
+        Ok(Some(
+            e.part
+                .iter()
+                .zip(&e.alpha)
+                .map(|(&q, a)| {
+                    let c = fmul(v[quotient_index(q, e.j)], iv, p);
+                    a.iter().zip(pt).fold(c, |acc, (&x, &t)| {
+                        fmul(acc, obsan_recon::fp::pow(t, u64::from(x), p), p)
+                    })
+                })
+                .collect(),
+        ))
+    };
+    let r = interpolate_part(np, &e.per, &e.degrees, &mut bbp, ropts)?;
+    Ok(r.map(|r| Coefficients {
+        fns: r
+            .functions
+            .iter()
+            .zip(&e.alpha)
+            .map(|(f, a)| {
+                let g = f.over_monomial(a);
+                (g.num().clone(), g.den().clone())
+            })
+            .collect(),
+        error_bound: r.certificate.error_bound,
+        points: calls.get(),
+        part: Some(e.part.clone()),
+        denominator_terms: 0,
+        divisor: e.j,
+    }))
+}
+
+/// A part's scaled quotients (`bbp`) interpolated sparsely, each of
+/// per-axis degrees `per[q]` and total degree `degrees[q]`.
+fn interpolate_part<F>(
+    np: usize,
+    per: &[Vec<u32>],
+    degrees: &[u32],
+    bbp: &mut F,
+    ropts: &Options,
+) -> Result<Option<obsan_recon::Reconstruction>, obsan_recon::ReconError<AnalysisError>>
+where
+    F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, AnalysisError>,
+{
+    let bounds = DegreeBounds {
+        per_var: (0..np)
+            .map(|k| per.iter().map(|d| d[k]).max().unwrap_or(0))
+            .collect(),
+        total: degrees.iter().copied().max(),
+    };
+    let sopts = Options {
+        max_terms: MAX_SPARSE_TERMS,
+        ..ropts.clone()
+    };
+    interpolate_polys_vec(np, per.len(), bbp, &sopts, &bounds)
 }
 
 /// Per quotient its degree in each parameter after the scaling, the bounds
@@ -477,6 +609,10 @@ pub(super) struct Coefficients {
     pub(super) part: Option<Vec<usize>>,
     /// Terms of the common denominator (`common_denominator`), 0 if none.
     pub(super) denominator_terms: usize,
+    /// The coefficient `c_j` the quotients are `c_m / c_j` of (quotient `q`
+    /// is `c_m`, `m = quotient_index(q, j)`).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(super) divisor: usize,
 }
 
 /// How much simpler (in monomials the bounds allow) the part must be than
@@ -505,13 +641,13 @@ fn generating_part(est: &[usize], jac: &[Vec<u64>], p: u64) -> Option<Vec<usize>
 /// A quotient's size estimate (the monomials its degree bounds allow): its
 /// own, or a lower bound while its degree along the line is not known.
 #[derive(Clone, Copy, Debug)]
-enum Estimate {
+pub(super) enum Estimate {
     Exact(usize),
     AtLeast(usize),
 }
 
 impl Estimate {
-    fn low(self) -> usize {
+    pub(super) fn low(self) -> usize {
         match self {
             Estimate::Exact(e) | Estimate::AtLeast(e) => e,
         }
@@ -526,6 +662,17 @@ impl Estimate {
 /// exact order too; the whole's size is at least the largest lower bound.
 fn select_part(est: &[Estimate], jac: &[Vec<u64>], p: u64) -> Option<Option<Vec<usize>>> {
     let full = obsan_recon::fp::rank(Zp(p), jac.iter().cloned());
+    select_ranked(est, jac, p, full)
+}
+
+/// [`select_part`] when the whole Jacobian's rank is known to be `full`
+/// (io_part.rs: every parameter, `np`, reached by rows known so far).
+pub(super) fn select_ranked(
+    est: &[Estimate],
+    jac: &[Vec<u64>],
+    p: u64,
+    full: usize,
+) -> Option<Option<Vec<usize>>> {
     if full == 0 {
         return Some(None);
     }
@@ -597,7 +744,7 @@ fn axis_jacobian(axes: &[Vec<Fraction>], base: &[u64], p: u64) -> Option<Vec<Vec
 }
 
 /// `d/dt (num/den)` at `t0` modulo `p` (coefficients lowest degree first).
-fn fraction_derivative(num: &[u64], den: &[u64], t0: u64, p: u64) -> Option<u64> {
+pub(super) fn fraction_derivative(num: &[u64], den: &[u64], t0: u64, p: u64) -> Option<u64> {
     use obsan_recon::fp::{add, sub};
     // Value and derivative by Horner.
     let eval = |c: &[u64]| -> (u64, u64) {
@@ -799,19 +946,31 @@ fn others(v: &[u64], j: usize) -> impl Iterator<Item = u64> + '_ {
         .map(|(_, &c)| c)
 }
 
-fn is_monomial(v: &[u64]) -> bool {
+pub(super) fn is_monomial(v: &[u64]) -> bool {
     v.iter().filter(|&&c| c != 0).count() == 1
 }
 
 /// Samples of the black box along the axis lines `theta_k = t` (the other
-/// parameters at one random point), kept so that every normalisation tried
-/// reuses them.
-struct Axes<'a, 'b> {
+/// parameters at one random point), and per coefficient divided by and
+/// per axis one univariate interpolation per quotient, fed as far as asked:
+/// every normalisation tried, and the part chosen early (io_part.rs), reuse
+/// both.
+pub(super) struct Axes<'a, 'b> {
     bb: &'a mut BlackBox<'b>,
     base: Vec<u64>,
     samples: Vec<Vec<(u64, Vec<u64>)>>,
     next_t: Vec<u64>,
     misses: usize,
+    /// Per divisor `j`, per axis: the samples fed, and the interpolations
+    /// (from the first sample where `v_j` does not vanish).
+    probes: HashMap<usize, Vec<Probe>>,
+}
+
+/// One axis's interpolations of the quotients by one coefficient.
+#[derive(Default)]
+struct Probe {
+    fed: usize,
+    th: Option<Vec<Univariate>>,
 }
 
 /// A univariate fraction modulo p: numerator and denominator coefficients,
@@ -820,46 +979,117 @@ type Fraction = (Vec<u64>, Vec<u64>);
 
 /// Consecutive samples a univariate fraction must predict before it is
 /// taken for the function (`Univariate`'s early termination).
-const AGREE: usize = 2;
+pub(super) const AGREE: usize = 2;
 
 /// Samples per axis before a probe gives up (the coefficients' degrees
 /// along a line are 14 for Goodwin, 12 for SIWR_multiout).
-const MAX_AXIS_SAMPLES: usize = 400;
+pub(super) const MAX_AXIS_SAMPLES: usize = 400;
 
-impl Axes<'_, '_> {
-    /// Along axis `k`, the reduced fractions `v_m / v_j` (`m != j`), `v` the
-    /// black box's vector; `None` when the samples run out.
-    fn fractions(&mut self, k: usize, j: usize) -> Result<Option<Vec<Fraction>>, AnalysisError> {
-        let p = obsan_recon::PRIMES[0];
-        let mut th: Option<Vec<Univariate>> = None;
-        let mut idx = 0;
-        while th.as_ref().is_none_or(|th| th.iter().any(|x| !x.done())) {
-            while self.samples[k].len() <= idx {
-                if self.misses > 8 || idx >= MAX_AXIS_SAMPLES {
-                    return Ok(None);
+/// The entry of the black box's vector that is quotient `q` by coefficient
+/// `j` (the quotients leave `j` out, `others`).
+pub(super) fn quotient_index(q: usize, j: usize) -> usize {
+    if q < j {
+        q
+    } else {
+        q + 1
+    }
+}
+
+impl<'a, 'b> Axes<'a, 'b> {
+    pub(super) fn new(bb: &'a mut BlackBox<'b>, base: &[u64]) -> Self {
+        Axes {
+            bb,
+            base: base.to_vec(),
+            samples: vec![Vec::new(); base.len()],
+            next_t: vec![1; base.len()],
+            misses: 0,
+            probes: HashMap::new(),
+        }
+    }
+
+    pub(super) fn base(&self) -> &[u64] {
+        &self.base
+    }
+
+    /// The black box at `pt` modulo the probes' prime.
+    pub(super) fn call(&mut self, pt: &[u64]) -> Result<Option<Vec<u64>>, AnalysisError> {
+        (self.bb)(pt, P0)
+    }
+
+    /// Along axis `k`, the quotients by coefficient `j` fed with the first
+    /// `cap` samples, or fewer once every one is done; false when the
+    /// samples run out first.
+    pub(super) fn advance(
+        &mut self,
+        k: usize,
+        j: usize,
+        cap: usize,
+    ) -> Result<bool, AnalysisError> {
+        let np = self.samples.len();
+        let mut probe = std::mem::take(
+            &mut self
+                .probes
+                .entry(j)
+                .or_insert_with(|| (0..np).map(|_| Probe::default()).collect())[k],
+        );
+        let r = self.feed(k, j, cap, &mut probe);
+        if let Some(ps) = self.probes.get_mut(&j) {
+            ps[k] = probe;
+        }
+        r
+    }
+
+    fn feed(
+        &mut self,
+        k: usize,
+        j: usize,
+        cap: usize,
+        pr: &mut Probe,
+    ) -> Result<bool, AnalysisError> {
+        while pr.fed < cap && pr.th.as_ref().is_none_or(|th| th.iter().any(|x| !x.done())) {
+            while self.samples[k].len() <= pr.fed {
+                if self.misses > 8 || pr.fed >= MAX_AXIS_SAMPLES {
+                    return Ok(false);
                 }
                 let mut pt = self.base.clone();
                 pt[k] = self.next_t[k];
                 self.next_t[k] += 1;
-                match (self.bb)(&pt, p)? {
+                match (self.bb)(&pt, P0)? {
                     Some(v) => self.samples[k].push((pt[k], v)),
                     None => self.misses += 1,
                 }
             }
-            let (t, v) = &self.samples[k][idx];
-            idx += 1;
-            let Some(iv) = obsan_recon::fp::inv(v[j], p) else {
+            let (t, v) = &self.samples[k][pr.fed];
+            pr.fed += 1;
+            let Some(iv) = obsan_recon::fp::inv(v[j], P0) else {
                 continue;
             };
-            let th =
-                th.get_or_insert_with(|| (1..v.len()).map(|_| Univariate::new(p, AGREE)).collect());
+            let th = pr
+                .th
+                .get_or_insert_with(|| (1..v.len()).map(|_| Univariate::new(P0, AGREE)).collect());
             for (x, c) in th.iter_mut().zip(others(v, j)) {
                 if !x.done() {
-                    x.add(*t, fmul(c, iv, p));
+                    x.add(*t, fmul(c, iv, P0));
                 }
             }
         }
-        Ok(th.map(|th| th.iter().map(Univariate::rational).collect()))
+        Ok(true)
+    }
+
+    /// Along axis `k`, the interpolations of the quotients by `j` so far.
+    pub(super) fn probes(&self, k: usize, j: usize) -> Option<&[Univariate]> {
+        self.probes.get(&j)?.get(k)?.th.as_deref()
+    }
+
+    /// Along axis `k`, the reduced fractions `v_m / v_j` (`m != j`), `v` the
+    /// black box's vector; `None` when the samples run out.
+    fn fractions(&mut self, k: usize, j: usize) -> Result<Option<Vec<Fraction>>, AnalysisError> {
+        if !self.advance(k, j, usize::MAX)? {
+            return Ok(None);
+        }
+        Ok(self
+            .probes(k, j)
+            .map(|th| th.iter().map(Univariate::rational).collect()))
     }
 }
 
@@ -885,16 +1115,8 @@ impl Axes<'_, '_> {
 fn normalisation(
     np: usize,
     n: usize,
-    bb: &mut BlackBox<'_>,
-    base: &[u64],
+    axes: &mut Axes<'_, '_>,
 ) -> Result<Normalised, AnalysisError> {
-    let mut axes = Axes {
-        bb,
-        base: base.to_vec(),
-        samples: vec![Vec::new(); np],
-        next_t: vec![1; np],
-        misses: 0,
-    };
     let ord = |v: &[u64]| v.iter().position(|&c| c != 0).unwrap_or(0) as i64;
     let fallback = Normalised {
         j: n - 1,
@@ -991,7 +1213,7 @@ fn normalisation(
 }
 
 /// The first reconstruction prime (the axis probes' field).
-const P0: u64 = obsan_recon::PRIMES[0];
+pub(super) const P0: u64 = obsan_recon::PRIMES[0];
 
 /// A least common multiple of univariate polynomials modulo `p`.
 fn ulcm(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {

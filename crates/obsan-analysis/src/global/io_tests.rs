@@ -583,6 +583,48 @@ fn sparse_path_matches_the_rational_reconstruction() {
     );
 }
 
+/// A part chosen before the axis probes are complete (io_part.rs; SIWR_multiout's
+/// 29 of 132 quotients are) is the black box's own quotients: at a fresh
+/// point modulo a fresh prime each of its functions is the kernel's
+/// `c_m / c_j`.
+#[test]
+fn an_early_part_is_the_kernels_quotients() {
+    use super::super::io_count::{quotient_index, reconstruct, Part};
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/benchmarks/si-jl/SIWR_multiout.sys"
+    );
+    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let p = obsan_expr::P;
+    let mut rng = Rng::new(7);
+    let io = IoModel::new(&m, p).unwrap();
+    let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
+    let orders = io.orders(&th, &mut rng).unwrap();
+    let r = io
+        .relation(&th, &orders, 0, 40, 1000, &mut rng)
+        .unwrap()
+        .unwrap();
+    let opts = crate::global::GlobalOptions::default();
+    let c = reconstruct(&m, &orders, 0, &r.support, &opts, 1, Part::Generating).unwrap();
+    let part = c.part.clone().expect("SIWR_multiout's relation has a part");
+    assert!(part.len() < r.support.len() - 1);
+    let q = obsan_recon::PRIMES[7];
+    let io_q = IoModel::new(&m, q).unwrap();
+    let pt: Vec<u64> = (0..io.n_params())
+        .map(|_| 1 + rng.next() % (q - 1))
+        .collect();
+    let v = io_q
+        .on_support(&pt, &orders, 0, &r.support, &mut Rng::new(3))
+        .unwrap()
+        .unwrap();
+    let iv = obsan_recon::fp::inv(v[c.divisor], q).unwrap();
+    for (&k, (num, den)) in part.iter().zip(&c.fns) {
+        let want = obsan_recon::fp::mul(v[quotient_index(k, c.divisor)], iv, q);
+        let d = obsan_recon::fp::inv(den.eval_mod(&pt, q), q).unwrap();
+        assert_eq!(obsan_recon::fp::mul(num.eval_mod(&pt, q), d, q), want);
+    }
+}
+
 /// Every orderly ranking gives a characteristic presentation whose
 /// coefficients generate the same field (OPPS 2021), so the counts do not
 /// depend on the outputs' priority; the sizes do (HIV's `w'''` relation has

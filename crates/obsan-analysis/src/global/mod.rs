@@ -20,6 +20,7 @@ mod io;
 mod io_choice;
 mod io_count;
 mod io_elim;
+mod io_part;
 mod io_pres;
 mod io_report;
 mod io_series;
