@@ -810,6 +810,23 @@ fn line_degrees(
     Line::new(np, m, seed).finish(bb)
 }
 
+/// The random line `a + t b` of the total degrees ([`Line`], and io_part.rs's
+/// `RawLine` on the same points): `a` and `b`.
+pub(super) fn line_ends(np: usize, seed: u64) -> (Vec<u64>, Vec<u64>) {
+    let mut rng = Rng::new(seed ^ 0x1e4e);
+    let a = (0..np).map(|_| elem(&mut rng, P0)).collect();
+    let b = (0..np).map(|_| elem(&mut rng, P0)).collect();
+    (a, b)
+}
+
+/// The point `a + t b` modulo [`P0`].
+pub(super) fn line_point(a: &[u64], b: &[u64], t: u64) -> Vec<u64> {
+    a.iter()
+        .zip(b)
+        .map(|(&x, &y)| obsan_recon::fp::add(x, fmul(t, y, P0), P0))
+        .collect()
+}
+
 /// The black box's functions along one random line `a + t b`, sampled at
 /// `t = 1, 2, ...`, one univariate interpolation each: their total degrees
 /// ([`line_degree`]), sampled only as far as a caller needs.
@@ -823,14 +840,11 @@ struct Line {
 
 impl Line {
     fn new(np: usize, m: usize, seed: u64) -> Line {
-        let p = obsan_recon::PRIMES[0];
-        let mut rng = Rng::new(seed ^ 0x1e4e);
-        let a: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
-        let b: Vec<u64> = (0..np).map(|_| elem(&mut rng, p)).collect();
+        let (a, b) = line_ends(np, seed);
         Line {
             a,
             b,
-            th: (0..m).map(|_| Univariate::new(p, AGREE)).collect(),
+            th: (0..m).map(|_| Univariate::new(P0, AGREE)).collect(),
             t: 0,
             misses: 0,
         }
@@ -845,20 +859,14 @@ impl Line {
             if self.misses > 8 || self.t as usize > MAX_AXIS_SAMPLES {
                 return Ok(false);
             }
-            let t = self.t;
-            let pt: Vec<u64> = self
-                .a
-                .iter()
-                .zip(&self.b)
-                .map(|(&x, &y)| obsan_recon::fp::add(x, fmul(t, y, p), p))
-                .collect();
+            let pt = line_point(&self.a, &self.b, self.t);
             let Some(v) = bb(&pt, p)? else {
                 self.misses += 1;
                 continue;
             };
             for (x, c) in self.th.iter_mut().zip(v) {
                 if !x.done() {
-                    x.add(t, c);
+                    x.add(self.t, c);
                 }
             }
             return Ok(true);

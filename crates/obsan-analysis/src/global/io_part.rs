@@ -22,12 +22,11 @@
 //! which then falls back to the whole.
 
 use super::io_count::{
-    fraction_derivative, is_monomial, quotient_index, select_ranked, Axes, Estimate, AGREE,
-    MAX_AXIS_SAMPLES, P0,
+    fraction_derivative, is_monomial, line_ends, line_point, quotient_index, select_ranked, Axes,
+    Estimate, AGREE, MAX_AXIS_SAMPLES, P0,
 };
-use super::run::Rng;
 use crate::rank::AnalysisError;
-use obsan_recon::fp::{add, inv, mul, pow, Echelon, Zp};
+use obsan_recon::fp::{inv, mul, pow, Echelon, Zp};
 use obsan_recon::{DegreeBounds, Univariate};
 
 /// A part chosen early: the coefficient divided by, and per quotient of
@@ -285,9 +284,7 @@ struct RawLine {
 
 impl RawLine {
     fn new(np: usize, seed: u64) -> RawLine {
-        let mut rng = Rng::new(seed ^ 0x1e4e);
-        let a = (0..np).map(|_| super::io::elem(&mut rng, P0)).collect();
-        let b = (0..np).map(|_| super::io::elem(&mut rng, P0)).collect();
+        let (a, b) = line_ends(np, seed);
         RawLine {
             a,
             b,
@@ -305,15 +302,9 @@ impl RawLine {
             if self.misses > 8 || self.t as usize > MAX_AXIS_SAMPLES {
                 return Ok(false);
             }
-            let t = self.t;
-            let pt: Vec<u64> = self
-                .a
-                .iter()
-                .zip(&self.b)
-                .map(|(&x, &y)| add(x, mul(t, y, P0), P0))
-                .collect();
+            let pt = line_point(&self.a, &self.b, self.t);
             match axes.call(&pt)? {
-                Some(v) => self.samples.push((t, pt, v)),
+                Some(v) => self.samples.push((self.t, pt, v)),
                 None => self.misses += 1,
             }
         }

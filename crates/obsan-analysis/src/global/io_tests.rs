@@ -516,6 +516,22 @@ fn io_recon_trace() {
     }
 }
 
+/// The model at `path`, its outputs' orders and its first output's relation
+/// (the dense ansatz), at a random point drawn from `seed`.
+fn first_relation(path: &str, seed: u64) -> (ZModel, Vec<usize>, IoRelation) {
+    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let p = obsan_expr::P;
+    let mut rng = Rng::new(seed);
+    let io = IoModel::new(&m, p).unwrap();
+    let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
+    let orders = io.orders(&th, &mut rng).unwrap();
+    let r = io
+        .relation(&th, &orders, 0, 40, 1000, &mut rng)
+        .unwrap()
+        .unwrap();
+    (m, orders, r)
+}
+
 /// Goodwin's quotients by its last coefficient are polynomials once scaled
 /// by their monomial denominators, so the route's reconstruction takes the
 /// sparse path (Ben-Or & Tiwari): the same functions as the rational
@@ -528,16 +544,7 @@ fn sparse_path_matches_the_rational_reconstruction() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../systems/global/sijl_tests/goodwin.sys"
     );
-    let m = model(&std::fs::read_to_string(path).unwrap(), path);
-    let p = obsan_expr::P;
-    let mut rng = Rng::new(5);
-    let io = IoModel::new(&m, p).unwrap();
-    let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
-    let orders = io.orders(&th, &mut rng).unwrap();
-    let r = io
-        .relation(&th, &orders, 0, 40, 1000, &mut rng)
-        .unwrap()
-        .unwrap();
+    let (m, orders, r) = first_relation(path, 5);
     let opts = crate::global::GlobalOptions::default();
     let c = super::super::io_count::reconstruct(
         &m,
@@ -594,23 +601,15 @@ fn an_early_part_is_the_kernels_quotients() {
         env!("CARGO_MANIFEST_DIR"),
         "/../../systems/benchmarks/si-jl/SIWR_multiout.sys"
     );
-    let m = model(&std::fs::read_to_string(path).unwrap(), path);
-    let p = obsan_expr::P;
-    let mut rng = Rng::new(7);
-    let io = IoModel::new(&m, p).unwrap();
-    let th: Vec<u64> = (0..io.n_params()).map(|_| rng.next() % p).collect();
-    let orders = io.orders(&th, &mut rng).unwrap();
-    let r = io
-        .relation(&th, &orders, 0, 40, 1000, &mut rng)
-        .unwrap()
-        .unwrap();
+    let (m, orders, r) = first_relation(path, 7);
+    let mut rng = Rng::new(8);
     let opts = crate::global::GlobalOptions::default();
     let c = reconstruct(&m, &orders, 0, &r.support, &opts, 1, Part::Generating).unwrap();
     let part = c.part.clone().expect("SIWR_multiout's relation has a part");
     assert!(part.len() < r.support.len() - 1);
     let q = obsan_recon::PRIMES[7];
     let io_q = IoModel::new(&m, q).unwrap();
-    let pt: Vec<u64> = (0..io.n_params())
+    let pt: Vec<u64> = (0..m.param_vars.len())
         .map(|_| 1 + rng.next() % (q - 1))
         .collect();
     let v = io_q
