@@ -468,7 +468,53 @@ impl fp::PrimeField for FpField {
     fn inv(self, a: Fp) -> Option<Fp> {
         a.inv()
     }
+    /// Delayed reduction (`fp::reduce_delayed`): products below `2^122`
+    /// summed in u128, folded by `2^61 = 1` once every [`MERSENNE_ADDS`]
+    /// rows; the per-row shift-and-add products were most of the io route's
+    /// Wronskian checks (io.rs `independent_along`, 771 columns on
+    /// SIWR_orig).
+    fn reduce_sorted(self, v: &mut [Fp], rows: &[(usize, Vec<Fp>)]) {
+        fp::reduce_delayed(&mut [v], rows, P, MERSENNE_ADDS, fold61, reduce61);
+    }
+    fn reduce_block(self, vs: &mut [Vec<Fp>], rows: &[(usize, Vec<Fp>)]) {
+        fp::reduce_delayed(vs, rows, P, MERSENNE_ADDS, fold61, reduce61);
+    }
 }
+
+impl fp::Residue for Fp {
+    #[inline]
+    fn residue(self) -> u64 {
+        self.0
+    }
+    #[inline]
+    fn of_residue(x: u64) -> Fp {
+        Fp(x)
+    }
+}
+
+/// `x` with the same residue modulo `P = 2^61 - 1`, below `2^68`: its low 61
+/// bits plus the rest (`2^61 = 1`).
+#[inline]
+fn fold61(x: u128) -> u128 {
+    (x & u128::from(P)) + (x >> 61)
+}
+
+/// `x mod P` for any u128.
+#[inline]
+fn reduce61(x: u128) -> u64 {
+    // Below 2^68, then below 2^61 + 2^7, then below P.
+    let y = fold61(fold61(x)) as u64;
+    if y >= P {
+        y - P
+    } else {
+        y
+    }
+}
+
+/// Products (each below `(P - 1)^2 < 2^122`) [`FpField`]'s delayed reduction
+/// adds between folds: the folded entries are below `2^68`, and `2^68 + 63
+/// (P - 1)^2 < 2^128`.
+const MERSENNE_ADDS: usize = 63;
 
 /// Rows over [`Fp`] in reduced row echelon form: ranks, null spaces,
 /// membership and solves (`obsan_recon::fp::Echelon`).
@@ -543,6 +589,59 @@ mod tests {
             let sq = a.mul(a);
             let s = sq.sqrt().unwrap();
             assert_eq!(s.mul(s), sq);
+        }
+    }
+
+    #[test]
+    fn delayed_reduction_is_row_by_row_reduction() {
+        // FpField's delayed reduction against the trait's default loops
+        // (one shift-and-add product per entry), past one fold's 63 rows.
+        #[derive(Clone, Copy)]
+        struct Plain;
+        impl fp::PrimeField for Plain {
+            type Elem = Fp;
+            fn zero(self) -> Fp {
+                Fp::ZERO
+            }
+            fn one(self) -> Fp {
+                Fp::ONE
+            }
+            fn sub(self, a: Fp, b: Fp) -> Fp {
+                a - b
+            }
+            fn mul(self, a: Fp, b: Fp) -> Fp {
+                a * b
+            }
+            fn inv(self, a: Fp) -> Option<Fp> {
+                a.inv()
+            }
+        }
+        let mut r = SplitMix(11);
+        for n in [1usize, 7, 70, 140] {
+            let (mut fast, mut slow) = (fp::RowEchelon::new(FpField), fp::RowEchelon::new(Plain));
+            let rows: Vec<Vec<Fp>> = (0..n + 3)
+                .map(|i| {
+                    // Entries near P too, and a repeated row (a dependent one).
+                    (0..n)
+                        .map(|k| if (i + k) % 5 == 0 { Fp(P - 1 - (k as u64 % 3)) } else { r.fp() })
+                        .collect()
+                })
+                .collect();
+            let mut rows = rows;
+            if n > 2 {
+                rows[2] = rows[1].clone();
+            }
+            for row in &rows {
+                assert_eq!(fast.insert(row.clone()), slow.insert(row.clone()));
+            }
+            assert_eq!(fast.null_space(n), slow.null_space(n));
+            let (mut a, mut b) = (fp::RowEchelon::new(FpField), fp::RowEchelon::new(Plain));
+            assert_eq!(a.insert_all(rows.clone(), 2), b.insert_all(rows, 1));
+            assert_eq!(a.null_space(n), b.null_space(n));
+        }
+        for x in [0u128, u128::MAX, u128::from(P), u128::from(P) * u128::from(P - 1)] {
+            assert_eq!(u128::from(reduce61(x)), x % u128::from(P));
+            assert!(fold61(x) < 1 << 68 && fold61(x) % u128::from(P) == x % u128::from(P));
         }
     }
 

@@ -104,70 +104,82 @@ impl PrimeField for Zp {
             *a = s.times(*a);
         }
     }
-    /// Delayed reduction: the entries are summed in `u128` (each product
-    /// below `(p - 1)^2`) and reduced once every `max_adds` rows, not once
-    /// per product; each row's multiplier is reduced when its pivot is
-    /// reached (the rows before it never touch that column again).
+    /// Delayed reduction ([`reduce_delayed`]) of one vector.
     fn reduce_sorted(self, v: &mut [u64], rows: &[(usize, Vec<u64>)]) {
-        let p = self.0;
-        let (max_adds, shrink) = Shrink::new(p);
-        let m = field::Rem128::new(p);
-        let mut acc: Vec<u128> = v.iter().map(|&x| x as u128).collect();
-        let mut adds = 0;
-        for (piv, r) in rows {
-            let c = m.reduce(acc[*piv]);
+        let (max_adds, shrink) = Shrink::new(self.0);
+        let m = field::Rem128::new(self.0);
+        reduce_delayed(&mut [v], rows, self.0, max_adds, |a| shrink.one(a), |a| m.reduce(a));
+    }
+    /// [`reduce_delayed`], row-major: each row of the basis is read once
+    /// and applied to every vector of the block while it sits in cache (one
+    /// vector at a time streams the whole basis from memory per vector:
+    /// SIWR_orig's 771-column kernels, 4.7 MB).
+    fn reduce_block(self, vs: &mut [Vec<u64>], rows: &[(usize, Vec<u64>)]) {
+        let (max_adds, shrink) = Shrink::new(self.0);
+        let m = field::Rem128::new(self.0);
+        reduce_delayed(vs, rows, self.0, max_adds, |a| shrink.one(a), |a| m.reduce(a));
+    }
+}
+
+/// Field elements that are residues `0..p`, `p < 2^63`, for
+/// [`reduce_delayed`] (this crate's `u64`, obsan-expr's `Fp`).
+pub trait Residue: Copy {
+    fn residue(self) -> u64;
+    fn of_residue(x: u64) -> Self;
+}
+
+impl Residue for u64 {
+    #[inline]
+    fn residue(self) -> u64 {
+        self
+    }
+    #[inline]
+    fn of_residue(x: u64) -> u64 {
+        x
+    }
+}
+
+/// Each of `vs` reduced by `rows` (sorted by pivot, each 1 at its pivot and
+/// 0 at the earlier rows' pivots) with delayed reduction: the entries are
+/// summed in `u128` (each product below `(p - 1)^2`) and brought back by
+/// `shrink` (same residue, below a bound the caller's `max_adds` leaves
+/// room above) once every `max_adds` rows, not reduced once per product;
+/// each row's multiplier is reduced (`full`, to `0..p`) when its pivot is
+/// reached (the rows before it never touch that column again). Row-major:
+/// each row is applied to the whole block while it sits in cache.
+pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
+    vs: &mut [V],
+    rows: &[(usize, Vec<E>)],
+    p: u64,
+    max_adds: usize,
+    shrink: impl Fn(u128) -> u128,
+    full: impl Fn(u128) -> u64,
+) {
+    let mut accs: Vec<(Vec<u128>, usize)> = vs
+        .iter_mut()
+        .map(|v| (v.as_mut().iter().map(|x| u128::from(x.residue())).collect(), 0))
+        .collect();
+    for (piv, r) in rows {
+        for (acc, adds) in accs.iter_mut() {
+            let c = full(acc[*piv]);
             acc[*piv] = 0;
             if c == 0 {
                 continue;
             }
-            if adds >= max_adds {
-                shrink.all(&mut acc[*piv..]);
-                adds = 0;
+            if *adds >= max_adds {
+                acc[*piv..].iter_mut().for_each(|a| *a = shrink(*a));
+                *adds = 0;
             }
-            let nc = (p - c) as u128;
-            for (a, &y) in acc[*piv + 1..].iter_mut().zip(&r[*piv + 1..]) {
-                *a += nc * y as u128;
+            let nc = u128::from(p - c);
+            for (a, y) in acc[*piv + 1..].iter_mut().zip(&r[*piv + 1..]) {
+                *a += nc * u128::from(y.residue());
             }
-            adds += 1;
-        }
-        for (x, a) in v.iter_mut().zip(&acc) {
-            *x = m.reduce(*a);
+            *adds += 1;
         }
     }
-    /// [`Zp::reduce_sorted`]'s delayed reduction, row-major: each row of
-    /// the basis is read once and applied to every vector of the block
-    /// while it sits in cache (one vector at a time streams the whole basis
-    /// from memory per vector: SIWR_orig's 771-column kernels, 4.7 MB).
-    fn reduce_block(self, vs: &mut [Vec<u64>], rows: &[(usize, Vec<u64>)]) {
-        let p = self.0;
-        let (max_adds, shrink) = Shrink::new(p);
-        let m = field::Rem128::new(p);
-        let mut accs: Vec<(Vec<u128>, usize)> = vs
-            .iter()
-            .map(|v| (v.iter().map(|&x| x as u128).collect(), 0))
-            .collect();
-        for (piv, r) in rows {
-            for (acc, adds) in accs.iter_mut() {
-                let c = m.reduce(acc[*piv]);
-                acc[*piv] = 0;
-                if c == 0 {
-                    continue;
-                }
-                if *adds >= max_adds {
-                    shrink.all(&mut acc[*piv..]);
-                    *adds = 0;
-                }
-                let nc = (p - c) as u128;
-                for (a, &y) in acc[*piv + 1..].iter_mut().zip(&r[*piv + 1..]) {
-                    *a += nc * y as u128;
-                }
-                *adds += 1;
-            }
-        }
-        for (v, (acc, _)) in vs.iter_mut().zip(&accs) {
-            for (x, a) in v.iter_mut().zip(acc) {
-                *x = m.reduce(*a);
-            }
+    for (v, (acc, _)) in vs.iter_mut().zip(&accs) {
+        for (x, &a) in v.as_mut().iter_mut().zip(acc) {
+            *x = E::of_residue(full(a));
         }
     }
 }
@@ -195,10 +207,11 @@ impl Shrink {
         (max_adds, shrink)
     }
 
-    fn all(self, acc: &mut [u128]) {
+    #[inline]
+    fn one(self, a: u128) -> u128 {
         match self {
-            Shrink::Fold(f) => acc.iter_mut().for_each(|a| *a = f.fold(*a)),
-            Shrink::Rem(m) => acc.iter_mut().for_each(|a| *a = u128::from(m.reduce(*a))),
+            Shrink::Fold(f) => f.fold(a),
+            Shrink::Rem(m) => u128::from(m.reduce(a)),
         }
     }
 }

@@ -70,7 +70,8 @@ pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
 /// [`PrimeField`](fp::PrimeField) so the engine's own `Fp` uses it too.
 pub mod fp {
     pub use crate::echelon::{
-        null_space, rank, solve, Echelon, PrimeField, RowEchelon, Zp, BLOCK, PARALLEL_WORK,
+        null_space, rank, reduce_delayed, solve, Echelon, PrimeField, Residue, RowEchelon, Zp,
+        BLOCK, PARALLEL_WORK,
     };
     pub use crate::field::{add, inv, mul, pow, sub, Fold, Rem128, Shoup};
 }
