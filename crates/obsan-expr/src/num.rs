@@ -623,7 +623,13 @@ mod tests {
                 .map(|i| {
                     // Entries near P too, and a repeated row (a dependent one).
                     (0..n)
-                        .map(|k| if (i + k) % 5 == 0 { Fp(P - 1 - (k as u64 % 3)) } else { r.fp() })
+                        .map(|k| {
+                            if (i + k) % 5 == 0 {
+                                Fp(P - 1 - (k as u64 % 3))
+                            } else {
+                                r.fp()
+                            }
+                        })
                         .collect()
                 })
                 .collect();
@@ -639,7 +645,12 @@ mod tests {
             assert_eq!(a.insert_all(rows.clone(), 2), b.insert_all(rows, 1));
             assert_eq!(a.null_space(n), b.null_space(n));
         }
-        for x in [0u128, u128::MAX, u128::from(P), u128::from(P) * u128::from(P - 1)] {
+        for x in [
+            0u128,
+            u128::MAX,
+            u128::from(P),
+            u128::from(P) * u128::from(P - 1),
+        ] {
             assert_eq!(u128::from(reduce61(x)), x % u128::from(P));
             assert!(fold61(x) < 1 << 68 && fold61(x) % u128::from(P) == x % u128::from(P));
         }

@@ -108,7 +108,14 @@ impl PrimeField for Zp {
     fn reduce_sorted(self, v: &mut [u64], rows: &[(usize, Vec<u64>)]) {
         let (max_adds, shrink) = Shrink::new(self.0);
         let m = field::Rem128::new(self.0);
-        reduce_delayed(&mut [v], rows, self.0, max_adds, |a| shrink.one(a), |a| m.reduce(a));
+        reduce_delayed(
+            &mut [v],
+            rows,
+            self.0,
+            max_adds,
+            |a| shrink.one(a),
+            |a| m.reduce(a),
+        );
     }
     /// [`reduce_delayed`], row-major: each row of the basis is read once
     /// and applied to every vector of the block while it sits in cache (one
@@ -117,7 +124,14 @@ impl PrimeField for Zp {
     fn reduce_block(self, vs: &mut [Vec<u64>], rows: &[(usize, Vec<u64>)]) {
         let (max_adds, shrink) = Shrink::new(self.0);
         let m = field::Rem128::new(self.0);
-        reduce_delayed(vs, rows, self.0, max_adds, |a| shrink.one(a), |a| m.reduce(a));
+        reduce_delayed(
+            vs,
+            rows,
+            self.0,
+            max_adds,
+            |a| shrink.one(a),
+            |a| m.reduce(a),
+        );
     }
 }
 
@@ -157,7 +171,12 @@ pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
 ) {
     let mut accs: Vec<(Vec<u128>, usize)> = vs
         .iter_mut()
-        .map(|v| (v.as_mut().iter().map(|x| u128::from(x.residue())).collect(), 0))
+        .map(|v| {
+            (
+                v.as_mut().iter().map(|x| u128::from(x.residue())).collect(),
+                0,
+            )
+        })
         .collect();
     for (piv, r) in rows {
         for (acc, adds) in accs.iter_mut() {
