@@ -188,6 +188,13 @@ where
     Ok(th)
 }
 
+/// Points [`interpolate_along`] takes before a degree is past the budget's:
+/// `Univariate` is done after at most `a + b + 2 + agree` points for degrees
+/// `(a, b)`, so more than `2 max + 2 + agree` points mean `a + b > 2 max`.
+fn interpolation_cap(budget: &Budget) -> usize {
+    2 * budget.max_degree as usize + 2 + budget.agree
+}
+
 /// True when the interpolant of all but the last point passes through the
 /// last one (early termination of Newton interpolation).
 fn predicted(xs: &[u64], ys: &[u64], p: u64) -> bool {
@@ -261,7 +268,7 @@ where
     /// about deg/p) gives a wrong image, which the check rejects.
     pub(crate) fn var_degrees(&mut self, budget: &mut Budget) -> Result<(), Fail<E>> {
         let p = self.p;
-        let cap = 2 * budget.max_degree as usize + 2;
+        let cap = interpolation_cap(budget);
         let mut out: Vec<[Vec<usize>; 2]> = vec![[Vec::new(), Vec::new()]; self.m];
         for i in 0..self.n {
             let base: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
@@ -298,7 +305,7 @@ where
     pub(crate) fn degrees(&mut self, budget: &mut Budget) -> Result<Vec<(usize, usize)>, Fail<E>> {
         let p = self.p;
         let z: Vec<u64> = (0..self.n).map(|_| self.rng.nonzero(p)).collect();
-        let cap = 2 * budget.max_degree as usize + 2;
+        let cap = interpolation_cap(budget);
         let shift = &self.shift;
         let th = interpolate_along(self.bb, self.rng, budget, self.m, p, cap, |t| {
             line_point(t, &z, shift, p)
