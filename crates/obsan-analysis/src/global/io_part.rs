@@ -82,6 +82,15 @@ pub(super) fn early_part(
                     }
                 }
                 match divisor(axes, np, n, &rejected) {
+                    // Every quotient by the last probed and no candidate
+                    // left: the whole's normalisation decides.
+                    None if (0..np).all(|k| {
+                        axes.probes(k, n - 1)
+                            .is_some_and(|th| th.iter().all(Univariate::done))
+                    }) =>
+                    {
+                        return Ok(None)
+                    }
                     None => {
                         targets = vec![true; np];
                         continue;
