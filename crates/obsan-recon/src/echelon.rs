@@ -157,10 +157,18 @@ impl Residue for u64 {
 /// 0 at the earlier rows' pivots) with delayed reduction: the entries are
 /// summed in `u128` (each product below `(p - 1)^2`) and brought back by
 /// `shrink` (same residue, below a bound the caller's `max_adds` leaves
-/// room above) once every `max_adds` rows, not reduced once per product;
-/// each row's multiplier is reduced (`full`, to `0..p`) when its pivot is
-/// reached (the rows before it never touch that column again). Row-major:
-/// each row is applied to the whole block while it sits in cache.
+/// room above) before `max_adds` products pile up, not reduced once per
+/// product; each row's multiplier is reduced (`full`, to `0..p`) when its
+/// pivot is reached (the rows before it never touch that column again).
+/// Row-major: each row is applied to the whole block while it sits in
+/// cache. Rows go [`GROUP`] at a time: their multipliers first (each
+/// row's pivot entry as the rows before it in the group leave it, on the
+/// pivot columns only; the rows are zero before their pivots), then one
+/// pass over the columns adds all their products to each entry, loaded and
+/// stored once per group instead of once per row (dense 771- and
+/// 1465-column eliminations, one thread: 8-13% faster). At a group's pivot
+/// columns the pass leaves a multiple of `p` where one row at a time left
+/// 0: the same residue, and no later row reads those columns.
 pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
     vs: &mut [V],
     rows: &[(usize, Vec<E>)],
@@ -178,27 +186,85 @@ pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
             )
         })
         .collect();
-    for (piv, r) in rows {
+    // With fewer than GROUP products of room the rows go one at a time.
+    let group = if max_adds >= 2 * GROUP { GROUP } else { 1 };
+    for g in rows.chunks(group) {
+        let first = g.iter().map(|(q, _)| *q).min().unwrap_or(0);
         for (acc, adds) in accs.iter_mut() {
-            let c = full(acc[*piv]);
-            acc[*piv] = 0;
-            if c == 0 {
-                continue;
-            }
-            if *adds >= max_adds {
-                acc[*piv..].iter_mut().for_each(|a| *a = shrink(*a));
+            if *adds + g.len() > max_adds {
+                acc[first..].iter_mut().for_each(|a| *a = shrink(*a));
                 *adds = 0;
             }
-            let nc = u128::from(p - c);
-            for (a, y) in acc[*piv + 1..].iter_mut().zip(&r[*piv + 1..]) {
-                *a += nc * u128::from(y.residue());
+            // The multipliers, as the rows one at a time would find them:
+            // row `i`'s pivot entry after the rows before it in the group.
+            let mut neg = [0u64; GROUP];
+            for (i, (piv, _)) in g.iter().enumerate() {
+                let a = (0..i).fold(acc[*piv], |a, h| {
+                    a + u128::from(neg[h]) * u128::from(g[h].1[*piv].residue())
+                });
+                let c = full(a);
+                neg[i] = if c == 0 { 0 } else { p - c };
             }
-            *adds += 1;
+            let mut nc = [0u64; GROUP];
+            let mut live: [&[E]; GROUP] = [&[]; GROUP];
+            let mut k = 0;
+            for (i, (_, r)) in g.iter().enumerate() {
+                if neg[i] != 0 {
+                    nc[k] = neg[i];
+                    live[k] = &r[first..];
+                    k += 1;
+                }
+            }
+            if k == 0 {
+                continue;
+            }
+            add_rows(&mut acc[first..], &nc, &live, k);
+            *adds += k;
         }
     }
     for (v, (acc, _)) in vs.iter_mut().zip(&accs) {
         for (x, &a) in v.as_mut().iter_mut().zip(acc) {
             *x = E::of_residue(full(a));
+        }
+    }
+}
+
+/// Rows per group of [`reduce_delayed`]'s pass.
+const GROUP: usize = 4;
+
+/// `acc[j] += sum_k nc[k] rows[k][j]` over the first `k` rows, each entry
+/// loaded and stored once (zipped iterators: no bounds checks in the loop).
+#[inline]
+fn add_rows<E: Residue>(acc: &mut [u128], nc: &[u64; GROUP], rows: &[&[E]; GROUP], k: usize) {
+    // Each product a 64 x 64 -> 128 multiply: both factors widened at use.
+    let [c0, c1, c2, c3] = *nc;
+    let m = |c: u64, x: &E| u128::from(c) * u128::from(x.residue());
+    match k {
+        1 => {
+            for (a, x) in acc.iter_mut().zip(rows[0]) {
+                *a += m(c0, x);
+            }
+        }
+        2 => {
+            for ((a, x), y) in acc.iter_mut().zip(rows[0]).zip(rows[1]) {
+                *a += m(c0, x) + m(c1, y);
+            }
+        }
+        3 => {
+            for (((a, x), y), z) in acc.iter_mut().zip(rows[0]).zip(rows[1]).zip(rows[2]) {
+                *a += m(c0, x) + m(c1, y) + m(c2, z);
+            }
+        }
+        _ => {
+            for ((((a, x), y), z), t) in acc
+                .iter_mut()
+                .zip(rows[0])
+                .zip(rows[1])
+                .zip(rows[2])
+                .zip(rows[3])
+            {
+                *a += m(c0, x) + m(c1, y) + m(c2, z) + m(c3, t);
+            }
         }
     }
 }
@@ -656,14 +722,28 @@ mod tests {
         // 15 products per fold), a prime near 2^63 (3 products per fold),
         // and one whose 2^64 mod p passes 2^32 (no fold: remainders, 16).
         assert!(field::Fold::new(0x3fff_feff_ffff_fff9).is_none());
+        // Sparse rows too (two entries in three zero): many multipliers of
+        // a group of rows zero, and rows nonzero at later rows' pivots, so
+        // the group's multipliers depend on each other.
         for q in [P, 0x7fff_ffff_ffff_ffe7, 0x3fff_feff_ffff_fff9] {
             for n in [1usize, 5, 40, 70] {
-                let (mut fast, mut slow) = (RowEchelon::new(Zp(q)), RowEchelon::new(Naive(q)));
-                for _ in 0..n + 3 {
-                    let row: Vec<u64> = (0..n).map(|_| rng.nonzero(q) - 1).collect();
-                    assert_eq!(fast.insert(row.clone()), slow.insert(row));
+                for sparse in [false, true] {
+                    let (mut fast, mut slow) = (RowEchelon::new(Zp(q)), RowEchelon::new(Naive(q)));
+                    for _ in 0..n + 3 {
+                        let row: Vec<u64> = (0..n)
+                            .map(|_| {
+                                let x = rng.nonzero(q) - 1;
+                                if sparse && x % 3 != 0 {
+                                    0
+                                } else {
+                                    x
+                                }
+                            })
+                            .collect();
+                        assert_eq!(fast.insert(row.clone()), slow.insert(row));
+                    }
+                    assert_eq!(fast.rows, slow.rows);
                 }
-                assert_eq!(fast.rows, slow.rows);
             }
         }
     }
