@@ -98,7 +98,7 @@ fn run(name: &str, n: usize, fs: &[(Terms, Terms)], reps: usize) {
 fn kernels(rng: &mut SplitMix) {
     use obsan_recon::fp::{RowEchelon, Zp};
     let p = obsan_recon::PRIMES[0];
-    for n in [200usize, 771] {
+    for n in [200usize, 771, 1465] {
         let rows: Vec<Vec<u64>> = (0..n - 1)
             .map(|_| (0..n).map(|_| rng.next() % p).collect())
             .collect();
