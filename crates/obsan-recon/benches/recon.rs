@@ -94,16 +94,25 @@ fn run(name: &str, n: usize, fs: &[(Terms, Terms)], reps: usize) {
 
 /// The input-output route's kernels: `n - 1` random rows of `n` columns
 /// (rank `n - 1`, one null vector), inserted one by one and by blocks on
-/// one and two threads; the same null space every way.
+/// one and two threads; the same null space every way. Modulo a 62-bit
+/// prime (the `u128` pass) and a 52-bit one (AVX-512 IFMA where the CPU
+/// has it, else the `u128` pass too).
 fn kernels(rng: &mut SplitMix) {
     use obsan_recon::fp::{RowEchelon, Zp};
-    let p = obsan_recon::PRIMES[0];
-    for n in [200usize, 771, 1465] {
+    println!("AVX-512 IFMA on this CPU: {}", obsan_recon::fp::ifma());
+    for (p, n) in [62u32, 52].into_iter().flat_map(|bits| {
+        let p = if bits == 62 {
+            obsan_recon::PRIMES[0]
+        } else {
+            obsan_recon::PRIMES52[0]
+        };
+        [200usize, 771, 1465].map(|n| (p, n))
+    }) {
         let rows: Vec<Vec<u64>> = (0..n - 1)
             .map(|_| (0..n).map(|_| rng.next() % p).collect())
             .collect();
         let mut null = None;
-        let mut line = format!("dense kernel {n:>4} cols ");
+        let mut line = format!("dense kernel {n:>4} cols, {}-bit p", 64 - p.leading_zeros());
         for way in ["one by one", "blocks, 1 thread", "blocks, 2 threads"] {
             let mut times = Vec::new();
             for _ in 0..3 {

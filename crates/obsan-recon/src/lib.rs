@@ -61,7 +61,7 @@ use std::time::Instant;
 use dashu_int::ops::{Gcd, UnsignedAbs};
 use dashu_int::{IBig, UBig};
 
-pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
+pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, PRIMES52, VERIFY_PRIMES};
 
 /// Arithmetic modulo a prime `p < 2^63` on residues in `0..p` (products in
 /// u128): the workspace's one implementation; obsan-groebner's `Field` wraps it.
@@ -70,10 +70,11 @@ pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, VERIFY_PRIMES};
 /// [`PrimeField`](fp::PrimeField) so the engine's own `Fp` uses it too.
 pub mod fp {
     pub use crate::echelon::{
-        null_space, rank, reduce_delayed, solve, Echelon, PrimeField, Residue, RowEchelon, Zp,
-        BLOCK, PARALLEL_WORK,
+        null_space, rank, reduce_delayed, reduce_delayed52, solve, Echelon, PrimeField, Residue,
+        RowEchelon, Zp, BLOCK, IFMA_BOUND, PARALLEL_WORK,
     };
     pub use crate::field::{add, inv, mul, pow, sub, Fold, Rem128, Shoup};
+    pub use obsan_simd::ifma;
 }
 pub use rational::{Poly, Rational, Term};
 pub use rng::splitmix64;
