@@ -203,7 +203,7 @@ pub(crate) fn reduce_pairs(st: &mut St, sel: &[Pair]) -> Result<Vec<Elem>, GbErr
     // are appended while this runs).
     let mut c = 0usize;
     while c < m.sym.len() {
-        if c % 256 == 0 {
+        if c.is_multiple_of(256) {
             deadline(s)?;
             over_work(s)?;
         }

@@ -566,7 +566,7 @@ pub(crate) fn reduce_by(
                 if held(streams.len(), done.len()) > max_bytes {
                     return Err(too_big(streams.len(), done.len()));
                 }
-                if steps % 1024 == 0 {
+                if steps.is_multiple_of(1024) {
                     if let Some(d) = deadline {
                         if Instant::now() > d {
                             return Err(GbError::Budget("deadline"));

@@ -301,14 +301,17 @@ fn reduce52_every<V: AsMut<[u64]>>(
                 }
                 *adds = 0;
             }
-            // The multipliers, as the rows one at a time would find them.
+            // The multipliers, as the rows one at a time would find them
+            // (a zero sum without a remainder: a vector already reduced by
+            // the basis, as `RowEchelon::insert_all` inserts them, meets
+            // zeros at every pivot but a few).
             let mut neg = [0u64; GROUP52];
             for (i, (piv, _)) in g.iter().enumerate() {
                 let start = u128::from(lo[*piv]) + (u128::from(hi[*piv]) << obsan_simd::BITS);
                 let a = (0..i).fold(start, |a, h| {
                     a + u128::from(neg[h]) * u128::from(g[h].1[*piv])
                 });
-                let c = m.reduce(a);
+                let c = if a == 0 { 0 } else { m.reduce(a) };
                 neg[i] = if c == 0 { 0 } else { p - c };
             }
             let mut nc = [0u64; GROUP52];
@@ -836,7 +839,7 @@ mod tests {
                         let row: Vec<u64> = (0..n)
                             .map(|_| {
                                 let x = rng.nonzero(q) - 1;
-                                if sparse && x % 3 != 0 {
+                                if sparse && !x.is_multiple_of(3) {
                                     0
                                 } else {
                                     x
@@ -878,7 +881,7 @@ mod tests {
             for sparse in [false, true] {
                 let entry = |rng: &mut Rng| {
                     let x = rng.nonzero(q) - 1;
-                    if sparse && x % 3 != 0 {
+                    if sparse && !x.is_multiple_of(3) {
                         0
                     } else {
                         x

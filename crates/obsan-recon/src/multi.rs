@@ -63,6 +63,8 @@ pub(crate) struct Budget {
     pub(crate) agree: usize,
     pub(crate) degrees: Vec<(u32, u32)>,
     pub(crate) stage: &'static str,
+    /// The fixed list of primes in use (`Options::prime_list`).
+    pub(crate) list: &'static [u64; crate::PRIMES.len()],
 }
 
 impl Budget {
@@ -78,6 +80,7 @@ impl Budget {
             agree: opts.agree.max(1),
             degrees: Vec::new(),
             stage,
+            list: opts.prime_list.primes(),
         }
     }
 

@@ -28,7 +28,7 @@
 //! monomial within the bounds, a failed verification) gives
 //! `Ok(None)`: the caller falls back to the rational reconstruction.
 
-use crate::field::{add, inv, mul, pow, sub, Rem128, Shoup, MAX_RECON_PRIMES, PRIMES};
+use crate::field::{add, inv, mul, pow, sub, Rem128, Shoup, MAX_RECON_PRIMES};
 use crate::multi::{call, Budget, Image, Terms};
 use crate::rng::Rng;
 use crate::{verify, Acc, Limit, Options, ReconError, Reconstruction};
@@ -68,7 +68,7 @@ fn small_primes(n: usize) -> Vec<u64> {
     let mut out: Vec<u64> = Vec::with_capacity(n);
     let mut c = 2u64;
     while out.len() < n {
-        if out.iter().take_while(|&&q| q * q <= c).all(|&q| c % q != 0) {
+        if out.iter().take_while(|&&q| q * q <= c).all(|&q| !c.is_multiple_of(q)) {
             out.push(c);
         }
         c += 1;
@@ -488,7 +488,7 @@ fn first_sequences<F, E>(
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    let p0 = PRIMES[0];
+    let p0 = budget.list[0];
     for _ in 0..RESTARTS {
         let r: Vec<u64> = (0..a.len()).map(|_| rng.nonzero(p0)).collect();
         let mut bms: Vec<Bm> = (0..m).map(|_| Bm::new(p0)).collect();
@@ -571,7 +571,7 @@ fn roots_and_weights<E>(
     budget: &Budget,
     rng: &mut Rng,
 ) -> Result<Option<RootsWeights>, ReconError<E>> {
-    let p0 = PRIMES[0];
+    let p0 = budget.list[0];
     let mut known: Vec<u64> = Vec::new();
     let mut known_set = std::collections::HashSet::new();
     let mut comps = Vec::with_capacity(bms.len());
@@ -644,7 +644,7 @@ fn shifted_exponents<F, E>(
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    let p0 = PRIMES[0];
+    let p0 = budget.list[0];
     let (m, n) = (first.comps.len(), first.a.len());
     let t = first.comps.iter().map(|(roots, _)| roots.len()).max();
     let mut exps: Supports = first
@@ -714,7 +714,7 @@ fn first_image<F, E>(
 where
     F: FnMut(&[u64], u64) -> Result<Option<Vec<u64>>, E>,
 {
-    let p0 = PRIMES[0];
+    let p0 = budget.list[0];
     let nvars = bounds.per_var.len();
     let q = assign_primes(&bounds.per_var);
     let small = largest_monomial_value(&q, bounds, p0).is_some();
@@ -803,7 +803,7 @@ where
     }
     let mut rng = Rng::new(opts.seed ^ 0x5ba7_5e00);
     let mut budget = Budget::from_options(opts, "sparse: checking the degree bounds");
-    let p0 = PRIMES[0];
+    let p0 = budget.list[0];
     let max_total = bounds.total.unwrap_or(u32::MAX).min(budget.max_degree);
 
     // First prime: supports and coefficients.
@@ -826,7 +826,7 @@ where
 
     // Later primes: coefficients on the known supports.
     let tmax = supports.iter().map(Vec::len).max().unwrap_or(0);
-    for &p in &PRIMES[1..opts.max_primes] {
+    for &p in &budget.list[1..opts.max_primes] {
         budget.stage = "sparse: coefficients on the known monomials";
         let mut img: Option<Image> = None;
         'restart: for _ in 0..RESTARTS {
@@ -901,7 +901,7 @@ where
 fn exponents(mut rho: u64, q: &[u64], per_var: &[u32], max_total: u32) -> Option<Vec<u32>> {
     let mut e = vec![0u32; q.len()];
     for (i, &qi) in q.iter().enumerate() {
-        while rho % qi == 0 {
+        while rho.is_multiple_of(qi) {
             rho /= qi;
             e[i] += 1;
             if e[i] > per_var[i] {
@@ -915,6 +915,7 @@ fn exponents(mut rho: u64, q: &[u64], per_var: &[u32], max_total: u32) -> Option
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::field::PRIMES;
 
     const P: u64 = PRIMES[0];
 

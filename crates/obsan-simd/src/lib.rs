@@ -70,7 +70,7 @@ pub fn madd52(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]]) {
         }
         return;
     }
-    portable(lo, hi, cs, rows, 0);
+    portable(lo, hi, cs, rows);
 }
 
 /// [`madd52`] without the hardware: the definition, and the fallback.
@@ -79,7 +79,7 @@ pub fn madd52(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]]) {
 /// As [`madd52`].
 pub fn madd52_portable(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]]) {
     check(lo, hi, cs, rows);
-    portable(lo, hi, cs, rows, 0);
+    portable(lo, hi, cs, rows);
 }
 
 fn check(lo: &[u64], hi: &[u64], cs: &[u64], rows: &[&[u64]]) {
@@ -97,12 +97,12 @@ fn arr<T, const K: usize>(s: &[T]) -> &[T; K] {
     s.try_into().expect("a chunk of K")
 }
 
-/// The products of columns `from..lo.len()`, one at a time.
-fn portable(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]], from: usize) {
+/// The products, one at a time.
+fn portable(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]]) {
     let n = lo.len();
     for (&c, r) in cs.iter().zip(rows) {
         let c = u128::from(c & MASK);
-        for ((l, h), &y) in lo[from..].iter_mut().zip(&mut hi[from..]).zip(&r[from..n]) {
+        for ((l, h), &y) in lo.iter_mut().zip(hi.iter_mut()).zip(&r[..n]) {
             let x = c * u128::from(y & MASK);
             *l = l.wrapping_add(x as u64 & MASK);
             *h = h.wrapping_add((x >> BITS) as u64);
@@ -113,13 +113,14 @@ fn portable(lo: &mut [u64], hi: &mut [u64], cs: &[u64], rows: &[&[u64]], from: u
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::{
-        __m512i, _mm512_loadu_epi64, _mm512_madd52hi_epu64, _mm512_madd52lo_epu64,
-        _mm512_set1_epi64, _mm512_setzero_si512, _mm512_storeu_epi64,
+        __m512i, __mmask8, _mm512_loadu_epi64, _mm512_madd52hi_epu64, _mm512_madd52lo_epu64,
+        _mm512_mask_storeu_epi64, _mm512_maskz_loadu_epi64, _mm512_set1_epi64,
+        _mm512_setzero_si512, _mm512_storeu_epi64,
     };
 
     /// Eight columns at a time, all `K` rows (up to eight) added to each
     /// loaded pair of accumulators before it is stored (one load and store
-    /// per `K` products); the last `len % 8` columns by the portable loop.
+    /// per `K` products); the last `len % 8` columns under a mask.
     ///
     /// # Safety
     /// The CPU has avx512f and avx512ifma, and every row is at least as
@@ -155,8 +156,25 @@ mod x86 {
             }
             j += 8;
         }
-        let rows: [&[u64]; K] = *rows;
-        super::portable(lo, hi, cs, &rows, whole);
+        if whole < n {
+            // The last `n % 8` columns under a mask: masked-off lanes are
+            // neither read nor written (no fault past the slices' ends).
+            let mask: __mmask8 = (1u8 << (n - whole)) - 1;
+            // SAFETY: the lanes the mask keeps are columns whole..n, below
+            // the length of lo, hi and every row.
+            unsafe {
+                let at = |s: &[u64]| s.as_ptr().add(whole) as *const i64;
+                let mut l = _mm512_maskz_loadu_epi64(mask, at(lo));
+                let mut h = _mm512_maskz_loadu_epi64(mask, at(hi));
+                for k in 0..K {
+                    let y = _mm512_maskz_loadu_epi64(mask, at(rows[k]));
+                    l = _mm512_madd52lo_epu64(l, c[k], y);
+                    h = _mm512_madd52hi_epu64(h, c[k], y);
+                }
+                _mm512_mask_storeu_epi64(lo.as_mut_ptr().add(whole) as *mut i64, mask, l);
+                _mm512_mask_storeu_epi64(hi.as_mut_ptr().add(whole) as *mut i64, mask, h);
+            }
+        }
     }
 }
 

@@ -28,7 +28,7 @@ use super::types::err;
 use crate::rank::AnalysisError;
 use obsan_expr::{Fp, FpField};
 use obsan_expr::{Int, Poly as ZPoly, Var};
-use obsan_recon::fp::{Echelon, PrimeField, RowEchelon, Zp, BLOCK};
+use obsan_recon::fp::{Echelon, PrimeField, RowEchelon, Shoup, Zp, BLOCK};
 
 /// Arithmetic modulo `p`, with the rank test's shift-and-add products when
 /// `p = 2^61 - 1`, and otherwise (the reconstruction's primes) products
@@ -758,27 +758,32 @@ impl IoModel {
                         IoVar::U(u, k) => fp::mul(us[u][k], fact[k], p),
                     })
                     .collect();
-                // Powers of each jet up to its largest exponent, then one
-                // product per factor of each monomial.
-                let pows: Vec<Vec<u64>> = vals
+                // Powers of each jet up to its largest exponent, each ready
+                // for Shoup products (a division each here saves one per
+                // factor of every monomial below: Rem128 products were
+                // most of the row's time once the kernels ran on IFMA).
+                let pows: Vec<Vec<Shoup>> = vals
                     .iter()
                     .zip(&top)
                     .map(|(&v, &t)| {
-                        let mut w = vec![1u64; t as usize + 1];
-                        for e in 1..w.len() {
-                            w[e] = fp::mul(w[e - 1], v, p);
-                        }
-                        w
+                        let mut x = 1 % p;
+                        (0..=t)
+                            .map(|_| {
+                                let s = Shoup::new(x, p);
+                                x = fp::mul(x, v, p);
+                                s
+                            })
+                            .collect()
                     })
                     .collect();
                 return Ok(monos
                     .iter()
                     .map(|m| {
-                        m.iter().zip(&pows).fold(1u64, |acc, (&e, w)| {
+                        m.iter().zip(&pows).fold(1 % p, |acc, (&e, w)| {
                             if e == 0 {
                                 acc
                             } else {
-                                fp::mul(acc, w[e as usize], p)
+                                w[e as usize].times(acc)
                             }
                         })
                     })

@@ -24,8 +24,8 @@ use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, term_bytes, Field, Mono, Order, Poly, Ring};
 use obsan_recon::fp::{Echelon, Zp};
 use obsan_recon::{
-    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, Rational,
-    Univariate,
+    interpolate_polys_vec, reconstruct_vec, DegreeBounds, Options, Poly as RPoly, PrimeList,
+    Rational, Univariate,
 };
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -155,7 +155,7 @@ pub(super) fn io_count_under(
         coeffs.push(Some(c));
     }
     // Two independent points and primes must agree, as on the Taylor route.
-    let primes = [obsan_recon::PRIMES[0], obsan_recon::PRIMES[1]];
+    let primes = [IO_PRIMES[0], IO_PRIMES[1]];
     let counts = |coeffs: &[Option<Coefficients>]| {
         let fns: Vec<(RPoly, RPoly)> = coeffs
             .iter()
@@ -252,7 +252,7 @@ pub(super) fn reconstruct(
     let mut coeffs = |pt: &[u64], p: u64| kernels.at(pt, p);
     let np = m.param_vars.len();
     // The axis lines' base point (module `normalisation`).
-    let p0 = obsan_recon::PRIMES[0];
+    let p0 = IO_PRIMES[0];
     let mut base_rng = Rng::new(seed ^ 0xde40);
     let base: Vec<u64> = (0..np).map(|_| elem(&mut base_rng, p0)).collect();
     let recon_err = |e: obsan_recon::ReconError<AnalysisError>| match e {
@@ -264,6 +264,7 @@ pub(super) fn reconstruct(
     let ropts = Options {
         deadline: opts.deadline,
         seed: seed ^ 0x10c0,
+        prime_list: PrimeList::Bits52,
         ..Options::default()
     };
     // A part chosen before every quotient is probed (io_part.rs); the
@@ -561,7 +562,7 @@ fn scaling(
     bb: &mut BlackBox<'_>,
     ropts: &Options,
 ) -> Result<Scaling, obsan_recon::ReconError<AnalysisError>> {
-    let p0 = obsan_recon::PRIMES[0];
+    let p0 = IO_PRIMES[0];
     Ok(match (&norm.axes, &norm.quotients) {
         (Some(fr), _) => (
             Some(axis_degrees(fr, &norm.alpha)),
@@ -853,7 +854,7 @@ impl Line {
     /// One more sample, for the functions not yet done; false when the
     /// samples have run out (too many bad points, or too many samples).
     fn step(&mut self, bb: &mut BlackBox<'_>) -> Result<bool, AnalysisError> {
-        let p = obsan_recon::PRIMES[0];
+        let p = IO_PRIMES[0];
         loop {
             self.t += 1;
             if self.misses > 8 || self.t as usize > MAX_AXIS_SAMPLES {
@@ -1221,7 +1222,13 @@ fn normalisation(
 }
 
 /// The first reconstruction prime (the axis probes' field).
-pub(super) const P0: u64 = obsan_recon::PRIMES[0];
+pub(super) const P0: u64 = IO_PRIMES[0];
+
+/// The input-output route's primes: its black box is a dense kernel modulo
+/// the prime ([`Kernels`]), which runs on AVX-512 IFMA (3.5-4x) modulo
+/// these 52-bit primes where the CPU has it; the same primes on every CPU,
+/// so that the answers do not depend on it.
+pub(super) const IO_PRIMES: &[u64; obsan_recon::PRIMES.len()] = &obsan_recon::PRIMES52;
 
 /// A least common multiple of univariate polynomials modulo `p`.
 fn ulcm(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
@@ -1271,7 +1278,7 @@ fn common_denominator(
     bb: &mut BlackBox<'_>,
     ropts: &Options,
 ) -> Result<Option<(RPoly, Vec<Vec<u32>>)>, obsan_recon::ReconError<AnalysisError>> {
-    let p = obsan_recon::PRIMES[0];
+    let p = IO_PRIMES[0];
     let nq = quotients.first().map_or(0, Vec::len);
     // Per axis, the product of the chosen denominators so far (a multiple
     // of their lcm there: enough to tell when every one divides it).
