@@ -68,7 +68,11 @@ fn small_primes(n: usize) -> Vec<u64> {
     let mut out: Vec<u64> = Vec::with_capacity(n);
     let mut c = 2u64;
     while out.len() < n {
-        if out.iter().take_while(|&&q| q * q <= c).all(|&q| !c.is_multiple_of(q)) {
+        if out
+            .iter()
+            .take_while(|&&q| q * q <= c)
+            .all(|&q| !c.is_multiple_of(q))
+        {
             out.push(c);
         }
         c += 1;

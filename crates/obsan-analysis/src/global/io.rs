@@ -482,11 +482,14 @@ impl IoModel {
             .collect();
         lists.sort_unstable();
         // Rows inserted a block at a time: the echelon alone holds `N`
-        // rows (the memory the kernel's budget check allowed).
+        // rows (the memory the kernel's budget check allowed). Modulo the
+        // model's own prime, as the series are (this was the engine's
+        // `FpField` whatever `p`, right only while the search ran modulo
+        // its prime).
         let threads = threads();
-        let mut ech = RowEchelon::new(FpField);
+        let mut ech = RowEchelon::new(Zp(p));
         let mut dependent = 0;
-        let mut rows: Vec<Vec<Fp>> = Vec::with_capacity(BLOCK);
+        let mut rows: Vec<Vec<u64>> = Vec::with_capacity(BLOCK);
         let mut stack: Vec<(usize, Ser)> = Vec::new();
         for (i, f) in lists.iter().enumerate() {
             let shared = stack
@@ -503,8 +506,8 @@ impl IoModel {
                 stack.push((v, next));
             }
             rows.push(match stack.last() {
-                None => (0..l).map(|k| Fp(u64::from(k == 0))).collect(),
-                Some((_, t)) => t.iter().map(|&c| Fp(c)).collect(),
+                None => (0..l).map(|k| u64::from(k == 0)).collect(),
+                Some((_, t)) => t.clone(),
             });
             if rows.len() == BLOCK || i + 1 == lists.len() {
                 let block = std::mem::take(&mut rows);

@@ -105,7 +105,7 @@ pub(super) fn io_count_under(
 ) -> Result<IoCounts, AnalysisError> {
     let np = m.param_vars.len();
     let mut rng = Rng::new(seed);
-    let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, obsan_expr::P)).collect();
+    let theta: Vec<u64> = (0..np).map(|_| elem(&mut rng, P0)).collect();
     let pres = presentation(m, opts, &theta, &mut rng, (eliminate, cap), only)?;
     let (mp, perm) = (&pres.model, &pres.perm);
     let mut sizes: Vec<(usize, IoSize)> = Vec::new();

@@ -126,7 +126,9 @@ fn relations_under(
     let mut mp = m.clone();
     mp.outputs = perm.iter().map(|&k| m.outputs[k].clone()).collect();
     mp.forms = perm.iter().map(|&k| m.forms[k].clone()).collect();
-    let mut io = IoModel::new(&mp, obsan_expr::P)?;
+    // Modulo the route's first 52-bit prime, as the reconstruction: the
+    // ansatz's kernels then run on IFMA too (io_count's `IO_PRIMES`).
+    let mut io = IoModel::new(&mp, super::io_count::P0)?;
     io.deadline = opts.deadline;
     io.max_bytes = opts.max_bytes;
     io.max_work = opts.max_io_work;

@@ -677,3 +677,46 @@ fn every_priority_counts_the_same() {
     assert!(size(&b) < size(&a), "{} {}", size(&b), size(&a));
     assert_eq!(size(&chosen), size(&b));
 }
+
+#[test]
+fn the_wronskian_test_works_modulo_any_prime() {
+    // Regression: `independent_along` reduced its rows modulo the engine's
+    // Mersenne prime whatever the model's prime, which went unseen while the
+    // search ran modulo that prime only. By hand: two summed decays satisfy
+    // y'' + (a + b) y' + a b y = 0 and nothing smaller, so their three
+    // monomials are independent along an output but for that relation
+    // (non-zero Wronskian); the forced oscillator with an offset
+    // (systems/global/forced_oscillator_offset.sys) has a relation whose
+    // four monomials also satisfy y''' + omega^2 y' = 0 (zero Wronskian).
+    let decays = model(
+        "system t\nstate x1, x2\nparam a, b\nx1' = -a*x1\nx2' = -b*x2\noutput y = x1 + x2\n",
+        "t.sys",
+    );
+    let offset = model(
+        "system t\nstate x1, x2, w2\nparam b, c\nx1' = x2\nx2' = -w2*x1 + b\nw2' = 0\n\
+         output y = x1 + c\n",
+        "t.sys",
+    );
+    for (m, single) in [(&decays, true), (&offset, false)] {
+        for p in [
+            obsan_expr::P,
+            obsan_recon::PRIMES[0],
+            obsan_recon::PRIMES52[0],
+        ] {
+            let io = IoModel::new(m, p).unwrap();
+            let mut rng = Rng::new(17);
+            let theta = [elem(&mut rng, p), elem(&mut rng, p)];
+            let orders = io.orders(&theta, &mut rng).unwrap();
+            let rel = io
+                .relation(&theta, &orders, 0, 6, 200, &mut rng)
+                .unwrap()
+                .expect("a small relation");
+            assert_eq!(
+                io.independent_along(&theta, &orders, 0, &rel.support, &mut rng),
+                single,
+                "p {p}, support {:?}",
+                rel.support
+            );
+        }
+    }
+}
