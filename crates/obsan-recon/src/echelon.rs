@@ -43,6 +43,17 @@ pub trait PrimeField: Copy + Send + Sync {
             *a = self.mul(*a, c);
         }
     }
+    /// `-(a . b)` (a field may sum the products before reducing them).
+    #[inline]
+    fn neg_dot(self, a: &[Self::Elem], b: &[Self::Elem]) -> Self::Elem {
+        a.iter().zip(b).fold(self.zero(), |s, (&x, &y)| {
+            if y == self.zero() {
+                s
+            } else {
+                self.sub(s, self.mul(x, y))
+            }
+        })
+    }
     /// `v` reduced by `rows` in row echelon form, sorted by pivot (each 1
     /// at its pivot and 0 before it): in order, each row times `v`'s entry
     /// at its pivot is subtracted ([`RowEchelon::insert`]).
@@ -102,6 +113,25 @@ impl PrimeField for Zp {
         let s = field::Shoup::new(c, self.0);
         for a in x.iter_mut() {
             *a = s.times(*a);
+        }
+    }
+    /// The products summed in `u128`, brought back every `max_adds` of
+    /// them (one remainder at the end, not one per product: the null
+    /// space's back-substitution was a fifth of a kernel's time).
+    fn neg_dot(self, a: &[u64], b: &[u64]) -> u64 {
+        let (max_adds, shrink) = Shrink::new(self.0);
+        let mut acc = 0u128;
+        for (xs, ys) in a.chunks(max_adds).zip(b.chunks(max_adds)) {
+            acc = shrink.one(acc);
+            for (&x, &y) in xs.iter().zip(ys) {
+                acc += u128::from(x) * u128::from(y);
+            }
+        }
+        let s = field::Rem128::new(self.0).reduce(acc);
+        if s == 0 {
+            0
+        } else {
+            self.0 - s
         }
     }
     /// Delayed reduction ([`reduce_delayed`], or [`reduce_delayed52`] on
@@ -308,7 +338,7 @@ fn reduce52_every<V: AsMut<[u64]>>(
             let mut neg = [0u64; GROUP52];
             for (i, (piv, _)) in g.iter().enumerate() {
                 let start = u128::from(lo[*piv]) + (u128::from(hi[*piv]) << obsan_simd::BITS);
-                let a = (0..i).fold(start, |a, h| {
+                let a = (0..i).filter(|&h| neg[h] != 0).fold(start, |a, h| {
                     a + u128::from(neg[h]) * u128::from(g[h].1[*piv])
                 });
                 let c = if a == 0 { 0 } else { m.reduce(a) };
@@ -646,13 +676,7 @@ impl<F: PrimeField> RowEchelon<F> {
                 let mut x = vec![f.zero(); ncols];
                 x[j] = f.one();
                 for (p, r) in self.rows.iter().rev() {
-                    let mut s = f.zero();
-                    for k in p + 1..ncols {
-                        if x[k] != f.zero() {
-                            s = f.sub(s, f.mul(r[k], x[k]));
-                        }
-                    }
-                    x[*p] = s;
+                    x[*p] = f.neg_dot(&r[p + 1..ncols], &x[p + 1..ncols]);
                 }
                 x
             })
@@ -828,6 +852,22 @@ mod tests {
         // 15 products per fold), a prime near 2^63 (3 products per fold),
         // and one whose 2^64 mod p passes 2^32 (no fold: remainders, 16).
         assert!(field::Fold::new(0x3fff_feff_ffff_fff9).is_none());
+        // The null space's dot products summed late, against the generic
+        // fold, past a fold's count of products (3 near 2^63, 15 near 2^62).
+        for q in [
+            P,
+            0x7fff_ffff_ffff_ffe7,
+            0x3fff_feff_ffff_fff9,
+            0xf_ffff_ffff_ffd1,
+        ] {
+            for n in [0usize, 1, 3, 4, 16, 70] {
+                let x: Vec<u64> = (0..n).map(|_| rng.nonzero(q) - 1).collect();
+                let y: Vec<u64> = (0..n).map(|_| rng.nonzero(q) - 1).collect();
+                assert_eq!(Zp(q).neg_dot(&x, &y), Naive(q).neg_dot(&x, &y), "{q} {n}");
+                let top = vec![q - 1; n];
+                assert_eq!(Zp(q).neg_dot(&top, &top), Naive(q).neg_dot(&top, &top));
+            }
+        }
         // Sparse rows too (two entries in three zero): many multipliers of
         // a group of rows zero, and rows nonzero at later rows' pivots, so
         // the group's multipliers depend on each other.
