@@ -276,11 +276,9 @@ const GROUP: usize = 4;
 /// has AVX-512 IFMA ([`obsan_simd::ifma`]).
 pub const IFMA_BOUND: u64 = 1 << obsan_simd::BITS;
 
-/// Products added to an accumulator `lo + 2^52 hi` between two reductions:
-/// from `lo < p < 2^52` and `hi = 0`, each product (below 2^104) adds below
-/// 2^52 to each half, so after 4095 of them `lo < 2^52 + 4095 (2^52 - 1) <
-/// 2^64` and `hi < 2^64`: neither wraps.
-const MAX_ADDS52: usize = 4095;
+/// Products added to an accumulator `lo + 2^52 hi` between two reductions
+/// (from `lo < p < 2^52` and `hi = 0`): [`obsan_simd::ROOM`].
+const MAX_ADDS52: usize = obsan_simd::ROOM;
 
 /// Rows per group of [`reduce_delayed52`]'s pass: eight products per load
 /// and store of an accumulator's halves (four: dense 1465-column kernels
@@ -297,6 +295,70 @@ const GROUP52: usize = 8;
 /// leave it. Gives the residues [`reduce_delayed`] gives.
 pub fn reduce_delayed52<V: AsMut<[u64]>>(vs: &mut [V], rows: &[(usize, Vec<u64>)], p: u64) {
     reduce52_every(vs, rows, p, MAX_ADDS52);
+}
+
+/// `out = a b` truncated to `out.len()` terms, for residues modulo a prime
+/// `p <` [`IFMA_BOUND`]: the Cauchy product as row operations, eight
+/// coefficients `a_i` a pass, each row `b` shifted by `i`, summed as 52-bit
+/// halves by [`obsan_simd::madd52`] (AVX-512 IFMA where the CPU has it; the
+/// input-output route's series products). Each entry is reduced before
+/// [`obsan_simd::ROOM`] products pile up.
+pub fn mul_truncated52(a: &[u64], b: &[u64], out: &mut [u64], p: u64) {
+    assert!(
+        p < IFMA_BOUND,
+        "mul_truncated52: a prime of 52 bits or more"
+    );
+    let n = out.len();
+    let m = field::Rem128::new(p);
+    let full = |lo: u64, hi: u64| m.reduce(u128::from(lo) + (u128::from(hi) << obsan_simd::BITS));
+    // `b` padded with zeros to `n` terms: every shifted row as long as its columns.
+    let mut bz = b[..b.len().min(n)].to_vec();
+    bz.resize(n, 0);
+    let (mut lo, mut hi) = (vec![0u64; n], vec![0u64; n]);
+    let mut adds = 0;
+    let na = a.len().min(n);
+    let mut i0 = 0;
+    while i0 < na {
+        let i1 = (i0 + GROUP52).min(na);
+        if a[i0..i1].iter().all(|&x| x == 0) {
+            i0 = i1;
+            continue;
+        }
+        if adds + GROUP52 > MAX_ADDS52 {
+            for (l, h) in lo[i0..].iter_mut().zip(&mut hi[i0..]) {
+                *l = full(*l, *h);
+                *h = 0;
+            }
+            adds = 0;
+        }
+        // Columns from `top` on take every row of the group; the triangle
+        // before it (row `i` from column `i`), one product at a time.
+        let top = i1 - 1;
+        for i in i0..top {
+            let c = u128::from(a[i]);
+            for j in i..top {
+                let x = c * u128::from(bz[j - i]);
+                lo[j] += x as u64 & obsan_simd::MASK;
+                hi[j] += (x >> obsan_simd::BITS) as u64;
+            }
+        }
+        let mut cs = [0u64; GROUP52];
+        let mut rows: [&[u64]; GROUP52] = [&[]; GROUP52];
+        let mut k = 0;
+        for i in i0..i1 {
+            if a[i] != 0 {
+                cs[k] = a[i];
+                rows[k] = &bz[top - i..n - i];
+                k += 1;
+            }
+        }
+        obsan_simd::madd52(&mut lo[top..], &mut hi[top..], &cs[..k], &rows[..k]);
+        adds += GROUP52;
+        i0 = i1;
+    }
+    for ((o, &l), &h) in out.iter_mut().zip(&lo).zip(&hi) {
+        *o = full(l, h);
+    }
 }
 
 /// [`reduce_delayed52`] reducing the entries once `max_adds` (at least
@@ -972,6 +1034,41 @@ mod tests {
                     );
                     assert_eq!(old, want);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn truncated_products_of_52_bit_residues_are_cauchy_products() {
+        // Against the schoolbook sum: lengths around the groups of eight,
+        // a `b` shorter than the output, runs of zero coefficients in `a`
+        // (whole groups skipped), and 4300 terms (reductions between
+        // groups past obsan_simd::ROOM products).
+        let mut rng = Rng::new(7);
+        for q in [0xf_ffff_ffff_ffd1, 65_521, 3] {
+            for (na, nb, n) in [
+                (0, 3, 3),
+                (1, 1, 1),
+                (5, 5, 5),
+                (9, 9, 9),
+                (17, 6, 20),
+                (40, 40, 33),
+                (4300, 4300, 4300),
+            ] {
+                let mut a: Vec<u64> = (0..na).map(|_| rng.nonzero(q) - 1).collect();
+                for x in a.iter_mut().skip(3).take(10) {
+                    *x = 0;
+                }
+                let b: Vec<u64> = (0..nb).map(|_| rng.nonzero(q) - 1).collect();
+                let mut want = vec![0u64; n];
+                for (i, &x) in a.iter().enumerate().take(n) {
+                    for (j, &y) in b.iter().enumerate().take(n - i) {
+                        want[i + j] = add(want[i + j], field::mul(x, y, q), q);
+                    }
+                }
+                let mut got = vec![1u64; n];
+                mul_truncated52(&a, &b, &mut got, q);
+                assert_eq!(got, want, "p {q}, lengths {na} {nb} {n}");
             }
         }
     }

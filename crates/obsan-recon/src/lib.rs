@@ -70,8 +70,8 @@ pub use field::{is_prime, MAX_RECON_PRIMES, PRIMES, PRIMES52, VERIFY_PRIMES};
 /// [`PrimeField`](fp::PrimeField) so the engine's own `Fp` uses it too.
 pub mod fp {
     pub use crate::echelon::{
-        null_space, rank, reduce_delayed, reduce_delayed52, solve, Echelon, PrimeField, Residue,
-        RowEchelon, Zp, BLOCK, IFMA_BOUND, PARALLEL_WORK,
+        mul_truncated52, null_space, rank, reduce_delayed, reduce_delayed52, solve, Echelon,
+        PrimeField, Residue, RowEchelon, Zp, BLOCK, IFMA_BOUND, PARALLEL_WORK,
     };
     pub use crate::field::{add, inv, mul, pow, sub, Fold, Rem128, Shoup};
     pub use obsan_simd::ifma;

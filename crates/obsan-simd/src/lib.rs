@@ -23,6 +23,12 @@ pub const BITS: u32 = 52;
 /// `2^52 - 1`.
 pub const MASK: u64 = (1 << BITS) - 1;
 
+/// Products of 52-bit operands a pair of halves takes, from `lo < 2^52`
+/// and `hi = 0`, before either can wrap: each adds below 2^52 to each
+/// half, so after 4095 of them `lo < 2^52 + 4095 (2^52 - 1) < 2^64` and
+/// `hi < 2^64` (a test reaches the bound).
+pub const ROOM: usize = 4095;
+
 /// Whether [`madd52`] runs on AVX-512 IFMA on this CPU (else the portable
 /// loop). The detection is cached by the standard library.
 pub fn ifma() -> bool {
@@ -196,20 +202,21 @@ mod tests {
 
     #[test]
     fn the_halves_sum_the_products() {
-        // 4095 products of the largest 52-bit operands from lo = 2^52 - 1:
-        // the documented room, reached without a wrap.
+        // ROOM products of the largest 52-bit operands from lo = 2^52 - 1:
+        // reached without a wrap.
         let n = 19;
         let mut lo = vec![MASK; n];
         let mut hi = vec![0; n];
         let row = vec![MASK; n];
         let rows: Vec<&[u64]> = vec![&row; 5];
         let cs = vec![MASK; 5];
-        for _ in 0..819 {
+        assert_eq!(ROOM % 5, 0);
+        for _ in 0..ROOM / 5 {
             madd52(&mut lo, &mut hi, &cs, &rows);
         }
         let x = u128::from(MASK) * u128::from(MASK);
         for j in 0..n {
-            assert_eq!(value(lo[j], hi[j]), u128::from(MASK) + 4095 * x);
+            assert_eq!(value(lo[j], hi[j]), u128::from(MASK) + ROOM as u128 * x);
         }
     }
 

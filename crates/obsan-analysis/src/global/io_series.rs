@@ -7,7 +7,7 @@
 //! reconstruction's black box (docs/performance.md, session 31).
 
 use super::io::fp;
-use obsan_recon::fp::{Fold, Rem128, Shoup};
+use obsan_recon::fp::{ifma, mul_truncated52, Fold, Rem128, Shoup, IFMA_BOUND};
 
 /// A polynomial in the series variables with its parameters already
 /// evaluated: terms `(coefficient, [(variable, exponent)])`.
@@ -173,6 +173,10 @@ impl Arith {
         let (p, g, len) = (self.p, self.g, self.len);
         out.fill(0);
         if g == 1 {
+            // The io route's 52-bit primes: the product on IFMA.
+            if p < IFMA_BOUND && ifma() {
+                return mul_truncated52(a, b, out, p);
+            }
             if let Some(f) = Fold::new(p) {
                 return mul_folded(a, b, out, p, f);
             }
@@ -340,46 +344,50 @@ mod tests {
 
     #[test]
     fn flat_products_and_quotients_agree_with_the_nested_naive_ones() {
-        let mut st = 17u64;
-        let mut next = || obsan_recon::splitmix64(&mut st) % P;
-        for (g, len) in [(1, 1), (1, 6), (3, 5), (5, 2), (1, 9), (1, 40), (1, 100)] {
-            let a = Arith { p: P, g, len };
-            let nested = |next: &mut dyn FnMut() -> u64| -> Vec<Vec<u64>> {
-                (0..len).map(|_| (0..g).map(|_| next()).collect()).collect()
-            };
-            let x = nested(&mut next);
-            let mut y = nested(&mut next);
-            // Some zero coefficients, to take the skips.
-            y[len / 2].iter_mut().for_each(|c| *c = 0);
-            let flat = |s: &[Vec<u64>]| -> Ser { s.concat() };
-            let prod = a.mul(&flat(&x), &flat(&y));
-            assert_eq!(prod, flat(&naive_mul(&x, &y, P)));
-            // (x y) / y = x wherever y(0) != 0.
-            if y[0][0] != 0 {
-                assert_eq!(a.div(&prod, &flat(&y)).unwrap(), flat(&x));
-                let iv = fp::inv(y[0][0], P).unwrap();
-                assert_eq!(a.div_with(&prod, &flat(&y), iv).unwrap(), flat(&x));
-            }
-            // Division by a constant series.
-            let mut c = vec![vec![0u64; g]; len];
-            c[0][0] = 7;
-            let q = a.div(&flat(&x), &flat(&c)).unwrap();
-            assert_eq!(a.mul(&q, &flat(&c)), flat(&x));
-            // 3 x^2 y + 5 + 2 y against the products.
-            let poly: IPoly = vec![(3, vec![(0, 2), (1, 1)]), (5, vec![]), (2, vec![(1, 1)])];
-            let vars = vec![flat(&x), flat(&y)];
-            let (mut t1, mut t2) = (a.zero(), a.zero());
-            let got = a.eval(&poly, &vars, &mut t1, &mut t2);
-            let x2y = naive_mul(&naive_mul(&x, &x, P), &y, P);
-            let mut want = a.zero();
-            for k in 0..len {
-                for d in 0..g {
-                    let v = &mut want[k * g + d];
-                    *v = ((3 * x2y[k][d] as u128 + 2 * y[k][d] as u128) % P as u128) as u64;
+        // A 62-bit prime (folded u128 sums) and a 52-bit one (IFMA's
+        // halves where the CPU has it).
+        for p in [P, obsan_recon::PRIMES52[0]] {
+            let mut st = 17u64;
+            let mut next = || obsan_recon::splitmix64(&mut st) % p;
+            for (g, len) in [(1, 1), (1, 6), (3, 5), (5, 2), (1, 9), (1, 40), (1, 100)] {
+                let a = Arith { p: p, g, len };
+                let nested = |next: &mut dyn FnMut() -> u64| -> Vec<Vec<u64>> {
+                    (0..len).map(|_| (0..g).map(|_| next()).collect()).collect()
+                };
+                let x = nested(&mut next);
+                let mut y = nested(&mut next);
+                // Some zero coefficients, to take the skips.
+                y[len / 2].iter_mut().for_each(|c| *c = 0);
+                let flat = |s: &[Vec<u64>]| -> Ser { s.concat() };
+                let prod = a.mul(&flat(&x), &flat(&y));
+                assert_eq!(prod, flat(&naive_mul(&x, &y, p)));
+                // (x y) / y = x wherever y(0) != 0.
+                if y[0][0] != 0 {
+                    assert_eq!(a.div(&prod, &flat(&y)).unwrap(), flat(&x));
+                    let iv = fp::inv(y[0][0], p).unwrap();
+                    assert_eq!(a.div_with(&prod, &flat(&y), iv).unwrap(), flat(&x));
                 }
+                // Division by a constant series.
+                let mut c = vec![vec![0u64; g]; len];
+                c[0][0] = 7;
+                let q = a.div(&flat(&x), &flat(&c)).unwrap();
+                assert_eq!(a.mul(&q, &flat(&c)), flat(&x));
+                // 3 x^2 y + 5 + 2 y against the products.
+                let poly: IPoly = vec![(3, vec![(0, 2), (1, 1)]), (5, vec![]), (2, vec![(1, 1)])];
+                let vars = vec![flat(&x), flat(&y)];
+                let (mut t1, mut t2) = (a.zero(), a.zero());
+                let got = a.eval(&poly, &vars, &mut t1, &mut t2);
+                let x2y = naive_mul(&naive_mul(&x, &x, p), &y, p);
+                let mut want = a.zero();
+                for k in 0..len {
+                    for d in 0..g {
+                        let v = &mut want[k * g + d];
+                        *v = ((3 * x2y[k][d] as u128 + 2 * y[k][d] as u128) % p as u128) as u64;
+                    }
+                }
+                want[0] = (want[0] + 5) % p;
+                assert_eq!(got, want);
             }
-            want[0] = (want[0] + 5) % P;
-            assert_eq!(got, want);
         }
     }
 }
