@@ -350,7 +350,7 @@ mod tests {
             let mut st = 17u64;
             let mut next = || obsan_recon::splitmix64(&mut st) % p;
             for (g, len) in [(1, 1), (1, 6), (3, 5), (5, 2), (1, 9), (1, 40), (1, 100)] {
-                let a = Arith { p: p, g, len };
+                let a = Arith { p, g, len };
                 let nested = |next: &mut dyn FnMut() -> u64| -> Vec<Vec<u64>> {
                     (0..len).map(|_| (0..g).map(|_| next()).collect()).collect()
                 };
