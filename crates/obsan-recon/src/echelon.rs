@@ -234,26 +234,8 @@ pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
                 acc[first..].iter_mut().for_each(|a| *a = shrink(*a));
                 *adds = 0;
             }
-            // The multipliers, as the rows one at a time would find them:
-            // row `i`'s pivot entry after the rows before it in the group.
-            let mut neg = [0u64; GROUP];
-            for (i, (piv, _)) in g.iter().enumerate() {
-                let a = (0..i).fold(acc[*piv], |a, h| {
-                    a + u128::from(neg[h]) * u128::from(g[h].1[*piv].residue())
-                });
-                let c = full(a);
-                neg[i] = if c == 0 { 0 } else { p - c };
-            }
-            let mut nc = [0u64; GROUP];
-            let mut live: [&[E]; GROUP] = [&[]; GROUP];
-            let mut k = 0;
-            for (i, (_, r)) in g.iter().enumerate() {
-                if neg[i] != 0 {
-                    nc[k] = neg[i];
-                    live[k] = &r[first..];
-                    k += 1;
-                }
-            }
+            let neg: [u64; GROUP] = multipliers(g, |c| acc[c], &full, p);
+            let (nc, live, k) = live_rows(g, &neg, first);
             if k == 0 {
                 continue;
             }
@@ -270,6 +252,51 @@ pub fn reduce_delayed<E: Residue, V: AsMut<[E]>>(
 
 /// Rows per group of [`reduce_delayed`]'s pass.
 const GROUP: usize = 4;
+
+/// A group's negated multipliers, as the rows one at a time would find
+/// them: row `i`'s pivot entry (`value` at its column, before the group)
+/// after the rows before it in the group, reduced by `full`; products with
+/// a zero multiplier skipped, and no remainder for a zero sum (a vector
+/// already reduced by the basis, as [`RowEchelon::insert_all`] inserts
+/// them, meets zeros at every pivot but a few).
+#[inline]
+fn multipliers<E: Residue, const G: usize>(
+    g: &[(usize, Vec<E>)],
+    value: impl Fn(usize) -> u128,
+    full: impl Fn(u128) -> u64,
+    p: u64,
+) -> [u64; G] {
+    let mut neg = [0u64; G];
+    for (i, (piv, _)) in g.iter().enumerate() {
+        let a = (0..i).filter(|&h| neg[h] != 0).fold(value(*piv), |a, h| {
+            a + u128::from(neg[h]) * u128::from(g[h].1[*piv].residue())
+        });
+        let c = if a == 0 { 0 } else { full(a) };
+        neg[i] = if c == 0 { 0 } else { p - c };
+    }
+    neg
+}
+
+/// The group's rows with a non-zero multiplier, from column `first` on,
+/// and how many there are.
+#[inline]
+fn live_rows<'a, E, const G: usize>(
+    g: &'a [(usize, Vec<E>)],
+    neg: &[u64; G],
+    first: usize,
+) -> ([u64; G], [&'a [E]; G], usize) {
+    let mut nc = [0u64; G];
+    let mut live: [&[E]; G] = [&[]; G];
+    let mut k = 0;
+    for (i, (_, r)) in g.iter().enumerate() {
+        if neg[i] != 0 {
+            nc[k] = neg[i];
+            live[k] = &r[first..];
+            k += 1;
+        }
+    }
+    (nc, live, k)
+}
 
 /// Primes below this bound have residues that fit IFMA's 52-bit operands:
 /// [`Zp`]'s eliminations modulo them run [`reduce_delayed52`] where the CPU
@@ -393,29 +420,9 @@ fn reduce52_every<V: AsMut<[u64]>>(
                 }
                 *adds = 0;
             }
-            // The multipliers, as the rows one at a time would find them
-            // (a zero sum without a remainder: a vector already reduced by
-            // the basis, as `RowEchelon::insert_all` inserts them, meets
-            // zeros at every pivot but a few).
-            let mut neg = [0u64; GROUP52];
-            for (i, (piv, _)) in g.iter().enumerate() {
-                let start = u128::from(lo[*piv]) + (u128::from(hi[*piv]) << obsan_simd::BITS);
-                let a = (0..i).filter(|&h| neg[h] != 0).fold(start, |a, h| {
-                    a + u128::from(neg[h]) * u128::from(g[h].1[*piv])
-                });
-                let c = if a == 0 { 0 } else { m.reduce(a) };
-                neg[i] = if c == 0 { 0 } else { p - c };
-            }
-            let mut nc = [0u64; GROUP52];
-            let mut live: [&[u64]; GROUP52] = [&[]; GROUP52];
-            let mut k = 0;
-            for (i, (_, r)) in g.iter().enumerate() {
-                if neg[i] != 0 {
-                    nc[k] = neg[i];
-                    live[k] = &r[first..];
-                    k += 1;
-                }
-            }
+            let value = |c: usize| u128::from(lo[c]) + (u128::from(hi[c]) << obsan_simd::BITS);
+            let neg: [u64; GROUP52] = multipliers(g, value, |a| m.reduce(a), p);
+            let (nc, live, k) = live_rows(g, &neg, first);
             if k == 0 {
                 continue;
             }
