@@ -5,11 +5,13 @@
 //! The modular kernels of the input-output route are dense eliminations
 //! whose inner loop is `acc[j] += c * row[j]`. In `u128` one core does about
 //! 1.2 G such multiply-adds a second; IFMA's `vpmadd52luq`/`vpmadd52huq`
-//! multiply eight pairs of 52-bit operands a cycle and add the low and the
-//! high 52 bits of each 104-bit product to two 64-bit accumulators, 5-7x
-//! that for residues modulo a prime below 2^50 (`docs/performance.md`,
-//! session 42). An entry is then `lo + 2^52 hi`; the caller reduces it
-//! modulo its prime before either half can wrap.
+//! multiply eight pairs of 52-bit operands at once and add the low and the
+//! high 52 bits of each 104-bit product to two 64-bit accumulators (a row
+//! pass alone: 8.6 G a second, session 41's prototype), so that whole dense
+//! kernels modulo a prime below 2^52 run 3.5-4x faster (`cargo bench -p
+//! obsan-recon --bench recon`; `docs/performance.md`, session 42). An entry
+//! is then `lo + 2^52 hi`; the caller reduces it modulo its prime before
+//! either half can wrap.
 //!
 //! The rest of the workspace forbids `unsafe`. Here it is confined to
 //! [`madd52`]'s dispatch: the loads and stores of eight lanes, in bounds
