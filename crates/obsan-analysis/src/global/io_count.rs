@@ -1280,8 +1280,14 @@ fn common_denominator(
 ) -> Result<Option<(RPoly, Vec<Vec<u32>>)>, obsan_recon::ReconError<AnalysisError>> {
     let p = IO_PRIMES[0];
     let nq = quotients.first().map_or(0, Vec::len);
-    // Per axis, the product of the chosen denominators so far (a multiple
-    // of their lcm there: enough to tell when every one divides it).
+    // Per axis, the lcm of the chosen denominators so far: the common
+    // denominator built from them below is a multiple of their
+    // multivariate lcm only (the largest monomial, each other factor
+    // once), so covering is judged on the lcm. A product counts a repeated
+    // factor twice: SEAIJRC's common denominator had `r^2` times a binomial
+    // where some quotients need `r^3` (the chosen ones' product had covered
+    // it; session 43), so the scaled quotients were no polynomials and went
+    // to the dense rational reconstruction, which did not finish.
     let mut cur: Vec<Vec<u64>> = vec![vec![1]; quotients.len()];
     let mut chosen: Vec<usize> = Vec::new();
     let covered = |cur: &[Vec<u64>]| {
@@ -1313,7 +1319,7 @@ fn common_denominator(
             return Ok(None);
         };
         for (fr, c) in quotients.iter().zip(cur.iter_mut()) {
-            *c = umul(c, &fr[m].1, p);
+            *c = ulcm(c, &fr[m].1, p);
         }
         chosen.push(m);
     }
@@ -1343,6 +1349,12 @@ fn common_denominator(
             fr.iter().all(|(_, den)| divides(den, &dk, p))
         })
     };
+    // (The whole product covers by construction; checked, since one that
+    // did not would send the scaled quotients, no polynomials, to the
+    // rational reconstruction's many points.)
+    if !covers(&rests) {
+        return Ok(None);
+    }
     for i in (0..rests.len()).rev() {
         let mut fewer = rests.clone();
         fewer.remove(i);
@@ -1710,6 +1722,66 @@ mod tests {
         assert_eq!(&q[..=udeg(&q)], &g[..]);
         assert!(!divides(&h, &g, p));
         assert!(urem(&a, &f, p).iter().all(|&c| c == 0));
+    }
+
+    /// Regression (SEAIJRC, session 43): quotients `1/r`, `a/r^2`,
+    /// `a^2/r^3` (by hand; params `r, a`). Taken smallest numerator first,
+    /// the first two's denominators multiply to `r^3` on the `r` axis, which
+    /// covered the third's, but the common denominator built from them is
+    /// their lcm `r^2`, and `a^2/r^3` times it is no polynomial. Judged on
+    /// the lcm, the third is chosen too: the common denominator is `r^3`.
+    #[test]
+    fn common_denominator_covers_repeated_factors() {
+        use obsan_recon::Term;
+        let p = P0;
+        let mono = |e: [u32; 2]| {
+            RPoly::from_terms([Term {
+                exps: e.to_vec(),
+                coeff: 1.into(),
+            }])
+        };
+        // c_m / c_last for m = 0, 1, 2 (the last coefficient is 1).
+        let fns = [
+            (mono([0, 0]), mono([1, 0])),
+            (mono([0, 1]), mono([2, 0])),
+            (mono([0, 2]), mono([3, 0])),
+        ];
+        let base = [123_456_789u64, 987_654_321];
+        // Per axis, each quotient restricted there, reduced.
+        let quotients: Vec<Vec<Fraction>> = (0..2)
+            .map(|k| {
+                fns.iter()
+                    .map(|(n, d)| {
+                        let (n, d) = (restrict(n, &base, k, p), restrict(d, &base, k, p));
+                        let g = ugcd(&n, &d, p);
+                        (udiv(&n, &g, p), udiv(&d, &g, p))
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut bb = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+            let mut v = Vec::new();
+            for (n, d) in &fns {
+                let Some(id) = obsan_recon::fp::inv(d.eval_mod(pt, q), q) else {
+                    return Ok(None);
+                };
+                v.push(fmul(n.eval_mod(pt, q), id, q));
+            }
+            v.push(1);
+            Ok(Some(v))
+        };
+        let ropts = Options {
+            prime_list: PrimeList::Bits52,
+            ..Options::default()
+        };
+        let Ok(Some((d, per))) = common_denominator(&quotients, &base, 3, 2, &mut bb, &ropts)
+        else {
+            panic!("no common denominator");
+        };
+        assert_eq!(d.terms().len(), 1);
+        assert_eq!(d.terms()[0].exps, vec![3, 0]);
+        // Times it, the quotients are r^2, a r, a^2: their degrees per axis.
+        assert_eq!(per, vec![vec![2, 0], vec![1, 1], vec![0, 2]]);
     }
 
     /// The common multiple of x^2 y (b + c), x (b + c) and 3 (x + 1) is
