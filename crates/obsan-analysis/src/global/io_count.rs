@@ -112,6 +112,7 @@ pub(super) fn io_count_under(
     // Per relation, its coefficients: first a generating part where one is
     // far simpler than the whole (`Part::Generating`), else all of them.
     let mut coeffs: Vec<Option<Coefficients>> = Vec::new();
+    let mut memos: Vec<Memo> = Vec::new();
     for (i, (rel, &single)) in pres.rels.iter().zip(&pres.single).enumerate() {
         let out = perm[i];
         if !single && !opts.multi_experiment {
@@ -139,6 +140,7 @@ pub(super) fn io_count_under(
         ));
         // A monomial relation (`y' = 0`: Treatment's constant N) has no
         // coefficient to reconstruct and constrains no parameter.
+        memos.push(Memo::default());
         if rel.support.len() < 2 {
             coeffs.push(None);
             continue;
@@ -150,7 +152,7 @@ pub(super) fn io_count_under(
             &rel.support,
             opts,
             seed,
-            Part::Generating,
+            (Part::Generating, &mut memos[i]),
         )?;
         coeffs.push(Some(c));
     }
@@ -187,7 +189,7 @@ pub(super) fn io_count_under(
                     &pres.rels[i].support,
                     opts,
                     seed,
-                    Part::All,
+                    (Part::All, &mut memos[i]),
                 )?;
                 all.points += spent;
                 *c = Some(all);
@@ -232,7 +234,7 @@ pub(super) fn reconstruct(
     support: &[Vec<u32>],
     opts: &GlobalOptions,
     seed: u64,
-    want: Part,
+    (want, memo): (Part, &mut Memo),
 ) -> Result<Coefficients, AnalysisError> {
     let (calls, remember) = (Cell::new(0u64), Cell::new(true));
     let mut kernels = Kernels {
@@ -245,8 +247,7 @@ pub(super) fn reconstruct(
         calls: &calls,
         remember: &remember,
         models: HashMap::new(),
-        memo: HashMap::new(),
-        memo_bytes: 0,
+        memo,
     };
     // The kernel normalised by its last coefficient (which is 1).
     let mut coeffs = |pt: &[u64], p: u64| kernels.at(pt, p);
@@ -432,19 +433,30 @@ struct Kernels<'a> {
     calls: &'a Cell<u64>,
     remember: &'a Cell<bool>,
     models: HashMap<u64, (IoModel, Rng)>,
-    memo: HashMap<(u64, Vec<u64>), Option<Vec<u64>>>,
-    memo_bytes: usize,
+    memo: &'a mut Memo,
 }
 
-/// Bytes of kernels [`Kernels`] remembers (SIWR_orig's probes: 150 points
-/// of 771 entries, under a megabyte).
-const MEMO_BYTES: usize = 16 << 20;
+/// The kernels a relation's reconstructions remember, by prime and point:
+/// the axis and line probes and the common denominator's points, which
+/// the whole's reconstruction after a part's (`Part::All` after
+/// `Part::Generating`) asks for again (SEAIJRC: 1,360 of them, 200 s).
+/// A kernel is unique, so it does not depend on which rows found it.
+#[derive(Default)]
+pub(super) struct Memo {
+    map: HashMap<(u64, Vec<u64>), Option<Vec<u64>>>,
+    bytes: usize,
+}
+
+/// Bytes of kernels a [`Memo`] holds at most, and at most a quarter of the
+/// memory budget (SIWR_orig's probes: 150 points of 771 entries, under a
+/// megabyte; SEAIJRC's, 1,360 of 1,465, 16 MB).
+const MEMO_BYTES: usize = 64 << 20;
 
 impl Kernels<'_> {
     /// The kernel at `pt` modulo `p`, normalised by its last coefficient.
     fn at(&mut self, pt: &[u64], p: u64) -> Result<Option<Vec<u64>>, AnalysisError> {
         let key = (p, pt.to_vec());
-        if let Some(v) = self.memo.get(&key) {
+        if let Some(v) = self.memo.map.get(&key) {
             return Ok(v.clone());
         }
         self.calls.set(self.calls.get() + 1);
@@ -461,9 +473,10 @@ impl Kernels<'_> {
         };
         let v = io.on_support(pt, self.orders, self.i, self.support, rng)?;
         let bytes = 8 * (pt.len() + v.as_ref().map_or(0, Vec::len));
-        if self.remember.get() && self.memo_bytes + bytes <= MEMO_BYTES {
-            self.memo_bytes += bytes;
-            self.memo.insert(key, v.clone());
+        let cap = MEMO_BYTES.min(self.opts.max_bytes / 4);
+        if self.remember.get() && self.memo.bytes + bytes <= cap {
+            self.memo.bytes += bytes;
+            self.memo.map.insert(key, v.clone());
         }
         Ok(v)
     }

@@ -497,7 +497,16 @@ fn io_recon_trace() {
             } else {
                 Part::Generating
             };
-            let c = reconstruct(&m, &orders, i, &r.support, &opts, 1, want).unwrap();
+            let c = reconstruct(
+                &m,
+                &orders,
+                i,
+                &r.support,
+                &opts,
+                1,
+                (want, &mut Default::default()),
+            )
+            .unwrap();
             if let Some(part) = &c.part {
                 println!("{name} y{}: a part of {} quotients", i + 1, part.len());
             }
@@ -553,7 +562,7 @@ fn sparse_path_matches_the_rational_reconstruction() {
         &r.support,
         &opts,
         3,
-        super::super::io_count::Part::All,
+        (super::super::io_count::Part::All, &mut Default::default()),
     )
     .unwrap();
     let (fns, calls) = (c.fns, c.points);
@@ -604,7 +613,16 @@ fn an_early_part_is_the_kernels_quotients() {
     let (m, orders, r) = first_relation(path, 7);
     let mut rng = Rng::new(8);
     let opts = crate::global::GlobalOptions::default();
-    let c = reconstruct(&m, &orders, 0, &r.support, &opts, 1, Part::Generating).unwrap();
+    let c = reconstruct(
+        &m,
+        &orders,
+        0,
+        &r.support,
+        &opts,
+        1,
+        (Part::Generating, &mut Default::default()),
+    )
+    .unwrap();
     let part = c.part.clone().expect("SIWR_multiout's relation has a part");
     assert!(part.len() < r.support.len() - 1);
     let q = obsan_recon::PRIMES[7];
