@@ -579,6 +579,76 @@ const PARALLEL_ROWS: std::time::Duration = std::time::Duration::from_micros(500)
 /// The right kernel of the rows `sample` draws (a block at a time), drawn until the rank stops
 /// growing for 4 rows in a row (a dependent row of a random point on the
 /// variety: probability at most `deg / p` each) or reaches `stop`.
+/// The monomials of a kernel's rows, each from a parent: the monomial
+/// with one exponent lowered, among `monos` or added to them (their
+/// closure under that step along one path per monomial), parents first.
+/// A row's values are then one Shoup product each (the jet's, prepared
+/// once per row), and those of one degree do not wait on each other; a
+/// product per factor of every monomial, each waiting on the last, was
+/// 14% of SIWR_orig's black box.
+struct Chain {
+    /// Per monomial of the closure after the first (the constant 1): its
+    /// parent's index and the variable raised.
+    steps: Vec<(usize, usize)>,
+    /// Per monomial of `monos`, its index in the closure.
+    at: Vec<usize>,
+}
+
+impl Chain {
+    fn new(monos: &[Vec<u32>]) -> Chain {
+        let n = monos.first().map_or(0, Vec::len);
+        let mut index: std::collections::HashMap<Vec<u32>, usize> =
+            std::collections::HashMap::new();
+        index.insert(vec![0; n], 0);
+        let mut steps = Vec::new();
+        let mut at = Vec::with_capacity(monos.len());
+        for m in monos {
+            // The path down to a monomial already present, then back up
+            // (each step's parent created before it).
+            let mut path: Vec<(Vec<u32>, usize)> = Vec::new();
+            let mut cur = m.clone();
+            let mut found = index.get(&cur).copied();
+            while found.is_none() {
+                // Lower an exponent whose parent is present, else the first.
+                let lowered = |k: usize| {
+                    let mut q = cur.clone();
+                    q[k] -= 1;
+                    q
+                };
+                let ks: Vec<usize> = (0..n).filter(|&k| cur[k] > 0).collect();
+                let k = ks
+                    .iter()
+                    .copied()
+                    .find(|&k| index.contains_key(&lowered(k)))
+                    .unwrap_or(ks[0]);
+                let parent = lowered(k);
+                path.push((cur, k));
+                found = index.get(&parent).copied();
+                cur = parent;
+            }
+            let mut idx = found.unwrap_or(0);
+            for (mono, k) in path.into_iter().rev() {
+                steps.push((idx, k));
+                idx = steps.len();
+                index.insert(mono, idx);
+            }
+            at.push(idx);
+        }
+        Chain { steps, at }
+    }
+
+    /// The monomials' values at the jets' values `vals` modulo `p`.
+    fn values(&self, vals: &[u64], p: u64) -> Vec<u64> {
+        let sh: Vec<Shoup> = vals.iter().map(|&v| Shoup::new(v, p)).collect();
+        let mut all = Vec::with_capacity(self.steps.len() + 1);
+        all.push(1 % p);
+        for &(parent, k) in &self.steps {
+            all.push(sh[k].times(all[parent]));
+        }
+        self.at.iter().map(|&i| all[i]).collect()
+    }
+}
+
 fn kernel<F: PrimeField>(
     field: F,
     to: impl Fn(u64) -> F::Elem,
@@ -731,9 +801,7 @@ impl IoModel {
         for j in 1..len {
             fact[j] = fp::mul(fact[j - 1], j as u64 % p, p);
         }
-        let top: Vec<u32> = (0..vars.len())
-            .map(|v| monos.iter().map(|m| m[v]).max().unwrap_or(0))
-            .collect();
+        let chain = Chain::new(monos);
         // One row from its own generator (seeded from `rng` in order, so
         // the rows, and the answer, do not depend on the threads).
         let row = |seed: u64| -> Result<Vec<u64>, AnalysisError> {
@@ -761,36 +829,7 @@ impl IoModel {
                         IoVar::U(u, k) => fp::mul(us[u][k], fact[k], p),
                     })
                     .collect();
-                // Powers of each jet up to its largest exponent, each ready
-                // for Shoup products (a division each here saves one per
-                // factor of every monomial below: Rem128 products were
-                // most of the row's time once the kernels ran on IFMA).
-                let pows: Vec<Vec<Shoup>> = vals
-                    .iter()
-                    .zip(&top)
-                    .map(|(&v, &t)| {
-                        let mut x = 1 % p;
-                        (0..=t)
-                            .map(|_| {
-                                let s = Shoup::new(x, p);
-                                x = fp::mul(x, v, p);
-                                s
-                            })
-                            .collect()
-                    })
-                    .collect();
-                return Ok(monos
-                    .iter()
-                    .map(|m| {
-                        m.iter().zip(&pows).fold(1 % p, |acc, (&e, w)| {
-                            if e == 0 {
-                                acc
-                            } else {
-                                w[e as usize].times(acc)
-                            }
-                        })
-                    })
-                    .collect());
+                return Ok(chain.values(&vals, p));
             }
         };
         let threads = threads();

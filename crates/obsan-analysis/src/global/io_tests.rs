@@ -738,3 +738,39 @@ fn the_wronskian_test_works_modulo_any_prime() {
         }
     }
 }
+
+/// `Chain`'s values are the monomials' products, term by term (an
+/// identity), on a support with gaps (no parent of `x^3 y^2 z` but the
+/// ones the closure adds), repeats and the constant, at a 52-bit prime.
+#[test]
+fn chain_values_are_the_monomials() {
+    let p = obsan_recon::PRIMES52[0];
+    let monos: Vec<Vec<u32>> = vec![
+        vec![3, 2, 1],
+        vec![0, 0, 0],
+        vec![1, 0, 0],
+        vec![3, 2, 1],
+        vec![0, 5, 0],
+        vec![2, 2, 2],
+        vec![0, 0, 7],
+        vec![1, 1, 1],
+    ];
+    let chain = Chain::new(&monos);
+    let mut rng = Rng::new(7);
+    for _ in 0..20 {
+        let vals: Vec<u64> = (0..3).map(|_| elem(&mut rng, p)).collect();
+        let want: Vec<u64> = monos
+            .iter()
+            .map(|m| {
+                m.iter().zip(&vals).fold(1, |acc, (&e, &v)| {
+                    fp::mul(acc, obsan_recon::fp::pow(v, u64::from(e), p), p)
+                })
+            })
+            .collect();
+        assert_eq!(chain.values(&vals, p), want);
+    }
+    // One step per monomial of the closure, and a monomial adds at most
+    // its degree in steps (its path down to one already present).
+    let degrees: usize = monos.iter().map(|m| m.iter().sum::<u32>() as usize).sum();
+    assert!(chain.steps.len() <= degrees);
+}
