@@ -1293,16 +1293,17 @@ fn common_denominator(
 ) -> Result<Option<(RPoly, Vec<Vec<u32>>)>, obsan_recon::ReconError<AnalysisError>> {
     let p = IO_PRIMES[0];
     let nq = quotients.first().map_or(0, Vec::len);
-    // Per axis, the lcm of the chosen denominators so far: the common
-    // denominator built from them below is a multiple of their
-    // multivariate lcm only (the largest monomial, each other factor
-    // once), so covering is judged on the lcm. A product counts a repeated
-    // factor twice: SEAIJRC's common denominator had `r^2` times a binomial
-    // where some quotients need `r^3` (the chosen ones' product had covered
-    // it; session 43), so the scaled quotients were no polynomials and went
-    // to the dense rational reconstruction, which did not finish.
+    // Per axis, the product of the chosen denominators so far (a multiple
+    // of their lcm there: enough to tell when every one divides it).
     let mut cur: Vec<Vec<u64>> = vec![vec![1]; quotients.len()];
     let mut chosen: Vec<usize> = Vec::new();
+    // A quotient's numerator size: the monomials its axis degrees allow.
+    let size = |m: usize| {
+        quotients
+            .iter()
+            .map(|fr| udeg(&fr[m].0) + 1)
+            .fold(1usize, usize::saturating_mul)
+    };
     let covered = |cur: &[Vec<u64>]| {
         quotients
             .iter()
@@ -1321,37 +1322,67 @@ fn common_denominator(
                     let d = &fr[m].1;
                     gain += udeg(d) - udeg(&ugcd(d, c, p));
                 }
-                let num = quotients
-                    .iter()
-                    .map(|fr| udeg(&fr[m].0) + 1)
-                    .fold(1usize, usize::saturating_mul);
-                (gain > 0).then_some((std::cmp::Reverse(num), gain, m))
+                (gain > 0).then_some((std::cmp::Reverse(size(m)), gain, m))
             })
             .max();
         let Some((_, _, m)) = best else {
             return Ok(None);
         };
         for (fr, c) in quotients.iter().zip(cur.iter_mut()) {
-            *c = ulcm(c, &fr[m].1, p);
+            *c = umul(c, &fr[m].1, p);
         }
         chosen.push(m);
     }
     if chosen.is_empty() {
         return Ok(None);
     }
-    let mut one = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
-        let Some(v) = bb(pt, q)? else {
-            return Ok(None);
+    // The chosen quotients reconstructed as rational functions, and the
+    // common multiple of their denominators built below; while it misses a
+    // quotient's denominator on some axis, that quotient (the smallest
+    // such) is chosen and reconstructed too. The product above counts a
+    // repeated factor twice where the multiple built holds it once:
+    // SEAIJRC's held `r^2` times a binomial where some quotients need `r^3`
+    // (session 43), so they were no polynomials times it and went to the
+    // dense rational reconstruction, which did not finish. (Each call's
+    // points are the first one's, remembered: the repeats cost no kernel.)
+    let mut dens: Vec<RPoly> = Vec::new();
+    let mut todo = chosen.clone();
+    let (mono, mut rests) = loop {
+        let mut some = |pt: &[u64], q: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+            let Some(v) = bb(pt, q)? else {
+                return Ok(None);
+            };
+            let Some(iv) = obsan_recon::fp::inv(v[j], q) else {
+                return Ok(None);
+            };
+            let quo: Vec<u64> = others(&v, j).collect();
+            Ok(Some(todo.iter().map(|&m| fmul(quo[m], iv, q)).collect()))
         };
-        let Some(iv) = obsan_recon::fp::inv(v[j], q) else {
-            return Ok(None);
-        };
-        let quo: Vec<u64> = others(&v, j).collect();
-        Ok(Some(chosen.iter().map(|&m| fmul(quo[m], iv, q)).collect()))
+        let r = reconstruct_vec(np, todo.len(), &mut some, ropts)?;
+        dens.extend(r.functions.iter().map(|f| f.den().clone()));
+        let refs: Vec<&RPoly> = dens.iter().collect();
+        let (mono, rests) = factors(&refs, np);
+        let d = product(&mono, &rests);
+        let dks: Vec<Vec<u64>> = (0..quotients.len())
+            .map(|k| restrict(&d, base, k, p))
+            .collect();
+        let missed = (0..nq)
+            .filter(|m| !chosen.contains(m))
+            .filter(|&m| {
+                quotients
+                    .iter()
+                    .zip(&dks)
+                    .any(|(fr, dk)| !divides(&fr[m].1, dk, p))
+            })
+            .min_by_key(|&m| (size(m), m));
+        match missed {
+            None => break (mono, rests),
+            Some(m) => {
+                chosen.push(m);
+                todo = vec![m];
+            }
+        }
     };
-    let r = reconstruct_vec(np, chosen.len(), &mut one, ropts)?;
-    let dens: Vec<&RPoly> = r.functions.iter().map(Rational::den).collect();
-    let (mono, mut rests) = factors(&dens, np);
     // A factor shared by two denominators (a binomial dividing a larger
     // one) is counted twice: dropped while the product, restricted to each
     // axis line, stays divisible by every quotient's denominator there.
@@ -1362,9 +1393,9 @@ fn common_denominator(
             fr.iter().all(|(_, den)| divides(den, &dk, p))
         })
     };
-    // (The whole product covers by construction; checked, since one that
-    // did not would send the scaled quotients, no polynomials, to the
-    // rational reconstruction's many points.)
+    // (The whole product covers now; checked, since one that did not would
+    // send the scaled quotients, no polynomials, to the rational
+    // reconstruction's many points.)
     if !covers(&rests) {
         return Ok(None);
     }
@@ -1740,9 +1771,9 @@ mod tests {
     /// Regression (SEAIJRC, session 43): quotients `1/r`, `a/r^2`,
     /// `a^2/r^3` (by hand; params `r, a`). Taken smallest numerator first,
     /// the first two's denominators multiply to `r^3` on the `r` axis, which
-    /// covered the third's, but the common denominator built from them is
-    /// their lcm `r^2`, and `a^2/r^3` times it is no polynomial. Judged on
-    /// the lcm, the third is chosen too: the common denominator is `r^3`.
+    /// covers the third's, but the common denominator built from them is
+    /// their lcm `r^2`, and `a^2/r^3` times it is no polynomial. The third,
+    /// missed by it, is chosen too: the common denominator is `r^3`.
     #[test]
     fn common_denominator_covers_repeated_factors() {
         use obsan_recon::Term;
