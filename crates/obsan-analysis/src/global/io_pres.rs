@@ -152,6 +152,12 @@ fn relations_under(
                     None
                 };
                 found.ok_or_else(|| {
+                    if t.cap == 0 {
+                        return err(format!(
+                            "global (io): the input-output relation of output {} was not found by elimination within its bounds",
+                            out + 1
+                        ));
+                    }
                     err(format!(
                         "global (io): the input-output relation of output {} needs more than {} ansatz monomials{}",
                         out + 1,
