@@ -180,8 +180,16 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
                 // A generating part of the coefficients settled the count
                 // (docs/engine.md, "Input-output route", step 3).
                 let part = if s.support > 1 && s.reconstructed + 1 < s.support {
+                    let why = if s.checked_solutions > 1 {
+                        format!(
+                            "a part; its {} solutions at the random points kept where the whole relation's kernel is that of the point",
+                            s.checked_solutions
+                        )
+                    } else {
+                        "a part that generates the parameters' field".to_string()
+                    };
                     format!(
-                        ", {} of its {} coefficients reconstructed (a part that generates the parameters' field)",
+                        ", {} of its {} coefficients reconstructed ({why})",
                         s.reconstructed,
                         s.support - 1
                     )

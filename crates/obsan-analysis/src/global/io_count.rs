@@ -15,8 +15,9 @@
 //! refuses otherwise.
 
 use super::io::{elem, IoModel};
+use super::io_check;
 use super::io_part;
-use super::io_pres::presentation;
+use super::io_pres::{presentation, Presentation};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::{err, gb_err, too_large, GlobalOptions};
@@ -53,6 +54,9 @@ pub struct IoSize {
     /// Terms of the common denominator the quotients were multiplied by
     /// when no coefficient is a monomial (`common_denominator`); 0 if none.
     pub common_denominator: usize,
+    /// When the part's count was above 1 and its solutions were filtered by
+    /// the whole relation's kernel (io_check.rs): how many; 0 otherwise.
+    pub checked_solutions: usize,
 }
 
 /// The route's answer on the parameters.
@@ -136,6 +140,7 @@ pub(super) fn io_count_under(
                 single,
                 reconstructed: 0,
                 common_denominator: 0,
+                checked_solutions: 0,
             },
         ));
         // A monomial relation (`y' = 0`: Treatment's constant N) has no
@@ -158,27 +163,38 @@ pub(super) fn io_count_under(
     }
     // Two independent points and primes must agree, as on the Taylor route.
     let primes = [IO_PRIMES[0], IO_PRIMES[1]];
-    let counts = |coeffs: &[Option<Coefficients>]| {
+    let counts = |coeffs: &[Option<Coefficients>], zeros: bool| {
         let fns: Vec<(RPoly, RPoly)> = coeffs
             .iter()
             .flatten()
             .flat_map(|c| c.fns.iter().cloned())
             .collect();
-        let a = count(&fns, np, opts, seed, primes[0])?;
-        let b = count(&fns, np, opts, seed.wrapping_add(1), primes[1])?;
-        if a != b {
+        let a = count(&fns, np, opts, seed, (primes[0], zeros))?;
+        let b = count(&fns, np, opts, seed.wrapping_add(1), (primes[1], zeros))?;
+        if (&a.per, a.joint) != (&b.per, b.joint) {
             return Err(err(
                 "global (io): two independent random points disagree on the counts (a non-generic point); try another --seed",
             ));
         }
-        Ok(a)
+        Ok([a, b])
     };
-    let (mut per_param, mut joint) = counts(&coeffs)?;
-    // A part answers for the whole when every parameter is globally
-    // identifiable or not locally identifiable over it (`generating_part`);
-    // a count above 1 may be larger over a part: all the coefficients then.
     let parted = coeffs.iter().flatten().any(|c| c.part.is_some());
+    let runs = counts(&coeffs, parted)?;
+    let (mut per_param, mut joint) = (runs[0].per.clone(), runs[0].joint);
+    // A part answers for the whole when every parameter is globally
+    // identifiable or not locally identifiable over it (`generating_part`).
+    // A count above 1 may be larger over a part: it stands when each of the
+    // part's solutions gives the whole relations' kernels of `theta*`
+    // (io_check.rs), else all the coefficients are reconstructed.
+    let mut checked = 0;
     if parted && per_param.iter().any(|k| matches!(k, Some(k) if *k > 1)) {
+        checked = runs[0].zeros.as_ref().map_or(0, Vec::len);
+        match whole_from_part(mp, &pres, &coeffs, &runs, opts, seed)? {
+            Some((per, k)) => (per_param, joint) = (per, Some(k)),
+            None => checked = 0,
+        }
+    }
+    if checked == 0 && parted && per_param.iter().any(|k| matches!(k, Some(k) if *k > 1)) {
         for (i, c) in coeffs.iter_mut().enumerate() {
             if c.as_ref().is_some_and(|c| c.part.is_some()) {
                 let spent = c.as_ref().map_or(0, |c| c.points);
@@ -195,7 +211,8 @@ pub(super) fn io_count_under(
                 *c = Some(all);
             }
         }
-        (per_param, joint) = counts(&coeffs)?;
+        let runs = counts(&coeffs, false)?;
+        (per_param, joint) = (runs[0].per.clone(), runs[0].joint);
     }
     for ((_, size), c) in sizes.iter_mut().zip(&coeffs) {
         let Some(c) = c else { continue };
@@ -213,6 +230,7 @@ pub(super) fn io_count_under(
         size.recon_error_bound = c.error_bound;
         size.reconstructed = f.len();
         size.common_denominator = c.denominator_terms;
+        size.checked_solutions = if c.part.is_some() { checked } else { 0 };
     }
     // The sizes in the outputs' own order.
     sizes.sort_by_key(|s| s.0);
@@ -223,6 +241,50 @@ pub(super) fn io_count_under(
         sizes,
         primes,
     })
+}
+
+/// The whole's counts from the part's solutions (io_check.rs): at both
+/// counts' points, those whose parted relations have their kernels at
+/// `theta*`, counted; `None` when a solution lies outside `F_q`, the black
+/// box gives no kernel, or the two points disagree.
+#[allow(clippy::type_complexity)]
+fn whole_from_part(
+    m: &ZModel,
+    pres: &Presentation,
+    coeffs: &[Option<Coefficients>],
+    runs: &[Counted; 2],
+    opts: &GlobalOptions,
+    seed: u64,
+) -> Result<Option<(Vec<Option<usize>>, usize)>, AnalysisError> {
+    let mut found = Vec::with_capacity(2);
+    for (run, &q) in runs.iter().zip(&IO_PRIMES[..2]) {
+        let Some(zeros) = &run.zeros else {
+            return Ok(None);
+        };
+        if !zeros.contains(&run.star) {
+            return Ok(None);
+        }
+        let mut keep = vec![true; zeros.len()];
+        for (i, c) in coeffs.iter().enumerate() {
+            if c.as_ref().is_none_or(|c| c.part.is_none()) {
+                continue;
+            }
+            let rel = (pres.orders.as_slice(), i, pres.rels[i].support.as_slice());
+            let Some(same) = io_check::same_kernel(m, rel, opts, seed, q, &run.star, zeros)? else {
+                return Ok(None);
+            };
+            keep.iter_mut().zip(same).for_each(|(k, s)| *k &= s);
+        }
+        let kept: Vec<&Vec<u64>> = zeros
+            .iter()
+            .zip(&keep)
+            .filter(|z| *z.1)
+            .map(|z| z.0)
+            .collect();
+        let local: Vec<bool> = run.per.iter().map(Option::is_some).collect();
+        found.push(io_check::counts_over(&kept, &local));
+    }
+    Ok((found[0] == found[1]).then(|| found.swap_remove(0)))
 }
 
 /// The normalised coefficients of output `i`'s relation (the last one is 1,
@@ -1509,12 +1571,12 @@ fn factors(dens: &[&RPoly], np: usize) -> (Vec<u32>, Vec<RPoly>) {
 }
 
 /// The degree of a univariate polynomial (coefficients lowest first).
-fn udeg(a: &[u64]) -> usize {
+pub(super) fn udeg(a: &[u64]) -> usize {
     a.iter().rposition(|&c| c != 0).unwrap_or(0)
 }
 
 /// The product of univariate polynomials modulo `p`.
-fn umul(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
+pub(super) fn umul(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
     let (a, b) = (&a[..=udeg(a)], &b[..=udeg(b)]);
     let mut out = vec![0u64; a.len() + b.len() - 1];
     for (i, &x) in a.iter().enumerate() {
@@ -1527,7 +1589,7 @@ fn umul(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
 
 /// A greatest common divisor of univariate polynomials modulo `p`
 /// (Euclid; up to a constant).
-fn ugcd(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
+pub(super) fn ugcd(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
     let (mut a, mut b) = (a.to_vec(), b.to_vec());
     while b.iter().any(|&c| c != 0) {
         let r = urem(&a, &b, p);
@@ -1539,12 +1601,12 @@ fn ugcd(a: &[u64], b: &[u64], p: u64) -> Vec<u64> {
 
 /// The quotient of `b` divided by `a` modulo `p` (`a` not zero; the
 /// remainder dropped).
-fn udiv(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+pub(super) fn udiv(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
     udivrem(b, a, p).0
 }
 
 /// The remainder of `b` divided by `a` modulo `p` (`a` not zero).
-fn urem(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
+pub(super) fn urem(b: &[u64], a: &[u64], p: u64) -> Vec<u64> {
     udivrem(b, a, p).1
 }
 
@@ -1593,14 +1655,15 @@ fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisErr
 /// `c_i(theta) = c_i(theta*)` at a random `theta*` over `F_q`, the
 /// denominators kept non-zero by `z L(theta) = 1`; the parameters that are
 /// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
-#[allow(clippy::type_complexity)]
-fn count(
+/// With `zeros`, the solutions too when they are several and all in
+/// `F_q` (io_check.rs).
+pub(super) fn count(
     fns: &[(RPoly, RPoly)],
     np: usize,
     opts: &GlobalOptions,
     seed: u64,
-    q: u64,
-) -> Result<(Vec<Option<usize>>, Option<usize>), AnalysisError> {
+    (q, zeros): (u64, bool),
+) -> Result<Counted, AnalysisError> {
     let field = Field::new(q).ok_or_else(|| err("global (io): bad prime"))?;
     let ring = Ring::new(field, np + 1, Order::Grevlex);
     let mut rng = Rng::new(seed ^ 0xc0u64);
@@ -1728,16 +1791,34 @@ fn count(
             terms.push((Mono::var(np + 1, t, 1), elem(&mut rng, q)));
         }
     }
-    let joint = if terms.is_empty() {
-        None
-    } else {
+    let (mut joint, mut points) = (None, None);
+    if !terms.is_empty() {
         let lf = ring.from_terms(terms);
         let mp = b
             .minimal_polynomial_in(&lf, &steps, opts.max_solutions)
             .map_err(gb_err)?;
-        Some(distinct_roots(field, &mp))
-    };
-    Ok((per, joint))
+        let k = distinct_roots(field, &mp);
+        joint = Some(k);
+        if zeros && k > 1 {
+            points = io_check::zeros(&ring, &gens, (&lf, &mp), np, opts, &mut rng)?;
+        }
+    }
+    star.truncate(np);
+    Ok(Counted {
+        per,
+        joint,
+        star,
+        zeros: points,
+    })
+}
+
+/// One count (`count`): per parameter, jointly, its random point, and its
+/// solutions when asked for and found.
+pub(super) struct Counted {
+    pub(super) per: Vec<Option<usize>>,
+    pub(super) joint: Option<usize>,
+    pub(super) star: Vec<u64>,
+    pub(super) zeros: Option<Vec<Vec<u64>>>,
 }
 
 #[cfg(test)]

@@ -774,3 +774,58 @@ fn chain_values_are_the_monomials() {
     let degrees: usize = monos.iter().map(|m| m.iter().sum::<u32>() as usize).sum();
     assert!(chain.steps.len() <= degrees);
 }
+
+/// The part's filter (io_check.rs) on two summed decays, by hand: `y'' +
+/// (a + b) y' + a b y = 0`, so the count's solutions at `(a*, b*)` are it
+/// and its swap `(b*, a*)`, and both give the relation's kernel at `theta*`;
+/// a point off the solutions does not, and is not counted.
+#[test]
+fn the_zeros_of_two_decays_are_the_swap() {
+    use super::super::io_check::{counts_over, same_kernel};
+    use super::super::io_count::{count, reconstruct, Memo, Part, IO_PRIMES, MAX_ANSATZ};
+    use super::super::types::GlobalOptions;
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../systems/global/two_decays.sys"
+    );
+    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let opts = GlobalOptions::default();
+    let mut rng = Rng::new(3);
+    let theta = [elem(&mut rng, IO_PRIMES[0]), elem(&mut rng, IO_PRIMES[0])];
+    let pres =
+        super::super::io_pres::presentation(&m, &opts, &theta, &mut rng, (true, MAX_ANSATZ), None)
+            .unwrap();
+    let (mp, support) = (&pres.model, &pres.rels[0].support);
+    let c = reconstruct(
+        mp,
+        &pres.orders,
+        0,
+        support,
+        &opts,
+        3,
+        (Part::All, &mut Memo::default()),
+    )
+    .unwrap();
+    let q = IO_PRIMES[1];
+    let run = count(&c.fns, 2, &opts, 7, (q, true)).unwrap();
+    assert_eq!(run.joint, Some(2));
+    let s = run.star.clone();
+    let mut got = run.zeros.expect("both solutions lie in F_q");
+    got.sort();
+    let mut want = vec![s.clone(), vec![s[1], s[0]]];
+    want.sort();
+    assert_eq!(got, want);
+    let rel = (pres.orders.as_slice(), 0, support.as_slice());
+    let same = same_kernel(mp, rel, &opts, 3, q, &s, &got).unwrap();
+    assert_eq!(same, Some(vec![true, true]));
+    let off = vec![s[0], obsan_recon::fp::add(s[1], 1, q)];
+    let same = same_kernel(mp, rel, &opts, 3, q, &s, &[s.clone(), off]).unwrap();
+    assert_eq!(same, Some(vec![true, false]));
+    // Both kept: a and b 2 values each, 2 jointly; the swap dropped: 1.
+    let both: Vec<&Vec<u64>> = got.iter().collect();
+    assert_eq!(
+        counts_over(&both, &[true, true]),
+        (vec![Some(2), Some(2)], 2)
+    );
+    assert_eq!(counts_over(&[&s], &[true, false]), (vec![Some(1), None], 1));
+}

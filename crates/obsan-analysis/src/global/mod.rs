@@ -17,6 +17,7 @@ use obsan_model::NormalForm;
 
 mod count;
 mod io;
+mod io_check;
 mod io_choice;
 mod io_count;
 mod io_elim;
