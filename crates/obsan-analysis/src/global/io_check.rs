@@ -7,10 +7,10 @@
 //! as well: those where the whole relation's kernel is the one at
 //! `theta*`. Counted over those, the answer is the whole's, without the
 //! thousands of quotients its reconstruction would need (SEAIJRC: a part of
-//! 49 quotients against 1,464, whose sparse interpolation passes its term
-//! cap; the part's second solution, the rate swap of its chain `E -> I -> C`,
-//! changes the whole relation). A solution outside `F_q`, or a kernel the
-//! black box cannot give, leaves the question to the whole's
+//! 49 quotients, where the whole's 1,464 pass the sparse interpolation's
+//! term cap; the part's second solution changes the whole relation, so every
+//! locally identifiable parameter is global). A solution outside `F_q`, or a
+//! kernel the black box cannot give, leaves the question to the whole's
 //! reconstruction.
 //!
 //! Why this is the whole's count: a solution of the part either solves the

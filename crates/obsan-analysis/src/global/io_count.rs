@@ -248,7 +248,7 @@ pub(super) fn io_count_under(
 /// `theta*`, counted; `None` when a solution lies outside `F_q`, the black
 /// box gives no kernel, or the two points disagree.
 #[allow(clippy::type_complexity)]
-fn whole_from_part(
+pub(super) fn whole_from_part(
     m: &ZModel,
     pres: &Presentation,
     coeffs: &[Option<Coefficients>],
@@ -707,7 +707,9 @@ const PART_GAIN: usize = 16;
 /// `K'` is in `K` (globally identifiable); the Jacobians have the same rank,
 /// so `K'` and `K` have the same transcendence degree and the same
 /// parameters are locally identifiable. Only a count `k > 1` over `K'` may
-/// be larger than over `K`: then the whole is reconstructed.
+/// be larger than over `K`: then the part's solutions are filtered by the
+/// whole relation's kernel (io_check.rs), or else the whole is
+/// reconstructed.
 #[cfg(test)]
 fn generating_part(est: &[usize], jac: &[Vec<u64>], p: u64) -> Option<Vec<usize>> {
     let exact: Vec<Estimate> = est.iter().map(|&e| Estimate::Exact(e)).collect();

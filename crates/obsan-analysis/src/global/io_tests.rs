@@ -829,3 +829,48 @@ fn the_zeros_of_two_decays_are_the_swap() {
     );
     assert_eq!(counts_over(&[&s], &[true, false]), (vec![Some(1), None], 1));
 }
+
+/// The filter drops what the whole rules out, by hand: `x1' = -a x1 + u,
+/// x2' = -b x2, y = x1 + x2` has the relation `y'' + (a + b) y' + a b y =
+/// u' + b u`. Its part `1 / (a b), (a + b) / (a b)` (written here, not
+/// reconstructed) counts the swap `(a, b) -> (b, a)`: 2 solutions; the
+/// whole's kernel at the swap has `a u` for `b u`, so the filter keeps 1.
+#[test]
+fn the_whole_drops_a_solution_of_the_part() {
+    use super::super::io_count::{count, whole_from_part, Coefficients, IO_PRIMES, MAX_ANSATZ};
+    use super::super::types::GlobalOptions;
+    use obsan_recon::{Poly as RPoly, Term};
+    let src = "system t\nstate x1, x2\nparam a, b\ninput u\nx1' = -a*x1 + u\nx2' = -b*x2\noutput y = x1 + x2\n";
+    let m = model(src, "t.sys");
+    let opts = GlobalOptions::default();
+    let mut rng = Rng::new(3);
+    let theta = [elem(&mut rng, IO_PRIMES[0]), elem(&mut rng, IO_PRIMES[0])];
+    let pres =
+        super::super::io_pres::presentation(&m, &opts, &theta, &mut rng, (true, MAX_ANSATZ), None)
+            .unwrap();
+    let poly = |terms: &[[u32; 2]]| {
+        RPoly::from_terms(terms.iter().map(|e| Term {
+            exps: e.to_vec(),
+            coeff: 1.into(),
+        }))
+    };
+    let ab = poly(&[[1, 1]]);
+    let part = vec![(poly(&[[0, 0]]), ab.clone()), (poly(&[[1, 0], [0, 1]]), ab)];
+    let runs = [
+        count(&part, 2, &opts, 3, (IO_PRIMES[0], true)).unwrap(),
+        count(&part, 2, &opts, 4, (IO_PRIMES[1], true)).unwrap(),
+    ];
+    for r in &runs {
+        assert_eq!((r.per.clone(), r.joint), (vec![Some(2), Some(2)], Some(2)));
+    }
+    let c = Coefficients {
+        fns: part,
+        error_bound: 0.0,
+        points: 0,
+        part: Some(vec![0, 1]),
+        denominator_terms: 0,
+        divisor: 0,
+    };
+    let whole = whole_from_part(&pres.model, &pres, &[Some(c)], &runs, &opts, 3).unwrap();
+    assert_eq!(whole, Some((vec![Some(1), Some(1)], 1)));
+}
