@@ -50,7 +50,15 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
     let maps: Vec<String> = r
         .maps
         .iter()
-        .filter(|m| m.keeps_angles == Some(true))
+        .filter(|m| m.keeps_angles == Some(true) && !m.params_only)
+        .map(|m| m.to_string())
+        .collect();
+    // Maps of the parameters alone (the input-output relations' exact
+    // symmetries; the states' images not sought).
+    let maps_params: Vec<String> = r
+        .maps
+        .iter()
+        .filter(|m| m.params_only)
         .map(|m| m.to_string())
         .collect();
     let maps_pi: Vec<(String, bool)> = r
@@ -99,6 +107,7 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             log10_degree_bound_global: r.log10_delta_global,
             maps,
             maps_modulo_pi: maps_pi.iter().map(|m| m.0.clone()).collect(),
+            maps_of_parameters: maps_params.clone(),
             method: if r.route == Route::InputOutput {
                 "input-output relations: kernels of monomials in the outputs' jets at numeric parameters, coefficients reconstructed over Q and verified, Gröbner basis over F_p of c(theta) = c(theta*); two independent points and primes agree".into()
             } else if r.route == Route::Lie {
@@ -347,6 +356,12 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
             o.push_str(&format!("  {m}\n"));
         }
     }
+    if !maps_params.is_empty() {
+        o.push_str("discrete symmetries of the parameters (each keeps every input-output relation's coefficients, checked exactly over Q; the initial states' images not sought):\n");
+        for m in &maps_params {
+            o.push_str(&format!("  {m}\n"));
+        }
+    }
     if !maps_pi.is_empty() {
         o.push_str("symmetries of the angle outputs' tangents only (not of the angles as read):\n");
         for (m, turns) in &maps_pi {
@@ -363,10 +378,10 @@ pub fn run(a: &GlobalArgs) -> Result<ExitCode, Failure> {
         o.push_str(&format!(
             "they generate a group of order {}{}\n",
             r.group_order,
-            if all {
-                ": it maps the generic point onto every solution"
-            } else {
-                ""
+            match (all, maps_params.is_empty()) {
+                (true, true) => ": it maps the generic point onto every solution",
+                (true, false) => ": it maps the generic parameters onto every solution's",
+                _ => "",
             }
         ));
     } else if !r.maps.is_empty() {

@@ -383,6 +383,10 @@ class Global(Result):
     maps_modulo_pi: List[DiscreteMap] = field(default_factory=list)
     """Symmetries of the angle outputs' tangents only: each turns an angle output
     by pi or is not decided on the angles; not symmetries of the model."""
+    maps_of_parameters: List[DiscreteMap] = field(default_factory=list)
+    """Symmetries of the parameters alone (the input-output route): each keeps
+    every input-output relation's coefficients, checked exactly over Q; the initial
+    states' images are not sought."""
     route: str = "taylor"
     """``"taylor"`` (parameters and initial states), ``"input-output"`` (the
     outputs' input-output relations: parameters, and the initial states when
@@ -421,6 +425,9 @@ class Global(Result):
             maps=[DiscreteMap.parse(str(m)) for m in raw.get("maps") or []],
             solutions_at_most=bool(raw.get("solutions_at_most", False)),
             maps_modulo_pi=[DiscreteMap.parse(str(m)) for m in raw.get("maps_modulo_pi") or []],
+            maps_of_parameters=[
+                DiscreteMap.parse(str(m)) for m in raw.get("maps_of_parameters") or []
+            ],
             route=str(raw.get("route") or "taylor"),
             fallback=raw.get("fallback"),
             multi_experiment=bool(raw.get("multi_experiment", False)),

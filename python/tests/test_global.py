@@ -76,6 +76,9 @@ def test_the_input_output_route_counts_two_summed_decays():
     assert g.route == "input-output" and g.fallback is None
     values = {v.name: v.values for v in g.variables}
     assert values == {"a": 2, "b": 2}, g.variables
+    # The swap, as a map of the parameters (a + b and a b are symmetric).
+    assert [str(m) for m in g.maps_of_parameters] == ["(a, b) -> (b, a)"]
+    assert g.maps_of_parameters[0].apply({"a": 2.0, "b": 3.0}) == {"a": 3.0, "b": 2.0}
 
 
 def test_multi_experiment_counts_where_one_experiment_does_not_fix_the_relation():

@@ -336,11 +336,11 @@ dependent along an output (a zero Wronskian: one experiment does not fix its coe
 and --route io refuses); multi_experiment says whether the counts are of that kind only.
 --json prints {system, restriction, variables: [{name, kind (param | state), angle,
 verdict (global | local | not identifiable), values, at_most}], solutions, solutions_at_most,
-all_local, maps, maps_modulo_pi, group_order, order, rank_order, output_forms: [{output,
-counted_as}], output_orders: [{output, order}], error_bound, degree_bound_local,
-log10_degree_bound_global, unknowns, equations, primes, exact: false, method, route
-(taylor | input-output | lie), fallback, multi_experiment, states_after_io: {counted,
-fixed_params, output_orders, unknowns, equations, error_bound, why_not} or null}.")]
+all_local, maps, maps_modulo_pi, maps_of_parameters, group_order, order, rank_order,
+output_forms: [{output, counted_as}], output_orders: [{output, order}], error_bound,
+degree_bound_local, log10_degree_bound_global, unknowns, equations, primes, exact: false,
+method, route (taylor | input-output | lie), fallback, multi_experiment, states_after_io:
+{counted, fixed_params, output_orders, unknowns, equations, error_bound, why_not} or null}.")]
     Global(GlobalArgs),
     /// Which sensor, which trajectory: the minimal sets of candidate outputs
     /// (by count, then cost) that make the system (or --target) observable,

@@ -30,6 +30,10 @@ pub struct Global {
     /// `tangent`): each turns an angle output by pi, or is not decided on
     /// the angles; not symmetries of the model as written.
     pub maps_modulo_pi: Vec<String>,
+    /// Discrete symmetries of the parameters alone (`input-output` route),
+    /// as text: each keeps every input-output relation's coefficients,
+    /// checked exactly over Q; the initial states' images are not sought.
+    pub maps_of_parameters: Vec<String>,
     /// How the answer was found, in words.
     pub method: String,
     /// The counts are of multi-experiment identifiability only (`--multi-experiment`,

@@ -62,6 +62,64 @@ fn two_decays_by_io() {
     }
     assert_eq!(v["solutions"], 2);
     assert_eq!(v["output_orders"][0]["order"], 2);
+    // The swap, on the parameters (the relation's coefficients a + b, a b
+    // are symmetric): the group of order 2 reaches both solutions.
+    assert_eq!(
+        v["maps_of_parameters"],
+        serde_json::json!(["(a, b) -> (b, a)"])
+    );
+    assert_eq!(v["maps"], serde_json::json!([]));
+    assert_eq!(v["group_order"], 2);
+}
+
+/// The io route's maps of the parameters (io_check.rs, `param_maps`), each
+/// derived by hand: `x' = -a^2 x` keeps its relation `y' + a^2 y = 0` under
+/// `a -> -a`; SI.jl's three compartments around `x1` (and Bilirubin's
+/// three, with the input into `x1`) keep `x1`'s equation and the output
+/// when the peripheral compartments are relabelled with their rates: the
+/// swap, and the six permutations of three (five maps besides the
+/// identity), which reach every solution.
+#[test]
+fn maps_of_the_parameters_by_io() {
+    let io = |f: &str| -> Value {
+        serde_json::from_str(&ok(&["global", f, "--route", "io", "--json"])).unwrap()
+    };
+    let sorted = |v: &Value| -> Vec<String> {
+        let mut m: Vec<String> = v["maps_of_parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_str().unwrap().to_string())
+            .collect();
+        m.sort();
+        m
+    };
+    let v = io("systems/global/squared_rate.sys");
+    assert_eq!(sorted(&v), ["a -> -a"]);
+    let v = io("systems/global/sijl_tests/three_compartments.sys");
+    assert_eq!(sorted(&v), ["(a21, a31, a12, a13) -> (a31, a21, a13, a12)"]);
+    let v = io("systems/benchmarks/si-jl/Bilirubin.sys");
+    let mut want = vec![
+        "(k21, k31, k12, k13) -> (k31, k21, k13, k12)",
+        "(k21, k41, k12, k14) -> (k41, k21, k14, k12)",
+        "(k31, k41, k13, k14) -> (k41, k31, k14, k13)",
+        "(k21, k31, k41, k12, k13, k14) -> (k31, k41, k21, k13, k14, k12)",
+        "(k21, k31, k41, k12, k13, k14) -> (k41, k21, k31, k14, k12, k13)",
+    ];
+    want.sort();
+    assert_eq!(sorted(&v), want);
+    assert_eq!(
+        (v["group_order"].as_u64(), v["solutions"].as_u64()),
+        (Some(6), Some(6))
+    );
+    let t = ok(&[
+        "global",
+        "systems/benchmarks/si-jl/Bilirubin.sys",
+        "--route",
+        "io",
+    ]);
+    assert!(t.contains("discrete symmetries of the parameters"), "{t}");
+    assert!(t.contains("onto every solution's"), "{t}");
 }
 
 #[test]
@@ -116,6 +174,12 @@ fn goodwin_falls_back_on_io() {
     for n in ["x2", "x3"] {
         assert_eq!(state(n), "not identifiable", "{n}");
     }
+    // SI.jl's functions hold beta + delta and beta delta: the swap, found
+    // on the relation (the Taylor count of the states finds no map).
+    assert_eq!(
+        v["maps_of_parameters"],
+        serde_json::json!(["(beta, delta) -> (delta, beta)"])
+    );
     let t = ok(&[
         "global",
         "systems/global/sijl_tests/goodwin.sys",

@@ -28,6 +28,7 @@ use super::types::{gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
 use obsan_groebner::{distinct_roots, groebner, Poly, Ring};
 use obsan_recon::fp;
+use obsan_recon::{Poly as RPoly, Term};
 
 /// Tries of the equal-degree split per factor: each splits a factor of
 /// degree 2 or more with probability at least 1/2, so 64 fail together with
@@ -89,11 +90,19 @@ pub(super) fn roots(f: &[u64], p: u64, rng: &mut Rng) -> Option<Vec<u64>> {
     Some(out)
 }
 
-/// The zeros of the zero-dimensional system `gens` (variables `0..n`; the
-/// first `np` reported), when all of them lie in `F_q`: the roots of the
-/// minimal polynomial `mp` of the separating linear form `lf`, each one's
-/// point read off the system with `lf = r` added. `None` when some zero
-/// lies outside `F_q` (or a root could not be split off).
+/// The zeros of a zero-dimensional system that lie in `F_q`, and whether
+/// they are all of them.
+pub(super) struct Zeros {
+    pub(super) points: Vec<Vec<u64>>,
+    pub(super) complete: bool,
+}
+
+/// The zeros in `F_q` of the zero-dimensional system `gens` (variables
+/// `0..n`; the first `np` reported): the roots in `F_q` of the minimal
+/// polynomial `mp` of the separating linear form `lf`, each one's point read
+/// off the system with `lf = r` added. A root in `F_q` gives a zero in
+/// `F_q`: its Frobenius conjugate has the same value of `lf`, which
+/// separates the zeros. `complete` when every zero is among them.
 pub(super) fn zeros(
     ring: &Ring,
     gens: &[Poly],
@@ -101,21 +110,23 @@ pub(super) fn zeros(
     np: usize,
     opts: &GlobalOptions,
     rng: &mut Rng,
-) -> Result<Option<Vec<Vec<u64>>>, AnalysisError> {
+) -> Result<Zeros, AnalysisError> {
     let q = ring.field.modulus();
     let Some(rs) = roots(mp, q, rng) else {
-        return Ok(None);
+        return Ok(Zeros {
+            points: Vec::new(),
+            complete: false,
+        });
     };
-    if rs.len() != distinct_roots(ring.field, mp) {
-        return Ok(None);
-    }
-    let mut out = Vec::with_capacity(rs.len());
-    for r in rs {
+    let mut complete = rs.len() == distinct_roots(ring.field, mp);
+    let mut points = Vec::with_capacity(rs.len());
+    'roots: for r in rs {
         let mut g = gens.to_vec();
         g.push(ring.sub(lf, &ring.constant(r)));
         let b = groebner(ring, &g, opts.gb_budget()).map_err(gb_err)?;
         if b.is_unit() || !b.is_zero_dimensional() {
-            return Ok(None);
+            complete = false;
+            continue;
         }
         let mut pt = Vec::with_capacity(np);
         for t in 0..np {
@@ -125,12 +136,85 @@ pub(super) fn zeros(
             // `lf` separates the zeros: one value per coordinate.
             match roots(&m, q, rng).as_deref() {
                 Some([c]) => pt.push(*c),
-                _ => return Ok(None),
+                _ => {
+                    complete = false;
+                    continue 'roots;
+                }
             }
         }
-        out.push(pt);
+        points.push(pt);
     }
-    Ok(Some(out))
+    Ok(Zeros { points, complete })
+}
+
+/// A map of the parameters: entry `v` is `(w, s)`, `theta_v -> s theta_w`.
+pub(super) type ParamMap = Vec<(usize, i8)>;
+
+/// The signed permutations of the parameters that send `star` to one of
+/// `zeros` (each coordinate of the zero equal to plus or minus one of
+/// `star`'s, which random coordinates make unambiguous) and keep every
+/// coefficient `n / d` of `fns` exactly: `n(phi) d = n d(phi)` over Z. A
+/// zero that is no signed permutation of `star` (an affine or rational
+/// map) gives none.
+pub(super) fn param_maps(
+    fns: &[(RPoly, RPoly)],
+    zeros: &[Vec<u64>],
+    star: &[u64],
+    q: u64,
+) -> Vec<ParamMap> {
+    let mut out: Vec<ParamMap> = Vec::new();
+    for z in zeros.iter().filter(|z| z.as_slice() != star) {
+        let map: Option<ParamMap> = z
+            .iter()
+            .map(|&c| {
+                (0..star.len()).find_map(|w| {
+                    if c == star[w] {
+                        Some((w, 1))
+                    } else if c == fp::sub(0, star[w], q) {
+                        Some((w, -1))
+                    } else {
+                        None
+                    }
+                })
+            })
+            .collect();
+        let Some(map) = map else { continue };
+        let mut seen = vec![false; map.len()];
+        let bijective = map
+            .iter()
+            .all(|&(w, _)| !std::mem::replace(&mut seen[w], true));
+        if bijective && !out.contains(&map) && keeps(fns, &map) {
+            out.push(map);
+        }
+    }
+    out
+}
+
+/// `p(phi(theta))` for a signed permutation `phi` of the parameters.
+fn substitute(p: &RPoly, map: &[(usize, i8)]) -> RPoly {
+    RPoly::from_terms(p.terms().iter().map(|t| {
+        let mut exps = vec![0u32; map.len()];
+        let mut odd = false;
+        for (&e, &(w, s)) in t.exps.iter().zip(map) {
+            exps[w] = e;
+            odd ^= s < 0 && e % 2 == 1;
+        }
+        Term {
+            exps,
+            coeff: if odd {
+                -t.coeff.clone()
+            } else {
+                t.coeff.clone()
+            },
+        }
+    }))
+}
+
+/// Whether every fraction `n / d` of `fns` is the same after `phi`: the
+/// identity `n(phi) d = n d(phi)` of polynomials over Z, exact.
+fn keeps(fns: &[(RPoly, RPoly)], map: &[(usize, i8)]) -> bool {
+    fns.iter()
+        .all(|(n, d)| substitute(n, map).times(d) == n.times(&substitute(d, map)))
 }
 
 /// Per point of `zeros`, whether relation `i`'s kernel modulo `q` there is
@@ -215,5 +299,36 @@ mod tests {
         let rs: Vec<u64> = (10..30).map(|r| r * 1_000_003).collect();
         let f = rs.iter().fold(vec![1u64], |a, &r| umul(&a, &lin(r), p));
         assert_eq!(roots(&f, p, &mut rng), Some(rs));
+    }
+
+    fn poly(terms: &[([u32; 2], i64)]) -> RPoly {
+        RPoly::from_terms(terms.iter().map(|(e, c)| Term {
+            exps: e.to_vec(),
+            coeff: (*c).into(),
+        }))
+    }
+
+    /// Two summed decays' coefficients `a + b`, `a b` (by hand): the swap
+    /// keeps both, `a -> -a` and `(a, b) -> (-b, -a)` do not (`a b` and
+    /// `a + b` change sign); a zero `(b*, a*)` gives the swap, a zero that
+    /// is no signed permutation of `star` none.
+    #[test]
+    fn maps_kept_by_the_coefficients() {
+        let one = poly(&[([0, 0], 1)]);
+        let fns = vec![
+            (poly(&[([1, 0], 1), ([0, 1], 1)]), one.clone()),
+            (poly(&[([1, 1], 1)]), one),
+        ];
+        assert!(keeps(&fns, &[(1, 1), (0, 1)]));
+        assert!(!keeps(&fns, &[(0, -1), (1, 1)]));
+        assert!(!keeps(&fns, &[(1, -1), (0, -1)]));
+        let q = super::super::io_count::P0;
+        let star = vec![5, 11];
+        let maps = param_maps(&fns, &[star.clone(), vec![11, 5]], &star, q);
+        assert_eq!(maps, vec![vec![(1, 1), (0, 1)]]);
+        assert!(param_maps(&fns, &[vec![6, 10]], &star, q).is_empty());
+        // A signed permutation that is a zero but keeps no coefficient is
+        // not reported (the exact check, not the zero, decides).
+        assert!(param_maps(&fns, &[vec![q - 5, 11]], &star, q).is_empty());
     }
 }

@@ -67,6 +67,9 @@ pub(super) struct IoCounts {
     pub(super) sizes: Vec<IoSize>,
     /// The primes of the two counts (which agree).
     pub(super) primes: [u64; 2],
+    /// Signed permutations of the parameters keeping every coefficient
+    /// exactly (io_check.rs, `param_maps`).
+    pub(super) maps: Vec<io_check::ParamMap>,
 }
 
 /// Largest ansatz (monomials) one relation's first kernel may use: its
@@ -179,7 +182,7 @@ pub(super) fn io_count_under(
         Ok([a, b])
     };
     let parted = coeffs.iter().flatten().any(|c| c.part.is_some());
-    let runs = counts(&coeffs, parted)?;
+    let mut runs = counts(&coeffs, parted)?;
     let (mut per_param, mut joint) = (runs[0].per.clone(), runs[0].joint);
     // A part answers for the whole when every parameter is globally
     // identifiable or not locally identifiable over it (`generating_part`).
@@ -188,7 +191,7 @@ pub(super) fn io_count_under(
     // (io_check.rs), else all the coefficients are reconstructed.
     let mut checked = 0;
     if parted && per_param.iter().any(|k| matches!(k, Some(k) if *k > 1)) {
-        checked = runs[0].zeros.as_ref().map_or(0, Vec::len);
+        checked = runs[0].zeros.as_ref().map_or(0, |z| z.points.len());
         match whole_from_part(mp, &pres, &coeffs, &runs, opts, seed)? {
             Some((per, k)) => (per_param, joint) = (per, Some(k)),
             None => checked = 0,
@@ -211,9 +214,22 @@ pub(super) fn io_count_under(
                 *c = Some(all);
             }
         }
-        let runs = counts(&coeffs, false)?;
+        runs = counts(&coeffs, false)?;
         (per_param, joint) = (runs[0].per.clone(), runs[0].joint);
     }
+    // The maps, on every coefficient only (a part's do not settle them).
+    let whole = coeffs.iter().flatten().all(|c| c.part.is_none());
+    let maps = match &runs[0].zeros {
+        Some(z) if whole && joint.is_some_and(|k| k > 1) => {
+            let fns: Vec<(RPoly, RPoly)> = coeffs
+                .iter()
+                .flatten()
+                .flat_map(|c| c.fns.iter().cloned())
+                .collect();
+            io_check::param_maps(&fns, &z.points, &runs[0].star, primes[0])
+        }
+        _ => Vec::new(),
+    };
     for ((_, size), c) in sizes.iter_mut().zip(&coeffs) {
         let Some(c) = c else { continue };
         let f = &c.fns;
@@ -240,6 +256,7 @@ pub(super) fn io_count_under(
         joint,
         sizes,
         primes,
+        maps,
     })
 }
 
@@ -258,7 +275,11 @@ pub(super) fn whole_from_part(
 ) -> Result<Option<(Vec<Option<usize>>, usize)>, AnalysisError> {
     let mut found = Vec::with_capacity(2);
     for (run, &q) in runs.iter().zip(&IO_PRIMES[..2]) {
-        let Some(zeros) = &run.zeros else {
+        let Some(io_check::Zeros {
+            points: zeros,
+            complete: true,
+        }) = &run.zeros
+        else {
             return Ok(None);
         };
         if !zeros.contains(&run.star) {
@@ -1657,8 +1678,9 @@ fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisErr
 /// `c_i(theta) = c_i(theta*)` at a random `theta*` over `F_q`, the
 /// denominators kept non-zero by `z L(theta) = 1`; the parameters that are
 /// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
-/// With `zeros`, the solutions too when they are several and all in
-/// `F_q` (io_check.rs).
+/// The solutions in `F_q` too when they are several and asked for
+/// (`zeros`: the part's filter) or at most [`MAP_ZEROS`] (the maps), both
+/// io_check.rs.
 pub(super) fn count(
     fns: &[(RPoly, RPoly)],
     np: usize,
@@ -1801,8 +1823,16 @@ pub(super) fn count(
             .map_err(gb_err)?;
         let k = distinct_roots(field, &mp);
         joint = Some(k);
-        if zeros && k > 1 {
-            points = io_check::zeros(&ring, &gens, (&lf, &mp), np, opts, &mut rng)?;
+        // The zeros for the part's filter, or for the maps (a few).
+        if k > 1 && (zeros || k <= MAP_ZEROS) {
+            points = Some(io_check::zeros(
+                &ring,
+                &gens,
+                (&lf, &mp),
+                np,
+                opts,
+                &mut rng,
+            )?);
         }
     }
     star.truncate(np);
@@ -1820,8 +1850,13 @@ pub(super) struct Counted {
     pub(super) per: Vec<Option<usize>>,
     pub(super) joint: Option<usize>,
     pub(super) star: Vec<u64>,
-    pub(super) zeros: Option<Vec<Vec<u64>>>,
+    pub(super) zeros: Option<io_check::Zeros>,
 }
+
+/// Most solutions read off one by one for the maps (io_check.rs,
+/// `param_maps`): each costs a Gröbner basis of the count's system with
+/// one more equation.
+const MAP_ZEROS: usize = 16;
 
 #[cfg(test)]
 mod tests {

@@ -5,9 +5,12 @@
 use super::io_count::io_count_with;
 pub(super) use super::io_count::MAX_ANSATZ;
 pub(super) use super::io_pres::PAST_ANSATZ;
+use super::maps::{group_order, Candidate, Image};
 use super::model::zmodel;
 use super::outputs::OutputForm;
-use super::types::{err, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, Route};
+use super::types::{
+    err, DiscreteMap, GlobalOptions, GlobalReport, GlobalVariable, Identifiability, MapImage, Route,
+};
 use crate::rank::AnalysisError;
 use obsan_model::NormalForm;
 
@@ -32,6 +35,47 @@ pub(super) fn io_route(
     }
     let c = io_count_with(&m, opts, opts.seed, eliminate, cap)?;
     let nx = m.dyn_vars.len();
+    // The relations' maps of the parameters (io_check.rs), named, and the
+    // group they generate (the states fixed).
+    let names: Vec<&str> = nf.state[nx..].iter().map(String::as_str).collect();
+    let maps: Vec<DiscreteMap> = c
+        .maps
+        .iter()
+        .map(|pm| DiscreteMap {
+            images: pm
+                .iter()
+                .enumerate()
+                .filter(|&(v, &(w, s))| v != w || s < 0)
+                .map(|(v, &(w, s))| MapImage {
+                    var: names[v].to_string(),
+                    sign: s,
+                    image: names[w].to_string(),
+                    plus_pi: false,
+                })
+                .collect(),
+            keeps_angles: Some(true),
+            params_only: true,
+        })
+        .collect();
+    let candidates: Vec<Candidate> = c
+        .maps
+        .iter()
+        .map(|pm| {
+            (0..nx)
+                .map(|v| Image {
+                    var: v,
+                    sign: 1,
+                    exp: 1,
+                })
+                .chain(pm.iter().map(|&(w, sign)| Image {
+                    var: nx + w,
+                    sign,
+                    exp: 1,
+                }))
+                .collect()
+        })
+        .collect();
+    let group_order = group_order(&candidates, nx + names.len(), 100_000);
     let variables: Vec<GlobalVariable> = nf.state[nx..]
         .iter()
         .zip(&c.per_param)
@@ -51,8 +95,8 @@ pub(super) fn io_route(
         all_local: c.per_param.iter().all(|k| k.is_some()),
         variables,
         solutions: c.joint,
-        maps: Vec::new(),
-        group_order: 1,
+        maps,
+        group_order,
         solutions_at_most: false,
         output_forms: nf
             .outputs

@@ -317,15 +317,20 @@ fn states_after_io(
         error_bound: t.error_bound,
         why_not: None,
     });
-    // The params' verdicts agree; the states', the joint count and the
-    // maps are the Taylor count's (over params and initial states). The
+    // The params' verdicts agree; the states', the joint count and (when
+    // it finds any) the maps are the Taylor count's (over params and
+    // initial states). The
     // error bound stays the io route's (none): the states' count assumes
     // the params' verdicts.
     io.variables = t.variables;
     io.solutions = t.solutions;
     io.all_local = t.all_local;
-    io.maps = t.maps;
-    io.group_order = t.group_order;
+    // The relations' maps of the parameters stay when the Taylor count
+    // finds none over parameters and states.
+    if !t.maps.is_empty() || io.maps.is_empty() {
+        io.maps = t.maps;
+        io.group_order = t.group_order;
+    }
     Ok(io)
 }
 
@@ -474,6 +479,7 @@ fn taylor_route(
             } else {
                 None
             },
+            params_only: false,
         })
         .collect();
     let variables: Vec<GlobalVariable> = variables

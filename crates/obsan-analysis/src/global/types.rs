@@ -124,6 +124,11 @@ pub struct DiscreteMap {
     /// (`Some(false)`: a symmetry of the tangents only), or neither is
     /// proven (`None`). `Some(true)` without such outputs.
     pub keeps_angles: Option<bool>,
+    /// A map of the parameters alone (the input-output route): it keeps
+    /// every relation's coefficients, checked exactly over Q, so the
+    /// parameters and their images give the same outputs (the initial
+    /// states' images are not sought).
+    pub params_only: bool,
 }
 
 /// `var -> sign * image`, plus pi when `plus_pi` (angles only: `theta ->
