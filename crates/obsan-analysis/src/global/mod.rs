@@ -325,9 +325,11 @@ fn states_after_io(
     io.variables = t.variables;
     io.solutions = t.solutions;
     io.all_local = t.all_local;
-    // The relations' maps of the parameters stay when the Taylor count
-    // finds none over parameters and states.
-    if !t.maps.is_empty() || io.maps.is_empty() {
+    // The relations' maps of the parameters stay when they generate a
+    // larger group than the Taylor count's maps over parameters and states
+    // (whose search is bounded: Bilirubin's finds one swap, order 2, where
+    // the relations give all six relabellings), else the Taylor count's.
+    if t.group_order >= io.group_order {
         io.maps = t.maps;
         io.group_order = t.group_order;
     }
