@@ -15,6 +15,22 @@ fn model(src: &str, name: &str) -> ZModel {
     zmodel(&mut nf).unwrap()
 }
 
+/// [`model`] of a file under `systems/`.
+fn model_file(rel: &str) -> ZModel {
+    let path = format!("{}/../../systems/{rel}", env!("CARGO_MANIFEST_DIR"));
+    model(&std::fs::read_to_string(&path).unwrap(), &path)
+}
+
+/// The relations of a two-parameter model at a random point (seed 3).
+fn presented(m: &ZModel) -> super::super::io_pres::Presentation {
+    let p = super::super::io_count::IO_PRIMES[0];
+    let mut rng = Rng::new(3);
+    let theta = [elem(&mut rng, p), elem(&mut rng, p)];
+    let opts = Default::default();
+    let cap = super::super::io_count::MAX_ANSATZ;
+    super::super::io_pres::presentation(m, &opts, &theta, &mut rng, (true, cap), None).unwrap()
+}
+
 /// The coefficient of monomial `m` in `r` (0 if absent).
 fn coeff(r: &IoRelation, m: &[u32]) -> u64 {
     r.support
@@ -414,11 +430,7 @@ fn primitive_degree(fracs: &[(Vec<u64>, Vec<u64>)], p: u64) -> usize {
 /// identifiable. The Taylor route needs more than the default budget here.
 #[test]
 fn io_count_goodwin() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/global/sijl_tests/goodwin.sys"
-    );
-    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let m = model_file("global/sijl_tests/goodwin.sys");
     let t0 = Instant::now();
     let c = super::super::io_count::io_count(&m, &Default::default(), 3).unwrap();
     eprintln!(
@@ -782,19 +794,11 @@ fn chain_values_are_the_monomials() {
 #[test]
 fn the_zeros_of_two_decays_are_the_swap() {
     use super::super::io_check::{counts_over, same_kernel};
-    use super::super::io_count::{count, reconstruct, Memo, Part, IO_PRIMES, MAX_ANSATZ};
+    use super::super::io_count::{count, reconstruct, Memo, Part, IO_PRIMES};
     use super::super::types::GlobalOptions;
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../systems/global/two_decays.sys"
-    );
-    let m = model(&std::fs::read_to_string(path).unwrap(), path);
+    let m = model_file("global/two_decays.sys");
     let opts = GlobalOptions::default();
-    let mut rng = Rng::new(3);
-    let theta = [elem(&mut rng, IO_PRIMES[0]), elem(&mut rng, IO_PRIMES[0])];
-    let pres =
-        super::super::io_pres::presentation(&m, &opts, &theta, &mut rng, (true, MAX_ANSATZ), None)
-            .unwrap();
+    let pres = presented(&m);
     let (mp, support) = (&pres.model, &pres.rels[0].support);
     let c = reconstruct(
         mp,
@@ -839,17 +843,13 @@ fn the_zeros_of_two_decays_are_the_swap() {
 /// whole's kernel at the swap has `a u` for `b u`, so the filter keeps 1.
 #[test]
 fn the_whole_drops_a_solution_of_the_part() {
-    use super::super::io_count::{count, whole_from_part, Coefficients, IO_PRIMES, MAX_ANSATZ};
+    use super::super::io_count::{count, whole_from_part, Coefficients, IO_PRIMES};
     use super::super::types::GlobalOptions;
     use obsan_recon::{Poly as RPoly, Term};
     let src = "system t\nstate x1, x2\nparam a, b\ninput u\nx1' = -a*x1 + u\nx2' = -b*x2\noutput y = x1 + x2\n";
     let m = model(src, "t.sys");
     let opts = GlobalOptions::default();
-    let mut rng = Rng::new(3);
-    let theta = [elem(&mut rng, IO_PRIMES[0]), elem(&mut rng, IO_PRIMES[0])];
-    let pres =
-        super::super::io_pres::presentation(&m, &opts, &theta, &mut rng, (true, MAX_ANSATZ), None)
-            .unwrap();
+    let pres = presented(&m);
     let poly = |terms: &[[u32; 2]]| {
         RPoly::from_terms(terms.iter().map(|e| Term {
             exps: e.to_vec(),
