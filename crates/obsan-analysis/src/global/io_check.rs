@@ -26,7 +26,7 @@ use super::model::ZModel;
 use super::run::Rng;
 use super::types::{gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
-use obsan_groebner::{distinct_roots, groebner, Poly, Ring};
+use obsan_groebner::{distinct_roots, groebner, GbError, Poly, Ring};
 use obsan_recon::fp;
 use obsan_recon::{Poly as RPoly, Term};
 
@@ -123,18 +123,18 @@ pub(super) fn zeros(
     'roots: for r in rs {
         let mut g = gens.to_vec();
         g.push(ring.sub(lf, &ring.constant(r)));
-        let b = groebner(ring, &g, opts.gb_budget()).map_err(gb_err)?;
-        if b.is_unit() || !b.is_zero_dimensional() {
-            complete = false;
-            continue;
-        }
+        let b = match soft(groebner(ring, &g, opts.gb_budget()))? {
+            Some(b) if !b.is_unit() && b.is_zero_dimensional() => b,
+            _ => {
+                complete = false;
+                continue;
+            }
+        };
         let mut pt = Vec::with_capacity(np);
         for t in 0..np {
-            let m = b
-                .minimal_polynomial(&ring.var(t), opts.max_solutions)
-                .map_err(gb_err)?;
+            let m = soft(b.minimal_polynomial(&ring.var(t), opts.max_solutions))?;
             // `lf` separates the zeros: one value per coordinate.
-            match roots(&m, q, rng).as_deref() {
+            match m.and_then(|m| roots(&m, q, rng)).as_deref() {
                 Some([c]) => pt.push(*c),
                 _ => {
                     complete = false;
@@ -145,6 +145,17 @@ pub(super) fn zeros(
         points.push(pt);
     }
     Ok(Zeros { points, complete })
+}
+
+/// A Gröbner step of [`zeros`], which only adds to an answer already
+/// found: past a budget it is left out (`None`: the zeros incomplete), the
+/// deadline alone stops the command.
+fn soft<T>(r: Result<T, GbError>) -> Result<Option<T>, AnalysisError> {
+    match r {
+        Ok(v) => Ok(Some(v)),
+        Err(GbError::Budget("deadline")) => Err(gb_err(GbError::Budget("deadline"))),
+        Err(_) => Ok(None),
+    }
 }
 
 /// A map of the parameters: entry `v` is `(w, s)`, `theta_v -> s theta_w`.
@@ -299,6 +310,39 @@ mod tests {
         let rs: Vec<u64> = (10..30).map(|r| r * 1_000_003).collect();
         let f = rs.iter().fold(vec![1u64], |a, &r| umul(&a, &lin(r), p));
         assert_eq!(roots(&f, p, &mut rng), Some(rs));
+    }
+
+    /// `x + y = 11, x y = 30` over `F_q` (by hand: `(5, 6)` and `(6, 5)`),
+    /// the form `x + 2 y` separating them (17 and 16): both zeros read off;
+    /// with no room for one more basis element, none and incomplete, never
+    /// an error (the count they would add to is already found).
+    #[test]
+    fn zeros_read_off_or_left_out_past_a_budget() {
+        use obsan_groebner::{Field, Mono, Order};
+        let q = super::super::io_count::P0;
+        let ring = Ring::new(Field::new(q).unwrap(), 2, Order::Grevlex);
+        let (x, y) = (ring.var(0), ring.var(1));
+        let gens = vec![
+            ring.sub(&ring.add(&x, &y), &ring.constant(11)),
+            ring.sub(&ring.mul(&x, &y).unwrap(), &ring.constant(30)),
+        ];
+        let lf = ring.from_terms([(Mono::var(2, 0, 1), 1), (Mono::var(2, 1, 1), 2)]);
+        let opts = GlobalOptions::default();
+        let b = groebner(&ring, &gens, opts.gb_budget()).unwrap();
+        let mp = b.minimal_polynomial(&lf, 100).unwrap();
+        let mut rng = Rng::new(1);
+        let z = zeros(&ring, &gens, (&lf, &mp), 2, &opts, &mut rng).unwrap();
+        assert!(z.complete);
+        let mut pts = z.points;
+        pts.sort();
+        assert_eq!(pts, vec![vec![5, 6], vec![6, 5]]);
+        let tight = GlobalOptions {
+            max_basis: 0,
+            ..GlobalOptions::default()
+        };
+        let z = zeros(&ring, &gens, (&lf, &mp), 2, &tight, &mut rng).unwrap();
+        assert!(!z.complete);
+        assert!(z.points.is_empty());
     }
 
     fn poly(terms: &[([u32; 2], i64)]) -> RPoly {
