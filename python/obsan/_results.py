@@ -320,12 +320,45 @@ class Identifiability(NamedTuple):
 
 class MapImage(NamedTuple):
     """One moved variable of a discrete map: ``var -> sign * image``, plus pi
-    when ``plus_pi`` (angles: ``theta -> phi + pi`` or ``pi - phi``)."""
+    when ``plus_pi`` (angles: ``theta -> phi + pi`` or ``pi - phi``). ``image``
+    is a variable, or (the input-output route's rational maps) a formula in
+    the variables with ``+ - * / ^`` and integers, e.g. ``(a*g - b)/g``."""
 
     var: str
     image: str
     sign: int
     plus_pi: bool
+
+
+def _evaluate(formula: str, values: Mapping[str, float]) -> float:
+    """A map image's value at a point: a variable, or an arithmetic formula
+    in the variables (``+ - * / ^``, integers, parentheses) read with Python's
+    own parser and nothing but those operations evaluated."""
+    import ast
+
+    ops = {
+        ast.Add: lambda a, b: a + b,
+        ast.Sub: lambda a, b: a - b,
+        ast.Mult: lambda a, b: a * b,
+        ast.Div: lambda a, b: a / b,
+        ast.Pow: lambda a, b: a**b,
+    }
+
+    def ev(node: ast.AST) -> float:
+        if isinstance(node, ast.Expression):
+            return ev(node.body)
+        if isinstance(node, ast.BinOp) and type(node.op) in ops:
+            return ops[type(node.op)](ev(node.left), ev(node.right))
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+            v = ev(node.operand)
+            return -v if isinstance(node.op, ast.USub) else v
+        if isinstance(node, ast.Name):
+            return float(values[node.id])
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
+            return float(node.value)
+        raise ValueError(f"not a map image: {formula!r}")
+
+    return ev(ast.parse(formula.replace("^", "**"), mode="eval"))
 
 
 class DiscreteMap(NamedTuple):
@@ -342,8 +375,21 @@ class DiscreteMap(NamedTuple):
         lhs, sep, rhs = text.partition(" -> ")
         if not sep:
             raise ValueError(f"not a map: {text!r}")
-        names = [n for n in lhs.strip().strip("()").split(", ")]
-        targets = [t for t in rhs.strip().strip("()").split(", ")]
+        lhs, rhs = lhs.strip(), rhs.strip()
+        # Several variables: one pair of parentheses around each side, the
+        # images split at the commas outside the formulas' own parentheses.
+        if lhs.startswith("("):
+            lhs, rhs = lhs[1:-1], rhs[1:-1]
+        names = lhs.split(", ")
+        targets, depth, cur = [], 0, ""
+        for ch in rhs:
+            depth += {"(": 1, ")": -1}.get(ch, 0)
+            if ch == "," and depth == 0:
+                targets.append(cur.strip())
+                cur = ""
+            else:
+                cur += ch
+        targets.append(cur.strip())
         if len(names) != len(targets):
             raise ValueError(f"not a map: {text!r}")
         images = []
@@ -352,7 +398,7 @@ class DiscreteMap(NamedTuple):
                 images.append(MapImage(n, t[5:], -1, True))
             elif t.endswith(" + pi"):
                 images.append(MapImage(n, t[:-5], 1, True))
-            elif t.startswith("-"):
+            elif t.startswith("-") and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", t[1:]):
                 images.append(MapImage(n, t[1:], -1, False))
             else:
                 images.append(MapImage(n, t, 1, False))
@@ -362,7 +408,7 @@ class DiscreteMap(NamedTuple):
         """The image of a point (a value per variable; unmoved ones are kept)."""
         out = dict(values)
         for im in self.images:
-            out[im.var] = im.sign * values[im.image] + (math.pi if im.plus_pi else 0.0)
+            out[im.var] = im.sign * _evaluate(im.image, values) + (math.pi if im.plus_pi else 0.0)
         return out
 
     def __str__(self) -> str:

@@ -81,6 +81,23 @@ def test_the_input_output_route_counts_two_summed_decays():
     assert g.maps_of_parameters[0].apply({"a": 2.0, "b": 3.0}) == {"a": 3.0, "b": 2.0}
 
 
+def test_the_input_output_route_finds_an_affine_map():
+    # By hand (systems/global/shifted_rates.sys): the rates a and a + b are known
+    # as an unordered pair, so (a, b) -> (a + b, -b), no signed permutation.
+    g = obsan.load(SYSTEMS / "global" / "shifted_rates.sys").global_identifiability(route="io")
+    assert [str(m) for m in g.maps_of_parameters] == ["(a, b) -> (a + b, -b)"]
+    assert g.maps_of_parameters[0].apply({"a": 2.0, "b": 3.0}) == {"a": 5.0, "b": -3.0}
+
+
+def test_a_map_with_formulas_reads_and_applies():
+    # SI.jl's Treatment by the input-output route prints this map; by hand at
+    # d=2, a=3, nu=5, g=7: (14 - 3 - 7 + 5)/7, -7 + 5, 3 + 7.
+    m = obsan.DiscreteMap.parse("(d, a, nu) -> ((d*g - a - g + nu)/g, -g + nu, a + g)")
+    assert [im.var for im in m.images] == ["d", "a", "nu"]
+    q = m.apply({"d": 2.0, "a": 3.0, "nu": 5.0, "g": 7.0})
+    assert q == pytest.approx({"d": 9.0 / 7.0, "a": -2.0, "nu": 10.0, "g": 7.0})
+
+
 def test_multi_experiment_counts_where_one_experiment_does_not_fix_the_relation():
     # By hand (systems/global/forced_oscillator_offset.sys): one experiment shows
     # b/omega^2 + c only; the relation y' y'' - y y''' + c y''' - b y' = 0 has a

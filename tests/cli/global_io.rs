@@ -96,6 +96,11 @@ fn maps_of_the_parameters_by_io() {
     };
     let v = io("systems/global/squared_rate.sys");
     assert_eq!(sorted(&v), ["a -> -a"]);
+    // An affine map (systems/global/shifted_rates.sys, by hand): the rates
+    // a and a + b as an unordered pair, reconstructed as rational functions.
+    let v = io("systems/global/shifted_rates.sys");
+    assert_eq!(sorted(&v), ["(a, b) -> (a + b, -b)"]);
+    assert_eq!(v["group_order"], 2);
     let v = io("systems/global/sijl_tests/three_compartments.sys");
     assert_eq!(sorted(&v), ["(a21, a31, a12, a13) -> (a31, a21, a13, a12)"]);
     let v = io("systems/benchmarks/si-jl/Bilirubin.sys");

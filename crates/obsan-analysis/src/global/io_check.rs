@@ -20,15 +20,17 @@
 //! The filter runs at both of the count's independent points and primes,
 //! which must agree, as the count's own.
 
+use super::io::elem;
 use super::io::IoModel;
+use super::io_count::system_at;
 use super::io_count::{udeg, udiv, ugcd, umul, urem};
 use super::model::ZModel;
 use super::run::Rng;
 use super::types::{gb_err, GlobalOptions};
 use crate::rank::AnalysisError;
-use obsan_groebner::{distinct_roots, groebner, GbError, Poly, Ring};
+use obsan_groebner::{distinct_roots, groebner, Field, GbError, Mono, Order, Poly, Ring};
 use obsan_recon::fp;
-use obsan_recon::{Poly as RPoly, Term};
+use obsan_recon::{reconstruct_vec, Options, Poly as RPoly, PrimeList, Rational, ReconError, Term};
 
 /// Tries of the equal-degree split per factor: each splits a factor of
 /// degree 2 or more with probability at least 1/2, so 64 fail together with
@@ -199,6 +201,161 @@ pub(super) fn param_maps(
         }
     }
     out
+}
+
+/// Most black-box points (each a count's system solved at one point) the
+/// reconstruction of a rational map may take.
+const MAP_POINTS: u64 = 3000;
+
+/// Most terms [`compose`] may build while checking a rational map exactly.
+const MAP_TERMS: usize = 200_000;
+
+/// A joint count of 2 with no signed permutation between the two solutions:
+/// the other solution as rational functions of the parameters, read at
+/// points `theta` (the count's system at `theta`, its two solutions over
+/// `F_p`, the one that is not `theta`) and reconstructed over Q
+/// (obsan-recon), then checked exactly on every coefficient ([`keeps_map`]).
+/// Why one map: with two solutions, the other is fixed by every field
+/// automorphism that fixes `theta`, so it is rational in `theta` (when it
+/// lies in `F_p` at random points, as the black box needs). `None` when the
+/// points are not found, the reconstruction passes its budget or the check
+/// its size.
+pub(super) fn rational_map(
+    fns: &[(RPoly, RPoly)],
+    np: usize,
+    opts: &GlobalOptions,
+    seed: u64,
+) -> Result<Option<Vec<Rational>>, AnalysisError> {
+    let mut rng = Rng::new(seed ^ 0x3a9);
+    let mut other = |theta: &[u64], p: u64| -> Result<Option<Vec<u64>>, AnalysisError> {
+        let Some(field) = Field::new(p) else {
+            return Ok(None);
+        };
+        let ring = Ring::new(field, np + 1, Order::Grevlex);
+        let Some((gens, local)) = system_at(fns, &ring, theta, opts)? else {
+            return Ok(None);
+        };
+        let b = match soft(groebner(&ring, &gens, opts.gb_budget()))? {
+            Some(b) if !b.is_unit() && b.is_zero_dimensional() => b,
+            _ => return Ok(None),
+        };
+        let lf = ring.from_terms(
+            (0..np)
+                .filter(|&t| local[t])
+                .map(|t| (Mono::var(np + 1, t, 1), elem(&mut rng, p))),
+        );
+        let Some(mp) = soft(b.minimal_polynomial(&lf, opts.max_solutions))? else {
+            return Ok(None);
+        };
+        if distinct_roots(field, &mp) != 2 {
+            return Ok(None);
+        }
+        let z = zeros(&ring, &gens, (&lf, &mp), np, opts, &mut rng)?;
+        if !z.complete || z.points.len() != 2 {
+            return Ok(None);
+        }
+        Ok(z.points.into_iter().find(|pt| pt.as_slice() != theta))
+    };
+    let ropts = Options {
+        deadline: opts.deadline,
+        seed: seed ^ 0x3a9,
+        prime_list: PrimeList::Bits52,
+        max_points: MAP_POINTS,
+        ..Options::default()
+    };
+    let map = match reconstruct_vec(np, np, &mut other, &ropts) {
+        Ok(r) => r.functions,
+        Err(ReconError::BlackBox(e)) => return Err(e),
+        Err(_) => return Ok(None),
+    };
+    Ok(keeps_map(fns, &map).then_some(map))
+}
+
+/// Whether coordinate `v` of a rational map is `theta_v` itself.
+pub(super) fn is_identity(r: &Rational, v: usize) -> bool {
+    let unit = |p: &RPoly, var: Option<usize>| {
+        matches!(p.terms(), [t] if t.coeff == 1.into()
+            && t.exps.iter().enumerate().all(|(w, &e)| e == u32::from(Some(w) == var)))
+    };
+    unit(r.num(), Some(v)) && unit(r.den(), None)
+}
+
+/// `p(phi)` as `N / D` for a rational map `phi` (coordinate `w` is `n_w /
+/// d_w`): `D = prod_w d_w^E_w`, `E_w` the degree of `p` in `w`, and each
+/// term `c prod_w n_w^e_w d_w^(E_w - e_w)`; `None` past [`MAP_TERMS`].
+fn compose(p: &RPoly, map: &[Rational]) -> Option<(RPoly, RPoly)> {
+    let deg: Vec<u32> = (0..map.len())
+        .map(|w| {
+            p.terms()
+                .iter()
+                .map(|t| t.exps.get(w).copied().unwrap_or(0))
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let one = RPoly::from_terms([Term {
+        exps: vec![0; map.len()],
+        coeff: 1.into(),
+    }]);
+    // Powers 0..=E_w of each n_w and d_w.
+    let powers = |f: &RPoly, e: u32| -> Option<Vec<RPoly>> {
+        let mut v = vec![one.clone()];
+        for _ in 0..e {
+            let next = v.last()?.times(f);
+            if next.terms().len() > MAP_TERMS {
+                return None;
+            }
+            v.push(next);
+        }
+        Some(v)
+    };
+    let mut nums = Vec::with_capacity(map.len());
+    let mut dens = Vec::with_capacity(map.len());
+    for (r, &e) in map.iter().zip(&deg) {
+        nums.push(powers(r.num(), e)?);
+        dens.push(powers(r.den(), e)?);
+    }
+    let mut terms = Vec::new();
+    for t in p.terms() {
+        let mut prod = RPoly::from_terms([Term {
+            exps: vec![0; map.len()],
+            coeff: t.coeff.clone(),
+        }]);
+        for w in 0..map.len() {
+            let e = t.exps.get(w).copied().unwrap_or(0);
+            for f in [&nums[w][e as usize], &dens[w][(deg[w] - e) as usize]] {
+                prod = prod.times(f);
+                if prod.terms().len() > MAP_TERMS {
+                    return None;
+                }
+            }
+        }
+        terms.extend(prod.terms().iter().cloned());
+        if terms.len() > MAP_TERMS {
+            return None;
+        }
+    }
+    let den = dens
+        .iter()
+        .zip(&deg)
+        .try_fold(one.clone(), |acc, (d, &e)| {
+            let next = acc.times(&d[e as usize]);
+            (next.terms().len() <= MAP_TERMS).then_some(next)
+        })?;
+    Some((RPoly::from_terms(terms), den))
+}
+
+/// Whether every fraction `n / d` of `fns` is the same after the rational
+/// map `phi`: `n(phi) / d(phi) = N_n D_d / (D_n N_d)` equals `n / d`, i.e.
+/// `N_n D_d d = n D_n N_d` as polynomials over Z; false past the size
+/// bound (never a map unchecked).
+fn keeps_map(fns: &[(RPoly, RPoly)], map: &[Rational]) -> bool {
+    fns.iter().all(|(n, d)| {
+        let (Some((nn, dn)), Some((nd, dd))) = (compose(n, map), compose(d, map)) else {
+            return false;
+        };
+        nn.times(&dd).times(d) == n.times(&dn).times(&nd)
+    })
 }
 
 /// `p(phi(theta))` for a signed permutation `phi` of the parameters.
@@ -374,5 +531,31 @@ mod tests {
         // A signed permutation that is a zero but keeps no coefficient is
         // not reported (the exact check, not the zero, decides).
         assert!(param_maps(&fns, &[vec![q - 5, 11]], &star, q).is_empty());
+    }
+
+    /// Rates `a` and `a + b` (systems/global/shifted_rates.sys, by hand):
+    /// the coefficients `2 a + b` and `a (a + b)` keep `(a, b) -> (a + b,
+    /// -b)`, reconstructed from the count's other solution and checked
+    /// exactly; the same map does not keep two decays' `a + b`.
+    #[test]
+    fn a_rational_map_reconstructed_and_checked() {
+        let one = poly(&[([0, 0], 1)]);
+        let fns = vec![
+            (poly(&[([1, 0], 2), ([0, 1], 1)]), one.clone()),
+            (poly(&[([2, 0], 1), ([1, 1], 1)]), one.clone()),
+        ];
+        let map = rational_map(&fns, 2, &GlobalOptions::default(), 7)
+            .unwrap()
+            .expect("the other solution is rational");
+        let names = ["a", "b"];
+        let shown: Vec<String> = map.iter().map(|r| r.display(&names).to_string()).collect();
+        assert_eq!(shown, ["a + b", "-b"]);
+        assert!(!is_identity(&map[0], 0) && !is_identity(&map[1], 1));
+        assert!(keeps_map(&fns, &map));
+        let decays = vec![
+            (poly(&[([1, 0], 1), ([0, 1], 1)]), one.clone()),
+            (poly(&[([1, 1], 1)]), one),
+        ];
+        assert!(!keeps_map(&decays, &map));
     }
 }

@@ -70,6 +70,9 @@ pub(super) struct IoCounts {
     /// Signed permutations of the parameters keeping every coefficient
     /// exactly (io_check.rs, `param_maps`).
     pub(super) maps: Vec<io_check::ParamMap>,
+    /// With two solutions and no such map: the other solution as rational
+    /// functions of the parameters, checked exactly on every coefficient.
+    pub(super) rational_map: Option<Vec<obsan_recon::Rational>>,
 }
 
 /// Largest ansatz (monomials) one relation's first kernel may use: its
@@ -230,6 +233,19 @@ pub(super) fn io_count_under(
         }
         _ => Vec::new(),
     };
+    // Two solutions and no signed permutation between them: the other as
+    // rational functions of the parameters (io_check.rs, `rational_map`).
+    let rational_map = match &runs[0].zeros {
+        Some(z) if whole && maps.is_empty() && joint == Some(2) && z.complete => {
+            let fns: Vec<(RPoly, RPoly)> = coeffs
+                .iter()
+                .flatten()
+                .flat_map(|c| c.fns.iter().cloned())
+                .collect();
+            io_check::rational_map(&fns, np, opts, seed)?
+        }
+        _ => None,
+    };
     for ((_, size), c) in sizes.iter_mut().zip(&coeffs) {
         let Some(c) = c else { continue };
         let f = &c.fns;
@@ -257,6 +273,7 @@ pub(super) fn io_count_under(
         sizes,
         primes,
         maps,
+        rational_map,
     })
 }
 
@@ -1675,50 +1692,36 @@ fn to_fp(p: &obsan_recon::Poly, ring: &Ring, q: u64) -> Result<Poly, AnalysisErr
     Ok(ring.from_terms(terms))
 }
 
-/// `c_i(theta) = c_i(theta*)` at a random `theta*` over `F_q`, the
-/// denominators kept non-zero by `z L(theta) = 1`; the parameters that are
-/// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
-/// The solutions in `F_q` too when they are several and asked for
-/// (`zeros`: the part's filter) or at most [`MAP_ZEROS`] (the maps), both
-/// io_check.rs.
-pub(super) fn count(
+/// The count's system at `star` (the parameters' values) over `ring`'s
+/// field: `c_i(theta) = c_i(star)`, the parameters that are not locally
+/// identifiable there sliced at `star`, and `z L(theta) = 1`; with which
+/// parameters are locally identifiable. `None` when a denominator vanishes
+/// at `star`.
+#[allow(clippy::type_complexity)]
+pub(super) fn system_at(
     fns: &[(RPoly, RPoly)],
-    np: usize,
+    ring: &Ring,
+    star: &[u64],
     opts: &GlobalOptions,
-    seed: u64,
-    (q, zeros): (u64, bool),
-) -> Result<Counted, AnalysisError> {
-    let field = Field::new(q).ok_or_else(|| err("global (io): bad prime"))?;
-    let ring = Ring::new(field, np + 1, Order::Grevlex);
-    let mut rng = Rng::new(seed ^ 0xc0u64);
-    let mut star = vec![0u64; np + 1];
+) -> Result<Option<(Vec<Poly>, Vec<bool>)>, AnalysisError> {
+    let (q, np) = (ring.field.modulus(), ring.n - 1);
+    // The point with z = 0 beside it (z enters no equation evaluated here).
+    let star: Vec<u64> = star.iter().copied().chain([0]).collect();
     let mut eqs = Vec::new();
     let mut dens: Vec<Poly> = Vec::new();
-    for _ in 0..16 {
-        for s in star.iter_mut().take(np) {
-            *s = elem(&mut rng, q);
+    for (fn_, fd) in fns {
+        let (n, d) = (to_fp(fn_, ring, q)?, to_fp(fd, ring, q)?);
+        let (nv, dv) = (ring.eval(&n, &star), ring.eval(&d, &star));
+        if dv == 0 {
+            return Ok(None);
         }
-        eqs.clear();
-        dens.clear();
-        let mut ok = true;
-        for (fn_, fd) in fns {
-            let (n, d) = (to_fp(fn_, &ring, q)?, to_fp(fd, &ring, q)?);
-            let (nv, dv) = (ring.eval(&n, &star), ring.eval(&d, &star));
-            if dv == 0 {
-                ok = false;
-                break;
-            }
-            eqs.push(ring.sub(&ring.scale(&n, dv), &ring.scale(&d, nv)));
-            // Up to a constant (a common denominator comes scaled by each
-            // fraction's own constant): the first coefficient made 1.
-            let lead = d.terms().first().map_or(1, |t| t.1);
-            let d = ring.scale(&d, obsan_recon::fp::inv(lead, q).unwrap_or(1));
-            if d.degree() > 0 && !dens.contains(&d) {
-                dens.push(d);
-            }
-        }
-        if ok {
-            break;
+        eqs.push(ring.sub(&ring.scale(&n, dv), &ring.scale(&d, nv)));
+        // Up to a constant (a common denominator comes scaled by each
+        // fraction's own constant): the first coefficient made 1.
+        let lead = d.terms().first().map_or(1, |t| t.1);
+        let d = ring.scale(&d, obsan_recon::fp::inv(lead, q).unwrap_or(1));
+        if d.degree() > 0 && !dens.contains(&d) {
+            dens.push(d);
         }
     }
     // Local identifiability: the Jacobian of the equations at theta*.
@@ -1790,6 +1793,41 @@ pub(super) fn count(
     } else {
         gens.push(ring.var(np));
     }
+    Ok(Some((gens, local)))
+}
+
+/// `c_i(theta) = c_i(theta*)` at a random `theta*` over `F_q`, the
+/// denominators kept non-zero by `z L(theta) = 1`; the parameters that are
+/// not locally identifiable (Jacobian at `theta*`) sliced at `theta*`.
+/// The solutions in `F_q` too when they are several and asked for
+/// (`zeros`: the part's filter) or at most [`MAP_ZEROS`] (the maps), both
+/// io_check.rs.
+pub(super) fn count(
+    fns: &[(RPoly, RPoly)],
+    np: usize,
+    opts: &GlobalOptions,
+    seed: u64,
+    (q, zeros): (u64, bool),
+) -> Result<Counted, AnalysisError> {
+    let field = Field::new(q).ok_or_else(|| err("global (io): bad prime"))?;
+    let ring = Ring::new(field, np + 1, Order::Grevlex);
+    let mut rng = Rng::new(seed ^ 0xc0u64);
+    let mut star = vec![0u64; np];
+    let mut system = None;
+    for _ in 0..16 {
+        for s in star.iter_mut() {
+            *s = elem(&mut rng, q);
+        }
+        system = system_at(fns, &ring, &star, opts)?;
+        if system.is_some() {
+            break;
+        }
+    }
+    let Some((gens, local)) = system else {
+        return Err(err(
+            "global (io): a coefficient's denominator vanished at 16 random points; try another --seed",
+        ));
+    };
     let b = groebner(&ring, &gens, opts.gb_budget()).map_err(gb_err)?;
     if b.is_unit() || !b.is_zero_dimensional() {
         return Err(err(
@@ -1835,7 +1873,6 @@ pub(super) fn count(
             )?);
         }
     }
-    star.truncate(np);
     Ok(Counted {
         per,
         joint,

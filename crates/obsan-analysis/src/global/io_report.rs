@@ -75,7 +75,28 @@ pub(super) fn io_route(
                 .collect()
         })
         .collect();
-    let group_order = group_order(&candidates, nx + names.len(), 100_000);
+    let mut group_order = group_order(&candidates, nx + names.len(), 100_000);
+    let mut maps = maps;
+    // A rational map between two solutions: an involution (the other
+    // solution's other is the first), its moved coordinates as formulas.
+    if let Some(r) = &c.rational_map {
+        maps.push(DiscreteMap {
+            images: r
+                .iter()
+                .enumerate()
+                .filter(|(v, f)| !super::io_check::is_identity(f, *v))
+                .map(|(v, f)| MapImage {
+                    var: names[v].to_string(),
+                    sign: 1,
+                    image: f.display(&names).to_string(),
+                    plus_pi: false,
+                })
+                .collect(),
+            keeps_angles: Some(true),
+            params_only: true,
+        });
+        group_order = 2;
+    }
     let variables: Vec<GlobalVariable> = nf.state[nx..]
         .iter()
         .zip(&c.per_param)
