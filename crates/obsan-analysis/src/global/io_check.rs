@@ -205,7 +205,13 @@ pub(super) fn param_maps(
 
 /// Most black-box points (each a count's system solved at one point) the
 /// reconstruction of a rational map may take.
-const MAP_POINTS: u64 = 3000;
+const MAP_POINTS: u64 = 2000;
+
+/// Most terms of the coefficients (numerators and denominators) whose count
+/// system a rational map is sought on (SI.jl's models: 31-126): each of up
+/// to [`MAP_POINTS`] points solves that system once (a bound on sizes, not
+/// time, so the same model always takes the same path).
+pub(super) const MAP_FN_TERMS: usize = 500;
 
 /// Most terms [`compose`] may build while checking a rational map exactly.
 const MAP_TERMS: usize = 200_000;

@@ -242,7 +242,15 @@ pub(super) fn io_count_under(
                 .flatten()
                 .flat_map(|c| c.fns.iter().cloned())
                 .collect();
-            io_check::rational_map(&fns, np, opts, seed)?
+            let terms: usize = fns
+                .iter()
+                .map(|(n, d)| n.terms().len() + d.terms().len())
+                .sum();
+            if terms <= io_check::MAP_FN_TERMS {
+                io_check::rational_map(&fns, np, opts, seed)?
+            } else {
+                None
+            }
         }
         _ => None,
     };
