@@ -101,6 +101,24 @@ fn maps_of_the_parameters_by_io() {
     let v = io("systems/global/shifted_rates.sys");
     assert_eq!(sorted(&v), ["(a, b) -> (a + b, -b)"]);
     assert_eq!(v["group_order"], 2);
+    // Under auto the Taylor route answers it and finds no signed
+    // permutation (the states' images are no such map either): the
+    // relations' map is added. Two decays' Taylor map (the swap of both
+    // pairs) reaches both solutions: nothing is added.
+    let auto = |f: &str| -> Value { serde_json::from_str(&ok(&["global", f, "--json"])).unwrap() };
+    let v = auto("systems/global/shifted_rates.sys");
+    assert_eq!(v["route"], "taylor", "{v}");
+    assert_eq!(sorted(&v), ["(a, b) -> (a + b, -b)"]);
+    assert_eq!(
+        (v["group_order"].as_u64(), v["solutions"].as_u64()),
+        (Some(2), Some(2))
+    );
+    let v = auto("systems/global/two_decays.sys");
+    assert_eq!(
+        v["maps"],
+        serde_json::json!(["(x1, x2, a, b) -> (x2, x1, b, a)"])
+    );
+    assert_eq!(v["maps_of_parameters"], serde_json::json!([]));
     let v = io("systems/global/sijl_tests/three_compartments.sys");
     assert_eq!(sorted(&v), ["(a21, a31, a12, a13) -> (a31, a21, a13, a12)"]);
     let v = io("systems/benchmarks/si-jl/Bilirubin.sys");

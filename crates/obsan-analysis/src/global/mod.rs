@@ -70,7 +70,46 @@ pub fn global_identifiability(
         Route::Taylor => taylor_route(nf, opts, false, true, &[], &mut Prolonged::default()),
         Route::Lie => taylor_route(nf, opts, true, false, &[], &mut Prolonged::default()),
         Route::InputOutput => io_report::io_route(nf, opts, None, true, io_report::MAX_ANSATZ),
-        Route::Auto => auto_route(nf, opts),
+        Route::Auto => {
+            let r = auto_route(nf, opts)?;
+            Ok(maps_from_relations(nf, opts, r))
+        }
+    }
+}
+
+/// Under `--route auto`, an answer whose maps do not reach every solution
+/// (the Taylor route's search is of signed permutations, with a budget):
+/// the input-output relations' maps of the parameters (io_check.rs: signed
+/// permutations, or a rational map between two solutions), sought under
+/// the cheap io attempt's bounds, replace them when they generate a larger
+/// group and the relations give every parameter the same verdict. The
+/// answer stands whatever that attempt does (SI.jl's Treatment, Covid3,
+/// SEIR1, Biohydrogenation: each count of 2 now with its map).
+fn maps_from_relations(nf: &mut NormalForm, opts: &GlobalOptions, r: GlobalReport) -> GlobalReport {
+    let unexplained = r.solutions.is_some_and(|k| k > r.group_order);
+    if r.route == Route::InputOutput || r.solutions_at_most || !unexplained {
+        return r;
+    }
+    let cheap = GlobalOptions {
+        max_work: opts.max_work.min(io_choice::QUICK_WORK),
+        max_io_work: opts.max_io_work.min(io_choice::QUICK_IO_WORK),
+        ..opts.clone()
+    };
+    let Ok(io) = io_report::io_route(nf, &cheap, None, false, io_report::MAX_ANSATZ) else {
+        return r;
+    };
+    let same = io.variables.iter().all(|v| {
+        r.variables
+            .iter()
+            .any(|w| w.param && w.name == v.name && w.verdict == v.verdict)
+    });
+    if !same || io.group_order <= r.group_order {
+        return r;
+    }
+    GlobalReport {
+        maps: io.maps,
+        group_order: io.group_order,
+        ..r
     }
 }
 

@@ -86,8 +86,14 @@ fn hiv_xia_moog_swaps_delta_and_c() {
         assert_eq!(verdict(&r, v), Identifiability::Global, "{v}");
     }
     assert_eq!(r.solutions, Some(2));
-    // Not a signed permutation (I moves by an affine map): none is claimed.
-    assert!(r.maps.is_empty());
+    // Over parameters and states no signed permutation (I moves by an
+    // affine map): none is claimed. On the parameters the swap of delta and
+    // c keeps delta + c and delta c, so the relations' map is given, as a
+    // map of the parameters alone.
+    let maps: Vec<String> = r.maps.iter().map(|m| m.to_string()).collect();
+    assert_eq!(maps, ["(delta, c) -> (c, delta)"]);
+    assert!(r.maps.iter().all(|m| m.params_only));
+    assert_eq!(r.group_order, 2);
 }
 
 #[test]
