@@ -12,10 +12,11 @@ from __future__ import annotations
 import copy
 import html
 import math
+import operator
 import re
 import sys
 from dataclasses import dataclass, field, fields
-from typing import Any, Dict, Iterator, List, Mapping, NamedTuple, Optional, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Mapping, NamedTuple, Optional, Tuple
 
 def arrays(v: Any) -> Any:
     """Numeric lists (and rectangular lists of them) as numpy arrays, unless
@@ -336,12 +337,12 @@ def _evaluate(formula: str, values: Mapping[str, float]) -> float:
     own parser and nothing but those operations evaluated."""
     import ast
 
-    ops = {
-        ast.Add: lambda a, b: a + b,
-        ast.Sub: lambda a, b: a - b,
-        ast.Mult: lambda a, b: a * b,
-        ast.Div: lambda a, b: a / b,
-        ast.Pow: lambda a, b: a**b,
+    ops: Dict[type, Callable[[float, float], float]] = {
+        ast.Add: operator.add,
+        ast.Sub: operator.sub,
+        ast.Mult: operator.mul,
+        ast.Div: operator.truediv,
+        ast.Pow: operator.pow,
     }
 
     def ev(node: ast.AST) -> float:
