@@ -189,9 +189,10 @@ pub(super) fn io_count_under(
     let (mut per_param, mut joint) = (runs[0].per.clone(), runs[0].joint);
     // A part answers for the whole when every parameter is globally
     // identifiable or not locally identifiable over it (`generating_part`).
-    // A count above 1 may be larger over a part: it stands when each of the
-    // part's solutions gives the whole relations' kernels of `theta*`
-    // (io_check.rs), else all the coefficients are reconstructed.
+    // A count above 1 may be larger over a part: the part's solutions are
+    // then kept where the whole relations' kernels are those of `theta*`,
+    // and counted (io_check.rs); when they cannot be (a solution outside
+    // F_q, no kernel), all the coefficients are reconstructed.
     let mut checked = 0;
     if parted && per_param.iter().any(|k| matches!(k, Some(k) if *k > 1)) {
         checked = runs[0].zeros.as_ref().map_or(0, |z| z.points.len());
