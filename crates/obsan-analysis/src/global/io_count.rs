@@ -169,12 +169,16 @@ pub(super) fn io_count_under(
     }
     // Two independent points and primes must agree, as on the Taylor route.
     let primes = [IO_PRIMES[0], IO_PRIMES[1]];
-    let counts = |coeffs: &[Option<Coefficients>], zeros: bool| {
-        let fns: Vec<(RPoly, RPoly)> = coeffs
+    // Every relation's fractions, in one list (the counts' equations).
+    let all_fns = |coeffs: &[Option<Coefficients>]| -> Vec<(RPoly, RPoly)> {
+        coeffs
             .iter()
             .flatten()
             .flat_map(|c| c.fns.iter().cloned())
-            .collect();
+            .collect()
+    };
+    let counts = |coeffs: &[Option<Coefficients>], zeros: bool| {
+        let fns = all_fns(coeffs);
         let a = count(&fns, np, opts, seed, (primes[0], zeros))?;
         let b = count(&fns, np, opts, seed.wrapping_add(1), (primes[1], zeros))?;
         if (&a.per, a.joint) != (&b.per, b.joint) {
@@ -225,11 +229,7 @@ pub(super) fn io_count_under(
     let whole = coeffs.iter().flatten().all(|c| c.part.is_none());
     let maps = match &runs[0].zeros {
         Some(z) if whole && joint.is_some_and(|k| k > 1) => {
-            let fns: Vec<(RPoly, RPoly)> = coeffs
-                .iter()
-                .flatten()
-                .flat_map(|c| c.fns.iter().cloned())
-                .collect();
+            let fns = all_fns(&coeffs);
             io_check::param_maps(&fns, &z.points, &runs[0].star, primes[0])
         }
         _ => Vec::new(),
@@ -238,11 +238,7 @@ pub(super) fn io_count_under(
     // rational functions of the parameters (io_check.rs, `rational_map`).
     let rational_map = match &runs[0].zeros {
         Some(z) if whole && maps.is_empty() && joint == Some(2) && z.complete => {
-            let fns: Vec<(RPoly, RPoly)> = coeffs
-                .iter()
-                .flatten()
-                .flat_map(|c| c.fns.iter().cloned())
-                .collect();
+            let fns = all_fns(&coeffs);
             let terms: usize = fns
                 .iter()
                 .map(|(n, d)| n.terms().len() + d.terms().len())
